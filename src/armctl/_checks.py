@@ -1,0 +1,78 @@
+"""Input checks shared by the whole package (private).
+
+They are written for the hot path: a 7-vector is checked in well under a microsecond.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
+
+FloatArray = NDArray[np.float64]
+
+
+def vector(x: ArrayLike, n: int, name: str) -> FloatArray:
+    """Return ``x`` as a float vector of length ``n``; raise if its shape is wrong or it is not finite."""
+    a = np.asarray(x, dtype=float)
+    if a.shape != (n,):
+        raise ShapeError(f"{name} must have shape ({n},), got shape {a.shape}", value=x)
+    if not all(map(math.isfinite, a.tolist())):
+        raise NonFiniteError(f"{name} holds NaN or inf: {a!r}", value=x)
+    return a
+
+
+def matrix(x: ArrayLike, shape: tuple[int, int], name: str) -> FloatArray:
+    a = np.asarray(x, dtype=float)
+    if a.shape != shape:
+        raise ShapeError(f"{name} must have shape {shape}, got shape {a.shape}", value=x)
+    if not np.isfinite(a).all():
+        raise NonFiniteError(f"{name} holds NaN or inf", value=x)
+    return a
+
+
+def scalar(x: Any, name: str, *, positive: bool = False, nonnegative: bool = False) -> float:
+    try:
+        v = float(x)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"{name} must be a real number, got {x!r}", value=x) from None
+    if not math.isfinite(v):
+        raise NonFiniteError(f"{name} must be finite, got {v}", value=x)
+    if positive and v <= 0:
+        raise InvalidParameterError(f"{name} must be > 0, got {v}", value=x)
+    if nonnegative and v < 0:
+        raise InvalidParameterError(f"{name} must be >= 0, got {v}", value=x)
+    return v
+
+
+def gain_matrix(k: ArrayLike, n: int, name: str) -> FloatArray:
+    """A gain given as a scalar, a vector (diagonal) or an n×n matrix, returned as a symmetric positive
+    definite n×n matrix; raise if it is not one."""
+    a = np.asarray(k, dtype=float)
+    if a.ndim == 0:
+        a = np.full(n, float(a))
+    if a.ndim == 1:
+        if a.shape != (n,):
+            raise ShapeError(f"{name} as a vector must have length {n}, got {a.shape}", value=k)
+        a = np.diag(a)
+    if a.shape != (n, n):
+        raise ShapeError(f"{name} must be a scalar, a ({n},) vector or a ({n}, {n}) matrix, got {a.shape}",
+                         value=k)
+    if not np.isfinite(a).all():
+        raise NonFiniteError(f"{name} holds NaN or inf", value=k)
+    if not np.allclose(a, a.T, rtol=1e-10, atol=1e-12):
+        raise InvalidParameterError(f"{name} must be symmetric", value=k)
+    lo = float(np.linalg.eigvalsh(a).min())
+    if lo <= 0:
+        raise InvalidParameterError(f"{name} must be positive definite; its smallest eigenvalue is {lo:g}",
+                                    value=k)
+    return a
+
+
+def readonly(a: FloatArray) -> FloatArray:
+    a.flags.writeable = False
+    return a

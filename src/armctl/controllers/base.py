@@ -1,0 +1,50 @@
+"""`Controller`: the base of every controller, built-in or written by a user.
+
+A controller maps ``(t, q, q̇, reference) → τ``. It is a plain object: call it from ``armctl.simulate`` or
+from your own 1 kHz loop. Subclasses implement :meth:`Controller.compute`; ``__call__`` checks the inputs
+once and hands them on. Per-step values worth logging (parameter estimates, a Lyapunov function, …) go in
+``self.last_log``, a dict the simulator records after every control step.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from typing import Any
+
+from numpy.typing import ArrayLike
+
+from armctl._checks import FloatArray, vector
+from armctl.dynamics.base import Dynamics
+from armctl.errors import InvalidParameterError, ShapeError
+from armctl.reference import Reference
+
+
+class Controller(ABC):
+    """Base class. ``dynamics``: the controller's own model (it may be reduced or wrong on purpose), or
+    None for a model-free controller, in which case ``n`` must be given."""
+
+    def __init__(self, dynamics: Dynamics | None = None, n: int | None = None) -> None:
+        if dynamics is not None and not isinstance(dynamics, Dynamics):
+            raise InvalidParameterError(f"dynamics must be an armctl.Dynamics, got {type(dynamics).__name__}",
+                                        value=dynamics)
+        if dynamics is None and n is None:
+            raise InvalidParameterError("a controller without dynamics needs n (the number of joints)", value=n)
+        self.dynamics = dynamics
+        self.n = dynamics.n if dynamics is not None else int(n)  # type: ignore[arg-type]
+        self.last_log: dict[str, Any] = {}
+
+    def __call__(self, t: float, q: ArrayLike, qd: ArrayLike, ref: Reference) -> FloatArray:
+        """τ for the measured state (q, q̇) at time t [s] and the reference ``ref``."""
+        if not isinstance(ref, Reference):
+            raise InvalidParameterError(f"ref must be an armctl.Reference, got {type(ref).__name__}", value=ref)
+        if ref.n != self.n:
+            raise ShapeError(f"reference has {ref.n} joints, the controller {self.n}", value=ref)
+        return self.compute(float(t), vector(q, self.n, "q"), vector(qd, self.n, "qd"), ref)
+
+    @abstractmethod
+    def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
+        """The control law, on checked inputs."""
+
+    def reset(self) -> None:
+        """Forget any internal state (integrators, estimates) before a new run."""
+        self.last_log = {}

@@ -1,0 +1,286 @@
+"""`Dynamics`: evaluation of the Lagrange model of an arm, behind one interface and two backends.
+
+    M(q) q̈ + C(q, q̇) q̇ + g(q) = τ − F_v q̇ − F_c sgn(q̇) − J(q)ᵀ h_e
+
+``armctl.Dynamics(model, backend="pinocchio")`` returns the backend's object:
+
+* ``"pinocchio"`` (:class:`~armctl.dynamics.pinocchio_backend.PinocchioDynamics`): RNEA / CRBA / ABA /
+  Coriolis matrix / joint-torque regressor of Pinocchio; rotors as reflected inertia (armature).
+* ``"lagrange"`` (:class:`~armctl.dynamics.lagrange.LagrangeDynamics`): the Lagrange formulation built with
+  CasADi from the kinetic and potential energies, including the rotors' gyroscopic coupling.
+
+A backend implements a handful of private primitives (rigid-body terms, Jacobian, energies, regressor of the
+rigid-body part); this base adds input checks, friction, the end-effector wrench, the passivity regressor and
+the base parameters, so both backends expose the same API. Every method checks shapes and finiteness and
+raises an :class:`~armctl.errors.ArmctlError` subclass naming the value.
+"""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from armctl._checks import FloatArray, vector
+from armctl.errors import NonFiniteError, UnknownNameError
+from armctl.model.robot import PARAMS_PER_JOINT, RobotModel
+
+BACKENDS = ("pinocchio", "lagrange")
+_SQRT8 = math.sqrt(8.0)
+
+
+class Dynamics(ABC):
+    """The dynamics of ``model`` evaluated by ``backend`` (``"pinocchio"`` or ``"lagrange"``).
+
+    Calling ``Dynamics(model, backend=...)`` constructs the backend's subclass. Keyword options go to the
+    backend (e.g. ``rotor_coupling``, ``compile`` for the Lagrange backend). A ``RobotModel`` is immutable,
+    so a ``Dynamics`` object can be shared, but its workspace is not thread-safe: give each thread its own.
+    """
+
+    backend: str = ""
+
+    def __new__(cls, model: RobotModel | None = None, backend: str = "pinocchio", **options: Any) -> Dynamics:
+        if cls is Dynamics:
+            if backend == "pinocchio":
+                from armctl.dynamics.pinocchio_backend import PinocchioDynamics as sub
+            elif backend == "lagrange":
+                from armctl.dynamics.lagrange import LagrangeDynamics as sub
+            else:
+                raise UnknownNameError("backend", backend, BACKENDS)
+            return super().__new__(sub)
+        return super().__new__(cls)
+
+    def __init__(self, model: RobotModel, backend: str | None = None, **options: Any) -> None:
+        if not isinstance(model, RobotModel):
+            from armctl.errors import InvalidParameterError
+
+            raise InvalidParameterError(f"Dynamics needs a RobotModel, got {type(model).__name__}", value=model)
+        if backend is not None and backend != self.backend:
+            raise UnknownNameError("backend", backend, (self.backend,))
+        if options:
+            raise TypeError(f"{type(self).__name__} got unexpected options {sorted(options)}")
+        self.model = model
+        self.n = model.n
+        self._shape = (self.n,)
+        self._zeros = np.zeros(self.n)
+        fr = [j.friction for j in model.joints]
+        self._fv = np.array([f.viscous for f in fr])
+        fc_pos = np.array([f.coulomb for f in fr])
+        fc_neg = np.array([f.coulomb_neg for f in fr])
+        self._fc_mean = 0.5 * (fc_pos + fc_neg)
+        self._fc_offset = 0.5 * (fc_pos - fc_neg)
+        self._has_viscous = bool(self._fv.any())
+        self._has_coulomb = bool(self._fc_mean.any())
+        self._has_asymmetry = bool(self._fc_offset.any())
+        self._has_friction = self._has_viscous or self._has_coulomb
+        self._params = model.parameters()
+        # flat indices of Y[i, 13 i + c] for the rotor (c = 10), viscous (11) and Coulomb (12) columns,
+        # in a C-ordered (n, 13n) array
+        k, rows = PARAMS_PER_JOINT, np.arange(self.n)
+        self._diag_idx = np.concatenate([rows * k * self.n + k * rows + c for c in (10, 11, 12)])
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        # rebuilt from the (immutable) model and options: workspaces and compiled functions are not pickled
+        return (_make, (self.model, self.backend, self.options))
+
+    @property
+    def options(self) -> dict[str, Any]:
+        """The backend options this object was made with."""
+        return {}
+
+    def __repr__(self) -> str:
+        return f"Dynamics({self.model.name!r}, backend={self.backend!r}, n={self.n})"
+
+    # ------------------------------------------------------------------------ backend primitives
+    @abstractmethod
+    def _mass(self, q: FloatArray) -> FloatArray: ...
+
+    @abstractmethod
+    def _coriolis(self, q: FloatArray, qd: FloatArray) -> FloatArray: ...
+
+    @abstractmethod
+    def _gravity(self, q: FloatArray) -> FloatArray: ...
+
+    @abstractmethod
+    def _rigid_torque(self, q: FloatArray, qd: FloatArray, qdd: FloatArray) -> FloatArray:
+        """M q̈ + C q̇ + g (rotors included, no friction)."""
+
+    @abstractmethod
+    def _rigid_regressor(self, q: FloatArray, qd: FloatArray, qdd: FloatArray,
+                         friction: tuple[FloatArray, FloatArray] | None = None) -> FloatArray:
+        """n × 13n regressor of M q̈ + C q̇ + g; the friction columns hold ``friction`` = (viscous column,
+        Coulomb column) diagonals, or zeros."""
+
+    @abstractmethod
+    def _jacobian(self, q: FloatArray, frame: str | None) -> FloatArray: ...
+
+    @abstractmethod
+    def _kinetic(self, q: FloatArray, qd: FloatArray) -> float: ...
+
+    @abstractmethod
+    def _potential(self, q: FloatArray) -> float: ...
+
+    @abstractmethod
+    def frame_pose(self, q: ArrayLike, frame: str | None = None) -> FloatArray:
+        """4×4 pose of ``frame`` (default: the tool frame) in the world."""
+
+    def _forward(self, q: FloatArray, qd: FloatArray, tau_net: FloatArray) -> FloatArray:
+        """q̈ = M⁻¹ (τ_net − C q̇ − g); backends may do better."""
+        return np.linalg.solve(self._mass(q), tau_net - self._rigid_torque(q, qd, np.zeros(self.n)))
+
+    # ------------------------------------------------------------------------------- public API
+    # Hot paths are written EAFP: the backend is called with what the caller passed; only if it refuses
+    # (wrong type or size) are the inputs converted and checked, so that the error names the value. NaN or
+    # inf in an input propagates into the result, which is checked once; the slow path then names the input.
+    def _q(self, q: ArrayLike, name: str = "q") -> FloatArray:
+        return vector(q, self.n, name)
+
+    def _finite(self, x: Any, name: str) -> FloatArray:
+        """``x`` if it is already a finite float (n,) array (the fast case), else checked by :func:`vector`."""
+        try:
+            if x.shape == self._shape and math.isfinite(sum(x.tolist())):
+                return x  # type: ignore[no-any-return]
+        except AttributeError:
+            pass
+        return vector(x, self.n, name)
+
+    def _call(self, fn: Any, names: tuple[str, ...], *args: Any) -> FloatArray:
+        """``fn(*args)`` → an (n,) result, on the fast path; if ``fn`` refuses the inputs or the result is not
+        finite, check every input (raising a named error) and retry."""
+        try:
+            out = fn(*args)
+            if math.isfinite(sum(out.tolist())):  # NaN/inf anywhere in the inputs shows up here
+                return out  # type: ignore[no-any-return]
+        except Exception:
+            pass
+        args = tuple(vector(a, self.n, nm) for a, nm in zip(args, names, strict=True))
+        out = fn(*args)
+        if not np.isfinite(out).all():
+            raise NonFiniteError(f"result is not finite although every input is: {out!r}", value=out)
+        return out  # type: ignore[no-any-return]
+
+    def _inputs(self, names: tuple[str, ...], *args: Any) -> tuple[FloatArray, ...]:
+        """The inputs as finite (n,) arrays: one cheap test when they already are, else named errors."""
+        try:
+            total = 0.0
+            for a in args:
+                if a.shape != self._shape:
+                    raise TypeError
+                total += sum(a.tolist())
+            if math.isfinite(total):
+                return args
+        except (AttributeError, TypeError):
+            pass
+        return tuple(vector(a, self.n, nm) for a, nm in zip(args, names, strict=True))
+
+    def mass_matrix(self, q: ArrayLike) -> FloatArray:
+        """M(q) (n×n, symmetric positive definite) [kg·m² / kg]."""
+        return self._mass(self._finite(q, "q"))
+
+    def coriolis_matrix(self, q: ArrayLike, qd: ArrayLike) -> FloatArray:
+        """C(q, q̇) from the Christoffel symbols, c_ij = Σ_k ½(∂M_ij/∂q_k + ∂M_ik/∂q_j − ∂M_jk/∂q_i) q̇_k,
+        so that Ṁ − 2C is skew-symmetric."""
+        return self._coriolis(self._finite(q, "q"), self._finite(qd, "qd"))
+
+    def gravity_torque(self, q: ArrayLike) -> FloatArray:
+        """g(q) = ∂U/∂q [N·m]."""
+        return self._gravity(self._finite(q, "q"))
+
+    def friction_torque(self, qd: ArrayLike) -> FloatArray:
+        """τ_f = F_v q̇ + F_c⁺ (q̇ > 0) or − F_c⁻ (q̇ < 0); zero Coulomb part at rest (the simulator handles
+        stiction)."""
+        return self._friction(self._finite(qd, "qd"))
+
+    def _friction(self, qd: FloatArray) -> FloatArray:
+        qd = np.asarray(qd, dtype=float)
+        tau = self._fv * qd if self._has_viscous else np.zeros(self.n)
+        if self._has_coulomb:
+            tau += self._fc_mean * np.sign(qd)
+            if self._has_asymmetry:
+                tau += self._fc_offset * (qd != 0)
+        return tau
+
+    def inverse_dynamics(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike,
+                         wrench: ArrayLike | None = None) -> FloatArray:
+        """τ = M q̈ + C q̇ + g + τ_f(q̇) + J(q)ᵀ h_e, with ``wrench`` h_e = [f; μ] at the tool frame in
+        world-aligned axes (the force the arm exerts on the environment)."""
+        if self._has_friction or wrench is not None:
+            q, qd, qdd = self._finite(q, "q"), self._finite(qd, "qd"), self._finite(qdd, "qdd")
+            tau = self._rigid_torque(q, qd, qdd)
+            if self._has_friction:
+                tau += self._friction(qd)
+            if wrench is not None:
+                tau += self._jacobian(q, None).T @ vector(wrench, 6, "wrench")
+            return tau
+        return self._call(self._rigid_torque, ("q", "qd", "qdd"), q, qd, qdd)
+
+    def forward_dynamics(self, q: ArrayLike, qd: ArrayLike, tau: ArrayLike,
+                         wrench: ArrayLike | None = None) -> FloatArray:
+        """q̈ = M⁻¹ (τ − C q̇ − g − τ_f(q̇) − Jᵀ h_e). Coulomb friction here is the kinetic one
+        (sgn q̇, zero at rest); stick–slip is the simulator's business."""
+        if self._has_friction or wrench is not None:
+            q, qd, tau = self._finite(q, "q"), self._finite(qd, "qd"), self._finite(tau, "tau")
+            if self._has_friction:
+                tau = tau - self._friction(qd)
+            if wrench is not None:
+                tau = tau - self._jacobian(q, None).T @ vector(wrench, 6, "wrench")
+            return self._forward(q, qd, tau)
+        return self._call(self._forward, ("q", "qd", "tau"), q, qd, tau)
+
+    def jacobian(self, q: ArrayLike, frame: str | None = None) -> FloatArray:
+        """Geometric Jacobian (6×n) of ``frame`` (default: the tool frame) at its origin, world-aligned axes,
+        rows [linear; angular]."""
+        if frame is not None:
+            self.model.frame(frame)  # raises UnknownNameError listing the valid names
+        return self._jacobian(self._q(q), frame)
+
+    def kinetic_energy(self, q: ArrayLike, qd: ArrayLike) -> float:
+        """T = ½ q̇ᵀ M(q) q̇ [J] (links and rotors)."""
+        return self._kinetic(self._q(q), self._q(qd, "qd"))
+
+    def potential_energy(self, q: ArrayLike) -> float:
+        """U = −Σ m_i g₀ᵀ p_Ci [J], zero with every centre of mass at the world origin's height."""
+        return self._potential(self._q(q))
+
+    def parameters(self) -> FloatArray:
+        """π of the model these dynamics evaluate (see :meth:`RobotModel.parameters`)."""
+        return self._params
+
+    def regressor(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike) -> FloatArray:
+        """Y(q, q̇, q̈) (n × 13n) with Y π = inverse_dynamics(q, q̇, q̈) for symmetric Coulomb friction.
+
+        Columns per joint follow :data:`armctl.model.robot.PARAMETER_NAMES`; the friction columns are q̇_i and
+        sgn(q̇_i). With an asymmetric Coulomb friction, Y π misses the offset ½(F_c⁺ − F_c⁻)·|sgn q̇_i|, which
+        :meth:`coulomb_offset` returns.
+        """
+        q, qd, qdd = self._inputs(("q", "qd", "qdd"), q, qd, qdd)
+        return self._rigid_regressor(q, qd, qdd, (qd, np.sign(qd)))
+
+    def coulomb_offset(self, qd: ArrayLike) -> FloatArray:
+        """The part of the friction torque outside π: ½(F_c⁺ − F_c⁻) for every moving joint, 0 at rest."""
+        return self._fc_offset * (self._finite(qd, "qd") != 0)
+
+    def passivity_regressor(self, q: ArrayLike, qd: ArrayLike, qd_r: ArrayLike, qdd_r: ArrayLike) -> FloatArray:
+        """Y(q, q̇, q̇_r, q̈_r) with Y π = M q̈_r + C(q, q̇) q̇_r + g + F_v q̇_r + F_c sgn(q̇) — the Slotine–Li form.
+
+        C(q, q̇) q̇_r is the symmetric bilinear form B(q̇, q̇_r) of the velocity terms h(v) = C(q, v) v (the
+        Christoffel choice makes it symmetric), so by polarisation B(a, b) = ¼[h(a + b) − h(a − b)], and
+        with R(q, v, a) = M a + h(v) + g:
+
+            Y = 2 R(q, (q̇ + q̇_r)/√8, q̈_r/2) − R(q, (q̇ − q̇_r)/2, 0)
+
+        — two regressor evaluations. Viscous friction is taken at q̇_r (it then adds F_v s to the closed
+        loop's damping); Coulomb friction at the measured q̇.
+        """
+        q, qd, qd_r, qdd_r = self._inputs(("q", "qd", "qd_r", "qdd_r"), q, qd, qd_r, qdd_r)
+        y = self._rigid_regressor(q, (qd + qd_r) / _SQRT8, 0.5 * qdd_r, (0.5 * qd_r, 0.5 * np.sign(qd)))
+        y *= 2.0
+        y -= self._rigid_regressor(q, 0.5 * (qd - qd_r), self._zeros)
+        return y
+
+
+def _make(model: RobotModel, backend: str, options: dict[str, Any]) -> Dynamics:
+    return Dynamics(model, backend=backend, **options)

@@ -1,0 +1,50 @@
+"""The errors armctl raises.
+
+Every error derives from :class:`ArmctlError`; each subclass also derives from the matching builtin
+(``ValueError``, ``KeyError``, …) so that generic handlers keep working. Errors carry the offending value
+(``.value``) and say how to fix it.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+
+class ArmctlError(Exception):
+    """Root of every error raised by armctl."""
+
+    def __init__(self, message: str, *, value: Any = None) -> None:
+        super().__init__(message)
+        self.value = value
+
+
+class ShapeError(ArmctlError, ValueError):
+    """An array has the wrong shape."""
+
+
+class NonFiniteError(ArmctlError, ValueError):
+    """An array holds NaN or infinity."""
+
+
+class InvalidParameterError(ArmctlError, ValueError):
+    """A physical or numerical parameter is out of its allowed range (negative mass, bad inertia, …)."""
+
+
+class UnknownNameError(ArmctlError, KeyError):
+    """A name (frame, joint, backend, integrator, …) is not one of the valid names, which it lists."""
+
+    def __init__(self, kind: str, name: Any, valid: list[str] | tuple[str, ...]) -> None:
+        shown = ", ".join(repr(v) for v in valid[:40]) + (" …" if len(valid) > 40 else "")
+        super().__init__(f"unknown {kind} {name!r}; valid {kind}s: {shown}", value=name)
+        self.valid = tuple(valid)
+
+    def __str__(self) -> str:  # KeyError would otherwise print the repr of the message
+        return str(self.args[0])
+
+
+class ModelLoadError(ArmctlError, OSError):
+    """A robot description (URDF, DH table) cannot be read or does not describe a supported arm."""
+
+
+class BackendError(ArmctlError, RuntimeError):
+    """A dynamics backend cannot evaluate what was asked (e.g. a term it cannot express)."""

@@ -1,0 +1,113 @@
+"""Denavit–Hartenberg tables → :class:`~armctl.RobotModel` (standard and modified conventions)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from armctl._checks import FloatArray
+from armctl.errors import InvalidParameterError
+from armctl.model.parts import (
+    JOINT_KINDS,
+    Frame,
+    Joint,
+    JointFriction,
+    JointLimits,
+    Link,
+    Motor,
+    homogeneous,
+    rot,
+    transform,
+)
+from armctl.model.robot import RobotModel
+
+_Z = np.array([0.0, 0.0, 1.0])
+_X = np.array([1.0, 0.0, 0.0])
+
+
+@dataclass(frozen=True)
+class DHLink:
+    """One row of a DH table and the body it moves.
+
+    d, a [m], alpha, offset [rad]: the DH parameters (for a prismatic joint ``offset`` is θ and ``d`` the
+    offset of the joint variable). mass [kg], com [m] and inertia [kg·m²] (about the centre of mass) are in
+    the DH link frame {i}, as in Corke's toolbox. motor, friction, limits as in :mod:`armctl.model.parts`.
+    """
+
+    d: float = 0.0
+    a: float = 0.0
+    alpha: float = 0.0
+    offset: float = 0.0
+    kind: str = "revolute"
+    mass: float = 0.0
+    com: ArrayLike = (0.0, 0.0, 0.0)
+    inertia: ArrayLike = (0.0, 0.0, 0.0)
+    motor: Motor | None = None
+    friction: JointFriction = field(default_factory=JointFriction)
+    limits: JointLimits = field(default_factory=JointLimits)
+    name: str | None = None
+    physical: bool = True
+
+    def __post_init__(self) -> None:
+        for k in ("d", "a", "alpha", "offset"):
+            v = float(getattr(self, k))
+            if not math.isfinite(v):
+                raise InvalidParameterError(f"DH parameter {k} must be finite, got {v}", value=v)
+        if self.kind not in JOINT_KINDS:
+            raise InvalidParameterError(f"DH joint kind must be one of {JOINT_KINDS}, got {self.kind!r}",
+                                        value=self.kind)
+
+
+def _std(link: DHLink) -> FloatArray:
+    """Rz(θ_off) Tz(d) Tx(a) Rx(α): the link-frame offset from the joint frame (standard DH)."""
+    return (transform(rot(_Z, link.offset)) @ transform(None, [0, 0, link.d]) @ transform(None, [link.a, 0, 0])
+            @ transform(rot(_X, link.alpha)))
+
+
+def _mod(link: DHLink) -> FloatArray:
+    """Rx(α) Tx(a) Rz(θ_off) Tz(d): the joint frame in the previous link frame (modified DH)."""
+    return (transform(rot(_X, link.alpha)) @ transform(None, [link.a, 0, 0]) @ transform(rot(_Z, link.offset))
+            @ transform(None, [0, 0, link.d]))
+
+
+def model_from_dh(links: Sequence[Any], convention: str = "standard", gravity: ArrayLike = (0, 0, -9.81),
+                  tool: ArrayLike | None = None, name: str = "dh_robot", base: ArrayLike | None = None
+                  ) -> RobotModel:
+    """Joint i's frame is the DH frame in which its axis is z; link bodies are re-expressed there.
+
+    standard: frame {i−1} · Rz(q_i) is joint i's frame, link frame {i} = joint frame · Rz(θ_off)Tz(d)Tx(a)Rx(α).
+    modified (Craig): joint i's frame is link frame {i} = {i−1} · Rx(α)Tx(a)Rz(θ_off)Tz(d), moved by Rz(q_i).
+    A tool transform (4×4) is given in the last DH link frame and becomes the frame ``"tool"``.
+    """
+    if convention not in ("standard", "modified"):
+        raise InvalidParameterError(f"DH convention must be 'standard' or 'modified', got {convention!r}",
+                                    value=convention)
+    rows = [lk if isinstance(lk, DHLink) else DHLink(**lk) for lk in links]
+    if not rows:
+        raise InvalidParameterError("a DH table needs at least one link", value=links)
+    joints = []
+    prev_offset = homogeneous(base, "base") if base is not None else np.eye(4)
+    last_link_frame = np.eye(4)
+    for i, row in enumerate(rows):
+        if convention == "standard":
+            placement = prev_offset
+            link_frame = _std(row)  # a prismatic joint moves along z: d is a constant offset
+            prev_offset = link_frame
+        else:
+            placement = prev_offset @ _mod(row)
+            link_frame = np.eye(4)
+            prev_offset = np.eye(4)
+        last_link_frame = link_frame
+        body = Link(row.mass, row.com, row.inertia, row.physical).transformed(link_frame[:3, :3], link_frame[:3, 3])
+        joints.append(Joint(row.name or f"joint{i + 1}", row.kind, _Z, placement, body, row.motor,
+                            row.friction, row.limits))
+    tool_t = last_link_frame @ homogeneous(tool, "tool")
+    frames = (Frame("tool", len(joints), tool_t),)
+    return RobotModel(tuple(joints), name=name, gravity=np.asarray(gravity, dtype=float), frames=frames,
+                      tool_frame="tool")
+

@@ -1,0 +1,303 @@
+"""The parts a :class:`~armctl.RobotModel` is made of: links, motors, joint friction, limits, joints, frames.
+
+Conventions (the textbook's, see ``shared/references``):
+
+* A link's inertia is the *augmented* link of the Lagrange formulation: the link itself plus the stator and
+  the rotor (as a rigid body) of the motor that rides on it. Centre of mass and inertia tensor are given in
+  the joint frame of the link (``Joint.placement`` composed with the joint motion), the tensor about the
+  centre of mass.
+* A motor drives joint i through a rigid gear of ratio ``k_r`` (rotor angle = k_r·q_i); its rotor rides on
+  link i−1 and spins about ``axis`` (in the frame of link i−1; by default the joint axis). What the rotor adds
+  beyond the augmented link is its spin: kinetic energy ½ I_m (k_r q̇_i + z_mᵀω_{i−1})² − ½ I_m (z_mᵀω_{i−1})²,
+  i.e. the reflected inertia k_r² I_m q̇_i²/2 and the gyroscopic coupling k_r I_m q̇_i z_mᵀω_{i−1}.
+* Friction is referred to the joint side: τ_f = F_v q̇ + F_c⁺ (q̇ > 0), F_v q̇ − F_c⁻ (q̇ < 0), 0 at rest.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from armctl._checks import FloatArray, readonly
+from armctl.errors import InvalidParameterError, ShapeError
+
+_INERTIA_TOL = 1e-9
+
+
+def _vec3(x: ArrayLike, name: str) -> FloatArray:
+    a = np.array(x, dtype=float).reshape(-1) if np.ndim(x) else np.array([x], dtype=float)
+    if a.shape != (3,):
+        raise ShapeError(f"{name} must have 3 components, got {np.shape(x)}", value=x)
+    if not np.isfinite(a).all():
+        raise InvalidParameterError(f"{name} must be finite, got {a}", value=x)
+    return readonly(a)
+
+
+def inertia_tensor(x: ArrayLike, name: str = "inertia", triangle: bool = True) -> FloatArray:
+    """A 3×3 inertia tensor from a 3×3 matrix, 3 principal moments (diagonal) or 6 values
+    ``(Ixx, Ixy, Ixz, Iyy, Iyz, Izz)``; checked symmetric, positive semi-definite and satisfying the
+    triangle inequalities of its principal moments."""
+    a = np.array(x, dtype=float)
+    if a.shape == (3,):
+        a = np.diag(a)
+    elif a.shape == (6,):
+        xx, xy, xz, yy, yz, zz = a
+        a = np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
+    if a.shape != (3, 3):
+        raise ShapeError(f"{name} must be 3×3, 3 principal moments or 6 values (Ixx, Ixy, Ixz, Iyy, Iyz, Izz);"
+                         f" got shape {a.shape}", value=x)
+    if not np.isfinite(a).all():
+        raise InvalidParameterError(f"{name} must be finite", value=x)
+    scale = max(float(np.abs(a).max()), 1e-300)
+    if not np.allclose(a, a.T, atol=_INERTIA_TOL * scale):
+        raise InvalidParameterError(f"{name} must be symmetric, got {a.tolist()}", value=x)
+    a = 0.5 * (a + a.T)
+    ev = np.linalg.eigvalsh(a)
+    tol = _INERTIA_TOL * scale
+    if ev[0] < -tol:
+        raise InvalidParameterError(
+            f"{name} is not positive semi-definite: principal moments {ev.tolist()} (a rigid body has none "
+            "negative; a point mass or slender rod may have zeros)", value=x)
+    if triangle and ev[0] + ev[1] < ev[2] - tol:
+        raise InvalidParameterError(
+            f"{name} violates the triangle inequality of principal moments: {ev[0]:g} + {ev[1]:g} < {ev[2]:g};"
+            " no rigid body has these moments (check units and which axis is which)", value=x)
+    return readonly(a)
+
+
+@dataclass(frozen=True)
+class Link:
+    """An (augmented) link body.
+
+    mass: [kg] ≥ 0. com: centre of mass in the joint frame [m]. inertia: tensor about the centre of mass,
+    joint-frame axes [kg·m²] (3×3, 3 principal moments, or Ixx, Ixy, Ixz, Iyy, Iyz, Izz).
+    physical: False accepts an inertia tensor that violates the triangle inequality (published data sets
+    such as Corke's Puma 560 have some); it must still be positive semi-definite.
+    """
+
+    mass: float
+    com: FloatArray = field(default_factory=lambda: np.zeros(3))
+    inertia: FloatArray = field(default_factory=lambda: np.zeros((3, 3)))
+    physical: bool = True
+
+    def __post_init__(self) -> None:
+        m = float(self.mass)
+        if not math.isfinite(m) or m < 0:
+            raise InvalidParameterError(f"link mass must be finite and >= 0 kg, got {self.mass!r}",
+                                        value=self.mass)
+        object.__setattr__(self, "mass", m)
+        object.__setattr__(self, "com", _vec3(self.com, "link com"))
+        object.__setattr__(self, "inertia", inertia_tensor(self.inertia, "link inertia", self.physical))
+
+    def inertia_about_origin(self) -> FloatArray:
+        """Inertia tensor about the joint-frame origin (parallel-axis theorem)."""
+        c = self.com
+        return self.inertia + self.mass * (float(c @ c) * np.eye(3) - np.outer(c, c))
+
+    def transformed(self, rotation: FloatArray, translation: FloatArray) -> Link:
+        """This body expressed in a frame where a point x of the old frame is ``rotation @ x + translation``."""
+        return Link(self.mass, rotation @ self.com + translation, rotation @ self.inertia @ rotation.T,
+                    self.physical)
+
+    def combined(self, other: Link) -> Link:
+        """The rigid union of two bodies given in the same frame."""
+        m = self.mass + other.mass
+        physical = self.physical and other.physical
+        if m == 0.0:
+            return Link(0.0, np.zeros(3), self.inertia + other.inertia, physical)
+        c = (self.mass * self.com + other.mass * other.com) / m
+        i = np.zeros((3, 3))
+        for b in (self, other):
+            d = b.com - c
+            i += b.inertia + b.mass * (float(d @ d) * np.eye(3) - np.outer(d, d))
+        return Link(m, c, i, physical)
+
+
+@dataclass(frozen=True)
+class Motor:
+    """A motor driving a joint through a rigid gear.
+
+    inertia: rotor moment of inertia about its spin axis, I_m [kg·m²]. gear_ratio: k_r (rotor angle / joint
+    angle), sign included. axis: spin axis in the frame of the link the rotor rides on (None: the joint axis).
+    """
+
+    inertia: float = 0.0
+    gear_ratio: float = 1.0
+    axis: FloatArray | None = None
+
+    def __post_init__(self) -> None:
+        i, k = float(self.inertia), float(self.gear_ratio)
+        if not math.isfinite(i) or i < 0:
+            raise InvalidParameterError(f"rotor inertia must be >= 0 kg·m², got {self.inertia!r}",
+                                        value=self.inertia)
+        if not math.isfinite(k) or k == 0:
+            raise InvalidParameterError(f"gear ratio must be finite and non-zero, got {self.gear_ratio!r}",
+                                        value=self.gear_ratio)
+        object.__setattr__(self, "inertia", i)
+        object.__setattr__(self, "gear_ratio", k)
+        if self.axis is not None:
+            a = _vec3(self.axis, "motor axis")
+            nrm = float(np.linalg.norm(a))
+            if nrm < 1e-12:
+                raise InvalidParameterError("motor axis must be non-zero", value=self.axis)
+            object.__setattr__(self, "axis", readonly(a / nrm))
+
+    @property
+    def reflected_inertia(self) -> float:
+        """k_r² I_m [kg·m²]: the rotor inertia seen at the joint."""
+        return self.gear_ratio**2 * self.inertia
+
+
+@dataclass(frozen=True)
+class JointFriction:
+    """Joint-side friction. viscous: F_v [N·m·s/rad]. coulomb: F_c⁺, the Coulomb level for q̇ > 0 [N·m].
+    coulomb_negative: F_c⁻ for q̇ < 0 (a magnitude; None: same as coulomb). static: breakaway (stiction)
+    level [N·m] used by the simulator's stick–slip model (None: the Coulomb level). stribeck_velocity: v_s
+    [rad/s] of the Stribeck curve (0: none)."""
+
+    viscous: float = 0.0
+    coulomb: float = 0.0
+    coulomb_negative: float | None = None
+    static: float | None = None
+    stribeck_velocity: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("viscous", "coulomb", "coulomb_negative", "static", "stribeck_velocity"):
+            v = getattr(self, name)
+            if v is None:
+                continue
+            f = float(v)
+            if not math.isfinite(f) or f < 0:
+                raise InvalidParameterError(f"friction {name} must be finite and >= 0, got {v!r}", value=v)
+            object.__setattr__(self, name, f)
+        if self.static is not None and self.static < max(self.coulomb, self.coulomb_neg) - 1e-12:
+            raise InvalidParameterError(
+                f"static friction {self.static} must be >= the Coulomb levels ({self.coulomb}, "
+                f"{self.coulomb_neg})", value=self.static)
+
+    @property
+    def coulomb_neg(self) -> float:
+        return self.coulomb if self.coulomb_negative is None else self.coulomb_negative
+
+    @property
+    def coulomb_mean(self) -> float:
+        """(F_c⁺ + F_c⁻)/2: the Coulomb parameter of π."""
+        return 0.5 * (self.coulomb + self.coulomb_neg)
+
+    @property
+    def breakaway(self) -> tuple[float, float]:
+        """Breakaway magnitudes (positive direction, negative direction)."""
+        if self.static is None:
+            return self.coulomb, self.coulomb_neg
+        return self.static, self.static
+
+    @property
+    def is_zero(self) -> bool:
+        return self.viscous == 0 and self.coulomb == 0 and self.coulomb_neg == 0
+
+
+@dataclass(frozen=True)
+class JointLimits:
+    """lower, upper: position [rad or m]; velocity [rad/s]; effort: torque magnitude [N·m] (inf: none)."""
+
+    lower: float = -math.inf
+    upper: float = math.inf
+    velocity: float = math.inf
+    effort: float = math.inf
+
+    def __post_init__(self) -> None:
+        vals = {k: float(getattr(self, k)) for k in ("lower", "upper", "velocity", "effort")}
+        if any(math.isnan(v) for v in vals.values()):
+            raise InvalidParameterError(f"joint limits must not be NaN: {vals}", value=vals)
+        if vals["lower"] > vals["upper"]:
+            raise InvalidParameterError(f"joint lower limit {vals['lower']} is above upper {vals['upper']}",
+                                        value=vals)
+        if vals["velocity"] <= 0 or vals["effort"] <= 0:
+            raise InvalidParameterError(f"velocity and effort limits must be > 0: {vals}", value=vals)
+        for k, v in vals.items():
+            object.__setattr__(self, k, v)
+
+
+JOINT_KINDS = ("revolute", "prismatic")
+
+
+@dataclass(frozen=True)
+class Joint:
+    """One joint of a serial chain and the link it moves.
+
+    placement: 4×4 homogeneous transform of this joint's frame (at q = 0) in the previous joint's frame
+    (the world for the first joint). axis: unit axis of motion in the joint frame.
+    """
+
+    name: str
+    kind: str
+    axis: FloatArray
+    placement: FloatArray
+    link: Link
+    motor: Motor | None = None
+    friction: JointFriction = field(default_factory=JointFriction)
+    limits: JointLimits = field(default_factory=JointLimits)
+
+    def __post_init__(self) -> None:
+        if self.kind not in JOINT_KINDS:
+            raise InvalidParameterError(f"joint {self.name!r}: kind must be one of {JOINT_KINDS}, got "
+                                        f"{self.kind!r}", value=self.kind)
+        a = _vec3(self.axis, f"joint {self.name!r} axis")
+        nrm = float(np.linalg.norm(a))
+        if abs(nrm - 1.0) > 1e-6:
+            raise InvalidParameterError(f"joint {self.name!r} axis must be a unit vector, got {a}", value=a)
+        object.__setattr__(self, "axis", readonly(a / nrm))
+        object.__setattr__(self, "placement", homogeneous(self.placement, f"joint {self.name!r} placement"))
+
+    @property
+    def motor_axis(self) -> FloatArray:
+        """Rotor spin axis in the previous link's frame."""
+        if self.motor is not None and self.motor.axis is not None:
+            return self.motor.axis
+        return readonly(self.placement[:3, :3] @ self.axis)
+
+
+@dataclass(frozen=True)
+class Frame:
+    """A named frame rigidly attached to joint ``joint`` (0: the world, i: the i-th joint, 1-based)."""
+
+    name: str
+    joint: int
+    placement: FloatArray
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "placement", homogeneous(self.placement, f"frame {self.name!r} placement"))
+
+
+def homogeneous(x: ArrayLike | None, name: str = "transform") -> FloatArray:
+    """Check a 4×4 homogeneous transform (rotation orthonormal, last row 0 0 0 1); None is the identity."""
+    if x is None:
+        return readonly(np.eye(4))
+    t = np.array(x, dtype=float)
+    if t.shape != (4, 4):
+        raise ShapeError(f"{name} must be a 4×4 homogeneous transform, got shape {t.shape}", value=x)
+    r = t[:3, :3]
+    if (not np.isfinite(t).all() or not np.allclose(r.T @ r, np.eye(3), atol=1e-6)
+            or not np.allclose(t[3], [0, 0, 0, 1]) or np.linalg.det(r) < 0):
+        raise InvalidParameterError(f"{name} is not a rigid transform (orthonormal rotation, det +1, last row "
+                                    f"0 0 0 1): {t.tolist()}", value=x)
+    return readonly(t)
+
+
+def rot(axis: ArrayLike, angle: float) -> FloatArray:
+    """Rotation matrix about a unit axis (Rodrigues)."""
+    k = np.asarray(axis, dtype=float)
+    s = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    return np.eye(3) + math.sin(angle) * s + (1 - math.cos(angle)) * (s @ s)
+
+
+def transform(rotation: ArrayLike | None = None, translation: ArrayLike | None = None) -> FloatArray:
+    t = np.eye(4)
+    if rotation is not None:
+        t[:3, :3] = rotation
+    if translation is not None:
+        t[:3, 3] = translation
+    return t

@@ -1,0 +1,290 @@
+"""`RobotModel`: the immutable description of a serial arm (kinematics, inertias, motors, friction, limits).
+
+A model describes; it does not evaluate (that is :class:`armctl.Dynamics`). Variants are new objects:
+:meth:`RobotModel.with_payload`, :meth:`RobotModel.perturbed`, :meth:`RobotModel.reduced`,
+:meth:`RobotModel.with_friction`.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from armctl._checks import FloatArray, readonly
+from armctl.errors import InvalidParameterError, ShapeError, UnknownNameError
+from armctl.model.parts import Frame, Joint, JointFriction, Link, inertia_tensor
+
+if TYPE_CHECKING:
+    import pinocchio
+
+#: Names of the 13 dynamic parameters of one joint, in the order of :meth:`RobotModel.parameters`.
+PARAMETER_NAMES: tuple[str, ...] = (
+    "m", "mcx", "mcy", "mcz", "Ixx", "Ixy", "Iyy", "Ixz", "Iyz", "Izz", "Im_reflected", "Fv", "Fc",
+)
+PARAMS_PER_JOINT = len(PARAMETER_NAMES)
+
+
+@dataclass(frozen=True)
+class RobotModel:
+    """A serial manipulator: joints (each with its link, motor, friction, limits), named frames, gravity.
+
+    Build one with :meth:`from_dh`, :meth:`from_urdf`, one of :mod:`armctl.models`, or directly from
+    :class:`~armctl.model.parts.Joint` objects. Every joint frame is also a named frame (the joint's name);
+    ``tool_frame`` names the frame used when a method is given ``frame=None``.
+    """
+
+    joints: tuple[Joint, ...]
+    name: str = "robot"
+    gravity: FloatArray = field(default_factory=lambda: np.array([0.0, 0.0, -9.81]))
+    frames: tuple[Frame, ...] = ()
+    tool_frame: str | None = None
+
+    def __post_init__(self) -> None:
+        joints = tuple(self.joints)
+        if not joints:
+            raise InvalidParameterError("a RobotModel needs at least one joint", value=self.joints)
+        if not all(isinstance(j, Joint) for j in joints):
+            raise InvalidParameterError("joints must be armctl.model.Joint objects", value=self.joints)
+        names = [j.name for j in joints]
+        if len(set(names)) != len(names):
+            raise InvalidParameterError(f"joint names must be unique: {names}", value=names)
+        g = np.array(self.gravity, dtype=float)
+        if g.shape != (3,) or not np.isfinite(g).all():
+            raise ShapeError(f"gravity must be a finite 3-vector, got {self.gravity!r}", value=self.gravity)
+        frames = tuple(self.frames)
+        for f in frames:
+            if not 0 <= f.joint <= len(joints):
+                raise InvalidParameterError(f"frame {f.name!r} is attached to joint {f.joint}, but the model "
+                                            f"has joints 1..{len(joints)} (0 is the world)", value=f.joint)
+        all_names = ["world", *names, *(f.name for f in frames)]
+        if len(set(all_names)) != len(all_names):
+            raise InvalidParameterError(f"frame names must be unique (joint names count as frames): "
+                                        f"{all_names}", value=all_names)
+        object.__setattr__(self, "joints", joints)
+        object.__setattr__(self, "frames", frames)
+        object.__setattr__(self, "gravity", readonly(g))
+        if self.tool_frame is not None and self.tool_frame not in all_names:
+            raise UnknownNameError("frame", self.tool_frame, all_names)
+
+    # ----------------------------------------------------------------------------------------- builders
+    @classmethod
+    def from_dh(cls, links: Sequence[Any], convention: str = "standard", gravity: ArrayLike = (0, 0, -9.81),
+                tool: ArrayLike | None = None, name: str = "dh_robot", base: ArrayLike | None = None
+                ) -> RobotModel:
+        """A model from a Denavit–Hartenberg table of :class:`~armctl.model.dh.DHLink` (see there)."""
+        from armctl.model.dh import model_from_dh
+
+        return model_from_dh(links, convention=convention, gravity=gravity, tool=tool, name=name, base=base)
+
+    @classmethod
+    def from_urdf(cls, path: str, tool_frame: str | None = None, lock: Sequence[str] | Mapping[str, float] = (),
+                  gravity: ArrayLike = (0, 0, -9.81), name: str | None = None) -> RobotModel:
+        """A model from a URDF file through Pinocchio's parser. ``lock``: joints held fixed (names, or a
+        mapping name → position). URDF ``<dynamics damping friction>`` become viscous and Coulomb friction."""
+        from armctl.model.urdf import model_from_urdf
+
+        return model_from_urdf(path, tool_frame=tool_frame, lock=lock, gravity=gravity, name=name)
+
+    # ------------------------------------------------------------------------------------------ queries
+    @property
+    def n(self) -> int:
+        """Number of joints (degrees of freedom)."""
+        return len(self.joints)
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        return tuple(j.name for j in self.joints)
+
+    @property
+    def frame_names(self) -> tuple[str, ...]:
+        """Every frame a method can be asked about: 'world', the joint frames, the extra frames."""
+        return ("world", *self.joint_names, *(f.name for f in self.frames))
+
+    def frame(self, name: str | None = None) -> Frame:
+        """The frame called ``name`` (None: the tool frame, or the last joint frame if there is none)."""
+        if name is None:
+            name = self.tool_frame or self.joints[-1].name
+        if name == "world":
+            return Frame("world", 0, np.eye(4))
+        for i, j in enumerate(self.joints, start=1):
+            if j.name == name:
+                return Frame(name, i, np.eye(4))
+        for f in self.frames:
+            if f.name == name:
+                return f
+        raise UnknownNameError("frame", name, self.frame_names)
+
+    def joint_index(self, name: str) -> int:
+        """0-based index of the joint called ``name``."""
+        try:
+            return self.joint_names.index(name)
+        except ValueError:
+            raise UnknownNameError("joint", name, self.joint_names) from None
+
+    def _limit(self, attr: str) -> FloatArray:
+        return readonly(np.array([getattr(j.limits, attr) for j in self.joints]))
+
+    @property
+    def lower(self) -> FloatArray:
+        """Lower position limits (n,)."""
+        return self._limit("lower")
+
+    @property
+    def upper(self) -> FloatArray:
+        return self._limit("upper")
+
+    @property
+    def velocity_limit(self) -> FloatArray:
+        return self._limit("velocity")
+
+    @property
+    def effort_limit(self) -> FloatArray:
+        return self._limit("effort")
+
+    @property
+    def has_motors(self) -> bool:
+        return any(j.motor is not None and j.motor.inertia > 0 for j in self.joints)
+
+    @property
+    def has_friction(self) -> bool:
+        return any(not j.friction.is_zero for j in self.joints)
+
+    def parameters(self) -> FloatArray:
+        """The dynamic parameter vector π, 13 per joint (13·n,), joint by joint, each in the order of
+        :data:`PARAMETER_NAMES`:
+
+        ``m, m·cx, m·cy, m·cz, Ixx, Ixy, Iyy, Ixz, Iyz, Izz, k_r²·I_m, F_v, F_c``
+
+        with the first moment m·c and the inertia tensor *about the joint-frame origin* in joint-frame axes
+        (the augmented link; the ten inertial parameters in Pinocchio's order, so its regressor columns map
+        one to one), k_r²·I_m the reflected rotor inertia, F_v the viscous and F_c the Coulomb
+        friction. For an asymmetric Coulomb friction F_c is the mean (F_c⁺ + F_c⁻)/2; the asymmetry
+        (F_c⁺ − F_c⁻)/2 acts as a direction-dependent offset outside π (see ``Dynamics.regressor``).
+        """
+        out = np.empty(PARAMS_PER_JOINT * self.n)
+        for i, j in enumerate(self.joints):
+            lk = j.link
+            io = lk.inertia_about_origin()
+            rotor = j.motor.reflected_inertia if j.motor is not None else 0.0
+            out[PARAMS_PER_JOINT * i: PARAMS_PER_JOINT * (i + 1)] = [
+                lk.mass, *(lk.mass * lk.com), io[0, 0], io[0, 1], io[1, 1], io[0, 2], io[1, 2], io[2, 2],
+                rotor, j.friction.viscous, j.friction.coulomb_mean,
+            ]
+        return readonly(out)
+
+    def parameter_names(self) -> tuple[str, ...]:
+        """Names of the entries of :meth:`parameters`, e.g. ``'m[2]'`` for the mass of the third joint's link."""
+        return tuple(f"{p}[{i}]" for i in range(self.n) for p in PARAMETER_NAMES)
+
+    def fingerprint(self, inertial: bool = True) -> str:
+        """A hash of what determines the dynamics (for caches of generated code). ``inertial=False`` leaves
+        out what enters only through π or friction (masses, inertias, rotor inertias, friction), so every
+        payload or perturbed variant of an arm shares the kinematic fingerprint."""
+        h = hashlib.sha256()
+        h.update(self.gravity.tobytes())
+        for j in self.joints:
+            h.update(j.kind.encode())
+            h.update(j.axis.tobytes())
+            h.update(j.placement.tobytes())
+            if inertial:
+                h.update(np.array([j.link.mass, *j.link.com]).tobytes())
+                h.update(j.link.inertia.tobytes())
+            if j.motor is not None:
+                h.update(np.array([j.motor.gear_ratio]).tobytes())
+                h.update(j.motor_axis.tobytes())
+                if inertial:
+                    h.update(np.array([j.motor.inertia]).tobytes())
+        tool = self.frame(None)
+        h.update(f"{tool.name}:{tool.joint}".encode())
+        h.update(tool.placement.tobytes())
+        return h.hexdigest()[:16]
+
+    def to_pinocchio(self) -> pinocchio.Model:
+        """A new ``pinocchio.Model`` of this arm (rotors as armature k_r²I_m; friction is not copied)."""
+        from armctl.model.pinocchio_io import build_pinocchio
+
+        return build_pinocchio(self)
+
+    # ----------------------------------------------------------------------------------------- variants
+    def with_payload(self, mass: float, com: ArrayLike = (0.0, 0.0, 0.0),
+                     inertia: ArrayLike = (0.0, 0.0, 0.0), frame: str | None = None) -> RobotModel:
+        """This arm carrying a rigid payload: ``mass`` [kg], centre of mass ``com`` and ``inertia`` about it,
+        both in the axes of ``frame`` (default: the tool frame)."""
+        f = self.frame(frame)
+        if f.joint == 0:
+            raise InvalidParameterError("a payload cannot be attached to the world frame", value=frame)
+        payload = Link(mass, com, inertia_tensor(inertia, "payload inertia")).transformed(
+            f.placement[:3, :3], f.placement[:3, 3])
+        idx = f.joint - 1
+        joints = list(self.joints)
+        joints[idx] = replace(joints[idx], link=joints[idx].link.combined(payload))
+        return replace(self, joints=tuple(joints), name=f"{self.name}+payload")
+
+    def with_friction(self, viscous: ArrayLike = 0.0, coulomb: ArrayLike = 0.0,
+                      coulomb_negative: ArrayLike | None = None, static: ArrayLike | None = None,
+                      stribeck_velocity: ArrayLike = 0.0) -> RobotModel:
+        """This arm with the given joint friction (each a scalar for all joints or an (n,) vector)."""
+
+        def per_joint(x: ArrayLike | None, what: str) -> list[float | None]:
+            if x is None:
+                return [None] * self.n
+            a = np.broadcast_to(np.asarray(x, dtype=float), (self.n,)) if np.ndim(x) <= 1 else None
+            if a is None or (np.ndim(x) == 1 and np.shape(x) != (self.n,)):
+                raise ShapeError(f"{what} must be a scalar or a ({self.n},) vector, got {np.shape(x)}", value=x)
+            return [float(v) for v in a]
+
+        cols = zip(per_joint(viscous, "viscous"), per_joint(coulomb, "coulomb"),
+                   per_joint(coulomb_negative, "coulomb_negative"), per_joint(static, "static"),
+                   per_joint(stribeck_velocity, "stribeck_velocity"), strict=True)
+        joints = tuple(replace(j, friction=JointFriction(*c)) for j, c in zip(self.joints, cols, strict=True))
+        return replace(self, joints=joints)
+
+    def perturbed(self, mass: float = 1.0, inertia: float = 1.0, com_offset: float = 0.0,
+                  friction: float = 1.0, rotor: float = 1.0, noise: float = 0.0,
+                  seed: int | None = None) -> RobotModel:
+        """A deliberately wrong copy of this arm, for model-error studies.
+
+        mass, inertia, friction, rotor: factors on every link mass, every inertia tensor about the centre of
+        mass, every friction coefficient and every rotor inertia. com_offset: a shift [m] of every centre of
+        mass along a random direction. noise: relative standard deviation of an extra random factor per
+        link (seeded by ``seed``), clipped to stay physical.
+        """
+        for nm, v in (("mass", mass), ("inertia", inertia), ("friction", friction), ("rotor", rotor)):
+            if not (math.isfinite(v) and v >= 0):
+                raise InvalidParameterError(f"perturbed(): factor {nm} must be finite and >= 0, got {v}", value=v)
+        rng = np.random.default_rng(seed)
+        joints = []
+        for j in self.joints:
+            f_noise = max(0.05, 1.0 + noise * rng.standard_normal()) if noise else 1.0
+            d = rng.standard_normal(3)
+            d *= com_offset / max(float(np.linalg.norm(d)), 1e-12)
+            link = Link(j.link.mass * mass * f_noise, j.link.com + d, j.link.inertia * inertia * f_noise,
+                        j.link.physical)
+            motor = replace(j.motor, inertia=j.motor.inertia * rotor) if j.motor is not None else None
+            fr = j.friction
+            fr = JointFriction(fr.viscous * friction, fr.coulomb * friction,
+                               None if fr.coulomb_negative is None else fr.coulomb_negative * friction,
+                               None if fr.static is None else fr.static * friction, fr.stribeck_velocity)
+            joints.append(replace(j, link=link, motor=motor, friction=fr))
+        return replace(self, joints=tuple(joints), name=f"{self.name}~perturbed")
+
+    def reduced(self, rotors: bool = True, friction: bool = True,
+                lock: Sequence[str] | Mapping[str, float] = ()) -> RobotModel:
+        """A simpler model of this arm: ``rotors=False`` drops the motors, ``friction=False`` the friction,
+        ``lock`` holds joints fixed (names locked at 0, or a mapping name → position), merging their links
+        into the previous one."""
+        joints = tuple(replace(j, motor=j.motor if rotors else None,
+                               friction=j.friction if friction else JointFriction()) for j in self.joints)
+        model = replace(self, joints=joints)
+        if lock:
+            from armctl.model.pinocchio_io import lock_joints
+
+            model = lock_joints(model, lock)
+        return model
+

@@ -1,0 +1,48 @@
+"""URDF files → :class:`~armctl.RobotModel`, through Pinocchio's parser."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import replace
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from armctl.errors import ModelLoadError, UnknownNameError
+from armctl.model.robot import RobotModel
+
+
+def model_from_urdf(path: str | os.PathLike[str], tool_frame: str | None = None,
+                    lock: Sequence[str] | Mapping[str, float] = (), gravity: ArrayLike = (0, 0, -9.81),
+                    name: str | None = None) -> RobotModel:
+    import pinocchio as pin
+
+    from armctl.model.pinocchio_io import joints_from_pinocchio
+
+    path = os.fspath(path)
+    if not os.path.isfile(path):
+        raise ModelLoadError(f"URDF file not found: {path!r}", value=path)
+    try:
+        pm = pin.buildModelFromUrdf(path)
+    except Exception as exc:  # pinocchio raises plain ValueError/RuntimeError with the parser's words
+        raise ModelLoadError(f"cannot read URDF {path!r}: {exc}", value=path) from exc
+    if lock:
+        positions = dict(lock) if isinstance(lock, Mapping) else {n: 0.0 for n in lock}
+        q = pin.neutral(pm)
+        ids = []
+        for jname, value in positions.items():
+            if not pm.existJointName(jname):
+                raise UnknownNameError("joint", jname, list(pm.names)[1:])
+            jid = pm.getJointId(jname)
+            q[pm.idx_qs[jid]] = float(value)
+            ids.append(jid)
+        pm = pin.buildReducedModel(pm, ids, q)
+    joints, frames = joints_from_pinocchio(pm, path)
+    model = RobotModel(tuple(joints), name=name or pm.name or os.path.basename(path),
+                       gravity=np.asarray(gravity, dtype=float), frames=tuple(frames))
+    if tool_frame is not None:
+        if tool_frame not in model.frame_names:
+            raise UnknownNameError("frame", tool_frame, model.frame_names)
+        model = replace(model, tool_frame=tool_frame)
+    return model

@@ -1,0 +1,43 @@
+"""`Reference`: a joint-space reference (q, q̇, q̈) at one instant."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from armctl._checks import FloatArray, readonly
+from armctl.errors import NonFiniteError, ShapeError
+
+
+@dataclass(frozen=True)
+class Reference:
+    """Desired joint positions ``q`` [rad or m], velocities ``qd`` and accelerations ``qdd`` (each (n,),
+    read-only). ``qd`` and ``qdd`` default to zeros (a set-point)."""
+
+    q: FloatArray
+    qd: FloatArray | None = None
+    qdd: FloatArray | None = None
+
+    def __post_init__(self) -> None:
+        q = np.array(self.q, dtype=float).reshape(-1) if np.ndim(self.q) <= 1 else None
+        if q is None:
+            raise ShapeError(f"Reference q must be a vector, got shape {np.shape(self.q)}", value=self.q)
+        for name in ("q", "qd", "qdd"):
+            raw = getattr(self, name)
+            a = np.zeros_like(q) if raw is None else np.array(raw, dtype=float)
+            if a.shape != q.shape:
+                raise ShapeError(f"Reference {name} must have shape {q.shape} like q, got {a.shape}", value=raw)
+            if not np.isfinite(a).all():
+                raise NonFiniteError(f"Reference {name} holds NaN or inf: {a}", value=raw)
+            object.__setattr__(self, name, readonly(a))
+
+    @property
+    def n(self) -> int:
+        return int(self.q.shape[0])
+
+    @classmethod
+    def hold(cls, q: ArrayLike) -> Reference:
+        """A set-point: q with zero velocity and acceleration."""
+        return cls(np.asarray(q, dtype=float))
