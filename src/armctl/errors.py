@@ -48,3 +48,30 @@ class ModelLoadError(ArmctlError, OSError):
 
 class BackendError(ArmctlError, RuntimeError):
     """A dynamics backend cannot evaluate what was asked (e.g. a term it cannot express)."""
+
+
+class InfeasibleError(ArmctlError, ValueError):
+    """A problem (QP, time scaling, identification) has no solution; the error says which constraint binds
+    and carries the problem (``.problem``) where there is one."""
+
+    def __init__(self, message: str, *, value: Any = None, problem: Any = None) -> None:
+        super().__init__(message, value=value)
+        self.problem = problem
+
+
+class SolverError(ArmctlError, RuntimeError):
+    """A numerical solver failed (no convergence, numerical trouble); carries the problem and the solver's
+    result where there are some."""
+
+    def __init__(self, message: str, *, value: Any = None, problem: Any = None, result: Any = None) -> None:
+        super().__init__(message, value=value)
+        self.problem = problem
+        self.result = result
+
+
+class IdentifiabilityError(ArmctlError, ValueError):
+    """Data do not excite the parameters enough; carries the unidentifiable directions (``.directions``)."""
+
+    def __init__(self, message: str, *, value: Any = None, directions: Any = None) -> None:
+        super().__init__(message, value=value)
+        self.directions = directions
