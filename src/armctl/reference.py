@@ -11,7 +11,7 @@ from armctl._checks import FloatArray, readonly
 from armctl.errors import NonFiniteError, ShapeError
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)  # numpy fields: compare by identity
 class Reference:
     """Desired joint positions ``q`` [rad or m], velocities ``qd`` and accelerations ``qdd`` (each (n,),
     read-only). ``qd`` and ``qdd`` default to zeros (a set-point)."""

@@ -178,7 +178,12 @@ class Dynamics(ABC):
 
     def mass_matrix(self, q: ArrayLike) -> FloatArray:
         """M(q) (n×n, symmetric positive definite) [kg·m² / kg]."""
-        return self._mass(self._finite(q, "q"))
+        try:  # the fast path of _finite, inlined: this is called every control step
+            if q.shape == self._shape and math.isfinite(sum(q.tolist())):  # type: ignore[union-attr]
+                return self._mass(q)
+        except AttributeError:
+            pass
+        return self._mass(vector(q, self.n, "q"))
 
     def coriolis_matrix(self, q: ArrayLike, qd: ArrayLike) -> FloatArray:
         """C(q, q̇) from the Christoffel symbols, c_ij = Σ_k ½(∂M_ij/∂q_k + ∂M_ik/∂q_j − ∂M_jk/∂q_i) q̇_k,
@@ -187,7 +192,12 @@ class Dynamics(ABC):
 
     def gravity_torque(self, q: ArrayLike) -> FloatArray:
         """g(q) = ∂U/∂q [N·m]."""
-        return self._gravity(self._finite(q, "q"))
+        try:  # inlined fast path, as in mass_matrix
+            if q.shape == self._shape and math.isfinite(sum(q.tolist())):  # type: ignore[union-attr]
+                return self._gravity(q)
+        except AttributeError:
+            pass
+        return self._gravity(vector(q, self.n, "q"))
 
     def friction_torque(self, qd: ArrayLike) -> FloatArray:
         """τ_f = F_v q̇ + F_c⁺ (q̇ > 0) or − F_c⁻ (q̇ < 0); zero Coulomb part at rest (the simulator handles
@@ -276,9 +286,15 @@ class Dynamics(ABC):
         loop's damping); Coulomb friction at the measured q̇.
         """
         q, qd, qd_r, qdd_r = self._inputs(("q", "qd", "qd_r", "qdd_r"), q, qd, qd_r, qdd_r)
-        y = self._rigid_regressor(q, (qd + qd_r) / _SQRT8, 0.5 * qdd_r, (0.5 * qd_r, 0.5 * np.sign(qd)))
+        return self._polarised_regressor(q, (qd + qd_r) / _SQRT8, 0.5 * qdd_r, 0.5 * (qd - qd_r),
+                                         (qd_r, np.sign(qd)))
+
+    def _polarised_regressor(self, q: FloatArray, v1: FloatArray, a1: FloatArray, v2: FloatArray,
+                             friction: tuple[FloatArray, FloatArray]) -> FloatArray:
+        """2 R(q, v1, a1) − R(q, v2, 0) with the given friction columns; backends may combine earlier."""
+        y = self._rigid_regressor(q, v1, a1, (0.5 * friction[0], 0.5 * friction[1]))
         y *= 2.0
-        y -= self._rigid_regressor(q, 0.5 * (qd - qd_r), self._zeros)
+        y -= self._rigid_regressor(q, v2, self._zeros)
         return y
 
 

@@ -63,15 +63,27 @@ class PinocchioDynamics(Dynamics):
 
     def _rigid_regressor(self, q: FloatArray, qd: FloatArray, qdd: FloatArray,
                          friction: tuple[FloatArray, FloatArray] | None = None) -> FloatArray:
-        # Pinocchio's ten inertial parameters per body are armctl's first ten, in the same order
+        return self._assemble(self._raw_regressor(q, qd, qdd), qdd, friction)
+
+    def _polarised_regressor(self, q: FloatArray, v1: FloatArray, a1: FloatArray, v2: FloatArray,
+                             friction: tuple[FloatArray, FloatArray]) -> FloatArray:
+        # combine Pinocchio's (n, 10n) outputs first, then assemble the (n, 13n) layout once
+        raw = self._raw_regressor(q, v1, a1)
+        raw *= 2.0
+        raw -= self._raw_regressor(q, v2, self._zeros)
+        return self._assemble(raw, 2.0 * a1, friction)
+
+    def _assemble(self, raw: FloatArray, rotor: FloatArray,
+                  friction: tuple[FloatArray, FloatArray] | None) -> FloatArray:
+        """armctl's (n, 13n) regressor from Pinocchio's (n, 10n) one: Pinocchio's ten inertial parameters
+        per body are armctl's first ten, in the same order; the rotor column is q̈ (diagonal)."""
         n = self.n
-        raw = self._raw_regressor(q, qd, qdd)
         yt = np.zeros((n, PARAMS_PER_JOINT, n))
         yt[:, :10, :] = raw.T.reshape(n, 10, n)
         if friction is None:
-            yt.put(self._t_idx[:n], qdd)
+            yt.put(self._t_idx[:n], rotor)
         else:
-            yt.put(self._t_idx, np.concatenate((qdd, *friction)))
+            yt.put(self._t_idx, np.concatenate((rotor, *friction)))
         return yt.reshape(PARAMS_PER_JOINT * n, n).T  # (n, 13n), column-major
 
     def _forward(self, q: FloatArray, qd: FloatArray, tau_net: FloatArray) -> FloatArray:

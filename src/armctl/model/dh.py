@@ -30,7 +30,7 @@ _Z = np.array([0.0, 0.0, 1.0])
 _X = np.array([1.0, 0.0, 0.0])
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)  # numpy fields: compare by identity
 class DHLink:
     """One row of a DH table and the body it moves.
 

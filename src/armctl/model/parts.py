@@ -68,7 +68,7 @@ def inertia_tensor(x: ArrayLike, name: str = "inertia", triangle: bool = True) -
     return readonly(a)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)  # numpy fields: compare by identity
 class Link:
     """An (augmented) link body.
 
@@ -116,7 +116,7 @@ class Link:
         return Link(m, c, i, physical)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)  # numpy fields: compare by identity
 class Motor:
     """A motor driving a joint through a rigid gear.
 
@@ -151,7 +151,7 @@ class Motor:
         return self.gear_ratio**2 * self.inertia
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)  # numpy fields: compare by identity
 class JointFriction:
     """Joint-side friction. viscous: F_v [N·m·s/rad]. coulomb: F_c⁺, the Coulomb level for q̇ > 0 [N·m].
     coulomb_negative: F_c⁻ for q̇ < 0 (a magnitude; None: same as coulomb). static: breakaway (stiction)
@@ -199,7 +199,7 @@ class JointFriction:
         return self.viscous == 0 and self.coulomb == 0 and self.coulomb_neg == 0
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)  # numpy fields: compare by identity
 class JointLimits:
     """lower, upper: position [rad or m]; velocity [rad/s]; effort: torque magnitude [N·m] (inf: none)."""
 
@@ -224,7 +224,7 @@ class JointLimits:
 JOINT_KINDS = ("revolute", "prismatic")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)  # numpy fields: compare by identity
 class Joint:
     """One joint of a serial chain and the link it moves.
 
@@ -260,7 +260,7 @@ class Joint:
         return readonly(self.placement[:3, :3] @ self.axis)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)  # numpy fields: compare by identity
 class Frame:
     """A named frame rigidly attached to joint ``joint`` (0: the world, i: the i-th joint, 1-based)."""
 

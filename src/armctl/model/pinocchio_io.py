@@ -53,8 +53,10 @@ def build_pinocchio(model: RobotModel) -> pinocchio.Model:
     return pm
 
 
-def joints_from_pinocchio(pm: pinocchio.Model, source: str) -> tuple[list[Joint], list[Frame]]:
-    """Read a serial, one-dof-per-joint pinocchio.Model back into joints and frames (motors not included)."""
+def joints_from_pinocchio(pm: pinocchio.Model, source: str, physical: bool = True
+                          ) -> tuple[list[Joint], list[Frame]]:
+    """Read a serial, one-dof-per-joint pinocchio.Model back into joints and frames (motors not included).
+    ``physical=False`` accepts inertias that violate the triangle inequality (see :class:`Link`)."""
     import pinocchio as pin
 
     if pm.nq != pm.nv:
@@ -80,7 +82,7 @@ def joints_from_pinocchio(pm: pinocchio.Model, source: str) -> tuple[list[Joint]
             effort=float(pm.effortLimit[idx]) if 0 < pm.effortLimit[idx] < 1e10 else np.inf)
         fric = JointFriction(viscous=float(pm.damping[idx]), coulomb=float(pm.friction[idx]))
         joints.append(Joint(pm.names[jid], kind, axis, transform(pl.rotation, pl.translation),
-                            Link(inert.mass, inert.lever, inert.inertia), None, fric, lim))
+                            Link(inert.mass, inert.lever, inert.inertia, physical), None, fric, lim))
     names = set(pm.names)
     frames = [Frame(f.name, int(f.parentJoint), transform(f.placement.rotation, f.placement.translation))
               for f in pm.frames if f.name not in names and f.name != "universe" and f.parentJoint > 0]
@@ -102,7 +104,7 @@ def lock_joints(model: RobotModel, lock: Sequence[str] | Mapping[str, float]) ->
         ids.append(i + 1)
     pm = build_pinocchio(model)
     reduced = pin.buildReducedModel(pm, ids, q)
-    joints, frames = joints_from_pinocchio(reduced, model.name)
+    joints, frames = joints_from_pinocchio(reduced, model.name, all(j.link.physical for j in model.joints))
     kept = {j.name: j for j in model.joints}
     joints = [replace(j, motor=kept[j.name].motor, friction=kept[j.name].friction, limits=kept[j.name].limits)
               for j in joints]

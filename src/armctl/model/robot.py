@@ -30,7 +30,7 @@ PARAMETER_NAMES: tuple[str, ...] = (
 PARAMS_PER_JOINT = len(PARAMETER_NAMES)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)  # numpy fields: compare by identity
 class RobotModel:
     """A serial manipulator: joints (each with its link, motor, friction, limits), named frames, gravity.
 

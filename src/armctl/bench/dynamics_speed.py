@@ -1,0 +1,80 @@
+"""Speed of the dynamics through armctl's public API against raw Pinocchio, on the Panda (7 joints).
+
+Run: ``python -m armctl.bench.dynamics_speed``. Prints per-call medians and ratios measured in the same run
+(interleaved rounds), the Lagrange backend's symbolic build time and its compiled inverse dynamics against
+the Pinocchio backend, and each figure's target.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+import numpy as np
+
+import armctl
+from armctl.bench.timing import interleaved
+
+TARGETS = {"mass_matrix": 1.5, "inverse_dynamics": 1.5, "regressor": 1.5, "passivity_regressor": 4.0,
+           "lagrange_compiled_inverse_dynamics": 10.0, "lagrange_build_seconds": 5.0}
+
+
+def run(number: int = 1000, rounds: int = 15, seed: int = 0) -> dict[str, Any]:
+    """Measure; returns a dict of figures (seconds and ratios)."""
+    import pinocchio as pin
+
+    model = armctl.models.panda()
+    dyn = armctl.Dynamics(model)
+    pm, pd = model.to_pinocchio(), None
+    pd = pm.createData()
+    rng = np.random.default_rng(seed)
+    q, qd, qdd = rng.uniform(-1.5, 1.5, (3, model.n))
+    out: dict[str, Any] = {"model": model.name, "n": model.n}
+    pairs = {
+        "mass_matrix": (lambda: dyn.mass_matrix(q), lambda: pin.crba(pm, pd, q)),
+        "inverse_dynamics": (lambda: dyn.inverse_dynamics(q, qd, qdd), lambda: pin.rnea(pm, pd, q, qd, qdd)),
+        "regressor": (lambda: dyn.regressor(q, qd, qdd),
+                      lambda: pin.computeJointTorqueRegressor(pm, pd, q, qd, qdd)),
+        "passivity_regressor": (lambda: dyn.passivity_regressor(q, qd, 0.9 * qd, qdd),
+                                lambda: pin.computeJointTorqueRegressor(pm, pd, q, qd, qdd)),
+    }
+    for name, (api, raw) in pairs.items():
+        t = interleaved({"api": api, "raw": raw}, number, rounds)
+        out[name] = {"api_s": t["api"], "raw_s": t["raw"], "ratio": t["api"] / t["raw"]}
+    t0 = time.perf_counter()
+    lag_vm = armctl.Dynamics(model, backend="lagrange")
+    out["lagrange_build_seconds"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    lag = armctl.Dynamics(model, backend="lagrange", compile=True)
+    out["lagrange_compile_or_load_seconds"] = time.perf_counter() - t0
+    t = interleaved({"lag": lambda: lag.inverse_dynamics(q, qd, qdd), "pin": lambda: dyn.inverse_dynamics(q, qd, qdd),
+                     "vm": lambda: lag_vm.inverse_dynamics(q, qd, qdd)}, max(number // 10, 50), rounds)
+    out["lagrange_compiled_inverse_dynamics"] = {"api_s": t["lag"], "pinocchio_backend_s": t["pin"],
+                                                 "ratio": t["lag"] / t["pin"], "casadi_vm_s": t["vm"]}
+    return out
+
+
+def report(fig: dict[str, Any]) -> str:
+    lines = [f"dynamics speed on {fig['model']} ({fig['n']} joints), medians of interleaved rounds"]
+    for name in ("mass_matrix", "inverse_dynamics", "regressor", "passivity_regressor"):
+        f = fig[name]
+        ok = "ok" if f["ratio"] <= TARGETS[name] else "MISSED"
+        lines.append(f"  {name:22s} api {f['api_s'] * 1e6:7.2f} us  raw {f['raw_s'] * 1e6:7.2f} us  "
+                     f"ratio {f['ratio']:5.2f}  (target <= {TARGETS[name]}: {ok})")
+    f = fig["lagrange_compiled_inverse_dynamics"]
+    ok = "ok" if f["ratio"] <= TARGETS["lagrange_compiled_inverse_dynamics"] else "MISSED"
+    lines.append(f"  lagrange compiled tau  {f['api_s'] * 1e6:7.2f} us  pinocchio backend "
+                 f"{f['pinocchio_backend_s'] * 1e6:6.2f} us  ratio {f['ratio']:5.2f}  (target <= 10: {ok}); "
+                 f"CasADi VM {f['casadi_vm_s'] * 1e6:.1f} us")
+    b = fig["lagrange_build_seconds"]
+    lines.append(f"  lagrange symbolic build {b:.2f} s (target <= 5: {'ok' if b <= 5 else 'MISSED'}); "
+                 f"compile or cached load {fig['lagrange_compile_or_load_seconds']:.2f} s")
+    return "\n".join(lines)
+
+
+def main() -> None:
+    print(report(run()))
+
+
+if __name__ == "__main__":
+    main()

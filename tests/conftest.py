@@ -1,0 +1,31 @@
+"""Shared fixtures: built-in models and Dynamics objects, built once per session (they are immutable)."""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from functools import cache
+
+import pytest
+
+import armctl
+
+# compiled CasADi code is cached across runs (CI keeps ~/.cache between steps of one run at least)
+os.environ.setdefault("ARMCTL_CACHE", os.path.join(tempfile.gettempdir(), "armctl-cache"))
+
+MODEL_NAMES = ("pendulum", "planar_2r", "planar_3r", "puma560", "panda", "ur5")
+
+
+@cache
+def model(name: str) -> armctl.RobotModel:
+    return getattr(armctl.models, name)()
+
+
+@cache
+def dynamics(name: str, backend: str = "pinocchio", **options: object) -> armctl.Dynamics:
+    return armctl.Dynamics(model(name), backend=backend, **options)
+
+
+@pytest.fixture(params=MODEL_NAMES)
+def model_name(request: pytest.FixtureRequest) -> str:
+    return str(request.param)

@@ -1,0 +1,114 @@
+"""The algebraic identities of the Lagrange model, on random states (hypothesis), on both backends.
+
+M symmetric positive definite; Ṁ − 2C skew-symmetric (Ṁ by central differences); Y π = τ; the passivity
+regressor identity; and the energy balance dE/dt = q̇ᵀ(τ − τ_f) along the model's own forward dynamics, with
+dE/dt by central differences of T + U.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from tests.conftest import dynamics
+
+CASES = [("planar_2r", "pinocchio"), ("planar_2r", "lagrange"), ("puma560", "pinocchio"),
+         ("puma560", "lagrange"), ("panda", "pinocchio"), ("ur5", "pinocchio"), ("planar_3r", "lagrange")]
+SETTINGS = settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+
+
+def states(n: int, k: int = 3) -> st.SearchStrategy[np.ndarray]:
+    return st.lists(st.floats(-3.0, 3.0, allow_nan=False), min_size=k * n, max_size=k * n).map(
+        lambda v: np.asarray(v).reshape(k, n))
+
+
+@pytest.mark.parametrize(("name", "backend"), CASES)
+@SETTINGS
+@given(data=st.data())
+def test_mass_matrix_symmetric_positive_definite(name: str, backend: str, data: st.DataObject) -> None:
+    dyn = dynamics(name, backend)
+    q = data.draw(states(dyn.n, 1))[0]
+    m = dyn.mass_matrix(q)
+    assert np.allclose(m, m.T, rtol=0, atol=1e-12 * np.abs(m).max())
+    assert np.linalg.eigvalsh(m).min() > 0
+
+
+@pytest.mark.parametrize(("name", "backend"), CASES)
+@SETTINGS
+@given(data=st.data())
+def test_mdot_minus_2c_is_skew_symmetric(name: str, backend: str, data: st.DataObject) -> None:
+    dyn = dynamics(name, backend)
+    q, qd, _ = data.draw(states(dyn.n))
+    h = 1e-6
+    mdot = (dyn.mass_matrix(q + h * qd) - dyn.mass_matrix(q - h * qd)) / (2 * h)
+    n = mdot - 2 * dyn.coriolis_matrix(q, qd)
+    # central differences: truncation O(h²) and round-off ~ ε|M|/h; N itself is O(|M| |q̇|)
+    tol = 1e-7 * np.abs(dyn.mass_matrix(q)).max() * (1 + np.abs(qd).max())
+    assert np.abs(n + n.T).max() <= tol
+    assert abs(qd @ n @ qd) <= tol * (qd @ qd + 1)
+
+
+@pytest.mark.parametrize(("name", "backend"), CASES)
+@SETTINGS
+@given(data=st.data())
+def test_regressor_times_parameters_is_inverse_dynamics(name: str, backend: str, data: st.DataObject) -> None:
+    dyn = dynamics(name, backend)
+    q, qd, qdd = data.draw(states(dyn.n))
+    tau = dyn.inverse_dynamics(q, qd, qdd)
+    y = dyn.regressor(q, qd, qdd)
+    assert y.shape == (dyn.n, 13 * dyn.n)
+    # puma560's asymmetric Coulomb friction leaves an offset outside π (documented)
+    assert np.allclose(y @ dyn.model.parameters() + dyn.coulomb_offset(qd), tau, rtol=1e-10,
+                       atol=1e-10 * np.abs(tau).max())
+
+
+@pytest.mark.parametrize(("name", "backend"), CASES)
+@SETTINGS
+@given(data=st.data())
+def test_passivity_regressor_identity(name: str, backend: str, data: st.DataObject) -> None:
+    dyn = dynamics(name, backend)
+    q, qd, qd_r = data.draw(states(dyn.n))
+    qdd_r = data.draw(states(dyn.n, 1))[0]
+    fr = [j.friction for j in dyn.model.joints]
+    fv = np.array([f.viscous for f in fr])
+    coulomb = np.where(qd > 0, [f.coulomb for f in fr], 0.0) - np.where(qd < 0, [f.coulomb_neg for f in fr], 0.0)
+    expected = (dyn.mass_matrix(q) @ qdd_r + dyn.coriolis_matrix(q, qd) @ qd_r + dyn.gravity_torque(q)
+                + fv * qd_r + coulomb)
+    y = dyn.passivity_regressor(q, qd, qd_r, qdd_r)
+    got = y @ dyn.model.parameters() + dyn.coulomb_offset(qd)
+    assert np.allclose(got, expected, rtol=1e-9, atol=1e-9 * max(np.abs(expected).max(), 1.0))
+    # with q̇_r = q̇ and q̈_r = q̈ it is the ordinary regressor
+    assert np.allclose(dyn.passivity_regressor(q, qd, qd, qdd_r), dyn.regressor(q, qd, qdd_r), atol=1e-9)
+
+
+@pytest.mark.parametrize(("name", "backend"), CASES)
+@SETTINGS
+@given(data=st.data())
+def test_energy_balance_along_forward_dynamics(name: str, backend: str, data: st.DataObject) -> None:
+    """dE/dt = q̇ᵀ(τ − τ_f): the power of the actuators minus what friction dissipates."""
+    dyn = dynamics(name, backend)
+    q, qd, tau = data.draw(states(dyn.n))
+    tau = tau * 10
+    qdd = dyn.forward_dynamics(q, qd, tau)
+
+    def energy(qq: np.ndarray, vv: np.ndarray) -> float:
+        return dyn.kinetic_energy(qq, vv) + dyn.potential_energy(qq)
+
+    h = 1e-6
+    de_dt = (energy(q + h * qd, qd + h * qdd) - energy(q - h * qd, qd - h * qdd)) / (2 * h)
+    power = qd @ (tau - dyn.friction_torque(qd))
+    roundoff = 1e-6 * (abs(energy(q, qd)) + 1)  # ~ ε|E|/h with margin
+    assert de_dt == pytest.approx(power, rel=1e-5, abs=1e-5 * np.abs(tau).max() + roundoff)
+
+
+@pytest.mark.parametrize(("name", "backend"), CASES)
+def test_forward_dynamics_inverts_inverse_dynamics(name: str, backend: str) -> None:
+    dyn = dynamics(name, backend)
+    rng = np.random.default_rng(7)
+    for _ in range(5):
+        q, qd, qdd = rng.uniform(-2, 2, (3, dyn.n))
+        wrench = rng.normal(size=6)
+        tau = dyn.inverse_dynamics(q, qd, qdd, wrench=wrench)
+        assert np.allclose(dyn.forward_dynamics(q, qd, tau, wrench=wrench), qdd, atol=1e-8)

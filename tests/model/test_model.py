@@ -1,0 +1,182 @@
+"""RobotModel: builders, variants, parameters, and the errors bad input gets."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import armctl
+from armctl.errors import (
+    ArmctlError,
+    InvalidParameterError,
+    ModelLoadError,
+    NonFiniteError,
+    ShapeError,
+    UnknownNameError,
+)
+from armctl.model import DHLink, Joint, JointFriction, Link, Motor
+from tests.conftest import dynamics, model
+
+
+def test_builtin_sizes_and_tool_frames(model_name: str) -> None:
+    m = model(model_name)
+    expected = {"pendulum": 1, "planar_2r": 2, "planar_3r": 3, "puma560": 6, "panda": 7, "ur5": 6}[model_name]
+    assert m.n == expected
+    assert m.parameters().shape == (13 * m.n,)
+    assert m.tool_frame in m.frame_names
+    assert not m.parameters().flags.writeable
+
+
+def test_parameters_layout() -> None:
+    """π per joint: m, m·c, inertia about the joint origin (parallel axis), k_r² I_m, F_v, F_c."""
+    link = Link(2.0, (0.1, 0.2, 0.3), np.diag([0.01, 0.02, 0.03]))
+    joint = Joint("j", "revolute", (0, 0, 1), np.eye(4), link, Motor(1e-4, 10.0),
+                  JointFriction(0.5, 1.0, 3.0))
+    pi = armctl.RobotModel((joint,)).parameters()
+    c = np.array([0.1, 0.2, 0.3])
+    i_o = np.diag([0.01, 0.02, 0.03]) + 2.0 * (c @ c * np.eye(3) - np.outer(c, c))
+    assert pi[0] == 2.0
+    assert np.allclose(pi[1:4], 2.0 * c)
+    assert np.allclose(pi[4:10], [i_o[0, 0], i_o[0, 1], i_o[1, 1], i_o[0, 2], i_o[1, 2], i_o[2, 2]])
+    assert pi[10] == pytest.approx(1e-2)
+    assert pi[11] == 0.5
+    assert pi[12] == 2.0  # mean of the asymmetric Coulomb levels 1 and 3
+
+
+def test_standard_and_modified_dh_describe_the_same_arm() -> None:
+    """A 3-link arm written in both conventions has the same dynamics and tool pose."""
+    std = [DHLink(d=0.3, a=0.0, alpha=math.pi / 2, mass=2.0, com=(0, -0.1, 0), inertia=(0.02, 0.01, 0.02)),
+           DHLink(a=0.5, mass=1.5, com=(-0.25, 0, 0), inertia=(0.001, 0.03, 0.03)),
+           DHLink(a=0.4, mass=1.0, com=(-0.2, 0, 0), inertia=(0.001, 0.015, 0.015))]
+    # modified: row i holds alpha_{i-1}, a_{i-1}, d_i; link bodies are given in frame {i} = joint frame i, which in
+    # the standard convention is frame {i-1} · Rz(q): re-express each body there
+    mdh = [DHLink(d=0.3, mass=2.0, com=(0, 0, 0.1), inertia=(0.02, 0.02, 0.01)),
+           DHLink(alpha=math.pi / 2, mass=1.5, com=(0.25, 0, 0), inertia=(0.001, 0.03, 0.03)),
+           DHLink(a=0.5, mass=1.0, com=(0.2, 0, 0), inertia=(0.001, 0.015, 0.015))]
+    tool = np.eye(4)
+    tool[0, 3] = 0.4
+    a = armctl.Dynamics(armctl.RobotModel.from_dh(std, "standard"))
+    b = armctl.Dynamics(armctl.RobotModel.from_dh(mdh, "modified", tool=tool))
+    rng = np.random.default_rng(0)
+    for _ in range(5):
+        q, qd, qdd = rng.uniform(-2, 2, (3, 3))
+        assert np.allclose(a.frame_pose(q), b.frame_pose(q), atol=1e-12)
+        assert np.allclose(a.inverse_dynamics(q, qd, qdd), b.inverse_dynamics(q, qd, qdd), atol=1e-10)
+
+
+def test_payload_adds_its_weight_through_the_jacobian() -> None:
+    """A point payload of mass m at the tool adds J_vᵀ(−m g₀) to the gravity torque."""
+    base = model("panda")
+    heavy = base.with_payload(1.5)
+    q = np.array([0.2, -0.4, 0.1, -1.8, 0.3, 1.6, 0.5])
+    d0, d1 = dynamics("panda"), armctl.Dynamics(heavy)
+    expected = d0.gravity_torque(q) + d0.jacobian(q)[:3].T @ (-1.5 * base.gravity)
+    assert np.allclose(d1.gravity_torque(q), expected, atol=1e-10)
+    assert base.parameters()[-13] != heavy.parameters()[-13]  # the model itself is unchanged
+    assert heavy.n == base.n
+
+
+def test_locked_joint_gives_the_submodel() -> None:
+    """Locking joint 3 at 0.7: M, g of the reduced arm are the full model's with q3 = 0.7, q̇3 = 0."""
+    full = model("puma560").reduced(friction=False)
+    red = full.reduced(lock={"joint3": 0.7})
+    assert red.n == 5 and "joint3" not in red.joint_names
+    df, dr = armctl.Dynamics(full), armctl.Dynamics(red)
+    keep = [0, 1, 3, 4, 5]
+    rng = np.random.default_rng(1)
+    for _ in range(3):
+        qr, qdr, qddr = rng.uniform(-2, 2, (3, 5))
+        q, qd, qdd = (np.insert(x, 2, v) for x, v in ((qr, 0.7), (qdr, 0.0), (qddr, 0.0)))
+        assert np.allclose(dr.mass_matrix(qr), df.mass_matrix(q)[np.ix_(keep, keep)], atol=1e-10)
+        assert np.allclose(dr.inverse_dynamics(qr, qdr, qddr), df.inverse_dynamics(q, qd, qdd)[keep], atol=1e-10)
+
+
+def test_reduced_drops_rotors_and_friction_and_perturbed_scales() -> None:
+    p = model("puma560")
+    assert p.has_motors and p.has_friction
+    r = p.reduced(rotors=False, friction=False)
+    assert not r.has_motors and not r.has_friction
+    pert = p.perturbed(mass=1.2, friction=0.5)
+    assert np.allclose(pert.parameters()[13::13][:1], p.parameters()[13::13][:1] * 1.2)
+    assert pert.joints[0].friction.viscous == pytest.approx(0.5 * p.joints[0].friction.viscous)
+    noisy = p.perturbed(noise=0.2, seed=3)
+    assert np.array_equal(noisy.parameters(), p.perturbed(noise=0.2, seed=3).parameters())
+    assert not np.allclose(noisy.parameters(), p.parameters())
+
+
+def test_puma560_physical_variant() -> None:
+    assert not model("puma560").joints[2].link.physical
+    fixed = armctl.models.puma560(physical=True)
+    assert all(j.link.physical for j in fixed.joints)
+    # link 1's fix changes no torque
+    q = np.array([0.3, 0.2, -0.5, 0.1, 0.4, 0.2])
+    only1 = [j if i != 0 else fixed.joints[0] for i, j in enumerate(model("puma560").joints)]
+    a = armctl.Dynamics(armctl.RobotModel(tuple(only1)))
+    b = armctl.Dynamics(armctl.RobotModel(model("puma560").joints))
+    assert np.allclose(a.inverse_dynamics(q, q, q), b.inverse_dynamics(q, q, q))
+
+
+@pytest.mark.parametrize(("kwargs", "match"), [
+    ({"mass": -1.0}, "mass"),
+    ({"mass": 1.0, "inertia": (1.0, 1.0, -0.1)}, "positive semi-definite"),
+    ({"mass": 1.0, "inertia": (0.1, 0.1, 0.5)}, "triangle inequality"),
+    ({"mass": 1.0, "inertia": np.ones((2, 2))}, "3×3"),
+    ({"mass": 1.0, "com": (0, 0)}, "3 components"),
+])
+def test_bad_link_raises_named_errors(kwargs: dict, match: str) -> None:
+    with pytest.raises(ArmctlError, match=match):
+        Link(**kwargs)
+
+
+def test_bad_input_errors() -> None:
+    dyn = dynamics("panda")
+    with pytest.raises(ShapeError, match=r"qd must have shape \(7,\)"):
+        dyn.inverse_dynamics(np.zeros(7), np.zeros(6), np.zeros(7))
+    with pytest.raises(NonFiniteError, match="qdd"):
+        dyn.inverse_dynamics(np.zeros(7), np.zeros(7), [0, 0, np.nan, 0, 0, 0, 0])
+    with pytest.raises(NonFiniteError, match="q holds"):
+        dyn.mass_matrix([np.inf] + [0.0] * 6)
+    with pytest.raises(NonFiniteError, match="q holds"):
+        dyn.mass_matrix([np.nan] + [0.0] * 6)  # M does not depend on q1: checked anyway
+    with pytest.raises(UnknownNameError, match="panda_hand_tcp") as info:
+        dyn.jacobian(np.zeros(7), frame="gripper")
+    assert "gripper" in str(info.value) and isinstance(info.value, KeyError)
+    with pytest.raises(UnknownNameError, match="'lagrange'"):
+        armctl.Dynamics(model("panda"), backend="featherstone")
+    with pytest.raises(ModelLoadError, match="not found"):
+        armctl.RobotModel.from_urdf("/nonexistent/robot.urdf")
+    with pytest.raises(ShapeError, match="wrench"):
+        dyn.inverse_dynamics(np.zeros(7), np.zeros(7), np.zeros(7), wrench=np.zeros(3))
+    with pytest.raises(InvalidParameterError, match="convention"):
+        armctl.RobotModel.from_dh([DHLink(a=1.0, mass=1.0)], convention="craig")
+
+
+def test_unreadable_urdf(tmp_path: object) -> None:
+    import pathlib
+
+    bad = pathlib.Path(str(tmp_path)) / "bad.urdf"
+    bad.write_text("<robot name='x'><link name='a'/><joint name='j' type='revolute'>")
+    with pytest.raises(ModelLoadError, match="cannot read URDF"):
+        armctl.RobotModel.from_urdf(bad)
+
+
+def test_urdf_lock_and_tool_frame_errors() -> None:
+    path = armctl.models.robot_description("panda_description/urdf/panda.urdf")
+    with pytest.raises(UnknownNameError, match="panda_joint1"):
+        armctl.RobotModel.from_urdf(path, lock=("finger",))
+    with pytest.raises(UnknownNameError, match="unknown frame"):
+        armctl.RobotModel.from_urdf(path, tool_frame="nope", lock=("panda_finger_joint1", "panda_finger_joint2"))
+    with pytest.raises(ModelLoadError, match="serial chains"):
+        armctl.RobotModel.from_urdf(path)  # the two fingers branch off the hand
+
+
+def test_dynamics_pickles_by_rebuilding() -> None:
+    import pickle
+
+    for backend in ("pinocchio", "lagrange"):
+        d = dynamics("planar_2r", backend)
+        d2 = pickle.loads(pickle.dumps(d))
+        q = np.array([0.3, -0.2])
+        assert np.allclose(d2.mass_matrix(q), d.mass_matrix(q)) and d2.backend == backend
