@@ -1,5 +1,20 @@
-"""Controllers: ``tau = controller(t, q, qd, ref)``."""
+"""Controllers: ``tau = controller(t, q, qd, ref)``.
 
+==========================  =================================================================================
+:class:`PDGravity`           set-point PD with gravity compensation (Takegaki–Arimoto)
+:class:`ComputedTorque`      inverse dynamics + PD (+ integral)
+:class:`PassivityBased`      Slotine–Li: M q̈_r + C q̇_r + g − K_D s
+:class:`Adaptive`            Slotine–Li adaptive law on the passivity regressor, with projection, σ-modification,
+                             dead-zone and composite adaptation
+==========================  =================================================================================
+
+Write your own by subclassing :class:`Controller` and implementing ``compute(t, q, qd, ref)``.
+"""
+
+from armctl.controllers.adaptive import Adaptive
 from armctl.controllers.base import Controller
+from armctl.controllers.computed_torque import ComputedTorque
+from armctl.controllers.passivity import PassivityBased
+from armctl.controllers.pd import PDGravity
 
-__all__ = ["Controller"]
+__all__ = ["Adaptive", "ComputedTorque", "Controller", "PDGravity", "PassivityBased"]

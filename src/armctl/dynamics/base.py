@@ -289,6 +289,22 @@ class Dynamics(ABC):
         return self._polarised_regressor(q, (qd + qd_r) / _SQRT8, 0.5 * qdd_r, 0.5 * (qd - qd_r),
                                          (qd_r, np.sign(qd)))
 
+    def passivity_torque(self, q: ArrayLike, qd: ArrayLike, qd_r: ArrayLike, qdd_r: ArrayLike) -> FloatArray:
+        """M q̈_r + C(q, q̇) q̇_r + g + F_v q̇_r + F_c sgn(q̇) (= passivity_regressor(...) @ π, with the Coulomb
+        asymmetry offset), from two inverse-dynamics evaluations by the same polarisation:
+        2 R(q, (q̇ + q̇_r)/√8, q̈_r/2) − R(q, (q̇ − q̇_r)/2, 0), R(q, v, a) = M a + C(q, v) v + g."""
+        q, qd, qd_r, qdd_r = self._inputs(("q", "qd", "qd_r", "qdd_r"), q, qd, qd_r, qdd_r)
+        tau = self._rigid_torque(q, (qd + qd_r) / _SQRT8, 0.5 * qdd_r)
+        tau *= 2.0
+        tau -= self._rigid_torque(q, 0.5 * (qd - qd_r), self._zeros)
+        if self._has_viscous:
+            tau += self._fv * qd_r
+        if self._has_coulomb:
+            tau += self._fc_mean * np.sign(qd)
+            if self._has_asymmetry:
+                tau += self._fc_offset * (qd != 0)
+        return tau
+
     def _polarised_regressor(self, q: FloatArray, v1: FloatArray, a1: FloatArray, v2: FloatArray,
                              friction: tuple[FloatArray, FloatArray]) -> FloatArray:
         """2 R(q, v1, a1) − R(q, v2, 0) with the given friction columns; backends may combine earlier."""

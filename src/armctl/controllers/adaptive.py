@@ -1,0 +1,103 @@
+"""Adaptive control (Slotine–Li) with the passivity regressor, and the protections it needs in practice."""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from armctl._checks import FloatArray, gain_matrix, scalar, vector
+from armctl.controllers.base import Controller
+from armctl.controllers.passivity import sliding
+from armctl.dynamics.base import Dynamics
+from armctl.errors import InvalidParameterError
+from armctl.model.consistency import project_physical
+from armctl.reference import Reference
+
+
+class Adaptive(Controller):
+    """τ = Y(q, q̇, q̇_r, q̈_r) θ̂ − K_D s,   θ̂̇ = −Γ (Yᵀ s + σ (θ̂ − θ₀) + κ W_fᵀ (W_f θ̂ − τ_f))
+
+    (Slotine & Li 1987; s, q̇_r, q̈_r as in :class:`PassivityBased`). With σ = κ = 0 and no disturbance,
+    V = ½ sᵀM s + ½ θ̃ᵀΓ⁻¹θ̃ has V̇ = −sᵀ(K_D + F_v)s ≤ 0: tracking converges whatever θ̂(0), while θ̂ itself
+    converges only under persistent excitation. θ̂ is integrated at the control rate (explicit Euler over the
+    time between calls).
+
+    Protections against drift under disturbances and noise (off by default, as in the textbook law):
+
+    * ``projection``: after each update, each link's pseudo-inertia is projected onto the PSD cone, so θ̂ stays
+      physically consistent (positive masses, triangle inequalities; rotor and friction terms ≥ 0);
+    * ``sigma``: σ-modification, a leak towards θ₀ that bounds θ̂;
+    * ``dead_zone``: no adaptation while ‖s‖ < δ (noise alone does not move θ̂);
+    * ``composite`` κ: composite adaptation, adding the torque prediction error of the first-order-filtered
+      regressor W_f = F[Y(q, q̇, q̈̂)] and filtered commanded torque τ_f = F[τ] (bandwidth ``filter_bandwidth``
+      [rad/s]; q̈̂ by differencing q̇; the commanded torque is taken as applied).
+
+    lam: Λ [1/s]; kd: K_D; gamma: Γ (scalar, 13n vector or matrix); theta0: initial θ̂ (None: the controller
+    model's own π). ``last_log`` holds ``theta`` and ``s`` after each step.
+    """
+
+    def __init__(self, dynamics: Dynamics, lam: ArrayLike, kd: ArrayLike, gamma: ArrayLike,
+                 theta0: ArrayLike | None = None, *, projection: bool = False, sigma: float = 0.0,
+                 dead_zone: float = 0.0, composite: float = 0.0, filter_bandwidth: float = 20.0) -> None:
+        super().__init__(dynamics)
+        p = 13 * self.n
+        self.lam = gain_matrix(lam, self.n, "lam")
+        self.kd = gain_matrix(kd, self.n, "kd")
+        g = np.asarray(gamma, dtype=float)
+        self._gamma_diag = None if g.ndim == 2 else np.diag(gain_matrix(g, p, "gamma")).copy()
+        self.gamma = gain_matrix(g, p, "gamma")
+        self.theta0 = dynamics.parameters().copy() if theta0 is None else vector(theta0, p, "theta0").copy()
+        self.projection = bool(projection)
+        self.sigma = scalar(sigma, "sigma", nonnegative=True)
+        self.dead_zone = scalar(dead_zone, "dead_zone", nonnegative=True)
+        self.composite = scalar(composite, "composite", nonnegative=True)
+        self.filter_bandwidth = scalar(filter_bandwidth, "filter_bandwidth", positive=True)
+        if self.projection and not np.isfinite(self.theta0).all():
+            raise InvalidParameterError("theta0 must be finite", value=theta0)
+        self.reset()
+
+    def reset(self) -> None:
+        super().reset()
+        self.theta = project_physical(self.theta0) if self.projection else self.theta0.copy()
+        self._t_prev: float | None = None
+        self._qd_prev: FloatArray | None = None
+        self._tau_prev: FloatArray | None = None
+        self._w_f: FloatArray | None = None
+        self._tau_f: FloatArray | None = None
+
+    def _gamma(self, v: FloatArray) -> FloatArray:
+        return self._gamma_diag * v if self._gamma_diag is not None else self.gamma @ v
+
+    def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
+        dyn = self.dynamics
+        assert dyn is not None
+        qd_r, qdd_r, s = sliding(q, qd, ref, self.lam)
+        y = dyn.passivity_regressor(q, qd, qd_r, qdd_r)
+        dt = 0.0 if self._t_prev is None else t - self._t_prev
+        if dt > 0:
+            grad = y.T @ s if float(np.linalg.norm(s)) >= self.dead_zone else np.zeros_like(self.theta)
+            if self.sigma:
+                grad = grad + self.sigma * (self.theta - self.theta0)
+            if self.composite:
+                grad = grad + self.composite * self._prediction_gradient(q, qd, dt)
+            self.theta = self.theta - dt * self._gamma(grad)
+            if self.projection:
+                self.theta = project_physical(self.theta)
+        self._t_prev, self._qd_prev = t, qd
+        tau = y @ self.theta - self.kd @ s
+        self._tau_prev = tau
+        self.last_log = {"theta": self.theta.copy(), "s": s}
+        return tau
+
+    def _prediction_gradient(self, q: FloatArray, qd: FloatArray, dt: float) -> FloatArray:
+        """W_fᵀ (W_f θ̂ − τ_f) with first-order filters of bandwidth ω: x_f += (1 − e^{−ω dt})(x − x_f)."""
+        dyn = self.dynamics
+        assert dyn is not None and self._qd_prev is not None and self._tau_prev is not None
+        w = dyn.regressor(q, qd, (qd - self._qd_prev) / dt)
+        a = 1.0 - float(np.exp(-self.filter_bandwidth * dt))
+        if self._w_f is None or self._tau_f is None:
+            self._w_f, self._tau_f = w, self._tau_prev.copy()
+        else:
+            self._w_f = self._w_f + a * (w - self._w_f)
+            self._tau_f = self._tau_f + a * (self._tau_prev - self._tau_f)
+        return self._w_f.T @ (self._w_f @ self.theta - self._tau_f)

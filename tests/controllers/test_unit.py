@@ -1,0 +1,129 @@
+"""Controllers without a simulator: the laws themselves, gains, references and bad input."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import armctl
+from armctl.controllers import Adaptive, ComputedTorque, Controller, PassivityBased, PDGravity
+from armctl.errors import ArmctlError, InvalidParameterError, NonFiniteError, ShapeError
+from armctl.model.consistency import is_physical, project_physical
+from armctl.references import Quintic, Sinusoid, WaypointSpline
+from tests.conftest import dynamics
+
+REF7 = armctl.Reference(np.full(7, 0.1), np.full(7, 0.2), np.full(7, -0.3))
+
+
+def test_computed_torque_on_the_reference_is_inverse_dynamics() -> None:
+    dyn = dynamics("puma560")
+    ref = armctl.Reference([0.1, 0.5, -0.3, 0.2, 0.4, 0.0], [0.2, -0.1, 0.3, 0.0, 0.5, -0.2], [1, 0, -1, 2, 0, 1])
+    ct = ComputedTorque(dyn, kp=100, kd=20)
+    assert np.allclose(ct(0.0, ref.q, ref.qd, ref), dyn.inverse_dynamics(ref.q, ref.qd, ref.qdd))
+    # off the reference: M (q̈_d + K_d ė + K_p e) + C q̇ + g + τ_f
+    q, qd = ref.q + 0.01, ref.qd - 0.02
+    v = ref.qdd + 20 * (ref.qd - qd) + 100 * (ref.q - q)
+    expected = (dyn.mass_matrix(q) @ v + dyn.coriolis_matrix(q, qd) @ qd + dyn.gravity_torque(q)
+                + dyn.friction_torque(qd))
+    assert np.allclose(ct(0.0, q, qd, ref), expected)
+    no_friction = ComputedTorque(dyn, kp=100, kd=20, friction=False)
+    assert np.allclose(no_friction(0.0, q, qd, ref), expected - dyn.friction_torque(qd))
+
+
+def test_passivity_based_law() -> None:
+    dyn = dynamics("panda")
+    q, qd = np.full(7, 0.15), np.full(7, 0.1)
+    lam, kd = np.diag(np.arange(1.0, 8.0)), 5.0
+    e, ed = q - REF7.q, qd - REF7.qd
+    qd_r, qdd_r = REF7.qd - lam @ e, REF7.qdd - lam @ ed
+    s = qd - qd_r
+    expected = (dyn.mass_matrix(q) @ qdd_r + dyn.coriolis_matrix(q, qd) @ qd_r + dyn.gravity_torque(q) - kd * s)
+    assert np.allclose(PassivityBased(dyn, lam, kd)(0.0, q, qd, REF7), expected, atol=1e-10)
+
+
+def test_adaptive_with_exact_parameters_is_passivity_based() -> None:
+    dyn = dynamics("panda")
+    q, qd = np.full(7, 0.15), np.full(7, 0.1)
+    ad = Adaptive(dyn, 3.0, 5.0, gamma=0.0 + 1e-9)
+    pb = PassivityBased(dyn, 3.0, 5.0)
+    assert np.allclose(ad(0.0, q, qd, REF7), pb(0.0, q, qd, REF7))
+    assert np.allclose(ad.last_log["theta"], dyn.model.parameters())
+
+
+def test_adaptive_update_is_the_gradient_law() -> None:
+    """One step: θ̂(t+dt) = θ̂ − dt Γ Yᵀ s."""
+    dyn = dynamics("planar_2r")
+    ref = armctl.Reference([0.3, -0.2], [0.1, 0.0], [0.0, 0.5])
+    ad = Adaptive(dyn, 2.0, 10.0, gamma=0.5, theta0=np.zeros(26))
+    q, qd = np.array([0.35, -0.1]), np.array([0.0, 0.2])
+    ad(0.0, q, qd, ref)
+    s = ad.last_log["s"]
+    y = dyn.passivity_regressor(q, qd, ref.qd - 2.0 * (q - ref.q), ref.qdd - 2.0 * (qd - ref.qd))
+    ad(0.01, q, qd, ref)
+    assert np.allclose(ad.last_log["theta"], -0.01 * 0.5 * y.T @ s)
+    ad.reset()
+    assert np.allclose(ad.theta, 0)
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.floats(-5, 5), min_size=26, max_size=26))
+def test_projection_is_physical_and_idempotent(values: list[float]) -> None:
+    p = project_physical(np.array(values))
+    assert is_physical(p)
+    assert np.allclose(project_physical(p), p, atol=1e-9)
+
+
+def test_projection_leaves_physical_parameters_alone() -> None:
+    pi = dynamics("panda").model.parameters()
+    assert is_physical(pi) and np.allclose(project_physical(pi), pi)
+    assert not is_physical(armctl.models.puma560().parameters())  # Corke's published links 1 and 3
+
+
+class Zero(Controller):
+    def compute(self, t: float, q: np.ndarray, qd: np.ndarray, ref: armctl.Reference) -> np.ndarray:
+        return np.zeros(self.n)
+
+
+def test_bad_input() -> None:
+    dyn = dynamics("panda")
+    for bad, err in [((-1.0,), InvalidParameterError), ((np.ones(6),), ShapeError), ((np.nan,), NonFiniteError),
+                     ((np.array([[1.0, 2.0], [0.0, 1.0]]),), ShapeError)]:
+        with pytest.raises(err):
+            PDGravity(dyn, *bad, 1.0)
+    with pytest.raises(InvalidParameterError, match="positive definite"):
+        ComputedTorque(dyn, np.diag([1, 1, 1, 1, 1, 1, -1.0]), 1.0)
+    with pytest.raises(InvalidParameterError, match="symmetric"):
+        PassivityBased(dyn, np.triu(np.ones((7, 7))), 1.0)
+    ct = ComputedTorque(dyn, 1.0, 1.0)
+    with pytest.raises(ShapeError, match="reference has 2 joints"):
+        ct(0.0, np.zeros(7), np.zeros(7), armctl.Reference([0.0, 0.0]))
+    with pytest.raises(NonFiniteError, match="qd"):
+        ct(0.0, np.zeros(7), [np.nan] * 7, REF7)
+    with pytest.raises(InvalidParameterError, match="Reference"):
+        ct(0.0, np.zeros(7), np.zeros(7), np.zeros(7))  # type: ignore[arg-type]
+    with pytest.raises(ShapeError, match="theta0"):
+        Adaptive(dyn, 1.0, 1.0, 1.0, theta0=np.zeros(5))
+    with pytest.raises(ArmctlError):
+        Zero(None)
+    assert np.array_equal(Zero(n=3)(0.0, np.zeros(3), np.zeros(3), armctl.Reference(np.zeros(3))), np.zeros(3))
+
+
+def test_references() -> None:
+    mj = Quintic([0.0, 1.0], [1.0, -1.0], 2.0, t0=1.0)
+    assert np.allclose(mj(0.0).q, [0, 1]) and np.allclose(mj(5.0).q, [1, -1])
+    mid = mj(2.0)
+    assert np.allclose(mid.q, [0.5, 0.0]) and np.allclose(mid.qd, [15 / 16, -15 / 8])  # peak speed 15/8 Δ/T
+    h = 1e-6
+    for t in (1.3, 2.7):
+        assert np.allclose((mj(t + h).q - mj(t - h).q) / (2 * h), mj(t).qd, atol=1e-6)
+        assert np.allclose((mj(t + h).qd - mj(t - h).qd) / (2 * h), mj(t).qdd, atol=1e-5)
+    sine = Sinusoid([0.0, 0.0], [np.pi / 6, np.pi / 4], 1.0)
+    assert np.allclose(sine(0.25).q, [np.pi / 6, np.pi / 4]) and np.allclose(sine(0.25).qd, 0, atol=1e-12)
+    sp = WaypointSpline([0, 1, 3], [[0, 0], [1, 2], [0, 1]])
+    assert np.allclose(sp(1.0).q, [1, 2]) and np.allclose(sp(0.0).qd, 0) and np.allclose(sp(3.0).qd, 0)
+    with pytest.raises(InvalidParameterError, match="increasing"):
+        WaypointSpline([0, 0, 1], [[0], [1], [2]])
+    with pytest.raises(ShapeError):
+        Quintic([0, 0], [1], 1.0)
