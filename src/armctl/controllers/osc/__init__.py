@@ -1,0 +1,35 @@
+"""Operational-space control as a QP (proxsuite, warm-started), with contacts, limits and strict priorities.
+
+    from armctl.controllers.osc import OperationalSpaceQP, FramePoseTask, PostureTask
+
+Parts, one concept a file: ``state`` (model terms of one step), ``tasks/`` (error + Jacobian), ``limits/``
+(bounds on q̈ or τ), ``contact`` (force variables, contact rows, friction cones), ``build`` (the QP),
+``problem`` (the inspectable QP), ``solve`` (proxsuite / qpsolvers), ``diagnose`` (conflicting rows),
+``hierarchy`` (cascaded priorities), ``controller`` (the controller), ``closed_form`` (Khatib's baseline).
+"""
+
+from armctl.controllers.osc.build import QPBuilder, StepQP
+from armctl.controllers.osc.closed_form import ClosedFormOSC
+from armctl.controllers.osc.contact import Contact
+from armctl.controllers.osc.controller import OperationalSpaceQP, default_limits
+from armctl.controllers.osc.diagnose import conflicting_rows
+from armctl.controllers.osc.hierarchy import OSCSolution
+from armctl.controllers.osc.limits import AccelerationLimit, JointPositionLimit, JointVelocityLimit, Limit, TorqueLimit
+from armctl.controllers.osc.problem import QPProblem
+from armctl.controllers.osc.solve import ProxQPSolver, QPSolution, QpsolversSolver
+from armctl.controllers.osc.tasks import (
+    ContactForceTask,
+    FrameOrientationTask,
+    FramePoseTask,
+    FramePositionTask,
+    MotionTask,
+    PostureTask,
+    Task,
+)
+
+__all__ = [
+    "AccelerationLimit", "ClosedFormOSC", "Contact", "ContactForceTask", "FrameOrientationTask", "FramePoseTask",
+    "FramePositionTask", "JointPositionLimit", "JointVelocityLimit", "Limit", "MotionTask", "OSCSolution",
+    "OperationalSpaceQP", "PostureTask", "ProxQPSolver", "QPBuilder", "QPProblem", "QPSolution",
+    "QpsolversSolver", "StepQP", "Task", "TorqueLimit", "conflicting_rows", "default_limits",
+]

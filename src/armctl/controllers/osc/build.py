@@ -1,0 +1,285 @@
+"""`QPBuilder`: turns the model terms of one control step, the tasks, limits and contacts into QPs.
+
+Decision variables x = [q̈ (n); τ (n); f_c (3) per active contact]. Rows, every one named:
+
+* equation of motion (n rows):  M q̈ − τ − Σ_c J_cᵀ f_c = −(C q̇ + g + τ_f)          ``dynamics[joint]``
+* contact kinematics (3 rows per active contact), see :class:`~armctl.controllers.osc.contact.Contact`
+* limits l ≤ x_b ≤ u (one row per joint and limit) and the contacts' friction-cone rows.
+
+Each priority level k gets the cost  ½ Σ_{tasks i of level k} ‖W_i^{1/2} (J_i x_i − b_i)‖² + ½ ε ‖x‖²,
+i.e.  H_k = T_kᵀ T_k + ε I,  g_k = −T_kᵀ t_k  with T_k, t_k the weighted task rows stacked. ε (``regularization``)
+makes H_k positive definite and picks, among equally good solutions, the smallest.
+
+With ``slacks=True`` the task rows become constraints with slack variables s: T_k x − s = t_k and the cost
+½‖s‖² + ½ε‖x‖² — the same optimum, with s reporting how far each task is from being met.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from armctl._checks import FloatArray
+from armctl.controllers.osc.contact import Contact
+from armctl.controllers.osc.limits.base import Limit
+from armctl.controllers.osc.problem import QPProblem
+from armctl.controllers.osc.state import ModelState
+from armctl.controllers.osc.tasks.base import Task
+from armctl.model.robot import RobotModel
+from armctl.reference import Reference
+
+
+class Layout:
+    """Variable blocks and the constant parts (C, names) for one set of active contacts."""
+
+    def __init__(self, model: RobotModel, limits: Sequence[Limit], contacts: Sequence[Contact],
+                 regularization: float) -> None:
+        n = model.n
+        self.n = n
+        self.contacts = tuple(contacts)
+        self.variables: dict[str, slice] = {"qdd": slice(0, n), "tau": slice(n, 2 * n)}
+        col = 2 * n
+        for c in contacts:
+            self.variables[c.name] = slice(col, col + c.dim)
+            col += c.dim
+        self.nx = col
+        self.eq_names = tuple([f"dynamics[{j}]" for j in model.joint_names]
+                              + [nm for c in contacts for nm in c.eq_names])
+        rows: list[FloatArray] = []
+        names: list[str] = []
+        lo: list[FloatArray] = []
+        up: list[FloatArray] = []
+        for lim in limits:
+            blk = np.zeros((n, col))
+            blk[:, self.variables[lim.variable]] = np.eye(n)
+            rows.append(blk)
+            names += lim.row_names
+        for c in contacts:
+            cf, cl, cu, cn = c.cone_rows()
+            blk = np.zeros((cf.shape[0], col))
+            blk[:, self.variables[c.name]] = cf
+            rows.append(blk)
+            lo.append(cl)
+            up.append(cu)
+            names += cn
+        self.C = np.vstack(rows) if rows else np.zeros((0, col))
+        self.C.flags.writeable = False
+        self.ineq_names = tuple(names)
+        self.cone_l = np.concatenate(lo) if lo else np.zeros(0)
+        self.cone_u = np.concatenate(up) if up else np.zeros(0)
+        self.limits = tuple(limits)
+        self.regularization = np.full(col, regularization)
+        self.regularization.flags.writeable = False
+        self.reg_matrix = np.diag(self.regularization)
+        # bounds that do not depend on the state (e.g. torque limits) are concatenated once
+        self.constant_bounds: tuple[FloatArray, FloatArray] | None = None
+        if all(lim.constant for lim in limits):
+            bounds = [lim.bounds(None) for lim in limits]  # type: ignore[arg-type]
+            self.constant_bounds = (np.concatenate([bd[0] for bd in bounds] + [self.cone_l]),
+                                    np.concatenate([bd[1] for bd in bounds] + [self.cone_u]))
+            for a in self.constant_bounds:
+                a.flags.writeable = False
+        # equation of motion: A = [M, −I, −J_cᵀ …]; the −I block is constant
+        self.A_template = np.zeros((len(self.eq_names), col))
+        self.A_template[:n, n:2 * n] = -np.eye(n)
+
+
+class LevelRows:
+    """Stacked task rows of one level: ``jr`` = [J | b] (m × (nx+1), unweighted), ``sqrt_w`` (m, 1) and the
+    per-task row slices; ``T``, ``t`` the weighted rows W^{1/2} J, W^{1/2} b."""
+
+    __slots__ = ("_Tt", "jr", "nx", "slices", "sqrt_w", "tasks")
+
+    def __init__(self, tasks: tuple[Task, ...], jr: FloatArray, sqrt_w: FloatArray, slices: dict[str, slice]
+                 ) -> None:
+        self.tasks = tasks
+        self.jr = jr
+        self.nx = jr.shape[1] - 1
+        self.sqrt_w = sqrt_w
+        self.slices = slices
+        self._Tt: FloatArray | None = None
+
+    @property
+    def Tt(self) -> FloatArray:
+        """[T | t] = W^{1/2} [J | b]."""
+        if self._Tt is None:
+            self._Tt = self.sqrt_w * self.jr
+        return self._Tt
+
+    @property
+    def T(self) -> FloatArray:
+        return self.Tt[:, : self.nx]
+
+    @property
+    def t(self) -> FloatArray:
+        return self.Tt[:, self.nx]
+
+    def residuals(self, x: FloatArray) -> dict[str, FloatArray]:
+        """Unweighted residual J_i x_i − b_i of every task of the level at ``x``."""
+        r = self.jr[:, : self.nx] @ x[: self.nx] - self.jr[:, self.nx]
+        return {name: r[s] for name, s in self.slices.items()}
+
+
+class LevelPlan:
+    """What does not change between steps for one level and one layout: its tasks, their rows and columns,
+    [J | b] with the identity blocks already in place, and the square-root weights."""
+
+    def __init__(self, tasks: tuple[Task, ...], lay: Layout) -> None:
+        self.tasks = tasks
+        m = sum(tk.dim for tk in tasks)
+        nx = lay.nx
+        self.template = np.zeros((m, nx + 1))
+        self.slices: dict[str, slice] = {}
+        self.entries: list[tuple[Task, slice, slice | None]] = []
+        r = 0
+        for tk in tasks:
+            rows, cols = slice(r, r + tk.dim), lay.variables[tk.variable]
+            if tk.identity_jacobian:
+                blk = self.template[rows, cols]
+                blk.flat[:: tk.dim + 1] = 1.0
+            self.slices[tk.name] = rows
+            self.entries.append((tk, rows, cols))
+            r += tk.dim
+        self.m = m
+        self.nx = nx
+        self.version = -1
+        self.sqrt_w = np.zeros((m, 1))
+
+    def weights(self) -> FloatArray:
+        if self.version != Task.weights_version:
+            self.sqrt_w = np.concatenate([tk.sqrt_weight for tk in self.tasks])[:, None] if self.tasks \
+                else np.zeros((0, 1))
+            self.version = Task.weights_version
+        return self.sqrt_w
+
+
+class StepQP:
+    """Everything one control step solves: the constraints and, per priority level, the task rows.
+    :meth:`problem` returns the QP of a level (with rows freezing the levels above, if given)."""
+
+    def __init__(self, layout: Layout, A: FloatArray, b: FloatArray, l: FloatArray, u: FloatArray,  # noqa: E741
+                 levels: list[LevelRows], regularization: FloatArray, slacks: bool) -> None:
+        self.layout = layout
+        self.A, self.b, self.l, self.u = A, b, l, u
+        self.levels = levels
+        self.regularization = regularization
+        self.slacks = slacks
+
+    @property
+    def variables(self) -> dict[str, slice]:
+        return self.layout.variables
+
+    def problem(self, k: int = 0, frozen: tuple[FloatArray, FloatArray] | None = None) -> QPProblem:
+        """QP of level ``k``; ``frozen`` = (F, φ) adds the equality rows F x = φ that keep the optimum of the
+        levels above."""
+        lay, lev = self.layout, self.levels[k]
+        eq_names = lay.eq_names
+        if frozen is not None and frozen[0].shape[0]:
+            eq_names = eq_names + tuple(f"priority[{i}]" for i in range(frozen[0].shape[0]))
+        names = tuple(t.name for t in lev.tasks)
+        if not self.slacks:
+            H, g, A, b, C, l, u = self.arrays(k, frozen)  # noqa: E741
+            return QPProblem(H, g, A, b, C, l, u, lay.variables, eq_names, lay.ineq_names, k, names)
+        A, b = self.A, self.b
+        if frozen is not None and frozen[0].shape[0]:
+            A = np.vstack([A, frozen[0]])
+            b = np.concatenate([b, frozen[1]])
+        m, nx = lev.T.shape[0], lay.nx
+        H = np.diag(np.concatenate([self.regularization, np.ones(m)]))
+        A2 = np.zeros((A.shape[0] + m, nx + m))
+        A2[: A.shape[0], :nx] = A
+        A2[A.shape[0]:, :nx] = lev.T
+        A2[A.shape[0]:, nx:] = -np.eye(m)
+        C2 = np.hstack([lay.C, np.zeros((lay.C.shape[0], m))])
+        variables = dict(lay.variables, slack=slice(nx, nx + m))
+        slack_names = tuple(f"slack[{t.name}][{i}]" for t in lev.tasks for i in range(t.dim))
+        return QPProblem(H, np.zeros(nx + m), A2, np.concatenate([b, lev.t]), C2, self.l, self.u, variables,
+                         eq_names + slack_names, lay.ineq_names, k, names)
+
+
+    def arrays(self, k: int = 0, frozen: tuple[FloatArray, FloatArray] | None = None) -> tuple[FloatArray, ...]:
+        """(H, g, A, b, C, l, u) of level ``k`` without slacks (the hot path of :meth:`problem`)."""
+        lay = self.layout
+        Tt = self.levels[k].Tt
+        G = Tt.T @ Tt  # [TᵀT, Tᵀt; tᵀT, tᵀt]
+        nx = lay.nx
+        H = G[:nx, :nx] + lay.reg_matrix
+        g = np.negative(G[:nx, nx])
+        A, b = self.A, self.b
+        if frozen is not None and frozen[0].shape[0]:
+            A = np.vstack([A, frozen[0]])
+            b = np.concatenate([b, frozen[1]])
+        return H, g, A, b, lay.C, self.l, self.u
+
+
+class QPBuilder:
+    """Builds a :class:`StepQP` per control step for fixed tasks, limits and contacts (contacts may be switched
+    on and off: one :class:`Layout` is kept per set of active contacts)."""
+
+    def __init__(self, model: RobotModel, tasks: Sequence[Task], limits: Sequence[Limit],
+                 contacts: Sequence[Contact], regularization: float = 1e-8, slacks: bool = False) -> None:
+        self.model = model
+        self.n = model.n
+        self.tasks = tuple(tasks)
+        self.limits = tuple(limits)
+        self.contacts = tuple(contacts)
+        self.priorities = sorted({t.priority for t in self.tasks})
+        self.regularization = float(regularization)
+        self.slacks = bool(slacks)
+        self._layouts: dict[tuple[str, ...], Layout] = {}
+        self._level_plans: dict[int, list[LevelPlan]] = {}
+
+    def layout(self) -> Layout:
+        active = tuple(c.name for c in self.contacts if c.active)
+        lay = self._layouts.get(active)
+        if lay is None:
+            lay = self._layouts[active] = Layout(self.model, self.limits, [c for c in self.contacts if c.active],
+                                                     self.regularization)
+        return lay
+
+    def build(self, state: ModelState, t: float, ref: Reference) -> StepQP:
+        lay = self.layout()
+        n = self.n
+        A = lay.A_template.copy()
+        A[:n, :n] = state.mass
+        b = np.empty(A.shape[0])
+        np.negative(state.bias, out=b[:n])
+        if state.friction is not None:
+            b[:n] -= state.friction
+        row = n
+        for c in lay.contacts:
+            gq, gf, rhs = c.equality_rows(state)
+            cols = lay.variables[c.name]
+            A[:n, cols] = -state.frame(c.frame).jacobian[:3].T
+            A[row: row + 3, :n] = gq
+            A[row: row + 3, cols] = gf
+            b[row: row + 3] = rhs
+            row += 3
+        if lay.constant_bounds is not None:
+            lo, up = lay.constant_bounds
+        else:
+            bounds = [lim.bounds(state) for lim in lay.limits]
+            lo = np.concatenate([bd[0] for bd in bounds] + [lay.cone_l])
+            up = np.concatenate([bd[1] for bd in bounds] + [lay.cone_u])
+        levels = [self._level(plan, state, t, ref) for plan in self._plans(lay)]
+        return StepQP(lay, A, b, lo, up, levels, lay.regularization, self.slacks)
+
+    def _plans(self, lay: Layout) -> list[LevelPlan]:
+        plans = self._level_plans.get(id(lay))
+        if plans is None:
+            plans = self._level_plans[id(lay)] = [
+                LevelPlan(tuple(tk for tk in self.tasks if tk.priority == k and tk.variable in lay.variables), lay)
+                for k in self.priorities]
+        return plans
+
+    @staticmethod
+    def _level(plan: LevelPlan, state: ModelState, t: float, ref: Reference) -> LevelRows:
+        jr = plan.template.copy()
+        nx = plan.nx
+        for tk, rows, cols in plan.entries:
+            J, bb = tk.residual(state, t, ref)
+            if J is not None:
+                jr[rows, cols] = J
+            jr[rows, nx] = bb
+        return LevelRows(plan.tasks, jr, plan.weights(), plan.slices)

@@ -1,0 +1,145 @@
+"""`OperationalSpaceQP`: operational-space control as one QP (or a cascade of QPs) per control period.
+
+Every period, at the measured (q, q̇):
+
+    min over x = [q̈, τ, f]   Σ_levels-in-order  ½ Σ_i ‖W_i^{1/2}(J_i x_i − b_i)‖²
+    s.t.  M q̈ + C q̇ + g + τ_f − Σ_c J_cᵀ f_c = τ       (the controller's own model)
+          contact kinematics, friction cones, torque / position (viability) / velocity limits
+
+and τ goes to the arm. Task targets:
+
+* frame tasks (:class:`FramePositionTask`, :class:`FrameOrientationTask`, :class:`FramePoseTask`) take a
+  constant target through ``task.set_target(...)`` or a trajectory through ``task.set_trajectory(fn)``,
+  ``fn(t) -> (value, velocity, acceleration)``; either may be changed between periods;
+* :class:`PostureTask` follows the joint reference ``ref`` handed to the controller (unless fixed);
+* :class:`ContactForceTask` takes a force vector or a callable of t.
+
+Contacts are switched with ``contact.active``. The QP of a period can be looked at before (or instead of)
+solving it: :meth:`OperationalSpaceQP.build` returns the :class:`~armctl.controllers.osc.build.StepQP`,
+``.problem(k)`` the :class:`~armctl.controllers.osc.problem.QPProblem` (H, g, A, b, C, l, u) of level k.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from armctl._checks import FloatArray, scalar, vector
+from armctl.controllers.base import Controller
+from armctl.controllers.osc.build import QPBuilder, StepQP
+from armctl.controllers.osc.contact import Contact
+from armctl.controllers.osc.hierarchy import OSCSolution, solve_cascade
+from armctl.controllers.osc.limits import JointPositionLimit, JointVelocityLimit, Limit, TorqueLimit
+from armctl.controllers.osc.solve import make_solver
+from armctl.controllers.osc.state import ModelEvaluator
+from armctl.controllers.osc.tasks.base import Task
+from armctl.dynamics.base import Dynamics
+from armctl.errors import InvalidParameterError
+from armctl.reference import Reference
+
+
+def default_limits(dt: float = 1e-3) -> list[Limit]:
+    """Torque limits, joint position limits (viability) and joint velocity limits, for control period dt [s]."""
+    return [TorqueLimit(), JointPositionLimit(dt), JointVelocityLimit(dt)]
+
+
+def _unique(items: Sequence[Any], kind: str) -> None:
+    names = [it.name for it in items]
+    dup = sorted({nm for nm in names if names.count(nm) > 1})
+    if dup:
+        raise InvalidParameterError(f"{kind} names must be unique; repeated: {dup} (give name=...)", value=dup)
+
+
+class OperationalSpaceQP(Controller):
+    """Operational-space QP controller.
+
+    dynamics: the controller's model (pinocchio backend: one-pass model terms; any backend works).
+    tasks: :class:`~armctl.controllers.osc.tasks.Task` objects; ``task.priority`` (0 first) orders levels
+    strictly, ``task.weight`` trades tasks off inside a level. limits: :class:`~armctl.controllers.osc.limits.Limit`
+    objects (default :func:`default_limits` with ``dt``). contacts: :class:`Contact` objects. solver:
+    "proxsuite" (dense ProxQP, warm-started), "qpsolvers:NAME", or an object with ``solve``/``reset``.
+    regularization: ε of ½ε‖x‖² in every level. slacks: task rows as constraints with slack variables.
+    dt: control period [s] for the default limits.
+    """
+
+    def __init__(self, dynamics: Dynamics, tasks: Sequence[Task], limits: Sequence[Limit] | None = None,
+                 contacts: Sequence[Contact] = (), solver: str | Any = "proxsuite", regularization: float = 1e-8,
+                 slacks: bool = False, dt: float = 1e-3) -> None:
+        if not isinstance(dynamics, Dynamics):
+            raise InvalidParameterError(f"dynamics must be an armctl.Dynamics, got {type(dynamics).__name__}",
+                                        value=dynamics)
+        super().__init__(dynamics)
+        tasks = list(tasks) if not isinstance(tasks, Task) else [tasks]
+        if not tasks:
+            raise InvalidParameterError("OperationalSpaceQP needs at least one task", value=tasks)
+        for obj, cls, kind in [(t, Task, "task") for t in tasks] + [(c, Contact, "contact") for c in contacts]:
+            if not isinstance(obj, cls):
+                raise InvalidParameterError(f"every {kind} must be an osc.{cls.__name__}, got {type(obj).__name__}",
+                                            value=obj)
+        _unique(tasks, "task")
+        _unique(list(contacts), "contact")
+        self.evaluator = ModelEvaluator(dynamics)
+        for c in contacts:
+            self.evaluator.check_frame(c.frame)
+        cdims = {c.name: c.dim for c in contacts}
+        for t in tasks:
+            t.check(self.evaluator, self.n, cdims)
+        limits = default_limits(scalar(dt, "dt", positive=True)) if limits is None else list(limits)
+        for lim in limits:
+            if not isinstance(lim, Limit):
+                raise InvalidParameterError(f"every limit must be an osc.Limit, got {type(lim).__name__}", value=lim)
+            lim.bind(dynamics.model)
+        self.tasks = tuple(tasks)
+        self.limits = tuple(limits)
+        self.contacts = tuple(contacts)
+        self.solver = make_solver(solver)
+        self.builder = QPBuilder(dynamics.model, tasks, limits, contacts,
+                                 scalar(regularization, "regularization", positive=True), slacks)
+        torque = [lim for lim in limits if isinstance(lim, TorqueLimit)]
+        self._tau_lo = np.max([-lim.limit for lim in torque], axis=0) if torque else None
+        self._tau_up = np.min([lim.limit for lim in torque], axis=0) if torque else None
+        self.last_solution: OSCSolution | None = None
+
+    @property
+    def priorities(self) -> list[int]:
+        """The priority levels in solving order."""
+        return list(self.builder.priorities)
+
+    def build(self, t: float, q: Any, qd: Any, ref: Reference) -> StepQP:
+        """The QPs of one control period at (q, q̇), not solved (``.problem(k)`` for level k)."""
+        q, qd = vector(q, self.n, "q"), vector(qd, self.n, "qd")
+        return self.builder.build(self.evaluator.evaluate(q, qd), float(t), ref)
+
+    def solve(self, t: float, q: Any, qd: Any, ref: Reference) -> OSCSolution:
+        """Build and solve one control period; raises InfeasibleError naming the conflicting rows."""
+        q, qd = vector(q, self.n, "q"), vector(qd, self.n, "qd")
+        return self._solve(float(t), q, qd, ref)
+
+    def _solve(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> OSCSolution:
+        step = self.builder.build(self.evaluator.evaluate(q, qd), t, ref)
+        sol = solve_cascade(step, self.solver)
+        self.last_solution = sol
+        return sol
+
+    def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
+        """τ = the τ block of the QP solution (clipped onto the torque limits, which it meets to the solver's
+        tolerance)."""
+        sol = self._solve(t, q, qd, ref)
+        tau = sol.tau.copy()
+        if self._tau_up is not None:
+            np.clip(tau, self._tau_lo, self._tau_up, out=tau)
+        log: dict[str, Any] = {"qp_iterations": sol.iterations}
+        for name, f in sol.forces.items():
+            log[f"force[{name}]"] = f
+        if len(sol.level_status) > 1:
+            log["level_status"] = sol.level_status
+        self.last_log = log
+        return tau
+
+    def reset(self) -> None:
+        """Forget the warm start and the last solution."""
+        super().reset()
+        self.solver.reset()
+        self.last_solution = None

@@ -1,0 +1,87 @@
+"""Diagnosis of a QP that could not be solved: which rows conflict, and by how much.
+
+The elastic program relaxes every constraint except the equation of motion (physics, which τ can always
+meet on its own) by non-negative slacks and minimises their sum:
+
+    min  Σ (p + q + s_l + s_u) + ½ ε (‖x‖² + ‖s‖²)
+    s.t. A_dyn x = b_dyn,   A_rest x + p − q = b_rest,   l − s_l ≤ C x ≤ u + s_u,   p, q, s_l, s_u ≥ 0
+
+It always has a solution. If the slacks are zero the QP was feasible (the failure was numerical: SolverError).
+Otherwise the conflicting rows are those that must be relaxed (slack > 0, with the amount) and those that
+bind the conflict (a non-zero multiplier in the elastic program: they are tight and pay for the slack).
+"""
+
+from __future__ import annotations
+
+from typing import Any, NoReturn
+
+import numpy as np
+
+from armctl.controllers.osc.problem import QPProblem
+from armctl.errors import InfeasibleError, SolverError
+
+_EPS = 1e-7  # regularisation of the elastic program
+_BIG = 1e20
+
+
+def conflicting_rows(p: QPProblem, tol: float = 1e-6) -> dict[str, float]:
+    """Rows of ``p`` that conflict, name → how much the row must be relaxed (0 for a row that binds the
+    conflict without being relaxed itself). Empty if ``p`` is feasible."""
+    from proxsuite import proxqp
+
+    nx, me, mi = p.nx, p.b.shape[0], p.l.shape[0]
+    dyn = np.array([nm.startswith("dynamics[") for nm in p.eq_names], dtype=bool)
+    rel = np.flatnonzero(~dyn)
+    mr = rel.size
+    ns = 2 * mr + 2 * mi  # p, q, s_l, s_u
+    nv = nx + ns
+    H = np.eye(nv) * _EPS
+    g = np.r_[np.zeros(nx), np.ones(ns)]
+    A = np.zeros((me, nv))
+    A[:, :nx] = p.A
+    A[rel, nx + np.arange(mr)] = 1.0
+    A[rel, nx + mr + np.arange(mr)] = -1.0
+    o = nx + 2 * mr
+    C = np.zeros((2 * mi + ns, nv))
+    C[:mi, :nx] = p.C
+    C[:mi, o: o + mi] = np.eye(mi)
+    C[mi: 2 * mi, :nx] = p.C
+    C[mi: 2 * mi, o + mi: o + 2 * mi] = -np.eye(mi)
+    C[2 * mi:, nx:] = np.eye(ns)
+    lo = np.r_[np.nan_to_num(p.l, neginf=-_BIG), np.full(mi, -_BIG), np.zeros(ns)]
+    up = np.r_[np.full(mi, _BIG), np.nan_to_num(p.u, posinf=_BIG), np.full(ns, _BIG)]
+    qp = proxqp.dense.QP(nv, me, C.shape[0])
+    qp.settings.eps_abs = 1e-10
+    qp.settings.eps_rel = 0.0
+    qp.settings.max_iter = 20000
+    qp.init(H, g, A, p.b, C, lo, up)
+    qp.solve()
+    x, y, z = qp.results.x, qp.results.y, qp.results.z
+    out: dict[str, float] = {}
+    s = x[nx:]
+    for k, i in enumerate(rel):
+        amount = s[k] + s[mr + k]
+        if amount > tol or abs(y[i]) > 1e-3:
+            out[p.eq_names[i]] = float(amount) if amount > tol else 0.0
+    for i in range(mi):
+        amount = s[2 * mr + i] + s[2 * mr + mi + i]
+        if amount > tol or abs(z[i]) > 1e-3 or abs(z[mi + i]) > 1e-3:
+            out[p.ineq_names[i]] = float(amount) if amount > tol else 0.0
+    if not any(v > 0 for v in out.values()):
+        return {}
+    return out
+
+
+def raise_failure(p: QPProblem, solver: str, status: str, result: Any) -> NoReturn:
+    """Raise InfeasibleError (with the conflicting rows) or SolverError for a failed solve of ``p``."""
+    rows = conflicting_rows(p)
+    if rows:
+        shown = ", ".join(f"{k} (relax by {v:.4g})" if v > 0 else k for k, v in rows.items())
+        raise InfeasibleError(
+            f"the QP of priority level {p.level} has no feasible point ({solver}: {status}); conflicting rows "
+            f"(coupled through the equation of motion): {shown}. Relax one of these limits or contacts, or "
+            "enable slacks on them.", value=rows, problem=p)
+    raise SolverError(f"{solver} failed on the QP of priority level {p.level} ({status}) although it is "
+                      "feasible; try a looser eps_abs or another solver (solver='qpsolvers:<name>')",
+                      value=status, problem=p, result=result)
+

@@ -1,0 +1,53 @@
+"""`Limit`: a bound l ≤ x_b ≤ u on one block of the QP's variables (q̈ or τ), one row per joint.
+
+A limit has one method, :meth:`Limit.bounds`, returning (l, u) at the current state; the rows of C are the
+identity on the block, so C is constant and only l, u change from step to step.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from armctl._checks import FloatArray
+from armctl.controllers.osc.state import ModelState
+from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
+from armctl.model.robot import RobotModel
+
+
+def per_joint(x: ArrayLike | None, default: FloatArray, n: int, name: str, positive: bool = True) -> FloatArray:
+    """``x`` as an (n,) vector (a scalar is broadcast; None takes ``default``), checked > 0 if ``positive``."""
+    a = np.array(default if x is None else x, dtype=float)
+    if a.ndim == 0:
+        a = np.full(n, float(a))
+    if a.shape != (n,):
+        raise ShapeError(f"{name} must be a scalar or a ({n},) vector, got shape {a.shape}", value=x)
+    if np.isnan(a).any():
+        raise NonFiniteError(f"{name} holds NaN", value=x)
+    if positive and (a <= 0).any():
+        raise InvalidParameterError(f"{name} must be > 0, got {a.tolist()}", value=x)
+    return a
+
+
+class Limit(ABC):
+    """Bounds on the variable block ``variable`` ("qdd" or "tau"); ``kind`` names its rows, e.g.
+    ``torque_limit[panda_joint1]``."""
+
+    variable: str = "qdd"
+    kind: str = "limit"
+    #: True if :meth:`bounds` does not depend on the state (it is then evaluated once)
+    constant: bool = False
+
+    def bind(self, model: RobotModel) -> None:
+        """Take defaults from ``model`` and check sizes (called once by the controller)."""
+        self.n = model.n
+        self.row_names = [f"{self.kind}[{j}]" for j in model.joint_names]
+
+    @abstractmethod
+    def bounds(self, state: ModelState) -> tuple[FloatArray, FloatArray]:
+        """(l, u), each (n,), at the current state."""
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}()"

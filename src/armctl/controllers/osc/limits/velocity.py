@@ -1,0 +1,39 @@
+"""`JointVelocityLimit`: joint velocities stay within ±q̇_max one control period ahead.
+
+    (−q̇_max − q̇)/Δt ≤ q̈ ≤ (q̇_max − q̇)/Δt
+
+each bound clamped to ±a_max (so that a joint already too fast is asked to brake at a_max, not at an
+impossible (q̇_max − q̇)/Δt, which would make the QP infeasible against the torque limits).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from armctl._checks import FloatArray, scalar
+from armctl.controllers.osc.limits.base import Limit, per_joint
+from armctl.controllers.osc.state import ModelState
+from armctl.model.robot import RobotModel
+
+
+class JointVelocityLimit(Limit):
+    """|q̇_i| ≤ q̇_max,i [rad/s] (default: the model's velocity limits), with control period ``dt`` [s] and
+    braking acceleration ``max_deceleration`` a_max [rad/s²] (scalar or (n,))."""
+
+    kind = "velocity_limit"
+
+    def __init__(self, dt: float = 1e-3, limit: ArrayLike | None = None, max_deceleration: ArrayLike = 10.0) -> None:
+        self.dt = scalar(dt, "dt", positive=True)
+        self._given, self._amax = limit, max_deceleration
+
+    def bind(self, model: RobotModel) -> None:
+        super().bind(model)
+        self.limit = per_joint(self._given, model.velocity_limit, model.n, "velocity limit")
+        self.max_deceleration = per_joint(self._amax, np.zeros(0), model.n, "max_deceleration")
+
+    def bounds(self, state: ModelState) -> tuple[FloatArray, FloatArray]:
+        inv = 1.0 / self.dt
+        upper = np.maximum((self.limit - state.qd) * inv, -self.max_deceleration)
+        lower = np.minimum((-self.limit - state.qd) * inv, self.max_deceleration)
+        return lower, upper

@@ -1,0 +1,122 @@
+"""Task base classes: a task is a least-squares objective on one block of the QP's variables.
+
+A task of dimension m contributes the residual r = J x_b − b on a block x_b of the decision variables
+(q̈, or a contact's force f) and the cost ½ Σ_i w_i r_i² to its priority level. Weights w_i ≥ 0 (a scalar or
+one per row) trade tasks off inside a level; ``priority`` (0 = most important) orders levels strictly.
+
+A :class:`MotionTask` is defined by its error e, its Jacobian J and the drift J̇ q̇ (the pink / TSID way); the
+base class turns them into the desired task acceleration of a PD law and the residual on q̈:
+
+    ẍ* = ẍ_ref + K_d (ẋ_ref − J q̇) + K_p e,      r = J q̈ + J̇ q̇ − ẋ*
+
+so that a zero residual gives the error dynamics ë + K_d ė + K_p e = 0.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from armctl._checks import FloatArray, gain_matrix
+from armctl.controllers.osc.state import ModelState
+from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
+from armctl.reference import Reference
+
+
+def _weights(weight: ArrayLike, dim: int, name: str) -> FloatArray:
+    w = np.asarray(weight, dtype=float)
+    if w.ndim == 0:
+        w = np.full(dim, float(w))
+    if w.shape != (dim,):
+        raise ShapeError(f"{name}: weight must be a scalar or a ({dim},) vector, got shape {w.shape}", value=weight)
+    if not np.isfinite(w).all():
+        raise NonFiniteError(f"{name}: weight holds NaN or inf", value=weight)
+    if (w < 0).any():
+        raise InvalidParameterError(f"{name}: weights must be >= 0, got {w.tolist()}", value=weight)
+    return w
+
+
+class Task(ABC):
+    """A least-squares objective of dimension ``dim`` on the variable block ``variable`` ("qdd" or a contact
+    name). ``weight`` w ≥ 0: scalar or (dim,). ``priority``: integer level, 0 the most important."""
+
+    variable: str = "qdd"
+    #: bumped whenever any task's weight changes (builders cache the stacked weights)
+    weights_version: int = 0
+    #: True if the task's Jacobian is always the identity on its block (``residual`` then returns None for it)
+    identity_jacobian: bool = False
+
+    def __init__(self, dim: int, name: str, weight: ArrayLike = 1.0, priority: int = 0) -> None:
+        self.dim = int(dim)
+        self.name = str(name)
+        self.weight = weight  # type: ignore[assignment]  (checked by the property)
+        if isinstance(priority, bool) or not isinstance(priority, (int, np.integer)) or priority < 0:
+            raise InvalidParameterError(f"{name}: priority must be an integer >= 0, got {priority!r}",
+                                        value=priority)
+        self.priority = int(priority)
+
+    @property
+    def weight(self) -> FloatArray:
+        """Weights w_i ≥ 0 of the rows (dim,)."""
+        return self._weight
+
+    @weight.setter
+    def weight(self, value: ArrayLike) -> None:
+        self._weight = _weights(value, self.dim, self.name)
+        self.sqrt_weight = np.sqrt(self._weight)
+        Task.weights_version += 1
+
+    def check(self, evaluator: Any, n: int, contacts: dict[str, int]) -> None:
+        """Validate against the controller's model (frames, sizes); raise an ArmctlError if it does not fit."""
+        return None
+
+    @abstractmethod
+    def residual(self, state: ModelState, t: float, ref: Reference) -> tuple[FloatArray | None, FloatArray]:
+        """(J, b) of the residual r = J x_b − b; J None means the identity."""
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self.name!r}, dim={self.dim}, priority={self.priority})"
+
+
+class MotionTask(Task):
+    """A task on q̈ with PD gains ``kp`` [1/s²] and ``kd`` [1/s] (each a scalar, a (dim,) vector or a
+    dim×dim matrix, symmetric positive definite; ``kd=None``: critical damping 2√kp for a scalar kp)."""
+
+    def __init__(self, dim: int, name: str, kp: ArrayLike, kd: ArrayLike | None = None, weight: ArrayLike = 1.0,
+                 priority: int = 0) -> None:
+        super().__init__(dim, name, weight, priority)
+        kp_m = gain_matrix(kp, dim, f"{name}: kp")
+        if kd is None:
+            if np.ndim(kp) != 0:
+                raise InvalidParameterError(f"{name}: give kd when kp is not a scalar", value=kp)
+            kd = 2.0 * np.sqrt(float(kp))
+        kd_m = gain_matrix(kd, dim, f"{name}: kd")
+        self.kp, self.kd = kp_m, kd_m
+        # isotropic gains become scalars on the hot path
+        self._kp: Any = kp_m[0, 0] if np.array_equal(kp_m, kp_m[0, 0] * np.eye(dim)) else kp_m
+        self._kd: Any = kd_m[0, 0] if np.array_equal(kd_m, kd_m[0, 0] * np.eye(dim)) else kd_m
+
+    @abstractmethod
+    def kinematics(self, state: ModelState, t: float, ref: Reference
+                   ) -> tuple[FloatArray | None, FloatArray, FloatArray, FloatArray, FloatArray]:
+        """(J, drift J̇q̇, error e, velocity error ė, feed-forward acceleration ẍ_ref); J None: identity."""
+
+    def desired_acceleration(self, state: ModelState, t: float, ref: Reference
+                             ) -> tuple[FloatArray | None, FloatArray, FloatArray]:
+        """(J, J̇q̇, ẍ*) with ẍ* = ẍ_ref + K_d ė + K_p e."""
+        jac, drift, e, ed, acc = self.kinematics(state, t, ref)
+        kp, kd = self._kp, self._kd
+        if isinstance(kp, float) and isinstance(kd, float):
+            return jac, drift, acc + kp * e + kd * ed
+        return jac, drift, acc + kp @ e + kd @ ed
+
+    def residual(self, state: ModelState, t: float, ref: Reference) -> tuple[FloatArray | None, FloatArray]:
+        jac, drift, xdd = self.desired_acceleration(state, t, ref)
+        return jac, xdd - drift
+
+    def error(self, state: ModelState, t: float, ref: Reference) -> FloatArray:
+        """The task error e at this state (for logs and tests)."""
+        return self.kinematics(state, t, ref)[2]

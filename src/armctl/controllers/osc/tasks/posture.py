@@ -1,0 +1,45 @@
+"""`PostureTask`: the joints follow a joint-space reference (by default the controller's ``ref``).
+
+    e = q_ref − q,   ė = q̇_ref − q̇,   J = I,   drift = 0,   feed-forward q̈_ref
+
+As the lowest-priority (or lightly weighted) task it resolves the redundancy of an arm with more joints than
+task rows.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from armctl._checks import FloatArray, vector
+from armctl.controllers.osc.state import ModelState
+from armctl.controllers.osc.tasks.base import MotionTask
+from armctl.errors import ShapeError
+from armctl.reference import Reference
+
+
+class PostureTask(MotionTask):
+    """Joint posture of an n-joint arm; gains ``kp`` [1/s²], ``kd`` [1/s] (scalar, (n,) or n×n). The target
+    is the controller's joint reference ``ref`` unless :meth:`set_target` fixes one."""
+
+    identity_jacobian = True
+
+    def __init__(self, n: int, kp: ArrayLike = 100.0, kd: ArrayLike | None = None, weight: ArrayLike = 1e-2,
+                 priority: int = 0, name: str = "posture") -> None:
+        super().__init__(int(n), name, kp, kd, weight, priority)
+        self._fixed: Reference | None = None
+        self._zeros = np.zeros(self.dim)
+
+    def set_target(self, q: ArrayLike | None, qd: ArrayLike | None = None, qdd: ArrayLike | None = None) -> None:
+        """Fix the target (q [rad], q̇, q̈); ``None`` goes back to following the controller's ``ref``."""
+        self._fixed = None if q is None else Reference(vector(q, self.dim, f"{self.name}: q"), qd, qdd)
+
+    def check(self, evaluator: object, n: int, contacts: dict[str, int]) -> None:
+        if self.dim != n:
+            raise ShapeError(f"{self.name}: a posture task of {self.dim} joints on a model of {n} joints",
+                             value=self.dim)
+
+    def kinematics(self, state: ModelState, t: float, ref: Reference
+                   ) -> tuple[None, FloatArray, FloatArray, FloatArray, FloatArray]:
+        r = self._fixed or ref
+        return None, self._zeros, r.q - state.q, r.qd - state.qd, r.qdd  # type: ignore[return-value]
