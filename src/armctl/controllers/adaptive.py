@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, gain_matrix, scalar, vector
+from armctl._checks import FloatArray, apply_gain, compact_gain, gain_matrix, scalar, vector
 from armctl.controllers.base import Controller
 from armctl.controllers.passivity import sliding
 from armctl.dynamics.base import Dynamics
@@ -43,9 +43,8 @@ class Adaptive(Controller):
         p = 13 * self.n
         self.lam = gain_matrix(lam, self.n, "lam")
         self.kd = gain_matrix(kd, self.n, "kd")
-        g = np.asarray(gamma, dtype=float)
-        self._gamma_diag = None if g.ndim == 2 else np.diag(gain_matrix(g, p, "gamma")).copy()
-        self.gamma = gain_matrix(g, p, "gamma")
+        self.gamma = gain_matrix(gamma, p, "gamma")
+        self._lam, self._kd, self._gamma = compact_gain(self.lam), compact_gain(self.kd), compact_gain(self.gamma)
         self.theta0 = dynamics.parameters().copy() if theta0 is None else vector(theta0, p, "theta0").copy()
         self.projection = bool(projection)
         self.sigma = scalar(sigma, "sigma", nonnegative=True)
@@ -65,26 +64,25 @@ class Adaptive(Controller):
         self._w_f: FloatArray | None = None
         self._tau_f: FloatArray | None = None
 
-    def _gamma(self, v: FloatArray) -> FloatArray:
-        return self._gamma_diag * v if self._gamma_diag is not None else self.gamma @ v
-
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         dyn = self.dynamics
         assert dyn is not None
-        qd_r, qdd_r, s = sliding(q, qd, ref, self.lam)
+        qd_r, qdd_r, s = sliding(q, qd, ref, self._lam)
         y = dyn.passivity_regressor(q, qd, qd_r, qdd_r)
         dt = 0.0 if self._t_prev is None else t - self._t_prev
         if dt > 0:
-            grad = y.T @ s if float(np.linalg.norm(s)) >= self.dead_zone else np.zeros_like(self.theta)
+            grad = y.T.dot(s) if self.dead_zone == 0 or float(np.linalg.norm(s)) >= self.dead_zone \
+                else np.zeros_like(self.theta)
             if self.sigma:
                 grad = grad + self.sigma * (self.theta - self.theta0)
             if self.composite:
                 grad = grad + self.composite * self._prediction_gradient(q, qd, dt)
-            self.theta = self.theta - dt * self._gamma(grad)
+            self.theta = self.theta - dt * apply_gain(self._gamma, grad)
             if self.projection:
                 self.theta = project_physical(self.theta)
         self._t_prev, self._qd_prev = t, qd
-        tau = y @ self.theta - self.kd @ s
+        tau = y.dot(self.theta)
+        tau -= apply_gain(self._kd, s)
         self._tau_prev = tau
         self.last_log = {"theta": self.theta.copy(), "s": s}
         return tau
@@ -100,4 +98,4 @@ class Adaptive(Controller):
         else:
             self._w_f = self._w_f + a * (w - self._w_f)
             self._tau_f = self._tau_f + a * (self._tau_prev - self._tau_f)
-        return self._w_f.T @ (self._w_f @ self.theta - self._tau_f)
+        return self._w_f.T.dot(self._w_f.dot(self.theta) - self._tau_f)

@@ -8,6 +8,7 @@ once and hands them on. Per-step values worth logging (parameter estimates, a Ly
 
 from __future__ import annotations
 
+import math
 from abc import ABC, abstractmethod
 from typing import Any
 
@@ -31,15 +32,23 @@ class Controller(ABC):
             raise InvalidParameterError("a controller without dynamics needs n (the number of joints)", value=n)
         self.dynamics = dynamics
         self.n = dynamics.n if dynamics is not None else int(n)  # type: ignore[arg-type]
+        self._shape = (self.n,)
         self.last_log: dict[str, Any] = {}
 
     def __call__(self, t: float, q: ArrayLike, qd: ArrayLike, ref: Reference) -> FloatArray:
         """τ for the measured state (q, q̇) at time t [s] and the reference ``ref``."""
         if not isinstance(ref, Reference):
             raise InvalidParameterError(f"ref must be an armctl.Reference, got {type(ref).__name__}", value=ref)
-        if ref.n != self.n:
+        if ref.q.shape != self._shape:
             raise ShapeError(f"reference has {ref.n} joints, the controller {self.n}", value=ref)
-        return self.compute(float(t), vector(q, self.n, "q"), vector(qd, self.n, "qd"), ref)
+        try:  # the cheap test first: this runs every control period
+            ok = (q.shape == self._shape and qd.shape == self._shape  # type: ignore[union-attr]
+                  and math.isfinite(sum(q.tolist()) + sum(qd.tolist())))  # type: ignore[union-attr]
+        except AttributeError:
+            ok = False
+        if not ok:
+            q, qd = vector(q, self.n, "q"), vector(qd, self.n, "qd")
+        return self.compute(float(t), q, qd, ref)  # type: ignore[arg-type]
 
     @abstractmethod
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:

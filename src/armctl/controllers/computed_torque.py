@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, gain_matrix
+from armctl._checks import FloatArray, apply_gain, compact_gain, gain_matrix
 from armctl.controllers.base import Controller
 from armctl.dynamics.base import Dynamics
 from armctl.reference import Reference
@@ -29,6 +29,8 @@ class ComputedTorque(Controller):
         self.kd = gain_matrix(kd, self.n, "kd")
         self.ki = None if ki is None else gain_matrix(ki, self.n, "ki")
         self.friction = bool(friction)
+        self._kp, self._kd = compact_gain(self.kp), compact_gain(self.kd)
+        self._ki = None if self.ki is None else compact_gain(self.ki)
         self.reset()
 
     def reset(self) -> None:
@@ -40,12 +42,13 @@ class ComputedTorque(Controller):
         dyn = self.dynamics
         assert dyn is not None
         e = ref.q - q
-        v = ref.qdd + self.kd @ (ref.qd - qd) + self.kp @ e
-        if self.ki is not None:
+        v = ref.qdd + apply_gain(self._kd, ref.qd - qd)
+        v += apply_gain(self._kp, e)
+        if self._ki is not None:
             if self._t_prev is not None:
                 self._integral += e * (t - self._t_prev)
             self._t_prev = t
-            v += self.ki @ self._integral
+            v += apply_gain(self._ki, self._integral)
         tau = dyn.inverse_dynamics(q, qd, v)
         if not self.friction and dyn._has_friction:
             tau -= dyn.friction_torque(qd)

@@ -4,18 +4,17 @@ from __future__ import annotations
 
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, gain_matrix
+from armctl._checks import FloatArray, apply_gain, compact_gain, gain_matrix
 from armctl.controllers.base import Controller
 from armctl.dynamics.base import Dynamics
 from armctl.reference import Reference
 
 
 def sliding(q: FloatArray, qd: FloatArray, ref: Reference, lam: FloatArray) -> tuple[FloatArray, ...]:
-    """(q̇_r, q̈_r, s) of Slotine–Li: q̃ = q − q_d, q̇_r = q̇_d − Λq̃, q̈_r = q̈_d − Λ(q̇ − q̇_d), s = q̇ − q̇_r."""
-    e = q - ref.q
-    ed = qd - ref.qd
-    qd_r = ref.qd - lam @ e
-    qdd_r = ref.qdd - lam @ ed
+    """(q̇_r, q̈_r, s) of Slotine–Li: q̃ = q − q_d, q̇_r = q̇_d − Λq̃, q̈_r = q̈_d − Λ(q̇ − q̇_d), s = q̇ − q̇_r.
+    ``lam`` in :func:`~armctl._checks.compact_gain` form."""
+    qd_r = ref.qd - apply_gain(lam, q - ref.q)
+    qdd_r = ref.qdd - apply_gain(lam, qd - ref.qd)
     return qd_r, qdd_r, qd - qd_r
 
 
@@ -34,9 +33,12 @@ class PassivityBased(Controller):
         super().__init__(dynamics)
         self.lam = gain_matrix(lam, self.n, "lam")
         self.kd = gain_matrix(kd, self.n, "kd")
+        self._lam, self._kd = compact_gain(self.lam), compact_gain(self.kd)
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         dyn = self.dynamics
         assert dyn is not None
-        qd_r, qdd_r, s = sliding(q, qd, ref, self.lam)
-        return dyn.passivity_torque(q, qd, qd_r, qdd_r) - self.kd @ s
+        qd_r, qdd_r, s = sliding(q, qd, ref, self._lam)
+        tau = dyn.passivity_torque(q, qd, qd_r, qdd_r)
+        tau -= apply_gain(self._kd, s)
+        return tau

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, gain_matrix
+from armctl._checks import FloatArray, apply_gain, compact_gain, gain_matrix
 from armctl.controllers.base import Controller
 from armctl.dynamics.base import Dynamics
 from armctl.reference import Reference
@@ -25,11 +25,14 @@ class PDGravity(Controller):
         self.kp = gain_matrix(kp, self.n, "kp")
         self.kd = gain_matrix(kd, self.n, "kd")
         self.friction = bool(friction)
+        self._kp, self._kd = compact_gain(self.kp), compact_gain(self.kd)
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         dyn = self.dynamics
         assert dyn is not None
-        tau = self.kp @ (ref.q - q) + self.kd @ (ref.qd - qd) + dyn.gravity_torque(q)
+        tau = dyn.gravity_torque(q)
+        tau += apply_gain(self._kp, ref.q - q)
+        tau += apply_gain(self._kd, ref.qd - qd)
         if self.friction:
             tau += dyn.friction_torque(qd)
         return tau

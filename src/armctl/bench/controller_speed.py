@@ -1,0 +1,53 @@
+"""Cost of one control step through the public API on the Panda, as a ratio to one raw Pinocchio RNEA call
+measured in the same run (interleaved rounds). Run: ``python -m armctl.bench.controller_speed``."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+import armctl
+from armctl.bench.timing import interleaved
+
+TARGETS = {"PDGravity": 3.0, "ComputedTorque": 4.0, "PassivityBased": 7.0, "Adaptive": 14.0}
+
+
+def run(number: int = 1000, rounds: int = 15, seed: int = 0) -> dict[str, Any]:
+    import pinocchio as pin
+
+    from armctl.controllers import Adaptive, ComputedTorque, PassivityBased, PDGravity
+
+    model = armctl.models.panda()
+    dyn = armctl.Dynamics(model)
+    pm = model.to_pinocchio()
+    pd = pm.createData()
+    rng = np.random.default_rng(seed)
+    q, qd, qdd = rng.uniform(-1.0, 1.0, (3, model.n))
+    ref = armctl.Reference(q + 0.01, qd, qdd)
+    controllers = {"PDGravity": PDGravity(dyn, 100.0, 20.0), "ComputedTorque": ComputedTorque(dyn, 100.0, 20.0),
+                   "PassivityBased": PassivityBased(dyn, 5.0, 20.0), "Adaptive": Adaptive(dyn, 5.0, 20.0, 0.01)}
+    out: dict[str, Any] = {"model": model.name}
+    for name, c in controllers.items():
+        clock = iter(np.arange(1, 10**8) * 1e-3)  # the adaptive law integrates between calls
+        t = interleaved({"ctrl": lambda c=c, clock=clock: c(next(clock), q, qd, ref),
+                         "rnea": lambda: pin.rnea(pm, pd, q, qd, qdd)}, number, rounds)
+        out[name] = {"step_s": t["ctrl"], "rnea_s": t["rnea"], "ratio": t["ctrl"] / t["rnea"]}
+    return out
+
+
+def report(fig: dict[str, Any]) -> str:
+    lines = [f"control step on {fig['model']}, ratio to one raw RNEA (medians of interleaved rounds)"]
+    for name, target in TARGETS.items():
+        f = fig[name]
+        lines.append(f"  {name:15s} {f['step_s'] * 1e6:7.2f} us  RNEA {f['rnea_s'] * 1e6:5.2f} us  ratio "
+                     f"{f['ratio']:5.2f}  (target <= {target}: {'ok' if f['ratio'] <= target else 'MISSED'})")
+    return "\n".join(lines)
+
+
+def main() -> None:
+    print(report(run()))
+
+
+if __name__ == "__main__":
+    main()
