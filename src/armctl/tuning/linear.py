@@ -1,0 +1,65 @@
+"""Linear models and gains on python-control.
+
+* :func:`linearize`: the arm about an equilibrium (q₀, q̇ = 0, τ₀ = g(q₀)) as a ``control.StateSpace`` with
+  state (δq, δq̇) and input δτ: A = [[0, 1], [−M⁻¹ ∂g/∂q, −M⁻¹ F_v]], B = [[0], [M⁻¹]] (Coriolis terms are
+  quadratic in q̇ and vanish to first order).
+* :func:`pd_from_bandwidth`: K_p = ω_n², K_d = 2ζω_n for the decoupled error dynamics ë + K_d ė + K_p e = 0
+  that computed torque produces.
+* :func:`lqr_gains`: LQR gains (K_p, K_d) for the same double-integrator error dynamics.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from armctl._checks import FloatArray, scalar, vector
+from armctl.dynamics.base import Dynamics
+
+
+def linearize(dyn: Dynamics, q0: ArrayLike, step: float = 1e-6) -> Any:
+    """``control.StateSpace`` of the arm about q₀ at rest (∂g/∂q by central differences of step [rad])."""
+    import control
+
+    q0 = vector(q0, dyn.n, "q0")
+    n = dyn.n
+    m_inv = np.linalg.inv(dyn.mass_matrix(q0))
+    dg = np.empty((n, n))
+    for j in range(n):
+        e = np.zeros(n)
+        e[j] = step
+        dg[:, j] = (dyn.gravity_torque(q0 + e) - dyn.gravity_torque(q0 - e)) / (2 * step)
+    fv = np.diag([jt.friction.viscous for jt in dyn.model.joints])
+    a = np.block([[np.zeros((n, n)), np.eye(n)], [-m_inv @ dg, -m_inv @ fv]])
+    b = np.vstack([np.zeros((n, n)), m_inv])
+    c = np.hstack([np.eye(n), np.zeros((n, n))])
+    return control.ss(a, b, c, np.zeros((n, n)))
+
+
+def pd_from_bandwidth(omega_n: float, zeta: float = 1.0) -> tuple[float, float]:
+    """(K_p, K_d) = (ω_n², 2ζω_n) [1/s², 1/s]: poles of s² + K_d s + K_p at natural frequency ω_n [rad/s]
+    and damping ratio ζ."""
+    w = scalar(omega_n, "omega_n", positive=True)
+    z = scalar(zeta, "zeta", positive=True)
+    return w * w, 2 * z * w
+
+
+def lqr_gains(position_weight: float, velocity_weight: float = 0.0, effort_weight: float = 1.0
+              ) -> tuple[float, float]:
+    """(K_p, K_d) minimising ∫ q_p e² + q_v ė² + r v² dt for ë = v (one joint; the same for every joint of a
+    computed-torque loop)."""
+    import control
+
+    qp = scalar(position_weight, "position_weight", positive=True)
+    qv = scalar(velocity_weight, "velocity_weight", nonnegative=True)
+    r = scalar(effort_weight, "effort_weight", positive=True)
+    k, _s, _e = control.lqr(np.array([[0.0, 1.0], [0.0, 0.0]]), np.array([[0.0], [1.0]]), np.diag([qp, qv]),
+                            np.array([[r]]))
+    return float(k[0, 0]), float(k[0, 1])
+
+
+def closed_loop_poles(kp: float, kd: float) -> FloatArray:
+    """Roots of s² + K_d s + K_p."""
+    return np.roots([1.0, kd, kp])

@@ -1,0 +1,33 @@
+"""Linearisation and gains against closed forms."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from armctl.tuning import closed_loop_poles, linearize, lqr_gains, pd_from_bandwidth
+from tests.conftest import dynamics
+
+
+def test_pendulum_linearisation_is_the_textbook_one() -> None:
+    """About q₀: J δq̈ + F_v δq̇ + m g ℓ cos(q₀) δq = δτ, J = I_c + mℓ² + k_r² I_m."""
+    m, length, f_v = 2.0, 0.5, 0.05
+    ell = length / 2
+    j = m * length**2 / 12 + m * ell**2 + 50.0**2 * 5e-5
+    for q0 in (0.0, 0.7, math.pi):
+        sys = linearize(dynamics("pendulum"), [q0])
+        expected = np.array([[0, 1], [-m * 9.81 * ell * math.cos(q0) / j, -f_v / j]])
+        assert np.allclose(sys.A, expected, rtol=1e-6, atol=1e-8)
+        assert np.allclose(sys.B, [[0], [1 / j]])
+    assert (np.linalg.eigvals(linearize(dynamics("pendulum"), [math.pi]).A).real > 0).any()  # upright: unstable
+
+
+def test_gains() -> None:
+    kp, kd = pd_from_bandwidth(10.0, 0.7)
+    assert (kp, kd) == pytest.approx((100.0, 14.0))
+    assert np.abs(closed_loop_poles(kp, kd)) == pytest.approx([10.0, 10.0])
+    # LQR for ë = v with weights q_p, q_v, r: K_p = √(q_p/r), K_d = √(q_v/r + 2 K_p) (Riccati by hand)
+    kp, kd = lqr_gains(100.0, 4.0, 1.0)
+    assert kp == pytest.approx(10.0) and kd == pytest.approx(math.sqrt(4.0 + 20.0))
