@@ -127,9 +127,7 @@ class OperationalSpaceQP(Controller):
         """τ = the τ block of the QP solution (clipped onto the torque limits, which it meets to the solver's
         tolerance)."""
         sol = self._solve(t, q, qd, ref)
-        tau = sol.tau.copy()
-        if self._tau_up is not None:
-            np.clip(tau, self._tau_lo, self._tau_up, out=tau)
+        tau = sol.tau.clip(self._tau_lo, self._tau_up) if self._tau_up is not None else sol.tau.copy()
         log: dict[str, Any] = {"qp_iterations": sol.iterations}
         for name, f in sol.forces.items():
             log[f"force[{name}]"] = f

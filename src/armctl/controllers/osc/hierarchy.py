@@ -32,7 +32,7 @@ class OSCSolution:
     for a level that kept the one above, see ``level_status``) and :meth:`problem` to look at the QP of a
     level."""
 
-    __slots__ = ("_frozen", "forces", "level_status", "qdd", "slacks", "solutions", "step", "tau", "x")
+    __slots__ = ("_frozen", "forces", "iterations", "level_status", "qdd", "slacks", "solutions", "step", "tau", "x")
 
     def __init__(self, step: StepQP, x: FloatArray, solutions: tuple[QPSolution | None, ...],
                  level_status: tuple[str, ...], slacks: dict[str, FloatArray] | None,
@@ -44,6 +44,8 @@ class OSCSolution:
         self.tau = x[v["tau"]]
         self.forces = {c.name: x[v[c.name]] for c in step.layout.contacts}
         self.solutions = solutions
+        #: solver iterations summed over the levels
+        self.iterations = sum(int(s.iterations) for s in solutions if s is not None)
         self.level_status = level_status
         self.slacks = slacks
         self._frozen = frozen
@@ -55,11 +57,6 @@ class OSCSolution:
         for lev in self.step.levels:
             out.update(lev.residuals(self.x))
         return out
-
-    @property
-    def iterations(self) -> int:
-        """Solver iterations summed over the levels."""
-        return sum(int(s.iterations) for s in self.solutions if s is not None)
 
     def problem(self, level: int = 0) -> QPProblem:
         """The QP that was solved for ``level`` (with its rows freezing the levels above)."""
@@ -82,6 +79,9 @@ def solve_cascade(step: StepQP, solver: object, rank_tol: float = 1e-9) -> OSCSo
     ``solve_raw(arrays, slot, problem_factory)`` is used when present and there are no slacks)."""
     nx = step.layout.nx
     raw = getattr(solver, "solve_raw", None) if not step.slacks else None
+    if raw is not None and len(step.levels) == 1:  # the common case, kept lean
+        sol = raw(step.arrays(0), 0, lambda: step.problem(0))
+        return OSCSolution(step, sol.x[:nx], (sol,), ("solved",), None, [None])
     F = np.zeros((0, nx))
     x: FloatArray | None = None
     sols: list[QPSolution | None] = []

@@ -39,6 +39,14 @@ def _weights(weight: ArrayLike, dim: int, name: str) -> FloatArray:
     return w
 
 
+def _compact(k: FloatArray) -> Any:
+    """A gain matrix as a float (isotropic), a vector (diagonal) or itself."""
+    d = np.diag(k).copy()
+    if not np.array_equal(k, np.diag(d)):
+        return k
+    return float(d[0]) if (d == d[0]).all() else d
+
+
 class Task(ABC):
     """A least-squares objective of dimension ``dim`` on the variable block ``variable`` ("qdd" or a contact
     name). ``weight`` w ≥ 0: scalar or (dim,). ``priority``: integer level, 0 the most important."""
@@ -95,9 +103,9 @@ class MotionTask(Task):
             kd = 2.0 * np.sqrt(float(kp))
         kd_m = gain_matrix(kd, dim, f"{name}: kd")
         self.kp, self.kd = kp_m, kd_m
-        # isotropic gains become scalars on the hot path
-        self._kp: Any = kp_m[0, 0] if np.array_equal(kp_m, kp_m[0, 0] * np.eye(dim)) else kp_m
-        self._kd: Any = kd_m[0, 0] if np.array_equal(kd_m, kd_m[0, 0] * np.eye(dim)) else kd_m
+        # on the hot path isotropic gains are scalars and diagonal ones vectors (elementwise products)
+        self._kp: Any = _compact(kp_m)
+        self._kd: Any = _compact(kd_m)
 
     @abstractmethod
     def kinematics(self, state: ModelState, t: float, ref: Reference
@@ -111,7 +119,7 @@ class MotionTask(Task):
         kp, kd = self._kp, self._kd
         if isinstance(kp, float) and isinstance(kd, float):
             return jac, drift, acc + kp * e + kd * ed
-        return jac, drift, acc + kp @ e + kd @ ed
+        return jac, drift, acc + (kp @ e if np.ndim(kp) == 2 else kp * e) + (kd @ ed if np.ndim(kd) == 2 else kd * ed)
 
     def residual(self, state: ModelState, t: float, ref: Reference) -> tuple[FloatArray | None, FloatArray]:
         jac, drift, xdd = self.desired_acceleration(state, t, ref)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from typing import Any
 
@@ -27,6 +28,14 @@ class TargetHolder:
 
     def _check(self, value: Any, velocity: Any, acceleration: Any) -> tuple[FloatArray, FloatArray, FloatArray]:
         shape = self.value_shape
+        try:  # fast path: float arrays of the right shapes, all finite (one sum, NaN/inf propagate into it)
+            if (value.shape == shape and velocity.shape == acceleration.shape == (self.rate,)
+                    and value.dtype == velocity.dtype == acceleration.dtype == np.float64
+                    and math.isfinite(sum(value.ravel().tolist()) + sum(velocity.tolist())
+                                      + sum(acceleration.tolist()))):
+                return value, velocity, acceleration
+        except AttributeError:
+            pass
         val = (vector(value, shape[0], f"{self.owner}: target") if len(shape) == 1
                else matrix(value, shape, f"{self.owner}: target"))  # type: ignore[arg-type]
         vel = np.zeros(self.rate) if velocity is None else vector(velocity, self.rate, f"{self.owner}: velocity")

@@ -1,0 +1,161 @@
+"""The QP of the operational-space controller (issue 5): its rows against the Dynamics API (an independent
+evaluation of the same Lagrange model), its solution against hand-written task accelerations, build
+separately from solve, and proxsuite against qpsolvers."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+import armctl
+from armctl.controllers.osc import (
+    Contact,
+    ContactForceTask,
+    FramePoseTask,
+    FramePositionTask,
+    OperationalSpaceQP,
+    PostureTask,
+    QPProblem,
+    TorqueLimit,
+)
+
+from .conftest import Q_HOME, panda_dynamics
+
+
+def _state(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    return Q_HOME + rng.uniform(-0.3, 0.3, 7), rng.uniform(-0.5, 0.5, 7)
+
+
+def test_equality_rows_are_the_equation_of_motion(panda: armctl.Dynamics, rng: np.random.Generator) -> None:
+    """Any x with A x = b has τ = inverse_dynamics(q, q̇, q̈) (friction included)."""
+    dyn = panda_dynamics(friction=True)
+    task = FramePositionTask()
+    task.set_target([0.4, 0.0, 0.5])
+    ctrl = OperationalSpaceQP(dyn, [task], limits=[TorqueLimit()])
+    for _ in range(3):
+        q, qd = _state(rng)
+        p = ctrl.build(0.0, q, qd, armctl.Reference(q)).problem(0)
+        qdd = rng.normal(size=7)
+        tau = np.linalg.solve(p.A[:, 7:], p.b - p.A[:, :7] @ qdd)  # A = [M, −I]: τ from the rows
+        np.testing.assert_allclose(tau, dyn.inverse_dynamics(q, qd, qdd), atol=1e-9)
+
+
+def test_contact_force_enters_as_minus_jacobian_transpose(rng: np.random.Generator) -> None:
+    """With a contact force f (environment on the robot), τ = inverse_dynamics(q, q̇, q̈, wrench=h_e) with
+    h_e = [−f; 0], the wrench the arm exerts."""
+    dyn = panda_dynamics()
+    contact = Contact(mode="fixed", mu=0.8)
+    task = FramePositionTask()
+    task.set_target([0.4, 0.0, 0.5])
+    ctrl = OperationalSpaceQP(dyn, [task, ContactForceTask(contact, [0.0, 0.0, 10.0])], limits=[],
+                              contacts=[contact])
+    q, qd = _state(rng)
+    p = ctrl.build(0.0, q, qd, armctl.Reference(q)).problem(0)
+    v = p.variables
+    qdd, f = rng.normal(size=7), rng.normal(size=3)
+    x = np.zeros(p.nx)
+    x[v["qdd"]] = qdd
+    x[v[contact.name]] = f
+    tau = p.A[:7] @ x - p.b[:7]  # the rows read M q̈ − τ − J_cᵀ f = −(C q̇ + g); x has τ = 0
+    np.testing.assert_allclose(tau, dyn.inverse_dynamics(q, qd, qdd, wrench=np.r_[-f, 0, 0, 0]), atol=1e-9)
+
+
+def test_solution_realises_the_pd_task_acceleration(rng: np.random.Generator) -> None:
+    """One pose task, no limits binding: J q̈ + J̇ q̇ equals ẍ* = a_ref + K_d(V_ref − V) + K_p e, all written
+    here independently (rotation error from scipy, J̇q̇ from a finite difference of the frame velocity)."""
+    dyn = panda_dynamics()
+    q, qd = _state(rng)
+    pose0 = dyn.frame_pose(q)
+    target = pose0.copy()
+    target[:3, 3] += [0.02, -0.01, 0.03]
+    target[:3, :3] = Rotation.from_rotvec([0.05, -0.02, 0.1]).as_matrix() @ pose0[:3, :3]
+    twist, acc = rng.normal(size=6) * 0.1, rng.normal(size=6) * 0.1
+    kp, kd = np.array([100.0, 150.0, 200.0, 80.0, 90.0, 60.0]), 30.0
+    task = FramePoseTask(kp=kp, kd=kd)
+    task.set_target(target, twist, acc)
+    ctrl = OperationalSpaceQP(dyn, [task, PostureTask(7, kp=10.0, priority=1)], limits=[TorqueLimit()])
+    sol = ctrl.solve(0.0, q, qd, armctl.Reference(q))
+    J = dyn.jacobian(q)
+    V = J @ qd
+    e = np.r_[target[:3, 3] - pose0[:3, 3], Rotation.from_matrix(target[:3, :3] @ pose0[:3, :3].T).as_rotvec()]
+    xdd_star = acc + kd * (twist - V) + kp * e
+    h = 1e-7  # J̇ q̇ = d/dt (J(q) q̇) at q̈ = 0
+    drift = (dyn.jacobian(q + h * qd) @ qd - dyn.jacobian(q - h * qd) @ qd) / (2 * h)
+    np.testing.assert_allclose(J @ sol.qdd + drift, xdd_star, atol=1e-5)
+    # and the torque is what the plant needs for that q̈
+    np.testing.assert_allclose(sol.tau, dyn.inverse_dynamics(q, qd, sol.qdd), atol=1e-6)
+
+
+def test_build_is_separate_from_solve_and_inspectable(panda: armctl.Dynamics) -> None:
+    task = FramePoseTask()
+    task.set_target(panda.frame_pose(Q_HOME))
+    ctrl = OperationalSpaceQP(panda, [task, PostureTask(7)], limits=[TorqueLimit()])
+    p = ctrl.build(0.0, Q_HOME, np.zeros(7), armctl.Reference(Q_HOME)).problem(0)
+    assert isinstance(p, QPProblem)
+    assert (p.H.shape, p.A.shape, p.C.shape) == ((14, 14), (7, 14), (7, 14))
+    assert p.eq_names[3] == "dynamics[panda_joint4]" and p.ineq_names[6] == "torque_limit[panda_joint7]"
+    np.testing.assert_allclose(p.H, p.H.T)
+    assert np.linalg.eigvalsh(p.H).min() > 0
+    np.testing.assert_allclose(p.u, panda.model.effort_limit)
+    with pytest.raises(ValueError):
+        p.H[0, 0] = 1.0  # read-only
+    assert ctrl.last_solution is None  # building solved nothing
+
+
+def test_qpsolvers_and_proxsuite_agree(panda: armctl.Dynamics, rng: np.random.Generator) -> None:
+    q, qd = _state(rng)
+    tasks = []
+    for solver in ("proxsuite", "qpsolvers:proxqp"):
+        task = FramePoseTask(kp=300.0)
+        task.set_target(panda.frame_pose(Q_HOME))
+        tasks.append(OperationalSpaceQP(panda, [task, PostureTask(7, weight=1e-2)], limits=[TorqueLimit(scale=0.2)],
+                                        solver=solver))
+    a, b = (c.solve(0.0, q, qd, armctl.Reference(Q_HOME)) for c in tasks)
+    np.testing.assert_allclose(a.x, b.x, atol=1e-5)
+    assert a.problem(0).violations(a.x) == {}
+
+
+def test_warm_start_reuses_the_previous_solution(panda: armctl.Dynamics) -> None:
+    task = FramePoseTask()
+    task.set_target(panda.frame_pose(Q_HOME))
+    ctrl = OperationalSpaceQP(panda, [task, PostureTask(7)], limits=[TorqueLimit()])
+    ref = armctl.Reference(Q_HOME)
+    qd = np.full(7, 0.1)
+    ctrl(0.0, Q_HOME, qd, ref)
+    ctrl(0.001, Q_HOME + 1e-4, qd, ref)
+    assert ctrl.last_solution is not None and ctrl.last_solution.iterations <= 3
+    ctrl.reset()
+    assert ctrl.last_solution is None
+
+
+def test_lagrange_backend_gives_the_same_step() -> None:
+    """The finite-difference J̇q̇ of the generic path against Pinocchio's classical acceleration."""
+    pin_dyn = armctl.Dynamics(armctl.models.planar_3r())
+    lag_dyn = armctl.Dynamics(armctl.models.planar_3r(), backend="lagrange")
+    q, qd = np.array([0.3, 0.8, -0.6]), np.array([0.7, -0.4, 0.9])
+    out = []
+    for dyn in (pin_dyn, lag_dyn):
+        task = FramePositionTask(kp=50.0, weight=[1.0, 1.0, 0.0])  # the arm is planar: z is not a task
+        task.set_target(pin_dyn.frame_pose(q)[:3, 3] + [0.05, -0.02, 0.0], [0.1, 0.0, 0.0])
+        ctrl = OperationalSpaceQP(dyn, [task, PostureTask(3, weight=1e-3)], limits=[TorqueLimit(100.0)])
+        out.append(ctrl.solve(0.0, q, qd, armctl.Reference(q)).x)
+    np.testing.assert_allclose(out[0], out[1], atol=1e-6)
+
+
+def test_slacks_report_how_far_each_task_is_from_met(panda: armctl.Dynamics) -> None:
+    """Slack variables equal the (weighted) residuals; they vanish for a task that can be met (the position
+    task, priority 0) and not for the posture below it, which gives way."""
+    sols = []
+    for slacks in (False, True):
+        task = FramePositionTask(kp=100.0)
+        task.set_target(panda.frame_pose(Q_HOME)[:3, 3] + [0.05, 0.0, 0.0])
+        ctrl = OperationalSpaceQP(panda, [task, PostureTask(7, kp=50.0, weight=1e-2, priority=1)],
+                                  limits=[TorqueLimit()], slacks=slacks)
+        sols.append(ctrl.solve(0.0, Q_HOME, np.zeros(7), armctl.Reference(Q_HOME)))
+    plain, slack = sols
+    np.testing.assert_allclose(plain.x, slack.x, atol=1e-6)
+    assert slack.slacks is not None
+    w = np.sqrt(1e-2)
+    np.testing.assert_allclose(slack.slacks["posture"], w * slack.residuals["posture"], atol=1e-6)
+    assert np.abs(slack.slacks["position[tool]"]).max() < 1e-3 < np.abs(slack.slacks["posture"]).max()
