@@ -1,0 +1,94 @@
+"""Grid convergence of the time-optimal scaling against the analytic bang-bang duration.
+
+On a straight line q(s) = q₀ + s Δ with symmetric joint limits v_j, a_j, the path limits are constants,
+ṡ ≤ V = min_j v_j/|Δ_j| and |s̈| ≤ A = min_j a_j/|Δ_j|, and the minimum rest-to-rest time over s ∈ [0, 1] is the
+bang-bang one:
+
+    T = 2 √(1/A)          if V² ≥ A (the top speed is never reached: a triangle),
+    T = 1/V + V/A         otherwise (a trapezoid).
+
+:func:`grid_convergence` solves the same move on grids of increasing size and records the duration error and
+the compute time; :func:`plot_convergence` draws both (matplotlib is imported there only).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from armctl._checks import FloatArray, readonly, scalar, vector
+from armctl.dynamics.base import Dynamics
+from armctl.planning.path import LinePath
+
+
+def bang_bang_duration(distance: float, v_max: float, a_max: float) -> float:
+    """Minimum time [s] to move ``distance`` from rest to rest with |v| ≤ v_max and |a| ≤ a_max."""
+    d = abs(scalar(distance, "distance"))
+    v, a = scalar(v_max, "v_max", positive=True), scalar(a_max, "a_max", positive=True)
+    if v * v >= a * d:
+        return 2.0 * math.sqrt(d / a)
+    return d / v + v / a
+
+
+def line_min_time(start: ArrayLike, end: ArrayLike, vel_limit: ArrayLike, acc_limit: ArrayLike) -> float:
+    """Minimum rest-to-rest time [s] along the straight line from ``start`` to ``end`` with symmetric joint
+    limits (scalars or (n,) vectors)."""
+    q0 = np.asarray(start, dtype=float)
+    delta = np.abs(vector(end, q0.shape[0], "end") - q0)
+    moving = delta > 0
+    v = np.broadcast_to(np.asarray(vel_limit, dtype=float), delta.shape)[moving]
+    a = np.broadcast_to(np.asarray(acc_limit, dtype=float), delta.shape)[moving]
+    return bang_bang_duration(1.0, float(np.min(v / delta[moving])), float(np.min(a / delta[moving])))
+
+
+@dataclass(frozen=True)
+class ConvergenceStudy:
+    """Durations [s], relative errors |T_N − T|/T and compute times [s] of the time-optimal scaling for
+    each grid size N, against the analytic duration ``reference`` T."""
+
+    grids: FloatArray
+    durations: FloatArray
+    errors: FloatArray
+    compute_times: FloatArray
+    reference: float
+
+
+def grid_convergence(dyn: Dynamics, start: ArrayLike, end: ArrayLike, vel_limit: ArrayLike, acc_limit: ArrayLike,
+                     grids: Sequence[int] = (10, 20, 50, 100, 200, 500, 1000)) -> ConvergenceStudy:
+    """Solve the straight-line move on each grid (velocity and acceleration limits only) and compare with
+    :func:`line_min_time`."""
+    from armctl.planning.topp import time_optimal
+
+    path = LinePath(start, end)
+    ref = line_min_time(start, end, vel_limit, acc_limit)
+    durations, times = [], []
+    for n in grids:
+        t0 = time.perf_counter()
+        traj = time_optimal(dyn, path, vel_limit=vel_limit, acc_limit=acc_limit, grid=int(n))
+        times.append(time.perf_counter() - t0)
+        durations.append(traj.duration)
+    dur = np.array(durations)
+    return ConvergenceStudy(readonly(np.array(grids, dtype=float)), readonly(dur), readonly(np.abs(dur - ref) / ref),
+                            readonly(np.array(times)), ref)
+
+
+def plot_convergence(study: ConvergenceStudy) -> Any:
+    """A matplotlib Figure: relative duration error and compute time against the grid size (log-log)."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(9.0, 3.6), layout="constrained")
+    ax_err, ax_time = fig.subplots(1, 2)
+    ax_err.loglog(study.grids, np.maximum(study.errors, 1e-16), "o-")
+    ax_err.set(xlabel="grid size N (stages)", ylabel="|T_N − T| / T",
+               title=f"duration error (bang-bang T = {study.reference:.4g} s)")
+    ax_time.loglog(study.grids, 1e3 * study.compute_times, "s-", color="C1")
+    ax_time.set(xlabel="grid size N (stages)", ylabel="compute time [ms]", title="time_optimal compute time")
+    for ax in (ax_err, ax_time):
+        ax.grid(True, which="both", alpha=0.3)
+    return fig

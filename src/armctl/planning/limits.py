@@ -1,0 +1,146 @@
+"""Joint limits for time scaling: velocity, acceleration and torque bounds, each lower ≤ value ≤ upper per joint.
+
+A limit is given as
+
+* ``None``: not imposed;
+* ``"model"``: the model's own limits (``model.velocity_limit`` or ``model.effort_limit``, symmetric);
+* a scalar L > 0: ±L on every joint;
+* an (n,) vector of L_j > 0: ±L_j;
+* an (n, 2) array of (lower_j, upper_j) with lower_j < upper_j.
+
+Velocity and acceleration bounds must also admit zero (lower ≤ 0 ≤ upper): the motion starts and ends at rest.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from armctl._checks import FloatArray, readonly
+from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
+from armctl.model.robot import RobotModel
+
+KINDS = ("velocity", "acceleration", "torque")
+UNITS = {"velocity": "rad/s", "acceleration": "rad/s²", "torque": "N·m"}
+
+
+@dataclass(frozen=True)
+class Bounds:
+    """lower ≤ value ≤ upper per joint, (n,) each, read-only. ``kind``: one of :data:`KINDS`."""
+
+    kind: str
+    lower: FloatArray
+    upper: FloatArray
+
+    @property
+    def unit(self) -> str:
+        return UNITS[self.kind]
+
+    def scaled(self, factor: float) -> Bounds:
+        """The bounds shrunk (factor < 1) about their midpoint: mid ± factor · half-range."""
+        mid, half = 0.5 * (self.upper + self.lower), 0.5 * (self.upper - self.lower)
+        return Bounds(self.kind, readonly(mid - factor * half), readonly(mid + factor * half))
+
+    def utilisation(self, values: FloatArray) -> FloatArray:
+        """How much of the range each value uses: |v − mid| / half-range (1 at a bound, > 1 outside).
+        For symmetric bounds ±L this is |v|/L. values: (..., n)."""
+        mid, half = 0.5 * (self.upper + self.lower), 0.5 * (self.upper - self.lower)
+        return np.abs(values - mid) / half  # type: ignore[no-any-return]
+
+
+@dataclass(frozen=True)
+class JointLimits:
+    """The limits a time scaling respects; each is a :class:`Bounds` or None (not imposed).
+
+    torque_margin m ∈ [0, 1): the torque bounds actually planned with are the given ones shrunk by m about
+    their midpoint (``planned_torque``); velocity and acceleration are planned as given.
+    """
+
+    velocity: Bounds | None
+    acceleration: Bounds | None
+    torque: Bounds | None
+    torque_margin: float = 0.0
+
+    @property
+    def planned_torque(self) -> Bounds | None:
+        if self.torque is None or self.torque_margin == 0.0:
+            return self.torque
+        return self.torque.scaled(1.0 - self.torque_margin)
+
+    def planned(self) -> dict[str, Bounds]:
+        """The bounds planned with, by kind (only those imposed)."""
+        out = {"velocity": self.velocity, "acceleration": self.acceleration, "torque": self.planned_torque}
+        return {k: v for k, v in out.items() if v is not None}
+
+
+def bounds(value: Any, kind: str, model: RobotModel) -> Bounds | None:
+    """Parse one limit (see the module docstring) for ``model``; raise an ArmctlError naming what is wrong."""
+    n = model.n
+    name = f"{kind} limit"
+    if value is None:
+        return None
+    if isinstance(value, str):
+        if value != "model" or kind == "acceleration":
+            valid = "None, a number, an (n,) or (n, 2) array" + (", or 'model'" if kind != "acceleration" else "")
+            raise InvalidParameterError(f"{name} must be {valid}; got {value!r}", value=value)
+        lim = np.array(model.velocity_limit if kind == "velocity" else model.effort_limit, dtype=float)
+        if not np.isfinite(lim).all():
+            raise InvalidParameterError(f"{name}='model' but model {model.name!r} has no {kind} limit on joints "
+                                        f"{np.flatnonzero(~np.isfinite(lim)).tolist()}; give the limits explicitly",
+                                        value=lim)
+        value = lim
+    try:
+        a = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"{name} must be numeric, got {value!r}", value=value) from None
+    if a.ndim == 0:
+        a = np.full(n, float(a))
+    if a.shape == (n,):
+        if np.isnan(a).any() or np.isinf(a).any():
+            raise NonFiniteError(f"{name} holds NaN or inf: {a}; give finite limits (use None for no limit)",
+                                 value=value)
+        if (a <= 0).any():
+            j = int(np.argmin(a))
+            raise InvalidParameterError(f"{name} of joint {j} is {a[j]:g} {UNITS[kind]}; a symmetric limit must be "
+                                        "> 0 (give an (n, 2) array for asymmetric bounds)", value=value)
+        lower, upper = -a, a
+    elif a.shape == (n, 2):
+        if not np.isfinite(a).all():
+            raise NonFiniteError(f"{name} holds NaN or inf: {a.tolist()}", value=value)
+        lower, upper = a[:, 0].copy(), a[:, 1].copy()
+        if (lower >= upper).any():
+            j = int(np.argmax(lower - upper))
+            raise InvalidParameterError(f"{name} of joint {j}: lower {lower[j]:g} must be below upper {upper[j]:g} "
+                                        f"{UNITS[kind]}; columns are (lower, upper)", value=value)
+        if kind != "torque" and ((lower > 0).any() or (upper < 0).any()):
+            j = int(np.flatnonzero((lower > 0) | (upper < 0))[0])
+            raise InvalidParameterError(f"{name} of joint {j} is [{lower[j]:g}, {upper[j]:g}] {UNITS[kind]}; it must "
+                                        "contain 0, since the motion starts and ends at rest", value=value)
+    else:
+        raise ShapeError(f"{name} must be a scalar, an ({n},) vector or an ({n}, 2) array of (lower, upper), got "
+                         f"shape {a.shape}", value=value)
+    return Bounds(kind, readonly(lower), readonly(upper))
+
+
+def joint_limits(model: RobotModel, vel_limit: Any = None, acc_limit: Any = None, torque_limit: Any = None,
+                 torque_margin: float = 0.0) -> JointLimits:
+    """All limits of a time-scaling problem, checked; at least one must be imposed."""
+    try:
+        m = float(torque_margin)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"torque_margin must be a number in [0, 1), got {torque_margin!r}",
+                                    value=torque_margin) from None
+    if not 0.0 <= m < 1.0:
+        raise InvalidParameterError(f"torque_margin must be in [0, 1) (0.1 plans with 90 % of the torque range), got "
+                                    f"{torque_margin!r}", value=torque_margin)
+    lim = JointLimits(bounds(vel_limit, "velocity", model), bounds(acc_limit, "acceleration", model),
+                      bounds(torque_limit, "torque", model), m)
+    if lim.velocity is None and lim.acceleration is None and lim.torque is None:
+        raise InvalidParameterError("no limit given: with no velocity, acceleration or torque limit the fastest "
+                                    "motion takes no time; pass vel_limit=, acc_limit= and/or torque_limit= "
+                                    "('model' uses the model's limits)", value=None)
+    if m and lim.torque is None:
+        raise InvalidParameterError(f"torque_margin={m} needs a torque_limit", value=m)
+    return lim

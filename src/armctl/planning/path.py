@@ -1,0 +1,166 @@
+"""Geometric paths q(s) in joint space, s ∈ [0, 1], with their first two derivatives.
+
+A path is the geometry only; a timing law s(t) turns it into a trajectory (see :mod:`.trajectory`). Along a
+path, with ṡ = ds/dt and s̈ = d²s/dt²,
+
+    q̇ = q'(s) ṡ,        q̈ = q'(s) s̈ + q''(s) ṡ²,
+
+which is what time scaling works with. Two paths are provided: :class:`SplinePath`, a cubic spline through
+joint waypoints (knots at the normalised cumulative chord length, so that |q'| is of the order of the path
+length everywhere), and :class:`LinePath`, a straight line between two configurations (q'' = 0).
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from armctl._checks import FloatArray, readonly, vector
+from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
+
+BC_TYPES = ("not-a-knot", "natural", "clamped")
+KNOTS = ("chord", "uniform")
+
+
+class Path(ABC):
+    """A C² path q(s) (n joints) on s ∈ [0, 1].
+
+    Subclasses implement :meth:`_derivatives`; :meth:`__call__` and :meth:`derivatives` check ``s``.
+    """
+
+    n: int
+
+    @property
+    def interval(self) -> tuple[float, float]:
+        """The path parameter range (0, 1)."""
+        return (0.0, 1.0)
+
+    @property
+    def breakpoints(self) -> FloatArray:
+        """Parameters s of the waypoints (where the path's pieces join), first 0 and last 1."""
+        return readonly(np.array([0.0, 1.0]))
+
+    @abstractmethod
+    def _derivatives(self, s: FloatArray, order: int) -> FloatArray:
+        """d^order q / ds^order at every s (m,) → (m, n); s is checked and inside [0, 1]."""
+
+    def __call__(self, s: ArrayLike, order: int = 0) -> FloatArray:
+        """q(s) (order 0), q'(s) (1) or q''(s) (2) [rad, rad, rad]; a scalar s gives (n,), an array (m,) gives
+        (m, n)."""
+        if order not in (0, 1, 2):
+            raise InvalidParameterError(f"path derivative order must be 0, 1 or 2, got {order!r}", value=order)
+        ss = self._params(s)
+        out = self._derivatives(ss.reshape(-1), order)
+        return out[0] if ss.ndim == 0 else out
+
+    def derivatives(self, s: ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """(q, q', q'') at the parameters s (m,), each (m, n)."""
+        ss = self._params(s).reshape(-1)
+        return self._derivatives(ss, 0), self._derivatives(ss, 1), self._derivatives(ss, 2)
+
+    @staticmethod
+    def _params(s: ArrayLike) -> FloatArray:
+        ss = np.asarray(s, dtype=float)
+        if ss.ndim > 1:
+            raise ShapeError(f"path parameter s must be a scalar or a vector, got shape {ss.shape}", value=s)
+        if not np.isfinite(ss).all():
+            raise NonFiniteError("path parameter s holds NaN or inf", value=s)
+        if ss.size and (ss.min() < -1e-12 or ss.max() > 1.0 + 1e-12):
+            raise InvalidParameterError(f"path parameter s must lie in [0, 1], got values in "
+                                        f"[{ss.min():g}, {ss.max():g}]", value=s)
+        return np.clip(ss, 0.0, 1.0)
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}(n={self.n})"
+
+
+class SplinePath(Path):
+    """Cubic spline through joint waypoints.
+
+    waypoints: (m, n) joint positions [rad], m ≥ 2, consecutive ones distinct. knots: ``"chord"`` (default)
+    puts waypoint k at s_k = L_k / L with L_k the cumulative joint-space distance Σ|q_{i+1} − q_i| up to it;
+    ``"uniform"`` at k/(m−1); or an explicit increasing (m,) array from 0 to 1. bc_type: end conditions of
+    :class:`scipy.interpolate.CubicSpline`: ``"not-a-knot"`` (default; two waypoints give a straight line),
+    ``"natural"`` (q'' = 0 at the ends) or ``"clamped"`` (q' = 0 at the ends — avoid for time scaling: where
+    q' = 0 the path velocity ṡ is unbounded by joint velocity limits).
+    """
+
+    def __init__(self, waypoints: ArrayLike, knots: str | ArrayLike = "chord", bc_type: str = "not-a-knot") -> None:
+        from scipy.interpolate import CubicSpline
+
+        w = np.array(waypoints, dtype=float)
+        if w.ndim != 2 or w.shape[0] < 2 or w.shape[1] < 1:
+            raise ShapeError(f"waypoints must be an (m, n) array with m >= 2 waypoints of n joints, got shape "
+                             f"{w.shape}", value=waypoints)
+        if not np.isfinite(w).all():
+            bad = np.argwhere(~np.isfinite(w))[0]
+            raise NonFiniteError(f"waypoint {bad[0]} joint {bad[1]} is {w[tuple(bad)]}; waypoints must be finite",
+                                 value=waypoints)
+        steps = np.linalg.norm(np.diff(w, axis=0), axis=1)
+        if (steps <= 1e-12 * max(1.0, float(np.abs(w).max()))).any():
+            k = int(np.argmin(steps))
+            raise InvalidParameterError(f"waypoints {k} and {k + 1} coincide; remove the repeated waypoint (a "
+                                        "path that stops has no time-optimal scaling through the stop)", value=w)
+        if isinstance(knots, str):
+            if knots == "chord":
+                s = np.concatenate(([0.0], np.cumsum(steps))) / steps.sum()
+            elif knots == "uniform":
+                s = np.linspace(0.0, 1.0, w.shape[0])
+            else:
+                raise InvalidParameterError(f"knots must be one of {KNOTS} or an array, got {knots!r}", value=knots)
+        else:
+            s = vector(knots, w.shape[0], "knots")
+            if s[0] != 0.0 or s[-1] != 1.0 or (np.diff(s) <= 0).any():
+                raise InvalidParameterError(f"knots must increase strictly from 0 to 1, got {s}", value=knots)
+        if bc_type not in BC_TYPES:
+            raise InvalidParameterError(f"bc_type must be one of {BC_TYPES}, got {bc_type!r}", value=bc_type)
+        s[-1] = 1.0
+        self.n = w.shape[1]
+        self.waypoints = readonly(w)
+        self._knots = readonly(s)
+        self._splines = [CubicSpline(s, w, bc_type=bc_type)]
+        self._splines += [self._splines[0].derivative(k) for k in (1, 2)]
+
+    @property
+    def breakpoints(self) -> FloatArray:
+        return self._knots
+
+    def _derivatives(self, s: FloatArray, order: int) -> FloatArray:
+        return self._splines[order](s)  # type: ignore[no-any-return]
+
+
+class LinePath(Path):
+    """The straight line q(s) = q₀ + s (q₁ − q₀) in joint space; q' = q₁ − q₀, q'' = 0."""
+
+    def __init__(self, start: ArrayLike, end: ArrayLike) -> None:
+        a = np.array(start, dtype=float).reshape(-1) if np.ndim(start) <= 1 else None
+        if a is None or a.size == 0:
+            raise ShapeError(f"start must be a non-empty vector, got shape {np.shape(start)}", value=start)
+        self.n = a.shape[0]
+        self.start = readonly(vector(a, self.n, "start"))
+        self.end = readonly(vector(end, self.n, "end"))
+        delta = self.end - self.start
+        if not np.abs(delta).max() > 0.0:
+            raise InvalidParameterError("start and end coincide: a line path needs two distinct configurations",
+                                        value=end)
+        self.delta = readonly(delta)
+        self.waypoints = readonly(np.stack([self.start, self.end]))
+
+    def _derivatives(self, s: FloatArray, order: int) -> FloatArray:
+        if order == 0:
+            return self.start + s[:, None] * self.delta  # type: ignore[no-any-return]
+        if order == 1:
+            return np.repeat(self.delta[None, :], s.shape[0], axis=0)
+        return np.zeros((s.shape[0], self.n))
+
+
+def as_path(path_or_waypoints: Path | ArrayLike, n: int | None = None) -> Path:
+    """``path_or_waypoints`` as a :class:`Path`: a Path is returned as it is, an (m, n) array becomes a
+    :class:`SplinePath`. With ``n`` given, the path must have n joints."""
+    path = path_or_waypoints if isinstance(path_or_waypoints, Path) else SplinePath(path_or_waypoints)
+    if n is not None and path.n != n:
+        raise ShapeError(f"the path has {path.n} joints (waypoints of width {path.n}), the arm {n}; give waypoints "
+                         f"as an (m, {n}) array", value=path_or_waypoints)
+    return path

@@ -1,0 +1,229 @@
+"""`TimeScalingProblem`: the time-optimal path scaling problem in TOPP-RA's canonical form, built from the dynamics.
+
+Along a path q(s), with x = ṡ² ≥ 0 and u = s̈ (so x' = dx/ds = 2u), the inverse dynamics
+τ = M q̈ + C(q, q̇) q̇ + g + F_v q̇ + F_c(sgn q̇) become
+
+    τ(s) = a(s) u + b(s) x + c(s) + F_v q'(s) √x + F_c(sgn q'(s)),
+    a = M q',   b = M q'' + C(q, q') q',   c = g(q),
+
+obtained from three inverse-dynamics evaluations per gridpoint: c = ID(q, 0, 0), a = ID(q, 0, q') − c,
+b = ID(q, q', q'') − c − friction (C is quadratic in q̇, hence C(q, q'ṡ) q'ṡ = C(q, q') q' x).
+
+Friction, exactly where it can be and conservatively where it cannot:
+
+* Coulomb: q̇_j = q'_j ṡ with ṡ ≥ 0, so sgn q̇_j = sgn q'_j is known along the path and the Coulomb torque is a
+  known function of s — exact. Where q'_j changes sign (joint j reverses) the torque jumps; the gridpoints on
+  either side of a reversal are held to both one-sided values (max for the upper bound, min for the lower).
+  Where ṡ = 0 (the ends of a rest-to-rest motion) the friction is taken as its limit from inside the motion.
+* Viscous: F_v q'_j √x is not linear in x. The side where it helps (it opposes motion, so it adds torque in
+  the direction of q'_j) is dropped (√x ≥ 0); on the side where it hurts, √x is replaced by its tangent at a
+  reference x₀ > 0, √x ≤ √x₀/2 + x/(2√x₀), which over-estimates it everywhere and is exact at x = x₀. x₀ is the
+  solution of a first pass (see :func:`~armctl.planning.topp.time_optimal`). The result is never optimistic.
+
+Every constraint is stored as a row  a_r u + b_r x + c_r + w_r √x ≤ g_r  (w_r ≥ 0) at every gridpoint, plus
+0 ≤ x ≤ x_max(s) from the velocity limits: lower_j ≤ q'_j ṡ ≤ upper_j.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from armctl._checks import FloatArray, readonly
+from armctl.dynamics.base import Dynamics
+from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
+from armctl.planning._batch import rigid_torques
+from armctl.planning.limits import JointLimits
+from armctl.planning.path import Path
+
+X_CAP = 1e8  # largest path velocity² considered (toppra's Seidel solver bounds x by 1e8 as well)
+DISCRETIZATIONS = ("interpolation", "collocation")
+
+
+@dataclass(frozen=True)
+class RowLabel:
+    """What a constraint row bounds: ``kind`` "torque" or "acceleration", ``joint`` index, ``side``
+    "upper" or "lower"."""
+
+    kind: str
+    joint: int
+    side: str
+
+
+@dataclass(frozen=True, eq=False)
+class TimeScalingProblem:
+    """The discretised problem: rows a u + b x + c + w √x ≤ g at gridpoints ``s`` (N+1,), 0 ≤ x ≤ ``x_max``.
+
+    Arrays are read-only: a, b, c, w (N+1, m); g (m,); q, dq, ddq (N+1, n) the path and its derivatives;
+    gravity (N+1, n) g(q(s)) [N·m]; coulomb (N+1, n, 2) the Coulomb torque on the (lower, upper) side [N·m].
+    ``labels[r]`` names row r. ``discretization``: "interpolation" (each stage also imposes its rows at
+    s_{i+1} with x_{i+1} = x_i + 2Δ_i u_i, TOPP-RA's more accurate scheme) or "collocation".
+    """
+
+    dyn: Dynamics
+    path: Path
+    limits: JointLimits
+    s: FloatArray
+    q: FloatArray
+    dq: FloatArray
+    ddq: FloatArray
+    a: FloatArray
+    b: FloatArray
+    c: FloatArray
+    w: FloatArray
+    g: FloatArray
+    x_max: FloatArray
+    gravity: FloatArray
+    coulomb: FloatArray
+    labels: tuple[RowLabel, ...]
+    discretization: str = "interpolation"
+
+    @property
+    def grid(self) -> int:
+        """N, the number of stages (intervals)."""
+        return int(self.s.shape[0] - 1)
+
+    @property
+    def has_viscous(self) -> bool:
+        return bool(self.w.any())
+
+    def linearized(self, x0: ArrayLike | None) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """(a, b, c) of the rows with w √x replaced by its tangent at x₀ (N+1,) > 0, or dropped (x0=None)."""
+        if x0 is None or not self.has_viscous:
+            return self.a, self.b, self.c
+        r = np.sqrt(np.asarray(x0, dtype=float))[:, None]
+        return self.a, self.b + self.w / (2.0 * r), self.c + 0.5 * self.w * r
+
+
+def gridpoints(grid: int | ArrayLike) -> FloatArray:
+    """The gridpoints: N + 1 evenly spaced ones on [0, 1] for an integer N ≥ 2, or an explicit increasing array
+    from 0 to 1."""
+    if isinstance(grid, (int, np.integer)) and not isinstance(grid, bool):
+        if grid < 2:
+            raise InvalidParameterError(f"grid must be >= 2 intervals, got {grid}", value=grid)
+        return np.linspace(0.0, 1.0, int(grid) + 1)
+    s = np.asarray(grid, dtype=float)
+    if s.ndim != 1 or s.shape[0] < 3:
+        raise ShapeError(f"grid must be an integer N >= 2 or an array of >= 3 gridpoints, got {grid!r}", value=grid)
+    if not np.isfinite(s).all():
+        raise NonFiniteError("grid holds NaN or inf", value=grid)
+    if s[0] != 0.0 or s[-1] != 1.0 or (np.diff(s) <= 0).any():
+        raise InvalidParameterError("gridpoints must increase strictly from 0 to 1", value=grid)
+    return s
+
+
+def _rigid_coefficients(dyn: Dynamics, q: FloatArray, dq: FloatArray, ddq: FloatArray
+                        ) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """a = M q', b = M q'' + C(q, q') q', c = g at every row of q (the rigid-body part, no friction), from
+    one batch of 3 (N+1) inverse-dynamics evaluations."""
+    m = q.shape[0]
+    zero = np.zeros_like(q)
+    tau = rigid_torques(dyn, np.concatenate((q, q, q)), np.concatenate((zero, zero, dq)),
+                        np.concatenate((zero, dq, ddq)))
+    c = tau[:m]
+    return tau[m:2 * m] - c, tau[2 * m:] - c, c
+
+
+def friction_parameters(dyn: Dynamics) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """(F_v, F_c⁺, F_c⁻) of the joints, (n,) each [N·m·s/rad, N·m, N·m]."""
+    fr = [j.friction for j in dyn.model.joints]
+    return (np.array([f.viscous for f in fr]), np.array([f.coulomb for f in fr]),
+            np.array([f.coulomb_neg for f in fr]))
+
+
+def coulomb_sides(dq: FloatArray, fc_pos: FloatArray, fc_neg: FloatArray) -> FloatArray:
+    """(N+1, n, 2): the least and the largest Coulomb torque at each gridpoint over the signs of q'_j at it
+    and at its two neighbours (both values near a reversal, the exact one elsewhere)."""
+    scale = np.abs(dq).max(axis=0, keepdims=True)
+    sign = np.where(np.abs(dq) > 1e-12 * np.maximum(scale, 1e-300), np.sign(dq), 0.0)
+    f = np.where(sign > 0, fc_pos, np.where(sign < 0, -fc_neg, 0.0))
+    lo, hi = f.copy(), f.copy()
+    for dst, src in ((slice(1, None), slice(None, -1)), (slice(None, -1), slice(1, None))):  # previous, next
+        lo[dst] = np.minimum(lo[dst], f[src])
+        hi[dst] = np.maximum(hi[dst], f[src])
+    return np.stack([lo, hi], axis=-1)
+
+
+def velocity_bound(path: Path, s: FloatArray, limits: JointLimits, per_stage: int = 8) -> FloatArray:
+    """x_max at each gridpoint such that the velocity limits hold on the whole of both adjacent stages.
+
+    For one s, lower_j ≤ q'_j ṡ ≤ upper_j gives ṡ ≤ upper_j / q'_j (q'_j > 0) or lower_j / q'_j (q'_j < 0):
+    x ≤ X(s) = min_j ṡ_max,j². Within a stage TOPP-RA's x = ṡ² is linear in s, so bounding it at the two ends
+    by X(s_i), X(s_{i+1}) lets it exceed X in between where X sags below its chord (toppra's velocity
+    constraint does this: several % on curved paths). Here each stage's end bounds are lowered by that sag σ
+    (the largest chord − X over the stage, sampled ``per_stage`` times) — an O(Δ²) tightening — or, where that
+    gives less, both set to the least X over the stage; a gridpoint takes the lower of its two stages' bounds.
+    """
+    N = s.shape[0] - 1
+    if limits.velocity is None:
+        return np.full(N + 1, X_CAP)
+    frac = np.arange(per_stage + 1) / per_stage
+    dense = s[:-1, None] + np.diff(s)[:, None] * frac[None, :]  # (N, per_stage + 1), both ends included
+    dq = path(dense.reshape(-1), 1)
+    lo, hi = limits.velocity.lower, limits.velocity.upper
+    with np.errstate(divide="ignore", invalid="ignore"):
+        sd = np.where(dq > 0, hi / dq, np.where(dq < 0, lo / dq, np.inf))
+    X = np.minimum(np.min(sd, axis=1) ** 2, X_CAP).reshape(N, per_stage + 1)
+    chord = X[:, :1] + (X[:, -1:] - X[:, :1]) * frac[None, :]
+    sag = np.maximum((chord - X).max(axis=1), 0.0)
+    start, end = X[:, 0] - sag, X[:, -1] - sag
+    least = X.min(axis=1)
+    use_min = start + end < 2.0 * least
+    start, end = np.where(use_min, least, start), np.where(use_min, least, end)
+    x_max = np.empty(N + 1)
+    x_max[0], x_max[-1] = start[0], end[-1]
+    x_max[1:-1] = np.minimum(end[:-1], start[1:])
+    return np.maximum(x_max, 0.0)
+
+
+def build_problem(dyn: Dynamics, path: Path, limits: JointLimits, grid: int | ArrayLike = 100,
+                  discretization: str = "interpolation") -> TimeScalingProblem:
+    """The :class:`TimeScalingProblem` of ``path`` under ``limits`` on ``grid`` (see the module docstring)."""
+    if discretization not in DISCRETIZATIONS:
+        raise InvalidParameterError(f"discretization must be one of {DISCRETIZATIONS}, got {discretization!r}",
+                                    value=discretization)
+    s = gridpoints(grid)
+    q, dq, ddq = path.derivatives(s)
+    speed = np.linalg.norm(dq, axis=1)
+    still = np.flatnonzero(speed[1:-1] <= 1e-9 * speed.max()) + 1
+    if still.size:
+        raise InvalidParameterError(f"the path is stationary (q'(s) = 0) at s = {s[still[0]]:.4g}: there the path "
+                                    "velocity is unbounded and the scaling ill-posed (toppra issue #104); remove "
+                                    "the stop from the path or split the path there", value=s[still])
+    n = dyn.n
+    rows_a, rows_b, rows_c, rows_w, rows_g, labels = [], [], [], [], [], []
+    gravity = np.zeros_like(q)
+    coul = np.zeros((*q.shape, 2))
+    if limits.acceleration is not None:
+        for side, sg, lim in (("upper", 1.0, limits.acceleration.upper), ("lower", -1.0, -limits.acceleration.lower)):
+            rows_a.append(sg * dq)
+            rows_b.append(sg * ddq)
+            rows_c.append(np.zeros_like(dq))
+            rows_w.append(np.zeros_like(dq))
+            rows_g.append(lim)
+            labels += [RowLabel("acceleration", j, side) for j in range(n)]
+    tau = limits.planned_torque
+    if tau is not None:
+        a, b, gravity = _rigid_coefficients(dyn, q, dq, ddq)
+        fv, fc_pos, fc_neg = friction_parameters(dyn)
+        coul = coulomb_sides(dq, fc_pos, fc_neg)
+        v = fv * dq  # viscous torque per unit ṡ
+        rows_a += [a, -a]
+        rows_b += [b, -b]
+        rows_c += [gravity + coul[..., 1], -(gravity + coul[..., 0])]
+        rows_w += [np.maximum(v, 0.0), np.maximum(-v, 0.0)]
+        rows_g += [tau.upper, -tau.lower]
+        labels += [RowLabel("torque", j, side) for side in ("upper", "lower") for j in range(n)]
+    m = len(labels)
+    cat = (lambda xs: np.concatenate(xs, axis=1)) if m else (lambda xs: np.zeros((s.shape[0], 0)))
+    arrays = [cat(rows_a), cat(rows_b), cat(rows_c), cat(rows_w)]
+    g = np.concatenate(rows_g) if m else np.zeros(0)
+    for name, arr in zip("abcw", arrays, strict=True):
+        if not np.isfinite(arr).all():
+            raise NonFiniteError(f"the dynamics gave non-finite path coefficients {name}(s); check the model",
+                                 value=arr)
+    return TimeScalingProblem(dyn, path, limits, readonly(s), readonly(q), readonly(dq), readonly(ddq),
+                              *map(readonly, arrays), readonly(g), readonly(velocity_bound(path, s, limits)),
+                              readonly(gravity), readonly(coul), tuple(labels), discretization)

@@ -1,0 +1,135 @@
+"""`time_optimal`: the fastest rest-to-rest timing of a path under joint velocity, acceleration and torque limits.
+
+TOPP-RA (Pham & Pham, "A new approach to time-optimal path parameterization based on reachability analysis",
+IEEE T-RO 2018) through toppra, on the problem built by :func:`~armctl.planning.problem.build_problem` from the
+arm's own dynamics (friction included, see there). Every result is then verified densely
+(:func:`~armctl.planning.verify.check_trajectory`); when a limit is exceeded by more than ``tol`` the grid is
+refined (doubled) and the problem solved again, and if that does not help a
+:class:`~armctl.errors.SolverError` is raised — a violating result never reaches the caller silently.
+Infeasible problems raise :class:`~armctl.errors.InfeasibleError` naming the binding constraint and where it
+binds (:mod:`~armctl.planning.infeasibility`).
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from armctl._checks import FloatArray
+from armctl.dynamics.base import Dynamics
+from armctl.errors import InvalidParameterError, SolverError
+from armctl.planning.infeasibility import diagnose
+from armctl.planning.limits import joint_limits
+from armctl.planning.path import Path, as_path
+from armctl.planning.problem import TimeScalingProblem, build_problem, gridpoints
+from armctl.planning.timing import GridTiming
+from armctl.planning.trajectory import Trajectory
+from armctl.planning.verify import check_trajectory
+
+
+def solve_problem(problem: TimeScalingProblem, viscous_passes: int = 1) -> Trajectory:
+    """Solve ``problem`` with TOPP-RA (rest to rest) → :class:`Trajectory` with a
+    :class:`~armctl.planning.timing.GridTiming` (not yet verified densely).
+
+    With viscous friction, a first pass drops it (optimistic, never returned); each of the ``viscous_passes``
+    further passes replaces F_v q' √x by its tangent at the previous pass's x, which over-estimates it (see
+    :mod:`~armctl.planning.problem`), so the returned solution is conservative.
+    """
+    from armctl.planning._toppra import run_toppra
+
+    if int(viscous_passes) < 1:
+        raise InvalidParameterError(f"viscous_passes must be >= 1, got {viscous_passes!r}", value=viscous_passes)
+    t0 = time.perf_counter()
+    interp = problem.discretization == "interpolation"
+    x0 = None
+    passes = 1 + (int(viscous_passes) if problem.has_viscous else 0)
+    for _ in range(passes):
+        rows = problem.linearized(x0)
+        out = run_toppra(problem.path, problem.s, *rows, problem.g, problem.x_max, interp)
+        if not out.ok or out.x is None:
+            raise diagnose(problem, rows, out.code, out.x, out.K)
+        x = _checked_profile(problem, out.x)
+        x0 = np.maximum(x, 1e-9 * max(float(x.max()), 1e-12))
+    timing = GridTiming(problem.s, x)
+    return Trajectory(problem.path, timing, info={"grid": problem.grid, "passes": passes,
+                                                  "solve_time": time.perf_counter() - t0})
+
+
+def _checked_profile(problem: TimeScalingProblem, x: FloatArray) -> FloatArray:
+    """toppra's x = ṡ², checked: finite, ≥ 0, within the velocity bound, zero at both ends."""
+    if not np.isfinite(x).all():
+        i = int(np.flatnonzero(~np.isfinite(x))[0])
+        raise SolverError(f"toppra returned a non-finite path velocity at s = {problem.s[i]:.4g}", value=x,
+                          problem=problem)
+    scale = max(float(x.max()), 1e-12)
+    if x.min() < -1e-9 * scale or (x > problem.x_max * (1 + 1e-6) + 1e-12).any() or max(x[0], x[-1]) > 1e-9 * scale:
+        raise SolverError("toppra returned a path velocity profile outside its own bounds (negative, above the "
+                          "velocity bound or not at rest at the ends)", value=x, problem=problem)
+    x = np.clip(x, 0.0, problem.x_max)
+    x[0] = x[-1] = 0.0
+    return x
+
+
+def _refined(grid: int | ArrayLike) -> int | FloatArray:
+    if isinstance(grid, (int, np.integer)):
+        return 2 * int(grid)
+    s = np.asarray(grid, dtype=float)
+    return np.sort(np.concatenate((s, 0.5 * (s[1:] + s[:-1]))))
+
+
+def time_optimal(dyn: Dynamics, path: Path | ArrayLike, vel_limit: Any = None, acc_limit: Any = None,
+                 torque_limit: Any = None, grid: int | ArrayLike = 100, *, torque_margin: float = 0.0,
+                 tol: float = 1e-2, refine: bool = True, max_grid: int = 1600, oversample: int = 10,
+                 viscous_passes: int = 1, discretization: str = "interpolation") -> Trajectory:
+    """The time-optimal rest-to-rest trajectory along ``path`` within the given limits.
+
+    dyn: the arm's :class:`~armctl.Dynamics` (torques are τ = ``dyn.inverse_dynamics``, friction included).
+    path: a :class:`~armctl.planning.Path`, or (m, n) joint waypoints [rad] (a cubic :class:`SplinePath`).
+    vel_limit [rad/s], acc_limit [rad/s²], torque_limit [N·m]: None (not imposed), ``"model"`` (the model's
+    velocity / effort limits; not for acceleration), a scalar, an (n,) vector (symmetric) or (n, 2) bounds.
+    grid: the number N of stages (evenly spaced in s), or the gridpoints (increasing from 0 to 1).
+    torque_margin: plan with the torque bounds shrunk by this fraction (0.1 → 90 % of the range), to leave
+    room for feedback.
+    tol: largest normalised violation accepted by the dense check (0.01: 1 % of a limit). refine: when it is
+    exceeded, double the grid (up to ``max_grid`` stages) and solve again; if it is still exceeded, raise
+    :class:`~armctl.errors.SolverError` (pass ``tol=float("inf")`` to accept any result and read
+    ``traj.check`` yourself). oversample: dense-check samples per stage (≥ 10 recommended).
+    viscous_passes, discretization: see :func:`solve_problem` and :func:`~armctl.planning.problem.build_problem`.
+
+    Returns a :class:`~armctl.planning.Trajectory` with ``check`` (the dense verification) and ``info``
+    (grid, passes, the history of refinements, compute time).
+    Raises :class:`~armctl.errors.InfeasibleError` if no timing meets the limits (it names the constraint and
+    where it binds), :class:`~armctl.errors.SolverError` on a numerical failure, another
+    :class:`~armctl.errors.ArmctlError` on bad input.
+    """
+    t0 = time.perf_counter()
+    if not isinstance(dyn, Dynamics):
+        raise InvalidParameterError(f"dyn must be an armctl.Dynamics, got {type(dyn).__name__}", value=dyn)
+    geo = as_path(path, dyn.n)
+    limits = joint_limits(dyn.model, vel_limit, acc_limit, torque_limit, torque_margin)
+    tol = float(tol)
+    if not tol >= 0.0:
+        raise InvalidParameterError(f"tol must be >= 0, got {tol}", value=tol)
+    if int(oversample) < 1:
+        raise InvalidParameterError(f"oversample must be >= 1, got {oversample!r}", value=oversample)
+    history: list[dict[str, Any]] = []
+    while True:
+        problem = build_problem(dyn, geo, limits, grid, discretization)
+        traj = solve_problem(problem, viscous_passes)
+        check = check_trajectory(dyn, traj, limits, int(oversample))
+        history.append({"grid": problem.grid, "duration": traj.duration, "worst_excess": check.worst_excess})
+        if check.worst_excess <= tol:
+            info = {**traj.info, "history": history, "compute_time": time.perf_counter() - t0}
+            return Trajectory(geo, traj.timing, check, info)
+        nxt = _refined(grid)
+        if not refine or len(gridpoints(nxt)) - 1 > max_grid:
+            worst = check.worst()
+            raise SolverError(f"the time-optimal trajectory exceeds a limit by more than tol = {tol:g} on a grid of "
+                              f"{problem.grid} stages: {worst}" + ("" if refine else "; pass refine=True") +
+                              " (or raise max_grid or tol; the trajectory is in .result)",
+                              value=check, problem=problem, result=Trajectory(geo, traj.timing, check,
+                                                                              {"history": history}))
+        grid = nxt

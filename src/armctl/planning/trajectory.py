@@ -1,0 +1,100 @@
+"""`Trajectory`: a path traversed with a timing law, q(t) = q(s(t)), evaluated as a :class:`~armctl.Reference`.
+
+    q̇ = q'(s) ṡ,    q̈ = q'(s) s̈ + q''(s) ṡ².
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from armctl._checks import FloatArray, readonly, scalar
+from armctl.errors import InvalidParameterError
+from armctl.planning.path import Path
+from armctl.planning.timing import Timing
+from armctl.reference import Reference
+
+if TYPE_CHECKING:
+    from armctl.planning.verify import LimitCheck
+
+
+@dataclass(frozen=True, eq=False)
+class Samples:
+    """A trajectory sampled at times ``t`` (m,) [s]: path parameter s, ṡ, s̈ (m,) and q, q̇, q̈ (m, n)."""
+
+    t: FloatArray
+    s: FloatArray
+    sd: FloatArray
+    sdd: FloatArray
+    q: FloatArray
+    qd: FloatArray
+    qdd: FloatArray
+    dq: FloatArray
+    ddq: FloatArray
+
+    def __len__(self) -> int:
+        return int(self.t.shape[0])
+
+
+class Trajectory:
+    """``path`` traversed with ``timing``. ``traj(t)`` is the :class:`~armctl.Reference` at time t [s] (at rest
+    at the start before 0 and at the end after ``duration``); ``traj.sample(...)`` evaluates many times at once.
+
+    check: the dense verification of the limits (:class:`~armctl.planning.verify.LimitCheck`) when the
+    trajectory comes from :func:`~armctl.planning.time_optimal` or :func:`~armctl.planning.uniform_time_scaling`;
+    info: how it was computed (grid, passes, solve time, …).
+    """
+
+    def __init__(self, path: Path, timing: Timing, check: LimitCheck | None = None,
+                 info: dict[str, Any] | None = None) -> None:
+        if not isinstance(path, Path):
+            raise InvalidParameterError(f"path must be an armctl.planning.Path, got {type(path).__name__}", value=path)
+        if not isinstance(timing, Timing):
+            raise InvalidParameterError(f"timing must be an armctl.planning.Timing, got {type(timing).__name__}",
+                                        value=timing)
+        self.path = path
+        self.timing = timing
+        self.check = check
+        self.info = dict(info or {})
+
+    @property
+    def n(self) -> int:
+        return self.path.n
+
+    @property
+    def duration(self) -> float:
+        """T [s]."""
+        return self.timing.duration
+
+    def __repr__(self) -> str:
+        return f"Trajectory(n={self.n}, duration={self.duration:.4g} s, path={self.path!r})"
+
+    def __call__(self, t: float) -> Reference:
+        s, sd, sdd = self.timing.evaluate(scalar(t, "t"))
+        q, dq, ddq = self.path.derivatives(s)
+        return Reference(q[0], dq[0] * sd, dq[0] * sdd + ddq[0] * sd * sd)
+
+    def sample(self, t: ArrayLike | None = None, *, dt: float | None = None, num: int | None = None) -> Samples:
+        """The trajectory at times ``t`` (a vector [s]), or on [0, T] every ``dt`` [s] (T included), or at
+        ``num`` evenly spaced times from 0 to T; give exactly one."""
+        if sum(x is not None for x in (t, dt, num)) != 1:
+            raise InvalidParameterError("give exactly one of t, dt or num", value=(t, dt, num))
+        T = self.duration
+        if dt is not None:
+            step = scalar(dt, "dt", positive=True)
+            tt = np.arange(0.0, T, step)
+            tt = np.append(tt, T) if tt[-1] < T else tt
+        elif num is not None:
+            if int(num) < 2:
+                raise InvalidParameterError(f"num must be >= 2, got {num!r}", value=num)
+            tt = np.linspace(0.0, T, int(num))
+        else:
+            tt = np.array(t, dtype=float).reshape(-1)
+        s, sd, sdd = self.timing.evaluate(tt)
+        q, dq, ddq = self.path.derivatives(s)
+        qd = dq * sd[:, None]
+        qdd = dq * sdd[:, None] + ddq * (sd * sd)[:, None]
+        return Samples(*(readonly(np.asarray(a)) for a in (tt, s, sd, sdd, q, qd, qdd, dq, ddq)))
