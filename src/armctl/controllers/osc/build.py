@@ -6,9 +6,11 @@ Decision variables x = [q̈ (n); τ (n); f_c (3) per active contact]. Rows, ever
 * contact kinematics (3 rows per active contact), see :class:`~armctl.controllers.osc.contact.Contact`
 * limits l ≤ x_b ≤ u (one row per joint and limit) and the contacts' friction-cone rows.
 
-Each priority level k gets the cost  ½ Σ_{tasks i of level k} ‖W_i^{1/2} (J_i x_i − b_i)‖² + ½ ε ‖x‖²,
-i.e.  H_k = T_kᵀ T_k + ε I,  g_k = −T_kᵀ t_k  with T_k, t_k the weighted task rows stacked. ε (``regularization``)
-makes H_k positive definite and picks, among equally good solutions, the smallest.
+Each priority level k gets the cost  ½ Σ_{tasks i of level k} ‖W_i^{1/2} (J_i x_i − b_i)‖² + ½ ε_k ‖x‖²,
+i.e.  H_k = T_kᵀ T_k + ε_k I,  g_k = −T_kᵀ t_k  with T_k, t_k the weighted task rows stacked. ε (``regularization``)
+makes the last level's H positive definite and picks, among equally good solutions, the smallest; levels above
+it get ε·1e-4 only, because there a regularisation would trade the level's own accuracy for a smaller x (a bias
+of order ε‖x‖²) that the levels below resolve anyway.
 
 With ``slacks=True`` the task rows become constraints with slack variables s: T_k x − s = t_k and the cost
 ½‖s‖² + ½ε‖x‖² — the same optimum, with s reporting how far each task is from being met.
@@ -28,6 +30,9 @@ from armctl.controllers.osc.state import ModelState
 from armctl.controllers.osc.tasks.base import Task
 from armctl.model.robot import RobotModel
 from armctl.reference import Reference
+
+#: regularisation of the levels above the last, relative to ``regularization``
+UPPER_REGULARIZATION_FACTOR = 1e-4
 
 
 class Layout:
@@ -72,6 +77,7 @@ class Layout:
         self.regularization = np.full(col, regularization)
         self.regularization.flags.writeable = False
         self.reg_matrix = np.diag(self.regularization)
+        self.reg_matrix_upper = UPPER_REGULARIZATION_FACTOR * self.reg_matrix
         # bounds that do not depend on the state (e.g. torque limits) are concatenated once
         self.constant_bounds: tuple[FloatArray, FloatArray] | None = None
         if all(lim.constant for lim in limits):
@@ -186,7 +192,8 @@ class StepQP:
             A = np.vstack([A, frozen[0]])
             b = np.concatenate([b, frozen[1]])
         m, nx = lev.T.shape[0], lay.nx
-        H = np.diag(np.concatenate([self.regularization, np.ones(m)]))
+        reg = self.regularization if k == len(self.levels) - 1 else UPPER_REGULARIZATION_FACTOR * self.regularization
+        H = np.diag(np.concatenate([reg, np.ones(m)]))
         A2 = np.zeros((A.shape[0] + m, nx + m))
         A2[: A.shape[0], :nx] = A
         A2[A.shape[0]:, :nx] = lev.T
@@ -204,7 +211,7 @@ class StepQP:
         Tt = self.levels[k].Tt
         G = Tt.T @ Tt  # [TᵀT, Tᵀt; tᵀT, tᵀt]
         nx = lay.nx
-        H = G[:nx, :nx] + lay.reg_matrix
+        H = G[:nx, :nx] + (lay.reg_matrix if k == len(self.levels) - 1 else lay.reg_matrix_upper)
         g = np.negative(G[:nx, nx])
         A, b = self.A, self.b
         if frozen is not None and frozen[0].shape[0]:

@@ -1,9 +1,12 @@
 """`ContactForceTask`: regulate the force of a declared contact.
 
-    r = f − f_ref   (on the contact's force variables, world axes)
+    r = f − f_ref                (3 rows, world axes), or
+    r = nᵀf − f_n,ref            (1 row, ``normal_only``: the default for a sliding contact, whose tangential
+                                  force Coulomb's law already fixes)
 
 f is the force of the environment on the robot (see :class:`~armctl.controllers.osc.contact.Contact`): to
-press on a table with 10 N, ask for f_ref = (0, 0, 10). A weight of 0 on a row leaves that component free.
+press on a table with 10 N, ask for f_ref = (0, 0, 10), or f_n,ref = 10. A weight of 0 on a row leaves that
+component free.
 """
 
 from __future__ import annotations
@@ -20,36 +23,48 @@ from armctl.controllers.osc.tasks.base import Task
 from armctl.errors import InvalidParameterError, UnknownNameError
 from armctl.reference import Reference
 
+Force = ArrayLike | float | Callable[[float], ArrayLike]
+
 
 class ContactForceTask(Task):
-    """Force of ``contact`` [N] towards ``force``: a (3,) vector or a callable t -> (3,)."""
+    """Force of ``contact`` [N] towards ``force``: a (3,) vector (world axes), or with ``normal_only`` the
+    normal force f_n [N] (a scalar; a (3,) vector is projected on the normal); either may be a callable of
+    t [s]. ``normal_only`` None: True for a sliding contact, False for a fixed one."""
 
-    identity_jacobian = True
-
-    def __init__(self, contact: Contact, force: ArrayLike | Callable[[float], ArrayLike] = (0.0, 0.0, 0.0),
-                 weight: ArrayLike = 1e-3, priority: int = 0, name: str | None = None) -> None:
+    def __init__(self, contact: Contact, force: Force = (0.0, 0.0, 0.0), weight: ArrayLike = 1e-3,
+                 priority: int = 0, name: str | None = None, normal_only: bool | None = None) -> None:
         if not isinstance(contact, Contact):
             raise InvalidParameterError(f"contact must be an osc.Contact, got {type(contact).__name__}",
                                         value=contact)
-        super().__init__(contact.dim, name or f"force[{contact.name}]", weight, priority)
+        self.normal_only = contact.mode == "sliding" if normal_only is None else bool(normal_only)
+        self.identity_jacobian = not self.normal_only
+        super().__init__(1 if self.normal_only else contact.dim, name or f"force[{contact.name}]", weight, priority)
         self.contact = contact
         self.variable = contact.name
+        self._jac = contact.normal[None, :].copy()
         self.set_target(force)
 
-    def set_target(self, force: ArrayLike | Callable[[float], ArrayLike]) -> None:
-        """Desired contact force [N]: a vector, or a callable of t [s] returning one."""
+    def _value(self, force: ArrayLike) -> FloatArray:
+        a = np.asarray(force, dtype=float)
+        if self.normal_only:
+            a = np.atleast_1d(self.contact.normal @ a if a.shape == (3,) else a)
+        return vector(a, self.dim, f"{self.name}: force")
+
+    def set_target(self, force: Force) -> None:
+        """Desired contact force [N] (see the class): a value, or a callable of t [s] returning one."""
         if callable(force):
             self._fn: Callable[[float], ArrayLike] | None = force
         else:
             self._fn = None
-            self._force = vector(force, self.dim, f"{self.name}: force")
+            self._force = self._value(force)  # type: ignore[arg-type]
 
     def target(self, t: float) -> FloatArray:
-        return vector(self._fn(t), self.dim, f"{self.name}: force") if self._fn is not None else self._force
+        """The desired force at time t: (3,) or (1,) with ``normal_only``."""
+        return self._value(self._fn(t)) if self._fn is not None else self._force
 
     def check(self, evaluator: object, n: int, contacts: dict[str, int]) -> None:
         if self.contact.name not in contacts:
             raise UnknownNameError("contact", self.contact.name, list(contacts))
 
-    def residual(self, state: ModelState, t: float, ref: Reference) -> tuple[None, FloatArray]:
-        return None, np.array(self.target(t), dtype=float)
+    def residual(self, state: ModelState, t: float, ref: Reference) -> tuple[FloatArray | None, FloatArray]:
+        return (self._jac if self.normal_only else None), self.target(t)

@@ -1,0 +1,109 @@
+"""Limits and contacts of the operational-space QP (issue 5): viability of the position bounds and the
+velocity bounds checked on the exact discrete double integrator, the linearised friction cone, Coulomb's law
+of a sliding contact."""
+
+from __future__ import annotations
+
+import math
+from types import SimpleNamespace
+
+import numpy as np
+
+import armctl
+from armctl.controllers.osc import (
+    Contact,
+    ContactForceTask,
+    FramePositionTask,
+    JointPositionLimit,
+    JointVelocityLimit,
+    OperationalSpaceQP,
+    PostureTask,
+    TorqueLimit,
+)
+
+from .conftest import Q_HOME
+
+DT = 1e-3
+
+
+def _run_against_upper_limit(limit: JointPositionLimit | JointVelocityLimit, q: np.ndarray, qd: np.ndarray,
+                             steps: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Push every joint as hard as the bounds allow towards its upper limit, integrating the exact discrete
+    double integrator q⁺ = q + Δt q̇ + ½Δt² q̈, q̇⁺ = q̇ + Δt q̈; returns the q, q̇ and q̈ histories."""
+    qs, qds, accs = [], [], []
+    for _ in range(steps):
+        lo, up = limit.bounds(SimpleNamespace(q=q, qd=qd))  # type: ignore[arg-type]
+        assert (lo <= up + 1e-9).all()
+        a = up
+        q, qd = q + DT * qd + 0.5 * DT * DT * a, qd + DT * a
+        qs.append(q)
+        qds.append(qd)
+        accs.append(a)
+    return np.array(qs), np.array(qds), np.array(accs)
+
+
+def test_position_bounds_keep_every_joint_stoppable(panda: armctl.Dynamics) -> None:
+    amax = 5.0
+    lim = JointPositionLimit(DT, max_deceleration=amax)
+    lim.bind(panda.model)
+    upper = panda.model.upper
+    # from rest 0.3 rad below the limit and from 1 rad/s towards it (still viable: v² < 2 a_max gap)
+    for q0, v0 in ((upper - 0.3, np.zeros(7)), (upper - 0.3, np.ones(7))):
+        q, qd, acc = _run_against_upper_limit(lim, q0, v0, 3000)
+        assert (q <= upper + 1e-9).all()  # never beyond the limit
+        assert (acc >= -amax - 1e-9).all()  # never asks for more braking than a_max
+        assert np.abs(qd[-1]).max() < 0.05 and (upper - q[-1]).max() < 1e-2  # comes to rest at the limit
+    # far from the limits the bounds do not bind
+    lo, up = lim.bounds(SimpleNamespace(q=0.5 * (panda.model.lower + upper), qd=np.zeros(7)))  # type: ignore[arg-type]
+    assert (up > 100).all() and (lo < -100).all()
+
+
+def test_position_bounds_brake_a_joint_that_cannot_stop_in_time(panda: armctl.Dynamics) -> None:
+    lim = JointPositionLimit(DT, max_deceleration=5.0)
+    lim.bind(panda.model)
+    q0 = panda.model.upper - 0.01
+    lo, up = lim.bounds(SimpleNamespace(q=q0, qd=np.full(7, 2.0)))  # type: ignore[arg-type]
+    np.testing.assert_allclose(up, -5.0)  # v²/(2 gap) = 200 > a_max: brake at a_max
+    assert (lo <= up).all()
+
+
+def test_velocity_bounds_hold_the_velocity_limit(panda: armctl.Dynamics) -> None:
+    lim = JointVelocityLimit(DT)
+    lim.bind(panda.model)
+    _, qd, _ = _run_against_upper_limit(lim, Q_HOME.copy(), np.zeros(7), 200)
+    assert (qd <= panda.model.velocity_limit + 1e-9).all()
+    np.testing.assert_allclose(qd[-1], panda.model.velocity_limit, rtol=1e-9)
+
+
+def test_fixed_contact_force_stays_in_the_friction_pyramid(panda: armctl.Dynamics) -> None:
+    """Asking for a tangential force twice what friction allows: the QP returns the force on the pyramid's
+    boundary, inside the true cone ‖f_t‖ ≤ μ f_n."""
+    mu = 0.5
+    contact = Contact(mode="fixed", mu=mu, facets=4)
+    force_task = ContactForceTask(contact, [10.0, 0.0, 10.0], weight=1.0)
+    ctrl = OperationalSpaceQP(panda, [force_task, PostureTask(7, weight=1e-3)], limits=[TorqueLimit()],
+                              contacts=[contact])
+    sol = ctrl.solve(0.0, Q_HOME, np.zeros(7), armctl.Reference(Q_HOME))
+    f = sol.forces[contact.name]
+    fn, ft = f[2], f[:2]
+    assert fn > 0
+    assert np.linalg.norm(ft) <= mu * fn + 1e-6
+    # on a boundary facet of the inscribed pyramid: max_i |t_i·f| = μ cos(π/4) f_n
+    t = contact.tangents
+    np.testing.assert_allclose(np.abs(t @ f).max(), mu * math.cos(math.pi / 4) * fn, rtol=1e-5)
+    # and the contact point does not accelerate (fixed contact, at rest): J_v q̈ + J̇q̇ = 0
+    np.testing.assert_allclose(panda.jacobian(Q_HOME)[:3] @ sol.qdd, 0.0, atol=1e-6)
+
+
+def test_sliding_contact_force_follows_coulomb(panda: armctl.Dynamics) -> None:
+    mu = 0.4
+    contact = Contact(mode="sliding", mu=mu, slip_velocity=1e-4)
+    task = FramePositionTask(kp=100.0, weight=[1.0, 1.0, 0.0])
+    task.set_target(panda.frame_pose(Q_HOME)[:3, 3] + [0.05, 0.0, 0.0], [0.1, 0.0, 0.0])
+    ctrl = OperationalSpaceQP(panda, [task, ContactForceTask(contact, 10.0, weight=1.0),
+                                      PostureTask(7, weight=1e-3)], limits=[TorqueLimit()], contacts=[contact])
+    v_tool = np.array([0.08, -0.06, 0.0])  # sliding along the surface
+    qd = np.linalg.pinv(panda.jacobian(Q_HOME)[:3]) @ v_tool
+    f = ctrl.solve(0.0, Q_HOME, qd, armctl.Reference(Q_HOME)).forces[contact.name]
+    np.testing.assert_allclose(f[2], 10.0, rtol=1e-6)  # the force task of a sliding contact: normal only
+    np.testing.assert_allclose(f[:2], -mu * f[2] * v_tool[:2] / np.linalg.norm(v_tool), rtol=1e-3)
