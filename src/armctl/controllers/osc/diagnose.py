@@ -79,8 +79,8 @@ def raise_failure(p: QPProblem, solver: str, status: str, result: Any) -> NoRetu
         shown = ", ".join(f"{k} (relax by {v:.4g})" if v > 0 else k for k, v in rows.items())
         raise InfeasibleError(
             f"the QP of priority level {p.level} has no feasible point ({solver}: {status}); conflicting rows "
-            f"(coupled through the equation of motion): {shown}. Relax one of these limits or contacts, or "
-            "enable slacks on them.", value=rows, problem=p)
+            f"(coupled through the equation of motion): {shown}. Relax one of these limits or contacts.",
+            value=rows, problem=p)
     raise SolverError(f"{solver} failed on the QP of priority level {p.level} ({status}) although it is "
                       "feasible; try a looser eps_abs or another solver (solver='qpsolvers:<name>')",
                       value=status, problem=p, result=result)
