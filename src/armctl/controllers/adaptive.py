@@ -25,7 +25,10 @@ class Adaptive(Controller):
     Protections against drift under disturbances and noise (off by default, as in the textbook law):
 
     * ``projection``: after each update, each link's pseudo-inertia is projected onto the PSD cone, so θ̂ stays
-      physically consistent (positive masses, triangle inequalities; rotor and friction terms ≥ 0);
+      physically consistent (positive masses, triangle inequalities; rotor and friction terms ≥ 0). That cone
+      is unbounded, so it does not stop drift by itself; ``radius`` R adds the ball ‖θ̂ − θ₀‖ ≤ R (θ₀
+      physical), a bounded set assumed to contain the true parameters: radial shrink towards θ₀, the exact
+      projection onto the ball, keeps consistency because the cone is convex;
     * ``sigma``: σ-modification, a leak towards θ₀ that bounds θ̂;
     * ``dead_zone``: no adaptation while ‖s‖ < δ (noise alone does not move θ̂);
     * ``composite`` κ: composite adaptation, adding the torque prediction error of the first-order-filtered
@@ -38,7 +41,8 @@ class Adaptive(Controller):
 
     def __init__(self, dynamics: Dynamics, lam: ArrayLike, kd: ArrayLike, gamma: ArrayLike,
                  theta0: ArrayLike | None = None, *, projection: bool = False, sigma: float = 0.0,
-                 dead_zone: float = 0.0, composite: float = 0.0, filter_bandwidth: float = 20.0) -> None:
+                 dead_zone: float = 0.0, composite: float = 0.0, filter_bandwidth: float = 20.0,
+                 radius: float | None = None) -> None:
         super().__init__(dynamics)
         p = 13 * self.n
         self.lam = gain_matrix(lam, self.n, "lam")
@@ -51,13 +55,16 @@ class Adaptive(Controller):
         self.dead_zone = scalar(dead_zone, "dead_zone", nonnegative=True)
         self.composite = scalar(composite, "composite", nonnegative=True)
         self.filter_bandwidth = scalar(filter_bandwidth, "filter_bandwidth", positive=True)
-        if self.projection and not np.isfinite(self.theta0).all():
-            raise InvalidParameterError("theta0 must be finite", value=theta0)
+        self.radius = None if radius is None else scalar(radius, "radius", positive=True)
+        if self.radius is not None and not self.projection:
+            raise InvalidParameterError("radius bounds the projection: use it with projection=True", value=radius)
+        if self.projection:
+            self.theta0 = project_physical(self.theta0)
         self.reset()
 
     def reset(self) -> None:
         super().reset()
-        self.theta = project_physical(self.theta0) if self.projection else self.theta0.copy()
+        self.theta = self.theta0.copy()
         self._t_prev: float | None = None
         self._qd_prev: FloatArray | None = None
         self._tau_prev: FloatArray | None = None
@@ -79,13 +86,22 @@ class Adaptive(Controller):
                 grad = grad + self.composite * self._prediction_gradient(q, qd, dt)
             self.theta = self.theta - dt * apply_gain(self._gamma, grad)
             if self.projection:
-                self.theta = project_physical(self.theta)
+                self.theta = self._project(self.theta)
         self._t_prev, self._qd_prev = t, qd
         tau = y.dot(self.theta)
         tau -= apply_gain(self._kd, s)
         self._tau_prev = tau
         self.last_log = {"theta": self.theta.copy(), "s": s}
         return tau
+
+    def _project(self, theta: FloatArray) -> FloatArray:
+        theta = project_physical(theta)
+        if self.radius is not None:
+            d = theta - self.theta0
+            norm = float(np.linalg.norm(d))
+            if norm > self.radius:
+                theta = self.theta0 + d * (self.radius / norm)
+        return theta
 
     def _prediction_gradient(self, q: FloatArray, qd: FloatArray, dt: float) -> FloatArray:
         """W_fᵀ (W_f θ̂ − τ_f) with first-order filters of bandwidth ω: x_f += (1 − e^{−ω dt})(x − x_f)."""

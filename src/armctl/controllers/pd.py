@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numpy as np
 from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray, apply_gain, compact_gain, gain_matrix
@@ -11,28 +12,47 @@ from armctl.reference import Reference
 
 
 class PDGravity(Controller):
-    """τ = K_p (q_d − q) + K_d (q̇_d − q̇) + g(q)  [+ τ_f(q̇) with ``friction=True``].
+    """τ = K_p e + K_d ė + g(q)  [+ K_i ∫e dt] [+ τ_f(q̇) with ``friction=True``],  e = q_d − q.
 
     For a set-point (q̇_d = 0) the closed loop is globally asymptotically stable for any K_p, K_d ≻ 0 with an
-    exact g (Takegaki & Arimoto 1981): V = ½ q̇ᵀM q̇ + ½ q̃ᵀK_p q̃ decreases as −q̇ᵀK_d q̇. Against Coulomb
-    friction F_c the arm stops anywhere with |K_p q̃| ≤ F_c, so the steady-state error is bounded by F_c/K_p.
+    exact g (Takegaki & Arimoto 1981): V = ½ q̇ᵀM q̇ + ½ eᵀK_p e decreases as −q̇ᵀK_d q̇. Against Coulomb
+    friction the arm stops anywhere with |K_p e| below the breakaway level F_s, so the steady-state error is
+    bounded by F_s/K_p (F_c/K_p without stiction). An integral term removes that error in theory, but against
+    stiction (breakaway above the Coulomb level) it produces the stick–slip "hunting" limit cycle: the integral
+    winds up while the joint sticks, the joint breaks away, overshoots, and sticks again on the other side.
 
-    kp: proportional gain [N·m/rad]; kd: derivative gain [N·m·s/rad] (scalar, vector or matrix).
+    kp: proportional gain [N·m/rad]; kd: derivative gain [N·m·s/rad]; ki: integral gain [N·m/(rad·s)] or None
+    (each a scalar, vector or matrix). The integral is accumulated at the control rate.
     """
 
-    def __init__(self, dynamics: Dynamics, kp: ArrayLike, kd: ArrayLike, friction: bool = False) -> None:
+    def __init__(self, dynamics: Dynamics, kp: ArrayLike, kd: ArrayLike, ki: ArrayLike | None = None,
+                 friction: bool = False) -> None:
         super().__init__(dynamics)
         self.kp = gain_matrix(kp, self.n, "kp")
         self.kd = gain_matrix(kd, self.n, "kd")
+        self.ki = None if ki is None else gain_matrix(ki, self.n, "ki")
         self.friction = bool(friction)
         self._kp, self._kd = compact_gain(self.kp), compact_gain(self.kd)
+        self._ki = None if self.ki is None else compact_gain(self.ki)
+        self.reset()
+
+    def reset(self) -> None:
+        super().reset()
+        self._integral = np.zeros(self.n)
+        self._t_prev: float | None = None
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         dyn = self.dynamics
         assert dyn is not None
+        e = ref.q - q
         tau = dyn.gravity_torque(q)
-        tau += apply_gain(self._kp, ref.q - q)
+        tau += apply_gain(self._kp, e)
         tau += apply_gain(self._kd, ref.qd - qd)
+        if self._ki is not None:
+            if self._t_prev is not None:
+                self._integral += e * (t - self._t_prev)
+            self._t_prev = t
+            tau += apply_gain(self._ki, self._integral)
         if self.friction:
             tau += dyn.friction_torque(qd)
         return tau
