@@ -1,0 +1,20 @@
+"""Closed-loop simulation: ``armctl.sim.simulate(plant, controller, reference, duration, ...)``.
+
+The plant is the truth (friction with real stiction, contact environments, disturbances, payload); the
+controller runs at its own rate with a zero-order hold. Modules: ``simulate`` (the loop), ``plant`` (the
+equations of motion), ``integrators``, ``friction`` and ``stick_slip``, ``contact`` and ``normal_force``,
+``result`` (:class:`SimResult`), ``plot``, ``sweep`` (many runs through an Executor).
+"""
+
+from armctl.sim.contact import ContactPoint, Environment, ForceSensor, Plane
+from armctl.sim.friction import FrictionModel, SmoothFriction, StickSlip
+from armctl.sim.integrators import INTEGRATORS
+from armctl.sim.normal_force import HuntCrossley, KelvinVoigt, NormalForce
+from armctl.sim.result import SimResult
+from armctl.sim.simulate import simulate
+from armctl.sim.sweep import sweep
+
+__all__ = [
+    "INTEGRATORS", "ContactPoint", "Environment", "ForceSensor", "FrictionModel", "HuntCrossley", "KelvinVoigt",
+    "NormalForce", "Plane", "SimResult", "SmoothFriction", "StickSlip", "simulate", "sweep",
+]

@@ -1,0 +1,203 @@
+"""`Plant`: the truth that ``simulate`` integrates — rigid-body dynamics, joint friction, contact environments
+and an external-wrench disturbance:
+
+    M(q) q̈ + C(q, q̇) q̇ + g(q) = τ − τ_f(q̇) − Σ_p J_p(q)ᵀ h_p − J_tool(q)ᵀ h_d(t)
+
+τ: the applied (held, saturated) torque; τ_f: the friction model's torque, or for stuck joints the holding
+torque of the stick–slip constraint; h_p: contact forces on the environment; h_d(t): the disturbance wrench at
+the tool frame, with the sign of ``Dynamics``' ``wrench`` (what the arm exerts on the environment: a push of F
+on the arm is h_d = −F).
+
+The plant also gives the powers the integrators accumulate into work: p_f = −q̇ᵀτ_f (≤ 0) and
+p_e = −q̇ᵀ(Σ J_pᵀh_p + J_toolᵀh_d).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+
+from armctl._checks import FloatArray
+from armctl.dynamics.base import Dynamics
+from armctl.errors import NonFiniteError, ShapeError
+from armctl.sim.contact import Environment
+from armctl.sim.friction import FrictionModel, StickSlip
+from armctl.sim.stick_slip import constrained_accel, solve_sticking
+
+Disturbance = Callable[[float], Any]
+
+
+class Plant:
+    """The simulated arm. ``friction``: a friction model (None or all-zero: none); ``environments``: contact
+    environments; ``disturbance``: t [s] → h_d (6,) or None.
+
+    Stick–slip state (set by :meth:`begin` at the start of every step, fixed during it): ``stuck`` (boolean
+    mask or None), ``direction`` (sliding direction ±1 of every joint that can stick, 0 at rest) and ``hold``
+    (holding friction torques of the stuck joints).
+    """
+
+    def __init__(self, dyn: Dynamics, friction: FrictionModel | None = None,
+                 environments: Sequence[Environment] = (), disturbance: Disturbance | None = None) -> None:
+        self.dyn = dyn
+        self.n = n = dyn.n
+        self.friction = None if friction is None or friction.is_zero else friction
+        f = self.friction
+        self.sticky: StickSlip | None = f if isinstance(f, StickSlip) and f.any_capable else None
+        self.environments = tuple(environments)
+        self.disturbance = disturbance
+        self.has_external = bool(self.environments) or disturbance is not None
+        #: no friction, no contact, no disturbance: q̈ is Pinocchio's ABA of τ and work needs no quadrature
+        self.simple = self.friction is None and not self.has_external
+        self._zeros = np.zeros(n)
+        self._capable = self.sticky.capable.astype(float) if self.sticky is not None else self._zeros
+        self._forward = dyn._forward
+        self._mass = dyn._mass
+        self._rigid = dyn._rigid_torque
+        self.direction = np.zeros(n)
+        self._stickslip = isinstance(f, StickSlip)
+        self._fv = f.viscous if f is not None else self._zeros
+        self._set_direction(self.direction)
+        self.stuck: FloatArray | None = None
+        self.all_stuck = False
+        self.hold = np.zeros(n)
+        self.stats = {"stick_events": 0, "breakaway_events": 0, "implicit_unconverged": 0}
+
+    # ---------------------------------------------------------------------------------- forces
+    def disturbance_wrench(self, t: float) -> FloatArray:
+        """h_d(t) (6,), checked."""
+        h = np.asarray(self.disturbance(t), dtype=float)  # type: ignore[misc]
+        if h.shape != (6,):
+            raise ShapeError(f"disturbance(t) must return a (6,) wrench [f; moment], got shape {h.shape} at "
+                             f"t = {t}", value=h)
+        if not math.isfinite(sum(h.tolist())):
+            raise NonFiniteError(f"disturbance(t) returned a non-finite wrench {h} at t = {t}", value=h)
+        return h
+
+    def external(self, t: float, q: FloatArray, qd: FloatArray) -> FloatArray:
+        """The external joint torque *added* to τ: Σ J_pᵀF_p − J_toolᵀh_d (F_p: contact force on the arm)."""
+        tau = np.zeros(self.n)
+        for env in self.environments:
+            tau += env.joint_torque(self.dyn, q, qd)[0]
+        if self.disturbance is not None:
+            tau -= self.dyn._jacobian(q, None).T @ self.disturbance_wrench(t)
+        return tau
+
+    def external_stiffness(self, t: float, q: FloatArray, qd: FloatArray
+                           ) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """(τ_e, K, D): :meth:`external` with its derivatives in q and q̇ (the disturbance taken as given)."""
+        n = self.n
+        tau, kj, dj = np.zeros(n), np.zeros((n, n)), np.zeros((n, n))
+        for env in self.environments:
+            te, ke, de = env.joint_torque(self.dyn, q, qd, stiffness=True)
+            tau += te
+            kj += ke  # type: ignore[operator]
+            dj += de  # type: ignore[operator]
+        if self.disturbance is not None:
+            tau -= self.dyn._jacobian(q, None).T @ self.disturbance_wrench(t)
+        return tau, kj, dj
+
+    def friction_torque(self, qd: FloatArray) -> FloatArray:
+        """τ_f now: the model's torque for sliding joints, the holding torque for stuck ones."""
+        if self.friction is None:
+            return np.zeros(self.n)
+        return self.kinetic_friction(qd) + self.hold
+
+    def _set_direction(self, direction: FloatArray) -> None:
+        self.direction = direction
+        if self._stickslip:
+            f: StickSlip = self.friction  # type: ignore[assignment]
+            self._level = f.level(direction)
+            self._hump = f.hump(direction) if f.has_stribeck else None
+
+    def kinetic_friction(self, qd: FloatArray) -> FloatArray:
+        """The friction model's torque at q̇ for the current sliding directions (0 for stuck joints)."""
+        if self._stickslip:
+            tau = self._fv * qd + self._level
+            if self._hump is not None:
+                tau += self._hump * np.exp(-((qd / self.friction.stribeck_velocity) ** 2))  # type: ignore[union-attr]
+            return tau  # type: ignore[no-any-return]
+        return self.friction.torque(qd, self.direction)  # type: ignore[union-attr]
+
+    def friction_slope(self, qd: FloatArray) -> FloatArray:
+        """∂τ_f/∂q̇ (diagonal) for the current sliding directions."""
+        return self.friction.slope(qd, self.direction)  # type: ignore[union-attr]
+
+    # ------------------------------------------------------------------------------ stick–slip
+    def begin(self, t: float, q: FloatArray, qd: FloatArray, tau: FloatArray, held: FloatArray | None = None
+              ) -> None:
+        """Decide which joints stick for the step starting at (t, q, q̇) under τ (see
+        :mod:`armctl.sim.stick_slip`); ``held``: joints kept stuck whatever their holding torque."""
+        sticky = self.sticky
+        if sticky is None:
+            return
+        self._set_direction(np.sign(qd) * self._capable)
+        if 0.0 not in qd.tolist():
+            self._free_all()
+            return
+        cand = sticky.capable & (qd == 0.0)
+        if not cand.any():
+            self._free_all()
+            return
+        net = tau - self.kinetic_friction(qd)
+        if self.has_external:
+            net = net + self.external(t, q, qd)
+        rhs = net - self._rigid(q, qd, self._zeros)
+        stuck, direction, lam = solve_sticking(sticky, self._mass(q), rhs, cand, self.direction, held)
+        self.stats["breakaway_events"] += int((cand & ~stuck).sum())
+        self._set_direction(direction)
+        self.hold = lam
+        self.stuck = stuck if stuck.any() else None
+        self.all_stuck = bool(stuck.all())
+
+    def _free_all(self) -> None:
+        self.stuck = None
+        self.all_stuck = False
+        if self.hold.any():
+            self.hold = np.zeros(self.n)
+
+    def crossings(self, qd1: FloatArray) -> FloatArray | None:
+        """Joints that slid during the step and whose velocity reached zero or reversed (None if none)."""
+        if self.sticky is None:
+            return None
+        d = self.direction * qd1
+        if min(d.tolist()) > 0.0 or not self.direction.any():
+            return None
+        mask = (self.direction != 0.0) & (d <= 0.0)
+        return mask if mask.any() else None
+
+    # ------------------------------------------------------------------------------ accelerations
+    def accel(self, t: float, q: FloatArray, qd: FloatArray, tau: FloatArray) -> FloatArray:
+        """q̈ for the current stick state."""
+        net = tau
+        if self.friction is not None:
+            net = net - self.kinetic_friction(qd)
+        if self.has_external:
+            net = net + self.external(t, q, qd)
+        return self._solve(q, qd, net)
+
+    def accel_work(self, t: float, q: FloatArray, qd: FloatArray, tau: FloatArray) -> tuple[FloatArray, float, float]:
+        """(q̈, p_f, p_e): :meth:`accel` and the friction and external powers [W]."""
+        net = tau
+        pf = pe = 0.0
+        if self.friction is not None:
+            f = self.kinetic_friction(qd)
+            pf = -float(qd @ f)
+            net = net - f
+        if self.has_external:
+            e = self.external(t, q, qd)
+            pe = float(qd @ e)
+            net = net + e
+        return self._solve(q, qd, net), pf, pe
+
+    def _solve(self, q: FloatArray, qd: FloatArray, net: FloatArray) -> FloatArray:
+        if self.stuck is None:
+            return self._forward(q, qd, net)  # type: ignore[no-any-return]
+        if self.all_stuck:
+            return np.zeros(self.n)
+        return constrained_accel(self._mass(q), net - self._rigid(q, qd, self._zeros), self.stuck)
+
+    def kinetic(self, q: FloatArray, qd: FloatArray) -> float:
+        return 0.5 * float(qd @ self._mass(q) @ qd)

@@ -1,0 +1,106 @@
+"""`Recorder`: preallocated per-sample arrays of a run, turned into a :class:`SimResult` at the end."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from armctl._checks import FloatArray
+from armctl.dynamics.base import Dynamics
+from armctl.sim.contact import Environment, ForceSensor
+from armctl.sim.plant import Plant
+from armctl.sim.result import SimResult
+
+
+class Recorder:
+    """Rows 0..N for the samples t_k = k·control_dt."""
+
+    def __init__(self, n: int, samples: int, control_dt: float, environments: tuple[Environment, ...],
+                 sensors: tuple[ForceSensor, ...], measured: bool) -> None:
+        self.samples = samples
+        self.control_dt = control_dt
+        z = np.zeros
+        self.q, self.qd, self.qdd = z((samples, n)), z((samples, n)), z((samples, n))
+        self.tau, self.tau_applied = z((samples, n)), z((samples, n))
+        self.tau_friction, self.tau_ext = z((samples, n)), z((samples, n))
+        self.stuck = z((samples, n), dtype=bool)
+        self.points = [(env, i) for env in environments for i in range(len(env.points))]
+        self.wrench = z((samples, 6))
+        self.contact_force = z((samples, len(self.points), 3))
+        self.sensors = sensors
+        self.sensor = z((samples, len(sensors), 6))
+        self.measured = measured
+        self.q_measured = z((samples, n)) if measured else self.q
+        self.qd_measured = z((samples, n)) if measured else self.qd
+        self.work_friction, self.work_external = z(samples), z(samples)
+        self.logs: dict[str, list[Any]] = {}
+        self.log_rows: dict[str, list[int]] = {}
+
+    def record_plant(self, k: int, plant: Plant, t: float, q: FloatArray, qd: FloatArray) -> None:
+        """Friction, external torques, contact forces, wrench and sensors at sample k (non-simple plants)."""
+        dyn = plant.dyn
+        self.tau_friction[k] = plant.friction_torque(qd)
+        if plant.stuck is not None:
+            self.stuck[k] = plant.stuck
+        if not plant.has_external:
+            return
+        self.tau_ext[k] = -plant.external(t, q, qd)
+        tool = dyn.frame_pose(q, None)[:3, 3]
+        f, m = np.zeros(3), np.zeros(3)
+        if self.points:
+            forces, positions = [], []
+            for env in dict.fromkeys(e for e, _ in self.points):
+                h, p = env.forces(dyn, q, qd)
+                forces.append(h)
+                positions.append(p)
+            hs, ps = np.concatenate(forces), np.concatenate(positions)
+            self.contact_force[k] = hs
+            f += hs.sum(axis=0)
+            m += np.cross(ps - tool, hs).sum(axis=0)
+            if self.sensors:
+                joints = np.array([dyn.model.frame(env.points[i].frame).joint for env, i in self.points])
+                for s, sensor in enumerate(self.sensors):
+                    self.sensor[k, s] = sensor.reading(dyn, q, hs, ps, joints)
+        if plant.disturbance is not None:
+            hd = plant.disturbance_wrench(t)
+            f += hd[:3]
+            m += hd[3:]
+        self.wrench[k, :3] = f
+        self.wrench[k, 3:] = m
+
+    def log_controller(self, k: int, log: dict[str, Any]) -> None:
+        for key, val in log.items():
+            self.logs.setdefault(key, []).append(np.array(val, copy=True))
+            self.log_rows.setdefault(key, []).append(k)
+
+    def result(self, rows: int, dyn: Dynamics, energy: bool, info: dict[str, Any],
+               divergence: tuple[float, str, FloatArray, FloatArray] | None) -> SimResult:
+        """The SimResult of the first ``rows`` samples."""
+        r = slice(0, rows)
+        q, qd = self.q[r], self.qd[r]
+        # work of a torque held over [t_k, t_k+1) is exactly τ_kᵀ(q_k+1 − q_k)
+        dw = np.einsum("ij,ij->i", self.tau_applied[: max(rows - 1, 0)], np.diff(q, axis=0))
+        work_act = np.concatenate(([0.0], np.cumsum(dw)))[:rows]
+        if energy:
+            e = np.array([0.5 * float(v @ dyn._mass(p) @ v) + dyn._potential(p) for p, v in zip(q, qd, strict=True)])
+        else:
+            e = np.full(rows, np.nan)
+        logs: dict[str, Any] = {}
+        for key, vals in self.logs.items():
+            idx = [i for i in self.log_rows[key] if i < rows]
+            try:
+                logs[key] = np.stack(vals[: len(idx)])
+            except ValueError:
+                continue  # ragged entries are not recorded
+            if idx != list(range(len(idx))):
+                logs[f"{key}:sample"] = np.array(idx)
+        d = divergence
+        return SimResult(
+            t=np.arange(rows) * self.control_dt, q=q, qd=qd, qdd=self.qdd[r], tau=self.tau[r],
+            tau_applied=self.tau_applied[r], tau_friction=self.tau_friction[r], tau_ext=self.tau_ext[r],
+            wrench=self.wrench[r], contact_force=self.contact_force[r], sensor=self.sensor[r],
+            q_measured=self.q_measured[r], qd_measured=self.qd_measured[r], stuck=self.stuck[r], energy=e,
+            work_actuator=work_act, work_friction=self.work_friction[r], work_external=self.work_external[r],
+            diverged=d is not None, diverged_at=None if d is None else d[0], divergence="" if d is None else d[1],
+            diverged_q=None if d is None else d[2], diverged_qd=None if d is None else d[3], logs=logs, info=info)

@@ -1,0 +1,173 @@
+"""`SimResult`: what a closed-loop simulation recorded, sampled at every control instant t_k = k·control_dt.
+
+Arrays have one row per sample (N + 1 rows for N control periods; fewer if the run diverged) and are
+read-only. Torques are in N·m (N for prismatic joints), the sign conventions those of
+
+    M q̈ + C q̇ + g = tau_applied − tau_friction − tau_ext,     tau_ext = Σ J_pᵀ h_p + J_toolᵀ h_d
+
+Energies in J. ``save``/``load`` use NumPy's npz format (no pickle).
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field, fields
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from armctl._checks import FloatArray
+from armctl.errors import InvalidParameterError
+
+_ARRAYS = ("t", "q", "qd", "qdd", "tau", "tau_applied", "tau_friction", "tau_ext", "wrench", "contact_force",
+           "sensor", "q_measured", "qd_measured", "stuck", "energy", "work_actuator", "work_friction",
+           "work_external")
+
+
+@dataclass(frozen=True, eq=False)
+class SimResult:
+    """The record of one run of :func:`armctl.simulate`.
+
+    t (N,) [s]; q, qd, qdd (N, n): the plant's true state and acceleration; tau (N, n): the controller's
+    command, tau_applied: after saturation (held over [t_k, t_k+1)); tau_friction: joint friction torque (for
+    stuck joints the holding torque); tau_ext (N, n): joint torque of contact and disturbance wrenches;
+    wrench (N, 6): the total wrench h_e the arm exerts on its surroundings (contacts and disturbance),
+    [f; moment about the tool-frame origin] in world axes; contact_force (N, P, 3): force each contact point
+    exerts on its environment; sensor (N, S, 6): force-sensor readings; q_measured, qd_measured (N, n): what
+    the controller was given (noise and delay included); stuck (N, n): joints held by stiction; energy (N,):
+    E = T + U of the plant; work_actuator, work_friction, work_external (N,): work done since t = 0 by the
+    applied torque, by friction (≤ 0) and by the external wrenches, so that
+    energy − energy[0] ≈ work_actuator + work_friction + work_external (see :meth:`energy_balance`).
+
+    diverged: the run stopped early; diverged_at: the time [s] it was detected, divergence: why, diverged_q /
+    diverged_qd: the offending state. logs: the controller's ``last_log`` entries stacked over the samples.
+    info: settings and counters (integrator, steps, sub-steps, stick events, wall time, …).
+    """
+
+    t: FloatArray
+    q: FloatArray
+    qd: FloatArray
+    qdd: FloatArray
+    tau: FloatArray
+    tau_applied: FloatArray
+    tau_friction: FloatArray
+    tau_ext: FloatArray
+    wrench: FloatArray
+    contact_force: FloatArray
+    sensor: FloatArray
+    q_measured: FloatArray
+    qd_measured: FloatArray
+    stuck: FloatArray
+    energy: FloatArray
+    work_actuator: FloatArray
+    work_friction: FloatArray
+    work_external: FloatArray
+    diverged: bool = False
+    diverged_at: float | None = None
+    divergence: str = ""
+    diverged_q: FloatArray | None = None
+    diverged_qd: FloatArray | None = None
+    logs: dict[str, FloatArray] = field(default_factory=dict)
+    info: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        for name in (*_ARRAYS, "diverged_q", "diverged_qd"):
+            a = getattr(self, name)
+            if a is not None:
+                a = np.array(a, copy=True)
+                a.flags.writeable = False
+                object.__setattr__(self, name, a)
+        logs = {}
+        for k, v in self.logs.items():
+            a = np.array(v, copy=True)
+            a.flags.writeable = False
+            logs[k] = a
+        object.__setattr__(self, "logs", logs)
+
+    # ------------------------------------------------------------------------------ derived
+    @property
+    def n(self) -> int:
+        """Number of joints."""
+        return int(self.q.shape[1])
+
+    @property
+    def duration(self) -> float:
+        """Simulated time covered by the samples [s]."""
+        return float(self.t[-1] - self.t[0]) if len(self.t) else 0.0
+
+    @property
+    def work(self) -> FloatArray:
+        """Total work since t = 0 [J]: actuator + friction + external."""
+        return self.work_actuator + self.work_friction + self.work_external  # type: ignore[no-any-return]
+
+    def energy_balance(self) -> FloatArray:
+        """E(t) − E(0) − W(t) [J]: zero for the exact solution; its size measures the integration error."""
+        return self.energy - self.energy[0] - self.work  # type: ignore[no-any-return]
+
+    def __repr__(self) -> str:
+        state = f"diverged at t = {self.diverged_at:g} s ({self.divergence})" if self.diverged else "ok"
+        return (f"SimResult({len(self.t)} samples, {self.duration:g} s, n = {self.n}, "
+                f"{self.info.get('integrator', '?')}, {state})")
+
+    # ------------------------------------------------------------------------------ files
+    def save(self, path: str | Path) -> Path:
+        """Write the result to ``path`` (an ``.npz`` file; the suffix is added if missing)."""
+        path = Path(path)
+        if path.suffix != ".npz":
+            path = path.with_name(path.name + ".npz")
+        arrays: dict[str, Any] = {name: getattr(self, name) for name in _ARRAYS}
+        for name in ("diverged_q", "diverged_qd"):
+            if getattr(self, name) is not None:
+                arrays[name] = getattr(self, name)
+        for k, v in self.logs.items():
+            arrays[f"log:{k}"] = v
+        meta = {"diverged": self.diverged, "diverged_at": self.diverged_at, "divergence": self.divergence,
+                "info": self.info, "format": "armctl.SimResult/1"}
+        arrays["meta"] = np.array(json.dumps(meta, default=_jsonable))
+        np.savez_compressed(path, **arrays)
+        return path
+
+    @classmethod
+    def load(cls, path: str | Path) -> SimResult:
+        """Read a result written by :meth:`save`."""
+        with np.load(Path(path), allow_pickle=False) as data:
+            if "meta" not in data.files:
+                raise InvalidParameterError(f"{path} is not a saved SimResult (no 'meta' entry)", value=str(path))
+            meta = json.loads(str(data["meta"]))
+            kw: dict[str, Any] = {name: data[name] for name in _ARRAYS}
+            for name in ("diverged_q", "diverged_qd"):
+                kw[name] = data[name] if name in data.files else None
+            logs = {k[4:]: data[k] for k in data.files if k.startswith("log:")}
+        return cls(**kw, diverged=bool(meta["diverged"]), diverged_at=meta["diverged_at"],
+                   divergence=meta["divergence"], logs=logs, info=meta["info"])
+
+    # ------------------------------------------------------------------------------ plots
+    def plot(self, quantities: tuple[str, ...] = ("q", "qd", "tau_applied"), joints: Any = None) -> Any:
+        """A matplotlib Figure with one panel per quantity (see :func:`armctl.sim.plot.plot_joints`)."""
+        from armctl.sim.plot import plot_joints
+
+        return plot_joints(self, quantities, joints)
+
+    def plot_energy(self) -> Any:
+        """A matplotlib Figure of the energy balance (see :func:`armctl.sim.plot.plot_energy`)."""
+        from armctl.sim.plot import plot_energy
+
+        return plot_energy(self)
+
+    def plot_wrench(self) -> Any:
+        """A matplotlib Figure of the contact wrench and forces (see :func:`armctl.sim.plot.plot_wrench`)."""
+        from armctl.sim.plot import plot_wrench
+
+        return plot_wrench(self)
+
+
+def _jsonable(x: Any) -> Any:
+    if isinstance(x, np.generic):
+        return x.item()
+    if isinstance(x, np.ndarray):
+        return x.tolist()
+    return str(x)
+
+
+FIELD_NAMES = tuple(f.name for f in fields(SimResult))

@@ -1,0 +1,164 @@
+"""Checking and normalising the arguments of :func:`armctl.simulate` (every bad input raises an
+:class:`~armctl.errors.ArmctlError` subclass that names the value and says what is allowed)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from armctl._checks import FloatArray, scalar, vector
+from armctl.controllers.base import Controller
+from armctl.dynamics.base import Dynamics
+from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError, UnknownNameError
+from armctl.model.robot import RobotModel
+from armctl.reference import Reference
+from armctl.sim.contact import Environment, ForceSensor
+from armctl.sim.friction import FrictionModel, make_friction
+from armctl.sim.integrators import INTEGRATORS
+
+_REL = 1e-9
+
+
+def plant_dynamics(plant: Any) -> Dynamics:
+    """``plant`` as a Dynamics (a RobotModel gets the Pinocchio backend)."""
+    if isinstance(plant, Dynamics):
+        return plant
+    if isinstance(plant, RobotModel):
+        return Dynamics(plant)
+    raise InvalidParameterError(f"plant must be an armctl.Dynamics or an armctl.RobotModel, got "
+                                f"{type(plant).__name__}", value=plant)
+
+
+def periods(duration: Any, control_dt: Any, dt: Any) -> tuple[float, float, int, int]:
+    """(control_dt, dt, number of control periods N, sub-steps per period m), checked."""
+    duration = scalar(duration, "duration [s]", positive=True)
+    control_dt = scalar(control_dt, "control_dt [s]", positive=True)
+    dt = control_dt if dt is None else scalar(dt, "dt [s]", positive=True)
+    ratio = control_dt / dt
+    m = round(ratio)
+    if m < 1 or abs(ratio - m) > _REL * ratio:
+        raise InvalidParameterError(
+            f"control_dt = {control_dt} s must be a whole multiple of the integration step dt = {dt} s "
+            f"(it is {ratio:.6g} steps); choose dt = control_dt / k, e.g. dt = {control_dt / max(m, 1):g}",
+            value=dt)
+    steps = duration / control_dt
+    n_steps = round(steps)
+    if n_steps < 1 or abs(steps - n_steps) > _REL * max(steps, 1.0):
+        lo, hi = math.floor(steps) * control_dt, math.ceil(steps) * control_dt
+        raise InvalidParameterError(
+            f"duration = {duration} s is not a whole number of control periods of {control_dt} s "
+            f"({steps:.6g}); use {lo:g} s or {hi:g} s", value=duration)
+    return control_dt, control_dt / m, n_steps, m
+
+
+def integrator_name(name: Any) -> str:
+    if not isinstance(name, str) or name not in INTEGRATORS:
+        raise UnknownNameError("integrator", name, INTEGRATORS)
+    return name
+
+
+def reference_source(reference: Any, n: int) -> tuple[Reference | None, Callable[[float], Reference] | None]:
+    """(fixed reference, None) or (None, callable); the value at t = 0 is checked."""
+    if isinstance(reference, Reference):
+        check_reference(reference, n, 0.0)
+        return reference, None
+    if callable(reference):
+        check_reference(reference(0.0), n, 0.0)
+        return None, reference
+    raise InvalidParameterError(f"reference must be an armctl.Reference or a callable t -> Reference, got "
+                                f"{type(reference).__name__}", value=reference)
+
+
+def check_reference(ref: Any, n: int, t: float) -> Reference:
+    if not isinstance(ref, Reference):
+        raise InvalidParameterError(f"reference(t) must return an armctl.Reference, got {type(ref).__name__} at "
+                                    f"t = {t}", value=ref)
+    if ref.n != n:
+        raise ShapeError(f"reference has {ref.n} joints, the plant {n} (at t = {t})", value=ref)
+    return ref
+
+
+def controller_call(controller: Any, n: int) -> Callable[..., Any]:
+    """The fastest correct way to call ``controller``: a :class:`Controller`'s ``compute`` (the simulator's
+    state and references are already checked), else the callable itself."""
+    if not callable(controller):
+        raise InvalidParameterError(f"controller must be callable as controller(t, q, qd, ref) -> tau, got "
+                                    f"{type(controller).__name__}", value=controller)
+    cn = getattr(controller, "n", None)
+    if isinstance(cn, int | np.integer) and int(cn) != n:
+        raise ShapeError(f"controller is for {cn} joints, the plant has {n}", value=controller)
+    if isinstance(controller, Controller) and type(controller).__call__ is Controller.__call__:
+        return controller.compute
+    return controller  # type: ignore[no-any-return]
+
+
+def initial_state(q0: ArrayLike | None, qd0: ArrayLike | None, ref0: Reference, n: int
+                  ) -> tuple[FloatArray, FloatArray]:
+    """(q0, q̇0) as fresh arrays; None starts on the reference at t = 0."""
+    q = ref0.q if q0 is None else vector(q0, n, "q0")
+    qd = ref0.qd if qd0 is None else vector(qd0, n, "qd0")
+    return np.array(q, dtype=float), np.array(qd, dtype=float)
+
+
+def noise_level(x: ArrayLike, n: int, name: str) -> FloatArray:
+    a = np.asarray(x, dtype=float)
+    if a.ndim == 0:
+        a = np.full(n, float(a))
+    if a.shape != (n,):
+        raise ShapeError(f"{name} must be a scalar or an ({n},) vector, got shape {a.shape}", value=x)
+    if not np.isfinite(a).all():
+        raise NonFiniteError(f"{name} holds NaN or inf: {a}", value=x)
+    if (a < 0).any():
+        raise InvalidParameterError(f"{name} (a standard deviation) must be >= 0, got {a}", value=x)
+    return a
+
+
+def delay_periods(delay: Any) -> int:
+    if isinstance(delay, bool) or not isinstance(delay, int | np.integer) or delay < 0:
+        raise InvalidParameterError(f"delay must be a whole number of control periods >= 0, got {delay!r}",
+                                    value=delay)
+    return int(delay)
+
+
+def bound(x: Any, name: str) -> float:
+    v = float(x) if isinstance(x, int | float | np.floating | np.integer) else math.nan
+    if not v > 0:
+        raise InvalidParameterError(f"{name} must be a positive number (inf: no bound), got {x!r}", value=x)
+    return v
+
+
+def seq(x: Any, kind: type, name: str) -> tuple[Any, ...]:
+    if x is None:
+        return ()
+    items = (x,) if isinstance(x, kind) else tuple(x) if isinstance(x, Sequence) else None
+    if items is None or not all(isinstance(i, kind) for i in items):
+        raise InvalidParameterError(f"{name} must be a {kind.__name__} or a sequence of them, got {x!r}", value=x)
+    return items
+
+
+@dataclass(frozen=True)
+class Scene:
+    """What the plant is made of, checked against its model."""
+
+    friction: FrictionModel
+    environments: tuple[Environment, ...]
+    sensors: tuple[ForceSensor, ...]
+    disturbance: Callable[[float], Any] | None
+
+
+def scene(dyn: Dynamics, friction: Any, environment: Any, sensors: Any, disturbance: Any) -> Scene:
+    envs = seq(environment, Environment, "environment")
+    for env in envs:
+        env.check(dyn.model)
+    sens = seq(sensors, ForceSensor, "sensors")
+    for s in sens:
+        dyn.model.frame(s.frame)
+    if disturbance is not None and not callable(disturbance):
+        raise InvalidParameterError(f"disturbance must be a callable t -> (6,) wrench or None, got "
+                                    f"{type(disturbance).__name__}", value=disturbance)
+    return Scene(make_friction(friction, dyn.model), envs, sens, disturbance)

@@ -1,0 +1,179 @@
+"""`simulate`: a controller in closed loop with a plant, at a real control rate.
+
+At every control instant t_k = k·Δt_c the controller is given the measured state and the reference and
+returns τ_k; τ_k, saturated at the plant's effort limits, is held constant over [t_k, t_k + Δt_c) (zero-order
+hold) while the plant is integrated with m = Δt_c/Δt sub-steps:
+
+    M(q) q̈ + C(q, q̇) q̇ + g(q) = sat(τ_k) − τ_f − Σ_p J_pᵀ h_p − J_toolᵀ h_d(t)
+
+(see :mod:`armctl.sim.plant` for the terms, :mod:`armctl.sim.friction` and :mod:`armctl.sim.contact` for the
+models, :mod:`armctl.sim.integrators` for the schemes).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Sequence
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from armctl.dynamics.base import Dynamics
+from armctl.errors import ShapeError
+from armctl.model.robot import RobotModel
+from armctl.reference import Reference
+from armctl.sim import setup
+from armctl.sim.contact import Environment, ForceSensor
+from armctl.sim.friction import FrictionModel
+from armctl.sim.integrators import make_step
+from armctl.sim.plant import Plant
+from armctl.sim.recorder import Recorder
+from armctl.sim.result import SimResult
+from armctl.sim.stepper import advance
+from armctl.sim.stick_slip import NotPositiveDefinite
+
+
+def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
+             reference: Reference | Callable[[float], Reference], duration: float,
+             q0: ArrayLike | None = None, qd0: ArrayLike | None = None, control_dt: float = 1e-3,
+             dt: float | None = None, integrator: str = "rk4", *,
+             friction: str | FrictionModel = "stick-slip",
+             environment: Environment | Sequence[Environment] | None = None,
+             sensors: ForceSensor | Sequence[ForceSensor] = (),
+             disturbance: Callable[[float], ArrayLike] | None = None,
+             saturate: bool = True, noise_q: ArrayLike = 0.0, noise_qd: ArrayLike = 0.0, seed: int | None = None,
+             delay: int = 0, max_velocity: float = 1e3, max_position: float = math.inf, reset: bool = True,
+             energy: bool = True) -> SimResult:
+    """Simulate ``controller`` driving ``plant`` along ``reference`` for ``duration`` seconds.
+
+    plant: the true arm, a Dynamics or a RobotModel (its friction, payload, … are the truth; it may differ
+    from the controller's own model). controller: ``tau = controller(t, q, qd, ref)``; its ``reset()`` is
+    called first (``reset=True``) and its ``last_log`` dict recorded after every call. reference: a Reference
+    or a callable t → Reference. duration [s]: a whole number of control periods. q0, qd0: initial state
+    (None: the reference at t = 0). control_dt: controller period Δt_c [s]. dt: integration step [s]; Δt_c
+    must be a whole multiple of it (None: Δt_c). integrator: "rk4", "semi-implicit-euler"
+    (symplectic: no energy drift), "implicit-euler" (stiff contact and damping) or "euler" (the cheapest);
+    see :mod:`armctl.sim.integrators`.
+
+    friction: "stick-slip" (exact sticking), "smooth" (tanh) or a FrictionModel, applied to the plant
+    model's joint friction. environment: contact environment(s); sensors: force sensor(s) recorded in
+    ``res.sensor``; disturbance: t → h_d (6,), a wrench at the tool frame with the sign of Dynamics' ``wrench``
+    (what the arm exerts: a push F on the arm is −F). saturate: clip τ at the model's effort limits.
+    noise_q [rad], noise_qd [rad/s]: standard deviations (scalar or per joint) of Gaussian measurement noise,
+    drawn from ``seed``. delay: the controller sees the measurement of ``delay`` periods earlier (the first
+    one before that). max_velocity [rad/s], max_position [rad]: a state beyond them, or non-finite, stops the
+    run as diverged (as does a non-finite torque from the controller or a mass matrix that is no longer
+    positive definite). energy: record E = T + U at every sample.
+
+    Returns a :class:`~armctl.sim.result.SimResult`; a run that diverges returns the samples before it with
+    ``diverged=True``, ``diverged_at``, ``divergence`` and the offending state — it does not raise.
+    """
+    dyn = setup.plant_dynamics(plant)
+    n = dyn.n
+    cdt, h, n_periods, m = setup.periods(duration, control_dt, dt)
+    scheme = setup.integrator_name(integrator)
+    fixed_ref, ref_fn = setup.reference_source(reference, n)
+    ref0 = fixed_ref if fixed_ref is not None else ref_fn(0.0)  # type: ignore[misc]
+    call = setup.controller_call(controller, n)
+    q, v = setup.initial_state(q0, qd0, ref0, n)
+    sig_q, sig_qd = setup.noise_level(noise_q, n, "noise_q"), setup.noise_level(noise_qd, n, "noise_qd")
+    lag = setup.delay_periods(delay)
+    vmax, qmax = setup.bound(max_velocity, "max_velocity"), setup.bound(max_position, "max_position")
+    sc = setup.scene(dyn, friction, environment, sensors, disturbance)
+
+    pl = Plant(dyn, sc.friction, sc.environments, sc.disturbance)
+    step = make_step(scheme, pl)
+    simple = pl.simple
+    implicit = scheme in ("implicit-euler", "semi-implicit-euler")  # these give no q̈ at the step start
+    samples = n_periods + 1
+    noisy = bool(sig_q.any() or sig_qd.any())
+    rec = Recorder(n, samples, cdt, sc.environments, sc.sensors, measured=noisy or lag > 0)
+    rng = np.random.default_rng(seed)
+    nq = rng.standard_normal((samples, n)) * sig_q if noisy else None
+    nv = rng.standard_normal((samples, n)) * sig_qd if noisy else None
+    limit = dyn.model.effort_limit
+    clip = saturate and bool(np.isfinite(limit).any())
+    lim_list = limit.tolist()
+    if reset and callable(getattr(controller, "reset", None)):
+        controller.reset()  # type: ignore[union-attr]
+    has_log = hasattr(controller, "last_log")
+
+    Q, QD, QDD, TAU, TAUA = rec.q, rec.qd, rec.qdd, rec.tau, rec.tau_applied
+    QM, QDM, WF, WE = rec.q_measured, rec.qd_measured, rec.work_friction, rec.work_external
+    shape = (n,)
+    wf = we = 0.0
+    divergence = None
+    rows = samples
+    t0 = time.perf_counter()
+    with np.errstate(all="ignore"):
+        for k in range(samples):
+            t = k * cdt
+            ql, vl = q.tolist(), v.tolist()
+            if not math.isfinite(sum(ql) + sum(vl)):
+                divergence, rows = (t, "the state is not finite", q, v), k
+                break
+            if max(vl) > vmax or -min(vl) > vmax:
+                divergence, rows = (t, f"a joint velocity is beyond max_velocity = {vmax:g}", q, v), k
+                break
+            if qmax < math.inf and (max(ql) > qmax or -min(ql) > qmax):
+                divergence, rows = (t, f"a joint position is beyond max_position = {qmax:g}", q, v), k
+                break
+            q.flags.writeable = False
+            v.flags.writeable = False
+            Q[k] = q
+            QD[k] = v
+            WF[k] = wf
+            WE[k] = we
+            qm, vm = q, v
+            if rec.measured:
+                if noisy:
+                    QM[k] = q + nq[k]  # type: ignore[index]
+                    QDM[k] = v + nv[k]  # type: ignore[index]
+                else:
+                    QM[k] = q
+                    QDM[k] = v
+                j = k - lag if k >= lag else 0
+                qm, vm = QM[j].copy(), QDM[j].copy()
+            ref = fixed_ref if fixed_ref is not None else setup.check_reference(ref_fn(t), n, t)  # type: ignore[misc]
+            tau = np.asarray(call(t, qm, vm, ref), dtype=float)
+            if has_log and controller.last_log:  # type: ignore[union-attr]
+                rec.log_controller(k, controller.last_log)  # type: ignore[union-attr]
+            if tau.shape != shape:
+                raise ShapeError(f"the controller returned a torque of shape {tau.shape} at t = {t}; expected "
+                                 f"({n},)", value=tau)
+            tl = tau.tolist()
+            if not math.isfinite(sum(tl)):
+                divergence, rows = (t, f"the controller returned a non-finite torque {tau}", q, v), k
+                break
+            tau_a = tau
+            if clip and any(abs(x) > lim for x, lim in zip(tl, lim_list, strict=True)):
+                tau_a = np.clip(tau, -limit, limit)
+            TAU[k] = tau
+            TAUA[k] = tau_a
+            try:
+                if not simple:
+                    pl.begin(t, q, v, tau_a)
+                    rec.record_plant(k, pl, t, q, v)
+                if implicit or k == n_periods:
+                    QDD[k] = pl.accel(t, q, v, tau_a)
+                if k == n_periods:
+                    break
+                for s in range(m):
+                    q, v, a0, dwf, dwe = advance(pl, step, t + s * h, q, v, tau_a, h, begun=s == 0)
+                    if s == 0 and a0 is not None:
+                        QDD[k] = a0
+                    wf += dwf
+                    we += dwe
+            except NotPositiveDefinite as exc:
+                divergence, rows = (t + cdt, f"{exc} during the control period from t = {t:g} s",
+                                    Q[k].copy(), QD[k].copy()), k + 1
+                break
+    wall = time.perf_counter() - t0
+    info = {"plant": dyn.model.name, "n": n, "backend": dyn.backend, "integrator": scheme, "control_dt": cdt,
+            "dt": h, "substeps": m, "periods": n_periods, "friction": sc.friction.name if pl.friction else "none",
+            "saturate": bool(saturate), "delay": lag, "seed": seed, "wall_time": wall,
+            "real_time_factor": (rows - 1) * cdt / wall if wall > 0 and rows > 1 else math.nan, **pl.stats}
+    if divergence is not None:
+        divergence = (divergence[0], divergence[1], np.array(divergence[2]), np.array(divergence[3]))
+    return rec.result(rows, dyn, energy, info, divergence)
