@@ -29,8 +29,11 @@ def _row_scales(problem: TimeScalingProblem) -> FloatArray:
     return np.array([0.5 * float(lim[r.kind].upper[r.joint] - lim[r.kind].lower[r.joint]) for r in problem.labels])
 
 
+Binding = list[tuple[int, int, float]]  # (row, gridpoint, dual)
+
+
 def _stage_lp(problem: TimeScalingProblem, rows: tuple[FloatArray, FloatArray, FloatArray], i: int,
-              k_next: FloatArray, x_fixed: float | None) -> tuple[float, FloatArray, list[tuple[int, int, float]]]:
+              k_next: FloatArray | None, x_fixed: float | None) -> tuple[float, FloatArray, Binding]:
     """Least-violation LP at stage i: (t*, (u*, x*), [(row, gridpoint, dual), …] sorted by |dual|)."""
     from scipy.optimize import linprog
 
@@ -47,7 +50,7 @@ def _stage_lp(problem: TimeScalingProblem, rows: tuple[FloatArray, FloatArray, F
             A.append([(a[p, r] + two_delta * b[p, r]) / h[r], b[p, r] / h[r], -1.0])
             ub.append((g[r] - c[p, r]) / h[r])
             tag.append((r, p))
-    if i < N:  # the next velocity² must be controllable
+    if i < N and k_next is not None:  # the next velocity² must be controllable
         A += [[2.0 * delta, 1.0, 0.0], [-2.0 * delta, -1.0, 0.0]]
         ub += [float(k_next[1]), -float(k_next[0])]
     x_hi = float(problem.x_max[i]) if x_fixed is None else x_fixed
@@ -137,7 +140,7 @@ def diagnose(problem: TimeScalingProblem, rows: tuple[FloatArray, FloatArray, Fl
         return InfeasibleError(f"{msg}: the arm cannot hold itself there and {fail_at}. Raise the limit, lighten "
                                "the load or change the path.", value=value, problem=problem)
     k_next = K[i + 1] if i < N else np.zeros(2)
-    t, _, binding = _stage_lp(problem, rows, i, np.array([0.0, np.inf]), x_fixed)
+    t, _, binding = _stage_lp(problem, rows, i, None, x_fixed)
     dynamic = t <= 1e-9
     if dynamic:  # the point itself is feasible: what fails is reaching a controllable velocity beyond it
         t, _, binding = _stage_lp(problem, rows, i, k_next, x_fixed)

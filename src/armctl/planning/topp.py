@@ -30,13 +30,14 @@ from armctl.planning.trajectory import Trajectory
 from armctl.planning.verify import check_trajectory
 
 
-def solve_problem(problem: TimeScalingProblem, viscous_passes: int = 1) -> Trajectory:
+def solve_problem(problem: TimeScalingProblem, viscous_passes: int = 2) -> Trajectory:
     """Solve ``problem`` with TOPP-RA (rest to rest) → :class:`Trajectory` with a
     :class:`~armctl.planning.timing.GridTiming` (not yet verified densely).
 
     With viscous friction, a first pass drops it (optimistic, never returned); each of the ``viscous_passes``
-    further passes replaces F_v q' √x by its tangent at the previous pass's x, which over-estimates it (see
-    :mod:`~armctl.planning.problem`), so the returned solution is conservative.
+    further passes replaces F_v q' √x by a line over it, tangent at the previous pass's x where it can be (see
+    :meth:`~armctl.planning.problem.TimeScalingProblem.linearized`), so the returned solution is conservative
+    and, pass after pass, closer to the optimum.
     """
     from armctl.planning._toppra import run_toppra
 
@@ -83,7 +84,7 @@ def _refined(grid: int | ArrayLike) -> int | FloatArray:
 def time_optimal(dyn: Dynamics, path: Path | ArrayLike, vel_limit: Any = None, acc_limit: Any = None,
                  torque_limit: Any = None, grid: int | ArrayLike = 100, *, torque_margin: float = 0.0,
                  tol: float = 1e-2, refine: bool = True, max_grid: int = 1600, oversample: int = 10,
-                 viscous_passes: int = 1, discretization: str = "interpolation") -> Trajectory:
+                 viscous_passes: int = 2, discretization: str = "interpolation") -> Trajectory:
     """The time-optimal rest-to-rest trajectory along ``path`` within the given limits.
 
     dyn: the arm's :class:`~armctl.Dynamics` (torques are τ = ``dyn.inverse_dynamics``, friction included).

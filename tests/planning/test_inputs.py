@@ -1,0 +1,73 @@
+"""Bad input to the planners raises an ArmctlError subclass that names the value (and a builtin base class)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import armctl
+from armctl.errors import ArmctlError, InvalidParameterError, NonFiniteError, ShapeError
+from armctl.planning import LinePath, PolynomialTiming, Trajectory, time_optimal, uniform_time_scaling
+from tests.planning._common import PANDA_WAYPOINTS, panda
+
+N = 7
+
+
+@pytest.mark.parametrize(("kwargs", "error", "match"), [
+    ({"waypoints": PANDA_WAYPOINTS[:, :6]}, ShapeError, r"6 joints .* the arm 7"),
+    ({"waypoints": PANDA_WAYPOINTS[0]}, ShapeError, "waypoints must be an"),
+    ({"waypoints": np.where(np.eye(5, 7) > 0, np.nan, PANDA_WAYPOINTS)}, NonFiniteError, "waypoint 0 joint 0"),
+    ({"torque_limit": np.ones(6)}, ShapeError, "torque limit must be a scalar, an \\(7,\\)"),
+    ({"torque_limit": np.ones((7, 3))}, ShapeError, "torque limit"),
+    ({"torque_limit": -5.0}, InvalidParameterError, "must be > 0"),
+    ({"vel_limit": np.r_[1.0, 1.0, 0.0, 1.0, 1.0, 1.0, 1.0]}, InvalidParameterError, "joint 2 is 0"),
+    ({"acc_limit": np.nan}, NonFiniteError, "NaN"),
+    ({"torque_limit": np.column_stack([np.full(N, 5.0), np.full(N, -5.0)])}, InvalidParameterError, "lower 5"),
+    ({"vel_limit": np.column_stack([np.full(N, 0.5), np.full(N, 2.0)])}, InvalidParameterError, "contain 0"),
+    ({"acc_limit": "model"}, InvalidParameterError, "acceleration limit"),
+    ({"torque_limit": "lots"}, InvalidParameterError, "torque limit"),
+    ({"torque_limit": None}, InvalidParameterError, "no limit given"),
+    ({"torque_margin": 1.0}, InvalidParameterError, "torque_margin"),
+    ({"torque_margin": 0.1, "torque_limit": None, "vel_limit": 1.0}, InvalidParameterError, "needs a torque_limit"),
+    ({"grid": 1}, InvalidParameterError, "grid must be >= 2"),
+    ({"grid": np.array([0.0, 0.6, 0.4, 1.0])}, InvalidParameterError, "increase strictly"),
+    ({"grid": np.array([0.1, 0.5, 1.0])}, InvalidParameterError, "from 0 to 1"),
+    ({"tol": -1.0}, InvalidParameterError, "tol"),
+    ({"oversample": 0}, InvalidParameterError, "oversample"),
+    ({"discretization": "spectral"}, InvalidParameterError, "discretization"),
+])
+def test_time_optimal_rejects_bad_input(kwargs: dict, error: type[ArmctlError], match: str) -> None:
+    args = {"waypoints": PANDA_WAYPOINTS, "torque_limit": "model"}
+    args.update(kwargs)
+    waypoints = args.pop("waypoints")
+    with pytest.raises(error, match=match) as e:
+        time_optimal(panda(), waypoints, **args)
+    assert isinstance(e.value, ValueError)
+
+
+def test_dynamics_must_be_a_dynamics() -> None:
+    with pytest.raises(InvalidParameterError, match=r"armctl\.Dynamics"):
+        time_optimal(armctl.models.panda(), PANDA_WAYPOINTS, torque_limit="model")
+
+
+def test_a_path_that_stops_is_refused() -> None:
+    # q(s) = 4(s − ½)³: q'(½) = 0 inside the path, where the path velocity would be unbounded
+    from armctl.planning import SplinePath
+
+    s = np.linspace(0, 1, 9)
+    path = SplinePath((4 * (s - 0.5) ** 3)[:, None], knots=s)
+    dyn = armctl.Dynamics(armctl.models.pendulum())
+    with pytest.raises(InvalidParameterError, match="stationary"):
+        time_optimal(dyn, path, vel_limit=1.0, grid=8)
+
+
+def test_uniform_time_scaling_rejects_bad_input() -> None:
+    dyn = panda()
+    with pytest.raises(InvalidParameterError, match="Trajectory"):
+        uniform_time_scaling(dyn, PANDA_WAYPOINTS, torque_limit="model")
+    short = Trajectory(LinePath([0.0, 0.0], [1.0, 1.0]), PolynomialTiming(1.0))
+    with pytest.raises(InvalidParameterError, match="2 joints"):
+        uniform_time_scaling(dyn, short, torque_limit="model")
+    line = Trajectory(LinePath(PANDA_WAYPOINTS[0], PANDA_WAYPOINTS[1]), PolynomialTiming(1.0))
+    with pytest.raises(ShapeError):
+        uniform_time_scaling(dyn, line, torque_limit=np.ones(3))

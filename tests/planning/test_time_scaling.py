@@ -1,0 +1,65 @@
+"""Uniform (Hollerbach) time scaling: the closed-form factor against a brute-force search on the closed-form
+pendulum, the scaled trajectory at its limit, and the case no slowing down can fix."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import armctl
+from armctl.errors import InfeasibleError
+from armctl.planning import LinePath, PolynomialTiming, SplinePath, Trajectory, uniform_time_scaling
+from tests.planning._common import PANDA_WAYPOINTS, PENDULUM_GRAVITY, PENDULUM_INERTIA, panda
+
+VISCOUS = 0.05  # the library pendulum's viscous friction [N·m·s/rad]
+
+
+def _pendulum_torque(q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
+    """The pendulum's equation of motion written out: M q̈ + m g ℓ sin q + F_v q̇."""
+    return PENDULUM_INERTIA * qdd + PENDULUM_GRAVITY * np.sin(q) + VISCOUS * qd
+
+
+def test_closed_form_factor_matches_a_brute_force_search() -> None:
+    dyn = armctl.Dynamics(armctl.models.pendulum())
+    nominal = Trajectory(LinePath([-0.3], [1.2]), PolynomialTiming(0.4))
+    limit = 8.0
+    result = uniform_time_scaling(dyn, nominal, torque_limit=limit, samples=401)
+    smp = nominal.sample(num=401)
+    q, qd, qdd = smp.q[:, 0], smp.qd[:, 0], smp.qdd[:, 0]
+
+    def fits(r: float) -> bool:  # slowed by r: q̇/r, q̈/r²
+        return bool((np.abs(_pendulum_torque(q, qd / r, qdd / r**2)) <= limit).all())
+
+    rs = np.linspace(0.2, 5.0, 4801)
+    ok = np.array([fits(r) for r in rs])
+    r_brute = rs[np.flatnonzero(~ok).max() + 1]  # every slower scaling fits too
+    assert result.factor == pytest.approx(r_brute, abs=rs[1] - rs[0])
+    assert result.kind == "torque" and result.joint == 0
+    assert result.duration == pytest.approx(0.4 * result.factor)
+
+
+def test_scaled_trajectory_sits_at_its_limit() -> None:
+    dyn = panda(friction=True)
+    nominal = Trajectory(SplinePath(PANDA_WAYPOINTS), PolynomialTiming(1.0))
+    result = uniform_time_scaling(dyn, nominal, vel_limit="model", acc_limit=10.0, torque_limit="model")
+    smp = result.trajectory.sample(num=1001)
+    inner = slice(1, -1)  # at rest the model's kinetic friction is zero
+    tau = np.array([dyn.inverse_dynamics(q, qd, qdd) for q, qd, qdd in
+                    zip(smp.q[inner], smp.qd[inner], smp.qdd[inner], strict=True)])
+    used = max((np.abs(tau) / dyn.model.effort_limit).max(), (np.abs(smp.qd) / dyn.model.velocity_limit).max(),
+               (np.abs(smp.qdd) / 10.0).max())
+    assert used == pytest.approx(1.0, abs=2e-3)
+    assert result.trajectory.check.ok(2e-3)
+    faster = Trajectory(nominal.path, PolynomialTiming(0.99 * result.duration))  # the same law, 1 % too fast
+    again = uniform_time_scaling(dyn, faster, vel_limit="model", acc_limit=10.0, torque_limit="model")
+    assert again.factor == pytest.approx(1 / 0.99, rel=1e-9)
+
+
+def test_gravity_beyond_the_limit_cannot_be_scaled_away() -> None:
+    dyn = armctl.Dynamics(armctl.models.pendulum())
+    nominal = Trajectory(LinePath([0.0], [3.0]), PolynomialTiming(1.0))
+    with pytest.raises(InfeasibleError, match="gravity and Coulomb friction alone need") as e:
+        uniform_time_scaling(dyn, nominal, torque_limit=3.0)
+    assert e.value.value["needed"] == pytest.approx(PENDULUM_GRAVITY * math.sin(3.0 * e.value.value["s"]), rel=1e-6)

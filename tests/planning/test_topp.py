@@ -1,0 +1,201 @@
+"""time_optimal against independent references: the analytic bang-bang durations (with Coulomb friction,
+asymmetric), the exact viscous bang-bang, dense re-checks with the library's inverse dynamics, the uniform
+time scaling, infeasibility reports and toppra's failure modes."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+
+import armctl
+import armctl.planning._toppra as toppra_adapter
+from armctl.errors import InfeasibleError, SolverError
+from armctl.planning import (
+    LinePath,
+    PolynomialTiming,
+    SplinePath,
+    Trajectory,
+    grid_convergence,
+    plot_convergence,
+    time_optimal,
+    uniform_time_scaling,
+)
+from tests.planning._common import PANDA_WAYPOINTS, PENDULUM_GRAVITY, PENDULUM_INERTIA, flat_pendulum, panda
+
+START = np.zeros(7)
+END = np.array([1.0, -0.5, 0.3, 0.2, 1.0, 0.5, -0.7])
+
+
+def test_converges_to_the_bang_bang_duration(tmp_path) -> None:
+    # straight line, |q̇_j| ≤ 1 rad/s and |q̈_j| ≤ 2.3 rad/s²: joints 0 and 4 (|Δ| = 1) bind, so in path
+    # coordinates ṡ ≤ 1, |s̈| ≤ 2.3 and the trapezoid takes 1/V + V/A (V² = 1 < A = 2.3)
+    analytic = 1.0 / 1.0 + 1.0 / 2.3
+    study = grid_convergence(panda(), START, END, 1.0, 2.3, grids=(10, 20, 50, 100, 200, 500, 1000), repeat=1)
+    assert study.reference == pytest.approx(analytic, rel=1e-15)
+    errors = np.abs(study.durations - analytic) / analytic
+    assert errors[-1] < 1e-5
+    assert (errors[3:] < errors[0] / 50).all()  # from N = 100 on, far below the coarse grid's
+    assert (study.durations >= analytic * (1 - 1e-9)).all()  # never faster than the optimum
+    fig = plot_convergence(study)
+    assert len(fig.axes) == 2
+    fig.savefig(tmp_path / "topp_convergence.png")
+    assert (tmp_path / "topp_convergence.png").stat().st_size > 0
+
+
+@pytest.mark.parametrize("distance", [1.5, -1.5])
+def test_coulomb_friction_is_exact_asymmetric_bang_bang(distance: float) -> None:
+    # gravity off: M q̈ + F_c(sgn q̇) = τ, |τ| ≤ 2. Moving up (F_c⁺ = 0.5) the arm accelerates at (2 − F_c)/M and
+    # brakes at (2 + F_c)/M; moving down F_c⁻ = 0.8 plays that role
+    fc = 0.5 if distance > 0 else 0.8
+    dyn = flat_pendulum(coulomb=0.5, coulomb_negative=0.8)
+    a1, a2 = (2.0 - fc) / PENDULUM_INERTIA, (2.0 + fc) / PENDULUM_INERTIA
+    v = math.sqrt(2 * abs(distance) * a1 * a2 / (a1 + a2))
+    analytic = v / a1 + v / a2
+    traj = time_optimal(dyn, LinePath([0.0], [distance]), torque_limit=2.0, grid=200)
+    assert traj.duration == pytest.approx(analytic, rel=1e-5)
+    assert traj.check.ok(1e-9)
+
+
+def _viscous_bang_bang(distance: float, tau: float, fv: float, inertia: float, help_braking: bool = True) -> float:
+    """Minimum time with M q̈ = τ − F_v q̇ at full torque forward, then full torque back to rest, braking with
+    M q̈ = −τ − F_v q̇ (the true dynamics) or, help_braking=False, −τ alone (the planner's conservative model,
+    which does not count on viscous friction to help it brake). Closed form per phase, switch by root finding."""
+    k, a = fv / inertia, tau / inertia
+
+    def speed(t: float) -> float:  # accelerating from rest
+        return a / k * (1 - math.exp(-k * t))
+
+    def travelled(t: float) -> float:
+        return a / k * (t - (1 - math.exp(-k * t)) / k)
+
+    def braking(v0: float) -> tuple[float, float]:  # time and distance to stop from v0
+        if not help_braking:
+            return v0 / a, v0 * v0 / (2 * a)
+        ts = math.log(1 + k * v0 / a) / k
+        return ts, (v0 + a / k) * (1 - math.exp(-k * ts)) / k - a / k * ts
+
+    t1 = brentq(lambda t: travelled(t) + braking(speed(t))[1] - distance, 1e-9, 100.0, xtol=1e-14)
+    return t1 + braking(speed(t1))[0]
+
+
+def test_viscous_friction_is_conservative_and_close() -> None:
+    dyn = flat_pendulum(viscous=1.5)
+    exact = _viscous_bang_bang(1.5, 2.0, 1.5, PENDULUM_INERTIA)
+    modelled = _viscous_bang_bang(1.5, 2.0, 1.5, PENDULUM_INERTIA, help_braking=False)
+    traj = time_optimal(dyn, LinePath([0.0], [1.5]), torque_limit=2.0, grid=200)
+    assert exact < modelled <= traj.duration <= modelled * 1.01
+    assert traj.check.ok(0.0)  # conservative: the true torque never exceeds the bound
+
+
+def _dense_torque_utilisation(dyn: armctl.Dynamics, traj: Trajectory, limit: np.ndarray, num: int) -> float:
+    """max |τ_j| / limit_j over num samples strictly inside (0, T), τ from dyn.inverse_dynamics."""
+    smp = traj.sample(np.linspace(0, traj.duration, num + 2)[1:-1])
+    tau = np.array([dyn.inverse_dynamics(q, qd, qdd) for q, qd, qdd in zip(smp.q, smp.qd, smp.qdd, strict=True)])
+    return float((np.abs(tau) / limit).max())
+
+
+def test_panda_with_friction_respects_torque_limits_and_beats_uniform_scaling() -> None:
+    dyn = panda(friction=True)
+    limit = dyn.model.effort_limit
+    traj = time_optimal(dyn, PANDA_WAYPOINTS, vel_limit="model", torque_limit="model", grid=100, tol=1e-2)
+    assert traj.check.ok(1e-2)
+    assert _dense_torque_utilisation(dyn, traj, limit, 2000) <= 1.01  # our own re-check, 20 samples per stage
+    vel = np.abs(traj.sample(num=2001).qd) / dyn.model.velocity_limit
+    assert vel.max() <= 1.01
+    nominal = Trajectory(SplinePath(PANDA_WAYPOINTS), PolynomialTiming(1.0))
+    uniform = uniform_time_scaling(dyn, nominal, vel_limit="model", torque_limit="model")
+    assert traj.duration <= uniform.duration
+
+
+def test_torque_margin_is_kept() -> None:
+    dyn = panda()
+    limit = dyn.model.effort_limit
+    full = time_optimal(dyn, PANDA_WAYPOINTS, torque_limit="model")
+    kept = time_optimal(dyn, PANDA_WAYPOINTS, torque_limit="model", torque_margin=0.1)
+    assert kept.duration > full.duration
+    assert _dense_torque_utilisation(dyn, kept, limit, 2000) <= 0.9 * 1.01
+
+
+def test_refinement_until_within_tolerance() -> None:
+    dyn = panda()
+    traj = time_optimal(dyn, PANDA_WAYPOINTS, torque_limit="model", grid=25, tol=1e-3)
+    grids = [h["grid"] for h in traj.info["history"]]
+    assert grids[0] == 25 and grids == sorted(grids) and len(grids) > 1
+    assert traj.check.worst_excess <= 1e-3 < traj.info["history"][0]["worst_excess"]
+    with pytest.raises(SolverError, match="exceeds a limit") as err:
+        time_optimal(dyn, PANDA_WAYPOINTS, torque_limit="model", grid=25, tol=1e-3, refine=False)
+    assert isinstance(err.value.result, Trajectory)  # the violating result is handed over, never silently
+
+
+def test_reference_at_the_ends_and_consistent_derivatives() -> None:
+    traj = time_optimal(panda(), PANDA_WAYPOINTS, vel_limit="model", torque_limit="model")
+    start, end = traj(0.0), traj(traj.duration)
+    np.testing.assert_allclose(start.q, PANDA_WAYPOINTS[0], atol=1e-12)
+    np.testing.assert_allclose(end.q, PANDA_WAYPOINTS[-1], atol=1e-12)
+    np.testing.assert_allclose(start.qd, 0, atol=1e-12)
+    np.testing.assert_allclose(end.qd, 0, atol=1e-12)
+    np.testing.assert_allclose(traj(traj.duration + 1.0).qdd, 0)
+    t = np.linspace(0.1, traj.duration - 0.1, 23)
+    h = 1e-6
+    fd = (traj.sample(t + h).q - traj.sample(t - h).q) / (2 * h)
+    np.testing.assert_allclose(fd, traj.sample(t).qd, atol=1e-5)
+    ref = traj(1.0)
+    np.testing.assert_allclose(ref.qdd, traj.sample(np.array([1.0])).qdd[0])
+
+
+def test_gravity_beyond_the_limit_is_named_with_its_place() -> None:
+    # the pendulum's gravity torque is m g ℓ sin q (4.905 N·m at most); with 3 N·m it cannot hold itself
+    # between asin(3/4.905) and π − asin(3/4.905), and lifting it to 3 rad needs more work than 3 N·m × 3 rad
+    dyn = armctl.Dynamics(armctl.models.pendulum())
+    with pytest.raises(InfeasibleError, match=r"joint 0 .*torque at s = .*gravity alone needs .*the limit is 3") as e:
+        time_optimal(dyn, LinePath([0.0], [3.0]), torque_limit=3.0)
+    v = e.value.value
+    q = 3.0 * v["s"]
+    assert math.asin(3 / PENDULUM_GRAVITY) <= q <= math.pi - math.asin(3 / PENDULUM_GRAVITY)
+    assert v["gravity"] == pytest.approx(PENDULUM_GRAVITY * math.sin(q), rel=1e-9)
+    assert v["limit"] == 3.0 and v["constraint"] == "torque" and v["joint"] == 0
+
+
+def test_panda_infeasibility_names_the_joint() -> None:
+    limits = np.array([87, 20, 87, 87, 12, 12, 12.0])
+    with pytest.raises(InfeasibleError, match=r"panda_joint2.*gravity alone needs") as e:
+        time_optimal(panda(), PANDA_WAYPOINTS, torque_limit=limits)
+    assert e.value.value["joint"] == 1
+    assert abs(e.value.value["gravity"]) > 20
+    assert e.value.problem is not None
+
+
+def test_toppra_failures_do_not_pass_silently(monkeypatch: pytest.MonkeyPatch) -> None:
+    real = toppra_adapter.run_toppra
+    dyn = panda()
+
+    def forward_fails(*args, **kwargs):
+        out = real(*args, **kwargs)
+        x = out.x.copy()
+        x[40:] = np.nan
+        return toppra_adapter.ToppraOutput("ErrUnknown", x, out.K)
+
+    monkeypatch.setattr(toppra_adapter, "run_toppra", forward_fails)
+    with pytest.raises(SolverError, match="forward pass failed"):
+        time_optimal(dyn, PANDA_WAYPOINTS, torque_limit="model")
+
+    def spurious_uncontrollable(*args, **kwargs):  # toppra issues #14/#17: NaN sets on a feasible problem
+        out = real(*args, **kwargs)
+        K = out.K.copy()
+        K[30] = np.nan
+        return toppra_adapter.ToppraOutput("FailUncontrollable", None, K)
+
+    monkeypatch.setattr(toppra_adapter, "run_toppra", spurious_uncontrollable)
+    with pytest.raises(SolverError, match="numerical failure"):
+        time_optimal(dyn, PANDA_WAYPOINTS, torque_limit="model")
+
+    def overshoot(*args, **kwargs):  # a profile beyond its own velocity bound
+        out = real(*args, **kwargs)
+        return toppra_adapter.ToppraOutput("Ok", out.x * 1.5, out.K)
+
+    monkeypatch.setattr(toppra_adapter, "run_toppra", overshoot)
+    with pytest.raises(SolverError, match="outside its own bounds"):
+        time_optimal(dyn, PANDA_WAYPOINTS, vel_limit="model")
