@@ -1,0 +1,22 @@
+"""Standard closed-loop scenes, each modelling no more than it needs: ``pendulum``, ``planar_2r``,
+``panda_topp``, ``panda_contact``. ``scene(name)`` builds one; ``SCENES`` lists them."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from armctl.errors import UnknownNameError
+from armctl.scenes.base import JOINT_METHODS, Scene
+from armctl.scenes.joint_scenes import pendulum, planar_2r
+from armctl.scenes.panda_topp import panda_topp
+
+SCENES: dict[str, Callable[[], Scene]] = {"pendulum": pendulum, "planar_2r": planar_2r, "panda_topp": panda_topp}
+
+
+def scene(name: str) -> Scene:
+    if name not in SCENES:
+        raise UnknownNameError("scene", name, tuple(SCENES))
+    return SCENES[name]()
+
+
+__all__ = ["JOINT_METHODS", "SCENES", "Scene", "panda_topp", "pendulum", "planar_2r", "scene"]

@@ -1,0 +1,33 @@
+"""The joint-space scenes: ``pendulum`` and ``planar_2r``."""
+
+from __future__ import annotations
+
+from armctl.model import library
+from armctl.references import Quintic, Sinusoid
+from armctl.scenes.base import Scene
+
+
+def pendulum() -> Scene:
+    """The geared single joint swinging through a minimum-jerk move and back. The plant has viscous and
+    Coulomb friction with stiction; the exact model knows the friction (kinetic part), the reduced one
+    drops rotor and friction — what a controller tuned on the link alone believes."""
+    plant = library.pendulum().with_friction(viscous=0.05, coulomb=0.3, static=0.45)
+    move = Quintic([0.0], [1.2], 1.5, t0=0.2)
+    back = Quintic([1.2], [0.0], 1.5, t0=2.2)
+
+    def reference(t: float):  # type: ignore[no-untyped-def]
+        return move(t) if t < 2.2 else back(t)
+
+    return Scene("pendulum", "geared single joint: out-and-back minimum-jerk move with stick–slip friction",
+                 plant=plant, exact=plant, reduced=plant.reduced(rotors=False, friction=False),
+                 reference=reference, duration=4.0)
+
+
+def planar_2r(payload: float = 10.0) -> Scene:
+    """Siciliano's two-link arm tracking sinusoids while carrying a ``payload`` [kg] at the tool that only the
+    exact model knows; the reduced model is the nominal arm without it."""
+    nominal = library.planar_2r()
+    plant = nominal.with_payload(payload)
+    ref = Sinusoid([0.3, -0.4], [0.4, 0.5], [0.5, 0.7])
+    return Scene("planar_2r", f"two-link arm tracking sinusoids with an unknown {payload:g} kg payload",
+                 plant=plant, exact=plant, reduced=nominal, reference=ref, duration=5.0)
