@@ -13,6 +13,7 @@ length everywhere), and :class:`LinePath`, a straight line between two configura
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from bisect import bisect_right
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -59,6 +60,11 @@ class Path(ABC):
         """(q, q', q'') at the parameters s (m,), each (m, n)."""
         ss = self._params(s).reshape(-1)
         return self._derivatives(ss, 0), self._derivatives(ss, 1), self._derivatives(ss, 2)
+
+    def at(self, s: float) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """(q, q', q'') at one parameter s ∈ [0, 1], each (n,) — :meth:`derivatives` for a control loop's rate."""
+        q, dq, ddq = self.derivatives(np.array([s]))
+        return q[0], dq[0], ddq[0]
 
     @staticmethod
     def _params(s: ArrayLike) -> FloatArray:
@@ -122,6 +128,8 @@ class SplinePath(Path):
         self._knots = readonly(s)
         self._splines = [CubicSpline(s, w, bc_type=bc_type)]
         self._splines += [self._splines[0].derivative(k) for k in (1, 2)]
+        self._knot_list = s.tolist()
+        self._coeffs = [tuple(self._splines[0].c[:, k, :]) for k in range(s.shape[0] - 1)]
 
     @property
     def breakpoints(self) -> FloatArray:
@@ -129,6 +137,17 @@ class SplinePath(Path):
 
     def _derivatives(self, s: FloatArray, order: int) -> FloatArray:
         return self._splines[order](s)  # type: ignore[no-any-return]
+
+    def at(self, s: float) -> tuple[FloatArray, FloatArray, FloatArray]:
+        # the cubic piece q = c₀d³ + c₁d² + c₂d + c₃, d = s − s_k, evaluated directly (no scipy call)
+        s = float(s)
+        if not 0.0 <= s <= 1.0:
+            return super().at(s)  # raises with the message
+        knots = self._knot_list
+        k = min(max(bisect_right(knots, s) - 1, 0), len(knots) - 2)
+        d = s - knots[k]
+        c0, c1, c2, c3 = self._coeffs[k]
+        return (((c0 * d + c1) * d + c2) * d + c3, (3.0 * c0 * d + 2.0 * c1) * d + c2, 6.0 * c0 * d + 2.0 * c1)
 
 
 class LinePath(Path):
@@ -154,6 +173,12 @@ class LinePath(Path):
         if order == 1:
             return np.repeat(self.delta[None, :], s.shape[0], axis=0)
         return np.zeros((s.shape[0], self.n))
+
+    def at(self, s: float) -> tuple[FloatArray, FloatArray, FloatArray]:
+        s = float(s)
+        if not 0.0 <= s <= 1.0:
+            return super().at(s)
+        return self.start + s * self.delta, self.delta.copy(), np.zeros(self.n)
 
 
 def as_path(path_or_waypoints: Path | ArrayLike, n: int | None = None) -> Path:

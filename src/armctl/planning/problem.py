@@ -22,8 +22,10 @@ Friction, exactly where it can be and conservatively where it cannot:
   (:meth:`TimeScalingProblem.linearized`). x₀ comes from a previous pass (see
   :func:`~armctl.planning.topp.solve_problem`). Every pass over-estimates the viscous torque: never optimistic.
 
-Every constraint is stored as a row  a_r u + b_r x + c_r + w_r √x ≤ g_r  (w_r ≥ 0) at every gridpoint, plus
-0 ≤ x ≤ x_max(s) from the velocity limits: lower_j ≤ q'_j ṡ ≤ upper_j.
+Every constraint is stored as a row  a_r u + b_r x + c_r + w_r √x ≤ g_r  (w_r ≥ 0) at every gridpoint
+(acceleration rows: a = ±q', b = ±q'', c = w = 0), plus 0 ≤ x ≤ x_max(s) from the velocity limits
+lower_j ≤ q'_j ṡ ≤ upper_j, tightened so that they hold on whole stages, not only at gridpoints
+(:func:`velocity_bound`).
 """
 
 from __future__ import annotations

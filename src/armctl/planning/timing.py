@@ -3,7 +3,9 @@ rest-to-rest motion on [0, T]: before 0 the path waits at s = 0, after T at s = 
 
 from __future__ import annotations
 
+import math
 from abc import ABC, abstractmethod
+from bisect import bisect_right
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -41,6 +43,19 @@ class Timing(ABC):
         shape = tt.shape
         return s.reshape(shape), sd.reshape(shape), sdd.reshape(shape)
 
+    def at(self, t: float) -> tuple[float, float, float]:
+        """(s, ṡ, s̈) at one time t [s] (as :meth:`evaluate`, for a control loop's rate)."""
+        t = float(t)
+        if not math.isfinite(t):
+            raise NonFiniteError(f"t must be finite, got {t}", value=t)
+        if t < 0.0 or t > self.duration:
+            return (0.0 if t < 0.0 else 1.0), 0.0, 0.0
+        return self._at(t)
+
+    def _at(self, t: float) -> tuple[float, float, float]:
+        s, sd, sdd = self._evaluate(np.array([t]))
+        return float(s[0]), float(sd[0]), float(sdd[0])
+
 
 class GridTiming(Timing):
     """The TOPP-RA timing: x = ṡ² given at gridpoints s_i, s̈ = u_i constant over each stage [s_i, s_{i+1}]:
@@ -71,6 +86,7 @@ class GridTiming(Timing):
         self.s, self.x, self.sd = readonly(ss), readonly(xx), readonly(sd)
         self.u = readonly((xx[1:] - xx[:-1]) / (2.0 * delta))
         self.t = readonly(np.concatenate(([0.0], np.cumsum(2.0 * delta / speed))))
+        self._lists = (self.t.tolist(), self.s.tolist(), self.sd.tolist(), self.u.tolist())
 
     @property
     def duration(self) -> float:
@@ -83,6 +99,14 @@ class GridTiming(Timing):
         s = np.clip(self.s[i] + self.sd[i] * tau + 0.5 * u * tau**2, self.s[i], self.s[i + 1])
         sd = np.maximum(self.sd[i] + u * tau, 0.0)
         return s, sd, u
+
+    def _at(self, t: float) -> tuple[float, float, float]:
+        ts, ss, sds, us = self._lists
+        i = min(max(bisect_right(ts, t) - 1, 0), len(us) - 1)
+        tau = min(max(t - ts[i], 0.0), ts[i + 1] - ts[i])
+        u = us[i]
+        s = min(max(ss[i] + sds[i] * tau + 0.5 * u * tau * tau, ss[i]), ss[i + 1])
+        return s, max(sds[i] + u * tau, 0.0), u
 
 
 class PolynomialTiming(Timing):
@@ -103,6 +127,12 @@ class PolynomialTiming(Timing):
         sdd = 60.0 * r * (1.0 - r) * (1.0 - 2.0 * r) / T**2
         return s, sd, sdd
 
+    def _at(self, t: float) -> tuple[float, float, float]:
+        T = self._duration
+        r = t / T
+        return (r**3 * (10.0 - 15.0 * r + 6.0 * r**2), 30.0 * r**2 * (1.0 - r) ** 2 / T,
+                60.0 * r * (1.0 - r) * (1.0 - 2.0 * r) / T**2)
+
 
 class ScaledTiming(Timing):
     """``base`` slowed down uniformly by ``factor`` r > 0 (r < 1 speeds it up): s_r(t) = s(t/r), so
@@ -122,3 +152,8 @@ class ScaledTiming(Timing):
         r = self.factor
         s, sd, sdd = self.base._evaluate(np.minimum(t / r, self.base.duration))
         return s, sd / r, sdd / r**2
+
+    def _at(self, t: float) -> tuple[float, float, float]:
+        r = self.factor
+        s, sd, sdd = self.base._at(min(t / r, self.base.duration))
+        return s, sd / r, sdd / (r * r)

@@ -8,6 +8,21 @@ refined (doubled) and the problem solved again, and if that does not help a
 :class:`~armctl.errors.SolverError` is raised — a violating result never reaches the caller silently.
 Infeasible problems raise :class:`~armctl.errors.InfeasibleError` naming the binding constraint and where it
 binds (:mod:`~armctl.planning.infeasibility`).
+
+toppra's known failure modes (its issue tracker) and what happens to each here:
+
+* the default ``ParametrizeSpline`` output overshoots the limits between gridpoints (#41, #56, #150): not used;
+  the output is :class:`~armctl.planning.timing.GridTiming`, TOPP-RA's own constant-s̈ model;
+* a failed solve returns None with a log warning (#26): return codes are read and turned into
+  :class:`~armctl.errors.InfeasibleError` (a real infeasibility) or :class:`~armctl.errors.SolverError`;
+* NaN controllable sets on feasible problems, forward-pass failures (#14, #17, #226): the failing stage is
+  re-solved as a small LP; if it is feasible the error says the failure was numerical;
+* velocity bounds imposed at gridpoints only are exceeded between them on curved paths (several %): the bound
+  is tightened by its sag over each stage (:func:`~armctl.planning.problem.velocity_bound`);
+* paths with q'(s) = 0 inside give unbounded path velocities (#104): refused with the place;
+* a stage crossed at zero speed would take "5 s" in toppra's parametrizer: refused (:class:`GridTiming`);
+* every profile is checked (finite, ≥ 0, within its velocity bound, at rest at both ends) and every trajectory
+  densely re-verified with the full inverse dynamics.
 """
 
 from __future__ import annotations

@@ -73,9 +73,9 @@ class Trajectory:
         return f"Trajectory(n={self.n}, duration={self.duration:.4g} s, path={self.path!r})"
 
     def __call__(self, t: float) -> Reference:
-        s, sd, sdd = self.timing.evaluate(scalar(t, "t"))
-        q, dq, ddq = self.path.derivatives(s)
-        return Reference(q[0], dq[0] * sd, dq[0] * sdd + ddq[0] * sd * sd)
+        s, sd, sdd = self.timing.at(scalar(t, "t"))
+        q, dq, ddq = self.path.at(s)
+        return Reference(q, dq * sd, dq * sdd + ddq * (sd * sd))
 
     def sample(self, t: ArrayLike | None = None, *, dt: float | None = None, num: int | None = None) -> Samples:
         """The trajectory at times ``t`` (a vector [s]), or on [0, T] every ``dt`` [s] (T included), or at
