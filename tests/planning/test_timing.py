@@ -67,3 +67,21 @@ def test_polynomial_and_scaled_timings() -> None:
 def test_a_stage_at_rest_is_refused() -> None:
     with pytest.raises(SolverError, match="zero on the whole stage"):
         GridTiming([0.0, 0.5, 0.6, 1.0], [0.0, 0.0, 1.0, 0.0])
+
+
+def test_scalar_evaluation_equals_the_vectorised_one() -> None:
+    from armctl.planning import LinePath, SplinePath, Trajectory
+    from tests.planning._common import PANDA_WAYPOINTS
+
+    grid = GridTiming(np.linspace(0, 1, 11), np.r_[0.0, np.linspace(0.5, 2.0, 9), 0.0])
+    for timing in (grid, PolynomialTiming(2.0), ScaledTiming(grid, 0.7)):
+        t = np.linspace(-0.5, timing.duration + 0.5, 97)
+        np.testing.assert_allclose(np.array([timing.at(x) for x in t]).T, timing.evaluate(t), atol=1e-13)
+        for path in (SplinePath(PANDA_WAYPOINTS), LinePath(PANDA_WAYPOINTS[0], PANDA_WAYPOINTS[1])):
+            traj = Trajectory(path, timing)
+            smp = traj.sample(t)
+            for k in range(0, 97, 8):
+                ref = traj(t[k])
+                np.testing.assert_allclose(ref.q, smp.q[k], atol=1e-12)
+                np.testing.assert_allclose(ref.qd, smp.qd[k], atol=1e-12)
+                np.testing.assert_allclose(ref.qdd, smp.qdd[k], atol=1e-11)

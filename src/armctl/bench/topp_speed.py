@@ -8,7 +8,9 @@ armctl's call does more — it builds the constraints from its Dynamics (frictio
 inputs, verifies the result on 10 samples per stage with the full inverse dynamics — and the target is a ratio
 ≤ 1.2. Rounds alternate between the two so that a noisy shared machine slows both alike; medians are reported.
 
-Run: ``python -m armctl.bench.topp_speed [--rounds R] [--number K]``.
+Run: ``python -m armctl.bench.topp_speed [--rounds R] [--number K] [--chart PATH]``; with ``--chart`` it also
+writes the grid-convergence chart (duration error against the analytic bang-bang duration, and compute time,
+against the grid size) of a straight-line panda move with velocity and acceleration limits.
 """
 
 from __future__ import annotations
@@ -84,12 +86,30 @@ def measure(rounds: int = 15, number: int = 5, grid: int = 100) -> dict[str, flo
             "duration_armctl": wrapped(), "duration_toppra": direct()}
 
 
+def convergence_chart(path: str) -> Any:
+    """Write the grid-convergence chart to ``path`` and return the study."""
+    import armctl
+    from armctl.planning import grid_convergence, plot_convergence
+
+    dyn = armctl.Dynamics(armctl.models.panda())
+    end = np.array([1.0, -0.5, 0.3, 0.2, 1.0, 0.5, -0.7])
+    study = grid_convergence(dyn, np.zeros(7), end, 1.0, 2.3, grids=(10, 20, 50, 100, 200, 500, 1000, 2000))
+    plot_convergence(study).savefig(path, dpi=120)
+    return study
+
+
 def main(argv: list[str] | None = None) -> dict[str, float]:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--rounds", type=int, default=15)
     p.add_argument("--number", type=int, default=5)
     p.add_argument("--grid", type=int, default=100)
+    p.add_argument("--chart", default=None, help="also write the grid-convergence chart (PNG) here")
     args = p.parse_args(argv)
+    if args.chart:
+        study = convergence_chart(args.chart)
+        print(f"grid convergence (bang-bang T = {study.reference:.6f} s), chart in {args.chart}")
+        for n, err, t in zip(study.grids, study.errors, study.compute_times, strict=True):
+            print(f"  N = {int(n):5d}   |T_N - T|/T = {err:.2e}   {1e3 * t:7.2f} ms")
     r = measure(args.rounds, args.number, args.grid)
     print(f"panda, 6 waypoints, {args.grid} grid intervals, velocity + torque limits "
           f"(median of {args.rounds} rounds x {args.number} calls)")

@@ -8,7 +8,9 @@ bang-bang one:
     T = 1/V + V/A         otherwise (a trapezoid).
 
 :func:`grid_convergence` solves the same move on grids of increasing size and records the duration error and
-the compute time; :func:`plot_convergence` draws both (matplotlib is imported there only).
+the compute time; :func:`plot_convergence` draws both (matplotlib is imported there only). The error falls
+until about 1e-6 and stays there: toppra's forward pass shaves every x_{i+1} by max(1e-8, 0.01 %) to keep it
+inside the controllable set, which sets that floor.
 """
 
 from __future__ import annotations
