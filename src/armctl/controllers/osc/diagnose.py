@@ -24,9 +24,10 @@ _EPS = 1e-7  # regularisation of the elastic program
 _BIG = 1e20
 
 
-def conflicting_rows(p: QPProblem, tol: float = 1e-6) -> dict[str, float]:
+def conflicting_rows(p: QPProblem, tol: float = 1e-6) -> dict[str, float] | None:
     """Rows of ``p`` that conflict, name → how much the row must be relaxed (0 for a row that binds the
-    conflict without being relaxed itself). Empty if ``p`` is feasible."""
+    conflict without being relaxed itself). Empty if ``p`` is feasible; None if the elastic program could not
+    be solved either (no diagnosis)."""
     from proxsuite import proxqp
 
     nx, me, mi = p.nx, p.b.shape[0], p.l.shape[0]
@@ -54,8 +55,11 @@ def conflicting_rows(p: QPProblem, tol: float = 1e-6) -> dict[str, float]:
     qp.settings.eps_abs = 1e-10
     qp.settings.eps_rel = 0.0
     qp.settings.max_iter = 20000
+    qp.settings.default_rho = 1e-8
     qp.init(H, g, A, p.b, C, lo, up)
     qp.solve()
+    if qp.results.info.status != proxqp.QPSolverOutput.PROXQP_SOLVED:
+        return None
     x, y, z = qp.results.x, qp.results.y, qp.results.z
     out: dict[str, float] = {}
     s = x[nx:]
@@ -75,6 +79,10 @@ def conflicting_rows(p: QPProblem, tol: float = 1e-6) -> dict[str, float]:
 def raise_failure(p: QPProblem, solver: str, status: str, result: Any) -> NoReturn:
     """Raise InfeasibleError (with the conflicting rows) or SolverError for a failed solve of ``p``."""
     rows = conflicting_rows(p)
+    if rows is None:
+        raise SolverError(f"{solver} failed on the QP of priority level {p.level} ({status}) and so did the "
+                          "elastic program that looks for conflicting rows; the problem is likely badly scaled "
+                          "(check gains, weights and limits)", value=status, problem=p, result=result)
     if rows:
         shown = ", ".join(f"{k} (relax by {v:.4g})" if v > 0 else k for k, v in rows.items())
         raise InfeasibleError(

@@ -32,16 +32,19 @@ class QPSolution:
 
 class ProxQPSolver:
     """proxsuite.proxqp.dense, one QP object per (slot, problem shape) so that each priority level is
-    warm-started from its own previous solution. ``eps_abs``: absolute tolerance of the residuals."""
+    warm-started from its own previous solution. ``eps_abs``: absolute tolerance of the residuals (primal in
+    N·m and rad/s², dual in the cost's units); ``rho``: ProxQP's proximal parameter (small values converge
+    faster on the degenerate QPs met near singular configurations)."""
 
     name = "proxsuite"
 
-    def __init__(self, eps_abs: float = 1e-8, max_iter: int = 1000) -> None:
+    def __init__(self, eps_abs: float = 1e-6, max_iter: int = 5000, rho: float = 1e-8) -> None:
         from proxsuite import proxqp
 
         self._proxqp = proxqp
         self.eps_abs = scalar(eps_abs, "eps_abs", positive=True)
         self.max_iter = int(max_iter)
+        self.rho = scalar(rho, "rho", positive=True)
         self._qps: dict[tuple[int, int, int, int], Any] = {}
         self._cl: dict[tuple[int, int, int, int], tuple[FloatArray, FloatArray, FloatArray]] = {}
         self._solved = proxqp.QPSolverOutput.PROXQP_SOLVED
@@ -67,6 +70,7 @@ class ProxQPSolver:
             qp.settings.eps_abs = self.eps_abs
             qp.settings.eps_rel = 0.0
             qp.settings.max_iter = self.max_iter
+            qp.settings.default_rho = self.rho
             qp.settings.initial_guess = px.InitialGuess.EQUALITY_CONSTRAINED_INITIAL_GUESS
             qp.init(H, g, A, b, C, l, u)
             qp.solve()
