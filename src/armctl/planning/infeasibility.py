@@ -91,6 +91,7 @@ def _message(problem: TimeScalingProblem, label: RowLabel, p: int, need: float) 
         value.update(gravity=grav, coulomb=fric)
         beyond = static > bound if label.side == "upper" else static < bound
         if beyond:
+            value["needed"] = static
             what = "gravity alone needs" if fric == 0 else f"gravity and Coulomb friction alone need ({fric:+.3g})"
             return f"{head}: {what} {static:.4g} N·m, {limit_txt}", value
         return (f"{head}: following the path needs at least {need:.4g} N·m there (gravity {grav:.4g} N·m), "
