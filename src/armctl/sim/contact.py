@@ -56,6 +56,50 @@ def point_kinematics(dyn: Dynamics, q: FloatArray, point: ContactPoint) -> tuple
     return pose[:3, 3] + r, jac[:3] - _skew(r) @ jac[3:]
 
 
+class PointKinematics:
+    """:func:`point_kinematics` of a fixed set of points for one Dynamics, one frame evaluation per frame
+    (straight through Pinocchio for the ``"pinocchio"`` backend)."""
+
+    def __init__(self, dyn: Dynamics, points: Sequence[ContactPoint]) -> None:
+        self.dyn = dyn
+        self.points = tuple(points)
+        self.frames = list(dict.fromkeys(p.frame for p in self.points))
+        self._slot = [self.frames.index(p.frame) for p in self.points]
+        #: 1-based joint each point rides on (0: the world)
+        self.joints = np.array([dyn.model.frame(p.frame).joint for p in self.points])
+        self._pin = None
+        if getattr(dyn, "backend", "") == "pinocchio":
+            import pinocchio as pin
+
+            ids = [dyn._frame_id(f) for f in self.frames]  # type: ignore[attr-defined]
+            if all(i != 0 for i in ids):
+                self._pin = (pin.computeFrameJacobian, dyn.pin_model, dyn.pin_data, ids,  # type: ignore[attr-defined]
+                             pin.LOCAL_WORLD_ALIGNED)
+
+    def __call__(self, q: FloatArray) -> list[tuple[FloatArray, FloatArray]]:
+        """[(p, J_p)] for every point at configuration q."""
+        frames = []
+        if self._pin is not None:
+            jac_fn, pm, pd, ids, rf = self._pin
+            for fid in ids:
+                jac = jac_fn(pm, pd, q, fid, rf).reshape(6, -1)
+                oMf = pd.oMf[fid]
+                frames.append((oMf.translation, oMf.rotation, jac))
+        else:
+            for f in self.frames:
+                pose = self.dyn.frame_pose(q, f)
+                frames.append((pose[:3, 3], pose[:3, :3], self.dyn._jacobian(q, f)))
+        out = []
+        for point, slot in zip(self.points, self._slot, strict=True):
+            origin, rot, jac = frames[slot]
+            if not point.offset.any():
+                out.append((origin, jac[:3]))
+                continue
+            r = rot @ point.offset
+            out.append((origin + r, jac[:3] - _skew(r) @ jac[3:]))
+        return out
+
+
 class Environment(ABC):
     """Something the arm touches. ``points``: the contact points it acts on."""
 
@@ -66,16 +110,19 @@ class Environment(ABC):
         for p in self.points:
             model.frame(p.frame)
 
-    def joint_torque(self, dyn: Dynamics, q: FloatArray, qd: FloatArray, stiffness: bool = False
+    def kinematics(self, dyn: Dynamics) -> PointKinematics:
+        """The evaluator of this environment's points for ``dyn`` (build once, call at every step)."""
+        return PointKinematics(dyn, self.points)
+
+    def joint_torque(self, kin: PointKinematics, q: FloatArray, qd: FloatArray, stiffness: bool = False
                      ) -> tuple[FloatArray, FloatArray | None, FloatArray | None]:
         """(τ_c, K, D): τ_c = Σ J_pᵀ F_p, the joint torque of the forces on the arm (it is *added* to τ), and,
-        if ``stiffness``, K = ∂τ_c/∂q and D = ∂τ_c/∂q̇ (n×n)."""
-        n = dyn.n
+        if ``stiffness``, K = ∂τ_c/∂q and D = ∂τ_c/∂q̇ (n×n). ``kin``: :meth:`kinematics` of the plant."""
+        n = kin.dyn.n
         tau = np.zeros(n)
         kj = np.zeros((n, n)) if stiffness else None
         dj = np.zeros((n, n)) if stiffness else None
-        for point in self.points:
-            p, jp = point_kinematics(dyn, q, point)
+        for p, jp in kin(q):
             force, dfdp, dfdv = self.force(p, jp @ qd, stiffness)
             if force is None:
                 continue
@@ -85,11 +132,10 @@ class Environment(ABC):
                 dj += jp.T @ dfdv @ jp  # type: ignore[operator]
         return tau, kj, dj
 
-    def forces(self, dyn: Dynamics, q: FloatArray, qd: FloatArray) -> tuple[FloatArray, FloatArray]:
+    def forces(self, kin: PointKinematics, q: FloatArray, qd: FloatArray) -> tuple[FloatArray, FloatArray]:
         """(h, p): the force each point exerts *on the environment* h_p = −F_p [N] and its position [m], (P, 3)."""
         hs, ps = np.zeros((len(self.points), 3)), np.zeros((len(self.points), 3))
-        for i, point in enumerate(self.points):
-            p, jp = point_kinematics(dyn, q, point)
+        for i, (p, jp) in enumerate(kin(q)):
             force, _, _ = self.force(p, jp @ qd, False)
             ps[i] = p
             if force is not None:

@@ -47,6 +47,7 @@ class Plant:
         f = self.friction
         self.sticky: StickSlip | None = f if isinstance(f, StickSlip) and f.any_capable else None
         self.environments = tuple(environments)
+        self.kinematics = [env.kinematics(dyn) for env in self.environments]
         self.disturbance = disturbance
         self.has_external = bool(self.environments) or disturbance is not None
         #: no friction, no contact, no disturbance: q̈ is Pinocchio's ABA of τ and work needs no quadrature
@@ -79,8 +80,8 @@ class Plant:
     def external(self, t: float, q: FloatArray, qd: FloatArray) -> FloatArray:
         """The external joint torque *added* to τ: Σ J_pᵀF_p − J_toolᵀh_d (F_p: contact force on the arm)."""
         tau = np.zeros(self.n)
-        for env in self.environments:
-            tau += env.joint_torque(self.dyn, q, qd)[0]
+        for env, kin in zip(self.environments, self.kinematics, strict=True):
+            tau += env.joint_torque(kin, q, qd)[0]
         if self.disturbance is not None:
             tau -= self.dyn._jacobian(q, None).T @ self.disturbance_wrench(t)
         return tau
@@ -90,8 +91,8 @@ class Plant:
         """(τ_e, K, D): :meth:`external` with its derivatives in q and q̇ (the disturbance taken as given)."""
         n = self.n
         tau, kj, dj = np.zeros(n), np.zeros((n, n)), np.zeros((n, n))
-        for env in self.environments:
-            te, ke, de = env.joint_torque(self.dyn, q, qd, stiffness=True)
+        for env, kin in zip(self.environments, self.kinematics, strict=True):
+            te, ke, de = env.joint_torque(kin, q, qd, stiffness=True)
             tau += te
             kj += ke  # type: ignore[operator]
             dj += de  # type: ignore[operator]

@@ -50,8 +50,8 @@ class Recorder:
         f, m = np.zeros(3), np.zeros(3)
         if self.points:
             forces, positions = [], []
-            for env in dict.fromkeys(e for e, _ in self.points):
-                h, p = env.forces(dyn, q, qd)
+            for env, kin in zip(plant.environments, plant.kinematics, strict=True):
+                h, p = env.forces(kin, q, qd)
                 forces.append(h)
                 positions.append(p)
             hs, ps = np.concatenate(forces), np.concatenate(positions)
@@ -59,7 +59,7 @@ class Recorder:
             f += hs.sum(axis=0)
             m += np.cross(ps - tool, hs).sum(axis=0)
             if self.sensors:
-                joints = np.array([dyn.model.frame(env.points[i].frame).joint for env, i in self.points])
+                joints = np.concatenate([kin.joints for kin in plant.kinematics])
                 for s, sensor in enumerate(self.sensors):
                     self.sensor[k, s] = sensor.reading(dyn, q, hs, ps, joints)
         if plant.disturbance is not None:
