@@ -5,7 +5,7 @@ Run: ``python -m armctl.bench.osc_speed [--quick]``.
 Set-up: pose task on the tool frame (weight 1) + posture task (weight 1e-3) + torque limits, one priority
 level; the x = [q̈, τ] QP has 14 variables, 7 equality and 7 inequality rows. A sequence of states is made by
 running the controller on its own model along a 10 cm circle (so the QPs change from step to step as in a
-real loop). Measured, as medians of interleaved rounds over that sequence:
+real loop). Measured, as medians of interleaved rounds over that sequence (CPU time of this process):
 
 * ``step``: ``controller(t, q, q̇, ref)`` — model terms, QP build, warm-started proxsuite solve, τ;
 * ``bare_solve``: proxsuite dense ``update`` + ``solve`` of the very same QPs (H, g, A, b, C, l, u), warm-started
@@ -21,12 +21,13 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import statistics
+import time
 from typing import Any
 
 import numpy as np
 
 import armctl
-from armctl.bench.timing import interleaved
 from armctl.controllers.osc import (
     ClosedFormOSC,
     FramePoseTask,
@@ -36,6 +37,23 @@ from armctl.controllers.osc import (
 )
 
 TARGET_RATIO = 4.0
+
+
+def interleaved(candidates: dict[str, Any], number: int, rounds: int) -> dict[str, float]:
+    """Median CPU seconds per call of each candidate over alternating rounds. CPU time (``process_time``)
+    rather than wall time: on a shared machine a long Python step is preempted more often than a short C++
+    solve, which would inflate their ratio."""
+    for fn in candidates.values():
+        for _ in range(max(1, number // 10)):
+            fn()
+    samples: dict[str, list[float]] = {k: [] for k in candidates}
+    for _ in range(rounds):
+        for name, fn in candidates.items():
+            t0 = time.process_time()
+            for _ in range(number):
+                fn()
+            samples[name].append((time.process_time() - t0) / number)
+    return {k: statistics.median(v) for k, v in samples.items()}
 Q_HOME = np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])
 
 

@@ -238,6 +238,11 @@ class QPBuilder:
         self._level_plans: dict[int, list[LevelPlan]] = {}
 
     def layout(self) -> Layout:
+        """The layout for the contacts active now."""
+        if not self.contacts:
+            lay = self._layouts.get(())
+            if lay is not None:
+                return lay
         active = tuple(c.name for c in self.contacts if c.active)
         lay = self._layouts.get(active)
         if lay is None:

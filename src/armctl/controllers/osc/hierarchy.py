@@ -42,10 +42,13 @@ class OSCSolution:
         self.x = x
         self.qdd = x[v["qdd"]]
         self.tau = x[v["tau"]]
-        self.forces = {c.name: x[v[c.name]] for c in step.layout.contacts}
+        self.forces = {c.name: x[v[c.name]] for c in step.layout.contacts} if step.layout.contacts else {}
         self.solutions = solutions
         #: solver iterations summed over the levels
-        self.iterations = sum(int(s.iterations) for s in solutions if s is not None)
+        self.iterations = 0
+        for s in solutions:
+            if s is not None:
+                self.iterations += s.iterations
         self.level_status = level_status
         self.slacks = slacks
         self._frozen = frozen

@@ -45,7 +45,10 @@ class FrameKinematics:
 
 class ModelState:
     """The model terms at (q, q̇): ``q``, ``qd``, ``mass`` M (n×n), ``bias`` h = C q̇ + g (n,) [N·m],
-    ``friction`` τ_f(q̇) (n,) [N·m]; :meth:`frame` gives :class:`FrameKinematics`, computed on first use."""
+    ``friction`` τ_f(q̇) (n,) [N·m]; :meth:`frame` gives :class:`FrameKinematics`, computed on first use.
+
+    With Pinocchio the arrays may be views of the evaluator's workspace: a state is valid until the next
+    :meth:`ModelEvaluator.evaluate` (the QP built from it copies what it keeps)."""
 
     __slots__ = ("_evaluator", "_frames", "bias", "friction", "mass", "q", "qd")
 
@@ -105,7 +108,7 @@ class ModelEvaluator:
             pd = self._pd
             self._pin.computeAllTerms(self._pm, pd, q, qd)
             self._pin.updateFramePlacements(self._pm, pd)
-            return ModelState(self, q, qd, pd.M.copy(), pd.nle.copy(), fr)
+            return ModelState(self, q, qd, pd.M, pd.nle, fr)  # views of the workspace (see ModelState)
         dyn = self.dynamics
         bias = dyn.coriolis_matrix(q, qd) @ qd + dyn.gravity_torque(q)
         return ModelState(self, q, qd, dyn.mass_matrix(q), bias, fr)
@@ -120,7 +123,7 @@ class ModelEvaluator:
             pose = pd.oMf[fid]
             jac = pin.getFrameJacobian(pm, pd, fid, self._lwa).reshape(6, self.n)
             drift = pin.getFrameClassicalAcceleration(pm, pd, fid, self._lwa).vector
-            return FrameKinematics(pose.translation.copy(), pose.rotation.copy(), jac, jac @ state.qd, drift)
+            return FrameKinematics(pose.translation, pose.rotation, jac, jac @ state.qd, drift)
         dyn = self.dynamics
         pose = dyn.frame_pose(state.q, name)
         jac = dyn.jacobian(state.q, name)

@@ -109,21 +109,34 @@ class MotionTask(Task):
 
     @abstractmethod
     def kinematics(self, state: ModelState, t: float, ref: Reference
-                   ) -> tuple[FloatArray | None, FloatArray, FloatArray, FloatArray, FloatArray]:
-        """(J, drift J̇q̇, error e, velocity error ė, feed-forward acceleration ẍ_ref); J None: identity."""
+                   ) -> tuple[FloatArray | None, FloatArray | None, FloatArray, FloatArray, FloatArray]:
+        """(J, drift J̇q̇, error e, velocity error ė, feed-forward acceleration ẍ_ref); J None: the identity,
+        drift None: zero. e and ė must be fresh arrays (the caller overwrites them)."""
+
+    def _pd(self, e: FloatArray, ed: FloatArray, acc: FloatArray) -> FloatArray:
+        """ẍ* = ẍ_ref + K_d ė + K_p e, computed in place in ``e``."""
+        kp, kd = self._kp, self._kd
+        if isinstance(kp, float) and isinstance(kd, float):
+            e *= kp
+            ed *= kd
+            e += ed
+            e += acc
+            return e
+        return acc + (kp @ e if np.ndim(kp) == 2 else kp * e) + (kd @ ed if np.ndim(kd) == 2 else kd * ed)
 
     def desired_acceleration(self, state: ModelState, t: float, ref: Reference
                              ) -> tuple[FloatArray | None, FloatArray, FloatArray]:
         """(J, J̇q̇, ẍ*) with ẍ* = ẍ_ref + K_d ė + K_p e."""
         jac, drift, e, ed, acc = self.kinematics(state, t, ref)
-        kp, kd = self._kp, self._kd
-        if isinstance(kp, float) and isinstance(kd, float):
-            return jac, drift, acc + kp * e + kd * ed
-        return jac, drift, acc + (kp @ e if np.ndim(kp) == 2 else kp * e) + (kd @ ed if np.ndim(kd) == 2 else kd * ed)
+        return jac, np.zeros(self.dim) if drift is None else drift, self._pd(e, ed, acc)
 
     def residual(self, state: ModelState, t: float, ref: Reference) -> tuple[FloatArray | None, FloatArray]:
-        jac, drift, xdd = self.desired_acceleration(state, t, ref)
-        return jac, xdd - drift
+        """(J, ẍ* − J̇q̇)."""
+        jac, drift, e, ed, acc = self.kinematics(state, t, ref)
+        rhs = self._pd(e, ed, acc)
+        if drift is not None:
+            rhs -= drift
+        return jac, rhs
 
     def error(self, state: ModelState, t: float, ref: Reference) -> FloatArray:
         """The task error e at this state (for logs and tests)."""

@@ -8,7 +8,6 @@ task rows.
 
 from __future__ import annotations
 
-import numpy as np
 from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray, vector
@@ -28,7 +27,6 @@ class PostureTask(MotionTask):
                  priority: int = 0, name: str = "posture") -> None:
         super().__init__(int(n), name, kp, kd, weight, priority)
         self._fixed: Reference | None = None
-        self._zeros = np.zeros(self.dim)
 
     def set_target(self, q: ArrayLike | None, qd: ArrayLike | None = None, qdd: ArrayLike | None = None) -> None:
         """Fix the target (q [rad], q̇, q̈); ``None`` goes back to following the controller's ``ref``."""
@@ -40,6 +38,6 @@ class PostureTask(MotionTask):
                              value=self.dim)
 
     def kinematics(self, state: ModelState, t: float, ref: Reference
-                   ) -> tuple[None, FloatArray, FloatArray, FloatArray, FloatArray]:
+                   ) -> tuple[None, None, FloatArray, FloatArray, FloatArray]:
         r = self._fixed or ref
-        return None, self._zeros, r.q - state.q, r.qd - state.qd, r.qdd  # type: ignore[return-value]
+        return None, None, r.q - state.q, r.qd - state.qd, r.qdd  # type: ignore[return-value]
