@@ -24,140 +24,14 @@ import numpy as np
 
 from armctl._checks import FloatArray
 from armctl.controllers.osc.contact import Contact
+from armctl.controllers.osc.layout import UPPER_REGULARIZATION_FACTOR, Layout
+from armctl.controllers.osc.levels import LevelPlan, LevelRows
 from armctl.controllers.osc.limits.base import Limit
 from armctl.controllers.osc.problem import QPProblem
 from armctl.controllers.osc.state import ModelState
 from armctl.controllers.osc.tasks.base import Task
 from armctl.model.robot import RobotModel
 from armctl.reference import Reference
-
-#: regularisation of the levels above the last, relative to ``regularization``
-UPPER_REGULARIZATION_FACTOR = 1e-4
-
-
-class Layout:
-    """Variable blocks and the constant parts (C, names) for one set of active contacts."""
-
-    def __init__(self, model: RobotModel, limits: Sequence[Limit], contacts: Sequence[Contact],
-                 regularization: float) -> None:
-        n = model.n
-        self.n = n
-        self.contacts = tuple(contacts)
-        self.variables: dict[str, slice] = {"qdd": slice(0, n), "tau": slice(n, 2 * n)}
-        col = 2 * n
-        for c in contacts:
-            self.variables[c.name] = slice(col, col + c.dim)
-            col += c.dim
-        self.nx = col
-        self.eq_names = tuple([f"dynamics[{j}]" for j in model.joint_names]
-                              + [nm for c in contacts for nm in c.eq_names])
-        rows: list[FloatArray] = []
-        names: list[str] = []
-        lo: list[FloatArray] = []
-        up: list[FloatArray] = []
-        for lim in limits:
-            blk = np.zeros((n, col))
-            blk[:, self.variables[lim.variable]] = np.eye(n)
-            rows.append(blk)
-            names += lim.row_names
-        for c in contacts:
-            cf, cl, cu, cn = c.cone_rows()
-            blk = np.zeros((cf.shape[0], col))
-            blk[:, self.variables[c.name]] = cf
-            rows.append(blk)
-            lo.append(cl)
-            up.append(cu)
-            names += cn
-        self.C = np.vstack(rows) if rows else np.zeros((0, col))
-        self.C.flags.writeable = False
-        self.ineq_names = tuple(names)
-        self.cone_l = np.concatenate(lo) if lo else np.zeros(0)
-        self.cone_u = np.concatenate(up) if up else np.zeros(0)
-        self.limits = tuple(limits)
-        self.regularization = np.full(col, regularization)
-        self.regularization.flags.writeable = False
-        self.reg_matrix = np.diag(self.regularization)
-        self.reg_matrix_upper = UPPER_REGULARIZATION_FACTOR * self.reg_matrix
-        # bounds that do not depend on the state (e.g. torque limits) are concatenated once
-        self.constant_bounds: tuple[FloatArray, FloatArray] | None = None
-        if all(lim.constant for lim in limits):
-            bounds = [lim.bounds(None) for lim in limits]  # type: ignore[arg-type]
-            self.constant_bounds = (np.concatenate([bd[0] for bd in bounds] + [self.cone_l]),
-                                    np.concatenate([bd[1] for bd in bounds] + [self.cone_u]))
-            for a in self.constant_bounds:
-                a.flags.writeable = False
-        # equation of motion: A = [M, −I, −J_cᵀ …]; the −I block is constant
-        self.A_template = np.zeros((len(self.eq_names), col))
-        self.A_template[:n, n:2 * n] = -np.eye(n)
-
-
-class LevelRows:
-    """Stacked task rows of one level: ``jr`` = [J | b] (m × (nx+1), unweighted), ``sqrt_w`` (m, 1) and the
-    per-task row slices; ``T``, ``t`` the weighted rows W^{1/2} J, W^{1/2} b."""
-
-    __slots__ = ("_Tt", "jr", "nx", "slices", "sqrt_w", "tasks")
-
-    def __init__(self, tasks: tuple[Task, ...], jr: FloatArray, sqrt_w: FloatArray, slices: dict[str, slice]
-                 ) -> None:
-        self.tasks = tasks
-        self.jr = jr
-        self.nx = jr.shape[1] - 1
-        self.sqrt_w = sqrt_w
-        self.slices = slices
-        self._Tt: FloatArray | None = None
-
-    @property
-    def Tt(self) -> FloatArray:
-        """[T | t] = W^{1/2} [J | b]."""
-        if self._Tt is None:
-            self._Tt = self.sqrt_w * self.jr
-        return self._Tt
-
-    @property
-    def T(self) -> FloatArray:
-        return self.Tt[:, : self.nx]
-
-    @property
-    def t(self) -> FloatArray:
-        return self.Tt[:, self.nx]
-
-    def residuals(self, x: FloatArray) -> dict[str, FloatArray]:
-        """Unweighted residual J_i x_i − b_i of every task of the level at ``x``."""
-        r = self.jr[:, : self.nx] @ x[: self.nx] - self.jr[:, self.nx]
-        return {name: r[s] for name, s in self.slices.items()}
-
-
-class LevelPlan:
-    """What does not change between steps for one level and one layout: its tasks, their rows and columns,
-    [J | b] with the identity blocks already in place, and the square-root weights."""
-
-    def __init__(self, tasks: tuple[Task, ...], lay: Layout) -> None:
-        self.tasks = tasks
-        m = sum(tk.dim for tk in tasks)
-        nx = lay.nx
-        self.template = np.zeros((m, nx + 1))
-        self.slices: dict[str, slice] = {}
-        self.entries: list[tuple[Task, slice, slice | None]] = []
-        r = 0
-        for tk in tasks:
-            rows, cols = slice(r, r + tk.dim), lay.variables[tk.variable]
-            if tk.identity_jacobian:
-                blk = self.template[rows, cols]
-                blk.flat[:: tk.dim + 1] = 1.0
-            self.slices[tk.name] = rows
-            self.entries.append((tk, rows, cols))
-            r += tk.dim
-        self.m = m
-        self.nx = nx
-        self.version = -1
-        self.sqrt_w = np.zeros((m, 1))
-
-    def weights(self) -> FloatArray:
-        if self.version != Task.weights_version:
-            self.sqrt_w = np.concatenate([tk.sqrt_weight for tk in self.tasks])[:, None] if self.tasks \
-                else np.zeros((0, 1))
-            self.version = Task.weights_version
-        return self.sqrt_w
 
 
 class StepQP:
