@@ -1,0 +1,162 @@
+"""Base (identifiable) parameters of an arm, found numerically.
+
+Not every entry of π (13 per joint) changes the joint torques: some columns of the regressor Y are zero
+(a link's mass on a joint that turns about the vertical) and others are linear combinations of the rest
+(a link's inertia about its joint axis lumps with the next link's mass times the squared link length). The
+*base parameters* θ are a minimal set of linear combinations of π with
+
+    Y(q, q̇, q̈) π = Y_b(q, q̇, q̈) θ,    θ = K π = π_b + β π_d    for every (q, q̇, q̈),
+
+where Y_b = Y[:, b] are the independent columns, π_b and π_d the parameters of the independent and
+dependent columns, and β the constant matrix with Y[:, d] = Y_b β.
+
+They are found by QR decomposition with column pivoting of the regressor stacked at random states
+(Gautier 1990): W = [Y(x_1); …; Y(x_S)] = Q R Pᵀ; the numerical rank r counts the |R_kk| above
+``tol·|R_00|``; the first r pivoted columns are independent and β = R_11⁻¹ R_12.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+
+from armctl._checks import FloatArray, readonly, scalar
+from armctl.dynamics.base import Dynamics
+from armctl.errors import InvalidParameterError
+from armctl.model.robot import PARAMS_PER_JOINT
+
+_BETA_ZERO = 1e-10  # entries of β below this (relative to the largest) are round-off
+
+
+@dataclass(frozen=True)
+class BaseParameters:
+    """The base parameters of an arm: which columns of Y are independent and how the others lump in.
+
+    independent: indices b into π of the r independent columns (θ_k is π_b[k] plus its lumped terms).
+    dependent: indices d of the other 13n − r columns. beta: (r, 13n − r) with Y[:, d] = Y[:, b] β.
+    names: (13n,) names of π's entries (``'m[2]'``, …). tol: the relative rank tolerance used.
+    """
+
+    independent: tuple[int, ...]
+    dependent: tuple[int, ...]
+    beta: FloatArray
+    names: tuple[str, ...]
+    tol: float
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "beta", readonly(np.array(self.beta, dtype=float)))
+
+    @property
+    def n_full(self) -> int:
+        """Number of entries of π (13 n)."""
+        return len(self.names)
+
+    @property
+    def n_base(self) -> int:
+        """Number r of base parameters."""
+        return len(self.independent)
+
+    @property
+    def map(self) -> FloatArray:
+        """K (r × 13n) with θ = K π: identity on the independent columns, β on the dependent ones."""
+        k = np.zeros((self.n_base, self.n_full))
+        k[:, list(self.independent)] = np.eye(self.n_base)
+        k[:, list(self.dependent)] = self.beta
+        return readonly(k)
+
+    @property
+    def null_space(self) -> FloatArray:
+        """(13n, 13n − r) basis N of the parameter changes that no torque can see: K N = 0, Y N = 0."""
+        out = np.zeros((self.n_full, len(self.dependent)))
+        out[list(self.independent), :] = -self.beta
+        out[list(self.dependent), :] = np.eye(len(self.dependent))
+        return readonly(out)
+
+    def project(self, pi: FloatArray) -> FloatArray:
+        """θ = K π: the base parameters of a full parameter vector π (13n,)."""
+        p = np.asarray(pi, dtype=float)
+        if p.shape != (self.n_full,):
+            raise InvalidParameterError(f"π must have shape ({self.n_full},), got {p.shape}", value=pi)
+        return self.map @ p
+
+    def columns(self, y: FloatArray) -> FloatArray:
+        """Y_b: the independent columns of a regressor Y (… × 13n)."""
+        return np.asarray(y)[..., list(self.independent)]
+
+    def base_names(self, digits: int = 4) -> tuple[str, ...]:
+        """A readable name for each base parameter, e.g. ``'Izz[1] + 0.1866 m[2] + Im_reflected[1]'``."""
+        out = []
+        for row, k in enumerate(self.independent):
+            terms = [self.names[k]]
+            for col, d in enumerate(self.dependent):
+                c = float(self.beta[row, col])
+                if c == 0.0:
+                    continue
+                mag = f"{abs(c):.{digits}g}"
+                coef = "" if mag == "1" else f"{mag} "
+                terms.append(f"{'+' if c > 0 else '-'} {coef}{self.names[d]}")
+            out.append(" ".join(terms))
+        return tuple(out)
+
+
+def random_states(dynamics: Dynamics, samples: int, rng: np.random.Generator) -> FloatArray:
+    """(samples, 3, n) random (q, q̇, q̈): q uniform within the joint limits (±π where a limit is infinite),
+    q̇ and q̈ standard normal [rad/s, rad/s²]."""
+    m = dynamics.model
+    lo = np.where(np.isfinite(m.lower), m.lower, -np.pi)
+    hi = np.where(np.isfinite(m.upper), m.upper, np.pi)
+    n = dynamics.n
+    q = lo + (hi - lo) * rng.random((samples, n))
+    return np.stack([q, rng.standard_normal((samples, n)), rng.standard_normal((samples, n))], axis=1)
+
+
+def find_base_parameters(dynamics: Dynamics, samples: int | None = None, seed: int = 0,
+                         tol: float = 1e-8) -> BaseParameters:
+    """The base parameters of ``dynamics``' arm, by pivoted QR of the regressor stacked at random states.
+
+    samples: number of random states S (default max(30, 4n)); the stacked W is (S n × 13n). seed: of the
+    random states. tol: relative rank tolerance on |R_kk| / |R_00|. The result depends only on the
+    kinematics (and on which columns exist), not on the inertial values of the model.
+    """
+    n, p = dynamics.n, PARAMS_PER_JOINT * dynamics.n
+    s = int(samples) if samples is not None else max(30, 4 * n)
+    if s * n < p:
+        raise InvalidParameterError(f"samples={s} gives {s * n} rows for {p} columns; use at least "
+                                    f"{-(-p // n)} samples", value=samples)
+    tol = scalar(tol, "tol", positive=True)
+    rng = np.random.default_rng(seed)
+    w = np.vstack([dynamics.regressor(*x) for x in random_states(dynamics, s, rng)])
+    _, r, perm = scipy.linalg.qr(w, mode="economic", pivoting=True)
+    diag = np.abs(np.diag(r))
+    rank = int(np.count_nonzero(diag > tol * max(diag[0], 1e-300)))
+    independent = _first_independent(w, rank, tol)
+    if independent is None:  # the greedy choice disagrees with the rank: keep the pivoted choice
+        independent = tuple(sorted(int(i) for i in perm[:rank]))
+    dependent = tuple(k for k in range(p) if k not in independent)
+    wb, wd = w[:, list(independent)], w[:, list(dependent)]
+    beta = np.linalg.lstsq(wb, wd, rcond=None)[0] if dependent else np.zeros((rank, 0))
+    beta[np.abs(beta) < _BETA_ZERO * max(1.0, float(np.abs(beta).max(initial=0.0)))] = 0.0
+    return BaseParameters(independent, dependent, beta, dynamics.model.parameter_names(), tol)
+
+
+def _first_independent(w: FloatArray, rank: int, tol: float) -> tuple[int, ...] | None:
+    """The first ``rank`` columns of ``w``, in order, each independent of those kept before it (Gram–Schmidt
+    with re-orthogonalisation on unit-norm columns), or None if that does not give exactly ``rank`` columns.
+
+    Taking columns in π's order gives the textbook lumping (a link's inertia about its axis keeps its name
+    and absorbs the next link's mass), where pivoting would pick whichever column is largest."""
+    norms = np.linalg.norm(w, axis=0)
+    basis = np.zeros((w.shape[0], 0))
+    kept: list[int] = []
+    for k in range(w.shape[1]):
+        if norms[k] <= tol * norms.max():
+            continue
+        v = w[:, k] / norms[k]
+        for _ in range(2):
+            v = v - basis @ (basis.T @ v)
+        if np.linalg.norm(v) > np.sqrt(tol):
+            basis = np.column_stack([basis, v / np.linalg.norm(v)])
+            kept.append(k)
+    return tuple(kept) if len(kept) == rank else None

@@ -1,0 +1,110 @@
+"""Excitation trajectories: a finite Fourier series per joint (Swevers et al. 1997).
+
+    q_i(t)  = q0_i + Σ_{l=1}^{N} [ a_il/(ω_f l) sin(ω_f l t) − b_il/(ω_f l) cos(ω_f l t) ]
+    q̇_i(t)  = Σ_l [ a_il cos(ω_f l t) + b_il sin(ω_f l t) ]
+    q̈_i(t)  = Σ_l ω_f l [ −a_il sin(ω_f l t) + b_il cos(ω_f l t) ]
+
+with ω_f = 2π / period. The trajectory is periodic, so measurements can be averaged over periods and
+filtered without transients, and its spectrum is known (N ω_f), so the filters of the data pipeline can be
+placed above it. :func:`optimize_excitation` chooses the coefficients; this file only evaluates them.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from armctl._checks import FloatArray, readonly
+from armctl.errors import InvalidParameterError, ShapeError
+from armctl.reference import Reference
+
+
+@dataclass(frozen=True)
+class FourierExcitation:
+    """A periodic joint trajectory, a finite Fourier series per joint.
+
+    q0: (n,) offsets [rad]. a, b: (n, N) coefficients of the velocity's cosine and sine terms [rad/s].
+    period: T_f = 2π/ω_f [s].
+    """
+
+    q0: FloatArray
+    a: FloatArray
+    b: FloatArray
+    period: float
+
+    def __post_init__(self) -> None:
+        q0 = np.array(self.q0, dtype=float).reshape(-1)
+        a, b = np.array(self.a, dtype=float), np.array(self.b, dtype=float)
+        if a.ndim != 2 or a.shape != b.shape or a.shape[0] != q0.shape[0] or a.shape[1] < 1:
+            raise ShapeError(f"a and b must both be (n, N) with n = len(q0) = {q0.shape[0]} and N >= 1; got "
+                             f"{a.shape} and {b.shape}", value=(self.a, self.b))
+        if not (np.isfinite(q0).all() and np.isfinite(a).all() and np.isfinite(b).all()):
+            raise InvalidParameterError("Fourier coefficients must be finite", value=(self.q0, self.a, self.b))
+        period = float(self.period)
+        if not (math.isfinite(period) and period > 0):
+            raise InvalidParameterError(f"period must be > 0 s, got {self.period!r}", value=self.period)
+        object.__setattr__(self, "q0", readonly(q0))
+        object.__setattr__(self, "a", readonly(a))
+        object.__setattr__(self, "b", readonly(b))
+        object.__setattr__(self, "period", period)
+
+    @property
+    def n(self) -> int:
+        return int(self.q0.shape[0])
+
+    @property
+    def harmonics(self) -> int:
+        """Number N of harmonics."""
+        return int(self.a.shape[1])
+
+    @property
+    def omega(self) -> float:
+        """Fundamental frequency ω_f [rad/s]."""
+        return 2.0 * math.pi / self.period
+
+    @property
+    def bandwidth(self) -> float:
+        """Highest frequency in the trajectory, N ω_f / 2π [Hz]."""
+        return self.harmonics / self.period
+
+    def evaluate(self, t: ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """(q, q̇, q̈) at times ``t`` [s]: each (len(t), n), or (n,) for a scalar t."""
+        tt = np.asarray(t, dtype=float)
+        scalar_t = tt.ndim == 0
+        tt = tt.reshape(-1)
+        wl = self.omega * np.arange(1, self.harmonics + 1)  # (N,)
+        phase = np.outer(tt, wl)  # (S, N)
+        s, c = np.sin(phase), np.cos(phase)
+        q = self.q0 + (s / wl) @ self.a.T - (c / wl) @ self.b.T
+        qd = c @ self.a.T + s @ self.b.T
+        qdd = (-s * wl) @ self.a.T + (c * wl) @ self.b.T
+        if scalar_t:
+            return q[0], qd[0], qdd[0]
+        return q, qd, qdd
+
+    def __call__(self, t: float) -> Reference:
+        """The trajectory at time ``t`` [s] as a :class:`~armctl.Reference` (usable by ``simulate``)."""
+        q, qd, qdd = self.evaluate(float(t))
+        return Reference(q, qd, qdd)
+
+    def extremes(self, samples_per_period: int = 2000) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        """(min q, max q, max |q̇|, max |q̈|) per joint over one period, on a dense grid."""
+        t = np.linspace(0.0, self.period, samples_per_period, endpoint=False)
+        q, qd, qdd = self.evaluate(t)
+        return q.min(axis=0), q.max(axis=0), np.abs(qd).max(axis=0), np.abs(qdd).max(axis=0)
+
+    def scaled(self, factor: ArrayLike) -> FourierExcitation:
+        """The same trajectory with each joint's motion about q0 scaled by ``factor`` (scalar or (n,))."""
+        f = np.broadcast_to(np.asarray(factor, dtype=float), (self.n,))[:, None]
+        return FourierExcitation(self.q0, self.a * f, self.b * f, self.period)
+
+    def within(self, lower: ArrayLike, upper: ArrayLike, velocity: ArrayLike, acceleration: ArrayLike,
+               tol: float = 1e-9) -> bool:
+        """True if the trajectory stays within the position, velocity [rad/s] and acceleration [rad/s²]
+        limits (checked on a dense grid)."""
+        qmin, qmax, vmax, amax = self.extremes()
+        return bool(np.all(qmin >= np.asarray(lower) - tol) and np.all(qmax <= np.asarray(upper) + tol)
+                    and np.all(vmax <= np.asarray(velocity) + tol) and np.all(amax <= np.asarray(acceleration) + tol))

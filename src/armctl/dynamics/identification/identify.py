@@ -1,0 +1,157 @@
+"""`identify`: the whole offline identification of an arm, and its named results.
+
+    data ──► build_problem (W θ = y on the base parameters) ──► solve_least_squares (OLS / WLS, σ_θ)
+                                                          └──► consistent_estimate (full π, a RobotModel)
+
+``identify(model, data)`` runs the chain; the steps are public for anyone who wants to look at a problem
+before solving it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from armctl._checks import FloatArray, readonly
+from armctl.dynamics.base import Dynamics
+from armctl.dynamics.identification.base_parameters import BaseParameters, find_base_parameters
+from armctl.dynamics.identification.consistency import ConsistentEstimate, consistent_estimate
+from armctl.dynamics.identification.data import IdentificationData
+from armctl.dynamics.identification.least_squares import LeastSquaresEstimate, solve_least_squares
+from armctl.dynamics.identification.problem import IdentificationProblem, build_problem, problem_regressor
+from armctl.errors import InvalidParameterError, ShapeError
+from armctl.model.robot import RobotModel
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+
+@dataclass(frozen=True)
+class ValidationResult:
+    """Torques predicted by an identified model against measured ones, per joint.
+
+    t: (S,) [s]. predicted, measured: (S, n) [N·m]. rms_error: RMS of their difference (n,) [N·m].
+    rms_torque: RMS of the measured torque (n,). relative_error: rms_error / rms_torque (n,).
+    max_error: largest |difference| (n,).
+    """
+
+    t: FloatArray
+    predicted: FloatArray
+    measured: FloatArray
+
+    def __post_init__(self) -> None:
+        for k in ("t", "predicted", "measured"):
+            object.__setattr__(self, k, readonly(np.array(getattr(self, k), dtype=float)))
+        if self.predicted.shape != self.measured.shape or self.t.shape != self.measured.shape[:1]:
+            raise ShapeError(f"t {self.t.shape}, predicted {self.predicted.shape} and measured "
+                             f"{self.measured.shape} do not match", value=self.t.shape)
+
+    @property
+    def rms_error(self) -> FloatArray:
+        return readonly(np.sqrt(((self.predicted - self.measured) ** 2).mean(axis=0)))
+
+    @property
+    def rms_torque(self) -> FloatArray:
+        return readonly(np.sqrt((self.measured**2).mean(axis=0)))
+
+    @property
+    def relative_error(self) -> FloatArray:
+        return readonly(self.rms_error / np.maximum(self.rms_torque, 1e-300))
+
+    @property
+    def max_error(self) -> FloatArray:
+        return readonly(np.abs(self.predicted - self.measured).max(axis=0))
+
+
+@dataclass(frozen=True)
+class IdentificationResult:
+    """What :func:`identify` found.
+
+    model: the model identification started from (kinematics, and the prior for what data cannot see).
+    dynamics: its Dynamics (evaluates the regressor). problem: W θ = y. estimate: the (weighted) least-squares
+    estimate of the base parameters and Coulomb offsets. consistent: the physically consistent estimate (a
+    full π and a RobotModel), or None if not asked for.
+    """
+
+    model: RobotModel
+    dynamics: Dynamics
+    problem: IdentificationProblem
+    estimate: LeastSquaresEstimate
+    consistent: ConsistentEstimate | None
+
+    @property
+    def base(self) -> BaseParameters:
+        return self.problem.base
+
+    @property
+    def condition_number(self) -> float:
+        """cond of the (weighted) stacked regressor W."""
+        return self.estimate.condition_number
+
+    @property
+    def identified_model(self) -> RobotModel:
+        """The RobotModel of the consistent estimate (raises if it was not computed)."""
+        if self.consistent is None:
+            raise InvalidParameterError("no consistent estimate: run identify(..., consistent=True)", value=None)
+        return self.consistent.model
+
+    def _theta(self, consistent: bool) -> FloatArray:
+        if not consistent:
+            return self.estimate.theta
+        if self.consistent is None:
+            raise InvalidParameterError("no consistent estimate: run identify(..., consistent=True)", value=None)
+        return self.consistent.theta
+
+    def predict(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, consistent: bool = False) -> FloatArray:
+        """Torques (S, n) [N·m] the estimate predicts at samples (S, n) of q, q̇, q̈ (``consistent``: of the
+        consistent estimate instead of the least-squares one)."""
+        arrays = [np.atleast_2d(np.asarray(a, dtype=float)) for a in (q, qd, qdd)]
+        if any(a.shape != arrays[0].shape or a.shape[1] != self.problem.n for a in arrays):
+            raise ShapeError(f"q, qd, qdd must each be (S, {self.problem.n}); got {[a.shape for a in arrays]}",
+                             value=[a.shape for a in arrays])
+        w = problem_regressor(self.dynamics, self.base, *arrays, self.problem.offsets)
+        return w @ self._theta(consistent)
+
+    def validate(self, data: IdentificationData, consistent: bool = False) -> ValidationResult:
+        """Predicted against measured torques on (fresh) data, processed like the identification data."""
+        if not isinstance(data, IdentificationData):
+            raise TypeError(f"data must be an IdentificationData, got {type(data).__name__}")
+        problem = build_problem(self.dynamics, data, self.base, self.problem.offsets)
+        predicted = (problem.regressor @ self._theta(consistent)).reshape(-1, problem.n)
+        return ValidationResult(data.t[list(data.kept)], predicted, problem.torque.reshape(-1, problem.n))
+
+    def report(self, validation: ValidationResult | None = None) -> str:
+        """A plain-text report: condition number, estimates ± σ, residuals per joint, validation errors."""
+        from armctl.dynamics.identification.report import format_report
+
+        return format_report(self, validation)
+
+    def plot(self, validation: ValidationResult, **kwargs: Any) -> Figure:
+        """The validation plot (see :func:`~armctl.dynamics.identification.report.validation_plot`)."""
+        from armctl.dynamics.identification.report import validation_plot
+
+        return validation_plot(validation, joint_names=self.model.joint_names, **kwargs)
+
+
+def identify(model: RobotModel | Dynamics, data: IdentificationData | Sequence[IdentificationData], *,
+             weighted: bool = True, consistent: bool = True, offsets: bool = True, base: BaseParameters | None = None,
+             prior: ArrayLike | None = None, prior_weight: float = 1e-4, rtol: float = 1e-7) -> IdentificationResult:
+    """Identify the dynamic parameters of ``model``'s arm from measured data.
+
+    model: a RobotModel (or a Dynamics of one): its kinematics are trusted; its inertial and friction
+    parameters serve only as the prior of the consistent estimate. data: one experiment or several.
+    weighted: WLS (per-joint noise levels) instead of OLS. consistent: also compute the physically consistent
+    full π. offsets: estimate the Coulomb asymmetry ½(F_c⁺ − F_c⁻) of each joint. base: base parameters
+    (default: found numerically). prior, prior_weight: see :func:`consistent_estimate`. rtol: excitation
+    threshold (raises IdentifiabilityError with the unidentifiable directions below it).
+    """
+    dyn = model if isinstance(model, Dynamics) else Dynamics(model)
+    base = base if base is not None else find_base_parameters(dyn)
+    problem = build_problem(dyn, data, base, offsets)
+    estimate = solve_least_squares(problem, weighted=weighted, rtol=rtol)
+    cons = consistent_estimate(problem, dyn.model, estimate, prior, prior_weight) if consistent else None
+    return IdentificationResult(dyn.model, dyn, problem, estimate, cons)

@@ -1,0 +1,110 @@
+"""Ordinary and weighted least squares on the base parameters, with standard deviations.
+
+OLS:   θ̂ = argmin ‖W θ − y‖²,      σ̂² = ‖y − W θ̂‖² / (S n − p),      cov θ̂ = σ̂² (WᵀW)⁻¹
+WLS:   θ̂ = argmin ‖Σ^{-1/2}(W θ − y)‖²,   Σ = diag(σ̂_j²) for the rows of joint j,   cov θ̂ = (Wᵀ Σ⁻¹ W)⁻¹
+
+with σ̂_j² = ‖r_j‖² / (S − p/n) the per-joint residual variance of the OLS fit (Gautier & Poignet 2001):
+joints with noisier torques count less. The standard deviations assume white residuals; residuals of
+filtered, decimated data are somewhat correlated, so they are optimistic.
+
+Before solving, the columns of W are scaled to unit norm and its singular values checked: if
+σ_min/σ_max < ``rtol`` the data do not excite some combinations of parameters, and
+:class:`~armctl.errors.IdentifiabilityError` names them (the right singular vectors) instead of returning a
+minimum-norm answer.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from armctl._checks import FloatArray, readonly
+from armctl.dynamics.identification.problem import IdentificationProblem
+from armctl.errors import IdentifiabilityError, InvalidParameterError
+
+
+@dataclass(frozen=True)
+class LeastSquaresEstimate:
+    """An estimate of the unknowns of an :class:`IdentificationProblem`.
+
+    theta: (p,) estimates (base parameters, then Coulomb offsets if any) in SI units. std: (p,) their
+    standard deviations. covariance: (p, p). noise_std: (n,) σ̂_j, the residual torque std per joint [N·m].
+    residual_rms: (n,) RMS of y − W θ̂ per joint [N·m]. condition_number: cond of the (weighted) W.
+    weighted: WLS or OLS. names: (p,) names of the unknowns.
+    """
+
+    theta: FloatArray
+    std: FloatArray
+    covariance: FloatArray
+    noise_std: FloatArray
+    residual_rms: FloatArray
+    condition_number: float
+    weighted: bool
+    names: tuple[str, ...]
+
+    def __post_init__(self) -> None:
+        for k in ("theta", "std", "covariance", "noise_std", "residual_rms"):
+            object.__setattr__(self, k, readonly(np.array(getattr(self, k), dtype=float)))
+
+    @property
+    def relative_std(self) -> FloatArray:
+        """σ_k / |θ_k| (inf where θ_k = 0)."""
+        with np.errstate(divide="ignore"):
+            return readonly(self.std / np.abs(self.theta))
+
+
+def check_excitation(w: FloatArray, names: tuple[str, ...], rtol: float = 1e-7) -> FloatArray:
+    """The singular values of W with unit-norm columns; raise IdentifiabilityError if some are below
+    ``rtol`` times the largest, with those directions (rows, in the unknowns' units, unit norm)."""
+    if w.shape[0] < w.shape[1]:
+        raise IdentifiabilityError(f"{w.shape[0]} equations for {w.shape[1]} unknowns: record more samples",
+                                   value=w.shape, directions=None)
+    norms = np.linalg.norm(w, axis=0)
+    scale = np.where(norms > 0, norms, 1.0)  # a zero column stays zero and shows as a zero singular value
+    _, s, vt = np.linalg.svd(w / scale, full_matrices=False)
+    weak = s <= rtol * s[0]
+    if not weak.any():
+        return s
+    dirs = vt[weak] / scale  # back to the unknowns' own units: W d ≈ 0
+    dirs = dirs / np.linalg.norm(dirs, axis=1, keepdims=True)
+    lines = []
+    for d in dirs[:8]:
+        top = np.argsort(-np.abs(d))[:3]
+        lines.append("  " + " ".join(f"{d[k]:+.2f}·({names[k]})" for k in top if abs(d[k]) > 1e-3))
+    more = f"\n  … and {len(dirs) - 8} more" if len(dirs) > 8 else ""
+    raise IdentifiabilityError(
+        f"the data do not excite {len(dirs)} of {w.shape[1]} parameter combinations (relative singular value "
+        f"below {rtol:g}); the trajectory must move them, e.g. an optimised excitation "
+        f"(optimize_excitation) over more joints. Unidentifiable directions (largest components):\n"
+        + "\n".join(lines) + more, value=s, directions=readonly(dirs))
+
+
+def solve_least_squares(problem: IdentificationProblem, weighted: bool = True, rtol: float = 1e-7
+                        ) -> LeastSquaresEstimate:
+    """OLS (``weighted=False``) or WLS estimate of the problem's unknowns (see the module). rtol: relative
+    singular-value threshold of the excitation check."""
+    w, y, n = problem.regressor, problem.torque, problem.n
+    p, rows = w.shape[1], w.shape[0]
+    if not rtol > 0:
+        raise InvalidParameterError(f"rtol must be > 0, got {rtol}", value=rtol)
+    check_excitation(w, problem.names, rtol)
+    theta = np.linalg.lstsq(w, y, rcond=None)[0]
+    r = (y - w @ theta).reshape(-1, n)
+    s_count = r.shape[0]
+    if weighted:
+        var_j = (r**2).sum(axis=0) / max(s_count - p / n, 1.0)
+        var_j = np.maximum(var_j, 1e-12 * max(var_j.max(), 1e-300))
+        wt = np.tile(1.0 / np.sqrt(var_j), s_count)
+        ww = w * wt[:, None]
+        theta = np.linalg.lstsq(ww, y * wt, rcond=None)[0]
+        r = (y - w @ theta).reshape(-1, n)
+        cov = np.linalg.inv(ww.T @ ww)
+        cond = float(np.linalg.cond(ww))
+    else:
+        var = float((r**2).sum()) / max(rows - p, 1)
+        cov = var * np.linalg.inv(w.T @ w)
+        cond = float(np.linalg.cond(w))
+    noise_std = np.sqrt((r**2).sum(axis=0) / max(s_count - p / n, 1.0))
+    return LeastSquaresEstimate(theta, np.sqrt(np.clip(np.diag(cov), 0.0, None)), cov, noise_std,
+                                np.sqrt((r**2).mean(axis=0)), cond, bool(weighted), problem.names)

@@ -1,0 +1,101 @@
+"""The identification problem W θ = y, built from data before anything is solved.
+
+Stacking the base regressor over the S samples (sample-major: rows k n … k n + n − 1 are sample k) gives
+
+    y = [τ(t_1); …; τ(t_S)] = W θ + e,     W = [Y_b(x_1)  O(q̇_1); …; Y_b(x_S)  O(q̇_S)]
+
+where θ are the base parameters and, when ``offsets`` is on, n extra unknowns: the Coulomb asymmetry
+½(F_c⁺ − F_c⁻) of each joint, whose column O = diag(|sgn q̇_i|) lies outside π (see
+``Dynamics.coulomb_offset``). A real robot also puts its torque-sensor offsets there.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from armctl._checks import FloatArray, readonly
+from armctl.dynamics.base import Dynamics
+from armctl.dynamics.identification.base_parameters import BaseParameters, find_base_parameters
+from armctl.dynamics.identification.data import IdentificationData
+from armctl.errors import ShapeError
+
+
+@dataclass(frozen=True)
+class IdentificationProblem:
+    """W θ = y (see the module). regressor: W (S n × p); torque: y (S n,); base: the base parameters;
+    offsets: whether the last n unknowns are Coulomb offsets; names: (p,) names of the unknowns."""
+
+    regressor: FloatArray
+    torque: FloatArray
+    base: BaseParameters
+    n: int
+    offsets: bool
+    names: tuple[str, ...]
+
+    def __post_init__(self) -> None:
+        w, y = np.array(self.regressor, dtype=float), np.array(self.torque, dtype=float).reshape(-1)
+        if w.ndim != 2 or w.shape[0] != y.shape[0] or w.shape[1] != len(self.names) or y.shape[0] % self.n:
+            raise ShapeError(f"regressor {w.shape}, torque {y.shape} and {len(self.names)} names do not match "
+                             f"(n = {self.n})", value=(w.shape, y.shape))
+        object.__setattr__(self, "regressor", readonly(w))
+        object.__setattr__(self, "torque", readonly(y))
+
+    @property
+    def samples(self) -> int:
+        return self.torque.shape[0] // self.n
+
+    @property
+    def n_unknowns(self) -> int:
+        return self.regressor.shape[1]
+
+    def joint_rows(self, i: int) -> slice:
+        """The rows of joint i (0-based) in W and y."""
+        return slice(i, None, self.n)
+
+
+def offset_names(n: int) -> tuple[str, ...]:
+    return tuple(f"Fc_offset[{i}]" for i in range(n))
+
+
+def problem_regressor(dynamics: Dynamics, base: BaseParameters, q: FloatArray, qd: FloatArray, qdd: FloatArray,
+                      offsets: bool) -> FloatArray:
+    """The regressor blocks [Y_b  O] (S, n, p) for samples (S, n) of q, q̇, q̈ (see the module)."""
+    n = dynamics.n
+    cols = list(base.independent)
+    out = np.zeros((q.shape[0], n, base.n_base + (n if offsets else 0)))
+    diag = np.arange(n)
+    for k in range(q.shape[0]):
+        out[k, :, : base.n_base] = dynamics.regressor(q[k], qd[k], qdd[k])[:, cols]
+        if offsets:
+            out[k, diag, base.n_base + diag] = np.abs(np.sign(qd[k]))
+    return out
+
+
+def build_problem(dynamics: Dynamics, data: IdentificationData | Sequence[IdentificationData],
+                  base: BaseParameters | None = None, offsets: bool = True) -> IdentificationProblem:
+    """Stack the regressor of ``dynamics``' arm over ``data`` (one experiment or several).
+
+    The regressor is evaluated at every sample, then it and τ are filtered and decimated alike
+    (``IdentificationData.reduce``). base: the base parameters (default: found with
+    :func:`find_base_parameters`). offsets: add the Coulomb asymmetry of each joint as an unknown.
+    """
+    experiments = [data] if isinstance(data, IdentificationData) else list(data)
+    if not experiments or not all(isinstance(d, IdentificationData) for d in experiments):
+        raise TypeError("data must be an IdentificationData (see prepare_data) or a non-empty sequence of them")
+    for d in experiments:
+        if d.n != dynamics.n:
+            raise ShapeError(f"data have {d.n} joints, the model {dynamics.n}", value=d.n)
+    base = base if base is not None else find_base_parameters(dynamics)
+    if base.n_full != dynamics.n * 13:
+        raise ShapeError(f"base parameters are for {base.n_full // 13} joints, the model has {dynamics.n}",
+                         value=base)
+    ws, ys = [], []
+    for d in experiments:
+        w = problem_regressor(dynamics, base, d.q, d.qd, d.qdd, offsets)
+        ws.append(d.reduce(w.reshape(d.samples, -1)).reshape(-1, w.shape[2]))
+        ys.append(d.reduce(d.tau).reshape(-1))
+    names = base.base_names() + (offset_names(dynamics.n) if offsets else ())
+    return IdentificationProblem(np.vstack(ws), np.concatenate(ys), base, dynamics.n, bool(offsets), names)
