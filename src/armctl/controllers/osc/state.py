@@ -121,7 +121,9 @@ class ModelEvaluator:
                 return FrameKinematics(np.zeros(3), np.eye(3), np.zeros((6, self.n)), z6, z6.copy())
             pin, pm, pd = self._pin, self._pm, self._pd
             pose = pd.oMf[fid]
-            jac = pin.getFrameJacobian(pm, pd, fid, self._lwa).reshape(6, self.n)
+            jac = pin.getFrameJacobian(pm, pd, fid, self._lwa)
+            if self.n == 1:  # eigenpy squeezes a 6×1 result to (6,)
+                jac = jac.reshape(6, 1)
             drift = pin.getFrameClassicalAcceleration(pm, pd, fid, self._lwa).vector
             return FrameKinematics(pose.translation, pose.rotation, jac, jac @ state.qd, drift)
         dyn = self.dynamics

@@ -9,12 +9,13 @@ errors it still turns about the shortest axis).
 
 from __future__ import annotations
 
-import pinocchio as pin
+import numpy as np
 from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray
 from armctl.controllers.osc.state import ModelState
 from armctl.controllers.osc.tasks.base import MotionTask
+from armctl.controllers.osc.tasks.rotation import rotation_error
 from armctl.controllers.osc.tasks.target import TargetHolder, Trajectory
 from armctl.reference import Reference
 
@@ -45,5 +46,5 @@ class FrameOrientationTask(MotionTask):
                    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
         rot, w, dw = self.target.at(t)
         fk = state.frame(self.frame)
-        e = pin.log3(rot @ fk.rotation.T)
+        e = np.array(rotation_error(rot, fk.rotation))
         return fk.jacobian[3:], fk.drift[3:], e, w - fk.velocity[3:], dw

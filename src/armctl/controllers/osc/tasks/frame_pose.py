@@ -6,12 +6,12 @@
 from __future__ import annotations
 
 import numpy as np
-import pinocchio as pin
 from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray
 from armctl.controllers.osc.state import ModelState
 from armctl.controllers.osc.tasks.base import MotionTask
+from armctl.controllers.osc.tasks.rotation import rotation_error
 from armctl.controllers.osc.tasks.target import TargetHolder, Trajectory
 from armctl.reference import Reference
 
@@ -27,7 +27,6 @@ class FramePoseTask(MotionTask):
         super().__init__(6, name, kp, kd, weight, priority)
         self.frame = frame
         self.target = TargetHolder(name, (4, 4), 6)
-        self._e = np.empty(6)
 
     def set_target(self, pose: ArrayLike, twist: ArrayLike | None = None,
                    acceleration: ArrayLike | None = None) -> None:
@@ -46,5 +45,5 @@ class FramePoseTask(MotionTask):
         fk = state.frame(self.frame)
         e = np.empty(6)
         e[:3] = pose[:3, 3] - fk.position
-        e[3:] = pin.log3(pose[:3, :3] @ fk.rotation.T)
+        e[3:] = rotation_error(pose[:3, :3], fk.rotation)
         return fk.jacobian, fk.drift, e, twist - fk.velocity, acc
