@@ -1,0 +1,110 @@
+"""Bad input raises an ArmctlError subclass that names the value (issue 3)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import armctl
+from armctl.errors import ArmctlError, InvalidParameterError, NonFiniteError, ShapeError, UnknownNameError
+from armctl.sim import ContactPoint, ForceSensor, HuntCrossley, KelvinVoigt, Plane, simulate
+from tests.sim.helpers import zero_torque
+
+MODEL = armctl.models.planar_2r()
+REF = armctl.Reference.hold([0.1, 0.2])
+
+
+def run(**kw: object) -> armctl.sim.SimResult:
+    args: dict[str, object] = {"plant": MODEL, "controller": zero_torque, "reference": REF, "duration": 0.01}
+    args.update(kw)
+    return simulate(**args)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(("kwargs", "error", "shown"), [
+    ({"duration": -1.0}, InvalidParameterError, "-1.0"),
+    ({"duration": 0.0}, InvalidParameterError, "duration"),
+    ({"duration": float("nan")}, NonFiniteError, "nan"),
+    ({"duration": 0.0105}, InvalidParameterError, "0.0105"),
+    ({"control_dt": -1e-3}, InvalidParameterError, "-0.001"),
+    ({"control_dt": "fast"}, InvalidParameterError, "fast"),
+    ({"dt": 0.0}, InvalidParameterError, "dt"),
+    ({"dt": 3e-4}, InvalidParameterError, "0.0003"),
+    ({"dt": 2e-3}, InvalidParameterError, "0.002"),
+    ({"integrator": "rk45"}, UnknownNameError, "rk45"),
+    ({"q0": [0.0, 0.0, 0.0]}, ShapeError, "(3,)"),
+    ({"qd0": [np.nan, 0.0]}, NonFiniteError, "nan"),
+    ({"noise_q": -0.1}, InvalidParameterError, "-0.1"),
+    ({"noise_qd": [0.1, 0.1, 0.1]}, ShapeError, "(3,)"),
+    ({"delay": -1}, InvalidParameterError, "-1"),
+    ({"delay": 1.5}, InvalidParameterError, "1.5"),
+    ({"max_velocity": 0.0}, InvalidParameterError, "max_velocity"),
+    ({"friction": "lugre"}, UnknownNameError, "lugre"),
+    ({"environment": "wall"}, InvalidParameterError, "wall"),
+    ({"environment": Plane(KelvinVoigt(1e4), points=[ContactPoint("elbow")])}, UnknownNameError, "elbow"),
+    ({"sensors": [ForceSensor("wrist")]}, UnknownNameError, "wrist"),
+    ({"disturbance": 3.0}, InvalidParameterError, "float"),
+    ({"plant": "planar_2r"}, InvalidParameterError, "str"),
+    ({"controller": None}, InvalidParameterError, "NoneType"),
+    ({"reference": [0.1, 0.2]}, InvalidParameterError, "list"),
+    ({"reference": armctl.Reference.hold([0.1, 0.2, 0.3])}, ShapeError, "3 joints"),
+    ({"reference": lambda t: [0.0, 0.0]}, InvalidParameterError, "list"),
+])
+def test_bad_input_raises_a_named_error(kwargs: dict[str, object], error: type, shown: str) -> None:
+    with pytest.raises(error) as info:
+        run(**kwargs)
+    assert isinstance(info.value, ArmctlError)
+    assert shown in str(info.value)
+
+
+def test_errors_carry_the_offending_value() -> None:
+    with pytest.raises(InvalidParameterError) as info:
+        run(dt=3e-4)
+    assert info.value.value == 3e-4
+    with pytest.raises(UnknownNameError) as info2:
+        run(integrator="verlet")
+    assert "rk4" in str(info2.value) and info2.value.valid
+
+
+def test_controller_returning_a_wrong_shape_is_named() -> None:
+    with pytest.raises(ShapeError, match=r"\(3,\)"):
+        run(controller=lambda t, q, qd, ref: np.zeros(3))
+
+
+def test_disturbance_returning_a_wrong_shape_is_named() -> None:
+    with pytest.raises(ShapeError, match=r"\(3,\)"):
+        run(disturbance=lambda t: np.zeros(3))
+
+
+def test_controller_for_another_arm_is_refused() -> None:
+    from tests.sim.helpers import PDGravity
+
+    ctrl = PDGravity(armctl.Dynamics(armctl.models.pendulum()), 1.0, 1.0)
+    with pytest.raises(ShapeError, match="1 joints"):
+        run(controller=ctrl)
+
+
+@pytest.mark.parametrize(("make", "error"), [
+    (lambda: KelvinVoigt(-1.0), InvalidParameterError),
+    (lambda: KelvinVoigt(1e4, damping=-2.0), InvalidParameterError),
+    (lambda: HuntCrossley(1e4, exponent=0.5), InvalidParameterError),
+    (lambda: Plane(KelvinVoigt(1e4), normal=(0.0, 0.0, 0.0)), InvalidParameterError),
+    (lambda: Plane(KelvinVoigt(1e4), point=(0.0, 1.0)), InvalidParameterError),
+    (lambda: Plane("stiff"), InvalidParameterError),  # type: ignore[arg-type]
+    (lambda: Plane(KelvinVoigt(1e4), friction=-0.1), InvalidParameterError),
+    (lambda: Plane(KelvinVoigt(1e4), points=[]), InvalidParameterError),
+    (lambda: ContactPoint(None, (0.0, 1.0)), InvalidParameterError),
+])
+def test_bad_environment_parameters(make: object, error: type) -> None:
+    with pytest.raises(error):
+        make()  # type: ignore[operator]
+
+
+def test_caller_arrays_are_not_modified() -> None:
+    q0 = np.array([0.1, 0.2])
+    qd0 = np.array([0.5, -0.5])
+    res = run(q0=q0, qd0=qd0, duration=0.1)
+    assert q0.flags.writeable and qd0.flags.writeable
+    np.testing.assert_array_equal(q0, [0.1, 0.2])
+    np.testing.assert_array_equal(qd0, [0.5, -0.5])
+    with pytest.raises(ValueError):
+        res.q[0, 0] = 1.0  # results are read-only

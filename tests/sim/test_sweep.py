@@ -1,0 +1,79 @@
+"""Sweeps: the same answers through a process pool, a thread pool and serially; a progress bar; diverged runs
+as answers; a bad case raised with its index (issue 3)."""
+
+from __future__ import annotations
+
+import io
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+import pytest
+
+import armctl
+from armctl.errors import InvalidParameterError
+from armctl.sim import SimResult, sweep
+from tests.sim.helpers import PDGravity
+
+MODEL = armctl.models.planar_2r()
+
+
+def final_state(res: SimResult) -> tuple[bool, float, float]:
+    """What comes back from a worker: diverged, final error, final time."""
+    return res.diverged, float(np.abs(res.q[-1] - [0.3, -0.2]).max()), float(res.t[-1])
+
+
+def cases(gains: list[float]) -> list[dict[str, object]]:
+    # each case gets its own Dynamics (a Dynamics' workspace is not shared between threads)
+    return [{"plant": MODEL, "controller": PDGravity(armctl.Dynamics(MODEL), kp, 0.1 * kp),
+             "reference": armctl.Reference.hold([0.3, -0.2]), "duration": 0.3, "q0": [0.0, 0.0],
+             "max_velocity": 20.0, "saturate": False} for kp in gains]
+
+
+GAINS = [2e3, 1e4, 5e4, 3e7]  # the last one is far too stiff for a 1 kHz loop
+
+
+def test_process_pool_thread_pool_and_serial_agree() -> None:
+    stream = io.StringIO()
+    pooled = sweep(cases(GAINS), summary=final_state, max_workers=2, progress=stream)
+    with ThreadPoolExecutor(2) as ex:
+        threaded = sweep(cases(GAINS), summary=final_state, executor=ex, progress=False)
+    serial = sweep(cases(GAINS), summary=final_state, executor="serial", progress=False)
+    assert pooled == threaded == serial
+    assert [d for d, _, _ in serial] == [False, False, False, True]  # divergence is an answer
+    assert serial[2][1] < serial[0][1]  # stiffer gain, smaller final error
+    bar = stream.getvalue()
+    assert "4/4 runs" in bar and "[" + "#" * 30 + "]" in bar
+
+
+def test_full_results_come_back_without_summary() -> None:
+    out = sweep(cases(GAINS[:2]), max_workers=2, progress=False)
+    assert all(isinstance(r, SimResult) for r in out)
+    assert len(out[0].t) == 301
+
+
+def test_a_custom_run_function() -> None:
+    out = sweep([{"x": 1}, {"x": 2}], run=_square, executor="serial", progress=False)
+    assert out == [1, 4]
+
+
+def _square(x: int) -> int:
+    return x * x
+
+
+def test_a_bad_case_is_raised_with_its_index() -> None:
+    bad = cases(GAINS[:2])
+    bad[1]["duration"] = -1.0
+    with pytest.raises(InvalidParameterError) as info:
+        sweep(bad, executor="serial", progress=False)
+    assert "sweep case 1" in "".join(getattr(info.value, "__notes__", []))
+    with pytest.raises(InvalidParameterError):
+        sweep(bad, max_workers=2, progress=False)
+
+
+def test_bad_sweep_arguments() -> None:
+    with pytest.raises(InvalidParameterError, match="'dask'"):
+        sweep(cases(GAINS[:1]), executor="dask", progress=False)
+    with pytest.raises(InvalidParameterError, match="case 0"):
+        sweep([("not", "a", "mapping")], progress=False)  # type: ignore[list-item]
+    with pytest.raises(InvalidParameterError, match="max_workers"):
+        sweep(cases(GAINS[:1]), max_workers=0, progress=False)
