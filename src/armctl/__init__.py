@@ -4,11 +4,11 @@ The spine is the Lagrange model M(q)q̈ + C(q,q̇)q̇ + g(q) = τ − F_v q̇ �
 :class:`RobotModel` describes an arm, :class:`Dynamics` evaluates it.
 """
 
-from armctl import controllers, errors, models
+from armctl import controllers, errors, models, planning
 from armctl.dynamics import Dynamics
 from armctl.errors import ArmctlError
 from armctl.model import RobotModel
 from armctl.reference import Reference
 
 __version__ = "0.1.0"
-__all__ = ["ArmctlError", "Dynamics", "Reference", "RobotModel", "controllers", "errors", "models"]
+__all__ = ["ArmctlError", "Dynamics", "Reference", "RobotModel", "controllers", "errors", "models", "planning"]

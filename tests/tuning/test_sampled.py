@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from armctl.tuning import SampledDataAnalysis
+from armctl.tuning import SampledDataAnalysis, spectral_radius
 
 
 def bisect_critical(kp: float, kd: float, period: float, delay: int) -> float:
@@ -35,3 +35,10 @@ def test_gain_margin_is_the_critical_multiplier(kp: float, kd: float, period: fl
     got = SampledDataAnalysis.of(kp, kd, period, delay)
     assert got.critical_multiplier == pytest.approx(bisect_critical(kp, kd, period, delay), rel=1e-6)
     assert got.spectral_radius < 1.0
+
+
+@pytest.mark.parametrize(("kp", "kd", "period", "delay"), [(400, 40, 1e-3, 1), (100, 20, 5e-3, 2), (900, 60, 2e-3, 0)])
+def test_numpy_spectral_radius_matches_python_control(kp: float, kd: float, period: float, delay: int) -> None:
+    for k in (0.5, 1.0, 3.0):
+        got = spectral_radius(k * kp, k * kd, period, delay)
+        assert got == pytest.approx(SampledDataAnalysis.of(k * kp, k * kd, period, delay).spectral_radius, rel=1e-9)

@@ -1,23 +1,179 @@
-"""``armctl bench``: runs every benchmark section, writes ``figures.json`` and prints a summary.
+"""``armctl bench``: every scene × controller, stability maps, TOPP convergence, the dynamics backends', the
+integrators' and the models' cost against accuracy — written to ``figures.json`` (every number behind the
+charts), PNG charts and ``report.html``, with a summary table printed.
 
-Sections so far: the dynamics backends' speed. (Scenes × controllers, stability maps, TOPP, integrators and
-the HTML report join as the layers land.)
+Sections run in turn; the simulation-heavy ones go through an ``Executor`` (a process pool by default).
+``quick`` shrinks grids and repetitions so the whole run stays around a minute.
 """
 
 from __future__ import annotations
 
 import json
+import math
+import time
+from collections.abc import Callable
+from concurrent.futures import Executor
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 
-def run_suite(quick: bool = False, out: Path = Path("bench-out")) -> dict[str, Any]:
-    from armctl.bench import dynamics_speed
+SCENE_NAMES = ("pendulum", "planar_2r", "panda_topp", "panda_contact")
 
+
+def run_scene_method(scene: str, method: str) -> dict[str, Any]:
+    """Simulate one method on one scene and return its metrics (runs in a worker process)."""
+    from armctl.scenes import scene as make
+
+    sc = make(scene)
+    res = sc.run(method)
+    return {"scene": scene, "method": method, **sc.metrics(res, method)}
+
+
+def scene_matrix(executor: Executor | str | None = None) -> list[dict[str, Any]]:
+    from armctl.scenes import SCENES, scene
+    from armctl.sim import sweep
+
+    cases = [{"scene": name, "method": m} for name in SCENE_NAMES if name in SCENES for m in scene(name).methods]
+    return sweep(cases, run=run_scene_method, executor=executor, progress=True)
+
+
+def pareto_front(points: list[tuple[float, float]]) -> list[int]:
+    """Indices of the points no other point beats in both coordinates (both minimised)."""
+    front = []
+    for i, (x, y) in enumerate(points):
+        dominated = any((x2 <= x and y2 <= y) and (x2 < x or y2 < y) for j, (x2, y2) in enumerate(points) if j != i)
+        if not dominated and math.isfinite(x) and math.isfinite(y):
+            front.append(i)
+    return front
+
+
+def plot_pareto(rows: list[dict[str, Any]], path: Path) -> None:
+    """Compute time per step against tracking error, log-log, one panel per scene, Pareto front marked."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import matplotlib.ticker
+
+    scenes = [s for s in SCENE_NAMES if any(r["scene"] == s for r in rows)]
+    fig, axes = plt.subplots(1, len(scenes), figsize=(4.6 * len(scenes), 4.0), squeeze=False)
+    for ax, name in zip(axes[0], scenes, strict=True):
+        mine = [r for r in rows if r["scene"] == name and not r["diverged"]]
+        pts = [(r["compute_s"] * 1e6, r["rms_error"]) for r in mine]
+        front = set(pareto_front(pts))
+        for i, (r, (x, y)) in enumerate(zip(mine, pts, strict=True)):
+            ax.scatter(x, y, s=60, color="#d62828" if i in front else "#577590", zorder=3)
+            ax.annotate(r["method"].replace("_", " "), (x, y), fontsize=7, xytext=(4, 3), textcoords="offset points")
+        fx = sorted((pts[i] for i in front))
+        if fx:
+            ax.plot(*zip(*fx, strict=True), color="#d62828", lw=1, label="Pareto front")
+        ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+        ax.set(xscale="log", yscale="log", xlabel="compute time per control step [µs]",
+               ylabel="RMS tracking error [rad]" if name != "panda_contact" else "RMS error", title=name)
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+
+
+def topp_convergence(quick: bool) -> dict[str, Any]:
+    import armctl
+    from armctl.planning import grid_convergence
+
+    dyn = armctl.Dynamics(armctl.models.planar_2r())
+    grids = (10, 20, 50, 100, 200) if quick else (10, 20, 50, 100, 200, 500, 1000)
+    study = grid_convergence(dyn, [0.0, 0.0], [1.0, -0.8], [1.0, 1.5], [3.0, 4.0], grids=grids,
+                             repeat=1 if quick else 3)
+    return {"grids": study.grids.tolist(), "durations": study.durations.tolist(), "errors": study.errors.tolist(),
+            "compute_s": study.compute_times.tolist(), "analytic_duration": study.reference}
+
+
+def plot_topp(data: dict[str, Any], path: Path) -> None:
+    from armctl.planning.convergence import ConvergenceStudy, plot_convergence
+
+    study = ConvergenceStudy(np.array(data["grids"]), np.array(data["durations"]), np.array(data["errors"]),
+                             np.array(data["compute_s"]), data["analytic_duration"])
+    plot_convergence(study).savefig(path, dpi=90)
+
+
+def _optional_section(name: str) -> Any:
+    import importlib
+
+    try:
+        return importlib.import_module(f"armctl.bench.{name}")
+    except ImportError:
+        return None
+
+
+def run_suite(quick: bool = False, out: Path = Path("bench-out"), executor: Executor | str | None = None
+              ) -> dict[str, Any]:
+    from armctl.bench import controller_speed, dynamics_speed, stability
+
+    out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    figures: dict[str, Any] = {"quick": quick}
+    figures: dict[str, Any] = {"quick": quick, "started": time.strftime("%Y-%m-%d %H:%M:%S")}
+    charts: dict[str, str] = {}
     number, rounds = (300, 5) if quick else (1000, 15)
-    figures["dynamics_speed"] = dynamics_speed.run(number=number, rounds=rounds)
-    print(dynamics_speed.report(figures["dynamics_speed"]))
-    (out / "figures.json").write_text(json.dumps(figures, indent=2, default=float))
+    t_all = time.perf_counter()
+
+    def section(key: str, fn: Callable[[], Any]) -> Any:
+        print(f"\n== {key}", flush=True)
+        t0 = time.perf_counter()
+        figures[key] = fn()
+        figures.setdefault("section_seconds", {})[key] = time.perf_counter() - t0
+        return figures[key]
+
+    section("scenes", lambda: scene_matrix(executor))
+    plot_pareto(figures["scenes"], out / "speed_accuracy.png")
+    charts["speed_accuracy.png"] = "Compute time per control step against tracking error, per scene"
+    section("stability_maps", lambda: stability.maps(quick=quick, executor=executor))
+    for name in stability.plot(figures["stability_maps"], lambda n: out / n):
+        charts[name] = "Stability map (cells simulated, dashed line: sampled-data theory)"
+    section("topp_convergence", lambda: topp_convergence(quick))
+    plot_topp(figures["topp_convergence"], out / "topp_convergence.png")
+    charts["topp_convergence.png"] = "TOPP-RA duration error and compute time against grid size"
+    for key in ("backends", "integrators", "fidelity"):
+        mod = _optional_section(key)
+        if mod is not None:
+            section(key, lambda mod=mod: mod.run(quick=quick))
+            mod.plot(figures[key], out / f"{key}.png")
+            charts[f"{key}.png"] = (mod.__doc__ or key).strip().splitlines()[0]
+    section("dynamics_speed", lambda: dynamics_speed.run(number=number, rounds=rounds))
+    section("controller_speed", lambda: controller_speed.run(number=number, rounds=rounds))
+    figures["total_seconds"] = time.perf_counter() - t_all
+    figures["charts"] = charts
+    (out / "figures.json").write_text(json.dumps(figures, indent=1, default=_json_default))
+    text = summary(figures)
+    print("\n" + text)
+    from armctl.bench.report import write_report
+
+    write_report(out, figures, charts, text)
     return figures
+
+
+def _json_default(x: Any) -> Any:
+    if isinstance(x, (np.floating, np.integer)):
+        return x.item()
+    if isinstance(x, np.ndarray):
+        return x.tolist()
+    return str(x)
+
+
+def summary(figures: dict[str, Any]) -> str:
+    from armctl.bench import controller_speed, dynamics_speed
+
+    lines = [f"{'scene':14s} {'method':26s} {'RMS err':>9s} {'max err':>9s} {'step µs':>8s} {'τ RMS':>8s} "
+             f"{'over lim':>8s}  diverged"]
+    for r in figures.get("scenes", []):
+        lines.append(f"{r['scene']:14s} {r['method']:26s} {r['rms_error']:9.2e} {r['max_error']:9.2e} "
+                     f"{r['compute_s'] * 1e6:8.1f} {r['torque_rms']:8.2f} {r['limit_violation_share']:8.2%}  "
+                     f"{'yes at %.2f s' % r['diverged_at'] if r['diverged'] else 'no'}")
+    for key in ("backends", "integrators", "fidelity"):
+        mod = _optional_section(key)
+        if key in figures and mod is not None and hasattr(mod, "summary"):
+            lines += ["", mod.summary(figures[key])]
+    lines += ["", dynamics_speed.report(figures["dynamics_speed"]), "",
+              controller_speed.report(figures["controller_speed"])]
+    lines.append(f"\ntotal {figures['total_seconds']:.1f} s")
+    return "\n".join(lines)

@@ -35,6 +35,21 @@ def sampled_pd_loop(kp: float, kd: float, period: float, delay: int = 1):  # typ
     return loop
 
 
+def spectral_radius(kp: float, kd: float, period: float, delay: int = 1) -> float:
+    """Spectral radius of the closed loop x_{k+1} = A x_k − B K x_{k−d} (state augmented with d past states):
+    below 1 means stable. The same loop as :func:`sampled_pd_loop`, evaluated directly with NumPy (cheap
+    enough for bisections and maps)."""
+    t = float(period)
+    d = int(delay)
+    size = 2 * (d + 1)
+    big = np.zeros((size, size))
+    big[:2, :2] = [[1.0, t], [0.0, 1.0]]
+    big[:2, 2 * d: 2 * d + 2] -= np.array([[t * t / 2], [t]]) @ np.array([[kp, kd]])
+    if d:
+        big[2:, :-2] = np.eye(2 * d)
+    return float(np.abs(np.linalg.eigvals(big)).max())
+
+
 @dataclass(frozen=True)
 class SampledDataAnalysis:
     """critical_multiplier: gain margin of the loop (k* scaling both gains); phase_margin [deg];
