@@ -3,7 +3,8 @@ and model error — simulated cell by cell, with the border theory predicts draw
 
 The scenario is the geared pendulum turned into a horizontal plane (one joint, inertia J, no gravity: scaling
 the controller's inertial parameters by f then scales its M̂ exactly, with no gravity offset to confuse the
-outcome) regulating a set-point from a small offset, with one control period of measurement delay. Linearised, every law here is a PD on a double integrator with
+outcome) regulating a set-point from a small offset, with one control period of measurement delay.
+Linearised, every law here is a PD on a double integrator with
 equivalent gains (K_p, K_d) [1/s², 1/s], so the discrete-time analysis of :mod:`armctl.tuning.sampled`
 (zero-order hold + delay) gives the border:
 

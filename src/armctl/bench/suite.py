@@ -65,7 +65,7 @@ def plot_pareto(rows: list[dict[str, Any]], path: Path) -> None:
         for i, (r, (x, y)) in enumerate(zip(mine, pts, strict=True)):
             ax.scatter(x, y, s=60, color="#d62828" if i in front else "#577590", zorder=3)
             ax.annotate(r["method"].replace("_", " "), (x, y), fontsize=7, xytext=(4, 3), textcoords="offset points")
-        fx = sorted((pts[i] for i in front))
+        fx = sorted(pts[i] for i in front)
         if fx:
             ax.plot(*zip(*fx, strict=True), color="#d62828", lw=1, label="Pareto front")
         ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
@@ -168,7 +168,7 @@ def summary(figures: dict[str, Any]) -> str:
     for r in figures.get("scenes", []):
         lines.append(f"{r['scene']:14s} {r['method']:26s} {r['rms_error']:9.2e} {r['max_error']:9.2e} "
                      f"{r['compute_s'] * 1e6:8.1f} {r['torque_rms']:8.2f} {r['limit_violation_share']:8.2%}  "
-                     f"{'yes at %.2f s' % r['diverged_at'] if r['diverged'] else 'no'}")
+                     + (f"yes at {r['diverged_at']:.2f} s" if r["diverged"] else "no"))
     for key in ("backends", "integrators", "fidelity"):
         mod = _optional_section(key)
         if key in figures and mod is not None and hasattr(mod, "summary"):
