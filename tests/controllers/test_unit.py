@@ -30,6 +30,10 @@ def test_computed_torque_on_the_reference_is_inverse_dynamics() -> None:
     assert np.allclose(ct(0.0, q, qd, ref), expected)
     no_friction = ComputedTorque(dyn, kp=100, kd=20, friction=False)
     assert np.allclose(no_friction(0.0, q, qd, ref), expected - dyn.friction_torque(qd))
+    feedforward = ComputedTorque(dyn, kp=100, kd=20, friction="reference")
+    assert np.allclose(feedforward(0.0, q, qd, ref), expected - dyn.friction_torque(qd) + dyn.friction_torque(ref.qd))
+    with pytest.raises(InvalidParameterError, match="friction"):
+        ComputedTorque(dyn, 1.0, 1.0, friction="yes")
 
 
 def test_passivity_based_law() -> None:

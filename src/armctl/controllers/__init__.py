@@ -6,6 +6,9 @@
 :class:`PassivityBased`      Slotine–Li: M q̈_r + C q̇_r + g − K_D s
 :class:`Adaptive`            Slotine–Li adaptive law on the passivity regressor, with projection, σ-modification,
                              dead-zone and composite adaptation
+:class:`OperationalSpaceQP`  operational-space control as a QP (proxsuite): tasks, priorities, limits, contacts;
+                             see :mod:`armctl.controllers.osc`
+:class:`ClosedFormOSC`       Khatib's closed-form operational-space control (the QP's baseline)
 ==========================  =================================================================================
 
 Write your own by subclassing :class:`Controller` and implementing ``compute(t, q, qd, ref)``.
@@ -14,7 +17,9 @@ Write your own by subclassing :class:`Controller` and implementing ``compute(t, 
 from armctl.controllers.adaptive import Adaptive
 from armctl.controllers.base import Controller
 from armctl.controllers.computed_torque import ComputedTorque
+from armctl.controllers.osc import ClosedFormOSC, OperationalSpaceQP
 from armctl.controllers.passivity import PassivityBased
 from armctl.controllers.pd import PDGravity
 
-__all__ = ["Adaptive", "ComputedTorque", "Controller", "PDGravity", "PassivityBased"]
+__all__ = ["Adaptive", "ClosedFormOSC", "ComputedTorque", "Controller", "OperationalSpaceQP", "PDGravity",
+           "PassivityBased"]

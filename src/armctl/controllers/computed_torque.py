@@ -8,6 +8,7 @@ from numpy.typing import ArrayLike
 from armctl._checks import FloatArray, apply_gain, compact_gain, gain_matrix
 from armctl.controllers.base import Controller
 from armctl.dynamics.base import Dynamics
+from armctl.errors import InvalidParameterError
 from armctl.reference import Reference
 
 
@@ -18,17 +19,23 @@ class ComputedTorque(Controller):
     wrong one (payload, parameter error) the mismatch enters as a disturbance M̂⁻¹(Δ) and the error no longer
     vanishes. The integral is accumulated at the control rate (rectangle rule over the time between calls).
 
-    kp [1/s²], kd [1/s], ki [1/s³] (scalar, vector or matrix; ki may be None). friction: also compensate the
-    model's friction τ_f(q̇) (default True).
+    kp [1/s²], kd [1/s], ki [1/s³] (scalar, vector or matrix; ki may be None). friction: compensate the model's
+    friction at the measured velocity, τ_f(q̇) (True, the default), at the reference velocity, τ_f(q̇_d)
+    (``"reference"``: a feedforward that pushes a stuck joint the way it should move — the feedback alone,
+    scaled by M, needs large errors to break stiction on light joints — and does not chatter at rest), or not
+    at all (False).
     """
 
     def __init__(self, dynamics: Dynamics, kp: ArrayLike, kd: ArrayLike, ki: ArrayLike | None = None,
-                 friction: bool = True) -> None:
+                 friction: bool | str = True) -> None:
         super().__init__(dynamics)
         self.kp = gain_matrix(kp, self.n, "kp")
         self.kd = gain_matrix(kd, self.n, "kd")
         self.ki = None if ki is None else gain_matrix(ki, self.n, "ki")
-        self.friction = bool(friction)
+        if friction not in (True, False, "reference"):
+            raise InvalidParameterError(f"friction must be True, False or 'reference', got {friction!r}",
+                                        value=friction)
+        self.friction = friction
         self._kp, self._kd = compact_gain(self.kp), compact_gain(self.kd)
         self._ki = None if self.ki is None else compact_gain(self.ki)
         self.reset()
@@ -50,6 +57,8 @@ class ComputedTorque(Controller):
             self._t_prev = t
             v += apply_gain(self._ki, self._integral)
         tau = dyn.inverse_dynamics(q, qd, v)
-        if not self.friction and dyn._has_friction:
+        if self.friction is not True and dyn._has_friction:
             tau -= dyn.friction_torque(qd)
+            if self.friction == "reference":
+                tau += dyn.friction_torque(ref.qd)
         return tau

@@ -89,14 +89,17 @@ class Scene:
     def metrics(self, res: Any, method: str, gains: dict[str, Any] | None = None,
                 timing_samples: int = 200) -> dict[str, Any]:
         """Tracking error (RMS, max) [rad], torque RMS [N·m], share of samples whose command exceeds the
-        effort limits, divergence, and the controller's compute time per step [s], measured by replaying
-        recorded states through a fresh controller (so the simulator's own cost is not counted)."""
+        effort limits, divergence, and the controller's compute time per step [s], measured by replaying a
+        contiguous window of recorded states (from the middle of the run, as a loop would see them: warm
+        starts stay warm) through a fresh controller, so the simulator's own cost is not counted."""
         want = np.array([self.reference(t).q for t in res.t])
         err = np.abs(res.q - want) if len(res.t) else np.zeros((0, self.plant.n))
         limit = self.plant.effort_limit
         over = np.abs(res.tau) > limit * (1 + 1e-9) if len(res.t) else np.zeros((0, 1), bool)
         ctrl = self.controller(method, gains)
-        idx = np.linspace(0, max(len(res.t) - 1, 0), min(timing_samples, len(res.t))).astype(int)
+        count = min(timing_samples, len(res.t))
+        first = max((len(res.t) - count) // 2, 0)
+        idx = np.arange(first, first + count)
         refs = [self.reference(float(res.t[k])) for k in idx]
         t0 = time.perf_counter()
         for k, r in zip(idx, refs, strict=True):

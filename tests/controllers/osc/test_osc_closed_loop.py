@@ -10,17 +10,15 @@ import numpy as np
 import pytest
 
 import armctl
-from armctl.controllers.base import Controller
 from armctl.controllers.osc import (
     ClosedFormOSC,
-    Contact,
-    ContactForceTask,
     FramePoseTask,
     FramePositionTask,
     OperationalSpaceQP,
     PostureTask,
     TorqueLimit,
 )
+from armctl.scenes.panda_contact import PressAndSlide
 
 from .conftest import Q_HOME, panda_dynamics
 
@@ -65,60 +63,13 @@ def test_circle_tracking_with_the_exact_model() -> None:
     assert (np.abs(res.qd) <= dyn.model.velocity_limit).all()
 
 
-class _PressAndSlide(Controller):
-    """User-side scene logic around the QP: approach the table at 2 cm/s; on touching it, switch the
-    sliding contact on, free the pose task's z row and ramp the normal force to 10 N in 0.2 s; then slide 10 cm
-    along x (quintic profile)."""
-
-    def __init__(self, dyn: armctl.Dynamics, z_table: float, mu: float, slide_start: float, slide_time: float
-                 ) -> None:
-        super().__init__(dyn)
-        self.p0, self.z_table = dyn.frame_pose(Q_HOME), z_table
-        self.slide_start, self.slide_time = slide_start, slide_time
-        self.pose = FramePoseTask(kp=400.0)
-        self.pose.set_trajectory(self.target)
-        self.contact = Contact(mode="sliding", mu=mu, kd=100.0, active=False)
-        self.force = ContactForceTask(self.contact, 0.0, weight=1.0)
-        self.qp = OperationalSpaceQP(dyn, [self.pose, self.force, PostureTask(7, kp=25.0, priority=1)],
-                                     contacts=[self.contact])
-        self.touched: float | None = None
-
-    def target(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        pose, twist, acc = self.p0.copy(), np.zeros(6), np.zeros(6)
-        z_end = self.z_table - 0.01
-        pose[2, 3] = max(self.p0[2, 3] - 0.02 * t, z_end)
-        twist[2] = -0.02 if pose[2, 3] > z_end else 0.0
-        s = min(max((t - self.slide_start) / self.slide_time, 0.0), 1.0)
-        pose[0, 3] += 0.1 * s**3 * (10 - 15 * s + 6 * s * s)
-        twist[0] = 0.1 * 30 * s * s * (1 - s) ** 2 / self.slide_time
-        acc[0] = 0.1 * 60 * s * (1 - s) * (1 - 2 * s) / self.slide_time**2
-        return pose, twist, acc
-
-    def reset(self) -> None:
-        super().reset()
-        self.qp.reset()
-        self.contact.active, self.touched = False, None
-        self.pose.weight = 1.0
-        self.force.set_target(0.0)
-
-    def compute(self, t: float, q: np.ndarray, qd: np.ndarray, ref: armctl.Reference) -> np.ndarray:
-        if self.touched is None and self.dynamics.frame_pose(q)[2, 3] <= self.z_table:  # type: ignore[union-attr]
-            self.touched, self.contact.active = t, True
-            self.pose.weight = [1, 1, 0, 1, 1, 1]  # the contact takes over the normal direction
-        if self.touched is not None:
-            self.force.set_target(10.0 * min(1.0, (t - self.touched) / 0.2))
-        tau = self.qp.compute(t, q, qd, ref)
-        self.last_log = self.qp.last_log
-        return tau
-
-
 def test_press_and_slide_on_a_table_with_friction() -> None:
     """Approach, press with 10 N, slide 10 cm against μ = 0.3: after settling the normal force stays within
     ±10 % of 10 N, contact is never lost (no bounce), and the slide is done; the plant feels the contact as
     −Jᵀh_e (the simulator's plane)."""
     dyn = panda_dynamics(friction=True)
     z_table, mu = dyn.frame_pose(Q_HOME)[2, 3] - 0.005, 0.3
-    scene = _PressAndSlide(dyn, z_table, mu, slide_start=0.75, slide_time=1.0)
+    scene = PressAndSlide(dyn, z_table, mu, slide_start=0.75, slide_time=1.0)
     plane = sim.Plane(sim.KelvinVoigt(2e4, 50.0), normal=(0, 0, 1), point=(0, 0, z_table), friction=mu)
     res = sim.simulate(dyn, scene, armctl.Reference(Q_HOME), 1.95, q0=Q_HOME, environment=plane)
     assert not res.diverged and scene.touched is not None

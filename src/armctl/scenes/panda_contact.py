@@ -1,0 +1,137 @@
+"""``panda_contact``: the Panda approaches a table, presses on it with 10 N and slides 10 cm along it against
+surface friction — operational-space control as a QP with a sliding contact and normal-force regulation,
+against Khatib's closed-form controller, which can only press through its pose stiffness."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from armctl.controllers.base import Controller
+from armctl.controllers.osc import (
+    ClosedFormOSC,
+    Contact,
+    ContactForceTask,
+    FramePoseTask,
+    OperationalSpaceQP,
+    PostureTask,
+)
+from armctl.dynamics.base import Dynamics
+from armctl.model import library
+from armctl.reference import Reference
+from armctl.scenes.base import Scene
+
+Q_HOME = np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])  # the Panda's "ready" posture
+
+
+class PressAndSlide(Controller):
+    """Scene logic around an operational-space controller: approach the table at 2 cm/s; on touching it
+    (tool below the table plane) the QP switches its sliding contact on, frees the pose task's normal row
+    and ramps the normal force to ``force`` [N] in 0.2 s; then slide ``slide`` [m] along x (quintic profile
+    of ``slide_time`` s from ``slide_start`` s). ``closed_form=True`` uses :class:`ClosedFormOSC` instead,
+    which keeps pushing its pose target 1 cm below the table: the force is whatever its stiffness gives."""
+
+    def __init__(self, dyn: Dynamics, z_table: float, mu: float, force: float = 10.0, slide: float = 0.1,
+                 slide_start: float = 0.75, slide_time: float = 1.0, closed_form: bool = False,
+                 kp: float = 400.0) -> None:
+        super().__init__(dyn)
+        self.p0, self.z_table = dyn.frame_pose(Q_HOME), float(z_table)
+        self.force_target, self.slide = float(force), float(slide)
+        self.slide_start, self.slide_time = float(slide_start), float(slide_time)
+        self.pose = FramePoseTask(kp=kp)
+        self.pose.set_trajectory(self.target)
+        self.closed_form = bool(closed_form)
+        self.touched: float | None = None
+        if self.closed_form:
+            self.ctrl: Controller = ClosedFormOSC(dyn, self.pose, PostureTask(dyn.n, kp=25.0))
+        else:
+            self.contact = Contact(mode="sliding", mu=mu, kd=100.0, active=False)
+            self.force_task = ContactForceTask(self.contact, 0.0, weight=1.0)
+            self.ctrl = OperationalSpaceQP(dyn, [self.pose, self.force_task, PostureTask(dyn.n, kp=25.0, priority=1)],
+                                           contacts=[self.contact])
+
+    def target(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Tool pose, twist and acceleration targets at time t [s]."""
+        pose, twist, acc = self.p0.copy(), np.zeros(6), np.zeros(6)
+        z_end = self.z_table - 0.01
+        pose[2, 3] = max(self.p0[2, 3] - 0.02 * t, z_end)
+        twist[2] = -0.02 if pose[2, 3] > z_end else 0.0
+        s = min(max((t - self.slide_start) / self.slide_time, 0.0), 1.0)
+        pose[0, 3] += self.slide * s**3 * (10 - 15 * s + 6 * s * s)
+        twist[0] = self.slide * 30 * s * s * (1 - s) ** 2 / self.slide_time
+        acc[0] = self.slide * 60 * s * (1 - s) * (1 - 2 * s) / self.slide_time**2
+        return pose, twist, acc
+
+    def reset(self) -> None:
+        super().reset()
+        self.ctrl.reset()
+        self.touched = None
+        self.pose.weight = 1.0
+        if not self.closed_form:
+            self.contact.active = False
+            self.force_task.set_target(0.0)
+
+    def compute(self, t: float, q: np.ndarray, qd: np.ndarray, ref: Reference) -> np.ndarray:
+        if self.touched is None and self.dynamics.frame_pose(q)[2, 3] <= self.z_table:  # type: ignore[union-attr]
+            self.touched = t
+            if not self.closed_form:
+                self.contact.active = True
+                self.pose.weight = [1, 1, 0, 1, 1, 1]  # the contact takes over the normal direction
+        if self.touched is not None and not self.closed_form:
+            self.force_task.set_target(self.force_target * min(1.0, (t - self.touched) / 0.2))
+        tau = self.ctrl.compute(t, q, qd, ref)
+        self.last_log = dict(self.ctrl.last_log)
+        return tau
+
+
+def panda_contact_model() -> Any:
+    return library.panda().with_friction(viscous=[0.5, 0.5, 0.5, 0.5, 0.2, 0.2, 0.2],
+                                         coulomb=[0.8, 0.8, 0.8, 0.8, 0.3, 0.3, 0.3])
+
+
+class ContactScene(Scene):
+    """A scene whose error is the tool's position error [m] against the controller's target, with the normal
+    force error after settling [N] and contact loss reported."""
+
+    z_table: float = 0.0
+    mu: float = 0.3
+
+    def controller(self, method: str, gains: dict[str, Any] | None = None) -> Controller:
+        from armctl.errors import UnknownNameError
+
+        if method not in self.methods:
+            raise UnknownNameError("method", method, self.methods)
+        kp = float((gains or {}).get("kp", 400.0))
+        return PressAndSlide(self.dynamics("exact"), self.z_table, self.mu, closed_form=method == "osc_closed_form",
+                             kp=kp)
+
+    def metrics(self, res: Any, method: str, gains: dict[str, Any] | None = None,
+                timing_samples: int = 100) -> dict[str, Any]:
+        out = super().metrics(res, method, gains, timing_samples)
+        dyn = self.dynamics("exact")
+        probe = self.controller(method, gains)
+        x = np.array([dyn.frame_pose(q)[:3, 3] for q in res.q])
+        want = np.array([probe.target(float(t))[0][:3, 3] for t in res.t])  # type: ignore[attr-defined]
+        err = np.linalg.norm((x - want)[:, :2], axis=1)  # in the table plane: the normal is force-controlled
+        fn = -res.contact_force[:, 0, 2] if res.contact_force.size else np.zeros(len(res.t))
+        touch = np.flatnonzero(fn > 0)
+        settled = (res.t >= res.t[touch[0]] + 0.4) if touch.size else np.zeros(len(res.t), bool)
+        out.update({"rms_error": float(np.sqrt((err**2).mean())), "max_error": float(err.max()),
+                    "force_rms_error": float(np.sqrt(((fn[settled] - 10.0) ** 2).mean())) if settled.any() else
+                    float("nan"),
+                    "contact_lost": bool(touch.size and (fn[touch[0] + 1:] <= 0).any()), "error_unit": "m"})
+        return out
+
+
+def panda_contact() -> Scene:
+    from armctl.sim import KelvinVoigt, Plane
+
+    model = panda_contact_model()
+    z_table = float(Dynamics(model).frame_pose(Q_HOME)[2, 3]) - 0.005
+    plane = Plane(KelvinVoigt(2e4, 50.0), normal=(0, 0, 1), point=(0, 0, z_table), friction=0.3)
+    sc = ContactScene("panda_contact", "Panda pressing 10 N on a table with friction and sliding 10 cm",
+                      plant=model, exact=model, reduced=model, reference=lambda t: Reference(Q_HOME), duration=1.95,
+                      methods=("osc_qp", "osc_closed_form"), q0=Q_HOME, sim_options={"environment": plane})
+    sc.z_table = z_table
+    return sc
