@@ -161,3 +161,25 @@ def test_pendulum_sticks_exactly_when_gravity_is_below_breakaway(q0: float, marg
         assert (res.q == q0).all()
     else:
         assert abs(res.q[-1, 0] - q0) > 0.0 and np.sign(res.q[-1, 0] - q0) == -np.sign(q0)
+
+
+@settings(max_examples=12, deadline=None)
+@given(q0=st.lists(st.floats(-2.0, 2.0), min_size=3, max_size=3),
+       static=st.lists(st.floats(0.5, 40.0), min_size=3, max_size=3),
+       ratio=st.floats(0.3, 1.0),
+       torque=st.lists(st.floats(-10.0, 10.0), min_size=3, max_size=3))
+def test_several_joints_stick_and_slip_consistently(q0: list[float], static: list[float], ratio: float,
+                                                    torque: list[float]) -> None:
+    """planar_3r from rest under random constant torques and random stiction: whatever sticks or slips, a
+    stuck joint has exactly zero velocity and a holding torque within its breakaway band, and the energy
+    balance closes (the stick solve and the events lose or make no energy)."""
+    static_a = np.array(static)
+    model = armctl.models.planar_3r().with_friction(viscous=0.2, coulomb=ratio * static_a, static=static_a)
+    res = simulate(model, OpenLoop(Ramp(torque, [0.0, 0.0, 0.0])), armctl.Reference.hold(q0), 0.3, dt=5e-4)
+    assert not res.diverged
+    stuck = res.stuck
+    assert (res.qd[stuck] == 0.0).all()
+    held = np.abs(res.tau_friction) <= static_a * (1 + 1e-9) + 1e-9
+    assert held[stuck].all()
+    scale = max(np.abs(res.work_actuator).max(), 1.0)
+    assert np.abs(res.energy_balance()).max() <= 1e-6 * scale

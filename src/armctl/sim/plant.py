@@ -107,6 +107,10 @@ class Plant:
         return self.kinetic_friction(qd) + self.hold
 
     def _set_direction(self, direction: FloatArray) -> None:
+        key = direction.tolist()
+        if key == getattr(self, "_direction_key", None):
+            return
+        self._direction_key = key
         self.direction = direction
         if self._stickslip:
             f: StickSlip = self.friction  # type: ignore[assignment]

@@ -26,12 +26,14 @@ from armctl.reference import Reference
 from armctl.sim import setup
 from armctl.sim.contact import Environment, ForceSensor
 from armctl.sim.friction import FrictionModel
-from armctl.sim.integrators import make_step
+from armctl.sim.integrators import fast_step, make_step
 from armctl.sim.plant import Plant
 from armctl.sim.recorder import Recorder
 from armctl.sim.result import SimResult
 from armctl.sim.stepper import advance
 from armctl.sim.stick_slip import NotPositiveDefinite
+
+_GT = float.__gt__
 
 
 def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
@@ -84,6 +86,7 @@ def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
 
     pl = Plant(dyn, sc.friction, sc.environments, sc.disturbance)
     step = make_step(scheme, pl)
+    fast = fast_step(scheme, pl)
     simple = pl.simple
     implicit = scheme in ("implicit-euler", "semi-implicit-euler")  # these give no q̈ at the step start
     samples = n_periods + 1
@@ -123,8 +126,9 @@ def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
             v.flags.writeable = False
             Q[k] = q
             QD[k] = v
-            WF[k] = wf
-            WE[k] = we
+            if not simple:
+                WF[k] = wf
+                WE[k] = we
             qm, vm = q, v
             if rec.measured:
                 if noisy:
@@ -147,7 +151,7 @@ def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
                 divergence, rows = (t, f"the controller returned a non-finite torque {tau}", q, v), k
                 break
             tau_a = tau
-            if clip and any(abs(x) > lim for x, lim in zip(tl, lim_list, strict=True)):
+            if clip and any(map(_GT, map(abs, tl), lim_list)):
                 tau_a = np.clip(tau, -limit, limit)
             TAU[k] = tau
             TAUA[k] = tau_a
@@ -159,6 +163,12 @@ def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
                     QDD[k] = pl.accel(t, q, v, tau_a)
                 if k == n_periods:
                     break
+                if fast is not None:  # no friction, contact or disturbance: straight to ABA
+                    for s in range(m):
+                        q, v, a0 = fast(q, v, tau_a, h)
+                        if s == 0:
+                            QDD[k] = a0
+                    continue
                 for s in range(m):
                     q, v, a0, dwf, dwe = advance(pl, step, t + s * h, q, v, tau_a, h, begun=s == 0)
                     if s == 0 and a0 is not None:

@@ -1,0 +1,256 @@
+"""Speed of the closed-loop simulator (issue 3), against MuJoCo stepping the same arm from a Python loop.
+
+Run: ``python -m armctl.bench.sim_speed [--quick] [--runs N] [--workers W]``. Prints:
+
+* Panda (7 joints), a computed-torque controller at 1 kHz tracking a joint-space sine, 1 ms steps, 10 s of
+  simulated time: armctl's real-time factor and cost per control step for RK4 (the default) and the
+  cheapest scheme ("euler"), and the same closed loop with MuJoCo stepping the Panda (loaded from the same
+  URDF, RK4 at 1 ms) from a Python loop — same controller, same reference — plus MuJoCo's bare ``mj_step``
+  loop. Medians over interleaved rounds, so that a busy shared machine slows both alike.
+* A sweep of ``--runs`` (default 200) 5 s planar_2r scenes (PD + gravity compensation with different gains,
+  stick–slip joint friction) through a process pool of ``--workers`` (default 2) against the same runs
+  one after the other; the speed-up.
+
+Targets from the issue: real-time factor ≥ 30, cost per step ≤ 2× the MuJoCo loop, sweep speed-up ≥ 1.7 on
+two cores.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import re
+import statistics
+import time
+from typing import Any
+
+import numpy as np
+
+import armctl
+from armctl.controllers import Controller
+from armctl.reference import Reference
+from armctl.sim import simulate, sweep
+
+TARGETS = {"real_time_factor": 30.0, "ratio_to_mujoco": 2.0, "sweep_speedup": 1.7}
+
+
+class LocalComputedTorque(Controller):
+    """τ = M(q)(q̈_r + K_p e + K_d ė) + C q̇ + g (used when armctl.controllers has no ComputedTorque yet)."""
+
+    def __init__(self, dynamics: armctl.Dynamics, kp: float, kd: float) -> None:
+        super().__init__(dynamics)
+        self.kp, self.kd = kp, kd
+        self._mass, self._rnea = dynamics._mass, dynamics._rigid_torque
+        self._zero = np.zeros(dynamics.n)
+
+    def compute(self, t: float, q: np.ndarray, qd: np.ndarray, ref: Reference) -> np.ndarray:
+        a = ref.qdd + self.kp * (ref.q - q) + self.kd * (ref.qd - qd)
+        return self._mass(q) @ a + self._rnea(q, qd, self._zero)  # type: ignore[no-any-return]
+
+
+def computed_torque(dyn: armctl.Dynamics, kp: float, kd: float) -> tuple[Any, str]:
+    """The library's ComputedTorque if it exists, else the local one; and which it is."""
+    cls = getattr(armctl.controllers, "ComputedTorque", None)
+    if cls is not None:
+        return cls(dyn, kp, kd), "armctl.controllers.ComputedTorque"
+    return LocalComputedTorque(dyn, kp, kd), "LocalComputedTorque (bench)"
+
+
+class SampledSine:
+    """q_r(t) = q0 + a sin(ω t), precomputed at the control instants (a table lookup per call)."""
+
+    def __init__(self, q0: np.ndarray, amplitude: float, omega: float, period: float, duration: float) -> None:
+        n_samples = round(duration / period) + 1
+        self.period = period
+        self.table = []
+        for k in range(n_samples):
+            t = k * period
+            s, c = math.sin(omega * t), math.cos(omega * t)
+            self.table.append(Reference(q0 + amplitude * s, np.full(len(q0), amplitude * omega * c),
+                                        np.full(len(q0), -amplitude * omega**2 * s)))
+
+    def __call__(self, t: float) -> Reference:
+        return self.table[min(round(t / self.period), len(self.table) - 1)]
+
+
+def panda_mujoco() -> tuple[Any, Any]:
+    """The Panda in MuJoCo from the same URDF: meshes stripped, fingers fixed, no damping, armature,
+    limits or contacts; RK4 at 1 ms."""
+    import mujoco
+
+    text = armctl.models.robot_description("panda_description/urdf/panda.urdf").read_text()
+    for tag in ("visual", "collision"):
+        text = re.sub(rf"<{tag}>.*?</{tag}>", "", text, flags=re.S)
+    text = re.sub(r"<dynamics[^>]*/>", "", text)
+    text = re.sub(r'(<joint name="panda_finger_joint[12]"[^>]*type=)"prismatic"', r'\1"fixed"', text)
+    text = re.sub(r"(<robot[^>]*>)", r'\1<mujoco><compiler discardvisual="true" fusestatic="false" '
+                  r'balanceinertia="false"/></mujoco>', text, count=1)
+    m = mujoco.MjModel.from_xml_string(text)
+    m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONSTRAINT) | int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
+    m.dof_damping[:] = 0.0
+    m.dof_armature[:] = 0.0
+    m.dof_frictionloss[:] = 0.0
+    m.opt.integrator = mujoco.mjtIntegrator.mjINT_RK4
+    m.opt.timestep = 1e-3
+    if m.nv != 7:
+        raise RuntimeError(f"expected the 7 Panda arm joints in MuJoCo, got {m.nv}")
+    return m, mujoco.MjData(m)
+
+
+def mujoco_loop(m: Any, d: Any, controller: Any, reference: Any, q0: np.ndarray, steps: int) -> float:
+    """Seconds for ``steps`` closed-loop steps: read the state, control, apply, mj_step."""
+    import mujoco
+
+    d.qpos[:] = q0
+    d.qvel[:] = 0.0
+    mujoco.mj_forward(m, d)
+    step, qpos, qvel, qfrc = mujoco.mj_step, d.qpos, d.qvel, d.qfrc_applied
+    t0 = time.perf_counter()
+    for k in range(steps):
+        t = k * 1e-3
+        qfrc[:] = controller(t, qpos.copy(), qvel.copy(), reference(t))
+        step(m, d)
+    return time.perf_counter() - t0
+
+
+def mujoco_bare(m: Any, d: Any, q0: np.ndarray, steps: int) -> float:
+    import mujoco
+
+    d.qpos[:] = q0
+    d.qvel[:] = 0.0
+    step = mujoco.mj_step
+    t0 = time.perf_counter()
+    for _ in range(steps):
+        step(m, d)
+    return time.perf_counter() - t0
+
+
+def panda_figures(duration: float = 10.0, rounds: int = 3) -> dict[str, Any]:
+    model = armctl.models.panda()
+    dyn = armctl.Dynamics(model)
+    q0 = np.array([0.0, -0.4, 0.0, -2.0, 0.0, 1.6, 0.8])
+    ref = SampledSine(q0, 0.3, 2.0, 1e-3, duration)
+    ctrl, ctrl_name = computed_torque(armctl.Dynamics(model), 400.0, 40.0)
+    steps = round(duration / 1e-3)
+    out: dict[str, Any] = {"controller": ctrl_name, "steps": steps, "duration_s": duration}
+    try:
+        m, d = panda_mujoco()
+    except ImportError:
+        m = d = None
+    samples: dict[str, list[float]] = {"rk4": [], "euler": [], "mujoco_closed_loop": [], "mujoco_bare": []}
+    error = {}
+    for _ in range(rounds):
+        for integ in ("rk4", "euler"):
+            res = simulate(dyn, ctrl, ref, duration, q0=q0, integrator=integ)
+            samples[integ].append(res.info["wall_time"])
+            error[integ] = float(np.abs(res.q[-1] - ref(duration).q).max())
+        if m is not None:
+            samples["mujoco_closed_loop"].append(mujoco_loop(m, d, ctrl, ref, q0, steps))
+            samples["mujoco_bare"].append(mujoco_bare(m, d, q0, steps))
+    for name, vals in samples.items():
+        if vals:
+            wall = statistics.median(vals)
+            out[name] = {"wall_s": wall, "us_per_step": 1e6 * wall / steps, "real_time_factor": duration / wall}
+    out["final_tracking_error_rad"] = error
+    if "mujoco_closed_loop" in out:
+        base = out["mujoco_closed_loop"]["us_per_step"]
+        for integ in ("rk4", "euler"):
+            out[integ]["ratio_to_mujoco"] = out[integ]["us_per_step"] / base
+    return out
+
+
+class SweepPD(Controller):
+    """τ = g(q) + K_p (q_r − q) + K_d (q̇_r − q̇) for the sweep (module level, so that it pickles)."""
+
+    def __init__(self, dynamics: armctl.Dynamics, kp: float, kd: float) -> None:
+        super().__init__(dynamics)
+        self.kp, self.kd = kp, kd
+
+    def compute(self, t: float, q: np.ndarray, qd: np.ndarray, ref: Reference) -> np.ndarray:
+        return self.dynamics.gravity_torque(q) + self.kp * (ref.q - q) + self.kd * (ref.qd - qd)
+
+
+class SweepSine:
+    """q_r(t) = q0 + a sin(ω t) at the 1 kHz control instants of a 5 s run, tabulated in the worker on first
+    use (the table is not pickled)."""
+
+    def __init__(self, q0: list[float], amplitude: float, omega: float) -> None:
+        self.args = (np.asarray(q0, dtype=float), amplitude, omega)
+        self._table: SampledSine | None = None
+
+    def __getstate__(self) -> dict[str, Any]:
+        return {"args": self.args, "_table": None}
+
+    def __call__(self, t: float) -> Reference:
+        if self._table is None:
+            self._table = SampledSine(*self.args, period=1e-3, duration=5.0)
+        return self._table(t)
+
+
+def rms_error(res: Any) -> float:
+    """Summary returned by each sweep run (run in the worker)."""
+    return float(np.sqrt(np.mean(res.q_measured[:, 0] ** 2))) if res.diverged else float(res.q[-1, 0])
+
+
+def sweep_cases(runs: int) -> list[dict[str, Any]]:
+    from armctl.bench import sim_speed as me  # pickled by their importable name, also under "python -m"
+
+    model = armctl.models.planar_2r().with_friction(viscous=10.0, coulomb=30.0, static=40.0)
+    ctrl_model = model.reduced(friction=False)
+    ref = me.SweepSine([0.3, -0.5], 0.4, 1.5)
+    gains = np.geomspace(500.0, 5e4, runs)
+    return [{"plant": model, "controller": me.SweepPD(armctl.Dynamics(ctrl_model), kp, 2 * math.sqrt(kp * 250.0)),
+             "reference": ref, "duration": 5.0} for kp in gains]
+
+
+def sweep_figures(runs: int = 200, workers: int = 2) -> dict[str, Any]:
+    from armctl.bench import sim_speed as me
+
+    cases = sweep_cases(runs)
+    t0 = time.perf_counter()
+    pooled = sweep(cases, summary=me.rms_error, max_workers=workers, progress=True)
+    t_pool = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    serial = sweep(cases, summary=me.rms_error, executor="serial", progress=True)
+    t_serial = time.perf_counter() - t0
+    if not np.allclose(pooled, serial, rtol=0, atol=0):
+        raise RuntimeError("pooled and serial sweeps disagree")
+    return {"runs": runs, "workers": workers, "serial_s": t_serial, "pool_s": t_pool, "speedup": t_serial / t_pool,
+            "s_per_run_serial": t_serial / runs}
+
+
+def report(panda: dict[str, Any], sw: dict[str, Any] | None) -> str:
+    lines = [f"Panda, {panda['controller']} at 1 kHz, 1 ms steps, {panda['duration_s']:g} s "
+             f"({panda['steps']} steps); medians of interleaved rounds"]
+    for name in ("rk4", "euler", "mujoco_closed_loop", "mujoco_bare"):
+        if name in panda:
+            f = panda[name]
+            extra = f", {f['ratio_to_mujoco']:.2f}× the MuJoCo closed loop" if "ratio_to_mujoco" in f else ""
+            lines.append(f"  {name:<20} {f['us_per_step']:7.1f} µs/step  real-time ×{f['real_time_factor']:6.1f}"
+                         f"{extra}")
+    lines.append(f"  targets: real-time ×≥{TARGETS['real_time_factor']:g}, ≤{TARGETS['ratio_to_mujoco']:g}× MuJoCo")
+    if sw is not None:
+        lines.append(f"Sweep of {sw['runs']} × 5 s planar_2r runs: serial {sw['serial_s']:.1f} s, process pool of "
+                     f"{sw['workers']} {sw['pool_s']:.1f} s: speed-up ×{sw['speedup']:.2f} "
+                     f"(target ≥{TARGETS['sweep_speedup']:g})")
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> dict[str, Any]:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="2 s Panda runs, one round, a 20-run sweep")
+    parser.add_argument("--runs", type=int, default=None, help="sweep runs (default 200; 20 with --quick)")
+    parser.add_argument("--workers", type=int, default=2, help="process pool size (default 2)")
+    parser.add_argument("--no-sweep", action="store_true", help="skip the sweep")
+    args = parser.parse_args(argv)
+    panda = panda_figures(2.0 if args.quick else 10.0, 1 if args.quick else 3)
+    print(report(panda, None), flush=True)
+    sw = None
+    if not args.no_sweep:
+        sw = sweep_figures(args.runs or (20 if args.quick else 200), args.workers)
+        print(report(panda, sw).splitlines()[-1])
+    return {"panda": panda, "sweep": sw}
+
+
+if __name__ == "__main__":
+    main()
