@@ -1,0 +1,225 @@
+"""The benchmark sections ``integrators``, ``backends`` and ``fidelity`` (issue 7), each run once in quick mode:
+finite numbers, the orderings theory predicts, and a written chart."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+import armctl
+from armctl.bench import backends, fidelity, integrators
+
+
+def _finite_numbers(x: Any, path: str = "") -> list[str]:
+    """Paths of the numbers in ``x`` that are not finite (booleans and None are not numbers here)."""
+    if isinstance(x, dict):
+        return [p for k, v in x.items() for p in _finite_numbers(v, f"{path}.{k}")]
+    if isinstance(x, list | tuple):
+        return [p for i, v in enumerate(x) for p in _finite_numbers(v, f"{path}[{i}]")]
+    if isinstance(x, float | int) and not isinstance(x, bool) and not math.isfinite(x):
+        return [path]
+    return []
+
+
+def _check_section(module: Any, data: dict[str, Any], tmp_path: Path) -> None:
+    json.dumps(data, allow_nan=False)  # JSON-serialisable, no NaN or inf
+    assert _finite_numbers(data) == []
+    assert module.summary(data).strip()
+    png = tmp_path / f"{module.__name__.rsplit('.', 1)[-1]}.png"
+    module.plot(data, png)
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert png.stat().st_size > 10_000
+
+
+# ----------------------------------------------------------------------------------------------- integrators
+@pytest.fixture(scope="module")
+def integ() -> dict[str, Any]:
+    return integrators.run(quick=True)
+
+
+def test_integrators_section(integ: dict[str, Any], tmp_path: Path) -> None:
+    _check_section(integrators, integ, tmp_path)
+    assert set(integ["integrators"]) == set(integrators.INTEGRATORS)
+    for d in integ["integrators"].values():
+        assert all(c["cost"] > 0 and c["error"] > 0 and not c["diverged"] for c in d["cases"])
+
+
+def test_independent_reference_is_accurate(integ: dict[str, Any]) -> None:
+    """DOP853 at rtol 1e-11 agrees with itself at rtol 1e-13, and with the simulator's finest RK4 run (a
+    different method) far below the Euler errors."""
+    assert integ["reference"]["error_estimate"] < 1e-12
+    assert min(c["error"] for c in integ["integrators"]["rk4"]["cases"]) < 1e-10
+
+
+def test_rk4_is_fourth_order(integ: dict[str, Any]) -> None:
+    """Halving the step divides RK4's error by ~16 in its asymptotic range."""
+    d = integ["integrators"]["rk4"]
+    valid = [p for p in d["orders"] if p is not None]
+    assert len(valid) >= 3
+    assert all(3.6 < p < 4.4 for p in valid)
+    assert 3.8 < d["asymptotic_order"] < 4.2
+
+
+@pytest.mark.parametrize("name", ["semi-implicit-euler", "implicit-euler"])
+def test_euler_schemes_are_first_order(integ: dict[str, Any], name: str) -> None:
+    d = integ["integrators"][name]
+    valid = [p for p in d["orders"] if p is not None]
+    assert len(valid) == len(d["orders"])
+    assert all(0.85 < p < 1.15 for p in valid)
+    assert 0.95 < d["asymptotic_order"] < 1.05
+
+
+def test_rk4_beats_euler_at_every_step(integ: dict[str, Any]) -> None:
+    rk4 = integ["integrators"]["rk4"]["cases"]
+    for name in ("semi-implicit-euler", "implicit-euler"):
+        for a, b in zip(rk4, integ["integrators"][name]["cases"], strict=True):
+            assert a["step"] == b["step"]
+            assert a["error"] < 1e-3 * b["error"]
+
+
+def test_observed_orders_of_a_power_law() -> None:
+    steps = [0.1 / 2**k for k in range(5)]
+    errors = [3.0 * h**4 for h in steps]
+    orders = integrators.observed_orders(steps, errors, floor=1e-8)
+    assert orders[:3] == pytest.approx([4.0, 4.0, 4.0])
+    assert orders[3] is None  # the finer error (4.6e-9) is below the floor
+
+
+# -------------------------------------------------------------------------------------------------- backends
+@pytest.fixture(scope="module")
+def back() -> dict[str, Any]:
+    return backends.run(quick=True)
+
+
+def test_backends_section(back: dict[str, Any], tmp_path: Path) -> None:
+    _check_section(backends, back, tmp_path)
+    assert {"puma560", "panda"} <= set(back["arms"])
+    for arm in back["arms"].values():
+        assert all(c["cost_s"] > 0 and c["error"] >= 0 for c in arm["candidates"].values())
+
+
+def test_reference_candidates_are_exact(back: dict[str, Any]) -> None:
+    for arm in back["arms"].values():
+        cands = arm["candidates"]
+        assert cands["lagrange_vm"]["error"] == 0.0  # the reference itself
+        if "lagrange_compiled" in cands:
+            assert cands["lagrange_compiled"]["error"] < 1e-12
+
+
+def test_pinocchio_error_is_exactly_the_rotor_coupling(back: dict[str, Any]) -> None:
+    """Pinocchio's armature model misses only the rotors' gyroscopic coupling: its error equals that of the
+    Lagrange backend without coupling, is clearly nonzero on arms with motors and zero on the Panda."""
+    for name, arm in back["arms"].items():
+        c = arm["candidates"]
+        assert c["pinocchio"]["error"] == pytest.approx(c["lagrange_vm_nc"]["error"], rel=1e-6, abs=1e-12)
+        assert c["pinocchio"]["error"] == pytest.approx(arm["rotor_coupling_share"], rel=1e-6, abs=1e-12)
+        if arm["has_motors"]:
+            assert c["pinocchio"]["error"] > 1e-4, name
+        else:
+            assert c["pinocchio"]["error"] < 1e-12, name
+    assert not back["arms"]["panda"]["has_motors"]
+
+
+def test_simplified_models_cost_accuracy(back: dict[str, Any]) -> None:
+    """Dropping the rotors or the friction is a far larger error than the missing coupling."""
+    for arm in back["arms"].values():
+        c = arm["candidates"]
+        for key in ("pinocchio_no_rotors", "pinocchio_no_friction", "pinocchio_rigid"):
+            if key in c:
+                assert c[key]["error"] > 10 * max(c["pinocchio"]["error"], 1e-6)
+        if "pinocchio_rigid" in c:
+            assert c["pinocchio_rigid"]["error"] >= c["pinocchio_no_friction"]["error"]
+
+
+def test_relative_rms() -> None:
+    ref = np.array([[3.0, 4.0], [0.0, 0.0]])
+    assert backends.relative_rms(ref, ref) == 0.0
+    assert backends.relative_rms(1.1 * ref, ref) == pytest.approx(0.1)
+
+
+# -------------------------------------------------------------------------------------------------- fidelity
+@pytest.fixture(scope="module")
+def fid() -> dict[str, Any]:
+    return fidelity.run(quick=True)
+
+
+def test_fidelity_section(fid: dict[str, Any], tmp_path: Path) -> None:
+    _check_section(fidelity, fid, tmp_path)
+    assert {"planar_2r", "panda_topp"} <= set(fid["scenes"])
+
+
+def test_shares_sum_to_one(fid: dict[str, Any]) -> None:
+    for s in fid["scenes"].values():
+        assert set(s["shares"]) == set(fidelity.TERMS)
+        assert sum(s["shares"].values()) == pytest.approx(1.0)
+        assert all(0.0 <= v <= 1.0 for v in s["shares"].values())
+        assert s["shares"]["contact"] == 0.0
+
+
+def test_shares_follow_the_models(fid: dict[str, Any]) -> None:
+    """No motors on the Panda: no rotor term; no friction on the 2R arm; friction where the plant has it;
+    the 2R arm's rotors (k_r = 100) are a large share."""
+    sc = fid["scenes"]
+    assert sc["panda_topp"]["shares"]["rotor"] == 0.0
+    assert sc["planar_2r"]["shares"]["friction"] == 0.0
+    assert sc["pendulum"]["shares"]["friction"] > 0.01
+    assert sc["panda_topp"]["shares"]["friction"] > 0.005
+    assert sc["planar_2r"]["shares"]["rotor"] > 0.1
+
+
+def test_terms_add_up_to_the_exact_inverse_dynamics() -> None:
+    """inertia + Coriolis + gravity + rotor + friction = the exact (Lagrange, rotor-coupled) τ of the plant."""
+    model = armctl.models.planar_2r().with_friction(viscous=0.5, coulomb=2.0)
+    ref = armctl.references.Sinusoid([0.3, -0.4], [0.4, 0.5], [0.5, 0.7])
+    times = np.linspace(0.0, 2.0, 7)
+    terms = fidelity.model_terms(model, model, ref, times)
+    exact = armctl.Dynamics(model, backend="lagrange", rotor_coupling=True)
+    for i, t in enumerate(times):
+        r = ref(float(t))
+        total = sum(terms[k][i] for k in fidelity.TERMS)
+        np.testing.assert_allclose(total, exact.inverse_dynamics(r.q, r.qd, r.qdd), rtol=1e-9, atol=1e-9)
+
+
+def test_gravity_dominates_a_rest_like_reference() -> None:
+    model = armctl.models.planar_2r()
+    slow = armctl.references.Sinusoid([0.3, -0.4], [0.4, 0.5], [0.01, 0.01])
+    shares = fidelity.term_shares(fidelity.model_terms(model, model, slow, np.linspace(0.0, 20.0, 50)))["shares"]
+    assert shares["gravity"] > 0.99
+    assert max(shares, key=shares.__getitem__) == "gravity"
+
+
+def test_choice_is_the_cheapest_within_the_factor(fid: dict[str, Any]) -> None:
+    for s in fid["scenes"].values():
+        cl = s["closed_loop"]
+        cands, choice = cl["candidates"], cl["candidates"][cl["choice"]]
+        assert cl["threshold"] == pytest.approx(fid["factor"] * cands[cl["baseline"]]["rms_error"])
+        assert not choice["diverged"] and choice["rms_error"] <= cl["threshold"]
+        for c in cands.values():
+            if not c["diverged"] and c["rms_error"] <= cl["threshold"]:
+                assert choice["compute_s"] <= (1 + cl["tie"]) * c["compute_s"]
+
+
+def test_dropping_the_rotors_breaks_tracking_on_the_2r_arm(fid: dict[str, Any]) -> None:
+    """Reflected rotor inertia k_r² I_m = 100 kg·m² is most of the 2R arm's inertia: without it computed
+    torque misses its error dynamics by far, so the chosen model keeps the rotors."""
+    cl = fid["scenes"]["planar_2r"]["closed_loop"]
+    no_rotor = [c for c in cl["candidates"].values() if not c["kept"]["rotors"]]
+    assert no_rotor and all(c["rms_error"] > 10 * cl["threshold"] for c in no_rotor)
+    assert cl["choice_kept"]["rotors"]
+
+
+def test_choose_tie_prefers_fewer_terms() -> None:
+    def cand(err: float, cost: float, rotors: bool, friction: bool) -> dict[str, Any]:
+        return {"rms_error": err, "compute_s": cost, "diverged": False,
+                "kept": {"rotors": rotors, "friction": friction}}
+
+    cands = {"full": cand(1.0, 10.0, True, True), "lean": cand(1.5, 10.5, False, True),
+             "bad": cand(3.0, 1.0, False, False)}
+    assert fidelity.choose(cands, "full", factor=2.0, tie=0.1) == "lean"
+    assert fidelity.choose(cands, "full", factor=2.0, tie=0.0) == "full"
+    assert fidelity.choose(cands, "full", factor=4.0, tie=0.1) == "bad"
