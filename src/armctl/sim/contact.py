@@ -48,17 +48,9 @@ def _skew(r: FloatArray) -> FloatArray:
     return np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
 
 
-def point_kinematics(dyn: Dynamics, q: FloatArray, point: ContactPoint) -> tuple[FloatArray, FloatArray]:
-    """(p, J_p): world position [m] of ``point`` and the 3×n Jacobian of its velocity."""
-    pose = dyn.frame_pose(q, point.frame)
-    jac = dyn._jacobian(q, point.frame)
-    r = pose[:3, :3] @ point.offset
-    return pose[:3, 3] + r, jac[:3] - _skew(r) @ jac[3:]
-
-
 class PointKinematics:
-    """:func:`point_kinematics` of a fixed set of points for one Dynamics, one frame evaluation per frame
-    (straight through Pinocchio for the ``"pinocchio"`` backend)."""
+    """Positions p [m] and velocity Jacobians J_p = J_lin − [r]× J_ang (3×n) of a fixed set of points for one
+    Dynamics, one frame evaluation per frame (straight through Pinocchio for the ``"pinocchio"`` backend)."""
 
     def __init__(self, dyn: Dynamics, points: Sequence[ContactPoint]) -> None:
         self.dyn = dyn
