@@ -205,20 +205,21 @@ class Dynamics(ABC):
         return self._friction(self._finite(qd, "qd"))
 
     def _friction(self, qd: FloatArray) -> FloatArray:
-        qd = np.asarray(qd, dtype=float)
-        tau = self._fv * qd if self._has_viscous else np.zeros(self.n)
         if self._has_coulomb:
-            tau += self._fc_mean * np.sign(qd)
+            tau = self._fc_mean * np.sign(qd)
             if self._has_asymmetry:
                 tau += self._fc_offset * (qd != 0)
-        return tau
+            if self._has_viscous:
+                tau += self._fv * qd
+            return tau
+        return self._fv * qd
 
     def inverse_dynamics(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike,
                          wrench: ArrayLike | None = None) -> FloatArray:
         """τ = M q̈ + C q̇ + g + τ_f(q̇) + J(q)ᵀ h_e, with ``wrench`` h_e = [f; μ] at the tool frame in
         world-aligned axes (the force the arm exerts on the environment)."""
         if self._has_friction or wrench is not None:
-            q, qd, qdd = self._finite(q, "q"), self._finite(qd, "qd"), self._finite(qdd, "qdd")
+            q, qd, qdd = self._inputs(("q", "qd", "qdd"), q, qd, qdd)
             tau = self._rigid_torque(q, qd, qdd)
             if self._has_friction:
                 tau += self._friction(qd)
@@ -232,7 +233,7 @@ class Dynamics(ABC):
         """q̈ = M⁻¹ (τ − C q̇ − g − τ_f(q̇) − Jᵀ h_e). Coulomb friction here is the kinetic one
         (sgn q̇, zero at rest); stick–slip is the simulator's business."""
         if self._has_friction or wrench is not None:
-            q, qd, tau = self._finite(q, "q"), self._finite(qd, "qd"), self._finite(tau, "tau")
+            q, qd, tau = self._inputs(("q", "qd", "tau"), q, qd, tau)
             if self._has_friction:
                 tau = tau - self._friction(qd)
             if wrench is not None:
