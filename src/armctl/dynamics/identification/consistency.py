@@ -67,7 +67,7 @@ class ConsistentEstimate:
 
 
 def consistent_estimate(problem: IdentificationProblem, model: RobotModel, estimate: LeastSquaresEstimate | None = None,
-                        prior: ArrayLike | None = None, prior_weight: float = 1e-4, max_evaluations: int = 300
+                        prior: ArrayLike | None = None, prior_weight: float = 1e-6, max_evaluations: int = 300
                         ) -> ConsistentEstimate:
     """The physically consistent estimate of ``model``'s π from ``problem`` (see the module).
 
@@ -98,13 +98,17 @@ def consistent_estimate(problem: IdentificationProblem, model: RobotModel, estim
         return np.concatenate([kmap @ pi, delta]) if problem.offsets else kmap @ pi
 
     def residual(x: FloatArray) -> FloatArray:
-        pi, delta, _ = layout.unpack(x)
-        return np.concatenate([r @ unknowns(pi, delta) - z, prior_scale * (null.T @ (pi - pi0))])
+        with np.errstate(all="ignore"):  # a wild trial step may overflow: give it a huge, finite cost
+            pi, delta, _ = layout.unpack(x)
+            out = np.concatenate([r @ unknowns(pi, delta) - z, prior_scale * (null.T @ (pi - pi0))])
+        return out if np.isfinite(out).all() else np.full(out.shape, 1e100)
 
     def jacobian(x: FloatArray) -> FloatArray:
-        _, _, (dpi, ddelta) = layout.unpack(x)
-        du = np.vstack([kmap @ dpi, ddelta]) if problem.offsets else kmap @ dpi
-        return np.vstack([r @ du, prior_scale * (null.T @ dpi)])
+        with np.errstate(all="ignore"):
+            _, _, (dpi, ddelta) = layout.unpack(x)
+            du = np.vstack([kmap @ dpi, ddelta]) if problem.offsets else kmap @ dpi
+            out = np.vstack([r @ du, prior_scale * (null.T @ dpi)])
+        return out if np.isfinite(out).all() else np.zeros(out.shape)
 
     x0 = layout.start(pi0)
     # Levenberg–Marquardt; near a rank-deficient J_i (a link at the edge of physical, e.g. massless) it

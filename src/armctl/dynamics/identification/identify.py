@@ -139,7 +139,7 @@ class IdentificationResult:
 
 def identify(model: RobotModel | Dynamics, data: IdentificationData | Sequence[IdentificationData], *,
              weighted: bool = True, consistent: bool = True, offsets: bool = True, base: BaseParameters | None = None,
-             prior: ArrayLike | None = None, prior_weight: float = 1e-4, rtol: float = 1e-7) -> IdentificationResult:
+             prior: ArrayLike | None = None, prior_weight: float = 1e-6, rtol: float = 1e-7) -> IdentificationResult:
     """Identify the dynamic parameters of ``model``'s arm from measured data.
 
     model: a RobotModel (or a Dynamics of one): its kinematics are trusted; its inertial and friction

@@ -3,9 +3,10 @@
 OLS:   θ̂ = argmin ‖W θ − y‖²,      σ̂² = ‖y − W θ̂‖² / (S n − p),      cov θ̂ = σ̂² (WᵀW)⁻¹
 WLS:   θ̂ = argmin ‖Σ^{-1/2}(W θ − y)‖²,   Σ = diag(σ̂_j²) for the rows of joint j,   cov θ̂ = (Wᵀ Σ⁻¹ W)⁻¹
 
-with σ̂_j² = ‖r_j‖² / (S − p/n) the per-joint residual variance of the OLS fit (Gautier & Poignet 2001):
-joints with noisier torques count less. The standard deviations assume white residuals; residuals of
-filtered, decimated data are somewhat correlated, so they are optimistic.
+with σ̂_j² = ‖r_j‖² / (S − p/n) the per-joint residual variance (Gautier & Poignet 2001), first of the OLS
+fit, then re-estimated from the WLS residual until it settles: joints with noisier torques count less. The
+standard deviations assume white residuals; residuals of filtered, decimated data are somewhat correlated,
+so they are optimistic.
 
 Before solving, the columns of W are scaled to unit norm and its singular values checked: if
 σ_min/σ_max < ``rtol`` the data do not excite some combinations of parameters, and
@@ -93,12 +94,19 @@ def solve_least_squares(problem: IdentificationProblem, weighted: bool = True, r
     r = (y - w @ theta).reshape(-1, n)
     s_count = r.shape[0]
     if weighted:
-        var_j = (r**2).sum(axis=0) / max(s_count - p / n, 1.0)
-        var_j = np.maximum(var_j, 1e-12 * max(var_j.max(), 1e-300))
-        wt = np.tile(1.0 / np.sqrt(var_j), s_count)
-        ww = w * wt[:, None]
-        theta = np.linalg.lstsq(ww, y * wt, rcond=None)[0]
-        r = (y - w @ theta).reshape(-1, n)
+        # iterated: the OLS residual of a quiet joint carries the OLS error that the noisy joints cause,
+        # so the variances are re-estimated from the WLS residual until they settle
+        var_prev = np.zeros(n)
+        for _ in range(5):
+            var_j = (r**2).sum(axis=0) / max(s_count - p / n, 1.0)
+            var_j = np.maximum(var_j, 1e-12 * max(var_j.max(), 1e-300))
+            wt = np.tile(1.0 / np.sqrt(var_j), s_count)
+            ww = w * wt[:, None]
+            theta = np.linalg.lstsq(ww, y * wt, rcond=None)[0]
+            r = (y - w @ theta).reshape(-1, n)
+            if np.all(np.abs(var_j - var_prev) <= 1e-3 * var_j):
+                break
+            var_prev = var_j
         cov = np.linalg.inv(ww.T @ ww)
         cond = float(np.linalg.cond(ww))
     else:

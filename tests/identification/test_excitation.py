@@ -1,0 +1,69 @@
+"""Fourier excitation: derivatives, periodicity, limits, and the optimiser's inputs."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import armctl
+from armctl.dynamics.identification import FourierExcitation, optimize_excitation
+from armctl.errors import InvalidParameterError, ShapeError
+from tests.conftest import dynamics
+
+
+def _random(n: int = 3, harmonics: int = 4, seed: int = 0) -> FourierExcitation:
+    rng = np.random.default_rng(seed)
+    return FourierExcitation(rng.standard_normal(n), rng.standard_normal((n, harmonics)),
+                             rng.standard_normal((n, harmonics)), period=6.0)
+
+
+def test_velocity_and_acceleration_are_the_derivatives_of_position() -> None:
+    traj = _random()
+    t = np.linspace(0.1, 5.9, 37)
+    h = 1e-5
+    q_p, qd_p, _ = traj.evaluate(t + h)
+    q_m, qd_m, _ = traj.evaluate(t - h)
+    _, qd, qdd = traj.evaluate(t)
+    np.testing.assert_allclose((q_p - q_m) / (2 * h), qd, atol=1e-6)
+    np.testing.assert_allclose((qd_p - qd_m) / (2 * h), qdd, atol=1e-5)
+
+
+def test_periodic_and_reference() -> None:
+    traj = _random()
+    for a, b in zip(traj.evaluate(1.3), traj.evaluate(1.3 + 2 * traj.period), strict=True):
+        np.testing.assert_allclose(a, b, atol=1e-9)
+    ref = traj(0.7)
+    assert isinstance(ref, armctl.Reference)
+    np.testing.assert_allclose(ref.qdd, traj.evaluate(0.7)[2])
+    assert traj.bandwidth == pytest.approx(4 / 6.0)
+    # zero-mean velocity: the motion returns, so every joint reverses (Coulomb friction is excited)
+    qd = traj.evaluate(np.linspace(0, traj.period, 2000, endpoint=False))[1]
+    assert np.allclose(qd.mean(axis=0), 0.0, atol=1e-9)
+
+
+def test_optimised_trajectory_respects_limits_on_a_dense_grid() -> None:
+    dyn = dynamics("planar_3r")
+    design = optimize_excitation(dyn, acceleration_limit=3.0, velocity_limit=1.0, period=5.0, harmonics=3,
+                                 maxiter=15, seed=1)
+    t = np.linspace(0.0, 5.0, 20001)
+    q, qd, qdd = design.trajectory.evaluate(t)
+    m = dyn.model
+    assert np.all(np.abs(qd) <= 1.0 + 1e-9) and np.all(np.abs(qdd) <= 3.0 + 1e-9)
+    assert np.all(q >= np.where(np.isfinite(m.lower), m.lower, -np.inf))
+    assert design.condition_number <= design.initial_condition_number * (1 + 1e-9)
+    # it uses its limits: some joint reaches its velocity or acceleration limit within 10%
+    assert np.abs(qd).max() > 0.9 or np.abs(qdd).max() > 2.7
+
+
+def test_limits_are_required_where_the_model_has_none() -> None:
+    with pytest.raises(InvalidParameterError, match="velocity_limit"):
+        optimize_excitation(dynamics("puma560"), acceleration_limit=3.0, maxiter=0)  # no velocity limits
+    with pytest.raises(ShapeError):
+        optimize_excitation(dynamics("panda"), acceleration_limit=[1.0, 2.0], maxiter=0)
+
+
+def test_bad_coefficients_are_refused() -> None:
+    with pytest.raises(ShapeError):
+        FourierExcitation(np.zeros(2), np.zeros((3, 2)), np.zeros((3, 2)), 1.0)
+    with pytest.raises(InvalidParameterError):
+        FourierExcitation(np.zeros(2), np.zeros((2, 2)), np.zeros((2, 2)), -1.0)
