@@ -82,10 +82,7 @@ class Recorder:
         # work of a torque held over [t_k, t_k+1) is exactly τ_kᵀ(q_k+1 − q_k)
         dw = np.einsum("ij,ij->i", self.tau_applied[: max(rows - 1, 0)], np.diff(q, axis=0))
         work_act = np.concatenate(([0.0], np.cumsum(dw)))[:rows]
-        if energy:
-            e = np.array([0.5 * float(v @ dyn._mass(p) @ v) + dyn._potential(p) for p, v in zip(q, qd, strict=True)])
-        else:
-            e = np.full(rows, np.nan)
+        e = _energies(dyn, q, qd) if energy else np.full(rows, np.nan)
         logs: dict[str, Any] = {}
         for key, vals in self.logs.items():
             idx = [i for i in self.log_rows[key] if i < rows]
@@ -104,3 +101,17 @@ class Recorder:
             work_actuator=work_act, work_friction=self.work_friction[r], work_external=self.work_external[r],
             diverged=d is not None, diverged_at=None if d is None else d[0], divergence="" if d is None else d[1],
             diverged_q=None if d is None else d[2], diverged_qd=None if d is None else d[3], logs=logs, info=info)
+
+
+def _energies(dyn: Dynamics, q: FloatArray, qd: FloatArray) -> FloatArray:
+    """E = ½q̇ᵀM(q)q̇ + U(q) at every sample. Pinocchio's O(n) kinetic energy where the model has no
+    armature (it does not count armature consistently), ½q̇ᵀMq̇ from CRBA otherwise."""
+    pm = getattr(dyn, "pin_model", None)
+    if pm is not None and not np.asarray(pm.armature).any():
+        import pinocchio as pin
+
+        pd = pm.createData()
+        kin, pot = pin.computeKineticEnergy, pin.computePotentialEnergy
+        return np.array([kin(pm, pd, p, v) + pot(pm, pd, p) for p, v in zip(q, qd, strict=True)])
+    mass, pot_fn = dyn._mass, dyn._potential
+    return np.array([0.5 * float(v @ mass(p) @ v) + pot_fn(p) for p, v in zip(q, qd, strict=True)])
