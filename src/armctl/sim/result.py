@@ -34,8 +34,9 @@ class SimResult:
     stuck joints the holding torque); tau_ext (N, n): joint torque of contact and disturbance wrenches;
     wrench (N, 6): the total wrench h_e the arm exerts on its surroundings (contacts and disturbance),
     [f; moment about the tool-frame origin] in world axes; contact_force (N, P, 3): force each contact point
-    exerts on its environment; sensor (N, S, 6): force-sensor readings; q_measured, qd_measured (N, n): what
-    the controller was given (noise and delay included); stuck (N, n): joints held by stiction; energy (N,):
+    exerts on its environment; sensor (N, S, 6): force-sensor readings; q_measured, qd_measured (N, n): the
+    measurements taken at each sample, noise included (with a delay of d periods the controller at sample k
+    was given row max(k − d, 0)); stuck (N, n): joints held by stiction; energy (N,):
     E = T + U of the plant; work_actuator, work_friction, work_external (N,): work done since t = 0 by the
     applied torque, by friction (≤ 0) and by the external wrenches, so that
     energy − energy[0] ≈ work_actuator + work_friction + work_external (see :meth:`energy_balance`).
