@@ -113,14 +113,16 @@ def _uniform_step(t: FloatArray) -> float:
 
 def prepare_data(t: ArrayLike, q: ArrayLike, tau: ArrayLike, *, cutoff: float, order: int = 4,
                  decimate: int | None = None, trim: int | None = None) -> IdentificationData:
-    """Filter, differentiate, trim and decimate a log of joint positions and torques.
+    """A log of joint positions and torques made ready for identification: q filtered and differentiated
+    now; the filter, trimming and decimation recorded, to be applied to τ and to the regressor alike when
+    the problem is built (parallel filtering, see the module).
 
     t: (S,) uniformly spaced sample times [s]. q: (S, n) joint positions [rad] (noisy encoders are fine).
-    tau: (S, n) joint torques [N·m]. cutoff: low-pass corner f_c [Hz], placed above the motion's bandwidth
-    (for a Fourier excitation, a few times ``trajectory.bandwidth``) and below the noise. order: of the
-    Butterworth filter (the zero-phase filter has twice the order and gain |H(f)|² ≤ 1). decimate: keep every
-    k-th sample (default: the largest k with f_s/k ≥ 4 f_c). trim: samples dropped at each end (default
-    ⌈3 f_s / f_c⌉, three time constants of the filter).
+    tau: (S, n) joint torques [N·m] (raw; noise is fine). cutoff: low-pass corner f_c [Hz], above the
+    motion's bandwidth (for a Fourier excitation, several times ``trajectory.bandwidth``) and below the
+    noise. order: of the Butterworth filter (run twice: gain |H(f)|², no phase). decimate: keep every k-th
+    sample (default: the largest k with f_s/k ≥ 4 f_c). trim: samples dropped at each end (default
+    ⌈3 f_s / f_c⌉, three periods of the cutoff frequency).
     """
     tt = np.asarray(t, dtype=float).reshape(-1)
     qq, tq = np.asarray(q, dtype=float), np.asarray(tau, dtype=float)
