@@ -6,9 +6,14 @@ import os
 import tempfile
 from functools import cache
 
-import pytest
+# Small SVD/QR calls run ~20× slower with a multi-threaded BLAS on a loaded 2-core machine (seen here): one
+# thread, set before NumPy loads
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
 
-import armctl
+import pytest  # noqa: E402
+
+import armctl  # noqa: E402
 
 # compiled CasADi code is cached across runs (CI keeps ~/.cache between steps of one run at least)
 os.environ.setdefault("ARMCTL_CACHE", os.path.join(tempfile.gettempdir(), "armctl-cache"))

@@ -9,6 +9,8 @@ from armctl.dynamics import Dynamics
 from armctl.errors import ArmctlError
 from armctl.model import RobotModel
 from armctl.reference import Reference
+from armctl.sim import SimResult, simulate
 
 __version__ = "0.1.0"
-__all__ = ["ArmctlError", "Dynamics", "Reference", "RobotModel", "controllers", "errors", "models", "planning"]
+__all__ = ["ArmctlError", "Dynamics", "Reference", "RobotModel", "SimResult", "controllers", "errors", "models",
+           "planning", "simulate"]

@@ -11,7 +11,7 @@
 
 A backend implements a handful of private primitives (rigid-body terms, Jacobian, energies, regressor of the
 rigid-body part); this base adds input checks, friction, the end-effector wrench, the passivity regressor and
-the base parameters, so both backends expose the same API. Every method checks shapes and finiteness and
+the base (identifiable) parameters, so both backends expose the same API. Every method checks shapes and finiteness and
 raises an :class:`~armctl.errors.ArmctlError` subclass naming the value.
 """
 
@@ -269,6 +269,14 @@ class Dynamics(ABC):
         """
         q, qd, qdd = self._inputs(("q", "qd", "qdd"), q, qd, qdd)
         return self._rigid_regressor(q, qd, qdd, (qd, np.sign(qd)))
+
+    def base_parameters(self, samples: int | None = None, seed: int = 0) -> Any:
+        """The base (identifiable) parameters of this model: a minimal set θ = K π with Y π = Y_b θ, found
+        numerically (pivoted QR of the regressor stacked at random states); see
+        :func:`armctl.dynamics.identification.find_base_parameters` for the options and the result."""
+        from armctl.dynamics.identification import find_base_parameters
+
+        return find_base_parameters(self, samples=samples, seed=seed)
 
     def coulomb_offset(self, qd: ArrayLike) -> FloatArray:
         """The part of the friction torque outside π: ½(F_c⁺ − F_c⁻) for every moving joint, 0 at rest."""

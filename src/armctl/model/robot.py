@@ -226,6 +226,15 @@ class RobotModel:
         joints[idx] = replace(joints[idx], link=joints[idx].link.combined(payload))
         return replace(self, joints=tuple(joints), name=f"{self.name}+payload")
 
+    def with_parameters(self, pi: ArrayLike, coulomb_offset: ArrayLike | None = None, physical: bool = True
+                        ) -> RobotModel:
+        """This arm's kinematics with the dynamic parameters π (13 a joint, the layout of :meth:`parameters`);
+        ``coulomb_offset``: ½(F_c⁺ − F_c⁻) per joint (default: this model's); ``physical`` as for :class:`Link`.
+        Raises :class:`~armctl.errors.InvalidParameterError` if π is not that of physical bodies."""
+        from armctl.model.from_parameters import model_from_parameters
+
+        return model_from_parameters(self, pi, coulomb_offset=coulomb_offset, physical=physical)
+
     def with_friction(self, viscous: ArrayLike = 0.0, coulomb: ArrayLike = 0.0,
                       coulomb_negative: ArrayLike | None = None, static: ArrayLike | None = None,
                       stribeck_velocity: ArrayLike = 0.0) -> RobotModel:

@@ -20,9 +20,9 @@ from armctl.dynamics.identification.excitation import FourierExcitation
 from armctl.dynamics.identification.excitation_design import ExcitationDesign, optimize_excitation
 from armctl.dynamics.identification.identify import IdentificationResult, ValidationResult, identify
 from armctl.dynamics.identification.least_squares import LeastSquaresEstimate, solve_least_squares
-from armctl.dynamics.identification.model_builder import model_from_parameters
 from armctl.dynamics.identification.problem import IdentificationProblem, build_problem
 from armctl.dynamics.identification.report import format_report, validation_plot
+from armctl.model.from_parameters import model_from_parameters
 
 __all__ = [
     "BaseParameters", "ConsistentEstimate", "ExcitationDesign", "FourierExcitation", "IdentificationData",

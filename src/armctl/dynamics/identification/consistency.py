@@ -33,10 +33,10 @@ from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray, readonly, scalar, vector
 from armctl.dynamics.identification.least_squares import LeastSquaresEstimate
-from armctl.dynamics.identification.model_builder import model_from_parameters
 from armctl.dynamics.identification.problem import IdentificationProblem
 from armctl.dynamics.identification.pseudo_inertia import factor_of, parameters_from_factor
 from armctl.errors import ShapeError, SolverError
+from armctl.model.from_parameters import model_from_parameters
 from armctl.model.robot import PARAMS_PER_JOINT, RobotModel
 
 
