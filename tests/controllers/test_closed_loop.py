@@ -184,3 +184,22 @@ def test_adaptation_drifts_under_disturbance_and_protections_bound_it() -> None:
     assert dev["none"][1] > 2 * dev["none"][0] and dev["none"][1] > 100  # drifting
     assert dev["sigma"][1] < 0.1 * dev["none"][1] and dev["sigma"][1] < 2 * max(dev["sigma"][0], 1.0)
     assert dev["projection"][1] <= 30 + 1e-9
+
+
+def test_computed_torque_integral_removes_the_steady_error_of_an_unknown_payload() -> None:
+    """Without K_i the unknown weight leaves the error solving e = Δg(q_d − e)/(M̂ K_p) at rest (the weight's
+    torque taken where the arm stops); the integral term removes it."""
+    base = model("pendulum").reduced(friction=False)
+    plant = armctl.Dynamics(base.with_payload(0.5))
+    ctrl_dyn = armctl.Dynamics(base)
+    ref = armctl.Reference([0.8])
+    kp, kd = 100.0, 20.0
+    expected = 0.0
+    for _ in range(50):  # fixed point of the equilibrium equation
+        q = ref.q - expected
+        dg = plant.gravity_torque(q)[0] - ctrl_dyn.gravity_torque(q)[0]
+        expected = dg / (ctrl_dyn.mass_matrix(q)[0, 0] * kp)
+    res = simulate(plant, ComputedTorque(ctrl_dyn, kp, kd), ref, 3.0)
+    assert ref.q[0] - res.q[-1, 0] == pytest.approx(expected, rel=1e-3)
+    res_i = simulate(plant, ComputedTorque(ctrl_dyn, kp, kd, ki=200.0), ref, 6.0)
+    assert abs(ref.q[0] - res_i.q[-1, 0]) < 0.01 * abs(expected)

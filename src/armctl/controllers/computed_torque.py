@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-import numpy as np
 from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray, apply_gain, compact_gain, gain_matrix
 from armctl.controllers.base import Controller
+from armctl.controllers.integral import ErrorIntegral
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError
 from armctl.reference import Reference
@@ -42,8 +42,7 @@ class ComputedTorque(Controller):
 
     def reset(self) -> None:
         super().reset()
-        self._integral = np.zeros(self.n)
-        self._t_prev: float | None = None
+        self._integral = ErrorIntegral(self.n)
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         dyn = self.dynamics
@@ -52,10 +51,7 @@ class ComputedTorque(Controller):
         v = ref.qdd + apply_gain(self._kd, ref.qd - qd)
         v += apply_gain(self._kp, e)
         if self._ki is not None:
-            if self._t_prev is not None:
-                self._integral += e * (t - self._t_prev)
-            self._t_prev = t
-            v += apply_gain(self._ki, self._integral)
+            v += apply_gain(self._ki, self._integral.update(t, e))
         tau = dyn.inverse_dynamics(q, qd, v)
         if self.friction is not True and dyn._has_friction:
             tau -= dyn.friction_torque(qd)

@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-import numpy as np
 from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray, apply_gain, compact_gain, gain_matrix
 from armctl.controllers.base import Controller
+from armctl.controllers.integral import ErrorIntegral
 from armctl.dynamics.base import Dynamics
 from armctl.reference import Reference
 
@@ -38,8 +38,7 @@ class PDGravity(Controller):
 
     def reset(self) -> None:
         super().reset()
-        self._integral = np.zeros(self.n)
-        self._t_prev: float | None = None
+        self._integral = ErrorIntegral(self.n)
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         dyn = self.dynamics
@@ -49,10 +48,7 @@ class PDGravity(Controller):
         tau += apply_gain(self._kp, e)
         tau += apply_gain(self._kd, ref.qd - qd)
         if self._ki is not None:
-            if self._t_prev is not None:
-                self._integral += e * (t - self._t_prev)
-            self._t_prev = t
-            tau += apply_gain(self._ki, self._integral)
+            tau += apply_gain(self._ki, self._integral.update(t, e))
         if self.friction:
             tau += dyn.friction_torque(qd)
         return tau
