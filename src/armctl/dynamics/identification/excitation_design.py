@@ -181,10 +181,14 @@ def _random_start(rng: np.random.Generator, center: FloatArray, lo: FloatArray, 
 def _fit_into(traj: FourierExcitation, lo: FloatArray, hi: FloatArray, vmax: FloatArray, amax: FloatArray,
               fill: float = 1.0) -> FourierExcitation:
     """Scale each joint's motion about q0 (clipped into the range) so that it uses at most ``fill`` of its
-    tightest limit (positions, velocities, accelerations, on a dense grid); never scales up."""
+    tightest limit (positions, velocities, accelerations, on a dense grid); never scales up. Between grid
+    points a band-limited signal can exceed its sampled maximum by up to ~(ω_max Δt)²/8 of it (ω_max the top
+    harmonic): the scale leaves (ω_max Δt)² of room for that, so the limits hold everywhere."""
     q0 = np.clip(traj.q0, lo, hi)
     traj = FourierExcitation(q0, traj.a, traj.b, traj.period)
-    t = np.linspace(0.0, traj.period, 4000, endpoint=False)
+    samples = 4000
+    t = np.linspace(0.0, traj.period, samples, endpoint=False)
+    fill = fill * (1.0 - (2 * np.pi * traj.harmonics / samples) ** 2)
     q, qd, qdd = traj.evaluate(t)
     dev_up = np.maximum((q - q0).max(axis=0), 1e-300)
     dev_dn = np.maximum((q0 - q).min(axis=0) * -1.0, 1e-300)

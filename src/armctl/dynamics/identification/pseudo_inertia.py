@@ -21,6 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from armctl._checks import FloatArray
+from armctl.model.consistency import from_pseudo_inertia, pseudo_inertia
 
 # positions in U (4×4, upper triangular) of x[0..9]
 _ENTRIES = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2), (0, 3), (1, 3), (2, 3), (3, 3))
@@ -35,27 +36,8 @@ def _linear_map() -> FloatArray:
         e = np.zeros(16)
         e[k] = 1.0
         j = e.reshape(4, 4)
-        a[:, k] = parameters_of(0.5 * (j + j.T))
+        a[:, k] = from_pseudo_inertia(0.5 * (j + j.T))
     return a
-
-
-def pseudo_inertia(p: FloatArray) -> FloatArray:
-    """J (4×4) of one link's parameters p = (m, mcx, mcy, mcz, Ixx, Ixy, Iyy, Ixz, Iyz, Izz)."""
-    xx, xy, yy, xz, yz, zz = p[4:10]
-    io = np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
-    out = np.empty((4, 4))
-    out[:3, :3] = 0.5 * np.trace(io) * np.eye(3) - io
-    out[:3, 3] = out[3, :3] = p[1:4]
-    out[3, 3] = p[0]
-    return out
-
-
-def parameters_of(j: FloatArray) -> FloatArray:
-    """The ten parameters (m, h, I_O in π's order) of a pseudo-inertia J."""
-    sigma = j[:3, :3]
-    io = np.trace(sigma) * np.eye(3) - sigma
-    return np.array([j[3, 3], j[0, 3], j[1, 3], j[2, 3], io[0, 0], io[0, 1], io[1, 1], io[0, 2], io[1, 2],
-                     io[2, 2]])
 
 
 _A = _linear_map()
