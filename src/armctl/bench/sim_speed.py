@@ -204,20 +204,31 @@ def sweep_cases(runs: int) -> list[dict[str, Any]]:
              "reference": ref, "duration": 5.0} for kp in gains]
 
 
-def sweep_figures(runs: int = 200, workers: int = 2) -> dict[str, Any]:
+def sweep_figures(runs: int = 200, workers: int = 2, blocks: int = 4) -> dict[str, Any]:
+    """Pooled and serial sweeps of the same runs, in alternating blocks (pool, serial, pool, …) so that a
+    change in the load of a shared machine hits both alike; the machine's load average is reported."""
+    import os
+
     from armctl.bench import sim_speed as me
 
     cases = sweep_cases(runs)
-    t0 = time.perf_counter()
-    pooled = sweep(cases, summary=me.rms_error, max_workers=workers, progress=True)
-    t_pool = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    serial = sweep(cases, summary=me.rms_error, executor="serial", progress=True)
-    t_serial = time.perf_counter() - t0
-    if not np.allclose(pooled, serial, rtol=0, atol=0):
+    chunks = [cases[i::blocks] for i in range(blocks)]
+    t_pool = t_serial = 0.0
+    pooled: list[float] = []
+    serial: list[float] = []
+    load = [os.getloadavg()[0]]
+    for chunk in chunks:
+        t0 = time.perf_counter()
+        pooled += sweep(chunk, summary=me.rms_error, max_workers=workers, progress=True)
+        t_pool += time.perf_counter() - t0
+        t0 = time.perf_counter()
+        serial += sweep(chunk, summary=me.rms_error, executor="serial", progress=True)
+        t_serial += time.perf_counter() - t0
+        load.append(os.getloadavg()[0])
+    if pooled != serial:
         raise RuntimeError("pooled and serial sweeps disagree")
     return {"runs": runs, "workers": workers, "serial_s": t_serial, "pool_s": t_pool, "speedup": t_serial / t_pool,
-            "s_per_run_serial": t_serial / runs}
+            "s_per_run_serial": t_serial / runs, "load_average_1min": load}
 
 
 def report(panda: dict[str, Any], sw: dict[str, Any] | None) -> str:
@@ -233,7 +244,9 @@ def report(panda: dict[str, Any], sw: dict[str, Any] | None) -> str:
     if sw is not None:
         lines.append(f"Sweep of {sw['runs']} × 5 s planar_2r runs: serial {sw['serial_s']:.1f} s, process pool of "
                      f"{sw['workers']} {sw['pool_s']:.1f} s: speed-up ×{sw['speedup']:.2f} "
-                     f"(target ≥{TARGETS['sweep_speedup']:g})")
+                     f"(target ≥{TARGETS['sweep_speedup']:g}); 1-min load average during the sweep "
+                     f"{min(sw['load_average_1min']):.1f}–{max(sw['load_average_1min']):.1f} on "
+                     f"{__import__('os').cpu_count()} CPUs")
     return "\n".join(lines)
 
 
