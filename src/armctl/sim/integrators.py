@@ -32,6 +32,7 @@ balance E(t) − E(0) = W_actuator + W_friction + W_external closes to the schem
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from typing import Any
 
@@ -69,19 +70,27 @@ def rk4(f: Callable[..., FloatArray], t: float, q: FloatArray, v: FloatArray, ta
 
 def rk4_work(g: Callable[..., tuple[FloatArray, float, float]], t: float, q: FloatArray, v: FloatArray,
              tau: FloatArray, h: float) -> tuple[FloatArray, FloatArray, FloatArray, float, float]:
-    """RK4 of q̈ with the powers (p_f, p_e) = g(...)[1:] integrated alongside."""
+    """RK4 of q̈ with the powers (p_f, p_e) = g(...)[1:] integrated alongside (stages as in :func:`rk4`,
+    computed as products of :func:`_rk4_coefficients` with the rows [q, q̇, a₁, a₂, a₃, a₄])."""
+    c = _rk4_coefficients(h)
+    rows = np.empty((6, q.shape[0]))
+    rows[0] = q
+    rows[1] = v
     h2 = 0.5 * h
     a1, f1, e1 = g(t, q, v, tau)
-    v2 = v + h2 * a1
-    a2, f2, e2 = g(t + h2, q + h2 * v, v2, tau)
-    v3 = v + h2 * a2
-    a3, f3, e3 = g(t + h2, q + h2 * v2, v3, tau)
-    v4 = v + h * a3
-    a4, f4, e4 = g(t + h, q + h * v3, v4, tau)
-    s23 = a2 + a3
+    rows[2] = a1
+    x = c[0] @ rows
+    a, f2, e2 = g(t + h2, x[0], x[1], tau)
+    rows[3] = a
+    x = c[1] @ rows
+    a, f3, e3 = g(t + h2, x[0], x[1], tau)
+    rows[4] = a
+    x = c[2] @ rows
+    a, f4, e4 = g(t + h, x[0], x[1], tau)
+    rows[5] = a
+    x = c[3] @ rows
     h6 = h / 6.0
-    return (q + h * v + (h * h6) * (a1 + s23), v + h6 * (a1 + a4 + 2.0 * s23), a1,
-            h6 * (f1 + 2.0 * (f2 + f3) + f4), h6 * (e1 + 2.0 * (e2 + e3) + e4))
+    return x[0], x[1], a1, h6 * (f1 + 2.0 * (f2 + f3) + f4), h6 * (e1 + 2.0 * (e2 + e3) + e4)
 
 
 def semi_implicit_euler(f: Callable[..., FloatArray], t: float, q: FloatArray, v: FloatArray, tau: FloatArray,
@@ -217,6 +226,7 @@ def _symplectic_conservative(plant: Plant, q: FloatArray, v: FloatArray, mass: F
     return q1, constrained_accel(plant._mass(q1), mass @ vb, None), None, 0.0, 0.0
 
 
+@functools.lru_cache(maxsize=64)
 def _rk4_coefficients(h: float) -> tuple[FloatArray, ...]:
     """Rows giving (q, q̇) of RK4's stages 2, 3, 4 and of the result from [q, q̇, a₁, a₂, a₃, a₄]."""
     h2, hh = 0.5 * h, h * h
@@ -238,13 +248,10 @@ def fast_step(name: str, plant: Plant) -> Callable[..., tuple[FloatArray, FloatA
     # RK4 as linear combinations of the rows [q, q̇, a₁, a₂, a₃, a₄] of one array: each stage's (q, q̇) is one
     # small matrix product instead of four vector operations (the vector operations dominated the cost)
     rows = np.zeros((6, plant.n))
-    coeffs: dict[float, tuple[FloatArray, ...]] = {}
 
     def rk4_step(q: FloatArray, v: FloatArray, tau: FloatArray, h: float
                  ) -> tuple[FloatArray, FloatArray, FloatArray]:
-        c = coeffs.get(h)
-        if c is None:
-            c = coeffs[h] = _rk4_coefficients(h)
+        c = _rk4_coefficients(h)
         rows[0] = q
         rows[1] = v
         rows[2] = a1 = fwd(q, v, tau)
