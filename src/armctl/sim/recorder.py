@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -82,7 +83,6 @@ class Recorder:
         # work of a torque held over [t_k, t_k+1) is exactly τ_kᵀ(q_k+1 − q_k)
         dw = np.einsum("ij,ij->i", self.tau_applied[: max(rows - 1, 0)], np.diff(q, axis=0))
         work_act = np.concatenate(([0.0], np.cumsum(dw)))[:rows]
-        e = _energies(dyn, q, qd) if energy else np.full(rows, np.nan)
         logs: dict[str, Any] = {}
         for key, vals in self.logs.items():
             idx = [i for i in self.log_rows[key] if i < rows]
@@ -97,21 +97,26 @@ class Recorder:
             t=np.arange(rows) * self.control_dt, q=q, qd=qd, qdd=self.qdd[r], tau=self.tau[r],
             tau_applied=self.tau_applied[r], tau_friction=self.tau_friction[r], tau_ext=self.tau_ext[r],
             wrench=self.wrench[r], contact_force=self.contact_force[r], sensor=self.sensor[r],
-            q_measured=self.q_measured[r], qd_measured=self.qd_measured[r], stuck=self.stuck[r], energy=e,
+            q_measured=self.q_measured[r], qd_measured=self.qd_measured[r], stuck=self.stuck[r],
             work_actuator=work_act, work_friction=self.work_friction[r], work_external=self.work_external[r],
             diverged=d is not None, diverged_at=None if d is None else d[0], divergence="" if d is None else d[1],
-            diverged_q=None if d is None else d[2], diverged_qd=None if d is None else d[3], logs=logs, info=info)
+            diverged_q=None if d is None else d[2], diverged_qd=None if d is None else d[3], logs=logs, info=info,
+            _energy=None if energy else np.full(rows, np.nan), _energy_of=partial(energies, dyn) if energy else None)
 
 
-def _energies(dyn: Dynamics, q: FloatArray, qd: FloatArray) -> FloatArray:
-    """E = ½q̇ᵀM(q)q̇ + U(q) at every sample. Pinocchio's O(n) kinetic energy where the model has no
-    armature (it does not count armature consistently), ½q̇ᵀMq̇ from CRBA otherwise."""
+def energies(dyn: Dynamics, q: FloatArray, qd: FloatArray) -> FloatArray:
+    """E = ½q̇ᵀM(q)q̇ + U(q) at every sample [J]. With Pinocchio, on a workspace of its own (it may run later,
+    when the result's energy is first read), and with its O(n) kinetic energy where the model has no
+    armature (Pinocchio does not count armature consistently there); ½q̇ᵀMq̇ from CRBA otherwise."""
     pm = getattr(dyn, "pin_model", None)
-    if pm is not None and not np.asarray(pm.armature).any():
-        import pinocchio as pin
+    if pm is None:
+        return np.array([dyn._kinetic(p, v) + dyn._potential(p) for p, v in zip(q, qd, strict=True)])
+    import pinocchio as pin
 
-        pd = pm.createData()
-        kin, pot = pin.computeKineticEnergy, pin.computePotentialEnergy
+    pd = pm.createData()
+    pot = pin.computePotentialEnergy
+    if not np.asarray(pm.armature).any():
+        kin = pin.computeKineticEnergy
         return np.array([kin(pm, pd, p, v) + pot(pm, pd, p) for p, v in zip(q, qd, strict=True)])
-    mass, pot_fn = dyn._mass, dyn._potential
-    return np.array([0.5 * float(v @ mass(p) @ v) + pot_fn(p) for p, v in zip(q, qd, strict=True)])
+    crba = pin.crba
+    return np.array([0.5 * float(v @ crba(pm, pd, p) @ v) + pot(pm, pd, p) for p, v in zip(q, qd, strict=True)])

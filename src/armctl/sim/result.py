@@ -11,6 +11,7 @@ Energies in J. ``save``/``load`` use NumPy's npz format (no pickle).
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
@@ -21,8 +22,7 @@ from armctl._checks import FloatArray
 from armctl.errors import InvalidParameterError
 
 _ARRAYS = ("t", "q", "qd", "qdd", "tau", "tau_applied", "tau_friction", "tau_ext", "wrench", "contact_force",
-           "sensor", "q_measured", "qd_measured", "stuck", "energy", "work_actuator", "work_friction",
-           "work_external")
+           "sensor", "q_measured", "qd_measured", "stuck", "work_actuator", "work_friction", "work_external")
 
 
 @dataclass(frozen=True, eq=False)
@@ -36,9 +36,9 @@ class SimResult:
     [f; moment about the tool-frame origin] in world axes; contact_force (N, P, 3): force each contact point
     exerts on its environment; sensor (N, S, 6): force-sensor readings; q_measured, qd_measured (N, n): the
     measurements taken at each sample, noise included (with a delay of d periods the controller at sample k
-    was given row max(k − d, 0)); stuck (N, n): joints held by stiction; energy (N,):
-    E = T + U of the plant; work_actuator, work_friction, work_external (N,): work done since t = 0 by the
-    applied torque, by friction (≤ 0) and by the external wrenches, so that
+    was given row max(k − d, 0)); stuck (N, n): joints held by stiction; energy (N,): E = T + U of the
+    plant (computed when first read); work_actuator, work_friction, work_external (N,): work done since t = 0
+    by the applied torque, by friction (≤ 0) and by the external wrenches, so that
     energy − energy[0] ≈ work_actuator + work_friction + work_external (see :meth:`energy_balance`).
 
     diverged: the run stopped early; diverged_at: the time [s] it was detected, divergence: why, diverged_q /
@@ -60,7 +60,6 @@ class SimResult:
     q_measured: FloatArray
     qd_measured: FloatArray
     stuck: FloatArray
-    energy: FloatArray
     work_actuator: FloatArray
     work_friction: FloatArray
     work_external: FloatArray
@@ -71,9 +70,12 @@ class SimResult:
     diverged_qd: FloatArray | None = None
     logs: dict[str, FloatArray] = field(default_factory=dict)
     info: dict[str, Any] = field(default_factory=dict)
+    #: the energies, or None with ``_energy_of(q, qd)`` to compute them when first asked for
+    _energy: FloatArray | None = field(default=None, repr=False)
+    _energy_of: Callable[[FloatArray, FloatArray], FloatArray] | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
-        for name in (*_ARRAYS, "diverged_q", "diverged_qd"):
+        for name in (*_ARRAYS, "diverged_q", "diverged_qd", "_energy"):
             a = getattr(self, name)
             if a is not None:
                 a = np.array(a, copy=True)
@@ -87,6 +89,17 @@ class SimResult:
         object.__setattr__(self, "logs", logs)
 
     # ------------------------------------------------------------------------------ derived
+    @property
+    def energy(self) -> FloatArray:
+        """E = T + U of the plant at every sample [J] (computed from q, q̇ when first asked for; NaN if the run
+        was made with ``energy=False``)."""
+        if self._energy is None:
+            e = self._energy_of(self.q, self.qd) if self._energy_of is not None else np.full(len(self.t), np.nan)
+            e.flags.writeable = False
+            object.__setattr__(self, "_energy", e)
+            object.__setattr__(self, "_energy_of", None)
+        return self._energy  # type: ignore[return-value]
+
     @property
     def n(self) -> int:
         """Number of joints."""
@@ -117,7 +130,7 @@ class SimResult:
         path = Path(path)
         if path.suffix != ".npz":
             path = path.with_name(path.name + ".npz")
-        arrays: dict[str, Any] = {name: getattr(self, name) for name in _ARRAYS}
+        arrays: dict[str, Any] = {name: getattr(self, name) for name in (*_ARRAYS, "energy")}
         for name in ("diverged_q", "diverged_qd"):
             if getattr(self, name) is not None:
                 arrays[name] = getattr(self, name)
@@ -137,6 +150,7 @@ class SimResult:
                 raise InvalidParameterError(f"{path} is not a saved SimResult (no 'meta' entry)", value=str(path))
             meta = json.loads(str(data["meta"]))
             kw: dict[str, Any] = {name: data[name] for name in _ARRAYS}
+            kw["_energy"] = data["energy"]
             for name in ("diverged_q", "diverged_qd"):
                 kw[name] = data[name] if name in data.files else None
             logs = {k[4:]: data[k] for k in data.files if k.startswith("log:")}

@@ -66,7 +66,8 @@ def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
     drawn from ``seed``. delay: the controller sees the measurement of ``delay`` periods earlier (the first
     one before that). max_velocity [rad/s], max_position [rad]: a state beyond them, or non-finite, stops the
     run as diverged (as does a non-finite torque from the controller or a mass matrix that is no longer
-    positive definite). energy: record E = T + U at every sample.
+    positive definite). energy: provide ``res.energy``, E = T + U at every sample, computed from the
+    recorded states when first read (False: NaN).
 
     Returns a :class:`~armctl.sim.result.SimResult`; a run that diverges returns the samples before it with
     ``diverged=True``, ``diverged_at``, ``divergence`` and the offending state — it does not raise.
