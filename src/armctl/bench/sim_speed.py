@@ -206,29 +206,38 @@ def sweep_cases(runs: int) -> list[dict[str, Any]]:
 
 def sweep_figures(runs: int = 200, workers: int = 2, blocks: int = 4) -> dict[str, Any]:
     """Pooled and serial sweeps of the same runs, in alternating blocks (pool, serial, pool, …) so that a
-    change in the load of a shared machine hits both alike; the machine's load average is reported."""
+    change in the load of a shared machine hits both alike. Also the CPU time the work took each way (the
+    workers' from ``getrusage``), whose ratio is the speed-up an otherwise idle machine would give at best,
+    and the machine's load average."""
     import os
+    import resource
 
     from armctl.bench import sim_speed as me
 
     cases = sweep_cases(runs)
     chunks = [cases[i::blocks] for i in range(blocks)]
-    t_pool = t_serial = 0.0
+    t_pool = t_serial = cpu_serial = 0.0
     pooled: list[float] = []
     serial: list[float] = []
     load = [os.getloadavg()[0]]
+    children0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     for chunk in chunks:
         t0 = time.perf_counter()
         pooled += sweep(chunk, summary=me.rms_error, max_workers=workers, progress=True)
         t_pool += time.perf_counter() - t0
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         serial += sweep(chunk, summary=me.rms_error, executor="serial", progress=True)
         t_serial += time.perf_counter() - t0
+        cpu_serial += time.process_time() - c0
         load.append(os.getloadavg()[0])
+    children = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu_pool = (children.ru_utime - children0.ru_utime) + (children.ru_stime - children0.ru_stime)
     if pooled != serial:
         raise RuntimeError("pooled and serial sweeps disagree")
     return {"runs": runs, "workers": workers, "serial_s": t_serial, "pool_s": t_pool, "speedup": t_serial / t_pool,
-            "s_per_run_serial": t_serial / runs, "load_average_1min": load}
+            "s_per_run_serial": t_serial / runs, "cpu_serial_s": cpu_serial, "cpu_pool_workers_s": cpu_pool,
+            "idle_machine_speedup_bound": workers * cpu_serial / cpu_pool if cpu_pool > 0 else math.nan,
+            "load_average_1min": load}
 
 
 def report(panda: dict[str, Any], sw: dict[str, Any] | None) -> str:
@@ -246,7 +255,9 @@ def report(panda: dict[str, Any], sw: dict[str, Any] | None) -> str:
                      f"{sw['workers']} {sw['pool_s']:.1f} s: speed-up ×{sw['speedup']:.2f} "
                      f"(target ≥{TARGETS['sweep_speedup']:g}); 1-min load average during the sweep "
                      f"{min(sw['load_average_1min']):.1f}–{max(sw['load_average_1min']):.1f} on "
-                     f"{__import__('os').cpu_count()} CPUs")
+                     f"{__import__('os').cpu_count()} CPUs; CPU time serial {sw['cpu_serial_s']:.1f} s, pool "
+                     f"workers {sw['cpu_pool_workers_s']:.1f} s: on an idle machine at most "
+                     f"×{sw['idle_machine_speedup_bound']:.2f}")
     return "\n".join(lines)
 
 

@@ -4,7 +4,9 @@ Each case is a mapping of keyword arguments for ``run`` (by default :func:`armct
 sent to the executor's workers, so with a process pool (the default) everything in a case must pickle:
 Dynamics and RobotModel objects do (a Dynamics is rebuilt from its model in the worker), controllers do if
 their class is importable, and references must be Reference objects or module-level callables, not lambdas.
-``summary`` runs in the worker on each result, so that only what is needed travels back.
+``summary`` runs in the worker on each result, so that only what is needed travels back. With a thread
+pool, cases must not share a Dynamics object (its workspace is not thread-safe): give each its own, or pass
+the plant as a RobotModel (``simulate`` then builds one per run).
 
 A run that diverges is a result (``res.diverged``), not an error; an exception in a case (a bad input) stops
 the sweep and is raised with the case's index.
