@@ -1,0 +1,140 @@
+"""The implicit schemes of :mod:`armctl.sim.integrators`: backward Euler ("implicit-euler") and symplectic Euler
+in momentum form ("semi-implicit-euler"), each solved by Newton's method on the stiff forces (see there for
+the equations)."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.linalg import lapack
+
+from armctl._checks import FloatArray
+from armctl.sim.plant import Plant
+from armctl.sim.stick_slip import NotPositiveDefinite, constrained_accel
+
+NEWTON_TOL = 1e-11
+NEWTON_MAX_ITER = 25
+
+
+def implicit_euler(plant: Plant, t: float, q: FloatArray, v: FloatArray, tau: FloatArray, h: float
+                   ) -> tuple[FloatArray, FloatArray, None, float, float]:
+    """One backward-Euler step (see :mod:`armctl.sim.integrators`); returns (q₁, q̇₁, None, W_f, W_e)."""
+    n = plant.n
+    if plant.all_stuck:
+        return q, v, None, 0.0, 0.0
+    mass = plant._mass(q)
+    base = tau - plant._rigid(q, v, plant._zeros)  # τ − C q̇ − g, explicit
+    fr = plant.friction
+    stuck = plant.stuck
+    if plant.simple:  # nothing implicit to solve: one linear solve
+        v1 = v + h * constrained_accel(mass, base, None)
+        return q + h * v1, v1, None, 0.0, 0.0
+    t1 = t + h
+    v1 = v.copy()
+    f = e = plant._zeros
+    for _ in range(NEWTON_MAX_ITER):
+        q1 = q + h * v1
+        jac = mass.copy()
+        force = base
+        if fr is not None:
+            f = plant.kinetic_friction(v1)
+            force = force - f
+            jac[np.diag_indices(n)] += h * plant.friction_slope(v1)
+        if plant.has_external:
+            e, kj, dj = plant.external_stiffness(t1, q1, v1)
+            force = force + e
+            jac -= h * (dj + h * kj)
+        res = mass @ (v1 - v) - h * force
+        if stuck is not None:
+            jac[stuck, :] = 0.0
+            jac[:, stuck] = 0.0
+            jac[stuck, stuck] = 1.0
+            res[stuck] = 0.0
+        dv, info = lapack.dgesv(jac, -res)[2:]
+        if info != 0:
+            raise NotPositiveDefinite(f"implicit step: singular Newton matrix (LAPACK info {info})")
+        v1 = v1 + dv
+        if np.abs(dv).max() <= NEWTON_TOL * (1.0 + np.abs(v1).max()):
+            break
+    else:
+        plant.stats["implicit_unconverged"] += 1
+    if stuck is not None:
+        v1[stuck] = 0.0
+    q1 = q + h * v1
+    wf = we = 0.0
+    if fr is not None:
+        wf = -h * float(v1 @ plant.kinetic_friction(v1))
+    if plant.has_external:
+        we = h * float(v1 @ plant.external(t1, q1, v1))
+    return q1, v1, None, wf, we
+
+
+def symplectic_euler(plant: Plant, t: float, q: FloatArray, v: FloatArray, tau: FloatArray, h: float
+                     ) -> tuple[FloatArray, FloatArray, None, float, float]:
+    """One step of symplectic Euler in momentum form (see :mod:`armctl.sim.integrators`)."""
+    if plant.all_stuck:
+        return q, v, None, 0.0, 0.0
+    dyn = plant.dyn
+    n = plant.n
+    mass = plant._mass(q)
+    base = tau - dyn._gravity(q)
+    p0 = mass @ v
+    stuck = plant.stuck
+    if plant.simple:
+        return _symplectic_conservative(plant, q, v, mass, base, p0, h)
+    vb = v.copy()
+    f = e = plant._zeros
+    for _ in range(NEWTON_MAX_ITER):
+        force = base + dyn._coriolis(q, vb).T @ vb
+        jac = mass.copy()
+        if plant.friction is not None:
+            f = plant.kinetic_friction(vb)
+            force = force - f
+            jac[np.diag_indices(n)] += h * plant.friction_slope(vb)
+        if plant.has_external:
+            if plant.environments:
+                e, _, dj = plant.external_stiffness(t, q, vb)
+                jac -= h * dj
+            else:
+                e = plant.external(t, q, vb)
+            force = force + e
+        res = mass @ vb - p0 - h * force
+        if stuck is not None:
+            jac[stuck, :] = 0.0
+            jac[:, stuck] = 0.0
+            jac[stuck, stuck] = 1.0
+            res[stuck] = 0.0
+        dv, info = lapack.dgesv(jac, -res)[2:]
+        if info != 0:
+            raise NotPositiveDefinite(f"semi-implicit Euler: singular Newton matrix (LAPACK info {info})")
+        vb = vb + dv
+        if np.abs(dv).max() <= NEWTON_TOL * (1.0 + np.abs(vb).max()):
+            break
+    else:
+        plant.stats["implicit_unconverged"] += 1
+    if stuck is not None:
+        vb[stuck] = 0.0
+    q1 = q + h * vb
+    v1 = constrained_accel(plant._mass(q1), mass @ vb, stuck)
+    wf = -h * float(vb @ f) if plant.friction is not None else 0.0
+    we = h * float(vb @ e) if plant.has_external else 0.0
+    return q1, v1, None, wf, we
+
+
+def _symplectic_conservative(plant: Plant, q: FloatArray, v: FloatArray, mass: FloatArray, base: FloatArray,
+                             p0: FloatArray, h: float) -> tuple[FloatArray, FloatArray, None, float, float]:
+    """Symplectic Euler without friction or external forces: fixed-point iteration on a Cholesky factor."""
+    chol, info = lapack.dpotrf(mass)
+    if info != 0:
+        raise NotPositiveDefinite(f"mass matrix not positive definite (LAPACK info {info})")
+    coriolis = plant.dyn._coriolis
+    vb = v
+    for _ in range(NEWTON_MAX_ITER):
+        new = lapack.dpotrs(chol, p0 + h * (base + coriolis(q, vb).T @ vb))[0]
+        dv = np.abs(new - vb).max()
+        vb = new
+        if dv <= NEWTON_TOL * (1.0 + np.abs(vb).max()):
+            break
+    else:
+        plant.stats["implicit_unconverged"] += 1
+    q1 = q + h * vb
+    return q1, constrained_accel(plant._mass(q1), mass @ vb, None), None, 0.0, 0.0
