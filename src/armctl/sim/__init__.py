@@ -1,9 +1,11 @@
 """Closed-loop simulation: ``armctl.sim.simulate(plant, controller, reference, duration, ...)``.
 
 The plant is the truth (friction with real stiction, contact environments, disturbances, payload); the
-controller runs at its own rate with a zero-order hold. Modules: ``simulate`` (the loop), ``plant`` (the
-equations of motion), ``integrators``, ``friction`` and ``stick_slip``, ``contact`` and ``normal_force``,
-``result`` (:class:`SimResult`), ``plot``, ``sweep`` (many runs through an Executor).
+controller runs at its own rate with a zero-order hold. Modules: ``simulate`` (the loop; ``setup`` checks
+its arguments, ``recorder`` keeps the samples), ``plant`` (the equations of motion), ``integrators`` and
+``implicit`` (the schemes), ``stepper`` (a step with stick–slip events), ``friction`` and ``stick_slip``,
+``contact`` and ``normal_force``, ``result`` (:class:`SimResult`), ``plot``, ``sweep`` (many runs through an
+Executor).
 """
 
 from armctl.sim.contact import ContactPoint, Environment, ForceSensor, Plane
