@@ -4,15 +4,15 @@ from __future__ import annotations
 
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, apply_gain, compact_gain, gain_matrix
+from armctl._checks import FloatArray, apply_gain
 from armctl.controllers.base import Controller
-from armctl.controllers.integral import ErrorIntegral
+from armctl.controllers.integral import PIDGains
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError
 from armctl.reference import Reference
 
 
-class ComputedTorque(Controller):
+class ComputedTorque(PIDGains, Controller):
     """τ = M(q) v + C(q, q̇) q̇ + g(q) [+ τ_f(q̇)],  v = q̈_d + K_d ė + K_p e + K_i ∫e dt,  e = q_d − q.
 
     With an exact model the error dynamics are linear and decoupled, ë + K_d ė + K_p e (+ K_i ∫e) = 0; with a
@@ -29,20 +29,15 @@ class ComputedTorque(Controller):
     def __init__(self, dynamics: Dynamics, kp: ArrayLike, kd: ArrayLike, ki: ArrayLike | None = None,
                  friction: bool | str = True) -> None:
         super().__init__(dynamics)
-        self.kp = gain_matrix(kp, self.n, "kp")
-        self.kd = gain_matrix(kd, self.n, "kd")
-        self.ki = None if ki is None else gain_matrix(ki, self.n, "ki")
+        self._set_gains(kp, kd, ki)
         if friction not in (True, False, "reference"):
             raise InvalidParameterError(f"friction must be True, False or 'reference', got {friction!r}",
                                         value=friction)
         self.friction = friction
-        self._kp, self._kd = compact_gain(self.kp), compact_gain(self.kd)
-        self._ki = None if self.ki is None else compact_gain(self.ki)
-        self.reset()
 
     def reset(self) -> None:
         super().reset()
-        self._integral = ErrorIntegral(self.n)
+        self._integral.reset()
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         dyn = self.dynamics

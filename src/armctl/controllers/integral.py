@@ -1,10 +1,11 @@
-"""`ErrorIntegral`: ∫e dt accumulated at the control rate, for the controllers with an integral term."""
+"""The integral term of PID-type controllers: `ErrorIntegral` (∫e dt at the control rate) and `PIDGains`."""
 
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray
+from armctl._checks import FloatArray, compact_gain, gain_matrix
 
 
 class ErrorIntegral:
@@ -25,3 +26,18 @@ class ErrorIntegral:
             self.value += e * (t - self._t)
         self._t = t
         return self.value
+
+
+class PIDGains:
+    """Mixin of the controllers with K_p, K_d and an optional K_i: checks the gains (scalar, vector or matrix;
+    symmetric positive definite), keeps their cheap forms and the error integral."""
+
+    n: int
+
+    def _set_gains(self, kp: ArrayLike, kd: ArrayLike, ki: ArrayLike | None) -> None:
+        self.kp = gain_matrix(kp, self.n, "kp")
+        self.kd = gain_matrix(kd, self.n, "kd")
+        self.ki = None if ki is None else gain_matrix(ki, self.n, "ki")
+        self._kp, self._kd = compact_gain(self.kp), compact_gain(self.kd)
+        self._ki = None if self.ki is None else compact_gain(self.ki)
+        self._integral = ErrorIntegral(self.n)

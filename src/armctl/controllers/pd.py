@@ -4,14 +4,14 @@ from __future__ import annotations
 
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, apply_gain, compact_gain, gain_matrix
+from armctl._checks import FloatArray, apply_gain
 from armctl.controllers.base import Controller
-from armctl.controllers.integral import ErrorIntegral
+from armctl.controllers.integral import PIDGains
 from armctl.dynamics.base import Dynamics
 from armctl.reference import Reference
 
 
-class PDGravity(Controller):
+class PDGravity(PIDGains, Controller):
     """τ = K_p e + K_d ė + g(q)  [+ K_i ∫e dt] [+ τ_f(q̇) with ``friction=True``],  e = q_d − q.
 
     For a set-point (q̇_d = 0) the closed loop is globally asymptotically stable for any K_p, K_d ≻ 0 with an
@@ -28,17 +28,12 @@ class PDGravity(Controller):
     def __init__(self, dynamics: Dynamics, kp: ArrayLike, kd: ArrayLike, ki: ArrayLike | None = None,
                  friction: bool = False) -> None:
         super().__init__(dynamics)
-        self.kp = gain_matrix(kp, self.n, "kp")
-        self.kd = gain_matrix(kd, self.n, "kd")
-        self.ki = None if ki is None else gain_matrix(ki, self.n, "ki")
+        self._set_gains(kp, kd, ki)
         self.friction = bool(friction)
-        self._kp, self._kd = compact_gain(self.kp), compact_gain(self.kd)
-        self._ki = None if self.ki is None else compact_gain(self.ki)
-        self.reset()
 
     def reset(self) -> None:
         super().reset()
-        self._integral = ErrorIntegral(self.n)
+        self._integral.reset()
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         dyn = self.dynamics
