@@ -43,17 +43,8 @@ def implicit_euler(plant: Plant, t: float, q: FloatArray, v: FloatArray, tau: Fl
             e, kj, dj = plant.external_stiffness(t1, q1, v1)
             force = force + e
             jac -= h * (dj + h * kj)
-        res = mass @ (v1 - v) - h * force
-        if stuck is not None:
-            jac[stuck, :] = 0.0
-            jac[:, stuck] = 0.0
-            jac[stuck, stuck] = 1.0
-            res[stuck] = 0.0
-        dv, info = lapack.dgesv(jac, -res)[2:]
-        if info != 0:
-            raise NotPositiveDefinite(f"implicit step: singular Newton matrix (LAPACK info {info})")
-        v1 = v1 + dv
-        if np.abs(dv).max() <= NEWTON_TOL * (1.0 + np.abs(v1).max()):
+        v1, converged = _newton_update(jac, mass @ (v1 - v) - h * force, stuck, v1, "implicit step")
+        if converged:
             break
     else:
         plant.stats["implicit_unconverged"] += 1
@@ -97,17 +88,8 @@ def symplectic_euler(plant: Plant, t: float, q: FloatArray, v: FloatArray, tau: 
             else:
                 e = plant.external(t, q, vb)
             force = force + e
-        res = mass @ vb - p0 - h * force
-        if stuck is not None:
-            jac[stuck, :] = 0.0
-            jac[:, stuck] = 0.0
-            jac[stuck, stuck] = 1.0
-            res[stuck] = 0.0
-        dv, info = lapack.dgesv(jac, -res)[2:]
-        if info != 0:
-            raise NotPositiveDefinite(f"semi-implicit Euler: singular Newton matrix (LAPACK info {info})")
-        vb = vb + dv
-        if np.abs(dv).max() <= NEWTON_TOL * (1.0 + np.abs(vb).max()):
+        vb, converged = _newton_update(jac, mass @ vb - p0 - h * force, stuck, vb, "semi-implicit Euler")
+        if converged:
             break
     else:
         plant.stats["implicit_unconverged"] += 1
@@ -138,3 +120,20 @@ def _symplectic_conservative(plant: Plant, q: FloatArray, v: FloatArray, mass: F
         plant.stats["implicit_unconverged"] += 1
     q1 = q + h * vb
     return q1, constrained_accel(plant._mass(q1), mass @ vb, None), None, 0.0, 0.0
+
+
+def _newton_update(jac: FloatArray, res: FloatArray, stuck: np.ndarray | None, x: FloatArray, scheme: str
+                   ) -> tuple[FloatArray, bool]:
+    """One Newton step x − J⁻¹r of the implicit schemes, stuck joints held (their rows and columns replaced by
+    the identity, residual zero); returns the new x and whether the step was below the tolerance. ``jac`` and
+    ``res`` are modified."""
+    if stuck is not None:
+        jac[stuck, :] = 0.0
+        jac[:, stuck] = 0.0
+        jac[stuck, stuck] = 1.0
+        res[stuck] = 0.0
+    dx, info = lapack.dgesv(jac, -res)[2:]
+    if info != 0:
+        raise NotPositiveDefinite(f"{scheme}: singular Newton matrix (LAPACK info {info})")
+    x = x + dx
+    return x, bool(np.abs(dx).max() <= NEWTON_TOL * (1.0 + np.abs(x).max()))
