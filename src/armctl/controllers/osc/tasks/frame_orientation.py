@@ -14,33 +14,22 @@ from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray
 from armctl.controllers.osc.state import ModelState
-from armctl.controllers.osc.tasks.base import MotionTask
+from armctl.controllers.osc.tasks.frame_task import FrameTask
 from armctl.controllers.osc.tasks.rotation import rotation_error
-from armctl.controllers.osc.tasks.target import TargetHolder, Trajectory
 from armctl.reference import Reference
 
 
-class FrameOrientationTask(MotionTask):
+class FrameOrientationTask(FrameTask):
     """Orientation of ``frame`` (default: the tool frame); gains ``kp`` [1/s²], ``kd`` [1/s]. Target:
     :meth:`set_target` (rotation 3×3, angular velocity [rad/s], angular acceleration [rad/s²], world axes)."""
 
     def __init__(self, frame: str | None = None, kp: ArrayLike = 400.0, kd: ArrayLike | None = None,
                  weight: ArrayLike = 1.0, priority: int = 0, name: str | None = None) -> None:
-        name = name or f"orientation[{frame or 'tool'}]"
-        super().__init__(3, name, kp, kd, weight, priority)
-        self.frame = frame
-        self.target = TargetHolder(name, (3, 3), 3)
+        super().__init__(3, "orientation", (3, 3), frame, kp, kd, weight, priority, name)
 
     def set_target(self, rotation: ArrayLike, angular_velocity: ArrayLike | None = None,
                    angular_acceleration: ArrayLike | None = None) -> None:
         self.target.set(rotation, angular_velocity, angular_acceleration)
-
-    def set_trajectory(self, fn: Trajectory) -> None:
-        """Target from ``fn(t) -> (rotation, angular velocity, angular acceleration)``."""
-        self.target.follow(fn)
-
-    def check(self, evaluator: object, n: int, contacts: dict[str, int]) -> None:
-        evaluator.check_frame(self.frame)  # type: ignore[attr-defined]
 
     def kinematics(self, state: ModelState, t: float, ref: Reference
                    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:

@@ -10,34 +10,23 @@ from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray
 from armctl.controllers.osc.state import ModelState
-from armctl.controllers.osc.tasks.base import MotionTask
+from armctl.controllers.osc.tasks.frame_task import FrameTask
 from armctl.controllers.osc.tasks.rotation import rotation_error
-from armctl.controllers.osc.tasks.target import TargetHolder, Trajectory
 from armctl.reference import Reference
 
 
-class FramePoseTask(MotionTask):
+class FramePoseTask(FrameTask):
     """Pose of ``frame`` (default: the tool frame). Gains ``kp`` [1/s²], ``kd`` [1/s] (scalar, (6,) or 6×6;
     rows [linear; angular]). Target: :meth:`set_target` (4×4 pose in the world, twist [v; ω] (6,),
     acceleration [a; ω̇] (6,), world axes) or :meth:`set_trajectory`."""
 
     def __init__(self, frame: str | None = None, kp: ArrayLike = 400.0, kd: ArrayLike | None = None,
                  weight: ArrayLike = 1.0, priority: int = 0, name: str | None = None) -> None:
-        name = name or f"pose[{frame or 'tool'}]"
-        super().__init__(6, name, kp, kd, weight, priority)
-        self.frame = frame
-        self.target = TargetHolder(name, (4, 4), 6)
+        super().__init__(6, "pose", (4, 4), frame, kp, kd, weight, priority, name)
 
     def set_target(self, pose: ArrayLike, twist: ArrayLike | None = None,
                    acceleration: ArrayLike | None = None) -> None:
         self.target.set(pose, twist, acceleration)
-
-    def set_trajectory(self, fn: Trajectory) -> None:
-        """Target from ``fn(t) -> (pose 4×4, twist (6,), acceleration (6,))``."""
-        self.target.follow(fn)
-
-    def check(self, evaluator: object, n: int, contacts: dict[str, int]) -> None:
-        evaluator.check_frame(self.frame)  # type: ignore[attr-defined]
 
     def kinematics(self, state: ModelState, t: float, ref: Reference
                    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:

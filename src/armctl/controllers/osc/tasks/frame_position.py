@@ -9,33 +9,22 @@ from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray
 from armctl.controllers.osc.state import ModelState
-from armctl.controllers.osc.tasks.base import MotionTask
-from armctl.controllers.osc.tasks.target import TargetHolder, Trajectory
+from armctl.controllers.osc.tasks.frame_task import FrameTask
 from armctl.reference import Reference
 
 
-class FramePositionTask(MotionTask):
+class FramePositionTask(FrameTask):
     """Position of ``frame``'s origin (default: the tool frame) in the world [m]; gains ``kp`` [1/s²],
     ``kd`` [1/s]. Target: :meth:`set_target` (position, velocity, acceleration) or :meth:`set_trajectory`."""
 
     def __init__(self, frame: str | None = None, kp: ArrayLike = 400.0, kd: ArrayLike | None = None,
                  weight: ArrayLike = 1.0, priority: int = 0, name: str | None = None) -> None:
-        name = name or f"position[{frame or 'tool'}]"
-        super().__init__(3, name, kp, kd, weight, priority)
-        self.frame = frame
-        self.target = TargetHolder(name, (3,), 3)
+        super().__init__(3, "position", (3,), frame, kp, kd, weight, priority, name)
 
     def set_target(self, position: ArrayLike, velocity: ArrayLike | None = None,
                    acceleration: ArrayLike | None = None) -> None:
         """Constant target: position [m], velocity [m/s] and acceleration [m/s²] (world axes; default 0)."""
         self.target.set(position, velocity, acceleration)
-
-    def set_trajectory(self, fn: Trajectory) -> None:
-        """Target from ``fn(t) -> (position, velocity, acceleration)`` (velocity/acceleration may be None)."""
-        self.target.follow(fn)
-
-    def check(self, evaluator: object, n: int, contacts: dict[str, int]) -> None:
-        evaluator.check_frame(self.frame)  # type: ignore[attr-defined]
 
     def kinematics(self, state: ModelState, t: float, ref: Reference
                    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
