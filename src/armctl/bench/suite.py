@@ -142,7 +142,7 @@ def run_suite(quick: bool = False, out: Path = Path("bench-out"), executor: Exec
             section(key, lambda mod=mod: mod.run(quick=quick))
             mod.plot(figures[key], out / f"{key}.png")
             charts[f"{key}.png"] = (mod.__doc__ or key).strip().splitlines()[0]
-    section("dynamics_speed", lambda: dynamics_speed.run(number=number, rounds=rounds))
+    section("dynamics_speed", lambda: dynamics_speed.run(number=number, rounds=rounds, compile_if_needed=not quick))
     section("controller_speed", lambda: controller_speed.run(number=number, rounds=rounds))
     figures["total_seconds"] = time.perf_counter() - t_all
     figures["charts"] = charts

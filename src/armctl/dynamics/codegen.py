@@ -28,14 +28,18 @@ def cache_root(cache_dir: str | os.PathLike[str] | None = None) -> Path:
     return Path(env) if env else Path.home() / ".cache" / "armctl"
 
 
+def library_path(names: list[str], tag: str, cache_dir: str | os.PathLike[str] | None = None) -> Path:
+    """Where the compiled library of the functions ``names`` with cache ``tag`` lives (it may not exist yet)."""
+    key = hashlib.sha256(f"{tag}|{cs.__version__}|{CFLAGS}|{names}".encode())
+    return cache_root(cache_dir) / "casadi" / f"armctl_{key.hexdigest()[:20]}.so"
+
+
 def compiled(functions: list[cs.Function], tag: str, cache_dir: str | os.PathLike[str] | None = None
              ) -> list[cs.Function]:
     """The same functions, evaluated by C code compiled from them (built on first use, then cached)."""
     cc = shutil.which(os.environ.get("CC", "cc")) or shutil.which("gcc")
-    key = hashlib.sha256(f"{tag}|{cs.__version__}|{CFLAGS}|{[f.name() for f in functions]}".encode())
-    name = f"armctl_{key.hexdigest()[:20]}"
-    folder = cache_root(cache_dir) / "casadi"
-    lib = folder / f"{name}.so"
+    lib = library_path([f.name() for f in functions], tag, cache_dir)
+    folder, name = lib.parent, lib.stem
     if not lib.exists():
         if cc is None:
             raise BackendError("compile=True needs a C compiler (cc or gcc on PATH, or $CC); install one or "

@@ -116,6 +116,15 @@ class _Symbols:
         return pose, jac
 
 
+_FUNCTION_NAMES = ("M", "C", "g", "tau", "Y", "T", "U", "tool_J", "tool_pose")
+
+
+def _cache_tag(model: RobotModel, rotor_coupling: bool) -> str:
+    # π is an input of every function, so the code depends on the kinematics only: payload and perturbed
+    # variants of an arm share one compiled library
+    return f"{model.fingerprint(inertial=False)}-{'rc' if rotor_coupling else 'nc'}"
+
+
 class _Evaluator:
     """Calls a CasADi function through its zero-copy buffer (``Function.buffer``): ~10× less overhead than
     ``f(*args)``, which converts every argument to a DM. Results are fresh arrays (column-major for
@@ -178,15 +187,19 @@ class LagrangeDynamics(Dynamics):
         if compile:
             from armctl.dynamics.codegen import compiled
 
-            # π is an input of every function, so the code depends on the kinematics only: payload and
-            # perturbed variants of an arm share one compiled library
-            tag = f"{model.fingerprint(inertial=False)}-{'rc' if self.rotor_coupling else 'nc'}"
-            fns = compiled(fns, tag, cache_dir)
+            fns = compiled(fns, _cache_tag(model, self.rotor_coupling), cache_dir)
         self.functions: dict[str, cs.Function] = {f.name(): f for f in fns}
         with_pi = {"M": 1, "C": 2, "g": 1, "tau": 3, "T": 2, "U": 1}
         self._ev = {f.name(): _Evaluator(f, {with_pi[f.name()]: self._params} if f.name() in with_pi else None)
                     for f in fns}
         self._frame_fns: dict[str, tuple[_Evaluator, _Evaluator]] = {}
+
+    @staticmethod
+    def is_compiled_cached(model: RobotModel, rotor_coupling: bool = True, cache_dir: str | None = None) -> bool:
+        """Whether ``compile=True`` would load a cached library (instead of compiling, ~20 s for 7 joints)."""
+        from armctl.dynamics.codegen import library_path
+
+        return library_path(list(_FUNCTION_NAMES), _cache_tag(model, rotor_coupling), cache_dir).exists()
 
     @property
     def options(self) -> dict[str, Any]:
