@@ -49,6 +49,20 @@ def scalar(x: Any, name: str, *, positive: bool = False, nonnegative: bool = Fal
     return v
 
 
+def nonnegative_vector(x: ArrayLike, n: int, name: str) -> FloatArray:
+    """A scalar (for every entry) or an (n,) vector, finite and ≥ 0 — weights, standard deviations, …"""
+    a = np.asarray(x, dtype=float)
+    if a.ndim == 0:
+        a = np.full(n, float(a))
+    if a.shape != (n,):
+        raise ShapeError(f"{name} must be a scalar or an ({n},) vector, got shape {a.shape}", value=x)
+    if not np.isfinite(a).all():
+        raise NonFiniteError(f"{name} holds NaN or inf: {a}", value=x)
+    if (a < 0).any():
+        raise InvalidParameterError(f"{name} must be >= 0, got {a.tolist()}", value=x)
+    return a
+
+
 def gain_matrix(k: ArrayLike, n: int, name: str) -> FloatArray:
     """A gain given as a scalar, a vector (diagonal) or an n×n matrix, returned as a symmetric positive
     definite n×n matrix; raise if it is not one."""

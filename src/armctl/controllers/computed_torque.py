@@ -35,10 +35,6 @@ class ComputedTorque(PIDGains, Controller):
                                         value=friction)
         self.friction = friction
 
-    def reset(self) -> None:
-        super().reset()
-        self._integral.reset()
-
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         dyn = self.dynamics
         assert dyn is not None

@@ -41,3 +41,7 @@ class PIDGains:
         self._kp, self._kd = compact_gain(self.kp), compact_gain(self.kd)
         self._ki = None if self.ki is None else compact_gain(self.ki)
         self._integral = ErrorIntegral(self.n)
+
+    def reset(self) -> None:
+        super().reset()  # type: ignore[misc]  # the Controller's, next in the MRO
+        self._integral.reset()

@@ -31,10 +31,6 @@ class PDGravity(PIDGains, Controller):
         self._set_gains(kp, kd, ki)
         self.friction = bool(friction)
 
-    def reset(self) -> None:
-        super().reset()
-        self._integral.reset()
-
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         dyn = self.dynamics
         assert dyn is not None

@@ -14,7 +14,7 @@ from numpy.typing import ArrayLike
 from armctl._checks import FloatArray, scalar, vector
 from armctl.controllers.base import Controller
 from armctl.dynamics.base import Dynamics
-from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError, UnknownNameError
+from armctl.errors import InvalidParameterError, ShapeError, UnknownNameError
 from armctl.model.robot import RobotModel
 from armctl.reference import Reference
 from armctl.sim.contact import Environment, ForceSensor
@@ -103,19 +103,6 @@ def initial_state(q0: ArrayLike | None, qd0: ArrayLike | None, ref0: Reference, 
     q = ref0.q if q0 is None else vector(q0, n, "q0")
     qd = ref0.qd if qd0 is None else vector(qd0, n, "qd0")
     return np.array(q, dtype=float), np.array(qd, dtype=float)
-
-
-def noise_level(x: ArrayLike, n: int, name: str) -> FloatArray:
-    a = np.asarray(x, dtype=float)
-    if a.ndim == 0:
-        a = np.full(n, float(a))
-    if a.shape != (n,):
-        raise ShapeError(f"{name} must be a scalar or an ({n},) vector, got shape {a.shape}", value=x)
-    if not np.isfinite(a).all():
-        raise NonFiniteError(f"{name} holds NaN or inf: {a}", value=x)
-    if (a < 0).any():
-        raise InvalidParameterError(f"{name} (a standard deviation) must be >= 0, got {a}", value=x)
-    return a
 
 
 def delay_periods(delay: Any) -> int:

@@ -19,6 +19,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 from numpy.typing import ArrayLike
 
+from armctl._checks import nonnegative_vector
 from armctl.dynamics.base import Dynamics
 from armctl.errors import ShapeError
 from armctl.model.robot import RobotModel
@@ -80,7 +81,8 @@ def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
     ref0 = fixed_ref if fixed_ref is not None else ref_fn(0.0)  # type: ignore[misc]
     call = setup.controller_call(controller, n)
     q, v = setup.initial_state(q0, qd0, ref0, n)
-    sig_q, sig_qd = setup.noise_level(noise_q, n, "noise_q"), setup.noise_level(noise_qd, n, "noise_qd")
+    sig_q, sig_qd = (nonnegative_vector(noise_q, n, "noise_q (a standard deviation)"),
+                      nonnegative_vector(noise_qd, n, "noise_qd (a standard deviation)"))
     lag = setup.delay_periods(delay)
     vmax, qmax = setup.bound(max_velocity, "max_velocity"), setup.bound(max_position, "max_position")
     sc = setup.scene(dyn, friction, environment, sensors, disturbance)

@@ -20,23 +20,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, gain_matrix
+from armctl._checks import FloatArray, gain_matrix, nonnegative_vector
 from armctl.controllers.osc.state import ModelState
-from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
+from armctl.errors import InvalidParameterError
 from armctl.reference import Reference
-
-
-def _weights(weight: ArrayLike, dim: int, name: str) -> FloatArray:
-    w = np.asarray(weight, dtype=float)
-    if w.ndim == 0:
-        w = np.full(dim, float(w))
-    if w.shape != (dim,):
-        raise ShapeError(f"{name}: weight must be a scalar or a ({dim},) vector, got shape {w.shape}", value=weight)
-    if not np.isfinite(w).all():
-        raise NonFiniteError(f"{name}: weight holds NaN or inf", value=weight)
-    if (w < 0).any():
-        raise InvalidParameterError(f"{name}: weights must be >= 0, got {w.tolist()}", value=weight)
-    return w
 
 
 def _compact(k: FloatArray) -> Any:
@@ -73,7 +60,7 @@ class Task(ABC):
 
     @weight.setter
     def weight(self, value: ArrayLike) -> None:
-        self._weight = _weights(value, self.dim, self.name)
+        self._weight = nonnegative_vector(value, self.dim, f"{self.name}: weight")
         self.sqrt_weight = np.sqrt(self._weight)
         Task.weights_version += 1
 
