@@ -75,7 +75,9 @@ class Adaptive(Controller):
         dyn = self.dynamics
         assert dyn is not None
         qd_r, qdd_r, s = sliding(q, qd, ref, self._lam)
-        y = dyn.passivity_regressor(q, qd, qd_r, qdd_r)
+        # q, q̇ checked by Controller.__call__; Y may be the dynamics' workspace (read before the next
+        # regressor call: the composite term makes one, so it needs a copy)
+        y = dyn._passivity_regressor(q, qd, qd_r, qdd_r, s, copy=bool(self.composite))
         dt = 0.0 if self._t_prev is None else t - self._t_prev
         if dt > 0:
             grad = y.T.dot(s) if self.dead_zone == 0 or float(np.linalg.norm(s)) >= self.dead_zone \

@@ -43,9 +43,7 @@ class ComputedTorque(PIDGains, Controller):
         v += apply_gain(self._kp, e)
         if self._ki is not None:
             v += apply_gain(self._ki, self._integral.update(t, e))
-        tau = dyn.inverse_dynamics(q, qd, v)
-        if self.friction is not True and dyn._has_friction:
-            tau -= dyn.friction_torque(qd)
-            if self.friction == "reference":
-                tau += dyn.friction_torque(ref.qd)
+        tau = dyn._rigid_torque(q, qd, v)  # q, q̇ checked by Controller.__call__, v finite from them and ref
+        if self.friction and dyn._has_friction:
+            tau += dyn._friction(qd if self.friction is True else ref.qd)
         return tau

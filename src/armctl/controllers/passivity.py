@@ -39,6 +39,6 @@ class PassivityBased(Controller):
         dyn = self.dynamics
         assert dyn is not None
         qd_r, qdd_r, s = sliding(q, qd, ref, self._lam)
-        tau = dyn.passivity_torque(q, qd, qd_r, qdd_r)
+        tau = dyn._passivity_torque(q, qd, qd_r, qdd_r, s)  # q, q̇ checked by Controller.__call__
         tau -= apply_gain(self._kd, s)
         return tau

@@ -35,11 +35,11 @@ class PDGravity(PIDGains, Controller):
         dyn = self.dynamics
         assert dyn is not None
         e = ref.q - q
-        tau = dyn.gravity_torque(q)
+        tau = dyn._gravity(q)  # q is checked by Controller.__call__
         tau += apply_gain(self._kp, e)
         tau += apply_gain(self._kd, ref.qd - qd)
         if self._ki is not None:
             tau += apply_gain(self._ki, self._integral.update(t, e))
-        if self.friction:
-            tau += dyn.friction_torque(qd)
+        if self.friction and dyn._has_friction:
+            tau += dyn._friction(qd)
         return tau

@@ -111,8 +111,8 @@ class Dynamics(ABC):
     @abstractmethod
     def _rigid_regressor(self, q: FloatArray, qd: FloatArray, qdd: FloatArray,
                          friction: tuple[FloatArray, FloatArray] | None = None) -> FloatArray:
-        """n × 13n regressor of M q̈ + C q̇ + g; the friction columns hold ``friction`` = (viscous column,
-        Coulomb column) diagonals, or zeros."""
+        """n × 13n regressor of M q̈ + C q̇ + g; the friction columns hold ``friction`` = (v, w): the viscous
+        column's diagonal v and the Coulomb column's sgn(w), or zeros."""
 
     @abstractmethod
     def _jacobian(self, q: FloatArray, frame: str | None) -> FloatArray: ...
@@ -268,7 +268,7 @@ class Dynamics(ABC):
         :meth:`coulomb_offset` returns.
         """
         q, qd, qdd = self._inputs(("q", "qd", "qdd"), q, qd, qdd)
-        return self._rigid_regressor(q, qd, qdd, (qd, np.sign(qd)))
+        return self._rigid_regressor(q, qd, qdd, (qd, qd))
 
     def base_parameters(self, samples: int | None = None, seed: int = 0) -> Any:
         """The base (identifiable) parameters of this model: a minimal set θ = K π with Y π = Y_b θ, found
@@ -295,17 +295,35 @@ class Dynamics(ABC):
         loop's damping); Coulomb friction at the measured q̇.
         """
         q, qd, qd_r, qdd_r = self._inputs(("q", "qd", "qd_r", "qdd_r"), q, qd, qd_r, qdd_r)
-        return self._polarised_regressor(q, (qd + qd_r) / _SQRT8, 0.5 * qdd_r, 0.5 * (qd - qd_r),
-                                         (qd_r, np.sign(qd)))
+        return self._passivity_regressor(q, qd, qd_r, qdd_r, qd - qd_r)
 
     def passivity_torque(self, q: ArrayLike, qd: ArrayLike, qd_r: ArrayLike, qdd_r: ArrayLike) -> FloatArray:
         """M q̈_r + C(q, q̇) q̇_r + g + F_v q̇_r + F_c sgn(q̇) (= passivity_regressor(...) @ π, with the Coulomb
         asymmetry offset), from two inverse-dynamics evaluations by the same polarisation:
         2 R(q, (q̇ + q̇_r)/√8, q̈_r/2) − R(q, (q̇ − q̇_r)/2, 0), R(q, v, a) = M a + C(q, v) v + g."""
         q, qd, qd_r, qdd_r = self._inputs(("q", "qd", "qd_r", "qdd_r"), q, qd, qd_r, qdd_r)
+        return self._passivity_torque(q, qd, qd_r, qdd_r, qd - qd_r)
+
+    # The primitives behind the two methods above, on checked inputs and with s = q̇ − q̇_r (controllers that
+    # have checked the state and formed s call them directly). copy=False may return a workspace that the
+    # next regressor call overwrites.
+    def _passivity_regressor(self, q: FloatArray, qd: FloatArray, qd_r: FloatArray, qdd_r: FloatArray,
+                             s: FloatArray, copy: bool = True) -> FloatArray:
+        y = self._rigid_regressor(q, (qd + qd_r) / _SQRT8, 0.5 * qdd_r)
+        y *= 2.0
+        y -= self._rigid_regressor(q, 0.5 * s, self._zeros)
+        y.put(self._diag_idx[self.n:], np.concatenate((qd_r, np.sign(qd))))
+        return y
+
+    def _passivity_torque(self, q: FloatArray, qd: FloatArray, qd_r: FloatArray, qdd_r: FloatArray,
+                          s: FloatArray) -> FloatArray:
         tau = self._rigid_torque(q, (qd + qd_r) / _SQRT8, 0.5 * qdd_r)
         tau *= 2.0
-        tau -= self._rigid_torque(q, 0.5 * (qd - qd_r), self._zeros)
+        tau -= self._rigid_torque(q, 0.5 * s, self._zeros)
+        return self._add_passivity_friction(tau, qd, qd_r)
+
+    def _add_passivity_friction(self, tau: FloatArray, qd: FloatArray, qd_r: FloatArray) -> FloatArray:
+        """τ + F_v q̇_r + F_c sgn(q̇) (+ the Coulomb asymmetry offset), in place."""
         if self._has_viscous:
             tau += self._fv * qd_r
         if self._has_coulomb:
@@ -313,14 +331,6 @@ class Dynamics(ABC):
             if self._has_asymmetry:
                 tau += self._fc_offset * (qd != 0)
         return tau
-
-    def _polarised_regressor(self, q: FloatArray, v1: FloatArray, a1: FloatArray, v2: FloatArray,
-                             friction: tuple[FloatArray, FloatArray]) -> FloatArray:
-        """2 R(q, v1, a1) − R(q, v2, 0) with the given friction columns; backends may combine earlier."""
-        y = self._rigid_regressor(q, v1, a1, (0.5 * friction[0], 0.5 * friction[1]))
-        y *= 2.0
-        y -= self._rigid_regressor(q, v2, self._zeros)
-        return y
 
 
 def _make(model: RobotModel, backend: str, options: dict[str, Any]) -> Dynamics:

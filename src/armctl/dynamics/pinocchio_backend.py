@@ -37,11 +37,47 @@ class PinocchioDynamics(Dynamics):
         self._rigid_torque = partial(pin.rnea, pm, pd)  # type: ignore[method-assign]
         self._forward = partial(pin.aba, pm, pd)  # type: ignore[method-assign]
         self._raw_regressor = partial(pin.computeJointTorqueRegressor, pm, pd)
-        # Y is built as its transpose, an (n, 13, n) block array: Yᵀ[j, c, i] = Y[i, 13 j + c], so that
-        # Pinocchio's column-major (n, 10n) regressor copies in as one block; flat indices of the diagonals
-        # of the rotor (c = 10), viscous (11) and Coulomb (12) columns
-        j = np.arange(self.n)
-        self._t_idx = np.concatenate([(PARAMS_PER_JOINT * j + c) * self.n + j for c in (10, 11, 12)])
+        # the same model without gravity, for the velocity terms h(v) = C(q, v) v alone
+        self.pin_model_free = pin.Model(pm)
+        self.pin_model_free.gravity = pin.Motion.Zero()
+        self.pin_data_free = self.pin_model_free.createData()
+        self._rigid_torque_free = partial(pin.rnea, self.pin_model_free, self.pin_data_free)
+        self._raw_regressor_free = partial(pin.computeJointTorqueRegressor, self.pin_model_free,
+                                           self.pin_data_free)
+        self._init_regressor_workspace()
+
+    def _init_regressor_workspace(self) -> None:
+        """Y is assembled in a workspace holding its transpose as an (n, 13, n) block array, Yᵀ[j, c, i] =
+        Y[i, 13 j + c]: Pinocchio's own (column-major) regressor, seen transposed, is a C-contiguous (10n, n)
+        array whose (n, 10, n) view copies into the first ten rows of every block in n contiguous pieces. The
+        rotor (c = 10), viscous (11) and Coulomb (12) columns have Y[i, 13 i + c] as their only non-zero, a
+        strided view of the workspace. Each call returns a copy of the workspace."""
+        n = self.n
+        self._yt = np.zeros((n, PARAMS_PER_JOINT, n))
+        self._yt_rigid = self._yt[:, :10, :]
+        flat = self._yt.reshape(-1)
+        self._yt_rotor, self._yt_viscous, self._yt_coulomb = (flat[c * n::PARAMS_PER_JOINT * n + 1]
+                                                              for c in (10, 11, 12))
+        self._y = self._yt.reshape(PARAMS_PER_JOINT * n, n).T  # (n, 13n), column-major view
+        # Pinocchio keeps its regressor in Data.jointTorqueRegressor, which eigenpy hands out as a view; the
+        # views are used only if they really are views (checked here), else the returned copies are read
+        rng = np.random.default_rng(0)
+        args = rng.uniform(-1.0, 1.0, (3, n))
+        shared = True
+        for data, fn in ((self.pin_data, self._raw_regressor), (self.pin_data_free, self._raw_regressor_free)):
+            view = data.jointTorqueRegressor
+            out = fn(*args)
+            shared &= bool(np.shares_memory(view, data.jointTorqueRegressor) and np.array_equal(view, out)
+                           and view.T.flags.c_contiguous)
+        self._raw_t = self.pin_data.jointTorqueRegressor.T.reshape(n, 10, n) if shared else None
+        self._raw_t_free = self.pin_data_free.jointTorqueRegressor.T.reshape(n, 10, n) if shared else None
+
+    def _raw_blocks(self, q: FloatArray, qd: FloatArray, qdd: FloatArray) -> FloatArray:
+        """Pinocchio's regressor at (q, q̇, q̈) as (n, 10, n) blocks, Yᵀ layout (a view when it can be)."""
+        out = self._raw_regressor(q, qd, qdd)
+        if self._raw_t is not None:
+            return self._raw_t
+        return out.T.reshape(self.n, 10, self.n)  # type: ignore[no-any-return]
 
     def _frame_id(self, frame: str | None) -> int:
         name = self.model.frame(frame).name
@@ -63,28 +99,42 @@ class PinocchioDynamics(Dynamics):
 
     def _rigid_regressor(self, q: FloatArray, qd: FloatArray, qdd: FloatArray,
                          friction: tuple[FloatArray, FloatArray] | None = None) -> FloatArray:
-        return self._assemble(self._raw_regressor(q, qd, qdd), qdd, friction)
+        self._yt_rigid[...] = self._raw_blocks(q, qd, qdd)
+        self._yt_rotor[:] = qdd
+        return self._finish_regressor(friction)
 
-    def _polarised_regressor(self, q: FloatArray, v1: FloatArray, a1: FloatArray, v2: FloatArray,
-                             friction: tuple[FloatArray, FloatArray]) -> FloatArray:
-        # combine Pinocchio's (n, 10n) outputs first, then assemble the (n, 13n) layout once
-        raw = self._raw_regressor(q, v1, a1)
-        raw *= 2.0
-        raw -= self._raw_regressor(q, v2, self._zeros)
-        return self._assemble(raw, 2.0 * a1, friction)
-
-    def _assemble(self, raw: FloatArray, rotor: FloatArray,
-                  friction: tuple[FloatArray, FloatArray] | None) -> FloatArray:
-        """armctl's (n, 13n) regressor from Pinocchio's (n, 10n) one: Pinocchio's ten inertial parameters
-        per body are armctl's first ten, in the same order; the rotor column is q̈ (diagonal)."""
-        n = self.n
-        yt = np.zeros((n, PARAMS_PER_JOINT, n))
-        yt[:, :10, :] = raw.T.reshape(n, 10, n)
-        if friction is None:
-            yt.put(self._t_idx[:n], rotor)
+    # Polarisation with a gravity-free twin of the model: with R(q, v, a) = M a + h(v) + g and
+    # h₀(v) = h(v) = C(q, v) v evaluated without gravity, and s = q̇ − q̇_r,
+    #     M q̈_r + C(q, q̇) q̇_r + g = R(q, q̇_r + s/2, q̈_r) − h₀(s/2)
+    # since h(a + b) − h(a − b) = 4 C(q, a) b with a ± b = (q̇ ± q̇_r)/2: one subtraction of two evaluations.
+    def _passivity_regressor(self, q: FloatArray, qd: FloatArray, qd_r: FloatArray, qdd_r: FloatArray,
+                             s: FloatArray, copy: bool = True) -> FloatArray:
+        w = 0.5 * s
+        if self._raw_t is not None:  # both regressors stay in Pinocchio's workspaces: subtract them there
+            self._raw_regressor(q, qd_r + w, qdd_r)
+            self._raw_regressor_free(q, w, self._zeros)
+            np.subtract(self._raw_t, self._raw_t_free, out=self._yt_rigid)
         else:
-            yt.put(self._t_idx, np.concatenate((rotor, *friction)))
-        return yt.reshape(PARAMS_PER_JOINT * n, n).T  # (n, 13n), column-major
+            self._yt_rigid[...] = self._raw_blocks(q, qd_r + w, qdd_r)
+            self._yt_rigid -= self._raw_regressor_free(q, w, self._zeros).T.reshape(self.n, 10, self.n)
+        self._yt_rotor[:] = qdd_r
+        return self._finish_regressor((qd_r, qd), copy)
+
+    def _passivity_torque(self, q: FloatArray, qd: FloatArray, qd_r: FloatArray, qdd_r: FloatArray,
+                          s: FloatArray) -> FloatArray:
+        w = 0.5 * s
+        tau = self._rigid_torque(q, qd_r + w, qdd_r)
+        tau -= self._rigid_torque_free(q, w, self._zeros)
+        return self._add_passivity_friction(tau, qd, qd_r)
+
+    def _finish_regressor(self, friction: tuple[FloatArray, FloatArray] | None, copy: bool = True) -> FloatArray:
+        if friction is None:
+            self._yt_viscous[:] = 0.0
+            self._yt_coulomb[:] = 0.0
+        else:
+            self._yt_viscous[:] = friction[0]
+            np.sign(friction[1], out=self._yt_coulomb)
+        return self._y.copy(order="K") if copy else self._y  # type: ignore[no-any-return]
 
     def _forward(self, q: FloatArray, qd: FloatArray, tau_net: FloatArray) -> FloatArray:
         return pin.aba(self.pin_model, self.pin_data, q, qd, tau_net)

@@ -119,17 +119,17 @@ def fast_step(name: str, plant: Plant) -> Callable[..., tuple[FloatArray, FloatA
 
     def rk4_step(q: FloatArray, v: FloatArray, tau: FloatArray, h: float
                  ) -> tuple[FloatArray, FloatArray, FloatArray]:
-        c = _rk4_coefficients(h)
+        c0, c1, c2, c3 = _rk4_coefficients(h)  # ``.dot``: a third of the cost of ``@`` on these small arrays
         rows[0] = q
         rows[1] = v
         rows[2] = a1 = fwd(q, v, tau)
-        x = c[0] @ rows[:3]
+        x = c0.dot(rows[:3])
         rows[3] = fwd(x[0], x[1], tau)
-        x = c[1] @ rows[:4]
+        x = c1.dot(rows[:4])
         rows[4] = fwd(x[0], x[1], tau)
-        x = c[2] @ rows[:5]
+        x = c2.dot(rows[:5])
         rows[5] = fwd(x[0], x[1], tau)
-        x = c[3] @ rows
+        x = c3.dot(rows)
         return x[0], x[1], a1
 
     def euler_step(q: FloatArray, v: FloatArray, tau: FloatArray, h: float

@@ -78,7 +78,7 @@ def check_reference(ref: Any, n: int, t: float) -> Reference:
     if not isinstance(ref, Reference):
         raise InvalidParameterError(f"reference(t) must return an armctl.Reference, got {type(ref).__name__} at "
                                     f"t = {t}", value=ref)
-    if ref.n != n:
+    if ref.q.shape[0] != n:
         raise ShapeError(f"reference has {ref.n} joints, the plant {n} (at t = {t})", value=ref)
     return ref
 

@@ -101,6 +101,7 @@ def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
     limit = dyn.model.effort_limit
     clip = saturate and bool(np.isfinite(limit).any())
     lim_list = limit.tolist()
+    lim_min = min(lim_list)  # |τ| below every limit needs no clipping: the cheap test first
     if reset and callable(getattr(controller, "reset", None)):
         controller.reset()  # type: ignore[union-attr]
     has_log = hasattr(controller, "last_log")
@@ -154,7 +155,7 @@ def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
                 divergence, rows = (t, f"the controller returned a non-finite torque {tau}", q, v), k
                 break
             tau_a = tau
-            if clip and any(map(_GT, map(abs, tl), lim_list)):
+            if clip and (max(tl) > lim_min or -min(tl) > lim_min) and any(map(_GT, map(abs, tl), lim_list)):
                 tau_a = np.clip(tau, -limit, limit)
             TAU[k] = tau
             TAUA[k] = tau_a

@@ -83,7 +83,7 @@ class StepQP:
         """(H, g, A, b, C, l, u) of level ``k`` without slacks (the hot path of :meth:`problem`)."""
         lay = self.layout
         Tt = self.levels[k].Tt
-        G = Tt.T @ Tt  # [TᵀT, Tᵀt; tᵀT, tᵀt]
+        G = Tt.T.dot(Tt)  # [TᵀT, Tᵀt; tᵀT, tᵀt] (``.dot``: cheaper than ``@`` on small arrays)
         nx = lay.nx
         H = G[:nx, :nx] + (lay.reg_matrix if k == len(self.levels) - 1 else lay.reg_matrix_upper)
         g = np.negative(G[:nx, nx])

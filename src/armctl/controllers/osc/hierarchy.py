@@ -93,7 +93,7 @@ def solve_cascade(step: StepQP, solver: object, rank_tol: float = 1e-9) -> OSCSo
     slacks: dict[str, FloatArray] | None = {} if step.slacks else None
     last = len(step.levels) - 1
     for k, lev in enumerate(step.levels):
-        frozen = None if x is None else (F, F @ x)
+        frozen = None if x is None else (F, F.dot(x))
         frozen_rows.append(frozen)
         try:
             if raw is not None:

@@ -125,7 +125,7 @@ class ModelEvaluator:
             if self.n == 1:  # eigenpy squeezes a 6×1 result to (6,)
                 jac = jac.reshape(6, 1)
             drift = pin.getFrameClassicalAcceleration(pm, pd, fid, self._lwa).vector
-            return FrameKinematics(pose.translation, pose.rotation, jac, jac @ state.qd, drift)
+            return FrameKinematics(pose.translation, pose.rotation, jac, jac.dot(state.qd), drift)
         dyn = self.dynamics
         pose = dyn.frame_pose(state.q, name)
         jac = dyn.jacobian(state.q, name)

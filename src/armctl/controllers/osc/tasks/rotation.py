@@ -19,7 +19,7 @@ _NEAR_PI = math.pi - 1e-3
 
 def rotation_error(rot_ref: FloatArray, rot: FloatArray) -> list[float]:
     """log(R_ref Rᵀ) [rad] as a list of 3 floats."""
-    E = rot_ref @ rot.T
+    E = rot_ref.dot(rot.T)
     (a, b, c), (d, e, f), (g, h, i) = E.tolist()
     cos = 0.5 * (a + e + i - 1.0)
     cos = 1.0 if cos > 1.0 else -1.0 if cos < -1.0 else cos
