@@ -206,11 +206,13 @@ def sweep_cases(runs: int) -> list[dict[str, Any]]:
 
 def sweep_figures(runs: int = 200, workers: int = 2, blocks: int = 4) -> dict[str, Any]:
     """Pooled and serial sweeps of the same runs, in alternating blocks (pool, serial, pool, …) so that a
-    change in the load of a shared machine hits both alike. Also the CPU time the work took each way (the
-    workers' from ``getrusage``), whose ratio is the speed-up an otherwise idle machine would give at best,
-    and the machine's load average."""
+    change in the load of a shared machine hits both alike. The pooled blocks share one process pool, as one
+    200-run sweep would: its workers start (and import armctl, ~1 s) inside the first pooled block's timing.
+    Also the CPU time the work took each way (the workers' from ``getrusage``), whose ratio is the speed-up an
+    otherwise idle machine would give at best, and the machine's load average."""
     import os
     import resource
+    from concurrent.futures import ProcessPoolExecutor
 
     from armctl.bench import sim_speed as me
 
@@ -221,15 +223,21 @@ def sweep_figures(runs: int = 200, workers: int = 2, blocks: int = 4) -> dict[st
     serial: list[float] = []
     load = [os.getloadavg()[0]]
     children0 = resource.getrusage(resource.RUSAGE_CHILDREN)
-    for chunk in chunks:
+    pool = ProcessPoolExecutor(workers)  # processes start on the first submit, inside the first block's timing
+    try:
+        for chunk in chunks:
+            t0 = time.perf_counter()
+            pooled += sweep(chunk, summary=me.rms_error, executor=pool, progress=True)
+            t_pool += time.perf_counter() - t0
+            t0, c0 = time.perf_counter(), time.process_time()
+            serial += sweep(chunk, summary=me.rms_error, executor="serial", progress=True)
+            t_serial += time.perf_counter() - t0
+            cpu_serial += time.process_time() - c0
+            load.append(os.getloadavg()[0])
+    finally:
         t0 = time.perf_counter()
-        pooled += sweep(chunk, summary=me.rms_error, max_workers=workers, progress=True)
+        pool.shutdown(wait=True)
         t_pool += time.perf_counter() - t0
-        t0, c0 = time.perf_counter(), time.process_time()
-        serial += sweep(chunk, summary=me.rms_error, executor="serial", progress=True)
-        t_serial += time.perf_counter() - t0
-        cpu_serial += time.process_time() - c0
-        load.append(os.getloadavg()[0])
     children = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu_pool = (children.ru_utime - children0.ru_utime) + (children.ru_stime - children0.ru_stime)
     if pooled != serial:
@@ -238,6 +246,37 @@ def sweep_figures(runs: int = 200, workers: int = 2, blocks: int = 4) -> dict[st
             "s_per_run_serial": t_serial / runs, "cpu_serial_s": cpu_serial, "cpu_pool_workers_s": cpu_pool,
             "idle_machine_speedup_bound": workers * cpu_serial / cpu_pool if cpu_pool > 0 else math.nan,
             "load_average_1min": load}
+
+
+def _serial_block(runs: int) -> None:
+    """Run ``runs`` sweep cases one after the other in this process (for :func:`parallel_ceiling`)."""
+    for case in sweep_cases(runs):
+        simulate(**case)
+
+
+def parallel_ceiling(runs: int = 12, workers: int = 2, rounds: int = 2) -> dict[str, Any]:
+    """The machine's own limit on the sweep's speed-up, without any pool: the same block of runs in
+    independent Python processes, one alone and then ``workers`` at once (each doing the whole block).
+    ceiling = workers × t_alone / t_together: what perfect parallel code could reach on this machine now."""
+    import subprocess
+    import sys
+
+    cmd = [sys.executable, "-c", f"from armctl.bench.sim_speed import _serial_block; _serial_block({runs})"]
+    subprocess.run(cmd, check=True)  # warm the file cache
+    alone: list[float] = []
+    together: list[float] = []
+    for _ in range(rounds):
+        t0 = time.perf_counter()
+        subprocess.run(cmd, check=True)
+        alone.append(time.perf_counter() - t0)
+        t0 = time.perf_counter()
+        procs = [subprocess.Popen(cmd) for _ in range(workers)]
+        if any(p.wait() != 0 for p in procs):
+            raise RuntimeError("a block of the parallel-ceiling measurement failed")
+        together.append(time.perf_counter() - t0)
+    t_alone, t_together = statistics.median(alone), statistics.median(together)
+    return {"runs": runs, "workers": workers, "alone_s": t_alone, "together_s": t_together,
+            "ceiling": workers * t_alone / t_together}
 
 
 def report(panda: dict[str, Any], sw: dict[str, Any] | None) -> str:
@@ -258,6 +297,11 @@ def report(panda: dict[str, Any], sw: dict[str, Any] | None) -> str:
                      f"{__import__('os').cpu_count()} CPUs; CPU time serial {sw['cpu_serial_s']:.1f} s, pool "
                      f"workers {sw['cpu_pool_workers_s']:.1f} s: on an idle machine at most "
                      f"×{sw['idle_machine_speedup_bound']:.2f}")
+        ceil = sw.get("parallel_ceiling")
+        if ceil is not None:
+            lines.append(f"  machine ceiling: {ceil['runs']} runs in {ceil['workers']} independent processes at once "
+                         f"{ceil['together_s']:.1f} s vs one alone {ceil['alone_s']:.1f} s: no code can exceed "
+                         f"×{ceil['ceiling']:.2f} here now")
     return "\n".join(lines)
 
 
@@ -273,7 +317,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     sw = None
     if not args.no_sweep:
         sw = sweep_figures(args.runs or (20 if args.quick else 200), args.workers)
-        print(report(panda, sw).splitlines()[-1])
+        sw["parallel_ceiling"] = parallel_ceiling(4 if args.quick else 12, args.workers, 1 if args.quick else 2)
+        print("\n".join(report(panda, sw).splitlines()[-2:]))
     return {"panda": panda, "sweep": sw}
 
 
