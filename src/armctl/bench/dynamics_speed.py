@@ -13,13 +13,13 @@ from typing import Any
 import numpy as np
 
 import armctl
-from armctl.bench.timing import interleaved
+from armctl.bench.timing import interleaved, paired_ratio
 
 TARGETS = {"mass_matrix": 1.5, "inverse_dynamics": 1.5, "regressor": 1.5, "passivity_regressor": 4.0,
            "lagrange_compiled_inverse_dynamics": 10.0, "lagrange_build_seconds": 5.0}
 
 
-def run(number: int = 1000, rounds: int = 15, seed: int = 0, compile_if_needed: bool = True) -> dict[str, Any]:
+def run(number: int = 200, rounds: int = 75, seed: int = 0, compile_if_needed: bool = True) -> dict[str, Any]:
     """Measure; returns a dict of figures (seconds and ratios). ``compile_if_needed=False`` skips the compiled
     Lagrange figure unless its library is already cached (the first compile takes ~20 s)."""
     import pinocchio as pin
@@ -40,8 +40,9 @@ def run(number: int = 1000, rounds: int = 15, seed: int = 0, compile_if_needed: 
                                 lambda: pin.computeJointTorqueRegressor(pm, pd, q, qd, qdd)),
     }
     for name, (api, raw) in pairs.items():
-        t = interleaved({"api": api, "raw": raw}, number, rounds)
-        out[name] = {"api_s": t["api"], "raw_s": t["raw"], "ratio": t["api"] / t["raw"]}
+        r = paired_ratio(api, raw, number, rounds)
+        out[name] = {"api_s": r["candidate_s"], "raw_s": r["reference_s"], "ratio": r["ratio"],
+                     "ratio_iqr": (r["ratio_q1"], r["ratio_q3"])}
     t0 = time.perf_counter()
     lag_vm = armctl.Dynamics(model, backend="lagrange")
     out["lagrange_build_seconds"] = time.perf_counter() - t0
@@ -62,12 +63,14 @@ def run(number: int = 1000, rounds: int = 15, seed: int = 0, compile_if_needed: 
 
 
 def report(fig: dict[str, Any]) -> str:
-    lines = [f"dynamics speed on {fig['model']} ({fig['n']} joints), medians of interleaved rounds"]
+    lines = [f"dynamics speed on {fig['model']} ({fig['n']} joints): medians; ratios are medians of per-round "
+             "ratios [quartiles]"]
     for name in ("mass_matrix", "inverse_dynamics", "regressor", "passivity_regressor"):
         f = fig[name]
         ok = "ok" if f["ratio"] <= TARGETS[name] else "MISSED"
+        q1, q3 = f["ratio_iqr"]
         lines.append(f"  {name:22s} api {f['api_s'] * 1e6:7.2f} us  raw {f['raw_s'] * 1e6:7.2f} us  "
-                     f"ratio {f['ratio']:5.2f}  (target <= {TARGETS[name]}: {ok})")
+                     f"ratio {f['ratio']:5.2f} [{q1:.2f}, {q3:.2f}]  (target <= {TARGETS[name]}: {ok})")
     f = fig["lagrange_compiled_inverse_dynamics"]
     if f is None:
         lines.append("  lagrange compiled tau  skipped: not compiled yet (~20 s; run without --quick once)")

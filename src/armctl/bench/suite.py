@@ -117,7 +117,7 @@ def run_suite(quick: bool = False, out: Path = Path("bench-out"), executor: Exec
     out.mkdir(parents=True, exist_ok=True)
     figures: dict[str, Any] = {"quick": quick, "started": time.strftime("%Y-%m-%d %H:%M:%S")}
     charts: dict[str, str] = {}
-    number, rounds = (300, 5) if quick else (1000, 15)
+    number, rounds = (100, 15) if quick else (200, 75)  # paired rounds: see bench.timing.paired_ratio
     t_all = time.perf_counter()
 
     def section(key: str, fn: Callable[[], Any]) -> Any:

@@ -36,7 +36,7 @@ class Adaptive(Controller):
       [rad/s]; q̈̂ by differencing q̇; the commanded torque is taken as applied).
 
     lam: Λ [1/s]; kd: K_D; gamma: Γ (scalar, 13n vector or matrix); theta0: initial θ̂ (None: the controller
-    model's own π). ``last_log`` holds ``theta`` and ``s`` after each step.
+    model's own π). ``theta`` (θ̂) is updated in place; ``last_log`` holds a copy of it and ``s`` after each step.
     """
 
     def __init__(self, dynamics: Dynamics, lam: ArrayLike, kd: ArrayLike, gamma: ArrayLike,
@@ -86,7 +86,9 @@ class Adaptive(Controller):
                 grad = grad + self.sigma * (self.theta - self.theta0)
             if self.composite:
                 grad = grad + self.composite * self._prediction_gradient(q, qd, dt)
-            self.theta = self.theta - dt * apply_gain(self._gamma, grad)
+            step = apply_gain(self._gamma, grad)
+            step *= dt
+            self.theta -= step  # in place: the log below keeps copies
             if self.projection:
                 self.theta = self._project(self.theta)
         self._t_prev, self._qd_prev = t, qd

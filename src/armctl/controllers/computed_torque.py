@@ -39,8 +39,13 @@ class ComputedTorque(PIDGains, Controller):
         dyn = self.dynamics
         assert dyn is not None
         e = ref.q - q
-        v = ref.qdd + apply_gain(self._kd, ref.qd - qd)
-        v += apply_gain(self._kp, e)
+        if self._diagonal:
+            v = self._kd * (ref.qd - qd)
+            v += self._kp * e
+            v += ref.qdd
+        else:
+            v = ref.qdd + apply_gain(self._kd, ref.qd - qd)
+            v += apply_gain(self._kp, e)
         if self._ki is not None:
             v += apply_gain(self._ki, self._integral.update(t, e))
         tau = dyn._rigid_torque(q, qd, v)  # q, q̇ checked by Controller.__call__, v finite from them and ref

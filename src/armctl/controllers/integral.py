@@ -40,6 +40,8 @@ class PIDGains:
         self.ki = None if ki is None else gain_matrix(ki, self.n, "ki")
         self._kp, self._kd = compact_gain(self.kp), compact_gain(self.kd)
         self._ki = None if self.ki is None else compact_gain(self.ki)
+        # diagonal K_p and K_d (the usual case): the control laws multiply elementwise, inline
+        self._diagonal = self._kp.ndim == 1 and self._kd.ndim == 1
         self._integral = ErrorIntegral(self.n)
 
     def reset(self) -> None:

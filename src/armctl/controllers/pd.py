@@ -36,8 +36,12 @@ class PDGravity(PIDGains, Controller):
         assert dyn is not None
         e = ref.q - q
         tau = dyn._gravity(q)  # q is checked by Controller.__call__
-        tau += apply_gain(self._kp, e)
-        tau += apply_gain(self._kd, ref.qd - qd)
+        if self._diagonal:
+            tau += self._kp * e
+            tau += self._kd * (ref.qd - qd)
+        else:
+            tau += apply_gain(self._kp, e)
+            tau += apply_gain(self._kd, ref.qd - qd)
         if self._ki is not None:
             tau += apply_gain(self._ki, self._integral.update(t, e))
         if self.friction and dyn._has_friction:
