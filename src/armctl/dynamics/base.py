@@ -291,16 +291,18 @@ class Dynamics(ABC):
 
             Y = 2 R(q, (q̇ + q̇_r)/√8, q̈_r/2) − R(q, (q̇ − q̇_r)/2, 0)
 
-        — two regressor evaluations. Viscous friction is taken at q̇_r (it then adds F_v s to the closed
-        loop's damping); Coulomb friction at the measured q̇.
+        — two regressor evaluations. (The Pinocchio backend uses the equivalent R(q, q̇_r + s/2, q̈_r) − h₀(s/2),
+        s = q̇ − q̇_r, with h₀ evaluated on a gravity-free twin of the model: a single subtraction.) Viscous
+        friction is taken at q̇_r (it then adds F_v s to the closed loop's damping); Coulomb friction at the
+        measured q̇.
         """
         q, qd, qd_r, qdd_r = self._inputs(("q", "qd", "qd_r", "qdd_r"), q, qd, qd_r, qdd_r)
         return self._passivity_regressor(q, qd, qd_r, qdd_r, qd - qd_r)
 
     def passivity_torque(self, q: ArrayLike, qd: ArrayLike, qd_r: ArrayLike, qdd_r: ArrayLike) -> FloatArray:
         """M q̈_r + C(q, q̇) q̇_r + g + F_v q̇_r + F_c sgn(q̇) (= passivity_regressor(...) @ π, with the Coulomb
-        asymmetry offset), from two inverse-dynamics evaluations by the same polarisation:
-        2 R(q, (q̇ + q̇_r)/√8, q̈_r/2) − R(q, (q̇ − q̇_r)/2, 0), R(q, v, a) = M a + C(q, v) v + g."""
+        asymmetry offset), from two inverse-dynamics evaluations by the same polarisation as
+        :meth:`passivity_regressor`."""
         q, qd, qd_r, qdd_r = self._inputs(("q", "qd", "qd_r", "qdd_r"), q, qd, qd_r, qdd_r)
         return self._passivity_torque(q, qd, qd_r, qdd_r, qd - qd_r)
 
