@@ -3,6 +3,7 @@ measured in the same run (interleaved rounds). Run: ``python -m armctl.bench.con
 
 from __future__ import annotations
 
+import itertools
 from typing import Any
 
 import numpy as np
@@ -29,7 +30,7 @@ def run(number: int = 200, rounds: int = 75, seed: int = 0) -> dict[str, Any]:
                    "PassivityBased": PassivityBased(dyn, 5.0, 20.0), "Adaptive": Adaptive(dyn, 5.0, 20.0, 0.01)}
     out: dict[str, Any] = {"model": model.name}
     for name, c in controllers.items():
-        clock = iter(np.arange(1, 10**8) * 1e-3)  # the adaptive law integrates between calls
+        clock = itertools.count(1e-3, 1e-3)  # Python floats; the adaptive law integrates between calls
         r = paired_ratio(lambda c=c, clock=clock: c(next(clock), q, qd, ref), lambda: pin.rnea(pm, pd, q, qd, qdd),
                          number, rounds)
         out[name] = {"step_s": r["candidate_s"], "rnea_s": r["reference_s"], "ratio": r["ratio"],
