@@ -33,6 +33,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from armctl._checks import FloatArray
+from armctl.bench.report import pyplot, save_figure, section_main
 
 if TYPE_CHECKING:
     from armctl.dynamics.base import Dynamics
@@ -165,10 +166,7 @@ def summary(data: dict[str, Any]) -> str:
 def plot(data: dict[str, Any], path: Path) -> None:
     """Log-log chart, one panel per arm: per-call cost [s] against relative RMS error, labelled points (a zero
     error drawn at :data:`ZERO_ERROR_PLOT`); writes a PNG to ``path``."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     arms = data["arms"]
     fig, axes = plt.subplots(1, len(arms), figsize=(5.2 * len(arms), 4.4), squeeze=False)
@@ -195,16 +193,11 @@ def plot(data: dict[str, Any], path: Path) -> None:
     fig.legend(list(handles.values()), list(handles), loc="lower center", ncol=4, fontsize=7)
     fig.suptitle(f"Dynamics backends: cost vs accuracy (zero error drawn at {ZERO_ERROR_PLOT:g})", fontsize=11)
     fig.tight_layout(rect=(0, 0.1, 1, 0.95))
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def main() -> None:
-    import sys
-
-    data = run(quick="--quick" in sys.argv)
-    print(summary(data))
-    plot(data, Path("backends.png"))
+    section_main(run, summary, plot, "backends.png")
 
 
 if __name__ == "__main__":

@@ -41,6 +41,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from armctl._checks import FloatArray
+from armctl.bench.report import pyplot, save_figure, section_main
 
 if TYPE_CHECKING:
     from armctl.controllers.base import Controller
@@ -235,10 +236,7 @@ def plot(data: dict[str, Any], path: Path) -> None:
     """Stacked bars of the term shares per scene, and per scene a log-log scatter of RMS tracking error
     against compute time per step for the candidate models, the threshold drawn and the choice ringed;
     writes a PNG to ``path``."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
     from matplotlib.ticker import NullFormatter
 
     scenes = data["scenes"]
@@ -282,16 +280,11 @@ def plot(data: dict[str, Any], path: Path) -> None:
         ax.legend(fontsize=7, loc="best")
     fig.suptitle("Model no more than a scene needs (○ Pinocchio, □ Lagrange VM)", fontsize=11)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def main() -> None:
-    import sys
-
-    data = run(quick="--quick" in sys.argv)
-    print(summary(data))
-    plot(data, Path("fidelity.png"))
+    section_main(run, summary, plot, "fidelity.png")
 
 
 if __name__ == "__main__":

@@ -33,6 +33,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from armctl._checks import FloatArray
+from armctl.bench.report import pyplot, save_figure, section_main
 
 if TYPE_CHECKING:
     from armctl.dynamics.base import Dynamics
@@ -194,10 +195,7 @@ def summary(data: dict[str, Any]) -> str:
 def plot(data: dict[str, Any], path: Path) -> None:
     """Log-log chart: cost per simulated second against max joint-angle error, one line per integrator, each
     point labelled by its step size [ms]; writes a PNG to ``path``."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     fig, ax = plt.subplots(figsize=(7.0, 4.8))
     offsets = [((5, 3), "left"), ((-5, 3), "right"), ((5, -10), "left")]
@@ -222,16 +220,11 @@ def plot(data: dict[str, Any], path: Path) -> None:
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def main() -> None:
-    import sys
-
-    data = run(quick="--quick" in sys.argv)
-    print(summary(data))
-    plot(data, Path("integrators.png"))
+    section_main(run, summary, plot, "integrators.png")
 
 
 if __name__ == "__main__":

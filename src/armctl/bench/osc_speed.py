@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 
 import armctl
+from armctl.bench.timing import interleaved_samples
 from armctl.controllers.osc import (
     ClosedFormOSC,
     FramePoseTask,
@@ -39,21 +40,6 @@ from armctl.controllers.osc import (
 TARGET_RATIO = 4.0
 
 
-def interleaved(candidates: dict[str, Any], number: int, rounds: int) -> dict[str, list[float]]:
-    """CPU seconds per call of each candidate in each of ``rounds`` alternating rounds. CPU time
-    (``process_time``) rather than wall time: on a shared machine a long Python step is preempted more often
-    than a short C++ solve, which would inflate their ratio."""
-    for fn in candidates.values():
-        for _ in range(max(1, number // 10)):
-            fn()
-    samples: dict[str, list[float]] = {k: [] for k in candidates}
-    for _ in range(rounds):
-        for name, fn in candidates.items():
-            t0 = time.process_time()
-            for _ in range(number):
-                fn()
-            samples[name].append((time.process_time() - t0) / number)
-    return samples
 Q_HOME = np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])
 
 
@@ -140,8 +126,10 @@ def run(count: int = 400, rounds: int = 15) -> dict[str, Any]:
     def cold_solve() -> None:
         proxqp.dense.solve(*qps[cycle("cold")], eps_abs=ctrl.solver.eps_abs, eps_rel=0.0)
 
-    samples = interleaved({"step": step, "bare_solve": bare_solve, "closed_form": closed_form,
-                           "cold_solve": cold_solve}, number=count, rounds=rounds)
+    # CPU time (process_time) rather than wall time: on a shared machine a long Python step is preempted more
+    # often than a short C++ solve, which would inflate their ratio
+    samples = interleaved_samples({"step": step, "bare_solve": bare_solve, "closed_form": closed_form,
+                                   "cold_solve": cold_solve}, number=count, rounds=rounds, clock=time.process_time)
     t = {k: statistics.median(v) for k, v in samples.items()}
     # ratios round by round (each round runs every candidate once, back to back), then their median
     ratios = [a / b for a, b in zip(samples["step"], samples["bare_solve"], strict=True)]

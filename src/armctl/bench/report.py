@@ -4,8 +4,35 @@
 from __future__ import annotations
 
 import html
+import sys
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
+
+
+def pyplot() -> Any:
+    """``matplotlib.pyplot`` on the non-interactive Agg backend, imported on first use."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def save_figure(fig: Any, path: Path, dpi: int = 110) -> None:
+    """Write ``fig`` to ``path`` and free it."""
+    fig.savefig(path, dpi=dpi)
+    pyplot().close(fig)
+
+
+def section_main(run: Callable[..., dict[str, Any]], summary: Callable[[dict[str, Any]], str],
+                 plot: Callable[[dict[str, Any], Path], None], chart: str) -> None:
+    """Command line of a bench section: ``run`` (``--quick`` for the short version), print ``summary``, write
+    the chart ``chart`` in the working directory."""
+    data = run(quick="--quick" in sys.argv)
+    print(summary(data))
+    plot(data, Path(chart))
 
 
 def write_report(out: Path, figures: dict[str, Any], charts: dict[str, str], summary: str) -> Path:

@@ -8,24 +8,31 @@ import time
 from collections.abc import Callable
 
 
-def per_call(fn: Callable[[], object], number: int) -> float:
-    """Seconds per call of ``fn`` over ``number`` calls."""
-    t0 = time.perf_counter()
+def per_call(fn: Callable[[], object], number: int, clock: Callable[[], float] = time.perf_counter) -> float:
+    """Seconds per call of ``fn`` over ``number`` calls (``clock``: wall time by default;
+    ``time.process_time`` for this process's CPU time)."""
+    t0 = clock()
     for _ in range(number):
         fn()
-    return (time.perf_counter() - t0) / number
+    return (clock() - t0) / number
 
 
-def interleaved(candidates: dict[str, Callable[[], object]], number: int = 1000, rounds: int = 15
-                ) -> dict[str, float]:
-    """Median seconds per call of each candidate, measured in alternating rounds."""
-    for fn in candidates.values():  # warm-up
-        per_call(fn, max(1, number // 10))
+def interleaved_samples(candidates: dict[str, Callable[[], object]], number: int = 1000, rounds: int = 15,
+                        clock: Callable[[], float] = time.perf_counter) -> dict[str, list[float]]:
+    """Seconds per call of each candidate in each of ``rounds`` alternating rounds (after a warm-up)."""
+    for fn in candidates.values():
+        per_call(fn, max(1, number // 10), clock)
     samples: dict[str, list[float]] = {k: [] for k in candidates}
     for _ in range(rounds):
         for name, fn in candidates.items():
-            samples[name].append(per_call(fn, number))
-    return {k: statistics.median(v) for k, v in samples.items()}
+            samples[name].append(per_call(fn, number, clock))
+    return samples
+
+
+def interleaved(candidates: dict[str, Callable[[], object]], number: int = 1000, rounds: int = 15,
+                clock: Callable[[], float] = time.perf_counter) -> dict[str, float]:
+    """Median seconds per call of each candidate, measured in alternating rounds."""
+    return {k: statistics.median(v) for k, v in interleaved_samples(candidates, number, rounds, clock).items()}
 
 
 def paired_ratio(candidate: Callable[[], object], reference: Callable[[], object], number: int = 200,

@@ -16,8 +16,6 @@ against the grid size) of a straight-line panda move with velocity and accelerat
 from __future__ import annotations
 
 import argparse
-import statistics
-import time
 from collections.abc import Callable
 from typing import Any
 
@@ -70,18 +68,10 @@ def cases(grid: int = 100) -> tuple[Callable[[], float], Callable[[], float]]:
 
 def measure(rounds: int = 15, number: int = 5, grid: int = 100) -> dict[str, float]:
     """Median seconds per call of both, in alternating rounds, and their ratio."""
+    from armctl.bench.timing import interleaved
+
     wrapped, direct = cases(grid)
-    fns = {"armctl": wrapped, "toppra": direct}
-    for fn in fns.values():  # warm-up (imports, caches)
-        fn()
-    samples: dict[str, list[float]] = {k: [] for k in fns}
-    for _ in range(rounds):
-        for name, fn in fns.items():
-            t0 = time.perf_counter()
-            for _ in range(number):
-                fn()
-            samples[name].append((time.perf_counter() - t0) / number)
-    med = {k: statistics.median(v) for k, v in samples.items()}
+    med = interleaved({"armctl": wrapped, "toppra": direct}, number, rounds)
     return {"armctl_s": med["armctl"], "toppra_s": med["toppra"], "ratio": med["armctl"] / med["toppra"],
             "duration_armctl": wrapped(), "duration_toppra": direct()}
 
