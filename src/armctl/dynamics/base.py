@@ -129,12 +129,17 @@ class Dynamics(ABC):
 
     def _forward(self, q: FloatArray, qd: FloatArray, tau_net: FloatArray) -> FloatArray:
         """q̈ = M⁻¹ (τ_net − C q̇ − g); backends may do better."""
+        if tau_net.shape != self._shape:  # primitives refuse wrong lengths (see the public API's fast paths)
+            raise ValueError(f"tau_net has shape {tau_net.shape}, not {self._shape}")
         return np.linalg.solve(self._mass(q), tau_net - self._rigid_torque(q, qd, np.zeros(self.n)))
 
     # ------------------------------------------------------------------------------- public API
     # Hot paths are written EAFP: the backend is called with what the caller passed; only if it refuses
     # (wrong type or size) are the inputs converted and checked, so that the error names the value. NaN or
     # inf in an input propagates into the result, which is checked once; the slow path then names the input.
+    # So every backend primitive must raise on an input of the wrong length (Pinocchio does; the Lagrange
+    # backend's evaluators check), and the fast paths only rule out what a primitive would take silently
+    # (an (n, 1) column). tests/dynamics/test_input_checks.py tries every entry and shape on both backends.
     def _q(self, q: ArrayLike, name: str = "q") -> FloatArray:
         return vector(q, self.n, name)
 
@@ -151,6 +156,9 @@ class Dynamics(ABC):
         """``fn(*args)`` → an (n,) result, on the fast path; if ``fn`` refuses the inputs or the result is not
         finite, check every input (raising a named error) and retry."""
         try:
+            for a in args:  # eigenpy would take an (n, 1) column too; Pinocchio checks the lengths
+                if a.ndim != 1:
+                    raise TypeError
             out = fn(*args)
             if math.isfinite(sum(out.tolist())):  # NaN/inf anywhere in the inputs shows up here
                 return out  # type: ignore[no-any-return]

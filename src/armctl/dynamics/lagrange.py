@@ -138,10 +138,13 @@ class _Evaluator:
         for i, a in self._fixed.items():  # kept alive by self._fixed: the buffer holds a pointer to it
             self._buf.set_arg(i, memoryview(a))
         self._free = [i for i in range(fn.n_in()) if i not in self._fixed]
+        self._sizes = [fn.numel_in(i) for i in self._free]
 
     def __call__(self, *args: FloatArray) -> FloatArray:
         held = [np.ascontiguousarray(a, dtype=float) for a in args]  # alive until evaluation is done
-        for i, a in zip(self._free, held, strict=True):
+        for i, a, size in zip(self._free, held, self._sizes, strict=True):
+            if a.size != size:  # the buffer would read past a short array and ignore the tail of a long one
+                raise ValueError(f"argument {i} of {self.fn.name()} has {a.size} entries, not {size}")
             self._buf.set_arg(i, memoryview(a))
         out = np.empty(self._shape, order="F")
         self._buf.set_res(0, memoryview(out.reshape(-1, order="A")))
