@@ -46,3 +46,18 @@ def test_passivity_torque_is_regressor_times_parameters(puma: armctl.Dynamics) -
     y = puma.passivity_regressor(q, qd, qd_r, qdd)
     assert np.allclose(tau, y @ puma.parameters() + puma.coulomb_offset(qd), rtol=1e-10,
                        atol=1e-10 * np.abs(tau).max())
+
+
+def test_interleaved_calls_do_not_leak_between_states(puma: armctl.Dynamics) -> None:
+    # the passivity regressor subtracts in Pinocchio's own workspace; every later call, of either kind and
+    # at any state, must still give what a fresh object (clean workspaces, copy path) gives
+    fresh = armctl.Dynamics(puma.model)
+    fresh._raw_t = fresh._raw_t_free = None
+    for seed in range(6):
+        q, qd, qdd, qd_r = _states(puma.n, seed=seed)
+        got = (puma.passivity_regressor(q, qd, qd_r, qdd), puma.regressor(q, qd, qdd),
+               puma.passivity_regressor(qd, q, qdd, qd_r))
+        want = (fresh.passivity_regressor(q, qd, qd_r, qdd), fresh.regressor(q, qd, qdd),
+                fresh.passivity_regressor(qd, q, qdd, qd_r))
+        for a, b in zip(got, want, strict=True):
+            assert np.allclose(a, b, rtol=0, atol=1e-12 * np.abs(b).max())

@@ -184,6 +184,14 @@ class Dynamics(ABC):
             pass
         return tuple(vector(a, self.n, nm) for a, nm in zip(args, names, strict=True))
 
+    def _checked4(self, a: Any, b: Any, c: Any, d: Any) -> bool:
+        """True if the four inputs are finite float (n,) arrays already (the fast case of :meth:`_inputs`)."""
+        try:
+            return (a.shape == b.shape == c.shape == d.shape == self._shape  # type: ignore[no-any-return]
+                    and math.isfinite(sum(a.tolist()) + sum(b.tolist()) + sum(c.tolist()) + sum(d.tolist())))
+        except AttributeError:
+            return False
+
     def mass_matrix(self, q: ArrayLike) -> FloatArray:
         """M(q) (n×n, symmetric positive definite) [kg·m² / kg]."""
         try:  # the fast path of _finite, inlined: this is called every control step
@@ -234,6 +242,14 @@ class Dynamics(ABC):
             if wrench is not None:
                 tau += self._jacobian(q, None).T @ vector(wrench, 6, "wrench")
             return tau
+        try:  # _call's fast path, inlined: this is called every control step
+            # ndim: an int, cheaper than comparing shape tuples; Pinocchio checks the lengths
+            if q.ndim == qd.ndim == qdd.ndim == 1:  # type: ignore[union-attr]
+                out = self._rigid_torque(q, qd, qdd)
+                if math.isfinite(sum(out.tolist())):  # NaN/inf in any input shows up here (tested entry by entry)
+                    return out  # type: ignore[no-any-return]
+        except Exception:
+            pass
         return self._call(self._rigid_torque, ("q", "qd", "qdd"), q, qd, qdd)
 
     def forward_dynamics(self, q: ArrayLike, qd: ArrayLike, tau: ArrayLike,
@@ -275,6 +291,12 @@ class Dynamics(ABC):
         sgn(q̇_i). With an asymmetric Coulomb friction, Y π misses the offset ½(F_c⁺ − F_c⁻)·|sgn q̇_i|, which
         :meth:`coulomb_offset` returns.
         """
+        try:  # _inputs' fast path, inlined
+            if (q.ndim == qd.ndim == qdd.ndim == 1  # type: ignore[union-attr]  (Pinocchio checks the lengths)
+                    and math.isfinite(sum(q.tolist()) + sum(qd.tolist()) + sum(qdd.tolist()))):  # type: ignore[union-attr]
+                return self._rigid_regressor(q, qd, qdd, (qd, qd))  # type: ignore[arg-type]
+        except Exception:  # not arrays, or a length Pinocchio refuses: the checks below name the input
+            pass
         q, qd, qdd = self._inputs(("q", "qd", "qdd"), q, qd, qdd)
         return self._rigid_regressor(q, qd, qdd, (qd, qd))
 
@@ -304,15 +326,17 @@ class Dynamics(ABC):
         friction is taken at q̇_r (it then adds F_v s to the closed loop's damping); Coulomb friction at the
         measured q̇.
         """
-        q, qd, qd_r, qdd_r = self._inputs(("q", "qd", "qd_r", "qdd_r"), q, qd, qd_r, qdd_r)
-        return self._passivity_regressor(q, qd, qd_r, qdd_r, qd - qd_r)
+        if not self._checked4(q, qd, qd_r, qdd_r):
+            q, qd, qd_r, qdd_r = self._inputs(("q", "qd", "qd_r", "qdd_r"), q, qd, qd_r, qdd_r)
+        return self._passivity_regressor(q, qd, qd_r, qdd_r, qd - qd_r)  # type: ignore[operator]
 
     def passivity_torque(self, q: ArrayLike, qd: ArrayLike, qd_r: ArrayLike, qdd_r: ArrayLike) -> FloatArray:
         """M q̈_r + C(q, q̇) q̇_r + g + F_v q̇_r + F_c sgn(q̇) (= passivity_regressor(...) @ π, with the Coulomb
         asymmetry offset), from two inverse-dynamics evaluations by the same polarisation as
         :meth:`passivity_regressor`."""
-        q, qd, qd_r, qdd_r = self._inputs(("q", "qd", "qd_r", "qdd_r"), q, qd, qd_r, qdd_r)
-        return self._passivity_torque(q, qd, qd_r, qdd_r, qd - qd_r)
+        if not self._checked4(q, qd, qd_r, qdd_r):
+            q, qd, qd_r, qdd_r = self._inputs(("q", "qd", "qd_r", "qdd_r"), q, qd, qd_r, qdd_r)
+        return self._passivity_torque(q, qd, qd_r, qdd_r, qd - qd_r)  # type: ignore[operator]
 
     # The primitives behind the two methods above, on checked inputs and with s = q̇ − q̇_r (controllers that
     # have checked the state and formed s call them directly). copy=False may return a workspace that the
