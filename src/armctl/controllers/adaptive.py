@@ -36,7 +36,9 @@ class Adaptive(Controller):
       [rad/s]; q̈̂ by differencing q̇; the commanded torque is taken as applied).
 
     lam: Λ [1/s]; kd: K_D; gamma: Γ (scalar, 13n vector or matrix); theta0: initial θ̂ (None: the controller
-    model's own π). ``theta`` (θ̂) is updated in place; ``last_log`` holds a copy of it and ``s`` after each step.
+    model's own π). Each step replaces ``theta`` (θ̂) by a new array (never changes it in place), so
+    ``last_log["theta"]`` can hold it without a copy; ``last_log["s"]`` holds s. Γ·dt is computed once per control
+    period length (a new one when dt changes by more than 1e-9 relative).
     """
 
     def __init__(self, dynamics: Dynamics, lam: ArrayLike, kd: ArrayLike, gamma: ArrayLike,
@@ -70,6 +72,7 @@ class Adaptive(Controller):
         self._tau_prev: FloatArray | None = None
         self._w_f: FloatArray | None = None
         self._tau_f: FloatArray | None = None
+        self._dt, self._gamma_dt = 0.0, self._gamma * 0.0
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         dyn = self.dynamics
@@ -86,16 +89,17 @@ class Adaptive(Controller):
                 grad = grad + self.sigma * (self.theta - self.theta0)
             if self.composite:
                 grad = grad + self.composite * self._prediction_gradient(q, qd, dt)
-            step = apply_gain(self._gamma, grad)
-            step *= dt
-            self.theta -= step  # in place: the log below keeps copies
+            if abs(dt - self._dt) > 1e-9 * dt:  # Γ dt is kept while the control period stays the same
+                self._dt, self._gamma_dt = dt, self._gamma * dt
+            # a new array, not an update in place: the log below can then keep it without a copy
+            self.theta = self.theta - apply_gain(self._gamma_dt, grad)
             if self.projection:
                 self.theta = self._project(self.theta)
         self._t_prev, self._qd_prev = t, qd
         tau = y.dot(self.theta)
         tau -= apply_gain(self._kd, s)
         self._tau_prev = tau
-        self.last_log = {"theta": self.theta.copy(), "s": s}
+        self.last_log = {"theta": self.theta, "s": s}
         return tau
 
     def _project(self, theta: FloatArray) -> FloatArray:

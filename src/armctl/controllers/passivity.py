@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, apply_gain, compact_gain, gain_matrix
+from armctl._checks import FloatArray, compact_gain, gain_matrix
 from armctl.controllers.base import Controller
 from armctl.dynamics.base import Dynamics
 from armctl.reference import Reference
@@ -13,8 +13,12 @@ from armctl.reference import Reference
 def sliding(q: FloatArray, qd: FloatArray, ref: Reference, lam: FloatArray) -> tuple[FloatArray, ...]:
     """(q̇_r, q̈_r, s) of Slotine–Li: q̃ = q − q_d, q̇_r = q̇_d − Λq̃, q̈_r = q̈_d − Λ(q̇ − q̇_d), s = q̇ − q̇_r.
     ``lam`` in :func:`~armctl._checks.compact_gain` form."""
-    qd_r = ref.qd - apply_gain(lam, q - ref.q)
-    qdd_r = ref.qdd - apply_gain(lam, qd - ref.qd)
+    if lam.ndim == 1:  # apply_gain, inlined for the diagonal Λ of the hot path
+        qd_r = ref.qd - lam * (q - ref.q)
+        qdd_r = ref.qdd - lam * (qd - ref.qd)
+    else:
+        qd_r = ref.qd - lam.dot(q - ref.q)
+        qdd_r = ref.qdd - lam.dot(qd - ref.qd)
     return qd_r, qdd_r, qd - qd_r
 
 
@@ -40,5 +44,5 @@ class PassivityBased(Controller):
         assert dyn is not None
         qd_r, qdd_r, s = sliding(q, qd, ref, self._lam)
         tau = dyn._passivity_torque(q, qd, qd_r, qdd_r, s)  # q, q̇ checked by Controller.__call__
-        tau -= apply_gain(self._kd, s)
+        tau -= self._kd * s if self._kd.ndim == 1 else self._kd.dot(s)
         return tau
