@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, apply_gain, compact_gain, gain_matrix, scalar, vector
+from armctl._checks import FloatArray, compact_gain, gain_matrix, scalar, vector
 from armctl.controllers.base import Controller
 from armctl.controllers.passivity import sliding
 from armctl.dynamics.base import Dynamics
@@ -92,12 +92,13 @@ class Adaptive(Controller):
             if abs(dt - self._dt) > 1e-9 * dt:  # Γ dt is kept while the control period stays the same
                 self._dt, self._gamma_dt = dt, self._gamma * dt
             # a new array, not an update in place: the log below can then keep it without a copy
-            self.theta = self.theta - apply_gain(self._gamma_dt, grad)
+            g = self._gamma_dt  # apply_gain, inlined
+            self.theta = self.theta - (g * grad if g.ndim == 1 else g.dot(grad))
             if self.projection:
                 self.theta = self._project(self.theta)
         self._t_prev, self._qd_prev = t, qd
         tau = y.dot(self.theta)
-        tau -= apply_gain(self._kd, s)
+        tau -= self._kd * s if self._kd.ndim == 1 else self._kd.dot(s)
         self._tau_prev = tau
         self.last_log = {"theta": self.theta, "s": s}
         return tau

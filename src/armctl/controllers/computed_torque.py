@@ -39,10 +39,15 @@ class ComputedTorque(PIDGains, Controller):
         dyn = self.dynamics
         assert dyn is not None
         e = ref.q - q
-        if self._diagonal:
-            v = self._kd * (ref.qd - qd)
-            v += self._kp * e
+        if self._diagonal:  # in place where possible: an allocation costs as much as a small product
+            v = ref.qd - qd
+            v *= self._kd
             v += ref.qdd
+            if self._ki is not None:
+                v += self._kp * e  # e is integrated below
+            else:
+                e *= self._kp
+                v += e
         else:
             v = ref.qdd + apply_gain(self._kd, ref.qd - qd)
             v += apply_gain(self._kp, e)

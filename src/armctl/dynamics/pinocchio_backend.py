@@ -123,8 +123,10 @@ class PinocchioDynamics(Dynamics):
         else:
             self._yt_rigid[...] = self._raw_blocks(q, qd_r + w, qdd_r)
             self._yt_rigid -= self._raw_regressor_free(q, w, self._zeros).T.reshape(self.n, 10, self.n)
-        self._yt_rotor[:] = qdd_r
-        return self._finish_regressor((qd_r, qd), copy)
+        self._yt_rotor[:] = qdd_r  # and _finish_regressor, inlined
+        self._yt_viscous[:] = qd_r
+        np.sign(qd, out=self._yt_coulomb)
+        return self._y.copy(order="K") if copy else self._y  # type: ignore[no-any-return]
 
     def _passivity_torque(self, q: FloatArray, qd: FloatArray, qd_r: FloatArray, qdd_r: FloatArray,
                           s: FloatArray) -> FloatArray:
