@@ -56,17 +56,35 @@ def test_adaptive_with_exact_parameters_is_passivity_based() -> None:
     assert np.allclose(ad.last_log["theta"], dyn.model.parameters())
 
 
-def test_adaptive_update_is_the_gradient_law() -> None:
-    """One step: θ̂(t+dt) = θ̂ − dt Γ Yᵀ s."""
+def _full_gain(p: int) -> np.ndarray:
+    b = np.random.default_rng(4).uniform(-1.0, 1.0, (p, p))
+    return 0.5 * np.eye(p) + 0.01 * (b @ b.T)  # symmetric positive definite, not diagonal
+
+
+@pytest.mark.parametrize("gamma", [0.5, np.linspace(0.1, 1.0, 26), _full_gain(26)],
+                         ids=["scalar", "diagonal", "full"])
+def test_adaptive_update_is_the_gradient_law(gamma: object) -> None:
+    """θ̂(t+dt) = θ̂ − dt Γ Yᵀ s, step after step, with a jittering dt (a loop that measures its time)."""
     dyn = dynamics("planar_2r")
     ref = armctl.Reference([0.3, -0.2], [0.1, 0.0], [0.0, 0.5])
-    ad = Adaptive(dyn, 2.0, 10.0, gamma=0.5, theta0=np.zeros(26))
-    q, qd = np.array([0.35, -0.1]), np.array([0.0, 0.2])
-    ad(0.0, q, qd, ref)
-    s = ad.last_log["s"]
-    y = dyn.passivity_regressor(q, qd, ref.qd - 2.0 * (q - ref.q), ref.qdd - 2.0 * (qd - ref.qd))
-    ad(0.01, q, qd, ref)
-    assert np.allclose(ad.last_log["theta"], -0.01 * 0.5 * y.T @ s)
+    ad = Adaptive(dyn, 2.0, 10.0, gamma=gamma, theta0=np.zeros(26))
+    g = np.diag(np.broadcast_to(gamma, 26)) if np.ndim(gamma) < 2 else np.asarray(gamma)
+    rng = np.random.default_rng(9)
+    t, theta, logs = 0.0, np.zeros(26), []
+    for k in range(6):
+        q, qd = np.array([0.35, -0.1]) + 0.01 * k, np.array([0.0, 0.2]) - 0.02 * k
+        ad(t, q, qd, ref)
+        logs.append((ad.last_log["theta"], ad.last_log["theta"].copy()))
+        s = ad.last_log["s"]
+        y = dyn.passivity_regressor(q, qd, ref.qd - 2.0 * (q - ref.q), ref.qdd - 2.0 * (qd - ref.qd))
+        dt = 0.01 * (1.0 + 1e-6 * rng.standard_normal())
+        t += dt
+        theta = theta - dt * g @ (y.T @ s)  # the law, for the next step's θ̂ (at t + dt, on this state's s)
+        ad(t, q, qd, ref)
+        assert np.allclose(ad.last_log["theta"], theta, rtol=1e-8, atol=1e-12)
+        ad.theta = theta.copy()  # a new array: assigned, not changed in place
+    for logged, kept in logs:  # θ̂ is replaced each step, so a kept log never changes
+        assert np.array_equal(logged, kept)
     ad.reset()
     assert np.allclose(ad.theta, 0)
 

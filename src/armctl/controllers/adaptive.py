@@ -36,9 +36,10 @@ class Adaptive(Controller):
       [rad/s]; q̈̂ by differencing q̇; the commanded torque is taken as applied).
 
     lam: Λ [1/s]; kd: K_D; gamma: Γ (scalar, 13n vector or matrix); theta0: initial θ̂ (None: the controller
-    model's own π). Each step replaces ``theta`` (θ̂) by a new array (never changes it in place), so
-    ``last_log["theta"]`` can hold it without a copy; ``last_log["s"]`` holds s. Γ·dt is computed once per control
-    period length (a new one when dt changes by more than 1e-9 relative).
+    model's own π). Each step replaces ``theta`` (θ̂) by a new array (the controller never changes it in
+    place), so ``last_log["theta"]`` is that same array, not a copy: change ``theta`` by assigning a new array,
+    not in place, or the last log changes with it. ``last_log["s"]`` holds s. A diagonal Γ·dt is formed once per
+    control-period length (anew when dt changes by more than 1e-9 relative).
     """
 
     def __init__(self, dynamics: Dynamics, lam: ArrayLike, kd: ArrayLike, gamma: ArrayLike,
@@ -89,11 +90,15 @@ class Adaptive(Controller):
                 grad = grad + self.sigma * (self.theta - self.theta0)
             if self.composite:
                 grad = grad + self.composite * self._prediction_gradient(q, qd, dt)
-            if abs(dt - self._dt) > 1e-9 * dt:  # Γ dt is kept while the control period stays the same
-                self._dt, self._gamma_dt = dt, self._gamma * dt
             # a new array, not an update in place: the log below can then keep it without a copy
-            g = self._gamma_dt  # apply_gain, inlined
-            self.theta = self.theta - (g * grad if g.ndim == 1 else g.dot(grad))
+            if self._gamma.ndim == 1:  # diagonal Γ: Γ dt is kept while the control period stays the same
+                if abs(dt - self._dt) > 1e-9 * dt:
+                    self._dt, self._gamma_dt = dt, self._gamma * dt
+                self.theta = self.theta - self._gamma_dt * grad
+            else:  # a full Γ: rebuilding Γ dt for a jittery measured dt would cost a 13n×13n product
+                step = self._gamma.dot(grad)
+                step *= dt
+                self.theta = self.theta - step
             if self.projection:
                 self.theta = self._project(self.theta)
         self._t_prev, self._qd_prev = t, qd

@@ -41,6 +41,11 @@ class Dynamics(ABC):
     """
 
     backend: str = ""
+    #: True if a NaN or inf in any entry of any input of the rigid-body primitives always reaches their result
+    #: (numerical algorithms such as Pinocchio's, where NaN·0 = NaN); then the fast paths check the result
+    #: instead of the inputs. Not so for the Lagrange backend: CasADi simplifies its expressions, and a
+    #: frictionless pendulum's τ does not depend on q̇ at all.
+    _nan_propagates: bool = False
 
     def __new__(cls, model: RobotModel | None = None, backend: str = "pinocchio", **options: Any) -> Dynamics:
         if cls is Dynamics:
@@ -135,8 +140,9 @@ class Dynamics(ABC):
 
     # ------------------------------------------------------------------------------- public API
     # Hot paths are written EAFP: the backend is called with what the caller passed; only if it refuses
-    # (wrong type or size) are the inputs converted and checked, so that the error names the value. NaN or
-    # inf in an input propagates into the result, which is checked once; the slow path then names the input.
+    # (wrong type or size) are the inputs converted and checked, so that the error names the value. Where NaN
+    # or inf in an input always reaches the result (``_nan_propagates``), only the result is checked; the slow
+    # path then names the input. Otherwise the inputs are checked first.
     # So every backend primitive must raise on an input of the wrong length (Pinocchio does; the Lagrange
     # backend's evaluators check), and the fast paths only rule out what a primitive would take silently
     # (an (n, 1) column). tests/dynamics/test_input_checks.py tries every entry and shape on both backends.
@@ -155,16 +161,17 @@ class Dynamics(ABC):
     def _call(self, fn: Any, names: tuple[str, ...], *args: Any) -> FloatArray:
         """``fn(*args)`` → an (n,) result, on the fast path; if ``fn`` refuses the inputs or the result is not
         finite, check every input (raising a named error) and retry."""
-        try:
-            for a in args:  # eigenpy would take an (n, 1) column too; Pinocchio checks the lengths
-                if a.ndim != 1:
-                    raise TypeError
-            out = fn(*args)
-            if math.isfinite(sum(out.tolist())):  # NaN/inf anywhere in the inputs shows up here
-                return out  # type: ignore[no-any-return]
-        except Exception:
-            pass
-        args = tuple(vector(a, self.n, nm) for a, nm in zip(args, names, strict=True))
+        if self._nan_propagates:
+            try:
+                for a in args:  # eigenpy would take an (n, 1) column too; Pinocchio checks the lengths
+                    if a.ndim != 1:
+                        raise TypeError
+                out = fn(*args)
+                if math.isfinite(sum(out.tolist())):  # NaN/inf anywhere in the inputs shows up here
+                    return out  # type: ignore[no-any-return]
+            except Exception:
+                pass
+        args = self._inputs(names, *args)
         out = fn(*args)
         if not np.isfinite(out).all():
             raise NonFiniteError(f"result is not finite although every input is: {out!r}", value=out)
@@ -189,7 +196,7 @@ class Dynamics(ABC):
         try:
             return (a.shape == b.shape == c.shape == d.shape == self._shape  # type: ignore[no-any-return]
                     and math.isfinite(sum(a.tolist()) + sum(b.tolist()) + sum(c.tolist()) + sum(d.tolist())))
-        except AttributeError:
+        except (AttributeError, TypeError):  # not arrays, or entries that are not real numbers
             return False
 
     def mass_matrix(self, q: ArrayLike) -> FloatArray:
@@ -244,9 +251,9 @@ class Dynamics(ABC):
             return tau
         try:  # _call's fast path, inlined: this is called every control step
             # ndim: an int, cheaper than comparing shape tuples; Pinocchio checks the lengths
-            if q.ndim == qd.ndim == qdd.ndim == 1:  # type: ignore[union-attr]
+            if self._nan_propagates and q.ndim == qd.ndim == qdd.ndim == 1:  # type: ignore[union-attr]
                 out = self._rigid_torque(q, qd, qdd)
-                if math.isfinite(sum(out.tolist())):  # NaN/inf in any input shows up here (tested entry by entry)
+                if math.isfinite(sum(out.tolist())):  # NaN/inf in any input shows up here (_nan_propagates)
                     return out  # type: ignore[no-any-return]
         except Exception:
             pass

@@ -22,6 +22,7 @@ class PinocchioDynamics(Dynamics):
     """Dynamics evaluated by Pinocchio (see :class:`~armctl.dynamics.base.Dynamics` for the API)."""
 
     backend = "pinocchio"
+    _nan_propagates = True  # checked entry by entry in tests/dynamics/test_input_checks.py
 
     def __init__(self, model: RobotModel, backend: str | None = None, **options: Any) -> None:
         super().__init__(model, backend, **options)

@@ -19,7 +19,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, nonnegative_vector
+from armctl._checks import nonnegative_vector
 from armctl.dynamics.base import Dynamics
 from armctl.errors import ShapeError
 from armctl.model.robot import RobotModel
@@ -110,7 +110,7 @@ def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
     QM, QDM, WF, WE = rec.q_measured, rec.qd_measured, rec.work_friction, rec.work_external
     shape = (n,)
     wf = we = 0.0
-    clipped: list[tuple[int, FloatArray]] = []
+    clipped: list[int] = []  # rows where saturation clipped τ
     divergence = None
     rows = samples
     t0 = time.perf_counter()
@@ -158,7 +158,7 @@ def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
             tau_a = tau
             if clip and (max(tl) > lim_min or -min(tl) > lim_min) and any(map(_GT, map(abs, tl), lim_list)):
                 tau_a = np.clip(tau, -limit, limit)
-                clipped.append((k, tau_a))
+                clipped.append(k)
             TAU[k] = tau  # the applied torque is τ too, but for the clipped rows: written after the loop
             try:
                 if not simple:
@@ -185,8 +185,8 @@ def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
                                     Q[k].copy(), QD[k].copy()), k + 1
                 break
     TAUA[:] = TAU
-    for k, tau_a in clipped:
-        TAUA[k] = tau_a
+    if clipped:
+        TAUA[clipped] = np.clip(TAU[clipped], -limit, limit)
     wall = time.perf_counter() - t0
     info = {"plant": dyn.model.name, "n": n, "backend": dyn.backend, "integrator": scheme, "control_dt": cdt,
             "dt": h, "substeps": m, "periods": n_periods, "friction": sc.friction.name if pl.friction else "none",
