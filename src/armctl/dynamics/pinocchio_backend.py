@@ -19,7 +19,11 @@ from armctl.model.robot import PARAMS_PER_JOINT, RobotModel
 
 
 class PinocchioDynamics(Dynamics):
-    """Dynamics evaluated by Pinocchio (see :class:`~armctl.dynamics.base.Dynamics` for the API)."""
+    """Dynamics evaluated by Pinocchio (see :class:`~armctl.dynamics.base.Dynamics` for the API).
+
+    ``pin_model`` is the Pinocchio model; ``pin_data`` is this object's workspace, whose contents after a call
+    are unspecified (the passivity regressor, for one, leaves R − h₀ in ``jointTorqueRegressor``): create
+    your own ``pin_model.createData()`` to call Pinocchio directly."""
 
     backend = "pinocchio"
     _nan_propagates = True  # checked entry by entry in tests/dynamics/test_input_checks.py
