@@ -39,15 +39,11 @@ class ComputedTorque(PIDGains, Controller):
         dyn = self.dynamics
         assert dyn is not None
         e = ref.q - q
-        if self._diagonal:  # in place where possible: an allocation costs as much as a small product
+        if self._diagonal:  # in place where possible (e stays as it is: the integral takes it below)
             v = ref.qd - qd
             v *= self._kd
             v += ref.qdd
-            if self._ki is not None:
-                v += self._kp * e  # e is integrated below
-            else:
-                e *= self._kp
-                v += e
+            v += self._kp * e
         else:
             v = ref.qdd + apply_gain(self._kd, ref.qd - qd)
             v += apply_gain(self._kp, e)

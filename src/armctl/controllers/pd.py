@@ -36,15 +36,11 @@ class PDGravity(PIDGains, Controller):
         assert dyn is not None
         e = ref.q - q
         tau = dyn._gravity(q)  # q is checked by Controller.__call__
-        if self._diagonal:  # in place where possible: an allocation costs as much as a small product
+        if self._diagonal:  # in place where possible (e stays as it is: the integral takes it below)
             ed = ref.qd - qd
             ed *= self._kd
             tau += ed
-            if self._ki is not None:
-                tau += self._kp * e  # e is integrated below
-            else:
-                e *= self._kp
-                tau += e
+            tau += self._kp * e
         else:
             tau += apply_gain(self._kp, e)
             tau += apply_gain(self._kd, ref.qd - qd)

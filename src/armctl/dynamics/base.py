@@ -171,6 +171,10 @@ class Dynamics(ABC):
                     return out  # type: ignore[no-any-return]
             except Exception:
                 pass
+        return self._checked_call(fn, names, *args)
+
+    def _checked_call(self, fn: Any, names: tuple[str, ...], *args: Any) -> FloatArray:
+        """``fn(*args)`` on checked inputs (named errors), its result checked: the slow path of :meth:`_call`."""
         args = self._inputs(names, *args)
         out = fn(*args)
         if not np.isfinite(out).all():
@@ -257,7 +261,7 @@ class Dynamics(ABC):
                     return out  # type: ignore[no-any-return]
         except Exception:
             pass
-        return self._call(self._rigid_torque, ("q", "qd", "qdd"), q, qd, qdd)
+        return self._checked_call(self._rigid_torque, ("q", "qd", "qdd"), q, qd, qdd)
 
     def forward_dynamics(self, q: ArrayLike, qd: ArrayLike, tau: ArrayLike,
                          wrench: ArrayLike | None = None) -> FloatArray:
