@@ -10,12 +10,10 @@ from __future__ import annotations
 
 import re
 
+import mujoco
 import numpy as np
-import pytest
 
 import armctl
-
-mujoco = pytest.importorskip("mujoco")
 
 
 def panda_mujoco() -> tuple[object, object]:

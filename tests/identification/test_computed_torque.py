@@ -2,44 +2,25 @@
 started from.
 
 The plant is the true Puma 560 (published parameters, asymmetric Coulomb friction with stick–slip in the
-simulator); both controllers use the same gains and the same fresh trajectory. Needs
-``armctl.controllers.ComputedTorque`` and ``armctl.simulate`` (or ``armctl.sim.simulate``); skips until they
-exist.
+simulator); both controllers use the same gains and the same fresh trajectory.
 """
 
 from __future__ import annotations
 
 import numpy as np
-import pytest
 
 import armctl
+from armctl.controllers import ComputedTorque
+from armctl.sim import simulate
 from tests.identification._cases import Case
 
 
-def _simulate():  # type: ignore[no-untyped-def]
-    sim = getattr(armctl, "simulate", None)
-    if sim is None:
-        try:
-            from armctl.sim import simulate as sim
-        except ImportError as e:
-            pytest.skip(f"armctl.simulate is not available yet ({e}); this test runs once the simulator lands")
-    return sim
-
-
-def _computed_torque():  # type: ignore[no-untyped-def]
-    ct = getattr(getattr(armctl, "controllers", None), "ComputedTorque", None)
-    if ct is None:
-        pytest.skip("armctl.controllers.ComputedTorque is not available yet; this test runs once it lands")
-    return ct
-
-
 def test_identified_model_tracks_better_than_the_nominal_one(puma_case: Case) -> None:
-    simulate, computed_torque = _simulate(), _computed_torque()
     traj = puma_case.validation
     errors = {}
     for name, model in (("identified", puma_case.result.identified_model), ("nominal", puma_case.nominal),
                         ("truth", puma_case.truth)):
-        controller = computed_torque(armctl.Dynamics(model), kp=25.0, kd=10.0)
+        controller = ComputedTorque(armctl.Dynamics(model), kp=25.0, kd=10.0)
         res = simulate(puma_case.truth, controller, traj, 4.0, control_dt=1e-3)
         assert not res.diverged, name
         e = res.q - traj.evaluate(res.t)[0]

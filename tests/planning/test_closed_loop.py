@@ -15,9 +15,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import pytest
 
+from armctl.controllers import ComputedTorque
 from armctl.planning import time_optimal
+from armctl.sim import simulate
 from tests.planning._common import panda
 
 WAYPOINTS = np.array([
@@ -29,10 +30,6 @@ WAYPOINTS = np.array([
 
 
 def test_panda_tracks_the_time_optimal_trajectory_within_limits() -> None:
-    sim = pytest.importorskip("armctl.sim", reason="needs the simulator (armctl.sim), not built yet")
-    controllers = pytest.importorskip("armctl.controllers")
-    if not hasattr(controllers, "ComputedTorque") or not hasattr(sim, "simulate"):
-        pytest.skip("needs armctl.controllers.ComputedTorque and armctl.sim.simulate, not built yet")
     dyn = panda(friction=True)  # the planner's, the controller's and the plant's model: the same arm
     limit = dyn.model.effort_limit
     traj = time_optimal(dyn, WAYPOINTS, vel_limit="model", torque_limit="model", torque_margin=0.1)
@@ -40,8 +37,8 @@ def test_panda_tracks_the_time_optimal_trajectory_within_limits() -> None:
     control_dt = 1e-3
     duration = control_dt * math.ceil((traj.duration + 0.2) / control_dt)
     wn = np.array([30.0, 30.0, 30.0, 30.0, 60.0, 60.0, 100.0])
-    ctrl = controllers.ComputedTorque(dyn, kp=wn**2, kd=2 * wn)
-    res = sim.simulate(dyn, ctrl, traj, duration, control_dt=control_dt)
+    ctrl = ComputedTorque(dyn, kp=wn**2, kd=2 * wn)
+    res = simulate(dyn, ctrl, traj, duration, control_dt=control_dt)
     assert not res.diverged
     err = np.abs(res.q - traj.sample(res.t).q).max()
     assert err < 5e-3, f"tracking error {err:.3g} rad"

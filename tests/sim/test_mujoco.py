@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 
+import mujoco
 import numpy as np
 import pytest
 
@@ -14,7 +15,6 @@ from armctl.sim import simulate
 from tests.sim.helpers import OpenLoop
 
 pytestmark = pytest.mark.mujoco
-mujoco = pytest.importorskip("mujoco")
 
 
 class Profile:

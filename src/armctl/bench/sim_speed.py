@@ -28,33 +28,11 @@ from typing import Any
 import numpy as np
 
 import armctl
-from armctl.controllers import Controller
+from armctl.controllers import ComputedTorque, PDGravity
 from armctl.reference import Reference
 from armctl.sim import simulate, sweep
 
 TARGETS = {"real_time_factor": 30.0, "ratio_to_mujoco": 2.0, "sweep_speedup": 1.7}
-
-
-class LocalComputedTorque(Controller):
-    """τ = M(q)(q̈_r + K_p e + K_d ė) + C q̇ + g (used when armctl.controllers has no ComputedTorque yet)."""
-
-    def __init__(self, dynamics: armctl.Dynamics, kp: float, kd: float) -> None:
-        super().__init__(dynamics)
-        self.kp, self.kd = kp, kd
-        self._mass, self._rnea = dynamics._mass, dynamics._rigid_torque
-        self._zero = np.zeros(dynamics.n)
-
-    def compute(self, t: float, q: np.ndarray, qd: np.ndarray, ref: Reference) -> np.ndarray:
-        a = ref.qdd + self.kp * (ref.q - q) + self.kd * (ref.qd - qd)
-        return self._mass(q) @ a + self._rnea(q, qd, self._zero)  # type: ignore[no-any-return]
-
-
-def computed_torque(dyn: armctl.Dynamics, kp: float, kd: float) -> tuple[Any, str]:
-    """The library's ComputedTorque if it exists, else the local one; and which it is."""
-    cls = getattr(armctl.controllers, "ComputedTorque", None)
-    if cls is not None:
-        return cls(dyn, kp, kd), "armctl.controllers.ComputedTorque"
-    return LocalComputedTorque(dyn, kp, kd), "LocalComputedTorque (bench)"
 
 
 class SampledSine:
@@ -131,9 +109,9 @@ def panda_figures(duration: float = 10.0, rounds: int = 3) -> dict[str, Any]:
     dyn = armctl.Dynamics(model)
     q0 = np.array([0.0, -0.4, 0.0, -2.0, 0.0, 1.6, 0.8])
     ref = SampledSine(q0, 0.3, 2.0, 1e-3, duration)
-    ctrl, ctrl_name = computed_torque(armctl.Dynamics(model), 400.0, 40.0)
+    ctrl = ComputedTorque(armctl.Dynamics(model), 400.0, 40.0)
     steps = round(duration / 1e-3)
-    out: dict[str, Any] = {"controller": ctrl_name, "steps": steps, "duration_s": duration}
+    out: dict[str, Any] = {"controller": "armctl.controllers.ComputedTorque", "steps": steps, "duration_s": duration}
     try:
         m, d = panda_mujoco()
     except ImportError:
@@ -159,17 +137,6 @@ def panda_figures(duration: float = 10.0, rounds: int = 3) -> dict[str, Any]:
         for integ in ("rk4", "euler"):
             out[integ]["ratio_to_mujoco"] = out[integ]["us_per_step"] / base
     return out
-
-
-class SweepPD(Controller):
-    """τ = g(q) + K_p (q_r − q) + K_d (q̇_r − q̇) for the sweep (module level, so that it pickles)."""
-
-    def __init__(self, dynamics: armctl.Dynamics, kp: float, kd: float) -> None:
-        super().__init__(dynamics)
-        self.kp, self.kd = kp, kd
-
-    def compute(self, t: float, q: np.ndarray, qd: np.ndarray, ref: Reference) -> np.ndarray:
-        return self.dynamics.gravity_torque(q) + self.kp * (ref.q - q) + self.kd * (ref.qd - qd)
 
 
 @functools.cache
@@ -200,7 +167,7 @@ def sweep_cases(runs: int) -> list[dict[str, Any]]:
     ctrl_model = model.reduced(friction=False)
     ref = me.SweepSine([0.3, -0.5], 0.4, 1.5)
     gains = np.geomspace(500.0, 5e4, runs)
-    return [{"plant": model, "controller": me.SweepPD(armctl.Dynamics(ctrl_model), kp, 2 * math.sqrt(kp * 250.0)),
+    return [{"plant": model, "controller": PDGravity(armctl.Dynamics(ctrl_model), kp, 2 * math.sqrt(kp * 250.0)),
              "reference": ref, "duration": 5.0} for kp in gains]
 
 

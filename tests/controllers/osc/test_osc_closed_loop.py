@@ -7,9 +7,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import pytest
 
 import armctl
+from armctl import sim
 from armctl.controllers.osc import (
     ClosedFormOSC,
     FramePoseTask,
@@ -21,8 +21,6 @@ from armctl.controllers.osc import (
 from armctl.scenes.panda_contact import PressAndSlide
 
 from .conftest import Q_HOME, panda_dynamics
-
-sim = pytest.importorskip("armctl.sim", reason="the simulator (armctl.sim) is not there yet")
 
 Q_SINGULAR = np.array([0.0, 0.3, 0.0, -0.46700102, 0.0, 1.571, 0.785])  # σ_min(J) ≈ 2e-7, see test_osc_closed_form
 
