@@ -16,9 +16,21 @@ from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
 FloatArray = NDArray[np.float64]
 
 
+def real_array(x: ArrayLike, name: str) -> FloatArray:
+    """``x`` as a float array; raise if it holds anything but real numbers (complex values are refused rather
+    than cut to their real part, strings and None rather than passed on to fail somewhere else)."""
+    try:
+        a = np.asarray(x)
+        if a.dtype.kind == "c":
+            raise TypeError("complex")
+        return a.astype(float, copy=False)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"{name} must hold real numbers, got {x!r}", value=x) from None
+
+
 def vector(x: ArrayLike, n: int, name: str) -> FloatArray:
     """Return ``x`` as a float vector of length ``n``; raise if its shape is wrong or it is not finite."""
-    a = np.asarray(x, dtype=float)
+    a = real_array(x, name)
     if a.shape != (n,):
         raise ShapeError(f"{name} must have shape ({n},), got shape {a.shape}", value=x)
     if not all(map(math.isfinite, a.tolist())):
@@ -27,7 +39,7 @@ def vector(x: ArrayLike, n: int, name: str) -> FloatArray:
 
 
 def matrix(x: ArrayLike, shape: tuple[int, int], name: str) -> FloatArray:
-    a = np.asarray(x, dtype=float)
+    a = real_array(x, name)
     if a.shape != shape:
         raise ShapeError(f"{name} must have shape {shape}, got shape {a.shape}", value=x)
     if not np.isfinite(a).all():
@@ -51,7 +63,7 @@ def scalar(x: Any, name: str, *, positive: bool = False, nonnegative: bool = Fal
 
 def nonnegative_vector(x: ArrayLike, n: int, name: str) -> FloatArray:
     """A scalar (for every entry) or an (n,) vector, finite and ≥ 0 — weights, standard deviations, …"""
-    a = np.asarray(x, dtype=float)
+    a = real_array(x, name)
     if a.ndim == 0:
         a = np.full(n, float(a))
     if a.shape != (n,):
@@ -66,7 +78,7 @@ def nonnegative_vector(x: ArrayLike, n: int, name: str) -> FloatArray:
 def gain_matrix(k: ArrayLike, n: int, name: str) -> FloatArray:
     """A gain given as a scalar, a vector (diagonal) or an n×n matrix, returned as a symmetric positive
     definite n×n matrix; raise if it is not one."""
-    a = np.asarray(k, dtype=float)
+    a = real_array(k, name)
     if a.ndim == 0:
         a = np.full(n, float(a))
     if a.ndim == 1:

@@ -12,12 +12,15 @@ import math
 from abc import ABC, abstractmethod
 from typing import Any
 
+import numpy as np
 from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray, vector
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError, ShapeError
 from armctl.reference import Reference
+
+_FLOAT = np.dtype(np.float64)
 
 
 class Controller(ABC):
@@ -35,17 +38,29 @@ class Controller(ABC):
         self._shape = (self.n,)
         self.last_log: dict[str, Any] = {}
 
+    #: True for a law without state between calls whose τ is NaN or inf whenever an entry of q or q̇ is: then
+    #: only τ is checked for finiteness on the hot path (one check instead of two), and the inputs only when τ
+    #: is not finite (to name the culprit). False (the default) checks the inputs before ``compute``.
+    _checks_result: bool = False
+
     def __call__(self, t: float, q: ArrayLike, qd: ArrayLike, ref: Reference) -> FloatArray:
         """τ for the measured state (q, q̇) at time t [s] and the reference ``ref``."""
         if not isinstance(ref, Reference):
             raise InvalidParameterError(f"ref must be an armctl.Reference, got {type(ref).__name__}", value=ref)
         if ref.q.shape != self._shape:
             raise ShapeError(f"reference has {ref.n} joints, the controller {self.n}", value=ref)
-        try:  # the cheap test first: this runs every control period
-            ok = (q.shape == self._shape and qd.shape == self._shape  # type: ignore[union-attr]
-                  and math.isfinite(sum(q.tolist()) + sum(qd.tolist())))  # type: ignore[union-attr]
+        try:  # the cheap tests first: this runs every control period
+            ok = (q.dtype is _FLOAT and qd.dtype is _FLOAT  # type: ignore[union-attr]
+                  and q.shape == self._shape and qd.shape == self._shape)  # type: ignore[union-attr]
         except AttributeError:
             ok = False
+        if ok:
+            if self._checks_result:
+                tau = self.compute(float(t), q, qd, ref)  # type: ignore[arg-type]
+                if not math.isfinite(sum(tau.tolist())):
+                    vector(q, self.n, "q"), vector(qd, self.n, "qd")  # NonFiniteError if an input is the cause
+                return tau
+            ok = math.isfinite(sum(q.tolist()) + sum(qd.tolist()))  # type: ignore[union-attr]
         if not ok:
             q, qd = vector(q, self.n, "q"), vector(qd, self.n, "qd")
         return self.compute(float(t), q, qd, ref)  # type: ignore[arg-type]

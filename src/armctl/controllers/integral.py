@@ -43,6 +43,9 @@ class PIDGains:
         # diagonal K_p and K_d (the usual case): the control laws multiply elementwise, inline
         self._diagonal = self._kp.ndim == 1 and self._kd.ndim == 1
         self._integral = ErrorIntegral(self.n)
+        # without an integral the law keeps no state, and a NaN/inf in q_j or q̇_j reaches τ through K_p e or
+        # K_d ė (K ≻ 0: a positive diagonal entry multiplies it; in computed torque through v_j and M_jj > 0)
+        self._checks_result = self._ki is None
 
     def reset(self) -> None:
         super().reset()  # type: ignore[misc]  # the Controller's, next in the MRO

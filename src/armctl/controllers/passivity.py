@@ -33,6 +33,9 @@ class PassivityBased(Controller):
     lam: Λ [1/s]; kd: K_D [N·m·s/rad] (scalar, vector or matrix).
     """
 
+    # no state; a NaN/inf in q_j or q̇_j reaches s_j = q̃̇_j + (Λq̃)_j and τ through −K_D s (K_D ≻ 0)
+    _checks_result = True
+
     def __init__(self, dynamics: Dynamics, lam: ArrayLike, kd: ArrayLike) -> None:
         super().__init__(dynamics)
         self.lam = gain_matrix(lam, self.n, "lam")

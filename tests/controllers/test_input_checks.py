@@ -1,0 +1,106 @@
+"""`Controller.__call__` checks q and q̇ on a cheap fast path. The built-in laws without state check only τ
+(``_checks_result``: a NaN/inf in any entry of q or q̇ reaches τ through the PD or sliding term), and the
+inputs only when τ is not finite. Whatever the law, every entry of q and q̇ made NaN, +inf or −inf must raise a
+NonFiniteError naming that input and leave the controller's state (integral, θ̂) as it was; arrays that are not
+real numbers must raise an ArmctlError naming the input; lists, integer and object arrays of numbers must give
+the float result."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+import pytest
+
+import armctl
+from armctl.controllers import Adaptive, ComputedTorque, Controller, PassivityBased, PDGravity
+from armctl.errors import ArmctlError, NonFiniteError, ShapeError
+from tests.conftest import dynamics
+
+LAWS: dict[str, Callable[[armctl.Dynamics], Controller]] = {
+    "pd": lambda d: PDGravity(d, 100.0, 20.0),
+    "pd_integral": lambda d: PDGravity(d, 100.0, 20.0, ki=5.0),
+    "pd_matrix_gains": lambda d: PDGravity(d, np.eye(d.n) * 100.0 + 1.0, 20.0),
+    "ct": lambda d: ComputedTorque(d, 100.0, 20.0),
+    "ct_integral": lambda d: ComputedTorque(d, 100.0, 20.0, ki=5.0),
+    "ct_reference_friction": lambda d: ComputedTorque(d, 100.0, 20.0, friction="reference"),
+    "pb": lambda d: PassivityBased(d, 5.0, 20.0),
+    "adaptive": lambda d: Adaptive(d, 5.0, 20.0, 0.01),
+}
+# panda (Pinocchio, no friction), puma560 (rotors, asymmetric Coulomb friction), the Lagrange backend on the
+# frictionless pendulum (its τ holds no q̇ at all) and on planar_2r
+MODELS = (("panda", "pinocchio"), ("puma560", "pinocchio"), ("pendulum", "lagrange"), ("planar_2r", "lagrange"))
+
+
+def _state(n: int) -> tuple[np.ndarray, np.ndarray, armctl.Reference]:
+    q, qd, qdd = np.random.default_rng(5).uniform(-1.0, 1.0, (3, n))
+    return q, qd, armctl.Reference(q + 0.02, qd - 0.1, qdd)
+
+
+def _snapshot(c: Controller) -> list[np.ndarray]:
+    out = []
+    integral = getattr(c, "_integral", None)
+    if integral is not None:
+        out += [integral.value.copy(), np.array(np.nan if integral._t is None else integral._t)]
+    if isinstance(c, Adaptive):
+        out.append(c.theta.copy())
+    return out
+
+
+@pytest.mark.parametrize(("name", "backend"), MODELS)
+@pytest.mark.parametrize("law", sorted(LAWS))
+def test_every_non_finite_entry_is_named_and_changes_nothing(name: str, backend: str, law: str) -> None:
+    dyn = dynamics(name, backend)
+    c = LAWS[law](dyn)
+    q, qd, ref = _state(dyn.n)
+    c(0.0, q, qd, ref)  # start the clock of an integral
+    c(1e-3, q, qd, ref)
+    before = _snapshot(c)
+    for which in ("q", "qd"):
+        for j in range(dyn.n):
+            for bad in (np.nan, np.inf, -np.inf):
+                args = {"q": q.copy(), "qd": qd.copy()}
+                args[which][j] = bad
+                with pytest.raises(NonFiniteError, match=rf"^{which} holds NaN or inf"):
+                    c(2e-3, args["q"], args["qd"], ref)
+                for a, b in zip(_snapshot(c), before, strict=True):
+                    assert np.array_equal(a, b, equal_nan=True), (which, j, bad)
+    # and a good call afterwards gives what a fresh controller in the same state gives
+    fresh = LAWS[law](dyn)
+    fresh(0.0, q, qd, ref)
+    fresh(1e-3, q, qd, ref)
+    assert np.array_equal(c(2e-3, q, qd, ref), fresh(2e-3, q, qd, ref))
+
+
+@pytest.mark.parametrize("law", sorted(LAWS))
+def test_inputs_that_are_not_real_vectors(law: str) -> None:
+    dyn = dynamics("panda")
+    q, qd, ref = _state(dyn.n)
+    expected = LAWS[law](dyn)(0.0, q, qd, ref)
+    for which in ("q", "qd"):
+        for bad, err in [(np.full(dyn.n, 1.0 + 1.0j), ArmctlError),  # not cut to its real part
+                         (np.full(dyn.n, 0.5 + 0.0j), ArmctlError),  # complex even when it is real
+                         (np.array(["a"] * dyn.n), ArmctlError),
+                         (np.array([0.1] * (dyn.n - 1) + [None], dtype=object), ArmctlError),
+                         (np.zeros((dyn.n, 1)), ShapeError), (np.zeros(dyn.n + 1), ShapeError),
+                         (np.zeros(1), ShapeError), (None, ArmctlError)]:
+            args = {"q": q, "qd": qd, which: bad}
+            with pytest.raises(err, match=rf"^{which} "):
+                LAWS[law](dyn)(0.0, args["q"], args["qd"], ref)
+        good = {"q": q, "qd": qd}[which]
+        for same in (good.tolist(), good.astype(object)):
+            args = {"q": q, "qd": qd, which: same}
+            assert np.array_equal(LAWS[law](dyn)(0.0, args["q"], args["qd"], ref), expected), (which, type(same))
+    ints = {"q": np.arange(dyn.n) % 2, "qd": np.ones(dyn.n, dtype=int)}
+    floats = {k: v.astype(float) for k, v in ints.items()}
+    assert np.array_equal(LAWS[law](dyn)(0.0, ints["q"], ints["qd"], ref),
+                          LAWS[law](dyn)(0.0, floats["q"], floats["qd"], ref))
+
+
+def test_only_the_stateless_laws_check_their_result() -> None:
+    """The flag itself: a law with state (integral, θ̂) must check its inputs before computing."""
+    dyn = dynamics("panda")
+    flags = {law: LAWS[law](dyn)._checks_result for law in LAWS}
+    assert flags == {"pd": True, "pd_integral": False, "pd_matrix_gains": True, "ct": True, "ct_integral": False,
+                     "ct_reference_friction": True, "pb": True, "adaptive": False}
+    assert Controller._checks_result is False  # a user's controller: inputs first
