@@ -14,6 +14,8 @@ from numpy.typing import ArrayLike, NDArray
 from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
 
 FloatArray = NDArray[np.float64]
+#: the dtype of a float array (a singleton: fast paths test ``a.dtype is FLOAT``)
+FLOAT = np.dtype(np.float64)
 
 
 def real_array(x: ArrayLike, name: str) -> FloatArray:

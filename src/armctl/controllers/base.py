@@ -12,15 +12,13 @@ import math
 from abc import ABC, abstractmethod
 from typing import Any
 
-import numpy as np
 from numpy.typing import ArrayLike
 
+from armctl._checks import FLOAT as _FLOAT
 from armctl._checks import FloatArray, vector
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError, ShapeError
 from armctl.reference import Reference
-
-_FLOAT = np.dtype(np.float64)
 
 
 class Controller(ABC):

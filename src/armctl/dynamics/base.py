@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from armctl._checks import FLOAT as _FLOAT
 from armctl._checks import FloatArray, vector
 from armctl.errors import NonFiniteError, UnknownNameError
 from armctl.model.robot import PARAMS_PER_JOINT, RobotModel
@@ -152,7 +153,7 @@ class Dynamics(ABC):
     def _finite(self, x: Any, name: str) -> FloatArray:
         """``x`` if it is already a finite float (n,) array (the fast case), else checked by :func:`vector`."""
         try:
-            if x.shape == self._shape and math.isfinite(sum(x.tolist())):
+            if x.dtype is _FLOAT and x.shape == self._shape and math.isfinite(sum(x.tolist())):
                 return x  # type: ignore[no-any-return]
         except AttributeError:
             pass
@@ -186,7 +187,7 @@ class Dynamics(ABC):
         try:
             total = 0.0
             for a in args:
-                if a.shape != self._shape:
+                if a.shape != self._shape or a.dtype is not _FLOAT:  # e.g. an object array: converted below
                     raise TypeError
                 total += sum(a.tolist())
             if math.isfinite(total):
@@ -208,7 +209,7 @@ class Dynamics(ABC):
         try:  # the fast path of _finite, inlined: this is called every control step
             if q.shape == self._shape and math.isfinite(sum(q.tolist())):  # type: ignore[union-attr]
                 return self._mass(q)
-        except AttributeError:
+        except (AttributeError, TypeError):  # not an array; complex entries; Pinocchio refusing an object array
             pass
         return self._mass(vector(q, self.n, "q"))
 
@@ -222,7 +223,7 @@ class Dynamics(ABC):
         try:  # inlined fast path, as in mass_matrix
             if q.shape == self._shape and math.isfinite(sum(q.tolist())):  # type: ignore[union-attr]
                 return self._gravity(q)
-        except AttributeError:
+        except (AttributeError, TypeError):  # as in mass_matrix
             pass
         return self._gravity(vector(q, self.n, "q"))
 
@@ -337,17 +338,25 @@ class Dynamics(ABC):
         friction is taken at q̇_r (it then adds F_v s to the closed loop's damping); Coulomb friction at the
         measured q̇.
         """
-        if not self._checked4(q, qd, qd_r, qdd_r):
-            q, qd, qd_r, qdd_r = self._inputs(("q", "qd", "qd_r", "qdd_r"), q, qd, qd_r, qdd_r)
-        return self._passivity_regressor(q, qd, qd_r, qdd_r, qd - qd_r)  # type: ignore[operator]
+        if self._checked4(q, qd, qd_r, qdd_r):
+            try:
+                return self._passivity_regressor(q, qd, qd_r, qdd_r, qd - qd_r)  # type: ignore[operator]
+            except TypeError:  # an object array of numbers, which Pinocchio refuses: converted below
+                pass
+        q, qd, qd_r, qdd_r = self._inputs(("q", "qd", "qd_r", "qdd_r"), q, qd, qd_r, qdd_r)
+        return self._passivity_regressor(q, qd, qd_r, qdd_r, qd - qd_r)
 
     def passivity_torque(self, q: ArrayLike, qd: ArrayLike, qd_r: ArrayLike, qdd_r: ArrayLike) -> FloatArray:
         """M q̈_r + C(q, q̇) q̇_r + g + F_v q̇_r + F_c sgn(q̇) (= passivity_regressor(...) @ π, with the Coulomb
         asymmetry offset), from two inverse-dynamics evaluations by the same polarisation as
         :meth:`passivity_regressor`."""
-        if not self._checked4(q, qd, qd_r, qdd_r):
-            q, qd, qd_r, qdd_r = self._inputs(("q", "qd", "qd_r", "qdd_r"), q, qd, qd_r, qdd_r)
-        return self._passivity_torque(q, qd, qd_r, qdd_r, qd - qd_r)  # type: ignore[operator]
+        if self._checked4(q, qd, qd_r, qdd_r):
+            try:
+                return self._passivity_torque(q, qd, qd_r, qdd_r, qd - qd_r)  # type: ignore[operator]
+            except TypeError:  # an object array of numbers, which Pinocchio refuses: converted below
+                pass
+        q, qd, qd_r, qdd_r = self._inputs(("q", "qd", "qd_r", "qdd_r"), q, qd, qd_r, qdd_r)
+        return self._passivity_torque(q, qd, qd_r, qdd_r, qd - qd_r)
 
     # The primitives behind the two methods above, on checked inputs and with s = q̇ − q̇_r (controllers that
     # have checked the state and formed s call them directly). copy=False may return a workspace that the
