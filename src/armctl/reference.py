@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, readonly
+from armctl._checks import FloatArray, readonly, real_array
 from armctl.errors import NonFiniteError, ShapeError
 
 
@@ -21,12 +21,12 @@ class Reference:
     qdd: FloatArray | None = None
 
     def __post_init__(self) -> None:
-        q = np.array(self.q, dtype=float).reshape(-1) if np.ndim(self.q) <= 1 else None
+        q = np.array(real_array(self.q, "Reference q")).reshape(-1) if np.ndim(self.q) <= 1 else None
         if q is None:
             raise ShapeError(f"Reference q must be a vector, got shape {np.shape(self.q)}", value=self.q)
         for name in ("q", "qd", "qdd"):
             raw = getattr(self, name)
-            a = np.zeros_like(q) if raw is None else np.array(raw, dtype=float)
+            a = np.zeros_like(q) if raw is None else np.array(real_array(raw, f"Reference {name}"))
             if a.shape != q.shape:
                 raise ShapeError(f"Reference {name} must have shape {q.shape} like q, got {a.shape}", value=raw)
             if not np.isfinite(a).all():

@@ -14,7 +14,7 @@ import pytest
 
 import armctl
 from armctl.controllers import Adaptive, ComputedTorque, Controller, PassivityBased, PDGravity
-from armctl.errors import ArmctlError, NonFiniteError, ShapeError
+from armctl.errors import ArmctlError, InvalidParameterError, NonFiniteError, ShapeError
 from tests.conftest import dynamics
 
 LAWS: dict[str, Callable[[armctl.Dynamics], Controller]] = {
@@ -104,3 +104,13 @@ def test_only_the_stateless_laws_check_their_result() -> None:
     assert flags == {"pd": True, "pd_integral": False, "pd_matrix_gains": True, "ct": True, "ct_integral": False,
                      "ct_reference_friction": True, "pb": True, "adaptive": False}
     assert Controller._checks_result is False  # a user's controller: inputs first
+
+
+def test_a_reference_of_anything_but_real_numbers_is_refused() -> None:
+    for field in ("q", "qd", "qdd"):
+        for bad in ([0.5j, 0.0], [0.5 + 0j, 0.0], ["a", "b"]):
+            values = {"q": [0.1, 0.2], field: bad}
+            with pytest.raises(InvalidParameterError, match=rf"^Reference {field} must hold real numbers"):
+                armctl.Reference(**values)  # type: ignore[arg-type]
+    ref = armctl.Reference(np.array([1, 2]), np.array([0.5, 1], dtype=object))
+    assert ref.q.dtype == ref.qd.dtype == np.float64 and ref.qd.tolist() == [0.5, 1.0]
