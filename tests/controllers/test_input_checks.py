@@ -3,7 +3,8 @@
 inputs only when τ is not finite. Whatever the law, every entry of q and q̇ made NaN, +inf or −inf must raise a
 NonFiniteError naming that input and leave the controller's state (integral, θ̂) as it was; arrays that are not
 real numbers must raise an ArmctlError naming the input; lists, integer and object arrays of numbers must give
-the float result."""
+the float result. Time must be finite, never runs an integral backwards, and a controller keeps no reference to
+the caller's arrays."""
 
 from __future__ import annotations
 
@@ -114,3 +115,75 @@ def test_a_reference_of_anything_but_real_numbers_is_refused() -> None:
                 armctl.Reference(**values)  # type: ignore[arg-type]
     ref = armctl.Reference(np.array([1, 2]), np.array([0.5, 1], dtype=object))
     assert ref.q.dtype == ref.qd.dtype == np.float64 and ref.qd.tolist() == [0.5, 1.0]
+
+
+@pytest.mark.parametrize("law", sorted(LAWS))
+def test_time_must_be_a_finite_real_number(law: str) -> None:
+    dyn = dynamics("panda")
+    c = LAWS[law](dyn)
+    q, qd, ref = _state(dyn.n)
+    c(0.0, q, qd, ref)
+    c(1e-3, q, qd, ref)
+    before = _snapshot(c)
+    for bad, err in [(np.nan, NonFiniteError), (np.inf, NonFiniteError), ("soon", InvalidParameterError),
+                     (None, InvalidParameterError), (1j, InvalidParameterError)]:
+        with pytest.raises(err, match=r"^t must be"):
+            c(bad, q, qd, ref)  # type: ignore[arg-type]
+        for a, b in zip(_snapshot(c), before, strict=True):
+            assert np.array_equal(a, b, equal_nan=True), bad
+    assert np.isfinite(c(np.float32(2e-3), q, qd, ref)).all()
+
+
+@pytest.mark.parametrize("law", ["pd_integral", "ct_integral"])
+def test_an_integral_never_runs_backwards_in_time(law: str) -> None:
+    # a second run without reset() starts its clock at 0 again: the interval back to 0 is not integrated
+    dyn = dynamics("panda")
+    c = LAWS[law](dyn)
+    q, qd, ref = _state(dyn.n)
+    e = ref.q - q
+    for t in (0.0, 1.0, 1.5):
+        c(t, q, qd, ref)
+    assert np.allclose(c._integral.value, 1.5 * e)  # type: ignore[attr-defined]
+    c(0.5, q, qd, ref)  # back in time: the clock restarts here
+    assert np.allclose(c._integral.value, 1.5 * e)  # type: ignore[attr-defined]
+    c(0.6, q, qd, ref)
+    assert np.allclose(c._integral.value, 1.6 * e)  # type: ignore[attr-defined]
+    c(0.6, q, qd, ref)  # the same instant again adds nothing
+    assert np.allclose(c._integral.value, 1.6 * e)  # type: ignore[attr-defined]
+
+
+def test_adaptive_keeps_no_reference_to_the_callers_arrays() -> None:
+    # composite adaptation differences q̇ between calls: a loop that refills one q̇ buffer in place (and clips
+    # τ in place) must get what fresh arrays get
+    dyn = dynamics("planar_2r")
+    rng = np.random.default_rng(3)
+    states = rng.uniform(-1.0, 1.0, (6, 2, dyn.n))
+    ref = armctl.Reference([0.2, -0.3], [0.1, 0.0])
+    fresh = Adaptive(dyn, 5.0, 10.0, 0.5, composite=0.2)
+    reused = Adaptive(dyn, 5.0, 10.0, 0.5, composite=0.2)
+    q_buf, qd_buf = np.zeros(dyn.n), np.zeros(dyn.n)
+    for k, (q, qd) in enumerate(states):
+        t = 1e-3 * k
+        expected = fresh(t, q.copy(), qd.copy(), ref)
+        q_buf[:], qd_buf[:] = q, qd
+        tau = reused(t, q_buf, qd_buf, ref)
+        assert np.array_equal(tau, expected), k
+        tau *= 0.5  # the caller scales or clips the command in place
+    assert np.array_equal(fresh.theta, reused.theta)
+
+
+def test_adaptive_dead_zone_holds_theta() -> None:
+    # inside the dead zone no term moves θ̂: neither the gradient nor σ-modification nor the composite term
+    dyn = dynamics("planar_2r")
+    theta0 = dyn.parameters() * 1.1
+    c = Adaptive(dyn, 5.0, 10.0, 0.5, theta0=theta0, sigma=1.0, composite=0.5, dead_zone=1e3)
+    rng = np.random.default_rng(8)
+    ref = armctl.Reference([0.2, -0.3], [0.1, 0.0])
+    for k in range(5):
+        q, qd = rng.uniform(-0.5, 0.5, (2, dyn.n))
+        c(1e-3 * k, q, qd, ref)
+    assert np.array_equal(c.theta, theta0)
+    outside = Adaptive(dyn, 5.0, 10.0, 0.5, theta0=theta0, sigma=1.0, composite=0.5, dead_zone=1e-6)
+    for k in range(2):
+        outside(1e-3 * k, np.array([0.4, 0.1]), np.array([0.3, -0.2]), ref)
+    assert not np.array_equal(outside.theta, theta0)

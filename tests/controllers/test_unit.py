@@ -36,23 +36,39 @@ def test_computed_torque_on_the_reference_is_inverse_dynamics() -> None:
         ComputedTorque(dyn, 1.0, 1.0, friction="yes")
 
 
-def test_passivity_based_law() -> None:
-    dyn = dynamics("panda")
-    q, qd = np.full(7, 0.15), np.full(7, 0.1)
-    lam, kd = np.diag(np.arange(1.0, 8.0)), 5.0
-    e, ed = q - REF7.q, qd - REF7.qd
-    qd_r, qdd_r = REF7.qd - lam @ e, REF7.qdd - lam @ ed
-    s = qd - qd_r
-    expected = (dyn.mass_matrix(q) @ qdd_r + dyn.coriolis_matrix(q, qd) @ qd_r + dyn.gravity_torque(q) - kd * s)
-    assert np.allclose(PassivityBased(dyn, lam, kd)(0.0, q, qd, REF7), expected, atol=1e-10)
+def _slotine_li(dyn: armctl.Dynamics, q: np.ndarray, qd: np.ndarray, ref: armctl.Reference, lam: np.ndarray,
+                kd: float) -> np.ndarray:
+    """M q̈_r + C(q, q̇) q̇_r + g + F_v q̇_r + F_c±(q̇) − K_D s, friction straight from the model's joints."""
+    qd_r, qdd_r = ref.qd - lam @ (q - ref.q), ref.qdd - lam @ (qd - ref.qd)
+    fr = [j.friction for j in dyn.model.joints]
+    fv = np.array([f.viscous for f in fr])
+    fc = np.array([f.coulomb if v > 0 else -(f.coulomb if f.coulomb_negative is None else f.coulomb_negative)
+                   for f, v in zip(fr, qd, strict=True)])
+    return (dyn.mass_matrix(q) @ qdd_r + dyn.coriolis_matrix(q, qd) @ qd_r + dyn.gravity_torque(q) + fv * qd_r
+            + fc - kd * (qd - qd_r))
 
 
-def test_adaptive_with_exact_parameters_is_passivity_based() -> None:
-    dyn = dynamics("panda")
-    q, qd = np.full(7, 0.15), np.full(7, 0.1)
+# panda: no friction; puma560: rotors, viscous and asymmetric Coulomb friction
+@pytest.mark.parametrize("name", ["panda", "puma560"])
+def test_passivity_based_law(name: str) -> None:
+    dyn = dynamics(name)
+    n = dyn.n
+    q, qd = np.full(n, 0.15), np.linspace(-0.3, 0.4, n)
+    ref = armctl.Reference(np.full(n, 0.1), np.full(n, 0.2), np.full(n, -0.3))
+    lam = np.diag(np.arange(1.0, n + 1.0))
+    expected = _slotine_li(dyn, q, qd, ref, lam, 5.0)
+    assert np.allclose(PassivityBased(dyn, lam, 5.0)(0.0, q, qd, ref), expected, rtol=1e-12, atol=1e-10)
+
+
+@pytest.mark.parametrize("name", ["panda", "puma560"])
+def test_adaptive_with_exact_parameters_is_passivity_based(name: str) -> None:
+    dyn = dynamics(name)
+    n = dyn.n
+    q, qd = np.full(n, 0.15), np.linspace(-0.3, 0.4, n)
+    ref = armctl.Reference(np.full(n, 0.1), np.full(n, 0.2), np.full(n, -0.3))
     ad = Adaptive(dyn, 3.0, 5.0, gamma=0.0 + 1e-9)
-    pb = PassivityBased(dyn, 3.0, 5.0)
-    assert np.allclose(ad(0.0, q, qd, REF7), pb(0.0, q, qd, REF7))
+    assert np.allclose(ad(0.0, q, qd, ref), _slotine_li(dyn, q, qd, ref, 3.0 * np.eye(n), 5.0), rtol=1e-12,
+                       atol=1e-10)
     assert np.allclose(ad.last_log["theta"], dyn.model.parameters())
 
 

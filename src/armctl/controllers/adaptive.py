@@ -15,9 +15,12 @@ from armctl.reference import Reference
 
 
 class Adaptive(Controller):
-    """τ = Y(q, q̇, q̇_r, q̈_r) θ̂ − K_D s,   θ̂̇ = −Γ (Yᵀ s + σ (θ̂ − θ₀) + κ W_fᵀ (W_f θ̂ − τ_f))
+    """τ = Y(q, q̇, q̇_r, q̈_r) θ̂ + τ_o(q̇) − K_D s,   θ̂̇ = −Γ (Yᵀ s + σ (θ̂ − θ₀) + κ W_fᵀ (W_f θ̂ − τ_f))
 
-    (Slotine & Li 1987; s, q̇_r, q̈_r as in :class:`PassivityBased`). With σ = κ = 0 and no disturbance,
+    (Slotine & Li 1987; s, q̇_r, q̈_r as in :class:`PassivityBased`). τ_o(q̇) = ½(F_c⁺ − F_c⁻) for each moving
+    joint (:meth:`~armctl.Dynamics.coulomb_offset`) is the part of an asymmetric Coulomb friction outside the
+    parameters π, taken from the controller's model and not adapted; with θ̂ = π the law is
+    :class:`PassivityBased`'s. With σ = κ = 0 and no disturbance,
     V = ½ sᵀM s + ½ θ̃ᵀΓ⁻¹θ̃ has V̇ = −sᵀ(K_D + F_v)s ≤ 0: tracking converges whatever θ̂(0), while θ̂ itself
     converges only under persistent excitation. θ̂ is integrated at the control rate (explicit Euler over the
     time between calls).
@@ -30,10 +33,10 @@ class Adaptive(Controller):
       physical), a bounded set assumed to contain the true parameters: radial shrink towards θ₀, the exact
       projection onto the ball, keeps consistency because the cone is convex;
     * ``sigma``: σ-modification, a leak towards θ₀ that bounds θ̂;
-    * ``dead_zone``: no adaptation while ‖s‖ < δ (noise alone does not move θ̂);
+    * ``dead_zone``: θ̂ is held while ‖s‖ < δ (no term of the law moves it: noise alone does not);
     * ``composite`` κ: composite adaptation, adding the torque prediction error of the first-order-filtered
-      regressor W_f = F[Y(q, q̇, q̈̂)] and filtered commanded torque τ_f = F[τ] (bandwidth ``filter_bandwidth``
-      [rad/s]; q̈̂ by differencing q̇; the commanded torque is taken as applied).
+      regressor W_f = F[Y(q, q̇, q̈̂)] and filtered commanded torque τ_f = F[τ − τ_o] (bandwidth
+      ``filter_bandwidth`` [rad/s]; q̈̂ by differencing q̇; the commanded torque is taken as applied).
 
     lam: Λ [1/s]; kd: K_D; gamma: Γ (scalar, 13n vector or matrix); theta0: initial θ̂ (None: the controller
     model's own π). Each step replaces ``theta`` (θ̂) by a new array (the controller never changes it in
@@ -82,14 +85,15 @@ class Adaptive(Controller):
         # q, q̇ checked by Controller.__call__; Y may be the dynamics' workspace (read before the next
         # regressor call: the composite term makes one, so it needs a copy)
         y = dyn._passivity_regressor(q, qd, qd_r, qdd_r, s, copy=bool(self.composite))
-        dt = 0.0 if self._t_prev is None else t - self._t_prev
-        if dt > 0:
-            grad = y.T.dot(s) if self.dead_zone == 0 or float(np.linalg.norm(s)) >= self.dead_zone \
-                else np.zeros_like(self.theta)
+        dt = 0.0 if self._t_prev is None else t - self._t_prev  # ≤ 0 for a new run without reset: no update
+        if self.composite and dt > 0:  # the filters run inside the dead zone too
+            prediction = self._prediction_gradient(q, qd, dt)
+        if dt > 0 and (self.dead_zone == 0 or float(np.linalg.norm(s)) >= self.dead_zone):
+            grad = y.T.dot(s)
             if self.sigma:
                 grad = grad + self.sigma * (self.theta - self.theta0)
             if self.composite:
-                grad = grad + self.composite * self._prediction_gradient(q, qd, dt)
+                grad = grad + self.composite * prediction
             # a new array, not an update in place: the log below can then keep it without a copy
             if self._gamma.ndim == 1:  # diagonal Γ: Γ dt is kept while the control period stays the same
                 if abs(dt - self._dt) > 1e-9 * dt:
@@ -101,10 +105,15 @@ class Adaptive(Controller):
                 self.theta = self.theta - step
             if self.projection:
                 self.theta = self._project(self.theta)
-        self._t_prev, self._qd_prev = t, qd
+        self._t_prev = t
         tau = y.dot(self.theta)
+        offset = dyn._fc_offset * (qd != 0) if dyn._has_asymmetry else None
+        if offset is not None:
+            tau += offset
         tau -= self._kd * s if self._kd.ndim == 1 else self._kd.dot(s)
-        self._tau_prev = tau
+        if self.composite:  # copies: the caller may reuse its q̇ buffer, or clip τ in place
+            # the torque the parameters must explain: τ without the fixed Coulomb offset
+            self._qd_prev, self._tau_prev = qd.copy(), tau - offset if offset is not None else tau.copy()
         self.last_log = {"theta": self.theta, "s": s}
         return tau
 

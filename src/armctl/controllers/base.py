@@ -17,7 +17,7 @@ from numpy.typing import ArrayLike
 from armctl._checks import FLOAT as _FLOAT
 from armctl._checks import FloatArray, vector
 from armctl.dynamics.base import Dynamics
-from armctl.errors import InvalidParameterError, ShapeError
+from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
 from armctl.reference import Reference
 
 
@@ -43,10 +43,13 @@ class Controller(ABC):
 
     def __call__(self, t: float, q: ArrayLike, qd: ArrayLike, ref: Reference) -> FloatArray:
         """τ for the measured state (q, q̇) at time t [s] and the reference ``ref``."""
-        if not isinstance(ref, Reference):
-            raise InvalidParameterError(f"ref must be an armctl.Reference, got {type(ref).__name__}", value=ref)
-        if ref.q.shape != self._shape:
-            raise ShapeError(f"reference has {ref.n} joints, the controller {self.n}", value=ref)
+        self.check_reference(ref)
+        try:
+            t = float(t)
+        except (TypeError, ValueError):
+            raise InvalidParameterError(f"t must be a real number [s], got {t!r}", value=t) from None
+        if not math.isfinite(t):
+            raise NonFiniteError(f"t must be finite, got {t}", value=t)
         try:  # the cheap tests first: this runs every control period
             ok = (q.dtype is _FLOAT and qd.dtype is _FLOAT  # type: ignore[union-attr]
                   and q.shape == self._shape and qd.shape == self._shape)  # type: ignore[union-attr]
@@ -54,14 +57,21 @@ class Controller(ABC):
             ok = False
         if ok:
             if self._checks_result:
-                tau = self.compute(float(t), q, qd, ref)  # type: ignore[arg-type]
+                tau = self.compute(t, q, qd, ref)  # type: ignore[arg-type]
                 if not math.isfinite(sum(tau.tolist())):
                     vector(q, self.n, "q"), vector(qd, self.n, "qd")  # NonFiniteError if an input is the cause
                 return tau
             ok = math.isfinite(sum(q.tolist()) + sum(qd.tolist()))  # type: ignore[union-attr]
         if not ok:
             q, qd = vector(q, self.n, "q"), vector(qd, self.n, "qd")
-        return self.compute(float(t), q, qd, ref)  # type: ignore[arg-type]
+        return self.compute(t, q, qd, ref)  # type: ignore[arg-type]
+
+    def check_reference(self, ref: Reference) -> None:
+        """Raise unless ``ref`` is a :class:`~armctl.Reference` with as many joints as the controller."""
+        if not isinstance(ref, Reference):
+            raise InvalidParameterError(f"ref must be an armctl.Reference, got {type(ref).__name__}", value=ref)
+        if ref.q.shape != self._shape:
+            raise ShapeError(f"reference has {ref.n} joints, the controller {self.n}", value=ref)
 
     @abstractmethod
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:

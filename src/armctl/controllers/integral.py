@@ -10,7 +10,8 @@ from armctl._checks import FloatArray, compact_gain, gain_matrix
 
 class ErrorIntegral:
     """The integral of an error, by the rectangle rule over the time between successive calls (the first
-    call only starts the clock)."""
+    call only starts the clock). A call at an earlier time than the last (a new run without ``reset``, whose
+    clock starts again at 0) restarts the clock: no interval of negative length is added."""
 
     def __init__(self, n: int) -> None:
         self.n = n
@@ -22,7 +23,7 @@ class ErrorIntegral:
 
     def update(self, t: float, e: FloatArray) -> FloatArray:
         """Add e·(t − t_previous) and return the integral."""
-        if self._t is not None:
+        if self._t is not None and t > self._t:
             self.value += e * (t - self._t)
         self._t = t
         return self.value
