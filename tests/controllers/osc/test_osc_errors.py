@@ -11,6 +11,7 @@ from armctl.controllers.osc import (
     ClosedFormOSC,
     Contact,
     ContactForceTask,
+    FrameOrientationTask,
     FramePoseTask,
     FramePositionTask,
     OperationalSpaceQP,
@@ -57,6 +58,56 @@ def test_targets_of_the_wrong_size(panda: armctl.Dynamics) -> None:
     with pytest.raises(InvalidParameterError, match="no target"):
         OperationalSpaceQP(panda, [FramePositionTask()])(0.0, Q_HOME, np.zeros(7), armctl.Reference(Q_HOME))
 
+
+
+def _rotation(rx: float, ry: float, rz: float) -> np.ndarray:
+    """R_z R_y R_x, written out (not from the code under test)."""
+    cx, sx, cy, sy, cz, sz = np.cos(rx), np.sin(rx), np.cos(ry), np.sin(ry), np.cos(rz), np.sin(rz)
+    rot_x = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
+    rot_y = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
+    rot_z = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
+    return rot_z @ rot_y @ rot_x
+
+
+def test_rotation_and_pose_targets_must_be_rotations(panda: armctl.Dynamics) -> None:
+    # a reflection, a scaled or a zero matrix would give a zero rotation error: the task would think it is there
+    rot = _rotation(0.1, 0.2, 0.3)
+    orientation, pose = FrameOrientationTask(), FramePoseTask()
+    for bad, why in [(rot @ np.diag([1.0, 1.0, -1.0]), "reflection"), (2.0 * rot, "not orthonormal"),
+                     (np.zeros((3, 3)), "not orthonormal"), (rot + 1e-3, "not orthonormal")]:
+        with pytest.raises(InvalidParameterError, match=why):
+            orientation.set_target(bad)
+        pose_matrix = np.eye(4)
+        pose_matrix[:3, :3] = bad
+        with pytest.raises(InvalidParameterError, match=why):
+            pose.set_target(pose_matrix)
+    skewed = np.eye(4)
+    skewed[3, 0] = 0.1
+    with pytest.raises(InvalidParameterError, match="last row"):
+        pose.set_target(skewed)
+    # rounded in the 4th decimal: accepted
+    orientation.set_target(np.array([[0.7071, -0.7071, 0.0], [0.7071, 0.7071, 0.0], [0.0, 0.0, 1.0]]))
+    # checked on every call of a trajectory too
+    pose.set_trajectory(lambda t: (skewed if t > 0.5 else np.eye(4), np.zeros(6), np.zeros(6)))
+    ctrl = OperationalSpaceQP(panda, [pose, PostureTask(7, weight=1e-3)])
+    ref = armctl.Reference(Q_HOME)
+    ctrl(0.0, Q_HOME, np.zeros(7), ref)
+    with pytest.raises(InvalidParameterError, match="last row"):
+        ctrl(1.0, Q_HOME, np.zeros(7), ref)
+
+
+def test_build_and_solve_check_their_inputs(panda: armctl.Dynamics) -> None:
+    ctrl = OperationalSpaceQP(panda, [PostureTask(7)])
+    ref = armctl.Reference(Q_HOME)
+    for method in (ctrl.build, ctrl.solve):
+        with pytest.raises(ShapeError, match="reference has 1 joints"):
+            method(0.0, Q_HOME, np.zeros(7), armctl.Reference([0.1]))
+        with pytest.raises(InvalidParameterError, match=r"armctl\.Reference"):
+            method(0.0, Q_HOME, np.zeros(7), Q_HOME)  # type: ignore[arg-type]
+        with pytest.raises(ArmctlError, match=r"^t must be"):
+            method(np.nan, Q_HOME, np.zeros(7), ref)
+        with pytest.raises(ShapeError, match=r"^qd"):
+            method(0.0, Q_HOME, np.zeros(6), ref)
 
 @pytest.mark.parametrize("kwargs", [{"weight": -1.0}, {"weight": [1.0, -0.1, 1.0]}, {"kp": -5.0},
                                     {"kp": [[1.0, 2.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], "kd": 1.0},

@@ -109,13 +109,15 @@ class OperationalSpaceQP(Controller):
 
     def build(self, t: float, q: Any, qd: Any, ref: Reference) -> StepQP:
         """The QPs of one control period at (q, q̇), not solved (``.problem(k)`` for level k)."""
+        self.check_reference(ref)
         q, qd = vector(q, self.n, "q"), vector(qd, self.n, "qd")
-        return self.builder.build(self.evaluator.evaluate(q, qd), float(t), ref)
+        return self.builder.build(self.evaluator.evaluate(q, qd), scalar(t, "t"), ref)
 
     def solve(self, t: float, q: Any, qd: Any, ref: Reference) -> OSCSolution:
         """Build and solve one control period; raises InfeasibleError naming the conflicting rows."""
+        self.check_reference(ref)
         q, qd = vector(q, self.n, "q"), vector(qd, self.n, "qd")
-        return self._solve(float(t), q, qd, ref)
+        return self._solve(scalar(t, "t"), q, qd, ref)
 
     def _solve(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> OSCSolution:
         step = self.builder.build(self.evaluator.evaluate(q, qd), t, ref)

@@ -14,6 +14,29 @@ from armctl.errors import InvalidParameterError
 #: A trajectory maps t [s] to (value, velocity, acceleration); velocity and acceleration may be None (zero).
 Trajectory = Callable[[float], tuple[Any, Any, Any]]
 
+#: largest |(R Rᵀ − I)_ij| of a rotation target: rounding in the 4th decimal (0.7071) passes, a scaled or
+#: skewed matrix does not
+ROTATION_TOL = 1e-4
+
+
+def rotation_defect(entries: list[float], shape: tuple[int, ...]) -> str | None:
+    """Why the row-major ``entries`` of a 3×3 rotation or 4×4 pose are not one (None if they are): R Rᵀ = I
+    to :data:`ROTATION_TOL`, det R = +1 (not a reflection), a pose's last row [0, 0, 0, 1]. On Python floats:
+    a 3×3 is too small for NumPy calls to pay off."""
+    if shape == (4, 4):
+        if entries[12:] != [0.0, 0.0, 0.0, 1.0]:
+            return f"the last row of a pose must be [0, 0, 0, 1], got {entries[12:]}"
+        a, b, c, _, d, e, f, _, g, h, i = entries[:11]
+    else:
+        a, b, c, d, e, f, g, h, i = entries
+    worst = max(abs(a * a + b * b + c * c - 1.0), abs(d * d + e * e + f * f - 1.0), abs(g * g + h * h + i * i - 1.0),
+                abs(a * d + b * e + c * f), abs(a * g + b * h + c * i), abs(d * g + e * h + f * i))
+    if worst > ROTATION_TOL:
+        return f"its rotation is not orthonormal: |R Rᵀ − I| reaches {worst:.3g} (tolerance {ROTATION_TOL:g})"
+    if a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g) < 0.0:
+        return "its rotation is a reflection (det R = −1)"
+    return None
+
 
 class TargetHolder:
     """Holds a target (value, velocity, acceleration) of a frame task: ``value`` a vector of ``size`` or a
@@ -30,14 +53,23 @@ class TargetHolder:
         shape = self.value_shape
         try:  # fast path: float arrays of the right shapes, all finite (one sum, NaN/inf propagate into it)
             if (value.shape == shape and velocity.shape == acceleration.shape == (self.rate,)
-                    and value.dtype == velocity.dtype == acceleration.dtype == np.float64
-                    and math.isfinite(sum(value.ravel().tolist()) + sum(velocity.tolist())
-                                      + sum(acceleration.tolist()))):
-                return value, velocity, acceleration
+                    and value.dtype == velocity.dtype == acceleration.dtype == np.float64):
+                entries = value.ravel().tolist()
+                if (math.isfinite(sum(entries) + sum(velocity.tolist()) + sum(acceleration.tolist()))
+                        and (len(shape) == 1 or rotation_defect(entries, shape) is None)):
+                    return value, velocity, acceleration
         except AttributeError:
             pass
-        val = (vector(value, shape[0], f"{self.owner}: target") if len(shape) == 1
-               else matrix(value, shape, f"{self.owner}: target"))  # type: ignore[arg-type]
+        if len(shape) == 1:
+            val = vector(value, shape[0], f"{self.owner}: target")
+        else:
+            val = matrix(value, shape, f"{self.owner}: target")  # type: ignore[arg-type]
+            why = rotation_defect(val.ravel().tolist(), shape)
+            if why is not None:
+                kind = "pose" if shape == (4, 4) else "rotation"
+                hint = "" if why.startswith("the last row") else \
+                    "; orthonormalise it (e.g. pinocchio.Quaternion(R).normalized().matrix())"
+                raise InvalidParameterError(f"{self.owner}: the target is not a {kind} — {why}{hint}", value=value)
         vel = np.zeros(self.rate) if velocity is None else vector(velocity, self.rate, f"{self.owner}: velocity")
         acc = (np.zeros(self.rate) if acceleration is None
                else vector(acceleration, self.rate, f"{self.owner}: acceleration"))
