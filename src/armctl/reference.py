@@ -8,7 +8,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray, readonly, real_array
-from armctl.errors import NonFiniteError, ShapeError
+from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
 
 
 @dataclass(frozen=True, eq=False)  # numpy fields: compare by identity
@@ -21,14 +21,18 @@ class Reference:
     qdd: FloatArray | None = None
 
     def __post_init__(self) -> None:
+        if self.q is None:
+            raise InvalidParameterError("Reference q is required (the joint positions)", value=None)
         q = np.array(real_array(self.q, "Reference q")).reshape(-1) if np.ndim(self.q) <= 1 else None
         if q is None:
             raise ShapeError(f"Reference q must be a vector, got shape {np.shape(self.q)}", value=self.q)
         for name in ("q", "qd", "qdd"):
             raw = getattr(self, name)
             a = np.zeros_like(q) if raw is None else np.array(real_array(raw, f"Reference {name}"))
+            if a.ndim == 0:  # a scalar: one joint
+                a = a.reshape(1)
             if a.shape != q.shape:
-                raise ShapeError(f"Reference {name} must have shape {q.shape} like q, got {a.shape}", value=raw)
+                raise ShapeError(f"Reference {name} must have shape {q.shape} like q, got {np.shape(raw)}", value=raw)
             if not np.isfinite(a).all():
                 raise NonFiniteError(f"Reference {name} holds NaN or inf: {a}", value=raw)
             object.__setattr__(self, name, readonly(a))

@@ -187,3 +187,15 @@ def test_adaptive_dead_zone_holds_theta() -> None:
     for k in range(2):
         outside(1e-3 * k, np.array([0.4, 0.1]), np.array([0.3, -0.2]), ref)
     assert not np.array_equal(outside.theta, theta0)
+
+
+def test_a_one_joint_reference_from_scalars() -> None:
+    ref = armctl.Reference(0.3, 0.1, -0.2)
+    assert (ref.q.tolist(), ref.qd.tolist(), ref.qdd.tolist()) == ([0.3], [0.1], [-0.2])
+    assert armctl.Reference.hold(0.3).q.tolist() == [0.3]
+    with pytest.raises(InvalidParameterError, match="q is required"):
+        armctl.Reference(None)  # type: ignore[arg-type]
+    with pytest.raises(ShapeError, match=r"qd must have shape \(2,\) like q, got \(\)"):
+        armctl.Reference([0.1, 0.2], 0.5)  # type: ignore[arg-type]
+    pendulum = dynamics("pendulum")
+    assert np.isfinite(PDGravity(pendulum, 10.0, 1.0)(0.0, np.array([0.1]), np.array([0.0]), ref)).all()
