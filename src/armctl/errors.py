@@ -75,3 +75,8 @@ class IdentifiabilityError(ArmctlError, ValueError):
     def __init__(self, message: str, *, value: Any = None, directions: Any = None) -> None:
         super().__init__(message, value=value)
         self.directions = directions
+
+
+class SimulationWarning(UserWarning):
+    """A simulation ran, but part of its result is not to be trusted (e.g. an explicit integrator beyond its
+    stability limit on a stiff contact); the result's ``info`` says which part and how to fix it."""

@@ -11,6 +11,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import armctl
+from armctl.errors import SimulationWarning
 from armctl.sim import ContactPoint, ForceSensor, HuntCrossley, KelvinVoigt, Plane, simulate
 from tests.sim.helpers import ForceControl, PDGravity, slider, zero_torque
 
@@ -66,12 +67,15 @@ def test_implicit_scheme_is_stable_over_four_decades_of_contact_stiffness(stiffn
 
 
 def test_rk4_fails_on_the_stiffest_contact_where_the_implicit_scheme_holds() -> None:
-    """At k = 10⁸ N/m, ω·Δt is beyond RK4's stability limit: the impact throws the hand off the floor."""
+    """At k = 10⁸ N/m, ω·Δt is beyond RK4's stability limit: the impact throws the hand off the floor — and the
+    simulator says so before the run (a SimulationWarning, ``info["unstable_contacts"]``)."""
     dyn = armctl.Dynamics(armctl.models.panda())
     z_floor = dyn.frame_pose(PANDA_Q0)[2, 3] - 0.01
     floor = Plane(KelvinVoigt(1e8, 2 * 0.7 * math.sqrt(3e8)), point=(0.0, 0.0, z_floor))
-    res = simulate(dyn, ForceControl(dyn, [0.0, 0.0, -20.0], kd=5.0, kp=20.0), armctl.Reference.hold(PANDA_Q0), 1.5,
-                   environment=floor, integrator="rk4")
+    with pytest.warns(SimulationWarning, match="'rk4' is unstable on this contact"):
+        res = simulate(dyn, ForceControl(dyn, [0.0, 0.0, -20.0], kd=5.0, kp=20.0), armctl.Reference.hold(PANDA_Q0),
+                       1.5, environment=floor, integrator="rk4")
+    assert res.info["unstable_contacts"]
     settled = not res.diverged and abs(-res.contact_force[-1, 0, 2] - 19.6) < 1.0
     assert not settled
     assert res.diverged or np.abs(res.qd).max() > 1.0

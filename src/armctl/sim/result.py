@@ -43,7 +43,8 @@ class SimResult:
 
     diverged: the run stopped early; diverged_at: the time [s] it was detected, divergence: why, diverged_q /
     diverged_qd: the offending state. logs: the controller's ``last_log`` entries stacked over the samples.
-    info: settings and counters (integrator, steps, sub-steps, stick events, wall time, …).
+    info: settings and counters (integrator, steps, sub-steps, stick events, wall time, …); ``unstable_contacts``:
+    the contact points the integrator cannot integrate stably at this step (see :mod:`armctl.sim.stability`).
     """
 
     t: FloatArray
@@ -121,6 +122,8 @@ class SimResult:
 
     def __repr__(self) -> str:
         state = f"diverged at t = {self.diverged_at:g} s ({self.divergence})" if self.diverged else "ok"
+        if self.info.get("unstable_contacts"):
+            state += ", integrator unstable on a contact (see info['unstable_contacts'])"
         return (f"SimResult({len(self.t)} samples, {self.duration:g} s, n = {self.n}, "
                 f"{self.info.get('integrator', '?')}, {state})")
 

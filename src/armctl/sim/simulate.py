@@ -14,14 +14,15 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from collections.abc import Callable, Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import nonnegative_vector
+from armctl._checks import FloatArray, nonnegative_vector
 from armctl.dynamics.base import Dynamics
-from armctl.errors import ShapeError
+from armctl.errors import ShapeError, SimulationWarning
 from armctl.model.robot import RobotModel
 from armctl.reference import Reference
 from armctl.sim import setup
@@ -31,6 +32,7 @@ from armctl.sim.integrators import fast_step, make_step
 from armctl.sim.plant import Plant
 from armctl.sim.recorder import Recorder
 from armctl.sim.result import SimResult
+from armctl.sim.stability import contact_stability
 from armctl.sim.stepper import advance
 from armctl.sim.stick_slip import NotPositiveDefinite
 
@@ -71,7 +73,10 @@ def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
     recorded states when first read (False: NaN).
 
     Returns a :class:`~armctl.sim.result.SimResult`; a run that diverges returns the samples before it with
-    ``diverged=True``, ``diverged_at``, ``divergence`` and the offending state — it does not raise.
+    ``diverged=True``, ``diverged_at``, ``divergence`` and the offending state — it does not raise. A contact
+    the integrator cannot integrate stably at this step (:mod:`armctl.sim.stability`) is reported before the
+    run by a :class:`~armctl.errors.SimulationWarning` and kept in ``res.info["unstable_contacts"]``: the run
+    still happens (the failure is a result to show), but past the first impact it is not the arm's motion.
     """
     dyn = setup.plant_dynamics(plant)
     n = dyn.n
@@ -88,6 +93,7 @@ def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
     sc = setup.scene(dyn, friction, environment, sensors, disturbance)
 
     pl = Plant(dyn, sc.friction, sc.environments, sc.disturbance)
+    unstable = _check_contacts(dyn, sc.environments, q, scheme, h)
     step = make_step(scheme, pl)
     fast = fast_step(scheme, pl)
     simple = pl.simple
@@ -192,6 +198,24 @@ def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
             "dt": h, "substeps": m, "periods": n_periods, "friction": sc.friction.name if pl.friction else "none",
             "saturate": bool(saturate), "delay": lag, "seed": seed, "wall_time": wall,
             "real_time_factor": (rows - 1) * cdt / wall if wall > 0 and rows > 1 else math.nan, **pl.stats}
+    if unstable:
+        info["unstable_contacts"] = unstable
     if divergence is not None:
         divergence = (divergence[0], divergence[1], np.array(divergence[2]), np.array(divergence[3]))
     return rec.result(rows, dyn, energy, info, divergence)
+
+
+def _check_contacts(dyn: Dynamics, environments: Sequence[Environment], q0: FloatArray, scheme: str, h: float
+                    ) -> list[dict[str, float]]:
+    """Warn (:class:`~armctl.errors.SimulationWarning`) about every contact point the integrator cannot
+    integrate stably at step h (see :mod:`armctl.sim.stability`); returns them for ``info``."""
+    if not environments:
+        return []
+    found = [c for c in contact_stability(dyn, environments, q0, scheme, h) if not c.stable]
+    for c in found:
+        warnings.warn(f"environment {c.environment}, contact point {c.point}: {scheme!r} is unstable on this contact "
+                      f"at dt = {h:g} s (ω·dt = {c.omega_h:.3g}, one-step growth ×{c.radius:.3g}): once in contact "
+                      f"the arm gains energy the contact never had. Use dt <= {c.max_dt:.3g} s (at the initial "
+                      "configuration) or integrator='implicit-euler'", SimulationWarning, stacklevel=3)
+    return [{"environment": c.environment, "point": c.point, "omega_dt": c.omega_h, "growth": c.radius,
+             "max_dt": c.max_dt} for c in found]

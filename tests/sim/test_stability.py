@@ -1,0 +1,73 @@
+"""The check made before a run: can the chosen explicit integrator integrate a stiff contact stably at this step?
+
+References: the undamped oscillator's stability limits of each scheme in closed form (RK4: ω h ≤ 2√2, the
+Euler variants: ω h < 2), and the arm's effective mass at a point computed here from Pinocchio directly."""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import armctl
+from armctl.errors import SimulationWarning
+from armctl.sim import KelvinVoigt, Plane, simulate
+from armctl.sim.stability import contact_stability
+from tests.sim.helpers import OpenLoop, slider
+
+PANDA_Q0 = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8])  # hand pointing down
+
+
+@pytest.mark.parametrize(("scheme", "limit"), [("rk4", 2.0 * math.sqrt(2.0)), ("euler", 2.0),
+                                               ("semi-implicit-euler", 2.0)])
+def test_largest_stable_step_of_an_undamped_contact(scheme: str, limit: float) -> None:
+    mass, k = 2.0, 1e7
+    wall = Plane(KelvinVoigt(k), normal=(-1.0, 0.0, 0.0), point=(0.01, 0.0, 0.0))
+    dyn = armctl.Dynamics(slider(mass))
+    omega = math.sqrt(k / mass)
+    for h in (0.5 * limit / omega, 1.5 * limit / omega):
+        (found,) = contact_stability(dyn, [wall], np.zeros(1), scheme, h)
+        assert found.max_dt == pytest.approx(limit / omega, rel=1e-9)
+        assert found.omega_h == pytest.approx(omega * h, rel=1e-12)
+        assert found.stable == (h < limit / omega)
+    assert contact_stability(dyn, [wall], np.zeros(1), "implicit-euler", 1.0) == []
+
+
+def test_effective_mass_of_the_panda_hand() -> None:
+    dyn = armctl.Dynamics(armctl.models.panda())
+    k = 1e8
+    floor = Plane(KelvinVoigt(k), point=(0.0, 0.0, 0.0))
+    (found,) = contact_stability(dyn, [floor], PANDA_Q0, "rk4", 1e-3)
+    # m_eff = 1 / (nᵀ J M⁻¹ Jᵀ n) at the tool frame, straight from Pinocchio
+    pm = dyn.model.to_pinocchio()
+    pd = pm.createData()
+    mass = pin.crba(pm, pd, PANDA_Q0)
+    mass = np.triu(mass) + np.triu(mass, 1).T
+    fid = pm.getFrameId(dyn.model.frame(None).name)
+    jac = pin.computeFrameJacobian(pm, pd, PANDA_Q0, fid, pin.LOCAL_WORLD_ALIGNED)[:3]
+    jn = np.array([0.0, 0.0, 1.0]) @ jac
+    m_eff = 1.0 / (jn @ np.linalg.solve(mass, jn))
+    assert found.max_dt == pytest.approx(2.0 * math.sqrt(2.0) / math.sqrt(k / m_eff), rel=1e-9)
+    assert not found.stable  # the existing contact test's k = 1e8 at 1 ms: beyond RK4's limit
+
+
+def test_simulate_warns_and_records_an_unstable_contact() -> None:
+    wall = Plane(KelvinVoigt(1e9), normal=(-1.0, 0.0, 0.0), point=(0.01, 0.0, 0.0))
+    push = OpenLoop(lambda t: np.array([10.0]))
+    for scheme in ("rk4", "euler", "semi-implicit-euler"):
+        with pytest.warns(SimulationWarning, match=rf"'{scheme}' is unstable on this contact"):
+            res = simulate(slider(2.0), push, armctl.Reference.hold([0.0]), 0.1, environment=wall, integrator=scheme)
+        (entry,) = res.info["unstable_contacts"]
+        assert entry["omega_dt"] == pytest.approx(math.sqrt(1e9 / 2.0) * 1e-3)
+        assert "unstable on a contact" in repr(res)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        res = simulate(slider(2.0), push, armctl.Reference.hold([0.0]), 0.1, environment=wall,
+                       integrator="implicit-euler")
+        assert "unstable_contacts" not in res.info
+        soft = Plane(KelvinVoigt(1e5), normal=(-1.0, 0.0, 0.0), point=(0.01, 0.0, 0.0))
+        assert "unstable_contacts" not in simulate(slider(2.0), push, armctl.Reference.hold([0.0]), 0.1,
+                                                   environment=soft).info
