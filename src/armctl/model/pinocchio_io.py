@@ -2,14 +2,16 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from armctl.errors import ModelLoadError, UnknownNameError
-from armctl.model.parts import Frame, Joint, JointFriction, JointLimits, Link, transform
+from armctl._checks import FloatArray
+from armctl.errors import InvalidParameterError, ModelLoadError
+from armctl.model.parts import Frame, Joint, JointFriction, JointLimits, Link, rot, transform
 
 if TYPE_CHECKING:
     import pinocchio
@@ -91,25 +93,73 @@ def joints_from_pinocchio(pm: pinocchio.Model, source: str, physical: bool = Tru
     return joints, unique
 
 
+def _joint_motion(j: Joint, value: float) -> FloatArray:
+    """4×4 motion of joint ``j`` at position ``value`` (rotation about / translation along its axis)."""
+    t = np.eye(4)
+    if j.kind == "revolute":
+        t[:3, :3] = rot(j.axis, value)
+    else:
+        t[:3, 3] = j.axis * value
+    return t
+
+
 def lock_joints(model: RobotModel, lock: Sequence[str] | Mapping[str, float]) -> RobotModel:
-    """``model`` with some joints held fixed, through pinocchio.buildReducedModel."""
+    """``model`` with some joints held fixed: links merged by pinocchio.buildReducedModel; motors, friction,
+    limits carried over from ``model``, with a motor's explicit spin axis re-expressed in the link its rotor
+    now rides on; every frame (the locked joints' frames included) re-attached to the joint that now carries
+    it."""
     import pinocchio as pin
 
-    positions = dict(lock) if isinstance(lock, Mapping) else {name: 0.0 for name in lock}
+    if isinstance(lock, str):
+        lock = (lock,)
+    positions: dict[str, float] = {}
+    for name, value in (lock.items() if isinstance(lock, Mapping) else ((nm, 0.0) for nm in lock)):
+        model.joint_index(name)  # UnknownNameError listing the joints
+        try:
+            v = float(value)
+        except (TypeError, ValueError):
+            raise InvalidParameterError(f"lock position of joint {name!r} must be a real number, got {value!r}",
+                                        value=value) from None
+        if not math.isfinite(v):
+            raise InvalidParameterError(f"lock position of joint {name!r} must be finite, got {value!r}",
+                                        value=value)
+        positions[name] = v
+    if len(positions) == model.n:
+        raise InvalidParameterError(f"cannot lock every joint of {model.name!r} ({sorted(positions)}): a model "
+                                    "needs at least one free joint; leave one out of lock", value=lock)
     q = np.zeros(model.n)
-    ids = []
-    for name, value in positions.items():
-        i = model.joint_index(name)
-        q[i] = float(value)
-        ids.append(i + 1)
+    for name, v in positions.items():
+        q[model.joint_index(name)] = v
+    ids = sorted(model.joint_index(name) + 1 for name in positions)
+    # motion of each locked joint (1-based index) at its lock position: its link in the previous link's frame
+    locked = {i: model.joints[i - 1].placement @ _joint_motion(model.joints[i - 1], q[i - 1]) for i in ids}
+    new_index: dict[int, int] = {}  # old 1-based joint index (0: world) → index in the reduced model
+    for i in range(model.n + 1):
+        new_index[i] = 0 if i == 0 else new_index[i - 1] + (i not in locked)
+
+    def carried(joint: int, placement: FloatArray) -> tuple[int, FloatArray]:
+        """A pose on link ``joint`` (1-based, 0: world) as (reduced joint index, pose on that link)."""
+        while joint in locked:
+            placement = locked[joint] @ placement
+            joint -= 1
+        return new_index[joint], placement
+
     pm = build_pinocchio(model)
     reduced = pin.buildReducedModel(pm, ids, q)
-    joints, frames = joints_from_pinocchio(reduced, model.name, all(j.link.physical for j in model.joints))
-    kept = {j.name: j for j in model.joints}
-    joints = [replace(j, motor=kept[j.name].motor, friction=kept[j.name].friction, limits=kept[j.name].limits)
-              for j in joints]
+    joints, _ = joints_from_pinocchio(reduced, model.name, all(j.link.physical for j in model.joints))
+    source = {j.name: (i, j) for i, j in enumerate(model.joints, start=1)}
+    out = []
+    for j in joints:
+        i, old = source[j.name]
+        motor = old.motor
+        if motor is not None and motor.axis is not None and i - 1 in locked:  # rides on a merged link
+            # (an axis of None follows the joint axis, which moved with the placement pinocchio composed)
+            _, pose = carried(i - 1, transform(None, None))
+            motor = replace(motor, axis=pose[:3, :3] @ motor.axis)
+        out.append(replace(j, motor=motor, friction=old.friction, limits=old.limits))
+    frames = [Frame(model.joints[i - 1].name, *carried(i, np.eye(4))) for i in ids]
+    frames += [Frame(f.name, *carried(f.joint, f.placement)) for f in model.frames]
     tool = model.tool_frame
-    if tool is not None and tool in positions:
-        raise UnknownNameError("frame", tool, [j.name for j in joints] + [f.name for f in frames])
-    extra = [f for f in frames if f.name not in kept or f.name in positions]
-    return replace(model, joints=tuple(joints), frames=tuple(extra))
+    if tool is None and model.n in locked:  # the default tool frame (last joint's) must not move
+        tool = model.joints[-1].name
+    return replace(model, joints=tuple(out), frames=tuple(frames), tool_frame=tool)

@@ -183,9 +183,16 @@ class RobotModel:
         return tuple(f"{p}[{i}]" for i in range(self.n) for p in PARAMETER_NAMES)
 
     def fingerprint(self, inertial: bool = True) -> str:
-        """A hash of what determines the dynamics (for caches of generated code). ``inertial=False`` leaves
-        out what enters only through π or friction (masses, inertias, rotor inertias, friction), so every
-        payload or perturbed variant of an arm shares the kinematic fingerprint."""
+        """A short hash keying caches of code generated from this model (the ``"lagrange"`` backend's
+        compiled CasADi library uses ``fingerprint(inertial=False)``).
+
+        Covered: gravity; every joint's kind, axis and placement; for joints with a motor, its gear ratio and
+        spin axis; the tool frame (name, joint, placement). ``inertial=True`` adds the link masses, centres of
+        mass, inertia tensors and rotor inertias. Not covered: friction, joint limits, joint names and the
+        frames other than the tool frame. So equal fingerprints do *not* mean equal dynamics (models that
+        differ only in friction share one); they mean the same generated code, whose π input carries the
+        inertial and friction parameters at run time: every payload, perturbed or friction variant of an arm
+        shares ``fingerprint(inertial=False)``."""
         h = hashlib.sha256()
         h.update(self.gravity.tobytes())
         for j in self.joints:
@@ -243,9 +250,16 @@ class RobotModel:
         def per_joint(x: ArrayLike | None, what: str) -> list[float | None]:
             if x is None:
                 return [None] * self.n
-            a = np.broadcast_to(np.asarray(x, dtype=float), (self.n,)) if np.ndim(x) <= 1 else None
-            if a is None or (np.ndim(x) == 1 and np.shape(x) != (self.n,)):
-                raise ShapeError(f"{what} must be a scalar or a ({self.n},) vector, got {np.shape(x)}", value=x)
+            try:
+                a = np.asarray(x, dtype=float)
+            except (TypeError, ValueError):
+                raise InvalidParameterError(f"with_friction(): {what} must be a real number or {self.n} real "
+                                            f"numbers (one per joint), got {x!r}", value=x) from None
+            if a.ndim == 0:
+                a = np.full(self.n, float(a))
+            elif a.shape != (self.n,):
+                raise ShapeError(f"with_friction(): {what} must be a scalar or a vector of length {self.n} (one "
+                                 f"value per joint of {self.name!r}), got shape {a.shape}", value=x)
             return [float(v) for v in a]
 
         cols = zip(per_joint(viscous, "viscous"), per_joint(coulomb, "coulomb"),
@@ -264,9 +278,18 @@ class RobotModel:
         mass along a random direction. noise: relative standard deviation of an extra random factor per
         link (seeded by ``seed``), clipped to stay physical.
         """
-        for nm, v in (("mass", mass), ("inertia", inertia), ("friction", friction), ("rotor", rotor)):
-            if not (math.isfinite(v) and v >= 0):
-                raise InvalidParameterError(f"perturbed(): factor {nm} must be finite and >= 0, got {v}", value=v)
+        factor = "a factor, 1 leaves it unchanged"
+        for nm, v, hint in (("mass", mass, factor), ("inertia", inertia, factor), ("friction", friction, factor),
+                            ("rotor", rotor, factor),
+                            ("com_offset", com_offset, "a distance in m, 0 for none"),
+                            ("noise", noise, "a relative standard deviation, 0 for none")):
+            try:
+                ok = math.isfinite(v) and v >= 0
+            except TypeError:
+                ok = False
+            if not ok:
+                raise InvalidParameterError(f"perturbed(): {nm} must be finite and >= 0 ({hint}), got {v!r}",
+                                            value=v)
         rng = np.random.default_rng(seed)
         joints = []
         for j in self.joints:
@@ -287,7 +310,13 @@ class RobotModel:
                 lock: Sequence[str] | Mapping[str, float] = ()) -> RobotModel:
         """A simpler model of this arm: ``rotors=False`` drops the motors, ``friction=False`` the friction,
         ``lock`` holds joints fixed (names locked at 0, or a mapping name → position), merging their links
-        into the previous one."""
+        into the previous one. With ``lock``, the locked joints' frames and every other frame stay (attached
+        to the joint that now carries them, the world for links merged into it), a motor's explicit spin
+        axis is re-expressed in the link its rotor now rides on, the locked joints' motors and friction are
+        dropped (they no longer move), and a default tool frame (``tool_frame=None``: the last joint's) is
+        kept by name if that joint is locked. Raises :class:`~armctl.errors.UnknownNameError` for an unknown
+        joint and :class:`~armctl.errors.InvalidParameterError` for a non-finite lock position or locking
+        every joint."""
         joints = tuple(replace(j, motor=j.motor if rotors else None,
                                friction=j.friction if friction else JointFriction()) for j in self.joints)
         model = replace(self, joints=joints)
