@@ -21,6 +21,9 @@ toppra's known failure modes (its issue tracker) and what happens to each here:
   is tightened by its sag over each stage (:func:`~armctl.planning.problem.velocity_bound`);
 * paths with q'(s) = 0 inside give unbounded path velocities (#104): refused with the place;
 * a stage crossed at zero speed would take "5 s" in toppra's parametrizer: refused (:class:`GridTiming`);
+* toppra only requires ṡ = 0 at the ends and may brake (s̈ ≠ 0) at the last gridpoint, "throwing" the arm
+  into an end pose it cannot hold: the rest states at both ends (before 0, after T) are required to fit the
+  torque bounds before solving, and are part of the dense check;
 * every profile is checked (finite, ≥ 0, within its velocity bound, at rest at both ends) and every trajectory
   densely re-verified with the full inverse dynamics.
 """
@@ -36,7 +39,7 @@ from numpy.typing import ArrayLike
 from armctl._checks import FloatArray
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError, SolverError
-from armctl.planning.infeasibility import diagnose
+from armctl.planning.infeasibility import diagnose, rest_overload
 from armctl.planning.limits import joint_limits
 from armctl.planning.path import Path, as_path
 from armctl.planning.problem import TimeScalingProblem, build_problem, gridpoints
@@ -49,6 +52,10 @@ def solve_problem(problem: TimeScalingProblem, viscous_passes: int = 2) -> Traje
     """Solve ``problem`` with TOPP-RA (rest to rest) → :class:`Trajectory` with a
     :class:`~armctl.planning.timing.GridTiming` (not yet verified densely).
 
+    Raises :class:`~armctl.errors.InfeasibleError` first of all if the arm cannot be held at rest at the start
+    or end pose within the torque bounds (:func:`~armctl.planning.infeasibility.rest_overload`): the
+    trajectory rests there before 0 and after T, which toppra, free to brake at the last gridpoint, ignores.
+
     With viscous friction, a first pass drops it (optimistic, never returned); each of the ``viscous_passes``
     further passes replaces F_v q' √x by a line over it, tangent at the previous pass's x where it can be (see
     :meth:`~armctl.planning.problem.TimeScalingProblem.linearized`), so the returned solution is conservative
@@ -59,6 +66,9 @@ def solve_problem(problem: TimeScalingProblem, viscous_passes: int = 2) -> Traje
     if int(viscous_passes) < 1:
         raise InvalidParameterError(f"viscous_passes must be >= 1, got {viscous_passes!r}", value=viscous_passes)
     t0 = time.perf_counter()
+    at_rest = rest_overload(problem)
+    if at_rest is not None:
+        raise at_rest
     interp = problem.discretization == "interpolation"
     x0 = None
     passes = 1 + (int(viscous_passes) if problem.has_viscous else 0)
@@ -117,9 +127,10 @@ def time_optimal(dyn: Dynamics, path: Path | ArrayLike, vel_limit: Any = None, a
 
     Returns a :class:`~armctl.planning.Trajectory` with ``check`` (the dense verification) and ``info``
     (grid, passes, the history of refinements, compute time).
-    Raises :class:`~armctl.errors.InfeasibleError` if no timing meets the limits (it names the constraint and
-    where it binds), :class:`~armctl.errors.SolverError` on a numerical failure, another
-    :class:`~armctl.errors.ArmctlError` on bad input.
+    Raises :class:`~armctl.errors.InfeasibleError` if no timing meets the limits, naming the constraint and
+    where it binds (in particular when the arm cannot be held at rest at the start or end pose: gravity and the
+    Coulomb friction of the adjoining motion beyond the planned torque bound); :class:`~armctl.errors.SolverError`
+    on a numerical failure; another :class:`~armctl.errors.ArmctlError` on bad input.
     """
     t0 = time.perf_counter()
     if not isinstance(dyn, Dynamics):

@@ -6,6 +6,11 @@ grid, plus the end), recomputes q̇, q̈ and the torque τ = ``dyn.inverse_dynam
 reports per limit the worst *utilisation* |v − mid| / half-range (|v|/L for symmetric bounds ±L: 1 at the
 bound, above 1 a violation). Where ṡ = 0 (the two ends), the friction is taken as its limit from inside the
 motion, sgn q̇_j = sgn q'_j, as the planner does.
+
+A rest-to-rest trajectory also rests at its start pose before 0 and at its end pose after T (q̇ = q̈ = 0). At
+t = 0 and T the samples in motion still carry the first stage's acceleration and the last stage's braking, so
+the two rest states are checked as well (:func:`rest_samples`): a trajectory whose end pose the arm cannot
+hold does not pass.
 """
 
 from __future__ import annotations
@@ -26,7 +31,8 @@ from armctl.planning.trajectory import Samples, Trajectory
 @dataclass(frozen=True)
 class LimitReport:
     """The worst sample for one limit: ``ratio`` = utilisation there (≤ 1: within), at ``joint``, time ``t``
-    [s] and path parameter ``s``; ``value`` and the ``bound`` on its side, in ``unit``."""
+    [s] and path parameter ``s``; ``value`` and the ``bound`` on its side, in ``unit``. ``rest``: "start" or
+    "end" when the worst sample is the rest state at that pose (before t = 0 / after T), else None."""
 
     kind: str
     ratio: float
@@ -36,6 +42,7 @@ class LimitReport:
     value: float
     bound: float
     unit: str
+    rest: str | None = None
 
     @property
     def excess(self) -> float:
@@ -44,7 +51,9 @@ class LimitReport:
 
     def __str__(self) -> str:
         state = f"exceeds its bound by {100 * self.excess:.3g} %" if self.excess > 0 else "within"
-        return (f"{self.kind}: worst {100 * self.ratio:.4g} % of the range at joint {self.joint}, t = {self.t:.4g} s "
+        when = (f"t = {self.t:.4g} s" if self.rest is None else
+                f"rest at the {self.rest} pose ({'t < 0' if self.rest == 'start' else f't > {self.t:.4g} s'})")
+        return (f"{self.kind}: worst {100 * self.ratio:.4g} % of the range at joint {self.joint}, {when} "
                 f"(s = {self.s:.4g}): {self.value:.5g} {self.unit} vs bound {self.bound:.5g} — {state}")
 
 
@@ -85,6 +94,21 @@ def sample_times(traj: Trajectory, oversample: int = 10) -> FloatArray:
     return np.linspace(0.0, traj.duration, 100 * oversample + 1)
 
 
+def rest_samples(traj: Trajectory) -> Samples:
+    """The two rest states of ``traj``: at the start pose (s = 0, reported at t = 0, held for t < 0) and at the
+    end pose (s = 1, t = T, held for t > T), with ṡ = s̈ = 0, hence q̇ = q̈ = 0."""
+    s = np.array([0.0, 1.0])
+    q, dq, ddq = traj.path.derivatives(s)
+    zero, still = np.zeros(2), np.zeros_like(q)
+    t = np.array([0.0, traj.duration])
+    return Samples(*(readonly(np.asarray(a)) for a in (t, s, zero, zero, q, still, still, dq, ddq)))
+
+
+def _joined(a: Samples, b: Samples) -> Samples:
+    names = ("t", "s", "sd", "sdd", "q", "qd", "qdd", "dq", "ddq")
+    return Samples(*(readonly(np.concatenate((getattr(a, k), getattr(b, k)))) for k in names))
+
+
 def sample_torques(dyn: Dynamics, smp: Samples) -> FloatArray:
     """τ = inverse_dynamics(q, q̇, q̈) at every sample (m, n): the rigid-body part in one batch
     (:func:`~armctl.planning._batch.rigid_torques`) plus the friction; at rest (ṡ = 0) the Coulomb friction is
@@ -95,20 +119,25 @@ def sample_torques(dyn: Dynamics, smp: Samples) -> FloatArray:
     return tau
 
 
-def _report(kind: str, bounds: Bounds, values: FloatArray, smp: Samples) -> LimitReport:
+def _report(kind: str, bounds: Bounds, values: FloatArray, smp: Samples, moving: int) -> LimitReport:
+    """The worst of the samples; those from row ``moving`` on are the rest states (start, end)."""
     util = bounds.utilisation(values)
     k, j = np.unravel_index(int(np.argmax(util)), util.shape)
     v = float(values[k, j])
     mid = 0.5 * (bounds.upper[j] + bounds.lower[j])
     bound = float(bounds.upper[j] if v >= mid else bounds.lower[j])
-    return LimitReport(kind, float(util[k, j]), int(j), float(smp.t[k]), float(smp.s[k]), v, bound, bounds.unit)
+    rest = None if k < moving else ("start" if k == moving else "end")
+    return LimitReport(kind, float(util[k, j]), int(j), float(smp.t[k]), float(smp.s[k]), v, bound, bounds.unit,
+                       rest)
 
 
 def check_trajectory(dyn: Dynamics, traj: Trajectory, limits: JointLimits, oversample: int = 10,
                      samples: Samples | None = None) -> LimitCheck:
     """Check ``traj`` densely against the planned ``limits`` (torque bounds with their margin applied) and
-    report the worst utilisation of each. ``samples``: use these instead of :func:`sample_times`."""
-    smp = samples if samples is not None else traj.sample(sample_times(traj, oversample))
+    report the worst utilisation of each. ``samples``: use these instead of :func:`sample_times`. The rest
+    states at both ends (:func:`rest_samples`) are always checked too."""
+    moving = samples if samples is not None else traj.sample(sample_times(traj, oversample))
+    smp = _joined(moving, rest_samples(traj))
     reports: dict[str, LimitReport] = {}
     for kind, b in limits.planned().items():
         if kind == "velocity":
@@ -117,5 +146,5 @@ def check_trajectory(dyn: Dynamics, traj: Trajectory, limits: JointLimits, overs
             values = smp.qdd
         else:
             values = sample_torques(dyn, smp)
-        reports[kind] = _report(kind, b, readonly(values), smp)
+        reports[kind] = _report(kind, b, readonly(values), smp, len(moving))
     return LimitCheck(len(smp), reports)
