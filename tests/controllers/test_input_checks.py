@@ -199,3 +199,38 @@ def test_a_one_joint_reference_from_scalars() -> None:
         armctl.Reference([0.1, 0.2], 0.5)  # type: ignore[arg-type]
     pendulum = dynamics("pendulum")
     assert np.isfinite(PDGravity(pendulum, 10.0, 1.0)(0.0, np.array([0.1]), np.array([0.0]), ref)).all()
+
+
+@pytest.mark.parametrize(("make", "gains"), [
+    (lambda d, **g: PDGravity(d, **{"kp": 100.0, "kd": 20.0, **g}), {"kp": 400.0, "kd": np.arange(1.0, 8.0)}),
+    (lambda d, **g: PDGravity(d, **{"kp": 100.0, "kd": 20.0, **g}), {"ki": 3.0}),
+    (lambda d, **g: ComputedTorque(d, **{"kp": 100.0, "kd": 20.0, **g}), {"kp": np.eye(7) * 9.0, "kd": 7.0}),
+    (lambda d, **g: PassivityBased(d, **{"lam": 5.0, "kd": 20.0, **g}), {"lam": 2.0, "kd": np.eye(7) * 3.0}),
+    (lambda d, **g: Adaptive(d, **{"lam": 5.0, "kd": 20.0, "gamma": 0.01, **g}), {"lam": 2.0, "gamma": 0.5}),
+], ids=["pd", "pd_integral_added", "ct", "pb", "adaptive"])
+def test_gains_reassigned_take_effect(make: Callable[..., Controller], gains: dict[str, object]) -> None:
+    # a gain sweep that reassigns ctrl.kp must run the new gain, not the one the controller was built with
+    dyn = dynamics("panda")
+    q, qd, ref = _state(dyn.n)
+    changed, fresh = make(dyn), make(dyn, **gains)
+    for name, value in gains.items():
+        setattr(changed, name, value)
+    for k in range(3):
+        assert np.array_equal(changed(1e-3 * k, q, qd, ref), fresh(1e-3 * k, q, qd, ref)), k
+    with pytest.raises(InvalidParameterError, match="positive definite"):
+        setattr(changed, next(iter(gains)), -1.0)
+
+
+def test_task_gains_reassigned_take_effect() -> None:
+    from armctl.controllers.osc import PostureTask
+
+    task, fresh = PostureTask(7, kp=100.0), PostureTask(7, kp=400.0, kd=40.0)
+    task.kp, task.kd = 400.0, 40.0  # type: ignore[assignment]
+    assert np.array_equal(task._kp, fresh._kp) and np.array_equal(task._kd, fresh._kd)
+    with pytest.raises(InvalidParameterError, match="kp"):
+        task.kp = -1.0  # type: ignore[assignment]
+
+
+def test_pd_friction_flag_must_be_a_bool() -> None:
+    with pytest.raises(InvalidParameterError, match="friction"):
+        PDGravity(dynamics("panda"), 1.0, 1.0, friction="reference")  # type: ignore[arg-type]

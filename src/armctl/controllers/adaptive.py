@@ -51,10 +51,7 @@ class Adaptive(Controller):
                  radius: float | None = None) -> None:
         super().__init__(dynamics)
         p = 13 * self.n
-        self.lam = gain_matrix(lam, self.n, "lam")
-        self.kd = gain_matrix(kd, self.n, "kd")
-        self.gamma = gain_matrix(gamma, p, "gamma")
-        self._lam, self._kd, self._gamma = compact_gain(self.lam), compact_gain(self.kd), compact_gain(self.gamma)
+        self.lam, self.kd, self.gamma = lam, kd, gamma  # type: ignore[assignment]
         self.theta0 = dynamics.parameters().copy() if theta0 is None else vector(theta0, p, "theta0").copy()
         self.projection = bool(projection)
         self.sigma = scalar(sigma, "sigma", nonnegative=True)
@@ -67,6 +64,37 @@ class Adaptive(Controller):
         if self.projection:
             self.theta0 = project_physical(self.theta0)
         self.reset()
+
+    @property
+    def lam(self) -> FloatArray:
+        """Λ (n×n); the gains may be reassigned between calls (checked again)."""
+        return self._lam_matrix
+
+    @lam.setter
+    def lam(self, value: ArrayLike) -> None:
+        self._lam_matrix = gain_matrix(value, self.n, "lam")
+        self._lam = compact_gain(self._lam_matrix)
+
+    @property
+    def kd(self) -> FloatArray:
+        """K_D (n×n)."""
+        return self._kd_matrix
+
+    @kd.setter
+    def kd(self, value: ArrayLike) -> None:
+        self._kd_matrix = gain_matrix(value, self.n, "kd")
+        self._kd = compact_gain(self._kd_matrix)
+
+    @property
+    def gamma(self) -> FloatArray:
+        """Γ (13n×13n)."""
+        return self._gamma_matrix
+
+    @gamma.setter
+    def gamma(self, value: ArrayLike) -> None:
+        self._gamma_matrix = gain_matrix(value, 13 * self.n, "gamma")
+        self._gamma = compact_gain(self._gamma_matrix)
+        self._dt, self._gamma_dt = 0.0, self._gamma * 0.0  # Γ·dt formed anew at the next update
 
     def reset(self) -> None:
         super().reset()

@@ -31,19 +31,55 @@ class ErrorIntegral:
 
 class PIDGains:
     """Mixin of the controllers with K_p, K_d and an optional K_i: checks the gains (scalar, vector or matrix;
-    symmetric positive definite), keeps their cheap forms and the error integral."""
+    symmetric positive definite), keeps their cheap forms and the error integral. The gains may be reassigned
+    between calls (``ctrl.kp = 400.0``): they are checked again and take effect at the next call."""
 
     n: int
 
     def _set_gains(self, kp: ArrayLike, kd: ArrayLike, ki: ArrayLike | None) -> None:
-        self.kp = gain_matrix(kp, self.n, "kp")
-        self.kd = gain_matrix(kd, self.n, "kd")
-        self.ki = None if ki is None else gain_matrix(ki, self.n, "ki")
-        self._kp, self._kd = compact_gain(self.kp), compact_gain(self.kd)
-        self._ki = None if self.ki is None else compact_gain(self.ki)
+        self._integral = ErrorIntegral(self.n)
+        self._ki_matrix: FloatArray | None = None
+        self._ki: FloatArray | None = None
+        self.kp, self.kd, self.ki = kp, kd, ki  # type: ignore[assignment]
+
+    @property
+    def kp(self) -> FloatArray:
+        """K_p (n×n)."""
+        return self._kp_matrix
+
+    @kp.setter
+    def kp(self, value: ArrayLike) -> None:
+        self._kp_matrix = gain_matrix(value, self.n, "kp")
+        self._kp = compact_gain(self._kp_matrix)
+        self._gains_changed()
+
+    @property
+    def kd(self) -> FloatArray:
+        """K_d (n×n)."""
+        return self._kd_matrix
+
+    @kd.setter
+    def kd(self, value: ArrayLike) -> None:
+        self._kd_matrix = gain_matrix(value, self.n, "kd")
+        self._kd = compact_gain(self._kd_matrix)
+        self._gains_changed()
+
+    @property
+    def ki(self) -> FloatArray | None:
+        """K_i (n×n), or None: no integral term."""
+        return self._ki_matrix
+
+    @ki.setter
+    def ki(self, value: ArrayLike | None) -> None:
+        self._ki_matrix = None if value is None else gain_matrix(value, self.n, "ki")
+        self._ki = None if self._ki_matrix is None else compact_gain(self._ki_matrix)
+        self._gains_changed()
+
+    def _gains_changed(self) -> None:
+        if not hasattr(self, "_kd"):  # during _set_gains
+            return
         # diagonal K_p and K_d (the usual case): the control laws multiply elementwise, inline
         self._diagonal = self._kp.ndim == 1 and self._kd.ndim == 1
-        self._integral = ErrorIntegral(self.n)
         # without an integral the law keeps no state, and a NaN/inf in q_j or q̇_j reaches τ through K_p e or
         # K_d ė (K ≻ 0: a positive diagonal entry multiplies it; in computed torque through v_j and M_jj > 0)
         self._checks_result = self._ki is None

@@ -38,9 +38,27 @@ class PassivityBased(Controller):
 
     def __init__(self, dynamics: Dynamics, lam: ArrayLike, kd: ArrayLike) -> None:
         super().__init__(dynamics)
-        self.lam = gain_matrix(lam, self.n, "lam")
-        self.kd = gain_matrix(kd, self.n, "kd")
-        self._lam, self._kd = compact_gain(self.lam), compact_gain(self.kd)
+        self.lam, self.kd = lam, kd  # type: ignore[assignment]
+
+    @property
+    def lam(self) -> FloatArray:
+        """Λ (n×n); may be reassigned between calls (checked again)."""
+        return self._lam_matrix
+
+    @lam.setter
+    def lam(self, value: ArrayLike) -> None:
+        self._lam_matrix = gain_matrix(value, self.n, "lam")
+        self._lam = compact_gain(self._lam_matrix)
+
+    @property
+    def kd(self) -> FloatArray:
+        """K_D (n×n); may be reassigned between calls (checked again)."""
+        return self._kd_matrix
+
+    @kd.setter
+    def kd(self, value: ArrayLike) -> None:
+        self._kd_matrix = gain_matrix(value, self.n, "kd")
+        self._kd = compact_gain(self._kd_matrix)
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         dyn = self.dynamics

@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import numpy as np
 from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray, apply_gain
 from armctl.controllers.base import Controller
 from armctl.controllers.integral import PIDGains
 from armctl.dynamics.base import Dynamics
+from armctl.errors import InvalidParameterError
 from armctl.reference import Reference
 
 
@@ -29,6 +31,8 @@ class PDGravity(PIDGains, Controller):
                  friction: bool = False) -> None:
         super().__init__(dynamics)
         self._set_gains(kp, kd, ki)
+        if not isinstance(friction, (bool, np.bool_)):
+            raise InvalidParameterError(f"friction must be True or False, got {friction!r}", value=friction)
         self.friction = bool(friction)
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:

@@ -75,17 +75,34 @@ class MotionTask(Task):
     def __init__(self, dim: int, name: str, kp: ArrayLike, kd: ArrayLike | None = None, weight: ArrayLike = 1.0,
                  priority: int = 0) -> None:
         super().__init__(dim, name, weight, priority)
-        kp_m = gain_matrix(kp, dim, f"{name}: kp")
+        self.kp = kp  # type: ignore[assignment]
         if kd is None:
             if np.ndim(kp) != 0:
                 raise InvalidParameterError(f"{name}: give kd when kp is not a scalar", value=kp)
             kd = 2.0 * np.sqrt(float(kp))
-        kd_m = gain_matrix(kd, dim, f"{name}: kd")
-        self.kp, self.kd = kp_m, kd_m
-        # on the hot path diagonal gains (isotropic ones too) are vectors: elementwise products with an
-        # array cost about half those with a Python float
-        self._kp = compact_gain(kp_m)
-        self._kd = compact_gain(kd_m)
+        self.kd = kd  # type: ignore[assignment]
+
+    # on the hot path diagonal gains (isotropic ones too) are vectors: elementwise products with an array cost
+    # about half those with a Python float
+    @property
+    def kp(self) -> FloatArray:
+        """K_p (dim×dim); may be reassigned between control periods (checked again)."""
+        return self._kp_matrix
+
+    @kp.setter
+    def kp(self, value: ArrayLike) -> None:
+        self._kp_matrix = gain_matrix(value, self.dim, f"{self.name}: kp")
+        self._kp = compact_gain(self._kp_matrix)
+
+    @property
+    def kd(self) -> FloatArray:
+        """K_d (dim×dim); may be reassigned between control periods (checked again)."""
+        return self._kd_matrix
+
+    @kd.setter
+    def kd(self, value: ArrayLike) -> None:
+        self._kd_matrix = gain_matrix(value, self.dim, f"{self.name}: kd")
+        self._kd = compact_gain(self._kd_matrix)
 
     @abstractmethod
     def kinematics(self, state: ModelState, t: float, ref: Reference
