@@ -48,6 +48,14 @@ def run(**kw: object) -> armctl.sim.SimResult:
     ({"reference": [0.1, 0.2]}, InvalidParameterError, "list"),
     ({"reference": armctl.Reference.hold([0.1, 0.2, 0.3])}, ShapeError, "3 joints"),
     ({"reference": lambda t: [0.0, 0.0]}, InvalidParameterError, "list"),
+    ({"seed": "abc", "noise_q": 0.1}, InvalidParameterError, "abc"),
+    ({"seed": 1.5, "noise_q": 0.1}, InvalidParameterError, "1.5"),
+    ({"duration": True}, InvalidParameterError, "True"),
+    ({"duration": 1e-12}, InvalidParameterError, "use 0.001 s (one control period)"),
+    ({"q0": [3.0, 0.0], "max_position": 2.0}, InvalidParameterError, "beyond max_position = 2"),
+    ({"qd0": [0.0, 5.0], "max_velocity": 2.0}, InvalidParameterError, "beyond max_velocity = 2"),
+    ({"reference": armctl.Reference.hold([3.0, 0.0]), "max_position": 2.0}, InvalidParameterError,
+     "the reference at t = 0"),
 ])
 def test_bad_input_raises_a_named_error(kwargs: dict[str, object], error: type, shown: str) -> None:
     with pytest.raises(error) as info:
@@ -108,3 +116,12 @@ def test_caller_arrays_are_not_modified() -> None:
     np.testing.assert_array_equal(qd0, [0.5, -0.5])
     with pytest.raises(ValueError):
         res.q[0, 0] = 1.0  # results are read-only
+
+
+def test_a_run_stopped_before_its_first_sample_has_an_empty_energy_balance() -> None:
+    def nan_torque(t: float, q: np.ndarray, qd: np.ndarray, ref: armctl.Reference) -> np.ndarray:
+        return np.full(2, np.nan)
+
+    res = run(controller=nan_torque)
+    assert res.diverged and res.diverged_at == 0.0 and len(res.t) == 0
+    assert res.energy_balance().shape == (0,)

@@ -118,7 +118,10 @@ class SimResult:
 
     def energy_balance(self) -> FloatArray:
         """E(t) − E(0) − W(t) [J]: zero for the exact solution; its size measures the integration error."""
-        return self.energy - self.energy[0] - self.work  # type: ignore[no-any-return]
+        energy = self.energy
+        if not len(energy):  # a run stopped before its first sample
+            return np.zeros(0)
+        return energy - energy[0] - self.work  # type: ignore[no-any-return]
 
     def __repr__(self) -> str:
         state = f"diverged at t = {self.diverged_at:g} s ({self.divergence})" if self.diverged else "ok"

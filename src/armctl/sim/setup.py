@@ -36,6 +36,9 @@ def plant_dynamics(plant: Any) -> Dynamics:
 
 def periods(duration: Any, control_dt: Any, dt: Any) -> tuple[float, float, int, int]:
     """(control_dt, dt, number of control periods N, sub-steps per period m), checked."""
+    for name, x in (("duration", duration), ("control_dt", control_dt), ("dt", dt)):
+        if isinstance(x, bool | np.bool_):
+            raise InvalidParameterError(f"{name} must be a time in s, got {x!r}", value=x)
     duration = scalar(duration, "duration [s]", positive=True)
     control_dt = scalar(control_dt, "control_dt [s]", positive=True)
     dt = control_dt if dt is None else scalar(dt, "dt [s]", positive=True)
@@ -50,9 +53,10 @@ def periods(duration: Any, control_dt: Any, dt: Any) -> tuple[float, float, int,
     n_steps = round(steps)
     if n_steps < 1 or abs(steps - n_steps) > _REL * max(steps, 1.0):
         lo, hi = math.floor(steps) * control_dt, math.ceil(steps) * control_dt
+        use = f"{lo:g} s or {hi:g} s" if lo > 0 else f"{max(hi, control_dt):g} s (one control period)"
         raise InvalidParameterError(
             f"duration = {duration} s is not a whole number of control periods of {control_dt} s "
-            f"({steps:.6g}); use {lo:g} s or {hi:g} s", value=duration)
+            f"({steps:.6g}); use {use}", value=duration)
     return control_dt, control_dt / m, n_steps, m
 
 
@@ -97,12 +101,28 @@ def controller_call(controller: Any, n: int) -> Callable[..., Any]:
     return controller  # type: ignore[no-any-return]
 
 
-def initial_state(q0: ArrayLike | None, qd0: ArrayLike | None, ref0: Reference, n: int
-                  ) -> tuple[FloatArray, FloatArray]:
-    """(q0, q̇0) as fresh arrays; None starts on the reference at t = 0."""
+def initial_state(q0: ArrayLike | None, qd0: ArrayLike | None, ref0: Reference, n: int, max_position: float,
+                  max_velocity: float) -> tuple[FloatArray, FloatArray]:
+    """(q0, q̇0) as fresh arrays, within the run's bounds; None starts on the reference at t = 0."""
     q = ref0.q if q0 is None else vector(q0, n, "q0")
     qd = ref0.qd if qd0 is None else vector(qd0, n, "qd0")
+    for name, x, limit, bound_name in (("q0", q, max_position, "max_position"),
+                                       ("qd0", qd, max_velocity, "max_velocity")):
+        worst = float(np.abs(x).max()) if len(x) else 0.0
+        if worst > limit:
+            source = name if (q0 if name == "q0" else qd0) is not None else f"{name} (the reference at t = 0)"
+            raise InvalidParameterError(f"{source} reaches {worst:g}, beyond {bound_name} = {limit:g}: the run "
+                                        f"would stop as diverged before it starts; raise {bound_name}", value=x)
     return np.array(q, dtype=float), np.array(qd, dtype=float)
+
+
+def seed_value(seed: Any) -> int | None:
+    """``seed`` for numpy's default_rng: None or a whole number >= 0."""
+    if seed is None:
+        return None
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+        raise InvalidParameterError(f"seed must be None or a whole number >= 0, got {seed!r}", value=seed)
+    return int(seed)
 
 
 def delay_periods(delay: Any) -> int:

@@ -85,11 +85,13 @@ def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
     fixed_ref, ref_fn = setup.reference_source(reference, n)
     ref0 = fixed_ref if fixed_ref is not None else ref_fn(0.0)  # type: ignore[misc]
     call = setup.controller_call(controller, n)
-    q, v = setup.initial_state(q0, qd0, ref0, n)
+
     sig_q, sig_qd = (nonnegative_vector(noise_q, n, "noise_q (a standard deviation)"),
                       nonnegative_vector(noise_qd, n, "noise_qd (a standard deviation)"))
     lag = setup.delay_periods(delay)
     vmax, qmax = setup.bound(max_velocity, "max_velocity"), setup.bound(max_position, "max_position")
+    q, v = setup.initial_state(q0, qd0, ref0, n, qmax, vmax)
+    seed = setup.seed_value(seed)
     sc = setup.scene(dyn, friction, environment, sensors, disturbance)
 
     pl = Plant(dyn, sc.friction, sc.environments, sc.disturbance)
