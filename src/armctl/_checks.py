@@ -26,7 +26,7 @@ def real_array(x: ArrayLike, name: str) -> FloatArray:
         if a.dtype.kind == "c":
             raise TypeError("complex")
         return a.astype(float, copy=False)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise InvalidParameterError(f"{name} must hold real numbers, got {x!r}", value=x) from None
 
 

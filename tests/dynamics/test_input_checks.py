@@ -123,3 +123,9 @@ def test_an_input_the_expression_does_not_contain_is_still_checked() -> None:
         for method in ("inverse_dynamics", "forward_dynamics"):
             with pytest.raises(NonFiniteError, match=r"^qd holds NaN or inf"):
                 getattr(dyn, method)(np.array([0.3]), np.array([np.nan]), np.array([0.1]))
+
+
+def test_an_integer_too_large_for_a_float_is_named() -> None:
+    dyn = dynamics("panda")
+    with pytest.raises(InvalidParameterError, match=r"^q must hold real numbers"):
+        dyn.mass_matrix([10**400] + [0] * 6)

@@ -95,3 +95,14 @@ def test_other_bad_logs_raise() -> None:
         prepare_data(t, z_nan, z, cutoff=10.0)
     with pytest.raises(ShapeError, match="joints"):
         build_problem(dynamics("planar_3r"), IdentificationData(t, z, z, z, z))
+
+
+@pytest.mark.parametrize(("kwargs", "shown"), [({"order": 0}, "order"), ({"order": 2.7}, "2.7"),
+                                               ({"decimate": 1.5}, "1.5"), ({"decimate": 0}, "decimate"),
+                                               ({"trim": -1}, "trim"), ({"order": True}, "True")])
+def test_filter_settings_must_be_whole_numbers(kwargs: dict[str, object], shown: str) -> None:
+    # they were truncated silently (order=2.7 ran a 2nd-order filter) or accepted (order=0)
+    t = np.arange(0.0, 2.0, 0.002)
+    q = np.sin(t)[:, None]
+    with pytest.raises(InvalidParameterError, match=shown):
+        prepare_data(t, q, q, cutoff=5.0, **kwargs)  # type: ignore[arg-type]

@@ -138,6 +138,10 @@ def prepare_data(t: ArrayLike, q: ArrayLike, tau: ArrayLike, *, cutoff: float, o
     if fc >= 0.5 * fs:
         raise InvalidParameterError(f"cutoff {fc:g} Hz must be below the Nyquist frequency {0.5 * fs:g} Hz",
                                     value=cutoff)
+    for name, x in (("order", order), ("decimate", decimate), ("trim", trim)):
+        if x is not None and (isinstance(x, bool) or not isinstance(x, int | np.integer) or x < (name != "trim")):
+            raise InvalidParameterError(f"{name} must be a whole number >= {int(name != 'trim')}, got {x!r}",
+                                        value=x)
     k = int(decimate) if decimate is not None else max(1, int(fs / (4.0 * fc)))
     if k < 1 or fs / k < 2.0 * fc:
         raise InvalidParameterError(f"decimate={k} puts the new Nyquist frequency {0.5 * fs / max(k, 1):g} Hz "
