@@ -113,3 +113,37 @@ def test_tight_torque_limits_lower_priority_gives_way_first(panda: armctl.Dynami
     assert 0 < first_posture < first_position, rows
     assert r1s[first_posture] < 1e-4 and rows[first_posture][3]  # saturated, position still exact
     assert rows[-1][3] and r1s[-1] > 1e-3  # at the tightest limits even the position gives way
+
+
+def test_a_level_whose_solve_fails_still_outranks_the_levels_below(panda: armctl.Dynamics) -> None:
+    """Level 1 fails (a solver made to fail there): the controller keeps level 0's solution for it, and level 2
+    may not move level 1's residual away from what that solution gives it."""
+    from armctl.controllers.osc.solve import ProxQPSolver
+    from armctl.errors import SolverError
+
+    class FailsOnLevel1(ProxQPSolver):
+        def solve(self, p, slot=0):  # type: ignore[no-untyped-def]
+            if slot == 1:
+                raise SolverError("made to fail")
+            return super().solve(p, slot)
+
+    q, qd = Q_HOME + 0.1, np.linspace(-0.3, 0.3, 7)
+    refs = _setup(panda, q, qd)
+    priorities = {"position": 0, "orientation": 1, "posture": 2}
+    ctrl = OperationalSpaceQP(panda, _tasks(refs, priorities), limits=[TorqueLimit()], solver=FailsOnLevel1(),
+                              slacks=True)  # slacks: the solver's own solve() is used for every level
+    sol = ctrl.solve(0.0, q, qd, armctl.Reference(q))
+    assert sol.level_status[0] == "solved" and sol.level_status[1].startswith("kept level 0")
+    assert sol.level_status[2] == "solved"
+    # level 2 may move only within what levels 0 and 1 leave free: J₀, J₁ at level 0's solution x₀
+    J0, b0, _ = refs["position"]
+    J1, _, _ = refs["orientation"]
+    J2, b2, _ = refs["posture"]
+    x0 = sol.solutions[0].x[sol.step.variables["qdd"]]
+    np.testing.assert_allclose(J0 @ sol.qdd, b0, atol=1e-4)
+    np.testing.assert_allclose(J1 @ sol.qdd, J1 @ x0, atol=1e-4)  # level 1's residual as level 0 left it
+    # and within that, level 2 does its best (least squares in the null space of [J₀; J₁], written here)
+    J01 = np.vstack([J0, J1])
+    N = np.eye(7) - np.linalg.pinv(J01) @ J01
+    best = x0 + np.linalg.pinv(J2 @ N, rcond=1e-10) @ (b2 - J2 @ x0)
+    assert np.linalg.norm(J2 @ sol.qdd - b2) <= np.linalg.norm(J2 @ best - b2) * (1 + 1e-6) + 1e-6

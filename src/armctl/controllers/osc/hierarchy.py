@@ -10,8 +10,9 @@ optimal set of the level above). The rows are compressed to an orthonormal basis
 the part of T_j outside the span so far, keeping singular values above ``rank_tol`` relative to the largest),
 so that dependent rows (a pose task above a posture task, say) never make the equality rows rank-deficient.
 
-A lower level whose solve fails (it can only be numerical: x_{k−1} is feasible for it) keeps x_{k−1}: the
-lower-priority tasks give way; its status is reported, nothing is hidden.
+A lower level whose solve fails (it can only be numerical: x_{k−1} is feasible for it) keeps x_{k−1}, and the
+levels below it are solved with its residual frozen at that value (T_k x = T_k x_{k−1}), so that they still
+cannot degrade it; its status is reported, nothing is hidden.
 """
 
 from __future__ import annotations
@@ -105,6 +106,8 @@ def solve_cascade(step: StepQP, solver: object, rank_tol: float = 1e-9) -> OSCSo
                 raise
             sols.append(None)
             status.append(f"kept level {k - 1}: {type(err).__name__}")
+            if k < last:  # the levels below keep this level's residual at x_{k−1}: it gives way to none of them
+                F = _extend_basis(F, lev.T, rank_tol)
             continue
         sols.append(sol)
         status.append("solved")
