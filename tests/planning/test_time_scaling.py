@@ -63,3 +63,15 @@ def test_gravity_beyond_the_limit_cannot_be_scaled_away() -> None:
     with pytest.raises(InfeasibleError, match="gravity and Coulomb friction alone need") as e:
         uniform_time_scaling(dyn, nominal, torque_limit=3.0)
     assert e.value.value["needed"] == pytest.approx(PENDULUM_GRAVITY * math.sin(3.0 * e.value.value["s"]), rel=1e-6)
+
+
+def test_check_sees_between_the_samples_that_set_the_factor() -> None:
+    # a sharp spline: between the evenly spaced samples that set r, |q̈| exceeds its limit a little; checked at
+    # those same samples, the excess was reported as 0
+    dyn = armctl.Dynamics(armctl.models.planar_2r())
+    eps = 0.02
+    wp = np.array([[0.0, 0.0], [1.0, 0.0], [1.0 + eps, eps], [1.0 + 2 * eps, 3 * eps], [2.0, 0.6]])
+    scaled = uniform_time_scaling(dyn, Trajectory(SplinePath(wp), PolynomialTiming(1.0)), acc_limit=50.0).trajectory
+    true_excess = float(np.abs(scaled.sample(num=400001).qdd).max()) / 50.0 - 1.0
+    assert true_excess > 1e-3  # the case is what it should be
+    assert 0.5 * true_excess < scaled.check.worst_excess <= true_excess * (1 + 1e-9)
