@@ -37,6 +37,8 @@ def tune(name: str, out: Path) -> list[Path]:
         kp, kd = pd_from_bandwidth(wn, 1.0)
         how_ct = f"double pole at ω_n = {wn:g} rad/s"
     margin = SampledDataAnalysis.of(kp, kd, sc.control_dt, delay=1)
+    if not margin.stable:
+        raise SystemExit(f"{name}: {margin.summary()}")
     how_ct += (f"; sampled-data gain margin {margin.critical_multiplier:.1f} and phase margin "
                f"{margin.phase_margin_deg:.0f}° at {1 / sc.control_dt:g} Hz with one period of delay")
     record = {"omega_n": wn, "gain_margin": margin.critical_multiplier, "phase_margin_deg": margin.phase_margin_deg}

@@ -57,7 +57,8 @@ def equivalent_gains(controller: str, k: float, f: float) -> tuple[float, float]
 
 def critical_multiplier(controller: str, f: float, period: float, delay: int = 1) -> float:
     """The k at which the equivalent sampled loop's spectral radius reaches 1 (bisection on log k; at f = 1 for
-    computed torque this is the gain margin python-control reports, see :class:`SampledDataAnalysis`)."""
+    computed torque this is the gain margin python-control reports, see :class:`SampledDataAnalysis`); 0 if
+    the loop is unstable already at k = 1e-3, inf if it is stable up to k = 1e4."""
 
     def radius(k: float) -> float:
         return spectral_radius(*equivalent_gains(controller, k, f), period, delay)
@@ -65,6 +66,8 @@ def critical_multiplier(controller: str, f: float, period: float, delay: int = 1
     lo, hi = 1e-3, 1e4
     if radius(hi) < 1:
         return math.inf
+    if radius(lo) >= 1:  # unstable already at the smallest multiplier tried: no stable range to bound
+        return 0.0
     for _ in range(50):
         mid = math.sqrt(lo * hi)
         lo, hi = (mid, hi) if radius(mid) < 1 else (lo, mid)

@@ -24,6 +24,7 @@ def linearize(dyn: Dynamics, q0: ArrayLike, step: float = 1e-6) -> Any:
     import control
 
     q0 = vector(q0, dyn.n, "q0")
+    step = scalar(step, "step", positive=True)
     n = dyn.n
     m_inv = np.linalg.inv(dyn.mass_matrix(q0))
     dg = np.empty((n, n))
@@ -62,4 +63,4 @@ def lqr_gains(position_weight: float, velocity_weight: float = 0.0, effort_weigh
 
 def closed_loop_poles(kp: float, kd: float) -> FloatArray:
     """Roots of s² + K_d s + K_p."""
-    return np.roots([1.0, kd, kp])
+    return np.roots([1.0, scalar(kd, "kd"), scalar(kp, "kp")])

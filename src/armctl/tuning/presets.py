@@ -17,11 +17,13 @@ root of the source checkout armctl runs from.
 from __future__ import annotations
 
 import os
+import re
 import sys
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from armctl.errors import ModelLoadError
+from armctl.errors import InvalidParameterError, ModelLoadError
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -47,33 +49,63 @@ def load_preset(scene: str, method: str, folder: Path | None = None) -> dict[str
         have = sorted(p.name for p in path.parent.glob("*.toml")) if path.parent.is_dir() else []
         raise ModelLoadError(f"no preset {path.name} in {path.parent} (have: {have}); run the tuning examples "
                              "(examples/tune_gains.py) to write it", value=str(path))
-    with path.open("rb") as f:
-        data = tomllib.load(f)
-    if "gains" not in data:
+    try:
+        with path.open("rb") as f:
+            data = tomllib.load(f)
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
+        raise ModelLoadError(f"preset {path} is not valid TOML ({e}); fix the file or write it again "
+                             "(examples/tune_gains.py)", value=str(path)) from e
+    if not isinstance(data.get("gains"), dict):
         raise ModelLoadError(f"preset {path} has no [gains] table", value=str(path))
     return data
 
 
-def _toml_value(v: Any) -> str:
+#: TOML escapes for the quote, the backslash and the control characters that have a short one (others: \uXXXX)
+_SHORT_ESCAPES = {"\b": "\\b", "\t": "\\t", "\n": "\\n", "\f": "\\f", "\r": "\\r", '"': '\\"', "\\": "\\\\"}
+_NEEDS_ESCAPE = re.compile(r'[\x00-\x1f"\\\x7f]')
+_BARE_KEY = re.compile("[A-Za-z0-9_-]+")
+
+
+def _toml_string(s: str, name: str) -> str:
+    """``s`` as a TOML basic string: backslash, quote and the control characters U+0000–U+001F, U+007F escaped."""
+    if any("\ud800" <= c <= "\udfff" for c in s):
+        raise InvalidParameterError(f"{name} holds a lone surrogate, which TOML (UTF-8) cannot store: {s!r}", value=s)
+    return '"' + _NEEDS_ESCAPE.sub(lambda m: _SHORT_ESCAPES.get(m[0], f"\\u{ord(m[0]):04X}"), s) + '"'
+
+
+def _toml_key(k: Any) -> str:
+    if not isinstance(k, str):
+        raise InvalidParameterError(f"preset keys must be strings, got {k!r}", value=k)
+    return k if _BARE_KEY.fullmatch(k) else _toml_string(k, f"key {k!r}")
+
+
+def _toml_value(v: Any, name: str) -> str:
     if isinstance(v, str):
-        return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+        return _toml_string(v, name)
     if isinstance(v, bool):
         return "true" if v else "false"
+    if isinstance(v, int):
+        return str(int(v))
+    if isinstance(v, float):
+        return repr(float(v))  # shortest round-trip form; nan, inf and -inf are TOML floats too
     if isinstance(v, (list, tuple)):
-        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
-    if hasattr(v, "tolist"):
-        return _toml_value(v.tolist())
-    return repr(float(v)) if isinstance(v, float) else str(v)
+        return "[" + ", ".join(_toml_value(x, name) for x in v) + "]"
+    if isinstance(v, Mapping):
+        return "{" + ", ".join(f"{_toml_key(k)} = {_toml_value(x, name)}" for k, x in v.items()) + "}"
+    if hasattr(v, "tolist") and not isinstance(v, complex):  # NumPy arrays and scalars
+        return _toml_value(v.tolist(), name)
+    raise InvalidParameterError(f"{name} = {v!r}: a preset holds strings, booleans, real numbers, lists and tables, "
+                                f"not {type(v).__name__}", value=v)
 
 
 def write_preset(scene: str, method: str, gains: dict[str, Any], how: str, written_by: str,
                  folder: Path | None = None, **record: Any) -> Path:
     """Write a preset (gains plus the tuning record) and return its path."""
     path = preset_path(scene, method, folder)
+    fields = {"scene": scene, "method": method, "written_by": written_by, "how": how, **record}
+    lines = [f"{_toml_key(k)} = {_toml_value(v, k)}" for k, v in fields.items()]
+    lines += ["", "[gains]"] + [f"{_toml_key(k)} = {_toml_value(v, f'gains.{k}')}" for k, v in gains.items()]
+    text = "\n".join(lines) + "\n"  # built (and checked) in full before the file is touched
     path.parent.mkdir(parents=True, exist_ok=True)
-    lines = [f"scene = {_toml_value(scene)}", f"method = {_toml_value(method)}",
-             f"written_by = {_toml_value(written_by)}", f"how = {_toml_value(how)}"]
-    lines += [f"{k} = {_toml_value(v)}" for k, v in record.items()]
-    lines += ["", "[gains]"] + [f"{k} = {_toml_value(v)}" for k, v in gains.items()]
-    path.write_text("\n".join(lines) + "\n")
+    path.write_text(text, encoding="utf-8")
     return path
