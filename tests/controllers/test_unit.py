@@ -36,6 +36,32 @@ def test_computed_torque_on_the_reference_is_inverse_dynamics() -> None:
         ComputedTorque(dyn, 1.0, 1.0, friction="yes")
 
 
+@pytest.mark.parametrize("gains", ["diagonal", "matrix", "friction", "integral"])
+def test_pd_gravity_law(gains: str) -> None:
+    # τ = g(q) + K_p e + K_d ė (+ τ_f(q̇)) (+ K_i ∫e), g straight from Pinocchio; puma560 has friction
+    import pinocchio as pin
+
+    dyn = dynamics("puma560")
+    n = dyn.n
+    q, qd = np.linspace(-0.4, 0.5, n), np.linspace(0.3, -0.2, n)
+    ref = armctl.Reference(q + 0.05, qd + 0.1)
+    kp, kd = np.arange(1.0, n + 1.0) * 50.0, 10.0
+    kp_given = np.diag(kp) + (0.5 * np.eye(n)[::-1] + 0.5 * np.eye(n) if gains == "matrix" else 0.0)
+    c = PDGravity(dyn, kp_given if gains == "matrix" else kp, kd, ki=2.0 if gains == "integral" else None,
+                  friction=gains == "friction")
+    pm = dyn.model.to_pinocchio()
+    g = pin.computeGeneralizedGravity(pm, pm.createData(), q)
+    expected = g + (kp_given if gains == "matrix" else np.diag(kp)) @ (ref.q - q) + kd * (ref.qd - qd)
+    if gains == "friction":
+        fr = [j.friction for j in dyn.model.joints]
+        expected += np.array([f.viscous * v + (f.coulomb if v > 0 else -(f.coulomb_negative
+                              if f.coulomb_negative is not None else f.coulomb)) for f, v in zip(fr, qd, strict=True)])
+    c(0.0, q, qd, ref)  # the integral starts its clock
+    if gains == "integral":
+        expected += 2.0 * 0.01 * (ref.q - q)
+    np.testing.assert_allclose(c(0.01, q, qd, ref), expected, rtol=1e-12, atol=1e-9)
+
+
 def _slotine_li(dyn: armctl.Dynamics, q: np.ndarray, qd: np.ndarray, ref: armctl.Reference, lam: np.ndarray,
                 kd: float) -> np.ndarray:
     """M q̈_r + C(q, q̇) q̇_r + g + F_v q̇_r + F_c±(q̇) − K_D s, friction straight from the model's joints."""

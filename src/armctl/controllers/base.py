@@ -21,6 +21,13 @@ from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
 from armctl.reference import Reference
 
 
+def _seconds(t: Any) -> float:
+    try:
+        return float(t)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"t must be a real number [s], got {t!r}", value=t) from None
+
+
 class Controller(ABC):
     """Base class. ``dynamics``: the controller's own model (it may be reduced or wrong on purpose), or
     None for a model-free controller, in which case ``n`` must be given."""
@@ -43,14 +50,14 @@ class Controller(ABC):
 
     def __call__(self, t: float, q: ArrayLike, qd: ArrayLike, ref: Reference) -> FloatArray:
         """τ for the measured state (q, q̇) at time t [s] and the reference ``ref``."""
-        self.check_reference(ref)
-        try:
-            t = float(t)
-        except (TypeError, ValueError):
-            raise InvalidParameterError(f"t must be a real number [s], got {t!r}", value=t) from None
-        if not math.isfinite(t):
+        # the cheap tests first: this runs every control period
+        if ref.__class__ is not Reference or ref.q.shape != self._shape:
+            self.check_reference(ref)  # raises, unless ref is a subclass of the right size
+        if t.__class__ is not float:
+            t = _seconds(t)
+        if t - t != 0.0:  # NaN or ±inf
             raise NonFiniteError(f"t must be finite, got {t}", value=t)
-        try:  # the cheap tests first: this runs every control period
+        try:
             ok = (q.dtype is _FLOAT and qd.dtype is _FLOAT  # type: ignore[union-attr]
                   and q.shape == self._shape and qd.shape == self._shape)  # type: ignore[union-attr]
         except AttributeError:

@@ -31,15 +31,39 @@ class PDGravity(PIDGains, Controller):
                  friction: bool = False) -> None:
         super().__init__(dynamics)
         self._set_gains(kp, kd, ki)
-        if not isinstance(friction, (bool, np.bool_)):
-            raise InvalidParameterError(f"friction must be True or False, got {friction!r}", value=friction)
-        self.friction = bool(friction)
+        self.friction = friction
+
+    @property
+    def friction(self) -> bool:
+        """Compensate the model's friction at the measured velocity."""
+        return self._friction
+
+    @friction.setter
+    def friction(self, value: bool) -> None:
+        if not isinstance(value, (bool, np.bool_)):
+            raise InvalidParameterError(f"friction must be True or False, got {value!r}", value=value)
+        self._friction = bool(value)
+        self._gains_changed()
+
+    def _gains_changed(self) -> None:
+        super()._gains_changed()
+        # the common case, on its own path: diagonal K_p, K_d, no integral, no friction compensation
+        self._plain = (getattr(self, "_diagonal", False) and self._ki is None
+                       and not (getattr(self, "_friction", False) and self.dynamics._has_friction))  # type: ignore[union-attr]
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         dyn = self.dynamics
         assert dyn is not None
-        e = ref.q - q
         tau = dyn._gravity(q)  # q is checked by Controller.__call__
+        if self._plain:  # diagonal gains, nothing else: all in place
+            ed = ref.qd - qd
+            ed *= self._kd
+            tau += ed
+            ed = ref.q - q
+            ed *= self._kp
+            tau += ed
+            return tau
+        e = ref.q - q
         if self._diagonal:  # in place where possible (e stays as it is: the integral takes it below)
             ed = ref.qd - qd
             ed *= self._kd
