@@ -79,16 +79,19 @@ def _where(problem: TimeScalingProblem, p: int) -> str:
     return f"s = {s:.3g} (between waypoints {k} and {k + 1})"
 
 
-def _message(problem: TimeScalingProblem, label: RowLabel, p: int, need: float, where: str | None = None
-             ) -> tuple[str, dict[str, Any]]:
+def _limit_text(problem: TimeScalingProblem, kind: str, bound: float) -> str:
+    margin = problem.limits.torque_margin if kind == "torque" else 0.0
+    return f"the limit is {bound:.4g}" + (f" ({100 * (1 - margin):.3g} % of the range, torque_margin={margin})"
+                                          if margin else "")
+
+
+def _message(problem: TimeScalingProblem, label: RowLabel, p: int, need: float) -> tuple[str, dict[str, Any]]:
     lim = problem.limits.planned()[label.kind]
     bound = float(lim.upper[label.joint] if label.side == "upper" else lim.lower[label.joint])
-    margin = problem.limits.torque_margin if label.kind == "torque" else 0.0
-    limit_txt = f"the limit is {bound:.4g}" + (f" ({100 * (1 - margin):.3g} % of the range, torque_margin={margin})"
-                                               if margin else "")
+    limit_txt = _limit_text(problem, label.kind, bound)
     value = {"constraint": label.kind, "joint": label.joint, "side": label.side, "s": float(problem.s[p]),
              "needed": need, "limit": bound}
-    head = f"{_joint(problem, label.joint)} {label.kind} at {where or _where(problem, p)}"
+    head = f"{_joint(problem, label.joint)} {label.kind} at {_where(problem, p)}"
     if label.kind == "torque":
         grav = float(problem.gravity[p, label.joint])
         fric = float(problem.coulomb[p, label.joint, 1 if label.side == "upper" else 0])
@@ -104,18 +107,16 @@ def _message(problem: TimeScalingProblem, label: RowLabel, p: int, need: float, 
     return f"{head}: following the path needs at least {need:.4g} {lim.unit} there, {limit_txt}", value
 
 
-def _static_overload(problem: TimeScalingProblem, points: list[int] | None = None
-                     ) -> tuple[int, int, float] | None:
+def _static_overload(problem: TimeScalingProblem) -> tuple[int, int, float] | None:
     """The (row, gridpoint, normalised excess) where gravity and Coulomb friction alone (at rest) exceed a
-    torque bound the most, or None; over all gridpoints or only the given ``points``."""
+    torque bound the most, or None."""
     torque = [r for r, lab in enumerate(problem.labels) if lab.kind == "torque"]
     if not torque:
         return None
-    where = np.arange(problem.s.shape[0]) if points is None else np.asarray(points, dtype=int)
     h = _row_scales(problem)[torque]
-    excess = (problem.c[np.ix_(where, torque)] - problem.g[torque]) / h
+    excess = (problem.c[:, torque] - problem.g[torque]) / h
     p, k = np.unravel_index(int(np.argmax(excess)), excess.shape)
-    return (torque[k], int(where[p]), float(excess[p, k])) if excess[p, k] > 0 else None
+    return (torque[k], int(p), float(excess[p, k])) if excess[p, k] > 0 else None
 
 
 def rest_overload(problem: TimeScalingProblem) -> InfeasibleError | None:
@@ -124,25 +125,34 @@ def rest_overload(problem: TimeScalingProblem) -> InfeasibleError | None:
 
     A rest-to-rest trajectory rests at its start pose before t = 0 and at its end pose after T (q̇ = q̈ = 0), so
     these two states must fit the bounds by themselves, whatever happens in between (only there: the path
-    may pass dynamically through poses the arm could not hold). The torque at rest is the one the rows and
-    the dense check use, c = g(q) + F_c(sgn q'): gravity plus the Coulomb friction of the motion about to
-    start or just ended (at rest friction can hold the arm up to its static level, which is at least the
-    Coulomb level, so counting F_c in the direction of the motion never asks friction for more than it can
-    give, and is conservative when it acts the other way); the same as :func:`diagnose` and
-    :func:`~armctl.planning.uniform_time_scaling`.
+    may pass dynamically through poses the arm could not hold). At rest the torque is gravity alone, g(q):
+    friction is counted neither against the arm (nothing moves) nor for it (stiction may hold a real arm, but
+    its level is too uncertain to plan on) — as in the dense check (:func:`~armctl.planning.verify.rest_samples`).
     """
-    N = problem.grid
-    over = _static_overload(problem, [0, N])
-    if over is None:
+    bounds = problem.limits.planned().get("torque")
+    if bounds is None:
         return None
-    r, p, t = over
+    worst = None
+    for p in (0, problem.grid):
+        g = problem.gravity[p]
+        over = np.maximum(g - bounds.upper, bounds.lower - g) / np.maximum(bounds.upper - bounds.lower, 1e-300)
+        j = int(np.argmax(over))
+        if over[j] > 0 and (worst is None or over[j] > worst[2]):
+            worst = (p, j, float(over[j]))
+    if worst is None:
+        return None
+    p, j, excess = worst
+    side = "upper" if problem.gravity[p, j] > bounds.upper[j] else "lower"
+    bound = float(bounds.upper[j] if side == "upper" else bounds.lower[j])
     pose = "start" if p == 0 else "end"
     when = "before t = 0" if p == 0 else "after the motion, t > T"
-    msg, value = _message(problem, problem.labels[r], p, 0.0, where=f"the {pose} pose (s = {problem.s[p]:.3g})")
-    value.update(excess=t, endpoint=pose)
-    return InfeasibleError(f"{msg}: the arm cannot hold itself at rest at its {pose} pose, where a rest-to-rest "
-                           f"trajectory waits ({when}). Raise the limit, lighten the load or change the {pose} "
-                           "of the path.", value=value, problem=problem)
+    need = float(problem.gravity[p, j])
+    value = {"constraint": "torque", "joint": j, "side": side, "s": float(problem.s[p]), "needed": need,
+             "limit": bound, "gravity": need, "excess": excess, "endpoint": pose}
+    return InfeasibleError(f"{_joint(problem, j)} torque at the {pose} pose (s = {problem.s[p]:.3g}): gravity alone "
+                           f"needs {need:.4g} N·m, {_limit_text(problem, 'torque', bound)}: the arm cannot hold itself "
+                           f"at rest at its {pose} pose, where a rest-to-rest trajectory waits ({when}). Raise the "
+                           f"limit, lighten the load or change the {pose} of the path.", value=value, problem=problem)
 
 
 def diagnose(problem: TimeScalingProblem, rows: tuple[FloatArray, FloatArray, FloatArray], code: str,

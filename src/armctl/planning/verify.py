@@ -10,7 +10,8 @@ motion, sgn q̇_j = sgn q'_j, as the planner does.
 A rest-to-rest trajectory also rests at its start pose before 0 and at its end pose after T (q̇ = q̈ = 0). At
 t = 0 and T the samples in motion still carry the first stage's acceleration and the last stage's braking, so
 the two rest states are checked as well (:func:`rest_samples`): a trajectory whose end pose the arm cannot
-hold does not pass.
+hold does not pass. At rest friction is not counted, neither for nor against: the arm must be held by the
+actuators against gravity alone (stiction may help a real arm, but its level is too uncertain to plan on).
 """
 
 from __future__ import annotations
@@ -96,12 +97,13 @@ def sample_times(traj: Trajectory, oversample: int = 10) -> FloatArray:
 
 def rest_samples(traj: Trajectory) -> Samples:
     """The two rest states of ``traj``: at the start pose (s = 0, reported at t = 0, held for t < 0) and at the
-    end pose (s = 1, t = T, held for t > T), with ṡ = s̈ = 0, hence q̇ = q̈ = 0."""
+    end pose (s = 1, t = T, held for t > T), with ṡ = s̈ = 0, hence q̇ = q̈ = 0. Their path tangent is set to
+    zero, so that no Coulomb friction is given a direction: the torque at rest is gravity alone."""
     s = np.array([0.0, 1.0])
-    q, dq, ddq = traj.path.derivatives(s)
+    q, _, ddq = traj.path.derivatives(s)
     zero, still = np.zeros(2), np.zeros_like(q)
     t = np.array([0.0, traj.duration])
-    return Samples(*(readonly(np.asarray(a)) for a in (t, s, zero, zero, q, still, still, dq, ddq)))
+    return Samples(*(readonly(np.asarray(a)) for a in (t, s, zero, zero, q, still, still, still, ddq)))
 
 
 def _joined(a: Samples, b: Samples) -> Samples:
