@@ -23,8 +23,11 @@ def real_array(x: ArrayLike, name: str) -> FloatArray:
     than cut to their real part, strings and None rather than passed on to fail somewhere else)."""
     try:
         a = np.asarray(x)
-        if a.dtype.kind == "c":
-            raise TypeError("complex")
+        kind = a.dtype.kind
+        # complex, text (NumPy would parse "0.3"), or an object array holding any of them
+        if kind in "cUS" or (kind == "O" and any(isinstance(v, str | bytes | complex | np.complexfloating)
+                                                 for v in a.flat)):
+            raise TypeError(kind)
         return a.astype(float, copy=False)
     except (TypeError, ValueError, OverflowError):
         raise InvalidParameterError(f"{name} must hold real numbers, got {x!r}", value=x) from None
@@ -51,8 +54,10 @@ def matrix(x: ArrayLike, shape: tuple[int, int], name: str) -> FloatArray:
 
 def scalar(x: Any, name: str, *, positive: bool = False, nonnegative: bool = False) -> float:
     try:
+        if isinstance(x, str | bytes | complex | np.complexfloating):  # float("0.5") would parse text
+            raise TypeError(type(x).__name__)
         v = float(x)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise InvalidParameterError(f"{name} must be a real number, got {x!r}", value=x) from None
     if not math.isfinite(v):
         raise NonFiniteError(f"{name} must be finite, got {v}", value=x)

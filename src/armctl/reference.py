@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, readonly, real_array
+from armctl._checks import FLOAT, FloatArray, readonly, real_array
 from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
 
 
@@ -23,12 +23,21 @@ class Reference:
     def __post_init__(self) -> None:
         if self.q is None:
             raise InvalidParameterError("Reference q is required (the joint positions)", value=None)
-        q = np.array(real_array(self.q, "Reference q")).reshape(-1) if np.ndim(self.q) <= 1 else None
+        raw_q = self.q
+        if raw_q.__class__ is np.ndarray and raw_q.dtype is FLOAT and raw_q.ndim <= 1:  # the usual case
+            q: FloatArray | None = raw_q.reshape(-1)
+        else:
+            q = np.array(real_array(raw_q, "Reference q")).reshape(-1) if np.ndim(raw_q) <= 1 else None
         if q is None:
             raise ShapeError(f"Reference q must be a vector, got shape {np.shape(self.q)}", value=self.q)
         for name in ("q", "qd", "qdd"):
             raw = getattr(self, name)
-            a = np.zeros_like(q) if raw is None else np.array(real_array(raw, f"Reference {name}"))
+            if raw is None:
+                a = np.zeros_like(q)
+            elif raw.__class__ is np.ndarray and raw.dtype is FLOAT:  # the usual case: one copy, no conversion
+                a = raw.copy()
+            else:
+                a = np.array(real_array(raw, f"Reference {name}"))
             if a.ndim == 0:  # a scalar: one joint
                 a = a.reshape(1)
             if a.shape != q.shape:

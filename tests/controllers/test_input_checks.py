@@ -8,6 +8,7 @@ the caller's arrays."""
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable
 
 import numpy as np
@@ -235,3 +236,74 @@ def test_task_gains_reassigned_take_effect() -> None:
 def test_pd_friction_flag_must_be_a_bool() -> None:
     with pytest.raises(InvalidParameterError, match="friction"):
         PDGravity(dynamics("panda"), 1.0, 1.0, friction="reference")  # type: ignore[arg-type]
+
+
+def test_a_subclass_with_its_own_compute_gets_its_inputs_checked_first() -> None:
+    # the result-only check holds for the built-in law; a subclass's compute may keep state (here a velocity
+    # filter) that a NaN must never reach
+    class Filtered(PDGravity):
+        def compute(self, t: float, q: np.ndarray, qd: np.ndarray, ref: armctl.Reference) -> np.ndarray:
+            self.filtered = qd if not hasattr(self, "filtered") else 0.5 * (self.filtered + qd)
+            return super().compute(t, q, self.filtered, ref)
+
+    dyn = dynamics("panda")
+    q, qd, ref = _state(dyn.n)
+    c = Filtered(dyn, 100.0, 20.0)
+    assert not c._checks_result and PDGravity(dyn, 100.0, 20.0)._checks_result
+    c(0.0, q, qd, ref)
+    bad = qd.copy()
+    bad[1] = np.nan
+    with pytest.raises(NonFiniteError, match=r"^qd"):
+        c(1e-3, q, bad, ref)
+    assert np.isfinite(c(2e-3, q, qd, ref)).all()
+
+    class Sub(PassivityBased):  # a subclass that keeps the built-in law keeps its fast check
+        pass
+
+    assert Sub(dyn, 5.0, 20.0)._checks_result
+
+
+@pytest.mark.parametrize("law", ["pd", "ct", "pb"])
+def test_non_finite_input_is_named_even_when_numpy_warnings_are_errors(law: str) -> None:
+    dyn = dynamics("panda")
+    c = LAWS[law](dyn)
+    q, qd, ref = _state(dyn.n)
+    for which, bad in (("q", np.inf), ("qd", -np.inf), ("q", np.nan)):
+        args = {"q": q.copy(), "qd": qd.copy()}
+        args[which][2] = bad
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            with pytest.raises(NonFiniteError, match=rf"^{which} "):
+                c(0.0, args["q"], args["qd"], ref)
+        with np.errstate(all="raise"), pytest.raises(NonFiniteError, match=rf"^{which} "):
+            c(0.0, args["q"], args["qd"], ref)
+
+
+def test_text_is_not_a_number() -> None:
+    # NumPy would parse "0.3"; a string where a number belongs is a mistake to report
+    dyn = dynamics("planar_2r")
+    q, qd, ref = _state(dyn.n)
+    c = PDGravity(dyn, 10.0, 1.0)
+    for bad_ref in (lambda: armctl.Reference("0.3"), lambda: armctl.Reference(b"0.3"),
+                    lambda: armctl.Reference(np.array(["0.1", "0.2"]))):
+        with pytest.raises(InvalidParameterError, match="must hold real numbers"):
+            bad_ref()
+    with pytest.raises(InvalidParameterError, match=r"^q must hold real numbers"):
+        c(0.0, np.array(["0.1", "0.2"]), qd, ref)
+    with pytest.raises(InvalidParameterError, match=r"^q must hold real numbers"):
+        dyn.mass_matrix(np.array([0.1, "0.2"], dtype=object))
+    for t in ("0.5", b"0.5", np.complex128(0.5 + 1j), 10**400):
+        with pytest.raises(InvalidParameterError, match=r"^t must be a real number"):
+            c(t, q, qd, ref)  # type: ignore[arg-type]
+    with pytest.raises(InvalidParameterError, match="kp"):
+        PDGravity(dyn, "100", 1.0)  # type: ignore[arg-type]
+
+
+def test_composite_adaptation_switched_on_between_calls() -> None:
+    dyn = dynamics("planar_2r")
+    q, qd, ref = _state(dyn.n)
+    c = Adaptive(dyn, 5.0, 10.0, 0.5)
+    c(0.0, q, qd, ref)
+    c.composite = 0.2
+    for k in range(1, 4):  # the filters start at the first call with composite on
+        assert np.isfinite(c(1e-3 * k, q, qd + 0.01 * k, ref)).all()

@@ -114,13 +114,15 @@ class Adaptive(Controller):
         # regressor call: the composite term makes one, so it needs a copy)
         y = dyn._passivity_regressor(q, qd, qd_r, qdd_r, s, copy=bool(self.composite))
         dt = 0.0 if self._t_prev is None else t - self._t_prev  # ≤ 0 for a new run without reset: no update
-        if self.composite and dt > 0:  # the filters run inside the dead zone too
+        # the filters run inside the dead zone too; they start at the first call with composite on
+        composite = bool(self.composite) and dt > 0 and self._qd_prev is not None
+        if composite:
             prediction = self._prediction_gradient(q, qd, dt)
         if dt > 0 and (self.dead_zone == 0 or float(np.linalg.norm(s)) >= self.dead_zone):
             grad = y.T.dot(s)
             if self.sigma:
                 grad = grad + self.sigma * (self.theta - self.theta0)
-            if self.composite:
+            if composite:
                 grad = grad + self.composite * prediction
             # a new array, not an update in place: the log below can then keep it without a copy
             if self._gamma.ndim == 1:  # diagonal Γ: Γ dt is kept while the control period stays the same

@@ -15,17 +15,10 @@ from typing import Any
 from numpy.typing import ArrayLike
 
 from armctl._checks import FLOAT as _FLOAT
-from armctl._checks import FloatArray, vector
+from armctl._checks import FloatArray, scalar, vector
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
 from armctl.reference import Reference
-
-
-def _seconds(t: Any) -> float:
-    try:
-        return float(t)
-    except (TypeError, ValueError):
-        raise InvalidParameterError(f"t must be a real number [s], got {t!r}", value=t) from None
 
 
 class Controller(ABC):
@@ -43,10 +36,17 @@ class Controller(ABC):
         self._shape = (self.n,)
         self.last_log: dict[str, Any] = {}
 
-    #: True for a law without state between calls whose τ is NaN or inf whenever an entry of q or q̇ is: then
-    #: only τ is checked for finiteness on the hot path (one check instead of two), and the inputs only when τ
-    #: is not finite (to name the culprit). False (the default) checks the inputs before ``compute``.
+    #: the ``compute`` of a built-in law without state between calls whose τ is NaN or inf whenever an entry of
+    #: q or q̇ is (set by those classes). While ``type(self).compute`` is that function (not overridden by a
+    #: subclass), ``_checks_result`` may be set: then only τ is checked for finiteness on the hot path (one
+    #: check instead of two), and the inputs only when τ is not finite (to name the culprit). Otherwise (users'
+    #: controllers, subclasses, laws with state) the inputs are checked before ``compute``.
+    _result_checked_compute: Any = None
     _checks_result: bool = False
+
+    def _own_law(self) -> bool:
+        cls = type(self)
+        return cls.compute is cls._result_checked_compute
 
     def __call__(self, t: float, q: ArrayLike, qd: ArrayLike, ref: Reference) -> FloatArray:
         """τ for the measured state (q, q̇) at time t [s] and the reference ``ref``."""
@@ -54,9 +54,7 @@ class Controller(ABC):
         if ref.__class__ is not Reference or ref.q.shape != self._shape:
             self.check_reference(ref)  # raises, unless ref is a subclass of the right size
         if t.__class__ is not float:
-            t = _seconds(t)
-        if t - t != 0.0:  # NaN or ±inf
-            raise NonFiniteError(f"t must be finite, got {t}", value=t)
+            t = scalar(t, "t")
         try:
             ok = (q.dtype is _FLOAT and qd.dtype is _FLOAT  # type: ignore[union-attr]
                   and q.shape == self._shape and qd.shape == self._shape)  # type: ignore[union-attr]
@@ -64,14 +62,25 @@ class Controller(ABC):
             ok = False
         if ok:
             if self._checks_result:
-                tau = self.compute(t, q, qd, ref)  # type: ignore[arg-type]
-                if not math.isfinite(sum(tau.tolist())):
-                    vector(q, self.n, "q"), vector(qd, self.n, "qd")  # NonFiniteError if an input is the cause
+                try:
+                    tau = self.compute(t, q, qd, ref)  # type: ignore[arg-type]
+                except (RuntimeWarning, FloatingPointError):  # NumPy's warnings made errors: name the input
+                    self._checked(t, q, qd)
+                    raise  # the inputs were finite: the law's own
+                if math.isfinite(sum(tau.tolist()) + t):  # t too: the stateless laws do not use it
+                    return tau
+                self._checked(t, q, qd)  # NonFiniteError if an input is the cause
                 return tau
-            ok = math.isfinite(sum(q.tolist()) + sum(qd.tolist()))  # type: ignore[union-attr]
+            ok = math.isfinite(sum(q.tolist()) + sum(qd.tolist()) + t)  # type: ignore[union-attr]
         if not ok:
-            q, qd = vector(q, self.n, "q"), vector(qd, self.n, "qd")
+            q, qd = self._checked(t, q, qd)
         return self.compute(t, q, qd, ref)  # type: ignore[arg-type]
+
+    def _checked(self, t: float, q: ArrayLike, qd: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """(q, q̇) as finite float (n,) arrays; a named error if t, q or q̇ is not what it should be."""
+        if not math.isfinite(t):
+            raise NonFiniteError(f"t must be finite, got {t}", value=t)
+        return vector(q, self.n, "q"), vector(qd, self.n, "qd")
 
     def check_reference(self, ref: Reference) -> None:
         """Raise unless ``ref`` is a :class:`~armctl.Reference` with as many joints as the controller."""

@@ -53,3 +53,5 @@ class ComputedTorque(PIDGains, Controller):
         if self.friction and dyn._has_friction:
             tau += dyn._friction(qd if self.friction is True else ref.qd)
         return tau
+
+    _result_checked_compute = compute  # stateless without an integral (see Controller)

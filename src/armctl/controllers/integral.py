@@ -82,7 +82,7 @@ class PIDGains:
         self._diagonal = self._kp.ndim == 1 and self._kd.ndim == 1
         # without an integral the law keeps no state, and a NaN/inf in q_j or q̇_j reaches τ through K_p e or
         # K_d ė (K ≻ 0: a positive diagonal entry multiplies it; in computed torque through v_j and M_jj > 0)
-        self._checks_result = self._ki is None
+        self._checks_result = self._ki is None and self._own_law()  # type: ignore[attr-defined]
 
     def reset(self) -> None:
         super().reset()  # type: ignore[misc]  # the Controller's, next in the MRO

@@ -33,12 +33,11 @@ class PassivityBased(Controller):
     lam: Λ [1/s]; kd: K_D [N·m·s/rad] (scalar, vector or matrix).
     """
 
-    # no state; a NaN/inf in q_j or q̇_j reaches s_j = q̃̇_j + (Λq̃)_j and τ through −K_D s (K_D ≻ 0)
-    _checks_result = True
-
     def __init__(self, dynamics: Dynamics, lam: ArrayLike, kd: ArrayLike) -> None:
         super().__init__(dynamics)
         self.lam, self.kd = lam, kd  # type: ignore[assignment]
+        # no state; a NaN/inf in q_j or q̇_j reaches s_j = q̃̇_j + (Λq̃)_j and τ through −K_D s (K_D ≻ 0)
+        self._checks_result = self._own_law()
 
     @property
     def lam(self) -> FloatArray:
@@ -67,3 +66,5 @@ class PassivityBased(Controller):
         tau = dyn._passivity_torque(q, qd, qd_r, qdd_r, s)  # q, q̇ checked by Controller.__call__
         tau -= self._kd * s if self._kd.ndim == 1 else self._kd.dot(s)
         return tau
+
+    _result_checked_compute = compute  # stateless (see Controller)

@@ -77,3 +77,5 @@ class PDGravity(PIDGains, Controller):
         if self.friction and dyn._has_friction:
             tau += dyn._friction(qd)
         return tau
+
+    _result_checked_compute = compute  # stateless without an integral (see Controller)
