@@ -137,7 +137,7 @@ class Adaptive(Controller):
                 self.theta = self._project(self.theta)
         self._t_prev = t
         tau = y.dot(self.theta)
-        offset = dyn._fc_offset * (qd != 0) if dyn._has_asymmetry else None
+        offset = dyn._fc_offset * np.abs(np.sign(qd)) if dyn._has_asymmetry else None  # (cheaper than q̇ != 0)
         if offset is not None:
             tau += offset
         tau -= self._kd * s if self._kd.ndim == 1 else self._kd.dot(s)

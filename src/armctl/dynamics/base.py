@@ -234,9 +234,10 @@ class Dynamics(ABC):
 
     def _friction(self, qd: FloatArray) -> FloatArray:
         if self._has_coulomb:
-            tau = self._fc_mean * np.sign(qd)
-            if self._has_asymmetry:
-                tau += self._fc_offset * (qd != 0)
+            sign = np.sign(qd)
+            tau = self._fc_mean * sign
+            if self._has_asymmetry:  # |sgn q̇|: a float product, cheaper than one with (q̇ != 0)
+                tau += self._fc_offset * np.abs(sign)
             if self._has_viscous:
                 tau += self._fv * qd
             return tau
@@ -381,9 +382,10 @@ class Dynamics(ABC):
         if self._has_viscous:
             tau += self._fv * qd_r
         if self._has_coulomb:
-            tau += self._fc_mean * np.sign(qd)
+            sign = np.sign(qd)
+            tau += self._fc_mean * sign
             if self._has_asymmetry:
-                tau += self._fc_offset * (qd != 0)
+                tau += self._fc_offset * np.abs(sign)
         return tau
 
 
