@@ -307,3 +307,15 @@ def test_composite_adaptation_switched_on_between_calls() -> None:
     c.composite = 0.2
     for k in range(1, 4):  # the filters start at the first call with composite on
         assert np.isfinite(c(1e-3 * k, q, qd + 0.01 * k, ref)).all()
+
+
+def test_task_gains_reassigned_reach_the_qp() -> None:
+    from armctl.controllers.osc import OperationalSpaceQP, PostureTask
+
+    dyn = dynamics("panda")
+    q, qd, ref = _state(dyn.n)
+    task = PostureTask(7, kp=100.0)
+    changed = OperationalSpaceQP(dyn, [task])
+    task.kp, task.kd = 400.0, 40.0  # type: ignore[assignment]
+    fresh = OperationalSpaceQP(dyn, [PostureTask(7, kp=400.0, kd=40.0)])
+    np.testing.assert_allclose(changed(0.0, q, qd, ref), fresh(0.0, q, qd, ref), rtol=1e-9, atol=1e-9)

@@ -106,3 +106,10 @@ def test_filter_settings_must_be_whole_numbers(kwargs: dict[str, object], shown:
     q = np.sin(t)[:, None]
     with pytest.raises(InvalidParameterError, match=shown):
         prepare_data(t, q, q, cutoff=5.0, **kwargs)  # type: ignore[arg-type]
+
+
+def test_whole_floats_are_whole_numbers() -> None:
+    t = np.arange(0.0, 2.0, 0.002)
+    q = np.sin(t)[:, None]
+    a, b = prepare_data(t, q, q, cutoff=5.0, order=4.0), prepare_data(t, q, q, cutoff=5.0, order=4)
+    assert np.array_equal(a.qdd, b.qdd)

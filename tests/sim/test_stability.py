@@ -71,3 +71,25 @@ def test_simulate_warns_and_records_an_unstable_contact() -> None:
         soft = Plane(KelvinVoigt(1e5), normal=(-1.0, 0.0, 0.0), point=(0.01, 0.0, 0.0))
         assert "unstable_contacts" not in simulate(slider(2.0), push, armctl.Reference.hold([0.0]), 0.1,
                                                    environment=soft).info
+
+
+@pytest.mark.parametrize("zeta", [0.05, 0.5, 2.0])
+def test_rk4_limit_of_a_damped_contact_from_its_stability_function(zeta: float) -> None:
+    # RK4 on ẋ = A x is stable while |R(hλ)| ≤ 1 for both eigenvalues λ of A, R(z) = 1 + z + z²/2 + z³/6 + z⁴/24:
+    # the largest such h, by bisection on that scalar function (not on the one-step matrix the code uses)
+    mass, k = 2.0, 1e7
+    omega = math.sqrt(k / mass)
+    c = 2.0 * zeta * omega * mass
+    lam = np.roots([1.0, c / mass, k / mass])
+
+    def stable(h: float) -> bool:
+        z = h * lam
+        return bool(np.abs(1 + z + z**2 / 2 + z**3 / 6 + z**4 / 24).max() <= 1.0 + 1e-12)
+
+    lo, hi = 0.0, 10.0 / omega
+    for _ in range(100):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if stable(mid) else (lo, mid)
+    wall = Plane(KelvinVoigt(k, c), normal=(-1.0, 0.0, 0.0), point=(0.01, 0.0, 0.0))
+    (found,) = contact_stability(armctl.Dynamics(slider(mass)), [wall], np.zeros(1), "rk4", 1e-3)
+    assert found.max_dt == pytest.approx(lo, rel=1e-6)

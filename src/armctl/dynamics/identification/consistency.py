@@ -75,7 +75,8 @@ def consistent_estimate(problem: IdentificationProblem, model: RobotModel, estim
     estimate: a least-squares estimate of the same problem, whose per-joint noise levels weight the rows
     (None or OLS: unweighted). prior: π_0 (default ``model.parameters()``; it need not be physical).
     prior_weight: λ relative to the mean squared column norm of the compressed data matrix
-    (dimensionless). max_evaluations: of the solver.
+    (dimensionless). max_evaluations: of each of the two solver runs (LM, then trust region; 50 more may be
+    spent to tell a stalled run from one still descending).
     """
     n, k = problem.n, PARAMS_PER_JOINT
     if model.n != n or problem.base.n_full != k * n:

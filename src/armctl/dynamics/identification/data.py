@@ -139,7 +139,8 @@ def prepare_data(t: ArrayLike, q: ArrayLike, tau: ArrayLike, *, cutoff: float, o
         raise InvalidParameterError(f"cutoff {fc:g} Hz must be below the Nyquist frequency {0.5 * fs:g} Hz",
                                     value=cutoff)
     for name, x in (("order", order), ("decimate", decimate), ("trim", trim)):
-        if x is not None and (isinstance(x, bool) or not isinstance(x, int | np.integer) or x < (name != "trim")):
+        whole = isinstance(x, int | np.integer) or (isinstance(x, float | np.floating) and float(x).is_integer())
+        if x is not None and (isinstance(x, bool) or not whole or x < (name != "trim")):
             raise InvalidParameterError(f"{name} must be a whole number >= {int(name != 'trim')}, got {x!r}",
                                         value=x)
     k = int(decimate) if decimate is not None else max(1, int(fs / (4.0 * fc)))
