@@ -106,6 +106,34 @@ def gain_matrix(k: ArrayLike, n: int, name: str) -> FloatArray:
     return a
 
 
+class Gain:
+    """A gain attribute of a controller or task: assigned a scalar, a vector (diagonal) or a matrix, checked by
+    :func:`gain_matrix` (``size(owner)`` rows, errors named ``label(owner, name)``), read back as the matrix. Its
+    cheap form (:func:`compact_gain`) is kept in ``owner._<name>`` for the hot path, and the owner's
+    ``_gains_changed()``, if any, runs after every assignment, so a gain reassigned between calls takes effect.
+    ``optional``: None is allowed (no such term)."""
+
+    def __init__(self, doc: str, size: Any = lambda owner: owner.n, label: Any = lambda owner, name: name,
+                 optional: bool = False) -> None:
+        self.__doc__ = doc
+        self.size, self.label, self.optional = size, label, optional
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        self.name, self.compact, self.full = name, f"_{name}", f"_{name}_matrix"
+
+    def __get__(self, obj: Any, objtype: type | None = None) -> Any:
+        return self if obj is None else getattr(obj, self.full)
+
+    def __set__(self, obj: Any, value: ArrayLike | None) -> None:
+        full = None if value is None and self.optional else \
+            gain_matrix(value, self.size(obj), self.label(obj, self.name))  # type: ignore[arg-type]
+        setattr(obj, self.full, full)
+        setattr(obj, self.compact, None if full is None else compact_gain(full))
+        changed = getattr(obj, "_gains_changed", None)
+        if changed is not None:
+            changed()
+
+
 def readonly(a: FloatArray) -> FloatArray:
     a.flags.writeable = False
     return a

@@ -74,13 +74,18 @@ def _slotine_li(dyn: armctl.Dynamics, q: np.ndarray, qd: np.ndarray, ref: armctl
             + fc - kd * (qd - qd_r))
 
 
+def _off_reference(name: str) -> tuple[armctl.Dynamics, int, np.ndarray, np.ndarray, armctl.Reference]:
+    """(dyn, n, q, q̇, ref): a state off the reference, joints moving both ways."""
+    dyn = dynamics(name)
+    n = dyn.n
+    ref = armctl.Reference(np.full(n, 0.1), np.full(n, 0.2), np.full(n, -0.3))
+    return dyn, n, np.full(n, 0.15), np.linspace(-0.3, 0.4, n), ref
+
+
 # panda: no friction; puma560: rotors, viscous and asymmetric Coulomb friction
 @pytest.mark.parametrize("name", ["panda", "puma560"])
 def test_passivity_based_law(name: str) -> None:
-    dyn = dynamics(name)
-    n = dyn.n
-    q, qd = np.full(n, 0.15), np.linspace(-0.3, 0.4, n)
-    ref = armctl.Reference(np.full(n, 0.1), np.full(n, 0.2), np.full(n, -0.3))
+    dyn, n, q, qd, ref = _off_reference(name)
     lam = np.diag(np.arange(1.0, n + 1.0))
     expected = _slotine_li(dyn, q, qd, ref, lam, 5.0)
     assert np.allclose(PassivityBased(dyn, lam, 5.0)(0.0, q, qd, ref), expected, rtol=1e-12, atol=1e-10)
@@ -88,10 +93,7 @@ def test_passivity_based_law(name: str) -> None:
 
 @pytest.mark.parametrize("name", ["panda", "puma560"])
 def test_adaptive_with_exact_parameters_is_passivity_based(name: str) -> None:
-    dyn = dynamics(name)
-    n = dyn.n
-    q, qd = np.full(n, 0.15), np.linspace(-0.3, 0.4, n)
-    ref = armctl.Reference(np.full(n, 0.1), np.full(n, 0.2), np.full(n, -0.3))
+    dyn, n, q, qd, ref = _off_reference(name)
     ad = Adaptive(dyn, 3.0, 5.0, gamma=0.0 + 1e-9)
     assert np.allclose(ad(0.0, q, qd, ref), _slotine_li(dyn, q, qd, ref, 3.0 * np.eye(n), 5.0), rtol=1e-12,
                        atol=1e-10)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, compact_gain, gain_matrix, scalar, vector
+from armctl._checks import FloatArray, Gain, scalar, vector
 from armctl.controllers.base import Controller
 from armctl.controllers.passivity import sliding
 from armctl.dynamics.base import Dynamics
@@ -45,13 +45,17 @@ class Adaptive(Controller):
     control-period length (anew when dt changes by more than 1e-9 relative).
     """
 
+    lam = Gain("Λ (n×n); the gains may be reassigned between calls (checked again).")
+    kd = Gain("K_D (n×n).")
+    gamma = Gain("Γ (13n×13n).", size=lambda owner: 13 * owner.n)
+
     def __init__(self, dynamics: Dynamics, lam: ArrayLike, kd: ArrayLike, gamma: ArrayLike,
                  theta0: ArrayLike | None = None, *, projection: bool = False, sigma: float = 0.0,
                  dead_zone: float = 0.0, composite: float = 0.0, filter_bandwidth: float = 20.0,
                  radius: float | None = None) -> None:
         super().__init__(dynamics)
         p = 13 * self.n
-        self.lam, self.kd, self.gamma = lam, kd, gamma  # type: ignore[assignment]
+        self.lam, self.kd, self.gamma = lam, kd, gamma
         self.theta0 = dynamics.parameters().copy() if theta0 is None else vector(theta0, p, "theta0").copy()
         self.projection = bool(projection)
         self.sigma = scalar(sigma, "sigma", nonnegative=True)
@@ -65,36 +69,8 @@ class Adaptive(Controller):
             self.theta0 = project_physical(self.theta0)
         self.reset()
 
-    @property
-    def lam(self) -> FloatArray:
-        """Λ (n×n); the gains may be reassigned between calls (checked again)."""
-        return self._lam_matrix
-
-    @lam.setter
-    def lam(self, value: ArrayLike) -> None:
-        self._lam_matrix = gain_matrix(value, self.n, "lam")
-        self._lam = compact_gain(self._lam_matrix)
-
-    @property
-    def kd(self) -> FloatArray:
-        """K_D (n×n)."""
-        return self._kd_matrix
-
-    @kd.setter
-    def kd(self, value: ArrayLike) -> None:
-        self._kd_matrix = gain_matrix(value, self.n, "kd")
-        self._kd = compact_gain(self._kd_matrix)
-
-    @property
-    def gamma(self) -> FloatArray:
-        """Γ (13n×13n)."""
-        return self._gamma_matrix
-
-    @gamma.setter
-    def gamma(self, value: ArrayLike) -> None:
-        self._gamma_matrix = gain_matrix(value, 13 * self.n, "gamma")
-        self._gamma = compact_gain(self._gamma_matrix)
-        self._dt, self._gamma_dt = 0.0, self._gamma * 0.0  # Γ·dt formed anew at the next update
+    def _gains_changed(self) -> None:
+        self._dt, self._gamma_dt = 0.0, None  # Γ·dt formed anew at the next update
 
     def reset(self) -> None:
         super().reset()

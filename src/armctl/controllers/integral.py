@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, compact_gain, gain_matrix
+from armctl._checks import FloatArray, Gain
 
 
 class ErrorIntegral:
@@ -36,44 +36,14 @@ class PIDGains:
 
     n: int
 
+    kp = Gain("K_p (n×n).")
+    kd = Gain("K_d (n×n).")
+    ki = Gain("K_i (n×n), or None: no integral term.", optional=True)
+
     def _set_gains(self, kp: ArrayLike, kd: ArrayLike, ki: ArrayLike | None) -> None:
         self._integral = ErrorIntegral(self.n)
-        self._ki_matrix: FloatArray | None = None
-        self._ki: FloatArray | None = None
-        self.kp, self.kd, self.ki = kp, kd, ki  # type: ignore[assignment]
-
-    @property
-    def kp(self) -> FloatArray:
-        """K_p (n×n)."""
-        return self._kp_matrix
-
-    @kp.setter
-    def kp(self, value: ArrayLike) -> None:
-        self._kp_matrix = gain_matrix(value, self.n, "kp")
-        self._kp = compact_gain(self._kp_matrix)
-        self._gains_changed()
-
-    @property
-    def kd(self) -> FloatArray:
-        """K_d (n×n)."""
-        return self._kd_matrix
-
-    @kd.setter
-    def kd(self, value: ArrayLike) -> None:
-        self._kd_matrix = gain_matrix(value, self.n, "kd")
-        self._kd = compact_gain(self._kd_matrix)
-        self._gains_changed()
-
-    @property
-    def ki(self) -> FloatArray | None:
-        """K_i (n×n), or None: no integral term."""
-        return self._ki_matrix
-
-    @ki.setter
-    def ki(self, value: ArrayLike | None) -> None:
-        self._ki_matrix = None if value is None else gain_matrix(value, self.n, "ki")
-        self._ki = None if self._ki_matrix is None else compact_gain(self._ki_matrix)
-        self._gains_changed()
+        self._ki = None
+        self.kp, self.kd, self.ki = kp, kd, ki
 
     def _gains_changed(self) -> None:
         if not hasattr(self, "_kd"):  # during _set_gains

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, compact_gain, gain_matrix
+from armctl._checks import FloatArray, Gain
 from armctl.controllers.base import Controller
 from armctl.dynamics.base import Dynamics
 from armctl.reference import Reference
@@ -33,31 +33,14 @@ class PassivityBased(Controller):
     lam: Λ [1/s]; kd: K_D [N·m·s/rad] (scalar, vector or matrix).
     """
 
+    lam = Gain("Λ (n×n); may be reassigned between calls (checked again).")
+    kd = Gain("K_D (n×n); may be reassigned between calls (checked again).")
+
     def __init__(self, dynamics: Dynamics, lam: ArrayLike, kd: ArrayLike) -> None:
         super().__init__(dynamics)
-        self.lam, self.kd = lam, kd  # type: ignore[assignment]
+        self.lam, self.kd = lam, kd
         # no state; a NaN/inf in q_j or q̇_j reaches s_j = q̃̇_j + (Λq̃)_j and τ through −K_D s (K_D ≻ 0)
         self._checks_result = self._own_law()
-
-    @property
-    def lam(self) -> FloatArray:
-        """Λ (n×n); may be reassigned between calls (checked again)."""
-        return self._lam_matrix
-
-    @lam.setter
-    def lam(self, value: ArrayLike) -> None:
-        self._lam_matrix = gain_matrix(value, self.n, "lam")
-        self._lam = compact_gain(self._lam_matrix)
-
-    @property
-    def kd(self) -> FloatArray:
-        """K_D (n×n); may be reassigned between calls (checked again)."""
-        return self._kd_matrix
-
-    @kd.setter
-    def kd(self, value: ArrayLike) -> None:
-        self._kd_matrix = gain_matrix(value, self.n, "kd")
-        self._kd = compact_gain(self._kd_matrix)
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         dyn = self.dynamics

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, apply_gain, compact_gain, gain_matrix, nonnegative_vector
+from armctl._checks import FloatArray, Gain, apply_gain, nonnegative_vector
 from armctl.controllers.osc.state import ModelState
 from armctl.errors import InvalidParameterError
 from armctl.reference import Reference
@@ -68,41 +68,32 @@ class Task(ABC):
         return f"{type(self).__name__}({self.name!r}, dim={self.dim}, priority={self.priority})"
 
 
+def _dim(task: Task) -> int:
+    return task.dim
+
+
+def _label(task: Task, gain: str) -> str:
+    return f"{task.name}: {gain}"
+
+
 class MotionTask(Task):
     """A task on q̈ with PD gains ``kp`` [1/s²] and ``kd`` [1/s] (each a scalar, a (dim,) vector or a
     dim×dim matrix, symmetric positive definite; ``kd=None``: critical damping 2√kp for a scalar kp)."""
 
+    # on the hot path diagonal gains (isotropic ones too) are vectors (``_kp``, ``_kd``): elementwise products
+    # with an array cost about half those with a Python float
+    kp = Gain("K_p (dim×dim); may be reassigned between control periods (checked again).", size=_dim, label=_label)
+    kd = Gain("K_d (dim×dim); may be reassigned between control periods (checked again).", size=_dim, label=_label)
+
     def __init__(self, dim: int, name: str, kp: ArrayLike, kd: ArrayLike | None = None, weight: ArrayLike = 1.0,
                  priority: int = 0) -> None:
         super().__init__(dim, name, weight, priority)
-        self.kp = kp  # type: ignore[assignment]
+        self.kp = kp
         if kd is None:
             if np.ndim(kp) != 0:
                 raise InvalidParameterError(f"{name}: give kd when kp is not a scalar", value=kp)
             kd = 2.0 * np.sqrt(float(kp))
-        self.kd = kd  # type: ignore[assignment]
-
-    # on the hot path diagonal gains (isotropic ones too) are vectors: elementwise products with an array cost
-    # about half those with a Python float
-    @property
-    def kp(self) -> FloatArray:
-        """K_p (dim×dim); may be reassigned between control periods (checked again)."""
-        return self._kp_matrix
-
-    @kp.setter
-    def kp(self, value: ArrayLike) -> None:
-        self._kp_matrix = gain_matrix(value, self.dim, f"{self.name}: kp")
-        self._kp = compact_gain(self._kp_matrix)
-
-    @property
-    def kd(self) -> FloatArray:
-        """K_d (dim×dim); may be reassigned between control periods (checked again)."""
-        return self._kd_matrix
-
-    @kd.setter
-    def kd(self, value: ArrayLike) -> None:
-        self._kd_matrix = gain_matrix(value, self.dim, f"{self.name}: kd")
-        self._kd = compact_gain(self._kd_matrix)
+        self.kd = kd
 
     @abstractmethod
     def kinematics(self, state: ModelState, t: float, ref: Reference
