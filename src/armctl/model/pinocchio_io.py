@@ -58,7 +58,14 @@ def build_pinocchio(model: RobotModel) -> pinocchio.Model:
 def joints_from_pinocchio(pm: pinocchio.Model, source: str, physical: bool = True
                           ) -> tuple[list[Joint], list[Frame]]:
     """Read a serial, one-dof-per-joint pinocchio.Model back into joints and frames (motors not included).
-    ``physical=False`` accepts inertias that violate the triangle inequality (see :class:`Link`)."""
+    ``physical=False`` accepts inertias that violate the triangle inequality (see :class:`Link`).
+
+    Every named Pinocchio frame becomes a :class:`Frame` (the first of equal names wins), frames fixed to the
+    world (parent joint 0: a URDF's base link, the links merged into the world by locking the first joint)
+    included, except Pinocchio's ``"universe"`` and the joint frames (a joint's name is already a frame).
+    ``"world"`` names the model's own world frame: a Pinocchio frame called ``"world"`` (e.g. a URDF root
+    link of that name) is skipped if it is that frame (fixed to the world at the identity), and raises
+    :class:`~armctl.errors.ModelLoadError` otherwise."""
     import pinocchio as pin
 
     if pm.nq != pm.nv:
@@ -87,7 +94,13 @@ def joints_from_pinocchio(pm: pinocchio.Model, source: str, physical: bool = Tru
                             Link(inert.mass, inert.lever, inert.inertia, physical), None, fric, lim))
     names = set(pm.names)
     frames = [Frame(f.name, int(f.parentJoint), transform(f.placement.rotation, f.placement.translation))
-              for f in pm.frames if f.name not in names and f.name != "universe" and f.parentJoint > 0]
+              for f in pm.frames if f.name not in names and f.name != "universe"]
+    for f in frames:
+        if f.name == "world" and (f.joint != 0 or not np.allclose(f.placement, np.eye(4), rtol=0, atol=1e-12)):
+            where = f"on joint {pm.names[f.joint]!r}" if f.joint else "fixed to the world away from its origin"
+            raise ModelLoadError(f"{source}: a frame called 'world' {where}; 'world' is reserved for the world "
+                                 "frame (rename the link)", value=source)
+    frames = [f for f in frames if f.name != "world"]
     seen: set[str] = set()
     unique = [f for f in frames if not (f.name in seen or seen.add(f.name))]
     return joints, unique

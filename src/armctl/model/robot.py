@@ -86,7 +86,11 @@ class RobotModel:
     def from_urdf(cls, path: str, tool_frame: str | None = None, lock: Sequence[str] | Mapping[str, float] = (),
                   gravity: ArrayLike = (0, 0, -9.81), name: str | None = None) -> RobotModel:
         """A model from a URDF file through Pinocchio's parser. ``lock``: joints held fixed (names, or a
-        mapping name → position). URDF ``<dynamics damping friction>`` become viscous and Coulomb friction."""
+        mapping name → position). URDF ``<dynamics damping friction>`` become viscous and Coulomb friction.
+        Every link and fixed joint becomes a named frame, those fixed to the world included (the base link,
+        and with the first joint locked its link and the locked joint's frame); a root link called
+        ``"world"`` is the model's own ``"world"`` frame (a ``"world"`` frame elsewhere raises
+        :class:`~armctl.errors.ModelLoadError`)."""
         from armctl.model.urdf import model_from_urdf
 
         return model_from_urdf(path, tool_frame=tool_frame, lock=lock, gravity=gravity, name=name)
@@ -225,7 +229,8 @@ class RobotModel:
         both in the axes of ``frame`` (default: the tool frame)."""
         f = self.frame(frame)
         if f.joint == 0:
-            raise InvalidParameterError("a payload cannot be attached to the world frame", value=frame)
+            raise InvalidParameterError(f"a payload cannot be attached to frame {f.name!r}: it is fixed to the "
+                                        "world", value=frame)
         payload = Link(mass, com, inertia_tensor(inertia, "payload inertia")).transformed(
             f.placement[:3, :3], f.placement[:3, 3])
         idx = f.joint - 1
