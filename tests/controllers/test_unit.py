@@ -63,15 +63,16 @@ def test_pd_gravity_law(gains: str) -> None:
 
 
 def _slotine_li(dyn: armctl.Dynamics, q: np.ndarray, qd: np.ndarray, ref: armctl.Reference, lam: np.ndarray,
-                kd: float) -> np.ndarray:
+                kd: float | np.ndarray) -> np.ndarray:
     """M q̈_r + C(q, q̇) q̇_r + g + F_v q̇_r + F_c±(q̇) − K_D s, friction straight from the model's joints."""
     qd_r, qdd_r = ref.qd - lam @ (q - ref.q), ref.qdd - lam @ (qd - ref.qd)
     fr = [j.friction for j in dyn.model.joints]
     fv = np.array([f.viscous for f in fr])
     fc = np.array([f.coulomb if v > 0 else -(f.coulomb if f.coulomb_negative is None else f.coulomb_negative)
                    for f, v in zip(fr, qd, strict=True)])
+    kd_s = kd @ (qd - qd_r) if np.ndim(kd) == 2 else kd * (qd - qd_r)
     return (dyn.mass_matrix(q) @ qdd_r + dyn.coriolis_matrix(q, qd) @ qd_r + dyn.gravity_torque(q) + fv * qd_r
-            + fc - kd * (qd - qd_r))
+            + fc - kd_s)
 
 
 def _off_reference(name: str) -> tuple[armctl.Dynamics, int, np.ndarray, np.ndarray, armctl.Reference]:
@@ -89,6 +90,32 @@ def test_passivity_based_law(name: str) -> None:
     lam = np.diag(np.arange(1.0, n + 1.0))
     expected = _slotine_li(dyn, q, qd, ref, lam, 5.0)
     assert np.allclose(PassivityBased(dyn, lam, 5.0)(0.0, q, qd, ref), expected, rtol=1e-12, atol=1e-10)
+
+
+def _spd(n: int, seed: int, scale: float) -> np.ndarray:
+    """A symmetric positive definite gain that is not diagonal."""
+    b = np.random.default_rng(seed).uniform(-1.0, 1.0, (n, n))
+    return scale * (np.eye(n) + 0.1 * (b @ b.T))
+
+
+def test_full_gain_matrices_in_every_joint_space_law() -> None:
+    """Non-diagonal K_p, K_d, Λ, K_D: each law against its formula written out with the matrices."""
+    dyn, n, q, qd, ref = _off_reference("puma560")
+    kp, kd, lam, kd_pb = _spd(n, 1, 100.0), _spd(n, 2, 20.0), _spd(n, 3, 2.0), _spd(n, 4, 5.0)
+    e, ed = ref.q - q, ref.qd - qd
+    ct = ComputedTorque(dyn, kp, kd)
+    expected = (dyn.mass_matrix(q) @ (ref.qdd + kd @ ed + kp @ e) + dyn.coriolis_matrix(q, qd) @ qd
+                + dyn.gravity_torque(q) + dyn.friction_torque(qd))
+    np.testing.assert_allclose(ct(0.0, q, qd, ref), expected, rtol=1e-12, atol=1e-9)
+    pd = PDGravity(dyn, kp, kd)
+    np.testing.assert_allclose(pd(0.0, q, qd, ref), dyn.gravity_torque(q) + kp @ e + kd @ ed, rtol=1e-12, atol=1e-9)
+    expected = _slotine_li(dyn, q, qd, ref, lam, kd_pb)
+    np.testing.assert_allclose(PassivityBased(dyn, lam, kd_pb)(0.0, q, qd, ref), expected, rtol=1e-12, atol=1e-9)
+    # the exact parameters, and the asymmetric Coulomb offset outside them (puma560 has one)
+    ad = Adaptive(dyn, lam, kd_pb, gamma=1e-9)
+    np.testing.assert_allclose(ad(0.0, q, qd, ref), expected, rtol=1e-12, atol=1e-9)
+    s = qd - (ref.qd - lam @ (q - ref.q))
+    np.testing.assert_allclose(ad.last_log["s"], s, rtol=1e-12, atol=1e-12)
 
 
 @pytest.mark.parametrize("name", ["panda", "puma560"])

@@ -7,7 +7,7 @@ from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray, Gain, scalar, vector
 from armctl.controllers.base import Controller
-from armctl.controllers.passivity import sliding
+from armctl.controllers.passivity import sliding, sliding_map
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError
 from armctl.model.consistency import project_physical
@@ -71,6 +71,8 @@ class Adaptive(Controller):
 
     def _gains_changed(self) -> None:
         self._dt, self._gamma_dt = 0.0, None  # Γ·dt formed anew at the next update
+        if hasattr(self, "_kd"):  # Λ and K_D both set
+            self._sliding = sliding_map(self._lam_matrix, self._kd_matrix)
 
     def reset(self) -> None:
         super().reset()
@@ -85,10 +87,10 @@ class Adaptive(Controller):
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         dyn = self.dynamics
         assert dyn is not None
-        qd_r, qdd_r, s = sliding(q, qd, ref, self._lam)
+        qd_r, qdd_r, s, kd_s, a, w = sliding(q, qd, ref, self._sliding)
         # q, q̇ checked by Controller.__call__; Y may be the dynamics' workspace (read before the next
         # regressor call: the composite term makes one, so it needs a copy)
-        y = dyn._passivity_regressor(q, qd, qd_r, qdd_r, s, copy=bool(self.composite))
+        y = dyn._passivity_regressor(q, qd, qd_r, qdd_r, a, w, copy=bool(self.composite))
         dt = 0.0 if self._t_prev is None else t - self._t_prev  # ≤ 0 for a new run without reset: no update
         # the filters run inside the dead zone too; they start at the first call with composite on
         composite = bool(self.composite) and dt > 0 and self._qd_prev is not None
@@ -116,7 +118,7 @@ class Adaptive(Controller):
         offset = dyn._fc_offset * np.abs(np.sign(qd)) if dyn._has_asymmetry else None  # (cheaper than q̇ != 0)
         if offset is not None:
             tau += offset
-        tau -= self._kd * s if self._kd.ndim == 1 else self._kd.dot(s)
+        tau -= kd_s
         if self.composite:  # copies: the caller may reuse its q̇ buffer, or clip τ in place
             # the torque the parameters must explain: τ without the fixed Coulomb offset
             self._qd_prev, self._tau_prev = qd.copy(), tau - offset if offset is not None else tau.copy()

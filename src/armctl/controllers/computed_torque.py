@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numpy as np
 from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray, apply_gain
@@ -35,20 +36,17 @@ class ComputedTorque(PIDGains, Controller):
                                         value=friction)
         self.friction = friction
 
+    def _gains_changed(self) -> None:
+        super()._gains_changed()
+        if hasattr(self, "_feedback"):  # v = [I, F]·[q̈_d; q_d; q̇_d; q; q̇] (F: PIDGains' K_p e + K_d ė)
+            self._command = np.hstack((np.eye(self.n), self._feedback))
+
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         dyn = self.dynamics
         assert dyn is not None
-        e = ref.q - q
-        if self._diagonal:  # in place where possible (e stays as it is: the integral takes it below)
-            v = ref.qd - qd
-            v *= self._kd
-            v += ref.qdd
-            v += self._kp * e
-        else:
-            v = ref.qdd + apply_gain(self._kd, ref.qd - qd)
-            v += apply_gain(self._kp, e)
+        v = self._command.dot(np.concatenate((ref.qdd, ref.q, ref.qd, q, qd)))  # q̈_d + K_d ė + K_p e
         if self._ki is not None:
-            v += apply_gain(self._ki, self._integral.update(t, e))
+            v += apply_gain(self._ki, self._integral.update(t, ref.q - q))
         tau = dyn._rigid_torque(q, qd, v)  # q, q̇ checked by Controller.__call__, v finite from them and ref
         if self.friction and dyn._has_friction:
             tau += dyn._friction(qd if self.friction is True else ref.qd)

@@ -48,8 +48,10 @@ class PIDGains:
     def _gains_changed(self) -> None:
         if not hasattr(self, "_kd"):  # during _set_gains
             return
-        # diagonal K_p and K_d (the usual case): the control laws multiply elementwise, inline
-        self._diagonal = self._kp.ndim == 1 and self._kd.ndim == 1
+        # K_p e + K_d ė as one product with the stacked reference and state: F·[q_d; q̇_d; q; q̇], F = [K_p, K_d,
+        # −K_p, −K_d] (one concatenation and one product, where the term by term form takes six array operations)
+        kp, kd = self._kp_matrix, self._kd_matrix
+        self._feedback = np.hstack((kp, kd, -kp, -kd))
         # without an integral the law keeps no state, and a NaN/inf in q_j or q̇_j reaches τ through K_p e or
         # K_d ė (K ≻ 0: a positive diagonal entry multiplies it; in computed torque through v_j and M_jj > 0)
         self._checks_result = self._ki is None and self._own_law()  # type: ignore[attr-defined]

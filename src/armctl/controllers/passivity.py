@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numpy as np
 from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray, Gain
@@ -10,16 +11,22 @@ from armctl.dynamics.base import Dynamics
 from armctl.reference import Reference
 
 
-def sliding(q: FloatArray, qd: FloatArray, ref: Reference, lam: FloatArray) -> tuple[FloatArray, ...]:
-    """(q̇_r, q̈_r, s) of Slotine–Li: q̃ = q − q_d, q̇_r = q̇_d − Λq̃, q̈_r = q̈_d − Λ(q̇ − q̇_d), s = q̇ − q̇_r.
-    ``lam`` in :func:`~armctl._checks.compact_gain` form."""
-    if lam.ndim == 1:  # apply_gain, inlined for the diagonal Λ of the hot path
-        qd_r = ref.qd - lam * (q - ref.q)
-        qdd_r = ref.qdd - lam * (qd - ref.qd)
-    else:
-        qd_r = ref.qd - lam.dot(q - ref.q)
-        qdd_r = ref.qdd - lam.dot(qd - ref.qd)
-    return qd_r, qdd_r, qd - qd_r
+def sliding_map(lam: FloatArray, kd: FloatArray) -> FloatArray:
+    """P (6n × 5n) with P·[q_d; q̇_d; q̈_d; q; q̇] = [q̇_r; q̈_r; s; K_D s; a; w] for the full gains Λ and K_D,
+    where (Slotine–Li) q̃ = q − q_d, q̇_r = q̇_d − Λq̃, q̈_r = q̈_d − Λ(q̇ − q̇_d), s = q̇ − q̇_r, and a = q̇_r + s/2,
+    w = s/2 are the velocities of the dynamics' passivity primitives: every vector of the law from one
+    concatenation and one product (the term by term form takes ten array operations)."""
+    n = lam.shape[0]
+    eye, zero = np.eye(n), np.zeros((n, n))
+    qd_r = np.hstack((lam, eye, zero, -lam, zero))
+    s = np.hstack((-lam, -eye, zero, lam, eye))
+    return np.vstack((qd_r, np.hstack((zero, lam, eye, zero, -lam)), s, kd.dot(s), qd_r + 0.5 * s, 0.5 * s))
+
+
+def sliding(q: FloatArray, qd: FloatArray, ref: Reference, p: FloatArray) -> FloatArray:
+    """(q̇_r, q̈_r, s, K_D s, a, w) as the rows of a (6, n) array, from P = :func:`sliding_map`. The rows are
+    contiguous (n,) views."""
+    return p.dot(np.concatenate((ref.q, ref.qd, ref.qdd, q, qd))).reshape(6, -1)  # type: ignore[no-any-return]
 
 
 class PassivityBased(Controller):
@@ -42,12 +49,16 @@ class PassivityBased(Controller):
         # no state; a NaN/inf in q_j or q̇_j reaches s_j = q̃̇_j + (Λq̃)_j and τ through −K_D s (K_D ≻ 0)
         self._checks_result = self._own_law()
 
+    def _gains_changed(self) -> None:
+        if hasattr(self, "_kd"):  # both set
+            self._sliding = sliding_map(self._lam_matrix, self._kd_matrix)
+
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         dyn = self.dynamics
         assert dyn is not None
-        qd_r, qdd_r, s = sliding(q, qd, ref, self._lam)
-        tau = dyn._passivity_torque(q, qd, qd_r, qdd_r, s)  # q, q̇ checked by Controller.__call__
-        tau -= self._kd * s if self._kd.ndim == 1 else self._kd.dot(s)
+        qd_r, qdd_r, _, kd_s, a, w = sliding(q, qd, ref, self._sliding)
+        tau = dyn._passivity_torque(q, qd, qd_r, qdd_r, a, w)  # q, q̇ checked by Controller.__call__
+        tau -= kd_s
         return tau
 
     _result_checked_compute = compute  # stateless (see Controller)

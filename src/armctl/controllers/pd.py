@@ -43,38 +43,20 @@ class PDGravity(PIDGains, Controller):
         if not isinstance(value, (bool, np.bool_)):
             raise InvalidParameterError(f"friction must be True or False, got {value!r}", value=value)
         self._friction = bool(value)
-        self._gains_changed()
 
     def _gains_changed(self) -> None:
         super()._gains_changed()
-        # the common case, on its own path: diagonal K_p, K_d, no integral, no friction compensation
-        self._plain = (getattr(self, "_diagonal", False) and self._ki is None
-                       and not (getattr(self, "_friction", False) and self.dynamics._has_friction))  # type: ignore[union-attr]
+        if hasattr(self, "_feedback"):
+            self._with_gravity = np.hstack((self._feedback, np.eye(self.n)))
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         dyn = self.dynamics
         assert dyn is not None
-        tau = dyn._gravity(q)  # q is checked by Controller.__call__
-        if self._plain:  # diagonal gains, nothing else: all in place
-            ed = ref.qd - qd
-            ed *= self._kd
-            tau += ed
-            ed = ref.q - q
-            ed *= self._kp
-            tau += ed
-            return tau
-        e = ref.q - q
-        if self._diagonal:  # in place where possible (e stays as it is: the integral takes it below)
-            ed = ref.qd - qd
-            ed *= self._kd
-            tau += ed
-            tau += self._kp * e
-        else:
-            tau += apply_gain(self._kp, e)
-            tau += apply_gain(self._kd, ref.qd - qd)
+        # g + K_p e + K_d ė = [F, I]·[q_d; q̇_d; q; q̇; g] (F: PIDGains' feedback map): one product adds it all
+        tau = self._with_gravity.dot(np.concatenate((ref.q, ref.qd, q, qd, dyn._gravity(q))))  # q checked by __call__
         if self._ki is not None:
-            tau += apply_gain(self._ki, self._integral.update(t, e))
-        if self.friction and dyn._has_friction:
+            tau += apply_gain(self._ki, self._integral.update(t, ref.q - q))
+        if self._friction and dyn._has_friction:
             tau += dyn._friction(qd)
         return tau
 

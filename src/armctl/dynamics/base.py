@@ -30,7 +30,7 @@ from armctl.errors import NonFiniteError, UnknownNameError
 from armctl.model.robot import PARAMS_PER_JOINT, RobotModel
 
 BACKENDS = ("pinocchio", "lagrange")
-_SQRT8 = math.sqrt(8.0)
+_SQRT_HALF = math.sqrt(0.5)
 
 
 class Dynamics(ABC):
@@ -335,17 +335,18 @@ class Dynamics(ABC):
             Y = 2 R(q, (q̇ + q̇_r)/√8, q̈_r/2) − R(q, (q̇ − q̇_r)/2, 0)
 
         — two regressor evaluations. (The Pinocchio backend uses the equivalent R(q, q̇_r + s/2, q̈_r) − h₀(s/2),
-        s = q̇ − q̇_r, with h₀ evaluated on a gravity-free twin of the model: a single subtraction.) Viscous
+        s = q̇ − q̇_r, with h₀ evaluated on a gravity-free twin of the model: a single subtraction.) Both need
+        only a = q̇_r + s/2 and w = s/2, since (q̇ + q̇_r)/√8 = a/√2 and (q̇ − q̇_r)/2 = w. Viscous
         friction is taken at q̇_r (it then adds F_v s to the closed loop's damping); Coulomb friction at the
         measured q̇.
         """
         if self._checked4(q, qd, qd_r, qdd_r):
             try:
-                return self._passivity_regressor(q, qd, qd_r, qdd_r, qd - qd_r)  # type: ignore[operator]
+                return self._passivity_regressor(q, qd, qd_r, qdd_r, *_polarisation(qd, qd_r))
             except TypeError:  # an object array of numbers, which Pinocchio refuses: converted below
                 pass
         q, qd, qd_r, qdd_r = self._inputs(("q", "qd", "qd_r", "qdd_r"), q, qd, qd_r, qdd_r)
-        return self._passivity_regressor(q, qd, qd_r, qdd_r, qd - qd_r)
+        return self._passivity_regressor(q, qd, qd_r, qdd_r, *_polarisation(qd, qd_r))
 
     def passivity_torque(self, q: ArrayLike, qd: ArrayLike, qd_r: ArrayLike, qdd_r: ArrayLike) -> FloatArray:
         """M q̈_r + C(q, q̇) q̇_r + g + F_v q̇_r + F_c sgn(q̇) (= passivity_regressor(...) @ π, with the Coulomb
@@ -353,28 +354,29 @@ class Dynamics(ABC):
         :meth:`passivity_regressor`."""
         if self._checked4(q, qd, qd_r, qdd_r):
             try:
-                return self._passivity_torque(q, qd, qd_r, qdd_r, qd - qd_r)  # type: ignore[operator]
+                return self._passivity_torque(q, qd, qd_r, qdd_r, *_polarisation(qd, qd_r))
             except TypeError:  # an object array of numbers, which Pinocchio refuses: converted below
                 pass
         q, qd, qd_r, qdd_r = self._inputs(("q", "qd", "qd_r", "qdd_r"), q, qd, qd_r, qdd_r)
-        return self._passivity_torque(q, qd, qd_r, qdd_r, qd - qd_r)
+        return self._passivity_torque(q, qd, qd_r, qdd_r, *_polarisation(qd, qd_r))
 
-    # The primitives behind the two methods above, on checked inputs and with s = q̇ − q̇_r (controllers that
-    # have checked the state and formed s call them directly). copy=False may return a workspace that the
-    # next regressor call overwrites.
+    # The primitives behind the two methods above, on checked inputs and with the polarisation's velocities
+    # a = q̇_r + s/2 and w = s/2, s = q̇ − q̇_r (the Slotine–Li controllers form them in the same product as the
+    # rest of their law, armctl.controllers.passivity.sliding_map, and call these directly). copy=False may
+    # return a workspace that the next regressor call overwrites.
     def _passivity_regressor(self, q: FloatArray, qd: FloatArray, qd_r: FloatArray, qdd_r: FloatArray,
-                             s: FloatArray, copy: bool = True) -> FloatArray:
-        y = self._rigid_regressor(q, (qd + qd_r) / _SQRT8, 0.5 * qdd_r)
+                             a: FloatArray, w: FloatArray, copy: bool = True) -> FloatArray:
+        y = self._rigid_regressor(q, a * _SQRT_HALF, 0.5 * qdd_r)
         y *= 2.0
-        y -= self._rigid_regressor(q, 0.5 * s, self._zeros)
+        y -= self._rigid_regressor(q, w, self._zeros)
         y.put(self._diag_idx[self.n:], np.concatenate((qd_r, np.sign(qd))))
         return y
 
     def _passivity_torque(self, q: FloatArray, qd: FloatArray, qd_r: FloatArray, qdd_r: FloatArray,
-                          s: FloatArray) -> FloatArray:
-        tau = self._rigid_torque(q, (qd + qd_r) / _SQRT8, 0.5 * qdd_r)
+                          a: FloatArray, w: FloatArray) -> FloatArray:
+        tau = self._rigid_torque(q, a * _SQRT_HALF, 0.5 * qdd_r)
         tau *= 2.0
-        tau -= self._rigid_torque(q, 0.5 * s, self._zeros)
+        tau -= self._rigid_torque(q, w, self._zeros)
         return self._add_passivity_friction(tau, qd, qd_r)
 
     def _add_passivity_friction(self, tau: FloatArray, qd: FloatArray, qd_r: FloatArray) -> FloatArray:
@@ -391,3 +393,9 @@ class Dynamics(ABC):
 
 def _make(model: RobotModel, backend: str, options: dict[str, Any]) -> Dynamics:
     return Dynamics(model, backend=backend, **options)
+
+
+def _polarisation(qd: FloatArray, qd_r: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """(a, w) = (q̇_r + s/2, s/2) with s = q̇ − q̇_r: the velocities of the passivity primitives."""
+    w = 0.5 * (qd - qd_r)
+    return qd_r + w, w

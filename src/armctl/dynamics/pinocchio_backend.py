@@ -50,7 +50,6 @@ class PinocchioDynamics(Dynamics):
         self._raw_regressor_free = partial(pin.computeJointTorqueRegressor, self.pin_model_free,
                                            self.pin_data_free)
         self._init_regressor_workspace()
-        self._halves = np.full(self.n, 0.5)
 
     def _init_regressor_workspace(self) -> None:
         """Y is assembled in a workspace holding its transpose as an (n, 13, n) block array, Yᵀ[j, c, i] =
@@ -113,12 +112,12 @@ class PinocchioDynamics(Dynamics):
     # Polarisation with a gravity-free twin of the model: with R(q, v, a) = M a + h(v) + g and
     # h₀(v) = h(v) = C(q, v) v evaluated without gravity, and s = q̇ − q̇_r,
     #     M q̈_r + C(q, q̇) q̇_r + g = R(q, q̇_r + s/2, q̈_r) − h₀(s/2)
-    # since h(a + b) − h(a − b) = 4 C(q, a) b with a ± b = (q̇ ± q̇_r)/2: one subtraction of two evaluations.
+    # since h(u + v) − h(u − v) = 4 C(q, u) v with u ± v = (q̇ ± q̇_r)/2: one subtraction of two evaluations.
+    # The primitives take a = q̇_r + s/2 and w = s/2 (see Dynamics).
     def _passivity_regressor(self, q: FloatArray, qd: FloatArray, qd_r: FloatArray, qdd_r: FloatArray,
-                             s: FloatArray, copy: bool = True) -> FloatArray:
-        w = s * self._halves  # an array factor: half the cost of a Python float's
+                             a: FloatArray, w: FloatArray, copy: bool = True) -> FloatArray:
         if self._raw_t is not None:  # both regressors stay in Pinocchio's workspaces: subtract them there
-            self._raw_regressor(q, qd_r + w, qdd_r)
+            self._raw_regressor(q, a, qdd_r)
             self._raw_regressor_free(q, w, self._zeros)
             # in place in Pinocchio's (contiguous) workspace, then one block copy: half the cost of a
             # subtraction into the strided block view. Safe: Pinocchio rewrites every entry it ever writes
@@ -126,7 +125,7 @@ class PinocchioDynamics(Dynamics):
             np.subtract(self._raw_t, self._raw_t_free, out=self._raw_t)
             self._yt_rigid[...] = self._raw_t
         else:
-            self._yt_rigid[...] = self._raw_blocks(q, qd_r + w, qdd_r)
+            self._yt_rigid[...] = self._raw_blocks(q, a, qdd_r)
             self._yt_rigid -= self._raw_regressor_free(q, w, self._zeros).T.reshape(self.n, 10, self.n)
         self._yt_rotor[:] = qdd_r  # and _finish_regressor, inlined
         self._yt_viscous[:] = qd_r
@@ -134,9 +133,8 @@ class PinocchioDynamics(Dynamics):
         return self._y.copy(order="K") if copy else self._y  # type: ignore[no-any-return]
 
     def _passivity_torque(self, q: FloatArray, qd: FloatArray, qd_r: FloatArray, qdd_r: FloatArray,
-                          s: FloatArray) -> FloatArray:
-        w = s * self._halves  # an array factor: half the cost of a Python float's
-        tau = self._rigid_torque(q, qd_r + w, qdd_r)
+                          a: FloatArray, w: FloatArray) -> FloatArray:
+        tau = self._rigid_torque(q, a, qdd_r)
         tau -= self._rigid_torque_free(q, w, self._zeros)
         return self._add_passivity_friction(tau, qd, qd_r)
 
