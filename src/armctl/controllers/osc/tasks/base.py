@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, Gain, apply_gain, nonnegative_vector
+from armctl._checks import FloatArray, Gain, nonnegative_vector
 from armctl.controllers.osc.state import ModelState
 from armctl.errors import InvalidParameterError
 from armctl.reference import Reference
@@ -99,32 +99,29 @@ class MotionTask(Task):
     def kinematics(self, state: ModelState, t: float, ref: Reference
                    ) -> tuple[FloatArray | None, FloatArray | None, FloatArray, FloatArray, FloatArray]:
         """(J, drift J̇q̇, error e, velocity error ė, feed-forward acceleration ẍ_ref); J None: the identity,
-        drift None: zero. e and ė must be fresh arrays (the caller overwrites them)."""
+        drift None: zero."""
 
-    def _pd(self, e: FloatArray, ed: FloatArray, acc: FloatArray) -> FloatArray:
-        """ẍ* = ẍ_ref + K_d ė + K_p e, computed in place in ``e``."""
-        kp, kd = self._kp, self._kd
-        if kp.ndim == 1 and kd.ndim == 1:
-            e *= kp
-            ed *= kd
-            e += ed
-            e += acc
-            return e
-        return acc + apply_gain(kp, e) + apply_gain(kd, ed)
+    def _gains_changed(self) -> None:
+        if hasattr(self, "_kd"):  # both gains set
+            # ẍ* = [I, K_d, K_p]·[ẍ_ref; ė; e] and ẍ* − J̇q̇ = [I, K_d, K_p, −I]·[ẍ_ref; ė; e; J̇q̇]: one
+            # concatenation and one product each (the term by term form takes five array operations)
+            eye = np.eye(self.dim)
+            self._law = np.hstack((eye, self._kd_matrix, self._kp_matrix))
+            self._law_drift = np.hstack((self._law, -eye))
 
     def desired_acceleration(self, state: ModelState, t: float, ref: Reference
                              ) -> tuple[FloatArray | None, FloatArray, FloatArray]:
         """(J, J̇q̇, ẍ*) with ẍ* = ẍ_ref + K_d ė + K_p e."""
         jac, drift, e, ed, acc = self.kinematics(state, t, ref)
-        return jac, np.zeros(self.dim) if drift is None else drift, self._pd(e, ed, acc)
+        return (jac, np.zeros(self.dim) if drift is None else drift,
+                self._law.dot(np.concatenate((acc, ed, e))))
 
     def residual(self, state: ModelState, t: float, ref: Reference) -> tuple[FloatArray | None, FloatArray]:
         """(J, ẍ* − J̇q̇)."""
         jac, drift, e, ed, acc = self.kinematics(state, t, ref)
-        rhs = self._pd(e, ed, acc)
-        if drift is not None:
-            rhs -= drift
-        return jac, rhs
+        if drift is None:
+            return jac, self._law.dot(np.concatenate((acc, ed, e)))
+        return jac, self._law_drift.dot(np.concatenate((acc, ed, e, drift)))
 
     def error(self, state: ModelState, t: float, ref: Reference) -> FloatArray:
         """The task error e at this state (for logs and tests)."""

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from armctl._checks import FloatArray, matrix, vector
+from armctl._checks import FLOAT, FloatArray, matrix, vector
 from armctl.errors import InvalidParameterError
 
 #: A trajectory maps t [s] to (value, velocity, acceleration); velocity and acceleration may be None (zero).
@@ -29,9 +29,12 @@ def rotation_defect(entries: list[float], shape: tuple[int, ...]) -> str | None:
         a, b, c, _, d, e, f, _, g, h, i = entries[:11]
     else:
         a, b, c, d, e, f, g, h, i = entries
-    worst = max(abs(a * a + b * b + c * c - 1.0), abs(d * d + e * e + f * f - 1.0), abs(g * g + h * h + i * i - 1.0),
-                abs(a * d + b * e + c * f), abs(a * g + b * h + c * i), abs(d * g + e * h + f * i))
-    if worst > ROTATION_TOL:
+    gram = (a * a + b * b + c * c - 1.0, d * d + e * e + f * f - 1.0, g * g + h * h + i * i - 1.0,
+            a * d + b * e + c * f, a * g + b * h + c * i, d * g + e * h + f * i)  # R Rᵀ − I, upper triangle
+    tol = ROTATION_TOL
+    if not (-tol <= gram[0] <= tol and -tol <= gram[1] <= tol and -tol <= gram[2] <= tol  # chained tests:
+            and -tol <= gram[3] <= tol and -tol <= gram[4] <= tol and -tol <= gram[5] <= tol):  # no calls
+        worst = max(abs(x) for x in gram)
         return f"its rotation is not orthonormal: |R Rᵀ − I| reaches {worst:.3g} (tolerance {ROTATION_TOL:g})"
     if a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g) < 0.0:
         return "its rotation is a reflection (det R = −1)"
@@ -52,8 +55,8 @@ class TargetHolder:
     def _check(self, value: Any, velocity: Any, acceleration: Any) -> tuple[FloatArray, FloatArray, FloatArray]:
         shape = self.value_shape
         try:  # fast path: float arrays of the right shapes, all finite (one sum, NaN/inf propagate into it)
-            if (value.shape == shape and velocity.shape == acceleration.shape == (self.rate,)
-                    and value.dtype == velocity.dtype == acceleration.dtype == np.float64):
+            if (value.dtype is FLOAT and velocity.dtype is FLOAT and acceleration.dtype is FLOAT
+                    and value.shape == shape and velocity.shape == acceleration.shape == (self.rate,)):
                 entries = value.ravel().tolist()
                 if (math.isfinite(sum(entries) + sum(velocity.tolist()) + sum(acceleration.tolist()))
                         and (len(shape) == 1 or rotation_defect(entries, shape) is None)):
