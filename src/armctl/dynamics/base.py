@@ -72,6 +72,7 @@ class Dynamics(ABC):
         self.n = model.n
         self._shape = (self.n,)
         self._zeros = np.zeros(self.n)
+        self._halves = np.full(self.n, 0.5)
         fr = [j.friction for j in model.joints]
         self._fv = np.array([f.viscous for f in fr])
         fc_pos = np.array([f.coulomb for f in fr])
@@ -198,18 +199,20 @@ class Dynamics(ABC):
 
     def _checked4(self, a: Any, b: Any, c: Any, d: Any) -> bool:
         """True if the four inputs are finite float (n,) arrays already (the fast case of :meth:`_inputs`)."""
-        try:
-            return (a.shape == b.shape == c.shape == d.shape == self._shape  # type: ignore[no-any-return]
-                    and math.isfinite(sum(a.tolist()) + sum(b.tolist()) + sum(c.tolist()) + sum(d.tolist())))
+        try:  # each sum raises TypeError unless its array is 1-D with real entries; len then fixes the length
+            return (math.isfinite(sum(a.tolist()) + sum(b.tolist()) + sum(c.tolist()) + sum(d.tolist()))
+                    and len(a) == len(b) == len(c) == len(d) == self.n)  # type: ignore[no-any-return]
         except (AttributeError, TypeError):  # not arrays, or entries that are not real numbers
             return False
 
     def mass_matrix(self, q: ArrayLike) -> FloatArray:
         """M(q) (n×n, symmetric positive definite) [kg·m² / kg]."""
-        try:  # the fast path of _finite, inlined: this is called every control step
-            if q.shape == self._shape and math.isfinite(sum(q.tolist())):  # type: ignore[union-attr]
+        try:  # the fast path of _finite, inlined: this is called every control step. The sum of q.tolist()
+            # raises TypeError unless q is 1-D with real entries (an (n, 1) column gives a list of lists), and
+            # the backend checks the length: no shape test needed
+            if math.isfinite(sum(q.tolist())):  # type: ignore[union-attr]
                 return self._mass(q)
-        except (AttributeError, TypeError):  # not an array; complex entries; Pinocchio refusing an object array
+        except Exception:  # not an array; complex entries; a length or an object array the backend refuses
             pass
         return self._mass(vector(q, self.n, "q"))
 
@@ -221,9 +224,9 @@ class Dynamics(ABC):
     def gravity_torque(self, q: ArrayLike) -> FloatArray:
         """g(q) = ∂U/∂q [N·m]."""
         try:  # inlined fast path, as in mass_matrix
-            if q.shape == self._shape and math.isfinite(sum(q.tolist())):  # type: ignore[union-attr]
+            if math.isfinite(sum(q.tolist())):  # type: ignore[union-attr]
                 return self._gravity(q)
-        except (AttributeError, TypeError):  # as in mass_matrix
+        except Exception:  # as in mass_matrix
             pass
         return self._gravity(vector(q, self.n, "q"))
 
@@ -342,11 +345,11 @@ class Dynamics(ABC):
         """
         if self._checked4(q, qd, qd_r, qdd_r):
             try:
-                return self._passivity_regressor(q, qd, qd_r, qdd_r, *_polarisation(qd, qd_r))
+                return self._passivity_regressor(q, qd, qd_r, qdd_r, *self._polarisation(qd, qd_r))
             except TypeError:  # an object array of numbers, which Pinocchio refuses: converted below
                 pass
         q, qd, qd_r, qdd_r = self._inputs(("q", "qd", "qd_r", "qdd_r"), q, qd, qd_r, qdd_r)
-        return self._passivity_regressor(q, qd, qd_r, qdd_r, *_polarisation(qd, qd_r))
+        return self._passivity_regressor(q, qd, qd_r, qdd_r, *self._polarisation(qd, qd_r))
 
     def passivity_torque(self, q: ArrayLike, qd: ArrayLike, qd_r: ArrayLike, qdd_r: ArrayLike) -> FloatArray:
         """M q̈_r + C(q, q̇) q̇_r + g + F_v q̇_r + F_c sgn(q̇) (= passivity_regressor(...) @ π, with the Coulomb
@@ -354,11 +357,11 @@ class Dynamics(ABC):
         :meth:`passivity_regressor`."""
         if self._checked4(q, qd, qd_r, qdd_r):
             try:
-                return self._passivity_torque(q, qd, qd_r, qdd_r, *_polarisation(qd, qd_r))
+                return self._passivity_torque(q, qd, qd_r, qdd_r, *self._polarisation(qd, qd_r))
             except TypeError:  # an object array of numbers, which Pinocchio refuses: converted below
                 pass
         q, qd, qd_r, qdd_r = self._inputs(("q", "qd", "qd_r", "qdd_r"), q, qd, qd_r, qdd_r)
-        return self._passivity_torque(q, qd, qd_r, qdd_r, *_polarisation(qd, qd_r))
+        return self._passivity_torque(q, qd, qd_r, qdd_r, *self._polarisation(qd, qd_r))
 
     # The primitives behind the two methods above, on checked inputs and with the polarisation's velocities
     # a = q̇_r + s/2 and w = s/2, s = q̇ − q̇_r (the Slotine–Li controllers form them in the same product as the
@@ -379,6 +382,12 @@ class Dynamics(ABC):
         tau -= self._rigid_torque(q, w, self._zeros)
         return self._add_passivity_friction(tau, qd, qd_r)
 
+    def _polarisation(self, qd: FloatArray, qd_r: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """(a, w) = (q̇_r + s/2, s/2) with s = q̇ − q̇_r: the velocities of the passivity primitives."""
+        w = qd - qd_r
+        w *= self._halves  # an array factor: half the cost of a Python float's
+        return qd_r + w, w
+
     def _add_passivity_friction(self, tau: FloatArray, qd: FloatArray, qd_r: FloatArray) -> FloatArray:
         """τ + F_v q̇_r + F_c sgn(q̇) (+ the Coulomb asymmetry offset), in place."""
         if self._has_viscous:
@@ -393,9 +402,3 @@ class Dynamics(ABC):
 
 def _make(model: RobotModel, backend: str, options: dict[str, Any]) -> Dynamics:
     return Dynamics(model, backend=backend, **options)
-
-
-def _polarisation(qd: FloatArray, qd_r: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """(a, w) = (q̇_r + s/2, s/2) with s = q̇ − q̇_r: the velocities of the passivity primitives."""
-    w = 0.5 * (qd - qd_r)
-    return qd_r + w, w
