@@ -83,6 +83,15 @@ def test_measurement_noise_is_seeded_and_has_the_asked_deviation() -> None:
     assert np.std(res.qd_measured - res.qd) == pytest.approx(0.05, rel=0.1)
 
 
+def test_the_same_seed_gives_the_same_noise_whatever_the_duration() -> None:
+    """A longer run is the shorter one continued: over their common samples the measurements agree."""
+    kw = {"noise_q": 2e-3, "noise_qd": 0.05, "seed": 11}
+    short, long = (simulate(slider(MASS), zero_torque, armctl.Reference.hold([0.3]), d, **kw) for d in (0.5, 1.0))
+    k = len(short.t)
+    np.testing.assert_array_equal(long.q_measured[:k], short.q_measured)
+    np.testing.assert_array_equal(long.qd_measured[:k], short.qd_measured)
+
+
 def test_torques_saturate_at_the_effort_limits() -> None:
     model = slider(MASS, effort=5.0)
     push = OpenLoop(lambda t: np.array([12.0]))

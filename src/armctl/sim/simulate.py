@@ -104,8 +104,11 @@ def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
     noisy = bool(sig_q.any() or sig_qd.any())
     rec = Recorder(n, samples, cdt, sc.environments, sc.sensors, measured=noisy or lag > 0)
     rng = np.random.default_rng(seed)
-    nq = rng.standard_normal((samples, n)) * sig_q if noisy else None
-    nv = rng.standard_normal((samples, n)) * sig_qd if noisy else None
+    # sample k's noise is the k-th block of 2n draws (q's, then q̇'s): a longer run with the same seed sees the
+    # same noise over the common samples
+    draws = rng.standard_normal((samples, 2, n)) if noisy else None
+    nq = draws[:, 0] * sig_q if draws is not None else None
+    nv = draws[:, 1] * sig_qd if draws is not None else None
     limit = dyn.model.effort_limit
     clip = saturate and bool(np.isfinite(limit).any())
     lim_list = limit.tolist()
