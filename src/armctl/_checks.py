@@ -125,8 +125,10 @@ class Gain:
         return self if obj is None else getattr(obj, self.full)
 
     def __set__(self, obj: Any, value: ArrayLike | None) -> None:
+        # a read-only copy: the law's precomputed forms follow assignments only, so the gain must not change
+        # under them (a caller's array edited in place, or ``ctrl.kp[0, 0] = …``)
         full = None if value is None and self.optional else \
-            gain_matrix(value, self.size(obj), self.label(obj, self.name))  # type: ignore[arg-type]
+            readonly(np.array(gain_matrix(value, self.size(obj), self.label(obj, self.name))))  # type: ignore[arg-type]
         setattr(obj, self.full, full)
         setattr(obj, self.compact, None if full is None else compact_gain(full))
         changed = getattr(obj, "_gains_changed", None)

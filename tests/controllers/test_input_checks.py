@@ -223,6 +223,21 @@ def test_gains_reassigned_take_effect(make: Callable[..., Controller], gains: di
         setattr(changed, next(iter(gains)), -1.0)
 
 
+def test_a_gain_is_the_controllers_own_copy() -> None:
+    # the law's precomputed product follows assignments only: editing the array given, or the one read back,
+    # must not change one and not the other
+    dyn = dynamics("panda")
+    q, qd, ref = _state(dyn.n)
+    k = np.eye(7) * 100.0 + 1.0  # full (not diagonal)
+    ctrl, fresh = PDGravity(dyn, k, 20.0), PDGravity(dyn, k.copy(), 20.0)
+    k *= 2.0
+    assert np.array_equal(ctrl.kp, fresh.kp) and np.array_equal(ctrl(0.0, q, qd, ref), fresh(0.0, q, qd, ref))
+    with pytest.raises(ValueError, match="read-only"):
+        ctrl.kp[0, 0] = 1.0
+    ctrl.kp = 2.0 * ctrl.kp  # the way to change it
+    assert np.array_equal(ctrl(0.0, q, qd, ref), PDGravity(dyn, k, 20.0)(0.0, q, qd, ref))
+
+
 def test_task_gains_reassigned_take_effect() -> None:
     from armctl.controllers.osc import PostureTask
 

@@ -165,8 +165,8 @@ class Dynamics(ABC):
         finite, check every input (raising a named error) and retry."""
         if self._nan_propagates:
             try:
-                for a in args:  # eigenpy would take an (n, 1) column too; Pinocchio checks the lengths
-                    if a.ndim != 1:
+                for a in args:  # eigenpy would take an (n, 1) column too; Pinocchio checks the lengths but
+                    if a.ndim != 1 or a.dtype is not _FLOAT:  # reads a big-endian array's bytes as native
                         raise TypeError
                 out = fn(*args)
                 if math.isfinite(sum(out.tolist())):  # NaN/inf anywhere in the inputs shows up here
@@ -199,18 +199,22 @@ class Dynamics(ABC):
 
     def _checked4(self, a: Any, b: Any, c: Any, d: Any) -> bool:
         """True if the four inputs are finite float (n,) arrays already (the fast case of :meth:`_inputs`)."""
-        try:  # each sum raises TypeError unless its array is 1-D with real entries; len then fixes the length
-            return (math.isfinite(sum(a.tolist()) + sum(b.tolist()) + sum(c.tolist()) + sum(d.tolist()))
-                    and len(a) == len(b) == len(c) == len(d) == self.n)  # type: ignore[no-any-return]
-        except (AttributeError, TypeError):  # not arrays, or entries that are not real numbers
+        try:  # each sum raises TypeError unless its array is 1-D with real entries; len then fixes the length;
+            # native float64 only (Pinocchio reads a big-endian array's bytes as native; float32 would be
+            # combined in single precision)
+            return (a.dtype is b.dtype is c.dtype is d.dtype is _FLOAT  # type: ignore[no-any-return]
+                    and math.isfinite(sum(a.tolist()) + sum(b.tolist()) + sum(c.tolist()) + sum(d.tolist()))
+                    and len(a) == len(b) == len(c) == len(d) == self.n)
+        except (AttributeError, TypeError, OverflowError):  # not arrays, entries not real numbers, huge ints
             return False
 
     def mass_matrix(self, q: ArrayLike) -> FloatArray:
         """M(q) (n×n, symmetric positive definite) [kg·m² / kg]."""
         try:  # the fast path of _finite, inlined: this is called every control step. The sum of q.tolist()
             # raises TypeError unless q is 1-D with real entries (an (n, 1) column gives a list of lists), and
-            # the backend checks the length: no shape test needed
-            if math.isfinite(sum(q.tolist())):  # type: ignore[union-attr]
+            # the backend checks the length: no shape test needed. The dtype must be native float64: Pinocchio
+            # reads a big-endian array's bytes as if they were native
+            if q.dtype is _FLOAT and math.isfinite(sum(q.tolist())):  # type: ignore[union-attr]
                 return self._mass(q)
         except Exception:  # not an array; complex entries; a length or an object array the backend refuses
             pass
@@ -224,7 +228,7 @@ class Dynamics(ABC):
     def gravity_torque(self, q: ArrayLike) -> FloatArray:
         """g(q) = ∂U/∂q [N·m]."""
         try:  # inlined fast path, as in mass_matrix
-            if math.isfinite(sum(q.tolist())):  # type: ignore[union-attr]
+            if q.dtype is _FLOAT and math.isfinite(sum(q.tolist())):  # type: ignore[union-attr]
                 return self._gravity(q)
         except Exception:  # as in mass_matrix
             pass
@@ -260,7 +264,8 @@ class Dynamics(ABC):
             return tau
         try:  # _call's fast path, inlined: this is called every control step
             # ndim: an int, cheaper than comparing shape tuples; Pinocchio checks the lengths
-            if self._nan_propagates and q.ndim == qd.ndim == qdd.ndim == 1:  # type: ignore[union-attr]
+            if (self._nan_propagates and q.ndim == qd.ndim == qdd.ndim == 1  # type: ignore[union-attr]
+                    and q.dtype is qd.dtype is qdd.dtype is _FLOAT):  # type: ignore[union-attr]  (as in _call)
                 out = self._rigid_torque(q, qd, qdd)
                 if math.isfinite(sum(out.tolist())):  # NaN/inf in any input shows up here (_nan_propagates)
                     return out  # type: ignore[no-any-return]
@@ -309,6 +314,7 @@ class Dynamics(ABC):
         """
         try:  # _inputs' fast path, inlined
             if (q.ndim == qd.ndim == qdd.ndim == 1  # type: ignore[union-attr]  (Pinocchio checks the lengths)
+                    and q.dtype is qd.dtype is qdd.dtype is _FLOAT  # type: ignore[union-attr]  (as in _call)
                     and math.isfinite(sum(q.tolist()) + sum(qd.tolist()) + sum(qdd.tolist()))):  # type: ignore[union-attr]
                 return self._rigid_regressor(q, qd, qdd, (qd, qd))  # type: ignore[arg-type]
         except Exception:  # not arrays, or a length Pinocchio refuses: the checks below name the input

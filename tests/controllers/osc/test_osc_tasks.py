@@ -3,13 +3,15 @@ frame pose and scipy's rotations; the three forms of a gain."""
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
 import armctl
-from armctl.controllers.osc import FrameOrientationTask, FramePositionTask, PostureTask
+from armctl.controllers.osc import FrameOrientationTask, FramePoseTask, FramePositionTask, PostureTask
 from armctl.controllers.osc.state import ModelEvaluator
 from armctl.controllers.osc.tasks.rotation import rotation_error
 
@@ -77,3 +79,39 @@ def test_posture_follows_the_reference_unless_fixed(panda: armctl.Dynamics) -> N
     np.testing.assert_allclose(b, 2.0 + 1.0 * 0.5 + 4.0 * 0.1)
     task.set_target(Q_HOME)
     np.testing.assert_allclose(task.residual(state, 0.0, ref)[1], 0.0)
+
+
+def test_pose_task_residual_is_the_textbook_law(panda: armctl.Dynamics) -> None:
+    """ẍ* − J̇q̇ = ẍ_ref + K_d (V_ref − J q̇) + K_p [p_ref − p; log(R_ref Rᵀ)] − J̇q̇ with full 6×6 gains, written out
+    with SciPy's rotation vector; a subclass that overrides ``kinematics`` is used by the residual too; an
+    np.matrix target is taken as the same pose."""
+    state = ModelEvaluator(panda).evaluate(Q_HOME + 0.1, np.full(7, 0.2))
+    b = np.random.default_rng(3).uniform(-1.0, 1.0, (6, 6))
+    kp, kd = 50.0 * (np.eye(6) + 0.05 * b @ b.T), 10.0 * np.eye(6) + 0.05 * (b + b.T)  # SPD, not diagonal
+    target = np.eye(4)
+    target[:3, :3] = Rotation.from_rotvec([0.1, -0.2, 0.3]).as_matrix()
+    target[:3, 3] = [0.4, 0.1, 0.5]
+    twist, acc = np.array([0.1, 0.0, -0.1, 0.2, 0.0, 0.1]), np.array([0.0, 1.0, 0.0, 0.0, -1.0, 0.5])
+    task = FramePoseTask(kp=kp, kd=kd)
+    task.set_target(target, twist, acc)
+    fk = state.frame(None)
+    e = np.concatenate([target[:3, 3] - fk.position,
+                        Rotation.from_matrix(target[:3, :3] @ fk.rotation.T).as_rotvec()])
+    expected = acc + kd @ (twist - fk.jacobian @ state.qd) + kp @ e - fk.drift
+    ref = armctl.Reference(Q_HOME)
+    np.testing.assert_allclose(task.residual(state, 0.0, ref)[1], expected, rtol=1e-10, atol=1e-10)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PendingDeprecationWarning)  # NumPy's, on making an np.matrix
+        as_matrix = np.matrix(target)
+    task.set_target(as_matrix, twist, acc)
+    np.testing.assert_allclose(task.residual(state, 0.0, ref)[1], expected, rtol=1e-10, atol=1e-10)
+
+    class Shifted(FramePoseTask):
+        def kinematics(self, s, t, r):  # type: ignore[no-untyped-def]
+            J, d, err, ed, a = super().kinematics(s, t, r)
+            return J, d, err + np.array([0.0, 0.0, 0.05, 0.0, 0.0, 0.0]), ed, a
+
+    shifted = Shifted(kp=kp, kd=kd)
+    shifted.set_target(target, twist, acc)
+    np.testing.assert_allclose(shifted.residual(state, 0.0, ref)[1], expected + kp[:, 2] * 0.05, rtol=1e-10,
+                               atol=1e-10)

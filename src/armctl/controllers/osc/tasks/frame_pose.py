@@ -46,7 +46,10 @@ class FramePoseTask(FrameTask):
             self._pose_law = np.hstack((eye, kd, -kd, kp[:, :3], -kp[:, :3], kp[:, 3:], -eye))
 
     def residual(self, state: ModelState, t: float, ref: Reference) -> tuple[FloatArray, FloatArray]:
-        """(J, ẍ* − J̇q̇): :meth:`kinematics` and the PD law in one product (see ``_gains_changed``)."""
+        """(J, ẍ* − J̇q̇): :meth:`kinematics` and the PD law in one product (see ``_gains_changed``); a
+        subclass that overrides :meth:`kinematics` gets the generic form on its own kinematics."""
+        if type(self).kinematics is not FramePoseTask.kinematics:
+            return super().residual(state, t, ref)  # type: ignore[return-value]
         pose, twist, acc = self.target.at(t)
         fk = state.frame(self.frame)
         x = np.concatenate((acc, twist, fk.velocity, pose[:3, 3], fk.position,

@@ -61,7 +61,7 @@ class TargetHolder:
                 if (math.isfinite(sum(entries) + sum(velocity.tolist()) + sum(acceleration.tolist()))
                         and (len(shape) == 1 or rotation_defect(entries, shape) is None)):
                     return value, velocity, acceleration
-        except AttributeError:
+        except (AttributeError, TypeError):  # not arrays; an np.matrix (whose tolist is nested); object entries
             pass
         if len(shape) == 1:
             val = vector(value, shape[0], f"{self.owner}: target")
