@@ -108,7 +108,8 @@ def gain_matrix(k: ArrayLike, n: int, name: str) -> FloatArray:
 
 class Gain:
     """A gain attribute of a controller or task: assigned a scalar, a vector (diagonal) or a matrix, checked by
-    :func:`gain_matrix` (``size(owner)`` rows, errors named ``label(owner, name)``), read back as the matrix. Its
+    :func:`gain_matrix` (``size(owner)`` rows, errors named ``label(owner, name)``), read back as the matrix (a
+    read-only copy: change a gain by assigning it, e.g. ``ctrl.kp = 2 * ctrl.kp``). Its
     cheap form (:func:`compact_gain`) is kept in ``owner._<name>`` for the hot path, and the owner's
     ``_gains_changed()``, if any, runs after every assignment, so a gain reassigned between calls takes effect.
     ``optional``: None is allowed (no such term)."""
