@@ -25,8 +25,8 @@ def real_array(x: ArrayLike, name: str) -> FloatArray:
         a = np.asarray(x)
         kind = a.dtype.kind
         # complex, text (NumPy would parse "0.3"), or an object array holding any of them
-        if kind in "cUS" or (kind == "O" and any(isinstance(v, str | bytes | complex | np.complexfloating)
-                                                 for v in a.flat)):
+        if kind in "cUS" or (kind == "O" and any(v is None or isinstance(v, str | bytes | complex | np.complexfloating)
+                                                 for v in a.flat)):  # None: NumPy would make it NaN
             raise TypeError(kind)
         return a.astype(float, copy=False)
     except (TypeError, ValueError, OverflowError):

@@ -141,6 +141,14 @@ def test_an_input_the_expression_does_not_contain_is_still_checked() -> None:
                 getattr(dyn, method)(np.array([0.3]), np.array([np.nan]), np.array([0.1]))
 
 
+def test_none_entries_are_not_real_numbers() -> None:
+    # NumPy turns None into NaN in a float conversion: the error must say what was given
+    dyn = dynamics("panda")
+    for q in ([None] + [0.0] * 6, np.array([None] * 7)):
+        with pytest.raises(InvalidParameterError, match=r"^q must hold real numbers"):
+            dyn.mass_matrix(q)
+
+
 def test_an_integer_too_large_for_a_float_is_named() -> None:
     dyn = dynamics("panda")
     with pytest.raises(InvalidParameterError, match=r"^q must hold real numbers"):
