@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 import armctl
 from armctl.controllers import Adaptive, ComputedTorque, Controller, PassivityBased, PDGravity
 from armctl.errors import ArmctlError, InvalidParameterError, NonFiniteError, ShapeError
-from armctl.model.consistency import is_physical, project_physical
+from armctl.model.consistency import is_physical, project_physical, projection
 from armctl.references import Quintic, Sinusoid, WaypointSpline
 from tests.conftest import dynamics
 
@@ -166,6 +166,34 @@ def test_projection_is_physical_and_idempotent(values: list[float]) -> None:
     p = project_physical(np.array(values))
     assert is_physical(p)
     assert np.allclose(project_physical(p), p, atol=1e-9)
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.floats(-5, 5), min_size=26, max_size=26))
+def test_projection_is_the_nearest_psd_pseudo_inertia(values: list[float]) -> None:
+    """The optimality conditions of the Frobenius-nearest PSD matrix P to J, checked link by link: P ⪰ 0,
+    P − J ⪰ 0 (only negative eigen-directions of J are removed) and P (P − J) = 0 (complementarity)."""
+    from armctl.model.consistency import pseudo_inertia
+
+    pi = np.array(values)
+    for k in range(2):
+        j = pseudo_inertia(pi[13 * k: 13 * k + 10])
+        proj = pseudo_inertia(project_physical(pi)[13 * k: 13 * k + 10])
+        scale = 1.0 + np.abs(j).max()
+        assert np.linalg.eigvalsh(proj).min() >= -1e-9 * scale
+        assert np.linalg.eigvalsh(proj - j).min() >= -1e-9 * scale
+        assert np.abs(proj @ (proj - j)).max() <= 1e-9 * scale**2
+    assert (project_physical(pi).reshape(2, 13)[:, 10:] >= 0).all()
+    # the two ways in (a Cholesky test first, or the eigendecomposition straight away) give the same answer
+    (a, changed_a), (b, changed_b) = projection(pi), projection(pi, likely_inside=False)
+    assert np.array_equal(a, b) and changed_a == changed_b == (not np.array_equal(a, pi))
+
+
+def test_projection_refuses_non_finite_parameters() -> None:
+    pi = dynamics("panda").model.parameters().copy()
+    pi[3] = np.nan
+    with pytest.raises(NonFiniteError, match="NaN or inf"):
+        project_physical(pi)
 
 
 def test_projection_leaves_physical_parameters_alone() -> None:

@@ -10,7 +10,7 @@ from armctl.controllers.base import Controller
 from armctl.controllers.passivity import sliding, sliding_map
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError
-from armctl.model.consistency import project_physical
+from armctl.model.consistency import project_physical, projection
 from armctl.reference import Reference
 
 
@@ -77,6 +77,7 @@ class Adaptive(Controller):
     def reset(self) -> None:
         super().reset()
         self.theta = self.theta0.copy()
+        self._outside = False  # the last projection changed θ̂
         self._t_prev: float | None = None
         self._qd_prev: FloatArray | None = None
         self._tau_prev: FloatArray | None = None
@@ -126,7 +127,9 @@ class Adaptive(Controller):
         return tau
 
     def _project(self, theta: FloatArray) -> FloatArray:
-        theta = project_physical(theta)
+        # an estimate that needed projecting sits on the boundary of the physical set, where the next one
+        # likely is too: then straight to the eigendecomposition
+        theta, self._outside = projection(theta, likely_inside=not self._outside)
         if self.radius is not None:
             d = theta - self.theta0
             norm = float(np.linalg.norm(d))
