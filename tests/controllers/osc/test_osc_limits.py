@@ -8,6 +8,7 @@ import math
 from types import SimpleNamespace
 
 import numpy as np
+import pytest
 
 import armctl
 from armctl.controllers.osc import (
@@ -56,6 +57,31 @@ def test_position_bounds_keep_every_joint_stoppable(panda: armctl.Dynamics) -> N
     # far from the limits the bounds do not bind
     lo, up = lim.bounds(SimpleNamespace(q=0.5 * (panda.model.lower + upper), qd=np.zeros(7)))  # type: ignore[arg-type]
     assert (up > 100).all() and (lo < -100).all()
+
+
+def test_position_bounds_are_the_module_formulas(panda: armctl.Dynamics) -> None:
+    """Both sides against the bounds written out joint by joint (the module's formulas, on Python floats)."""
+    amax = np.linspace(3.0, 9.0, 7)
+    lim = JointPositionLimit(DT, max_deceleration=amax, margin=0.01)
+    lim.bind(panda.model)
+    lo_lim, up_lim = panda.model.lower + 0.01, panda.model.upper - 0.01
+
+    def upper_bound(gap: float, v: float, a: float) -> float:
+        pos = 2.0 * (gap - DT * v) / DT**2
+        disc = a * a * DT * DT + 8.0 * a * gap - 4.0 * a * DT * v
+        via = -a if disc < 0 else (-(2.0 * DT * v + a * DT * DT) + DT * math.sqrt(disc)) / (2.0 * DT * DT)
+        return max(min(pos, via), -a)
+
+    rng = np.random.default_rng(5)
+    states = [(rng.uniform(lo_lim - 0.02, up_lim + 0.02), rng.uniform(-3.0, 3.0, 7)) for _ in range(40)]
+    # 5 mm from a limit at 2.5 rad/s towards it: too fast to stop (negative discriminant), on both sides
+    states += [(up_lim - 0.005, np.full(7, 2.5)), (lo_lim + 0.005, np.full(7, -2.5)),
+               (rng.uniform(up_lim - 0.05, up_lim), rng.uniform(-1.0, 3.0, 7))]
+    for q, qd in states:
+        lo, up = lim.bounds(SimpleNamespace(q=q, qd=qd))  # type: ignore[arg-type]
+        for i in range(7):
+            assert up[i] == pytest.approx(upper_bound(up_lim[i] - q[i], qd[i], amax[i]), rel=1e-9, abs=1e-6)
+            assert lo[i] == pytest.approx(-upper_bound(q[i] - lo_lim[i], -qd[i], amax[i]), rel=1e-9, abs=1e-6)
 
 
 def test_position_bounds_brake_a_joint_that_cannot_stop_in_time(panda: armctl.Dynamics) -> None:
