@@ -45,6 +45,8 @@ class Adaptive(Controller):
     control-period length (anew when dt changes by more than 1e-9 relative).
     """
 
+    _outside = False  # whether the last projection changed θ̂ (see _project); reset() clears it
+
     lam = Gain("Λ (n×n); the gains may be reassigned between calls (checked again).")
     kd = Gain("K_D (n×n).")
     gamma = Gain("Γ (13n×13n).", size=lambda owner: 13 * owner.n)

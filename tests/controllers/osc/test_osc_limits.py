@@ -82,6 +82,8 @@ def test_position_bounds_are_the_module_formulas(panda: armctl.Dynamics) -> None
         for i in range(7):
             assert up[i] == pytest.approx(upper_bound(up_lim[i] - q[i], qd[i], amax[i]), rel=1e-9, abs=1e-6)
             assert lo[i] == pytest.approx(-upper_bound(q[i] - lo_lim[i], -qd[i], amax[i]), rel=1e-9, abs=1e-6)
+    with pytest.raises(ValueError, match="read-only"):  # taken at bind: an edit in place would be ignored
+        lim.upper[0] = 0.0
 
 
 def test_position_bounds_brake_a_joint_that_cannot_stop_in_time(panda: armctl.Dynamics) -> None:

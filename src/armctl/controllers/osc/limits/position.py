@@ -29,7 +29,10 @@ from armctl.model.robot import RobotModel
 
 class JointPositionLimit(Limit):
     """q_min + margin ≤ q ≤ q_max − margin [rad], enforced through q̈ bounds (see the module); ``dt`` the
-    control period [s], ``max_deceleration`` a_max [rad/s²] the braking the joints can count on."""
+    control period [s], ``max_deceleration`` a_max [rad/s²] the braking the joints can count on. The settings
+    are taken when the limit is bound to a model (by the controller) and kept as read-only arrays: to change
+    them, make a new limit. Near the point where a joint can only just stop (discriminant ≈ 0) the bound is
+    accurate to ~1e-4 rad/s² (the affine form rounds q_max and q before they cancel)."""
 
     kind = "position_limit"
 
@@ -45,6 +48,8 @@ class JointPositionLimit(Limit):
         self.max_deceleration = per_joint(self._amax, np.zeros(0), n, "max_deceleration")
         self.lower = per_joint(self._lo, model.lower, n, "lower position limit", positive=False) + self.margin
         self.upper = per_joint(self._up, model.upper, n, "upper position limit", positive=False) - self.margin
+        for arr in (self.max_deceleration, self.lower, self.upper):
+            arr.flags.writeable = False
         if (self.lower >= self.upper).any():
             raise InvalidParameterError(f"position limits (with margin {self.margin}) leave no range: lower "
                                         f"{self.lower.tolist()}, upper {self.upper.tolist()}", value=self.margin)
