@@ -53,13 +53,13 @@ class Controller(ABC):
     def __call__(self, t: float, q: ArrayLike, qd: ArrayLike, ref: Reference) -> FloatArray:
         """τ for the measured state (q, q̇) at time t [s] and the reference ``ref``."""
         # the cheap tests first: this runs every control period
-        if ref.__class__ is not Reference or ref.q.shape != self._shape:
+        if ref.__class__ is not Reference or len(ref.q) != self.n:  # a Reference's arrays are 1-D
             self.check_reference(ref)  # raises, unless ref is a subclass of the right size
         if t.__class__ is not float:
             t = scalar(t, "t")
         try:
-            ok = (q.dtype is _FLOAT and qd.dtype is _FLOAT  # type: ignore[union-attr]
-                  and q.shape == self._shape and qd.shape == self._shape)  # type: ignore[union-attr]
+            ok = (q.dtype is _FLOAT and qd.dtype is _FLOAT and q.ndim == qd.ndim == 1  # type: ignore[union-attr]
+                  and len(q) == len(qd) == self.n)  # type: ignore[arg-type]  (ints: cheaper than shape tuples)
         except AttributeError:
             ok = False
         if ok:
