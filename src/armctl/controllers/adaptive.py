@@ -7,14 +7,14 @@ from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray, Gain, scalar, vector
 from armctl.controllers.base import Controller
-from armctl.controllers.passivity import sliding, sliding_map
+from armctl.controllers.passivity import SlidingGains, sliding
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError
 from armctl.model.consistency import project_physical, projection
 from armctl.reference import Reference
 
 
-class Adaptive(Controller):
+class Adaptive(SlidingGains, Controller):
     """τ = Y(q, q̇, q̇_r, q̈_r) θ̂ + τ_o(q̇) − K_D s,   θ̂̇ = −Γ (Yᵀ s + σ (θ̂ − θ₀) + κ W_fᵀ (W_f θ̂ − τ_f))
 
     (Slotine & Li 1987; s, q̇_r, q̈_r as in :class:`PassivityBased`). τ_o(q̇) = ½(F_c⁺ − F_c⁻) for each moving
@@ -47,8 +47,6 @@ class Adaptive(Controller):
 
     _outside = False  # whether the last projection changed θ̂ (see _project); reset() clears it
 
-    lam = Gain("Λ (n×n); the gains may be reassigned between calls (checked again).")
-    kd = Gain("K_D (n×n).")
     gamma = Gain("Γ (13n×13n).", size=lambda owner: 13 * owner.n)
 
     def __init__(self, dynamics: Dynamics, lam: ArrayLike, kd: ArrayLike, gamma: ArrayLike,
@@ -72,9 +70,8 @@ class Adaptive(Controller):
         self.reset()
 
     def _gains_changed(self) -> None:
+        super()._gains_changed()
         self._dt, self._gamma_dt = 0.0, None  # Γ·dt formed anew at the next update
-        if hasattr(self, "_kd"):  # Λ and K_D both set
-            self._sliding = sliding_map(self._lam_matrix, self._kd_matrix)
 
     def reset(self) -> None:
         super().reset()

@@ -29,7 +29,21 @@ def sliding(q: FloatArray, qd: FloatArray, ref: Reference, p: FloatArray) -> Flo
     return p.dot(np.concatenate((ref.q, ref.qd, ref.qdd, q, qd))).reshape(6, -1)  # type: ignore[no-any-return]
 
 
-class PassivityBased(Controller):
+class SlidingGains:
+    """Mixin of the Slotine–Li controllers: the gains Λ and K_D, and the map P = :func:`sliding_map` built
+    from them (anew whenever one is reassigned)."""
+
+    n: int
+
+    lam = Gain("Λ (n×n); may be reassigned between calls (checked again).")
+    kd = Gain("K_D (n×n); may be reassigned between calls (checked again).")
+
+    def _gains_changed(self) -> None:
+        if hasattr(self, "_kd"):  # Λ and K_D both set
+            self._sliding = sliding_map(self._lam_matrix, self._kd_matrix)  # type: ignore[attr-defined]
+
+
+class PassivityBased(SlidingGains, Controller):
     """τ = M(q) q̈_r + C(q, q̇) q̇_r + g(q) + F_v q̇_r + F_c sgn(q̇) − K_D s  (Slotine & Li 1987).
 
     The closed loop M ṡ + C s + (K_D + F_v) s = 0 is passive: with Ṁ − 2C skew-symmetric, V = ½ sᵀM s
@@ -40,18 +54,11 @@ class PassivityBased(Controller):
     lam: Λ [1/s]; kd: K_D [N·m·s/rad] (scalar, vector or matrix).
     """
 
-    lam = Gain("Λ (n×n); may be reassigned between calls (checked again).")
-    kd = Gain("K_D (n×n); may be reassigned between calls (checked again).")
-
     def __init__(self, dynamics: Dynamics, lam: ArrayLike, kd: ArrayLike) -> None:
         super().__init__(dynamics)
         self.lam, self.kd = lam, kd
         # no state; a NaN/inf in q_j or q̇_j reaches s_j = q̃̇_j + (Λq̃)_j and τ through −K_D s (K_D ≻ 0)
         self._checks_result = self._own_law()
-
-    def _gains_changed(self) -> None:
-        if hasattr(self, "_kd"):  # both set
-            self._sliding = sliding_map(self._lam_matrix, self._kd_matrix)
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         dyn = self.dynamics

@@ -351,25 +351,20 @@ class Dynamics(ABC):
         friction is taken at q̇_r (it then adds F_v s to the closed loop's damping); Coulomb friction at the
         measured q̇.
         """
-        if self._checked4(q, qd, qd_r, qdd_r):
-            try:
-                return self._passivity_regressor(q, qd, qd_r, qdd_r, *self._polarisation(qd, qd_r))
-            except TypeError:  # an object array of numbers, which Pinocchio refuses: converted below
-                pass
-        q, qd, qd_r, qdd_r = self._inputs(("q", "qd", "qd_r", "qdd_r"), q, qd, qd_r, qdd_r)
-        return self._passivity_regressor(q, qd, qd_r, qdd_r, *self._polarisation(qd, qd_r))
+        return self._passivity_call(self._passivity_regressor, q, qd, qd_r, qdd_r)
 
     def passivity_torque(self, q: ArrayLike, qd: ArrayLike, qd_r: ArrayLike, qdd_r: ArrayLike) -> FloatArray:
         """M q̈_r + C(q, q̇) q̇_r + g + F_v q̇_r + F_c sgn(q̇) (= passivity_regressor(...) @ π, with the Coulomb
         asymmetry offset), from two inverse-dynamics evaluations by the same polarisation as
         :meth:`passivity_regressor`."""
-        if self._checked4(q, qd, qd_r, qdd_r):
-            try:
-                return self._passivity_torque(q, qd, qd_r, qdd_r, *self._polarisation(qd, qd_r))
-            except TypeError:  # an object array of numbers, which Pinocchio refuses: converted below
-                pass
-        q, qd, qd_r, qdd_r = self._inputs(("q", "qd", "qd_r", "qdd_r"), q, qd, qd_r, qdd_r)
-        return self._passivity_torque(q, qd, qd_r, qdd_r, *self._polarisation(qd, qd_r))
+        return self._passivity_call(self._passivity_torque, q, qd, qd_r, qdd_r)
+
+    def _passivity_call(self, primitive: Any, q: Any, qd: Any, qd_r: Any, qdd_r: Any) -> FloatArray:
+        """``primitive(q, q̇, q̇_r, q̈_r, a, w)`` on the inputs as given when they already are finite float64
+        (n,) arrays (:meth:`_checked4`), else on checked copies (named errors)."""
+        if not self._checked4(q, qd, qd_r, qdd_r):
+            q, qd, qd_r, qdd_r = self._inputs(("q", "qd", "qd_r", "qdd_r"), q, qd, qd_r, qdd_r)
+        return primitive(q, qd, qd_r, qdd_r, *self._polarisation(qd, qd_r))  # type: ignore[no-any-return]
 
     # The primitives behind the two methods above, on checked inputs and with the polarisation's velocities
     # a = q̇_r + s/2 and w = s/2, s = q̇ − q̇_r (the Slotine–Li controllers form them in the same product as the

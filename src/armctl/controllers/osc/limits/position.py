@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, scalar
+from armctl._checks import FloatArray, readonly, scalar
 from armctl.controllers.osc.limits.base import Limit, per_joint
 from armctl.controllers.osc.state import ModelState
 from armctl.errors import InvalidParameterError
@@ -49,7 +49,7 @@ class JointPositionLimit(Limit):
         self.lower = per_joint(self._lo, model.lower, n, "lower position limit", positive=False) + self.margin
         self.upper = per_joint(self._up, model.upper, n, "upper position limit", positive=False) - self.margin
         for arr in (self.max_deceleration, self.lower, self.upper):
-            arr.flags.writeable = False
+            readonly(arr)
         if (self.lower >= self.upper).any():
             raise InvalidParameterError(f"position limits (with margin {self.margin}) leave no range: lower "
                                         f"{self.lower.tolist()}, upper {self.upper.tolist()}", value=self.margin)

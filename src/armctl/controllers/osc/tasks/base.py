@@ -80,8 +80,7 @@ class MotionTask(Task):
     """A task on q̈ with PD gains ``kp`` [1/s²] and ``kd`` [1/s] (each a scalar, a (dim,) vector or a
     dim×dim matrix, symmetric positive definite; ``kd=None``: critical damping 2√kp for a scalar kp)."""
 
-    # on the hot path diagonal gains (isotropic ones too) are vectors (``_kp``, ``_kd``): elementwise products
-    # with an array cost about half those with a Python float
+    # the hot path uses the law's matrices built from the gains in _gains_changed
     kp = Gain("K_p (dim×dim); may be reassigned between control periods (checked again).", size=_dim, label=_label)
     kd = Gain("K_d (dim×dim); may be reassigned between control periods (checked again).", size=_dim, label=_label)
 
