@@ -53,6 +53,23 @@ def test_frame_kinematics_against_finite_differences(rng: np.random.Generator) -
     np.testing.assert_allclose(fk_tool.velocity, dyn.jacobian(q) @ qd, atol=1e-12)
 
 
+def test_one_evaluator_follows_the_state(rng: np.random.Generator) -> None:
+    """The same evaluator at successive states gives each state's M, h = C q̇ + g and frame placements (its
+    arrays are views of a workspace rewritten in place: they must never be a stale copy), for two frames read
+    in turn."""
+    dyn = panda_dynamics()
+    ev = ModelEvaluator(dyn)
+    for _ in range(4):
+        q, qd = Q_HOME + rng.uniform(-0.8, 0.8, 7), rng.uniform(-1, 1, 7)
+        state = ev.evaluate(q, qd)
+        np.testing.assert_allclose(state.mass, dyn.mass_matrix(q), atol=1e-12)
+        np.testing.assert_allclose(state.bias, dyn.inverse_dynamics(q, qd, np.zeros(7)), atol=1e-10)
+        for frame in (None, "panda_link4"):
+            fk, pose = state.frame(frame), dyn.frame_pose(q, frame)
+            np.testing.assert_allclose(fk.position, pose[:3, 3], atol=1e-12)
+            np.testing.assert_allclose(fk.rotation, pose[:3, :3], atol=1e-12)
+
+
 def test_the_three_forms_of_a_gain_agree(panda: armctl.Dynamics) -> None:
     state = ModelEvaluator(panda).evaluate(Q_HOME + 0.1, np.full(7, 0.2))
     out = []
@@ -115,3 +132,4 @@ def test_pose_task_residual_is_the_textbook_law(panda: armctl.Dynamics) -> None:
     shifted.set_target(target, twist, acc)
     np.testing.assert_allclose(shifted.residual(state, 0.0, ref)[1], expected + kp[:, 2] * 0.05, rtol=1e-10,
                                atol=1e-10)
+
