@@ -133,3 +133,29 @@ def test_pose_task_residual_is_the_textbook_law(panda: armctl.Dynamics) -> None:
     np.testing.assert_allclose(shifted.residual(state, 0.0, ref)[1], expected + kp[:, 2] * 0.05, rtol=1e-10,
                                atol=1e-10)
 
+
+def test_posture_residual_is_the_textbook_law(panda: armctl.Dynamics) -> None:
+    """ẍ* = q̈_ref + K_d (q̇_ref − q̇) + K_p (q_ref − q) with full 7×7 gains, written out; a gain reassigned
+    later takes effect; a subclass that overrides ``kinematics`` is used by the residual too."""
+    rng = np.random.default_rng(5)
+    q, qd = Q_HOME + rng.uniform(-0.3, 0.3, 7), rng.uniform(-1.0, 1.0, 7)
+    state = ModelEvaluator(panda).evaluate(q, qd)
+    b = rng.uniform(-1.0, 1.0, (7, 7))
+    kp, kd = 40.0 * (np.eye(7) + 0.05 * b @ b.T), 8.0 * np.eye(7) + 0.05 * (b + b.T)  # SPD, not diagonal
+    ref = armctl.Reference(Q_HOME + 0.2, rng.uniform(-1, 1, 7), rng.uniform(-3, 3, 7))
+    task = PostureTask(7, kp=kp, kd=kd)
+    J, got = task.residual(state, 0.0, ref)
+    assert J is None
+    np.testing.assert_allclose(got, ref.qdd + kd @ (ref.qd - qd) + kp @ (ref.q - q), rtol=1e-12, atol=1e-12)
+    task.kp = 3.0
+    np.testing.assert_allclose(task.residual(state, 0.0, ref)[1], ref.qdd + kd @ (ref.qd - qd) + 3.0 * (ref.q - q),
+                               rtol=1e-12, atol=1e-12)
+
+    class Offset(PostureTask):
+        def kinematics(self, s, t, r):  # type: ignore[no-untyped-def]
+            J, d, err, ed, a = super().kinematics(s, t, r)
+            return J, d, err + 0.01, ed, a
+
+    offset = Offset(7, kp=kp, kd=kd)
+    np.testing.assert_allclose(offset.residual(state, 0.0, ref)[1],
+                               ref.qdd + kd @ (ref.qd - qd) + kp @ (ref.q - q + 0.01), rtol=1e-12, atol=1e-12)

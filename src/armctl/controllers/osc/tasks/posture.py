@@ -8,6 +8,7 @@ task rows.
 
 from __future__ import annotations
 
+import numpy as np
 from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray, vector
@@ -41,3 +42,18 @@ class PostureTask(MotionTask):
                    ) -> tuple[None, None, FloatArray, FloatArray, FloatArray]:
         r = self._fixed or ref
         return None, None, r.q - state.q, r.qd - state.qd, r.qdd  # type: ignore[return-value]
+
+    def _gains_changed(self) -> None:
+        super()._gains_changed()
+        if hasattr(self, "_kd"):
+            # ẍ* with the errors inside the product: [I, K_d, −K_d, K_p, −K_p]·[q̈_ref; q̇_ref; q̇; q_ref; q]
+            eye, kd, kp = np.eye(self.dim), self._kd_matrix, self._kp_matrix
+            self._posture_law = np.hstack((eye, kd, -kd, kp, -kp))
+
+    def residual(self, state: ModelState, t: float, ref: Reference) -> tuple[None, FloatArray]:
+        """(None, ẍ*): :meth:`kinematics` and the PD law in one product (see ``_gains_changed``); a subclass
+        that overrides :meth:`kinematics` gets the generic form on its own kinematics."""
+        if type(self).kinematics is not PostureTask.kinematics:
+            return super().residual(state, t, ref)  # type: ignore[return-value]
+        r = self._fixed or ref
+        return None, self._posture_law.dot(np.concatenate((r.qdd, r.qd, state.qd, r.q, state.q)))
