@@ -168,3 +168,27 @@ def test_slacks_report_how_far_each_task_is_from_met(panda: armctl.Dynamics) -> 
     w = np.sqrt(1e-2)
     np.testing.assert_allclose(slack.slacks["posture"], w * slack.residuals["posture"], atol=1e-6)
     assert np.abs(slack.slacks["position[tool]"]).max() < 1e-3 < np.abs(slack.slacks["posture"]).max()
+
+
+def test_controllers_pickle_for_process_pools(rng: np.random.Generator) -> None:
+    """An OSC controller (pose, contact-force and posture tasks, a contact, the default limits) and the
+    closed-form baseline survive a pickle round trip, as a process-pool sweep needs: the copy, rebuilt on its
+    own workspace, gives the original's torques (both starting cold) at several states in turn."""
+    import pickle
+
+    from armctl.controllers.osc import ClosedFormOSC
+
+    dyn = panda_dynamics()
+    contact = Contact(mode="sliding", mu=0.5, slip_velocity=1e-3)
+    pose = FramePoseTask(kp=200.0)
+    pose.set_target(dyn.frame_pose(Q_HOME))
+    qp = OperationalSpaceQP(dyn, [pose, ContactForceTask(contact, [0.0, 0.0, 5.0], weight=0.1),
+                                  PostureTask(7, weight=1e-3)], contacts=[contact])
+    closed = ClosedFormOSC(dyn, pose, PostureTask(7, kp=25.0))
+    for ctrl in (qp, closed):
+        copy = pickle.loads(pickle.dumps(ctrl))
+        ctrl.reset()
+        for _ in range(3):
+            q, qd = _state(rng)
+            ref = armctl.Reference(q)
+            np.testing.assert_allclose(copy(0.0, q, qd, ref), ctrl(0.0, q, qd, ref), rtol=1e-6, atol=1e-6)

@@ -52,6 +52,10 @@ class ProxQPSolver:
         self._x: dict[tuple[int, int, int, int], FloatArray | None] = {}
         self._solved = proxqp.QPSolverOutput.PROXQP_SOLVED
 
+    def __reduce__(self) -> tuple[Any, ...]:
+        # the settings only: proxsuite's QP objects do not pickle; the copy starts cold, as after reset()
+        return (ProxQPSolver, (self.eps_abs, self.max_iter, self.rho))
+
     def reset(self) -> None:
         """Forget the previous solutions (no warm start at the next solve)."""
         self._qps.clear()

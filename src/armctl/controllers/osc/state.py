@@ -97,6 +97,11 @@ class ModelEvaluator:
         # else None and the placement is read afresh each time (fetching it costs ~1.7 µs a call)
         self._pose_views: dict[int, tuple[FloatArray, FloatArray] | None] = {}
 
+    def __reduce__(self) -> tuple[Any, ...]:
+        # rebuilt from the dynamics (which pickle by rebuilding): the workspace and its views are this
+        # process's, and a view pickled would arrive as a copy that never changes
+        return (ModelEvaluator, (self.dynamics,))
+
     def frame_id(self, name: str | None) -> int:
         """Pinocchio frame index of ``name`` (checked against the model's frames; UnknownNameError lists them)."""
         fid = self._fid.get(name)
