@@ -115,7 +115,7 @@ class Adaptive(SlidingGains, Controller):
                 self.theta = self._project(self.theta)
         self._t_prev = t
         tau = y.dot(self.theta)
-        offset = dyn._fc_offset * np.abs(np.sign(qd)) if dyn._has_asymmetry else None  # (cheaper than q̇ != 0)
+        offset = dyn._coulomb_offset(qd) if dyn._has_asymmetry else None
         if offset is not None:
             tau += offset
         tau -= kd_s

@@ -244,13 +244,16 @@ class Dynamics(ABC):
         stiction)."""
         return self._friction(self._finite(qd, "qd"))
 
-    def _friction(self, qd: FloatArray) -> FloatArray:
-        if self._has_coulomb:  # [F_v, F_c,mean, F_c,offset]·[q̇; sgn q̇; |sgn q̇|]: one product (see __init__)
+    def _friction(self, qd: FloatArray, viscous_at: FloatArray | None = None) -> FloatArray:
+        """τ_f(q̇), with the viscous part taken at ``viscous_at`` instead of q̇ if given (the Slotine–Li law
+        takes it at q̇_r)."""
+        v = qd if viscous_at is None else viscous_at
+        if self._has_coulomb:  # [F_v, F_c,mean, F_c,offset]·[v; sgn q̇; |sgn q̇|]: one product (see __init__)
             sign = np.sign(qd)
             if self._has_asymmetry:
-                return self._friction_map.dot(np.concatenate((qd, sign, np.abs(sign))))  # type: ignore[no-any-return]
-            return self._friction_map.dot(np.concatenate((qd, sign)))  # type: ignore[no-any-return]
-        return self._fv * qd
+                return self._friction_map.dot(np.concatenate((v, sign, np.abs(sign))))  # type: ignore[no-any-return]
+            return self._friction_map.dot(np.concatenate((v, sign)))  # type: ignore[no-any-return]
+        return self._fv * v
 
     def inverse_dynamics(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike,
                          wrench: ArrayLike | None = None) -> FloatArray:
@@ -334,7 +337,10 @@ class Dynamics(ABC):
 
     def coulomb_offset(self, qd: ArrayLike) -> FloatArray:
         """The part of the friction torque outside π: ½(F_c⁺ − F_c⁻) for every moving joint, 0 at rest."""
-        return self._fc_offset * (self._finite(qd, "qd") != 0)
+        return self._coulomb_offset(self._finite(qd, "qd"))
+
+    def _coulomb_offset(self, qd: FloatArray) -> FloatArray:
+        return self._fc_offset * np.abs(np.sign(qd))  # (cheaper than q̇ != 0)
 
     def passivity_regressor(self, q: ArrayLike, qd: ArrayLike, qd_r: ArrayLike, qdd_r: ArrayLike) -> FloatArray:
         """Y(q, q̇, q̇_r, q̈_r) with Y π = M q̈_r + C(q, q̇) q̇_r + g + F_v q̇_r + F_c sgn(q̇) — the Slotine–Li form.
@@ -393,13 +399,8 @@ class Dynamics(ABC):
 
     def _add_passivity_friction(self, tau: FloatArray, qd: FloatArray, qd_r: FloatArray) -> FloatArray:
         """τ + F_v q̇_r + F_c sgn(q̇) (+ the Coulomb asymmetry offset), in place."""
-        if self._has_viscous:
-            tau += self._fv * qd_r
-        if self._has_coulomb:
-            sign = np.sign(qd)
-            tau += self._fc_mean * sign
-            if self._has_asymmetry:
-                tau += self._fc_offset * np.abs(sign)
+        if self._has_friction:
+            tau += self._friction(qd, qd_r)
         return tau
 
 

@@ -85,7 +85,6 @@ def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
     fixed_ref, ref_fn = setup.reference_source(reference, n)
     ref0 = fixed_ref if fixed_ref is not None else ref_fn(0.0)  # type: ignore[misc]
     call = setup.controller_call(controller, n)
-
     sig_q, sig_qd = (nonnegative_vector(noise_q, n, "noise_q (a standard deviation)"),
                       nonnegative_vector(noise_qd, n, "noise_qd (a standard deviation)"))
     lag = setup.delay_periods(delay)
