@@ -44,8 +44,10 @@ class Dynamics(ABC):
     backend: str = ""
     #: True if a NaN or inf in any entry of any input of the rigid-body primitives always reaches their result
     #: (numerical algorithms such as Pinocchio's, where NaN·0 = NaN); then the fast paths check the result
-    #: instead of the inputs. Not so for the Lagrange backend: CasADi simplifies its expressions, and a
-    #: frictionless pendulum's τ does not depend on q̇ at all.
+    #: instead of the inputs. Inverse dynamics checks τ₁ alone: the models are serial chains, and in the RNEA
+    #: the force on the first joint sums every link's, so any non-finite input reaches it. Not so for the
+    #: Lagrange backend: CasADi simplifies its expressions, and a frictionless pendulum's τ does not depend
+    #: on q̇ at all.
     _nan_propagates: bool = False
 
     def __new__(cls, model: RobotModel | None = None, backend: str = "pinocchio", **options: Any) -> Dynamics:
@@ -272,7 +274,7 @@ class Dynamics(ABC):
             if (self._nan_propagates and q.ndim == qd.ndim == qdd.ndim == 1  # type: ignore[union-attr]
                     and q.dtype is qd.dtype is qdd.dtype is _FLOAT):  # type: ignore[union-attr]  (as in _call)
                 out = self._rigid_torque(q, qd, qdd)
-                if math.isfinite(sum(out.tolist())):  # NaN/inf in any input shows up here (_nan_propagates)
+                if math.isfinite(out.item(0)):  # NaN/inf in any input shows up in τ₁ (_nan_propagates)
                     return out  # type: ignore[no-any-return]
         except Exception:
             pass
