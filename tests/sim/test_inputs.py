@@ -125,3 +125,29 @@ def test_a_run_stopped_before_its_first_sample_has_an_empty_energy_balance() -> 
     res = run(controller=nan_torque)
     assert res.diverged and res.diverged_at == 0.0 and len(res.t) == 0
     assert res.energy_balance().shape == (0,)
+
+
+@pytest.mark.parametrize("integrator", ["rk4", "implicit-euler"])
+@pytest.mark.parametrize("friction", ["stick-slip", None])
+def test_a_controller_cannot_change_the_state_in_place(integrator: str, friction: str | None) -> None:
+    """The state handed to the controller is read-only: writing into it raises, and the run it was given is
+    the same as with a controller that only reads it."""
+    plant = MODEL.with_friction(viscous=0.5, coulomb=0.2) if friction else MODEL
+    fric = friction or "smooth"
+
+    def meddling(t: float, q: np.ndarray, qd: np.ndarray, ref: armctl.Reference) -> np.ndarray:
+        try:
+            q += 1.0
+        except ValueError:
+            pass
+        else:
+            raise AssertionError("the controller changed q in place")
+        with pytest.raises(ValueError):
+            qd[0] = 0.0
+        return -q - qd
+
+    res = simulate(plant, meddling, REF, 0.05, integrator=integrator, friction=fric, q0=[0.3, -0.2])
+    ref = simulate(plant, lambda t, q, qd, r: -q - qd, REF, 0.05, integrator=integrator, friction=fric,
+                   q0=[0.3, -0.2])
+    np.testing.assert_array_equal(res.q, ref.q)
+    assert abs(res.q[-1] - res.q[0]).max() > 1e-4  # the arm moved: the runs are not trivially equal

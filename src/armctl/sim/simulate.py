@@ -118,6 +118,8 @@ def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
 
     Q, QD, QDD, TAU, TAUA = rec.q, rec.qd, rec.qdd, rec.tau, rec.tau_applied
     QM, QDM, WF, WE = rec.q_measured, rec.qd_measured, rec.work_friction, rec.work_external
+    QR, QDR = Q.view(), QD.view()
+    QR.flags.writeable = QDR.flags.writeable = False
     shape = (n,)
     wf = we = 0.0
     clipped: list[int] = []  # rows where saturation clipped τ
@@ -137,14 +139,12 @@ def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
             if qmax < math.inf and (max(ql) > qmax or -min(ql) > qmax):
                 divergence, rows = (t, f"a joint position is beyond max_position = {qmax:g}", q, v), k
                 break
-            q.flags.writeable = False
-            v.flags.writeable = False
             Q[k] = q
             QD[k] = v
             if not simple:
                 WF[k] = wf
                 WE[k] = we
-            qm, vm = q, v
+            qm, vm = QR[k], QDR[k]  # read-only views of the rows: the controller cannot change the state
             if rec.measured:
                 if noisy:
                     QM[k] = q + nq[k]  # type: ignore[index]
