@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 
 import armctl
 from armctl.controllers import Adaptive, ComputedTorque, Controller, PassivityBased, PDGravity
-from armctl.errors import ArmctlError, InvalidParameterError, NonFiniteError, ShapeError
+from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
 from armctl.model.consistency import is_physical, project_physical, projection
 from armctl.references import Quintic, Sinusoid, WaypointSpline
 from tests.conftest import dynamics
@@ -246,7 +246,7 @@ def test_bad_input() -> None:
         ct(0.0, np.zeros(7), np.zeros(7), np.zeros(7))  # type: ignore[arg-type]
     with pytest.raises(ShapeError, match="theta0"):
         Adaptive(dyn, 1.0, 1.0, 1.0, theta0=np.zeros(5))
-    with pytest.raises(ArmctlError):
+    with pytest.raises(InvalidParameterError, match="needs n"):
         Zero(None)
     assert np.array_equal(Zero(n=3)(0.0, np.zeros(3), np.zeros(3), armctl.Reference(np.zeros(3))), np.zeros(3))
 

@@ -8,6 +8,7 @@ Pinocchio's joint Jacobians.
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
@@ -124,10 +125,21 @@ def test_puma560_published_gravity_load() -> None:
         assert np.allclose(g, [0, 31.6399, 6.0351, 0, 0.0283, 0], atol=6e-5)
 
 
-def test_compiled_lagrange_matches_and_is_cached(tmp_path: object) -> None:
+def test_compiled_lagrange_matches_and_is_cached(tmp_path: Path) -> None:
+    """Compiled C code gives the VM's τ; a payload variant (same kinematics) loads the same library instead
+    of compiling another; a different arm is not cached."""
+    from armctl.dynamics.lagrange import LagrangeDynamics
+
     m = model("planar_2r")
-    a = armctl.Dynamics(m, backend="lagrange", compile=True)
-    b = armctl.Dynamics(m.with_payload(2.0, (0.1, 0, 0)), backend="lagrange", compile=True)  # same kinematics
+    assert not LagrangeDynamics.is_compiled_cached(m, cache_dir=str(tmp_path))
+    a = armctl.Dynamics(m, backend="lagrange", compile=True, cache_dir=str(tmp_path))
+    libs = list(tmp_path.rglob("*.so"))
+    assert len(libs) == 1 and LagrangeDynamics.is_compiled_cached(m, cache_dir=str(tmp_path))
+    built = libs[0].stat().st_mtime_ns
+    b = armctl.Dynamics(m.with_payload(2.0, (0.1, 0, 0)), backend="lagrange", compile=True,
+                        cache_dir=str(tmp_path))  # same kinematics
+    assert list(tmp_path.rglob("*.so")) == libs and libs[0].stat().st_mtime_ns == built  # loaded, not rebuilt
+    assert not LagrangeDynamics.is_compiled_cached(model("planar_3r"), cache_dir=str(tmp_path))
     ref_a, ref_b = dynamics("planar_2r", "lagrange"), armctl.Dynamics(m.with_payload(2.0, (0.1, 0, 0)),
                                                                        backend="lagrange")
     rng = np.random.default_rng(2)

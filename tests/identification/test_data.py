@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from armctl.dynamics.identification import IdentificationData, build_problem, prepare_data, solve_least_squares
-from armctl.errors import ArmctlError, InvalidParameterError, ShapeError
+from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
 from tests.conftest import dynamics
 
 
@@ -71,9 +71,9 @@ def test_decimation_and_trimming() -> None:
 @pytest.mark.parametrize(("t_len", "q_len", "tau_len"), [(100, 99, 100), (100, 100, 98), (101, 100, 100)])
 def test_mismatched_sample_counts_raise(t_len: int, q_len: int, tau_len: int) -> None:
     t = np.arange(t_len) * 1e-3
-    with pytest.raises(ArmctlError):
+    with pytest.raises(ShapeError, match=rf"q \({q_len}, 2\), tau \({tau_len}, 2\)"):
         prepare_data(t, np.zeros((q_len, 2)), np.zeros((tau_len, 2)), cutoff=10.0)
-    with pytest.raises(ArmctlError):
+    with pytest.raises(ShapeError, match=rf"\({q_len}, 2\)|{t_len} samples"):
         IdentificationData(t, np.zeros((q_len, 2)), np.zeros((q_len, 2)), np.zeros((q_len, 2)),
                            np.zeros((tau_len, 2)))
 
@@ -91,7 +91,7 @@ def test_other_bad_logs_raise() -> None:
         prepare_data(t, z, z, cutoff=600.0)
     z_nan = z.copy()
     z_nan[3, 1] = np.nan
-    with pytest.raises(ArmctlError):
+    with pytest.raises(NonFiniteError, match=r"^q holds NaN or inf"):
         prepare_data(t, z_nan, z, cutoff=10.0)
     with pytest.raises(ShapeError, match="joints"):
         build_problem(dynamics("planar_3r"), IdentificationData(t, z, z, z, z))

@@ -50,7 +50,10 @@ def test_optimised_trajectory_respects_limits_on_a_dense_grid() -> None:
     m = dyn.model
     assert np.all(np.abs(qd) <= 1.0 + 1e-9) and np.all(np.abs(qdd) <= 3.0 + 1e-9)
     assert np.all(q >= np.where(np.isfinite(m.lower), m.lower, -np.inf))
-    assert design.condition_number <= design.initial_condition_number * (1 + 1e-9)
+    assert np.all(q <= np.where(np.isfinite(m.upper), m.upper, np.inf))
+    # the optimiser improves on its start by a margin (it falls back to the start if it cannot, so a bare
+    # "not worse" would hold with no optimisation at all)
+    assert design.condition_number < 0.8 * design.initial_condition_number
     # it uses its limits: some joint reaches its velocity or acceleration limit within 10%
     assert np.abs(qd).max() > 0.9 or np.abs(qdd).max() > 2.7
 

@@ -98,13 +98,14 @@ def test_estimates_agree_with_truth_within_their_uncertainty(which: str, request
     err = np.abs(est.theta[: base.n_base] - truth)
     z = err / np.maximum(est.std[: base.n_base], 1e-12)
     assert np.mean(z <= 5.0) >= 0.8, np.round(z, 1)
+    assert z.max() < 20.0, np.round(z, 1)
 
 
 @pytest.mark.parametrize("which", CASES)
 def test_optimised_excitation_is_better_conditioned_and_within_limits(which: str,
                                                                         request: pytest.FixtureRequest) -> None:
     c: Case = request.getfixturevalue(which)
-    assert c.design.condition_number <= c.design.initial_condition_number * (1 + 1e-9)
+    assert c.design.condition_number < 0.8 * c.design.initial_condition_number  # improved by a margin
     t = np.linspace(0, c.design.trajectory.period, 5001)
     q, qd, _ = c.design.trajectory.evaluate(t)
     assert np.all(q >= c.truth.lower) and np.all(q <= c.truth.upper)

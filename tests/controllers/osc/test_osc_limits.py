@@ -59,29 +59,44 @@ def test_position_bounds_keep_every_joint_stoppable(panda: armctl.Dynamics) -> N
     assert (up > 100).all() and (lo < -100).all()
 
 
-def test_position_bounds_are_the_module_formulas(panda: armctl.Dynamics) -> None:
-    """Both sides against the bounds written out joint by joint (the module's formulas, on Python floats)."""
+def _largest_viable_acceleration(gap: float, v: float, a_max: float) -> float:
+    """The viability bound from its definition, by bisection: the largest q̈ held over one step Δt (exact
+    double integrator) after which the joint is still short of its limit (``gap`` ahead, moving at v towards
+    it) and, if it still moves towards the limit, can stop before it braking at a_max (v⁺² ≤ 2 a_max gap⁺);
+    never below −a_max (no more braking than that is asked for)."""
+    def viable(a: float) -> bool:
+        gap1, v1 = gap - DT * v - 0.5 * DT * DT * a, v + DT * a
+        return gap1 >= 0.0 and (v1 <= 0.0 or v1 * v1 <= 2.0 * a_max * gap1)
+
+    if not viable(-a_max):
+        return -a_max
+    lo, hi = -a_max, 1e9
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if viable(mid) else (lo, mid)
+    return lo
+
+
+def test_position_bounds_are_the_largest_viable_accelerations(panda: armctl.Dynamics) -> None:
+    """Both sides against the definition of viability (found by bisection, not by the module's closed form)."""
     amax = np.linspace(3.0, 9.0, 7)
     lim = JointPositionLimit(DT, max_deceleration=amax, margin=0.01)
     lim.bind(panda.model)
     lo_lim, up_lim = panda.model.lower + 0.01, panda.model.upper - 0.01
-
-    def upper_bound(gap: float, v: float, a: float) -> float:
-        pos = 2.0 * (gap - DT * v) / DT**2
-        disc = a * a * DT * DT + 8.0 * a * gap - 4.0 * a * DT * v
-        via = -a if disc < 0 else (-(2.0 * DT * v + a * DT * DT) + DT * math.sqrt(disc)) / (2.0 * DT * DT)
-        return max(min(pos, via), -a)
-
     rng = np.random.default_rng(5)
     states = [(rng.uniform(lo_lim - 0.02, up_lim + 0.02), rng.uniform(-3.0, 3.0, 7)) for _ in range(40)]
-    # 5 mm from a limit at 2.5 rad/s towards it: too fast to stop (negative discriminant), on both sides
+    # 5 mm from a limit at 2.5 rad/s towards it: too fast to stop, on both sides; 1 mm from it, less than
+    # half a step away at 2.5 rad/s, or moving away at 3 rad/s
     states += [(up_lim - 0.005, np.full(7, 2.5)), (lo_lim + 0.005, np.full(7, -2.5)),
+               (up_lim - 0.001, np.full(7, 2.5)), (up_lim - 0.001, np.full(7, -3.0)),
                (rng.uniform(up_lim - 0.05, up_lim), rng.uniform(-1.0, 3.0, 7))]
     for q, qd in states:
         lo, up = lim.bounds(SimpleNamespace(q=q, qd=qd))  # type: ignore[arg-type]
         for i in range(7):
-            assert up[i] == pytest.approx(upper_bound(up_lim[i] - q[i], qd[i], amax[i]), rel=1e-9, abs=1e-6)
-            assert lo[i] == pytest.approx(-upper_bound(q[i] - lo_lim[i], -qd[i], amax[i]), rel=1e-9, abs=1e-6)
+            expected_up = _largest_viable_acceleration(up_lim[i] - q[i], qd[i], amax[i])
+            expected_lo = -_largest_viable_acceleration(q[i] - lo_lim[i], -qd[i], amax[i])
+            assert up[i] == pytest.approx(expected_up, rel=1e-9, abs=1e-6)
+            assert lo[i] == pytest.approx(expected_lo, rel=1e-9, abs=1e-6)
     with pytest.raises(ValueError, match="read-only"):  # taken at bind: an edit in place would be ignored
         lim.upper[0] = 0.0
 

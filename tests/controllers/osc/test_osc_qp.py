@@ -126,16 +126,28 @@ def test_qpsolvers_and_proxsuite_agree(panda: armctl.Dynamics, rng: np.random.Ge
 
 
 def test_warm_start_reuses_the_previous_solution(panda: armctl.Dynamics) -> None:
-    task = FramePoseTask()
-    task.set_target(panda.frame_pose(Q_HOME))
-    ctrl = OperationalSpaceQP(panda, [task, PostureTask(7)], limits=[TorqueLimit()])
+    """A controller that solved the previous period starts from that solution: at the next state it needs
+    fewer iterations than a fresh (cold) controller solving the same problem, and reaches the same answer.
+    The target is 10 cm away, so that neither solve is trivial."""
+    def make() -> OperationalSpaceQP:
+        task = FramePoseTask()
+        target = panda.frame_pose(Q_HOME)
+        target[:3, 3] += [0.1, 0.0, -0.05]
+        task.set_target(target)
+        return OperationalSpaceQP(panda, [task, PostureTask(7)], limits=[TorqueLimit()])
+
     ref = armctl.Reference(Q_HOME)
     qd = np.full(7, 0.1)
-    ctrl(0.0, Q_HOME, qd, ref)
-    ctrl(0.001, Q_HOME + 1e-4, qd, ref)
-    assert ctrl.last_solution is not None and ctrl.last_solution.iterations <= 3
-    ctrl.reset()
-    assert ctrl.last_solution is None
+    warm, cold = make(), make()
+    warm(0.0, Q_HOME, qd, ref)
+    tau_warm = warm(0.001, Q_HOME + 1e-4, qd, ref)
+    tau_cold = cold(0.001, Q_HOME + 1e-4, qd, ref)
+    assert warm.last_solution is not None and cold.last_solution is not None
+    assert cold.last_solution.iterations > 0
+    assert warm.last_solution.iterations < cold.last_solution.iterations
+    np.testing.assert_allclose(tau_warm, tau_cold, atol=1e-4 * np.abs(tau_cold).max())
+    warm.reset()
+    assert warm.last_solution is None
 
 
 def test_lagrange_backend_gives_the_same_step() -> None:
