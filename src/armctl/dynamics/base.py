@@ -49,6 +49,10 @@ class Dynamics(ABC):
     #: Lagrange backend: CasADi simplifies its expressions, and a frictionless pendulum's τ does not depend
     #: on q̇ at all.
     _nan_propagates: bool = False
+    #: A view of the regressor workspace, Y[0, the last link's ten columns], that NaN or inf in any input of
+    #: the (passivity) regressor reaches, by the argument above (only where ``_nan_propagates``); None:
+    #: the fast paths check the inputs.
+    _regressor_probe: FloatArray | None = None
 
     def __new__(cls, model: RobotModel | None = None, backend: str = "pinocchio", **options: Any) -> Dynamics:
         if cls is Dynamics:
@@ -321,9 +325,14 @@ class Dynamics(ABC):
         """
         try:  # _inputs' fast path, inlined
             if (q.ndim == qd.ndim == qdd.ndim == 1  # type: ignore[union-attr]  (Pinocchio checks the lengths)
-                    and q.dtype is qd.dtype is qdd.dtype is _FLOAT  # type: ignore[union-attr]  (as in _call)
-                    and math.isfinite(sum(q.tolist()) + sum(qd.tolist()) + sum(qdd.tolist()))):  # type: ignore[union-attr]
-                return self._rigid_regressor(q, qd, qdd, (qd, qd))  # type: ignore[arg-type]
+                    and q.dtype is qd.dtype is qdd.dtype is _FLOAT):  # type: ignore[union-attr]  (as in _call)
+                probe = self._regressor_probe
+                if probe is not None:  # the result shows any non-finite input
+                    y = self._rigid_regressor(q, qd, qdd, (qd, qd))  # type: ignore[arg-type]
+                    if math.isfinite(sum(probe.tolist())):
+                        return y
+                elif math.isfinite(sum(q.tolist()) + sum(qd.tolist()) + sum(qdd.tolist())):  # type: ignore[union-attr]
+                    return self._rigid_regressor(q, qd, qdd, (qd, qd))  # type: ignore[arg-type]
         except Exception:  # not arrays, or a length Pinocchio refuses: the checks below name the input
             pass
         q, qd, qdd = self._inputs(("q", "qd", "qdd"), q, qd, qdd)
@@ -359,6 +368,17 @@ class Dynamics(ABC):
         friction is taken at q̇_r (it then adds F_v s to the closed loop's damping); Coulomb friction at the
         measured q̇.
         """
+        probe = self._regressor_probe
+        if probe is not None:  # the result shows any non-finite input: check only what it would not show
+            try:
+                if (q.dtype is qd.dtype is qd_r.dtype is qdd_r.dtype is _FLOAT  # type: ignore[union-attr]
+                        and q.ndim == qd.ndim == qd_r.ndim == qdd_r.ndim == 1  # type: ignore[union-attr]
+                        and len(qd) == len(qd_r) == self.n):  # (q̇ − q̇_r would broadcast)
+                    y = self._passivity_regressor(q, qd, qd_r, qdd_r, *self._polarisation(qd, qd_r))
+                    if math.isfinite(sum(probe.tolist())):
+                        return y
+            except Exception:  # as in regressor
+                pass
         return self._passivity_call(self._passivity_regressor, q, qd, qd_r, qdd_r)
 
     def passivity_torque(self, q: ArrayLike, qd: ArrayLike, qd_r: ArrayLike, qdd_r: ArrayLike) -> FloatArray:

@@ -64,6 +64,9 @@ class PinocchioDynamics(Dynamics):
         self._yt_rotor, self._yt_viscous, self._yt_coulomb = (flat[c * n::PARAMS_PER_JOINT * n + 1]
                                                               for c in (10, 11, 12))
         self._y = self._yt.reshape(PARAMS_PER_JOINT * n, n).T  # (n, 13n), column-major view
+        # Y[0, 13(n−1) + c], c < 10: the first joint's torque per inertial parameter of the last link, which
+        # every input reaches (see Dynamics._regressor_probe)
+        self._regressor_probe = self._yt[n - 1, :10, 0]
         # Pinocchio keeps its regressor in Data.jointTorqueRegressor, which eigenpy hands out as a view; the
         # views are used only if they really are views (checked here), else the returned copies are read
         rng = np.random.default_rng(0)
