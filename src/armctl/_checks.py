@@ -68,6 +68,17 @@ def scalar(x: Any, name: str, *, positive: bool = False, nonnegative: bool = Fal
     return v
 
 
+def whole_number(x: Any, name: str, minimum: int = 0) -> int:
+    """``x`` as an int: an int, a NumPy integer or a float with an integral value (2.0), at least ``minimum``.
+    Booleans, fractions, NaN/inf and anything else raise an InvalidParameterError naming the value."""
+    whole = (not isinstance(x, bool | np.bool_)
+             and (isinstance(x, int | np.integer)
+                  or (isinstance(x, float | np.floating) and math.isfinite(x) and float(x).is_integer())))
+    if not whole or x < minimum:
+        raise InvalidParameterError(f"{name} must be a whole number >= {minimum}, got {x!r}", value=x)
+    return int(x)
+
+
 def nonnegative_vector(x: ArrayLike, n: int, name: str) -> FloatArray:
     """A scalar (for every entry) or an (n,) vector, finite and ≥ 0 — weights, standard deviations, …"""
     a = real_array(x, name)

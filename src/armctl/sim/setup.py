@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, scalar, vector
+from armctl._checks import FloatArray, scalar, vector, whole_number
 from armctl.controllers.base import Controller
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError, ShapeError, UnknownNameError
@@ -118,18 +118,11 @@ def initial_state(q0: ArrayLike | None, qd0: ArrayLike | None, ref0: Reference, 
 
 def seed_value(seed: Any) -> int | None:
     """``seed`` for numpy's default_rng: None or a whole number >= 0."""
-    if seed is None:
-        return None
-    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
-        raise InvalidParameterError(f"seed must be None or a whole number >= 0, got {seed!r}", value=seed)
-    return int(seed)
+    return None if seed is None else whole_number(seed, "seed")
 
 
 def delay_periods(delay: Any) -> int:
-    if isinstance(delay, bool) or not isinstance(delay, int | np.integer) or delay < 0:
-        raise InvalidParameterError(f"delay must be a whole number of control periods >= 0, got {delay!r}",
-                                    value=delay)
-    return int(delay)
+    return whole_number(delay, "delay (in control periods)")
 
 
 def bound(x: Any, name: str) -> float:

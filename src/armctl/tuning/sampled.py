@@ -25,18 +25,11 @@ from typing import Any
 
 import numpy as np
 
-from armctl._checks import scalar
-from armctl.errors import InvalidParameterError
+from armctl._checks import scalar, whole_number
 
 
 def _delay(delay: Any) -> int:
-    try:
-        whole = int(delay) == delay
-    except (TypeError, ValueError, OverflowError):
-        whole = False
-    if not whole or delay < 0:
-        raise InvalidParameterError(f"delay must be a whole number of periods >= 0, got {delay!r}", value=delay)
-    return int(delay)
+    return whole_number(delay, "delay (in periods)")
 
 
 def sampled_pd_loop(kp: float, kd: float, period: float, delay: int = 1) -> Any:

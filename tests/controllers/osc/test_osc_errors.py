@@ -113,8 +113,8 @@ def test_build_and_solve_check_their_inputs(panda: armctl.Dynamics) -> None:
     ({"weight": -1.0}, r"weight must be >= 0, got \[-1.0"), ({"weight": [1.0, -0.1, 1.0]}, r"weight must be >= 0"),
     ({"kp": -5.0}, "kp must be positive definite"),
     ({"kp": [[1.0, 2.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], "kd": 1.0}, "kp must be symmetric"),
-    ({"priority": -1}, "priority must be an integer >= 0, got -1"),
-    ({"priority": 1.5}, "priority must be an integer >= 0, got 1.5"), ({"weight": np.nan}, "weight holds NaN")])
+    ({"priority": -1}, "priority must be a whole number >= 0, got -1"),
+    ({"priority": 1.5}, "priority must be a whole number >= 0, got 1.5"), ({"weight": np.nan}, "weight holds NaN")])
 def test_negative_weights_gains_and_bad_priorities(kwargs: dict, message: str) -> None:
     with pytest.raises(ArmctlError, match=message):
         FramePositionTask(**kwargs)

@@ -23,7 +23,7 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, scalar, vector
+from armctl._checks import FloatArray, scalar, vector, whole_number
 from armctl.controllers.osc.state import ModelState
 from armctl.errors import InvalidParameterError, UnknownNameError
 
@@ -47,8 +47,7 @@ class Contact:
         length = float(np.linalg.norm(nrm))
         if length < 1e-9:
             raise InvalidParameterError("contact normal must be a non-zero vector", value=normal)
-        if isinstance(facets, bool) or not isinstance(facets, (int, np.integer)) or facets < 3:
-            raise InvalidParameterError(f"facets must be an integer >= 3, got {facets!r}", value=facets)
+        facets = whole_number(facets, "facets", minimum=3)
         self.frame = frame
         self.name = name or f"contact[{frame or 'tool'}]"
         self.mode = mode

@@ -25,7 +25,7 @@ import numpy as np
 import scipy.signal
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, readonly, scalar
+from armctl._checks import FloatArray, readonly, scalar, whole_number
 from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
 
 
@@ -139,10 +139,8 @@ def prepare_data(t: ArrayLike, q: ArrayLike, tau: ArrayLike, *, cutoff: float, o
         raise InvalidParameterError(f"cutoff {fc:g} Hz must be below the Nyquist frequency {0.5 * fs:g} Hz",
                                     value=cutoff)
     for name, x in (("order", order), ("decimate", decimate), ("trim", trim)):
-        whole = isinstance(x, int | np.integer) or (isinstance(x, float | np.floating) and float(x).is_integer())
-        if x is not None and (isinstance(x, bool) or not whole or x < (name != "trim")):
-            raise InvalidParameterError(f"{name} must be a whole number >= {int(name != 'trim')}, got {x!r}",
-                                        value=x)
+        if x is not None:
+            whole_number(x, name, minimum=int(name != "trim"))
     k = int(decimate) if decimate is not None else max(1, int(fs / (4.0 * fc)))
     if k < 1 or fs / k < 2.0 * fc:
         raise InvalidParameterError(f"decimate={k} puts the new Nyquist frequency {0.5 * fs / max(k, 1):g} Hz "

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, Gain, nonnegative_vector
+from armctl._checks import FloatArray, Gain, nonnegative_vector, whole_number
 from armctl.controllers.osc.state import ModelState
 from armctl.errors import InvalidParameterError
 from armctl.reference import Reference
@@ -40,10 +40,7 @@ class Task(ABC):
         self.dim = int(dim)
         self.name = str(name)
         self.weight = weight  # type: ignore[assignment]  (checked by the property)
-        if isinstance(priority, bool) or not isinstance(priority, (int, np.integer)) or priority < 0:
-            raise InvalidParameterError(f"{name}: priority must be an integer >= 0, got {priority!r}",
-                                        value=priority)
-        self.priority = int(priority)
+        self.priority = whole_number(priority, f"{name}: priority")
 
     @property
     def weight(self) -> FloatArray:
