@@ -334,3 +334,30 @@ def test_task_gains_reassigned_reach_the_qp() -> None:
     task.kp, task.kd = 400.0, 40.0  # type: ignore[assignment]
     fresh = OperationalSpaceQP(dyn, [PostureTask(7, kp=400.0, kd=40.0)])
     np.testing.assert_allclose(changed(0.0, q, qd, ref), fresh(0.0, q, qd, ref), rtol=1e-9, atol=1e-9)
+
+
+def test_a_non_finite_torque_from_a_finite_state_raises() -> None:
+    """Gains, estimates or a state too large for floats: the law's τ overflows although every input is
+    finite. Every controller, with or without state, and a user's own, raises instead of returning it."""
+    dyn = dynamics("planar_2r")
+    z, ref = np.zeros(2), armctl.Reference(np.zeros(2))
+
+    class Overflowing(Controller):
+        def compute(self, t: float, q: np.ndarray, qd: np.ndarray, r: armctl.Reference) -> np.ndarray:
+            return np.array([1e308, 1e308]) * 10.0
+
+    class AsList(Controller):  # a user's law may return a list: passed through as it is
+        def compute(self, t: float, q: np.ndarray, qd: np.ndarray, r: armctl.Reference) -> list[float]:
+            return [1.0, 2.0]
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # NumPy's overflow warnings on the way
+        cases = [(PDGravity(dyn, 100.0, 10.0), np.array([1e307, 0.0])),
+                 (PassivityBased(dyn, 1e308, 10.0), np.array([1.0, 0.0])),
+                 (ComputedTorque(dyn, 1e308, 1e308, ki=1.0), np.array([1.0, 0.0])),  # with state (integral)
+                 (Adaptive(dyn, 1.0, 10.0, 1.0, theta0=np.full(26, 1e308)), np.array([1.0, 0.5])),
+                 (Overflowing(n=2), z)]
+        for ctrl, q in cases:
+            with pytest.raises(NonFiniteError, match=rf"^{type(ctrl).__name__} gave a non-finite torque"):
+                ctrl(0.0, q, z, ref)
+    assert AsList(n=2)(0.0, z, z, ref) == [1.0, 2.0]

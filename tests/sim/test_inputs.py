@@ -151,3 +151,17 @@ def test_a_controller_cannot_change_the_state_in_place(integrator: str, friction
                    q0=[0.3, -0.2])
     np.testing.assert_array_equal(res.q, ref.q)
     assert abs(res.q[-1] - res.q[0]).max() > 1e-4  # the arm moved: the runs are not trivially equal
+
+
+@pytest.mark.parametrize("returned", [np.array([1j, 0.0]), ["a", "b"], {"a": 1.0}])
+def test_a_torque_that_is_not_real_numbers_is_named(returned: object) -> None:
+    """Complex torques are refused, not cut to their real part (NumPy would only warn); text and dicts too."""
+    with pytest.raises(InvalidParameterError, match=r"^the controller's torque at t = 0 s must hold real numbers"):
+        run(controller=lambda t, q, qd, r: returned)
+
+
+@pytest.mark.parametrize("returned", [[1.0, -2.0], np.array([1, -2]), np.array([1.0, -2.0], dtype=">f4")])
+def test_lists_integers_and_other_float_types_are_taken_as_torques(returned: object) -> None:
+    res = run(controller=lambda t, q, qd, r: returned)
+    np.testing.assert_array_equal(res.tau, np.tile([1.0, -2.0], (len(res.t), 1)))
+    assert res.tau.dtype == np.float64

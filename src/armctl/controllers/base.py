@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 from abc import ABC, abstractmethod
-from typing import Any
+from typing import Any, NoReturn
 
 from numpy.typing import ArrayLike
 
@@ -72,11 +72,21 @@ class Controller(ABC):
                 if math.isfinite(sum(tau.tolist()) + t):  # t too: the stateless laws do not use it
                     return tau
                 self._checked(t, q, qd)  # NonFiniteError if an input is the cause
-                return tau
+                self._nonfinite_torque(tau, q, qd)
             ok = math.isfinite(sum(q.tolist()) + sum(qd.tolist()) + t)  # type: ignore[union-attr]
         if not ok:
             q, qd = self._checked(t, q, qd)
-        return self.compute(t, q, qd, ref)  # type: ignore[arg-type]
+        tau = self.compute(t, q, qd, ref)  # type: ignore[arg-type]
+        try:
+            if math.isfinite(sum(tau.tolist())):
+                return tau
+        except (AttributeError, TypeError):  # not a float array: a user's law may return a list
+            return tau
+        self._nonfinite_torque(tau, q, qd)
+
+    def _nonfinite_torque(self, tau: Any, q: Any, qd: Any) -> NoReturn:
+        raise NonFiniteError(f"{type(self).__name__} gave a non-finite torque {tau} from a finite state (q = {q}, "
+                             f"qd = {qd}): its gains, its estimates or the state are too large for floats", value=tau)
 
     def _checked(self, t: float, q: ArrayLike, qd: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """(q, q̇) as finite float (n,) arrays; a named error if t, q or q̇ is not what it should be."""

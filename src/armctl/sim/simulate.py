@@ -20,7 +20,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, nonnegative_vector
+from armctl._checks import FloatArray, nonnegative_vector, real_array
 from armctl.dynamics.base import Dynamics
 from armctl.errors import ShapeError, SimulationWarning
 from armctl.model.robot import RobotModel
@@ -37,6 +37,7 @@ from armctl.sim.stepper import advance
 from armctl.sim.stick_slip import NotPositiveDefinite
 
 _GT = float.__gt__
+_FLOAT = np.dtype(float)
 
 
 def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
@@ -155,7 +156,9 @@ def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
                 j = k - lag if k >= lag else 0
                 qm, vm = QM[j].copy(), QDM[j].copy()
             ref = fixed_ref if fixed_ref is not None else setup.check_reference(ref_fn(t), n, t)  # type: ignore[misc]
-            tau = np.asarray(call(t, qm, vm, ref), dtype=float)
+            tau = call(t, qm, vm, ref)
+            if tau.__class__ is not np.ndarray or tau.dtype is not _FLOAT:  # complex or text: named errors
+                tau = real_array(tau, f"the controller's torque at t = {t:g} s")
             if has_log and controller.last_log:  # type: ignore[union-attr]
                 rec.log_controller(k, controller.last_log)  # type: ignore[union-attr]
             if tau.shape != shape:
