@@ -77,3 +77,16 @@ def test_bad_sweep_arguments() -> None:
         sweep([("not", "a", "mapping")], progress=False)  # type: ignore[list-item]
     with pytest.raises(InvalidParameterError, match="max_workers"):
         sweep(cases(GAINS[:1]), max_workers=0, progress=False)
+    with pytest.raises(InvalidParameterError, match="cases must be an iterable"):
+        sweep(None, progress=False)  # type: ignore[arg-type]
+    with pytest.raises(InvalidParameterError, match="progress must be True, False or a text stream, got 'yes'"):
+        sweep(cases(GAINS[:1]), progress="yes")  # type: ignore[arg-type]
+
+
+def test_a_friction_model_needs_the_model_not_the_dynamics() -> None:
+    from armctl.sim.friction import SmoothFriction, StickSlip
+
+    dyn = armctl.Dynamics(armctl.models.planar_2r())
+    for cls in (SmoothFriction, StickSlip):
+        with pytest.raises(InvalidParameterError, match=r"RobotModel \(dynamics.model\), got PinocchioDynamics"):
+            cls(dyn)  # type: ignore[arg-type]

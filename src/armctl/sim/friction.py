@@ -33,6 +33,7 @@ from abc import ABC, abstractmethod
 import numpy as np
 
 from armctl._checks import FloatArray, scalar
+from armctl.errors import InvalidParameterError, UnknownNameError
 from armctl.model.robot import RobotModel
 
 
@@ -50,6 +51,9 @@ class FrictionModel(ABC):
     name: str = ""
 
     def __init__(self, model: RobotModel, stribeck: bool = True) -> None:
+        if not isinstance(model, RobotModel):
+            raise InvalidParameterError(f"a friction model takes the plant's RobotModel (dynamics.model), got "
+                                        f"{type(model).__name__}", value=model)
         fr = [j.friction for j in model.joints]
         self.n = model.n
         self.viscous = np.array([f.viscous for f in fr])
@@ -160,8 +164,6 @@ FRICTION_MODELS = ("stick-slip", "smooth")
 
 def make_friction(spec: str | FrictionModel, model: RobotModel) -> FrictionModel:
     """The friction model named ``spec`` ("stick-slip" or "smooth") for ``model``, or ``spec`` itself."""
-    from armctl.errors import InvalidParameterError, UnknownNameError
-
     if isinstance(spec, FrictionModel):
         if spec.n != model.n:
             raise InvalidParameterError(f"friction model is for {spec.n} joints, the plant has {model.n}",

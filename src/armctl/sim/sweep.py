@@ -21,6 +21,8 @@ from collections.abc import Callable, Iterable, Mapping
 from concurrent.futures import Executor, Future, ProcessPoolExecutor, as_completed
 from typing import Any, TextIO
 
+import numpy as np
+
 from armctl.errors import InvalidParameterError
 
 
@@ -62,7 +64,14 @@ def sweep(cases: Iterable[Mapping[str, Any]], *, run: Callable[..., Any] | None 
     """
     if run is None:
         from armctl.sim.simulate import simulate as run
-    case_list = list(cases)
+    try:
+        case_list = list(cases)
+    except TypeError:
+        raise InvalidParameterError(f"cases must be an iterable of keyword-argument mappings, got {cases!r}",
+                                    value=cases) from None
+    if not (isinstance(progress, bool | np.bool_) or callable(getattr(progress, "write", None))):
+        raise InvalidParameterError(f"progress must be True, False or a text stream, got {progress!r}",
+                                    value=progress)
     for i, c in enumerate(case_list):
         if not isinstance(c, Mapping):
             raise InvalidParameterError(f"case {i} must be a mapping of keyword arguments, got {type(c).__name__}",

@@ -14,11 +14,20 @@ from armctl.controllers.osc import (
     FrameOrientationTask,
     FramePoseTask,
     FramePositionTask,
+    JointPositionLimit,
+    JointVelocityLimit,
     OperationalSpaceQP,
     PostureTask,
     TorqueLimit,
 )
-from armctl.errors import ArmctlError, InfeasibleError, InvalidParameterError, ShapeError, UnknownNameError
+from armctl.errors import (
+    ArmctlError,
+    InfeasibleError,
+    InvalidParameterError,
+    NonFiniteError,
+    ShapeError,
+    UnknownNameError,
+)
 
 from .conftest import Q_HOME
 
@@ -165,3 +174,23 @@ def test_infeasible_qp_names_the_conflicting_rows(panda: armctl.Dynamics) -> Non
     assert "torque_limit[panda_joint4]" in str(e) or "acceleration_limit[panda_joint4]" in str(e)
     assert not any(nm.startswith("dynamics[") for nm in names)  # the equation of motion is never relaxed
     assert max(e.value.values()) > 1.0  # joint 4 needs ~20 N·m more than allowed
+
+
+@pytest.mark.parametrize(("make", "error", "message"), [
+    (lambda d: OperationalSpaceQP(d, None), InvalidParameterError, "tasks must be a Task or a sequence"),
+    (lambda d: OperationalSpaceQP(d, [PostureTask(7)], limits=5), InvalidParameterError,
+     "limits must be a Limit or a sequence"),
+    (lambda d: PostureTask(0), InvalidParameterError, r"n \(the number of joints\) must be a whole number >= 1"),
+    (lambda d: PostureTask("a"), InvalidParameterError, "must be a whole number >= 1, got 'a'"),
+    (lambda d: OperationalSpaceQP(d, [PostureTask(7)], limits=[TorqueLimit(["a"] * 7)]), InvalidParameterError,
+     "torque limit must hold real numbers"),
+    # an infinite braking limit would turn the viability bounds into NaN (inf · 0) and so switch them off
+    (lambda d: OperationalSpaceQP(d, [PostureTask(7)], limits=[JointPositionLimit(1e-3, max_deceleration=np.inf)]),
+     NonFiniteError, r"max_deceleration must be finite for every joint, got \[inf"),
+    (lambda d: OperationalSpaceQP(d, [PostureTask(7)], limits=[JointVelocityLimit(1e-3, max_deceleration=np.nan)]),
+     NonFiniteError, "max_deceleration must be finite"),
+])
+def test_containers_counts_and_limits_are_checked(panda: armctl.Dynamics, make, error: type,  # type: ignore[no-untyped-def]
+                                                 message: str) -> None:
+    with pytest.raises(error, match=message):
+        make(panda)

@@ -71,7 +71,7 @@ class OperationalSpaceQP(Controller):
             raise InvalidParameterError(f"dynamics must be an armctl.Dynamics, got {type(dynamics).__name__}",
                                         value=dynamics)
         super().__init__(dynamics)
-        tasks = list(tasks) if not isinstance(tasks, Task) else [tasks]
+        tasks = _listed(tasks, Task, "tasks")
         if not tasks:
             raise InvalidParameterError("OperationalSpaceQP needs at least one task", value=tasks)
         for obj, cls, kind in [(t, Task, "task") for t in tasks] + [(c, Contact, "contact") for c in contacts]:
@@ -86,7 +86,8 @@ class OperationalSpaceQP(Controller):
         cdims = {c.name: c.dim for c in contacts}
         for t in tasks:
             t.check(self.evaluator, self.n, cdims)
-        limits = default_limits(scalar(dt, "dt", positive=True)) if limits is None else list(limits)
+        limits = default_limits(scalar(dt, "dt", positive=True)) if limits is None else _listed(limits, Limit,
+                                                                                                 "limits")
         for lim in limits:
             if not isinstance(lim, Limit):
                 raise InvalidParameterError(f"every limit must be an osc.Limit, got {type(lim).__name__}", value=lim)
@@ -143,3 +144,14 @@ class OperationalSpaceQP(Controller):
         super().reset()
         self.solver.reset()
         self.last_solution = None
+
+
+def _listed(items: Any, cls: type, name: str) -> list[Any]:
+    """``items`` (one ``cls`` or an iterable of them) as a list; anything else is named."""
+    if isinstance(items, cls):
+        return [items]
+    try:
+        return list(items)
+    except TypeError:
+        raise InvalidParameterError(f"{name} must be a {cls.__name__} or a sequence of them, got {items!r}",
+                                    value=items) from None

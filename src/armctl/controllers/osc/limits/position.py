@@ -45,7 +45,7 @@ class JointPositionLimit(Limit):
     def bind(self, model: RobotModel) -> None:
         super().bind(model)
         n = model.n
-        self.max_deceleration = per_joint(self._amax, np.zeros(0), n, "max_deceleration")
+        self.max_deceleration = per_joint(self._amax, np.zeros(0), n, "max_deceleration", finite=True)
         self.lower = per_joint(self._lo, model.lower, n, "lower position limit", positive=False) + self.margin
         self.upper = per_joint(self._up, model.upper, n, "upper position limit", positive=False) - self.margin
         for arr in (self.max_deceleration, self.lower, self.upper):

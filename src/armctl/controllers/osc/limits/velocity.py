@@ -30,7 +30,7 @@ class JointVelocityLimit(Limit):
     def bind(self, model: RobotModel) -> None:
         super().bind(model)
         self.limit = per_joint(self._given, model.velocity_limit, model.n, "velocity limit")
-        self.max_deceleration = per_joint(self._amax, np.zeros(0), model.n, "max_deceleration")
+        self.max_deceleration = per_joint(self._amax, np.zeros(0), model.n, "max_deceleration", finite=True)
 
     def bounds(self, state: ModelState) -> tuple[FloatArray, FloatArray]:
         inv = 1.0 / self.dt

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, vector
+from armctl._checks import FloatArray, vector, whole_number
 from armctl.controllers.osc.state import ModelState
 from armctl.controllers.osc.tasks.base import MotionTask
 from armctl.errors import ShapeError
@@ -26,7 +26,8 @@ class PostureTask(MotionTask):
 
     def __init__(self, n: int, kp: ArrayLike = 100.0, kd: ArrayLike | None = None, weight: ArrayLike = 1e-2,
                  priority: int = 0, name: str = "posture") -> None:
-        super().__init__(int(n), name, kp, kd, weight, priority)
+        super().__init__(whole_number(n, f"{name}: n (the number of joints)", minimum=1), name, kp, kd, weight,
+                         priority)
         self._fixed: Reference | None = None
 
     def set_target(self, q: ArrayLike | None, qd: ArrayLike | None = None, qdd: ArrayLike | None = None) -> None:
