@@ -26,7 +26,7 @@ from numpy.typing import ArrayLike
 
 from armctl._checks import FLOAT as _FLOAT
 from armctl._checks import FloatArray, vector
-from armctl.errors import NonFiniteError, UnknownNameError
+from armctl.errors import ArmctlError, InvalidParameterError, NonFiniteError, UnknownNameError
 from armctl.model.robot import PARAMS_PER_JOINT, RobotModel
 
 BACKENDS = ("pinocchio", "lagrange")
@@ -67,8 +67,6 @@ class Dynamics(ABC):
 
     def __init__(self, model: RobotModel, backend: str | None = None, **options: Any) -> None:
         if not isinstance(model, RobotModel):
-            from armctl.errors import InvalidParameterError
-
             raise InvalidParameterError(f"Dynamics needs a RobotModel, got {type(model).__name__}", value=model)
         if backend is not None and backend != self.backend:
             raise UnknownNameError("backend", backend, (self.backend,))
@@ -189,10 +187,29 @@ class Dynamics(ABC):
     def _checked_call(self, fn: Any, names: tuple[str, ...], *args: Any) -> FloatArray:
         """``fn(*args)`` on checked inputs (named errors), its result checked: the slow path of :meth:`_call`."""
         args = self._inputs(names, *args)
-        out = fn(*args)
+        try:
+            out = fn(*args)
+        except np.linalg.LinAlgError:  # the Lagrange backend's forward dynamics: M(q) singular
+            raise self._nonfinite_result(args[0], None) from None
         if not np.isfinite(out).all():
-            raise NonFiniteError(f"result is not finite although every input is: {out!r}", value=out)
+            raise self._nonfinite_result(args[0], out)
         return out  # type: ignore[no-any-return]
+
+    def _nonfinite_result(self, q: FloatArray, out: FloatArray | None) -> ArmctlError:
+        """The error for a result that is not finite (or could not be computed) although every input is: a
+        mass matrix that is not positive definite at q is named as such, with the joint of least inertia."""
+        m = self._mass(q)
+        try:
+            np.linalg.cholesky(m)
+        except np.linalg.LinAlgError:
+            d = np.diag(m)
+            k = int(np.argmin(d))
+            name = self.model.joints[k].name
+            return InvalidParameterError(
+                f"the mass matrix of {self.model.name!r} is not positive definite at q = {q} (smallest "
+                f"eigenvalue {np.linalg.eigvalsh(m).min():.3g}); joint {name!r} moves the least inertia (M_kk = "
+                f"{d[k]:.3g}): give the links it carries mass and inertia, or its motor a rotor inertia", value=q)
+        return NonFiniteError(f"result is not finite although every input is: {out!r}", value=out)
 
     def _inputs(self, names: tuple[str, ...], *args: Any) -> tuple[FloatArray, ...]:
         """The inputs as finite (n,) arrays: one cheap test when they already are, else named errors."""
@@ -294,7 +311,7 @@ class Dynamics(ABC):
                 tau = tau - self._friction(qd)
             if wrench is not None:
                 tau = tau - self._jacobian(q, None).T @ vector(wrench, 6, "wrench")
-            return self._forward(q, qd, tau)
+            return self._checked_call(self._forward, ("q", "qd", "tau"), q, qd, tau)
         return self._call(self._forward, ("q", "qd", "tau"), q, qd, tau)
 
     def jacobian(self, q: ArrayLike, frame: str | None = None) -> FloatArray:

@@ -92,6 +92,10 @@ def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
     vmax, qmax = setup.bound(max_velocity, "max_velocity"), setup.bound(max_position, "max_position")
     q, v = setup.initial_state(q0, qd0, ref0, n, qmax, vmax)
     seed = setup.seed_value(seed)
+    try:  # a plant whose M is singular from the start is a model to fix, not a run that diverged
+        np.linalg.cholesky(dyn.mass_matrix(q))
+    except np.linalg.LinAlgError:
+        raise dyn._nonfinite_result(q, None) from None
     sc = setup.scene(dyn, friction, environment, sensors, disturbance)
 
     pl = Plant(dyn, sc.friction, sc.environments, sc.disturbance)
@@ -193,7 +197,7 @@ def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
                         QDD[k] = a0
                     wf += dwf
                     we += dwe
-            except NotPositiveDefinite as exc:
+            except (NotPositiveDefinite, np.linalg.LinAlgError) as exc:  # (the latter: the Lagrange backend's)
                 divergence, rows = (t + cdt, f"{exc} during the control period from t = {t:g} s",
                                     Q[k].copy(), QD[k].copy()), k + 1
                 break

@@ -26,7 +26,10 @@ def linearize(dyn: Dynamics, q0: ArrayLike, step: float = 1e-6) -> Any:
     q0 = vector(q0, dyn.n, "q0")
     step = scalar(step, "step", positive=True)
     n = dyn.n
-    m_inv = np.linalg.inv(dyn.mass_matrix(q0))
+    try:
+        m_inv = np.linalg.inv(dyn.mass_matrix(q0))
+    except np.linalg.LinAlgError:
+        raise dyn._nonfinite_result(q0, None) from None  # names the singular mass matrix
     dg = np.empty((n, n))
     for j in range(n):
         e = np.zeros(n)

@@ -53,7 +53,10 @@ class ClosedFormOSC(Controller):
         J, drift, xdd = self.task.desired_acceleration(state, t, ref)
         if J is None:  # pragma: no cover - frame tasks always have a Jacobian
             raise InvalidParameterError("the task needs a Jacobian", value=self.task)
-        minv_jt = np.linalg.solve(M, J.T)
+        try:
+            minv_jt = np.linalg.solve(M, J.T)
+        except np.linalg.LinAlgError:
+            raise self.dynamics._nonfinite_result(q, None) from None  # type: ignore[union-attr]  (names M)
         lam_inv = J @ minv_jt
         try:
             lam = np.linalg.inv(lam_inv)
