@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 
+from armctl.errors import InvalidParameterError
 from armctl.tuning import closed_loop_poles, linearize, lqr_gains, pd_from_bandwidth
 from tests.conftest import dynamics
 
@@ -31,3 +32,23 @@ def test_gains() -> None:
     # LQR for ë = v with weights q_p, q_v, r: K_p = √(q_p/r), K_d = √(q_v/r + 2 K_p) (Riccati by hand)
     kp, kd = lqr_gains(100.0, 4.0, 1.0)
     assert kp == pytest.approx(10.0) and kd == pytest.approx(math.sqrt(4.0 + 20.0))
+
+
+@pytest.mark.parametrize(("qp", "qv", "r"), [(1.0, 0.0, 1.0), (100.0, 4.0, 0.5), (1e8, 1e3, 1e-2), (3.0, 0.0, 7.0)])
+def test_lqr_gains_are_python_controls_riccati_solution(qp: float, qv: float, r: float) -> None:
+    import control
+
+    k = control.lqr(np.array([[0.0, 1.0], [0.0, 0.0]]), np.array([[0.0], [1.0]]), np.diag([qp, qv]), [[r]])[0]
+    assert lqr_gains(qp, qv, r) == pytest.approx((k[0, 0], k[0, 1]), rel=1e-9)
+
+
+def test_lqr_gains_at_extreme_weights() -> None:
+    """Only the ratios of the weights matter: r = 1e-16 with q_p = 1 is q_p = 1e16 with r = 1, which
+    python-control solves (at r = 1e-16 itself it returns K = 0)."""
+    import control
+
+    k = control.lqr(np.array([[0.0, 1.0], [0.0, 0.0]]), np.array([[0.0], [1.0]]), np.diag([1e16, 0.0]), [[1.0]])[0]
+    assert k[0, 0] > 1e7  # the reference itself is sound
+    assert lqr_gains(1.0, 0.0, 1e-16) == pytest.approx((k[0, 0], k[0, 1]), rel=1e-9)
+    with pytest.raises(InvalidParameterError, match="beyond floating point"):
+        lqr_gains(1e300, 0.0, 1e-300)

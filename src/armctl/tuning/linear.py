@@ -10,6 +10,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -17,6 +18,7 @@ from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray, scalar, vector
 from armctl.dynamics.base import Dynamics
+from armctl.errors import InvalidParameterError
 
 
 def linearize(dyn: Dynamics, q0: ArrayLike, step: float = 1e-6) -> Any:
@@ -53,15 +55,25 @@ def pd_from_bandwidth(omega_n: float, zeta: float = 1.0) -> tuple[float, float]:
 def lqr_gains(position_weight: float, velocity_weight: float = 0.0, effort_weight: float = 1.0
               ) -> tuple[float, float]:
     """(K_p, K_d) minimising ∫ q_p e² + q_v ė² + r v² dt for ë = v (one joint; the same for every joint of a
-    computed-torque loop)."""
-    import control
+    computed-torque loop).
 
+    For the double integrator the Riccati equation solves in closed form: with P = [[p₁, p₂], [p₂, p₃]] and
+    K = [p₂, p₃]/r, its entries give p₂² = q_p r and p₃² = r (q_v + 2 p₂), so
+
+        K_p = √(q_p / r),   K_d = √(q_v / r + 2 K_p)
+
+    — exact at any scale of the weights, where a general Riccati solver loses the answer (python-control's
+    ``lqr`` returns K = 0 for r = 1e-16 and q_p = 1; the tests compare the two where both hold)."""
     qp = scalar(position_weight, "position_weight", positive=True)
     qv = scalar(velocity_weight, "velocity_weight", nonnegative=True)
     r = scalar(effort_weight, "effort_weight", positive=True)
-    k, _s, _e = control.lqr(np.array([[0.0, 1.0], [0.0, 0.0]]), np.array([[0.0], [1.0]]), np.diag([qp, qv]),
-                            np.array([[r]]))
-    return float(k[0, 0]), float(k[0, 1])
+    kp = math.sqrt(qp / r)
+    kd = math.sqrt(qv / r + 2.0 * kp)
+    if not (math.isfinite(kd) and kp > 0.0):
+        raise InvalidParameterError(f"the weights' ratios are beyond floating point: q_p/r = {qp / r:g}, "
+                                    f"q_v/r = {qv / r:g}; rescale position_weight, velocity_weight and "
+                                    "effort_weight together (only their ratios matter)", value=(qp, qv, r))
+    return kp, kd
 
 
 def closed_loop_poles(kp: float, kd: float) -> FloatArray:
