@@ -93,3 +93,35 @@ def test_rk4_limit_of_a_damped_contact_from_its_stability_function(zeta: float) 
     wall = Plane(KelvinVoigt(k, c), normal=(-1.0, 0.0, 0.0), point=(0.01, 0.0, 0.0))
     (found,) = contact_stability(armctl.Dynamics(slider(mass)), [wall], np.zeros(1), "rk4", 1e-3)
     assert found.max_dt == pytest.approx(lo, rel=1e-6)
+
+
+def _press(law: object, integrator: str) -> tuple[armctl.sim.SimResult, list[warnings.WarningMessage]]:
+    """planar_2r pushed by PD + gravity compensation into a floor 0.3 m below its base, for 0.5 s."""
+    from armctl.controllers import PDGravity
+
+    dyn = armctl.Dynamics(armctl.models.planar_2r())
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        res = simulate(dyn, PDGravity(dyn, 2000.0, 200.0), armctl.Reference([-0.5, 0.3]), 0.5, q0=[0.0, 0.0],
+                       environment=Plane(law, point=(0.0, 0.0, -0.3)), integrator=integrator)  # type: ignore[arg-type]
+    return res, [w for w in caught if issubclass(w.category, SimulationWarning)]
+
+
+def test_energy_gained_on_a_contact_that_could_not_be_checked_is_reported() -> None:
+    """Hunt–Crossley with p = 1.5 stiffens with depth, so the step cannot be judged before the run. At
+    k = 1e11 RK4 at 1 ms throws the arm off with energy no force supplied: the run says so afterwards (it does
+    not diverge numerically); implicit Euler, the remedy the warning names, gains none and ends elsewhere."""
+    from armctl.sim import HuntCrossley
+
+    stiff = HuntCrossley(1e11, exponent=1.5)
+    bad, warned = _press(stiff, "rk4")
+    assert not bad.diverged
+    assert len(warned) == 1 and "implicit-euler" in str(warned[0].message)
+    assert bad.info["energy_gain"] > 100.0  # joules, against ~150 J exchanged by a stable run
+    good, warned = _press(stiff, "implicit-euler")
+    assert warned == [] and "energy_gain" not in good.info
+    assert np.abs(good.q[-1] - bad.q[-1]).max() > 0.2
+    # the same law, softer: RK4 is stable, the balance closes, nothing is said
+    soft, warned = _press(HuntCrossley(1e6, exponent=1.5), "rk4")
+    assert warned == [] and abs(soft.info["energy_gain"]) < 1e-3
+    np.testing.assert_allclose(soft.q[-1], good.q[-1], atol=0.05)  # near where implicit Euler ends

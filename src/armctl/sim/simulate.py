@@ -32,7 +32,7 @@ from armctl.sim.integrators import fast_step, make_step
 from armctl.sim.plant import Plant
 from armctl.sim.recorder import Recorder
 from armctl.sim.result import SimResult
-from armctl.sim.stability import contact_stability
+from armctl.sim.stability import checkable, contact_stability
 from armctl.sim.stepper import advance
 from armctl.sim.stick_slip import NotPositiveDefinite
 
@@ -213,7 +213,35 @@ def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
         info["unstable_contacts"] = unstable
     if divergence is not None:
         divergence = (divergence[0], divergence[1], np.array(divergence[2]), np.array(divergence[3]))
-    return rec.result(rows, dyn, energy, info, divergence)
+    res = rec.result(rows, dyn, energy, info, divergence)
+    if (energy and divergence is None and scheme != "implicit-euler"
+            and not all(map(checkable, sc.environments))):
+        _check_energy_gain(res, scheme)
+    return res
+
+
+#: energy a run may gain that no force supplied, as a share of the largest energy exchanged (a stable run's
+#: balance closes to the integrator's order, ~1e-4 and below; an unstable contact's gains tens of percent)
+ENERGY_GAIN_TOLERANCE = 0.01
+
+
+def _check_energy_gain(res: SimResult, scheme: str) -> None:
+    """After a run with a contact :func:`contact_stability` could not judge beforehand: warn
+    (:class:`~armctl.errors.SimulationWarning`) if the arm gained energy that no force supplied, and record
+    it in ``res.info["energy_gain"]`` [J]."""
+    balance = res.energy_balance()
+    if not len(balance):
+        return
+    scale = max(float(np.abs(res.energy - res.energy[0]).max()), float(np.abs(res.work_actuator).max()),
+                float(np.abs(res.work_friction).max()), float(np.abs(res.work_external).max()), 1e-12)
+    gain = float(balance.max())
+    res.info["energy_gain"] = gain
+    if gain > ENERGY_GAIN_TOLERANCE * scale:
+        warnings.warn(f"the arm gained {gain:.3g} J that no force supplied ({100 * gain / scale:.0f}% of the "
+                      f"energy exchanged; E − E₀ − W in res.energy_balance()): {scheme!r} was likely unstable on a "
+                      "contact whose stability could not be checked before the run (e.g. Hunt–Crossley with an "
+                      "exponent above 1 stiffens with depth). Past that point the run is not the arm's motion: use "
+                      "integrator='implicit-euler' or a smaller dt", SimulationWarning, stacklevel=3)
 
 
 def _check_contacts(dyn: Dynamics, environments: Sequence[Environment], q0: FloatArray, scheme: str, h: float

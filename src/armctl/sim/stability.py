@@ -81,6 +81,14 @@ def _max_step(scheme: str, w2: float, c: float, h: float) -> float:
     return lo
 
 
+def checkable(env: Environment) -> bool:
+    """True if :func:`contact_stability` can judge ``env``: a plane with a linear normal law (Kelvin–Voigt,
+    or Hunt–Crossley with exponent 1)."""
+    law = getattr(env, "law", None)
+    return isinstance(env, Plane) and (isinstance(law, KelvinVoigt)
+                                       or (isinstance(law, HuntCrossley) and law.exponent == 1.0))
+
+
 def contact_stability(dyn: Dynamics, environments: Sequence[Environment], q: FloatArray, scheme: str, h: float
                       ) -> list[ContactStability]:
     """The stability of every contact point of the planes in ``environments`` at configuration ``q`` for
@@ -90,11 +98,9 @@ def contact_stability(dyn: Dynamics, environments: Sequence[Environment], q: Flo
     out = []
     minv = None
     for e, env in enumerate(environments):
-        law = getattr(env, "law", None)
-        if not isinstance(env, Plane) or not isinstance(law, (KelvinVoigt, HuntCrossley)):
+        if not checkable(env):
             continue
-        if isinstance(law, HuntCrossley) and law.exponent != 1.0:
-            continue
+        law = env.law  # type: ignore[attr-defined]
         damping = law.damping if isinstance(law, KelvinVoigt) else 0.0  # Hunt–Crossley's vanishes at first touch
         if minv is None:
             minv = np.linalg.inv(dyn.mass_matrix(q))
