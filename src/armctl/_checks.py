@@ -21,6 +21,9 @@ FLOAT = np.dtype(np.float64)
 def real_array(x: ArrayLike, name: str) -> FloatArray:
     """``x`` as a float array; raise if it holds anything but real numbers (complex values are refused rather
     than cut to their real part, strings and None rather than passed on to fail somewhere else)."""
+    if isinstance(x, np.ma.MaskedArray) and np.ma.getmaskarray(x).any():  # asarray would take the hidden data
+        raise InvalidParameterError(f"{name} has masked entries: fill them first (x.filled(value)), got {x!r}",
+                                    value=x)
     try:
         a = np.asarray(x)
         kind = a.dtype.kind

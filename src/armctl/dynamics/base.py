@@ -165,7 +165,7 @@ class Dynamics(ABC):
         try:
             if x.dtype is _FLOAT and x.shape == self._shape and math.isfinite(sum(x.tolist())):
                 return x  # type: ignore[no-any-return]
-        except AttributeError:
+        except (AttributeError, TypeError):  # not an array; a masked one (tolist gives None where masked)
             pass
         return vector(x, self.n, name)
 
