@@ -12,7 +12,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import armctl
-from armctl.errors import ArmctlError, InvalidParameterError, ShapeError, UnknownNameError
+from armctl.errors import ArmctlError, InvalidParameterError, NonFiniteError, ShapeError, UnknownNameError
 from armctl.model import Joint, JointFriction, Link, Motor
 from armctl.model.parts import Frame
 
@@ -169,7 +169,7 @@ def test_bad_lock_arguments() -> None:
     arm = _arm()
     with pytest.raises(UnknownNameError, match=r"'j9'.*'j0'"):
         arm.reduced(lock=["j9"])
-    with pytest.raises(InvalidParameterError, match=r"'j1'.*nan"):
+    with pytest.raises(NonFiniteError, match=r"'j1'.*nan"):
         arm.reduced(lock={"j1": math.nan})
     with pytest.raises(InvalidParameterError, match=r"'j1'.*'up'"):
         arm.reduced(lock={"j1": "up"})
@@ -198,13 +198,13 @@ def test_perturbed_noise_keeps_masses_near_nominal() -> None:
                                     {"static": [5.0]}, {"stribeck_velocity": np.zeros((2, 2))}])
 def test_with_friction_wrong_length_is_a_shape_error(kwargs: dict) -> None:
     (arg,) = kwargs
-    with pytest.raises(ShapeError, match=f"{arg} must be a scalar or a vector of length 2"):
+    with pytest.raises(ShapeError, match=rf"with_friction\(\): {arg} must be a scalar or an \(2,\) vector"):
         armctl.models.planar_2r().with_friction(**kwargs)
 
 
 def test_with_friction_bad_values() -> None:
     m = armctl.models.planar_2r()
-    with pytest.raises(InvalidParameterError, match="coulomb must be a real number"):
+    with pytest.raises(InvalidParameterError, match="coulomb must hold real numbers, got 'high'"):
         m.with_friction(coulomb="high")
     with pytest.raises(ArmctlError, match="viscous"):
         m.with_friction(viscous=[0.5, -1.0])

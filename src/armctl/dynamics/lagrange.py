@@ -29,6 +29,7 @@ from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray
 from armctl.dynamics.base import Dynamics
+from armctl.model.parts import boolean
 from armctl.model.robot import PARAMS_PER_JOINT, RobotModel
 
 
@@ -166,7 +167,7 @@ class LagrangeDynamics(Dynamics):
     def __init__(self, model: RobotModel, backend: str | None = None, *, rotor_coupling: bool = True,
                  compile: bool = False, cache_dir: str | None = None, **options: Any) -> None:
         super().__init__(model, backend, **options)
-        self.rotor_coupling = bool(rotor_coupling)
+        self.rotor_coupling = boolean(rotor_coupling, "rotor_coupling")  # bool("False") would be True
         t0 = time.perf_counter()
         s = _Symbols(model, self.rotor_coupling)
         self._sym = s
@@ -202,7 +203,8 @@ class LagrangeDynamics(Dynamics):
         """Whether ``compile=True`` would load a cached library (instead of compiling, ~20 s for 7 joints)."""
         from armctl.dynamics.codegen import library_path
 
-        return library_path(list(_FUNCTION_NAMES), _cache_tag(model, rotor_coupling), cache_dir).exists()
+        return library_path(list(_FUNCTION_NAMES), _cache_tag(model, boolean(rotor_coupling, "rotor_coupling")),
+                            cache_dir).exists()
 
     @property
     def options(self) -> dict[str, Any]:

@@ -14,9 +14,17 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray
+from armctl._checks import FLOAT, FloatArray
 from armctl.errors import NonFiniteError, ShapeError
+from armctl.model.parts import real_values
 from armctl.model.robot import PARAMS_PER_JOINT
+
+
+def _floats(x: ArrayLike, name: str) -> FloatArray:
+    """``x`` as a float array: a float64 array as it is (the adaptive law's estimate, every control period),
+    anything else through the real-number check (text, None, complex and booleans refused)."""
+    a = np.asarray(x)
+    return a if a.dtype is FLOAT else real_values(x, name)
 
 
 def _pseudo_inertia_by_definition(p: FloatArray) -> FloatArray:
@@ -50,7 +58,7 @@ _FROM_J = _parameters_by_definition(np.eye(16).reshape(16, 4, 4))  # p = vec J @
 def pseudo_inertia(link10: ArrayLike) -> FloatArray:
     """4×4 pseudo-inertia of ten link parameters (m, m·c, Ixx, Ixy, Iyy, Ixz, Iyz, Izz); stacks over leading
     axes ((..., 10) → (..., 4, 4))."""
-    p = np.asarray(link10, dtype=float)
+    p = _floats(link10, "link parameters")
     if p.shape[-1:] != (10,):
         raise ShapeError(f"link parameters must have 10 entries in the last axis, got shape {p.shape}", value=link10)
     return p.dot(_TO_J).reshape((*p.shape[:-1], 4, 4))  # type: ignore[no-any-return]
@@ -59,7 +67,7 @@ def pseudo_inertia(link10: ArrayLike) -> FloatArray:
 def from_pseudo_inertia(j: ArrayLike) -> FloatArray:
     """Inverse of :func:`pseudo_inertia`: Ī = tr(Σ) 1 − Σ (Σ, h, m read from the upper triangle and the last
     column of J, as the definition does)."""
-    a = np.asarray(j, dtype=float)
+    a = _floats(j, "pseudo-inertias")
     if a.shape[-2:] != (4, 4):
         raise ShapeError(f"pseudo-inertias must be 4×4 in the last two axes, got shape {a.shape}", value=j)
     return a.reshape((*a.shape[:-2], 16)).dot(_FROM_J)  # type: ignore[no-any-return]
@@ -67,7 +75,7 @@ def from_pseudo_inertia(j: ArrayLike) -> FloatArray:
 
 def is_physical(pi: ArrayLike, tol: float = 1e-9) -> bool:
     """Whether every link of π (13 a joint) is physically consistent and rotor/friction terms are ≥ 0."""
-    p = np.asarray(pi, dtype=float).reshape(-1, PARAMS_PER_JOINT)
+    p = _floats(pi, "pi").reshape(-1, PARAMS_PER_JOINT)
     if not np.isfinite(p).all():
         return False
     ev = np.linalg.eigvalsh(pseudo_inertia(p[:, :10]))
@@ -87,7 +95,7 @@ def projection(pi: ArrayLike, min_eig: float = 0.0, likely_inside: bool = True) 
     already physical; pass False when π is likely outside or on the boundary of the set (where Cholesky fails
     and only adds its cost), e.g. when the previous estimate of an adaptive law needed projecting. The two
     agree to rounding: on the boundary one may accept a π the other moves by ~1e-15."""
-    p = np.asarray(pi, dtype=float).reshape(-1, PARAMS_PER_JOINT).copy()
+    p = _floats(pi, "pi").reshape(-1, PARAMS_PER_JOINT).copy()
     if not np.isfinite(p).all():
         raise NonFiniteError(f"the parameters hold NaN or inf: {p.reshape(-1)!r}", value=pi)
     j = pseudo_inertia(p[:, :10])

@@ -2,8 +2,7 @@
 
 from __future__ import annotations
 
-import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -21,6 +20,9 @@ from armctl.model.parts import (
     Link,
     Motor,
     homogeneous,
+    instance_of,
+    name_text,
+    real_number,
     rot,
     transform,
 )
@@ -55,12 +57,18 @@ class DHLink:
 
     def __post_init__(self) -> None:
         for k in ("d", "a", "alpha", "offset"):
-            v = float(getattr(self, k))
-            if not math.isfinite(v):
-                raise InvalidParameterError(f"DH parameter {k} must be finite, got {v}", value=v)
-        if self.kind not in JOINT_KINDS:
+            object.__setattr__(self, k, real_number(getattr(self, k), f"DH parameter {k}"))
+        if not isinstance(self.kind, str) or self.kind not in JOINT_KINDS:
             raise InvalidParameterError(f"DH joint kind must be one of {JOINT_KINDS}, got {self.kind!r}",
                                         value=self.kind)
+        if self.name is not None:
+            name_text(self.name, "DH link name")
+        body = Link(self.mass, self.com, self.inertia, self.physical)  # checks the body here, not in from_dh
+        for k in ("mass", "com", "inertia", "physical"):
+            object.__setattr__(self, k, getattr(body, k))
+        instance_of(self.motor, Motor, "DH link motor", optional=True)
+        instance_of(self.friction, JointFriction, "DH link friction (JointFriction() for none)")
+        instance_of(self.limits, JointLimits, "DH link limits (JointLimits() for none)")
 
 
 def _std(link: DHLink) -> FloatArray:
@@ -87,7 +95,7 @@ def model_from_dh(links: Sequence[Any], convention: str = "standard", gravity: A
     if convention not in ("standard", "modified"):
         raise InvalidParameterError(f"DH convention must be 'standard' or 'modified', got {convention!r}",
                                     value=convention)
-    rows = [lk if isinstance(lk, DHLink) else DHLink(**lk) for lk in links]
+    rows = [_row(lk, i) for i, lk in enumerate(_rows(links))]
     if not rows:
         raise InvalidParameterError("a DH table needs at least one link", value=links)
     joints = []
@@ -108,6 +116,28 @@ def model_from_dh(links: Sequence[Any], convention: str = "standard", gravity: A
                             row.friction, row.limits))
     tool_t = last_link_frame @ homogeneous(tool, "tool")
     frames = (Frame("tool", len(joints), tool_t),)
-    return RobotModel(tuple(joints), name=name, gravity=np.asarray(gravity, dtype=float), frames=frames,
-                      tool_frame="tool")
+    return RobotModel(tuple(joints), name=name, gravity=gravity, frames=frames, tool_frame="tool")
+
+
+def _rows(links: Any) -> list[Any]:
+    """The rows of a DH table: a sequence (not a str, not a single row)."""
+    try:
+        if isinstance(links, str | bytes | DHLink | Mapping):
+            raise TypeError(type(links).__name__)
+        return list(links)
+    except TypeError:
+        raise InvalidParameterError("a DH table must be a sequence of DHLink (or of dicts of DHLink's "
+                                    f"arguments), got {links!r}", value=links) from None
+
+
+def _row(row: Any, i: int) -> DHLink:
+    """Row ``i`` of a DH table as a DHLink (a dict is DHLink's keyword arguments)."""
+    if isinstance(row, DHLink):
+        return row
+    if isinstance(row, Mapping):
+        try:
+            return DHLink(**row)
+        except TypeError as e:  # an unknown key
+            raise InvalidParameterError(f"DH row {i}: {e}; the keys are DHLink's arguments", value=row) from None
+    raise InvalidParameterError(f"DH row {i} must be a DHLink or a dict of its arguments, got {row!r}", value=row)
 

@@ -25,7 +25,7 @@ import numpy as np
 
 from armctl.errors import ModelLoadError
 from armctl.model.dh import DHLink
-from armctl.model.parts import Frame, Joint, JointFriction, JointLimits, Link, Motor, transform
+from armctl.model.parts import Frame, Joint, JointFriction, JointLimits, Link, Motor, boolean, transform
 from armctl.model.robot import RobotModel
 
 _PLANE_AXIS = (0.0, -1.0, 0.0)
@@ -119,6 +119,7 @@ def puma560(physical: bool = False) -> RobotModel:
     ``physical=True`` makes the smallest change that fixes them: link 1 I_xx = I_zz = 0.175 (no torque
     depends on them, link 1 only turns about y1) and link 3 I_zz = 0.020 (from 0.0125).
     Named poses: :data:`PUMA_QZ`, :data:`PUMA_QR`, :data:`PUMA_QN`."""
+    physical = boolean(physical, "puma560(): physical")
     rows = []
     for d, a, alpha, m, r, inert, jm, g, b, tc, qlim in _PUMA:
         ixx, iyy, izz, ixy, iyz, ixz = inert

@@ -17,30 +17,89 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, readonly
-from armctl.errors import InvalidParameterError, ShapeError
+from armctl._checks import FloatArray, readonly, real_array, scalar, whole_number
+from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
 
 _INERTIA_TOL = 1e-9
 
 
-def _vec3(x: ArrayLike, name: str) -> FloatArray:
-    a = np.array(x, dtype=float).reshape(-1) if np.ndim(x) else np.array([x], dtype=float)
+def no_booleans(x: Any, name: str) -> None:
+    """Raise if ``x`` is a boolean or an array of booleans: True is not a number (NumPy would take it as 1).
+    Anything else passes (the real-number check that follows names it)."""
+    try:
+        a = np.asarray(x)
+    except (TypeError, ValueError):  # ragged and the like
+        return
+    if a.dtype.kind == "b":
+        what = "a real number, not a boolean" if a.ndim == 0 else "real numbers, not booleans"
+        raise InvalidParameterError(f"{name} must be {what}, got {x!r}", value=x)
+
+
+def real_number(x: Any, name: str, *, positive: bool = False, nonnegative: bool = False) -> float:
+    """:func:`~armctl._checks.scalar` (a finite real number; text, None, complex and arrays refused), booleans
+    refused too."""
+    no_booleans(x, name)
+    return scalar(x, name, positive=positive, nonnegative=nonnegative)
+
+
+def real_values(x: ArrayLike, name: str) -> FloatArray:
+    """A new float array of ``x`` (:func:`~armctl._checks.real_array`: text, None and complex refused), booleans
+    refused too; its shape and finiteness are the caller's to check."""
+    no_booleans(x, name)
+    return np.array(real_array(x, name))  # a copy: parts make their arrays read-only, never the caller's
+
+
+def boolean(x: Any, name: str) -> bool:
+    """``x`` as a bool: only True or False (a NumPy bool too); text such as ``"False"`` would be truthy."""
+    if not isinstance(x, bool | np.bool_):
+        raise InvalidParameterError(f"{name} must be True or False, got {x!r}", value=x)
+    return bool(x)
+
+
+def instance_of(x: Any, cls: type, name: str, optional: bool = False) -> None:
+    """Raise unless ``x`` is a ``cls`` (or None, if ``optional``): a part given as anything else would fail far
+    from here."""
+    if not (isinstance(x, cls) or (optional and x is None)):
+        what = f"an armctl.model.{cls.__name__}" + (" or None" if optional else "")
+        raise InvalidParameterError(f"{name} must be {what}, got {x!r} ({type(x).__name__})", value=x)
+
+
+def name_text(x: Any, name: str) -> str:
+    """Raise unless ``x`` is a str (a name)."""
+    if not isinstance(x, str):
+        raise InvalidParameterError(f"{name} must be a str, got {x!r} ({type(x).__name__})", value=x)
+    return x
+
+
+def vec3(x: ArrayLike, name: str) -> FloatArray:
+    """A finite 3-vector (any array of 3 numbers, flattened), read-only."""
+    a = real_values(x, name).reshape(-1)
     if a.shape != (3,):
         raise ShapeError(f"{name} must have 3 components, got {np.shape(x)}", value=x)
     if not np.isfinite(a).all():
-        raise InvalidParameterError(f"{name} must be finite, got {a}", value=x)
+        raise NonFiniteError(f"{name} must be finite, got {a}", value=x)
     return readonly(a)
+
+
+def _limit(x: Any, name: str) -> float:
+    """A joint limit: a finite real number or ±inf (no limit)."""
+    if isinstance(x, float | np.floating) and math.isinf(x):
+        return float(x)
+    if isinstance(x, float | np.floating) and math.isnan(x):
+        raise NonFiniteError(f"{name} is NaN; give a number, or ±inf for no limit", value=x)
+    return real_number(x, name)
 
 
 def inertia_tensor(x: ArrayLike, name: str = "inertia", triangle: bool = True) -> FloatArray:
     """A 3×3 inertia tensor from a 3×3 matrix, 3 principal moments (diagonal) or 6 values
     ``(Ixx, Ixy, Ixz, Iyy, Iyz, Izz)``; checked symmetric, positive semi-definite and satisfying the
     triangle inequalities of its principal moments."""
-    a = np.array(x, dtype=float)
+    a = real_values(x, name)
     if a.shape == (3,):
         a = np.diag(a)
     elif a.shape == (6,):
@@ -50,7 +109,7 @@ def inertia_tensor(x: ArrayLike, name: str = "inertia", triangle: bool = True) -
         raise ShapeError(f"{name} must be 3×3, 3 principal moments or 6 values (Ixx, Ixy, Ixz, Iyy, Iyz, Izz);"
                          f" got shape {a.shape}", value=x)
     if not np.isfinite(a).all():
-        raise InvalidParameterError(f"{name} must be finite", value=x)
+        raise NonFiniteError(f"{name} must be finite, got {a.tolist()}", value=x)
     scale = max(float(np.abs(a).max()), 1e-300)
     if not np.allclose(a, a.T, atol=_INERTIA_TOL * scale):
         raise InvalidParameterError(f"{name} must be symmetric, got {a.tolist()}", value=x)
@@ -84,12 +143,9 @@ class Link:
     physical: bool = True
 
     def __post_init__(self) -> None:
-        m = float(self.mass)
-        if not math.isfinite(m) or m < 0:
-            raise InvalidParameterError(f"link mass must be finite and >= 0 kg, got {self.mass!r}",
-                                        value=self.mass)
-        object.__setattr__(self, "mass", m)
-        object.__setattr__(self, "com", _vec3(self.com, "link com"))
+        object.__setattr__(self, "mass", real_number(self.mass, "link mass [kg]", nonnegative=True))
+        object.__setattr__(self, "com", vec3(self.com, "link com"))
+        object.__setattr__(self, "physical", boolean(self.physical, "link physical"))
         object.__setattr__(self, "inertia", inertia_tensor(self.inertia, "link inertia", self.physical))
 
     def inertia_about_origin(self) -> FloatArray:
@@ -129,17 +185,15 @@ class Motor:
     axis: FloatArray | None = None
 
     def __post_init__(self) -> None:
-        i, k = float(self.inertia), float(self.gear_ratio)
-        if not math.isfinite(i) or i < 0:
-            raise InvalidParameterError(f"rotor inertia must be >= 0 kg·m², got {self.inertia!r}",
-                                        value=self.inertia)
-        if not math.isfinite(k) or k == 0:
-            raise InvalidParameterError(f"gear ratio must be finite and non-zero, got {self.gear_ratio!r}",
+        i = real_number(self.inertia, "rotor inertia [kg·m²]", nonnegative=True)
+        k = real_number(self.gear_ratio, "gear ratio")
+        if k == 0:
+            raise InvalidParameterError(f"gear ratio must be non-zero, got {self.gear_ratio!r}",
                                         value=self.gear_ratio)
         object.__setattr__(self, "inertia", i)
         object.__setattr__(self, "gear_ratio", k)
         if self.axis is not None:
-            a = _vec3(self.axis, "motor axis")
+            a = vec3(self.axis, "motor axis")
             nrm = float(np.linalg.norm(a))
             if nrm < 1e-12:
                 raise InvalidParameterError("motor axis must be non-zero", value=self.axis)
@@ -167,12 +221,9 @@ class JointFriction:
     def __post_init__(self) -> None:
         for name in ("viscous", "coulomb", "coulomb_negative", "static", "stribeck_velocity"):
             v = getattr(self, name)
-            if v is None:
+            if v is None and name in ("coulomb_negative", "static"):  # None: follows coulomb
                 continue
-            f = float(v)
-            if not math.isfinite(f) or f < 0:
-                raise InvalidParameterError(f"friction {name} must be finite and >= 0, got {v!r}", value=v)
-            object.__setattr__(self, name, f)
+            object.__setattr__(self, name, real_number(v, f"friction {name}", nonnegative=True))
         if self.static is not None and self.static < max(self.coulomb, self.coulomb_neg) - 1e-12:
             raise InvalidParameterError(
                 f"static friction {self.static} must be >= the Coulomb levels ({self.coulomb}, "
@@ -209,9 +260,7 @@ class JointLimits:
     effort: float = math.inf
 
     def __post_init__(self) -> None:
-        vals = {k: float(getattr(self, k)) for k in ("lower", "upper", "velocity", "effort")}
-        if any(math.isnan(v) for v in vals.values()):
-            raise InvalidParameterError(f"joint limits must not be NaN: {vals}", value=vals)
+        vals = {k: _limit(getattr(self, k), f"joint {k} limit") for k in ("lower", "upper", "velocity", "effort")}
         if vals["lower"] > vals["upper"]:
             raise InvalidParameterError(f"joint lower limit {vals['lower']} is above upper {vals['upper']}",
                                         value=vals)
@@ -242,10 +291,15 @@ class Joint:
     limits: JointLimits = field(default_factory=JointLimits)
 
     def __post_init__(self) -> None:
-        if self.kind not in JOINT_KINDS:
+        name_text(self.name, "joint name")
+        if not isinstance(self.kind, str) or self.kind not in JOINT_KINDS:
             raise InvalidParameterError(f"joint {self.name!r}: kind must be one of {JOINT_KINDS}, got "
                                         f"{self.kind!r}", value=self.kind)
-        a = _vec3(self.axis, f"joint {self.name!r} axis")
+        instance_of(self.link, Link, f"joint {self.name!r} link")
+        instance_of(self.motor, Motor, f"joint {self.name!r} motor", optional=True)
+        instance_of(self.friction, JointFriction, f"joint {self.name!r} friction (JointFriction() for none)")
+        instance_of(self.limits, JointLimits, f"joint {self.name!r} limits (JointLimits() for none)")
+        a = vec3(self.axis, f"joint {self.name!r} axis")
         nrm = float(np.linalg.norm(a))
         if abs(nrm - 1.0) > 1e-6:
             raise InvalidParameterError(f"joint {self.name!r} axis must be a unit vector, got {a}", value=a)
@@ -269,6 +323,8 @@ class Frame:
     placement: FloatArray
 
     def __post_init__(self) -> None:
+        name_text(self.name, "frame name")
+        object.__setattr__(self, "joint", whole_number(self.joint, f"frame {self.name!r} joint index"))
         object.__setattr__(self, "placement", homogeneous(self.placement, f"frame {self.name!r} placement"))
 
 
@@ -276,7 +332,7 @@ def homogeneous(x: ArrayLike | None, name: str = "transform") -> FloatArray:
     """Check a 4×4 homogeneous transform (rotation orthonormal, last row 0 0 0 1); None is the identity."""
     if x is None:
         return readonly(np.eye(4))
-    t = np.array(x, dtype=float)
+    t = real_values(x, name)
     if t.shape != (4, 4):
         raise ShapeError(f"{name} must be a 4×4 homogeneous transform, got shape {t.shape}", value=x)
     r = t[:3, :3]

@@ -2,16 +2,15 @@
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from armctl._checks import FloatArray
-from armctl.errors import InvalidParameterError, ModelLoadError
-from armctl.model.parts import Frame, Joint, JointFriction, JointLimits, Link, rot, transform
+from armctl.errors import InvalidParameterError, ModelLoadError, NonFiniteError, ShapeError, UnknownNameError
+from armctl.model.parts import Frame, Joint, JointFriction, JointLimits, Link, real_number, rot, transform
 
 if TYPE_CHECKING:
     import pinocchio
@@ -84,14 +83,20 @@ def joints_from_pinocchio(pm: pinocchio.Model, source: str, physical: bool = Tru
         inert = pm.inertias[jid]
         pl = pm.jointPlacements[jid]
         idx = jid - 1
-        lim = JointLimits(
-            lower=float(pm.lowerPositionLimit[idx]) if pm.lowerPositionLimit[idx] > -1e10 else -np.inf,
-            upper=float(pm.upperPositionLimit[idx]) if pm.upperPositionLimit[idx] < 1e10 else np.inf,
-            velocity=float(pm.velocityLimit[idx]) if 0 < pm.velocityLimit[idx] < 1e10 else np.inf,
-            effort=float(pm.effortLimit[idx]) if 0 < pm.effortLimit[idx] < 1e10 else np.inf)
-        fric = JointFriction(viscous=float(pm.damping[idx]), coulomb=float(pm.friction[idx]))
-        joints.append(Joint(pm.names[jid], kind, axis, transform(pl.rotation, pl.translation),
-                            Link(inert.mass, inert.lever, inert.inertia, physical), None, fric, lim))
+        try:
+            lim = JointLimits(
+                lower=float(pm.lowerPositionLimit[idx]) if pm.lowerPositionLimit[idx] > -1e10 else -np.inf,
+                upper=float(pm.upperPositionLimit[idx]) if pm.upperPositionLimit[idx] < 1e10 else np.inf,
+                velocity=float(pm.velocityLimit[idx]) if 0 < pm.velocityLimit[idx] < 1e10 else np.inf,
+                effort=float(pm.effortLimit[idx]) if 0 < pm.effortLimit[idx] < 1e10 else np.inf)
+            fric = JointFriction(viscous=float(pm.damping[idx]), coulomb=float(pm.friction[idx]))
+            link = Link(inert.mass, inert.lever, inert.inertia, physical)
+        except (InvalidParameterError, NonFiniteError, ShapeError) as e:  # name the joint and its links
+            links = [f.name for f in pm.frames if f.parentJoint == jid and f.type == pin.FrameType.BODY]
+            carried = f"link{'s' if len(links) > 1 else ''} {', '.join(map(repr, links))}"
+            raise type(e)(f"{source}: joint {pm.names[jid]!r} ({carried}): {e}", value=e.value) from None
+        joints.append(Joint(pm.names[jid], kind, axis, transform(pl.rotation, pl.translation), link, None, fric,
+                            lim))
     names = set(pm.names)
     frames = [Frame(f.name, int(f.parentJoint), transform(f.placement.rotation, f.placement.translation))
               for f in pm.frames if f.name not in names and f.name != "universe"]
@@ -116,6 +121,32 @@ def _joint_motion(j: Joint, value: float) -> FloatArray:
     return t
 
 
+def lock_positions(lock: Any, names: Sequence[str]) -> dict[str, float]:
+    """``lock`` (one joint name, names locked at 0, a mapping name → position, or None) as {name: position}, the
+    names checked against ``names`` (:class:`~armctl.errors.UnknownNameError`) and the positions finite real
+    numbers (:class:`~armctl.errors.NonFiniteError`, :class:`~armctl.errors.InvalidParameterError`)."""
+    if lock is None:
+        return {}
+    if isinstance(lock, str):
+        lock = (lock,)  # one name, not its letters
+    if isinstance(lock, Mapping):
+        items = list(lock.items())
+    else:
+        try:
+            if isinstance(lock, bytes):
+                raise TypeError("bytes")
+            items = [(name, 0.0) for name in lock]
+        except TypeError:
+            raise InvalidParameterError(f"lock must be a joint name, joint names or a mapping joint name → "
+                                        f"position, got {lock!r}", value=lock) from None
+    positions: dict[str, float] = {}
+    for name, value in items:
+        if not isinstance(name, str) or name not in names:
+            raise UnknownNameError("joint", name, list(names))
+        positions[name] = real_number(value, f"lock position of joint {name!r}")
+    return positions
+
+
 def lock_joints(model: RobotModel, lock: Sequence[str] | Mapping[str, float]) -> RobotModel:
     """``model`` with some joints held fixed: links merged by pinocchio.buildReducedModel; motors, friction,
     limits carried over from ``model``, with a motor's explicit spin axis re-expressed in the link its rotor
@@ -123,20 +154,7 @@ def lock_joints(model: RobotModel, lock: Sequence[str] | Mapping[str, float]) ->
     it."""
     import pinocchio as pin
 
-    if isinstance(lock, str):
-        lock = (lock,)
-    positions: dict[str, float] = {}
-    for name, value in (lock.items() if isinstance(lock, Mapping) else ((nm, 0.0) for nm in lock)):
-        model.joint_index(name)  # UnknownNameError listing the joints
-        try:
-            v = float(value)
-        except (TypeError, ValueError):
-            raise InvalidParameterError(f"lock position of joint {name!r} must be a real number, got {value!r}",
-                                        value=value) from None
-        if not math.isfinite(v):
-            raise InvalidParameterError(f"lock position of joint {name!r} must be finite, got {value!r}",
-                                        value=value)
-        positions[name] = v
+    positions = lock_positions(lock, model.joint_names)
     if len(positions) == model.n:
         raise InvalidParameterError(f"cannot lock every joint of {model.name!r} ({sorted(positions)}): a model "
                                     "needs at least one free joint; leave one out of lock", value=lock)

@@ -16,9 +16,20 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, readonly
-from armctl.errors import InvalidParameterError, ShapeError, UnknownNameError
-from armctl.model.parts import Frame, Joint, JointFriction, Link, inertia_tensor
+from armctl._checks import FloatArray, nonnegative_vector, readonly, vector, whole_number
+from armctl.errors import InvalidParameterError, UnknownNameError
+from armctl.model.parts import (
+    Frame,
+    Joint,
+    JointFriction,
+    Link,
+    boolean,
+    inertia_tensor,
+    name_text,
+    no_booleans,
+    real_number,
+    vec3,
+)
 
 if TYPE_CHECKING:
     import pinocchio
@@ -46,18 +57,15 @@ class RobotModel:
     tool_frame: str | None = None
 
     def __post_init__(self) -> None:
-        joints = tuple(self.joints)
+        joints, frames = _parts(self.joints, Joint, "joints"), _parts(self.frames, Frame, "frames")
         if not joints:
             raise InvalidParameterError("a RobotModel needs at least one joint", value=self.joints)
-        if not all(isinstance(j, Joint) for j in joints):
-            raise InvalidParameterError("joints must be armctl.model.Joint objects", value=self.joints)
+        name_text(self.name, "model name")
         names = [j.name for j in joints]
         if len(set(names)) != len(names):
             raise InvalidParameterError(f"joint names must be unique: {names}", value=names)
-        g = np.array(self.gravity, dtype=float)
-        if g.shape != (3,) or not np.isfinite(g).all():
-            raise ShapeError(f"gravity must be a finite 3-vector, got {self.gravity!r}", value=self.gravity)
-        frames = tuple(self.frames)
+        no_booleans(self.gravity, "gravity")
+        g = np.array(vector(self.gravity, 3, "gravity [m/s²]"))  # a copy, made read-only below
         for f in frames:
             if not 0 <= f.joint <= len(joints):
                 raise InvalidParameterError(f"frame {f.name!r} is attached to joint {f.joint}, but the model "
@@ -85,11 +93,11 @@ class RobotModel:
     @classmethod
     def from_urdf(cls, path: str, tool_frame: str | None = None, lock: Sequence[str] | Mapping[str, float] = (),
                   gravity: ArrayLike = (0, 0, -9.81), name: str | None = None) -> RobotModel:
-        """A model from a URDF file through Pinocchio's parser. ``lock``: joints held fixed (names, or a
-        mapping name → position). URDF ``<dynamics damping friction>`` become viscous and Coulomb friction.
-        Every link and fixed joint becomes a named frame, those fixed to the world included (the base link,
-        and with the first joint locked its link and the locked joint's frame); a root link called
-        ``"world"`` is the model's own ``"world"`` frame (a ``"world"`` frame elsewhere raises
+        """A model from a URDF file through Pinocchio's parser. ``lock``: joints held fixed (a name, names, or a
+        mapping name → position; checked as in :meth:`reduced`). URDF ``<dynamics damping friction>`` become
+        viscous and Coulomb friction. Every link and fixed joint becomes a named frame, those fixed to the
+        world included (the base link, and with the first joint locked its link and the locked joint's frame);
+        a root link called ``"world"`` is the model's own ``"world"`` frame (a ``"world"`` frame elsewhere raises
         :class:`~armctl.errors.ModelLoadError`)."""
         from armctl.model.urdf import model_from_urdf
 
@@ -231,7 +239,8 @@ class RobotModel:
         if f.joint == 0:
             raise InvalidParameterError(f"a payload cannot be attached to frame {f.name!r}: it is fixed to the "
                                         "world", value=frame)
-        payload = Link(mass, com, inertia_tensor(inertia, "payload inertia")).transformed(
+        mass = real_number(mass, "payload mass [kg]", nonnegative=True)
+        payload = Link(mass, vec3(com, "payload com"), inertia_tensor(inertia, "payload inertia")).transformed(
             f.placement[:3, :3], f.placement[:3, 3])
         idx = f.joint - 1
         joints = list(self.joints)
@@ -250,25 +259,19 @@ class RobotModel:
     def with_friction(self, viscous: ArrayLike = 0.0, coulomb: ArrayLike = 0.0,
                       coulomb_negative: ArrayLike | None = None, static: ArrayLike | None = None,
                       stribeck_velocity: ArrayLike = 0.0) -> RobotModel:
-        """This arm with the given joint friction (each a scalar for all joints or an (n,) vector)."""
+        """This arm with the given joint friction (each a scalar for all joints or an (n,) vector, finite and
+        >= 0; ``coulomb_negative`` and ``static`` may be None: the Coulomb level, see
+        :class:`~armctl.model.parts.JointFriction`)."""
 
-        def per_joint(x: ArrayLike | None, what: str) -> list[float | None]:
-            if x is None:
+        def per_joint(x: ArrayLike | None, what: str, optional: bool = False) -> list[float | None]:
+            if x is None and optional:
                 return [None] * self.n
-            try:
-                a = np.asarray(x, dtype=float)
-            except (TypeError, ValueError):
-                raise InvalidParameterError(f"with_friction(): {what} must be a real number or {self.n} real "
-                                            f"numbers (one per joint), got {x!r}", value=x) from None
-            if a.ndim == 0:
-                a = np.full(self.n, float(a))
-            elif a.shape != (self.n,):
-                raise ShapeError(f"with_friction(): {what} must be a scalar or a vector of length {self.n} (one "
-                                 f"value per joint of {self.name!r}), got shape {a.shape}", value=x)
-            return [float(v) for v in a]
+            name = f"with_friction(): {what}"
+            no_booleans(x, name)
+            return nonnegative_vector(x, self.n, name).tolist()  # type: ignore[no-any-return]
 
         cols = zip(per_joint(viscous, "viscous"), per_joint(coulomb, "coulomb"),
-                   per_joint(coulomb_negative, "coulomb_negative"), per_joint(static, "static"),
+                   per_joint(coulomb_negative, "coulomb_negative", True), per_joint(static, "static", True),
                    per_joint(stribeck_velocity, "stribeck_velocity"), strict=True)
         joints = tuple(replace(j, friction=JointFriction(*c)) for j, c in zip(self.joints, cols, strict=True))
         return replace(self, joints=joints)
@@ -289,13 +292,13 @@ class RobotModel:
                             ("com_offset", com_offset, "a distance in m, 0 for none"),
                             ("noise", noise, "a relative standard deviation, 0 for none")):
             try:
-                ok = math.isfinite(v) and v >= 0
+                ok = not isinstance(v, bool | np.bool_) and math.isfinite(v) and v >= 0
             except TypeError:
                 ok = False
             if not ok:
                 raise InvalidParameterError(f"perturbed(): {nm} must be finite and >= 0 ({hint}), got {v!r}",
                                             value=v)
-        rng = np.random.default_rng(seed)
+        rng = np.random.default_rng(None if seed is None else whole_number(seed, "perturbed(): seed"))
         joints = []
         for j in self.joints:
             f_noise = max(0.05, 1.0 + noise * rng.standard_normal()) if noise else 1.0
@@ -320,14 +323,33 @@ class RobotModel:
         axis is re-expressed in the link its rotor now rides on, the locked joints' motors and friction are
         dropped (they no longer move), and a default tool frame (``tool_frame=None``: the last joint's) is
         kept by name if that joint is locked. Raises :class:`~armctl.errors.UnknownNameError` for an unknown
-        joint and :class:`~armctl.errors.InvalidParameterError` for a non-finite lock position or locking
-        every joint."""
+        joint, :class:`~armctl.errors.NonFiniteError` for a non-finite lock position and
+        :class:`~armctl.errors.InvalidParameterError` for a lock position that is not a number or locking every
+        joint."""
+        from armctl.model.pinocchio_io import lock_joints, lock_positions
+
+        rotors, friction = boolean(rotors, "reduced(): rotors"), boolean(friction, "reduced(): friction")
+        positions = lock_positions(lock, self.joint_names)
         joints = tuple(replace(j, motor=j.motor if rotors else None,
                                friction=j.friction if friction else JointFriction()) for j in self.joints)
         model = replace(self, joints=joints)
-        if lock:
-            from armctl.model.pinocchio_io import lock_joints
-
-            model = lock_joints(model, lock)
+        if positions:
+            model = lock_joints(model, positions)
         return model
+
+
+def _parts(x: Any, cls: type, what: str) -> tuple[Any, ...]:
+    """``x`` as a tuple of ``cls`` objects (a RobotModel's joints or frames)."""
+    try:
+        if isinstance(x, str | bytes | cls):
+            raise TypeError(type(x).__name__)
+        parts = tuple(x)
+    except TypeError:
+        raise InvalidParameterError(f"{what} must be a sequence of armctl.model.{cls.__name__} objects, got {x!r}",
+                                    value=x) from None
+    for p in parts:
+        if not isinstance(p, cls):
+            raise InvalidParameterError(f"{what} must be armctl.model.{cls.__name__} objects, got {p!r} "
+                                        f"({type(p).__name__})", value=p)
+    return parts
 

@@ -6,10 +6,9 @@ import os
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
 
-import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl.errors import ModelLoadError, UnknownNameError
+from armctl.errors import InvalidParameterError, ModelLoadError, UnknownNameError
 from armctl.model.robot import RobotModel
 
 
@@ -18,8 +17,10 @@ def model_from_urdf(path: str | os.PathLike[str], tool_frame: str | None = None,
                     name: str | None = None) -> RobotModel:
     import pinocchio as pin
 
-    from armctl.model.pinocchio_io import joints_from_pinocchio
+    from armctl.model.pinocchio_io import joints_from_pinocchio, lock_positions
 
+    if not isinstance(path, str | os.PathLike):
+        raise InvalidParameterError(f"URDF path must be a str or a path, got {path!r}", value=path)
     path = os.fspath(path)
     if not os.path.isfile(path):
         raise ModelLoadError(f"URDF file not found: {path!r}", value=path)
@@ -27,20 +28,18 @@ def model_from_urdf(path: str | os.PathLike[str], tool_frame: str | None = None,
         pm = pin.buildModelFromUrdf(path)
     except Exception as exc:  # pinocchio raises plain ValueError/RuntimeError with the parser's words
         raise ModelLoadError(f"cannot read URDF {path!r}: {exc}", value=path) from exc
-    if lock:
-        positions = dict(lock) if isinstance(lock, Mapping) else {n: 0.0 for n in lock}
+    positions = lock_positions(lock, list(pm.names)[1:])
+    if positions:
         q = pin.neutral(pm)
         ids = []
         for jname, value in positions.items():
-            if not pm.existJointName(jname):
-                raise UnknownNameError("joint", jname, list(pm.names)[1:])
             jid = pm.getJointId(jname)
-            q[pm.idx_qs[jid]] = float(value)
+            q[pm.idx_qs[jid]] = value
             ids.append(jid)
         pm = pin.buildReducedModel(pm, ids, q)
     joints, frames = joints_from_pinocchio(pm, path)
     model = RobotModel(tuple(joints), name=name or pm.name or os.path.basename(path),
-                       gravity=np.asarray(gravity, dtype=float), frames=tuple(frames))
+                       gravity=gravity, frames=tuple(frames))
     if tool_frame is not None:
         if tool_frame not in model.frame_names:
             raise UnknownNameError("frame", tool_frame, model.frame_names)
