@@ -71,6 +71,13 @@ def scalar(x: Any, name: str, *, positive: bool = False, nonnegative: bool = Fal
     return v
 
 
+def boolean(x: Any, name: str) -> bool:
+    """``x`` as a bool: only True or False (a NumPy bool too); text such as ``"False"`` would be truthy."""
+    if not isinstance(x, bool | np.bool_):
+        raise InvalidParameterError(f"{name} must be True or False, got {x!r}", value=x)
+    return bool(x)
+
+
 def whole_number(x: Any, name: str, minimum: int = 0) -> int:
     """``x`` as an int: an int, a NumPy integer or a float with an integral value (2.0), at least ``minimum``.
     Booleans, fractions, NaN/inf and anything else raise an InvalidParameterError naming the value."""

@@ -5,11 +5,10 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, apply_gain
+from armctl._checks import FloatArray, apply_gain, boolean
 from armctl.controllers.base import Controller
 from armctl.controllers.integral import PIDGains
 from armctl.dynamics.base import Dynamics
-from armctl.errors import InvalidParameterError
 from armctl.reference import Reference
 
 
@@ -40,9 +39,7 @@ class PDGravity(PIDGains, Controller):
 
     @friction.setter
     def friction(self, value: bool) -> None:
-        if not isinstance(value, (bool, np.bool_)):
-            raise InvalidParameterError(f"friction must be True or False, got {value!r}", value=value)
-        self._friction = bool(value)
+        self._friction = boolean(value, "friction")
 
     def _gains_changed(self) -> None:
         super()._gains_changed()

@@ -27,9 +27,8 @@ import casadi as cs
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray
+from armctl._checks import FloatArray, boolean
 from armctl.dynamics.base import Dynamics
-from armctl.model.parts import boolean
 from armctl.model.robot import PARAMS_PER_JOINT, RobotModel
 
 

@@ -19,9 +19,9 @@ from dataclasses import replace
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, vector
+from armctl._checks import FloatArray, boolean, vector
 from armctl.errors import InvalidParameterError
-from armctl.model.parts import JointFriction, Link, Motor, boolean, no_booleans
+from armctl.model.parts import JointFriction, Link, Motor, no_booleans
 from armctl.model.robot import PARAMS_PER_JOINT, RobotModel
 
 _MASSLESS = 1e-9  # kg: below this a link counts as massless …

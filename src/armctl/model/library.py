@@ -23,9 +23,10 @@ from pathlib import Path
 
 import numpy as np
 
+from armctl._checks import boolean
 from armctl.errors import ModelLoadError
 from armctl.model.dh import DHLink
-from armctl.model.parts import Frame, Joint, JointFriction, JointLimits, Link, Motor, boolean, transform
+from armctl.model.parts import Frame, Joint, JointFriction, JointLimits, Link, Motor, transform
 from armctl.model.robot import RobotModel
 
 _PLANE_AXIS = (0.0, -1.0, 0.0)

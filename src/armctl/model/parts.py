@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, readonly, real_array, scalar, whole_number
+from armctl._checks import FloatArray, boolean, readonly, real_array, scalar, whole_number
 from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
 
 _INERTIA_TOL = 1e-9
@@ -52,13 +52,6 @@ def real_values(x: ArrayLike, name: str) -> FloatArray:
     refused too; its shape and finiteness are the caller's to check."""
     no_booleans(x, name)
     return np.array(real_array(x, name))  # a copy: parts make their arrays read-only, never the caller's
-
-
-def boolean(x: Any, name: str) -> bool:
-    """``x`` as a bool: only True or False (a NumPy bool too); text such as ``"False"`` would be truthy."""
-    if not isinstance(x, bool | np.bool_):
-        raise InvalidParameterError(f"{name} must be True or False, got {x!r}", value=x)
-    return bool(x)
 
 
 def instance_of(x: Any, cls: type, name: str, optional: bool = False) -> None:

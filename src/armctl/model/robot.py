@@ -16,14 +16,13 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, nonnegative_vector, readonly, vector, whole_number
+from armctl._checks import FloatArray, boolean, nonnegative_vector, readonly, vector, whole_number
 from armctl.errors import InvalidParameterError, UnknownNameError
 from armctl.model.parts import (
     Frame,
     Joint,
     JointFriction,
     Link,
-    boolean,
     inertia_tensor,
     name_text,
     no_booleans,
