@@ -14,7 +14,8 @@ from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
 @dataclass(frozen=True, eq=False)  # numpy fields: compare by identity
 class Reference:
     """Desired joint positions ``q`` [rad or m], velocities ``qd`` and accelerations ``qdd`` (each (n,),
-    read-only). ``qd`` and ``qdd`` default to zeros (a set-point)."""
+    read-only). ``qd`` and ``qdd`` default to zeros (a set-point). Each must hold real finite numbers (masked
+    arrays are refused: NumPy would pass on the data under the mask), q at least one."""
 
     q: FloatArray
     qd: FloatArray | None = None
@@ -22,7 +23,8 @@ class Reference:
 
     def __post_init__(self) -> None:
         if self.q is None:
-            raise InvalidParameterError("Reference q is required (the joint positions)", value=None)
+            raise InvalidParameterError("Reference q must hold real numbers (q is required: the joint positions), "
+                                        "got None", value=None)
         raw_q = self.q
         if raw_q.__class__ is np.ndarray and raw_q.dtype is FLOAT and raw_q.ndim <= 1:  # the usual case
             q: FloatArray | None = raw_q.reshape(-1)
@@ -30,6 +32,8 @@ class Reference:
             q = np.array(real_array(raw_q, "Reference q")).reshape(-1) if np.ndim(raw_q) <= 1 else None
         if q is None:
             raise ShapeError(f"Reference q must be a vector, got shape {np.shape(self.q)}", value=self.q)
+        if not q.shape[0]:
+            raise ShapeError(f"Reference q must hold at least one joint position, got {self.q!r}", value=self.q)
         for name in ("q", "qd", "qdd"):
             raw = getattr(self, name)
             if raw is None:
@@ -52,5 +56,5 @@ class Reference:
 
     @classmethod
     def hold(cls, q: ArrayLike) -> Reference:
-        """A set-point: q with zero velocity and acceleration."""
-        return cls(np.asarray(q, dtype=float))
+        """A set-point: q with zero velocity and acceleration (q checked as :class:`Reference` checks it)."""
+        return cls(q)  # type: ignore[arg-type]

@@ -12,21 +12,31 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, scalar
-from armctl.errors import InvalidParameterError, ShapeError
+from armctl._checks import FloatArray, real_array, scalar, vector
+from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError, UnknownNameError
 from armctl.reference import Reference
 
+#: the end conditions of :class:`WaypointSpline` given by name (scipy's ``CubicSpline`` also takes explicit pairs)
+BC_TYPES = ("clamped", "natural", "not-a-knot", "periodic")
 
-def _row(x: ArrayLike, name: str, n: int | None = None) -> FloatArray:
-    a = np.atleast_1d(np.asarray(x, dtype=float))
-    if a.ndim != 1 or (n is not None and a.shape != (n,)) or not np.isfinite(a).all():
-        raise ShapeError(f"{name} must be a finite vector{'' if n is None else f' of length {n}'}, got {a!r}",
-                         value=x)
-    return a
+
+def _row(x: ArrayLike, name: str, n: int | None = None, *, broadcast: bool = False) -> FloatArray:
+    """``x`` as a finite vector of ``n`` entries (``n`` None: any length >= 1; a scalar is one entry or, with
+    ``broadcast``, the value of every entry, as is a one-entry vector)."""
+    a = real_array(x, name)
+    if (a.ndim == 0 and (n is None or n == 1)) or (broadcast and a.shape in ((), (1,))):
+        a = np.full(1 if n is None else n, a.item())
+    if n is None:
+        if a.ndim != 1 or not a.shape[0]:
+            raise ShapeError(f"{name} must be a vector of at least one joint value, got shape {a.shape}: {x!r}",
+                             value=x)
+        n = a.shape[0]
+    return vector(a, n, name)
 
 
 @dataclass(frozen=True, eq=False)
@@ -45,9 +55,13 @@ class Quintic:
         object.__setattr__(self, "q0", q0)
         object.__setattr__(self, "q1", _row(self.q1, "q1", q0.size))
         object.__setattr__(self, "duration", scalar(self.duration, "duration", positive=True))
+        object.__setattr__(self, "t0", scalar(self.t0, "t0"))
         object.__setattr__(self, "_d", self.q1 - q0)
 
     def __call__(self, t: float) -> Reference:
+        """The reference at time ``t`` [s] (a real finite scalar)."""
+        if t.__class__ is not float or t - t != 0.0:  # t - t: NaN for NaN and ±inf
+            t = scalar(t, "t")  # a real finite scalar, or raise naming t
         big_t = self.duration
         s = min(max((t - self.t0) / big_t, 0.0), 1.0)
         p = 10 * s**3 - 15 * s**4 + 6 * s**5
@@ -70,11 +84,13 @@ class Sinusoid:
     def __post_init__(self) -> None:
         c = _row(self.center, "center")
         for name in ("amplitude", "frequency", "phase"):
-            v = np.broadcast_to(np.asarray(getattr(self, name), dtype=float), c.shape).copy()
-            object.__setattr__(self, name, _row(v, name, c.size))
+            object.__setattr__(self, name, _row(getattr(self, name), name, c.size, broadcast=True))
         object.__setattr__(self, "center", c)
 
     def __call__(self, t: float) -> Reference:
+        """The reference at time ``t`` [s] (a real finite scalar)."""
+        if t.__class__ is not float or t - t != 0.0:  # t - t: NaN for NaN and ±inf
+            t = scalar(t, "t")  # a real finite scalar, or raise naming t
         w = 2 * math.pi * self.frequency  # type: ignore[operator]
         arg = w * t + self.phase
         s, c = np.sin(arg), np.cos(arg)
@@ -86,22 +102,36 @@ class WaypointSpline:
     """A C² cubic spline through ``waypoints`` (k × n) at strictly increasing ``times`` (k,), with clamped
     (zero) end velocities by default; holds the end points outside [times[0], times[-1]]."""
 
-    def __init__(self, times: Sequence[float] | ArrayLike, waypoints: ArrayLike, bc_type: str = "clamped") -> None:
+    def __init__(self, times: Sequence[float] | ArrayLike, waypoints: ArrayLike,
+                 bc_type: str | tuple[Any, Any] = "clamped") -> None:
+        """times: (k,) [s], strictly increasing, k >= 2; waypoints: (k, n) joint positions; bc_type: the end
+        conditions, one of :data:`BC_TYPES` (or scipy ``CubicSpline``'s explicit ``((order, value), ...)``)."""
         from scipy.interpolate import CubicSpline
 
         t = _row(times, "times")
-        w = np.asarray(waypoints, dtype=float)
-        if w.ndim != 2 or w.shape[0] != t.size or t.size < 2:
-            raise ShapeError(f"waypoints must be ({t.size}, n) for {t.size} times (at least 2), got {w.shape}",
-                             value=waypoints)
+        w = real_array(waypoints, "waypoints")
+        if w.ndim != 2 or w.shape[0] != t.size or t.size < 2 or not w.shape[1]:
+            raise ShapeError(f"waypoints must be ({t.size}, n) for {t.size} times (at least 2) and n >= 1 joints, "
+                             f"got shape {w.shape}", value=waypoints)
         if not np.isfinite(w).all():
-            raise ShapeError("waypoints hold NaN or inf", value=waypoints)
+            k, j = np.argwhere(~np.isfinite(w))[0]
+            raise NonFiniteError(f"waypoints must be finite; waypoint {k} joint {j} is {w[k, j]}", value=waypoints)
         if not (np.diff(t) > 0).all():
             raise InvalidParameterError(f"times must be strictly increasing, got {t}", value=times)
+        if not (isinstance(bc_type, tuple | list) or (isinstance(bc_type, str) and bc_type in BC_TYPES)):
+            raise UnknownNameError("bc_type", bc_type, BC_TYPES)
+        try:
+            spline = CubicSpline(t, w, bc_type=bc_type, axis=0)
+        except (ValueError, TypeError) as e:  # explicit pairs of the wrong form, periodic with different ends
+            raise InvalidParameterError(f"bc_type={bc_type!r} does not fit these waypoints: {e}",
+                                        value=bc_type) from None
         self.times, self.waypoints = t, w
-        self._s = CubicSpline(t, w, bc_type=bc_type, axis=0)
+        self._s = spline
 
     def __call__(self, t: float) -> Reference:
+        """The reference at time ``t`` [s] (a real finite scalar); the end points are held outside the times."""
+        if t.__class__ is not float or t - t != 0.0:  # t - t: NaN for NaN and ±inf
+            t = scalar(t, "t")  # a real finite scalar, or raise naming t
         tc = min(max(t, self.times[0]), self.times[-1])
         q = self._s(tc)
         if t != tc:

@@ -24,8 +24,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, readonly, scalar, vector
+from armctl._checks import FloatArray, nonnegative_vector, readonly, scalar, whole_number
 from armctl.dynamics.base import Dynamics
+from armctl.errors import InvalidParameterError
 from armctl.planning.path import LinePath
 
 
@@ -39,14 +40,22 @@ def bang_bang_duration(distance: float, v_max: float, a_max: float) -> float:
 
 
 def line_min_time(start: ArrayLike, end: ArrayLike, vel_limit: ArrayLike, acc_limit: ArrayLike) -> float:
-    """Minimum rest-to-rest time [s] along the straight line from ``start`` to ``end`` with symmetric joint
-    limits (scalars or (n,) vectors)."""
-    q0 = np.asarray(start, dtype=float)
-    delta = np.abs(vector(end, q0.shape[0], "end") - q0)
+    """Minimum rest-to-rest time [s] along the straight line from ``start`` to ``end`` (distinct, finite (n,)
+    vectors, checked as :class:`LinePath` checks them) with symmetric joint limits > 0 (scalars or (n,)
+    vectors)."""
+    line = LinePath(start, end)
+    delta = np.abs(line.delta)
     moving = delta > 0
-    v = np.broadcast_to(np.asarray(vel_limit, dtype=float), delta.shape)[moving]
-    a = np.broadcast_to(np.asarray(acc_limit, dtype=float), delta.shape)[moving]
-    return bang_bang_duration(1.0, float(np.min(v / delta[moving])), float(np.min(a / delta[moving])))
+    v, a = (_positive_limit(x, line.n, name) for x, name in ((vel_limit, "vel_limit"), (acc_limit, "acc_limit")))
+    return bang_bang_duration(1.0, float(np.min(v[moving] / delta[moving])), float(np.min(a[moving] / delta[moving])))
+
+
+def _positive_limit(x: ArrayLike, n: int, name: str) -> FloatArray:
+    lim = nonnegative_vector(x, n, name)
+    if not lim.all():
+        j = int(np.argmin(lim))
+        raise InvalidParameterError(f"{name} of joint {j} is 0; a limit must be > 0, got {lim.tolist()}", value=x)
+    return lim
 
 
 @dataclass(frozen=True)
@@ -68,24 +77,28 @@ def grid_convergence(dyn: Dynamics, start: ArrayLike, end: ArrayLike, vel_limit:
     pays for importing toppra)."""
     from armctl.planning.topp import time_optimal
 
+    sizes = [whole_number(n, f"grids[{i}]", 2) for i, n in enumerate(np.ravel(np.asarray(grids, dtype=object)))]
+    if not sizes:
+        raise InvalidParameterError("grids must hold at least one grid size, got none", value=grids)
+    repeat = whole_number(repeat, "repeat", 1)
     path = LinePath(start, end)
     ref = line_min_time(start, end, vel_limit, acc_limit)
 
     def solve(n: int) -> float:
-        return time_optimal(dyn, path, vel_limit=vel_limit, acc_limit=acc_limit, grid=int(n)).duration
+        return time_optimal(dyn, path, vel_limit=vel_limit, acc_limit=acc_limit, grid=n).duration
 
-    solve(int(grids[0]))
+    solve(sizes[0])
     durations, times = [], []
-    for n in grids:
+    for n in sizes:
         best = math.inf
-        for _ in range(max(1, int(repeat))):
+        for _ in range(repeat):
             t0 = time.perf_counter()
             duration = solve(n)
             best = min(best, time.perf_counter() - t0)
         times.append(best)
         durations.append(duration)
     dur = np.array(durations)
-    return ConvergenceStudy(readonly(np.array(grids, dtype=float)), readonly(dur), readonly(np.abs(dur - ref) / ref),
+    return ConvergenceStudy(readonly(np.array(sizes, dtype=float)), readonly(dur), readonly(np.abs(dur - ref) / ref),
                             readonly(np.array(times)), ref)
 
 

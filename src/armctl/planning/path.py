@@ -18,7 +18,7 @@ from bisect import bisect_right
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, readonly, vector
+from armctl._checks import FloatArray, readonly, real_array, scalar, vector
 from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
 
 BC_TYPES = ("not-a-knot", "natural", "clamped")
@@ -63,16 +63,18 @@ class Path(ABC):
 
     def at(self, s: float) -> tuple[FloatArray, FloatArray, FloatArray]:
         """(q, q', q'') at one parameter s ∈ [0, 1], each (n,) — :meth:`derivatives` for a control loop's rate."""
+        if s.__class__ is not float:
+            s = scalar(s, "path parameter s")
         q, dq, ddq = self.derivatives(np.array([s]))
         return q[0], dq[0], ddq[0]
 
     @staticmethod
     def _params(s: ArrayLike) -> FloatArray:
-        ss = np.asarray(s, dtype=float)
+        ss = real_array(s, "path parameter s")
         if ss.ndim > 1:
             raise ShapeError(f"path parameter s must be a scalar or a vector, got shape {ss.shape}", value=s)
         if not np.isfinite(ss).all():
-            raise NonFiniteError("path parameter s holds NaN or inf", value=s)
+            raise NonFiniteError(f"path parameter s holds NaN or inf: {s!r}", value=s)
         if ss.size and (ss.min() < -1e-12 or ss.max() > 1.0 + 1e-12):
             raise InvalidParameterError(f"path parameter s must lie in [0, 1], got values in "
                                         f"[{ss.min():g}, {ss.max():g}]", value=s)
@@ -96,7 +98,7 @@ class SplinePath(Path):
     def __init__(self, waypoints: ArrayLike, knots: str | ArrayLike = "chord", bc_type: str = "not-a-knot") -> None:
         from scipy.interpolate import CubicSpline
 
-        w = np.array(waypoints, dtype=float)
+        w = np.array(real_array(waypoints, "waypoints"))
         if w.ndim != 2 or w.shape[0] < 2 or w.shape[1] < 1:
             raise ShapeError(f"waypoints must be an (m, n) array with m >= 2 waypoints of n joints, got shape "
                              f"{w.shape}", value=waypoints)
@@ -140,7 +142,8 @@ class SplinePath(Path):
 
     def at(self, s: float) -> tuple[FloatArray, FloatArray, FloatArray]:
         # the cubic piece q = c₀d³ + c₁d² + c₂d + c₃, d = s − s_k, evaluated directly (no scipy call)
-        s = float(s)
+        if s.__class__ is not float:
+            s = scalar(s, "path parameter s")
         if not 0.0 <= s <= 1.0:
             return super().at(s)  # raises with the message
         knots = self._knot_list
@@ -154,16 +157,19 @@ class LinePath(Path):
     """The straight line q(s) = q₀ + s (q₁ − q₀) in joint space; q' = q₁ − q₀, q'' = 0."""
 
     def __init__(self, start: ArrayLike, end: ArrayLike) -> None:
-        a = np.array(start, dtype=float).reshape(-1) if np.ndim(start) <= 1 else None
-        if a is None or a.size == 0:
-            raise ShapeError(f"start must be a non-empty vector, got shape {np.shape(start)}", value=start)
-        self.n = a.shape[0]
-        self.start = readonly(vector(a, self.n, "start"))
-        self.end = readonly(vector(end, self.n, "end"))
+        a, b = real_array(start, "start"), real_array(end, "end")
+        if a.ndim > 1 or a.size == 0:
+            raise ShapeError(f"start must be a non-empty vector, got shape {a.shape}: {start!r}", value=start)
+        if b.ndim > 1 or b.size != a.size:
+            raise ShapeError(f"start and end must be vectors of the same length, got start {start!r} (shape "
+                             f"{a.shape}) and end {end!r} (shape {b.shape})", value=end)
+        self.n = a.size
+        self.start = readonly(np.array(vector(a.reshape(-1), self.n, "start")))
+        self.end = readonly(np.array(vector(b.reshape(-1), self.n, "end")))
         delta = self.end - self.start
         if not np.abs(delta).max() > 0.0:
-            raise InvalidParameterError("start and end coincide: a line path needs two distinct configurations",
-                                        value=end)
+            raise InvalidParameterError(f"start and end coincide ({self.start.tolist()}): a line path needs two "
+                                        "distinct configurations", value=end)
         self.delta = readonly(delta)
         self.waypoints = readonly(np.stack([self.start, self.end]))
 
@@ -175,7 +181,8 @@ class LinePath(Path):
         return np.zeros((s.shape[0], self.n))
 
     def at(self, s: float) -> tuple[FloatArray, FloatArray, FloatArray]:
-        s = float(s)
+        if s.__class__ is not float:
+            s = scalar(s, "path parameter s")
         if not 0.0 <= s <= 1.0:
             return super().at(s)
         return self.start + s * self.delta, self.delta.copy(), np.zeros(self.n)

@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from armctl._checks import FloatArray
+from armctl._checks import FloatArray, whole_number
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InfeasibleError, InvalidParameterError
 from armctl.planning._batch import friction_torques, rigid_torques
@@ -84,10 +84,9 @@ def uniform_time_scaling(dyn: Dynamics, trajectory: Trajectory, vel_limit: Any =
                                     f"{type(trajectory).__name__}", value=trajectory)
     if trajectory.n != dyn.n:
         raise InvalidParameterError(f"the trajectory has {trajectory.n} joints, the arm {dyn.n}", value=trajectory)
-    if int(samples) < 2:
-        raise InvalidParameterError(f"samples must be >= 2, got {samples!r}", value=samples)
+    samples = whole_number(samples, "samples", 2)
     limits = joint_limits(dyn.model, vel_limit, acc_limit, torque_limit, torque_margin)
-    smp = trajectory.sample(num=int(samples))
+    smp = trajectory.sample(num=samples)
     z_by_kind: dict[str, FloatArray] = {}
     if limits.velocity is not None:
         z_by_kind["velocity"] = _speed_root(smp.qd, limits.velocity.lower, limits.velocity.upper, 1)
@@ -122,7 +121,7 @@ def uniform_time_scaling(dyn: Dynamics, trajectory: Trajectory, vel_limit: Any =
     scaled_path = Trajectory(trajectory.path, timing)
     # checked 10 times more densely than r was found, so that the check sees what happens between the samples
     # (checked at the same times, a sharp spline's 0.5 % acceleration excess between them was reported as 0)
-    dense = scaled_path.sample(np.linspace(0.0, scaled_path.duration, 10 * (int(samples) - 1) + 1))
+    dense = scaled_path.sample(np.linspace(0.0, scaled_path.duration, 10 * (samples - 1) + 1))
     check = check_trajectory(dyn, scaled_path, limits, samples=dense)
     scaled = Trajectory(trajectory.path, timing, check, {"factor": r, "binding": (kind, int(j))})
     return UniformScaling(r, scaled, kind, int(j), float(smp.t[k]))

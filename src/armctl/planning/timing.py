@@ -3,14 +3,13 @@ rest-to-rest motion on [0, T]: before 0 the path waits at s = 0, after T at s = 
 
 from __future__ import annotations
 
-import math
 from abc import ABC, abstractmethod
 from bisect import bisect_right
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, readonly, scalar
+from armctl._checks import FloatArray, readonly, real_array, scalar
 from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError, SolverError
 
 
@@ -29,11 +28,11 @@ class Timing(ABC):
     def evaluate(self, t: ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray]:
         """(s, ṡ, s̈) at times t [s] (a scalar or an (m,) vector; arrays of the same shape come back). Inside
         [0, T] the values in motion (at T, the limit from the left); outside, rest at the nearest end."""
-        tt = np.asarray(t, dtype=float)
+        tt = real_array(t, "t")
         if tt.ndim > 1:
             raise ShapeError(f"t must be a scalar or a vector, got shape {tt.shape}", value=t)
         if not np.isfinite(tt).all():
-            raise NonFiniteError("t holds NaN or inf", value=t)
+            raise NonFiniteError(f"t holds NaN or inf: {t!r}", value=t)
         flat = tt.reshape(-1)
         inside = (flat >= 0.0) & (flat <= self.duration)
         s = np.where(flat > self.duration, 1.0, 0.0)
@@ -45,9 +44,8 @@ class Timing(ABC):
 
     def at(self, t: float) -> tuple[float, float, float]:
         """(s, ṡ, s̈) at one time t [s] (as :meth:`evaluate`, for a control loop's rate)."""
-        t = float(t)
-        if not math.isfinite(t):
-            raise NonFiniteError(f"t must be finite, got {t}", value=t)
+        if t.__class__ is not float or t - t != 0.0:  # t - t: NaN for NaN and ±inf
+            t = scalar(t, "t")  # a real finite scalar, or raise naming t
         if t < 0.0 or t > self.duration:
             return (0.0 if t < 0.0 else 1.0), 0.0, 0.0
         return self._at(t)

@@ -30,15 +30,16 @@ toppra's known failure modes (its issue tracker) and what happens to each here:
 
 from __future__ import annotations
 
+import math
 import time
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray
+from armctl._checks import FloatArray, scalar, whole_number
 from armctl.dynamics.base import Dynamics
-from armctl.errors import InvalidParameterError, SolverError
+from armctl.errors import InvalidParameterError, NonFiniteError, SolverError
 from armctl.planning.infeasibility import diagnose, rest_overload
 from armctl.planning.limits import joint_limits
 from armctl.planning.path import Path, as_path
@@ -63,15 +64,14 @@ def solve_problem(problem: TimeScalingProblem, viscous_passes: int = 2) -> Traje
     """
     from armctl.planning._toppra import run_toppra
 
-    if int(viscous_passes) < 1:
-        raise InvalidParameterError(f"viscous_passes must be >= 1, got {viscous_passes!r}", value=viscous_passes)
+    viscous_passes = whole_number(viscous_passes, "viscous_passes", 1)
     t0 = time.perf_counter()
     at_rest = rest_overload(problem)
     if at_rest is not None:
         raise at_rest
     interp = problem.discretization == "interpolation"
     x0 = None
-    passes = 1 + (int(viscous_passes) if problem.has_viscous else 0)
+    passes = 1 + (viscous_passes if problem.has_viscous else 0)
     for _ in range(passes):
         rows = problem.linearized(x0)
         out = run_toppra(problem.path, problem.s, *rows, problem.g, problem.x_max, interp)
@@ -106,6 +106,17 @@ def _refined(grid: int | ArrayLike) -> int | FloatArray:
     return np.sort(np.concatenate((s, 0.5 * (s[1:] + s[:-1]))))
 
 
+def _tolerance(tol: Any) -> float:
+    """``tol`` as a float >= 0, ``inf`` included (accept any result)."""
+    if isinstance(tol, float | np.floating) and tol == math.inf:
+        return math.inf
+    try:
+        return scalar(tol, "tol", nonnegative=True)
+    except NonFiniteError:
+        raise NonFiniteError(f"tol must be a number >= 0 or float('inf') (accept any result), got {tol!r}",
+                             value=tol) from None
+
+
 def time_optimal(dyn: Dynamics, path: Path | ArrayLike, vel_limit: Any = None, acc_limit: Any = None,
                  torque_limit: Any = None, grid: int | ArrayLike = 100, *, torque_margin: float = 0.0,
                  tol: float = 1e-2, refine: bool = True, max_grid: int = 1600, oversample: int = 10,
@@ -137,16 +148,15 @@ def time_optimal(dyn: Dynamics, path: Path | ArrayLike, vel_limit: Any = None, a
         raise InvalidParameterError(f"dyn must be an armctl.Dynamics, got {type(dyn).__name__}", value=dyn)
     geo = as_path(path, dyn.n)
     limits = joint_limits(dyn.model, vel_limit, acc_limit, torque_limit, torque_margin)
-    tol = float(tol)
-    if not tol >= 0.0:
-        raise InvalidParameterError(f"tol must be >= 0, got {tol}", value=tol)
-    if int(oversample) < 1:
-        raise InvalidParameterError(f"oversample must be >= 1, got {oversample!r}", value=oversample)
+    tol = _tolerance(tol)
+    oversample = whole_number(oversample, "oversample", 1)
+    max_grid = whole_number(max_grid, "max_grid", 2)
+    viscous_passes = whole_number(viscous_passes, "viscous_passes", 1)
     history: list[dict[str, Any]] = []
     while True:
         problem = build_problem(dyn, geo, limits, grid, discretization)
         traj = solve_problem(problem, viscous_passes)
-        check = check_trajectory(dyn, traj, limits, int(oversample))
+        check = check_trajectory(dyn, traj, limits, oversample)
         history.append({"grid": problem.grid, "duration": traj.duration, "worst_excess": check.worst_excess})
         if check.worst_excess <= tol:
             info = {**traj.info, "history": history, "compute_time": time.perf_counter() - t0}

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, readonly, scalar
+from armctl._checks import FloatArray, readonly, real_array, scalar, whole_number
 from armctl.errors import InvalidParameterError
 from armctl.planning.path import Path
 from armctl.planning.timing import Timing
@@ -73,7 +73,7 @@ class Trajectory:
         return f"Trajectory(n={self.n}, duration={self.duration:.4g} s, path={self.path!r})"
 
     def __call__(self, t: float) -> Reference:
-        s, sd, sdd = self.timing.at(scalar(t, "t"))
+        s, sd, sdd = self.timing.at(t)  # checks t (a real finite scalar)
         q, dq, ddq = self.path.at(s)
         return Reference(q, dq * sd, dq * sdd + ddq * (sd * sd))
 
@@ -88,11 +88,9 @@ class Trajectory:
             tt = np.arange(0.0, T, step)
             tt = np.append(tt, T) if tt[-1] < T else tt
         elif num is not None:
-            if int(num) < 2:
-                raise InvalidParameterError(f"num must be >= 2, got {num!r}", value=num)
-            tt = np.linspace(0.0, T, int(num))
+            tt = np.linspace(0.0, T, whole_number(num, "num", 2))
         else:
-            tt = np.array(t, dtype=float).reshape(-1)
+            tt = np.array(real_array(t, "t")).reshape(-1)
         s, sd, sdd = self.timing.evaluate(tt)
         q, dq, ddq = self.path.derivatives(s)
         qd = dq * sd[:, None]

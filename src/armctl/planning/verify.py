@@ -20,9 +20,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from armctl._checks import FloatArray, readonly
+from armctl._checks import FloatArray, readonly, whole_number
 from armctl.dynamics.base import Dynamics
-from armctl.errors import InvalidParameterError
+from armctl.errors import InvalidParameterError, ShapeError
 from armctl.planning._batch import friction_torques, rigid_torques
 from armctl.planning.limits import Bounds, JointLimits
 from armctl.planning.timing import GridTiming
@@ -85,8 +85,7 @@ class LimitCheck:
 def sample_times(traj: Trajectory, oversample: int = 10) -> FloatArray:
     """Times to check: ``oversample`` per stage for a TOPP-RA timing (evenly in time within each stage, the
     gridpoints included), else ``oversample`` × 100 + 1 evenly spaced; always both ends."""
-    if oversample < 1:
-        raise InvalidParameterError(f"oversample must be >= 1, got {oversample}", value=oversample)
+    oversample = whole_number(oversample, "oversample", 1)
     timing = traj.timing
     if isinstance(timing, GridTiming):
         t0, dt = timing.t[:-1], np.diff(timing.t)
@@ -138,6 +137,24 @@ def check_trajectory(dyn: Dynamics, traj: Trajectory, limits: JointLimits, overs
     """Check ``traj`` densely against the planned ``limits`` (torque bounds with their margin applied) and
     report the worst utilisation of each. ``samples``: use these instead of :func:`sample_times`. The rest
     states at both ends (:func:`rest_samples`) are always checked too."""
+    if not isinstance(dyn, Dynamics):
+        raise InvalidParameterError(f"dyn must be an armctl.Dynamics, got {type(dyn).__name__}", value=dyn)
+    if not isinstance(traj, Trajectory):
+        raise InvalidParameterError(f"traj must be an armctl.planning.Trajectory, got {type(traj).__name__}",
+                                    value=traj)
+    if not isinstance(limits, JointLimits):
+        raise InvalidParameterError(f"limits must be an armctl.planning.JointLimits, got {limits!r}; build one with "
+                                    "armctl.planning.joint_limits(dyn.model, vel_limit=..., acc_limit=..., "
+                                    "torque_limit=...) ('model' there uses the model's limits)", value=limits)
+    if samples is not None and not isinstance(samples, Samples):
+        raise InvalidParameterError(f"samples must be None or armctl.planning.Samples (from traj.sample), got "
+                                    f"{type(samples).__name__}", value=samples)
+    if traj.n != dyn.n:
+        raise ShapeError(f"the trajectory has {traj.n} joints, the arm {dyn.n}", value=traj)
+    for kind, b in limits.planned().items():
+        if b.lower.shape != (dyn.n,):
+            raise ShapeError(f"the {kind} limits are for {b.lower.shape[0]} joints, the arm has {dyn.n}; build them "
+                             "with joint_limits(dyn.model, ...)", value=limits)
     moving = samples if samples is not None else traj.sample(sample_times(traj, oversample))
     smp = _joined(moving, rest_samples(traj))
     reports: dict[str, LimitReport] = {}

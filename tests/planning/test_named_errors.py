@@ -1,0 +1,185 @@
+"""Bad input to line_min_time, the paths, check_trajectory, time_optimal and the timing laws raises an
+ArmctlError naming the value (it used to be a raw ValueError, IndexError, AttributeError, or no error at all)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+import pytest
+
+import armctl
+from armctl.errors import ArmctlError, InvalidParameterError, NonFiniteError, ShapeError
+from armctl.planning import (
+    LinePath,
+    PolynomialTiming,
+    SplinePath,
+    Trajectory,
+    bang_bang_duration,
+    check_trajectory,
+    grid_convergence,
+    joint_limits,
+    line_min_time,
+    time_optimal,
+    uniform_time_scaling,
+)
+from tests.planning._common import PANDA_WAYPOINTS, panda
+
+
+@pytest.mark.parametrize(("args", "error", "match"), [
+    (([np.nan, 0.0], [1.0, 1.0], 1.0, 1.0), NonFiniteError, r"^start holds NaN or inf: array\(\[nan,  0\.\]\)"),
+    (([np.inf, 0.0], [1.0, 1.0], 1.0, 1.0), NonFiniteError, r"^start holds NaN or inf: array\(\[inf,  0\.\]\)"),
+    (([0.0, 0.0], [1.0, np.nan], 1.0, 1.0), NonFiniteError, r"^end holds NaN or inf: array\(\[ 1., nan\]\)"),
+    (([1.0, 1.0], [1.0, 1.0], 1.0, 1.0), InvalidParameterError, r"^start and end coincide \(\[1\.0, 1\.0\]\)"),
+    ((0.0, [1.0, 1.0], 1.0, 1.0), ShapeError,
+     r"^start and end must be vectors of the same length, got start 0\.0 \(shape \(\)\) and end \[1\.0, 1\.0\]"),
+    (([0.0, 0.0], [1.0, 1.0], [1.0, 1.0, 1.0], 1.0), ShapeError,
+     r"^vel_limit must be a scalar or an \(2,\) vector, got shape \(3,\)"),
+    (([0.0, 0.0], [1.0, 1.0], 1.0, [[1.0]]), ShapeError, r"^acc_limit must be a scalar or an \(2,\) vector"),
+    (([0.0, 0.0], [1.0, 1.0], [1.0, 0.0], 1.0), InvalidParameterError,
+     r"^vel_limit of joint 1 is 0; a limit must be > 0"),
+    (([0.0, 0.0], [1.0, 1.0], 1.0, -2.0), InvalidParameterError, r"^acc_limit must be >= 0, got \[-2\.0, -2\.0\]"),
+    (([0.0, 0.0], [1.0, 1.0], "fast", 1.0), InvalidParameterError, r"^vel_limit must hold real numbers, got 'fast'"),
+    ((["a", "b"], [1.0, 1.0], 1.0, 1.0), InvalidParameterError, r"^start must hold real numbers, got \['a', 'b'\]"),
+])
+def test_line_min_time_rejects_bad_input(args: tuple[Any, ...], error: type[ArmctlError], match: str) -> None:
+    # a NaN in start used to give 2.0 and an inf "v_max must be > 0, got 0.0"
+    with pytest.raises(error, match=match):
+        line_min_time(*args)
+
+
+def test_line_min_time_of_valid_input() -> None:
+    assert line_min_time(0.0, 1.0, 1.0, 1.0) == bang_bang_duration(1.0, 1.0, 1.0) == 2.0  # one joint, scalars
+    # the slowest joint sets the time; a joint that does not move imposes nothing
+    # (ṡ ≤ min(1/2, 1/1) = 0.5, s̈ ≤ min(4/2, 1/1) = 1: a trapezoid)
+    assert math.isclose(line_min_time([0.0, 0.0, 0.3], [2.0, 1.0, 0.3], [1.0, 1.0, 1e-3], [4.0, 1.0, 1e-3]),
+                        bang_bang_duration(1.0, 0.5, 1.0))
+
+
+@pytest.mark.parametrize(("build", "error", "match"), [
+    (lambda: SplinePath("ab"), InvalidParameterError, r"^waypoints must hold real numbers, got 'ab'"),
+    (lambda: SplinePath([["a", "b"], ["c", "d"]]), InvalidParameterError,
+     r"^waypoints must hold real numbers, got \[\['a', 'b'\], \['c', 'd'\]\]"),
+    (lambda: SplinePath([[0j, 1.0], [1.0, 2.0]]), InvalidParameterError, r"^waypoints must hold real numbers"),
+    (lambda: LinePath("ab", [1.0, 2.0]), InvalidParameterError, r"^start must hold real numbers, got 'ab'"),
+    (lambda: LinePath(None, [1.0, 2.0]), InvalidParameterError, r"^start must hold real numbers, got None"),
+    (lambda: LinePath([0.0, 1.0], ["a", "b"]), InvalidParameterError, r"^end must hold real numbers, got \['a', 'b'\]"),
+    (lambda: LinePath([0.0, 1.0], [0.0, 1.0]), InvalidParameterError, r"^start and end coincide \(\[0\.0, 1\.0\]\)"),
+    (lambda: LinePath([0.0, 1.0], [[0.0, 1.0]]), ShapeError, r"^start and end must be vectors of the same length"),
+    (lambda: LinePath([0.0, 0.0], [1.0, 1.0])("a"), InvalidParameterError,
+     r"^path parameter s must hold real numbers, got 'a'"),
+    (lambda: LinePath([0.0, 0.0], [1.0, 1.0]).derivatives(["0.5"]), InvalidParameterError,
+     r"^path parameter s must hold real numbers, got \['0\.5'\]"),
+    (lambda: LinePath([0.0, 0.0], [1.0, 1.0]).at("0.5"), InvalidParameterError,
+     r"^path parameter s must be a real number, got '0\.5'"),
+    (lambda: SplinePath(PANDA_WAYPOINTS)("a"), InvalidParameterError,
+     r"^path parameter s must hold real numbers, got 'a'"),
+    (lambda: SplinePath(PANDA_WAYPOINTS).at("0.5"), InvalidParameterError,
+     r"^path parameter s must be a real number, got '0\.5'"),
+    (lambda: SplinePath(PANDA_WAYPOINTS).at(None), InvalidParameterError,
+     r"^path parameter s must be a real number, got None"),
+    (lambda: SplinePath(PANDA_WAYPOINTS)(0.5j), InvalidParameterError,
+     r"^path parameter s must hold real numbers, got 0\.5j"),
+    (lambda: SplinePath(PANDA_WAYPOINTS)(np.nan), NonFiniteError, r"^path parameter s holds NaN or inf: nan"),
+])
+def test_paths_name_what_is_not_a_number(build: Callable[[], Any], error: type[ArmctlError], match: str) -> None:
+    with pytest.raises(error, match=match):
+        build()
+
+
+def test_paths_of_valid_input_are_unchanged() -> None:
+    line = LinePath(0.0, 2.0)  # scalars: one joint
+    assert line.n == 1 and line(0.25).tolist() == [0.5]
+    start = np.array([0.0, 1.0])
+    line = LinePath(start, [1.0, 1.0])
+    start[0] = 5.0  # the caller's array is not shared
+    assert line.start.tolist() == [0.0, 1.0] and line.at(np.float64(0.5))[0].tolist() == [0.5, 1.0]
+    spline = SplinePath(PANDA_WAYPOINTS)
+    for s in (0.3, np.float64(0.3), np.array(0.3)):
+        assert np.allclose(spline.at(s)[0], spline(0.3))
+
+
+def _trajectory() -> Trajectory:
+    return Trajectory(LinePath(PANDA_WAYPOINTS[0], PANDA_WAYPOINTS[1]), PolynomialTiming(1.0))
+
+
+def test_check_trajectory_names_bad_arguments() -> None:
+    dyn, traj = panda(), _trajectory()
+    limits = joint_limits(dyn.model, torque_limit="model")
+    with pytest.raises(InvalidParameterError, match=r"^limits must be an armctl\.planning\.JointLimits, got 'model'; "
+                                                     r"build one with armctl\.planning\.joint_limits"):
+        check_trajectory(dyn, traj, "model")  # type: ignore[arg-type]
+    with pytest.raises(InvalidParameterError, match=r"^dyn must be an armctl\.Dynamics, got RobotModel"):
+        check_trajectory(dyn.model, traj, limits)  # type: ignore[arg-type]
+    with pytest.raises(InvalidParameterError, match=r"^traj must be an armctl\.planning\.Trajectory, got ndarray"):
+        check_trajectory(dyn, PANDA_WAYPOINTS, limits)  # type: ignore[arg-type]
+    with pytest.raises(InvalidParameterError, match=r"^samples must be None or armctl\.planning\.Samples"):
+        check_trajectory(dyn, traj, limits, samples=np.zeros(3))  # type: ignore[arg-type]
+    short = Trajectory(LinePath([0.0, 0.0], [1.0, 1.0]), PolynomialTiming(1.0))
+    with pytest.raises(ShapeError, match=r"^the trajectory has 2 joints, the arm 7"):
+        check_trajectory(dyn, short, limits)
+    pendulum_limits = joint_limits(armctl.models.pendulum(), vel_limit=1.0)
+    with pytest.raises(ShapeError, match=r"^the velocity limits are for 1 joints, the arm has 7"):
+        check_trajectory(dyn, traj, pendulum_limits)
+    for bad in ("a", 2.7, 0, True):
+        with pytest.raises(InvalidParameterError, match=rf"^oversample must be a whole number >= 1, got {bad!r}"):
+            check_trajectory(dyn, traj, limits, bad)  # type: ignore[arg-type]
+    assert check_trajectory(dyn, traj, limits, 3.0).samples == check_trajectory(dyn, traj, limits, 3).samples
+
+
+@pytest.mark.parametrize(("kwargs", "error", "match"), [
+    ({"tol": "a"}, InvalidParameterError, r"^tol must be a real number, got 'a'"),
+    ({"tol": float("nan")}, NonFiniteError, r"^tol must be a number >= 0 or float\('inf'\).*got nan"),
+    ({"tol": -0.1}, InvalidParameterError, r"^tol must be >= 0, got -0\.1"),
+    ({"oversample": "a"}, InvalidParameterError, r"^oversample must be a whole number >= 1, got 'a'"),
+    ({"oversample": 2.7}, InvalidParameterError, r"^oversample must be a whole number >= 1, got 2\.7"),
+    ({"max_grid": "many"}, InvalidParameterError, r"^max_grid must be a whole number >= 2, got 'many'"),
+    ({"viscous_passes": 1.5}, InvalidParameterError, r"^viscous_passes must be a whole number >= 1, got 1\.5"),
+])
+def test_time_optimal_names_bad_settings(kwargs: dict[str, Any], error: type[ArmctlError], match: str) -> None:
+    # tol="a" and oversample="a" used to raise a raw ValueError; oversample=2.7 ran with 2
+    with pytest.raises(error, match=match):
+        time_optimal(panda(), PANDA_WAYPOINTS, torque_limit="model", grid=20, **kwargs)
+
+
+def test_time_optimal_settings_of_valid_input() -> None:
+    # tol=inf accepts any result (documented); integral floats and NumPy integers are whole numbers
+    traj = time_optimal(panda(), PANDA_WAYPOINTS, torque_limit="model", grid=20, tol=float("inf"),
+                        oversample=np.int64(3), max_grid=40.0)
+    assert traj.check is not None and len(traj.info["history"]) == 1
+
+
+def test_timing_and_sampling_name_bad_times_and_counts() -> None:
+    traj = _trajectory()
+    with pytest.raises(InvalidParameterError, match=r"^t must be a real number, got '0\.5'"):
+        traj.timing.at("0.5")  # type: ignore[arg-type]  # float() used to parse the text
+    with pytest.raises(NonFiniteError, match=r"^t must be finite, got inf"):
+        traj.timing.at(np.float64("inf"))
+    with pytest.raises(InvalidParameterError, match=r"^t must be a real number, got array\(\[0\.1, 0\.2\]\)"):
+        traj(np.array([0.1, 0.2]))  # type: ignore[arg-type]
+    with pytest.raises(InvalidParameterError, match=r"^t must hold real numbers, got \['0\.1', '0\.2'\]"):
+        traj.timing.evaluate(["0.1", "0.2"])
+    with pytest.raises(InvalidParameterError, match=r"^t must hold real numbers, got \['a'\]"):
+        traj.sample(["a"])
+    with pytest.raises(NonFiniteError, match=r"^t holds NaN or inf: array\(\[0\.1, nan\]\)"):
+        traj.sample([0.1, np.nan])
+    with pytest.raises(InvalidParameterError, match=r"^num must be a whole number >= 2, got 2\.5"):
+        traj.sample(num=2.5)  # type: ignore[arg-type]
+    assert len(traj.sample(num=5.0)) == 5  # type: ignore[arg-type]
+    assert np.array_equal(traj(np.float64(0.4)).q, traj(0.4).q) and np.array_equal(traj(1).q, traj(1.0).q)
+    with pytest.raises(InvalidParameterError, match=r"^samples must be a whole number >= 2, got 50\.5"):
+        uniform_time_scaling(panda(), traj, torque_limit="model", samples=50.5)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(("kwargs", "match"), [
+    ({"repeat": 1.5}, r"^repeat must be a whole number >= 1, got 1\.5"),
+    ({"grids": [10.5]}, r"^grids\[0\] must be a whole number >= 2, got 10\.5"),
+    ({"grids": [10, "x"]}, r"^grids\[1\] must be a whole number >= 2, got 'x'"),
+    ({"grids": []}, r"^grids must hold at least one grid size, got none"),
+])
+def test_grid_convergence_counts_are_whole_numbers(kwargs: dict[str, Any], match: str) -> None:
+    dyn = armctl.Dynamics(armctl.models.pendulum())
+    with pytest.raises(InvalidParameterError, match=match):
+        grid_convergence(dyn, [0.0], [1.0], 1.0, 1.0, **{"grids": [10], "repeat": 1, **kwargs})

@@ -1,0 +1,139 @@
+"""Bad input to the references (Reference, Quintic, Sinusoid, WaypointSpline) raises an ArmctlError naming it."""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+import pytest
+
+from armctl.errors import ArmctlError, InvalidParameterError, NonFiniteError, ShapeError, UnknownNameError
+from armctl.reference import Reference
+from armctl.references import Quintic, Sinusoid, WaypointSpline
+
+REFERENCES: dict[str, Callable[[], Any]] = {
+    "Quintic": lambda: Quintic([0.0, 0.5], [1.0, -1.0], 2.0),
+    "Sinusoid": lambda: Sinusoid([0.0, 0.0], 0.1, 1.0),
+    "WaypointSpline": lambda: WaypointSpline([0.0, 1.0, 2.0], [[0.0, 0.0], [1.0, 2.0], [0.0, 1.0]]),
+}
+
+BAD_TIMES = [
+    (np.array([0.1, 0.2]), InvalidParameterError, r"^t must be a real number, got array\(\[0\.1, 0\.2\]\)"),
+    (float("nan"), NonFiniteError, r"^t must be finite, got nan"),
+    (np.float64("nan"), NonFiniteError, r"^t must be finite, got nan"),
+    (float("inf"), NonFiniteError, r"^t must be finite, got inf"),
+    (-float("inf"), NonFiniteError, r"^t must be finite, got -inf"),
+    ("a", InvalidParameterError, r"^t must be a real number, got 'a'"),
+    ("0.5", InvalidParameterError, r"^t must be a real number, got '0\.5'"),
+    (None, InvalidParameterError, r"^t must be a real number, got None"),
+    (0.5j, InvalidParameterError, r"^t must be a real number, got 0\.5j"),
+]
+
+
+@pytest.mark.parametrize("kind", sorted(REFERENCES))
+@pytest.mark.parametrize(("t", "error", "match"), BAD_TIMES)
+def test_time_must_be_a_real_finite_scalar(kind: str, t: Any, error: type[ArmctlError], match: str) -> None:
+    # an array t used to evaluate each joint at a different time (Sinusoid) or fail deep inside (the others)
+    ref = REFERENCES[kind]()
+    with pytest.raises(error, match=match):
+        ref(t)
+
+
+@pytest.mark.parametrize("kind", sorted(REFERENCES))
+def test_any_real_scalar_time_gives_the_same_reference(kind: str) -> None:
+    ref = REFERENCES[kind]()
+    want = ref(1.0)
+    for t in (1, np.float64(1.0), np.int64(1), np.array(1.0), np.float32(1.0)):
+        got = ref(t)
+        for name in ("q", "qd", "qdd"):
+            assert np.array_equal(getattr(got, name), getattr(want, name)), (t, name)
+
+
+def test_hold_refuses_what_is_not_a_number() -> None:
+    with pytest.raises(InvalidParameterError, match=r"^Reference q must hold real numbers, got \['a', 'b'\]"):
+        Reference.hold(["a", "b"])
+    with pytest.raises(InvalidParameterError, match=r"^Reference q must hold real numbers .*got None"):
+        Reference.hold(None)  # type: ignore[arg-type]
+    with pytest.raises(InvalidParameterError, match=r"q is required"):
+        Reference(None)  # type: ignore[arg-type]
+    assert Reference.hold([0.1, 0.2]).q.tolist() == [0.1, 0.2]
+    assert Reference.hold(np.array([1, 2])).qd.tolist() == [0.0, 0.0]
+
+
+@pytest.mark.parametrize(("build", "match"), [
+    (lambda: Reference([]), r"^Reference q must hold at least one joint position, got \[\]"),
+    (lambda: Reference(np.zeros(0)), r"^Reference q must hold at least one joint position, got array\(\[\]"),
+    (lambda: Reference.hold([]), r"^Reference q must hold at least one joint position, got \[\]"),
+    (lambda: Quintic([], [], 1.0), r"^q0 must be a vector of at least one joint value, got shape \(0,\)"),
+    (lambda: Sinusoid([], 0.1, 1.0), r"^center must be a vector of at least one joint value, got shape \(0,\)"),
+    (lambda: WaypointSpline([0.0, 1.0], np.zeros((2, 0))), r"n >= 1 joints, got shape \(2, 0\)"),
+])
+def test_a_reference_of_no_joint_is_refused(build: Callable[[], Any], match: str) -> None:
+    with pytest.raises(ShapeError, match=match):
+        build()
+
+
+@pytest.mark.parametrize(("build", "match"), [
+    (lambda m: Reference(m), r"^Reference q has masked entries: fill them first"),
+    (lambda m: Reference([0.0, 0.0], m), r"^Reference qd has masked entries: fill them first"),
+    (lambda m: Reference.hold(m), r"^Reference q has masked entries: fill them first"),
+    (lambda m: Quintic(m, [0.0, 0.0], 1.0), r"^q0 has masked entries: fill them first"),
+    (lambda m: Sinusoid([0.0, 0.0], m, 1.0), r"^amplitude has masked entries: fill them first"),
+])
+def test_a_masked_array_is_refused(build: Callable[[Any], Any], match: str) -> None:
+    # NumPy drops the mask: the data under it (2.0 here) would have been used
+    masked = np.ma.masked_array([1.0, 2.0], mask=[False, True])
+    with pytest.raises(InvalidParameterError, match=match):
+        build(masked)
+
+
+def test_waypoint_spline_bc_type_is_a_known_name() -> None:
+    times, w = [0.0, 1.0, 2.0], [[0.0, 0.0], [1.0, 2.0], [0.0, 1.0]]
+    valid = "'clamped', 'natural', 'not-a-knot', 'periodic'"
+    for bad in ("nope", 3, None):
+        match = rf"^unknown bc_type {re.escape(repr(bad))}; valid bc_types: {valid}"
+        with pytest.raises(UnknownNameError, match=match):
+            WaypointSpline(times, w, bc_type=bad)  # type: ignore[arg-type]
+    with pytest.raises(InvalidParameterError, match=r"^bc_type='periodic' does not fit these waypoints: .*identical"):
+        WaypointSpline(times, w, bc_type="periodic")
+    with pytest.raises(InvalidParameterError, match=r"^bc_type=\(\(1, 0\.0\),\) does not fit"):
+        WaypointSpline(times, w, bc_type=((1, 0.0),))  # type: ignore[arg-type]
+    # the valid ones, named or explicit, still work
+    for bc in ("clamped", "natural", "not-a-knot"):
+        assert np.allclose(WaypointSpline(times, w, bc_type=bc)(1.0).q, [1.0, 2.0])
+    assert np.allclose(WaypointSpline(times, [[0.0, 0.0], [1.0, 2.0], [0.0, 0.0]], bc_type="periodic")(2.0).q, 0.0)
+    explicit = WaypointSpline(times, w, bc_type=((1, [0.0, 0.0]), (2, [0.0, 0.0])))  # type: ignore[arg-type]
+    assert np.allclose(explicit(0.0).qd, 0.0)
+
+
+def test_reference_parameters_are_checked_by_name() -> None:
+    with pytest.raises(InvalidParameterError, match=r"^t0 must be a real number, got 'a'"):
+        Quintic([0.0], [1.0], 1.0, t0="a")  # type: ignore[arg-type]
+    with pytest.raises(NonFiniteError, match=r"^t0 must be finite, got nan"):
+        Quintic([0.0], [1.0], 1.0, t0=float("nan"))
+    with pytest.raises(ShapeError, match=r"^amplitude must have shape \(2,\), got shape \(3,\)"):
+        Sinusoid([0.0, 0.0], [0.1, 0.2, 0.3], 1.0)
+    with pytest.raises(InvalidParameterError, match=r"^frequency must hold real numbers, got \['a', 'b'\]"):
+        Sinusoid([0.0, 0.0], 0.1, ["a", "b"])
+    with pytest.raises(InvalidParameterError, match=r"^q1 must hold real numbers, got 'x'"):
+        Quintic([0.0], "x", 1.0)  # type: ignore[arg-type]
+    with pytest.raises(NonFiniteError, match=r"^center holds NaN or inf: array\(\[ 0., nan\]\)"):
+        Sinusoid([0.0, float("nan")], 0.1, 1.0)
+    with pytest.raises(NonFiniteError, match=r"^waypoints must be finite; waypoint 1 joint 0 is inf"):
+        WaypointSpline([0.0, 1.0], [[0.0, 0.0], [float("inf"), 0.0]])
+    with pytest.raises(InvalidParameterError, match=r"^waypoints must hold real numbers, got \[\['a'\], \['b'\]\]"):
+        WaypointSpline([0.0, 1.0], [["a"], ["b"]])
+
+
+def test_valid_references_keep_their_values() -> None:
+    # scalars: one joint (Quintic), or every joint (Sinusoid's amplitude, frequency, phase; a one-entry list too)
+    assert Quintic(0.0, 1.0, 2.0)(1.0).q.tolist() == [0.5]
+    sine = Sinusoid([0.0, 0.0], [0.2], 1.0, phase=0.0)
+    assert sine.amplitude.tolist() == [0.2, 0.2] and sine.frequency.tolist() == [1.0, 1.0]
+    assert np.allclose(sine(0.25).q, [0.2, 0.2])
+    with pytest.raises(ShapeError, match=r"^q1 must have shape \(2,\), got shape \(\)"):
+        Quintic([0.0, 0.0], 1.0, 1.0)  # a scalar end for two joints stays refused (ambiguous)
+    spline = WaypointSpline([0.0, 1.0, 3.0], [[0.0, 0.0], [1.0, 2.0], [0.0, 1.0]])
+    assert np.allclose(spline(5.0).q, [0.0, 1.0]) and np.allclose(spline(5.0).qd, 0.0)
