@@ -277,3 +277,10 @@ def test_rotor_coupling_must_be_a_real_boolean(value: object) -> None:
 def test_rotor_coupling_takes_numpy_booleans() -> None:
     d = armctl.Dynamics(armctl.models.pendulum(), backend="lagrange", rotor_coupling=np.bool_(False))
     assert d.rotor_coupling is False and d.options["rotor_coupling"] is False
+
+
+@pytest.mark.parametrize("value", ["False", 0, None])
+def test_compile_must_be_a_real_boolean(value: object) -> None:
+    """compile="False" used to compile (bool("False") is True); refused before the symbolic build."""
+    with pytest.raises(InvalidParameterError, match=f"compile must be True or False, got {re.escape(repr(value))}"):
+        armctl.Dynamics(armctl.models.pendulum(), backend="lagrange", compile=value)

@@ -167,6 +167,7 @@ class LagrangeDynamics(Dynamics):
                  compile: bool = False, cache_dir: str | None = None, **options: Any) -> None:
         super().__init__(model, backend, **options)
         self.rotor_coupling = boolean(rotor_coupling, "rotor_coupling")  # bool("False") would be True
+        self.compiled = boolean(compile, "compile")  # checked before the build: "False" would compile
         t0 = time.perf_counter()
         s = _Symbols(model, self.rotor_coupling)
         self._sym = s
@@ -185,9 +186,8 @@ class LagrangeDynamics(Dynamics):
             ("tool_pose", [q], tool_pose),
         )]
         self.build_seconds = time.perf_counter() - t0
-        self.compiled = bool(compile)
         self._cache_dir = cache_dir
-        if compile:
+        if self.compiled:
             from armctl.dynamics.codegen import compiled
 
             fns = compiled(fns, _cache_tag(model, self.rotor_coupling), cache_dir)
