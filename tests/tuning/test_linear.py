@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 
+import armctl
 from armctl.errors import InvalidParameterError
 from armctl.tuning import closed_loop_poles, linearize, lqr_gains, pd_from_bandwidth
 from tests.conftest import dynamics
@@ -52,3 +53,20 @@ def test_lqr_gains_at_extreme_weights() -> None:
     assert lqr_gains(1.0, 0.0, 1e-16) == pytest.approx((k[0, 0], k[0, 1]), rel=1e-9)
     with pytest.raises(InvalidParameterError, match="beyond floating point"):
         lqr_gains(1e300, 0.0, 1e-300)
+
+
+def test_gains_and_steps_beyond_floating_point_are_named() -> None:
+    from armctl.tuning.sampled import SampledDataAnalysis, spectral_radius
+
+    dyn = armctl.Dynamics(armctl.models.planar_2r())
+    with pytest.raises(InvalidParameterError, match=r"omega_n = 1e\+200 rad/s .* beyond floating point"):
+        pd_from_bandwidth(1e200)  # K_p = inf
+    with pytest.raises(InvalidParameterError, match="beyond floating point"):
+        pd_from_bandwidth(1e-300, 1e-300)  # K_p = 0
+    for step in (1e-300, 1e3):  # q₀ ± 1e-300 rounds to q₀: ∂g/∂q would be exactly 0
+        with pytest.raises(InvalidParameterError, match=r"step must be in \[1e-10, 0.1\] rad"):
+            linearize(dyn, [0.1, 0.2], step=step)
+    with pytest.raises(InvalidParameterError, match=r"cannot be analysed in floating point: K_p T² = inf"):
+        spectral_radius(400.0, 40.0, 1e200)
+    with pytest.raises(InvalidParameterError, match=r"K_p T² = 1e\+294"):
+        SampledDataAnalysis.of(1e300, 1e150, 1e-3)

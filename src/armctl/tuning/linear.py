@@ -27,6 +27,9 @@ def linearize(dyn: Dynamics, q0: ArrayLike, step: float = 1e-6) -> Any:
 
     q0 = vector(q0, dyn.n, "q0")
     step = scalar(step, "step", positive=True)
+    if not 1e-10 <= step <= 0.1:  # below: q₀ ± step rounds to q₀ (∂g/∂q = 0); above: not a derivative
+        raise InvalidParameterError(f"step must be in [1e-10, 0.1] rad for central differences of g, got {step:g}",
+                                    value=step)
     n = dyn.n
     try:
         m_inv = np.linalg.inv(dyn.mass_matrix(q0))
@@ -49,7 +52,11 @@ def pd_from_bandwidth(omega_n: float, zeta: float = 1.0) -> tuple[float, float]:
     and damping ratio ζ."""
     w = scalar(omega_n, "omega_n", positive=True)
     z = scalar(zeta, "zeta", positive=True)
-    return w * w, 2 * z * w
+    kp, kd = w * w, 2 * z * w
+    if not (0.0 < kp < math.inf and 0.0 < kd < math.inf):
+        raise InvalidParameterError(f"omega_n = {w:g} rad/s with zeta = {z:g} gives gains beyond floating point "
+                                    f"(K_p = {kp:g}, K_d = {kd:g})", value=(omega_n, zeta))
+    return kp, kd
 
 
 def lqr_gains(position_weight: float, velocity_weight: float = 0.0, effort_weight: float = 1.0

@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from armctl._checks import scalar, whole_number
+from armctl.errors import InvalidParameterError
 
 
 def _delay(delay: Any) -> int:
@@ -63,7 +64,18 @@ def spectral_radius(kp: float, kd: float, period: float, delay: int = 1) -> floa
     big[:2, 2 * d: 2 * d + 2] -= np.array([[t * t / 2], [t]]) @ np.array([[kp, kd]])
     if d:
         big[2:, :-2] = np.eye(2 * d)
-    return float(np.abs(np.linalg.eigvals(big)).max())
+    try:
+        if not np.isfinite(big).all():
+            raise np.linalg.LinAlgError
+        return float(np.abs(np.linalg.eigvals(big)).max())
+    except np.linalg.LinAlgError:
+        raise _beyond_analysis(kp, kd, t) from None
+
+
+def _beyond_analysis(kp: float, kd: float, t: float) -> InvalidParameterError:
+    return InvalidParameterError(f"the sampled loop cannot be analysed in floating point: K_p T² = {kp * t * t:g}, "
+                                 f"K_d T = {kd * t:g} (period T = {t:g} s); stable loops have K_p T² < 4 and "
+                                 "K_d T < 2", value=(kp, kd, t))
 
 
 def _frequency_response(kp: float, kd: float, period: float, delay: int, w: Any) -> Any:
@@ -195,7 +207,12 @@ class SampledDataAnalysis:
         kd = scalar(kd, "kd", nonnegative=True)
         t = scalar(period, "period", positive=True)
         d = _delay(delay)
-        radius = float(np.abs(control.poles(control.feedback(sampled_pd_loop(kp, kd, t, d), 1))).max())
+        try:
+            radius = float(np.abs(control.poles(control.feedback(sampled_pd_loop(kp, kd, t, d), 1))).max())
+        except (np.linalg.LinAlgError, ValueError):
+            raise _beyond_analysis(kp, kd, t) from None
+        if not math.isfinite(radius):
+            raise _beyond_analysis(kp, kd, t)
         stable = radius < 1.0
         # the stable range of multipliers that contains 1 (stable loop) or lies highest below 1 (unstable loop)
         below = [r for r in _stable_ranges(kp, kd, t, d, _gain_crossings(kp, kd, t, d)) if r[0] <= 1.0]
