@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, readonly, scalar
+from armctl._checks import FloatArray, boolean, readonly, real_array, scalar
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError
 from armctl.model.robot import RobotModel
@@ -161,12 +161,14 @@ class Plane(Environment):
         if not isinstance(law, NormalForce):
             raise InvalidParameterError(f"law must be a NormalForce (KelvinVoigt, HuntCrossley), got {law!r}",
                                         value=law)
-        nrm = np.array(normal, dtype=float)
+        nrm = np.array(real_array(normal, "plane normal"), dtype=float)
+        if nrm.shape == (3,) and np.isfinite(nrm).all() and np.abs(nrm).max() > 0.0:
+            nrm = nrm / np.abs(nrm).max()  # first: the norm of (1e300, 0, 0) would overflow
         length = float(np.linalg.norm(nrm)) if nrm.shape == (3,) and np.isfinite(nrm).all() else 0.0
         if length < 1e-12:
             raise InvalidParameterError(f"plane normal must be a finite non-zero 3-vector, got {normal!r}",
                                         value=normal)
-        pt = np.array(point, dtype=float)
+        pt = real_array(point, "plane point")
         if pt.shape != (3,) or not np.isfinite(pt).all():
             raise InvalidParameterError(f"plane point must be a finite 3-vector, got {point!r}", value=point)
         self.law = law
@@ -174,7 +176,11 @@ class Plane(Environment):
         self.point = readonly(pt)
         self.friction = scalar(friction, "plane friction coefficient", nonnegative=True)
         self.slip_velocity = scalar(slip_velocity, "slip velocity", positive=True)
-        pts = (ContactPoint(),) if points is None else tuple(points)
+        pts = (ContactPoint(),) if points is None else (points,) if isinstance(points, ContactPoint) else points
+        try:
+            pts = tuple(pts)
+        except TypeError:
+            pts = ()
         if not pts or not all(isinstance(p, ContactPoint) for p in pts):
             raise InvalidParameterError(f"points must be a non-empty sequence of ContactPoint, got {points!r}",
                                         value=points)
@@ -231,6 +237,9 @@ class ForceSensor:
 
     frame: str | None = None
     world_axes: bool = False
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "world_axes", boolean(self.world_axes, "world_axes"))
 
     def reading(self, dyn: Dynamics, q: FloatArray, forces: FloatArray, positions: FloatArray,
                 joints: FloatArray) -> FloatArray:

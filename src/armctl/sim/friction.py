@@ -32,7 +32,7 @@ from abc import ABC, abstractmethod
 
 import numpy as np
 
-from armctl._checks import FloatArray, scalar
+from armctl._checks import FloatArray, boolean, scalar
 from armctl.errors import InvalidParameterError, UnknownNameError
 from armctl.model.robot import RobotModel
 
@@ -54,6 +54,7 @@ class FrictionModel(ABC):
         if not isinstance(model, RobotModel):
             raise InvalidParameterError(f"a friction model takes the plant's RobotModel (dynamics.model), got "
                                         f"{type(model).__name__}", value=model)
+        stribeck = boolean(stribeck, "stribeck")
         fr = [j.friction for j in model.joints]
         self.n = model.n
         self.viscous = np.array([f.viscous for f in fr])
@@ -83,6 +84,17 @@ class FrictionModel(ABC):
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}(n={self.n})"
+
+    def _stribeck_shape(self, qd: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """(x, exp(−x²)) with x = q̇/v_s clipped to ±40, where exp(−x²) is exactly 0 already: a tiny v_s would
+        otherwise overflow x² (and x·0 in the slope would be NaN)."""
+        x = np.clip(qd / self.stribeck_velocity, -40.0, 40.0)
+        return x, np.exp(-(x * x))
+
+    def _stribeck_slope(self, qd: FloatArray) -> FloatArray:
+        """d/dq̇ exp(−(q̇/v_s)²) = −2 x exp(−x²) / v_s, x = q̇/v_s."""
+        x, g = self._stribeck_shape(qd)
+        return -2.0 * x * g / self.stribeck_velocity  # type: ignore[no-any-return]
 
 
 class StickSlip(FrictionModel):
@@ -115,14 +127,13 @@ class StickSlip(FrictionModel):
     def torque(self, qd: FloatArray, direction: FloatArray) -> FloatArray:
         tau = self.viscous * qd + self.level(direction)
         if self.has_stribeck:
-            tau += self.hump(direction) * np.exp(-((qd / self.stribeck_velocity) ** 2))
+            tau += self.hump(direction) * self._stribeck_shape(qd)[1]
         return tau
 
     def slope(self, qd: FloatArray, direction: FloatArray) -> FloatArray:
         d = self.viscous.copy()
         if self.has_stribeck:
-            x = qd / self.stribeck_velocity
-            d += self.hump(direction) * np.exp(-(x**2)) * (-2.0 * x / self.stribeck_velocity)
+            d += self.hump(direction) * self._stribeck_slope(qd)
         return d
 
 
@@ -141,8 +152,7 @@ class SmoothFriction(FrictionModel):
         pos = qd > 0
         level = np.where(pos, self.coulomb_pos, self.coulomb_neg)
         if self.has_stribeck:
-            level = level + np.where(pos, self.hump_pos, self.hump_neg) * np.exp(-((qd / self.stribeck_velocity)
-                                                                                   ** 2))
+            level = level + np.where(pos, self.hump_pos, self.hump_neg) * self._stribeck_shape(qd)[1]
         return level
 
     def torque(self, qd: FloatArray, direction: FloatArray | None = None) -> FloatArray:
@@ -152,10 +162,7 @@ class SmoothFriction(FrictionModel):
         th = np.tanh(qd / self.velocity)
         d = self.viscous + (1.0 - th**2) / self.velocity * self._levels(qd)
         if self.has_stribeck:
-            pos = qd > 0
-            x = qd / self.stribeck_velocity
-            d += th * np.where(pos, self.hump_pos, self.hump_neg) * np.exp(-(x**2)) * (-2.0 * x
-                                                                                       / self.stribeck_velocity)
+            d += th * np.where(qd > 0, self.hump_pos, self.hump_neg) * self._stribeck_slope(qd)
         return d
 
 

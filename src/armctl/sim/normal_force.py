@@ -20,6 +20,7 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 
 from armctl._checks import scalar
+from armctl.errors import InvalidParameterError
 
 
 class NormalForce(ABC):
@@ -35,8 +36,9 @@ class NormalForce(ABC):
         """k, the static stiffness (for p = 1 in N/m)."""
 
     def depth_at(self, force: float) -> float:
-        """Static penetration δ [m] under a normal force [N] (δ̇ = 0)."""
-        return float((force / self.stiffness) ** (1.0 / getattr(self, "exponent", 1.0)))
+        """Static penetration δ [m] under a normal force [N] (δ̇ = 0); the contact only pushes, so force >= 0."""
+        f = scalar(force, "force", nonnegative=True)
+        return float((f / self.stiffness) ** (1.0 / getattr(self, "exponent", 1.0)))
 
 
 class KelvinVoigt(NormalForce):
@@ -70,8 +72,6 @@ class HuntCrossley(NormalForce):
         self.dissipation = scalar(dissipation, "contact dissipation", nonnegative=True)
         self.exponent = scalar(exponent, "contact exponent", positive=True)
         if self.exponent < 1.0:
-            from armctl.errors import InvalidParameterError
-
             raise InvalidParameterError(f"contact exponent must be >= 1 (its stiffness would be infinite at first "
                                         f"touch), got {exponent}", value=exponent)
 
@@ -81,8 +81,11 @@ class HuntCrossley(NormalForce):
         """The law whose impacts at ``impact_velocity`` [m/s] rebound with coefficient of restitution e
         (d = 3(1 − e) / (2 v_impact), Hunt & Crossley's approximation, good for e near 1)."""
         e = scalar(restitution, "restitution", nonnegative=True)
+        if e > 1.0:
+            raise InvalidParameterError(f"restitution must be in [0, 1] (1: no loss; a passive contact cannot return "
+                                        f"more energy than it took), got {e:g}", value=restitution)
         v = scalar(impact_velocity, "impact velocity", positive=True)
-        return cls(stiffness, 1.5 * (1.0 - min(e, 1.0)) / v, exponent)
+        return cls(stiffness, 1.5 * (1.0 - e) / v, exponent)
 
     @property
     def stiffness(self) -> float:

@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from armctl._checks import FloatArray
+from armctl._checks import FloatArray, real_array
 from armctl.dynamics.base import Dynamics
 from armctl.errors import NonFiniteError, ShapeError
 from armctl.sim.contact import Environment
@@ -69,7 +69,9 @@ class Plant:
     # ---------------------------------------------------------------------------------- forces
     def disturbance_wrench(self, t: float) -> FloatArray:
         """h_d(t) (6,), checked."""
-        h = np.asarray(self.disturbance(t), dtype=float)  # type: ignore[misc]
+        h = self.disturbance(t)  # type: ignore[misc]
+        if h.__class__ is not np.ndarray or h.dtype != np.float64:  # text, dicts, complex: named errors
+            h = real_array(h, f"disturbance(t) at t = {t:g} s")
         if h.shape != (6,):
             raise ShapeError(f"disturbance(t) must return a (6,) wrench [f; moment], got shape {h.shape} at "
                              f"t = {t}", value=h)
