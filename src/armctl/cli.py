@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import tempfile
 from pathlib import Path
 from typing import Any
 
@@ -28,6 +29,23 @@ def _demo(args: argparse.Namespace) -> int:
     return 0
 
 
+def _output_folder(out: str) -> str | None:
+    """Why ``out`` cannot be the bench's output folder (None if it can): it must be a non-empty path to a folder
+    that exists or can be created, and that can be written to. Creates the folder (as the bench would)."""
+    if not out.strip():
+        return "--out must name a folder, got an empty path; give e.g. --out bench-out"
+    path = Path(out)
+    if path.exists() and not path.is_dir():
+        return f"--out {out!r} exists and is not a folder; give a new or existing folder"
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=path):  # writable? (root may pass os.access on a read-only mount)
+            pass
+    except OSError as e:
+        return f"--out {out!r} cannot be created or written to ({e.strerror or e}); give a writable folder"
+    return None
+
+
 def _bench(args: argparse.Namespace) -> int:
     from armctl.bench.suite import run_suite
 
@@ -49,6 +67,10 @@ def main(argv: list[str] | None = None) -> int:
     d.add_argument("--backend", default="pinocchio", choices=["pinocchio", "lagrange"])
     d.set_defaults(func=_demo)
     args = parser.parse_args(argv)
+    if args.command == "bench":  # before the (long) run: a bad --out would only fail at its end
+        problem = _output_folder(args.out)
+        if problem is not None:
+            b.error(problem)  # prints the usage and the one-line error, exits with status 2
     return int(args.func(args))
 
 

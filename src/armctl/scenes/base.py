@@ -16,21 +16,48 @@ Gains come from the presets in ``controllers/`` (see :mod:`armctl.tuning.presets
 
 from __future__ import annotations
 
+import inspect
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
+from armctl._checks import boolean, whole_number
 from armctl.controllers import Adaptive, ComputedTorque, Controller, PassivityBased, PDGravity
 from armctl.dynamics.base import Dynamics
-from armctl.errors import UnknownNameError
+from armctl.errors import InvalidParameterError, UnknownNameError
 from armctl.model.robot import RobotModel
 from armctl.reference import Reference
 from armctl.tuning.presets import load_preset
 
 JOINT_METHODS = ("pd_gravity", "computed_torque", "computed_torque_reduced", "passivity", "adaptive")
+#: the gain keys of each built-in method: (required, optional)
+GAIN_KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
+    "pd_gravity": (("kp", "kd"), ("ki",)), "computed_torque": (("kp", "kd"), ("ki",)),
+    "computed_torque_reduced": (("kp", "kd"), ("ki",)), "passivity": (("lam", "kd"), ()),
+    "adaptive": (("lam", "kd", "gamma"), ("projection", "sigma"))}
+#: the models a scene holds
+MODELS = ("plant", "exact", "reduced")
+
+
+def check_gains(method: str, gains: Any, required: tuple[str, ...], optional: tuple[str, ...] = ()) -> dict[str, Any]:
+    """``gains`` as a dict; raise if it is not a mapping, has a key that is neither ``required`` nor
+    ``optional`` (UnknownNameError listing the valid ones) or lacks a required one."""
+    if not isinstance(gains, Mapping):
+        raise InvalidParameterError(f"gains of {method!r} must be a dict such as {{'kp': ..., 'kd': ...}}, "
+                                    f"got {gains!r}", value=gains)
+    valid = (*required, *optional)
+    for key in gains:
+        if key not in valid:
+            raise UnknownNameError(f"{method} gain", key, valid)
+    missing = [k for k in required if k not in gains]
+    if missing:
+        extra = f" (optional: {', '.join(optional)})" if optional else ""
+        raise InvalidParameterError(f"gains of {method!r} lack {', '.join(map(repr, missing))}; give "
+                                    f"{', '.join(required)}{extra}", value=dict(gains))
+    return dict(gains)
 
 
 @dataclass
@@ -53,6 +80,8 @@ class Scene:
 
     def dynamics(self, which: str = "exact") -> Dynamics:
         """Dynamics of the ``plant``, ``exact`` or ``reduced`` model (pickles by rebuilding)."""
+        if not isinstance(which, str) or which not in MODELS:
+            raise UnknownNameError("scene model", which, MODELS)
         return Dynamics({"plant": self.plant, "exact": self.exact, "reduced": self.reduced}[which],
                         backend=self.backend)
 
@@ -60,11 +89,13 @@ class Scene:
         return dict(load_preset(self.name, method)["gains"])
 
     def controller(self, method: str, gains: dict[str, Any] | None = None) -> Controller:
+        """The controller of ``method`` with ``gains`` (default: the preset). The keys of each built-in method
+        are in :data:`GAIN_KEYS`; an unknown key or a missing required one is an error, not ignored."""
         if method not in self.methods:
             raise UnknownNameError("method", method, self.methods)
-        g = self.gains(method) if gains is None else dict(gains)
-        if method in self.builders:
-            return self.builders[method](self, g)
+        if method in self.builders:  # a custom builder checks its own gains
+            return self.builders[method](self, self.gains(method) if gains is None else dict(gains))
+        g = check_gains(method, self.gains(method) if gains is None else gains, *GAIN_KEYS[method])
         if method == "pd_gravity":
             return PDGravity(self.dynamics("exact"), g["kp"], g["kd"], g.get("ki"))
         if method in ("computed_torque", "computed_torque_reduced"):
@@ -74,16 +105,25 @@ class Scene:
             return PassivityBased(self.dynamics("exact"), g["lam"], g["kd"])
         if method == "adaptive":
             return Adaptive(self.dynamics("reduced"), g["lam"], g["kd"], g["gamma"],
-                            projection=bool(g.get("projection", True)), sigma=float(g.get("sigma", 0.0)))
+                            projection=boolean(g.get("projection", True), "gains['projection']"),
+                            sigma=g.get("sigma", 0.0))
         raise UnknownNameError("method", method, self.methods)  # pragma: no cover
 
     def run(self, method: str, gains: dict[str, Any] | None = None, **overrides: Any) -> Any:
-        """Simulate ``method`` on this scene; ``overrides`` go to :func:`armctl.sim.simulate`."""
+        """Simulate ``method`` on this scene; ``overrides`` (``duration`` and any option of
+        :func:`armctl.sim.simulate`) go to :func:`armctl.sim.simulate` and win over the scene's settings. The
+        plant, controller and reference are the scene's (build another scene to change them)."""
         from armctl.sim import simulate
 
+        valid = tuple(p for p in inspect.signature(simulate).parameters if p not in ("plant", "controller",
+                                                                                     "reference"))
+        for key in overrides:
+            if key not in valid:
+                raise UnknownNameError("simulate option", key, valid)
         options = {"control_dt": self.control_dt, "dt": self.dt, "integrator": self.integrator, "q0": self.q0,
                    **self.sim_options, **overrides}
-        return simulate(self.dynamics("plant"), self.controller(method, gains), self.reference, self.duration,
+        duration = options.pop("duration", self.duration)
+        return simulate(self.dynamics("plant"), self.controller(method, gains), self.reference, duration,
                         **options)
 
     def metrics(self, res: Any, method: str, gains: dict[str, Any] | None = None,
@@ -91,7 +131,10 @@ class Scene:
         """Tracking error (RMS, max) [rad], torque RMS [N·m], share of samples whose command exceeds the
         effort limits, divergence, and the controller's compute time per step [s], measured by replaying a
         contiguous window of recorded states (from the middle of the run, as a loop would see them: warm
-        starts stay warm) through a fresh controller, so the simulator's own cost is not counted."""
+        starts stay warm) through a fresh controller, so the simulator's own cost is not counted.
+        ``timing_samples`` (≥ 1): how many states to replay. A run without samples gives NaN for every measure
+        (compute time and limit-violation share included)."""
+        timing_samples = whole_number(timing_samples, "timing_samples", 1)
         want = np.array([self.reference(t).q for t in res.t])
         err = np.abs(res.q - want) if len(res.t) else np.zeros((0, self.plant.n))
         limit = self.plant.effort_limit
@@ -104,9 +147,9 @@ class Scene:
         t0 = time.perf_counter()
         for k, r in zip(idx, refs, strict=True):
             ctrl(float(res.t[k]), res.q_measured[k], res.qd_measured[k], r)
-        step = (time.perf_counter() - t0) / max(len(idx), 1)
+        step = (time.perf_counter() - t0) / len(idx) if len(idx) else float("nan")  # nothing to replay
         return {"rms_error": float(np.sqrt((err**2).mean())) if err.size else float("nan"),
                 "max_error": float(err.max()) if err.size else float("nan"),
                 "torque_rms": float(np.sqrt((res.tau_applied**2).mean())) if len(res.t) else float("nan"),
-                "limit_violation_share": float(over.any(axis=1).mean()) if len(res.t) else 0.0,
+                "limit_violation_share": float(over.any(axis=1).mean()) if len(res.t) else float("nan"),
                 "diverged": bool(res.diverged), "diverged_at": res.diverged_at, "compute_s": step}

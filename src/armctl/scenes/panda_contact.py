@@ -7,7 +7,9 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
+from armctl._checks import boolean, scalar
 from armctl.controllers.base import Controller
 from armctl.controllers.osc import (
     ClosedFormOSC,
@@ -18,9 +20,10 @@ from armctl.controllers.osc import (
     PostureTask,
 )
 from armctl.dynamics.base import Dynamics
+from armctl.errors import UnknownNameError
 from armctl.model import library
 from armctl.reference import Reference
-from armctl.scenes.base import Scene
+from armctl.scenes.base import Scene, check_gains
 
 Q_HOME = np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])  # the Panda's "ready" posture
 
@@ -30,18 +33,23 @@ class PressAndSlide(Controller):
     (tool below the table plane) the QP switches its sliding contact on, frees the pose task's normal row
     and ramps the normal force to ``force`` [N] in 0.2 s; then slide ``slide`` [m] along x (quintic profile
     of ``slide_time`` s from ``slide_start`` s). ``closed_form=True`` uses :class:`ClosedFormOSC` instead,
-    which keeps pushing its pose target 1 cm below the table: the force is whatever its stiffness gives."""
+    which keeps pushing its pose target 1 cm below the table: the force is whatever its stiffness gives.
+    ``kp``, ``kd``: the pose task's gains (see :class:`FramePoseTask`; ``kd=None``: its default). ``force`` ≥ 0,
+    ``slide_start`` ≥ 0 and ``slide_time`` > 0 must be finite."""
 
     def __init__(self, dyn: Dynamics, z_table: float, mu: float, force: float = 10.0, slide: float = 0.1,
                  slide_start: float = 0.75, slide_time: float = 1.0, closed_form: bool = False,
-                 kp: float = 400.0) -> None:
+                 kp: ArrayLike = 400.0, kd: ArrayLike | None = None) -> None:
         super().__init__(dyn)
-        self.p0, self.z_table = dyn.frame_pose(Q_HOME), float(z_table)
-        self.force_target, self.slide = float(force), float(slide)
-        self.slide_start, self.slide_time = float(slide_start), float(slide_time)
-        self.pose = FramePoseTask(kp=kp)
+        self.p0, self.z_table = dyn.frame_pose(Q_HOME), scalar(z_table, "z_table")
+        mu = scalar(mu, "mu", nonnegative=True)
+        self.force_target = scalar(force, "force", nonnegative=True)
+        self.slide = scalar(slide, "slide")
+        self.slide_start = scalar(slide_start, "slide_start", nonnegative=True)
+        self.slide_time = scalar(slide_time, "slide_time", positive=True)
+        self.pose = FramePoseTask(kp=kp, kd=kd)
         self.pose.set_trajectory(self.target)
-        self.closed_form = bool(closed_form)
+        self.closed_form = boolean(closed_form, "closed_form")
         self.touched: float | None = None
         if self.closed_form:
             self.ctrl: Controller = ClosedFormOSC(dyn, self.pose, PostureTask(dyn.n, kp=25.0))
@@ -98,17 +106,20 @@ class ContactScene(Scene):
     mu: float = 0.3
 
     def controller(self, method: str, gains: dict[str, Any] | None = None) -> Controller:
-        from armctl.errors import UnknownNameError
-
+        """The :class:`PressAndSlide` controller; ``gains``: the pose task's ``kp`` (default 400) and ``kd``
+        (default: the task's own); other keys are refused."""
         if method not in self.methods:
             raise UnknownNameError("method", method, self.methods)
-        kp = float((gains or {}).get("kp", 400.0))
+        g = check_gains(method, {} if gains is None else gains, (), ("kp", "kd"))
         return PressAndSlide(self.dynamics("exact"), self.z_table, self.mu, closed_form=method == "osc_closed_form",
-                             kp=kp)
+                             kp=g.get("kp", 400.0), kd=g.get("kd"))
 
     def metrics(self, res: Any, method: str, gains: dict[str, Any] | None = None,
                 timing_samples: int = 100) -> dict[str, Any]:
         out = super().metrics(res, method, gains, timing_samples)
+        if not len(res.t):  # a run without samples: nothing to measure
+            out.update({"force_rms_error": float("nan"), "contact_lost": False, "error_unit": "m"})
+            return out
         dyn = self.dynamics("exact")
         probe = self.controller(method, gains)
         x = np.array([dyn.frame_pose(q)[:3, 3] for q in res.q])

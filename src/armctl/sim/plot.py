@@ -7,7 +7,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from armctl.errors import UnknownNameError
+from armctl._checks import whole_number
+from armctl.errors import InvalidParameterError, UnknownNameError
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -32,16 +33,35 @@ def _mark_divergence(res: SimResult, axes: Any) -> None:
             ax.axvline(res.diverged_at, color="red", linestyle="--", linewidth=1)
 
 
-def plot_joints(res: SimResult, quantities: tuple[str, ...] = ("q", "qd", "tau_applied"),
+def plot_joints(res: SimResult, quantities: tuple[str, ...] | str = ("q", "qd", "tau_applied"),
                 joints: Any = None) -> Figure:
     """One panel per quantity (any per-joint array of the result: "q", "qd", "qdd", "tau", "tau_applied",
-    "tau_friction", "tau_ext", "q_measured", "qd_measured"), one line per joint (``joints``: indices, default
-    all)."""
-    idx = list(range(res.n)) if joints is None else list(np.atleast_1d(joints))
+    "tau_friction", "tau_ext", "q_measured", "qd_measured"; one name or a sequence of them), one line per joint
+    (``joints``: 0-based indices 0 … n − 1, default all; negative indices are refused; lines are labelled
+    "joint j + 1")."""
+    if isinstance(quantities, str):
+        quantities = (quantities,)
+    quantities = tuple(quantities)
+    if not quantities:
+        raise InvalidParameterError(f"quantities must name at least one of {', '.join(_UNITS)}; got ()",
+                                    value=quantities)
+    for name in quantities:
+        if not isinstance(name, str) or name not in _UNITS:
+            raise UnknownNameError("quantity", name, tuple(_UNITS))
+    if joints is None:
+        idx = list(range(res.n))
+    else:
+        given = np.atleast_1d(np.asarray(joints, dtype=object))
+        idx = [whole_number(j, f"joints[{i}] (a joint index 0 … {res.n - 1})", 0) for i, j in enumerate(given)]
+        if not idx:
+            raise InvalidParameterError(f"joints must list at least one joint index in 0 … {res.n - 1}, "
+                                        f"got {joints!r}", value=joints)
+        for j in idx:
+            if j >= res.n:
+                raise InvalidParameterError(f"joint index {j} is out of range: the result has {res.n} joints, "
+                                            f"indices 0 … {res.n - 1}", value=joints)
     fig, axes = _figure(len(quantities))
     for ax, name in zip(axes, quantities, strict=True):
-        if name not in _UNITS:
-            raise UnknownNameError("quantity", name, tuple(_UNITS))
         data = getattr(res, name)
         for j in idx:
             ax.plot(res.t, data[:, j], label=f"joint {j + 1}", linewidth=1)
@@ -55,7 +75,10 @@ def plot_joints(res: SimResult, quantities: tuple[str, ...] = ("q", "qd", "tau_a
 
 def plot_energy(res: SimResult) -> Figure:
     """Energy E − E(0) against the work of actuators, friction and external wrenches, and the balance
-    residual E − E(0) − W."""
+    residual E − E(0) − W. Raises an InvalidParameterError for a result without samples."""
+    if not len(res.t):
+        raise InvalidParameterError("the result has no samples (the run stopped before its first one): there is "
+                                    "no energy to plot; check res.divergence", value=res)
     fig, axes = _figure(2, 2.8)
     ax = axes[0]
     ax.plot(res.t, res.energy - res.energy[0], label="E − E(0)", linewidth=1.5)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from functools import partial
 from typing import Any
 
@@ -9,6 +10,7 @@ import numpy as np
 
 from armctl._checks import FloatArray
 from armctl.dynamics.base import Dynamics
+from armctl.errors import SimulationWarning
 from armctl.sim.contact import Environment, ForceSensor
 from armctl.sim.plant import Plant
 from armctl.sim.result import SimResult
@@ -84,14 +86,27 @@ class Recorder:
         dw = np.einsum("ij,ij->i", self.tau_applied[: max(rows - 1, 0)], np.diff(q, axis=0))
         work_act = np.concatenate(([0.0], np.cumsum(dw)))[:rows]
         logs: dict[str, Any] = {}
+        skipped: list[str] = []
         for key, vals in self.logs.items():
             idx = [i for i in self.log_rows[key] if i < rows]
+            if not idx:  # logged only after the last recorded sample
+                continue
             try:
-                logs[key] = np.stack(vals[: len(idx)])
-            except ValueError:
-                continue  # ragged entries are not recorded
+                stacked = np.stack(vals[: len(idx)])
+            except ValueError:  # entries of different shapes
+                skipped.append(f"{key!r} (entries of different shapes)")
+                continue
+            if stacked.dtype.kind == "O":  # None, dicts, …: npz cannot store them without pickle
+                bad = next((v for v in vals[: len(idx)] if v.dtype.kind == "O"), stacked)
+                skipped.append(f"{key!r} (not numbers: {type(bad.item() if bad.ndim == 0 else bad).__name__})")
+                continue
+            logs[key] = stacked
             if idx != list(range(len(idx))):
                 logs[f"{key}:sample"] = np.array(idx)
+        if skipped:
+            warnings.warn(f"controller log entries not recorded: {', '.join(skipped)}; only numbers and arrays of "
+                          "one shape per key are stacked into SimResult.logs — log such values as numbers "
+                          "(e.g. NaN for 'none') or keep them in the controller", SimulationWarning, stacklevel=3)
         d = divergence
         return SimResult(
             t=np.arange(rows) * self.control_dt, q=q, qd=qd, qdd=self.qdd[r], tau=self.tau[r],

@@ -11,6 +11,7 @@ Energies in J. ``save``/``load`` use NumPy's npz format (no pickle).
 from __future__ import annotations
 
 import json
+import zipfile
 from collections.abc import Callable
 from dataclasses import dataclass, field, fields
 from pathlib import Path
@@ -42,7 +43,9 @@ class SimResult:
     energy − energy[0] ≈ work_actuator + work_friction + work_external (see :meth:`energy_balance`).
 
     diverged: the run stopped early; diverged_at: the time [s] it was detected, divergence: why, diverged_q /
-    diverged_qd: the offending state. logs: the controller's ``last_log`` entries stacked over the samples.
+    diverged_qd: the offending state. logs: the controller's ``last_log`` entries stacked over the samples
+    (numbers and arrays only: a key whose entries are None, dicts or of varying shape is left out with a
+    :class:`~armctl.errors.SimulationWarning` naming it).
     info: settings and counters (integrator, steps, sub-steps, stick events, wall time, …); ``unstable_contacts``:
     the contact points the integrator cannot integrate stably at this step (see :mod:`armctl.sim.stability`).
     """
@@ -132,7 +135,9 @@ class SimResult:
 
     # ------------------------------------------------------------------------------ files
     def save(self, path: str | Path) -> Path:
-        """Write the result to ``path`` (an ``.npz`` file; the suffix is added if missing)."""
+        """Write the result to ``path`` (an ``.npz`` file; the suffix is added if missing). Raises an
+        InvalidParameterError naming the log key if a log holds Python objects (npz stores them only by
+        pickling, which :meth:`load` refuses), and naming the path if it cannot be written."""
         path = Path(path)
         if path.suffix != ".npz":
             path = path.with_name(path.name + ".npz")
@@ -141,30 +146,63 @@ class SimResult:
             if getattr(self, name) is not None:
                 arrays[name] = getattr(self, name)
         for k, v in self.logs.items():
+            if v.dtype.kind == "O":
+                raise InvalidParameterError(
+                    f"log {k!r} holds Python objects (e.g. None or dicts), which a SimResult file cannot store; "
+                    "convert it to numbers or drop it (dataclasses.replace(result, logs=...)) before saving",
+                    value=k)
             arrays[f"log:{k}"] = v
         meta = {"diverged": self.diverged, "diverged_at": self.diverged_at, "divergence": self.divergence,
                 "info": self.info, "format": "armctl.SimResult/1"}
         arrays["meta"] = np.array(json.dumps(meta, default=_jsonable))
-        np.savez_compressed(path, **arrays)
+        try:
+            np.savez_compressed(path, **arrays)
+        except OSError as e:
+            raise InvalidParameterError(f"cannot write the SimResult to {str(path)!r}: {e.strerror or e}; pass a "
+                                        "path in an existing, writable folder", value=str(path)) from e
         return path
 
     @classmethod
     def load(cls, path: str | Path) -> SimResult:
-        """Read a result written by :meth:`save`."""
-        with np.load(Path(path), allow_pickle=False) as data:
+        """Read a result written by :meth:`save`. Raises an InvalidParameterError naming ``path`` if it is
+        missing, unreadable or not a complete saved SimResult."""
+        path = Path(path)
+
+        def bad(why: str) -> InvalidParameterError:
+            return InvalidParameterError(f"{str(path)!r} {why}; pass a file written by SimResult.save",
+                                         value=str(path))
+
+        if not path.is_file():
+            raise bad("does not exist" if not path.exists() else "is not a file")
+        try:
+            data = np.load(path, allow_pickle=False)
+        except (OSError, ValueError, EOFError, zipfile.BadZipFile) as e:  # unreadable, not NumPy, pickled
+            raise bad(f"cannot be read as an npz file ({e})") from e
+        if not isinstance(data, np.lib.npyio.NpzFile):
+            raise bad("is a single NumPy array (.npy), not a saved SimResult (.npz)")
+        with data:
             if "meta" not in data.files:
-                raise InvalidParameterError(f"{path} is not a saved SimResult (no 'meta' entry)", value=str(path))
-            meta = json.loads(str(data["meta"]))
-            kw: dict[str, Any] = {name: data[name] for name in _ARRAYS}
-            kw["_energy"] = data["energy"]
-            for name in ("diverged_q", "diverged_qd"):
-                kw[name] = data[name] if name in data.files else None
-            logs = {k[4:]: data[k] for k in data.files if k.startswith("log:")}
+                raise bad("is not a saved SimResult (no 'meta' entry)")
+            missing = [name for name in (*_ARRAYS, "energy") if name not in data.files]
+            if missing:
+                raise bad(f"is incomplete: it lacks the entries {missing}")
+            try:
+                meta = json.loads(str(data["meta"]))
+                kw: dict[str, Any] = {name: data[name] for name in _ARRAYS}
+                kw["_energy"] = data["energy"]
+                for name in ("diverged_q", "diverged_qd"):
+                    kw[name] = data[name] if name in data.files else None
+                logs = {k[4:]: data[k] for k in data.files if k.startswith("log:")}
+            except (ValueError, OSError, EOFError, zipfile.BadZipFile) as e:  # bad JSON, object arrays, corrupt
+                raise bad(f"has an unreadable entry ({e})") from e
+        keys = ("diverged", "diverged_at", "divergence", "info")
+        if not isinstance(meta, dict) or any(k not in meta for k in keys):
+            raise bad(f"has a 'meta' entry without the keys {list(keys)}")
         return cls(**kw, diverged=bool(meta["diverged"]), diverged_at=meta["diverged_at"],
                    divergence=meta["divergence"], logs=logs, info=meta["info"])
 
     # ------------------------------------------------------------------------------ plots
-    def plot(self, quantities: tuple[str, ...] = ("q", "qd", "tau_applied"), joints: Any = None) -> Any:
+    def plot(self, quantities: tuple[str, ...] | str = ("q", "qd", "tau_applied"), joints: Any = None) -> Any:
         """A matplotlib Figure with one panel per quantity (see :func:`armctl.sim.plot.plot_joints`)."""
         from armctl.sim.plot import plot_joints
 
