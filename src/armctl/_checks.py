@@ -33,7 +33,13 @@ def real_array(x: ArrayLike, name: str) -> FloatArray:
             raise TypeError(kind)
         return a.astype(float, copy=False)
     except (TypeError, ValueError, OverflowError):
-        raise InvalidParameterError(f"{name} must hold real numbers, got {x!r}", value=x) from None
+        raise InvalidParameterError(f"{name} must hold real numbers, got {_shown(x)}", value=x) from None
+
+
+def _shown(x: Any, limit: int = 200) -> str:
+    """repr(x), cut to ``limit`` characters (a whole log passed by mistake would fill the screen)."""
+    text = repr(x)
+    return text if len(text) <= limit else f"{text[:limit]}… ({len(text)} characters)"
 
 
 def vector(x: ArrayLike, n: int, name: str) -> FloatArray:

@@ -16,7 +16,7 @@ from armctl.dynamics.identification import (
 )
 from armctl.dynamics.identification.base_parameters import BaseParameters
 from armctl.dynamics.identification.problem import IdentificationProblem
-from armctl.errors import IdentifiabilityError, ShapeError
+from armctl.errors import IdentifiabilityError, InvalidParameterError, ShapeError
 from tests.conftest import dynamics
 
 
@@ -118,5 +118,5 @@ def test_mismatched_experiments_are_refused() -> None:
         build_problem(dyn, _data("planar_3r", moving=[0, 1, 2]))  # 3 joints of data for a 2-joint arm
     with pytest.raises(ShapeError, match="base parameters are for 3 joints"):
         build_problem(dyn, _data("planar_2r", moving=[0, 1]), base=find_base_parameters(dynamics("planar_3r")))
-    with pytest.raises(TypeError):
+    with pytest.raises(InvalidParameterError, match="data must be an IdentificationData"):
         build_problem(dyn, [])

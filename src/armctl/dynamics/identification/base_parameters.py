@@ -22,12 +22,17 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
-from armctl._checks import FloatArray, readonly, scalar
+from armctl._checks import FloatArray, readonly, scalar, whole_number
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError
 from armctl.model.robot import PARAMS_PER_JOINT
 
 _BETA_ZERO = 1e-10  # entries of β below this (relative to the largest) are round-off
+#: allowed range of the rank tolerance (relative to the largest pivot |R_00|). The numerical rank sits in a wide
+#: gap: round-off pivots are ~1e-16, genuine ones ≥ ~3e-2 for the planar 2R, Puma 560 and Panda (SI units). Below
+#: 1e-14 round-off would count as independent; above 1e-3, identifiable parameters with small columns (a short
+#: wrist link) would be dropped silently, leaving base parameters that no longer reproduce the torques.
+TOL_RANGE = (1e-14, 1e-3)
 
 
 @dataclass(frozen=True)
@@ -117,16 +122,21 @@ def find_base_parameters(dynamics: Dynamics, samples: int | None = None, seed: i
     """The base parameters of ``dynamics``' arm, by pivoted QR of the regressor stacked at random states.
 
     samples: number of random states S (default max(30, 4n)); the stacked W is (S n × 13n). seed: of the
-    random states. tol: relative rank tolerance on |R_kk| / |R_00|. The result depends only on the
+    random states (a whole number ≥ 0). tol: relative rank tolerance on |R_kk| / |R_00|, in [1e-14, 1e-3]
+    (see :data:`TOL_RANGE`; the default 1e-8 sits in the middle of the gap). The result depends only on the
     kinematics (and on which columns exist), not on the inertial values of the model.
     """
     n, p = dynamics.n, PARAMS_PER_JOINT * dynamics.n
-    s = int(samples) if samples is not None else max(30, 4 * n)
+    s = whole_number(samples, "samples", minimum=1) if samples is not None else max(30, 4 * n)
     if s * n < p:
         raise InvalidParameterError(f"samples={s} gives {s * n} rows for {p} columns; use at least "
                                     f"{-(-p // n)} samples", value=samples)
     tol = scalar(tol, "tol", positive=True)
-    rng = np.random.default_rng(seed)
+    if not TOL_RANGE[0] <= tol <= TOL_RANGE[1]:
+        raise InvalidParameterError(f"tol must be in [{TOL_RANGE[0]:g}, {TOL_RANGE[1]:g}] (relative to the largest "
+                                    f"pivot: smaller counts round-off as independent, larger drops identifiable "
+                                    f"parameters; default 1e-8), got {tol!r}", value=tol)
+    rng = np.random.default_rng(whole_number(seed, "seed"))
     w = np.vstack([dynamics.regressor(*x) for x in random_states(dynamics, s, rng)])
     _, r, perm = scipy.linalg.qr(w, mode="economic", pivoting=True)
     diag = np.abs(np.diag(r))

@@ -31,13 +31,20 @@ import scipy.linalg
 import scipy.optimize
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, readonly, scalar, vector
-from armctl.dynamics.identification.least_squares import LeastSquaresEstimate
+from armctl._checks import FloatArray, readonly, scalar, vector, whole_number
+from armctl.dynamics.identification.least_squares import LeastSquaresEstimate, check_torque
 from armctl.dynamics.identification.problem import IdentificationProblem
 from armctl.dynamics.identification.pseudo_inertia import factor_of, parameters_from_factor
-from armctl.errors import ShapeError, SolverError
+from armctl.errors import InvalidParameterError, ShapeError, SolverError
 from armctl.model.from_parameters import model_from_parameters
 from armctl.model.robot import PARAMS_PER_JOINT, RobotModel
+
+#: allowed range of ``prior_weight`` (relative to the data's scale): from 1 up, the prior pulls against the data
+#: through the nonlinear parametrisation and the solver stalls far from the fit (cost ratio 10–10³ at 1–1e6 on
+#: planar arms, an overflow at 1e300)
+PRIOR_WEIGHT_RANGE = (1e-12, 1.0)
+#: the cost ratio's round-off floor, relative to the weighted ‖y‖²
+RSS_FLOOR = 1e-12
 
 
 @dataclass(frozen=True)
@@ -47,10 +54,12 @@ class ConsistentEstimate:
     pi: (13 n,) full parameter vector (π's layout). coulomb_offset: (n,) δ [N·m] (zeros if the problem has
     none). theta: (p,) the problem's unknowns it implies ([K π; δ]). model: the RobotModel with these
     parameters (every link physical). residual_rms: (n,) RMS of y − W θ per joint [N·m]. cost_ratio: its
-    weighted residual sum of squares over that of the unconstrained least squares (≥ 1; near 1 when the
-    constraints cost nothing). converged: the solver met its tolerance, or used up its budget with the fit
-    stalled (50 more evaluations change the weighted residual sum of squares by less than 10⁻⁵ relative: what
-    still moves is the prior's choice in directions the data do not see). message: the solver's.
+    weighted residual sum of squares over that of the unconstrained least squares, each plus a round-off floor
+    of 10⁻¹² of the weighted ‖y‖² (a relative RMS residual of 10⁻⁶): ≥ 1, near 1 when the constraints cost
+    nothing, and 1 rather than a ratio of round-off on noise-free data. converged: the solver met its
+    tolerance, or used up its budget with the fit stalled (50 more evaluations change the weighted residual
+    sum of squares by less than 10⁻⁵ relative: what still moves is the prior's choice in directions the data
+    do not see). message: the solver's.
     """
 
     pi: FloatArray
@@ -67,6 +76,16 @@ class ConsistentEstimate:
             object.__setattr__(self, k, readonly(np.array(getattr(self, k), dtype=float)))
 
 
+def check_prior_weight(prior_weight: float) -> float:
+    """``prior_weight`` checked: a real number in :data:`PRIOR_WEIGHT_RANGE`."""
+    lam = scalar(prior_weight, "prior_weight", positive=True)
+    if not PRIOR_WEIGHT_RANGE[0] <= lam <= PRIOR_WEIGHT_RANGE[1]:
+        raise InvalidParameterError(f"prior_weight must be in [{PRIOR_WEIGHT_RANGE[0]:g}, {PRIOR_WEIGHT_RANGE[1]:g}] "
+                                    f"(relative to the data's scale; default 1e-6), got {prior_weight!r}",
+                                    value=prior_weight)
+    return lam
+
+
 def consistent_estimate(problem: IdentificationProblem, model: RobotModel, estimate: LeastSquaresEstimate | None = None,
                         prior: ArrayLike | None = None, prior_weight: float = 1e-6, max_evaluations: int = 300
                         ) -> ConsistentEstimate:
@@ -75,20 +94,24 @@ def consistent_estimate(problem: IdentificationProblem, model: RobotModel, estim
     estimate: a least-squares estimate of the same problem, whose per-joint noise levels weight the rows
     (None or OLS: unweighted). prior: π_0 (default ``model.parameters()``; it need not be physical).
     prior_weight: λ relative to the mean squared column norm of the compressed data matrix
-    (dimensionless). max_evaluations: of each of the two solver runs (LM, then trust region; 50 more may be
-    spent to tell a stalled run from one still descending).
+    (dimensionless, in [1e-12, 1]: the prior only fills in what the data cannot see; heavier, it fights the
+    data and the solver stalls). max_evaluations: of each of the two solver runs
+    (LM, then trust region; ≥ 1; 50 more may be spent to tell a stalled run from one still descending).
     """
     n, k = problem.n, PARAMS_PER_JOINT
     if model.n != n or problem.base.n_full != k * n:
         raise ShapeError(f"model has {model.n} joints, the problem {n}", value=model.n)
     pi0 = vector(model.parameters() if prior is None else prior, k * n, "prior")
-    lam = scalar(prior_weight, "prior_weight", positive=True)
+    lam = check_prior_weight(prior_weight)
+    budget = whole_number(max_evaluations, "max_evaluations", minimum=1)
     w, y = problem.regressor, problem.torque
+    check_torque(problem)
     sigma = estimate.noise_std if estimate is not None and estimate.weighted else np.ones(n)
     wt = np.tile(1.0 / sigma, problem.samples)
     q, r = scipy.linalg.qr(w * wt[:, None], mode="economic")
     z = q.T @ (y * wt)
-    rss_ls = max(float((y * wt) @ (y * wt) - z @ z), 1e-300)
+    rss_ls = float(((y * wt - q @ z) ** 2).sum())  # not ‖y‖² − ‖z‖²: that cancels to round-off, even < 0
+    floor = RSS_FLOOR * float((y * wt) @ (y * wt))  # round-off level of the fit: 1e-6 relative RMS
     kmap = problem.base.map
     nb = problem.base.n_base
     col2 = (r[:, :nb] ** 2).sum(axis=0)
@@ -121,17 +144,18 @@ def consistent_estimate(problem: IdentificationProblem, model: RobotModel, estim
     # see, so a run out of budget counts as converged when the fit has stalled: 50 more evaluations change the
     # weighted residual sum of squares by less than 1e-5 relative (its own sampling error is ~√(2/N), N the
     # number of torque samples: 1e-2 for 2e4 samples).
-    opts = {"jac": jacobian, "xtol": 1e-10, "ftol": 1e-10, "gtol": 1e-10, "max_nfev": int(max_evaluations)}
+    opts = {"jac": jacobian, "xtol": 1e-10, "ftol": 1e-10, "gtol": 1e-10, "max_nfev": budget}
     nu = r.shape[0]  # the data rows of the residual (the prior's follow)
     res = scipy.optimize.least_squares(residual, x0, method="lm", **opts)
     if np.isfinite(res.x).all():
         res = scipy.optimize.least_squares(residual, res.x, method="trf", **opts)
     if not np.isfinite(res.x).all() or res.status < 0:
-        raise SolverError(f"consistent estimate failed: {res.message}", problem=problem, result=res)
+        raise SolverError(f"consistent estimate failed ({res.message}); with prior_weight={prior_weight!r} and "
+                          f"max_evaluations={max_evaluations!r}", problem=problem, result=res)
     converged = res.status > 0
     if not converged:
         again = scipy.optimize.least_squares(residual, res.x, method="trf", **dict(opts, max_nfev=50))
-        fit, fit_again = (rss_ls + float(x.fun[:nu] @ x.fun[:nu]) for x in (res, again))  # weighted RSS
+        fit, fit_again = (rss_ls + floor + float(x.fun[:nu] @ x.fun[:nu]) for x in (res, again))  # weighted RSS
         converged = again.status > 0 or abs(fit - fit_again) <= 1e-5 * fit
         res = again if again.cost <= res.cost else res
     pi, delta, _ = layout.unpack(res.x)
@@ -139,7 +163,8 @@ def consistent_estimate(problem: IdentificationProblem, model: RobotModel, estim
     e = y - w @ theta
     rss = float(((e * wt) ** 2).sum())
     fitted = model_from_parameters(model, pi, delta, physical=True)
-    return ConsistentEstimate(pi, delta, theta, fitted, np.sqrt((e.reshape(-1, n) ** 2).mean(axis=0)), rss / rss_ls,
+    return ConsistentEstimate(pi, delta, theta, fitted, np.sqrt((e.reshape(-1, n) ** 2).mean(axis=0)),
+                              (rss + floor) / (rss_ls + floor),
                               bool(converged), str(res.message))
 
 

@@ -25,7 +25,7 @@ import numpy as np
 import scipy.signal
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, readonly, scalar, whole_number
+from armctl._checks import FloatArray, readonly, real_array, scalar, whole_number
 from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
 
 
@@ -35,8 +35,9 @@ class IdentificationData:
     reduce them before estimation.
 
     q [rad], qd [rad/s], qdd [rad/s²], tau [N·m]. sos: second-order sections of the zero-phase low-pass
-    applied to τ and to the regressor's columns (None: none, e.g. exact simulated samples). decimate: keep
-    every k-th sample after filtering. trim: samples dropped at each end after filtering. Build one from a
+    applied to τ and to the regressor's columns, (sections, 6) as from ``scipy.signal.butter(..., output="sos")``
+    (None: none, e.g. exact simulated samples). decimate: keep every k-th sample after filtering (a whole
+    number ≥ 1). trim: samples dropped at each end after filtering (a whole number ≥ 0). Build one from a
     raw log with :func:`prepare_data`, or directly when q̇ and q̈ are known.
     """
 
@@ -50,8 +51,8 @@ class IdentificationData:
     trim: int = 0
 
     def __post_init__(self) -> None:
-        t = np.array(self.t, dtype=float).reshape(-1)
-        arrays = {k: np.array(getattr(self, k), dtype=float) for k in ("q", "qd", "qdd", "tau")}
+        t = np.array(real_array(self.t, "t")).reshape(-1)
+        arrays = {k: np.array(real_array(getattr(self, k), k)) for k in ("q", "qd", "qdd", "tau")}
         shape = arrays["q"].shape
         if len(shape) != 2:
             raise ShapeError(f"q must be (samples, n), got shape {shape}", value=self.q)
@@ -65,13 +66,17 @@ class IdentificationData:
             if not np.isfinite(a).all():
                 raise NonFiniteError(f"{name} holds NaN or inf", value=a)
             object.__setattr__(self, name, readonly(a))
-        if int(self.decimate) < 1 or int(self.trim) < 0:
-            raise InvalidParameterError(f"decimate must be >= 1 and trim >= 0, got {self.decimate}, {self.trim}",
-                                        value=(self.decimate, self.trim))
-        object.__setattr__(self, "decimate", int(self.decimate))
-        object.__setattr__(self, "trim", int(self.trim))
+        object.__setattr__(self, "decimate", whole_number(self.decimate, "decimate", minimum=1))
+        object.__setattr__(self, "trim", whole_number(self.trim, "trim"))
         if self.sos is not None:
-            object.__setattr__(self, "sos", readonly(np.array(self.sos, dtype=float)))
+            sos = np.array(real_array(self.sos, "sos"))
+            if sos.ndim != 2 or sos.shape[0] < 1 or sos.shape[1] != 6:
+                raise ShapeError(f"sos must be second-order sections of shape (sections, 6) (scipy.signal.butter(..., "
+                                 f"output='sos')), got shape {sos.shape}", value=self.sos)
+            if not np.isfinite(sos).all() or np.any(sos[:, 3] == 0):
+                raise InvalidParameterError("sos must be finite with a nonzero leading denominator coefficient "
+                                            "(column 3) in every section", value=self.sos)
+            object.__setattr__(self, "sos", readonly(sos))
         if len(self.kept) < 1:
             raise InvalidParameterError(f"{shape[0]} samples leave none after trim={self.trim} at each end",
                                         value=self.trim)
@@ -92,11 +97,18 @@ class IdentificationData:
 
     def reduce(self, x: ArrayLike) -> FloatArray:
         """Filter (zero-phase, along the first axis) and decimate an array with one row per sample."""
-        a = np.asarray(x, dtype=float)
-        if a.shape[0] != self.samples:
-            raise ShapeError(f"expected {self.samples} rows, got {a.shape[0]}", value=a.shape)
+        a = real_array(x, "x")
+        if a.ndim < 1 or a.shape[0] != self.samples:
+            raise ShapeError(f"expected {self.samples} rows, got shape {a.shape}", value=a.shape)
+        if not np.isfinite(a).all():
+            raise NonFiniteError("x holds NaN or inf", value=a)
         if self.sos is not None:
-            a = scipy.signal.sosfiltfilt(np.array(self.sos), a, axis=0)
+            try:
+                a = scipy.signal.sosfiltfilt(np.array(self.sos), a, axis=0)
+            except ValueError as e:  # fewer samples than the filter's padding
+                raise InvalidParameterError(f"{self.samples} samples are too few for the filter sos "
+                                            f"({self.sos.shape[0]} sections): {e}; record more samples or use "
+                                            "a lower filter order", value=self.samples) from None
         return a[self.trim: self.samples - self.trim: self.decimate]
 
 
@@ -124,8 +136,8 @@ def prepare_data(t: ArrayLike, q: ArrayLike, tau: ArrayLike, *, cutoff: float, o
     sample (default: the largest k with f_s/k ≥ 4 f_c). trim: samples dropped at each end (default
     ⌈3 f_s / f_c⌉, three periods of the cutoff frequency).
     """
-    tt = np.asarray(t, dtype=float).reshape(-1)
-    qq, tq = np.asarray(q, dtype=float), np.asarray(tau, dtype=float)
+    tt = real_array(t, "t").reshape(-1)
+    qq, tq = real_array(q, "q"), real_array(tau, "tau")
     if qq.ndim != 2 or tq.shape != qq.shape or tt.shape != (qq.shape[0],):
         raise ShapeError(f"t (S,), q (S, n) and tau (S, n) must have one row per sample; got t {tt.shape}, "
                          f"q {qq.shape}, tau {tq.shape}", value=(tt.shape, qq.shape, tq.shape))
@@ -138,10 +150,10 @@ def prepare_data(t: ArrayLike, q: ArrayLike, tau: ArrayLike, *, cutoff: float, o
     if fc >= 0.5 * fs:
         raise InvalidParameterError(f"cutoff {fc:g} Hz must be below the Nyquist frequency {0.5 * fs:g} Hz",
                                     value=cutoff)
-    for name, x in (("order", order), ("decimate", decimate), ("trim", trim)):
-        if x is not None:
-            whole_number(x, name, minimum=int(name != "trim"))
-    k = int(decimate) if decimate is not None else max(1, int(fs / (4.0 * fc)))
+    order = whole_number(order, "order", minimum=1)
+    decimate = whole_number(decimate, "decimate", minimum=1) if decimate is not None else None
+    trim = whole_number(trim, "trim") if trim is not None else None
+    k = decimate if decimate is not None else max(1, int(fs / (4.0 * fc)))
     if k < 1 or fs / k < 2.0 * fc:
         raise InvalidParameterError(f"decimate={k} puts the new Nyquist frequency {0.5 * fs / max(k, 1):g} Hz "
                                     f"below the cutoff {fc:g} Hz (aliasing); use decimate <= {int(fs / (2 * fc))}",

@@ -17,8 +17,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, readonly
-from armctl.errors import InvalidParameterError, ShapeError
+from armctl._checks import FloatArray, readonly, real_array, scalar, whole_number
+from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
 from armctl.reference import Reference
 
 
@@ -27,7 +27,7 @@ class FourierExcitation:
     """A periodic joint trajectory, a finite Fourier series per joint.
 
     q0: (n,) offsets [rad]. a, b: (n, N) coefficients of the velocity's cosine and sine terms [rad/s].
-    period: T_f = 2π/ω_f [s].
+    period: T_f = 2π/ω_f [s], > 0 and large enough that N ω_f is finite.
     """
 
     q0: FloatArray
@@ -36,16 +36,18 @@ class FourierExcitation:
     period: float
 
     def __post_init__(self) -> None:
-        q0 = np.array(self.q0, dtype=float).reshape(-1)
-        a, b = np.array(self.a, dtype=float), np.array(self.b, dtype=float)
+        q0 = np.array(real_array(self.q0, "q0")).reshape(-1)
+        a, b = np.array(real_array(self.a, "a")), np.array(real_array(self.b, "b"))
         if a.ndim != 2 or a.shape != b.shape or a.shape[0] != q0.shape[0] or a.shape[1] < 1:
             raise ShapeError(f"a and b must both be (n, N) with n = len(q0) = {q0.shape[0]} and N >= 1; got "
                              f"{a.shape} and {b.shape}", value=(self.a, self.b))
         if not (np.isfinite(q0).all() and np.isfinite(a).all() and np.isfinite(b).all()):
             raise InvalidParameterError("Fourier coefficients must be finite", value=(self.q0, self.a, self.b))
-        period = float(self.period)
-        if not (math.isfinite(period) and period > 0):
-            raise InvalidParameterError(f"period must be > 0 s, got {self.period!r}", value=self.period)
+        period = scalar(self.period, "period", positive=True)
+        if not math.isfinite(2.0 * math.pi * a.shape[1] / period):
+            raise InvalidParameterError(f"period={self.period!r} s is too small: the top harmonic's frequency "
+                                        f"2π·{a.shape[1]}/period overflows; use a period of seconds",
+                                        value=self.period)
         object.__setattr__(self, "q0", readonly(q0))
         object.__setattr__(self, "a", readonly(a))
         object.__setattr__(self, "b", readonly(b))
@@ -72,7 +74,9 @@ class FourierExcitation:
 
     def evaluate(self, t: ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray]:
         """(q, q̇, q̈) at times ``t`` [s]: each (len(t), n), or (n,) for a scalar t."""
-        tt = np.asarray(t, dtype=float)
+        tt = real_array(t, "t")
+        if not np.isfinite(tt).all():
+            raise NonFiniteError(f"t holds NaN or inf: {t!r:.80}", value=t)
         scalar_t = tt.ndim == 0
         tt = tt.reshape(-1)
         wl = self.omega * np.arange(1, self.harmonics + 1)  # (N,)
@@ -87,24 +91,46 @@ class FourierExcitation:
 
     def __call__(self, t: float) -> Reference:
         """The trajectory at time ``t`` [s] as a :class:`~armctl.Reference` (usable by ``simulate``)."""
-        q, qd, qdd = self.evaluate(float(t))
+        q, qd, qdd = self.evaluate(scalar(t, "t"))
         return Reference(q, qd, qdd)
 
     def extremes(self, samples_per_period: int = 2000) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-        """(min q, max q, max |q̇|, max |q̈|) per joint over one period, on a dense grid."""
-        t = np.linspace(0.0, self.period, samples_per_period, endpoint=False)
+        """(min q, max q, max |q̇|, max |q̈|) per joint over one period, on a grid of ``samples_per_period``
+        (≥ 1) points."""
+        samples = whole_number(samples_per_period, "samples_per_period", minimum=1)
+        t = np.linspace(0.0, self.period, samples, endpoint=False)
         q, qd, qdd = self.evaluate(t)
         return q.min(axis=0), q.max(axis=0), np.abs(qd).max(axis=0), np.abs(qdd).max(axis=0)
 
     def scaled(self, factor: ArrayLike) -> FourierExcitation:
         """The same trajectory with each joint's motion about q0 scaled by ``factor`` (scalar or (n,))."""
-        f = np.broadcast_to(np.asarray(factor, dtype=float), (self.n,))[:, None]
+        f = _per_joint(factor, self.n, "factor")
+        if not np.isfinite(f).all():
+            raise NonFiniteError(f"factor holds NaN or inf: {factor!r}", value=factor)
+        f = f[:, None]
         return FourierExcitation(self.q0, self.a * f, self.b * f, self.period)
 
     def within(self, lower: ArrayLike, upper: ArrayLike, velocity: ArrayLike, acceleration: ArrayLike,
                tol: float = 1e-9) -> bool:
         """True if the trajectory stays within the position, velocity [rad/s] and acceleration [rad/s²]
-        limits (checked on a dense grid)."""
+        limits (checked on a dense grid). Each limit is a scalar or an (n,) vector (±inf: none); tol ≥ 0."""
+        lo, hi, vel, acc = (_per_joint(x, self.n, name) for x, name in (
+            (lower, "lower"), (upper, "upper"), (velocity, "velocity"), (acceleration, "acceleration")))
+        for x, name in ((lo, "lower"), (hi, "upper"), (vel, "velocity"), (acc, "acceleration")):
+            if np.isnan(x).any():
+                raise NonFiniteError(f"{name} holds NaN: {x.tolist()}", value=x)
+        eps = scalar(tol, "tol", nonnegative=True)
         qmin, qmax, vmax, amax = self.extremes()
-        return bool(np.all(qmin >= np.asarray(lower) - tol) and np.all(qmax <= np.asarray(upper) + tol)
-                    and np.all(vmax <= np.asarray(velocity) + tol) and np.all(amax <= np.asarray(acceleration) + tol))
+        return bool(np.all(qmin >= lo - eps) and np.all(qmax <= hi + eps)
+                    and np.all(vmax <= vel + eps) and np.all(amax <= acc + eps))
+
+
+def _per_joint(x: ArrayLike, n: int, name: str) -> FloatArray:
+    """``x`` (a scalar or an (n,) vector of real numbers) as an (n,) float vector; NaN and inf are left to the
+    caller (a limit may be infinite)."""
+    a = real_array(x, name)
+    if a.ndim == 0:
+        return np.full(n, float(a))
+    if a.shape != (n,):
+        raise ShapeError(f"{name} must be a scalar or an ({n},) vector, got shape {a.shape}", value=x)
+    return a

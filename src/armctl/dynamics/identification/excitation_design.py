@@ -19,11 +19,11 @@ import numpy as np
 import scipy.optimize
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, scalar
+from armctl._checks import FloatArray, real_array, scalar, whole_number
 from armctl.dynamics.base import Dynamics
 from armctl.dynamics.identification.base_parameters import BaseParameters, find_base_parameters
 from armctl.dynamics.identification.excitation import FourierExcitation
-from armctl.errors import InvalidParameterError, ShapeError
+from armctl.errors import IdentifiabilityError, InvalidParameterError, ShapeError
 
 
 @dataclass(frozen=True)
@@ -61,7 +61,9 @@ def _limit(value: ArrayLike | None, model_value: FloatArray, name: str) -> Float
     if value is None:
         out = np.array(model_value, dtype=float)
     else:
-        v = np.asarray(value, dtype=float)
+        v = real_array(value, name)
+        if np.isnan(v).any():
+            raise InvalidParameterError(f"{name} holds NaN: {value!r}", value=value)
         if v.ndim > 1 or (v.ndim == 1 and v.shape != (n,)):
             raise ShapeError(f"{name} must be a scalar or a ({n},) vector, got shape {v.shape}", value=value)
         out = np.minimum(np.broadcast_to(v, (n,)), model_value)
@@ -81,18 +83,24 @@ def optimize_excitation(dynamics: Dynamics, base: BaseParameters | None = None, 
     [rad/s] (default: the model's; if given, the smaller of the two). period: T_f [s]. harmonics: N.
     position_margin: kept from each position limit [rad]. samples: states S per period in the objective.
     grid: constraint points per period. starts: random starts (the best one is optimised). maxiter: SLSQP
-    iterations. seed: of the random starts.
+    iterations (0: the best random start). seed: of the random starts.
+
+    Raises IdentifiabilityError if even the best design leaves cond(W_b) infinite (limits or a period that
+    leave almost no motion, too few samples).
     """
     model = dynamics.model
     n = dynamics.n
     base = base if base is not None else find_base_parameters(dynamics)
     period = scalar(period, "period", positive=True)
     margin = scalar(position_margin, "position_margin", nonnegative=True)
-    nh = int(harmonics)
-    if nh < 1 or int(samples) * n < base.n_base or int(grid) < 4 * nh or int(starts) < 1:
-        raise InvalidParameterError(f"need harmonics >= 1, samples·n >= {base.n_base} base parameters, grid >= "
-                                    f"4·harmonics and starts >= 1; got harmonics={harmonics}, samples={samples}, "
-                                    f"grid={grid}, starts={starts}", value=(harmonics, samples, grid, starts))
+    nh = whole_number(harmonics, "harmonics", minimum=1)
+    samples, grid = whole_number(samples, "samples", minimum=1), whole_number(grid, "grid", minimum=1)
+    starts, maxiter = whole_number(starts, "starts", minimum=1), whole_number(maxiter, "maxiter")
+    seed = whole_number(seed, "seed")
+    if samples * n < base.n_base or grid < 4 * nh:
+        raise InvalidParameterError(f"need samples·n >= {base.n_base} base parameters and grid >= 4·harmonics; got "
+                                    f"harmonics={harmonics}, samples={samples}, grid={grid} (n = {n})",
+                                    value=(harmonics, samples, grid))
     vmax = _limit(velocity_limit, model.velocity_limit, "velocity_limit")
     amax = _limit(acceleration_limit, np.full(n, np.inf), "acceleration_limit")
     lo = np.where(np.isfinite(model.lower), model.lower + margin, -np.inf)
@@ -131,6 +139,14 @@ def optimize_excitation(dynamics: Dynamics, base: BaseParameters | None = None, 
     trajectory = _fit_into(unpack(x), lo, hi, vmax, amax)
     q, qd, qdd = trajectory.evaluate(t_obj)
     cond = condition_number(stacked_base_regressor(dynamics, base, q, qd, qdd))
+    if not math.isfinite(cond):
+        _, _, vpeak, apeak = trajectory.extremes()
+        raise IdentifiabilityError(
+            f"no excitation with a finite condition number found: the best design moves at most "
+            f"{vpeak.max():.3g} rad/s and {apeak.max():.3g} rad/s² over its {samples} samples (limits "
+            f"velocity_limit={vmax.tolist()}, acceleration_limit={amax.tolist()}, period={period:g} s, "
+            f"harmonics={nh}); raise acceleration_limit / velocity_limit, use a period of seconds, or more "
+            f"samples, harmonics and starts", value=cond)
     return ExcitationDesign(trajectory, cond, initial, evaluations, str(res.message))
 
 

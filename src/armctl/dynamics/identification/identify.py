@@ -16,14 +16,14 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, readonly
+from armctl._checks import FloatArray, boolean, readonly, real_array
 from armctl.dynamics.base import Dynamics
 from armctl.dynamics.identification.base_parameters import BaseParameters, find_base_parameters
-from armctl.dynamics.identification.consistency import ConsistentEstimate, consistent_estimate
+from armctl.dynamics.identification.consistency import ConsistentEstimate, check_prior_weight, consistent_estimate
 from armctl.dynamics.identification.data import IdentificationData
-from armctl.dynamics.identification.least_squares import LeastSquaresEstimate, solve_least_squares
+from armctl.dynamics.identification.least_squares import LeastSquaresEstimate, excitation_rtol, solve_least_squares
 from armctl.dynamics.identification.problem import IdentificationProblem, build_problem, problem_regressor
-from armctl.errors import InvalidParameterError, ShapeError
+from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
 from armctl.model.robot import RobotModel
 
 if TYPE_CHECKING:
@@ -45,10 +45,16 @@ class ValidationResult:
 
     def __post_init__(self) -> None:
         for k in ("t", "predicted", "measured"):
-            object.__setattr__(self, k, readonly(np.array(getattr(self, k), dtype=float)))
-        if self.predicted.shape != self.measured.shape or self.t.shape != self.measured.shape[:1]:
-            raise ShapeError(f"t {self.t.shape}, predicted {self.predicted.shape} and measured "
-                             f"{self.measured.shape} do not match", value=self.t.shape)
+            a = np.array(real_array(getattr(self, k), k))
+            if not np.isfinite(a).all():
+                raise NonFiniteError(f"{k} holds NaN or inf", value=a)
+            object.__setattr__(self, k, readonly(a))
+        m = self.measured
+        if m.ndim != 2 or self.predicted.shape != m.shape or self.t.shape != m.shape[:1] or m.shape[0] < 1 \
+                or m.shape[1] < 1:
+            raise ShapeError(f"t (S,), predicted (S, n) and measured (S, n) must match with S >= 1 samples and "
+                             f"n >= 1 joints; got t {self.t.shape}, predicted {self.predicted.shape}, measured "
+                             f"{m.shape}", value=(self.t.shape, self.predicted.shape, m.shape))
 
     @property
     def rms_error(self) -> FloatArray:
@@ -100,7 +106,7 @@ class IdentificationResult:
         return self.consistent.model
 
     def _theta(self, consistent: bool) -> FloatArray:
-        if not consistent:
+        if not boolean(consistent, "consistent"):
             return self.estimate.theta
         if self.consistent is None:
             raise InvalidParameterError("no consistent estimate: run identify(..., consistent=True)", value=None)
@@ -109,19 +115,25 @@ class IdentificationResult:
     def predict(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, consistent: bool = False) -> FloatArray:
         """Torques (S, n) [N·m] the estimate predicts at samples (S, n) of q, q̇, q̈ (``consistent``: of the
         consistent estimate instead of the least-squares one)."""
-        arrays = [np.atleast_2d(np.asarray(a, dtype=float)) for a in (q, qd, qdd)]
-        if any(a.shape != arrays[0].shape or a.shape[1] != self.problem.n for a in arrays):
+        theta = self._theta(consistent)
+        arrays = [np.atleast_2d(real_array(a, name)) for a, name in ((q, "q"), (qd, "qd"), (qdd, "qdd"))]
+        if any(a.ndim != 2 or a.shape != arrays[0].shape or a.shape[1] != self.problem.n for a in arrays):
             raise ShapeError(f"q, qd, qdd must each be (S, {self.problem.n}); got {[a.shape for a in arrays]}",
                              value=[a.shape for a in arrays])
+        for a, name in zip(arrays, ("q", "qd", "qdd"), strict=True):
+            if not np.isfinite(a).all():
+                raise NonFiniteError(f"{name} holds NaN or inf", value=a)
         w = problem_regressor(self.dynamics, self.base, *arrays, self.problem.offsets)
-        return w @ self._theta(consistent)
+        return w @ theta
 
     def validate(self, data: IdentificationData, consistent: bool = False) -> ValidationResult:
         """Predicted against measured torques on (fresh) data, processed like the identification data."""
         if not isinstance(data, IdentificationData):
-            raise TypeError(f"data must be an IdentificationData, got {type(data).__name__}")
+            raise InvalidParameterError(f"data must be an IdentificationData (see prepare_data), got "
+                                        f"{type(data).__name__}", value=data)
+        theta = self._theta(consistent)
         problem = build_problem(self.dynamics, data, self.base, self.problem.offsets)
-        predicted = (problem.regressor @ self._theta(consistent)).reshape(-1, problem.n)
+        predicted = (problem.regressor @ theta).reshape(-1, problem.n)
         return ValidationResult(data.t[list(data.kept)], predicted, problem.torque.reshape(-1, problem.n))
 
     def report(self, validation: ValidationResult | None = None) -> str:
@@ -149,6 +161,11 @@ def identify(model: RobotModel | Dynamics, data: IdentificationData | Sequence[I
     (default: found numerically). prior, prior_weight: see :func:`consistent_estimate`. rtol: excitation
     threshold (raises IdentifiabilityError with the unidentifiable directions below it).
     """
+    weighted, consistent = boolean(weighted, "weighted"), boolean(consistent, "consistent")
+    offsets = boolean(offsets, "offsets")
+    excitation_rtol(rtol)
+    if consistent:
+        check_prior_weight(prior_weight)
     dyn = model if isinstance(model, Dynamics) else Dynamics(model)
     base = base if base is not None else find_base_parameters(dyn)
     problem = build_problem(dyn, data, base, offsets)

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from armctl._checks import FloatArray, readonly
+from armctl._checks import FloatArray, boolean, readonly, scalar
 from armctl.dynamics.identification.problem import IdentificationProblem
 from armctl.errors import IdentifiabilityError, InvalidParameterError
 
@@ -81,14 +81,36 @@ def check_excitation(w: FloatArray, names: tuple[str, ...], rtol: float = 1e-7) 
         + "\n".join(lines) + more, value=s, directions=readonly(dirs))
 
 
+def check_torque(problem: IdentificationProblem) -> None:
+    """Raise IdentifiabilityError if the problem's torques are all zero: they carry no information on the
+    parameters (every estimate would be zero, its standard deviation 0/0)."""
+    if not np.any(problem.torque):
+        raise IdentifiabilityError("the torques (tau) of the data are all zero: they carry no information on the "
+                                   "parameters; identify from the measured joint torques of the moving arm",
+                                   value=problem.torque, directions=None)
+
+
+def excitation_rtol(rtol: float) -> float:
+    """``rtol`` checked: a real number in (0, 1)."""
+    v = scalar(rtol, "rtol", positive=True)
+    if v >= 1.0:
+        raise InvalidParameterError(f"rtol must be < 1 (a singular value relative to the largest; default 1e-7), "
+                                    f"got {rtol!r}", value=rtol)
+    return v
+
+
 def solve_least_squares(problem: IdentificationProblem, weighted: bool = True, rtol: float = 1e-7
                         ) -> LeastSquaresEstimate:
     """OLS (``weighted=False``) or WLS estimate of the problem's unknowns (see the module). rtol: relative
-    singular-value threshold of the excitation check."""
+    singular-value threshold of the excitation check, in (0, 1)."""
+    if not isinstance(problem, IdentificationProblem):
+        raise InvalidParameterError(f"problem must be an IdentificationProblem (see build_problem), got "
+                                    f"{type(problem).__name__}", value=problem)
     w, y, n = problem.regressor, problem.torque, problem.n
     p, rows = w.shape[1], w.shape[0]
-    if not rtol > 0:
-        raise InvalidParameterError(f"rtol must be > 0, got {rtol}", value=rtol)
+    weighted = boolean(weighted, "weighted")
+    rtol = excitation_rtol(rtol)
+    check_torque(problem)
     check_excitation(w, problem.names, rtol)
     theta = np.linalg.lstsq(w, y, rcond=None)[0]
     r = (y - w @ theta).reshape(-1, n)
@@ -97,9 +119,11 @@ def solve_least_squares(problem: IdentificationProblem, weighted: bool = True, r
         # iterated: the OLS residual of a quiet joint carries the OLS error that the noisy joints cause,
         # so the variances are re-estimated from the WLS residual until they settle
         var_prev = np.zeros(n)
+        # a residual variance below 1e-24 of the mean squared torque (1e-12 relative RMS) is round-off, not noise
+        var_floor = max(1e-24 * float((y**2).mean()), 1e-300)
         for _ in range(5):
             var_j = (r**2).sum(axis=0) / max(s_count - p / n, 1.0)
-            var_j = np.maximum(var_j, 1e-12 * max(var_j.max(), 1e-300))
+            var_j = np.maximum(var_j, max(1e-12 * var_j.max(), var_floor))
             wt = np.tile(1.0 / np.sqrt(var_j), s_count)
             ww = w * wt[:, None]
             theta = np.linalg.lstsq(ww, y * wt, rcond=None)[0]

@@ -16,11 +16,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from armctl._checks import FloatArray, readonly
+from armctl._checks import FloatArray, boolean, readonly, real_array, whole_number
 from armctl.dynamics.base import Dynamics
 from armctl.dynamics.identification.base_parameters import BaseParameters, find_base_parameters
 from armctl.dynamics.identification.data import IdentificationData
-from armctl.errors import ShapeError
+from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
 
 
 @dataclass(frozen=True)
@@ -36,10 +36,22 @@ class IdentificationProblem:
     names: tuple[str, ...]
 
     def __post_init__(self) -> None:
-        w, y = np.array(self.regressor, dtype=float), np.array(self.torque, dtype=float).reshape(-1)
+        n = whole_number(self.n, "n", minimum=1)
+        object.__setattr__(self, "n", n)
+        object.__setattr__(self, "offsets", boolean(self.offsets, "offsets"))
+        if not isinstance(self.base, BaseParameters):
+            raise InvalidParameterError(f"base must be a BaseParameters (see find_base_parameters), got "
+                                        f"{type(self.base).__name__}", value=self.base)
+        w = np.array(real_array(self.regressor, "regressor"))
+        y = np.array(real_array(self.torque, "torque")).reshape(-1)
         if w.ndim != 2 or w.shape[0] != y.shape[0] or w.shape[1] != len(self.names) or y.shape[0] % self.n:
             raise ShapeError(f"regressor {w.shape}, torque {y.shape} and {len(self.names)} names do not match "
                              f"(n = {self.n})", value=(w.shape, y.shape))
+        for name, a in (("regressor", w), ("torque", y)):
+            if not np.isfinite(a).all():
+                first = np.argwhere(~np.isfinite(a))[0].tolist()
+                raise NonFiniteError(f"{name} holds NaN or inf (first at index {first}); check the data the "
+                                     "problem was built from", value=a)
         object.__setattr__(self, "regressor", readonly(w))
         object.__setattr__(self, "torque", readonly(y))
 
@@ -82,13 +94,19 @@ def build_problem(dynamics: Dynamics, data: IdentificationData | Sequence[Identi
     (``IdentificationData.reduce``). base: the base parameters (default: found with
     :func:`find_base_parameters`). offsets: add the Coulomb asymmetry of each joint as an unknown.
     """
-    experiments = [data] if isinstance(data, IdentificationData) else list(data)
+    offsets = boolean(offsets, "offsets")
+    experiments = [data] if isinstance(data, IdentificationData) else \
+        list(data) if isinstance(data, Sequence) and not isinstance(data, str | bytes) else [data]
     if not experiments or not all(isinstance(d, IdentificationData) for d in experiments):
-        raise TypeError("data must be an IdentificationData (see prepare_data) or a non-empty sequence of them")
+        raise InvalidParameterError(f"data must be an IdentificationData (see prepare_data) or a non-empty sequence "
+                                    f"of them, got {data!r:.80}", value=data)
     for d in experiments:
         if d.n != dynamics.n:
             raise ShapeError(f"data have {d.n} joints, the model {dynamics.n}", value=d.n)
     base = base if base is not None else find_base_parameters(dynamics)
+    if not isinstance(base, BaseParameters):
+        raise InvalidParameterError(f"base must be a BaseParameters (see find_base_parameters), got "
+                                    f"{type(base).__name__}", value=base)
     if base.n_full != dynamics.n * 13:
         raise ShapeError(f"base parameters are for {base.n_full // 13} joints, the model has {dynamics.n}",
                          value=base)
@@ -98,4 +116,4 @@ def build_problem(dynamics: Dynamics, data: IdentificationData | Sequence[Identi
         ws.append(d.reduce(w.reshape(d.samples, -1)).reshape(-1, w.shape[2]))
         ys.append(d.reduce(d.tau).reshape(-1))
     names = base.base_names() + (offset_names(dynamics.n) if offsets else ())
-    return IdentificationProblem(np.vstack(ws), np.concatenate(ys), base, dynamics.n, bool(offsets), names)
+    return IdentificationProblem(np.vstack(ws), np.concatenate(ys), base, dynamics.n, offsets, names)

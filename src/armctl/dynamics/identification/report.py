@@ -7,6 +7,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from armctl.errors import InvalidParameterError, ShapeError
+
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
@@ -57,14 +59,34 @@ def format_report(result: IdentificationResult, validation: ValidationResult | N
     return "\n".join(lines)
 
 
+def _joint_names(joint_names: Sequence[str] | None, n: int) -> list[str]:
+    """``joint_names`` checked (n strings), or "joint 1" … "joint n" for None."""
+    if joint_names is None:
+        return [f"joint {i + 1}" for i in range(n)]
+    if isinstance(joint_names, str | bytes) or not isinstance(joint_names, Sequence) \
+            or not all(isinstance(x, str) for x in joint_names):
+        raise InvalidParameterError(f"joint_names must be a sequence of {n} strings, got {joint_names!r}",
+                                    value=joint_names)
+    if len(joint_names) != n:
+        raise ShapeError(f"joint_names has {len(joint_names)} names for {n} joints: give one per joint",
+                         value=joint_names)
+    return list(joint_names)
+
+
 def validation_plot(validation: ValidationResult, joint_names: Sequence[str] | None = None,
                     title: str = "Identified model: predicted vs measured torque") -> Figure:
     """A figure with one row per joint: measured and predicted torque [N·m] against time [s], and their
-    difference. Returns the matplotlib Figure (not shown, not saved)."""
+    difference. joint_names: one per joint (default "joint 1", …). Returns the matplotlib Figure (not shown,
+    not saved)."""
     from matplotlib.figure import Figure
 
+    from armctl.dynamics.identification.identify import ValidationResult
+
+    if not isinstance(validation, ValidationResult):
+        raise InvalidParameterError(f"validation must be a ValidationResult (IdentificationResult.validate), got "
+                                    f"{type(validation).__name__}", value=validation)
     n = validation.measured.shape[1]
-    names = list(joint_names) if joint_names is not None else [f"joint {i + 1}" for i in range(n)]
+    names = _joint_names(joint_names, n)
     fig = Figure(figsize=(9.0, 1.8 * n + 0.8), layout="constrained")
     axes = fig.subplots(n, 1, sharex=True, squeeze=False)[:, 0]
     rel = validation.relative_error
