@@ -12,6 +12,7 @@ import armctl
 from armctl.controllers.osc import (
     Contact,
     ContactForceTask,
+    FrameOrientationTask,
     FramePoseTask,
     FramePositionTask,
     OperationalSpaceQP,
@@ -204,3 +205,21 @@ def test_controllers_pickle_for_process_pools(rng: np.random.Generator) -> None:
             q, qd = _state(rng)
             ref = armctl.Reference(q)
             np.testing.assert_allclose(copy(0.0, q, qd, ref), ctrl(0.0, q, qd, ref), rtol=1e-6, atol=1e-6)
+
+
+def test_a_lower_priority_level_is_solved_not_dropped(panda: armctl.Dynamics, rng: np.random.Generator) -> None:
+    """Position (level 0) above orientation (level 1), no limits: six task rows on seven joints with free
+    torques, so both levels are met exactly. ProxQP used to report the second level DUAL_INFEASIBLE (its test
+    for an unbounded QP fired on the ε-flat directions of a strictly convex one), and the controller kept the
+    first level's answer: the orientation task was ignored (residual 340 rad/s²)."""
+    for _ in range(6):
+        q = Q_HOME + rng.uniform(-0.3, 0.3, 7)
+        qd = rng.uniform(-0.5, 0.5, 7)
+        pose = panda.frame_pose(q)
+        pos, ori = FramePositionTask(priority=0), FrameOrientationTask(priority=1)
+        pos.set_target(pose[:3, 3] + [0.05, -0.03, 0.04])
+        ori.set_target(Rotation.from_rotvec([0.3, -0.2, 0.4]).as_matrix() @ pose[:3, :3])
+        sol = OperationalSpaceQP(panda, [pos, ori], limits=[]).solve(0.0, q, qd, armctl.Reference(q))
+        assert sol.level_status == ("solved", "solved")
+        for name, r in sol.residuals.items():
+            assert np.abs(r).max() < 1e-3, (name, r)

@@ -79,6 +79,10 @@ class ProxQPSolver:
             qp.settings.eps_rel = 0.0
             qp.settings.max_iter = self.max_iter
             qp.settings.default_rho = self.rho
+            # the QPs are strictly convex (the builder's ε‖x‖²), so never unbounded: ProxQP's test for an
+            # unbounded QP (‖H d‖ ≤ eps_dual_inf ‖d‖ along a descent direction d) must not fire on the ε-flat
+            # directions, as it did at the default 1e-4 (a feasible priority level reported DUAL_INFEASIBLE)
+            qp.settings.eps_dual_inf = 1e-20
             qp.settings.initial_guess = px.InitialGuess.EQUALITY_CONSTRAINED_INITIAL_GUESS
             qp.init(H, g, A, b, C, l, u)
             qp.solve()
