@@ -268,3 +268,31 @@ def test_references() -> None:
         WaypointSpline([0, 0, 1], [[0], [1], [2]])
     with pytest.raises(ShapeError):
         Quintic([0, 0], [1], 1.0)
+
+
+def test_the_physical_projection_is_not_the_lyapunov_metrics() -> None:
+    """A limit shown, not hidden: ``project_physical`` is the nearest consistent point in the Frobenius norm of
+    each link's pseudo-inertia J, while the adaptive law's V = ½sᵀMs + ½θ̃ᵀΓ⁻¹θ̃ measures θ̃ in Γ⁻¹ (Euclidean
+    for a scalar Γ). A projection can move θ̂ towards the true π in the first and away from it in the second,
+    so V may rise at a projection (the docstring of ``Adaptive`` says so). Here the distances are computed
+    from J built independently of the module's own map, by the definition J = ∫ [r; 1][r; 1]ᵀ dm."""
+    from armctl.model.consistency import is_physical, project_physical
+
+    pi = dynamics("planar_2r").parameters()
+    theta = pi + np.random.default_rng(0).normal(0.0, 5.0, (2, 26))[1]
+    projected = project_physical(theta)
+    assert not is_physical(theta) and is_physical(projected) and is_physical(pi)
+
+    def pseudo(link: np.ndarray) -> np.ndarray:  # from (m, m c, I about the frame origin: xx, xy, yy, xz, yz, zz)
+        m, h = link[0], link[1:4]
+        ixx, ixy, iyy, ixz, iyz, izz = link[4:10]
+        inertia = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
+        sigma = 0.5 * np.trace(inertia) * np.eye(3) - inertia  # ∫ r rᵀ dm
+        return np.block([[sigma, h[:, None]], [h[None, :], np.array([[m]])]])
+
+    def j_distance(x: np.ndarray) -> float:
+        d = (x - pi).reshape(2, 13)
+        return float(np.sqrt(sum(np.linalg.norm(pseudo(v[:10])) ** 2 + v[10:] @ v[10:] for v in d)))
+
+    assert j_distance(projected) < j_distance(theta)  # nearer in the projection's own metric
+    assert np.linalg.norm(projected - pi) > np.linalg.norm(theta - pi)  # farther in V's (Γ scalar)
