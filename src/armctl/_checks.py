@@ -20,7 +20,8 @@ FLOAT = np.dtype(np.float64)
 
 def real_array(x: ArrayLike, name: str) -> FloatArray:
     """``x`` as a float array; raise if it holds anything but real numbers (complex values are refused rather
-    than cut to their real part, strings and None rather than passed on to fail somewhere else)."""
+    than cut to their real part, strings and None rather than passed on to fail somewhere else, booleans rather
+    than taken as 0 and 1)."""
     if isinstance(x, np.ma.MaskedArray) and np.ma.getmaskarray(x).any():  # asarray would take the hidden data
         raise InvalidParameterError(f"{name} has masked entries: fill them first (x.filled(value)), got {x!r}",
                                     value=x)
@@ -31,9 +32,12 @@ def real_array(x: ArrayLike, name: str) -> FloatArray:
         if kind in "cUS" or (kind == "O" and any(v is None or isinstance(v, str | bytes | complex | np.complexfloating)
                                                  for v in a.flat)):  # None: NumPy would make it NaN
             raise TypeError(kind)
-        return a.astype(float, copy=False)
+        if kind != "b":
+            return a.astype(float, copy=False)
     except (TypeError, ValueError, OverflowError):
         raise InvalidParameterError(f"{name} must hold real numbers, got {_shown(x)}", value=x) from None
+    what = "a real number, not a boolean" if a.ndim == 0 else "real numbers, not booleans"
+    raise InvalidParameterError(f"{name} must be {what}, got {_shown(x)}", value=x)
 
 
 def _shown(x: Any, limit: int = 200) -> str:
@@ -62,6 +66,10 @@ def matrix(x: ArrayLike, shape: tuple[int, int], name: str) -> FloatArray:
 
 
 def scalar(x: Any, name: str, *, positive: bool = False, nonnegative: bool = False) -> float:
+    """``x`` as a finite float (> 0 if ``positive``, >= 0 if ``nonnegative``); text, None, complex numbers,
+    arrays and booleans are refused by name."""
+    if isinstance(x, bool | np.bool_):  # float(True) would be 1.0
+        raise InvalidParameterError(f"{name} must be a real number, not a boolean, got {x!r}", value=x)
     try:
         if isinstance(x, str | bytes | complex | np.complexfloating):  # float("0.5") would parse text
             raise TypeError(type(x).__name__)
@@ -84,6 +92,25 @@ def boolean(x: Any, name: str) -> bool:
     return bool(x)
 
 
+def instances(items: Any, cls: type, name: str, label: str, *, single: bool = False) -> tuple[Any, ...]:
+    """``items`` as a tuple of ``cls`` objects: a sequence of them (not text), or one of them if ``single``;
+    anything else raises an InvalidParameterError naming it (``label``: how the class is named to the user)."""
+    if single and isinstance(items, cls):
+        return (items,)
+    try:
+        if isinstance(items, str | bytes | cls):
+            raise TypeError(type(items).__name__)
+        out = tuple(items)
+    except TypeError:
+        raise InvalidParameterError(f"{name} must be {f'a {label} or ' if single else ''}a sequence of {label} "
+                                    f"objects, got {items!r}", value=items) from None
+    for it in out:
+        if not isinstance(it, cls):
+            raise InvalidParameterError(f"{name} must be {label} objects, got {it!r} ({type(it).__name__})",
+                                        value=it)
+    return out
+
+
 def whole_number(x: Any, name: str, minimum: int = 0) -> int:
     """``x`` as an int: an int, a NumPy integer or a float with an integral value (2.0), at least ``minimum``.
     Booleans, fractions, NaN/inf and anything else raise an InvalidParameterError naming the value."""
@@ -95,13 +122,20 @@ def whole_number(x: Any, name: str, minimum: int = 0) -> int:
     return int(x)
 
 
-def nonnegative_vector(x: ArrayLike, n: int, name: str) -> FloatArray:
-    """A scalar (for every entry) or an (n,) vector, finite and ≥ 0 — weights, standard deviations, …"""
+def per_joint(x: ArrayLike, n: int, name: str) -> FloatArray:
+    """A scalar (for every entry) or an (n,) vector of real numbers, as an (n,) float array; NaN and inf are the
+    caller's to check (a limit may be infinite)."""
     a = real_array(x, name)
     if a.ndim == 0:
-        a = np.full(n, float(a))
+        return np.full(n, float(a))
     if a.shape != (n,):
         raise ShapeError(f"{name} must be a scalar or an ({n},) vector, got shape {a.shape}", value=x)
+    return a
+
+
+def nonnegative_vector(x: ArrayLike, n: int, name: str) -> FloatArray:
+    """A scalar (for every entry) or an (n,) vector, finite and ≥ 0 — weights, standard deviations, …"""
+    a = per_joint(x, n, name)
     if not np.isfinite(a).all():
         raise NonFiniteError(f"{name} holds NaN or inf: {a}", value=x)
     if (a < 0).any():

@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray
+from armctl._checks import FloatArray, scalar
 from armctl.errors import InvalidParameterError
 from armctl.model.parts import (
     JOINT_KINDS,
@@ -22,7 +22,6 @@ from armctl.model.parts import (
     homogeneous,
     instance_of,
     name_text,
-    real_number,
     rot,
     transform,
 )
@@ -57,7 +56,7 @@ class DHLink:
 
     def __post_init__(self) -> None:
         for k in ("d", "a", "alpha", "offset"):
-            object.__setattr__(self, k, real_number(getattr(self, k), f"DH parameter {k}"))
+            object.__setattr__(self, k, scalar(getattr(self, k), f"DH parameter {k}"))
         if not isinstance(self.kind, str) or self.kind not in JOINT_KINDS:
             raise InvalidParameterError(f"DH joint kind must be one of {JOINT_KINDS}, got {self.kind!r}",
                                         value=self.kind)

@@ -21,7 +21,7 @@ from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray, boolean, vector
 from armctl.errors import InvalidParameterError
-from armctl.model.parts import JointFriction, Link, Motor, no_booleans
+from armctl.model.parts import JointFriction, Link, Motor
 from armctl.model.robot import PARAMS_PER_JOINT, RobotModel
 
 _MASSLESS = 1e-9  # kg: below this a link counts as massless …
@@ -82,12 +82,10 @@ def model_from_parameters(model: RobotModel, pi: ArrayLike, coulomb_offset: Arra
     """
     n = model.n
     physical = boolean(physical, "physical")
-    no_booleans(pi, "pi")
     p = vector(pi, PARAMS_PER_JOINT * n, "pi").reshape(n, PARAMS_PER_JOINT)
     if coulomb_offset is None:
         delta = np.array([0.5 * (j.friction.coulomb - j.friction.coulomb_neg) for j in model.joints])
     else:
-        no_booleans(coulomb_offset, "coulomb_offset")
         delta = vector(coulomb_offset, n, "coulomb_offset")
     joints = []
     for i, (j, row) in enumerate(zip(model.joints, p, strict=True)):

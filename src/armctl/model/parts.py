@@ -28,29 +28,9 @@ from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
 _INERTIA_TOL = 1e-9
 
 
-def no_booleans(x: Any, name: str) -> None:
-    """Raise if ``x`` is a boolean or an array of booleans: True is not a number (NumPy would take it as 1).
-    Anything else passes (the real-number check that follows names it)."""
-    try:
-        a = np.asarray(x)
-    except (TypeError, ValueError):  # ragged and the like
-        return
-    if a.dtype.kind == "b":
-        what = "a real number, not a boolean" if a.ndim == 0 else "real numbers, not booleans"
-        raise InvalidParameterError(f"{name} must be {what}, got {x!r}", value=x)
-
-
-def real_number(x: Any, name: str, *, positive: bool = False, nonnegative: bool = False) -> float:
-    """:func:`~armctl._checks.scalar` (a finite real number; text, None, complex and arrays refused), booleans
-    refused too."""
-    no_booleans(x, name)
-    return scalar(x, name, positive=positive, nonnegative=nonnegative)
-
-
 def real_values(x: ArrayLike, name: str) -> FloatArray:
-    """A new float array of ``x`` (:func:`~armctl._checks.real_array`: text, None and complex refused), booleans
-    refused too; its shape and finiteness are the caller's to check."""
-    no_booleans(x, name)
+    """A new float array of ``x`` (:func:`~armctl._checks.real_array`); its shape and finiteness are the
+    caller's to check."""
     return np.array(real_array(x, name))  # a copy: parts make their arrays read-only, never the caller's
 
 
@@ -85,7 +65,7 @@ def _limit(x: Any, name: str) -> float:
         return float(x)
     if isinstance(x, float | np.floating) and math.isnan(x):
         raise NonFiniteError(f"{name} is NaN; give a number, or ±inf for no limit", value=x)
-    return real_number(x, name)
+    return scalar(x, name)
 
 
 def inertia_tensor(x: ArrayLike, name: str = "inertia", triangle: bool = True) -> FloatArray:
@@ -136,7 +116,7 @@ class Link:
     physical: bool = True
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "mass", real_number(self.mass, "link mass [kg]", nonnegative=True))
+        object.__setattr__(self, "mass", scalar(self.mass, "link mass [kg]", nonnegative=True))
         object.__setattr__(self, "com", vec3(self.com, "link com"))
         object.__setattr__(self, "physical", boolean(self.physical, "link physical"))
         object.__setattr__(self, "inertia", inertia_tensor(self.inertia, "link inertia", self.physical))
@@ -178,8 +158,8 @@ class Motor:
     axis: FloatArray | None = None
 
     def __post_init__(self) -> None:
-        i = real_number(self.inertia, "rotor inertia [kg·m²]", nonnegative=True)
-        k = real_number(self.gear_ratio, "gear ratio")
+        i = scalar(self.inertia, "rotor inertia [kg·m²]", nonnegative=True)
+        k = scalar(self.gear_ratio, "gear ratio")
         if k == 0:
             raise InvalidParameterError(f"gear ratio must be non-zero, got {self.gear_ratio!r}",
                                         value=self.gear_ratio)
@@ -216,7 +196,7 @@ class JointFriction:
             v = getattr(self, name)
             if v is None and name in ("coulomb_negative", "static"):  # None: follows coulomb
                 continue
-            object.__setattr__(self, name, real_number(v, f"friction {name}", nonnegative=True))
+            object.__setattr__(self, name, scalar(v, f"friction {name}", nonnegative=True))
         if self.static is not None and self.static < max(self.coulomb, self.coulomb_neg) - 1e-12:
             raise InvalidParameterError(
                 f"static friction {self.static} must be >= the Coulomb levels ({self.coulomb}, "

@@ -8,9 +8,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from armctl._checks import FloatArray
+from armctl._checks import FloatArray, scalar
 from armctl.errors import InvalidParameterError, ModelLoadError, NonFiniteError, ShapeError, UnknownNameError
-from armctl.model.parts import Frame, Joint, JointFriction, JointLimits, Link, real_number, rot, transform
+from armctl.model.parts import Frame, Joint, JointFriction, JointLimits, Link, rot, transform
 
 if TYPE_CHECKING:
     import pinocchio
@@ -143,21 +143,21 @@ def lock_positions(lock: Any, names: Sequence[str]) -> dict[str, float]:
     for name, value in items:
         if not isinstance(name, str) or name not in names:
             raise UnknownNameError("joint", name, list(names))
-        positions[name] = real_number(value, f"lock position of joint {name!r}")
+        positions[name] = scalar(value, f"lock position of joint {name!r}")
     return positions
 
 
-def lock_joints(model: RobotModel, lock: Sequence[str] | Mapping[str, float]) -> RobotModel:
-    """``model`` with some joints held fixed: links merged by pinocchio.buildReducedModel; motors, friction,
+def lock_joints(model: RobotModel, positions: Mapping[str, float]) -> RobotModel:
+    """``model`` with the joints of ``positions`` (checked by :func:`lock_positions`: name → position) held
+    fixed: links merged by pinocchio.buildReducedModel; motors, friction,
     limits carried over from ``model``, with a motor's explicit spin axis re-expressed in the link its rotor
     now rides on; every frame (the locked joints' frames included) re-attached to the joint that now carries
     it."""
     import pinocchio as pin
 
-    positions = lock_positions(lock, model.joint_names)
     if len(positions) == model.n:
         raise InvalidParameterError(f"cannot lock every joint of {model.name!r} ({sorted(positions)}): a model "
-                                    "needs at least one free joint; leave one out of lock", value=lock)
+                                    "needs at least one free joint; leave one out of lock", value=positions)
     q = np.zeros(model.n)
     for name, v in positions.items():
         q[model.joint_index(name)] = v

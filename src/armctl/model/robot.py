@@ -16,7 +16,16 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, boolean, nonnegative_vector, readonly, vector, whole_number
+from armctl._checks import (
+    FloatArray,
+    boolean,
+    instances,
+    nonnegative_vector,
+    readonly,
+    scalar,
+    vector,
+    whole_number,
+)
 from armctl.errors import InvalidParameterError, UnknownNameError
 from armctl.model.parts import (
     Frame,
@@ -25,8 +34,6 @@ from armctl.model.parts import (
     Link,
     inertia_tensor,
     name_text,
-    no_booleans,
-    real_number,
     vec3,
 )
 
@@ -56,15 +63,15 @@ class RobotModel:
     tool_frame: str | None = None
 
     def __post_init__(self) -> None:
-        joints, frames = _parts(self.joints, Joint, "joints"), _parts(self.frames, Frame, "frames")
+        joints = instances(self.joints, Joint, "joints", "armctl.model.Joint")
+        frames = instances(self.frames, Frame, "frames", "armctl.model.Frame")
         if not joints:
             raise InvalidParameterError("a RobotModel needs at least one joint", value=self.joints)
         name_text(self.name, "model name")
         names = [j.name for j in joints]
         if len(set(names)) != len(names):
             raise InvalidParameterError(f"joint names must be unique: {names}", value=names)
-        no_booleans(self.gravity, "gravity")
-        g = np.array(vector(self.gravity, 3, "gravity [m/s²]"))  # a copy, made read-only below
+        g = np.array(vector(self.gravity, 3, "gravity"))  # a copy, made read-only below
         for f in frames:
             if not 0 <= f.joint <= len(joints):
                 raise InvalidParameterError(f"frame {f.name!r} is attached to joint {f.joint}, but the model "
@@ -238,7 +245,7 @@ class RobotModel:
         if f.joint == 0:
             raise InvalidParameterError(f"a payload cannot be attached to frame {f.name!r}: it is fixed to the "
                                         "world", value=frame)
-        mass = real_number(mass, "payload mass [kg]", nonnegative=True)
+        mass = scalar(mass, "payload mass [kg]", nonnegative=True)
         payload = Link(mass, vec3(com, "payload com"), inertia_tensor(inertia, "payload inertia")).transformed(
             f.placement[:3, :3], f.placement[:3, 3])
         idx = f.joint - 1
@@ -266,7 +273,6 @@ class RobotModel:
             if x is None and optional:
                 return [None] * self.n
             name = f"with_friction(): {what}"
-            no_booleans(x, name)
             return nonnegative_vector(x, self.n, name).tolist()  # type: ignore[no-any-return]
 
         cols = zip(per_joint(viscous, "viscous"), per_joint(coulomb, "coulomb"),
@@ -336,19 +342,4 @@ class RobotModel:
             model = lock_joints(model, positions)
         return model
 
-
-def _parts(x: Any, cls: type, what: str) -> tuple[Any, ...]:
-    """``x`` as a tuple of ``cls`` objects (a RobotModel's joints or frames)."""
-    try:
-        if isinstance(x, str | bytes | cls):
-            raise TypeError(type(x).__name__)
-        parts = tuple(x)
-    except TypeError:
-        raise InvalidParameterError(f"{what} must be a sequence of armctl.model.{cls.__name__} objects, got {x!r}",
-                                    value=x) from None
-    for p in parts:
-        if not isinstance(p, cls):
-            raise InvalidParameterError(f"{what} must be armctl.model.{cls.__name__} objects, got {p!r} "
-                                        f"({type(p).__name__})", value=p)
-    return parts
 

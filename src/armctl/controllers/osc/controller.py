@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from armctl._checks import FloatArray, scalar, vector
+from armctl._checks import FloatArray, instances, scalar, vector
 from armctl.controllers.base import Controller
 from armctl.controllers.osc.build import QPBuilder, StepQP
 from armctl.controllers.osc.contact import Contact
@@ -71,30 +71,25 @@ class OperationalSpaceQP(Controller):
             raise InvalidParameterError(f"dynamics must be an armctl.Dynamics, got {type(dynamics).__name__}",
                                         value=dynamics)
         super().__init__(dynamics)
-        tasks = _listed(tasks, Task, "tasks")
+        tasks = instances(tasks, Task, "tasks", "Task", single=True)
         if not tasks:
             raise InvalidParameterError("OperationalSpaceQP needs at least one task", value=tasks)
-        for obj, cls, kind in [(t, Task, "task") for t in tasks] + [(c, Contact, "contact") for c in contacts]:
-            if not isinstance(obj, cls):
-                raise InvalidParameterError(f"every {kind} must be an osc.{cls.__name__}, got {type(obj).__name__}",
-                                            value=obj)
+        contacts = instances(contacts, Contact, "contacts", "Contact", single=True)
         _unique(tasks, "task")
-        _unique(list(contacts), "contact")
+        _unique(contacts, "contact")
         self.evaluator = ModelEvaluator(dynamics)
         for c in contacts:
             self.evaluator.check_frame(c.frame)
         cdims = {c.name: c.dim for c in contacts}
         for t in tasks:
             t.check(self.evaluator, self.n, cdims)
-        limits = default_limits(scalar(dt, "dt", positive=True)) if limits is None else _listed(limits, Limit,
-                                                                                                 "limits")
+        limits = (default_limits(scalar(dt, "dt", positive=True)) if limits is None
+                  else instances(limits, Limit, "limits", "Limit", single=True))
         for lim in limits:
-            if not isinstance(lim, Limit):
-                raise InvalidParameterError(f"every limit must be an osc.Limit, got {type(lim).__name__}", value=lim)
             lim.bind(dynamics.model)
-        self.tasks = tuple(tasks)
+        self.tasks = tasks
         self.limits = tuple(limits)
-        self.contacts = tuple(contacts)
+        self.contacts = contacts
         self.solver = make_solver(solver)
         self.builder = QPBuilder(dynamics.model, tasks, limits, contacts,
                                  scalar(regularization, "regularization", positive=True), slacks)
@@ -145,13 +140,3 @@ class OperationalSpaceQP(Controller):
         self.solver.reset()
         self.last_solution = None
 
-
-def _listed(items: Any, cls: type, name: str) -> list[Any]:
-    """``items`` (one ``cls`` or an iterable of them) as a list; anything else is named."""
-    if isinstance(items, cls):
-        return [items]
-    try:
-        return list(items)
-    except TypeError:
-        raise InvalidParameterError(f"{name} must be a {cls.__name__} or a sequence of them, got {items!r}",
-                                    value=items) from None

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, readonly, real_array, scalar, whole_number
+from armctl._checks import FloatArray, per_joint, readonly, real_array, scalar, whole_number
 from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
 from armctl.reference import Reference
 
@@ -104,7 +104,7 @@ class FourierExcitation:
 
     def scaled(self, factor: ArrayLike) -> FourierExcitation:
         """The same trajectory with each joint's motion about q0 scaled by ``factor`` (scalar or (n,))."""
-        f = _per_joint(factor, self.n, "factor")
+        f = per_joint(factor, self.n, "factor")
         if not np.isfinite(f).all():
             raise NonFiniteError(f"factor holds NaN or inf: {factor!r}", value=factor)
         f = f[:, None]
@@ -114,7 +114,7 @@ class FourierExcitation:
                tol: float = 1e-9) -> bool:
         """True if the trajectory stays within the position, velocity [rad/s] and acceleration [rad/s²]
         limits (checked on a dense grid). Each limit is a scalar or an (n,) vector (±inf: none); tol ≥ 0."""
-        lo, hi, vel, acc = (_per_joint(x, self.n, name) for x, name in (
+        lo, hi, vel, acc = (per_joint(x, self.n, name) for x, name in (
             (lower, "lower"), (upper, "upper"), (velocity, "velocity"), (acceleration, "acceleration")))
         for x, name in ((lo, "lower"), (hi, "upper"), (vel, "velocity"), (acc, "acceleration")):
             if np.isnan(x).any():
@@ -124,13 +124,3 @@ class FourierExcitation:
         return bool(np.all(qmin >= lo - eps) and np.all(qmax <= hi + eps)
                     and np.all(vmax <= vel + eps) and np.all(amax <= acc + eps))
 
-
-def _per_joint(x: ArrayLike, n: int, name: str) -> FloatArray:
-    """``x`` (a scalar or an (n,) vector of real numbers) as an (n,) float vector; NaN and inf are left to the
-    caller (a limit may be infinite)."""
-    a = real_array(x, name)
-    if a.ndim == 0:
-        return np.full(n, float(a))
-    if a.shape != (n,):
-        raise ShapeError(f"{name} must be a scalar or an ({n},) vector, got shape {a.shape}", value=x)
-    return a

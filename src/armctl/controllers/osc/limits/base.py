@@ -11,9 +11,10 @@ from abc import ABC, abstractmethod
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, real_array
+from armctl import _checks
+from armctl._checks import FloatArray
 from armctl.controllers.osc.state import ModelState
-from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
+from armctl.errors import InvalidParameterError, NonFiniteError
 from armctl.model.robot import RobotModel
 
 
@@ -21,11 +22,7 @@ def per_joint(x: ArrayLike | None, default: FloatArray, n: int, name: str, posit
               finite: bool = False) -> FloatArray:
     """``x`` as an (n,) vector (a scalar is broadcast; None takes ``default``), checked > 0 if ``positive``;
     ±inf (no limit) is allowed unless ``finite``."""
-    a = np.array(real_array(default if x is None else x, name), dtype=float)
-    if a.ndim == 0:
-        a = np.full(n, float(a))
-    if a.shape != (n,):
-        raise ShapeError(f"{name} must be a scalar or a ({n},) vector, got shape {a.shape}", value=x)
+    a = np.array(_checks.per_joint(default if x is None else x, n, name))  # a copy: the limit's own
     if np.isnan(a).any() or (finite and not np.isfinite(a).all()):
         raise NonFiniteError(f"{name} must be {'finite' if finite else 'a number'} for every joint, got "
                              f"{a.tolist()}", value=x)
