@@ -6,6 +6,7 @@ with the previous link, k_r I_m q̇_i z_mᵀω_{i−1}, is not expressed (the ``
 
 from __future__ import annotations
 
+import math
 from functools import partial
 from typing import Any
 
@@ -13,9 +14,11 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray
+from armctl._checks import FLOAT, FloatArray
 from armctl.dynamics.base import Dynamics
 from armctl.model.robot import PARAMS_PER_JOINT, RobotModel
+
+_crba = pin.crba
 
 
 class PinocchioDynamics(Dynamics):
@@ -92,6 +95,17 @@ class PinocchioDynamics(Dynamics):
         if name == "world":
             return 0
         return int(self.pin_model.getFrameId(name))
+
+    def mass_matrix(self, q: ArrayLike) -> FloatArray:
+        """M(q) (n×n, symmetric positive definite) [kg·m² / kg]."""
+        # Dynamics.mass_matrix with CRBA called here rather than through the bound partial: one call layer
+        # less, ~0.15 µs of ~2 µs (benchmarked: python -m armctl.bench.dynamics_speed)
+        try:
+            if q.dtype is FLOAT and math.isfinite(sum(q.tolist())):  # type: ignore[union-attr]
+                return _crba(self.pin_model, self.pin_data, q)  # type: ignore[no-any-return]
+        except Exception:  # as in Dynamics.mass_matrix, whose slow path names the input
+            pass
+        return super().mass_matrix(q)
 
     def _mass(self, q: FloatArray) -> FloatArray:
         return pin.crba(self.pin_model, self.pin_data, q)
