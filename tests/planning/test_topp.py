@@ -131,7 +131,8 @@ def test_refinement_until_within_tolerance() -> None:
 
 
 def test_reference_at_the_ends_and_consistent_derivatives() -> None:
-    traj = time_optimal(panda(), PANDA_WAYPOINTS, vel_limit="model", torque_limit="model")
+    # called with the keywords DESIGN.md names: time_optimal(dyn, waypoints, vel_limit=..., ...)
+    traj = time_optimal(dyn=panda(), waypoints=PANDA_WAYPOINTS, vel_limit="model", torque_limit="model")
     start, end = traj(0.0), traj(traj.duration)
     np.testing.assert_allclose(start.q, PANDA_WAYPOINTS[0], atol=1e-12)
     np.testing.assert_allclose(end.q, PANDA_WAYPOINTS[-1], atol=1e-12)

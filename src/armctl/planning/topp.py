@@ -117,14 +117,15 @@ def _tolerance(tol: Any) -> float:
                              value=tol) from None
 
 
-def time_optimal(dyn: Dynamics, path: Path | ArrayLike, vel_limit: Any = None, acc_limit: Any = None,
+def time_optimal(dyn: Dynamics, waypoints: Path | ArrayLike, vel_limit: Any = None, acc_limit: Any = None,
                  torque_limit: Any = None, grid: int | ArrayLike = 100, *, torque_margin: float = 0.0,
                  tol: float = 1e-2, refine: bool = True, max_grid: int = 1600, oversample: int = 10,
                  viscous_passes: int = 2, discretization: str = "interpolation") -> Trajectory:
-    """The time-optimal rest-to-rest trajectory along ``path`` within the given limits.
+    """The time-optimal rest-to-rest trajectory along ``waypoints`` within the given limits.
 
     dyn: the arm's :class:`~armctl.Dynamics` (torques are τ = ``dyn.inverse_dynamics``, friction included).
-    path: a :class:`~armctl.planning.Path`, or (m, n) joint waypoints [rad] (a cubic :class:`SplinePath`).
+    waypoints: (m, n) joint waypoints [rad] (through which a cubic :class:`SplinePath` is laid), or any
+    :class:`~armctl.planning.Path`.
     vel_limit [rad/s], acc_limit [rad/s²], torque_limit [N·m]: None (not imposed), ``"model"`` (the model's
     velocity / effort limits; not for acceleration), a scalar, an (n,) vector (symmetric) or (n, 2) bounds.
     grid: the number N of stages (evenly spaced in s), or the gridpoints (increasing from 0 to 1).
@@ -146,7 +147,7 @@ def time_optimal(dyn: Dynamics, path: Path | ArrayLike, vel_limit: Any = None, a
     t0 = time.perf_counter()
     if not isinstance(dyn, Dynamics):
         raise InvalidParameterError(f"dyn must be an armctl.Dynamics, got {type(dyn).__name__}", value=dyn)
-    geo = as_path(path, dyn.n)
+    geo = as_path(waypoints, dyn.n)
     limits = joint_limits(dyn.model, vel_limit, acc_limit, torque_limit, torque_margin)
     tol = _tolerance(tol)
     oversample = whole_number(oversample, "oversample", 1)
