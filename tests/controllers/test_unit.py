@@ -296,3 +296,38 @@ def test_the_physical_projection_is_not_the_lyapunov_metrics() -> None:
 
     assert j_distance(projected) < j_distance(theta)  # nearer in the projection's own metric
     assert np.linalg.norm(projected - pi) > np.linalg.norm(theta - pi)  # farther in V's (Γ scalar)
+
+
+@pytest.mark.parametrize("gamma", ["scalar", "diagonal", "full"])
+def test_adaptive_logs_the_lyapunov_function_of_its_plant(gamma: str) -> None:
+    """V = ½ sᵀM s + ½ θ̃ᵀΓ⁻¹θ̃ with a plant the controller's model differs from (a payload): M and π are the
+    plant's (given as a RobotModel), Γ⁻¹ formed here by inverting Γ (scalar, diagonal or full)."""
+    ctrl_dyn = dynamics("planar_2r")
+    plant = ctrl_dyn.model.with_payload(0.7, (0.05, 0.0, 0.0))
+    rng = np.random.default_rng(4)
+    g = {"scalar": 3.0, "diagonal": rng.uniform(0.5, 4.0, 26),
+         "full": (lambda a: a @ a.T + np.eye(26))(rng.standard_normal((26, 26)))}[gamma]
+    g_inv = np.linalg.inv(np.diag(np.broadcast_to(g, 26)) if np.ndim(g) < 2 else g)
+    ad = Adaptive(ctrl_dyn, 2.0, 10.0, g, plant=plant)
+    pi = plant.parameters()
+    assert not np.allclose(pi, ctrl_dyn.parameters())
+    ref = armctl.Reference([0.3, -0.2], [0.1, 0.0], [0.0, 0.5])
+    for k, t in enumerate((0.0, 0.01, 0.02)):
+        q, qd = np.array([0.35, -0.1]) + 0.01 * k, np.array([0.0, 0.2])
+        ad(t, q, qd, ref)
+        s, err = ad.last_log["s"], ad.last_log["theta"] - pi
+        m = armctl.Dynamics(plant).mass_matrix(q)
+        assert ad.last_log["V"] == pytest.approx(0.5 * s @ m @ s + 0.5 * err @ g_inv @ err, rel=1e-9)
+    plain = Adaptive(ctrl_dyn, 2.0, 10.0, 3.0)
+    plain(0.0, q, qd, ref)
+    assert "V" not in plain.last_log
+
+
+def test_adaptive_plant_checks() -> None:
+    ctrl_dyn = dynamics("planar_2r")
+    with pytest.raises(ShapeError, match="plant has 3 joints, the controller 2"):
+        Adaptive(ctrl_dyn, 2.0, 10.0, 1.0, plant=armctl.models.planar_3r())
+    with pytest.raises(InvalidParameterError, match=r"plant must be an armctl\.Dynamics"):
+        Adaptive(ctrl_dyn, 2.0, 10.0, 1.0, plant="planar_2r")
+    with pytest.raises(InvalidParameterError, match="set plant="):
+        Adaptive(ctrl_dyn, 2.0, 10.0, 1.0).lyapunov([0.1, 0.2], [0.0, 0.0])

@@ -9,7 +9,8 @@ from armctl._checks import FloatArray, Gain, scalar, vector
 from armctl.controllers.base import Controller
 from armctl.controllers.passivity import SlidingGains, sliding
 from armctl.dynamics.base import Dynamics
-from armctl.errors import InvalidParameterError
+from armctl.errors import InvalidParameterError, ShapeError
+from armctl.model import RobotModel
 from armctl.model.consistency import project_physical, projection
 from armctl.reference import Reference
 
@@ -47,16 +48,23 @@ class Adaptive(SlidingGains, Controller):
     place), so ``last_log["theta"]`` is that same array, not a copy: change ``theta`` by assigning a new array,
     not in place, or the last log changes with it. ``last_log["s"]`` holds s. A diagonal Γ·dt is formed once per
     control-period length (anew when dt changes by more than 1e-9 relative).
+
+    plant: the true arm (a :class:`~armctl.Dynamics` or :class:`~armctl.RobotModel`, as many joints), for
+    simulation studies only: each step then also logs ``last_log["V"]``, the Lyapunov function
+    V = ½ sᵀM(q)s + ½ θ̃ᵀΓ⁻¹θ̃ with the plant's M and θ̃ = θ̂ − π_plant (θ̂ after this step's update), so a run's
+    ``res.logs["V"]`` is V(t). The law never uses it (a real controller knows neither M nor π); it costs one
+    mass-matrix evaluation a step.
     """
 
     _outside = False  # whether the last projection changed θ̂ (see _project); reset() clears it
+    _plant: Dynamics | None = None  # (a class default too: objects pickled before plant existed)
 
     gamma = Gain("Γ (13n×13n).", size=lambda owner: 13 * owner.n)
 
     def __init__(self, dynamics: Dynamics, lam: ArrayLike, kd: ArrayLike, gamma: ArrayLike,
                  theta0: ArrayLike | None = None, *, projection: bool = False, sigma: float = 0.0,
                  dead_zone: float = 0.0, composite: float = 0.0, filter_bandwidth: float = 20.0,
-                 radius: float | None = None) -> None:
+                 radius: float | None = None, plant: Dynamics | RobotModel | None = None) -> None:
         super().__init__(dynamics)
         p = 13 * self.n
         self.lam, self.kd, self.gamma = lam, kd, gamma
@@ -71,7 +79,37 @@ class Adaptive(SlidingGains, Controller):
             raise InvalidParameterError("radius bounds the projection: use it with projection=True", value=radius)
         if self.projection:
             self.theta0 = project_physical(self.theta0)
+        self.plant = plant
         self.reset()
+
+    @property
+    def plant(self) -> Dynamics | None:
+        """The true arm whose M and π give the logged V (None: V not logged)."""
+        return self._plant
+
+    @plant.setter
+    def plant(self, value: Dynamics | RobotModel | None) -> None:
+        if value is None:
+            self._plant = None
+            return
+        if isinstance(value, RobotModel):
+            value = Dynamics(value)
+        if not isinstance(value, Dynamics):
+            raise InvalidParameterError(f"plant must be an armctl.Dynamics, a RobotModel or None, got "
+                                        f"{type(value).__name__}", value=value)
+        if value.n != self.n:
+            raise ShapeError(f"plant has {value.n} joints, the controller {self.n}", value=value.n)
+        self._plant = value
+
+    def lyapunov(self, q: ArrayLike, s: ArrayLike, theta: ArrayLike | None = None) -> float:
+        """V = ½ sᵀM(q)s + ½ θ̃ᵀΓ⁻¹θ̃ with :attr:`plant`'s M and θ̃ = θ − π_plant (θ: default the current θ̂)."""
+        if self._plant is None:
+            raise InvalidParameterError("V needs the true arm: set plant= (a Dynamics or RobotModel)", value=None)
+        q, s = vector(q, self.n, "q"), vector(s, self.n, "s")
+        err = (self.theta if theta is None else vector(theta, 13 * self.n, "theta")) - self._plant.parameters()
+        gamma = self._gamma
+        weighted = err / gamma if gamma.ndim == 1 else np.linalg.solve(gamma, err)
+        return 0.5 * float(s.dot(self._plant.mass_matrix(q).dot(s)) + err.dot(weighted))
 
     def _gains_changed(self) -> None:
         super()._gains_changed()
@@ -127,6 +165,8 @@ class Adaptive(SlidingGains, Controller):
             # the torque the parameters must explain: τ without the fixed Coulomb offset
             self._qd_prev, self._tau_prev = qd.copy(), tau - offset if offset is not None else tau.copy()
         self.last_log = {"theta": self.theta, "s": s}
+        if self._plant is not None:
+            self.last_log["V"] = self.lyapunov(q, s)
         return tau
 
     def _project(self, theta: FloatArray) -> FloatArray:
