@@ -8,7 +8,9 @@ python-control computes for a 1 kHz loop with one period of measurement delay; t
 * PD + gravity: the same poles through the linearised inertia, K_p = ω_n² M̄, K_d = 2ω_n M̄ (M̄ = diag M at
   the start of the reference);
 * passivity-based and adaptive: Λ = ω_n, K_D = ω_n M̄ (ṡ = −(K_D/M) s has its pole at ω_n too);
-  Γ for the adaptive law scaled so a typical parameter moves by ~10 % a second at a 0.01 rad/s error.
+  Γ for the adaptive law scaled so a typical parameter moves by ~10 % a second at a 0.01 rad/s error;
+* panda_contact (operational-space QP and Khatib's closed form): the pose task's error dynamics, which the
+  operational-space law decouples to ë = u per task coordinate, get the double pole at ω_n, checked the same way.
 
 Run: python examples/tune_gains.py [--out controllers]
 """
@@ -24,10 +26,35 @@ from armctl.scenes import scene
 from armctl.tuning import SampledDataAnalysis, lqr_gains, pd_from_bandwidth
 from armctl.tuning.presets import presets_dir, write_preset
 
-BANDWIDTH = {"pendulum": 15.0, "planar_2r": 10.0, "panda_topp": 20.0}  # ω_n [rad/s]
+BANDWIDTH = {"pendulum": 15.0, "planar_2r": 10.0, "panda_topp": 20.0, "panda_contact": 20.0}  # ω_n [rad/s]
+
+
+def margins(kp: float, kd: float, control_dt: float, name: str) -> tuple[str, dict[str, float]]:
+    """The sampled-data margins of ë = −k_p e − k_d ė at the scene's rate with one period of delay: the
+    text for ``how`` and the record; exits if the loop is unstable."""
+    margin = SampledDataAnalysis.of(kp, kd, control_dt, delay=1)
+    if not margin.stable:
+        raise SystemExit(f"{name}: {margin.summary()}")
+    text = (f"; sampled-data gain margin {margin.critical_multiplier:.1f} and phase margin "
+            f"{margin.phase_margin_deg:.0f}° at {1 / control_dt:g} Hz with one period of delay")
+    return text, {"gain_margin": margin.critical_multiplier, "phase_margin_deg": margin.phase_margin_deg}
+
+
+def tune_contact(name: str, out: Path) -> list[Path]:
+    """The pose task's gains of both operational-space methods (the force is regulated by the QP's contact,
+    or, in the closed form, by the pose stiffness alone)."""
+    sc = scene(name)
+    wn = BANDWIDTH[name]
+    kp, kd = pd_from_bandwidth(wn, 1.0)
+    text, record = margins(kp, kd, sc.control_dt, name)
+    how = f"pose task: double pole of the decoupled ë = u at ω_n = {wn:g} rad/s{text}"
+    return [write_preset(name, method, {"kp": kp, "kd": kd}, how, "examples/tune_gains.py", out, omega_n=wn,
+                         **record) for method in sc.methods]
 
 
 def tune(name: str, out: Path) -> list[Path]:
+    if name == "panda_contact":
+        return tune_contact(name, out)
     sc = scene(name)
     wn = BANDWIDTH[name]
     if name == "planar_2r":
@@ -36,12 +63,9 @@ def tune(name: str, out: Path) -> list[Path]:
     else:
         kp, kd = pd_from_bandwidth(wn, 1.0)
         how_ct = f"double pole at ω_n = {wn:g} rad/s"
-    margin = SampledDataAnalysis.of(kp, kd, sc.control_dt, delay=1)
-    if not margin.stable:
-        raise SystemExit(f"{name}: {margin.summary()}")
-    how_ct += (f"; sampled-data gain margin {margin.critical_multiplier:.1f} and phase margin "
-               f"{margin.phase_margin_deg:.0f}° at {1 / sc.control_dt:g} Hz with one period of delay")
-    record = {"omega_n": wn, "gain_margin": margin.critical_multiplier, "phase_margin_deg": margin.phase_margin_deg}
+    text, record = margins(kp, kd, sc.control_dt, name)
+    how_ct += text
+    record = {"omega_n": wn, **record}
     paths = []
     for method in ("computed_torque", "computed_torque_reduced"):
         paths.append(write_preset(name, method, {"kp": kp, "kd": kd}, how_ct, "examples/tune_gains.py", out,

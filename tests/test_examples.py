@@ -24,4 +24,5 @@ def test_example_runs(script: str, tmp_path: Path) -> None:
     assert proc.stdout.strip(), "an example says what it did"
     if script == "tune_gains.py":
         written = sorted(p.name for p in (tmp_path / "presets").glob("*.toml"))
-        assert len(written) == 15 and "planar_2r.computed_torque.toml" in written
+        assert len(written) == 17 and "planar_2r.computed_torque.toml" in written
+        assert "panda_contact.osc_qp.toml" in written and "panda_contact.osc_closed_form.toml" in written

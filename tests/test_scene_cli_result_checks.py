@@ -18,6 +18,7 @@ from armctl.errors import InvalidParameterError, NonFiniteError, SimulationWarni
 from armctl.scenes import PressAndSlide, scene
 from armctl.sim import SimResult, simulate
 from armctl.sim.result import _ARRAYS
+from armctl.tuning.presets import load_preset, write_preset
 
 
 class Logging:
@@ -241,6 +242,21 @@ def test_contact_scene_gains_are_checked_and_applied(contact: Any) -> None:
     ctrl = contact.controller("osc_qp", gains={"kp": 100.0, "kd": 30.0})
     np.testing.assert_array_equal(np.diag(ctrl.pose.kp), 100.0)
     np.testing.assert_array_equal(np.diag(ctrl.pose.kd), 30.0)
+
+
+@pytest.mark.parametrize("method", ["osc_qp", "osc_closed_form"])
+def test_contact_scene_reads_its_presets(contact: Any, method: str, tmp_path: Path,
+                                        monkeypatch: pytest.MonkeyPatch) -> None:
+    shipped = load_preset("panda_contact", method)
+    assert shipped["written_by"] == "examples/tune_gains.py" and "ω_n = 20" in shipped["how"]
+    ctrl = contact.controller(method)
+    np.testing.assert_array_equal(np.diag(ctrl.pose.kp), shipped["gains"]["kp"])
+    np.testing.assert_array_equal(np.diag(ctrl.pose.kd), shipped["gains"]["kd"])
+    write_preset("panda_contact", method, {"kp": 121.0, "kd": 22.0}, "test", "test", tmp_path)
+    monkeypatch.setenv("ARMCTL_PRESETS", str(tmp_path))  # another folder's preset is the one read
+    ctrl = contact.controller(method)
+    np.testing.assert_array_equal(np.diag(ctrl.pose.kp), 121.0)
+    np.testing.assert_array_equal(np.diag(ctrl.pose.kd), 22.0)
 
 
 def test_contact_metrics_of_a_run_without_samples(contact: Any, numeric: SimResult) -> None:

@@ -106,11 +106,12 @@ class ContactScene(Scene):
     mu: float = 0.3
 
     def controller(self, method: str, gains: dict[str, Any] | None = None) -> Controller:
-        """The :class:`PressAndSlide` controller; ``gains``: the pose task's ``kp`` (default 400) and ``kd``
-        (default: the task's own); other keys are refused."""
+        """The :class:`PressAndSlide` controller; ``gains``: the pose task's ``kp`` and ``kd`` (default: the
+        preset, ``controllers/panda_contact.<method>.toml``; a missing key: the task's default); other keys are
+        refused."""
         if method not in self.methods:
             raise UnknownNameError("method", method, self.methods)
-        g = check_gains(method, {} if gains is None else gains, (), ("kp", "kd"))
+        g = check_gains(method, self.gains(method) if gains is None else gains, (), ("kp", "kd"))
         return PressAndSlide(self.dynamics("exact"), self.z_table, self.mu, closed_form=method == "osc_closed_form",
                              kp=g.get("kp", 400.0), kd=g.get("kd"))
 
