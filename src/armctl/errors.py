@@ -30,8 +30,10 @@ class InvalidParameterError(ArmctlError, ValueError):
     """A physical or numerical parameter is out of its allowed range (negative mass, bad inertia, …)."""
 
 
-class UnknownNameError(ArmctlError, KeyError):
-    """A name (frame, joint, backend, integrator, …) is not one of the valid names, which it lists."""
+class UnknownNameError(ArmctlError, KeyError, ValueError):
+    """A name (frame, joint, backend, integrator, …) is not one of the valid names, which it lists. Both a
+    ``KeyError`` (a lookup that failed) and a ``ValueError`` (an argument with a bad value), so that a handler
+    written for either catches it."""
 
     def __init__(self, kind: str, name: Any, valid: list[str] | tuple[str, ...]) -> None:
         shown = ", ".join(repr(v) for v in valid[:40]) + (" …" if len(valid) > 40 else "")

@@ -246,6 +246,16 @@ def test_bad_input() -> None:
         ct(0.0, np.zeros(7), np.zeros(7), np.zeros(7))  # type: ignore[arg-type]
     with pytest.raises(ShapeError, match="theta0"):
         Adaptive(dyn, 1.0, 1.0, 1.0, theta0=np.zeros(5))
+    with pytest.raises(InvalidParameterError, match="projection must be True or False, got 'False'"):
+        Adaptive(dyn, 1.0, 1.0, 1.0, projection="False")  # bool("False") is True
+    ad = Adaptive(dyn, 1.0, 1.0, 1.0, projection=True)
+    with pytest.raises(InvalidParameterError, match="projection must be True or False"):
+        ad.projection = 1
+    state = dict(ad.__dict__)
+    state["projection"] = state.pop("_projection")  # as pickled when projection was a plain attribute
+    old = Adaptive.__new__(Adaptive)
+    old.__setstate__(state)
+    assert old.projection is True
     with pytest.raises(InvalidParameterError, match="needs n"):
         Zero(None)
     assert np.array_equal(Zero(n=3)(0.0, np.zeros(3), np.zeros(3), armctl.Reference(np.zeros(3))), np.zeros(3))

@@ -143,8 +143,10 @@ def test_bad_input_errors() -> None:
     with pytest.raises(UnknownNameError, match="panda_hand_tcp") as info:
         dyn.jacobian(np.zeros(7), frame="gripper")
     assert "gripper" in str(info.value) and isinstance(info.value, KeyError)
-    with pytest.raises(UnknownNameError, match="'lagrange'"):
+    with pytest.raises(ValueError, match="'lagrange'") as info:  # a bad argument value is a ValueError too
         armctl.Dynamics(model("panda"), backend="featherstone")
+    assert isinstance(info.value, UnknownNameError) and isinstance(info.value, KeyError)
+    assert str(info.value) == "unknown backend 'featherstone'; valid backends: 'pinocchio', 'lagrange'"
     with pytest.raises(ModelLoadError, match="not found"):
         armctl.RobotModel.from_urdf("/nonexistent/robot.urdf")
     with pytest.raises(ShapeError, match="wrench"):

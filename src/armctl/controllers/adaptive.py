@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, Gain, scalar, vector
+from armctl._checks import FloatArray, Gain, boolean, scalar, vector
 from armctl.controllers.base import Controller
 from armctl.controllers.passivity import SlidingGains, sliding
 from armctl.dynamics.base import Dynamics
@@ -69,7 +71,7 @@ class Adaptive(SlidingGains, Controller):
         p = 13 * self.n
         self.lam, self.kd, self.gamma = lam, kd, gamma
         self.theta0 = dynamics.parameters().copy() if theta0 is None else vector(theta0, p, "theta0").copy()
-        self.projection = bool(projection)
+        self.projection = projection
         self.sigma = scalar(sigma, "sigma", nonnegative=True)
         self.dead_zone = scalar(dead_zone, "dead_zone", nonnegative=True)
         self.composite = scalar(composite, "composite", nonnegative=True)
@@ -81,6 +83,20 @@ class Adaptive(SlidingGains, Controller):
             self.theta0 = project_physical(self.theta0)
         self.plant = plant
         self.reset()
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        if "projection" in state:  # pickled when projection was a plain attribute
+            state["_projection"] = bool(state.pop("projection"))
+        self.__dict__.update(state)
+
+    @property
+    def projection(self) -> bool:
+        """Project θ̂ onto the physically consistent set after each update (may be switched between calls)."""
+        return self._projection
+
+    @projection.setter
+    def projection(self, value: bool) -> None:
+        self._projection = boolean(value, "projection")
 
     @property
     def plant(self) -> Dynamics | None:
@@ -153,7 +169,7 @@ class Adaptive(SlidingGains, Controller):
                 step = self._gamma.dot(grad)
                 step *= dt
                 self.theta = self.theta - step
-            if self.projection:
+            if self._projection:
                 self.theta = self._project(self.theta)
         self._t_prev = t
         tau = y.dot(self.theta)

@@ -87,6 +87,24 @@ def test_the_three_forms_of_a_gain_agree(panda: armctl.Dynamics) -> None:
     np.testing.assert_allclose(b, expected, atol=1e-12)
 
 
+def test_default_kd_is_critical_damping_for_every_form_of_kp() -> None:
+    # scalar and vector: 2√k_p entry by entry; matrix: the K_d with K_d² = 4 K_p, symmetric, whose error
+    # dynamics ë + K_d ė + K_p e = 0 have every eigenvalue double (critically damped), checked here on the
+    # companion matrix's spectrum
+    assert np.allclose(FramePositionTask(kp=49.0).kd, 14.0 * np.eye(3), rtol=1e-15)
+    np.testing.assert_allclose(FramePositionTask(kp=[4.0, 9.0, 100.0]).kd, np.diag([4.0, 6.0, 20.0]), rtol=1e-14)
+    rng = np.random.default_rng(3)
+    a = rng.standard_normal((6, 6))
+    kp = a @ a.T + 6.0 * np.eye(6)
+    kd = FramePoseTask(kp=kp).kd
+    np.testing.assert_allclose(kd, kd.T, atol=1e-12)
+    np.testing.assert_allclose(kd @ kd, 4.0 * kp, rtol=1e-10, atol=1e-10)
+    companion = np.block([[np.zeros((6, 6)), np.eye(6)], [-kp, -kd]])
+    poles = np.sort(np.linalg.eigvals(companion).real)
+    np.testing.assert_allclose(poles[0::2], poles[1::2], rtol=1e-4)  # in pairs: −√λ_i twice
+    np.testing.assert_allclose(poles[0::2], -np.sqrt(np.linalg.eigvalsh(kp))[::-1], rtol=1e-4)
+
+
 def test_posture_follows_the_reference_unless_fixed(panda: armctl.Dynamics) -> None:
     state = ModelEvaluator(panda).evaluate(Q_HOME, np.zeros(7))
     task = PostureTask(7, kp=4.0, kd=1.0)

@@ -22,7 +22,6 @@ from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray, Gain, nonnegative_vector, whole_number
 from armctl.controllers.osc.state import ModelState
-from armctl.errors import InvalidParameterError
 from armctl.reference import Reference
 
 
@@ -75,7 +74,8 @@ def _label(task: Task, gain: str) -> str:
 
 class MotionTask(Task):
     """A task on q̈ with PD gains ``kp`` [1/s²] and ``kd`` [1/s] (each a scalar, a (dim,) vector or a
-    dim×dim matrix, symmetric positive definite; ``kd=None``: critical damping 2√kp for a scalar kp)."""
+    dim×dim matrix, symmetric positive definite; ``kd=None``: critical damping K_d = 2 K_p^½, 2√k_p for
+    a scalar or each entry of a vector)."""
 
     # the hot path uses the law's matrices built from the gains in _gains_changed
     kp = Gain("K_p (dim×dim); may be reassigned between control periods (checked again).", size=_dim, label=_label)
@@ -85,10 +85,9 @@ class MotionTask(Task):
                  priority: int = 0) -> None:
         super().__init__(dim, name, weight, priority)
         self.kp = kp
-        if kd is None:
-            if np.ndim(kp) != 0:
-                raise InvalidParameterError(f"{name}: give kd when kp is not a scalar", value=kp)
-            kd = 2.0 * np.sqrt(float(kp))
+        if kd is None:  # critical damping: K_d = 2 K_p^½ (the symmetric square root; 2√k_p for a scalar)
+            lam, vec = np.linalg.eigh(self.kp)
+            kd = 2.0 * (vec * np.sqrt(lam)) @ vec.T
         self.kd = kd
 
     @abstractmethod
