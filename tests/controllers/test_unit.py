@@ -111,7 +111,7 @@ def test_full_gain_matrices_in_every_joint_space_law() -> None:
     np.testing.assert_allclose(pd(0.0, q, qd, ref), dyn.gravity_torque(q) + kp @ e + kd @ ed, rtol=1e-12, atol=1e-9)
     expected = _slotine_li(dyn, q, qd, ref, lam, kd_pb)
     np.testing.assert_allclose(PassivityBased(dyn, lam, kd_pb)(0.0, q, qd, ref), expected, rtol=1e-12, atol=1e-9)
-    # the exact parameters, and the asymmetric Coulomb offset outside them (puma560 has one)
+    # the exact parameters (puma560's asymmetric Coulomb friction included, through Y's Coulomb column)
     ad = Adaptive(dyn, lam, kd_pb, gamma=1e-9)
     np.testing.assert_allclose(ad(0.0, q, qd, ref), expected, rtol=1e-12, atol=1e-9)
     s = qd - (ref.qd - lam @ (q - ref.q))

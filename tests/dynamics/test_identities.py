@@ -12,6 +12,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+import armctl
 from tests.conftest import dynamics
 
 CASES = [("planar_2r", "pinocchio"), ("planar_2r", "lagrange"), ("puma560", "pinocchio"),
@@ -59,9 +60,8 @@ def test_regressor_times_parameters_is_inverse_dynamics(name: str, backend: str,
     tau = dyn.inverse_dynamics(q, qd, qdd)
     y = dyn.regressor(q, qd, qdd)
     assert y.shape == (dyn.n, 13 * dyn.n)
-    # puma560's asymmetric Coulomb friction leaves an offset outside π (documented)
-    assert np.allclose(y @ dyn.model.parameters() + dyn.coulomb_offset(qd), tau, rtol=1e-10,
-                       atol=1e-10 * np.abs(tau).max())
+    # exact for puma560's asymmetric Coulomb friction too (its Coulomb column is F_c⁺/F̄_c or −F_c⁻/F̄_c)
+    assert np.allclose(y @ dyn.model.parameters(), tau, rtol=1e-10, atol=1e-10 * np.abs(tau).max())
 
 
 @pytest.mark.parametrize(("name", "backend"), CASES)
@@ -77,7 +77,7 @@ def test_passivity_regressor_identity(name: str, backend: str, data: st.DataObje
     expected = (dyn.mass_matrix(q) @ qdd_r + dyn.coriolis_matrix(q, qd) @ qd_r + dyn.gravity_torque(q)
                 + fv * qd_r + coulomb)
     y = dyn.passivity_regressor(q, qd, qd_r, qdd_r)
-    got = y @ dyn.model.parameters() + dyn.coulomb_offset(qd)
+    got = y @ dyn.model.parameters()
     assert np.allclose(got, expected, rtol=1e-9, atol=1e-9 * max(np.abs(expected).max(), 1.0))
     # with q̇_r = q̇ and q̈_r = q̈ it is the ordinary regressor
     assert np.allclose(dyn.passivity_regressor(q, qd, qd, qdd_r), dyn.regressor(q, qd, qdd_r), atol=1e-9)
@@ -112,3 +112,27 @@ def test_forward_dynamics_inverts_inverse_dynamics(name: str, backend: str) -> N
         wrench = rng.normal(size=6)
         tau = dyn.inverse_dynamics(q, qd, qdd, wrench=wrench)
         assert np.allclose(dyn.forward_dynamics(q, qd, tau, wrench=wrench), qdd, atol=1e-8)
+
+
+@pytest.mark.parametrize("backend", ["pinocchio", "lagrange"])
+def test_coulomb_column_gives_each_level(backend: str) -> None:
+    """F̄_c κ(q̇) is F_c⁺ moving forwards, −F_c⁻ backwards and 0 at rest, for one-sided (F_c⁻ = 0), asymmetric
+    and absent Coulomb friction; Y π = τ then holds exactly, while identification's regressor keeps
+    sgn q̇ (it estimates the asymmetry as an unknown of its own)."""
+    from armctl.dynamics.identification.base_parameters import identification_regressor
+
+    pos, neg = np.array([2.0, 1.5, 0.0]), np.array([0.0, 0.5, 0.0])  # one-sided, asymmetric, none
+    model = armctl.models.planar_3r().with_friction(viscous=0.1, coulomb=pos, coulomb_negative=neg)
+    dyn = armctl.Dynamics(model, backend=backend)
+    pi = model.parameters()
+    for qd in (np.array([0.3, -0.2, 1e-9]), np.array([-1e-12, 2.0, -0.4]), np.array([0.0, 0.0, 0.0])):
+        level = np.where(qd > 0, pos, 0.0) - np.where(qd < 0, neg, 0.0)  # from the levels themselves
+        np.testing.assert_allclose(pi[12::13] * dyn.coulomb_column(qd), level, rtol=1e-15, atol=0)
+        q, qdd = np.array([0.2, -0.4, 0.9]), np.array([0.5, -1.0, 0.3])
+        y = dyn.regressor(q, qd, qdd)
+        np.testing.assert_allclose(y[np.arange(3), 13 * np.arange(3) + 12], dyn.coulomb_column(qd), rtol=0)
+        tau = dyn.inverse_dynamics(q, qd, qdd)
+        np.testing.assert_allclose(y @ pi, tau, rtol=1e-12, atol=1e-12)
+        y_id = identification_regressor(dyn, q, qd, qdd)
+        np.testing.assert_array_equal(y_id[np.arange(3), 13 * np.arange(3) + 12], np.sign(qd))
+        np.testing.assert_allclose(y_id @ pi + dyn.coulomb_offset(qd), tau, rtol=1e-12, atol=1e-12)

@@ -18,12 +18,12 @@ from armctl.reference import Reference
 
 
 class Adaptive(SlidingGains, Controller):
-    """τ = Y(q, q̇, q̇_r, q̈_r) θ̂ + τ_o(q̇) − K_D s,   θ̂̇ = −Γ (Yᵀ s + σ (θ̂ − θ₀) + κ W_fᵀ (W_f θ̂ − τ_f))
+    """τ = Y(q, q̇, q̇_r, q̈_r) θ̂ − K_D s,   θ̂̇ = −Γ (Yᵀ s + σ (θ̂ − θ₀) + κ W_fᵀ (W_f θ̂ − τ_f))
 
-    (Slotine & Li 1987; s, q̇_r, q̈_r as in :class:`PassivityBased`). τ_o(q̇) = ½(F_c⁺ − F_c⁻) for each moving
-    joint (:meth:`~armctl.Dynamics.coulomb_offset`) is the part of an asymmetric Coulomb friction outside the
-    parameters π, taken from the controller's model and not adapted; with θ̂ = π the law is
-    :class:`PassivityBased`'s. With σ = κ = 0, no projection and no disturbance,
+    (Slotine & Li 1987; s, q̇_r, q̈_r as in :class:`PassivityBased`). With θ̂ = π the law is
+    :class:`PassivityBased`'s. An asymmetric Coulomb friction of the controller's model enters through Y's
+    Coulomb column (:meth:`~armctl.Dynamics.coulomb_column`): θ̂ adapts the mean level, the ratio of the two
+    levels stays the model's. With σ = κ = 0, no projection and no disturbance,
     V = ½ sᵀM s + ½ θ̃ᵀΓ⁻¹θ̃ has V̇ = −sᵀ(K_D + F_v)s ≤ 0: tracking converges whatever θ̂(0), while θ̂ itself
     converges only under persistent excitation. θ̂ is integrated at the control rate (explicit Euler over the
     time between calls).
@@ -42,7 +42,7 @@ class Adaptive(SlidingGains, Controller):
     * ``sigma``: σ-modification, a leak towards θ₀ that bounds θ̂;
     * ``dead_zone``: θ̂ is held while ‖s‖ < δ (no term of the law moves it: noise alone does not);
     * ``composite`` κ: composite adaptation, adding the torque prediction error of the first-order-filtered
-      regressor W_f = F[Y(q, q̇, q̈̂)] and filtered commanded torque τ_f = F[τ − τ_o] (bandwidth
+      regressor W_f = F[Y(q, q̇, q̈̂)] and filtered commanded torque τ_f = F[τ] (bandwidth
       ``filter_bandwidth`` [rad/s]; q̈̂ by differencing q̇; the commanded torque is taken as applied).
 
     lam: Λ [1/s]; kd: K_D; gamma: Γ (scalar, 13n vector or matrix); theta0: initial θ̂ (None: the controller
@@ -173,13 +173,9 @@ class Adaptive(SlidingGains, Controller):
                 self.theta = self._project(self.theta)
         self._t_prev = t
         tau = y.dot(self.theta)
-        offset = dyn._coulomb_offset(qd) if dyn._has_asymmetry else None
-        if offset is not None:
-            tau += offset
         tau -= kd_s
         if self.composite:  # copies: the caller may reuse its q̇ buffer, or clip τ in place
-            # the torque the parameters must explain: τ without the fixed Coulomb offset
-            self._qd_prev, self._tau_prev = qd.copy(), tau - offset if offset is not None else tau.copy()
+            self._qd_prev, self._tau_prev = qd.copy(), tau.copy()  # the torque the parameters must explain
         self.last_log = {"theta": self.theta, "s": s}
         if self._plant is not None:
             self.last_log["V"] = self.lyapunov(q, s)

@@ -86,6 +86,9 @@ class Dynamics(ABC):
         self._has_viscous = bool(self._fv.any())
         self._has_coulomb = bool(self._fc_mean.any())
         self._has_asymmetry = bool(self._fc_offset.any())
+        # ρ = δ / F_c,mean (|ρ| ≤ 1 as F_c± ≥ 0; 0 without Coulomb friction): the regressor's Coulomb column
+        # is sgn q̇ (1 + ρ sgn q̇), so that F_c,mean times it is F_c⁺ or −F_c⁻ (see _coulomb_column)
+        self._fc_ratio = np.divide(self._fc_offset, self._fc_mean, out=np.zeros(self.n), where=self._fc_mean > 0)
         self._has_friction = self._has_viscous or self._has_coulomb
         # τ_f = [diag F_v, diag F_c,mean (, diag F_c,offset)]·[q̇; sgn q̇ (; |sgn q̇|)]: one product where the
         # term by term form takes five to seven array operations
@@ -334,11 +337,15 @@ class Dynamics(ABC):
         return self._params
 
     def regressor(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike) -> FloatArray:
-        """Y(q, q̇, q̈) (n × 13n) with Y π = inverse_dynamics(q, q̇, q̈) for symmetric Coulomb friction.
+        """Y(q, q̇, q̈) (n × 13n) with Y π = inverse_dynamics(q, q̇, q̈), friction included.
 
         Columns per joint follow :data:`armctl.model.robot.PARAMETER_NAMES`; the friction columns are q̇_i and
-        sgn(q̇_i). With an asymmetric Coulomb friction, Y π misses the offset ½(F_c⁺ − F_c⁻)·|sgn q̇_i|, which
-        :meth:`coulomb_offset` returns.
+        the Coulomb column κ_i(q̇_i) of :meth:`coulomb_column`: sgn(q̇_i) for a symmetric Coulomb friction, and
+        for an asymmetric one (F_c⁺ ≠ F_c⁻, whose mean is π's Coulomb entry) F_c⁺/F̄_c for q̇_i > 0 and −F_c⁻/F̄_c
+        for q̇_i < 0, so that Y π = τ exactly for every model. The Coulomb column then carries this model's ratio
+        of the two levels, which an estimate of π (adaptation, identification) scales but does not change;
+        identification that estimates the asymmetry as well uses sgn(q̇_i) and a column of its own
+        (:mod:`armctl.dynamics.identification.problem`).
         """
         try:  # _inputs' fast path, inlined
             if (q.ndim == qd.ndim == qdd.ndim == 1  # type: ignore[union-attr]  (Pinocchio checks the lengths)
@@ -364,14 +371,28 @@ class Dynamics(ABC):
         return find_base_parameters(self, samples=samples, seed=seed)
 
     def coulomb_offset(self, qd: ArrayLike) -> FloatArray:
-        """The part of the friction torque outside π: ½(F_c⁺ − F_c⁻) for every moving joint, 0 at rest."""
+        """The asymmetric part of the Coulomb friction torque: δ = ½(F_c⁺ − F_c⁻) for every moving joint, 0 at
+        rest (the friction's Coulomb part is F̄_c sgn q̇ + δ |sgn q̇|)."""
         return self._coulomb_offset(self._finite(qd, "qd"))
 
     def _coulomb_offset(self, qd: FloatArray) -> FloatArray:
         return self._fc_offset * np.abs(np.sign(qd))  # (cheaper than q̇ != 0)
 
+    def coulomb_column(self, qd: ArrayLike) -> FloatArray:
+        """κ(q̇) (n,): the regressor's Coulomb column entries, κ_i = sgn q̇_i (1 + ρ_i sgn q̇_i) with
+        ρ_i = ½(F_c⁺ − F_c⁻)/F̄_c (0 without Coulomb friction), so F̄_c κ_i = F_c⁺ for q̇_i > 0, −F_c⁻ for
+        q̇_i < 0, 0 at rest; sgn q̇_i for a symmetric friction."""
+        return self._coulomb_column(self._finite(qd, "qd"))
+
+    def _coulomb_column(self, qd: FloatArray) -> FloatArray:
+        s = np.sign(qd)
+        if self._has_asymmetry:
+            s += self._fc_ratio * s * s
+        return s
+
     def passivity_regressor(self, q: ArrayLike, qd: ArrayLike, qd_r: ArrayLike, qdd_r: ArrayLike) -> FloatArray:
-        """Y(q, q̇, q̇_r, q̈_r) with Y π = M q̈_r + C(q, q̇) q̇_r + g + F_v q̇_r + F_c sgn(q̇) — the Slotine–Li form.
+        """Y(q, q̇, q̇_r, q̈_r) with Y π = M q̈_r + C(q, q̇) q̇_r + g + F_v q̇_r + τ_c(q̇) — the Slotine–Li form
+        (τ_c: the Coulomb friction at the measured q̇, F_c⁺ or −F_c⁻; its column is :meth:`coulomb_column`'s).
 
         C(q, q̇) q̇_r is the symmetric bilinear form B(q̇, q̇_r) of the velocity terms h(v) = C(q, v) v (the
         Christoffel choice makes it symmetric), so by polarisation B(a, b) = ¼[h(a + b) − h(a − b)], and
@@ -399,9 +420,8 @@ class Dynamics(ABC):
         return self._passivity_call(self._passivity_regressor, q, qd, qd_r, qdd_r)
 
     def passivity_torque(self, q: ArrayLike, qd: ArrayLike, qd_r: ArrayLike, qdd_r: ArrayLike) -> FloatArray:
-        """M q̈_r + C(q, q̇) q̇_r + g + F_v q̇_r + F_c sgn(q̇) (= passivity_regressor(...) @ π, with the Coulomb
-        asymmetry offset), from two inverse-dynamics evaluations by the same polarisation as
-        :meth:`passivity_regressor`."""
+        """M q̈_r + C(q, q̇) q̇_r + g + F_v q̇_r + τ_c(q̇) (= passivity_regressor(...) @ π), from two
+        inverse-dynamics evaluations by the same polarisation as :meth:`passivity_regressor`."""
         return self._passivity_call(self._passivity_torque, q, qd, qd_r, qdd_r)
 
     def _passivity_call(self, primitive: Any, q: Any, qd: Any, qd_r: Any, qdd_r: Any) -> FloatArray:
@@ -420,7 +440,7 @@ class Dynamics(ABC):
         y = self._rigid_regressor(q, a * _SQRT_HALF, 0.5 * qdd_r)
         y *= 2.0
         y -= self._rigid_regressor(q, w, self._zeros)
-        y.put(self._diag_idx[self.n:], np.concatenate((qd_r, np.sign(qd))))
+        y.put(self._diag_idx[self.n:], np.concatenate((qd_r, self._coulomb_column(qd))))
         return y
 
     def _passivity_torque(self, q: FloatArray, qd: FloatArray, qd_r: FloatArray, qdd_r: FloatArray,
@@ -437,7 +457,7 @@ class Dynamics(ABC):
         return qd_r + w, w
 
     def _add_passivity_friction(self, tau: FloatArray, qd: FloatArray, qd_r: FloatArray) -> FloatArray:
-        """τ + F_v q̇_r + F_c sgn(q̇) (+ the Coulomb asymmetry offset), in place."""
+        """τ + F_v q̇_r + τ_c(q̇) (F_c⁺ or −F_c⁻), in place."""
         if self._has_friction:
             tau += self._friction(qd, qd_r)
         return tau

@@ -231,7 +231,7 @@ class LagrangeDynamics(Dynamics):
                          friction: tuple[FloatArray, FloatArray] | None = None) -> FloatArray:
         y = self._ev["Y"](q, qd, qdd)
         if friction is not None:
-            y.put(self._diag_idx[self.n:], np.concatenate((friction[0], np.sign(friction[1]))))
+            y.put(self._diag_idx[self.n:], np.concatenate((friction[0], self._coulomb_column(friction[1]))))
         return y
 
     def _kinetic(self, q: FloatArray, qd: FloatArray) -> float:

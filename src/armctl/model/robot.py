@@ -182,8 +182,9 @@ class RobotModel:
         with the first moment m·c and the inertia tensor *about the joint-frame origin* in joint-frame axes
         (the augmented link; the ten inertial parameters in Pinocchio's order, so its regressor columns map
         one to one), k_r²·I_m the reflected rotor inertia, F_v the viscous and F_c the Coulomb
-        friction. For an asymmetric Coulomb friction F_c is the mean (F_c⁺ + F_c⁻)/2; the asymmetry
-        (F_c⁺ − F_c⁻)/2 acts as a direction-dependent offset outside π (see ``Dynamics.regressor``).
+        friction. For an asymmetric Coulomb friction F_c is the mean (F_c⁺ + F_c⁻)/2, and the regressor's
+        Coulomb column carries the ratio of the two levels, so Y π = τ still holds (see
+        ``Dynamics.regressor`` and ``Dynamics.coulomb_column``).
         """
         out = np.empty(PARAMS_PER_JOINT * self.n)
         for i, j in enumerate(self.joints):

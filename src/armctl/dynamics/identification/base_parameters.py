@@ -35,6 +35,18 @@ _BETA_ZERO = 1e-10  # entries of β below this (relative to the largest) are rou
 TOL_RANGE = (1e-14, 1e-3)
 
 
+def identification_regressor(dynamics: Dynamics, q: FloatArray, qd: FloatArray, qdd: FloatArray) -> FloatArray:
+    """``dynamics.regressor`` with sgn(q̇_i) as every joint's Coulomb column. Identification estimates the
+    mean Coulomb level and (with offsets, see :mod:`~armctl.dynamics.identification.problem`) the asymmetry as
+    unknowns of their own, so it must not take the ratio of the two levels from the model, which the
+    regressor's Coulomb column of an asymmetric friction carries (:meth:`~armctl.Dynamics.coulomb_column`)."""
+    y = dynamics.regressor(q, qd, qdd)
+    if dynamics._has_asymmetry:
+        joints = np.arange(dynamics.n)
+        y[joints, PARAMS_PER_JOINT * joints + PARAMS_PER_JOINT - 1] = np.sign(qd)
+    return y
+
+
 @dataclass(frozen=True)
 class BaseParameters:
     """The base parameters of an arm: which columns of Y are independent and how the others lump in.
@@ -137,7 +149,7 @@ def find_base_parameters(dynamics: Dynamics, samples: int | None = None, seed: i
                                     f"pivot: smaller counts round-off as independent, larger drops identifiable "
                                     f"parameters; default 1e-8), got {tol!r}", value=tol)
     rng = np.random.default_rng(whole_number(seed, "seed"))
-    w = np.vstack([dynamics.regressor(*x) for x in random_states(dynamics, s, rng)])
+    w = np.vstack([identification_regressor(dynamics, *x) for x in random_states(dynamics, s, rng)])
     _, r, perm = scipy.linalg.qr(w, mode="economic", pivoting=True)
     diag = np.abs(np.diag(r))
     rank = int(np.count_nonzero(diag > tol * max(diag[0], 1e-300)))

@@ -21,7 +21,11 @@ from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray, real_array, scalar, whole_number
 from armctl.dynamics.base import Dynamics
-from armctl.dynamics.identification.base_parameters import BaseParameters, find_base_parameters
+from armctl.dynamics.identification.base_parameters import (
+    BaseParameters,
+    find_base_parameters,
+    identification_regressor,
+)
 from armctl.dynamics.identification.excitation import FourierExcitation
 from armctl.errors import IdentifiabilityError, InvalidParameterError, ShapeError
 
@@ -46,7 +50,7 @@ def stacked_base_regressor(dynamics: Dynamics, base: BaseParameters, q: FloatArr
                            qdd: FloatArray) -> FloatArray:
     """W_b (S n × r): the base regressor Y_b stacked over S samples of (q, q̇, q̈), each (S, n)."""
     cols = list(base.independent)
-    return np.vstack([dynamics.regressor(q[k], qd[k], qdd[k])[:, cols] for k in range(q.shape[0])])
+    return np.vstack([identification_regressor(dynamics, q[k], qd[k], qdd[k])[:, cols] for k in range(q.shape[0])])
 
 
 def condition_number(w: FloatArray) -> float:

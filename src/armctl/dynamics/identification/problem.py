@@ -5,8 +5,10 @@ Stacking the base regressor over the S samples (sample-major: rows k n … k n +
     y = [τ(t_1); …; τ(t_S)] = W θ + e,     W = [Y_b(x_1)  O(q̇_1); …; Y_b(x_S)  O(q̇_S)]
 
 where θ are the base parameters and, when ``offsets`` is on, n extra unknowns: the Coulomb asymmetry
-½(F_c⁺ − F_c⁻) of each joint, whose column O = diag(|sgn q̇_i|) lies outside π (see
-``Dynamics.coulomb_offset``). A real robot also puts its torque-sensor offsets there.
+δ = ½(F_c⁺ − F_c⁻) of each joint, with the column O = diag(|sgn q̇_i|) (see ``Dynamics.coulomb_offset``). A
+real robot also puts its torque-sensor offsets there. Y_b's Coulomb columns are sgn q̇_i here
+(:func:`~armctl.dynamics.identification.base_parameters.identification_regressor`), so θ holds the mean
+level and O the asymmetry, whatever the model's own ratio of the two.
 """
 
 from __future__ import annotations
@@ -18,7 +20,11 @@ import numpy as np
 
 from armctl._checks import FloatArray, boolean, readonly, real_array, whole_number
 from armctl.dynamics.base import Dynamics
-from armctl.dynamics.identification.base_parameters import BaseParameters, find_base_parameters
+from armctl.dynamics.identification.base_parameters import (
+    BaseParameters,
+    find_base_parameters,
+    identification_regressor,
+)
 from armctl.dynamics.identification.data import IdentificationData
 from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
 
@@ -80,7 +86,7 @@ def problem_regressor(dynamics: Dynamics, base: BaseParameters, q: FloatArray, q
     out = np.zeros((q.shape[0], n, base.n_base + (n if offsets else 0)))
     diag = np.arange(n)
     for k in range(q.shape[0]):
-        out[k, :, : base.n_base] = dynamics.regressor(q[k], qd[k], qdd[k])[:, cols]
+        out[k, :, : base.n_base] = identification_regressor(dynamics, q[k], qd[k], qdd[k])[:, cols]
         if offsets:
             out[k, diag, base.n_base + diag] = np.abs(np.sign(qd[k]))
     return out
