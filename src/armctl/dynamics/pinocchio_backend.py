@@ -146,7 +146,9 @@ class PinocchioDynamics(Dynamics):
             self._yt_rigid -= self._raw_regressor_free(q, w, self._zeros).T.reshape(self.n, 10, self.n)
         self._yt_rotor[:] = qdd_r  # and _finish_regressor, inlined
         self._yt_viscous[:] = qd_r
-        self._set_coulomb_column(qd)
+        c = np.sign(qd, out=self._yt_coulomb)  # Dynamics.coulomb_column, in place in the strided view
+        if self._has_asymmetry:
+            c += self._fc_ratio * c * c
         return self._y.copy(order="K") if copy else self._y  # type: ignore[no-any-return]
 
     def _passivity_torque(self, q: FloatArray, qd: FloatArray, qd_r: FloatArray, qdd_r: FloatArray,
@@ -161,14 +163,10 @@ class PinocchioDynamics(Dynamics):
             self._yt_coulomb[:] = 0.0
         else:
             self._yt_viscous[:] = friction[0]
-            self._set_coulomb_column(friction[1])
+            c = np.sign(friction[1], out=self._yt_coulomb)  # as in _passivity_regressor
+            if self._has_asymmetry:
+                c += self._fc_ratio * c * c
         return self._y.copy(order="K") if copy else self._y  # type: ignore[no-any-return]
-
-    def _set_coulomb_column(self, qd: FloatArray) -> None:
-        """The workspace's Coulomb column = :meth:`~Dynamics.coulomb_column` (in place, in its strided view)."""
-        c = np.sign(qd, out=self._yt_coulomb)
-        if self._has_asymmetry:
-            c += self._fc_ratio * c * c
 
     def _forward(self, q: FloatArray, qd: FloatArray, tau_net: FloatArray) -> FloatArray:
         return pin.aba(self.pin_model, self.pin_data, q, qd, tau_net)
