@@ -38,7 +38,11 @@ class UnknownNameError(ArmctlError, KeyError, ValueError):
     def __init__(self, kind: str, name: Any, valid: list[str] | tuple[str, ...]) -> None:
         shown = ", ".join(repr(v) for v in valid[:40]) + (" …" if len(valid) > 40 else "")
         super().__init__(f"unknown {kind} {name!r}; valid {kind}s: {shown}", value=name)
-        self.valid = tuple(valid)
+        self.kind, self.valid = kind, tuple(valid)
+
+    def __reduce__(self) -> tuple[Any, ...]:  # pickled with the arguments of __init__ (not the message), so
+        # that it crosses process boundaries: a worker's error reaches a sweep's caller intact
+        return type(self), (self.kind, self.value, self.valid), self.__dict__
 
     def __str__(self) -> str:  # KeyError would otherwise print the repr of the message
         return str(self.args[0])

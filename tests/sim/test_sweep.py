@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import armctl
-from armctl.errors import InvalidParameterError
+from armctl.errors import ArmctlError, InvalidParameterError, UnknownNameError
 from armctl.sim import SimResult, sweep
 from tests.sim.helpers import PDGravity
 
@@ -68,6 +68,39 @@ def test_a_bad_case_is_raised_with_its_index() -> None:
     assert "sweep case 1" in "".join(getattr(info.value, "__notes__", []))
     with pytest.raises(InvalidParameterError):
         sweep(bad, max_workers=2, progress=False)
+
+
+class _Unpicklable(Exception):
+    def __init__(self, a: int, b: int) -> None:  # pickling rebuilds it from args = (message,): TypeError
+        super().__init__(f"broken with {a} and {b}")
+
+
+def _raises_unpicklable(**case: object) -> None:
+    raise _Unpicklable(1, 2)
+
+
+def test_errors_in_a_process_pool_arrive_with_their_message() -> None:
+    bad = cases(GAINS[:2])
+    bad[1]["integrator"] = "rk5"
+    with pytest.raises(UnknownNameError, match="unknown integrator 'rk5'") as info:  # pickled by its arguments
+        sweep(bad, max_workers=2, progress=False)
+    assert info.value.valid == armctl.sim.INTEGRATORS and info.value.value == "rk5"
+    assert "sweep case 1" in "".join(getattr(info.value, "__notes__", []))
+    with pytest.raises(ArmctlError, match=r"_Unpicklable: broken with 1 and 2 \(raised in a worker") as info:
+        sweep(cases(GAINS[:1]), run=_raises_unpicklable, max_workers=1, progress=False)
+    assert "_raises_unpicklable" in str(info.value)  # the worker's traceback
+
+
+def test_every_error_class_pickles() -> None:
+    import pickle
+
+    from armctl import errors
+
+    for cls in vars(errors).values():
+        if isinstance(cls, type) and issubclass(cls, ArmctlError):
+            exc = cls("frame", "hand", ("tool", "base")) if cls is UnknownNameError else cls("message", value=3)
+            back = pickle.loads(pickle.dumps(exc))
+            assert type(back) is cls and str(back) == str(exc) and back.value == exc.value
 
 
 def test_bad_sweep_arguments() -> None:

@@ -15,15 +15,17 @@ the sweep and is raised with the case's index.
 from __future__ import annotations
 
 import os
+import pickle
 import sys
 import time
+import traceback
 from collections.abc import Callable, Iterable, Mapping
 from concurrent.futures import Executor, Future, ProcessPoolExecutor, as_completed
 from typing import Any, TextIO
 
 import numpy as np
 
-from armctl.errors import InvalidParameterError
+from armctl.errors import ArmctlError, InvalidParameterError
 
 
 class ProgressBar:
@@ -50,6 +52,22 @@ class ProgressBar:
 def _run_case(run: Callable[..., Any], case: Mapping[str, Any], summary: Callable[[Any], Any] | None) -> Any:
     out = run(**case)
     return out if summary is None else summary(out)
+
+
+def _run_case_in_worker(run: Callable[..., Any], case: Mapping[str, Any],
+                        summary: Callable[[Any], Any] | None) -> Any:
+    """:func:`_run_case` in a pool's worker: an exception that cannot be pickled (which a process pool would
+    report only as a broken pool, without its message) comes back as an ArmctlError carrying its type,
+    message and traceback."""
+    try:
+        return _run_case(run, case, summary)
+    except Exception as exc:
+        try:
+            pickle.loads(pickle.dumps(exc))
+        except Exception:
+            raise ArmctlError(f"{type(exc).__name__}: {exc} (raised in a worker, and it cannot be pickled, so it "
+                              f"is passed on as text; the worker's traceback:\n{traceback.format_exc()})") from None
+        raise
 
 
 def sweep(cases: Iterable[Mapping[str, Any]], *, run: Callable[..., Any] | None = None,
@@ -95,7 +113,7 @@ def sweep(cases: Iterable[Mapping[str, Any]], *, run: Callable[..., Any] | None 
     pool: Executor = ProcessPoolExecutor(max_workers or os.cpu_count() or 1) if own else executor  # type: ignore[assignment]
     results: list[Any] = [None] * len(case_list)
     try:
-        futures: dict[Future[Any], int] = {pool.submit(_run_case, run, c, summary): i
+        futures: dict[Future[Any], int] = {pool.submit(_run_case_in_worker, run, c, summary): i
                                            for i, c in enumerate(case_list)}
         if bar:
             bar.update(0)
