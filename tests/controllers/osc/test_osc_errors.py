@@ -194,3 +194,19 @@ def test_containers_counts_and_limits_are_checked(panda: armctl.Dynamics, make, 
                                                  message: str) -> None:
     with pytest.raises(error, match=message):
         make(panda)
+
+
+def test_a_pulling_contact_force_target_is_refused_with_the_sign_convention() -> None:
+    wall = Contact(normal=(-1.0, 0.0, 0.0), mode="sliding", mu=0.3)  # a wall at +x: its normal points back at -x
+    # pressing 15 N into the wall: the wall pushes the robot along -x, i.e. +15 along its normal
+    assert ContactForceTask(wall, 15.0).target(0.0).tolist() == [15.0]
+    assert ContactForceTask(wall, (-15.0, 0.0, 0.0)).target(0.0).tolist() == [15.0]  # projected on the normal
+    with pytest.raises(InvalidParameterError, match=r"normal component of -15 N, a pull .* ask for 15$"):
+        ContactForceTask(wall, -15.0)
+    with pytest.raises(InvalidParameterError, match=r"normal component of -15 N.*ask for 15 times the normal"):
+        ContactForceTask(Contact(normal=(-1.0, 0.0, 0.0)), (15.0, 0.0, 0.0))  # the robot's push, not the wall's
+    task = ContactForceTask(wall, lambda t: 10.0 - 20.0 * t)  # a callable is checked when evaluated
+    assert task.target(0.25).tolist() == [5.0]
+    with pytest.raises(InvalidParameterError, match="a pull"):
+        task.target(1.0)
+    assert ContactForceTask(wall, 0.0).target(0.0).tolist() == [0.0]  # zero: allowed (no force wanted)

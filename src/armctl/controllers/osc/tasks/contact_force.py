@@ -29,7 +29,12 @@ Force = ArrayLike | float | Callable[[float], ArrayLike]
 class ContactForceTask(Task):
     """Force of ``contact`` [N] towards ``force``: a (3,) vector (world axes), or with ``normal_only`` the
     normal force f_n [N] (a scalar; a (3,) vector is projected on the normal); either may be a callable of
-    t [s]. ``normal_only`` None: True for a sliding contact, False for a fixed one."""
+    t [s]. ``normal_only`` None: True for a sliding contact, False for a fixed one.
+
+    The force is the one the environment exerts on the robot, so pressing means a positive normal component
+    (the contact's normal points from the surface towards the robot): to press on a table with 10 N, ask
+    for 10 (or (0, 0, 10)), not −10. A target with a negative normal component (a pull, which a contact
+    cannot give) is refused with :class:`~armctl.errors.InvalidParameterError`."""
 
     def __init__(self, contact: Contact, force: Force = (0.0, 0.0, 0.0), weight: ArrayLike = 1e-3,
                  priority: int = 0, name: str | None = None, normal_only: bool | None = None) -> None:
@@ -48,7 +53,15 @@ class ContactForceTask(Task):
         a = np.asarray(force, dtype=float)
         if self.normal_only:
             a = np.atleast_1d(self.contact.normal @ a if a.shape == (3,) else a)
-        return vector(a, self.dim, f"{self.name}: force")
+        a = vector(a, self.dim, f"{self.name}: force")
+        normal = float(a[0]) if self.normal_only else float(self.contact.normal @ a)
+        if normal < 0.0:
+            raise InvalidParameterError(
+                f"{self.name}: the target force {a.tolist()} has a normal component of {normal:g} N, a pull that a "
+                f"contact cannot give. The force is the environment's on the robot, along the normal "
+                f"{self.contact.normal.tolist()} (from the surface towards the robot) when pressing: to press with "
+                f"{-normal:g} N, ask for {-normal:g}" + ("" if self.normal_only else " times the normal"), value=force)
+        return a
 
     def set_target(self, force: Force) -> None:
         """Desired contact force [N] (see the class): a value, or a callable of t [s] returning one."""
