@@ -7,10 +7,13 @@ integrator reports; the work of the held actuator torque is τᵀΔq exactly."""
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
 import armctl
+from armctl.errors import SimulationWarning
 from armctl.sim import HuntCrossley, KelvinVoigt, Plane, simulate
 from tests.sim.helpers import PDGravity, zero_torque
 
@@ -25,8 +28,16 @@ FREE = {
 def _free_run(name: str, integrator: str, duration: float = 10.0) -> tuple[armctl.sim.SimResult, float]:
     model = getattr(armctl.models, name)()
     q0, qd0 = FREE[name]
-    res = simulate(model, zero_torque, armctl.Reference.hold(q0), duration, qd0=qd0, integrator=integrator,
-                   saturate=False)
+    outside = (np.asarray(q0) < model.lower) | (np.asarray(q0) > model.upper)  # the Panda hangs past joint 2's
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        res = simulate(model, zero_torque, armctl.Reference.hold(q0), duration, qd0=qd0, integrator=integrator,
+                       saturate=False)
+    said = [str(w.message) for w in caught if issubclass(w.category, SimulationWarning)]
+    assert len(said) == outside.any()  # a start outside the position limits is said, once; inside, nothing
+    if outside.any():
+        assert said[0].startswith("the run starts outside the model's position limits: joint 1 ('panda_joint2') "
+                                  "at 2.842 outside [-1.763, 1.763]")
     dyn = armctl.Dynamics(model)
     kinetic = np.array([dyn.kinetic_energy(q, v) for q, v in zip(res.q[::5], res.qd[::5], strict=True)])
     energy = kinetic + [dyn.potential_energy(q) for q in res.q[::5]]

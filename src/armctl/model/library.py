@@ -105,7 +105,9 @@ _PUMA = (
 
 PUMA_QZ = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)  #: zero angles, L-shaped pose
 PUMA_QR = (0.0, math.pi / 2, -math.pi / 2, 0.0, 0.0, 0.0)  #: ready pose, arm up
-PUMA_QN = (0.0, math.pi / 4, math.pi, 0.0, math.pi / 4, 0.0)  #: nominal non-singular pose
+#: nominal non-singular pose. Corke's toolbox gives q3 = +π, outside joint 3's range [−225°, 45°]; −π is the
+#: same pose, inside it (a controller that keeps the limits would throw the arm around from +π)
+PUMA_QN = (0.0, math.pi / 4, -math.pi, 0.0, math.pi / 4, 0.0)
 
 
 def puma560(physical: bool = False) -> RobotModel:

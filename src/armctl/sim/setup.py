@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -14,7 +15,7 @@ from numpy.typing import ArrayLike
 from armctl._checks import FloatArray, scalar, vector, whole_number
 from armctl.controllers.base import Controller
 from armctl.dynamics.base import Dynamics
-from armctl.errors import InvalidParameterError, ShapeError, UnknownNameError
+from armctl.errors import InvalidParameterError, ShapeError, SimulationWarning, UnknownNameError
 from armctl.model.robot import RobotModel
 from armctl.reference import Reference
 from armctl.sim.contact import Environment, ForceSensor
@@ -114,6 +115,20 @@ def initial_state(q0: ArrayLike | None, qd0: ArrayLike | None, ref0: Reference, 
             raise InvalidParameterError(f"{source} reaches {worst:g}, beyond {bound_name} = {limit:g}: the run "
                                         f"would stop as diverged before it starts; raise {bound_name}", value=x)
     return np.array(q, dtype=float), np.array(qd, dtype=float)
+
+
+def warn_outside_limits(model: RobotModel, q: FloatArray) -> None:
+    """Warn (:class:`~armctl.errors.SimulationWarning`, pointing at the caller of ``simulate``) if the start
+    configuration is outside the model's position limits."""
+    lower, upper = model.lower, model.upper
+    outside = np.flatnonzero((q < lower) | (q > upper))
+    if outside.size:
+        joints = "; ".join(f"joint {i} ({model.joint_names[i]!r}) at {q[i]:.4g} outside [{lower[i]:.4g}, "
+                           f"{upper[i]:.4g}]" for i in outside)
+        warnings.warn(f"the run starts outside the model's position limits: {joints}. The simulator does not stop "
+                      "a joint at its limits, but a controller that keeps them (a JointPositionLimit in an "
+                      "operational-space QP) acts hard from the first step; for a revolute joint, the same pose "
+                      "2π away may be inside the range", SimulationWarning, stacklevel=3)
 
 
 def seed_value(seed: Any) -> int | None:

@@ -91,6 +91,7 @@ def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
     lag = setup.delay_periods(delay)
     vmax, qmax = setup.bound(max_velocity, "max_velocity"), setup.bound(max_position, "max_position")
     q, v = setup.initial_state(q0, qd0, ref0, n, qmax, vmax)
+    setup.warn_outside_limits(dyn.model, q)
     seed = setup.seed_value(seed)
     try:  # a plant whose M is singular from the start is a model to fix, not a run that diverged
         np.linalg.cholesky(dyn.mass_matrix(q))
