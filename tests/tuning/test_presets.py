@@ -79,3 +79,37 @@ def test_value_toml_cannot_hold_raises_and_leaves_the_file(tmp_path: Path, gains
     with pytest.raises(InvalidParameterError, match=named):
         write_preset("s", "m", gains, "after", "me", tmp_path, **record)
     assert load_preset("s", "m", tmp_path)["how"] == "before"
+
+
+def test_presets_folder_search_order(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """$ARMCTL_PRESETS, else the source checkout's controllers/, else the installed copy (a non-editable
+    install has no checkout); with none, the checkout's path is named in the error."""
+    from armctl.tuning import presets
+
+    checkout, installed = tmp_path / "repo" / "controllers", tmp_path / "prefix" / "share" / "armctl" / "controllers"
+    monkeypatch.setattr(presets, "_candidates", lambda: (checkout, installed))
+    monkeypatch.delenv("ARMCTL_PRESETS", raising=False)
+    assert presets.presets_dir() == checkout  # neither exists
+    with pytest.raises(ModelLoadError, match=r"no preset s\.m\.toml in .*repo.*ARMCTL_PRESETS"):
+        load_preset("s", "m")
+    write_preset("s", "m", {"kp": 2.0}, "installed", "test", installed)
+    assert presets.presets_dir() == installed and load_preset("s", "m")["how"] == "installed"
+    write_preset("s", "m", {"kp": 1.0}, "checkout", "test", checkout)
+    assert presets.presets_dir() == checkout and load_preset("s", "m")["how"] == "checkout"
+    monkeypatch.setenv("ARMCTL_PRESETS", str(tmp_path / "mine"))
+    assert presets.presets_dir() == tmp_path / "mine"
+
+
+def test_the_package_ships_every_preset() -> None:
+    """pyproject's data-files put controllers/*.toml where presets_dir looks in a non-editable install."""
+    import sys
+
+    from armctl.tuning import presets
+
+    tomllib = pytest.importorskip("tomllib") if sys.version_info >= (3, 11) else pytest.importorskip("tomli")
+    root = Path(__file__).resolve().parents[2]
+    config = tomllib.loads((root / "pyproject.toml").read_text())
+    shipped = config["tool"]["setuptools"]["data-files"]["share/armctl/controllers"]
+    files = sorted(p for pattern in shipped for p in root.glob(pattern))
+    assert files == sorted((root / "controllers").glob("*.toml")) and len(files) >= 17
+    assert presets._candidates()[1] == Path(sys.prefix) / "share" / "armctl" / "controllers"

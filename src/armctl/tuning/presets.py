@@ -11,7 +11,8 @@ A preset records the gains and how they were found::
     kd = 40.0
 
 Gains are scalars or lists (a diagonal). The folder is ``$ARMCTL_PRESETS`` if set, else ``controllers/`` at the
-root of the source checkout armctl runs from.
+root of the source checkout armctl runs from (an editable install), else ``<prefix>/share/armctl/controllers``,
+where a non-editable install puts the presets shipped with it.
 """
 
 from __future__ import annotations
@@ -32,10 +33,19 @@ else:  # pragma: no cover
 
 
 def presets_dir() -> Path:
+    """Where presets are read and, by default, written (see the module)."""
     env = os.environ.get("ARMCTL_PRESETS")
     if env:
         return Path(env)
-    return Path(__file__).resolve().parents[3] / "controllers"
+    for folder in _candidates():
+        if folder.is_dir():
+            return folder
+    return _candidates()[0]  # none exists: the checkout's, named in the error that follows
+
+
+def _candidates() -> tuple[Path, ...]:
+    """The source checkout's controllers/, then the installed copy's."""
+    return (Path(__file__).resolve().parents[3] / "controllers", Path(sys.prefix) / "share" / "armctl" / "controllers")
 
 
 def preset_path(scene: str, method: str, folder: Path | None = None) -> Path:
@@ -48,7 +58,8 @@ def load_preset(scene: str, method: str, folder: Path | None = None) -> dict[str
     if not path.is_file():
         have = sorted(p.name for p in path.parent.glob("*.toml")) if path.parent.is_dir() else []
         raise ModelLoadError(f"no preset {path.name} in {path.parent} (have: {have}); run the tuning examples "
-                             "(examples/tune_gains.py) to write it", value=str(path))
+                             "(examples/tune_gains.py in the source repository) to write it, or point ARMCTL_PRESETS "
+                             "at a folder that holds it", value=str(path))
     try:
         with path.open("rb") as f:
             data = tomllib.load(f)
