@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import ast
 import math
+import re
 
 import numpy as np
 import pytest
@@ -170,8 +172,12 @@ def test_urdf_lock_and_tool_frame_errors() -> None:
         armctl.RobotModel.from_urdf(path, lock=("finger",))
     with pytest.raises(UnknownNameError, match="unknown frame"):
         armctl.RobotModel.from_urdf(path, tool_frame="nope", lock=("panda_finger_joint1", "panda_finger_joint2"))
-    with pytest.raises(ModelLoadError, match="serial chains"):
+    with pytest.raises(ModelLoadError, match="serial chains") as info:
         armctl.RobotModel.from_urdf(path)  # the two fingers branch off the hand
+    # the message says what to lock, and doing so loads the 7-joint arm
+    suggested = re.search(r"lock=(\[.*?\])", str(info.value))
+    assert suggested is not None and suggested[1] == "['panda_finger_joint1', 'panda_finger_joint2']"
+    assert armctl.RobotModel.from_urdf(path, lock=ast.literal_eval(suggested[1])).n == 7
 
 
 def test_dynamics_pickles_by_rebuilding() -> None:

@@ -74,9 +74,18 @@ def joints_from_pinocchio(pm: pinocchio.Model, source: str, physical: bool = Tru
     pin.forwardKinematics(pm, data, pin.neutral(pm))
     joints: list[Joint] = []
     for jid in range(1, pm.njoints):
-        if pm.parents[jid] != jid - 1 or pm.joints[jid].nv != 1:
+        if pm.joints[jid].nv != 1:
+            raise ModelLoadError(f"{source}: only one-dof joints are supported; joint {pm.names[jid]!r} is a "
+                                 f"{pm.joints[jid].shortname()} with {pm.joints[jid].nv} degrees of freedom (lock it "
+                                 f"with lock=[{pm.names[jid]!r}] if it may stay fixed)", value=source)
+        if pm.parents[jid] != jid - 1:
+            parent = pm.parents[jid]
+            beyond = [pm.names[k] for k in range(parent + 1, pm.njoints)]  # every joint past the branching one
             raise ModelLoadError(f"{source}: only serial chains of one-dof joints are supported (joint "
-                                 f"{pm.names[jid]!r} has parent {pm.names[pm.parents[jid]]!r})", value=source)
+                                 f"{pm.names[jid]!r} has parent {pm.names[parent]!r}, which already has a child "
+                                 f"joint). Lock the joints of the extra branches, e.g. "
+                                 f"RobotModel.from_urdf(..., lock={beyond!r}) to keep the chain up to "
+                                 f"{pm.names[parent]!r}", value=source)
         s = np.asarray(data.joints[jid].S).reshape(6)
         kind = "prismatic" if np.linalg.norm(s[:3]) > 0.5 else "revolute"
         axis = s[:3] if kind == "prismatic" else s[3:]
