@@ -12,7 +12,9 @@ python-control computes for a 1 kHz loop with one period of measurement delay; t
 * panda_contact (operational-space QP and Khatib's closed form): the pose task's error dynamics, which the
   operational-space law decouples to ë = u per task coordinate, get the double pole at ω_n, checked the same way.
 
-Run: python examples/tune_gains.py [--out controllers]
+Run: python examples/tune_gains.py [--out DIR] [--scenes NAME ...]  (default DIR: the presets folder armctl
+reads, $ARMCTL_PRESETS or the checkout's controllers/, wherever the script is run from: it rewrites the
+shipped presets)
 """
 
 from __future__ import annotations
@@ -89,8 +91,9 @@ def tune(name: str, out: Path) -> list[Path]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--out", type=Path, default=presets_dir())
-    parser.add_argument("--scenes", nargs="*", default=list(BANDWIDTH))
+    parser.add_argument("--out", type=Path, default=presets_dir(),
+                        help="folder to write the presets to (default: %(default)s, the one armctl reads)")
+    parser.add_argument("--scenes", nargs="*", default=list(BANDWIDTH), help="scenes to tune (default: all)")
     args = parser.parse_args()
     for name in args.scenes:
         for p in tune(name, args.out):

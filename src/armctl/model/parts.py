@@ -105,7 +105,8 @@ class Link:
     """An (augmented) link body.
 
     mass: [kg] ≥ 0. com: centre of mass in the joint frame [m]. inertia: tensor about the centre of mass,
-    joint-frame axes [kg·m²] (3×3, 3 principal moments, or Ixx, Ixy, Ixz, Iyy, Iyz, Izz).
+    joint-frame axes [kg·m²] (3×3, 3 principal moments, or six values in URDF order Ixx, Ixy, Ixz, Iyy, Iyz,
+    Izz — not π's order Ixx, Ixy, Iyy, Ixz, Iyz, Izz, which is Pinocchio's and about the joint frame).
     physical: False accepts an inertia tensor that violates the triangle inequality (published data sets
     such as Corke's Puma 560 have some); it must still be positive semi-definite.
     """

@@ -62,6 +62,13 @@ def check_gains(method: str, gains: Any, required: tuple[str, ...], optional: tu
 
 @dataclass
 class Scene:
+    """A standard closed-loop setup: the true ``plant``, the controller-side models (``exact``: the plant's
+    own; ``reduced``: with less in it, for the methods that are given a reduced or wrong model), the
+    ``reference`` (t → :class:`~armctl.Reference`), ``duration`` [s], rates and integrator, the start ``q0``
+    and other :func:`~armctl.sim.simulate` options (``sim_options``: environment, friction, …), and the
+    ``methods`` it runs. :meth:`controller` builds a method's controller (gains from the presets unless given),
+    :meth:`run` simulates it, :meth:`metrics` measures a run."""
+
     name: str
     description: str
     plant: RobotModel
