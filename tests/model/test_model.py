@@ -188,3 +188,11 @@ def test_dynamics_pickles_by_rebuilding() -> None:
         d2 = pickle.loads(pickle.dumps(d))
         q = np.array([0.3, -0.2])
         assert np.allclose(d2.mass_matrix(q), d.mass_matrix(q)) and d2.backend == backend
+
+
+def test_repr_is_a_summary() -> None:
+    text = repr(armctl.models.puma560())
+    assert text.startswith("RobotModel('puma560': 6 joints RRRRRR, ") and "motors=True, friction=True" in text
+    assert len(text) < 200  # not every array of every joint
+    masses = sum(j.link.mass for j in armctl.models.planar_2r().joints)
+    assert f"{masses:.4g} kg of links" in repr(armctl.models.planar_2r())

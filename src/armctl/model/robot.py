@@ -115,6 +115,13 @@ class RobotModel:
         """Number of joints (degrees of freedom)."""
         return len(self.joints)
 
+    def __repr__(self) -> str:  # a summary: the dataclass's own repr prints every array of every joint
+        kinds = "".join("P" if j.kind == "prismatic" else "R" for j in self.joints)
+        mass = sum(j.link.mass for j in self.joints)
+        return (f"RobotModel({self.name!r}: {self.n} joints {kinds}, {mass:.4g} kg of links, "
+                f"motors={self.has_motors}, friction={self.has_friction}, tool_frame={self.tool_frame!r}, "
+                f"gravity={self.gravity.tolist()}, {len(self.frames)} extra frames)")
+
     @property
     def joint_names(self) -> tuple[str, ...]:
         return tuple(j.name for j in self.joints)
