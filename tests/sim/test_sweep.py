@@ -4,6 +4,7 @@ as answers; a bad case raised with its index (issue 3)."""
 from __future__ import annotations
 
 import io
+import threading
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
@@ -71,8 +72,11 @@ def test_a_bad_case_is_raised_with_its_index() -> None:
 
 
 class _Unpicklable(Exception):
-    def __init__(self, a: int, b: int) -> None:  # pickling rebuilds it from args = (message,): TypeError
+    def __init__(self, a: int, b: int) -> None:
         super().__init__(f"broken with {a} and {b}")
+        # a lock does not pickle, whoever pickles the exception (tblib, which dask installs, pickles exceptions
+        # that would not rebuild from their args, but not their attributes)
+        self.lock = threading.Lock()
 
 
 def _raises_unpicklable(**case: object) -> None:
