@@ -68,6 +68,43 @@ def test_standard_and_modified_dh_describe_the_same_arm() -> None:
         assert np.allclose(a.inverse_dynamics(q, qd, qdd), b.inverse_dynamics(q, qd, qdd), atol=1e-10)
 
 
+@pytest.mark.parametrize("convention", ["standard", "modified"])
+def test_dh_motor_axis_is_in_the_dh_frame_of_the_link_it_rides_on(convention: str) -> None:
+    """A motor's explicit axis is read in DH frame {i−1} (the base frame {0} for joint 1). Joint i's axis
+    there is z in the standard convention and Rx(α)z in the modified one (row i's α, Craig's α_{i−1}; z of
+    {i−1} is joint i − 1's axis): given so, the model is the default-axis one, rotor coupling included. An x
+    axis is rotated from {i−1} into joint i − 1's frame by row i − 1's Rz(θ_off)Rx(α) (standard) or not at
+    all (modified: joint frame = {i−1})."""
+    alphas, offsets = (math.pi / 2, -0.7, 0.0), (0.2, -0.4, 0.0)
+
+    def rows(axes: list[tuple[float, ...] | None]) -> list[DHLink]:
+        bodies = [dict(d=0.3, mass=2.0, com=(0, -0.1, 0), inertia=(0.02, 0.01, 0.02)),
+                  dict(a=0.5, mass=1.5, com=(-0.25, 0, 0), inertia=(0.001, 0.03, 0.03)),
+                  dict(a=0.4, mass=1.0, com=(-0.2, 0, 0), inertia=(0.001, 0.015, 0.015))]
+        return [DHLink(alpha=al, offset=off, motor=Motor(inertia=2e-4, gear_ratio=-60.0, axis=ax), **body)
+                for al, off, ax, body in zip(alphas, offsets, axes, bodies, strict=True)]
+
+    def rz_rx(theta: float, alpha: float) -> np.ndarray:
+        c, s_, ca, sa = math.cos(theta), math.sin(theta), math.cos(alpha), math.sin(alpha)
+        return np.array([[c, -s_ * ca, s_ * sa], [s_, c * ca, -c * sa], [0.0, sa, ca]])
+
+    base = np.eye(4)
+    base[:3, :3] = np.array([[0.0, -1.0, 0.0], [0.0, 0.0, -1.0], [1.0, 0.0, 0.0]])  # a rotated base
+    joint_axes = [(0.0, 0.0, 1.0) if convention == "standard" else tuple(rz_rx(0.0, al)[:, 2]) for al in alphas]
+    default = armctl.RobotModel.from_dh(rows([None] * 3), convention, base=base)
+    given = armctl.RobotModel.from_dh(rows(joint_axes), convention, base=base)
+    for a, b in zip(default.joints, given.joints, strict=True):
+        np.testing.assert_allclose(b.motor_axis, a.motor_axis, atol=1e-15)
+    lag_a, lag_b = (armctl.Dynamics(m, backend="lagrange") for m in (default, given))
+    q, qd, qdd = np.array([0.3, -0.8, 1.1]), np.array([1.0, -2.0, 0.5]), np.array([0.2, 0.1, -0.3])
+    np.testing.assert_allclose(lag_b.inverse_dynamics(q, qd, qdd), lag_a.inverse_dynamics(q, qd, qdd), rtol=1e-13)
+    x_axis = armctl.RobotModel.from_dh(rows([(1.0, 0.0, 0.0)] * 3), convention, base=base)
+    np.testing.assert_allclose(x_axis.joints[0].motor_axis, base[:3, :3] @ [1.0, 0.0, 0.0], atol=1e-15)
+    for i in (1, 2):  # rotor i + 1 rides on link i
+        expected = rz_rx(offsets[i - 1], alphas[i - 1])[:, 0] if convention == "standard" else [1.0, 0.0, 0.0]
+        np.testing.assert_allclose(x_axis.joints[i].motor_axis, expected, atol=1e-15)
+
+
 def test_payload_adds_its_weight_through_the_jacobian() -> None:
     """A point payload of mass m at the tool adds J_vᵀ(−m g₀) to the gravity torque."""
     base = model("panda")

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -37,7 +37,10 @@ class DHLink:
 
     d, a [m], alpha, offset [rad]: the DH parameters (for a prismatic joint ``offset`` is θ and ``d`` the
     offset of the joint variable). mass [kg], com [m] and inertia [kg·m²] (about the centre of mass) are in
-    the DH link frame {i}, as in Corke's toolbox. motor, friction, limits as in :mod:`armctl.model.parts`.
+    the DH link frame {i}, as in Corke's toolbox. motor, friction, limits as in :mod:`armctl.model.parts`; a
+    motor's explicit spin ``axis`` is in the DH frame {i−1} of the link the rotor rides on (the base frame {0}
+    for the first joint). Joint i's axis there is z in the standard convention (``Motor(axis=(0, 0, 1))`` spins
+    about the joint axis, as ``axis=None`` does) and Rx(α)z in the modified one (z of {i−1} is joint i − 1's).
     """
 
     d: float = 0.0
@@ -101,6 +104,9 @@ def model_from_dh(links: Sequence[Any], convention: str = "standard", gravity: A
     prev_offset = homogeneous(base, "base") if base is not None else np.eye(4)
     last_link_frame = np.eye(4)
     for i, row in enumerate(rows):
+        motor = row.motor
+        if motor is not None and motor.axis is not None:  # from DH frame {i−1} to the frame of joint i − 1
+            motor = replace(motor, axis=prev_offset[:3, :3] @ motor.axis)  # (whose offset to {i−1} this is)
         if convention == "standard":
             placement = prev_offset
             link_frame = _std(row)  # a prismatic joint moves along z: d is a constant offset
@@ -111,8 +117,8 @@ def model_from_dh(links: Sequence[Any], convention: str = "standard", gravity: A
             prev_offset = np.eye(4)
         last_link_frame = link_frame
         body = Link(row.mass, row.com, row.inertia, row.physical).transformed(link_frame[:3, :3], link_frame[:3, 3])
-        joints.append(Joint(row.name or f"joint{i + 1}", row.kind, _Z, placement, body, row.motor,
-                            row.friction, row.limits))
+        joints.append(Joint(row.name or f"joint{i + 1}", row.kind, _Z, placement, body, motor, row.friction,
+                            row.limits))
     tool_t = last_link_frame @ homogeneous(tool, "tool")
     frames = (Frame("tool", len(joints), tool_t),)
     return RobotModel(tuple(joints), name=name, gravity=gravity, frames=frames, tool_frame="tool")
