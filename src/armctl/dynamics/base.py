@@ -329,7 +329,8 @@ class Dynamics(ABC):
         return self._kinetic(self._q(q), self._q(qd, "qd"))
 
     def potential_energy(self, q: ArrayLike) -> float:
-        """U = −Σ m_i g₀ᵀ p_Ci [J], zero with every centre of mass at the world origin's height."""
+        """U = −Σ m_i g₀ᵀ p_Ci [J] over the model's links, zero with every centre of mass at the world origin's
+        height (links a ``reduced(lock=...)`` merged into the world are not counted: a constant)."""
         return self._potential(self._q(q))
 
     def parameters(self) -> FloatArray:

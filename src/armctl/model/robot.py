@@ -335,7 +335,10 @@ class RobotModel:
         to the joint that now carries them, the world for links merged into it), a motor's explicit spin
         axis is re-expressed in the link its rotor now rides on, the locked joints' motors and friction are
         dropped (they no longer move), and a default tool frame (``tool_frame=None``: the last joint's) is
-        kept by name if that joint is locked. Raises :class:`~armctl.errors.UnknownNameError` for an unknown
+        kept by name if that joint is locked. Links merged into the world (locking the first joints) no longer
+        move and are no longer in the model: the dynamics are the full arm's held at the lock, but
+        ``potential_energy`` differs from the full arm's by their constant potential energy. Raises
+        :class:`~armctl.errors.UnknownNameError` for an unknown
         joint, :class:`~armctl.errors.NonFiniteError` for a non-finite lock position and
         :class:`~armctl.errors.InvalidParameterError` for a lock position that is not a number or locking every
         joint."""
