@@ -33,3 +33,9 @@ def test_subpackage_attribute(name: str) -> None:
 def test_unknown_attribute_is_an_attribute_error() -> None:
     with pytest.raises(AttributeError, match="no attribute 'tunning'"):
         armctl.tunning  # noqa: B018
+
+
+def test_sweep_is_where_the_design_puts_it_too() -> None:
+    from armctl.sim import sweep
+
+    assert armctl.tuning.sweep is sweep  # DESIGN.md's layout: tuning/ (python-control, sweeps)
