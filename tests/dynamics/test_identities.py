@@ -136,3 +136,22 @@ def test_coulomb_column_gives_each_level(backend: str) -> None:
         y_id = identification_regressor(dyn, q, qd, qdd)
         np.testing.assert_array_equal(y_id[np.arange(3), 13 * np.arange(3) + 12], np.sign(qd))
         np.testing.assert_allclose(y_id @ pi + dyn.coulomb_offset(qd), tau, rtol=1e-12, atol=1e-12)
+
+
+@pytest.mark.parametrize("scale", [0.1, 0.5, 2.0])
+def test_a_model_built_from_parameters_is_what_the_regressor_predicts(scale: float) -> None:
+    """with_parameters(θ) keeps the model's ratio of the two Coulomb levels, as the regressor's Coulomb column
+    does: Y(x) θ is the new model's τ, for θ with every Coulomb entry scaled (puma560, asymmetric), and the
+    levels are F_c± scaled alike (read from the new model's joints)."""
+    model = armctl.models.puma560()
+    theta = model.parameters().copy()
+    theta[12::13] *= scale
+    new = model.with_parameters(theta, physical=False)
+    for old_j, new_j in zip(model.joints, new.joints, strict=True):
+        assert new_j.friction.coulomb == pytest.approx(scale * old_j.friction.coulomb, rel=1e-12)
+        assert new_j.friction.coulomb_neg == pytest.approx(scale * old_j.friction.coulomb_neg, rel=1e-12)
+    y_of, tau_of = armctl.Dynamics(model), armctl.Dynamics(new)
+    rng = np.random.default_rng(1)
+    for q, qd, qdd in rng.uniform(-1.5, 1.5, (5, 3, 6)):
+        np.testing.assert_allclose(y_of.regressor(q, qd, qdd) @ theta, tau_of.inverse_dynamics(q, qd, qdd),
+                                   rtol=1e-12, atol=1e-12)

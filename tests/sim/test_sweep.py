@@ -93,6 +93,8 @@ def test_errors_in_a_process_pool_arrive_with_their_message() -> None:
     with pytest.raises(ArmctlError, match=r"_Unpicklable: broken with 1 and 2 \(raised in a worker") as info:
         sweep(cases(GAINS[:1]), run=_raises_unpicklable, max_workers=1, progress=False)
     assert "_raises_unpicklable" in str(info.value)  # the worker's traceback
+    with pytest.raises(_Unpicklable, match="broken with 1 and 2"), ThreadPoolExecutor(2) as pool:
+        sweep(cases(GAINS[:1]), run=_raises_unpicklable, executor=pool, progress=False)  # threads: as it is
 
 
 def test_every_error_class_pickles() -> None:

@@ -87,11 +87,14 @@ def test_presets_folder_search_order(tmp_path: Path, monkeypatch: pytest.MonkeyP
     from armctl.tuning import presets
 
     checkout, installed = tmp_path / "repo" / "controllers", tmp_path / "prefix" / "share" / "armctl" / "controllers"
-    monkeypatch.setattr(presets, "_candidates", lambda: (checkout, installed))
+    user = tmp_path / "home" / ".local" / "share" / "armctl" / "controllers"
+    monkeypatch.setattr(presets, "_candidates", lambda: (checkout, installed, user))
     monkeypatch.delenv("ARMCTL_PRESETS", raising=False)
-    assert presets.presets_dir() == checkout  # neither exists
+    assert presets.presets_dir() == checkout  # none exists
     with pytest.raises(ModelLoadError, match=r"no preset s\.m\.toml in .*repo.*ARMCTL_PRESETS"):
         load_preset("s", "m")
+    write_preset("s", "m", {"kp": 3.0}, "user", "test", user)
+    assert presets.presets_dir() == user and load_preset("s", "m")["how"] == "user"
     write_preset("s", "m", {"kp": 2.0}, "installed", "test", installed)
     assert presets.presets_dir() == installed and load_preset("s", "m")["how"] == "installed"
     write_preset("s", "m", {"kp": 1.0}, "checkout", "test", checkout)
@@ -113,3 +116,4 @@ def test_the_package_ships_every_preset() -> None:
     files = sorted(p for pattern in shipped for p in root.glob(pattern))
     assert files == sorted((root / "controllers").glob("*.toml")) and len(files) >= 17
     assert presets._candidates()[1] == Path(sys.prefix) / "share" / "armctl" / "controllers"
+    assert len(presets._candidates()) == 3  # and the user base's (pip install --user)

@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+import scipy.linalg
 from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray, Gain, boolean, scalar, vector
@@ -55,11 +56,12 @@ class Adaptive(SlidingGains, Controller):
     simulation studies only: each step then also logs ``last_log["V"]``, the Lyapunov function
     V = ½ sᵀM(q)s + ½ θ̃ᵀΓ⁻¹θ̃ with the plant's M and θ̃ = θ̂ − π_plant (θ̂ after this step's update), so a run's
     ``res.logs["V"]`` is V(t). The law never uses it (a real controller knows neither M nor π); it costs one
-    mass-matrix evaluation a step.
+    mass-matrix evaluation a step (and with a full Γ two triangular solves).
     """
 
     _outside = False  # whether the last projection changed θ̂ (see _project); reset() clears it
     _plant: Dynamics | None = None  # (a class default too: objects pickled before plant existed)
+    _gamma_factor: Any = None
 
     gamma = Gain("Γ (13n×13n).", size=lambda owner: 13 * owner.n)
 
@@ -124,12 +126,18 @@ class Adaptive(SlidingGains, Controller):
         q, s = vector(q, self.n, "q"), vector(s, self.n, "s")
         err = (self.theta if theta is None else vector(theta, 13 * self.n, "theta")) - self._plant.parameters()
         gamma = self._gamma
-        weighted = err / gamma if gamma.ndim == 1 else np.linalg.solve(gamma, err)
+        if gamma.ndim == 1:
+            weighted = err / gamma
+        else:  # a full Γ: its Cholesky factor, formed once per Γ
+            if self._gamma_factor is None:
+                self._gamma_factor = scipy.linalg.cho_factor(gamma)
+            weighted = scipy.linalg.cho_solve(self._gamma_factor, err)
         return 0.5 * float(s.dot(self._plant.mass_matrix(q).dot(s)) + err.dot(weighted))
 
     def _gains_changed(self) -> None:
         super()._gains_changed()
         self._dt, self._gamma_dt = 0.0, None  # Γ·dt formed anew at the next update
+        self._gamma_factor: Any = None  # and Γ's Cholesky factor, for V
 
     def reset(self) -> None:
         super().reset()

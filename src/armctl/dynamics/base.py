@@ -131,7 +131,8 @@ class Dynamics(ABC):
     def _rigid_regressor(self, q: FloatArray, qd: FloatArray, qdd: FloatArray,
                          friction: tuple[FloatArray, FloatArray] | None = None) -> FloatArray:
         """n × 13n regressor of M q̈ + C q̇ + g; the friction columns hold ``friction`` = (v, w): the viscous
-        column's diagonal v and the Coulomb column's sgn(w), or zeros."""
+        column's diagonal v and the Coulomb column's :meth:`_coulomb_column` of w (sgn w for a symmetric
+        friction), or zeros."""
 
     @abstractmethod
     def _jacobian(self, q: FloatArray, frame: str | None) -> FloatArray: ...

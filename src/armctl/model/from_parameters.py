@@ -74,17 +74,22 @@ def model_from_parameters(model: RobotModel, pi: ArrayLike, coulomb_offset: Arra
     """``model`` with its inertial, rotor and friction parameters replaced by π (13 n,), laid out as
     :meth:`RobotModel.parameters` returns them; kinematics, limits and frames unchanged.
 
-    coulomb_offset: (n,) asymmetry δ = ½(F_c⁺ − F_c⁻) [N·m] (default: the model's own); both levels must
-    stay ≥ 0. physical: require every link inertia to satisfy the triangle inequality (False accepts, like
-    the published Puma 560, positive semi-definite tensors that do not). Static friction is kept where it
+    coulomb_offset: (n,) asymmetry δ = ½(F_c⁺ − F_c⁻) [N·m] (default: the model's own ratio δ/F̄_c of the two
+    levels applied to π's Coulomb entry F̄_c, as the regressor's Coulomb column carries it, so that
+    ``Dynamics(model).regressor(x) @ pi`` is the new model's inverse dynamics); both levels must stay ≥ 0.
+    physical: require every link inertia to satisfy the triangle inequality (False accepts, like the
+    published Puma 560, positive semi-definite tensors that do not). Static friction is kept where it
     stays above the new Coulomb levels and dropped otherwise; the Stribeck velocity is kept.
     ``model_from_parameters(m, m.parameters())`` rebuilds ``m``'s dynamics exactly.
     """
     n = model.n
     physical = boolean(physical, "physical")
     p = vector(pi, PARAMS_PER_JOINT * n, "pi").reshape(n, PARAMS_PER_JOINT)
-    if coulomb_offset is None:
-        delta = np.array([0.5 * (j.friction.coulomb - j.friction.coulomb_neg) for j in model.joints])
+    if coulomb_offset is None:  # the model's ratio ρ = δ / F̄_c (Dynamics.coulomb_column), scaled with π's F̄_c
+        pos = np.array([j.friction.coulomb for j in model.joints])
+        neg = np.array([j.friction.coulomb_neg for j in model.joints])
+        ratio = np.divide(pos - neg, pos + neg, out=np.zeros(n), where=pos + neg > 0)
+        delta = ratio * p[:, 12]
     else:
         delta = vector(coulomb_offset, n, "coulomb_offset")
     joints = []

@@ -120,7 +120,7 @@ class RobotModel:
         mass = sum(j.link.mass for j in self.joints)
         return (f"RobotModel({self.name!r}: {self.n} joints {kinds}, {mass:.4g} kg of links, "
                 f"motors={self.has_motors}, friction={self.has_friction}, tool_frame={self.tool_frame!r}, "
-                f"gravity={self.gravity.tolist()}, {len(self.frames)} extra frames)")
+                f"gravity={self.gravity.tolist()}, {len(self.frames)} named frames besides the joints)")
 
     @property
     def joint_names(self) -> tuple[str, ...]:

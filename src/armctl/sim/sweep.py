@@ -20,7 +20,7 @@ import sys
 import time
 import traceback
 from collections.abc import Callable, Iterable, Mapping
-from concurrent.futures import Executor, Future, ProcessPoolExecutor, as_completed
+from concurrent.futures import Executor, Future, ProcessPoolExecutor, ThreadPoolExecutor, as_completed
 from typing import Any, TextIO
 
 import numpy as np
@@ -113,8 +113,9 @@ def sweep(cases: Iterable[Mapping[str, Any]], *, run: Callable[..., Any] | None 
     pool: Executor = ProcessPoolExecutor(max_workers or os.cpu_count() or 1) if own else executor  # type: ignore[assignment]
     results: list[Any] = [None] * len(case_list)
     try:
-        futures: dict[Future[Any], int] = {pool.submit(_run_case_in_worker, run, c, summary): i
-                                           for i, c in enumerate(case_list)}
+        # threads share this process: nothing is pickled, so exceptions travel as they are
+        work = _run_case if isinstance(pool, ThreadPoolExecutor) else _run_case_in_worker
+        futures: dict[Future[Any], int] = {pool.submit(work, run, c, summary): i for i, c in enumerate(case_list)}
         if bar:
             bar.update(0)
         for done, fut in enumerate(as_completed(futures), start=1):

@@ -11,8 +11,9 @@ A preset records the gains and how they were found::
     kd = 40.0
 
 Gains are scalars or lists (a diagonal). The folder is ``$ARMCTL_PRESETS`` if set, else ``controllers/`` at the
-root of the source checkout armctl runs from (an editable install), else ``<prefix>/share/armctl/controllers``,
-where a non-editable install puts the presets shipped with it.
+root of the source checkout armctl runs from (an editable install), else ``<prefix>/share/armctl/controllers``
+(or the user base's, after ``pip install --user``), where a non-editable install puts the presets shipped with
+it.
 """
 
 from __future__ import annotations
@@ -44,8 +45,12 @@ def presets_dir() -> Path:
 
 
 def _candidates() -> tuple[Path, ...]:
-    """The source checkout's controllers/, then the installed copy's."""
-    return (Path(__file__).resolve().parents[3] / "controllers", Path(sys.prefix) / "share" / "armctl" / "controllers")
+    """The source checkout's controllers/, then the installed copy's (``pip install``, then ``--user``)."""
+    import site
+
+    share = Path("share") / "armctl" / "controllers"
+    return (Path(__file__).resolve().parents[3] / "controllers", Path(sys.prefix) / share,
+            Path(site.getuserbase()) / share)
 
 
 def preset_path(scene: str, method: str, folder: Path | None = None) -> Path:

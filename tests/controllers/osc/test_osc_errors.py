@@ -210,3 +210,12 @@ def test_a_pulling_contact_force_target_is_refused_with_the_sign_convention() ->
     with pytest.raises(InvalidParameterError, match="a pull"):
         task.target(1.0)
     assert ContactForceTask(wall, 0.0).target(0.0).tolist() == [0.0]  # zero: allowed (no force wanted)
+    # round-off is not a pull: a tangential target on a tilted fixed contact, a ramp that ends at zero
+    for tilt in np.linspace(0.0, np.pi / 2, 50):
+        normal = np.array([0.0, np.sin(tilt), np.cos(tilt)])
+        tangent = np.array([0.0, np.cos(tilt), -np.sin(tilt)])
+        ContactForceTask(Contact(normal=normal), 7.0 * tangent).target(0.0)
+    ramp = ContactForceTask(wall, lambda t: 0.3 - 0.1 * t)
+    assert abs(ramp.target(3.0)[0]) < 1e-15
+    with pytest.raises(InvalidParameterError, match="a pull"):
+        ContactForceTask(wall, -1e-6)  # a micronewton pull is one

@@ -55,7 +55,8 @@ class ContactForceTask(Task):
             a = np.atleast_1d(self.contact.normal @ a if a.shape == (3,) else a)
         a = vector(a, self.dim, f"{self.name}: force")
         normal = float(a[0]) if self.normal_only else float(self.contact.normal @ a)
-        if normal < 0.0:
+        # round-off is not a pull: a tangential target on a tilted normal, a ramp ending at 0 (1 nN floor)
+        if normal < -1e-9 * max(float(np.abs(a).max()), 1.0):
             raise InvalidParameterError(
                 f"{self.name}: the target force {a.tolist()} has a normal component of {normal:g} N, a pull that a "
                 f"contact cannot give. The force is the environment's on the robot, along the normal "
