@@ -213,6 +213,46 @@ def test_scene_gains_are_checked(pendulum_run: tuple[Any, SimResult]) -> None:
     assert sc.controller("adaptive").projection is True  # the preset
 
 
+def test_limit_violations_of_each_kind(pendulum_run: tuple[Any, SimResult]) -> None:
+    """Shares of samples beyond the effort limit, the velocity limit by more than 1 %, and the position range,
+    counted here from the plant's limits on a run doctored sample by sample."""
+    sc, res = pendulum_run
+    joint = sc.plant.joints[0]  # the pendulum has no position range: give its plant one
+    limits = dataclasses.replace(joint.limits, lower=-1.0, upper=1.0)
+    sc = dataclasses.replace(sc, plant=dataclasses.replace(sc.plant, joints=(dataclasses.replace(joint,
+                                                                                                  limits=limits),)))
+    p = sc.plant
+    n = len(res.t)
+    tau, qd, q = res.tau.copy(), res.qd.copy(), res.q.copy()
+    tau[:3] = 2.0 * p.effort_limit  # 3 samples over the effort limit
+    qd[3:8] = 1.02 * p.velocity_limit  # 5 over the velocity limit by 2 %
+    qd[8:10] = 1.005 * p.velocity_limit  # 2 within the 1 % tolerance
+    q[9:11] = p.upper + 1e-3  # 2 outside the position range (one shared with the velocity rows)
+    doctored = dataclasses.replace(res, tau=tau, qd=qd, q=q)
+    got = sc.limit_violations(doctored)
+    assert got["torque_violation_share"] == pytest.approx(3 / n)
+    assert got["velocity_violation_share"] == pytest.approx(5 / n)
+    assert got["position_violation_share"] == pytest.approx(2 / n)
+    assert got["limit_violation_share"] == pytest.approx(10 / n)  # rows 0–7 and 9–10
+    m = sc.metrics(doctored, "pd_gravity", timing_samples=3, timing_rounds=2)
+    assert {k: m[k] for k in got} == got
+
+
+def test_compute_time_is_a_median_of_replays(pendulum_run: tuple[Any, SimResult],
+                                             monkeypatch: pytest.MonkeyPatch) -> None:
+    import armctl.scenes.base as base
+
+    sc, res = pendulum_run
+    window = sc.replay_window(res, 7)
+    assert len(window["t"]) == 7 and window["t"][0] == pytest.approx(float(res.t[7]))  # the middle of 21
+    calls: list[int] = []
+    monkeypatch.setattr(base, "replay_times", lambda ctrl, w, passes: calls.append(passes) or
+                        [100.0, 3.0, 1.0, 2.0, 50.0, 4.0][:passes])
+    assert sc.compute_time("pd_gravity", window, rounds=5) == 3.0  # median of the five after the warm-up
+    assert calls == [6]
+    assert math.isnan(sc.compute_time("pd_gravity", {"t": [], "q": [], "qd": [], "ref": []}))
+
+
 def test_dynamics_of_an_unknown_model_is_a_named_error(pendulum_run: tuple[Any, SimResult]) -> None:
     sc, _ = pendulum_run
     with pytest.raises(UnknownNameError, match=r"unknown scene model 'foo'; valid scene models: 'plant', 'exact', "

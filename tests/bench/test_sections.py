@@ -188,7 +188,8 @@ def test_term_shares_by_hand() -> None:
     out = fidelity.term_shares(terms)
     assert out["rms"] == pytest.approx({"a": 5.0, "b": 1.0, "c": 0.0})
     assert out["shares"] == pytest.approx({"a": 5.0 / 6.0, "b": 1.0 / 6.0, "c": 0.0})
-    assert out["total_rms"] == pytest.approx(6.0)
+    assert out["sum_of_term_rms"] == pytest.approx(6.0)
+    assert out["required_rms"] == pytest.approx(np.sqrt((32.0 + 20.0) / 2))  # rows (4, 4) and (2, 4)
     assert out["rms_per_joint"]["a"] == pytest.approx([3.0, 4.0])
     assert out["rms_per_joint"]["b"] == pytest.approx([1.0, 0.0])
 
@@ -255,3 +256,14 @@ def test_choose_tie_prefers_fewer_terms() -> None:
     assert fidelity.choose(cands, "full", factor=2.0, tie=0.1) == "lean"
     assert fidelity.choose(cands, "full", factor=2.0, tie=0.0) == "full"
     assert fidelity.choose(cands, "full", factor=4.0, tie=0.1) == "bad"
+
+
+def test_the_adaptive_stability_map_adapts_with_the_scene_preset_gain() -> None:
+    """Not Γ → 0 (which made the map the passivity-based one): the pendulum scene's preset Γ."""
+    from armctl.bench import stability
+    from armctl.tuning.presets import load_preset
+
+    ctrl = stability.make_controller("adaptive", 1.0, 2.0)
+    gamma = np.asarray(load_preset("pendulum", "adaptive")["gains"]["gamma"])
+    np.testing.assert_array_equal(ctrl.gamma, np.diag(gamma))
+    assert not ctrl.projection

@@ -32,6 +32,11 @@ def test_bench_quick_writes_every_scene_and_controller(tmp_path: Path) -> None:
             assert (name, method) in rows
     for r in rows.values():
         assert _finite([r["rms_error"], r["max_error"], r["compute_s"], r["torque_rms"]])
+        # timed in the main process after the runs, as a median of interleaved replays
+        assert r["compute_timing"].startswith("median of 5 interleaved replays")
+        assert r["compute_s_iqr"][0] <= r["compute_s"] <= r["compute_s_iqr"][1]
+        assert {"torque_violation_share", "velocity_violation_share", "position_violation_share"} <= set(r)
+        assert "window" not in r  # the replayed states stay out of figures.json
     for name in SCENES:
         if (name, "computed_torque_reduced") in rows:
             assert rows[(name, "computed_torque")]["rms_error"] < rows[(name, "computed_torque_reduced")]["rms_error"]

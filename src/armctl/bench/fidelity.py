@@ -41,7 +41,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from armctl._checks import FloatArray
-from armctl.bench.report import pyplot, save_figure, section_main
+from armctl.bench.report import plain_log_ticks, pyplot, save_figure, section_main
 
 if TYPE_CHECKING:
     from armctl.controllers.base import Controller
@@ -94,12 +94,16 @@ def model_terms(exact: RobotModel, plant: RobotModel, reference: Callable[[float
 
 
 def term_shares(terms: dict[str, FloatArray]) -> dict[str, Any]:
-    """RMS [N·m] of every term, √(mean_s ‖term(s)‖²), and its share of the sum of RMS (shares sum to 1)."""
+    """RMS [N·m] of every term, √(mean_s ‖term(s)‖²), and its share of the sum of the terms' RMS
+    (``sum_of_term_rms``; shares sum to 1); ``required_rms``: the RMS of the required torque itself, the sum of
+    the terms (smaller than ``sum_of_term_rms`` where terms cancel)."""
     rms = {k: float(np.sqrt((v**2).sum(axis=1).mean())) for k, v in terms.items()}
     total = sum(rms.values())
     shares = {k: (r / total if total > 0 else 0.0) for k, r in rms.items()}
     per_joint = {k: np.sqrt((v**2).mean(axis=0)).tolist() for k, v in terms.items()}
-    return {"rms": rms, "shares": shares, "rms_per_joint": per_joint, "total_rms": total}
+    required = sum(terms.values())
+    return {"rms": rms, "shares": shares, "rms_per_joint": per_joint, "sum_of_term_rms": total,
+            "required_rms": float(np.sqrt((required**2).sum(axis=1).mean())) if len(terms) else 0.0}
 
 
 def candidate_models(exact: RobotModel, backends: tuple[str, ...]
@@ -237,8 +241,6 @@ def plot(data: dict[str, Any], path: Path) -> None:
     against compute time per step for the candidate models, the threshold drawn and the choice ringed;
     writes a PNG to ``path``."""
     plt = pyplot()
-    from matplotlib.ticker import NullFormatter
-
     scenes = data["scenes"]
     fig, axes = plt.subplots(1, 1 + len(scenes), figsize=(4.2 * (1 + len(scenes)), 4.6), squeeze=False)
     ax = axes[0][0]
@@ -258,24 +260,24 @@ def plot(data: dict[str, Any], path: Path) -> None:
         cl = scenes[name]["closed_loop"]
         for c in cl["candidates"].values():
             err = c["rms_error"] if math.isfinite(c["rms_error"]) else np.nan
-            ax.scatter([c["compute_s"]], [err], marker=markers[c["backend"]], color="C3" if c["diverged"] else "C0",
-                       zorder=3)
+            us = c["compute_s"] * 1e6
+            ax.scatter([us], [err], marker=markers[c["backend"]], color="C3" if c["diverged"] else "C0", zorder=3)
             left = c["backend"] == "pinocchio"  # usually the cheaper: its label goes left, Lagrange's right
-            ax.annotate(c["variant"], (c["compute_s"], err), textcoords="offset points", xytext=(-5 if left else 5, 3),
+            ax.annotate(c["variant"], (us, err), textcoords="offset points", xytext=(-5 if left else 5, 3),
                         ha="right" if left else "left", fontsize=7)
         ch = cl["candidates"][cl["choice"]]
-        ax.scatter([ch["compute_s"]], [ch["rms_error"]], s=220, facecolors="none", edgecolors="C2", linewidths=2,
-                   zorder=4, label=f"choice: {cl['choice']}")
+        ax.scatter([ch["compute_s"] * 1e6], [ch["rms_error"]], s=220, facecolors="none", edgecolors="C2",
+                   linewidths=2, zorder=4, label=f"choice: {cl['choice']}")
         ax.axhline(cl["threshold"], color="C2", ls="--", lw=1, label=f"{data['factor']:g}× full model's error")
-        costs = [c["compute_s"] for c in cl["candidates"].values()]
+        costs = [c["compute_s"] * 1e6 for c in cl["candidates"].values()]
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_xlim(min(costs) / 4.0, max(costs) * 4.0)
-        ax.xaxis.set_minor_formatter(NullFormatter())
+        plain_log_ticks(ax)
         ax.margins(y=0.2)
-        ax.set_xlabel("controller compute time per step [s]")
+        ax.set_xlabel("controller compute time per step [µs]")
         ax.set_ylabel("RMS tracking error [rad]")
-        ax.set_title(f"{name}: computed torque, candidate models", fontsize=10)
+        ax.set_title(f"{name}\ncomputed torque, candidate models", fontsize=10)
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=7, loc="best")
     fig.suptitle("Model no more than a scene needs (○ Pinocchio, □ Lagrange VM)", fontsize=11)

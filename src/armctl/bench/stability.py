@@ -10,7 +10,11 @@ equivalent gains (K_p, K_d) [1/s², 1/s], so the discrete-time analysis of :mod:
 
 * computed torque with gains k·(K_p⁰, K_d⁰) and an inertia estimate M̂ = f·M: (K_p, K_d) = k f (K_p⁰, K_d⁰);
 * PD + gravity with gains k·(K_p⁰, K_d⁰) [N·m/rad, N·m·s/rad]: k (K_p⁰, K_d⁰)/J;
-* passivity-based (and adaptive with slow adaptation) with K_D = k K_D⁰, Λ: (k K_D⁰ Λ/J, fΛ + k K_D⁰/J).
+* passivity-based with K_D = k K_D⁰, Λ: (k K_D⁰ Λ/J, fΛ + k K_D⁰/J).
+
+The adaptive law runs with the adaptation gain Γ of the pendulum scene's preset (no projection), starting
+from the wrong model's θ̂; its border is drawn for θ̂ frozen (the passivity-based one), so cells where
+adaptation itself destabilises the loop fall inside it (with Γ → 0 the map would be the passivity map).
 
 A cell is *stable* when the error shrinks below a tenth of the initial offset, *unstable* when the run
 diverges or the error ends larger than it started, *marginal* otherwise.
@@ -18,6 +22,7 @@ diverges or the error ends larger than it started, *marginal* otherwise.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from concurrent.futures import Executor
@@ -86,8 +91,16 @@ def make_controller(controller: str, k: float, f: float) -> Any:
     if controller == "passivity":
         return PassivityBased(dyn, LAMBDA0, k * LAMBDA0 * j)
     if controller == "adaptive":
-        return Adaptive(dyn, LAMBDA0, k * LAMBDA0 * j, gamma=1e-3)
+        return Adaptive(dyn, LAMBDA0, k * LAMBDA0 * j, gamma=_adaptive_gamma())
     raise KeyError(controller)
+
+
+@functools.cache
+def _adaptive_gamma() -> Any:
+    """Γ of the pendulum scene's adaptive preset (the arm of this scenario, with gravity)."""
+    from armctl.tuning.presets import load_preset
+
+    return np.array(load_preset("pendulum", "adaptive")["gains"]["gamma"], dtype=float)
 
 
 def run_cell(controller: str, k: float, f: float, period: float, duration: float = 2.0, dt_max: float = 1e-3) -> str:
@@ -166,16 +179,20 @@ def plot(data: dict[str, Any], path_for: Callable[[str], Any]) -> list[str]:
         panels = [("rate_gain", "control rate [Hz]", data["rates_hz"])]
         if "gain_error" in data[c]:
             panels.append(("gain_error", "controller inertia / true inertia", data["inertia_factors"]))
-        fig, axes = plt.subplots(1, len(panels), figsize=(5.5 * len(panels), 4.2), squeeze=False)
+        fig, axes = plt.subplots(1, len(panels), figsize=(5.5 * len(panels), 4.8), squeeze=False)
         for ax, (kind, ylabel, ys) in zip(axes[0], panels, strict=True):
             m = data[c][kind]
             for i, y in enumerate(ys):
                 for j, k in enumerate(data["k"]):
                     ax.scatter(k, y, s=160, marker="s", color=colour[m["outcome"][i][j]])
-            ax.plot(m["border_k"], ys, "k--", label="theory: sampled-data border")
+            ax.plot(m["border_k"], ys, "k--", label="theory: sampled-data border"
+                    + (" (θ̂ frozen)" if c == "adaptive" else ""))
             ax.set(xscale="log", yscale="log", xlabel="gain multiplier k", ylabel=ylabel,
                    title=f"{c.replace('_', ' ')}: {kind.replace('_', ' × ')}")
-            ax.legend(loc="lower left", fontsize=8)
+            keys = [plt.Line2D([], [], ls="", marker="s", ms=8, color=colour[o], label=o) for o in colour]
+            handles = [*keys, *ax.get_legend_handles_labels()[0]]
+            # below the axes: inside, the key covered cells
+            ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2, fontsize=8)
         fig.tight_layout()
         name = f"stability_{c}.png"
         fig.savefig(path_for(name), dpi=90)

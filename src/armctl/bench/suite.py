@@ -22,20 +22,48 @@ SCENE_NAMES = ("pendulum", "planar_2r", "panda_topp", "panda_contact")
 
 
 def run_scene_method(scene: str, method: str) -> dict[str, Any]:
-    """Simulate one method on one scene and return its metrics (runs in a worker process)."""
+    """Simulate one method on one scene (runs in a worker process): its metrics, with a rough compute time
+    from one replay, and the window of recorded states that :func:`time_controllers` replays."""
     from armctl.scenes import scene as make
 
     sc = make(scene)
     res = sc.run(method)
-    return {"scene": scene, "method": method, **sc.metrics(res, method)}
+    return {"scene": scene, "method": method, **sc.metrics(res, method, timing_rounds=1),
+            "window": sc.replay_window(res, sc.timing_samples)}
 
 
-def scene_matrix(executor: Executor | str | None = None) -> list[dict[str, Any]]:
+def time_controllers(rows: list[dict[str, Any]], rounds: int) -> None:
+    """Replace each row's ``compute_s`` by a figure measured in this process once every simulation is done
+    (in a worker it ran beside another simulation on a 2-core machine, and one pass swung ×5 from run to
+    run): per scene, every method's controller replays its window in interleaved rounds (one warm-up
+    round), and ``compute_s`` is the median, with its quartiles in ``compute_s_iqr``."""
+    from armctl.scenes import scene as make
+    from armctl.scenes.base import replay_times
+
+    for name in dict.fromkeys(r["scene"] for r in rows):
+        sc = make(name)
+        mine = [r for r in rows if r["scene"] == name and len(r["window"]["t"])]
+        ctrls = [sc.controller(r["method"]) for r in mine]
+        times: list[list[float]] = [[] for _ in mine]
+        for _ in range(rounds + 1):
+            for ctrl, r, out in zip(ctrls, mine, times, strict=True):
+                out += replay_times(ctrl, r["window"], 1)
+        for r, out in zip(mine, times, strict=True):
+            q1, med, q3 = np.quantile(out[1:], [0.25, 0.5, 0.75])
+            r["compute_s"], r["compute_s_iqr"] = float(med), [float(q1), float(q3)]
+            r["compute_timing"] = f"median of {rounds} interleaved replays of {len(r['window']['t'])} recorded steps"
+    for r in rows:
+        del r["window"]
+
+
+def scene_matrix(executor: Executor | str | None = None, rounds: int = 9) -> list[dict[str, Any]]:
     from armctl.scenes import SCENES, scene
     from armctl.sim import sweep
 
     cases = [{"scene": name, "method": m} for name in SCENE_NAMES if name in SCENES for m in scene(name).methods]
-    return sweep(cases, run=run_scene_method, executor=executor, progress=True)
+    rows = sweep(cases, run=run_scene_method, executor=executor, progress=True)
+    time_controllers(rows, rounds)
+    return rows
 
 
 def pareto_front(points: list[tuple[float, float]]) -> list[int]:
@@ -54,7 +82,8 @@ def plot_pareto(rows: list[dict[str, Any]], path: Path) -> None:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    import matplotlib.ticker
+
+    from armctl.bench.report import plain_log_ticks
 
     scenes = [s for s in SCENE_NAMES if any(r["scene"] == s for r in rows)]
     fig, axes = plt.subplots(1, len(scenes), figsize=(4.6 * len(scenes), 4.0), squeeze=False)
@@ -62,18 +91,22 @@ def plot_pareto(rows: list[dict[str, Any]], path: Path) -> None:
         mine = [r for r in rows if r["scene"] == name and not r["diverged"]]
         pts = [(r["compute_s"] * 1e6, r["rms_error"]) for r in mine]
         front = set(pareto_front(pts))
+        placed: list[tuple[float, float]] = []
         for i, (r, (x, y)) in enumerate(zip(mine, pts, strict=True)):
             ax.scatter(x, y, s=60, color="#d62828" if i in front else "#577590", zorder=3)
-            ax.annotate(r["method"].replace("_", " "), (x, y), fontsize=7, xytext=(4, 3), textcoords="offset points")
+            # a label near an earlier one's point (in decades) goes one line lower for each such neighbour
+            near = sum(1 for px, py in placed if x > 0 and y > 0 and abs(math.log10(x / px)) < 0.25
+                       and abs(math.log10(y / py)) < 0.25)
+            placed.append((x, y))
+            ax.annotate(r["method"].replace("_", " "), (x, y), fontsize=7, xytext=(4, 3 - 10 * near),
+                        textcoords="offset points")
         fx = sorted(pts[i] for i in front)
         if fx:
             ax.plot(*zip(*fx, strict=True), color="#d62828", lw=1, label="Pareto front")
         ax.set(xscale="log", yscale="log", xlabel="compute time per control step [µs]",
                ylabel="RMS tracking error [rad]" if name != "panda_contact" else "RMS tool position error [m]",
                title=name)
-        xs = [x for x, _ in pts if x > 0]
-        if xs and max(xs) / min(xs) > 10:  # minor labels collide over several decades (set after set_xscale)
-            ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+        plain_log_ticks(ax)
         ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=90)
@@ -127,12 +160,14 @@ def run_suite(quick: bool = False, out: Path = Path("bench-out"), executor: Exec
         figures.setdefault("section_seconds", {})[key] = time.perf_counter() - t0
         return figures[key]
 
-    section("scenes", lambda: scene_matrix(executor))
+    section("scenes", lambda: scene_matrix(executor, rounds=5 if quick else 15))
     plot_pareto(figures["scenes"], out / "speed_accuracy.png")
     charts["speed_accuracy.png"] = "Compute time per control step against tracking error, per scene"
     section("stability_maps", lambda: stability.maps(quick=quick, executor=executor))
     for name in stability.plot(figures["stability_maps"], lambda n: out / n):
-        charts[name] = "Stability map (cells simulated, dashed line: sampled-data theory)"
+        who = name.removeprefix("stability_").removesuffix(".png").replace("_", " ")
+        charts[name] = (f"Stability map of {who}: control rate × gain and model error × gain (cells simulated, "
+                        "dashed line: sampled-data theory)")
     section("topp_convergence", lambda: topp_convergence(quick))
     plot_topp(figures["topp_convergence"], out / "topp_convergence.png")
     charts["topp_convergence.png"] = "TOPP-RA duration error and compute time against grid size"
@@ -166,11 +201,17 @@ def _json_default(x: Any) -> Any:
 def summary(figures: dict[str, Any]) -> str:
     from armctl.bench import controller_speed, dynamics_speed
 
-    lines = [f"{'scene':14s} {'method':26s} {'RMS err':>9s} {'max err':>9s} {'step µs':>8s} {'τ RMS':>8s} "
-             f"{'over lim':>8s}  diverged"]
+    lines = ["errors in rad (joint scenes) or m (panda_contact: tool position in the table plane); force: RMS "
+             "normal-force error after settling [N]; over limits: share of samples beyond the effort limit / "
+             "velocity limit (+1 %) / position range",
+             f"{'scene':14s} {'method':26s} {'RMS err':>9s} {'max err':>9s} {'force':>6s} {'step µs':>8s} "
+             f"{'τ RMS':>8s}  {'over τ / q̇ / q':>17s}  diverged"]
     for r in figures.get("scenes", []):
-        lines.append(f"{r['scene']:14s} {r['method']:26s} {r['rms_error']:9.2e} {r['max_error']:9.2e} "
-                     f"{r['compute_s'] * 1e6:8.1f} {r['torque_rms']:8.2f} {r['limit_violation_share']:8.2%}  "
+        force = f"{r['force_rms_error']:6.2f}" if "force_rms_error" in r else f"{'-':>6s}"
+        over = " / ".join(f"{r.get(f'{k}_violation_share', float('nan')):.1%}" for k in ("torque", "velocity",
+                                                                                          "position"))
+        lines.append(f"{r['scene']:14s} {r['method']:26s} {r['rms_error']:9.2e} {r['max_error']:9.2e} {force} "
+                     f"{r['compute_s'] * 1e6:8.1f} {r['torque_rms']:8.2f}  {over:>17s}  "
                      + (f"yes at {r['diverged_at']:.2f} s" if r["diverged"] else "no"))
     for key in ("backends", "integrators", "fidelity"):
         mod = _optional_section(key)

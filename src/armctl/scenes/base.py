@@ -17,10 +17,11 @@ Gains come from the presets in ``controllers/`` (see :mod:`armctl.tuning.presets
 from __future__ import annotations
 
 import inspect
+import statistics
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -60,6 +61,24 @@ def check_gains(method: str, gains: Any, required: tuple[str, ...], optional: tu
     return dict(gains)
 
 
+#: a joint "beyond its velocity limit" in :meth:`Scene.metrics` exceeds it by more than this share (a
+#: time-optimal reference runs exactly at the limit, which tracking then grazes)
+VELOCITY_TOLERANCE = 0.01
+
+
+def replay_times(controller: Controller, window: dict[str, Any], passes: int) -> list[float]:
+    """Seconds per step of each of ``passes`` replays of ``window`` through ``controller`` (reset first)."""
+    out = []
+    for _ in range(passes):
+        if callable(getattr(controller, "reset", None)):
+            controller.reset()
+        t0 = time.perf_counter()
+        for t, q, qd, r in zip(window["t"], window["q"], window["qd"], window["ref"], strict=True):
+            controller(t, q, qd, r)
+        out.append((time.perf_counter() - t0) / len(window["t"]))
+    return out
+
+
 @dataclass
 class Scene:
     """A standard closed-loop setup: the true ``plant``, the controller-side models (``exact``: the plant's
@@ -84,6 +103,7 @@ class Scene:
     sim_options: dict[str, Any] = field(default_factory=dict)
     builders: dict[str, Callable[[Scene, dict[str, Any]], Controller]] = field(default_factory=dict)
     backend: str = "pinocchio"
+    timing_samples: ClassVar[int] = 200  # recorded states :meth:`metrics` replays to time a controller
 
     def dynamics(self, which: str = "exact") -> Dynamics:
         """Dynamics of the ``plant``, ``exact`` or ``reduced`` model (pickles by rebuilding)."""
@@ -134,29 +154,54 @@ class Scene:
                         **options)
 
     def metrics(self, res: Any, method: str, gains: dict[str, Any] | None = None,
-                timing_samples: int = 200) -> dict[str, Any]:
-        """Tracking error (RMS, max) [rad], torque RMS [N·m], share of samples whose command exceeds the
-        effort limits, divergence, and the controller's compute time per step [s], measured by replaying a
-        contiguous window of recorded states (from the middle of the run, as a loop would see them: warm
-        starts stay warm) through a fresh controller, so the simulator's own cost is not counted.
-        ``timing_samples`` (≥ 1): how many states to replay. A run without samples gives NaN for every measure
-        (compute time and limit-violation share included)."""
-        timing_samples = whole_number(timing_samples, "timing_samples", 1)
+                timing_samples: int | None = None, timing_rounds: int = 5) -> dict[str, Any]:
+        """Tracking error (RMS, max) [rad], torque RMS [N·m], the share of samples beyond the plant's limits
+        (``limit_violation_share``: any of ``torque_violation_share``, the command beyond the effort limits;
+        ``velocity_violation_share``, a joint more than :data:`VELOCITY_TOLERANCE` beyond its velocity limit;
+        ``position_violation_share``, a joint outside its position range), divergence, and the controller's
+        compute time per step [s] (``compute_s``, see :meth:`compute_time` on :meth:`replay_window` of
+        ``timing_samples`` states, default :attr:`timing_samples`, in ``timing_rounds`` rounds). A run
+        without samples gives NaN for every measure (compute time and limit-violation shares included)."""
+        timing_samples = whole_number(self.timing_samples if timing_samples is None else timing_samples,
+                                      "timing_samples", 1)
         want = np.array([self.reference(t).q for t in res.t])
         err = np.abs(res.q - want) if len(res.t) else np.zeros((0, self.plant.n))
-        limit = self.plant.effort_limit
-        over = np.abs(res.tau) > limit * (1 + 1e-9) if len(res.t) else np.zeros((0, 1), bool)
-        ctrl = self.controller(method, gains)
-        count = min(timing_samples, len(res.t))
-        first = max((len(res.t) - count) // 2, 0)
-        idx = np.arange(first, first + count)
-        refs = [self.reference(float(res.t[k])) for k in idx]
-        t0 = time.perf_counter()
-        for k, r in zip(idx, refs, strict=True):
-            ctrl(float(res.t[k]), res.q_measured[k], res.qd_measured[k], r)
-        step = (time.perf_counter() - t0) / len(idx) if len(idx) else float("nan")  # nothing to replay
+        shares = self.limit_violations(res)
+        step = self.compute_time(method, self.replay_window(res, timing_samples), gains, timing_rounds)
         return {"rms_error": float(np.sqrt((err**2).mean())) if err.size else float("nan"),
                 "max_error": float(err.max()) if err.size else float("nan"),
                 "torque_rms": float(np.sqrt((res.tau_applied**2).mean())) if len(res.t) else float("nan"),
-                "limit_violation_share": float(over.any(axis=1).mean()) if len(res.t) else float("nan"),
-                "diverged": bool(res.diverged), "diverged_at": res.diverged_at, "compute_s": step}
+                **shares, "diverged": bool(res.diverged), "diverged_at": res.diverged_at, "compute_s": step}
+
+    def limit_violations(self, res: Any) -> dict[str, float]:
+        """Shares of a run's samples beyond the plant's limits (see :meth:`metrics`); NaN without samples."""
+        keys = ("torque", "velocity", "position")
+        if not len(res.t):
+            return {f"{k}_violation_share": float("nan") for k in ("limit", *keys)}
+        p = self.plant
+        over = {"torque": np.abs(res.tau) > p.effort_limit * (1 + 1e-9),
+                "velocity": np.abs(res.qd) > p.velocity_limit * (1 + VELOCITY_TOLERANCE),
+                "position": (res.q < p.lower) | (res.q > p.upper)}
+        rows = {k: v.any(axis=1) for k, v in over.items()}
+        return {"limit_violation_share": float(np.logical_or.reduce(list(rows.values())).mean()),
+                **{f"{k}_violation_share": float(rows[k].mean()) for k in keys}}
+
+    def replay_window(self, res: Any, samples: int = 200) -> dict[str, Any]:
+        """A contiguous window of ``samples`` recorded states from the middle of a run, as the controller
+        measured them (t, q, q̇ and the references), for :meth:`compute_time`."""
+        samples = whole_number(samples, "timing_samples", 1)
+        count = min(samples, len(res.t))
+        idx = np.arange(max((len(res.t) - count) // 2, 0), max((len(res.t) - count) // 2, 0) + count)
+        t = [float(res.t[k]) for k in idx]
+        return {"t": t, "q": res.q_measured[idx].copy(), "qd": res.qd_measured[idx].copy(),
+                "ref": [self.reference(tk) for tk in t]}
+
+    def compute_time(self, method: str, window: dict[str, Any], gains: dict[str, Any] | None = None,
+                     rounds: int = 5) -> float:
+        """Seconds per control step of ``method``'s controller replaying ``window`` (as a loop would see the
+        states: warm starts stay warm), so the simulator's own cost is not counted: the median over
+        ``rounds`` passes after a warm-up pass, the controller reset before each. NaN for an empty window."""
+        rounds = whole_number(rounds, "timing_rounds", 1)
+        if not len(window["t"]):
+            return float("nan")
+        return statistics.median(replay_times(self.controller(method, gains), window, rounds + 1)[1:])
