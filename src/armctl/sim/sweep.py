@@ -65,9 +65,13 @@ def _run_case_in_worker(run: Callable[..., Any], case: Mapping[str, Any],
         try:
             pickle.loads(pickle.dumps(exc))
         except Exception:
-            raise ArmctlError(f"{type(exc).__name__}: {exc} (raised in a worker, and it cannot be pickled, so it "
-                              f"is passed on as text; the worker's traceback:\n{traceback.format_exc()})") from None
-        raise
+            text = (f"{type(exc).__name__}: {exc} (raised in a worker, and it cannot be pickled, so it is passed "
+                    f"on as text; the worker's traceback:\n{traceback.format_exc()})")
+        else:
+            raise
+    # raised here, outside the handler, so that it carries no context: a pickler that follows exception
+    # chains (tblib's, which dask installs) would meet the unpicklable exception again
+    raise ArmctlError(text)
 
 
 def sweep(cases: Iterable[Mapping[str, Any]], *, run: Callable[..., Any] | None = None,
