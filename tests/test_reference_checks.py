@@ -137,3 +137,33 @@ def test_valid_references_keep_their_values() -> None:
         Quintic([0.0, 0.0], 1.0, 1.0)  # a scalar end for two joints stays refused (ambiguous)
     spline = WaypointSpline([0.0, 1.0, 3.0], [[0.0, 0.0], [1.0, 2.0], [0.0, 1.0]])
     assert np.allclose(spline(5.0).q, [0.0, 1.0]) and np.allclose(spline(5.0).qd, 0.0)
+
+
+@pytest.mark.parametrize("field", ["q", "qd", "qdd"])
+@pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
+def test_the_fast_path_still_refuses_non_finite_entries(field: str, bad: float) -> None:
+    """Three float64 vectors take a cheaper check (the sum of their entries); every non-finite entry is still
+    named, finite entries whose sum overflows are still accepted, and the arrays are copies, read-only."""
+    arrays = {k: np.linspace(-1.0, 1.0, 7) for k in ("q", "qd", "qdd")}
+    arrays[field][3] = bad
+    with pytest.raises(NonFiniteError, match=f"Reference {field} holds NaN or inf"):
+        Reference(**arrays)
+    huge = np.full(7, 1e308)
+    ref = Reference(huge, huge, -huge)  # finite: the sum overflows, the entries do not
+    assert np.array_equal(ref.q, huge) and ref.q is not huge and not ref.q.flags.writeable
+    src = np.zeros(7)
+    ref = Reference(src, src, src)
+    src[0] = 5.0  # the caller's buffer changes: the reference does not
+    assert ref.q[0] == 0.0 and not (ref.qd.flags.writeable or ref.qdd.flags.writeable)
+
+
+def test_sinusoid_is_the_formula() -> None:
+    """q = c + a sin(2π f t + φ) and its two derivatives, written out here, at several times and joints."""
+    c, a, f, ph = np.linspace(-1, 1, 4), np.array([0.1, 0.2, 0.0, 0.4]), np.array([0.5, 1.0, 2.0, 0.25]), 0.3
+    ref_fn = Sinusoid(c, a, f, ph)
+    for t in (0.0, 0.37, 2.5):
+        r = ref_fn(t)
+        w = 2 * np.pi * f
+        np.testing.assert_allclose(r.q, c + a * np.sin(w * t + ph), rtol=1e-15, atol=1e-15)
+        np.testing.assert_allclose(r.qd, a * w * np.cos(w * t + ph), rtol=1e-14, atol=1e-15)
+        np.testing.assert_allclose(r.qdd, -a * w**2 * np.sin(w * t + ph), rtol=1e-14, atol=1e-14)

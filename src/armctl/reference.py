@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -22,6 +23,24 @@ class Reference:
     qdd: FloatArray | None = None
 
     def __post_init__(self) -> None:
+        q, qd, qdd = self.q, self.qd, self.qdd
+        # the usual case, built every control period by a reference generator: three float64 vectors of one
+        # length with a finite sum (a sum that overflows goes the slow way, which checks entry by entry)
+        if (q.__class__ is qd.__class__ is qdd.__class__ is np.ndarray and q.dtype is qd.dtype is qdd.dtype is FLOAT
+                and q.ndim == 1 and q.shape == qd.shape == qdd.shape and q.shape[0]):
+            q, qd, qdd = q.copy(), qd.copy(), qdd.copy()
+            if math.isfinite(sum(q.tolist()) + sum(qd.tolist()) + sum(qdd.tolist())):
+                q.setflags(write=False)  # (cheaper than through .flags)
+                qd.setflags(write=False)
+                qdd.setflags(write=False)
+                object.__setattr__(self, "q", q)
+                object.__setattr__(self, "qd", qd)
+                object.__setattr__(self, "qdd", qdd)
+                return
+        self._checked()
+
+    def _checked(self) -> None:
+        """Convert and check the three fields entry by entry, naming what is wrong."""
         if self.q is None:
             raise InvalidParameterError("Reference q must hold real numbers (q is required: the joint positions), "
                                         "got None", value=None)

@@ -86,16 +86,23 @@ class Sinusoid:
         for name in ("amplitude", "frequency", "phase"):
             object.__setattr__(self, name, _row(getattr(self, name), name, c.size, broadcast=True))
         object.__setattr__(self, "center", c)
+        # the per-call factors, formed once: ω = 2π f, a ω and −a ω² (a call is then eight vector operations)
+        w = 2 * math.pi * self.frequency  # type: ignore[operator]
+        object.__setattr__(self, "_w", w)
+        object.__setattr__(self, "_aw", self.amplitude * w)  # type: ignore[operator]
+        object.__setattr__(self, "_maww", -self.amplitude * w * w)  # type: ignore[operator]
 
     def __call__(self, t: float) -> Reference:
         """The reference at time ``t`` [s] (a real finite scalar)."""
         if t.__class__ is not float or t - t != 0.0:  # t - t: NaN for NaN and ±inf
             t = scalar(t, "t")  # a real finite scalar, or raise naming t
-        w = 2 * math.pi * self.frequency  # type: ignore[operator]
-        arg = w * t + self.phase
-        s, c = np.sin(arg), np.cos(arg)
-        return Reference(self.center + self.amplitude * s, self.amplitude * w * c,  # type: ignore[operator]
-                         -self.amplitude * w * w * s)  # type: ignore[operator]
+        arg = self._w * t  # type: ignore[attr-defined]
+        arg += self.phase
+        s = np.sin(arg)
+        q = self.amplitude * s  # type: ignore[operator]
+        q += self.center
+        s *= self._maww  # type: ignore[attr-defined]
+        return Reference(q, self._aw * np.cos(arg), s)  # type: ignore[attr-defined]
 
 
 class WaypointSpline:
