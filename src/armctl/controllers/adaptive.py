@@ -137,7 +137,7 @@ class Adaptive(SlidingGains, Controller):
     def _gains_changed(self) -> None:
         super()._gains_changed()
         self._dt, self._gamma_dt = 0.0, None  # Γ·dt formed anew at the next update
-        self._gamma_factor: Any = None  # and Γ's Cholesky factor, for V
+        self._gamma_factor = None  # and Γ's Cholesky factor, for V
 
     def reset(self) -> None:
         super().reset()
