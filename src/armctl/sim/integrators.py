@@ -114,23 +114,32 @@ def fast_step(name: str, plant: Plant) -> Callable[..., tuple[FloatArray, FloatA
         return None
     fwd = plant._forward
     # RK4 as linear combinations of the rows [q, q̇, a₁, a₂, a₃, a₄] of one array: each stage's (q, q̇) is one
-    # small matrix product of the rows computed so far, instead of four vector operations (which dominated)
-    rows = np.zeros((6, plant.n))
+    # small matrix product of the rows computed so far, instead of four vector operations (which dominated).
+    # Two such arrays take turns: a step writes its (q₁, q̇₁) straight into the first two rows of the other,
+    # and returns views of them, which the next step finds in place (no copy in); the views stay valid
+    # until the step after next overwrites them, which is all the simulator needs (it stores q and q̇ at once)
+    bufs = [np.zeros((6, plant.n)), np.zeros((6, plant.n))]
+    views = [(b, b[:3], b[:4], b[:5], b[0], b[1], b[:2]) for b in bufs]  # slices made once, not per stage
+    turn = [0]
 
     def rk4_step(q: FloatArray, v: FloatArray, tau: FloatArray, h: float
                  ) -> tuple[FloatArray, FloatArray, FloatArray]:
         c0, c1, c2, c3 = _rk4_coefficients(h)  # ``.dot``: a third of the cost of ``@`` on these small arrays
-        rows[0] = q
-        rows[1] = v
+        rows, rows3, rows4, rows5, row_q, row_v, _ = views[turn[0]]
+        if row_q is not q or row_v is not v:  # not the last step's result: copy the state in
+            row_q[...] = q
+            row_v[...] = v
         rows[2] = a1 = fwd(q, v, tau)
-        x = c0.dot(rows[:3])
+        x = c0.dot(rows3)
         rows[3] = fwd(x[0], x[1], tau)
-        x = c1.dot(rows[:4])
+        x = c1.dot(rows4)
         rows[4] = fwd(x[0], x[1], tau)
-        x = c2.dot(rows[:5])
+        x = c2.dot(rows5)
         rows[5] = fwd(x[0], x[1], tau)
-        x = c3.dot(rows)
-        return x[0], x[1], a1
+        turn[0] ^= 1
+        _, _, _, _, q1, v1, out = views[turn[0]]
+        c3.dot(rows, out=out)
+        return q1, v1, a1
 
     step_h = [0.0, np.zeros(plant.n)]  # h and h as an (n,) array: a product with an array costs less than
     # one with a Python float, and the in-place additions allocate nothing
