@@ -167,3 +167,25 @@ def test_sinusoid_is_the_formula() -> None:
         np.testing.assert_allclose(r.q, c + a * np.sin(w * t + ph), rtol=1e-15, atol=1e-15)
         np.testing.assert_allclose(r.qd, a * w * np.cos(w * t + ph), rtol=1e-14, atol=1e-15)
         np.testing.assert_allclose(r.qdd, -a * w**2 * np.sin(w * t + ph), rtol=1e-14, atol=1e-14)
+
+
+def test_sinusoid_keeps_copies_and_old_pickles_load() -> None:
+    """The caller's arrays changing afterwards changes nothing (q̇ stays the derivative of q), and a Sinusoid
+    pickled before it kept its per-call factors rebuilds them."""
+    import pickle
+
+    c, a, f = np.zeros(2), np.array([0.3, 0.1]), np.array([0.5, 1.0])
+    ref_fn = Sinusoid(c, a, f)
+    before = ref_fn(0.2)
+    a *= 2.0
+    f *= 3.0
+    after = ref_fn(0.2)
+    assert np.array_equal(before.q, after.q) and np.array_equal(before.qd, after.qd)
+    assert not ref_fn.amplitude.flags.writeable
+    h = 1e-6
+    np.testing.assert_allclose((ref_fn(0.2 + h).q - ref_fn(0.2 - h).q) / (2 * h), after.qd, rtol=1e-7)
+    old_state = {k: v for k, v in ref_fn.__dict__.items() if not k.startswith("_")}
+    old = Sinusoid.__new__(Sinusoid)
+    old.__setstate__(old_state)
+    assert np.array_equal(old(0.2).qdd, after.qdd)
+    assert np.array_equal(pickle.loads(pickle.dumps(ref_fn))(0.2).qd, after.qd)

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, real_array, scalar, vector
+from armctl._checks import FloatArray, readonly, real_array, scalar, vector
 from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError, UnknownNameError
 from armctl.reference import Reference
 
@@ -82,15 +82,25 @@ class Sinusoid:
     phase: ArrayLike = 0.0
 
     def __post_init__(self) -> None:
-        c = _row(self.center, "center")
+        # read-only copies: the factors below are formed from them once, so the fields must not change later
+        c = readonly(np.array(_row(self.center, "center")))
         for name in ("amplitude", "frequency", "phase"):
-            object.__setattr__(self, name, _row(getattr(self, name), name, c.size, broadcast=True))
+            object.__setattr__(self, name, readonly(np.array(_row(getattr(self, name), name, c.size,
+                                                                  broadcast=True))))
         object.__setattr__(self, "center", c)
-        # the per-call factors, formed once: ω = 2π f, a ω and −a ω² (a call is then eight vector operations)
+        self._factors()
+
+    def _factors(self) -> None:
+        """The per-call factors, formed once: ω = 2π f, a ω and −a ω² (a call is then eight vector operations)."""
         w = 2 * math.pi * self.frequency  # type: ignore[operator]
         object.__setattr__(self, "_w", w)
         object.__setattr__(self, "_aw", self.amplitude * w)  # type: ignore[operator]
         object.__setattr__(self, "_maww", -self.amplitude * w * w)  # type: ignore[operator]
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        if "_w" not in state:  # pickled before the factors were kept
+            self._factors()
 
     def __call__(self, t: float) -> Reference:
         """The reference at time ``t`` [s] (a real finite scalar)."""

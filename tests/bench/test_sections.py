@@ -267,3 +267,18 @@ def test_the_adaptive_stability_map_adapts_with_the_scene_preset_gain() -> None:
     gamma = np.asarray(load_preset("pendulum", "adaptive")["gains"]["gamma"])
     np.testing.assert_array_equal(ctrl.gamma, np.diag(gamma))
     assert not ctrl.projection
+
+
+def test_time_controllers_checks_rounds_and_skips_empty_windows() -> None:
+    import math
+
+    from armctl.bench.suite import time_controllers
+    from armctl.errors import InvalidParameterError
+
+    empty = {"t": [], "q": np.zeros((0, 1)), "qd": np.zeros((0, 1)), "ref": []}
+    rows = [{"scene": "pendulum", "method": "pd_gravity", "compute_s": 1.0, "window": empty}]
+    with pytest.raises(InvalidParameterError, match="rounds must be a whole number >= 1, got 0"):
+        time_controllers([dict(rows[0], window=empty)], 0)
+    time_controllers(rows, 2)
+    assert math.isnan(rows[0]["compute_s"]) and rows[0]["compute_timing"] == "no recorded steps to replay"
+    assert "window" not in rows[0]

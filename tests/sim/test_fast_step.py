@@ -39,3 +39,27 @@ def test_fast_rk4_is_rk4_step_after_step_and_keeps_its_results() -> None:
                           np.zeros(7), 1e-3)
     np.testing.assert_allclose(q, ref_q, rtol=1e-13, atol=1e-15)
     assert np.array_equal(q0, q0_copy) and np.array_equal(v0, v0_copy)
+
+
+def test_fast_rk4_takes_its_own_results_in_any_order() -> None:
+    """States that alias the step's own arrays (its last q₁ and q̇₁ swapped, the same array for both, q from two
+    steps back) are read as values, like any other input."""
+    dyn = armctl.Dynamics(armctl.models.panda())
+    step = fast_step("rk4", Plant(dyn))
+    assert step is not None
+
+    def textbook(q: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        q1, v1, _ = rk4(lambda t, q_, v_, tau_: dyn.forward_dynamics(q_, v_, tau_), 0.0, q.copy(), v.copy(),
+                        np.zeros(7), 1e-3)
+        return q1, v1
+
+    rng = np.random.default_rng(5)
+    q1, v1, _ = step(*rng.uniform(-1.0, 1.0, (2, 7)), np.zeros(7), 1e-3)
+    q2, v2, _ = step(q1, v1, np.zeros(7), 1e-3)
+    for q, v in ((v2, q2), (q2, q2), (q1, v2)):  # swapped; one array for both; q two steps back
+        want = textbook(q, v)
+        got_q, got_v, _ = step(q, v, np.zeros(7), 1e-3)
+        np.testing.assert_allclose(got_q, want[0], rtol=1e-13, atol=1e-15)
+        np.testing.assert_allclose(got_v, want[1], rtol=1e-13, atol=1e-15)
+        q2, v2 = got_q, got_v
+        q1 = q2  # (kept for the next case's "two steps back")

@@ -6,6 +6,7 @@ from __future__ import annotations
 import io
 import threading
 from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -129,3 +130,26 @@ def test_a_friction_model_needs_the_model_not_the_dynamics() -> None:
     for cls in (SmoothFriction, StickSlip):
         with pytest.raises(InvalidParameterError, match=r"RobotModel \(dynamics.model\), got PinocchioDynamics"):
             cls(dyn)  # type: ignore[arg-type]
+
+
+def test_unpicklable_errors_arrive_when_exceptions_pickle_through_tblib() -> None:
+    """dask installs tblib's exception pickling, which follows an exception's context chain: the text-wrapped
+    error must not carry the unpicklable original with it (it broke the pool). Run in a fresh process, so the
+    installation does not leak into the other tests."""
+    import subprocess
+    import sys
+
+    pytest.importorskip("tblib")
+    code = ("from tblib import pickling_support\n"
+            "pickling_support.install()\n"
+            "from armctl.errors import ArmctlError\n"
+            "from armctl.sim import sweep\n"
+            "from tests.sim.test_sweep import GAINS, _raises_unpicklable, cases\n"
+            "try:\n"
+            "    sweep(cases(GAINS[:1]), run=_raises_unpicklable, max_workers=1, progress=False)\n"
+            "except ArmctlError as exc:\n"
+            "    print(type(exc).__name__, str(exc).splitlines()[0][:60])\n")
+    root = Path(__file__).resolve().parents[2]
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, cwd=root)
+    assert out.stdout.startswith("ArmctlError _Unpicklable: broken with 1 and 2 (raised in a worker"), \
+        out.stderr[-2000:]

@@ -9,7 +9,8 @@ integrator and step size, so the runs differ only by how they integrate
     M(q) q̈ + C(q, q̇) q̇ + g(q) = τ_k,     t ∈ [t_k, t_k + Δt_c).
 
 On this arm, without friction or contact, "implicit-euler" has nothing to treat implicitly (it treats the
-friction, damping and contact forces so) and is explicit Euler, to rounding: its figures here are Euler's.
+friction, damping and contact forces so) and is the "euler" scheme (q̇₁ = q̇ + h q̈, q₁ = q + h q̇₁), to rounding:
+its figures here are that scheme's.
 
 Each integrator ("rk4", "semi-implicit-euler", "implicit-euler") runs through :func:`armctl.sim.simulate` with
 step h = Δt_c / m for m in :data:`SUBSTEPS` (the steps align with the control instants, so the torque jumps
@@ -210,7 +211,7 @@ def plot(data: dict[str, Any], path: Path) -> None:
         order = d["asymptotic_order"]
         label = f"{name} (order {order:.2f})" if order is not None else name
         if name == "implicit-euler":  # nothing stiff here to treat implicitly (see the module)
-            label += ", explicit Euler here"
+            label += ", = \"euler\" here"
         ax.plot([p[0] for p in pts], [p[1] for p in pts], "o-", label=label)
         xytext, ha = offsets[i % len(offsets)]
         for e, c, h in pts:

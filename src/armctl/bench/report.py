@@ -64,7 +64,8 @@ SCOPE = (
     "map for PD+gravity (its loop gain does not depend on an inertia estimate). The adaptive law runs with its "
     "preset's Γ; its dashed border is for θ̂ frozen.",
     "Integrators: a frictionless, contact-free arm, on which \"implicit-euler\" has nothing to treat implicitly "
-    "and is explicit Euler; the implicit schemes earn their cost on stiff contact (tests/sim/test_contact.py).",
+    "and is the \"euler\" scheme (velocity form, q₁ = q + h q̇₁); the implicit schemes earn their cost on stiff "
+    "contact (tests/sim/test_contact.py).",
 )
 
 

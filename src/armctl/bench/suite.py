@@ -37,9 +37,15 @@ def time_controllers(rows: list[dict[str, Any]], rounds: int) -> None:
     (in a worker it ran beside another simulation on a 2-core machine, and one pass swung ×5 from run to
     run): per scene, every method's controller replays its window in interleaved rounds (one warm-up
     round), and ``compute_s`` is the median, with its quartiles in ``compute_s_iqr``."""
+    from armctl._checks import whole_number
     from armctl.scenes import scene as make
     from armctl.scenes.base import replay_times
 
+    rounds = whole_number(rounds, "rounds", 1)
+    for r in rows:
+        if not len(r["window"]["t"]):  # a run without samples: nothing to replay
+            r["compute_s"], r["compute_s_iqr"] = float("nan"), [float("nan"), float("nan")]
+            r["compute_timing"] = "no recorded steps to replay"
     for name in dict.fromkeys(r["scene"] for r in rows):
         sc = make(name)
         mine = [r for r in rows if r["scene"] == name and len(r["window"]["t"])]
@@ -165,9 +171,11 @@ def run_suite(quick: bool = False, out: Path = Path("bench-out"), executor: Exec
     charts["speed_accuracy.png"] = "Compute time per control step against tracking error, per scene"
     section("stability_maps", lambda: stability.maps(quick=quick, executor=executor))
     for name in stability.plot(figures["stability_maps"], lambda n: out / n):
-        who = name.removeprefix("stability_").removesuffix(".png").replace("_", " ")
-        charts[name] = (f"Stability map of {who}: control rate × gain and model error × gain (cells simulated, "
-                        "dashed line: sampled-data theory)")
+        key = name.removeprefix("stability_").removesuffix(".png")
+        panels = "control rate × gain" + (" and model error × gain" if "gain_error" in figures["stability_maps"][key]
+                                          else "")
+        charts[name] = (f"Stability map of {key.replace('_', ' ')}: {panels} (cells simulated, dashed line: "
+                        "sampled-data theory)")
     section("topp_convergence", lambda: topp_convergence(quick))
     plot_topp(figures["topp_convergence"], out / "topp_convergence.png")
     charts["topp_convergence.png"] = "TOPP-RA duration error and compute time against grid size"

@@ -125,10 +125,10 @@ def fast_step(name: str, plant: Plant) -> Callable[..., tuple[FloatArray, FloatA
     def rk4_step(q: FloatArray, v: FloatArray, tau: FloatArray, h: float
                  ) -> tuple[FloatArray, FloatArray, FloatArray]:
         c0, c1, c2, c3 = _rk4_coefficients(h)  # ``.dot``: a third of the cost of ``@`` on these small arrays
-        rows, rows3, rows4, rows5, row_q, row_v, _ = views[turn[0]]
-        if row_q is not q or row_v is not v:  # not the last step's result: copy the state in
-            row_q[...] = q
-            row_v[...] = v
+        rows, rows3, rows4, rows5, row_q, row_v, rows2 = views[turn[0]]
+        if row_q is not q or row_v is not v:  # not the last step's result: copy the state in, as a new pair
+            rows2[...] = np.array((q, v))  # first (q or v may be a view of these very rows, in either order),
+            q, v = row_q, row_v  # and read it from there
         rows[2] = a1 = fwd(q, v, tau)
         x = c0.dot(rows3)
         rows[3] = fwd(x[0], x[1], tau)

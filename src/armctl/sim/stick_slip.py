@@ -43,6 +43,8 @@ def constrained_accel(mass: FloatArray, rhs: FloatArray, stuck: FloatArray | Non
             return a
         a_free, info = lapack.dposv(mass.take(free, 0).take(free, 1), rhs.take(free))[1:]
         a[free] = a_free
+        if info > 0:  # the free block's pivot: name the arm's joint
+            info = int(free[info - 1]) + 1
     if info != 0:
         raise NotPositiveDefinite(f"mass matrix not positive definite (LAPACK info {info})")
     return a  # type: ignore[no-any-return]
