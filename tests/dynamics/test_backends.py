@@ -148,3 +148,22 @@ def test_compiled_lagrange_matches_and_is_cached(tmp_path: Path) -> None:
     assert np.allclose(b.inverse_dynamics(q, qd, qdd), ref_b.inverse_dynamics(q, qd, qdd), rtol=1e-12)
     assert not np.allclose(a.inverse_dynamics(q, qd, qdd), b.inverse_dynamics(q, qd, qdd))
     assert a.functions["tau"].is_a("External")
+
+
+@pytest.mark.parametrize("name", ["pendulum", "planar_2r", "puma560", "panda", "ur5"])
+def test_pinocchio_forward_dynamics_in_the_world_convention_is_abas_default_one(name: str) -> None:
+    """The backend runs ABA in Pinocchio's WORLD convention (faster); its q̈ must be the LOCAL (default) one's,
+    and M⁻¹(τ − h) formed from CRBA and RNEA, rotors (armature) included."""
+    import pinocchio as pin
+
+    dyn = dynamics(name, "pinocchio")
+    pm = dyn.pin_model
+    pd = pm.createData()
+    rng = np.random.default_rng(11)
+    for q, qd, tau in rng.uniform(-2.0, 2.0, (5, 3, dyn.n)):
+        got = dyn._forward(q, qd, tau)
+        local = pin.aba(pm, pd, q, qd, tau).copy()
+        by_hand = np.linalg.solve(pin.crba(pm, pd, q).copy(), tau - pin.rnea(pm, pd, q, qd, np.zeros(dyn.n)))
+        scale = max(1.0, float(np.abs(local).max()))
+        assert np.abs(got - local).max() <= 1e-12 * scale
+        assert np.abs(got - by_hand).max() <= 1e-10 * scale
