@@ -251,6 +251,7 @@ def test_compute_time_is_a_median_of_replays(pendulum_run: tuple[Any, SimResult]
     assert sc.compute_time("pd_gravity", window, rounds=5) == 3.0  # median of the five after the warm-up
     assert calls == [6]
     assert math.isnan(sc.compute_time("pd_gravity", {"t": [], "q": [], "qd": [], "ref": []}))
+    assert math.isnan(sc.metrics(res, "pd_gravity", timing_rounds=0)["compute_s"]) and calls == [6]  # not timed
 
 
 def test_dynamics_of_an_unknown_model_is_a_named_error(pendulum_run: tuple[Any, SimResult]) -> None:

@@ -22,13 +22,13 @@ SCENE_NAMES = ("pendulum", "planar_2r", "panda_topp", "panda_contact")
 
 
 def run_scene_method(scene: str, method: str) -> dict[str, Any]:
-    """Simulate one method on one scene (runs in a worker process): its metrics, with a rough compute time
-    from one replay, and the window of recorded states that :func:`time_controllers` replays."""
+    """Simulate one method on one scene (runs in a worker process): its metrics, untimed, and the window of
+    recorded states that :func:`time_controllers` replays to time it."""
     from armctl.scenes import scene as make
 
     sc = make(scene)
     res = sc.run(method)
-    return {"scene": scene, "method": method, **sc.metrics(res, method, timing_rounds=1),
+    return {"scene": scene, "method": method, **sc.metrics(res, method, timing_rounds=0),
             "window": sc.replay_window(res, sc.timing_samples)}
 
 

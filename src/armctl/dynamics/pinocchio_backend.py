@@ -161,9 +161,7 @@ class PinocchioDynamics(Dynamics):
             self._yt_rigid -= self._raw_regressor_free(q, w, self._zeros).T.reshape(self.n, 10, self.n)
         self._yt_rotor[:] = qdd_r  # and _finish_regressor, inlined
         self._yt_viscous[:] = qd_r
-        c = np.sign(qd, out=self._yt_coulomb)  # Dynamics.coulomb_column, in place in the strided view
-        if self._has_asymmetry:
-            c += self._fc_ratio * c * c
+        self._coulomb_column(qd, self._yt_coulomb)
         return self._y.copy(order="K") if copy else self._y  # type: ignore[no-any-return]
 
     def _passivity_torque(self, q: FloatArray, qd: FloatArray, qd_r: FloatArray, qdd_r: FloatArray,
@@ -178,9 +176,7 @@ class PinocchioDynamics(Dynamics):
             self._yt_coulomb[:] = 0.0
         else:
             self._yt_viscous[:] = friction[0]
-            c = np.sign(friction[1], out=self._yt_coulomb)  # as in _passivity_regressor
-            if self._has_asymmetry:
-                c += self._fc_ratio * c * c
+            self._coulomb_column(friction[1], self._yt_coulomb)
         return self._y.copy(order="K") if copy else self._y  # type: ignore[no-any-return]
 
     def _forward(self, q: FloatArray, qd: FloatArray, tau_net: FloatArray) -> FloatArray:  # (see __init__)

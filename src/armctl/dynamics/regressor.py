@@ -89,8 +89,9 @@ class RegressorMethods:
         q̇_i < 0, 0 at rest; sgn q̇_i for a symmetric friction."""
         return self._coulomb_column(self._finite(qd, "qd"))
 
-    def _coulomb_column(self, qd: FloatArray) -> FloatArray:
-        s = np.sign(qd)
+    def _coulomb_column(self, qd: FloatArray, out: FloatArray | None = None) -> FloatArray:
+        """κ(q̇), into ``out`` if given (the Pinocchio backend's strided workspace view)."""
+        s = np.sign(qd, out=out)
         if self._has_asymmetry:
             s += self._fc_ratio * s * s
         return s

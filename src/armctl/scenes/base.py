@@ -160,14 +160,17 @@ class Scene:
         ``velocity_violation_share``, a joint more than :data:`VELOCITY_TOLERANCE` beyond its velocity limit;
         ``position_violation_share``, a joint outside its position range), divergence, and the controller's
         compute time per step [s] (``compute_s``, see :meth:`compute_time` on :meth:`replay_window` of
-        ``timing_samples`` states, default :attr:`timing_samples`, in ``timing_rounds`` rounds). A run
-        without samples gives NaN for every measure (compute time and limit-violation shares included)."""
+        ``timing_samples`` states, default :attr:`timing_samples`, in ``timing_rounds`` rounds; 0 rounds: not
+        timed, NaN). A run without samples gives NaN for every measure (compute time and limit-violation
+        shares included)."""
         timing_samples = whole_number(self.timing_samples if timing_samples is None else timing_samples,
                                       "timing_samples", 1)
         want = np.array([self.reference(t).q for t in res.t])
         err = np.abs(res.q - want) if len(res.t) else np.zeros((0, self.plant.n))
         shares = self.limit_violations(res)
-        step = self.compute_time(method, self.replay_window(res, timing_samples), gains, timing_rounds)
+        timing_rounds = whole_number(timing_rounds, "timing_rounds", 0)
+        step = (self.compute_time(method, self.replay_window(res, timing_samples), gains, timing_rounds)
+                if timing_rounds else float("nan"))
         return {"rms_error": float(np.sqrt((err**2).mean())) if err.size else float("nan"),
                 "max_error": float(err.max()) if err.size else float("nan"),
                 "torque_rms": float(np.sqrt((res.tau_applied**2).mean())) if len(res.t) else float("nan"),
@@ -191,7 +194,8 @@ class Scene:
         measured them (t, q, q̇ and the references), for :meth:`compute_time`."""
         samples = whole_number(samples, "timing_samples", 1)
         count = min(samples, len(res.t))
-        idx = np.arange(max((len(res.t) - count) // 2, 0), max((len(res.t) - count) // 2, 0) + count)
+        first = (len(res.t) - count) // 2
+        idx = np.arange(first, first + count)
         t = [float(res.t[k]) for k in idx]
         return {"t": t, "q": res.q_measured[idx].copy(), "qd": res.qd_measured[idx].copy(),
                 "ref": [self.reference(tk) for tk in t]}
