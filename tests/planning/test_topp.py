@@ -5,6 +5,7 @@ time scaling, infeasibility reports and toppra's failure modes."""
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 import pytest
@@ -88,6 +89,53 @@ def test_viscous_friction_is_conservative_and_close() -> None:
     traj = time_optimal(dyn, LinePath([0.0], [1.5]), torque_limit=2.0, grid=200)
     assert exact < modelled <= traj.duration <= modelled * 1.01
     assert traj.check.ok(0.0)  # conservative: the true torque never exceeds the bound
+
+
+def _swing_bang_bang(distance: float, tau: float, fv: float, help_braking: bool) -> float:
+    """Rest-to-rest minimum time of the pendulum with gravity, I q̈ = ±τ − G sin q − F_v q̇ (closed-form model
+    from its published data), full torque forward then full torque back, the switch found by shooting;
+    help_braking=False brakes without the viscous term (the planner's conservative model)."""
+    from scipy.integrate import solve_ivp
+
+    def phase(sign: float, viscous: float) -> Any:
+        return lambda t, y: [y[1], (sign * tau - PENDULUM_GRAVITY * math.sin(y[0]) - viscous * y[1]) / PENDULUM_INERTIA]
+
+    def stop(t: float, y: np.ndarray) -> float:
+        return float(y[1])
+
+    stop.terminal, stop.direction = True, -1  # type: ignore[attr-defined]
+
+    def run(t_switch: float) -> tuple[float, float]:
+        a = solve_ivp(phase(1.0, fv), [0.0, t_switch], [0.0, 0.0], rtol=1e-11, atol=1e-12, events=stop)
+        if a.status == 1:  # stalled below the gravity peak
+            return -math.inf, math.inf
+        b = solve_ivp(phase(-1.0, fv if help_braking else 0.0), [t_switch, t_switch + 10.0], a.y[:, -1],
+                      rtol=1e-11, atol=1e-12, events=stop)
+        return float(b.y[0, -1]), float(b.t[-1])
+
+    t_switch = brentq(lambda ts: max(run(ts)[0], -1.0) - distance, 0.05, 3.0, xtol=1e-12)
+    return run(t_switch)[1]
+
+
+@pytest.mark.parametrize(("tau", "grid", "within"), [(4.8, 100, 0.02), (4.8, 400, 0.005), (4.5, 200, 0.012)])
+def test_viscous_swing_through_a_pose_it_cannot_hold(tau: float, grid: int, within: float) -> None:
+    # the torque bound is below the gravity peak G = 4.905 N·m: the arm must carry its speed through, which a
+    # viscous line fitted for slow motion forbids (it planned 5.7× the optimum, or found no timing at all)
+    dyn = armctl.Dynamics(armctl.models.pendulum().with_friction(viscous=0.3, coulomb=0.0))
+    exact = _swing_bang_bang(2.2, tau, 0.3, help_braking=True)
+    modelled = _swing_bang_bang(2.2, tau, 0.3, help_braking=False)
+    traj = time_optimal(dyn, LinePath([0.0], [2.2]), torque_limit=tau, grid=grid)
+    assert exact < modelled <= traj.duration <= modelled * (1 + within)
+
+
+def test_viscous_infeasibility_says_the_plan_is_conservative() -> None:
+    # with F_v = 1 the swing cannot carry its speed through the gravity peak: every bang-bang stalls
+    with pytest.raises(ValueError, match="f\\(a\\) and f\\(b\\) must have different signs"):
+        _swing_bang_bang(2.2, 4.5, 1.0, help_braking=True)
+    dyn = armctl.Dynamics(armctl.models.pendulum().with_friction(viscous=1.0, coulomb=0.0))
+    with pytest.raises(InfeasibleError, match=r"gravity alone needs 4\.905 N·m.*Viscous friction is planned with a "
+                       r"line above F_v q̇"):
+        time_optimal(dyn, LinePath([0.0], [2.2]), torque_limit=4.5)
 
 
 def _dense_torque_utilisation(dyn: armctl.Dynamics, traj: Trajectory, limit: np.ndarray, num: int) -> float:

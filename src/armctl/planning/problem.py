@@ -18,8 +18,8 @@ Friction, exactly where it can be and conservatively where it cannot:
 * Viscous: F_v q'_j √x is not linear in x. On the side where it helps (it adds torque in the direction of
   q'_j, so it helps the bound it pushes away from) it is dropped (√x ≥ 0); on the side where it hurts, √x is
   replaced by a line above it, α + β x with 4αβ ≥ 1: the tangent at a reference x₀ > 0 (√x₀/2 + x/(2√x₀),
-  exact at x₀) unless its intercept would leave too little torque for slow motion, then a steeper one
-  (:meth:`TimeScalingProblem.linearized`). x₀ comes from a previous pass (see
+  exact at x₀), or, where toppra finds no timing with it, a steeper one that leaves more torque for slow
+  motion (:meth:`TimeScalingProblem.linearized`). x₀ comes from a previous pass (see
   :func:`~armctl.planning.topp.solve_problem`). Every pass over-estimates the viscous torque: never optimistic.
 
 Every constraint is stored as a row  a_r u + b_r x + c_r + w_r √x ≤ g_r  (w_r ≥ 0) at every gridpoint
@@ -93,20 +93,24 @@ class TimeScalingProblem:
     def has_viscous(self) -> bool:
         return bool(self.w.any())
 
-    def linearized(self, x0: ArrayLike | None, keep: float = 0.5) -> tuple[FloatArray, FloatArray, FloatArray]:
+    def linearized(self, x0: ArrayLike | None, keep: float | None = None
+                   ) -> tuple[FloatArray, FloatArray, FloatArray]:
         """(a, b, c) of the rows with w √x replaced by a line α + β x ≥ √x (4αβ ≥ 1), or dropped (x0=None).
 
-        The line is the tangent at x₀ (N+1,) > 0, α = √x₀/2, β = 1/(2√x₀) — unless its intercept w α would
-        take more than the fraction ``keep`` of the row's slack at rest, g − c: then α = keep (g − c)/w and
-        β = 1/(4α), a steeper line that still over-estimates √x everywhere but leaves slow motion feasible
-        (a tangent far out along the curve would forbid the path from ever slowing down)."""
+        The line is the tangent at x₀ (N+1,) > 0, α = √x₀/2, β = 1/(2√x₀), exact at x₀ — unless ``keep``
+        (a fraction) is given and the intercept w α would take more than that fraction of the row's slack at
+        rest, g − c: then α = keep (g − c)/w and β = 1/(4α), a steeper line that still over-estimates √x
+        everywhere and leaves slow motion feasible where the tangent's intercept would not (the fallback of
+        :func:`~armctl.planning.topp.solve_problem`). Where the path must pass a pose it could not hold at
+        rest, carried by its momentum, the steep line forbids the speed it needs: the tangent comes first."""
         if x0 is None or not self.has_viscous:
             return self.a, self.b, self.c
         alpha = 0.5 * np.sqrt(np.asarray(x0, dtype=float))[:, None] * np.ones_like(self.w)
-        slack = self.g - self.c
-        with np.errstate(divide="ignore", invalid="ignore"):
-            cap = np.where((self.w > 0) & (slack > 0), keep * slack / self.w, np.inf)
-        alpha = np.minimum(alpha, cap)
+        if keep is not None:
+            slack = self.g - self.c
+            with np.errstate(divide="ignore", invalid="ignore"):
+                cap = np.where((self.w > 0) & (slack > 0), keep * slack / self.w, np.inf)
+            alpha = np.minimum(alpha, cap)
         return self.a, self.b + self.w / (4.0 * alpha), self.c + self.w * alpha
 
 

@@ -39,7 +39,7 @@ from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray, scalar, whole_number
 from armctl.dynamics.base import Dynamics
-from armctl.errors import InvalidParameterError, NonFiniteError, SolverError
+from armctl.errors import InfeasibleError, InvalidParameterError, NonFiniteError, SolverError
 from armctl.planning.infeasibility import diagnose, rest_overload
 from armctl.planning.limits import joint_limits
 from armctl.planning.path import Path, as_path
@@ -47,6 +47,10 @@ from armctl.planning.problem import TimeScalingProblem, build_problem, gridpoint
 from armctl.planning.timing import GridTiming
 from armctl.planning.trajectory import Trajectory
 from armctl.planning.verify import check_trajectory
+
+#: the fraction of a torque row's slack at rest that the fallback viscous line may take (see
+#: :meth:`~armctl.planning.problem.TimeScalingProblem.linearized`)
+VISCOUS_KEEP = 0.5
 
 
 def solve_problem(problem: TimeScalingProblem, viscous_passes: int = 2) -> Trajectory:
@@ -58,9 +62,10 @@ def solve_problem(problem: TimeScalingProblem, viscous_passes: int = 2) -> Traje
     trajectory rests there before 0 and after T, which toppra, free to brake at the last gridpoint, ignores.
 
     With viscous friction, a first pass drops it (optimistic, never returned); each of the ``viscous_passes``
-    further passes replaces F_v q' √x by a line over it, tangent at the previous pass's x where it can be (see
-    :meth:`~armctl.planning.problem.TimeScalingProblem.linearized`), so the returned solution is conservative
-    and, pass after pass, closer to the optimum.
+    further passes replaces F_v q' √x by a line over it: the tangent at the previous pass's x, or, if toppra
+    finds no timing with that, a steeper line that leaves slow motion more torque (see
+    :meth:`~armctl.planning.problem.TimeScalingProblem.linearized`). Every such pass is conservative; the
+    fastest is returned (a later pass that finds no timing leaves the earlier ones standing).
     """
     from armctl.planning._toppra import run_toppra
 
@@ -71,17 +76,38 @@ def solve_problem(problem: TimeScalingProblem, viscous_passes: int = 2) -> Traje
         raise at_rest
     interp = problem.discretization == "interpolation"
     x0 = None
-    passes = 1 + (viscous_passes if problem.has_viscous else 0)
-    for _ in range(passes):
-        rows = problem.linearized(x0)
-        out = run_toppra(problem.path, problem.s, *rows, problem.g, problem.x_max, interp)
-        if not out.ok or out.x is None:
-            raise diagnose(problem, rows, out.code, out.x, out.K)
+    best: GridTiming | None = None  # the fastest conservative pass
+    passes = 0
+    for _ in range(1 + (viscous_passes if problem.has_viscous else 0)):
+        for keep in (None,) if x0 is None else (None, VISCOUS_KEEP):
+            rows = problem.linearized(x0, keep)
+            out = run_toppra(problem.path, problem.s, *rows, problem.g, problem.x_max, interp)
+            if out.ok and out.x is not None:
+                break
+        else:
+            if best is not None:
+                break
+            raise _viscous_note(diagnose(problem, rows, out.code, out.x, out.K), x0 is not None)
         x = _checked_profile(problem, out.x)
+        passes += 1
+        if x0 is not None or not problem.has_viscous:
+            timing = GridTiming(problem.s, x)
+            if best is None or timing.duration < best.duration:
+                best = timing
         x0 = np.maximum(x, 1e-9 * max(float(x.max()), 1e-12))
-    timing = GridTiming(problem.s, x)
-    return Trajectory(problem.path, timing, info={"grid": problem.grid, "passes": passes,
+    assert best is not None
+    return Trajectory(problem.path, best, info={"grid": problem.grid, "passes": passes,
                                                   "solve_time": time.perf_counter() - t0})
+
+
+def _viscous_note(error: Exception, viscous: bool) -> Exception:
+    """``error`` (an InfeasibleError from a pass with the viscous term linearized) with a note that the plan's
+    over-estimate of viscous friction, not the limits themselves, may be what leaves no timing."""
+    if not viscous or not isinstance(error, InfeasibleError):
+        return error
+    return InfeasibleError(f"{error} (Viscous friction is planned with a line above F_v q̇ at every speed, and "
+                           "without it toppra found a timing: one may exist that this conservative plan misses; "
+                           "a different grid may find it.)", value=error.value, problem=error.problem)
 
 
 def _checked_profile(problem: TimeScalingProblem, x: FloatArray) -> FloatArray:
