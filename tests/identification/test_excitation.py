@@ -58,6 +58,21 @@ def test_optimised_trajectory_respects_limits_on_a_dense_grid() -> None:
     assert np.abs(qd).max() > 0.9 or np.abs(qdd).max() > 2.7
 
 
+@pytest.mark.parametrize("maxiter", [0, 5])
+def test_position_limits_hold_on_both_sides(maxiter: int) -> None:
+    # generous velocity and acceleration limits: the joint ranges bind (the best random start, maxiter=0, and a
+    # short optimisation both went up to 0.9 rad below the Puma's lower limits when the scaling read the
+    # downward swing as the upward one)
+    dyn = dynamics("puma560")
+    design = optimize_excitation(dyn, acceleration_limit=100.0, velocity_limit=10.0, maxiter=maxiter, seed=0)
+    q = design.trajectory.evaluate(np.linspace(0.0, design.trajectory.period, 40001))[0]
+    m = dyn.model
+    assert np.all(q >= m.lower + 0.05 - 1e-9) and np.all(q <= m.upper - 0.05 + 1e-9)  # default position_margin
+    # and the range is used: some joint comes within 10% of its span of a limit
+    span = m.upper - m.lower
+    assert (np.minimum(q.min(axis=0) - m.lower, m.upper - q.max(axis=0)) < 0.1 * span).any()
+
+
 def test_limits_are_required_where_the_model_has_none() -> None:
     with pytest.raises(InvalidParameterError, match="velocity_limit"):
         optimize_excitation(dynamics("puma560"), acceleration_limit=3.0, maxiter=0)  # no velocity limits

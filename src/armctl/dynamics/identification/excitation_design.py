@@ -211,7 +211,7 @@ def _fit_into(traj: FourierExcitation, lo: FloatArray, hi: FloatArray, vmax: Flo
     fill = fill * (1.0 - (2 * np.pi * traj.harmonics / samples) ** 2)
     q, qd, qdd = traj.evaluate(t)
     dev_up = np.maximum((q - q0).max(axis=0), 1e-300)
-    dev_dn = np.maximum((q0 - q).min(axis=0) * -1.0, 1e-300)
+    dev_dn = np.maximum((q0 - q).max(axis=0), 1e-300)
     with np.errstate(divide="ignore", invalid="ignore"):
         ratios = np.vstack([(hi - q0) / dev_up, (q0 - lo) / dev_dn, vmax / np.abs(qd).max(axis=0),
                             amax / np.abs(qdd).max(axis=0)])
