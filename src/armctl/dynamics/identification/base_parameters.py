@@ -10,9 +10,12 @@ Not every entry of π (13 per joint) changes the joint torques: some columns of 
 where Y_b = Y[:, b] are the independent columns, π_b and π_d the parameters of the independent and
 dependent columns, and β the constant matrix with Y[:, d] = Y_b β.
 
-They are found by QR decomposition with column pivoting of the regressor stacked at random states
-(Gautier 1990): W = [Y(x_1); …; Y(x_S)] = Q R Pᵀ; the numerical rank r counts the |R_kk| above
-``tol·|R_00|``; the first r pivoted columns are independent and β = R_11⁻¹ R_12.
+They are found from the regressor stacked at random states, W = [Y(x_1); …; Y(x_S)] (Gautier 1990): its
+numerical rank r is that of QR decomposition with column pivoting, W = Q R Pᵀ (the |R_kk| above
+``tol·|R_00|``); the independent columns are then taken greedily in π's order, each kept if it is independent
+of those kept before it (the textbook lumping: a link's inertia about its axis keeps its name and absorbs the
+next link's mass times the squared length), falling back to the first r pivoted columns if that does not give
+r of them; β is the least-squares solution of W_b β = W_d.
 """
 
 from __future__ import annotations

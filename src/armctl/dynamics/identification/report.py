@@ -34,8 +34,8 @@ def format_report(result: IdentificationResult, validation: ValidationResult | N
         f"Identification of {result.model.name!r} ({prob.n} joints)",
         f"  samples: {prob.samples} ({prob.samples * prob.n} equations), unknowns: {prob.n_unknowns} "
         f"({result.base.n_base} base parameters{f' + {prob.n} Coulomb offsets' if prob.offsets else ''})",
-        f"  estimator: {'weighted' if est.weighted else 'ordinary'} least squares; condition number of W: "
-        f"{est.condition_number:.4g}",
+        f"  estimator: {'weighted' if est.weighted else 'ordinary'} least squares; condition number of "
+        f"{'Σ^-1/2 W (W weighted by the noise)' if est.weighted else 'W'}: {est.condition_number:.4g}",
         "",
         f"  {'parameter':<{max_name}} {'estimate':>12} {'σ':>11} {'σ/|θ| %':>9}",
     ]
