@@ -30,9 +30,10 @@ def test_largest_stable_step_of_an_undamped_contact(scheme: str, limit: float) -
     omega = math.sqrt(k / mass)
     for h in (0.5 * limit / omega, 1.5 * limit / omega):
         (found,) = contact_stability(dyn, [wall], np.zeros(1), scheme, h)
-        assert found.max_dt == pytest.approx(limit / omega, rel=1e-9)
+        assert found.linear_dt == pytest.approx(limit / omega, rel=1e-9)
         assert found.omega_h == pytest.approx(omega * h, rel=1e-12)
-        assert found.stable == (h < limit / omega)
+        assert (found.radius <= 1.0 + 1e-12) == (h < limit / omega)
+        assert found.max_dt < found.linear_dt and not (h > limit / omega and found.stable)
     assert contact_stability(dyn, [wall], np.zeros(1), "implicit-euler", 1.0) == []
 
 
@@ -50,7 +51,7 @@ def test_effective_mass_of_the_panda_hand() -> None:
     jac = pin.computeFrameJacobian(pm, pd, PANDA_Q0, fid, pin.LOCAL_WORLD_ALIGNED)[:3]
     jn = np.array([0.0, 0.0, 1.0]) @ jac
     m_eff = 1.0 / (jn @ np.linalg.solve(mass, jn))
-    assert found.max_dt == pytest.approx(2.0 * math.sqrt(2.0) / math.sqrt(k / m_eff), rel=1e-9)
+    assert found.linear_dt == pytest.approx(2.0 * math.sqrt(2.0) / math.sqrt(k / m_eff), rel=1e-9)
     assert not found.stable  # the existing contact test's k = 1e8 at 1 ms: beyond RK4's limit
 
 
@@ -92,7 +93,34 @@ def test_rk4_limit_of_a_damped_contact_from_its_stability_function(zeta: float) 
         lo, hi = (mid, hi) if stable(mid) else (lo, mid)
     wall = Plane(KelvinVoigt(k, c), normal=(-1.0, 0.0, 0.0), point=(0.01, 0.0, 0.0))
     (found,) = contact_stability(armctl.Dynamics(slider(mass)), [wall], np.zeros(1), "rk4", 1e-3)
-    assert found.max_dt == pytest.approx(lo, rel=1e-6)
+    assert found.linear_dt == pytest.approx(lo, rel=1e-6)
+
+
+@pytest.mark.parametrize("zeta", [0.0, 0.05])
+def test_one_sided_contact_gaining_energy_below_the_linear_limit_is_reported(zeta: float) -> None:
+    # a 2 kg slider at rest on a wall's surface, pushed into it with 10 N: the exact motion keeps the force
+    # between 0 and 20 N undamped (and below that damped). At ω·dt = 1.8 the Euler variants are linearly stable
+    # (limit 2), yet every reopening of the contact pumps energy in; RK4 (limit 2√2) integrates it
+    mass, push, omega_h = 2.0, 10.0, 1.8
+    k = mass * (omega_h / 1e-3) ** 2
+    wall = Plane(KelvinVoigt(k, 2.0 * zeta * math.sqrt(k * mass)), normal=(-1.0, 0.0, 0.0), point=(0.0, 0.0, 0.0))
+    run = OpenLoop(lambda t: np.array([push]))
+    for scheme in ("euler", "semi-implicit-euler"):
+        (found,) = contact_stability(armctl.Dynamics(slider(mass)), [wall], np.zeros(1), scheme, 1e-3)
+        assert found.radius <= 1.0 and not found.stable
+        with pytest.warns(SimulationWarning, match="linearly stable, but as a one-sided contact"):
+            bad = simulate(slider(mass), run, armctl.Reference.hold([0.0]), 0.5, environment=wall, integrator=scheme)
+        assert np.abs(bad.contact_force).max() > 1.5 * 2.0 * push  # what the warning is about
+        dt = 1e-3 / math.ceil(1e-3 / bad.info["unstable_contacts"][0]["max_dt"])  # the step it recommends
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            good = simulate(slider(mass), run, armctl.Reference.hold([0.0]), 0.5, environment=wall, integrator=scheme,
+                            dt=dt)
+        assert np.abs(good.contact_force).max() <= 1.02 * 2.0 * push
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        res = simulate(slider(mass), run, armctl.Reference.hold([0.0]), 0.5, environment=wall, integrator="rk4")
+    assert np.abs(res.contact_force).max() <= 2.0 * push * (1 + 1e-9)
 
 
 def _press(law: object, integrator: str) -> tuple[armctl.sim.SimResult, list[warnings.WarningMessage]]:
