@@ -129,6 +129,12 @@ def test_check_trajectory_names_bad_arguments() -> None:
     assert check_trajectory(dyn, traj, limits, 3.0).samples == check_trajectory(dyn, traj, limits, 3).samples
 
 
+@pytest.mark.parametrize("grid", ["a", [0.0, "x", 1.0]])
+def test_a_grid_that_is_not_numbers_is_named(grid: object) -> None:
+    with pytest.raises(InvalidParameterError, match=r"^grid must be an integer N >= 2 or an array of gridpoints"):
+        time_optimal(panda(), PANDA_WAYPOINTS, torque_limit="model", grid=grid)  # type: ignore[arg-type]
+
+
 @pytest.mark.parametrize(("kwargs", "error", "match"), [
     ({"tol": "a"}, InvalidParameterError, r"^tol must be a real number, got 'a'"),
     ({"tol": float("nan")}, NonFiniteError, r"^tol must be a number >= 0 or float\('inf'\).*got nan"),

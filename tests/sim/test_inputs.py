@@ -38,6 +38,10 @@ def run(**kw: object) -> armctl.sim.SimResult:
     ({"delay": -1}, InvalidParameterError, "-1"),
     ({"delay": 1.5}, InvalidParameterError, "1.5"),
     ({"max_velocity": 0.0}, InvalidParameterError, "max_velocity"),
+    ({"max_velocity": True}, InvalidParameterError, "max_velocity must be a positive number"),  # was 1 rad/s
+    ({"saturate": "no"}, InvalidParameterError, "saturate must be True or False, got 'no'"),  # was truthy
+    ({"energy": "no"}, InvalidParameterError, "energy must be True or False"),
+    ({"reset": 0}, InvalidParameterError, "reset must be True or False, got 0"),
     ({"friction": "lugre"}, UnknownNameError, "lugre"),
     ({"environment": "wall"}, InvalidParameterError, "wall"),
     ({"environment": Plane(KelvinVoigt(1e4), points=[ContactPoint("elbow")])}, UnknownNameError, "elbow"),

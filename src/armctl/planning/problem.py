@@ -121,7 +121,11 @@ def gridpoints(grid: int | ArrayLike) -> FloatArray:
         if grid < 2:
             raise InvalidParameterError(f"grid must be >= 2 intervals, got {grid}", value=grid)
         return np.linspace(0.0, 1.0, int(grid) + 1)
-    s = np.asarray(grid, dtype=float)
+    try:
+        s = np.asarray(grid, dtype=float)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"grid must be an integer N >= 2 or an array of gridpoints from 0 to 1, got "
+                                    f"{grid!r}", value=grid) from None
     if s.ndim != 1 or s.shape[0] < 3:
         raise ShapeError(f"grid must be an integer N >= 2 or an array of >= 3 gridpoints, got {grid!r}", value=grid)
     if not np.isfinite(s).all():

@@ -141,7 +141,7 @@ def delay_periods(delay: Any) -> int:
 
 
 def bound(x: Any, name: str) -> float:
-    v = float(x) if isinstance(x, int | float | np.floating | np.integer) else math.nan
+    v = float(x) if isinstance(x, int | float | np.floating | np.integer) and not isinstance(x, bool) else math.nan
     if not v > 0:
         raise InvalidParameterError(f"{name} must be a positive number (inf: no bound), got {x!r}", value=x)
     return v

@@ -20,7 +20,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, nonnegative_vector, real_array
+from armctl._checks import FloatArray, boolean, nonnegative_vector, real_array
 from armctl.dynamics.base import Dynamics
 from armctl.errors import ShapeError, SimulationWarning
 from armctl.model.robot import RobotModel
@@ -89,6 +89,7 @@ def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
     sig_q, sig_qd = (nonnegative_vector(noise_q, n, "noise_q (a standard deviation)"),
                       nonnegative_vector(noise_qd, n, "noise_qd (a standard deviation)"))
     lag = setup.delay_periods(delay)
+    saturate, reset, energy = (boolean(saturate, "saturate"), boolean(reset, "reset"), boolean(energy, "energy"))
     vmax, qmax = setup.bound(max_velocity, "max_velocity"), setup.bound(max_position, "max_position")
     q, v = setup.initial_state(q0, qd0, ref0, n, qmax, vmax)
     setup.warn_outside_limits(dyn.model, q)
