@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import armctl
-from armctl.errors import ArmctlError, InvalidParameterError, NonFiniteError, ShapeError
+from armctl.errors import ArmctlError, InfeasibleError, InvalidParameterError, NonFiniteError, ShapeError
 from armctl.planning import LinePath, PolynomialTiming, Trajectory, time_optimal, uniform_time_scaling
 from tests.planning._common import PANDA_WAYPOINTS, panda
 
@@ -71,3 +71,28 @@ def test_uniform_time_scaling_rejects_bad_input() -> None:
     line = Trajectory(LinePath(PANDA_WAYPOINTS[0], PANDA_WAYPOINTS[1]), PolynomialTiming(1.0))
     with pytest.raises(ShapeError):
         uniform_time_scaling(dyn, line, torque_limit=np.ones(3))
+
+
+# waypoints inside the Panda's ranges whose cubic spline overshoots joint 3's upper limit (−0.0698 rad) between
+# waypoints 1 and 2, both at −0.08
+OVERSHOOT = np.array([[0.0, 0.0, 0.0, -2.0, 0.0, 1.5, 0.0], [0.3, 0.2, 0.0, -0.08, 0.0, 1.5, 0.0],
+                      [0.6, 0.4, 0.0, -0.08, 0.0, 1.5, 0.0], [0.9, 0.2, 0.0, -2.0, 0.0, 1.5, 0.0]])
+
+
+def test_a_path_leaving_the_joint_ranges_is_refused() -> None:
+    dyn = armctl.Dynamics(armctl.models.panda())
+    lower, upper = dyn.model.lower, dyn.model.upper
+    assert ((OVERSHOOT >= lower) & (OVERSHOOT <= upper)).all()
+    with pytest.raises(InfeasibleError, match=r"joint 3 \('panda_joint4'\) leaves its range .* between waypoints 1 and "
+                       r"2: the path overshoots"):
+        time_optimal(dyn, OVERSHOOT, vel_limit="model", torque_limit="model")
+    # planned anyway, the trajectory does leave the range (sampled densely, against the model's limit)
+    traj = time_optimal(dyn, OVERSHOOT, vel_limit="model", torque_limit="model", position_limit=None)
+    assert traj.sample(num=20001).q[:, 3].max() > upper[3] + 1e-3
+    beyond = OVERSHOOT.copy()
+    beyond[1, 3] = 0.5  # a waypoint 0.57 rad beyond the range
+    with pytest.raises(InfeasibleError, match=r"joint 3 .* 0\.5 at s = .*, at waypoint 1") as e:
+        time_optimal(dyn, beyond, torque_limit="model")
+    assert e.value.value["q"] == 0.5 and e.value.value["upper"] == upper[3]
+    with pytest.raises(InvalidParameterError, match="position_limit must be \"model\" or None, got 'yes'"):
+        time_optimal(dyn, PANDA_WAYPOINTS, torque_limit="model", position_limit="yes")  # type: ignore[arg-type]

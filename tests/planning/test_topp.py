@@ -26,8 +26,8 @@ from armctl.planning import (
 )
 from tests.planning._common import PANDA_WAYPOINTS, PENDULUM_GRAVITY, PENDULUM_INERTIA, flat_pendulum, panda
 
-START = np.zeros(7)
-END = np.array([1.0, -0.5, 0.3, 0.2, 1.0, 0.5, -0.7])
+START = np.array([0.0, 0.0, 0.0, -1.5, 0.0, 1.5, 0.0])  # within the Panda's joint ranges, as is END
+END = START + np.array([1.0, -0.5, 0.3, 0.2, 1.0, 0.5, -0.7])
 
 
 def test_converges_to_the_bang_bang_duration(tmp_path) -> None:

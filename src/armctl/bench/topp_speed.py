@@ -25,10 +25,20 @@ TARGET = 1.2
 
 
 def waypoints(model: Any, count: int = 6, seed: int = 0) -> np.ndarray:
-    """``count`` random waypoints in the middle half of the panda's joint ranges."""
-    rng = np.random.default_rng(seed)
+    """``count`` random waypoints in the middle half of the panda's joint ranges, drawn again (from the next
+    seed) until the spline through them stays within the ranges (the first draw's overshoots joint 6's)."""
+    from armctl.errors import InfeasibleError
+    from armctl.planning import SplinePath, check_range
+
     mid, half = 0.5 * (model.upper + model.lower), 0.5 * (model.upper - model.lower)
-    return mid + 0.5 * half * rng.uniform(-1.0, 1.0, (count, model.n))
+    for attempt in range(100):
+        w = mid + 0.5 * half * np.random.default_rng(seed + attempt).uniform(-1.0, 1.0, (count, model.n))
+        try:
+            check_range(model, SplinePath(w))
+        except InfeasibleError:
+            continue
+        return w  # type: ignore[no-any-return]
+    raise RuntimeError(f"no {count} random waypoints from seeds {seed}…{seed + 99} give a path within the ranges")
 
 
 def cases(grid: int = 100) -> tuple[Callable[[], float], Callable[[], float]]:
@@ -82,8 +92,9 @@ def convergence_chart(path: str) -> Any:
     from armctl.planning import grid_convergence, plot_convergence
 
     dyn = armctl.Dynamics(armctl.models.panda())
-    end = np.array([1.0, -0.5, 0.3, 0.2, 1.0, 0.5, -0.7])
-    study = grid_convergence(dyn, np.zeros(7), end, 1.0, 2.3, grids=(10, 20, 50, 100, 200, 500, 1000, 2000))
+    start = np.array([0.0, 0.0, 0.0, -1.5, 0.0, 1.5, 0.0])  # within the joint ranges, as the move below
+    end = start + np.array([1.0, -0.5, 0.3, 0.2, 1.0, 0.5, -0.7])
+    study = grid_convergence(dyn, start, end, 1.0, 2.3, grids=(10, 20, 50, 100, 200, 500, 1000, 2000))
     plot_convergence(study).savefig(path, dpi=120)
     return study
 

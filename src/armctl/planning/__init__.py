@@ -15,13 +15,13 @@ from armctl.planning.path import LinePath, Path, SplinePath
 from armctl.planning.problem import RowLabel, TimeScalingProblem, build_problem
 from armctl.planning.time_scaling import UniformScaling, uniform_time_scaling
 from armctl.planning.timing import GridTiming, PolynomialTiming, ScaledTiming, Timing
-from armctl.planning.topp import solve_problem, time_optimal
+from armctl.planning.topp import check_range, solve_problem, time_optimal
 from armctl.planning.trajectory import Samples, Trajectory
 from armctl.planning.verify import LimitCheck, LimitReport, check_trajectory
 
 __all__ = [
     "Bounds", "GridTiming", "JointLimits", "LimitCheck", "LimitReport", "LinePath", "Path", "PolynomialTiming",
     "RowLabel", "Samples", "ScaledTiming", "SplinePath", "TimeScalingProblem", "Timing", "Trajectory",
-    "UniformScaling", "bang_bang_duration", "build_problem", "check_trajectory", "grid_convergence",
+    "UniformScaling", "bang_bang_duration", "build_problem", "check_range", "check_trajectory", "grid_convergence",
     "joint_limits", "line_min_time", "plot_convergence", "solve_problem", "time_optimal", "uniform_time_scaling",
 ]

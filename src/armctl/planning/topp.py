@@ -40,6 +40,7 @@ from numpy.typing import ArrayLike
 from armctl._checks import FloatArray, scalar, whole_number
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InfeasibleError, InvalidParameterError, NonFiniteError, SolverError
+from armctl.model.robot import RobotModel
 from armctl.planning.infeasibility import diagnose, rest_overload
 from armctl.planning.limits import joint_limits
 from armctl.planning.path import Path, as_path
@@ -100,6 +101,41 @@ def solve_problem(problem: TimeScalingProblem, viscous_passes: int = 2) -> Traje
                                                   "solve_time": time.perf_counter() - t0})
 
 
+#: samples of a path per piece (between two waypoints) in the joint-range check
+RANGE_SAMPLES = 400
+
+
+def check_range(model: RobotModel, path: Path) -> None:
+    """Raise :class:`~armctl.errors.InfeasibleError` if ``path`` leaves the joint ranges of ``model`` (its
+    finite lower/upper limits) anywhere: sampled at :data:`RANGE_SAMPLES` points per piece, waypoints included;
+    the error names the joint, the worst point (a waypoint outside first, else where the path overshoots
+    between two) and the range."""
+    lo, hi = model.lower, model.upper
+    if not (np.isfinite(lo).any() or np.isfinite(hi).any()):
+        return
+    knots = path.breakpoints
+    frac = np.linspace(0.0, 1.0, RANGE_SAMPLES + 1)
+    s = np.unique(np.concatenate(((knots[:-1, None] + np.diff(knots)[:, None] * frac).ravel(), knots)))
+    q = path(s)
+    with np.errstate(invalid="ignore"):
+        excess = np.maximum(q - hi, lo - q)  # > 0 outside; inf limits give −inf
+    on_knot = np.isin(s, knots)
+    if (excess[on_knot] > 1e-12).any():  # a waypoint outside: the cause to name first
+        excess = np.where(on_knot[:, None], excess, -np.inf)
+    i, j = np.unravel_index(int(np.argmax(excess)), excess.shape)
+    if not excess[i, j] > 1e-12:
+        return
+    k = int(np.clip(np.searchsorted(knots, s[i], side="right") - 1, 0, len(knots) - 2))
+    at_knot = np.isclose(knots, s[i], rtol=0.0, atol=1e-12)
+    where = (f"at waypoint {int(np.flatnonzero(at_knot)[0])}" if at_knot.any() else
+             f"between waypoints {k} and {k + 1}: the path overshoots there; add a waypoint or move them")
+    raise InfeasibleError(
+        f"joint {j} ({model.joint_names[j]!r}) leaves its range [{lo[j]:.4g}, {hi[j]:.4g}] rad along the path: "
+        f"{q[i, j]:.4g} at s = {s[i]:.4g}, {where} (a timing cannot change the path; position_limit=None plans it "
+        "anyway)", value={"joint": j, "s": float(s[i]), "q": float(q[i, j]), "lower": float(lo[j]),
+                          "upper": float(hi[j])})
+
+
 def _viscous_note(error: Exception, viscous: bool) -> Exception:
     """``error`` (an InfeasibleError from a pass with the viscous term linearized) with a note that the plan's
     over-estimate of viscous friction, not the limits themselves, may be what leaves no timing."""
@@ -146,7 +182,8 @@ def _tolerance(tol: Any) -> float:
 def time_optimal(dyn: Dynamics, waypoints: Path | ArrayLike, vel_limit: Any = None, acc_limit: Any = None,
                  torque_limit: Any = None, grid: int | ArrayLike = 100, *, torque_margin: float = 0.0,
                  tol: float = 1e-2, refine: bool = True, max_grid: int = 1600, oversample: int = 10,
-                 viscous_passes: int = 2, discretization: str = "interpolation") -> Trajectory:
+                 viscous_passes: int = 2, discretization: str = "interpolation",
+                 position_limit: str | None = "model") -> Trajectory:
     """The time-optimal rest-to-rest trajectory along ``waypoints`` within the given limits.
 
     dyn: the arm's :class:`~armctl.Dynamics` (torques are τ = ``dyn.inverse_dynamics``, friction included).
@@ -162,6 +199,9 @@ def time_optimal(dyn: Dynamics, waypoints: Path | ArrayLike, vel_limit: Any = No
     :class:`~armctl.errors.SolverError` (pass ``tol=float("inf")`` to accept any result and read
     ``traj.check`` yourself). oversample: dense-check samples per stage (≥ 10 recommended).
     viscous_passes, discretization: see :func:`solve_problem` and :func:`~armctl.planning.problem.build_problem`.
+    position_limit: ``"model"`` (default): the path must stay within the model's joint ranges — a timing cannot
+    change the path, so one that leaves them (a waypoint outside, or the spline overshooting between two
+    inside) raises :class:`~armctl.errors.InfeasibleError` naming the joint and where; None: not checked.
 
     Returns a :class:`~armctl.planning.Trajectory` with ``check`` (the dense verification) and ``info``
     (grid, passes, the history of refinements, compute time).
@@ -175,6 +215,11 @@ def time_optimal(dyn: Dynamics, waypoints: Path | ArrayLike, vel_limit: Any = No
         raise InvalidParameterError(f"dyn must be an armctl.Dynamics, got {type(dyn).__name__}", value=dyn)
     geo = as_path(waypoints, dyn.n)
     limits = joint_limits(dyn.model, vel_limit, acc_limit, torque_limit, torque_margin)
+    if position_limit == "model":
+        check_range(dyn.model, geo)
+    elif position_limit is not None:
+        raise InvalidParameterError(f'position_limit must be "model" or None, got {position_limit!r}',
+                                    value=position_limit)
     tol = _tolerance(tol)
     oversample = whole_number(oversample, "oversample", 1)
     max_grid = whole_number(max_grid, "max_grid", 2)
