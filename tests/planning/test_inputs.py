@@ -96,3 +96,15 @@ def test_a_path_leaving_the_joint_ranges_is_refused() -> None:
     assert e.value.value["q"] == 0.5 and e.value.value["upper"] == upper[3]
     with pytest.raises(InvalidParameterError, match="position_limit must be \"model\" or None, got 'yes'"):
         time_optimal(dyn, PANDA_WAYPOINTS, torque_limit="model", position_limit="yes")  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(("limits", "waypoints", "kind"), [
+    ({"vel_limit": [[0.0, 1.0]]}, [[1.0], [0.0]], "velocity"),
+    ({"acc_limit": [[-1.0, 0.0]]}, [[0.0], [1.0]], "acceleration"),
+])
+def test_bounds_that_forbid_the_direction_of_the_path_are_named(limits: dict, waypoints: list, kind: str) -> None:
+    # the pendulum moving down with q̇ ∈ [0, 1], or up from rest with q̈ ∈ [−1, 0]: no timing moves it (it used to
+    # raise a SolverError about a "degenerate" zero-speed stage)
+    dyn = armctl.Dynamics(armctl.models.pendulum())
+    with pytest.raises(InfeasibleError, match=rf"no motion along the path at s = 0 .*joint 0 \('joint1'\) {kind} "):
+        time_optimal(dyn, waypoints, **limits)

@@ -155,6 +155,25 @@ def rest_overload(problem: TimeScalingProblem) -> InfeasibleError | None:
                            f"limit, lighten the load or change the {pose} of the path.", value=value, problem=problem)
 
 
+def no_motion(problem: TimeScalingProblem, i: int) -> InfeasibleError:
+    """The error for a profile that stops on stage i (ṡ = 0 at both its ends, so the motion would never go
+    on): naming the velocity or acceleration bounds that exclude the direction the path moves in there."""
+    dq = problem.dq[i] if np.abs(problem.dq[i]).max() > 0 else problem.dq[min(i + 1, problem.grid)]
+    found = []
+    for kind, b in (("velocity", problem.limits.velocity), ("acceleration", problem.limits.acceleration)):
+        if b is None:
+            continue
+        for j in range(dq.shape[0]):
+            if (dq[j] > 0 and b.upper[j] <= 0) or (dq[j] < 0 and b.lower[j] >= 0):
+                way = "up" if dq[j] > 0 else "down"
+                found.append(f"{_joint(problem, j)} {kind} bounds [{b.lower[j]:.4g}, {b.upper[j]:.4g}] {b.unit} "
+                             f"leave it no way to move {way}, as the path does there")
+    why = "; ".join(found) if found else "no timing within the limits gets the arm moving there"
+    return InfeasibleError(f"the limits allow no motion along the path at {_where(problem, i)}: {why}. Widen the "
+                           "bounds or change the path.", value={"s": float(problem.s[i]), "bounds": found},
+                           problem=problem)
+
+
 def diagnose(problem: TimeScalingProblem, rows: tuple[FloatArray, FloatArray, FloatArray], code: str,
              x: FloatArray | None, K: FloatArray | None) -> ArmctlError:
     """The error to raise for a failed toppra solve of ``problem`` (with the rows actually solved).

@@ -41,7 +41,7 @@ from armctl._checks import FloatArray, scalar, whole_number
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InfeasibleError, InvalidParameterError, NonFiniteError, SolverError
 from armctl.model.robot import RobotModel
-from armctl.planning.infeasibility import diagnose, rest_overload
+from armctl.planning.infeasibility import diagnose, no_motion, rest_overload
 from armctl.planning.limits import joint_limits
 from armctl.planning.path import Path, as_path
 from armctl.planning.problem import TimeScalingProblem, build_problem, gridpoints
@@ -90,6 +90,9 @@ def solve_problem(problem: TimeScalingProblem, viscous_passes: int = 2) -> Traje
                 break
             raise _viscous_note(diagnose(problem, rows, out.code, out.x, out.K), x0 is not None)
         x = _checked_profile(problem, out.x)
+        still = (x[:-1] <= 0.0) & (x[1:] <= 0.0)  # a stage never crossed: the limits forbid moving there
+        if still.any():
+            raise no_motion(problem, int(np.flatnonzero(still)[0]))
         passes += 1
         if x0 is not None or not problem.has_viscous:
             timing = GridTiming(problem.s, x)
@@ -204,7 +207,9 @@ def time_optimal(dyn: Dynamics, waypoints: Path | ArrayLike, vel_limit: Any = No
     inside) raises :class:`~armctl.errors.InfeasibleError` naming the joint and where; None: not checked.
 
     Returns a :class:`~armctl.planning.Trajectory` with ``check`` (the dense verification) and ``info``
-    (grid, passes, the history of refinements, compute time).
+    (grid, passes, the history of refinements, compute time). The path speed is bounded by ṡ² ≤ 1e8
+    (:data:`~armctl.planning.problem.X_CAP`, toppra's own bound), so a move so short, or limits so loose, that
+    its optimum would be faster than that gets the slower timing (a 1 nrad move at 1 rad/s takes 2e-4 s).
     Raises :class:`~armctl.errors.InfeasibleError` if no timing meets the limits, naming the constraint and
     where it binds (in particular when the arm cannot be held at rest at the start or end pose: gravity and the
     Coulomb friction of the adjoining motion beyond the planned torque bound); :class:`~armctl.errors.SolverError`
