@@ -18,8 +18,8 @@ whenever behaviour near zero velocity matters: holding a pose against gravity, s
 reversals, integral action against Coulomb friction (hunting limit cycles), breakaway tests.
 
 :class:`SmoothFriction` — the sign replaced by tanh(q̇/v_t). The dynamics become smooth, so every integrator
-keeps its order and linearisation is possible, but a joint under a net torque below the Coulomb level *creeps*
-at a velocity of order v_t·atanh(τ/F_c) instead of sticking, and a small v_t makes the dynamics stiff (use the
+keeps its order and linearisation is possible, but a joint under a net torque below the breakaway level
+*creeps* at a velocity of order v_t·atanh(τ/F_s) instead of sticking (F_s = F_c without a Stribeck hump), and a small v_t makes the dynamics stiff (use the
 implicit integrator or small steps). Use it for fast, large motions where the sticking phases do not matter,
 for sweeps that only need the dissipated energy right, and when comparing with tools that model friction this
 way.
@@ -140,7 +140,7 @@ class StickSlip(FrictionModel):
 class SmoothFriction(FrictionModel):
     """Smooth friction: τ_f = F_v q̇ + tanh(q̇/v_t) [F_c + (F_s − F_c) exp(−(q̇/v_s)²)], F_c and F_s by the sign
     of q̇. ``velocity``: v_t [rad/s], the width of the smoothed sign (default 0.01 rad/s); a net torque
-    below F_c makes a joint creep at about v_t·atanh(τ/F_c)."""
+    below F_s makes a joint creep at about v_t·atanh(τ/F_s) (for v_t ≪ v_s, where the level is still F_s)."""
 
     name = "smooth"
 
