@@ -19,10 +19,10 @@ reversals, integral action against Coulomb friction (hunting limit cycles), brea
 
 :class:`SmoothFriction` — the sign replaced by tanh(q̇/v_t). The dynamics become smooth, so every integrator
 keeps its order and linearisation is possible, but a joint under a net torque below the breakaway level
-*creeps* at a velocity of order v_t·atanh(τ/F_s) instead of sticking (F_s = F_c without a Stribeck hump), and a small v_t makes the dynamics stiff (use the
-implicit integrator or small steps). Use it for fast, large motions where the sticking phases do not matter,
-for sweeps that only need the dissipated energy right, and when comparing with tools that model friction this
-way.
+*creeps* at a velocity of order v_t·atanh(τ/F_s) instead of sticking (F_s = F_c without a Stribeck hump),
+and a small v_t makes the dynamics stiff (use the implicit integrator or small steps). Use it for fast, large
+motions where the sticking phases do not matter, for sweeps that only need the dissipated energy right, and
+when comparing with tools that model friction this way.
 """
 
 from __future__ import annotations
