@@ -361,3 +361,44 @@ def test_a_non_finite_torque_from_a_finite_state_raises() -> None:
             with pytest.raises(NonFiniteError, match=rf"^{type(ctrl).__name__} gave a non-finite torque"):
                 ctrl(0.0, q, z, ref)
     assert AsList(n=2)(0.0, z, z, ref) == [1.0, 2.0]
+
+
+@pytest.mark.parametrize("flag", [1, 1.0, 0, "measured", None])
+def test_computed_torque_friction_mode_is_true_false_or_reference(flag: object) -> None:
+    # 1 and 1.0 equal True, so they passed the check and then took the reference-velocity branch
+    dyn = dynamics("planar_2r")
+    with pytest.raises(InvalidParameterError, match=r"^friction must be True, False or 'reference', got"):
+        ComputedTorque(dyn, 100.0, 20.0, friction=flag)  # type: ignore[arg-type]
+    ct = ComputedTorque(dyn, 100.0, 20.0)
+    with pytest.raises(InvalidParameterError, match=r"^friction must be True, False or 'reference', got"):
+        ct.friction = flag  # type: ignore[assignment]
+    assert ct.friction is True
+
+
+def test_computed_torque_numpy_true_compensates_at_the_measured_velocity() -> None:
+    dyn = armctl.Dynamics(armctl.models.planar_2r().with_friction(viscous=[2.0, 1.0], coulomb=[4.0, 3.0]))
+    q, qd = np.array([0.2, -0.3]), np.array([0.5, -0.4])
+    ref = armctl.Reference([0.1, 0.0], [-0.6, 0.7], [0.0, 0.0])  # q̇_d opposite to q̇: the two modes differ
+    tau = {flag: ComputedTorque(dyn, 100.0, 20.0, friction=flag)(0.0, q, qd, ref)
+           for flag in (True, np.True_, "reference", False)}
+    fv, fc = np.array([2.0, 1.0]), np.array([4.0, 3.0])
+    np.testing.assert_allclose(tau[np.True_] - tau[False], fv * qd + fc * np.sign(qd), rtol=1e-12)
+    np.testing.assert_allclose(tau["reference"] - tau[False], fv * ref.qd + fc * np.sign(ref.qd), rtol=1e-12)
+    assert np.array_equal(tau[np.True_], tau[True])
+
+
+def test_composite_adaptation_is_stable_at_a_step_where_explicit_euler_diverged() -> None:
+    # pendulum, controller model with mass and inertia ×1.5, κ = 10: Γ κ dt λ_max(W_fᵀW_f) ≈ 2.8 at 1 ms, past
+    # explicit Euler's limit of 2 (θ̂ reached 4e6 and the run diverged at 0.44 s). The reference: the same law
+    # at a tenth of the period, where every scheme follows the continuous law
+    from armctl.references import Sinusoid
+
+    plant = armctl.Dynamics(armctl.models.pendulum().with_friction(viscous=0.0))
+    model = armctl.Dynamics(armctl.models.pendulum().with_friction(viscous=0.0).perturbed(mass=1.5, inertia=1.5))
+    ref = Sinusoid([0.3], [0.8], [0.7])
+    runs = {dt: armctl.simulate(plant, Adaptive(model, 10.0, 5.0, 0.5, composite=10.0), ref, 2.0, control_dt=dt,
+                                saturate=False) for dt in (1e-3, 1e-4)}
+    assert not any(r.diverged for r in runs.values())
+    coarse, fine = (np.asarray(runs[dt].logs["theta"])[-1] for dt in (1e-3, 1e-4))
+    assert np.abs(coarse - fine).max() < 0.005 * np.abs(fine).max()  # 0.09 % measured
+    assert np.abs(runs[1e-3].q[-1] - runs[1e-4].q[-1]).max() < 1e-4

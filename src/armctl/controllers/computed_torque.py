@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numpy.typing import ArrayLike
 
@@ -31,10 +33,26 @@ class ComputedTorque(PIDGains, Controller):
                  friction: bool | str = True) -> None:
         super().__init__(dynamics)
         self._set_gains(kp, kd, ki)
-        if friction not in (True, False, "reference"):
-            raise InvalidParameterError(f"friction must be True, False or 'reference', got {friction!r}",
-                                        value=friction)
         self.friction = friction
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        if "friction" in state:  # pickled when friction was a plain attribute
+            state["_friction"] = state.pop("friction")
+        self.__dict__.update(state)
+
+    @property
+    def friction(self) -> bool | str:
+        """True (at the measured velocity), ``"reference"`` (at the reference velocity) or False."""
+        return self._friction
+
+    @friction.setter
+    def friction(self, value: bool | str) -> None:
+        if isinstance(value, str) and value == "reference":
+            self._friction: bool | str = "reference"
+        elif isinstance(value, bool | np.bool_):  # not 1 or 1.0, which equal True but are no mode
+            self._friction = bool(value)
+        else:
+            raise InvalidParameterError(f"friction must be True, False or 'reference', got {value!r}", value=value)
 
     def _gains_changed(self) -> None:
         super()._gains_changed()
@@ -48,8 +66,8 @@ class ComputedTorque(PIDGains, Controller):
         if self._ki is not None:
             v += apply_gain(self._ki, self._integral.update(t, ref.q - q))
         tau = dyn._rigid_torque(q, qd, v)  # q, q̇ checked by Controller.__call__, v finite from them and ref
-        if self.friction and dyn._has_friction:
-            tau += dyn._friction(qd if self.friction is True else ref.qd)
+        if self._friction and dyn._has_friction:
+            tau += dyn._friction(ref.qd if self._friction == "reference" else qd)
         return tau
 
     _result_checked_compute = compute  # stateless without an integral (see Controller)
