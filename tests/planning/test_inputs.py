@@ -7,7 +7,7 @@ import pytest
 
 import armctl
 from armctl.errors import ArmctlError, InfeasibleError, InvalidParameterError, NonFiniteError, ShapeError
-from armctl.planning import LinePath, PolynomialTiming, Trajectory, time_optimal, uniform_time_scaling
+from armctl.planning import LinePath, PolynomialTiming, SplinePath, Trajectory, time_optimal, uniform_time_scaling
 from tests.planning._common import PANDA_WAYPOINTS, panda
 
 N = 7
@@ -108,3 +108,13 @@ def test_bounds_that_forbid_the_direction_of_the_path_are_named(limits: dict, wa
     dyn = armctl.Dynamics(armctl.models.pendulum())
     with pytest.raises(InfeasibleError, match=rf"no motion along the path at s = 0 .*joint 0 \('joint1'\) {kind} "):
         time_optimal(dyn, waypoints, **limits)
+
+
+def test_spline_range_points_hold_its_extreme_positions() -> None:
+    # against dense sampling: no sample of the spline goes beyond what its range points reach
+    rng = np.random.default_rng(3)
+    path = SplinePath(np.cumsum(rng.uniform(-0.5, 0.5, (12, 4)), axis=0))
+    dense = path(np.linspace(0.0, 1.0, 200001))
+    at = path(path.range_points())
+    assert (dense.max(axis=0) <= at.max(axis=0) + 1e-12).all() and (dense.min(axis=0) >= at.min(axis=0) - 1e-12).all()
+    np.testing.assert_allclose(at.max(axis=0), dense.max(axis=0), atol=1e-8)  # and they are reached

@@ -57,9 +57,15 @@ def test_viscous_tangent_over_estimates_at_every_speed() -> None:
     dyn = panda(friction=True)
     problem = build_problem(dyn, SplinePath(PANDA_WAYPOINTS), joint_limits(dyn.model, torque_limit="model"), 30)
     up, down = _torque_rows(problem)
-    x0 = np.full(problem.grid + 1, 0.04)
-    _, b, c = problem.linearized(x0)
-    fv = np.array([j.friction.viscous for j in dyn.model.joints])
+    for x0 in (np.full(problem.grid + 1, 0.04), np.full(problem.grid + 1, 400.0)):
+        for keep in (None, 0.5):  # the tangent, and the steeper line solve_problem tries as well
+            _check_viscous_line(problem, *problem.linearized(x0, keep)[1:], up, down)
+    # at x₀ = 400 the tangent's intercept takes more than half the slack of some rows: the steep line differs
+    assert (problem.linearized(x0)[2] != problem.linearized(x0, 0.5)[2]).any()
+
+
+def _check_viscous_line(problem, b, c, up, down) -> None:  # type: ignore[no-untyped-def]
+    fv = np.array([j.friction.viscous for j in problem.dyn.model.joints])
     for x in (0.0, 1e-4, 0.01, 0.04, 0.3, 3.0):
         true_visc = fv * problem.dq * np.sqrt(x)
         rows_up = b[:, up] * x + c[:, up] - problem.b[:, up] * x - problem.c[:, up]

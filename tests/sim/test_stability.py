@@ -123,6 +123,20 @@ def test_one_sided_contact_gaining_energy_below_the_linear_limit_is_reported(zet
     assert np.abs(res.contact_force).max() <= 2.0 * push * (1 + 1e-9)
 
 
+def test_the_one_sided_limits_hold_for_the_impact_model() -> None:
+    # SAFE_OMEGA_H: up to it the one-sided impact model gains at most its energy at every damping ratio where
+    # the linear check passes; well beyond it, undamped, it gains orders of magnitude more
+    from armctl.sim.stability import SAFE_OMEGA_H, _radius, impact_gain
+
+    for scheme, steps in (("euler", (0.3, 0.4)), ("semi-implicit-euler", (0.3, 0.4)), ("rk4", (1.0, 1.9))):
+        assert SAFE_OMEGA_H[scheme] == steps[-1]
+        for wh in steps:
+            for zeta in (0.0, 0.05, 0.3, 1.0, 2.0):
+                if _radius(scheme, wh * wh, 2.0 * zeta * wh, 1.0) <= 1.0 + 1e-12:
+                    assert impact_gain(scheme, wh, 2.0 * zeta * wh) <= 1.0, (scheme, wh, zeta)
+    assert impact_gain("euler", 1.0, 0.0) > 10.0 and impact_gain("rk4", 2.3, 0.0) > 10.0
+
+
 def _press(law: object, integrator: str) -> tuple[armctl.sim.SimResult, list[warnings.WarningMessage]]:
     """planar_2r pushed by PD + gravity compensation into a floor 0.3 m below its base, for 0.5 s."""
     from armctl.controllers import PDGravity

@@ -71,10 +71,11 @@ class ConvergenceStudy:
 
 
 def grid_convergence(dyn: Dynamics, start: ArrayLike, end: ArrayLike, vel_limit: ArrayLike, acc_limit: ArrayLike,
-                     grids: Sequence[int] = (10, 20, 50, 100, 200, 500, 1000), repeat: int = 3) -> ConvergenceStudy:
+                     grids: Sequence[int] = (10, 20, 50, 100, 200, 500, 1000), repeat: int = 3,
+                     position_limit: str | None = "model") -> ConvergenceStudy:
     """Solve the straight-line move on each grid (velocity and acceleration limits only) and compare with
     :func:`line_min_time`; the compute time is the least of ``repeat`` calls (after one warm-up call, which
-    pays for importing toppra)."""
+    pays for importing toppra). position_limit: as in :func:`~armctl.planning.time_optimal`."""
     from armctl.planning.topp import time_optimal
 
     sizes = [whole_number(n, f"grids[{i}]", 2) for i, n in enumerate(np.ravel(np.asarray(grids, dtype=object)))]
@@ -85,7 +86,8 @@ def grid_convergence(dyn: Dynamics, start: ArrayLike, end: ArrayLike, vel_limit:
     ref = line_min_time(start, end, vel_limit, acc_limit)
 
     def solve(n: int) -> float:
-        return time_optimal(dyn, path, vel_limit=vel_limit, acc_limit=acc_limit, grid=n).duration
+        return time_optimal(dyn, path, vel_limit=vel_limit, acc_limit=acc_limit, grid=n,
+                            position_limit=position_limit).duration
 
     solve(sizes[0])
     durations, times = [], []

@@ -43,6 +43,14 @@ class Path(ABC):
         """Parameters s of the waypoints (where the path's pieces join), first 0 and last 1."""
         return readonly(np.array([0.0, 1.0]))
 
+    def range_points(self, per_piece: int = 400) -> FloatArray:
+        """Parameters s at which the path reaches its extreme joint positions, for range checks: here the
+        breakpoints and ``per_piece`` evenly spaced samples of every piece between them (subclasses that
+        know their pieces return the exact extrema)."""
+        knots = self.breakpoints
+        frac = np.linspace(0.0, 1.0, per_piece + 1)
+        return np.unique(np.concatenate(((knots[:-1, None] + np.diff(knots)[:, None] * frac).ravel(), knots)))
+
     @abstractmethod
     def _derivatives(self, s: FloatArray, order: int) -> FloatArray:
         """d^order q / ds^order at every s (m,) → (m, n); s is checked and inside [0, 1]."""
@@ -136,6 +144,23 @@ class SplinePath(Path):
     @property
     def breakpoints(self) -> FloatArray:
         return self._knots
+
+    def range_points(self, per_piece: int = 400) -> FloatArray:
+        """The breakpoints and, in every piece, the roots of each joint's q'(s) (a quadratic there): where the
+        cubic pieces reach their extreme positions, exactly (``per_piece`` is not needed)."""
+        c = self._splines[0].c  # (4, pieces, n): q = c0 t³ + c1 t² + c2 t + c3, t = s − s_k
+        a, b, d = 3.0 * c[0], 2.0 * c[1], c[2]  # q' = a t² + b t + d
+        width = np.diff(self._knots)[:, None]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            root = np.sqrt(b * b - 4.0 * a * d)
+            big = np.abs(a) > 1e-12 * (np.abs(b) + np.abs(d) + 1e-300)
+            roots = [np.where(big, (-b + root) / (2.0 * a), -d / b), np.where(big, (-b - root) / (2.0 * a), np.nan)]
+        starts = np.broadcast_to(self._knots[:-1, None], a.shape)
+        points = [self._knots]
+        for t in roots:
+            ok = np.isfinite(t) & (t > 0.0) & (t < width)
+            points.append(starts[ok] + t[ok])
+        return np.unique(np.concatenate(points))
 
     def _derivatives(self, s: FloatArray, order: int) -> FloatArray:
         return self._splines[order](s)  # type: ignore[no-any-return]

@@ -63,10 +63,12 @@ def solve_problem(problem: TimeScalingProblem, viscous_passes: int = 2) -> Traje
     trajectory rests there before 0 and after T, which toppra, free to brake at the last gridpoint, ignores.
 
     With viscous friction, a first pass drops it (optimistic, never returned); each of the ``viscous_passes``
-    further passes replaces F_v q' √x by a line over it: the tangent at the previous pass's x, or, if toppra
-    finds no timing with that, a steeper line that leaves slow motion more torque (see
-    :meth:`~armctl.planning.problem.TimeScalingProblem.linearized`). Every such pass is conservative; the
-    fastest is returned (a later pass that finds no timing leaves the earlier ones standing).
+    further passes replaces F_v q' √x by a line over it, in two solves: the tangent at the previous pass's x,
+    and a steeper line that leaves slow motion more torque (see
+    :meth:`~armctl.planning.problem.TimeScalingProblem.linearized`; each wins on some paths: the tangent where
+    the path must carry its speed through a pose it cannot hold, the steep line elsewhere by a few %). Every
+    solve is conservative; the fastest is returned and seeds the next pass (a pass that finds no timing leaves
+    the earlier ones standing).
     """
     from armctl.planning._toppra import run_toppra
 
@@ -80,60 +82,59 @@ def solve_problem(problem: TimeScalingProblem, viscous_passes: int = 2) -> Traje
     best: GridTiming | None = None  # the fastest conservative pass
     passes = 0
     for _ in range(1 + (viscous_passes if problem.has_viscous else 0)):
-        for keep in (None,) if x0 is None else (None, VISCOUS_KEEP):
+        found: list[FloatArray] = []
+        for keep in (None,) if x0 is None else (None, VISCOUS_KEEP):  # with x₀: both lines, the faster kept
             rows = problem.linearized(x0, keep)
             out = run_toppra(problem.path, problem.s, *rows, problem.g, problem.x_max, interp)
             if out.ok and out.x is not None:
-                break
-        else:
+                found.append(_checked_profile(problem, out.x))
+        if not found:
             if best is not None:
                 break
             raise _viscous_note(diagnose(problem, rows, out.code, out.x, out.K), x0 is not None)
-        x = _checked_profile(problem, out.x)
-        still = (x[:-1] <= 0.0) & (x[1:] <= 0.0)  # a stage never crossed: the limits forbid moving there
-        if still.any():
-            raise no_motion(problem, int(np.flatnonzero(still)[0]))
+        for x in found:
+            still = (x[:-1] <= 0.0) & (x[1:] <= 0.0)  # a stage never crossed: the limits forbid moving there
+            if still.any():
+                raise no_motion(problem, int(np.flatnonzero(still)[0]))
         passes += 1
+        timings = [GridTiming(problem.s, x) for x in found]
+        fastest = min(range(len(found)), key=lambda k: timings[k].duration)
+        x = found[fastest]
         if x0 is not None or not problem.has_viscous:
-            timing = GridTiming(problem.s, x)
-            if best is None or timing.duration < best.duration:
-                best = timing
+            if best is None or timings[fastest].duration < best.duration:
+                best = timings[fastest]
         x0 = np.maximum(x, 1e-9 * max(float(x.max()), 1e-12))
     assert best is not None
     return Trajectory(problem.path, best, info={"grid": problem.grid, "passes": passes,
                                                   "solve_time": time.perf_counter() - t0})
 
 
-#: samples of a path per piece (between two waypoints) in the joint-range check
-RANGE_SAMPLES = 400
-
-
 def check_range(model: RobotModel, path: Path) -> None:
     """Raise :class:`~armctl.errors.InfeasibleError` if ``path`` leaves the joint ranges of ``model`` (its
-    finite lower/upper limits) anywhere: sampled at :data:`RANGE_SAMPLES` points per piece, waypoints included;
-    the error names the joint, the worst point (a waypoint outside first, else where the path overshoots
-    between two) and the range."""
+    finite lower/upper limits) anywhere, checked at the path's :meth:`~armctl.planning.Path.range_points`
+    (a spline's exact extrema; other paths densely sampled); the error names the joint, the worst point (a
+    waypoint outside first, else where the path overshoots between two) and the range."""
     lo, hi = model.lower, model.upper
     if not (np.isfinite(lo).any() or np.isfinite(hi).any()):
         return
     knots = path.breakpoints
-    frac = np.linspace(0.0, 1.0, RANGE_SAMPLES + 1)
-    s = np.unique(np.concatenate(((knots[:-1, None] + np.diff(knots)[:, None] * frac).ravel(), knots)))
+    s = path.range_points()
     q = path(s)
     with np.errstate(invalid="ignore"):
         excess = np.maximum(q - hi, lo - q)  # > 0 outside; inf limits give −inf
     on_knot = np.isin(s, knots)
     if (excess[on_knot] > 1e-12).any():  # a waypoint outside: the cause to name first
         excess = np.where(on_knot[:, None], excess, -np.inf)
-    i, j = np.unravel_index(int(np.argmax(excess)), excess.shape)
+    i, j = (int(v) for v in np.unravel_index(int(np.argmax(excess)), excess.shape))
     if not excess[i, j] > 1e-12:
         return
     k = int(np.clip(np.searchsorted(knots, s[i], side="right") - 1, 0, len(knots) - 2))
     at_knot = np.isclose(knots, s[i], rtol=0.0, atol=1e-12)
     where = (f"at waypoint {int(np.flatnonzero(at_knot)[0])}" if at_knot.any() else
              f"between waypoints {k} and {k + 1}: the path overshoots there; add a waypoint or move them")
+    unit = "m" if model.joints[j].kind == "prismatic" else "rad"
     raise InfeasibleError(
-        f"joint {j} ({model.joint_names[j]!r}) leaves its range [{lo[j]:.4g}, {hi[j]:.4g}] rad along the path: "
+        f"joint {j} ({model.joint_names[j]!r}) leaves its range [{lo[j]:.4g}, {hi[j]:.4g}] {unit} along the path: "
         f"{q[i, j]:.4g} at s = {s[i]:.4g}, {where} (a timing cannot change the path; position_limit=None plans it "
         "anyway)", value={"joint": j, "s": float(s[i]), "q": float(q[i, j]), "lower": float(lo[j]),
                           "upper": float(hi[j])})
