@@ -92,10 +92,11 @@ def solve_problem(problem: TimeScalingProblem, viscous_passes: int = 2) -> Traje
             if best is not None:
                 break
             raise _viscous_note(diagnose(problem, rows, out.code, out.x, out.K), x0 is not None)
-        for x in found:
-            still = (x[:-1] <= 0.0) & (x[1:] <= 0.0)  # a stage never crossed: the limits forbid moving there
-            if still.any():
-                raise no_motion(problem, int(np.flatnonzero(still)[0]))
+        # a profile with a stage never crossed (ṡ = 0 at both ends) is no timing: the limits forbid moving there
+        still = [(x[:-1] <= 0.0) & (x[1:] <= 0.0) for x in found]
+        if all(st.any() for st in still):
+            raise no_motion(problem, int(np.flatnonzero(still[0])[0]))
+        found = [x for x, st in zip(found, still, strict=True) if not st.any()]
         passes += 1
         timings = [GridTiming(problem.s, x) for x in found]
         fastest = min(range(len(found)), key=lambda k: timings[k].duration)
@@ -221,7 +222,7 @@ def time_optimal(dyn: Dynamics, waypoints: Path | ArrayLike, vel_limit: Any = No
         raise InvalidParameterError(f"dyn must be an armctl.Dynamics, got {type(dyn).__name__}", value=dyn)
     geo = as_path(waypoints, dyn.n)
     limits = joint_limits(dyn.model, vel_limit, acc_limit, torque_limit, torque_margin)
-    if position_limit == "model":
+    if isinstance(position_limit, str) and position_limit == "model":
         check_range(dyn.model, geo)
     elif position_limit is not None:
         raise InvalidParameterError(f'position_limit must be "model" or None, got {position_limit!r}',
