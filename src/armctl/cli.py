@@ -25,7 +25,8 @@ def _demo(args: argparse.Namespace) -> int:
     print("M(q)      =\n", dyn.mass_matrix(q))
     print("g(q)      =", dyn.gravity_torque(q))
     print("C(q,qd)qd =", dyn.coriolis_matrix(q, qd) @ qd)
-    print("tau(q,qd,0) =", dyn.inverse_dynamics(q, qd, np.zeros(model.n)))
+    print("friction  =", dyn.friction_torque(qd))
+    print("tau(q,qd,0) =", dyn.inverse_dynamics(q, qd, np.zeros(model.n)), " (= C qd + g + friction)")
     return 0
 
 
@@ -55,7 +56,7 @@ def _bench(args: argparse.Namespace) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="armctl", description=__doc__)
+    parser = argparse.ArgumentParser(prog="armctl", description=__doc__.replace("``", ""))
     sub = parser.add_subparsers(dest="command", required=True)
     b = sub.add_parser("bench", help="run the benchmark suite and write figures.json, charts and report.html")
     b.add_argument("--quick", action="store_true", help="a sub-minute run with fewer repetitions")

@@ -155,3 +155,21 @@ def test_a_model_built_from_parameters_is_what_the_regressor_predicts(scale: flo
     for q, qd, qdd in rng.uniform(-1.5, 1.5, (5, 3, 6)):
         np.testing.assert_allclose(y_of.regressor(q, qd, qdd) @ theta, tau_of.inverse_dynamics(q, qd, qdd),
                                    rtol=1e-12, atol=1e-12)
+
+
+@pytest.mark.parametrize("backend", ["pinocchio", "lagrange"])
+def test_a_rotor_given_to_a_joint_without_a_motor_is_an_armature(backend: str) -> None:
+    """planar_3r has no motors: a θ with rotor inertias gives its joints armatures (reflected inertia, no
+    gyroscopic coupling), so Y(x) θ of the motorless arm is the new model's τ on the Lagrange backend too, which
+    with a coupled k_r = 1 motor was off by up to 0.78 N·m."""
+    model = armctl.models.planar_3r()
+    theta = model.parameters().reshape(3, 13).copy()
+    theta[:, 10] = [0.5, 0.3, 0.2]
+    theta = theta.reshape(-1)
+    new = model.with_parameters(theta)
+    assert all(j.motor is not None and not j.motor.gyroscopic for j in new.joints)
+    y_of, tau_of = armctl.Dynamics(model, backend=backend), armctl.Dynamics(new, backend=backend)
+    rng = np.random.default_rng(2)
+    for q, qd, qdd in rng.uniform(-1.5, 1.5, (5, 3, 3)):
+        np.testing.assert_allclose(y_of.regressor(q, qd, qdd) @ theta, tau_of.inverse_dynamics(q, qd, qdd),
+                                   rtol=1e-12, atol=1e-12)

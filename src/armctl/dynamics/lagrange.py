@@ -84,7 +84,7 @@ class _Symbols:
             potential -= cs.dot(g0, m * p + r @ mc)
             rotor = pi[k * i + 10]  # k_r² I_m (a parameter of every joint; zero without a motor)
             kinetic += 0.5 * rotor * qd[i] ** 2
-            if joint.motor is not None:
+            if joint.motor is not None and joint.motor.gyroscopic:
                 if rotor_coupling and i > 0:
                     z_m = rot[i] @ cs.DM(joint.motor_axis)  # rotor axis, carried by link i−1
                     kinetic += rotor / joint.motor.gear_ratio * qd[i] * cs.dot(z_m, omega[i])
@@ -263,7 +263,7 @@ class LagrangeDynamics(Dynamics):
         qv = self._q(q)
         out = np.zeros((self.n, self.n))
         for i, joint in enumerate(self.model.joints):
-            if joint.motor is None or i == 0:
+            if joint.motor is None or not joint.motor.gyroscopic or i == 0:
                 continue
             z_m = self.frame_pose(qv, self.model.joints[i - 1].name)[:3, :3] @ joint.motor_axis
             jw = self._jacobian(qv, self.model.joints[i - 1].name)[3:]

@@ -8,8 +8,9 @@ is rebuilt as
 and a massless link (m ≤ 10⁻⁹ kg) keeps I_C = I_O (its first moment must then be below 10⁻⁶ kg·m, and is
 dropped). The rotor keeps the model's gear
 ratio (I_m = π_rotor / k_r²) so the Lagrange backend's gyroscopic term stays consistent; a joint without a
-motor gets one with k_r = 1 if π gives it a rotor inertia. Coulomb friction: F_c⁺ = F_c + δ, F_c⁻ = F_c − δ
-with δ the asymmetry (default: the model's own).
+motor gets an armature if π gives it a rotor inertia (a ``Motor`` with k_r = 1 and ``gyroscopic=False``: the
+reflected inertia alone, as the regressor of a joint without a motor has it). Coulomb friction:
+F_c⁺ = F_c + δ, F_c⁻ = F_c − δ with δ the asymmetry (default: the model's own).
 """
 
 from __future__ import annotations
@@ -103,7 +104,7 @@ def model_from_parameters(model: RobotModel, pi: ArrayLike, coulomb_offset: Arra
         if j.motor is not None:
             motor: Motor | None = replace(j.motor, inertia=rotor / j.motor.gear_ratio**2)
         else:
-            motor = Motor(rotor, 1.0) if rotor > 0 else None
+            motor = Motor(rotor, 1.0, gyroscopic=False) if rotor > 0 else None
         fp, fn = fc + delta[i], fc - delta[i]
         if min(fp, fn) < -1e-12:
             raise InvalidParameterError(f"{label}: Coulomb levels F_c ± δ = {fp:g}, {fn:g} must be >= 0", value=fc)

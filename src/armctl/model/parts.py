@@ -152,11 +152,15 @@ class Motor:
 
     inertia: rotor moment of inertia about its spin axis, I_m [kg·m²]. gear_ratio: k_r (rotor angle / joint
     angle), sign included. axis: spin axis in the frame of the link the rotor rides on (None: the joint axis).
+    gyroscopic: whether the rotor's coupling with the link it rides on is part of the model (the Lagrange
+    backend's ``rotor_coupling``); False: only the reflected inertia k_r² I_m, an *armature* (what
+    :func:`~armctl.model.from_parameters.model_from_parameters` gives a joint that had no motor).
     """
 
     inertia: float = 0.0
     gear_ratio: float = 1.0
     axis: FloatArray | None = None
+    gyroscopic: bool = True
 
     def __post_init__(self) -> None:
         i = scalar(self.inertia, "rotor inertia [kg·m²]", nonnegative=True)
@@ -166,6 +170,7 @@ class Motor:
                                         value=self.gear_ratio)
         object.__setattr__(self, "inertia", i)
         object.__setattr__(self, "gear_ratio", k)
+        object.__setattr__(self, "gyroscopic", boolean(self.gyroscopic, "gyroscopic"))
         if self.axis is not None:
             a = vec3(self.axis, "motor axis")
             nrm = float(np.linalg.norm(a))

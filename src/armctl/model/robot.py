@@ -212,13 +212,13 @@ class RobotModel:
         """A short hash keying caches of code generated from this model (the ``"lagrange"`` backend's
         compiled CasADi library uses ``fingerprint(inertial=False)``).
 
-        Covered: gravity; every joint's kind, axis and placement; for joints with a motor, its gear ratio and
-        spin axis; the tool frame (name, joint, placement). ``inertial=True`` adds the link masses, centres of
-        mass, inertia tensors and rotor inertias. Not covered: friction, joint limits, joint names and the
-        frames other than the tool frame. So equal fingerprints do *not* mean equal dynamics (models that
-        differ only in friction share one); they mean the same generated code, whose π input carries the
-        inertial and friction parameters at run time: every payload, perturbed or friction variant of an arm
-        shares ``fingerprint(inertial=False)``."""
+        Covered: gravity; every joint's kind, axis and placement; for joints with a motor, its gear ratio,
+        spin axis and whether it is gyroscopic; the tool frame (name, joint, placement). ``inertial=True`` adds
+        the link masses, centres of mass, inertia tensors and rotor inertias. Not covered: friction, joint
+        limits, joint names and the frames other than the tool frame. So equal fingerprints do *not* mean equal
+        dynamics (models that differ only in friction share one); they mean the same generated code, whose π
+        input carries the inertial and friction parameters at run time: every payload, perturbed or friction
+        variant of an arm shares ``fingerprint(inertial=False)``."""
         h = hashlib.sha256()
         h.update(self.gravity.tobytes())
         for j in self.joints:
@@ -231,6 +231,8 @@ class RobotModel:
             if j.motor is not None:
                 h.update(np.array([j.motor.gear_ratio]).tobytes())
                 h.update(j.motor_axis.tobytes())
+                if not j.motor.gyroscopic:  # (only then: the fingerprints of existing models stay)
+                    h.update(b"armature")
                 if inertial:
                     h.update(np.array([j.motor.inertia]).tobytes())
         tool = self.frame(None)
