@@ -287,24 +287,27 @@ class Dynamics(RegressorMethods, ABC):
                          wrench: ArrayLike | None = None) -> FloatArray:
         """τ = M q̈ + C q̇ + g + τ_f(q̇) + J(q)ᵀ h_e, with ``wrench`` h_e = [f; μ] at the tool frame in
         world-aligned axes (the force the arm exerts on the environment)."""
-        if self._has_friction or wrench is not None:
-            q, qd, qdd = self._inputs(("q", "qd", "qdd"), q, qd, qdd)
-            tau = self._rigid_torque(q, qd, qdd)
-            if self._has_friction:
-                tau += self._friction(qd)
-            if wrench is not None:
-                tau += self._jacobian(q, None).T @ vector(wrench, 6, "wrench")
-            return tau
-        try:  # _call's fast path, inlined: this is called every control step
-            # ndim: an int, cheaper than comparing shape tuples; Pinocchio checks the lengths
-            if (self._nan_propagates and q.ndim == qd.ndim == qdd.ndim == 1  # type: ignore[union-attr]
-                    and q.dtype is qd.dtype is qdd.dtype is _FLOAT):  # type: ignore[union-attr]  (as in _call)
-                out = self._rigid_torque(q, qd, qdd)
-                if math.isfinite(out.item(0)):  # NaN/inf in any input shows up in τ₁ (_nan_propagates)
-                    return out  # type: ignore[no-any-return]
-        except Exception:
-            pass
-        return self._checked_call(self._rigid_torque, ("q", "qd", "qdd"), q, qd, qdd)
+        if wrench is None:
+            try:  # _call's fast path, inlined: this is called every control step
+                # ndim: an int, cheaper than comparing shape tuples; Pinocchio checks the lengths
+                if (self._nan_propagates and q.ndim == qd.ndim == qdd.ndim == 1  # type: ignore[union-attr]
+                        and q.dtype is qd.dtype is qdd.dtype is _FLOAT):  # type: ignore[union-attr]  (as in _call)
+                    out = self._rigid_torque(q, qd, qdd)
+                    if math.isfinite(out.item(0)):  # NaN/inf in any input shows up in τ₁ (_nan_propagates)
+                        if self._has_friction:  # q̇ is finite and of length n: Pinocchio took it
+                            out += self._friction(qd)  # type: ignore[arg-type]
+                        return out  # type: ignore[no-any-return]
+            except Exception:
+                pass
+            if not self._has_friction:
+                return self._checked_call(self._rigid_torque, ("q", "qd", "qdd"), q, qd, qdd)
+        q, qd, qdd = self._inputs(("q", "qd", "qdd"), q, qd, qdd)
+        tau = self._rigid_torque(q, qd, qdd)
+        if self._has_friction:
+            tau += self._friction(qd)
+        if wrench is not None:
+            tau += self._jacobian(q, None).T @ vector(wrench, 6, "wrench")
+        return tau
 
     def forward_dynamics(self, q: ArrayLike, qd: ArrayLike, tau: ArrayLike,
                          wrench: ArrayLike | None = None) -> FloatArray:
