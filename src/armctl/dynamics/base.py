@@ -291,7 +291,8 @@ class Dynamics(RegressorMethods, ABC):
             try:  # _call's fast path, inlined: this is called every control step
                 # ndim: an int, cheaper than comparing shape tuples; Pinocchio checks the lengths
                 if (self._nan_propagates and q.ndim == qd.ndim == qdd.ndim == 1  # type: ignore[union-attr]
-                        and q.dtype is qd.dtype is qdd.dtype is _FLOAT):  # type: ignore[union-attr]  (as in _call)
+                        and q.dtype is qd.dtype is qdd.dtype is _FLOAT  # type: ignore[union-attr]  (as in _call)
+                        and q.__class__ is qd.__class__ is qdd.__class__ is np.ndarray):  # no masked arrays
                     out = self._rigid_torque(q, qd, qdd)
                     if math.isfinite(out.item(0)):  # NaN/inf in any input shows up in τ₁ (_nan_propagates)
                         if self._has_friction:  # q̇ is finite and of length n: Pinocchio took it
