@@ -56,7 +56,7 @@ def _bench(args: argparse.Namespace) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="armctl", description=__doc__.replace("``", ""))
+    parser = argparse.ArgumentParser(prog="armctl", description=(__doc__ or "").replace("``", ""))
     sub = parser.add_subparsers(dest="command", required=True)
     b = sub.add_parser("bench", help="run the benchmark suite and write figures.json, charts and report.html")
     b.add_argument("--quick", action="store_true", help="a sub-minute run with fewer repetitions")

@@ -173,3 +173,13 @@ def test_masked_entries_are_refused_on_the_checked_paths() -> None:
             call()
     unmasked = np.ma.masked_array(np.full(6, 0.5), mask=False)
     np.testing.assert_array_equal(dyn.friction_torque(unmasked), dyn.friction_torque(np.full(6, 0.5)))
+
+
+@pytest.mark.parametrize("model", [armctl.models.puma560(), armctl.models.planar_2r().with_friction(viscous=0.5)])
+def test_finite_inputs_too_large_for_floats_raise_with_friction_too(model: armctl.RobotModel) -> None:
+    # q̇ = 1e200 overflows C q̇ to inf − inf = NaN; without friction this raised, with friction τ came back NaN
+    dyn = armctl.Dynamics(model)
+    assert dyn._has_friction
+    n = dyn.n
+    with pytest.raises(NonFiniteError, match="not finite although every input is"):
+        dyn.inverse_dynamics(np.zeros(n), np.full(n, 1e200), np.zeros(n))

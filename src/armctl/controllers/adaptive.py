@@ -29,7 +29,8 @@ class Adaptive(SlidingGains, Controller):
     converges only under persistent excitation. θ̂ is integrated at the control rate over the time between
     calls: explicit Euler, but for the composite term κ W_fᵀW_f θ̂, which is stiff (explicit Euler diverges once
     Γ κ dt λ_max(W_fᵀW_f) > 2: a pendulum at κ = 10, 1 ms did) and is taken at the new θ̂ (backward Euler, by
-    the Woodbury identity: one n × n solve), a contraction for every κ and dt.
+    the Woodbury identity: one n × n solve), non-expansive in the Γ⁻¹ norm (eigenvalues in (0, 1]) for every κ
+    and dt.
 
     Protections against drift under disturbances and noise (off by default, as in the textbook law):
 

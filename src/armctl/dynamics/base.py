@@ -309,6 +309,8 @@ class Dynamics(RegressorMethods, ABC):
             tau += self._friction(qd)
         if wrench is not None:
             tau += self._jacobian(q, None).T @ vector(wrench, 6, "wrench")
+        if not np.isfinite(tau).all():  # finite inputs too large for floats (as _checked_call says)
+            raise self._nonfinite_result(q, tau)
         return tau
 
     def forward_dynamics(self, q: ArrayLike, qd: ArrayLike, tau: ArrayLike,

@@ -212,9 +212,10 @@ class RobotModel:
         """A short hash keying caches of code generated from this model (the ``"lagrange"`` backend's
         compiled CasADi library uses ``fingerprint(inertial=False)``).
 
-        Covered: gravity; every joint's kind, axis and placement; for joints with a motor, its gear ratio,
-        spin axis and whether it is gyroscopic; the tool frame (name, joint, placement). ``inertial=True`` adds
-        the link masses, centres of mass, inertia tensors and rotor inertias. Not covered: friction, joint
+        Covered: gravity; every joint's kind, axis and placement; for joints with a gyroscopic motor, its gear
+        ratio and spin axis (an armature changes no code: it is in π); the tool frame (name, joint,
+        placement). ``inertial=True`` adds the link masses, centres of mass, inertia tensors and rotor
+        inertias. Not covered: friction, joint
         limits, joint names and the frames other than the tool frame. So equal fingerprints do *not* mean equal
         dynamics (models that differ only in friction share one); they mean the same generated code, whose π
         input carries the inertial and friction parameters at run time: every payload, perturbed or friction
@@ -228,13 +229,13 @@ class RobotModel:
             if inertial:
                 h.update(np.array([j.link.mass, *j.link.com]).tobytes())
                 h.update(j.link.inertia.tobytes())
-            if j.motor is not None:
+            if j.motor is not None and j.motor.gyroscopic:
                 h.update(np.array([j.motor.gear_ratio]).tobytes())
                 h.update(j.motor_axis.tobytes())
-                if not j.motor.gyroscopic:  # (only then: the fingerprints of existing models stay)
-                    h.update(b"armature")
                 if inertial:
                     h.update(np.array([j.motor.inertia]).tobytes())
+            elif j.motor is not None and inertial:  # an armature: generated code as without a motor
+                h.update(b"armature" + np.array([j.motor.inertia * j.motor.gear_ratio**2]).tobytes())
         tool = self.frame(None)
         h.update(f"{tool.name}:{tool.joint}".encode())
         h.update(tool.placement.tobytes())
