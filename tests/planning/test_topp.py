@@ -260,3 +260,34 @@ def test_toppra_failures_do_not_pass_silently(monkeypatch: pytest.MonkeyPatch) -
     monkeypatch.setattr(toppra_adapter, "run_toppra", overshoot)
     with pytest.raises(SolverError, match="outside its own bounds"):
         time_optimal(dyn, PANDA_WAYPOINTS, vel_limit="model")
+
+
+def test_a_viscous_solve_that_stalls_is_dropped_when_the_other_moves(monkeypatch: pytest.MonkeyPatch) -> None:
+    # each viscous pass solves twice (tangent, then the steep line): a steep-line profile that stops on a stage is
+    # no timing, and the pass keeps the tangent's — the same result as a steep line that finds nothing at all
+    real = toppra_adapter.run_toppra
+    dyn = armctl.Dynamics(armctl.models.pendulum().with_friction(viscous=0.3, coulomb=0.0))
+    calls = {"n": 0}
+
+    def steep(stalls: bool):  # type: ignore[no-untyped-def]
+        def run(*args, **kwargs):  # type: ignore[no-untyped-def]
+            calls["n"] += 1
+            out = real(*args, **kwargs)
+            if calls["n"] % 2 == 1 and calls["n"] > 1:  # calls 3, 5: the steep line of each viscous pass
+                if not stalls:
+                    return toppra_adapter.ToppraOutput("FailUncontrollable", None, out.K)
+                x = out.x.copy()
+                x[40:42] = 0.0
+                return toppra_adapter.ToppraOutput("Ok", x, out.K)
+            return out
+        return run
+
+    durations = []
+    for stalls in (True, False):
+        calls["n"] = 0
+        monkeypatch.setattr(toppra_adapter, "run_toppra", steep(stalls))
+        durations.append(time_optimal(dyn, LinePath([0.0], [2.2]), torque_limit=4.8, grid=100).duration)
+    assert calls["n"] == 5  # 1 optimistic + 2 passes × 2 lines
+    assert durations[0] == durations[1]
+    monkeypatch.setattr(toppra_adapter, "run_toppra", real)
+    assert time_optimal(dyn, LinePath([0.0], [2.2]), torque_limit=4.8, grid=100).duration <= durations[0]
