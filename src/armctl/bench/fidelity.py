@@ -232,7 +232,7 @@ def summary(data: dict[str, Any]) -> str:
         lines.append(f"  {name:11s} {shares}")
         lines.append(f"  {'':11s} choice {cl['choice']} ({c['compute_s'] * 1e6:.1f} µs/step, RMS error "
                      f"{c['rms_error']:.2e} rad) vs {cl['baseline']} ({b['compute_s'] * 1e6:.1f} µs/step, "
-                     f"{b['rms_error']:.2e} rad)")
+                     f"{b['rms_error']:.2e} rad), runs of {cl['duration']:g} s")
     return "\n".join(lines)
 
 
