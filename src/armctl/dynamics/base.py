@@ -301,9 +301,7 @@ class Dynamics(RegressorMethods, ABC):
                             return out  # type: ignore[no-any-return]
             except Exception:
                 pass
-            if not self._has_friction:
-                return self._checked_call(self._rigid_torque, ("q", "qd", "qdd"), q, qd, qdd)
-        q, qd, qdd = self._inputs(("q", "qd", "qdd"), q, qd, qdd)
+        q, qd, qdd = self._inputs(("q", "qd", "qdd"), q, qd, qdd)  # the checked path (as _checked_call's)
         tau = self._rigid_torque(q, qd, qdd)
         if self._has_friction:
             tau += self._friction(qd)

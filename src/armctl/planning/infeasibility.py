@@ -74,8 +74,7 @@ def _joint(problem: TimeScalingProblem, j: int) -> str:
 
 def _where(problem: TimeScalingProblem, p: int) -> str:
     s = float(problem.s[p])
-    bp = problem.path.breakpoints
-    k = int(np.clip(np.searchsorted(bp, s, side="right") - 1, 0, len(bp) - 2))
+    k = problem.path.piece(s)
     return f"s = {s:.3g} (between waypoints {k} and {k + 1})"
 
 

@@ -43,6 +43,11 @@ class Path(ABC):
         """Parameters s of the waypoints (where the path's pieces join), first 0 and last 1."""
         return readonly(np.array([0.0, 1.0]))
 
+    def piece(self, s: float) -> int:
+        """k such that s lies in the piece [s_k, s_{k+1}] between waypoints k and k + 1 (the last one at s = 1)."""
+        bp = self.breakpoints
+        return int(np.clip(np.searchsorted(bp, s, side="right") - 1, 0, len(bp) - 2))
+
     def range_points(self, per_piece: int = 400) -> FloatArray:
         """Parameters s at which the path reaches its extreme joint positions, for range checks: here the
         breakpoints and ``per_piece`` evenly spaced samples of every piece between them (subclasses that

@@ -96,15 +96,12 @@ def solve_problem(problem: TimeScalingProblem, viscous_passes: int = 2) -> Traje
         still = [(x[:-1] <= 0.0) & (x[1:] <= 0.0) for x in found]
         if all(st.any() for st in still):
             raise no_motion(problem, int(np.flatnonzero(still[0])[0]))
-        found = [x for x, st in zip(found, still, strict=True) if not st.any()]
+        timing = min((GridTiming(problem.s, x) for x, st in zip(found, still, strict=True) if not st.any()),
+                     key=lambda g: g.duration)
         passes += 1
-        timings = [GridTiming(problem.s, x) for x in found]
-        fastest = min(range(len(found)), key=lambda k: timings[k].duration)
-        x = found[fastest]
-        if x0 is not None or not problem.has_viscous:
-            if best is None or timings[fastest].duration < best.duration:
-                best = timings[fastest]
-        x0 = np.maximum(x, 1e-9 * max(float(x.max()), 1e-12))
+        if (x0 is not None or not problem.has_viscous) and (best is None or timing.duration < best.duration):
+            best = timing
+        x0 = np.maximum(timing.x, 1e-9 * max(float(timing.x.max()), 1e-12))
     assert best is not None
     return Trajectory(problem.path, best, info={"grid": problem.grid, "passes": passes,
                                                   "solve_time": time.perf_counter() - t0})
@@ -129,7 +126,7 @@ def check_range(model: RobotModel, path: Path) -> None:
     i, j = (int(v) for v in np.unravel_index(int(np.argmax(excess)), excess.shape))
     if not excess[i, j] > 1e-12:
         return
-    k = int(np.clip(np.searchsorted(knots, s[i], side="right") - 1, 0, len(knots) - 2))
+    k = path.piece(float(s[i]))
     at_knot = np.isclose(knots, s[i], rtol=0.0, atol=1e-12)
     where = (f"at waypoint {int(np.flatnonzero(at_knot)[0])}" if at_knot.any() else
              f"between waypoints {k} and {k + 1}: the path overshoots there; add a waypoint or move them")
