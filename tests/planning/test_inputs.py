@@ -61,6 +61,28 @@ def test_a_path_that_stops_is_refused() -> None:
         time_optimal(dyn, path, vel_limit=1.0, grid=8)
 
 
+@pytest.mark.parametrize("grid", [50, 100, 101])
+def test_a_stop_between_gridpoints_is_refused_and_located(grid: int) -> None:
+    # three waypoints q₀, q₀ + 0.3, q₀ − 0.2 (every joint the same offset): the not-a-knot spline through three
+    # points is one parabola; with chord knots (0, 0.375, 1) it is p(s) = −1.6 s² + 1.4 s per joint, so all
+    # joints stop together at s = 1.4/3.2 = 0.4375, which none of these grids has as a gridpoint. Before the
+    # check looked between gridpoints, toppra failed there as "uncontrollable" and the error blamed the solver.
+    q0 = np.array([0.0, -0.4, 0.0, -2.0, 0.0, 1.6, 0.8])
+    with pytest.raises(InvalidParameterError, match=r"stationary .* at s = 0\.4375") as e:
+        time_optimal(panda(), np.array([q0, q0 + 0.3, q0 - 0.2]), torque_limit="model", grid=grid)
+    assert e.value.value == pytest.approx(0.4375, abs=1e-12)
+
+
+def test_a_near_stop_is_not_refused() -> None:
+    # the same move with one joint's middle offset changed: the joints no longer stop together, so the path
+    # moves everywhere (its slowest point is a joint-2 stop, with the others moving) and is timed
+    q0 = np.array([0.0, -0.4, 0.0, -2.0, 0.0, 1.6, 0.8])
+    mid = q0 + 0.3
+    mid[0] += 0.05
+    traj = time_optimal(panda(), np.array([q0, mid, q0 - 0.2]), torque_limit="model", vel_limit="model")
+    assert traj.check.ok
+
+
 def test_uniform_time_scaling_rejects_bad_input() -> None:
     dyn = panda()
     with pytest.raises(InvalidParameterError, match="Trajectory"):
