@@ -4,6 +4,7 @@ time scaling, infeasibility reports and toppra's failure modes."""
 
 from __future__ import annotations
 
+import itertools
 import math
 from typing import Any
 
@@ -188,6 +189,21 @@ def test_refinement_until_within_tolerance() -> None:
     with pytest.raises(SolverError, match="exceeds a limit") as err:
         time_optimal(dyn, PANDA_WAYPOINTS, torque_limit="model", grid=25, tol=1e-3, refine=False)
     assert isinstance(err.value.result, Trajectory)  # the violating result is handed over, never silently
+
+
+def test_collocation_converges_to_first_order_and_its_failure_says_so() -> None:
+    # collocation imposes the rows at each stage's start only: the constant s̈ of a stage exceeds a limit by its
+    # end by O(Δ), so the excess halves per doubling of the grid (interpolation's falls ~4× per doubling)
+    dyn = panda()
+    with pytest.raises(SolverError, match=r"collocation imposes .* discretization='interpolation'") as err:
+        time_optimal(dyn, PANDA_WAYPOINTS, vel_limit="model", acc_limit=5.0, grid=100, max_grid=800,
+                     discretization="collocation")
+    excess = [h["worst_excess"] for h in err.value.result.info["history"]]
+    assert len(excess) == 4 and excess[-1] > 1e-2
+    for coarse, fine in itertools.pairwise(excess):
+        assert 0.35 < fine / coarse < 0.7
+    traj = time_optimal(dyn, PANDA_WAYPOINTS, vel_limit="model", acc_limit=5.0, grid=100, max_grid=800)
+    assert traj.check.worst_excess <= 1e-2
 
 
 def test_reference_at_the_ends_and_consistent_derivatives() -> None:

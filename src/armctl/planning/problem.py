@@ -63,8 +63,9 @@ class TimeScalingProblem:
     Arrays are read-only: a, b, c, w (N+1, m); g (m,); q, dq, ddq (N+1, n) the path and its derivatives;
     gravity (N+1, n) g(q(s)) [N·m]; coulomb (N+1, n, 2) the Coulomb torque on the (lower, upper) side [N·m].
     ``labels[r]`` names row r. ``discretization``: "interpolation" (each stage also imposes its rows at
-    s_{i+1} with x_{i+1} = x_i + 2Δ_i u_i, TOPP-RA's more accurate scheme) or "collocation".
-    """
+    s_{i+1} with x_{i+1} = x_i + 2Δ_i u_i, TOPP-RA's more accurate scheme) or "collocation" (at s_i only: the
+    stage's constant u can exceed a limit by its end by an amount proportional to the stage width, so the dense
+    check needs far finer grids — on the Panda test path 1600 stages still leave 3.9 % against 0.0005 %)."""
 
     dyn: Dynamics
     path: Path

@@ -181,6 +181,20 @@ def _tolerance(tol: Any) -> float:
                              value=tol) from None
 
 
+def _collocation_note(problem: TimeScalingProblem, history: list[dict[str, Any]]) -> str:
+    """For a collocation plan that failed the check: its excess shrinks only in proportion to the stage width
+    (the limits are imposed at each stage's start only, and the stage's constant s̈ carries on to its end),
+    and how far the grid would have to go."""
+    if problem.discretization != "collocation":
+        return ""
+    note = ("; collocation imposes the limits at the start of each stage only, so its excess shrinks only in "
+            "proportion to the stage width")
+    excess = [h["worst_excess"] for h in history]
+    if len(excess) >= 2 and 0.0 < excess[-1] < excess[-2]:
+        note += f" (here ×{excess[-1] / excess[-2]:.2f} per doubling)"
+    return note + ": discretization='interpolation' (the default) meets the limits on far coarser grids"
+
+
 def time_optimal(dyn: Dynamics, waypoints: Path | ArrayLike, vel_limit: Any = None, acc_limit: Any = None,
                  torque_limit: Any = None, grid: int | ArrayLike = 100, *, torque_margin: float = 0.0,
                  tol: float = 1e-2, refine: bool = True, max_grid: int = 1600, oversample: int = 10,
@@ -242,7 +256,8 @@ def time_optimal(dyn: Dynamics, waypoints: Path | ArrayLike, vel_limit: Any = No
             worst = check.worst()
             raise SolverError(f"the time-optimal trajectory exceeds a limit by more than tol = {tol:g} on a grid of "
                               f"{problem.grid} stages: {worst}" + ("" if refine else "; pass refine=True") +
-                              " (or raise max_grid or tol; the trajectory is in .result)",
+                              " (or raise max_grid or tol; the trajectory is in .result)" + _collocation_note(
+                                  problem, history),
                               value=check, problem=problem, result=Trajectory(geo, traj.timing, check,
                                                                               {"history": history}))
         grid = nxt
