@@ -318,7 +318,13 @@ def no_bench(monkeypatch: pytest.MonkeyPatch) -> list[Path]:
     import armctl.bench.suite
 
     calls: list[Path] = []
-    monkeypatch.setattr(armctl.bench.suite, "run_suite", lambda quick, out: calls.append(out) or {})
+
+    def fake(quick: bool, out: Path) -> dict:
+        calls.append(out)
+        (out / "figures.json").write_text("{}")  # (the CLI reports the written file's size)
+        return {}
+
+    monkeypatch.setattr(armctl.bench.suite, "run_suite", fake)
     return calls
 
 
@@ -350,3 +356,12 @@ def test_bench_accepts_a_new_folder(tmp_path: Path, no_bench: list[Path]) -> Non
 
     assert main(["bench", "--quick", "--out", str(tmp_path / "a" / "b")]) == 0
     assert no_bench == [tmp_path / "a" / "b"] and (tmp_path / "a" / "b").is_dir()
+
+
+def test_bench_reports_the_size_of_the_file_it_wrote(tmp_path: Path, no_bench: list[Path],
+                                                     capsys: pytest.CaptureFixture[str]) -> None:
+    # it printed the size of an unindented dump, 20 % below the file on disk (written with indent=1)
+    from armctl.cli import main
+
+    assert main(["bench", "--out", str(tmp_path)]) == 0
+    assert f"wrote {tmp_path / 'figures.json'} (2 bytes)" in capsys.readouterr().out

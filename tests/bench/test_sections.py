@@ -282,3 +282,69 @@ def test_time_controllers_checks_rounds_and_skips_empty_windows() -> None:
     time_controllers(rows, 2)
     assert math.isnan(rows[0]["compute_s"]) and rows[0]["compute_timing"] == "no recorded steps to replay"
     assert "window" not in rows[0]
+
+
+def test_pareto_front_compares_noisy_times_by_their_quartiles() -> None:
+    from armctl.bench.suite import pareto_front
+
+    # (time, error): a is fast and coarse, b slow and exact, c slower than a only by noise and more accurate
+    points = [(10.0, 3e-3), (40.0, 1e-4), (12.0, 2e-3), (11.0, 5e-3), (float("nan"), 1e-9)]
+    assert pareto_front(points) == [0, 1, 2]  # the strict order: d is beaten by a; NaN never on the front
+    spans = [(8.0, 14.0), (35.0, 45.0), (9.0, 16.0), (9.5, 13.0), (0.0, 0.0)]
+    # with quartiles a and c tie in time, and c is the more accurate: a drops off; d ties with both, beaten
+    assert pareto_front(points, spans) == [1, 2]
+    # the same medians with quartiles that no longer overlap: a is clearly faster and back on the front
+    apart = [(9.9, 10.1), (39.0, 41.0), (11.9, 12.1), (10.9, 11.1), (0.0, 0.0)]
+    assert pareto_front(points, apart) == [0, 1, 2]
+
+
+def test_a_diverged_run_has_no_tracking_error_to_rank() -> None:
+    from armctl.scenes import scene
+
+    sc = scene("pendulum")
+    # gains far beyond the sampled-data border (k·T² ≫ 4), without torque limits to bound the growth
+    res = sc.run("computed_torque", gains={"kp": 1e7, "kd": 1e4}, saturate=False)
+    assert res.diverged
+    m = sc.metrics(res, "computed_torque", gains={"kp": 1e7, "kd": 1e4}, timing_rounds=0)
+    # before this was NaN, the error up to the divergence (~7e-3 rad at 0.2 s) ranked it above stable methods
+    assert math.isnan(m["rms_error"]) and math.isnan(m["max_error"])
+    assert 0.0 < m["rms_error_until_divergence"] <= m["max_error_until_divergence"]
+    want = np.array([sc.reference(t).q for t in res.t])
+    assert m["rms_error_until_divergence"] == pytest.approx(float(np.sqrt(((res.q - want) ** 2).mean())))
+
+
+def test_a_failing_method_is_a_row_of_the_bench(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    from armctl.bench import suite
+    from armctl.errors import SolverError
+    from armctl.scenes.base import Scene
+
+    def failing_run(self: Scene, method: str, gains: Any = None, **overrides: Any) -> Any:
+        raise SolverError("the QP is infeasible at t = 0.3 s")
+
+    monkeypatch.setattr(Scene, "run", failing_run)
+    row = suite.run_scene_method("pendulum", "pd_gravity")
+    assert row["failed"] == "SolverError: the QP is infeasible at t = 0.3 s"
+    assert math.isnan(row["rms_error"]) and math.isnan(row["compute_s"]) and not row["diverged"]
+    ok = {"scene": "pendulum", "method": "computed_torque", "rms_error": 1e-4, "max_error": 2e-4,
+          "torque_rms": 1.0, "compute_s": 1e-5, "compute_s_iqr": [9e-6, 1.1e-5], "diverged": False,
+          "diverged_at": None}
+    late = dict(ok, method="passivity", rms_error=float("nan"), max_error=float("nan"), diverged=True,
+                diverged_at=0.21)
+    suite.time_controllers([row], 1)  # nothing to replay: skipped, not an error
+    rows = [dict(row), ok, late]
+    suite.plot_pareto(rows, tmp_path / "chart.png")
+    assert (tmp_path / "chart.png").stat().st_size > 1000
+    lines = suite.summary({"scenes": rows, "total_seconds": 1.0}).splitlines()
+    assert any("pd_gravity" in ln and "FAILED (SolverError: the QP is infeasible" in ln for ln in lines)
+    assert any("passivity" in ln and "diverged at 0.21 s" in ln for ln in lines)
+    assert any("computed_torque" in ln and ln.endswith("ok") for ln in lines)
+
+
+def test_fidelity_makes_no_choice_against_a_diverged_full_model() -> None:
+    def cand(err: float, cost: float, diverged: bool = False) -> dict[str, Any]:
+        return {"rms_error": err, "compute_s": cost, "diverged": diverged, "kept": {"rotors": True, "friction": True}}
+
+    # the full model diverged (NaN error): 2 × its error was a threshold of NaN before, or of the error
+    # until the divergence, under which a cheaper model was "sufficient"
+    cands = {"full": cand(float("nan"), 10.0, diverged=True), "lean": cand(1e-3, 5.0)}
+    assert fidelity.choose(cands, "full") is None

@@ -49,6 +49,8 @@ if TYPE_CHECKING:
     from armctl.model.robot import RobotModel
     from armctl.reference import Reference
 
+#: the joint-space scenes (computed torque is compared on them; the contact scene's controllers are
+#: operational-space ones, outside this section)
 SCENES: tuple[str, ...] = ("pendulum", "planar_2r", "panda_topp")
 TERMS: tuple[str, ...] = ("inertia", "coriolis", "gravity", "rotor", "friction", "contact")
 #: the chosen model's RMS tracking error may be at most this factor times the full model's
@@ -126,11 +128,15 @@ def candidate_models(exact: RobotModel, backends: tuple[str, ...]
 
 
 def choose(candidates: dict[str, dict[str, Any]], baseline: str, factor: float = FACTOR, tie: float = TIE
-           ) -> str:
+           ) -> str | None:
     """The cheapest candidate (``compute_s``) with ``rms_error`` ≤ ``factor`` × the baseline's and not
     diverged; candidates within ``tie`` (relative) of the cheapest count as equally cheap and the one keeping
-    fewer terms wins among them."""
-    limit = factor * candidates[baseline]["rms_error"]
+    fewer terms wins among them. None if the baseline itself diverged (or has no error): there is then no
+    threshold to be sufficient against."""
+    base = candidates[baseline]
+    if base["diverged"] or not math.isfinite(base["rms_error"]):
+        return None
+    limit = factor * base["rms_error"]
     ok = [k for k, c in candidates.items() if not c["diverged"] and c["rms_error"] <= limit]
     cheapest = min(candidates[k]["compute_s"] for k in ok)
     tied = [k for k in ok if candidates[k]["compute_s"] <= (1.0 + tie) * cheapest]
@@ -151,6 +157,7 @@ def closed_loop(name: str, quick: bool, rounds: int = 5, timing_states: int = 10
     from armctl.bench.timing import interleaved
     from armctl.controllers import ComputedTorque
     from armctl.scenes import scene
+    from armctl.scenes.base import diverged_errors
     from armctl.sim import simulate
 
     sc = scene(name)
@@ -170,9 +177,10 @@ def closed_loop(name: str, quick: bool, rounds: int = 5, timing_states: int = 10
         want = np.array([sc.reference(float(t)).q for t in res.t])
         err = np.abs(res.q - want)
         controllers[key] = ctrl
-        results[key] = {"variant": key.split("/")[0], "backend": backend, "kept": kept,
-                        "rms_error": float(np.sqrt((err**2).mean())), "max_error": float(err.max()),
-                        "diverged": bool(res.diverged), "sim_wall_s": float(res.info["wall_time"])}
+        results[key] = diverged_errors({"variant": key.split("/")[0], "backend": backend, "kept": kept,
+                                        "rms_error": float(np.sqrt((err**2).mean())), "max_error": float(err.max()),
+                                        "diverged": bool(res.diverged), "diverged_at": res.diverged_at,
+                                        "sim_wall_s": float(res.info["wall_time"])})
         if key == baseline:
             recorded = res
     idx = np.linspace(0, len(recorded.t) - 1, min(timing_states, len(recorded.t))).astype(int)
@@ -195,7 +203,8 @@ def closed_loop(name: str, quick: bool, rounds: int = 5, timing_states: int = 10
     choice = choose(results, baseline)
     return {"duration": duration, "gains": {k: _plain(v) for k, v in gains.items()}, "baseline": baseline,
             "threshold": FACTOR * results[baseline]["rms_error"], "tie": TIE, "candidates": results, "choice": choice,
-            "choice_kept": results[choice]["kept"], "choice_backend": results[choice]["backend"]}
+            "choice_kept": results[choice]["kept"] if choice else None,
+            "choice_backend": results[choice]["backend"] if choice else None}
 
 
 def _plain(x: Any) -> Any:
@@ -222,17 +231,26 @@ def run(quick: bool = False) -> dict[str, Any]:
 
 def summary(data: dict[str, Any]) -> str:
     """Per scene: the term shares and the chosen model."""
-    lines = [f"model fidelity: term shares of the required torque; cheapest model within {data['factor']:g}× "
-             f"the full model's tracking error (computed torque)"]
+    lines = [f"model fidelity: each term's RMS torque as a share of the sum of the terms' RMS; cheapest model "
+             f"within {data['factor']:g}× the full model's tracking error (computed torque)"]
     for name, s in data["scenes"].items():
         shares = ", ".join(f"{k} {v:.0%}" for k, v in s["shares"].items() if v >= 0.005)
         cl = s["closed_loop"]
-        c = cl["candidates"][cl["choice"]]
         b = cl["candidates"][cl["baseline"]]
         lines.append(f"  {name:11s} {shares}")
+        if cl["choice"] is None:
+            lines.append(f"  {'':11s} no choice: the full model {cl['baseline']} diverged at "
+                         f"{b['diverged_at']:.2f} s, so no model is sufficient against it (runs of "
+                         f"{cl['duration']:g} s)")
+            continue
+        c = cl["candidates"][cl["choice"]]
         lines.append(f"  {'':11s} choice {cl['choice']} ({c['compute_s'] * 1e6:.1f} µs/step, RMS error "
                      f"{c['rms_error']:.2e} rad) vs {cl['baseline']} ({b['compute_s'] * 1e6:.1f} µs/step, "
                      f"{b['rms_error']:.2e} rad), runs of {cl['duration']:g} s")
+        diverged = [k for k, v in cl["candidates"].items() if v["diverged"]]
+        if diverged:
+            lines.append(f"  {'':11s} diverged: " + ", ".join(
+                f"{k} at {cl['candidates'][k]['diverged_at']:.2f} s" for k in diverged))
     return "\n".join(lines)
 
 
@@ -251,24 +269,32 @@ def plot(data: dict[str, Any], path: Path) -> None:
         ax.bar(names, vals, bottom=bottom, label=term, color=f"C{i}")
         bottom += vals
     ax.set_ylim(0, 1)
-    ax.set_ylabel("share of the required torque (RMS)")
+    ax.set_ylabel("share of Σ term RMS torques")
     ax.set_title("Model terms along each reference", fontsize=10)
     ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.1), ncol=3)
     ax.tick_params(axis="x", labelsize=8)
     markers = {"pinocchio": "o", "lagrange": "s"}
     for ax, name in zip(axes[0][1:], names, strict=True):
         cl = scenes[name]["closed_loop"]
-        for c in cl["candidates"].values():
-            err = c["rms_error"] if math.isfinite(c["rms_error"]) else np.nan
+        for key, c in cl["candidates"].items():
             us = c["compute_s"] * 1e6
-            ax.scatter([us], [err], marker=markers[c["backend"]], color="C3" if c["diverged"] else "C0", zorder=3)
+            if c["diverged"]:  # no error to plot: a cross at the top of the panel, at its compute time
+                ax.plot(us, 0.97, "x", color="C3", ms=9, mew=2, transform=ax.get_xaxis_transform(), zorder=4)
+                ax.annotate(f"{key}: diverged at {c['diverged_at']:.2f} s", (us, 0.97),
+                            xycoords=ax.get_xaxis_transform(), textcoords="offset points", xytext=(5, -10),
+                            fontsize=7, color="C3")
+                continue
+            ax.scatter([us], [c["rms_error"]], marker=markers[c["backend"]], color="C0", zorder=3)
             left = c["backend"] == "pinocchio"  # usually the cheaper: its label goes left, Lagrange's right
-            ax.annotate(c["variant"], (us, err), textcoords="offset points", xytext=(-5 if left else 5, 3),
+            ax.annotate(c["variant"], (us, c["rms_error"]), textcoords="offset points", xytext=(-5 if left else 5, 3),
                         ha="right" if left else "left", fontsize=7)
-        ch = cl["candidates"][cl["choice"]]
-        ax.scatter([ch["compute_s"] * 1e6], [ch["rms_error"]], s=220, facecolors="none", edgecolors="C2",
-                   linewidths=2, zorder=4, label=f"choice: {cl['choice']}")
-        ax.axhline(cl["threshold"], color="C2", ls="--", lw=1, label=f"{data['factor']:g}× full model's error")
+        if cl["choice"] is not None:
+            ch = cl["candidates"][cl["choice"]]
+            ax.scatter([ch["compute_s"] * 1e6], [ch["rms_error"]], s=220, facecolors="none", edgecolors="C2",
+                       linewidths=2, zorder=4, label=f"choice: {cl['choice']}")
+            ax.axhline(cl["threshold"], color="C2", ls="--", lw=1, label=f"{data['factor']:g}× full model's error")
+        else:
+            ax.text(0.02, 0.02, "no choice: the full model diverged", transform=ax.transAxes, fontsize=7, color="C3")
         costs = [c["compute_s"] * 1e6 for c in cl["candidates"].values()]
         ax.set_xscale("log")
         ax.set_yscale("log")
@@ -277,10 +303,13 @@ def plot(data: dict[str, Any], path: Path) -> None:
         ax.margins(y=0.2)
         ax.set_xlabel("controller compute time per step [µs]")
         ax.set_ylabel("RMS tracking error [rad]")
-        ax.set_title(f"{name}\ncomputed torque, candidate models", fontsize=10)
+        ax.set_title(f"{name}\ncomputed torque, candidate models, {cl['duration']:g} s runs", fontsize=10)
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=7, loc="best")
-    fig.suptitle("Model no more than a scene needs (○ Pinocchio, □ Lagrange VM)", fontsize=11)
+        if cl["choice"] is not None:
+            ax.legend(fontsize=7, loc="best")
+    shown = dict.fromkeys(c["backend"] for s in scenes.values() for c in s["closed_loop"]["candidates"].values())
+    symbols = {"pinocchio": "○ Pinocchio", "lagrange": "□ Lagrange VM"}
+    fig.suptitle(f"Model no more than a scene needs ({', '.join(symbols[b] for b in shown)})", fontsize=11)
     fig.tight_layout()
     save_figure(fig, path)
 

@@ -3,7 +3,7 @@ integrators' and the models' cost against accuracy — written to ``figures.json
 charts), PNG charts and ``report.html``, with a summary table printed.
 
 Sections run in turn; the simulation-heavy ones go through an ``Executor`` (a process pool by default).
-``quick`` shrinks grids and repetitions so the whole run stays around a minute.
+``quick`` shrinks grids and repetitions so the whole run takes 1–2 minutes on 2 cores.
 """
 
 from __future__ import annotations
@@ -21,13 +21,27 @@ import numpy as np
 SCENE_NAMES = ("pendulum", "planar_2r", "panda_topp", "panda_contact")
 
 
+#: the measures of a scene row, NaN in the row of a method that failed
+_MEASURES = ("rms_error", "max_error", "torque_rms", "compute_s", "limit_violation_share", "torque_violation_share",
+             "velocity_violation_share", "position_violation_share")
+
+
 def run_scene_method(scene: str, method: str) -> dict[str, Any]:
     """Simulate one method on one scene (runs in a worker process): its metrics, untimed, and the window of
-    recorded states that :func:`time_controllers` replays to time it."""
+    recorded states that :func:`time_controllers` replays to time it. A method that fails — its controller
+    raises an :class:`~armctl.errors.ArmctlError` (an infeasible QP, say), or the scene cannot be built (a plan
+    its limits refuse) — is a result too: a row with ``failed`` (the error's type and message) and NaN
+    measures, so the rest of the benchmark still runs and shows it."""
+    from armctl.errors import ArmctlError
     from armctl.scenes import scene as make
 
-    sc = make(scene)
-    res = sc.run(method)
+    try:
+        sc = make(scene)
+        res = sc.run(method)
+    except ArmctlError as exc:
+        return {"scene": scene, "method": method, **dict.fromkeys(_MEASURES, float("nan")), "diverged": False,
+                "diverged_at": None, "failed": f"{type(exc).__name__}: {exc}",
+                "window": {"t": [], "q": np.zeros((0, 0)), "qd": np.zeros((0, 0)), "ref": []}}
     return {"scene": scene, "method": method, **sc.metrics(res, method, timing_rounds=0),
             "window": sc.replay_window(res, sc.timing_samples)}
 
@@ -46,7 +60,7 @@ def time_controllers(rows: list[dict[str, Any]], rounds: int) -> None:
         if not len(r["window"]["t"]):  # a run without samples: nothing to replay
             r["compute_s"], r["compute_s_iqr"] = float("nan"), [float("nan"), float("nan")]
             r["compute_timing"] = "no recorded steps to replay"
-    for name in dict.fromkeys(r["scene"] for r in rows):
+    for name in dict.fromkeys(r["scene"] for r in rows if len(r["window"]["t"])):
         sc = make(name)
         mine = [r for r in rows if r["scene"] == name and len(r["window"]["t"])]
         ctrls = [sc.controller(r["method"]) for r in mine]
@@ -72,18 +86,39 @@ def scene_matrix(executor: Executor | str | None = None, rounds: int = 9) -> lis
     return rows
 
 
-def pareto_front(points: list[tuple[float, float]]) -> list[int]:
-    """Indices of the points no other point beats in both coordinates (both minimised)."""
-    front = []
-    for i, (x, y) in enumerate(points):
-        dominated = any((x2 <= x and y2 <= y) and (x2 < x or y2 < y) for j, (x2, y2) in enumerate(points) if j != i)
-        if not dominated and math.isfinite(x) and math.isfinite(y):
-            front.append(i)
-    return front
+def pareto_front(points: list[tuple[float, float]], spans: list[tuple[float, float]] | None = None) -> list[int]:
+    """Indices of the points (x, y) no other point beats (both minimised; non-finite points are never on it).
+
+    ``spans``: an interval (lo, hi) around each x — the quartiles of a noisy timing. Then x is compared by
+    the intervals: j is faster than i only if hi_j < lo_i, and overlapping intervals are a tie, so timing noise
+    alone cannot move a point on or off the front. j beats i if it is faster and no less accurate, or tied and
+    more accurate. Without spans this is the usual strict Pareto order."""
+    spans = [(x, x) for x, _ in points] if spans is None else spans
+    finite = [math.isfinite(x) and math.isfinite(y) for x, y in points]
+
+    def beats(j: int, i: int) -> bool:
+        (lo_i, hi_i), (lo_j, hi_j) = spans[i], spans[j]
+        yi, yj = points[i][1], points[j][1]
+        faster, slower = hi_j < lo_i, hi_i < lo_j
+        return (faster and yj <= yi) or (not faster and not slower and yj < yi)
+
+    return [i for i in range(len(points)) if finite[i]
+            and not any(finite[j] and beats(j, i) for j in range(len(points)) if j != i)]
+
+
+def _failure_note(r: dict[str, Any]) -> str | None:
+    """How a method failed on its scene, in a few words, or None."""
+    if r.get("failed"):
+        return f"failed: {r['failed'].split(':')[0]}"
+    if r["diverged"]:
+        return f"diverged at {r['diverged_at']:.2f} s"
+    return None
 
 
 def plot_pareto(rows: list[dict[str, Any]], path: Path) -> None:
-    """Compute time per step against tracking error, log-log, one panel per scene, Pareto front marked."""
+    """Tracking error against compute time per step, log-log, one panel per scene: the quartiles of the
+    timing as horizontal bars, the Pareto front (:func:`pareto_front` on those quartiles) marked, and every
+    method that diverged or failed listed in its panel (a cross at the top where its time is known)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -94,12 +129,15 @@ def plot_pareto(rows: list[dict[str, Any]], path: Path) -> None:
     scenes = [s for s in SCENE_NAMES if any(r["scene"] == s for r in rows)]
     fig, axes = plt.subplots(1, len(scenes), figsize=(4.6 * len(scenes), 4.0), squeeze=False)
     for ax, name in zip(axes[0], scenes, strict=True):
-        mine = [r for r in rows if r["scene"] == name and not r["diverged"]]
+        mine = [r for r in rows if r["scene"] == name and _failure_note(r) is None]
         pts = [(r["compute_s"] * 1e6, r["rms_error"]) for r in mine]
-        front = set(pareto_front(pts))
+        spans = [tuple(1e6 * v for v in r.get("compute_s_iqr", (r["compute_s"],) * 2)) for r in mine]
+        front = set(pareto_front(pts, spans))  # type: ignore[arg-type]
         placed: list[tuple[float, float]] = []
-        for i, (r, (x, y)) in enumerate(zip(mine, pts, strict=True)):
-            ax.scatter(x, y, s=60, color="#d62828" if i in front else "#577590", zorder=3)
+        for i, (r, (x, y), (lo, hi)) in enumerate(zip(mine, pts, spans, strict=True)):
+            color = "#d62828" if i in front else "#577590"
+            ax.errorbar(x, y, xerr=[[max(x - lo, 0.0)], [max(hi - x, 0.0)]], fmt="o", ms=7, color=color, zorder=3,
+                        capsize=2, lw=1)
             # a label near an earlier one's point (in decades) goes one line lower for each such neighbour
             near = sum(1 for px, py in placed if x > 0 and y > 0 and abs(math.log10(x / px)) < 0.25
                        and abs(math.log10(y / py)) < 0.25)
@@ -109,11 +147,21 @@ def plot_pareto(rows: list[dict[str, Any]], path: Path) -> None:
         fx = sorted(pts[i] for i in front)
         if fx:
             ax.plot(*zip(*fx, strict=True), color="#d62828", lw=1, label="Pareto front")
+        failed = [(r, note) for r in rows if r["scene"] == name and (note := _failure_note(r)) is not None]
+        for r, _ in failed:
+            if math.isfinite(r["compute_s"]):
+                ax.plot(r["compute_s"] * 1e6, 0.97, "x", color="#d62828", ms=9, mew=2,
+                        transform=ax.get_xaxis_transform(), clip_on=False, zorder=4)
+        if failed:  # under the axis label, where no point can sit
+            ax.text(0.0, -0.2, "\n".join(f"✕ {r['method'].replace('_', ' ')}: {note}" for r, note in failed),
+                    transform=ax.transAxes, fontsize=7, color="#d62828", va="top")
+        ax.margins(x=0.15, y=0.25)
         ax.set(xscale="log", yscale="log", xlabel="compute time per control step [µs]",
                ylabel="RMS tracking error [rad]" if name != "panda_contact" else "RMS tool position error [m]",
                title=name)
         plain_log_ticks(ax)
-        ax.legend(fontsize=8)
+        if fx:
+            ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=90)
     plt.close(fig)
@@ -139,13 +187,11 @@ def plot_topp(data: dict[str, Any], path: Path) -> None:
     plot_convergence(study).savefig(path, dpi=90)
 
 
-def _optional_section(name: str) -> Any:
-    import importlib
+def _model_sections() -> dict[str, Any]:
+    """The sections on the models' cost against accuracy, by key: backends, integrators, fidelity."""
+    from armctl.bench import backends, fidelity, integrators
 
-    try:
-        return importlib.import_module(f"armctl.bench.{name}")
-    except ImportError:
-        return None
+    return {"backends": backends, "integrators": integrators, "fidelity": fidelity}
 
 
 def run_suite(quick: bool = False, out: Path = Path("bench-out"), executor: Executor | str | None = None
@@ -168,7 +214,8 @@ def run_suite(quick: bool = False, out: Path = Path("bench-out"), executor: Exec
 
     section("scenes", lambda: scene_matrix(executor, rounds=5 if quick else 15))
     plot_pareto(figures["scenes"], out / "speed_accuracy.png")
-    charts["speed_accuracy.png"] = "Compute time per control step against tracking error, per scene"
+    charts["speed_accuracy.png"] = ("Tracking error against compute time per control step, per scene (bars: "
+                                    "timing quartiles; diverged or failed methods listed in their panel)")
     section("stability_maps", lambda: stability.maps(quick=quick, executor=executor))
     for name in stability.plot(figures["stability_maps"], lambda n: out / n):
         key = name.removeprefix("stability_").removesuffix(".png")
@@ -179,12 +226,10 @@ def run_suite(quick: bool = False, out: Path = Path("bench-out"), executor: Exec
     section("topp_convergence", lambda: topp_convergence(quick))
     plot_topp(figures["topp_convergence"], out / "topp_convergence.png")
     charts["topp_convergence.png"] = "TOPP-RA duration error and compute time against grid size"
-    for key in ("backends", "integrators", "fidelity"):
-        mod = _optional_section(key)
-        if mod is not None:
-            section(key, lambda mod=mod: mod.run(quick=quick))
-            mod.plot(figures[key], out / f"{key}.png")
-            charts[f"{key}.png"] = (mod.__doc__ or key).strip().splitlines()[0]
+    for key, mod in _model_sections().items():
+        section(key, lambda mod=mod: mod.run(quick=quick))
+        mod.plot(figures[key], out / f"{key}.png")
+        charts[f"{key}.png"] = (mod.__doc__ or key).strip().splitlines()[0]
     section("dynamics_speed", lambda: dynamics_speed.run(number=number, rounds=rounds, compile_if_needed=not quick))
     section("controller_speed", lambda: controller_speed.run(number=number, rounds=rounds))
     figures["total_seconds"] = time.perf_counter() - t_all
@@ -211,21 +256,24 @@ def summary(figures: dict[str, Any]) -> str:
 
     lines = ["errors in rad (joint scenes) or m (panda_contact: tool position in the table plane); force: RMS "
              "normal-force error after settling [N]; over limits: share of samples beyond the effort limit / "
-             "velocity limit (+1 %) / position range",
+             "velocity limit (+1 %) / position range; a run that diverged has no error (its error until then is in "
+             "figures.json)",
              f"{'scene':14s} {'method':26s} {'RMS err':>9s} {'max err':>9s} {'force':>6s} {'step µs':>8s} "
-             f"{'τ RMS':>8s}  {'over τ / q̇ / q':>17s}  diverged"]
+             f"{'τ RMS':>8s}  {'over τ / q̇ / q':>17s}  outcome"]
     for r in figures.get("scenes", []):
         force = f"{r['force_rms_error']:6.2f}" if "force_rms_error" in r else f"{'-':>6s}"
         over = " / ".join(f"{r.get(f'{k}_violation_share', float('nan')):.1%}" for k in ("torque", "velocity",
                                                                                           "position"))
+        outcome = (f"FAILED ({r['failed']})" if r.get("failed") else
+                   f"diverged at {r['diverged_at']:.2f} s" if r["diverged"] else "ok")
+        if r.get("contact_lost"):
+            outcome += ", contact lost"
         lines.append(f"{r['scene']:14s} {r['method']:26s} {r['rms_error']:9.2e} {r['max_error']:9.2e} {force} "
-                     f"{r['compute_s'] * 1e6:8.1f} {r['torque_rms']:8.2f}  {over:>17s}  "
-                     + (f"yes at {r['diverged_at']:.2f} s" if r["diverged"] else "no"))
-    for key in ("backends", "integrators", "fidelity"):
-        mod = _optional_section(key)
-        if key in figures and mod is not None and hasattr(mod, "summary"):
-            lines += ["", mod.summary(figures[key])]
-    lines += ["", dynamics_speed.report(figures["dynamics_speed"]), "",
-              controller_speed.report(figures["controller_speed"])]
+                     f"{r['compute_s'] * 1e6:8.1f} {r['torque_rms']:8.2f}  {over:>17s}  {outcome}")
+    reports = {**{key: mod.summary for key, mod in _model_sections().items()},
+               "dynamics_speed": dynamics_speed.report, "controller_speed": controller_speed.report}
+    for key, report in reports.items():
+        if key in figures:  # (every section, after a whole run)
+            lines += ["", report(figures[key])]
     lines.append(f"\ntotal {figures['total_seconds']:.1f} s")
     return "\n".join(lines)

@@ -79,6 +79,18 @@ def replay_times(controller: Controller, window: dict[str, Any], passes: int) ->
     return out
 
 
+def diverged_errors(metrics: dict[str, Any]) -> dict[str, Any]:
+    """``metrics`` with, for a diverged run, ``rms_error``, ``max_error`` (and ``force_rms_error``, if any) moved
+    to ``*_until_divergence`` and set to NaN (a failed run has no tracking error to rank)."""
+    if metrics["diverged"]:
+        for key in ("rms_error", "max_error", "force_rms_error"):
+            if key not in metrics:
+                continue
+            metrics[f"{key}_until_divergence"] = metrics[key]
+            metrics[key] = float("nan")
+    return metrics
+
+
 @dataclass
 class Scene:
     """A standard closed-loop setup: the true ``plant``, the controller-side models (``exact``: the plant's
@@ -162,7 +174,9 @@ class Scene:
         compute time per step [s] (``compute_s``, see :meth:`compute_time` on :meth:`replay_window` of
         ``timing_samples`` states, default :attr:`timing_samples`, in ``timing_rounds`` rounds; 0 rounds: not
         timed, NaN). A run without samples gives NaN for every measure (compute time and limit-violation
-        shares included)."""
+        shares included). A run that diverged has no tracking error (NaN): the error of its samples before
+        the divergence, which can look better than a stable method's, is kept apart as
+        ``rms_error_until_divergence`` and ``max_error_until_divergence``."""
         timing_samples = whole_number(self.timing_samples if timing_samples is None else timing_samples,
                                       "timing_samples", 1)
         want = np.array([self.reference(t).q for t in res.t])
@@ -171,10 +185,11 @@ class Scene:
         timing_rounds = whole_number(timing_rounds, "timing_rounds", 0)
         step = (self.compute_time(method, self.replay_window(res, timing_samples), gains, timing_rounds)
                 if timing_rounds else float("nan"))
-        return {"rms_error": float(np.sqrt((err**2).mean())) if err.size else float("nan"),
-                "max_error": float(err.max()) if err.size else float("nan"),
-                "torque_rms": float(np.sqrt((res.tau_applied**2).mean())) if len(res.t) else float("nan"),
-                **shares, "diverged": bool(res.diverged), "diverged_at": res.diverged_at, "compute_s": step}
+        out = {"rms_error": float(np.sqrt((err**2).mean())) if err.size else float("nan"),
+               "max_error": float(err.max()) if err.size else float("nan"),
+               "torque_rms": float(np.sqrt((res.tau_applied**2).mean())) if len(res.t) else float("nan"),
+               **shares, "diverged": bool(res.diverged), "diverged_at": res.diverged_at, "compute_s": step}
+        return diverged_errors(out)
 
     def limit_violations(self, res: Any) -> dict[str, float]:
         """Shares of a run's samples beyond the plant's limits (see :meth:`metrics`); NaN without samples."""

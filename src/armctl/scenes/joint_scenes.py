@@ -24,10 +24,12 @@ def pendulum() -> Scene:
 
 
 def planar_2r(payload: float = 10.0) -> Scene:
-    """Siciliano's two-link arm tracking sinusoids while carrying a ``payload`` [kg] at the tool that only the
-    exact model knows; the reduced model is the nominal arm without it."""
+    """Siciliano's two-link arm tracking sinusoids while carrying a ``payload`` [kg] at the tool. The exact
+    model (pd_gravity, computed_torque, passivity) knows it; the reduced model, the nominal arm without it, is
+    what computed_torque_reduced uses and what adaptive starts from and learns the payload."""
     nominal = library.planar_2r()
     plant = nominal.with_payload(payload)
     ref = Sinusoid([0.3, -0.4], [0.4, 0.5], [0.5, 0.7])
-    return Scene("planar_2r", f"two-link arm tracking sinusoids with an unknown {payload:g} kg payload",
+    return Scene("planar_2r", f"two-link arm tracking sinusoids with a {payload:g} kg payload, unknown to the "
+                 "reduced model (computed_torque_reduced, adaptive)",
                  plant=plant, exact=plant, reduced=nominal, reference=ref, duration=5.0)

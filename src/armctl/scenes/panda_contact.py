@@ -1,6 +1,8 @@
 """``panda_contact``: the Panda approaches a table, presses on it with 10 N and slides 10 cm along it against
 surface friction — operational-space control as a QP with a sliding contact and normal-force regulation,
-against Khatib's closed-form controller, which can only press through its pose stiffness."""
+against Khatib's closed-form controller, which can only press through its pose stiffness. The joints have
+viscous and Coulomb friction (issue 5 asks for the contact scene checked with joint friction), which both
+controllers' model knows."""
 
 from __future__ import annotations
 
@@ -23,7 +25,7 @@ from armctl.dynamics.base import Dynamics
 from armctl.errors import UnknownNameError
 from armctl.model import library
 from armctl.reference import Reference
-from armctl.scenes.base import Scene, check_gains
+from armctl.scenes.base import Scene, check_gains, diverged_errors
 
 Q_HOME = np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])  # the Panda's "ready" posture
 
@@ -134,7 +136,7 @@ class ContactScene(Scene):
                     "force_rms_error": float(np.sqrt(((fn[settled] - 10.0) ** 2).mean())) if settled.any() else
                     float("nan"),
                     "contact_lost": bool(touch.size and (fn[touch[0] + 1:] <= 0).any()), "error_unit": "m"})
-        return out
+        return diverged_errors(out)
 
 
 def panda_contact() -> Scene:
@@ -143,7 +145,8 @@ def panda_contact() -> Scene:
     model = panda_contact_model()
     z_table = float(Dynamics(model).frame_pose(Q_HOME)[2, 3]) - 0.005
     plane = Plane(KelvinVoigt(2e4, 50.0), normal=(0, 0, 1), point=(0, 0, z_table), friction=0.3)
-    sc = ContactScene("panda_contact", "Panda pressing 10 N on a table with friction and sliding 10 cm",
+    sc = ContactScene("panda_contact", "Panda with joint friction pressing 10 N on a table (surface friction "
+                      "μ = 0.3) and sliding 10 cm",
                       plant=model, exact=model, reduced=model, reference=lambda t: Reference(Q_HOME), duration=1.95,
                       methods=("osc_qp", "osc_closed_form"), q0=Q_HOME, sim_options={"environment": plane})
     sc.z_table = z_table
