@@ -348,3 +348,19 @@ def test_fidelity_makes_no_choice_against_a_diverged_full_model() -> None:
     # until the divergence, under which a cheaper model was "sufficient"
     cands = {"full": cand(float("nan"), 10.0, diverged=True), "lean": cand(1e-3, 5.0)}
     assert fidelity.choose(cands, "full") is None
+
+
+def test_a_scene_that_cannot_be_built_is_a_failed_row(monkeypatch: pytest.MonkeyPatch) -> None:
+    import armctl.scenes
+    from armctl.bench import suite
+    from armctl.errors import InfeasibleError
+
+    def unbuildable(name: str) -> Any:
+        raise InfeasibleError("torque limit of joint 2 exceeded at s = 0.4")
+
+    monkeypatch.setattr(suite, "SCENE_NAMES", ("panda_topp",))
+    monkeypatch.setattr(armctl.scenes, "scene", unbuildable)
+    rows = suite.scene_matrix("serial", rounds=1)
+    assert [(r["scene"], r["method"], r["failed"]) for r in rows] == [
+        ("panda_topp", "(scene)", "InfeasibleError: torque limit of joint 2 exceeded at s = 0.4")]
+    assert "window" not in rows[0]

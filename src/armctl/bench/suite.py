@@ -39,11 +39,16 @@ def run_scene_method(scene: str, method: str) -> dict[str, Any]:
         sc = make(scene)
         res = sc.run(method)
     except ArmctlError as exc:
-        return {"scene": scene, "method": method, **dict.fromkeys(_MEASURES, float("nan")), "diverged": False,
-                "diverged_at": None, "failed": f"{type(exc).__name__}: {exc}",
-                "window": {"t": [], "q": np.zeros((0, 0)), "qd": np.zeros((0, 0)), "ref": []}}
+        return _failed_row(scene, method, exc)
     return {"scene": scene, "method": method, **sc.metrics(res, method, timing_rounds=0),
             "window": sc.replay_window(res, sc.timing_samples)}
+
+
+def _failed_row(scene: str, method: str, exc: Exception) -> dict[str, Any]:
+    """The row of a method (or, as method "(scene)", a whole scene) that failed with ``exc``."""
+    return {"scene": scene, "method": method, **dict.fromkeys(_MEASURES, float("nan")), "diverged": False,
+            "diverged_at": None, "failed": f"{type(exc).__name__}: {exc}",
+            "window": {"t": [], "q": np.zeros((0, 0)), "qd": np.zeros((0, 0)), "ref": []}}
 
 
 def time_controllers(rows: list[dict[str, Any]], rounds: int) -> None:
@@ -77,11 +82,21 @@ def time_controllers(rows: list[dict[str, Any]], rounds: int) -> None:
 
 
 def scene_matrix(executor: Executor | str | None = None, rounds: int = 9) -> list[dict[str, Any]]:
+    from armctl.errors import ArmctlError
     from armctl.scenes import SCENES, scene
     from armctl.sim import sweep
 
-    cases = [{"scene": name, "method": m} for name in SCENE_NAMES if name in SCENES for m in scene(name).methods]
-    rows = sweep(cases, run=run_scene_method, executor=executor, progress=True)
+    cases, unbuilt = [], []
+    for name in SCENE_NAMES:
+        if name not in SCENES:
+            continue
+        try:
+            methods = scene(name).methods
+        except ArmctlError as exc:  # the scene itself cannot be built: one failed row stands for it
+            unbuilt.append(_failed_row(name, "(scene)", exc))
+            continue
+        cases += [{"scene": name, "method": m} for m in methods]
+    rows = sweep(cases, run=run_scene_method, executor=executor, progress=True) + unbuilt
     time_controllers(rows, rounds)
     return rows
 
