@@ -98,7 +98,10 @@ def symplectic_euler(plant: Plant, t: float, q: FloatArray, v: FloatArray, tau: 
     q1 = q + h * vb
     v1 = constrained_accel(plant._mass(q1), mass @ vb, stuck)
     wf = -h * float(vb @ f) if plant.friction is not None else 0.0
-    we = h * float(vb @ e) if plant.has_external else 0.0
+    we = 0.0
+    if plant.has_external:  # the trapezoid in q of the force at v̄: exact for a linear spring (the left sum
+        # h v̄ᵀτ_e(q) overstates a spring's work by k Δq²/2 a step, which hid energy an unstable wall made)
+        we = 0.5 * h * float(vb @ (e + plant.external(t + h, q1, vb)))
     return q1, v1, None, wf, we
 
 

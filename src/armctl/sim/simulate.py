@@ -26,13 +26,14 @@ from armctl.errors import ShapeError, SimulationWarning
 from armctl.model.robot import RobotModel
 from armctl.reference import Reference
 from armctl.sim import setup
+from armctl.sim.after_run import after_run
 from armctl.sim.contact import Environment, ForceSensor
 from armctl.sim.friction import FrictionModel
 from armctl.sim.integrators import fast_step, make_step
 from armctl.sim.plant import Plant
 from armctl.sim.recorder import Recorder
 from armctl.sim.result import SimResult
-from armctl.sim.stability import checkable, contact_stability
+from armctl.sim.stability import contact_stability
 from armctl.sim.stepper import advance
 from armctl.sim.stick_slip import NotPositiveDefinite
 
@@ -78,6 +79,9 @@ def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
     the integrator cannot integrate stably at this step (:mod:`armctl.sim.stability`) is reported before the
     run by a :class:`~armctl.errors.SimulationWarning` and kept in ``res.info["unstable_contacts"]``: the run
     still happens (the failure is a result to show), but past the first impact it is not the arm's motion.
+    After a run with contact, what that check cannot see is checked on the record (:mod:`armctl.sim.after_run`):
+    energy the arm gained that no force supplied (``res.info["energy_gain"]``), and a plane's friction too
+    stiff below its slip velocity for the step (``res.info["unstable_friction"]``), each with a warning.
     """
     dyn = setup.plant_dynamics(plant)
     n = dyn.n
@@ -216,34 +220,8 @@ def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
     if divergence is not None:
         divergence = (divergence[0], divergence[1], np.array(divergence[2]), np.array(divergence[3]))
     res = rec.result(rows, dyn, energy, info, divergence)
-    if (energy and divergence is None and scheme != "implicit-euler"
-            and not all(map(checkable, sc.environments))):
-        _check_energy_gain(res, scheme)
+    after_run(res, dyn, sc.environments, scheme, h)
     return res
-
-
-#: energy a run may gain that no force supplied, as a share of the largest energy exchanged (a stable run's
-#: balance closes to the integrator's order, ~1e-4 and below; an unstable contact's gains tens of percent)
-ENERGY_GAIN_TOLERANCE = 0.01
-
-
-def _check_energy_gain(res: SimResult, scheme: str) -> None:
-    """After a run with a contact :func:`contact_stability` could not judge beforehand: warn
-    (:class:`~armctl.errors.SimulationWarning`) if the arm gained energy that no force supplied, and record
-    it in ``res.info["energy_gain"]`` [J]."""
-    balance = res.energy_balance()
-    if not len(balance):
-        return
-    scale = max(float(np.abs(res.energy - res.energy[0]).max()), float(np.abs(res.work_actuator).max()),
-                float(np.abs(res.work_friction).max()), float(np.abs(res.work_external).max()), 1e-12)
-    gain = float(balance.max())
-    res.info["energy_gain"] = gain
-    if gain > ENERGY_GAIN_TOLERANCE * scale:
-        warnings.warn(f"the arm gained {gain:.3g} J that no force supplied ({100 * gain / scale:.0f}% of the "
-                      f"energy exchanged; E − E₀ − W in res.energy_balance()): {scheme!r} was likely unstable on a "
-                      "contact whose stability could not be checked before the run (e.g. Hunt–Crossley with an "
-                      "exponent above 1 stiffens with depth). Past that point the run is not the arm's motion: use "
-                      "integrator='implicit-euler' or a smaller dt", SimulationWarning, stacklevel=3)
 
 
 def _check_contacts(dyn: Dynamics, environments: Sequence[Environment], q0: FloatArray, scheme: str, h: float
