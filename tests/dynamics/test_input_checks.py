@@ -183,3 +183,23 @@ def test_finite_inputs_too_large_for_floats_raise_with_friction_too(model: armct
     n = dyn.n
     with pytest.raises(NonFiniteError, match="not finite although every input is"):
         dyn.inverse_dynamics(np.zeros(n), np.full(n, 1e200), np.zeros(n))
+
+
+@pytest.mark.parametrize(("backend", "option", "names"), [
+    ("pinocchio", "compile", "its options: none"), ("lagrange", "compiled", "its options: rotor_coupling, compile")])
+def test_an_unknown_backend_option_is_named_with_the_valid_ones(backend: str, option: str, names: str) -> None:
+    # it was a bare TypeError without the valid options
+    from armctl.errors import InvalidParameterError
+
+    with pytest.raises(InvalidParameterError, match=rf"\['{option}'\] for backend '{backend}' \({names}"):
+        armctl.Dynamics(armctl.models.planar_2r(), backend=backend, **{option: True})
+
+
+def test_the_name_universe_is_reserved() -> None:
+    # Pinocchio's world frame is called "universe": a joint of that name made Dynamics fail on construction
+    # with "Several frames match the filter"
+    from armctl.errors import InvalidParameterError
+    from armctl.model.dh import DHLink
+
+    with pytest.raises(InvalidParameterError, match="'universe' is reserved"):
+        armctl.RobotModel.from_dh([DHLink(a=0.3, mass=1.0, name="universe"), DHLink(a=0.2, mass=1.0)])

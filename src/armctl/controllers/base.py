@@ -15,7 +15,7 @@ from typing import Any, NoReturn
 from numpy.typing import ArrayLike
 
 from armctl._checks import FLOAT as _FLOAT
-from armctl._checks import FloatArray, scalar, vector
+from armctl._checks import FloatArray, scalar, vector, whole_number
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
 from armctl.reference import Reference
@@ -32,7 +32,7 @@ class Controller(ABC):
         if dynamics is None and n is None:
             raise InvalidParameterError("a controller without dynamics needs n (the number of joints)", value=n)
         self.dynamics = dynamics
-        self.n = dynamics.n if dynamics is not None else int(n)  # type: ignore[arg-type]
+        self.n = dynamics.n if dynamics is not None else whole_number(n, "n (the number of joints)", 1)
         self._shape = (self.n,)
         self.last_log: dict[str, Any] = {}
 
@@ -104,7 +104,8 @@ class Controller(ABC):
 
     @abstractmethod
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
-        """The control law, on checked inputs."""
+        """The control law, on checked inputs. In :func:`armctl.simulate`, q and q̇ are read-only views of the
+        run's record: work on new arrays (e = q − ref.q) or on a copy."""
 
     def reset(self) -> None:
         """Forget any internal state (integrators, estimates) before a new run."""

@@ -32,6 +32,8 @@ from armctl.errors import ArmctlError, InvalidParameterError, NonFiniteError, Un
 from armctl.model.robot import PARAMS_PER_JOINT, RobotModel
 
 BACKENDS = ("pinocchio", "lagrange")
+#: the keyword options of the Lagrange backend (the Pinocchio backend takes none)
+_LAGRANGE_OPTIONS = ("rotor_coupling", "compile", "cache_dir")
 
 
 class Dynamics(RegressorMethods, ABC):
@@ -43,6 +45,8 @@ class Dynamics(RegressorMethods, ABC):
     """
 
     backend: str = ""
+    #: the keyword options this backend takes
+    _option_names: tuple[str, ...] = ()
     #: True if a NaN or inf in any entry of any input of the rigid-body primitives always reaches their result
     #: (numerical algorithms such as Pinocchio's, where NaN·0 = NaN); then the fast paths check the result
     #: instead of the inputs. Inverse dynamics checks τ₁ alone: the models are serial chains, and in the RNEA
@@ -72,7 +76,11 @@ class Dynamics(RegressorMethods, ABC):
         if backend is not None and backend != self.backend:
             raise UnknownNameError("backend", backend, (self.backend,))
         if options:
-            raise TypeError(f"{type(self).__name__} got unexpected options {sorted(options)}")
+            own = ", ".join(self._option_names) or "none"
+            other = ("" if self.backend == "lagrange" else
+                     f"; backend='lagrange' takes {', '.join(_LAGRANGE_OPTIONS)}")
+            raise InvalidParameterError(f"unknown Dynamics option(s) {sorted(options)} for backend {self.backend!r} "
+                                        f"(its options: {own}){other}", value=dict(options))
         self.model = model
         self.n = model.n
         self._shape = (self.n,)

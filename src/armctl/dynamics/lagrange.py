@@ -28,7 +28,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray, boolean
-from armctl.dynamics.base import Dynamics
+from armctl.dynamics.base import _LAGRANGE_OPTIONS, Dynamics
 from armctl.model.robot import PARAMS_PER_JOINT, RobotModel
 
 
@@ -162,6 +162,7 @@ class LagrangeDynamics(Dynamics):
     """
 
     backend = "lagrange"
+    _option_names = _LAGRANGE_OPTIONS
 
     def __init__(self, model: RobotModel, backend: str | None = None, *, rotor_coupling: bool = True,
                  compile: bool = False, cache_dir: str | None = None, **options: Any) -> None:

@@ -77,6 +77,9 @@ class RobotModel:
                 raise InvalidParameterError(f"frame {f.name!r} is attached to joint {f.joint}, but the model "
                                             f"has joints 1..{len(joints)} (0 is the world)", value=f.joint)
         all_names = ["world", *names, *(f.name for f in frames)]
+        if "universe" in all_names:  # Pinocchio's own name for its world frame: a second one is ambiguous there
+            raise InvalidParameterError("the name 'universe' is reserved (Pinocchio's world frame, which armctl "
+                                        "calls 'world'): rename that joint or frame", value="universe")
         if len(set(all_names)) != len(all_names):
             raise InvalidParameterError(f"frame names must be unique (joint names count as frames): "
                                         f"{all_names}", value=all_names)

@@ -131,9 +131,10 @@ def warn_outside_limits(model: RobotModel, q: FloatArray) -> None:
                       "2π away may be inside the range", SimulationWarning, stacklevel=3)
 
 
-def seed_value(seed: Any) -> int | None:
-    """``seed`` for numpy's default_rng: None or a whole number >= 0."""
-    return None if seed is None else whole_number(seed, "seed")
+def seed_value(seed: Any) -> int:
+    """``seed`` for numpy's default_rng: a whole number >= 0, or for None a fresh one from the operating
+    system's entropy (recorded in the result, so that a noisy run can be repeated)."""
+    return int(np.random.SeedSequence().entropy) if seed is None else whole_number(seed, "seed")
 
 
 def delay_periods(delay: Any) -> int:

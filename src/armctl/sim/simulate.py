@@ -22,7 +22,7 @@ from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray, boolean, nonnegative_vector, real_array
 from armctl.dynamics.base import Dynamics
-from armctl.errors import ShapeError, SimulationWarning
+from armctl.errors import InvalidParameterError, ShapeError, SimulationWarning
 from armctl.model.robot import RobotModel
 from armctl.reference import Reference
 from armctl.sim import setup
@@ -68,11 +68,12 @@ def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
     ``res.sensor``; disturbance: t → h_d (6,), a wrench at the tool frame with the sign of Dynamics' ``wrench``
     (what the arm exerts: a push F on the arm is −F). saturate: clip τ at the model's effort limits.
     noise_q [rad], noise_qd [rad/s]: standard deviations (scalar or per joint) of Gaussian measurement noise,
-    drawn from ``seed``. delay: the controller sees the measurement of ``delay`` periods earlier (the first
-    one before that). max_velocity [rad/s], max_position [rad]: a state beyond them, or non-finite, stops the
-    run as diverged (as does a non-finite torque from the controller or a mass matrix that is no longer
-    positive definite). energy: provide ``res.energy``, E = T + U at every sample, computed from the
-    recorded states when first read (False: NaN).
+    drawn from ``seed`` (None: a fresh seed, kept in ``res.info["seed"]`` to repeat the run). delay: the
+    controller sees the measurement of ``delay`` periods earlier (the first one before that). max_velocity
+    [rad/s], max_position [rad]: a state beyond them, or non-finite, stops the run as diverged (as does a
+    non-finite torque from the controller or a mass matrix that is no longer positive definite). energy:
+    provide ``res.energy``, E = T + U at every sample, computed from the recorded states when first read
+    (False: NaN).
 
     Returns a :class:`~armctl.sim.result.SimResult`; a run that diverges returns the samples before it with
     ``diverged=True``, ``diverged_at``, ``divergence`` and the offending state — it does not raise. A contact
@@ -93,6 +94,9 @@ def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
     sig_q, sig_qd = (nonnegative_vector(noise_q, n, "noise_q (a standard deviation)"),
                       nonnegative_vector(noise_qd, n, "noise_qd (a standard deviation)"))
     lag = setup.delay_periods(delay)
+    if lag >= n_periods > 0:
+        warnings.warn(f"delay = {lag} control periods is not shorter than the run ({n_periods} periods): the "
+                      "controller sees only the first measurement", SimulationWarning, stacklevel=2)
     saturate, reset, energy = (boolean(saturate, "saturate"), boolean(reset, "reset"), boolean(energy, "energy"))
     vmax, qmax = setup.bound(max_velocity, "max_velocity"), setup.bound(max_position, "max_position")
     q, v = setup.initial_state(q0, qd0, ref0, n, qmax, vmax)
@@ -129,8 +133,10 @@ def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
 
     Q, QD, QDD, TAU, TAUA = rec.q, rec.qd, rec.qdd, rec.tau, rec.tau_applied
     QM, QDM, WF, WE = rec.q_measured, rec.qd_measured, rec.work_friction, rec.work_external
-    QR, QDR = Q.view(), QD.view()
-    QR.flags.writeable = QDR.flags.writeable = False
+    # read-only views of the recorded rows: the controller is given these (it cannot change the record)
+    QR, QDR, QMR, QDMR = Q.view(), QD.view(), QM.view(), QDM.view()
+    for view in (QR, QDR, QMR, QDMR):
+        view.flags.writeable = False
     shape = (n,)
     wf = we = 0.0
     clipped: list[int] = []  # rows where saturation clipped τ
@@ -164,9 +170,17 @@ def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
                     QM[k] = q
                     QDM[k] = v
                 j = k - lag if k >= lag else 0
-                qm, vm = QM[j].copy(), QDM[j].copy()
+                qm, vm = QMR[j], QDMR[j]
             ref = fixed_ref if fixed_ref is not None else setup.check_reference(ref_fn(t), n, t)  # type: ignore[misc]
-            tau = call(t, qm, vm, ref)
+            try:
+                tau = call(t, qm, vm, ref)
+            except ValueError as exc:
+                if "read-only" not in str(exc):
+                    raise
+                raise InvalidParameterError(f"the controller wrote into its q or q̇ at t = {t:g} s ({exc}): the "
+                                            "measurements it is given are read-only views of the run's record; "
+                                            "work on a copy (q = q.copy()) or on new arrays (e = q - ref.q)",
+                                            value=t) from exc
             if tau.__class__ is not np.ndarray or tau.dtype is not _FLOAT:  # complex or text: named errors
                 tau = real_array(tau, f"the controller's torque at t = {t:g} s")
             if has_log and controller.last_log:  # type: ignore[union-attr]
