@@ -225,3 +225,44 @@ def test_bad_validation_result_and_plot(result: ident.IdentificationResult, data
 def test_prior_weight_out_of_range(dyn: armctl.Dynamics, data: ident.IdentificationData, weight: float) -> None:
     with pytest.raises(InvalidParameterError, match=r"prior_weight must be in \[1e-12, 1\]"):
         ident.identify(dyn, data, prior_weight=weight)
+
+
+def test_an_offset_no_motion_can_excite_is_named_with_its_cause() -> None:
+    # an RRPR SCARA: the vertical prismatic joint 2 carries the constant gravity load (m₂ + m₃) g, and its
+    # Coulomb offset column |sgn q̇₂| is 1 whenever it moves: the two are the same column for every motion. The
+    # error used to ask for a better excitation, which cannot help
+    import math
+
+    import armctl
+    from armctl.dynamics.identification import IdentificationData, identify
+    from armctl.errors import IdentifiabilityError
+    from armctl.model.dh import DHLink
+    from armctl.model.parts import JointFriction, Motor
+
+    fr = JointFriction(0.1, 0.5)
+    rows = [DHLink(d=0.4, a=0.4, mass=5, com=(-0.2, 0, 0), inertia=(0.02, 0.1, 0.1), motor=Motor(1e-4, 80),
+                   friction=fr),
+            DHLink(a=0.3, alpha=math.pi, mass=3, com=(-0.15, 0, 0), inertia=(0.01, 0.05, 0.05), motor=Motor(1e-4, 60),
+                   friction=fr),
+            DHLink(kind="prismatic", mass=1, com=(0, 0, -0.1), inertia=(0.01, 0.01, 0.001), motor=Motor(1e-5, 1000),
+                   friction=fr),
+            DHLink(d=0.05, mass=0.5, com=(0, 0, 0.02), inertia=(0.001, 0.001, 0.0005), motor=Motor(1e-5, 50),
+                   friction=fr)]
+    model = armctl.RobotModel.from_dh(rows, name="scara")
+    dyn = armctl.Dynamics(model)
+    t = np.linspace(0.0, 10.0, 2000)
+    w = np.array([0.6, 1.3, 2.1])
+    ph = np.random.default_rng(0).uniform(0, 6, (4, 3))
+    arg = w[None, None, :] * (np.arange(4)[None, :, None] + 1) * t[:, None, None] + ph[None]
+    amp = 0.3 * np.ones(3)
+    freq = w[None, None, :] * (np.arange(4)[None, :, None] + 1)
+    q = (amp * np.sin(arg)).sum(axis=2)
+    qd = (amp * freq * np.cos(arg)).sum(axis=2)
+    qdd = (-amp * freq**2 * np.sin(arg)).sum(axis=2)
+    tau = np.array([dyn.inverse_dynamics(a, b, c) for a, b, c in zip(q, qd, qdd, strict=True)])
+    data = IdentificationData(t, q, qd, qdd, tau)
+    with pytest.raises(IdentifiabilityError, match=r"offset of joint\(s\) \[2\] .* for any motion: .* offsets=False"):
+        identify(model, data, consistent=False)
+    est = identify(model, data, consistent=False, offsets=False).estimate
+    base = dyn.base_parameters()
+    np.testing.assert_allclose(est.theta, base.project(model.parameters()), rtol=1e-8, atol=1e-10)

@@ -344,8 +344,9 @@ class Dynamics(RegressorMethods, ABC):
         return self._kinetic(self._q(q), self._q(qd, "qd"))
 
     def potential_energy(self, q: ArrayLike) -> float:
-        """U = −Σ m_i g₀ᵀ p_Ci [J] over the model's links, zero with every centre of mass at the world origin's
-        height (links a ``reduced(lock=...)`` merged into the world are not counted: a constant)."""
+        """U = −Σ m_i g₀ᵀ p_Ci [J] over the model's moving links, zero with every centre of mass at the world
+        origin's height. Bodies fixed to the world are not counted, a constant: a URDF's base link, links a
+        ``reduced(lock=...)`` merged into the world (MuJoCo's energy, which counts them, differs by that)."""
         return self._potential(self._q(q))
 
     def parameters(self) -> FloatArray:

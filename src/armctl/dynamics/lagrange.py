@@ -260,7 +260,8 @@ class LagrangeDynamics(Dynamics):
     def rotor_coupling_matrix(self, q: ArrayLike) -> FloatArray:
         """The rotors' gyroscopic contribution to M (n×n, symmetric): entry (i, j) = (j, i) =
         k_r,i I_m,i z_m,iᵀ J_O,j^(i−1) for j < i, where J_O^(i−1) is the angular Jacobian of link i−1 — the
-        difference between this backend with and without ``rotor_coupling``."""
+        difference between the model's M with and without the coupling. It describes the model, whatever this
+        object's ``rotor_coupling`` (with False its M leaves this term out)."""
         qv = self._q(q)
         out = np.zeros((self.n, self.n))
         for i, joint in enumerate(self.model.joints):

@@ -254,7 +254,9 @@ class RobotModel:
     def with_payload(self, mass: float, com: ArrayLike = (0.0, 0.0, 0.0),
                      inertia: ArrayLike = (0.0, 0.0, 0.0), frame: str | None = None) -> RobotModel:
         """This arm carrying a rigid payload: ``mass`` [kg], centre of mass ``com`` and ``inertia`` about it,
-        both in the axes of ``frame`` (default: the tool frame)."""
+        both in the axes of ``frame`` (default: the tool frame). ``inertia``: a 3×3 tensor, 3 principal moments
+        or 6 values in URDF order (Ixx, Ixy, Ixz, Iyy, Iyz, Izz) — not π's order (Ixx, Ixy, Iyy, Ixz, Iyz, Izz,
+        Pinocchio's, and about the joint frame, not the centre of mass)."""
         f = self.frame(frame)
         if f.joint == 0:
             raise InvalidParameterError(f"a payload cannot be attached to frame {f.name!r}: it is fixed to the "

@@ -24,9 +24,10 @@ from armctl.dynamics.identification.base_parameters import (
     BaseParameters,
     find_base_parameters,
     identification_regressor,
+    random_states,
 )
 from armctl.dynamics.identification.data import IdentificationData
-from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
+from armctl.errors import IdentifiabilityError, InvalidParameterError, NonFiniteError, ShapeError
 
 
 @dataclass(frozen=True)
@@ -92,6 +93,23 @@ def problem_regressor(dynamics: Dynamics, base: BaseParameters, q: FloatArray, q
     return out
 
 
+def structural_offsets(dynamics: Dynamics, base: BaseParameters, seed: int = 0) -> list[int]:
+    """The joints whose Coulomb-offset column is, at random states (every joint moving), a combination of the
+    base parameters' columns to rounding: offsets no trajectory can identify."""
+    rng = np.random.default_rng(seed)
+    n, nb = dynamics.n, base.n_base
+    states = random_states(dynamics, 4 * (nb + n) // n + 8, rng)
+    w = problem_regressor(dynamics, base, states[:, 0], states[:, 1], states[:, 2], True).reshape(-1, nb + n)
+    yb = w[:, :nb]
+    out = []
+    for i in range(n):
+        col = w[:, nb + i]
+        fit = np.linalg.lstsq(yb, col, rcond=None)[0]
+        if np.linalg.norm(yb @ fit - col) <= 1e-8 * np.linalg.norm(col):
+            out.append(i)
+    return out
+
+
 def build_problem(dynamics: Dynamics, data: IdentificationData | Sequence[IdentificationData],
                   base: BaseParameters | None = None, offsets: bool = True) -> IdentificationProblem:
     """Stack the regressor of ``dynamics``' arm over ``data`` (one experiment or several).
@@ -116,6 +134,15 @@ def build_problem(dynamics: Dynamics, data: IdentificationData | Sequence[Identi
     if base.n_full != dynamics.n * 13:
         raise ShapeError(f"base parameters are for {base.n_full // 13} joints, the model has {dynamics.n}",
                          value=base)
+    if offsets:
+        lumped = structural_offsets(dynamics, base)
+        if lumped:
+            raise IdentifiabilityError(
+                f"the Coulomb offset of joint(s) {lumped} (0-based) cannot be told apart from the base parameters "
+                "for any motion: its column |sgn q̇_i| is a combination of theirs, as when the joint's load has a "
+                "constant part (the gravity load of a vertical prismatic axis). No trajectory can excite it; pass "
+                "offsets=False (the Coulomb asymmetry is then not estimated)", value=lumped,
+                directions=None)
     ws, ys = [], []
     for d in experiments:
         w = problem_regressor(dynamics, base, d.q, d.qd, d.qdd, offsets)
