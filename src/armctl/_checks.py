@@ -25,6 +25,7 @@ def real_array(x: ArrayLike, name: str) -> FloatArray:
     if isinstance(x, np.ma.MaskedArray) and np.ma.getmaskarray(x).any():  # asarray would take the hidden data
         raise InvalidParameterError(f"{name} has masked entries: fill them first (x.filled(value)), got {x!r}",
                                     value=x)
+    ragged = None
     try:
         a = np.asarray(x)
         kind = a.dtype.kind
@@ -34,8 +35,14 @@ def real_array(x: ArrayLike, name: str) -> FloatArray:
             raise TypeError(kind)
         if kind != "b":
             return a.astype(float, copy=False)
-    except (TypeError, ValueError, OverflowError):
-        raise InvalidParameterError(f"{name} must hold real numbers, got {_shown(x)}", value=x) from None
+    except (TypeError, ValueError, OverflowError) as exc:
+        if isinstance(exc, ValueError) and "inhomogeneous" in str(exc):  # rows of different lengths
+            ragged = [len(r) if hasattr(r, "__len__") else 1 for r in x]  # type: ignore[union-attr]
+        else:
+            raise InvalidParameterError(f"{name} must hold real numbers, got {_shown(x)}", value=x) from None
+    if ragged is not None:
+        raise ShapeError(f"{name} must be a rectangular array, but its rows have different lengths {ragged}: got "
+                         f"{_shown(x)}", value=x)
     what = "a real number, not a boolean" if a.ndim == 0 else "real numbers, not booleans"
     raise InvalidParameterError(f"{name} must be {what}, got {_shown(x)}", value=x)
 

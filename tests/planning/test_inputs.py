@@ -16,6 +16,7 @@ N = 7
 @pytest.mark.parametrize(("kwargs", "error", "match"), [
     ({"waypoints": PANDA_WAYPOINTS[:, :6]}, ShapeError, r"6 joints .* the arm 7"),
     ({"waypoints": PANDA_WAYPOINTS[0]}, ShapeError, "waypoints must be an"),
+    ({"waypoints": [PANDA_WAYPOINTS[0], PANDA_WAYPOINTS[1][:3]]}, ShapeError, r"rows have different lengths \[7, 3\]"),
     ({"waypoints": np.where(np.eye(5, 7) > 0, np.nan, PANDA_WAYPOINTS)}, NonFiniteError, "waypoint 0 joint 0"),
     ({"torque_limit": np.ones(6)}, ShapeError, "torque limit must be a scalar, an \\(7,\\)"),
     ({"torque_limit": np.ones((7, 3))}, ShapeError, "torque limit"),

@@ -169,3 +169,15 @@ def test_lists_integers_and_other_float_types_are_taken_as_torques(returned: obj
     res = run(controller=lambda t, q, qd, r: returned)
     np.testing.assert_array_equal(res.tau, np.tile([1.0, -2.0], (len(res.t), 1)))
     assert res.tau.dtype == np.float64
+
+
+@pytest.mark.parametrize(("kind", "times"), [("float32", {"control_dt": 1e-3, "dt": 1e-4}),
+                                             ("float32", {"duration": 0.01}), ("float16", {"duration": 0.1})])
+def test_times_given_in_a_lower_precision_are_the_decimals_they_print_as(kind: str, times: dict) -> None:
+    # float32(1e-3) is 0.0010000000475 s: 1 s was "not a whole number of control periods (1000); use … 1 s"
+    args = {"duration": 1.0, **{k: getattr(np, kind)(v) for k, v in times.items()}}
+    duration = args.pop("duration")
+    res = simulate(MODEL, zero_torque, REF, duration, **args)
+    control_dt = float(times.get("control_dt", 1e-3))
+    assert len(res.t) == round(float(times.get("duration", 1.0)) / control_dt) + 1
+    assert res.info["dt"] == times.get("dt", 1e-3) and res.info["control_dt"] == control_dt

@@ -121,6 +121,15 @@ def test_bad_sweep_arguments() -> None:
         sweep(None, progress=False)  # type: ignore[arg-type]
     with pytest.raises(InvalidParameterError, match="progress must be True, False or a text stream, got 'yes'"):
         sweep(cases(GAINS[:1]), progress="yes")  # type: ignore[arg-type]
+    # these ran into an AttributeError ('submit'), a TypeError ('int' object is not callable) or were accepted
+    with pytest.raises(InvalidParameterError, match=r"executor must be an Executor .* got <object"):
+        sweep(cases(GAINS[:1]), executor=object(), progress=False)  # type: ignore[arg-type]
+    with pytest.raises(InvalidParameterError, match="run must be a function, got 5"):
+        sweep(cases(GAINS[:1]), run=5, executor="serial", progress=False)  # type: ignore[arg-type]
+    with pytest.raises(InvalidParameterError, match="summary must be a function"):
+        sweep(cases(GAINS[:1]), summary="rms", executor="serial", progress=False)  # type: ignore[arg-type]
+    with pytest.raises(InvalidParameterError, match="max_workers must be a positive integer, got True"):
+        sweep(cases(GAINS[:1]), max_workers=True, progress=False)
 
 
 def test_a_friction_model_needs_the_model_not_the_dynamics() -> None:

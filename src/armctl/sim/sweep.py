@@ -86,6 +86,9 @@ def sweep(cases: Iterable[Mapping[str, Any]], *, run: Callable[..., Any] | None 
     """
     if run is None:
         from armctl.sim.simulate import simulate as run
+    for name, fn in (("run", run), ("summary", summary)):
+        if fn is not None and not callable(fn):
+            raise InvalidParameterError(f"{name} must be a function, got {fn!r}", value=fn)
     try:
         case_list = list(cases)
     except TypeError:
@@ -108,11 +111,12 @@ def sweep(cases: Iterable[Mapping[str, Any]], *, run: Callable[..., Any] | None 
             if bar:
                 bar.update(i + 1)
         return out
-    if isinstance(executor, str):
-        raise InvalidParameterError(f"executor must be an Executor, 'serial' or None, got {executor!r}",
-                                    value=executor)
+    if executor is not None and not callable(getattr(executor, "submit", None)):
+        raise InvalidParameterError(f"executor must be an Executor (with a submit method), 'serial' or None, got "
+                                    f"{executor!r}", value=executor)
     own = executor is None
-    if max_workers is not None and (not isinstance(max_workers, int) or max_workers < 1):
+    if max_workers is not None and (isinstance(max_workers, bool) or not isinstance(max_workers, int)
+                                    or max_workers < 1):
         raise InvalidParameterError(f"max_workers must be a positive integer, got {max_workers!r}", value=max_workers)
     pool: Executor = ProcessPoolExecutor(max_workers or os.cpu_count() or 1) if own else executor  # type: ignore[assignment]
     results: list[Any] = [None] * len(case_list)
