@@ -70,6 +70,33 @@ def test_torque_ramp_breaks_away_at_the_predicted_torque(rate: float, coulomb: f
     assert res.info["breakaway_events"] >= 1
 
 
+@pytest.mark.parametrize(("rate", "up", "down"), [(1.0, 3.0, 2.0), (-1.0, 3.0, 2.0), (1.0, 1.5, 2.5),
+                                                 (-1.0, 1.5, 2.5)])
+def test_asymmetric_breakaway_levels_each_hold_their_own_side(rate: float, up: float, down: float) -> None:
+    # Coulomb F_c⁺ = up for motion in +q, F_c⁻ = down for −q (no static level: each side breaks away at its
+    # own): a ramp in +τ breaks away when τ − g(q0) reaches +F_c⁺, one in −τ when it reaches −F_c⁻. Swapping
+    # the two levels anywhere in the stick–slip solve moves each prediction by |F_c⁺ − F_c⁻| = 1 N·m
+    q0 = 0.3
+    predicted = gravity_pendulum(q0) + (up if rate > 0 else -down)
+    res = simulate(pendulum(coulomb=up, coulomb_negative=down), OpenLoop(Ramp([0.0], [rate])),
+                   armctl.Reference.hold([q0]), round(abs(predicted) * 1.3 + 0.2, 1))
+    moved = np.flatnonzero(res.q[:, 0] != q0)
+    assert moved.size, "it never broke away"
+    k = moved[0] - 1
+    assert (res.q[: k + 1, 0] == q0).all()
+    assert res.tau_applied[k, 0] == pytest.approx(predicted, rel=0.01, abs=0.01)
+    assert np.sign(res.q[moved[0], 0] - q0) == np.sign(rate)
+
+
+def test_gravity_beyond_the_lower_level_pulls_the_pendulum_down_at_once() -> None:
+    # g(0.3) = 1.45 N·m pulls towards −q: F_c⁺ = 3 cannot hold it, F_c⁻ = 1 < 1.45 cannot either — it slides
+    # from the start; with the levels the other way round (F_c⁻ = 3) it is held
+    free = simulate(pendulum(coulomb=3.0, coulomb_negative=1.0), zero_torque, armctl.Reference.hold([0.3]), 0.5)
+    held = simulate(pendulum(coulomb=1.0, coulomb_negative=3.0), zero_torque, armctl.Reference.hold([0.3]), 0.5)
+    assert free.q[-1, 0] < 0.3 - 0.05 and not free.stuck[1:].any()
+    assert (held.q == 0.3).all() and held.stuck.all()
+
+
 def test_stribeck_friction_starts_at_the_static_level_and_falls_to_coulomb() -> None:
     fv, fc, fs, vs = 0.1, 2.0, 3.0, 0.05
     model = slider().with_friction(viscous=fv, coulomb=fc, static=fs, stribeck_velocity=vs)
