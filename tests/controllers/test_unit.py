@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -158,6 +160,37 @@ def test_adaptive_update_is_the_gradient_law(gamma: object) -> None:
         assert np.array_equal(logged, kept)
     ad.reset()
     assert np.allclose(ad.theta, 0)
+
+
+def test_adaptive_update_with_sigma_and_composite_terms_is_the_written_law() -> None:
+    """θ̂⁺ = (I + κ dt Γ W_fᵀW_f)⁻¹ [θ̂ − dt Γ (Yᵀs + σ(θ̂ − θ₀) − κ W_fᵀτ_f)], written out here with a full
+    solve (the controller uses Woodbury), and the first-order filters x_f ← x_f + (1 − e^{−ω dt})(x − x_f) of
+    W = Y(q, q̇, Δq̇/dt) and of the previous call's torque, started at their first values."""
+    dyn = dynamics("planar_2r")
+    ref = armctl.Reference([0.3, -0.2], [0.1, 0.0], [0.0, 0.5])
+    lam, kd, gamma, sigma, kappa, omega, dt = 2.0, 10.0, 0.5, 0.3, 4.0, 20.0, 0.01
+    theta0 = dyn.parameters() * 0.8
+    ad = Adaptive(dyn, lam, kd, gamma=gamma, theta0=theta0, sigma=sigma, composite=kappa, filter_bandwidth=omega)
+    theta, w_f, tau_f, qd_prev, tau_prev = theta0.copy(), None, None, None, None
+    a = 1.0 - math.exp(-omega * dt)
+    for k in range(6):
+        t = k * dt
+        q, qd = np.array([0.35, -0.1]) + 0.01 * k, np.array([0.0, 0.2]) - 0.03 * k
+        qd_r = ref.qd - lam * (q - ref.q)
+        s = qd - qd_r
+        y = dyn.passivity_regressor(q, qd, qd_r, ref.qdd - lam * (qd - ref.qd))
+        if k > 0:
+            w = dyn.regressor(q, qd, (qd - qd_prev) / dt)
+            w_f = w if w_f is None else w_f + a * (w - w_f)
+            tau_f = tau_prev.copy() if tau_f is None else tau_f + a * (tau_prev - tau_f)
+            grad = y.T @ s + sigma * (theta - theta0) - kappa * w_f.T @ tau_f
+            lhs = np.eye(26) + kappa * dt * gamma * w_f.T @ w_f
+            theta = np.linalg.solve(lhs, theta - dt * gamma * grad)
+        tau = ad(t, q, qd, ref)
+        np.testing.assert_allclose(ad.theta, theta, rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(tau, y @ theta - kd * s, rtol=1e-9, atol=1e-9)
+        qd_prev, tau_prev = qd, tau
+    assert np.abs(theta - theta0).max() > 1e-3  # the terms moved θ̂: the comparison is not of two θ₀
 
 
 @settings(max_examples=40, deadline=None)

@@ -232,3 +232,19 @@ def test_constrained_acceleration_is_the_free_block_solve() -> None:
         np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-13)
     with pytest.raises(NotPositiveDefinite):
         constrained_accel(-mass, rhs, np.array([True, False, False, False, False]))
+
+
+def test_a_joint_released_brings_its_kinetic_friction_into_the_others_holding_torque() -> None:
+    # two joints at rest, M = [[3, 1.2], [1.2, 1]], r = [400, 60] N·m; joint 0: F_c = 200, F_s = 250; joint 1:
+    # F_c = 40, F_s = 50. Both held: λ = r, and joint 0 is beyond its band (400/250 > 60/50). Released (+q), it
+    # slides against F_c: q̈₀ = (400 − 200)/3 and joint 1 must hold λ₁ = 60 − 1.2 q̈₀ = −20 N·m, inside ±50: it
+    # stays stuck. Without the kinetic friction in r, λ₁ = 60 − 1.2·400/3 = −100 would release it too
+    from armctl.sim.friction import StickSlip
+    from armctl.sim.stick_slip import solve_sticking
+
+    model = armctl.models.planar_2r().with_friction(coulomb=[200.0, 40.0], static=[250.0, 50.0])
+    mass = np.array([[3.0, 1.2], [1.2, 1.0]])
+    stuck, direction, lam = solve_sticking(StickSlip(model), mass, np.array([400.0, 60.0]),
+                                           np.array([True, True]), np.zeros(2))
+    assert stuck.tolist() == [False, True] and direction.tolist() == [1.0, 0.0]
+    np.testing.assert_allclose(lam, [0.0, 60.0 - 1.2 * (400.0 - 200.0) / 3.0], rtol=1e-12, atol=1e-12)
