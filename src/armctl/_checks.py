@@ -36,15 +36,26 @@ def real_array(x: ArrayLike, name: str) -> FloatArray:
         if kind != "b":
             return a.astype(float, copy=False)
     except (TypeError, ValueError, OverflowError) as exc:
-        if isinstance(exc, ValueError) and "inhomogeneous" in str(exc):  # rows of different lengths
-            ragged = [len(r) if hasattr(r, "__len__") else 1 for r in x]  # type: ignore[union-attr]
-        else:
+        if isinstance(exc, ValueError) and "inhomogeneous" in str(exc):  # rows of different shapes?
+            ragged = _row_shapes(x)
+        if ragged is None:
             raise InvalidParameterError(f"{name} must hold real numbers, got {_shown(x)}", value=x) from None
     if ragged is not None:
-        raise ShapeError(f"{name} must be a rectangular array, but its rows have different lengths {ragged}: got "
+        raise ShapeError(f"{name} must be a rectangular array, but its rows have different shapes {ragged}: got "
                          f"{_shown(x)}", value=x)
     what = "a real number, not a boolean" if a.ndim == 0 else "real numbers, not booleans"
     raise InvalidParameterError(f"{name} must be {what}, got {_shown(x)}", value=x)
+
+
+def _row_shapes(x: Any) -> list[tuple[int, ...]] | None:
+    """The shapes of the rows of ``x`` if they differ (a ragged array), else None."""
+    try:
+        if any(isinstance(r, str | bytes) for r in x):  # text is the problem, not the shape
+            return None
+        shapes = [np.shape(r) for r in x]
+    except Exception:
+        return None
+    return shapes if len(set(shapes)) > 1 else None
 
 
 def _shown(x: Any, limit: int = 200) -> str:

@@ -296,6 +296,9 @@ def test_pareto_front_compares_noisy_times_by_their_quartiles() -> None:
     # the same medians with quartiles that no longer overlap: a is clearly faster and back on the front
     apart = [(9.9, 10.1), (39.0, 41.0), (11.9, 12.1), (10.9, 11.1), (0.0, 0.0)]
     assert pareto_front(points, apart) == [0, 1, 2]
+    # a point without quartiles (NaN) is compared by its median: it does not tie with everyone on time
+    assert pareto_front([(1.0, 1.0), (10.0, 0.5), (100.0, 0.1)],
+                        [(0.9, 1.1), (9.0, 11.0), (float("nan"), float("nan"))]) == [0, 1, 2]
 
 
 def test_a_diverged_run_has_no_tracking_error_to_rank() -> None:

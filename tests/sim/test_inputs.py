@@ -172,10 +172,14 @@ def test_lists_integers_and_other_float_types_are_taken_as_torques(returned: obj
 
 
 @pytest.mark.parametrize(("kind", "times"), [("float32", {"control_dt": 1e-3, "dt": 1e-4}),
-                                             ("float32", {"duration": 0.01}), ("float16", {"duration": 0.1})])
+                                             ("float32", {"duration": 0.01}), ("float16", {"duration": 0.1}),
+                                             ("array32", {"control_dt": 1e-3})])
 def test_times_given_in_a_lower_precision_are_the_decimals_they_print_as(kind: str, times: dict) -> None:
     # float32(1e-3) is 0.0010000000475 s: 1 s was "not a whole number of control periods (1000); use … 1 s"
-    args = {"duration": 1.0, **{k: getattr(np, kind)(v) for k, v in times.items()}}
+    def make(v: float) -> object:
+        return np.array(v, dtype=np.float32) if kind == "array32" else getattr(np, kind)(v)
+
+    args = {"duration": 1.0, **{k: make(v) for k, v in times.items()}}
     duration = args.pop("duration")
     res = simulate(MODEL, zero_torque, REF, duration, **args)
     control_dt = float(times.get("control_dt", 1e-3))

@@ -108,7 +108,9 @@ def pareto_front(points: list[tuple[float, float]], spans: list[tuple[float, flo
     the intervals: j is faster than i only if hi_j < lo_i, and overlapping intervals are a tie, so timing noise
     alone cannot move a point on or off the front. j beats i if it is faster and no less accurate, or tied and
     more accurate. Without spans this is the usual strict Pareto order."""
-    spans = [(x, x) for x, _ in points] if spans is None else spans
+    spans = [(x, x) for x, _ in points] if spans is None else [
+        (lo, hi) if math.isfinite(lo) and math.isfinite(hi) else (x, x)  # no quartiles: the point itself
+        for (x, _), (lo, hi) in zip(points, spans, strict=True)]
     finite = [math.isfinite(x) and math.isfinite(y) for x, y in points]
 
     def beats(j: int, i: int) -> bool:

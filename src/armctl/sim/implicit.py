@@ -74,6 +74,7 @@ def symplectic_euler(plant: Plant, t: float, q: FloatArray, v: FloatArray, tau: 
         return _symplectic_conservative(plant, q, v, mass, base, p0, h)
     vb = v.copy()
     f = e = plant._zeros
+    kj = None
     for _ in range(NEWTON_MAX_ITER):
         force = base + dyn._coriolis(q, vb).T @ vb
         jac = mass.copy()
@@ -83,7 +84,7 @@ def symplectic_euler(plant: Plant, t: float, q: FloatArray, v: FloatArray, tau: 
             jac[np.diag_indices(n)] += h * plant.friction_slope(vb)
         if plant.has_external:
             if plant.environments:
-                e, _, dj = plant.external_stiffness(t, q, vb)
+                e, kj, dj = plant.external_stiffness(t, q, vb)
                 jac -= h * dj
             else:
                 e = plant.external(t, q, vb)
@@ -99,9 +100,12 @@ def symplectic_euler(plant: Plant, t: float, q: FloatArray, v: FloatArray, tau: 
     v1 = constrained_accel(plant._mass(q1), mass @ vb, stuck)
     wf = -h * float(vb @ f) if plant.friction is not None else 0.0
     we = 0.0
-    if plant.has_external:  # the trapezoid in q of the force at v̄: exact for a linear spring (the left sum
-        # h v̄ᵀτ_e(q) overstates a spring's work by k Δq²/2 a step, which hid energy an unstable wall made)
-        we = 0.5 * h * float(vb @ (e + plant.external(t + h, q1, vb)))
+    if plant.has_external:  # the trapezoid in q of the force at v̄, τ_e(q₁) ≈ τ_e(q) + K h v̄: exact for a linear
+        # spring (the left sum h v̄ᵀτ_e(q) overstates a spring's work by k Δq²/2 a step, which hid energy an
+        # unstable wall made), at no extra evaluation
+        we = h * float(vb @ e)
+        if kj is not None:
+            we += 0.5 * h * h * float(vb @ kj @ vb)
     return q1, v1, None, wf, we
 
 

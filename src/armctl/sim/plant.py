@@ -187,17 +187,22 @@ class Plant:
 
     def accel_work(self, t: float, q: FloatArray, qd: FloatArray, tau: FloatArray) -> tuple[FloatArray, float, float]:
         """(q̈, p_f, p_e): :meth:`accel` and the friction and external powers [W]."""
+        a, f, e = self.accel_forces(t, q, qd, tau)
+        return a, -float(qd @ f) if f is not None else 0.0, float(qd @ e) if e is not None else 0.0
+
+    def accel_forces(self, t: float, q: FloatArray, qd: FloatArray, tau: FloatArray
+                     ) -> tuple[FloatArray, FloatArray | None, FloatArray | None]:
+        """(q̈, τ_f, τ_e): :meth:`accel` with the friction torque (against the motion) and the external torque
+        (added to τ) it used, each None if the plant has none."""
         net = tau
-        pf = pe = 0.0
+        f = e = None
         if self.friction is not None:
             f = self.kinetic_friction(qd)
-            pf = -float(qd @ f)
             net = net - f
         if self.has_external:
             e = self.external(t, q, qd)
-            pe = float(qd @ e)
             net = net + e
-        return self._solve(q, qd, net), pf, pe
+        return self._solve(q, qd, net), f, e
 
     def _solve(self, q: FloatArray, qd: FloatArray, net: FloatArray) -> FloatArray:
         if self.stuck is None:

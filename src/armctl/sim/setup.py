@@ -42,6 +42,8 @@ def periods(duration: Any, control_dt: Any, dt: Any) -> tuple[float, float, int,
             raise InvalidParameterError(f"{name} must be a time in s, got {x!r}", value=x)
     # a float32 1e-3 is 0.0010000000475 s: 1 s is then not a whole number of periods to 1e-9. Times given in
     # a lower precision are read as the decimal they print as (the value their author wrote)
+    duration, control_dt, dt = (x[()] if isinstance(x, np.ndarray) and x.ndim == 0 else x
+                                for x in (duration, control_dt, dt))
     duration, control_dt, dt = (float(np.format_float_positional(x, unique=True))
                                 if isinstance(x, np.floating) and np.finfo(x.dtype).bits < 64 else x
                                 for x in (duration, control_dt, dt))

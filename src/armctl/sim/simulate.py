@@ -177,8 +177,8 @@ def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
             except ValueError as exc:
                 if "read-only" not in str(exc):
                     raise
-                raise InvalidParameterError(f"the controller wrote into its q or q̇ at t = {t:g} s ({exc}): the "
-                                            "measurements it is given are read-only views of the run's record; "
+                raise InvalidParameterError(f"the controller wrote into a read-only array at t = {t:g} s ({exc}); "
+                                            "the q and q̇ it is given are read-only views of the run's record: "
                                             "work on a copy (q = q.copy()) or on new arrays (e = q - ref.q)",
                                             value=t) from exc
             if tau.__class__ is not np.ndarray or tau.dtype is not _FLOAT:  # complex or text: named errors
@@ -234,7 +234,7 @@ def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
     if divergence is not None:
         divergence = (divergence[0], divergence[1], np.array(divergence[2]), np.array(divergence[3]))
     res = rec.result(rows, dyn, energy, info, divergence)
-    after_run(res, dyn, sc.environments, scheme, h)
+    after_run(res, dyn, sc.environments, scheme, h, sc.disturbance is not None)
     return res
 
 

@@ -100,14 +100,9 @@ def structural_offsets(dynamics: Dynamics, base: BaseParameters, seed: int = 0) 
     n, nb = dynamics.n, base.n_base
     states = random_states(dynamics, 4 * (nb + n) // n + 8, rng)
     w = problem_regressor(dynamics, base, states[:, 0], states[:, 1], states[:, 2], True).reshape(-1, nb + n)
-    yb = w[:, :nb]
-    out = []
-    for i in range(n):
-        col = w[:, nb + i]
-        fit = np.linalg.lstsq(yb, col, rcond=None)[0]
-        if np.linalg.norm(yb @ fit - col) <= 1e-8 * np.linalg.norm(col):
-            out.append(i)
-    return out
+    yb, cols = w[:, :nb], w[:, nb:]
+    residual = cols - yb @ np.linalg.lstsq(yb, cols, rcond=None)[0]  # one factorisation for every joint
+    return [i for i in range(n) if np.linalg.norm(residual[:, i]) <= 1e-8 * np.linalg.norm(cols[:, i])]
 
 
 def build_problem(dynamics: Dynamics, data: IdentificationData | Sequence[IdentificationData],
