@@ -46,9 +46,11 @@ DAMPING_LIMIT = {"euler": 2.0, "rk4": 2.785}
 
 
 def _scale(res: SimResult) -> float:
-    """The largest energy exchanged in the run [J] (at least 1e-12)."""
-    return max(float(np.abs(res.energy - res.energy[0]).max()), float(np.abs(res.work_actuator).max()),
-               float(np.abs(res.work_friction).max()), float(np.abs(res.work_external).max()), 1e-12)
+    """The largest energy exchanged in the run [J] (at least 1e-12; the energy left out if it was not asked
+    for, energy=False)."""
+    works = (res.work_actuator, res.work_friction, res.work_external)
+    change = float(np.abs(res.energy - res.energy[0]).max())
+    return max(*(float(np.abs(w).max()) for w in works), change if math.isfinite(change) else 0.0, 1e-12)
 
 
 #: the energy error a stable first-order scheme may make in contact, as a share of the energy exchanged: its
