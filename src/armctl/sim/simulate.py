@@ -81,8 +81,9 @@ def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
     run by a :class:`~armctl.errors.SimulationWarning` and kept in ``res.info["unstable_contacts"]``: the run
     still happens (the failure is a result to show), but past the first impact it is not the arm's motion.
     After a run with contact, what that check cannot see is checked on the record (:mod:`armctl.sim.after_run`):
-    energy the arm gained that no force supplied (``res.info["energy_gain"]``), and a plane's friction too
-    stiff below its slip velocity for the step (``res.info["unstable_friction"]``), each with a warning.
+    energy the arm gained that no force supplied (``res.info["energy_gain"]``), positive work by the passive
+    environments (``res.info["environment_work"]``) and a plane's friction too stiff below its slip velocity
+    for the step (``res.info["unstable_friction"]``), each with a warning.
     """
     dyn = setup.plant_dynamics(plant)
     n = dyn.n
