@@ -144,3 +144,14 @@ def test_spline_range_points_hold_its_extreme_positions() -> None:
     at = path(path.range_points())
     assert (dense.max(axis=0) <= at.max(axis=0) + 1e-12).all() and (dense.min(axis=0) >= at.min(axis=0) - 1e-12).all()
     np.testing.assert_allclose(at.max(axis=0), dense.max(axis=0), atol=1e-8)  # and they are reached
+
+
+def test_torque_margin_shrinks_asymmetric_bounds_about_their_midpoint() -> None:
+    # bounds [5, 20] with a 10 % margin: midpoint 12.5, half-range 7.5 → [12.5 − 6.75, 12.5 + 6.75] = [5.75, 19.25]
+    # (shrunk about zero instead, as a mutant did: [4.5, 18])
+    from armctl.planning.limits import joint_limits
+
+    model = armctl.models.pendulum()
+    planned = joint_limits(model, torque_limit=np.array([[5.0, 20.0]]), torque_margin=0.1).planned_torque
+    assert planned is not None
+    np.testing.assert_allclose([planned.lower[0], planned.upper[0]], [5.75, 19.25], rtol=1e-12)
