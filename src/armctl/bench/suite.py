@@ -123,10 +123,10 @@ def pareto_front(points: list[tuple[float, float]], spans: list[tuple[float, flo
             and not any(finite[j] and beats(j, i) for j in range(len(points)) if j != i)]
 
 
-def _failure_note(r: dict[str, Any]) -> str | None:
-    """How a method failed on its scene, in a few words, or None."""
+def _failure_note(r: dict[str, Any], brief: bool = True) -> str | None:
+    """How a method failed on its scene, or None: the error's type (``brief``, for a chart) or its whole text."""
     if r.get("failed"):
-        return f"failed: {r['failed'].split(':')[0]}"
+        return f"failed: {r['failed'].split(':')[0]}" if brief else f"FAILED ({r['failed']})"
     if r["diverged"]:
         return f"diverged at {r['diverged_at']:.2f} s"
     return None
@@ -281,8 +281,7 @@ def summary(figures: dict[str, Any]) -> str:
         force = f"{r['force_rms_error']:6.2f}" if "force_rms_error" in r else f"{'-':>6s}"
         over = " / ".join(f"{r.get(f'{k}_violation_share', float('nan')):.1%}" for k in ("torque", "velocity",
                                                                                           "position"))
-        outcome = (f"FAILED ({r['failed']})" if r.get("failed") else
-                   f"diverged at {r['diverged_at']:.2f} s" if r["diverged"] else "ok")
+        outcome = _failure_note(r, brief=False) or "ok"
         if r.get("contact_lost"):
             outcome += ", contact lost"
         lines.append(f"{r['scene']:14s} {r['method']:26s} {r['rms_error']:9.2e} {r['max_error']:9.2e} {force} "

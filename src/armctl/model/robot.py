@@ -218,11 +218,10 @@ class RobotModel:
         Covered: gravity; every joint's kind, axis and placement; for joints with a gyroscopic motor, its gear
         ratio and spin axis (an armature changes no code: it is in π); the tool frame (name, joint,
         placement). ``inertial=True`` adds the link masses, centres of mass, inertia tensors and rotor
-        inertias. Not covered: friction, joint
-        limits, joint names and the frames other than the tool frame. So equal fingerprints do *not* mean equal
-        dynamics (models that differ only in friction share one); they mean the same generated code, whose π
-        input carries the inertial and friction parameters at run time: every payload, perturbed or friction
-        variant of an arm shares ``fingerprint(inertial=False)``."""
+        inertias. Not covered: friction, joint limits, joint names and the frames other than the tool frame.
+        So equal fingerprints do *not* mean equal dynamics (models that differ only in friction share one);
+        they mean the same generated code, whose π input carries the inertial and friction parameters at run
+        time: every payload, perturbed or friction variant of an arm shares ``fingerprint(inertial=False)``."""
         h = hashlib.sha256()
         h.update(self.gravity.tobytes())
         for j in self.joints:

@@ -35,18 +35,23 @@ def plant_dynamics(plant: Any) -> Dynamics:
                                 f"{type(plant).__name__}", value=plant)
 
 
+def _as_written(x: Any) -> Any:
+    """A time given in a lower precision than float64 (a NumPy float32 or float16, or a 0-d array of one) as the
+    decimal it prints as, the value its author wrote: a float32 1e-3 is 0.0010000000475 s, and 1 s is then not
+    a whole number of periods to 1e-9. Anything else unchanged (checked by the caller)."""
+    if isinstance(x, np.ndarray) and x.ndim == 0:
+        x = x[()]
+    if isinstance(x, np.floating) and np.finfo(x.dtype).bits < 64:
+        return float(np.format_float_positional(x, unique=True))
+    return x
+
+
 def periods(duration: Any, control_dt: Any, dt: Any) -> tuple[float, float, int, int]:
     """(control_dt, dt, number of control periods N, sub-steps per period m), checked."""
     for name, x in (("duration", duration), ("control_dt", control_dt), ("dt", dt)):
         if isinstance(x, bool | np.bool_):
             raise InvalidParameterError(f"{name} must be a time in s, got {x!r}", value=x)
-    # a float32 1e-3 is 0.0010000000475 s: 1 s is then not a whole number of periods to 1e-9. Times given in
-    # a lower precision are read as the decimal they print as (the value their author wrote)
-    duration, control_dt, dt = (x[()] if isinstance(x, np.ndarray) and x.ndim == 0 else x
-                                for x in (duration, control_dt, dt))
-    duration, control_dt, dt = (float(np.format_float_positional(x, unique=True))
-                                if isinstance(x, np.floating) and np.finfo(x.dtype).bits < 64 else x
-                                for x in (duration, control_dt, dt))
+    duration, control_dt, dt = (_as_written(x) for x in (duration, control_dt, dt))
     duration = scalar(duration, "duration [s]", positive=True)
     control_dt = scalar(control_dt, "control_dt [s]", positive=True)
     dt = control_dt if dt is None else scalar(dt, "dt [s]", positive=True)
