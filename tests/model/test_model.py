@@ -19,6 +19,7 @@ from armctl.errors import (
     UnknownNameError,
 )
 from armctl.model import DHLink, Joint, JointFriction, Link, Motor
+from armctl.model.consistency import is_physical, project_physical, projection
 from tests.conftest import dynamics, model
 
 
@@ -115,6 +116,23 @@ def test_payload_adds_its_weight_through_the_jacobian() -> None:
     assert np.allclose(d1.gravity_torque(q), expected, atol=1e-10)
     assert base.parameters()[-13] != heavy.parameters()[-13]  # the model itself is unchanged
     assert heavy.n == base.n
+
+
+@pytest.mark.parametrize("likely_inside", [True, False])
+def test_projection_clips_negative_rotor_and_friction_alone(likely_inside: bool) -> None:
+    """project_physical's docstring: rotor inertia and friction are clipped at 0. Links that are physical
+    already keep their ten parameters (to rounding: the eigendecomposition is taken apart and put back), so
+    the result is π with just the negative terms set to 0 (by hand), and projection() reports a change."""
+    pi = model("planar_2r").parameters()
+    assert is_physical(pi)
+    bad, want = pi.copy(), pi.copy()
+    bad[[11, 12, 23]] = -0.5, -0.2, -1e-3  # joint 1's F_v and F_c, joint 2's rotor inertia
+    want[[11, 12, 23]] = 0.0
+    assert not is_physical(bad)
+    projected, changed = projection(bad, likely_inside=likely_inside)
+    assert changed
+    np.testing.assert_allclose(projected, want, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(project_physical(bad), want, rtol=1e-12, atol=1e-12)
 
 
 def test_locked_joint_gives_the_submodel() -> None:

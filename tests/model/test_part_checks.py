@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
 import armctl
 from armctl.errors import ArmctlError, InvalidParameterError, NonFiniteError, ShapeError, UnknownNameError
@@ -203,6 +204,23 @@ def test_valid_parts_unchanged() -> None:
     assert np.array_equal(m.perturbed(noise=0.1, seed=np.int64(3)).parameters(),
                           m.perturbed(noise=0.1, seed=3.0).parameters())
     assert m.reduced(lock=None).n == 2 and m.reduced(rotors=np.bool_(False)).has_motors is False
+
+
+@pytest.mark.parametrize("moments", [(1.0, 1.0, 3.0), (0.1, 0.2, 0.45), (0.5, 1.0, 1.6), (1.0, 2.0, 3.0),
+                                     (2.0, 2.0, 3.0)])
+def test_link_takes_the_moments_of_some_mass_distribution_only(moments: tuple[float, float, float]) -> None:
+    """Principal moments a mass distribution can have: Σ = ½ tr(I) 1 − I = ∫ r rᵀ dm positive semi-definite
+    (computed here; I₁ + I₂ ≥ I₃, a flat plate (1, 2, 3) on the edge). Link (a rotated, full tensor) refuses
+    the others by the triangle inequality; physical=False takes them."""
+    r = Rotation.from_rotvec([0.4, -0.9, 0.3]).as_matrix()
+    inertia = r @ np.diag(moments) @ r.T
+    sigma = 0.5 * np.trace(inertia) * np.eye(3) - inertia
+    if np.linalg.eigvalsh(sigma).min() >= -1e-12:
+        np.testing.assert_allclose(Link(1.0, inertia=inertia).inertia, inertia, rtol=0, atol=1e-15)
+    else:
+        with pytest.raises(InvalidParameterError, match="triangle inequality"):
+            Link(1.0, inertia=inertia)
+        assert Link(1.0, inertia=inertia, physical=False).physical is False
 
 
 # ------------------------------------------------------------------------------------------------- URDF (3)

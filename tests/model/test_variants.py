@@ -194,6 +194,84 @@ def test_perturbed_noise_keeps_masses_near_nominal() -> None:
     assert 0.15 < masses.std() < 0.25
 
 
+def test_perturbed_com_offset_moves_every_com_by_that_distance() -> None:
+    """com_offset: every centre of mass moves by com_offset metres along a random direction (the docstring's
+    definition: the norm of each shift, by hand), directions differing between links; nothing else changes."""
+    arm = _arm()
+    for seed in range(3):
+        p = arm.perturbed(com_offset=0.02, seed=seed)
+        shifts = np.array([b.link.com - a.link.com for a, b in zip(arm.joints, p.joints, strict=True)])
+        np.testing.assert_allclose(np.linalg.norm(shifts, axis=1), 0.02, rtol=1e-12)
+        assert np.linalg.matrix_rank(shifts, tol=1e-3) == 3  # not one direction for all links
+        for a, b in zip(arm.joints, p.joints, strict=True):
+            assert b.link.mass == a.link.mass and np.array_equal(b.link.inertia, a.link.inertia)
+
+
+def test_perturbed_noise_scales_each_link_as_a_whole() -> None:
+    """noise: one random factor per link (docstring), on its mass and on its inertia about the centre of mass
+    alike, on top of the mass and inertia factors; the com stays. Reference: the factor read off the mass."""
+    arm = _arm()
+    p = arm.perturbed(mass=1.2, inertia=0.8, noise=0.3, seed=4)
+    factors = []
+    for a, b in zip(arm.joints, p.joints, strict=True):
+        f = b.link.mass / (1.2 * a.link.mass)
+        np.testing.assert_allclose(b.link.inertia, 0.8 * f * a.link.inertia, rtol=1e-12, atol=0)
+        np.testing.assert_array_equal(b.link.com, a.link.com)
+        factors.append(f)
+    assert np.std(factors) > 0.05  # the factors are there and differ between links
+
+
+def _frame_jacobians(arm: armctl.RobotModel, q: np.ndarray, frame: str, point: np.ndarray
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(R, J_v, J_ω) of a frame composed by hand: its world rotation R, the Jacobian of the world position of
+    ``point`` (given in the frame) and the angular-velocity Jacobian, by central differences (ω^ = Ṙ Rᵀ)."""
+    h, n = 1e-6, arm.n
+    rot = _hand_pose(arm, q, frame)[:3, :3]
+    jv, jw = np.zeros((3, n)), np.zeros((3, n))
+    for k in range(n):
+        e = h * np.eye(n)[k]
+        plus, minus = _hand_pose(arm, q + e, frame), _hand_pose(arm, q - e, frame)
+        jv[:, k] = (plus - minus)[:3] @ np.r_[point, 1.0] / (2 * h)
+        w = (plus[:3, :3] - minus[:3, :3]) / (2 * h) @ rot.T
+        jw[:, k] = w[2, 1], w[0, 2], w[1, 0]
+    return rot, jv, jw
+
+
+@pytest.mark.parametrize("frame", [None, "on_link3"])
+def test_payload_is_a_body_given_in_the_frames_axes(frame: str | None) -> None:
+    """with_payload(m, c, I, frame): a rigid body with its com c and inertia I about it in the axes of a
+    rotated frame (default: the tool). It adds m J_vᵀJ_v + J_ωᵀ R I Rᵀ J_ω to M and −m J_vᵀ g₀ to the gravity
+    torque, J_v of the com's world position, J_ω and R of the frame, from the pose composed by hand."""
+    arm = _arm()
+    mass, com = 1.3, np.array([0.08, -0.05, 0.12])
+    r = Rotation.from_rotvec([0.3, -0.5, 0.8]).as_matrix()
+    inertia = r @ np.diag([0.004, 0.006, 0.008]) @ r.T
+    heavy = arm.with_payload(mass, com, inertia, frame=frame)
+    q = np.array([0.4, -0.7, 0.12, 1.1, -0.5])
+    rot, jv, jw = _frame_jacobians(arm, q, frame or "tool", com)
+    d0, d1 = armctl.Dynamics(arm), armctl.Dynamics(heavy)
+    np.testing.assert_allclose(d1.mass_matrix(q) - d0.mass_matrix(q),
+                               mass * jv.T @ jv + jw.T @ rot @ inertia @ rot.T @ jw, rtol=0, atol=1e-8)
+    np.testing.assert_allclose(d1.gravity_torque(q) - d0.gravity_torque(q), -mass * jv.T @ arm.gravity,
+                               rtol=0, atol=1e-8)
+
+
+def test_with_parameters_keeps_static_friction_only_above_both_new_levels() -> None:
+    """model_from_parameters' docstring: static friction is kept where it stays above the new Coulomb levels
+    and dropped otherwise (not an error). New levels F̄_c (1 ± ρ), ρ = (F_c⁺ − F_c⁻)/(F_c⁺ + F_c⁻) the model's:
+    joint 1 (ρ = ½, F̄_c = 1.5) 2.25/0.75 and joint 2 (ρ = −½) 0.75/2.25 straddle the static 2.0; joint 3
+    (ρ = ½, F̄_c = 1.2) 1.8/0.6 stays below it."""
+    base = armctl.models.planar_3r().with_friction(coulomb=[1.5, 0.5, 1.5], coulomb_negative=[0.5, 1.5, 0.5],
+                                                   static=2.0)
+    pi = base.parameters().copy()
+    pi[[12, 25, 38]] = 1.5, 1.5, 1.2
+    new = [j.friction for j in base.with_parameters(pi).joints]
+    want = [(2.25, 0.75, None), (0.75, 2.25, None), (1.8, 0.6, 2.0)]
+    for f, (pos, neg, static) in zip(new, want, strict=True):
+        assert math.isclose(f.coulomb, pos, rel_tol=1e-12) and math.isclose(f.coulomb_neg, neg, rel_tol=1e-12)
+        assert f.static == static
+
+
 @pytest.mark.parametrize("kwargs", [{"viscous": [1.0, 2.0, 3.0]}, {"coulomb": [[1.0, 2.0]]},
                                     {"static": [5.0]}, {"stribeck_velocity": np.zeros((2, 2))}])
 def test_with_friction_wrong_length_is_a_shape_error(kwargs: dict) -> None:
