@@ -64,6 +64,21 @@ def test_pd_gravity_law(gains: str) -> None:
     np.testing.assert_allclose(c(0.01, q, qd, ref), expected, rtol=1e-12, atol=1e-9)
 
 
+def test_the_first_call_only_starts_the_integral_clock() -> None:
+    """A run whose first call is at t = 0.5 s (not 0): that call adds nothing to ∫e dt (ErrorIntegral's
+    docstring), so τ = g(q) + K_p e + K_d ė; the next, 20 ms later, adds K_i e · 0.02. g from Pinocchio."""
+    import pinocchio as pin
+
+    dyn = dynamics("planar_2r")
+    q, qd = np.array([0.1, 0.2]), np.array([0.3, -0.1])
+    ref = armctl.Reference([0.3, -0.1], [0.1, 0.2])
+    c = PDGravity(dyn, kp=100.0, kd=10.0, ki=50.0)
+    pm = dyn.model.to_pinocchio()
+    pd_law = pin.computeGeneralizedGravity(pm, pm.createData(), q) + 100.0 * (ref.q - q) + 10.0 * (ref.qd - qd)
+    np.testing.assert_allclose(c(0.5, q, qd, ref), pd_law, rtol=1e-12, atol=1e-9)
+    np.testing.assert_allclose(c(0.52, q, qd, ref), pd_law + 50.0 * 0.02 * (ref.q - q), rtol=1e-12, atol=1e-9)
+
+
 def _slotine_li(dyn: armctl.Dynamics, q: np.ndarray, qd: np.ndarray, ref: armctl.Reference, lam: np.ndarray,
                 kd: float | np.ndarray) -> np.ndarray:
     """M q̈_r + C(q, q̇) q̇_r + g + F_v q̇_r + F_c±(q̇) − K_D s, friction straight from the model's joints."""

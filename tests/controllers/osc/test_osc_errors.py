@@ -18,6 +18,7 @@ from armctl.controllers.osc import (
     JointVelocityLimit,
     OperationalSpaceQP,
     PostureTask,
+    QPProblem,
     TorqueLimit,
 )
 from armctl.errors import (
@@ -174,6 +175,28 @@ def test_infeasible_qp_names_the_conflicting_rows(panda: armctl.Dynamics) -> Non
     assert "torque_limit[panda_joint4]" in str(e) or "acceleration_limit[panda_joint4]" in str(e)
     assert not any(nm.startswith("dynamics[") for nm in names)  # the equation of motion is never relaxed
     assert max(e.value.values()) > 1.0  # joint 4 needs ~20 N·m more than allowed
+
+
+def test_a_row_that_binds_the_conflict_is_named_with_zero() -> None:
+    """A QP made by hand: ½ q̈ − τ = 0 (physics), q̈ = 5 (a contact's row), |τ| ≤ 1. By hand, the cheapest
+    relaxation is the torque limit's by 1.5 (τ = 2.5), not the contact row's by 3 (q̈ = 2, τ = 1): the contact
+    row is met exactly yet binds the conflict, so it is named with 0 (module docstring of diagnose); the
+    equation of motion never is."""
+    from armctl.controllers.osc.diagnose import conflicting_rows
+    from armctl.controllers.osc.solve import ProxQPSolver
+
+    p = QPProblem(np.eye(2), np.zeros(2), np.array([[0.5, -1.0], [1.0, 0.0]]), np.array([0.0, 5.0]),
+                  np.array([[0.0, 1.0]]), np.array([-1.0]), np.array([1.0]),
+                  {"qdd": slice(0, 1), "tau": slice(1, 2)}, ("dynamics[j]", "contact.acceleration[x]"),
+                  ("torque_limit[j]",))
+    rows = conflicting_rows(p)
+    assert rows is not None and set(rows) == {"torque_limit[j]", "contact.acceleration[x]"}
+    assert rows["torque_limit[j]"] == pytest.approx(1.5, abs=1e-6)
+    assert rows["contact.acceleration[x]"] == 0.0
+    with pytest.raises(InfeasibleError) as err:  # and the solver's error names it too
+        ProxQPSolver().solve(p)
+    assert err.value.value == rows
+    assert "contact.acceleration[x], torque_limit[j] (relax by 1.5)" in str(err.value)
 
 
 @pytest.mark.parametrize(("make", "error", "message"), [

@@ -118,6 +118,24 @@ def test_velocity_bounds_hold_the_velocity_limit(panda: armctl.Dynamics) -> None
     np.testing.assert_allclose(qd[-1], panda.model.velocity_limit, rtol=1e-9)
 
 
+def test_velocity_bounds_brake_an_over_fast_joint_at_a_max(panda: armctl.Dynamics) -> None:
+    """A joint already beyond ±q̇_max is asked to brake at exactly a_max, either way (module docstring: each
+    bound clamped to ±a_max), while its other bound stays (∓q̇_max − q̇)/Δt; both written out here."""
+    amax = np.linspace(4.0, 10.0, 7)
+    lim = JointVelocityLimit(DT, limit=1.0, max_deceleration=amax)
+    lim.bind(panda.model)
+    sign = np.array([1.0, -1.0, 1.0, -1.0, 1.0, -1.0, 1.0])
+    # 0.5 rad/s too fast, and just too fast: 1.5 a_max Δt beyond the limit (between a_max and 2 a_max to brake)
+    for excess in (np.full(7, 0.5), 1.5 * amax * DT):
+        qd = sign * (1.0 + excess)
+        lo, up = lim.bounds(SimpleNamespace(q=Q_HOME, qd=qd))  # type: ignore[arg-type]
+        pos, neg = sign > 0, sign < 0
+        np.testing.assert_allclose(up[pos], -amax[pos], rtol=1e-12)
+        np.testing.assert_allclose(lo[pos], (-1.0 - qd[pos]) / DT, rtol=1e-12)
+        np.testing.assert_allclose(lo[neg], amax[neg], rtol=1e-12)
+        np.testing.assert_allclose(up[neg], (1.0 - qd[neg]) / DT, rtol=1e-12)
+
+
 def test_fixed_contact_force_stays_in_the_friction_pyramid(panda: armctl.Dynamics) -> None:
     """Asking for a tangential force twice what friction allows: the QP returns the force on the pyramid's
     boundary, inside the true cone ‖f_t‖ ≤ μ f_n."""
@@ -150,3 +168,28 @@ def test_sliding_contact_force_follows_coulomb(panda: armctl.Dynamics) -> None:
     f = ctrl.solve(0.0, Q_HOME, qd, armctl.Reference(Q_HOME)).forces[contact.name]
     np.testing.assert_allclose(f[2], 10.0, rtol=1e-6)  # the force task of a sliding contact: normal only
     np.testing.assert_allclose(f[:2], -mu * f[2] * v_tool[:2] / np.linalg.norm(v_tool), rtol=1e-3)
+
+
+def test_fixed_contact_damps_the_contact_point_velocity(panda: armctl.Dynamics) -> None:
+    """A fixed contact whose point still moves (v_c ≠ 0): the solved q̈ gives it the classical acceleration
+    −k_d v_c (module docstring: J_c q̈ + J̇_c q̇ = −k_d v_c). Reference: Pinocchio's classical frame acceleration
+    and frame velocity of (q, q̇, q̈) on a Panda built here from the URDF, fingers locked closed."""
+    import pinocchio as pin
+
+    kd = 50.0
+    contact = Contact(mode="fixed", mu=0.8, kd=kd)
+    ctrl = OperationalSpaceQP(panda, [PostureTask(7, weight=1e-2), ContactForceTask(contact, [0.0, 0.0, 10.0])],
+                              limits=[], contacts=[contact])
+    qd = np.array([0.3, -0.2, 0.1, 0.4, -0.3, 0.2, 0.1])
+    sol = ctrl.solve(0.0, Q_HOME, qd, armctl.Reference(Q_HOME))
+    full = pin.buildModelFromUrdf(str(armctl.models.robot_description("panda_description/urdf/panda.urdf")))
+    fingers = [full.getJointId(f"panda_finger_joint{i}") for i in (1, 2)]
+    pm = pin.buildReducedModel(full, fingers, pin.neutral(full))
+    pd = pm.createData()
+    pin.forwardKinematics(pm, pd, Q_HOME, qd, sol.qdd)
+    pin.updateFramePlacements(pm, pd)
+    fid = pm.getFrameId("panda_hand_tcp")
+    vel = pin.getFrameVelocity(pm, pd, fid, pin.LOCAL_WORLD_ALIGNED).linear
+    acc = pin.getFrameClassicalAcceleration(pm, pd, fid, pin.LOCAL_WORLD_ALIGNED).linear
+    assert np.linalg.norm(vel) > 0.1  # the point moves: the damping is at work
+    np.testing.assert_allclose(acc, -kd * vel, atol=1e-6)

@@ -11,6 +11,7 @@ from scipy.spatial.transform import Rotation
 import armctl
 from armctl.controllers.osc import (
     FrameOrientationTask,
+    FramePoseTask,
     FramePositionTask,
     OperationalSpaceQP,
     PostureTask,
@@ -147,3 +148,30 @@ def test_a_level_whose_solve_fails_still_outranks_the_levels_below(panda: armctl
     N = np.eye(7) - np.linalg.pinv(J01) @ J01
     best = x0 + np.linalg.pinv(J2 @ N, rcond=1e-10) @ (b2 - J2 @ x0)
     assert np.linalg.norm(J2 @ sol.qdd - b2) <= np.linalg.norm(J2 @ best - b2) * (1 + 1e-6) + 1e-6
+
+
+def test_frozen_rows_are_an_orthonormal_basis_of_the_levels_above(panda: armctl.Dynamics) -> None:
+    """A pose task (level 0) above a position task of the same frame (level 1), the posture below: the rows
+    that freeze levels 0 and 1 in level 2's QP are orthonormal (hierarchy module docstring: dependent rows never
+    make the equality rows rank-deficient), as many as the rank of [J_pose; J_position] (numpy), spanning
+    exactly those Jacobians' rows, and hold at the solution the values of level 1's solution."""
+    q, qd = Q_HOME, np.full(7, 0.1)
+    target = panda.frame_pose(q)
+    target[:3, 3] += [0.05, 0.0, 0.0]
+    pose = FramePoseTask(priority=0)
+    pose.set_target(target)
+    position = FramePositionTask(priority=1)
+    position.set_target(target[:3, 3] + [0.0, 0.02, 0.0])
+    ctrl = OperationalSpaceQP(panda, [pose, position, PostureTask(7, priority=2)], limits=[TorqueLimit()])
+    sol = ctrl.solve(0.0, q, qd, armctl.Reference(q))
+    assert sol.level_status == ("solved", "solved", "solved")
+    p = sol.problem(2)
+    frozen = [i for i, name in enumerate(p.eq_names) if name.startswith("priority[")]
+    F = p.A[frozen]
+    J = panda.jacobian(q)
+    rows = np.zeros((9, p.nx))  # [J_pose; J_position] on the q̈ block of x
+    rows[:, p.variables["qdd"]] = np.vstack([J, J[:3]])
+    assert len(frozen) == np.linalg.matrix_rank(rows) == 6
+    np.testing.assert_allclose(F @ F.T, np.eye(6), atol=1e-12)
+    np.testing.assert_allclose(rows @ F.T @ F, rows, atol=1e-10)  # same row space
+    np.testing.assert_allclose(F @ sol.x, F @ sol.solutions[1].x[:p.nx], atol=1e-6)

@@ -15,6 +15,7 @@ from armctl.controllers.osc import (
     FrameOrientationTask,
     FramePoseTask,
     FramePositionTask,
+    JointVelocityLimit,
     OperationalSpaceQP,
     PostureTask,
     QPProblem,
@@ -149,6 +150,25 @@ def test_warm_start_reuses_the_previous_solution(panda: armctl.Dynamics) -> None
     np.testing.assert_allclose(tau_warm, tau_cold, atol=1e-4 * np.abs(tau_cold).max())
     warm.reset()
     assert warm.last_solution is None
+
+
+def test_a_warm_start_takes_the_new_state_dependent_bounds(panda: armctl.Dynamics) -> None:
+    """The velocity limit's bound q̈ ≤ (q̇_max − q̇)/Δt changes with the state while its rows C stay the same:
+    a controller warm-started from a period at rest must take the new bound (written out here), as a cold one
+    does, when the joints come within 0.5 mrad/s of the limit."""
+    def make() -> OperationalSpaceQP:
+        return OperationalSpaceQP(panda, [PostureTask(7, kp=100.0)],
+                                  limits=[TorqueLimit(), JointVelocityLimit(1e-3, limit=1.0)])
+
+    ref = armctl.Reference(Q_HOME + 0.5)  # the posture pulls every joint up, at ~50 rad/s²
+    warm, cold = make(), make()
+    warm(0.0, Q_HOME, np.zeros(7), ref)  # at rest: the bound, 1000 rad/s², is far
+    qd = np.full(7, 0.9995)
+    bound = (1.0 - qd) / 1e-3  # 0.5 rad/s²
+    a_warm = warm.solve(0.001, Q_HOME, qd, ref).qdd
+    a_cold = cold.solve(0.001, Q_HOME, qd, ref).qdd
+    np.testing.assert_allclose(a_cold, bound, atol=1e-5)  # the bound binds every joint
+    np.testing.assert_allclose(a_warm, bound, atol=1e-5)
 
 
 def test_lagrange_backend_gives_the_same_step() -> None:
