@@ -129,3 +129,25 @@ def test_dense_check_covers_the_rest_states(start: float, end: float, rest: str)
     fine = check_trajectory(dyn, traj, joint_limits(dyn.model, torque_limit=4.6))
     assert fine.ok() and fine.reports["torque"].rest == rest
     assert fine.reports["torque"].ratio == pytest.approx(_holding_torque(1.2) / 4.6, rel=1e-9)
+
+
+@pytest.mark.parametrize(("lower", "upper"), [(-4.5, 4.5), (-8.0, 4.0)])
+def test_rest_excess_is_normalised_like_the_mid_path_one(lower: float, upper: float) -> None:
+    """The ``excess`` of the error for an end pose the arm cannot hold (the rod horizontal, π/2) is the
+    normalised violation (|g| − upper)/half-range — (|g| − L)/L for ±L, utilisation − 1 as in the dense check —
+    with |g| = m |g| ℓ_c written out from the model (_holding_torque); and it is the figure reported for the same
+    overload met mid-path (0 → π passes π/2 at the gridpoint s = 0.5; viscous friction keeps the arm from
+    carrying its speed through, so toppra finds no timing there)."""
+    dyn = armctl.Dynamics(MODEL.with_friction(viscous=1.0, coulomb=0.0))
+    need = _holding_torque(math.pi / 2)
+    expected = (need - upper) / (0.5 * (upper - lower))
+    assert expected > 0.05  # 4.905 N·m against 4.5 (0.090) and 4 (0.151)
+    bounds = np.array([[lower, upper]])
+    with pytest.raises(InfeasibleError, match="end pose") as rest:
+        time_optimal(dyn, LinePath([0.0], [math.pi / 2]), torque_limit=bounds, grid=100)
+    with pytest.raises(InfeasibleError, match=r"torque at s = 0\.5 .*gravity alone needs 4\.905") as mid:
+        time_optimal(dyn, LinePath([0.0], [math.pi]), torque_limit=bounds, grid=100)
+    assert rest.value.value["endpoint"] == "end" and "endpoint" not in mid.value.value
+    assert rest.value.value["needed"] == pytest.approx(need, rel=1e-9)
+    assert rest.value.value["excess"] == pytest.approx(expected, rel=1e-9)
+    assert mid.value.value["excess"] == pytest.approx(expected, rel=1e-9)

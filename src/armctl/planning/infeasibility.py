@@ -127,6 +127,8 @@ def rest_overload(problem: TimeScalingProblem) -> InfeasibleError | None:
     may pass dynamically through poses the arm could not hold). At rest the torque is gravity alone, g(q):
     friction is counted neither against the arm (nothing moves) nor for it (stiction may hold a real arm, but
     its level is too uncertain to plan on) — as in the dense check (:func:`~armctl.planning.verify.rest_samples`).
+    The error's ``value["excess"]`` is the normalised violation there, utilisation − 1 = (|g| − L)/L for bounds
+    ±L (relative to the half-range for asymmetric ones), as in the dense check and the error raised mid-path.
     """
     bounds = problem.limits.planned().get("torque")
     if bounds is None:
@@ -134,7 +136,7 @@ def rest_overload(problem: TimeScalingProblem) -> InfeasibleError | None:
     worst = None
     for p in (0, problem.grid):
         g = problem.gravity[p]
-        over = np.maximum(g - bounds.upper, bounds.lower - g) / np.maximum(bounds.upper - bounds.lower, 1e-300)
+        over = bounds.utilisation(g) - 1.0  # > 0: outside [lower, upper], by that fraction of the half-range
         j = int(np.argmax(over))
         if over[j] > 0 and (worst is None or over[j] > worst[2]):
             worst = (p, j, float(over[j]))
