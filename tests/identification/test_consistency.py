@@ -146,3 +146,87 @@ def test_consistent_estimate_leaves_a_wrong_prior_when_the_data_say_so(mass: flo
     for budget in (1, 3, 10):
         short = consistent_estimate(result.problem, nominal, result.estimate, max_evaluations=budget)
         assert not short.converged or short.cost_ratio < 1.001, (budget, short.cost_ratio)
+
+
+def _exact_pendulum(truth: armctl.RobotModel, nominal: armctl.RobotModel, pull: float = 0.0):  # type: ignore[no-untyped-def]
+    """The arm of ``nominal`` (the prior) and noise-free data of ``truth`` (exact states, no filter) along the
+    best random excitation over one 6 s period at 250 Hz; ``pull`` [N·m] is added to the torque while the joint
+    moves down (data no friction can give if it makes F_c⁻ negative)."""
+    from armctl.dynamics import identification as ident
+
+    dyn = armctl.Dynamics(nominal)
+    base = ident.find_base_parameters(dyn)
+    traj = ident.optimize_excitation(dyn, base, period=6.0, harmonics=3, maxiter=0, acceleration_limit=5.0)
+    t = np.arange(0.0, 6.0, 1 / 250)
+    q, qd, qdd = traj.trajectory.evaluate(t)
+    true_dyn = armctl.Dynamics(truth)
+    tau = np.array([true_dyn.inverse_dynamics(*x) for x in zip(q, qd, qdd, strict=True)])
+    tau[:, 0] += pull * (qd[:, 0] < 0)
+    return dyn, base, ident.IdentificationData(t, q, qd, qdd, tau)
+
+
+def test_consistent_estimate_clamps_a_negative_coulomb_level_at_zero() -> None:
+    """Data whose least squares give F_c⁻ = F_c − δ = −0.2 N·m (F_c⁺ = 0.3, then 0.2 N·m pushing while moving
+    down): the constraint F_c ± δ ≥ 0 binds, and the estimate is the least squares with F_c⁻ = 0 (δ = F_c),
+    solved by hand with numpy on the problem's regressor — the only constraint the least squares violate."""
+    from armctl.dynamics import identification as ident
+
+    truth = armctl.models.pendulum().with_friction(viscous=0.05, coulomb=0.3, coulomb_negative=0.0)
+    dyn, base, data = _exact_pendulum(truth, truth.perturbed(seed=2, mass=1.2), pull=0.2)
+    result = ident.identify(dyn, data, base=base)
+    names = result.problem.names
+    fc, offset = names.index("Fc[0]"), names.index("Fc_offset[0]")
+    ls = result.estimate.theta
+    assert ls[fc] - ls[offset] == pytest.approx(-0.2, abs=1e-9)  # the case is what it should be
+    w = np.array(result.problem.regressor)
+    w[:, fc] += w[:, offset]  # F_c sgn q̇ + δ |sgn q̇| with δ = F_c
+    reduced, *_ = np.linalg.lstsq(np.delete(w, offset, axis=1), result.problem.torque, rcond=None)
+    expected = np.insert(reduced, offset, reduced[fc])
+    cons = result.consistent
+    assert cons.converged, cons.message
+    np.testing.assert_allclose(cons.theta, expected, rtol=1e-5, atol=1e-7)
+    friction = cons.model.joints[0].friction
+    assert friction.coulomb_neg == pytest.approx(0.0, abs=1e-7)
+    assert friction.coulomb == pytest.approx(2 * reduced[fc], rel=1e-5)
+
+
+def test_prior_weight_is_relative_to_the_mean_column_norm() -> None:
+    """A prior mass far too low for the data (0.3 × the truth's) makes the prior pull against the fit. The result
+    must minimise the documented objective ‖W K π − y‖² + λ · mean_k ‖W_k‖² · ‖N_oᵀ(π − π_0)‖² (OLS, no
+    offsets; the compressed matrix R = Qᵀ W has W's column norms), written out here with scipy's null space of
+    K: along every curve of bodies through the result — a coordinate of the factor J = U Uᵀ of its pseudo-
+    inertia, or of the square roots of its rotor and friction levels — its derivative vanishes (central
+    differences), while that of the data term alone does not."""
+    import scipy.linalg
+
+    from armctl.dynamics.identification import consistent_estimate, identify
+
+    truth = armctl.models.pendulum().with_friction(viscous=0.05, coulomb=0.3)
+    prior = truth.perturbed(seed=2, mass=0.3)
+    dyn, base, data = _exact_pendulum(truth, prior)
+    problem = identify(dyn, data, base=base, weighted=False, offsets=False, consistent=False).problem
+    lam = 1e-2
+    cons = consistent_estimate(problem, prior, None, prior_weight=lam)
+    assert cons.converged, cons.message
+    assert cons.cost_ratio > 2.0  # the prior does cost the fit here
+
+    w, y, kmap = problem.regressor, problem.torque, problem.base.map
+    null = scipy.linalg.null_space(kmap)
+    weight = lam * float((w**2).sum(axis=0).mean())
+
+    def terms(pi: np.ndarray) -> np.ndarray:  # (data term, prior term)
+        e, d = w @ (kmap @ pi) - y, null.T @ (pi - prior.parameters())
+        return np.array([e @ e, weight * (d @ d)])
+
+    pi = np.array(cons.pi)
+    x = np.r_[factor_of(pi[:10], floor=1e-12), np.sqrt(pi[10:])]
+
+    def body(x: np.ndarray) -> np.ndarray:
+        return np.r_[parameters_from_factor(x[:10])[0][0], x[10:] ** 2]
+
+    np.testing.assert_allclose(body(x), pi, atol=1e-10)
+    h = 1e-6
+    grad = np.array([(terms(body(x + h * e)) - terms(body(x - h * e))) / (2 * h) for e in np.eye(x.size)])
+    data_grad = np.linalg.norm(grad[:, 0])
+    assert data_grad > 1.0
+    assert np.linalg.norm(grad.sum(axis=1)) < 1e-3 * data_grad

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -85,3 +87,42 @@ def test_bad_coefficients_are_refused() -> None:
         FourierExcitation(np.zeros(2), np.zeros((3, 2)), np.zeros((3, 2)), 1.0)
     with pytest.raises(InvalidParameterError):
         FourierExcitation(np.zeros(2), np.zeros((2, 2)), np.zeros((2, 2)), -1.0)
+
+
+@pytest.mark.parametrize(("model_limit", "given"), [(0.5, 5.0), (2.0, 0.3)])
+def test_velocity_limit_is_the_smaller_of_the_models_and_the_given(model_limit: float, given: float) -> None:
+    """velocity_limit, if given, is the smaller of the two (docstring): checked on a dense grid of the design
+    against min(model's joint velocity limit, given), both set by hand; the design moves near that bound."""
+    base = dynamics("planar_3r").model
+    joints = tuple(dataclasses.replace(j, limits=dataclasses.replace(j.limits, velocity=model_limit))
+                   for j in base.joints)
+    dyn = armctl.Dynamics(dataclasses.replace(base, joints=joints))
+    assert np.all(dyn.model.velocity_limit == model_limit)
+    design = optimize_excitation(dyn, acceleration_limit=100.0, velocity_limit=given, period=5.0, harmonics=3,
+                                 maxiter=0, seed=1)
+    qd = np.abs(design.trajectory.evaluate(np.linspace(0.0, 5.0, 20001))[1]).max(axis=0)
+    bound = min(model_limit, given)
+    assert np.all(qd <= bound * (1 + 1e-9))
+    assert qd.max() > 0.8 * bound
+
+
+def test_optimiser_constraint_basis_is_the_fourier_series() -> None:
+    """The optimiser's linear maps from one joint's (a, b) to q − q0, q̇, q̈ on its grid (_Basis, from which the
+    position, velocity and acceleration constraints are built) against the series written out by hand:
+    q = q0 + Σ_l a_l/(ω l) sin(ω l t) − b_l/(ω l) cos(ω l t), q̇ = Σ_l a_l cos + b_l sin,
+    q̈ = Σ_l ω l (−a_l sin + b_l cos)."""
+    from armctl.dynamics.identification.excitation_design import _Basis
+
+    rng = np.random.default_rng(3)
+    period, nh = 4.0, 3
+    omega = 2 * np.pi / period
+    t = np.linspace(0.0, period, 50, endpoint=False)
+    a, b = rng.standard_normal(nh), rng.standard_normal(nh)
+    q = sum(a[k] / (omega * (k + 1)) * np.sin(omega * (k + 1) * t) - b[k] / (omega * (k + 1))
+            * np.cos(omega * (k + 1) * t) for k in range(nh))
+    qd = sum(a[k] * np.cos(omega * (k + 1) * t) + b[k] * np.sin(omega * (k + 1) * t) for k in range(nh))
+    qdd = sum(omega * (k + 1) * (-a[k] * np.sin(omega * (k + 1) * t) + b[k] * np.cos(omega * (k + 1) * t))
+              for k in range(nh))
+    basis = _Basis(omega, nh, t)
+    for mat, expected in ((basis.pos, q), (basis.vel, qd), (basis.acc, qdd)):
+        np.testing.assert_allclose(mat @ np.r_[a, b], expected, atol=1e-12)

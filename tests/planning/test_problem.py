@@ -10,7 +10,7 @@ import armctl
 from armctl.planning import SplinePath, build_problem, joint_limits
 from armctl.planning._batch import friction_torques, rigid_torques
 from tests.conftest import dynamics
-from tests.planning._common import PANDA_WAYPOINTS, panda
+from tests.planning._common import PANDA_WAYPOINTS, PENDULUM_GRAVITY, PENDULUM_INERTIA, panda
 
 
 def _torque_rows(problem):
@@ -117,3 +117,36 @@ def test_batched_dynamics_equal_the_public_api() -> None:
     q2, qd2, qdd2 = (np.ascontiguousarray(a[:, :2]) for a in (q, qd, qdd))
     expected = [lag.inverse_dynamics(a, b, c) for a, b, c in zip(q2, qd2, qdd2, strict=True)]
     np.testing.assert_allclose(rigid_torques(lag, q2, qd2, qdd2), expected)
+
+
+@pytest.mark.parametrize("i", [2, 5])
+@pytest.mark.parametrize("x", [0.5, 5.0, 60.0])
+def test_least_violation_lp_imposes_the_rows_at_the_stage_end(i: int, x: float) -> None:
+    """The failed-stage diagnosis LP (interpolation): with x = ṡ² fixed at s_i, the least normalised violation
+    over u is min_u max(|τ(s_i)|, |τ(s_{i+1})|)/L − 1, the torques from the closed-form pendulum
+    I q̈ + m g ℓ_c sin q with q̈ = q' u + q'' x at s_i and q' u + q'' (x + 2Δu) at s_{i+1} (x_{i+1} = x + 2Δu);
+    the minimum of that convex piecewise-linear function is found exactly among its kinks. The curved path
+    (uniform knots, q'' = 2) makes the stage end depend on u through q'' as well."""
+    from armctl.planning.infeasibility import _stage_lp
+
+    dyn = armctl.Dynamics(armctl.models.pendulum().with_friction(viscous=0.0, coulomb=0.0))
+    path = SplinePath([[0.0], [0.5], [1.5]], knots="uniform")
+    limit = 4.0
+    problem = build_problem(dyn, path, joint_limits(dyn.model, torque_limit=limit), grid=8)
+    t, (u_star, _), _ = _stage_lp(problem, problem.linearized(None), i, None, x)
+
+    s = problem.s[i:i + 2]
+    q, dq, ddq = (d[:, 0] for d in path.derivatives(s))
+    assert np.all(ddq == pytest.approx(2.0))
+    two_delta = np.array([0.0, 2.0 * (s[1] - s[0])])
+    alpha = PENDULUM_INERTIA * ddq * x + PENDULUM_GRAVITY * np.sin(q)  # τ = α + β u at s_i, s_{i+1}
+    beta = PENDULUM_INERTIA * (dq + ddq * two_delta)
+
+    def violation(u: float) -> float:
+        return float(np.abs(alpha + beta * u).max()) / limit - 1.0
+
+    kinks = [-alpha[0] / beta[0], -alpha[1] / beta[1], -(alpha[0] - alpha[1]) / (beta[0] - beta[1]),
+             -(alpha[0] + alpha[1]) / (beta[0] + beta[1])]
+    expected = min(violation(u) for u in kinks)
+    assert t == pytest.approx(expected, rel=1e-7, abs=1e-9)
+    assert violation(u_star) == pytest.approx(expected, rel=1e-7, abs=1e-9)

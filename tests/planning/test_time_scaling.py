@@ -4,6 +4,7 @@ pendulum, the scaled trajectory at its limit, and the case no slowing down can f
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 import pytest
@@ -21,6 +22,13 @@ def _pendulum_torque(q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarr
     return PENDULUM_INERTIA * qdd + PENDULUM_GRAVITY * np.sin(q) + VISCOUS * qd
 
 
+def _slowest_unfit(rs: np.ndarray, fits: Callable[[float], bool]) -> float:
+    """The brute-force factor: the first r of the increasing ``rs`` beyond the last one that does not fit
+    (every slower scaling fits too); rs[0] if all fit."""
+    ok = np.array([fits(r) for r in rs])
+    return float(rs[np.flatnonzero(~ok).max() + 1]) if not ok.all() else float(rs[0])
+
+
 def test_closed_form_factor_matches_a_brute_force_search() -> None:
     dyn = armctl.Dynamics(armctl.models.pendulum())
     nominal = Trajectory(LinePath([-0.3], [1.2]), PolynomialTiming(0.4))
@@ -33,11 +41,38 @@ def test_closed_form_factor_matches_a_brute_force_search() -> None:
         return bool((np.abs(_pendulum_torque(q, qd / r, qdd / r**2)) <= limit).all())
 
     rs = np.linspace(0.2, 5.0, 4801)
-    ok = np.array([fits(r) for r in rs])
-    r_brute = rs[np.flatnonzero(~ok).max() + 1]  # every slower scaling fits too
-    assert result.factor == pytest.approx(r_brute, abs=rs[1] - rs[0])
+    assert result.factor == pytest.approx(_slowest_unfit(rs, fits), abs=rs[1] - rs[0])
     assert result.kind == "torque" and result.joint == 0
     assert result.duration == pytest.approx(0.4 * result.factor)
+
+
+@pytest.mark.parametrize(("start", "end", "kind", "bounds"), [
+    (-0.3, 1.2, "torque", (-3.0, 40.0)),  # braking at the top pulls below −3 N·m
+    (1.2, -0.3, "velocity", (-0.5, 5.0)),  # moving down: q̇ < 0 meets the tight lower bound
+    (-0.3, 1.2, "acceleration", (-1.0, 50.0)),  # q̈ takes both signs: the lower bound is the tighter
+])
+def test_asymmetric_bounds_bind_on_their_own_side(start: float, end: float, kind: str,
+                                                  bounds: tuple[float, float]) -> None:
+    """With (lower, upper) bounds whose lower side is the tighter one, the closed-form factor equals a brute-force
+    search over r on the closed-form pendulum (τ, q̇/r, q̈/r² checked against both sides); the upper side alone
+    would allow a faster scaling, so the lower side is what binds."""
+    dyn = armctl.Dynamics(armctl.models.pendulum())
+    nominal = Trajectory(LinePath([start], [end]), PolynomialTiming(0.4))
+    arg = {"torque": "torque_limit", "velocity": "vel_limit", "acceleration": "acc_limit"}[kind]
+    result = uniform_time_scaling(dyn, nominal, samples=401, **{arg: np.array([bounds])})
+    smp = nominal.sample(num=401)
+    q, qd, qdd = smp.q[:, 0], smp.qd[:, 0], smp.qdd[:, 0]
+
+    def value(r: float) -> np.ndarray:  # slowed by r: q̇/r, q̈/r²
+        return {"torque": lambda: _pendulum_torque(q, qd / r, qdd / r**2), "velocity": lambda: qd / r,
+                "acceleration": lambda: qdd / r**2}[kind]()
+
+    lower, upper = bounds
+    rs = np.linspace(0.2, 20.0, 19801)
+    r_brute = _slowest_unfit(rs, lambda r: bool(((value(r) >= lower) & (value(r) <= upper)).all()))
+    assert _slowest_unfit(rs, lambda r: bool((value(r) <= upper).all())) < 0.8 * r_brute  # the lower side binds
+    assert result.factor == pytest.approx(r_brute, abs=rs[1] - rs[0])
+    assert result.kind == kind and result.joint == 0
 
 
 def test_scaled_trajectory_sits_at_its_limit() -> None:

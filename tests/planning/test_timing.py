@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -85,3 +86,19 @@ def test_scalar_evaluation_equals_the_vectorised_one() -> None:
                 np.testing.assert_allclose(ref.q, smp.q[k], atol=1e-12)
                 np.testing.assert_allclose(ref.qd, smp.qd[k], atol=1e-12)
                 np.testing.assert_allclose(ref.qdd, smp.qdd[k], atol=1e-11)
+
+
+def test_dense_check_samples_each_stage_evenly_in_time() -> None:
+    """sample_times of a GridTiming: ``oversample`` samples per stage, evenly in time from the stage's start, the
+    gridpoints included, plus the end (its docstring); the reference is np.linspace per stage, built by hand
+    from the stage times t_k."""
+    from armctl.planning import LinePath, Trajectory
+    from armctl.planning.verify import sample_times
+
+    s = np.linspace(0, 1, 6)
+    timing = GridTiming(s, [0.0, 0.5, 1.0, 1.2, 0.6, 0.0])  # stages of unequal durations
+    traj = Trajectory(LinePath([0.0], [1.0]), timing)
+    for oversample in (1, 3, 10):
+        hand = [np.linspace(a, b, oversample, endpoint=False) for a, b in itertools.pairwise(timing.t)]
+        expected = np.append(np.concatenate(hand), timing.t[-1])
+        np.testing.assert_allclose(sample_times(traj, oversample), expected, rtol=0, atol=1e-14)
