@@ -138,7 +138,7 @@ class PinocchioDynamics(Dynamics):
                          friction: tuple[FloatArray, FloatArray] | None = None) -> FloatArray:
         out = self._raw_regressor(q, qd, qdd)  # _raw_blocks, inlined
         self._yt_rigid[...] = self._raw_t if self._raw_t is not None else out.T.reshape(self.n, 10, self.n)
-        self._yt_rotor[:] = qdd
+        self._yt_rotor[...] = qdd
         return self._finish_regressor(friction)
 
     # Polarisation with a gravity-free twin of the model: with R(q, v, a) = M a + h(v) + g and
@@ -159,8 +159,8 @@ class PinocchioDynamics(Dynamics):
         else:
             self._yt_rigid[...] = self._raw_blocks(q, a, qdd_r)
             self._yt_rigid -= self._raw_regressor_free(q, w, self._zeros).T.reshape(self.n, 10, self.n)
-        self._yt_rotor[:] = qdd_r  # and _finish_regressor, inlined
-        self._yt_viscous[:] = qd_r
+        self._yt_rotor[...] = qdd_r  # and _finish_regressor, inlined
+        self._yt_viscous[...] = qd_r
         self._coulomb_column(qd, self._yt_coulomb)
         return self._y.copy(order="K") if copy else self._y  # type: ignore[no-any-return]
 
@@ -172,10 +172,10 @@ class PinocchioDynamics(Dynamics):
 
     def _finish_regressor(self, friction: tuple[FloatArray, FloatArray] | None, copy: bool = True) -> FloatArray:
         if friction is None:
-            self._yt_viscous[:] = 0.0
-            self._yt_coulomb[:] = 0.0
+            self._yt_viscous[...] = 0.0
+            self._yt_coulomb[...] = 0.0
         else:
-            self._yt_viscous[:] = friction[0]
+            self._yt_viscous[...] = friction[0]
             self._coulomb_column(friction[1], self._yt_coulomb)
         return self._y.copy(order="K") if copy else self._y  # type: ignore[no-any-return]
 
