@@ -328,6 +328,33 @@ def test_references() -> None:
         Quintic([0, 0], [1], 1.0)
 
 
+@pytest.mark.parametrize("bc_type", ["clamped", "natural"])
+def test_waypoint_spline_holds_its_end_points_outside_the_times(bc_type: str) -> None:
+    """Inside [times[0], times[-1]] the reference is scipy's CubicSpline with the same end conditions (q, q̇, q̈);
+    before and after, the first and last waypoints held at rest, q̇ = q̈ = 0 (the class docstring), although the
+    clamped spline ends with q̈ ≠ 0 and the natural one with q̇ ≠ 0."""
+    from scipy.interpolate import CubicSpline
+
+    times, w = [0.5, 1.5, 3.0], np.array([[0.2, -0.1], [1.0, 2.0], [0.0, 1.0]])
+    sp, ref_spline = WaypointSpline(times, w, bc_type=bc_type), CubicSpline(times, w, bc_type=bc_type, axis=0)
+    for t in (0.5, 1.2, 2.9, 3.0):
+        r = sp(t)
+        for got, order in ((r.q, 0), (r.qd, 1), (r.qdd, 2)):
+            np.testing.assert_allclose(got, ref_spline(t, order), rtol=1e-12, atol=1e-12)
+    assert np.abs(ref_spline(3.0, 1)).max() + np.abs(ref_spline(3.0, 2)).max() > 0.1  # the end does move
+    for t, end in ((-1.0, 0), (0.49, 0), (3.01, -1), (10.0, -1)):
+        r = sp(t)
+        np.testing.assert_allclose(r.q, w[end], rtol=0, atol=1e-12)
+        assert not r.qd.any() and not r.qdd.any()
+
+
+def test_a_reference_of_three_empty_arrays_is_refused() -> None:
+    """Three empty float64 vectors (the form the cheap check of Reference takes) hold no joint: refused with
+    the ShapeError an empty q alone gets, not a reference of n = 0."""
+    with pytest.raises(ShapeError, match="at least one joint position"):
+        armctl.Reference(np.zeros(0), np.zeros(0), np.zeros(0))
+
+
 def test_the_physical_projection_is_not_the_lyapunov_metrics() -> None:
     """A limit shown, not hidden: ``project_physical`` is the nearest consistent point in the Frobenius norm of
     each link's pseudo-inertia J, while the adaptive law's V = ½sᵀMs + ½θ̃ᵀΓ⁻¹θ̃ measures θ̃ in Γ⁻¹ (Euclidean

@@ -150,6 +150,43 @@ def test_compiled_lagrange_matches_and_is_cached(tmp_path: Path) -> None:
     assert a.functions["tau"].is_a("External")
 
 
+def test_compiled_libraries_with_and_without_rotor_coupling_are_kept_apart(tmp_path: Path,
+                                                                          monkeypatch: pytest.MonkeyPatch) -> None:
+    """``compile=True`` with rotor_coupling True (cached in $ARMCTL_CACHE, the codegen module's default), then
+    False (cache_dir: the same folder): two libraries, each giving its own model's M (Siciliano's closed form,
+    with and without the k_r2 I_m2 coupling term)."""
+    from armctl.dynamics.lagrange import LagrangeDynamics
+
+    monkeypatch.setenv("ARMCTL_CACHE", str(tmp_path))
+    m = model("planar_2r")
+    assert not LagrangeDynamics.is_compiled_cached(m)
+    coupled = armctl.Dynamics(m, backend="lagrange", compile=True)
+    assert len(list(tmp_path.rglob("*.so"))) == 1 and LagrangeDynamics.is_compiled_cached(m)
+    assert not LagrangeDynamics.is_compiled_cached(m, rotor_coupling=False)
+    plain = armctl.Dynamics(m, backend="lagrange", compile=True, rotor_coupling=False, cache_dir=str(tmp_path))
+    assert len(list(tmp_path.rglob("*.so"))) == 2
+    assert coupled.functions["M"].is_a("External") and plain.functions["M"].is_a("External")
+    for q in np.random.default_rng(6).uniform(-3.0, 3.0, (3, 2)):
+        for dyn, coupling in ((coupled, True), (plain, False)):
+            b, _, _ = siciliano_2r(q, np.zeros(2), coupling)
+            np.testing.assert_allclose(dyn.mass_matrix(q), b, rtol=1e-12, atol=1e-12)
+
+
+def test_a_non_gyroscopic_motor_adds_no_rotor_coupling() -> None:
+    """planar_3r given rotor inertias through with_parameters gets motors without gyroscopic coupling: the
+    coupled Lagrange model's M is then Pinocchio's (armature only), and rotor_coupling_matrix, by its docstring
+    that difference, is zero."""
+    m = model("planar_3r")
+    theta = m.parameters().reshape(3, 13).copy()
+    theta[:, 10] = [0.5, 0.3, 0.2]
+    armature = m.with_parameters(theta.reshape(-1))
+    assert all(j.motor is not None and not j.motor.gyroscopic for j in armature.joints)
+    lag, pin_dyn = armctl.Dynamics(armature, backend="lagrange"), armctl.Dynamics(armature)
+    for q in np.random.default_rng(9).uniform(-2.0, 2.0, (3, 3)):
+        np.testing.assert_allclose(lag.mass_matrix(q), pin_dyn.mass_matrix(q), rtol=1e-12, atol=1e-12)
+        assert not lag.rotor_coupling_matrix(q).any()
+
+
 @pytest.mark.parametrize("name", ["pendulum", "planar_2r", "puma560", "panda", "ur5"])
 def test_pinocchio_forward_dynamics_in_the_world_convention_is_abas_default_one(name: str) -> None:
     """The backend runs ABA in Pinocchio's WORLD convention (faster); its q̈ must be the LOCAL (default) one's,

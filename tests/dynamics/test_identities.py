@@ -64,6 +64,16 @@ def test_regressor_times_parameters_is_inverse_dynamics(name: str, backend: str,
     assert np.allclose(y @ dyn.model.parameters(), tau, rtol=1e-10, atol=1e-10 * np.abs(tau).max())
 
 
+def _slotine_li_form(dyn: armctl.Dynamics, q: np.ndarray, qd: np.ndarray, qd_r: np.ndarray,
+                     qdd_r: np.ndarray) -> np.ndarray:
+    """M q̈_r + C(q, q̇) q̇_r + g + F_v q̇_r + τ_c(q̇), the Coulomb levels F_c⁺, −F_c⁻ read from the joints."""
+    fr = [j.friction for j in dyn.model.joints]
+    fv = np.array([f.viscous for f in fr])
+    coulomb = np.where(qd > 0, [f.coulomb for f in fr], 0.0) - np.where(qd < 0, [f.coulomb_neg for f in fr], 0.0)
+    return (dyn.mass_matrix(q) @ qdd_r + dyn.coriolis_matrix(q, qd) @ qd_r + dyn.gravity_torque(q)
+            + fv * qd_r + coulomb)
+
+
 @pytest.mark.parametrize(("name", "backend"), CASES)
 @SETTINGS
 @given(data=st.data())
@@ -71,16 +81,27 @@ def test_passivity_regressor_identity(name: str, backend: str, data: st.DataObje
     dyn = dynamics(name, backend)
     q, qd, qd_r = data.draw(states(dyn.n))
     qdd_r = data.draw(states(dyn.n, 1))[0]
-    fr = [j.friction for j in dyn.model.joints]
-    fv = np.array([f.viscous for f in fr])
-    coulomb = np.where(qd > 0, [f.coulomb for f in fr], 0.0) - np.where(qd < 0, [f.coulomb_neg for f in fr], 0.0)
-    expected = (dyn.mass_matrix(q) @ qdd_r + dyn.coriolis_matrix(q, qd) @ qd_r + dyn.gravity_torque(q)
-                + fv * qd_r + coulomb)
+    expected = _slotine_li_form(dyn, q, qd, qd_r, qdd_r)
     y = dyn.passivity_regressor(q, qd, qd_r, qdd_r)
     got = y @ dyn.model.parameters()
     assert np.allclose(got, expected, rtol=1e-9, atol=1e-9 * max(np.abs(expected).max(), 1.0))
     # with q̇_r = q̇ and q̈_r = q̈ it is the ordinary regressor
     assert np.allclose(dyn.passivity_regressor(q, qd, qd, qdd_r), dyn.regressor(q, qd, qdd_r), atol=1e-9)
+
+
+@pytest.mark.parametrize(("name", "backend"), CASES)
+@SETTINGS
+@given(data=st.data())
+def test_passivity_torque_is_the_slotine_li_form(name: str, backend: str, data: st.DataObject) -> None:
+    """passivity_torque (two inverse-dynamics evaluations: the base class's polarisation on the Lagrange
+    backend, a gravity-free twin on Pinocchio's) against M q̈_r + C(q, q̇) q̇_r + g + F_v q̇_r + τ_c(q̇) formed
+    from the backend's M, C and g and the joints' friction."""
+    dyn = dynamics(name, backend)
+    q, qd, qd_r = data.draw(states(dyn.n))
+    qdd_r = data.draw(states(dyn.n, 1))[0]
+    expected = _slotine_li_form(dyn, q, qd, qd_r, qdd_r)
+    got = dyn.passivity_torque(q, qd, qd_r, qdd_r)
+    assert np.allclose(got, expected, rtol=1e-9, atol=1e-9 * max(np.abs(expected).max(), 1.0))
 
 
 @pytest.mark.parametrize(("name", "backend"), CASES)

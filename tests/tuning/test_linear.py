@@ -26,6 +26,28 @@ def test_pendulum_linearisation_is_the_textbook_one() -> None:
     assert (np.linalg.eigvals(linearize(dynamics("pendulum"), [math.pi]).A).real > 0).any()  # upright: unstable
 
 
+def test_planar_2r_linearisation_against_pinocchio() -> None:
+    """Two joints, distinct viscous frictions, q₀ off the vertical: A = [[0, I], [−M⁻¹ ∂g/∂q, −M⁻¹ F_v]] and
+    B = [0; M⁻¹] with M from Pinocchio's CRBA and ∂g/∂q from its gravity derivatives (M is not diagonal, so the
+    order of the products matters); the output is δq, so the static gain from δτ is (∂g/∂q)⁻¹ (δτ = ∂g/∂q δq)."""
+    import pinocchio as pin
+
+    model = armctl.models.planar_2r().with_friction(viscous=[3.0, 0.5])
+    pm = model.to_pinocchio()
+    data = pm.createData()
+    q0 = np.array([-1.2, 0.7])
+    m = pin.crba(pm, data, q0).copy()
+    m = np.triu(m) + np.triu(m, 1).T  # CRBA fills the upper triangle
+    dg = pin.computeGeneralizedGravityDerivatives(pm, data, q0).copy()
+    fv, m_inv, eye, zero = np.diag([3.0, 0.5]), np.linalg.inv(m), np.eye(2), np.zeros((2, 2))
+    assert not np.allclose(m_inv @ dg, dg @ m_inv) and not np.allclose(m_inv @ fv, fv @ m_inv)
+    sys = linearize(armctl.Dynamics(model), q0)
+    a = np.block([[zero, eye], [-m_inv @ dg, -m_inv @ fv]])
+    np.testing.assert_allclose(sys.A, a, rtol=1e-6, atol=1e-6 * np.abs(a).max())
+    np.testing.assert_allclose(sys.B, np.vstack([zero, m_inv]), rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(sys.dcgain(), np.linalg.inv(dg), rtol=1e-6)
+
+
 def test_gains() -> None:
     kp, kd = pd_from_bandwidth(10.0, 0.7)
     assert (kp, kd) == pytest.approx((100.0, 14.0))

@@ -22,7 +22,12 @@ from armctl.errors import InvalidParameterError
 
 
 def linearize(dyn: Dynamics, q0: ArrayLike, step: float = 1e-6) -> Any:
-    """``control.StateSpace`` of the arm about q₀ at rest (∂g/∂q by central differences of step [rad])."""
+    """``control.StateSpace`` of the arm about q₀ at rest: state x = (δq, δq̇), input δτ, output δq,
+
+        A = [[0, I], [−M⁻¹ ∂g/∂q, −M⁻¹ F_v]],   B = [0; M⁻¹],   C = [I, 0],   D = 0
+
+    (M at q₀, F_v the joints' viscous friction; Coulomb friction has no linearisation at rest), ∂g/∂q by central
+    differences of ``step`` [rad]."""
     import control
 
     q0 = vector(q0, dyn.n, "q0")
