@@ -9,6 +9,7 @@ returns to 1)."""
 from __future__ import annotations
 
 import functools
+import math
 import warnings
 
 import numpy as np
@@ -48,6 +49,8 @@ def test_friction_too_stiff_for_the_step_is_reported_and_chatters() -> None:
     assert item["normal_force"] == pytest.approx(FN, rel=1e-9)
     assert item["rate_dt"] == pytest.approx(RATE * 1e-3, rel=1e-6)  # 25
     assert item["max_dt"] == pytest.approx(2.785 / RATE, rel=1e-6)
+    # the slip velocity at which the same step would pass: μ f_n h / (m v) = 2.785
+    assert item["min_slip_velocity"] == pytest.approx(MU * FN * 1e-3 / (MASS * 2.785), rel=1e-6)
     texts = sorted(str(w.message) for w in warned)  # the friction, and the energy its chatter made
     assert len(texts) == 2 and "slip_velocity >=" in texts[0] and "no force supplied" in texts[1]
     ft = -res.contact_force[10:, 0, 0]  # the friction on the slider: −10 N in the exact creep; here it swings
@@ -157,3 +160,112 @@ def test_a_stable_stiffening_wall_is_not_reported(integrator: str) -> None:
     res, warned = _swing(1e6, integrator)
     assert warned == []
     assert np.abs(res.q - fine.q).max() < 1e-3
+
+
+def _quiet(*args: object, **kwargs: object) -> tuple[armctl.sim.SimResult, list[warnings.WarningMessage]]:
+    """simulate(*args, **kwargs) and the SimulationWarnings it gave."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        res = simulate(*args, **kwargs)  # type: ignore[arg-type]
+    return res, [w for w in caught if issubclass(w.category, SimulationWarning)]
+
+
+def test_a_plane_s_friction_is_judged_from_its_own_columns_of_the_contact_forces() -> None:
+    """The creeping slider of the module with a frictionless wall of two points ahead of its floor in the list
+    (never touched): the floor's normal force must be read from its own column of res.contact_force."""
+    from armctl.sim.contact import ContactPoint
+
+    far = Plane(KelvinVoigt(K), normal=(-1.0, 0.0, 0.0), point=(5.0, 0.0, 0.0),
+                points=[ContactPoint(), ContactPoint(offset=(0.0, 0.01, 0.0))])
+    floor = Plane(KelvinVoigt(K), normal=(0.0, 0.0, 1.0), point=(0.0, 0.0, DEPTH), friction=MU, slip_velocity=SLIP)
+    res, warned = _quiet(slider(MASS), OpenLoop(lambda t: np.array([PUSH])), armctl.Reference.hold([0.0]), 0.05,
+                         environment=[far, floor], dt=1e-3, energy=False)
+    (item,) = res.info["unstable_friction"]
+    assert item["points"] == [(1, 0)] and item["normal_force"] == pytest.approx(FN, rel=1e-9)
+    assert item["rate_dt"] == pytest.approx(RATE * 1e-3, rel=1e-6)
+    assert any("slip_velocity >=" in str(w.message) for w in warned)
+
+
+def test_euler_friction_limit_is_where_one_minus_a_h_leaves_the_unit_disc() -> None:
+    """Explicit Euler on v̇ = −a v + b maps v ↦ (1 − a h) v + h b: stable while a h ≤ 2. The creeping slider at a
+    h = 2.27 is reported; at a h = 1.92 it creeps at the closed form v = τ v_slip / (μ f_n) unreported."""
+    res, warned = _creep(1e-3 / 11, "euler")
+    (item,) = res.info["unstable_friction"]
+    assert item["rate_dt"] == pytest.approx(RATE * 1e-3 / 11, rel=1e-6) and item["limit"] == 2.0
+    assert any("slip_velocity >=" in str(w.message) for w in warned)
+    res, warned = _creep(1e-3 / 13, "euler")
+    assert warned == [] and "unstable_friction" not in res.info
+    np.testing.assert_allclose(res.qd[-20:, 0], PUSH * SLIP / (MU * FN), rtol=1e-3)
+
+
+def test_friction_of_a_point_that_can_only_move_along_the_normal_is_not_judged() -> None:
+    """A vertical slider resting on a floor with friction: its tangential Jacobian is zero, so the friction law
+    has no slope to integrate (the normal direction alone would give a h = μ m g h / (m v_slip) = 4.9 at 1 ms). It
+    rests at the static depth m g / k, unreported."""
+    model = slider(MASS, vertical=True)
+    weight = float(armctl.Dynamics(model).gravity_torque(np.zeros(1))[0])  # m g
+    floor = Plane(KelvinVoigt(K), friction=MU, slip_velocity=SLIP)
+    res, warned = _quiet(model, OpenLoop(lambda t: np.zeros(1)), armctl.Reference.hold([-weight / K]), 0.05,
+                         environment=floor)
+    assert weight == pytest.approx(MASS * 9.81, rel=1e-3)
+    assert warned == [] and "unstable_friction" not in res.info
+    np.testing.assert_allclose(res.q[:, 0], -weight / K, rtol=1e-9)
+
+
+def test_a_run_starting_inside_a_wall_may_take_back_its_spring_energy() -> None:
+    """The vertical slider released 1 cm deep in an undamped floor: the floor's work on it, once it has left, is
+    the spring energy ½ k δ₀² it started with — positive, and not an instability (it is not judged)."""
+    model = slider(MASS, vertical=True)
+    depth = 0.01
+    res, warned = _quiet(model, OpenLoop(lambda t: np.zeros(1)), armctl.Reference.hold([-depth]), 0.1,
+                         environment=Plane(KelvinVoigt(K)))
+    assert warned == [] and "environment_work" not in res.info
+    flying = res.q[:, 0] > 0.0
+    assert flying[-20:].all()
+    np.testing.assert_allclose(res.work_external[flying], 0.5 * K * depth**2, rtol=1e-3)
+
+
+def test_a_disturbance_pushing_into_a_wall_is_not_taken_for_the_wall_s_work() -> None:
+    """The slider pushed by a 50 N external wrench (h_d = −F: what the arm exerts) into a damped wall: the
+    disturbance's work is booked in work_external too, so that is not judged; the slider settles at the static
+    depth F / k."""
+    push, zeta = 50.0, 0.5
+    wall = Plane(KelvinVoigt(K, 2.0 * zeta * np.sqrt(K * MASS)), normal=(-1.0, 0.0, 0.0), point=(DEPTH, 0.0, 0.0))
+    res, warned = _quiet(slider(MASS), OpenLoop(lambda t: np.zeros(1)), armctl.Reference.hold([0.0]), 1.0,
+                         environment=wall, disturbance=lambda t: np.array([-push, 0.0, 0.0, 0.0, 0.0, 0.0]))
+    assert warned == [] and "environment_work" not in res.info
+    assert res.work_external.max() > 0.8 * push * DEPTH  # the push's work up to the wall, F × 1 cm
+    assert res.q[-1, 0] == pytest.approx(DEPTH + push / K, rel=1e-6)
+
+
+def test_friction_is_judged_on_the_contact_samples_of_a_run_mostly_out_of_contact() -> None:
+    """The slider pushed from 0.2 m away onto a floor tilted by 45° along its axis (it touches for about a third
+    of the run) comes to rest on it with its friction below v_slip = 0.2 mm/s. There the tangential block of J M⁻¹
+    Jᵀ is cos²45° / m, so the friction's decay rate is a = μ f_n cos²45° / (m v_slip): a h ≈ 8 > 2.785."""
+    slip, tilt = 2e-4, math.radians(45.0)
+    floor = Plane(KelvinVoigt(K), normal=(-math.sin(tilt), 0.0, math.cos(tilt)), point=(0.0, 0.0, 0.0), friction=MU,
+                  slip_velocity=slip)
+    res, warned = _quiet(slider(MASS), OpenLoop(lambda t: np.array([PUSH])), armctl.Reference.hold([-0.2]), 1.0,
+                         environment=floor, energy=False)
+    touching = np.abs(res.contact_force).max(axis=(1, 2)) > 0.0
+    assert 0 < touching.sum() < 0.5 * len(res.t)
+    (item,) = res.info["unstable_friction"]
+    rate = MU * item["normal_force"] * math.cos(tilt) ** 2 / (MASS * slip)
+    assert item["rate_dt"] == pytest.approx(rate * 1e-3, rel=1e-6) and item["rate_dt"] > 2.785
+    assert any("slip_velocity >=" in str(w.message) for w in warned)
+
+
+def test_a_first_order_run_that_stays_in_contact_is_judged_against_its_first_order_error() -> None:
+    """The slider pushed by 10 N from 1 cm onto a damped Hunt–Crossley wall (p = 1.5: not judged before the run)
+    stays in contact once it touches. Semi-implicit Euler at 1 ms (ω h ≈ 0.13 at rest) ends with the O(h) energy
+    error of a compressed contact, some percent of the energy exchanged: no gain to report. It rests at the static
+    depth of the law, k δᵖ = F."""
+    k, exponent = 1e6, 1.5
+    wall = Plane(HuntCrossley(k, 20.0, exponent), normal=(-1.0, 0.0, 0.0), point=(0.0, 0.0, 0.0))
+    res, warned = _quiet(slider(MASS), OpenLoop(lambda t: np.array([PUSH])), armctl.Reference.hold([-0.01]), 0.5,
+                         environment=wall, integrator="semi-implicit-euler")
+    touching = np.abs(res.contact_force).max(axis=(1, 2)) > 0.0
+    first = int(np.argmax(touching))
+    assert 0 < first and touching[first:].all()
+    assert warned == [] and res.info["energy_gain"] > 0.0
+    assert res.q[-1, 0] == pytest.approx((PUSH / k) ** (1.0 / exponent), rel=1e-6)

@@ -90,3 +90,31 @@ def test_plane_force_derivatives_match_finite_differences(p: list[float], v: lis
         fv = (plane.force(pv, vv + e, False)[0] - plane.force(pv, vv - e, False)[0]) / (2 * eps)
         np.testing.assert_allclose(dfdp[:, j], fp, rtol=1e-5, atol=1e-3)
         np.testing.assert_allclose(dfdv[:, j], fv, rtol=1e-5, atol=1e-3)
+
+
+@pytest.mark.parametrize("mu", [0.0, 0.6])
+def test_contact_joint_stiffness_and_damping_are_the_point_law_through_the_jacobian(mu: float) -> None:
+    """Environment.joint_torque on planar_2r pressing a tilted Hunt–Crossley plane with friction: τ_c = Jᵀ F,
+    D = ∂τ_c/∂q̇ (central differences of τ_c in q̇) and K = Jᵀ (∂F/∂p) J (the module's definition, J̇-terms
+    neglected; central differences of F along the tool's path p(q) from Pinocchio's forward kinematics)."""
+    dyn = armctl.Dynamics(armctl.models.planar_2r())
+    q, qd = np.array([0.5, -1.4]), np.array([0.3, -0.2])
+    unit = np.array([-1.0, 0.0, 0.5]) / math.sqrt(1.25)
+    tool = dyn.frame_pose(q)[:3, 3]
+    plane = Plane(HuntCrossley(1e5, 0.3), normal=unit, point=tool + 0.005 * unit, friction=mu, slip_velocity=0.05)
+    jac = dyn.jacobian(q)[:3]
+    speed = np.linalg.norm(jac @ qd - (unit @ jac @ qd) * unit)
+    assert speed > 0.1  # sliding, away from the slip velocity's kink
+    kin = plane.kinematics(dyn)
+    tau, stiff, damp = plane.joint_torque(kin, q, qd, stiffness=True)
+    force = plane.force(tool, jac @ qd, False)[0]
+    np.testing.assert_allclose(tau, jac.T @ force, rtol=1e-10)
+    eps = 1e-7
+    for j in range(2):
+        e = np.zeros(2)
+        e[j] = eps
+        dtau = (plane.joint_torque(kin, q, qd + e)[0] - plane.joint_torque(kin, q, qd - e)[0]) / (2 * eps)
+        np.testing.assert_allclose(damp[:, j], dtau, rtol=1e-5, atol=1e-6 * np.abs(damp).max())
+        up, down = (dyn.frame_pose(q + s * e)[:3, 3] for s in (1.0, -1.0))
+        df = (plane.force(up, jac @ qd, False)[0] - plane.force(down, jac @ qd, False)[0]) / (2 * eps)
+        np.testing.assert_allclose(stiff[:, j], jac.T @ df, rtol=1e-5, atol=1e-6 * np.abs(stiff).max())

@@ -170,3 +170,21 @@ def test_energy_gained_on_a_contact_that_could_not_be_checked_is_reported() -> N
     soft, warned = _press(HuntCrossley(1e6, exponent=1.5), "rk4")
     assert warned == [] and abs(soft.info["energy_gain"]) < 1e-3
     np.testing.assert_allclose(soft.q[-1], good.q[-1], atol=0.05)  # near where implicit Euler ends
+
+
+@pytest.mark.parametrize("zeta", [0.1, 0.7, 2.0])
+def test_euler_variants_limit_of_a_damped_contact_in_closed_form(zeta: float) -> None:
+    """The largest stable step of a damped wall for the two Euler schemes, in closed form: the one-step map's
+    characteristic polynomial λ² − T λ + D is Schur-stable iff |D| < 1 and 1 ± T + D > 0 (Jury). Euler
+    (v₁ = v − h(ω² x + c v), x₁ = x + h v₁): T = 2 − h²ω² − hc, D = 1 − hc, binding where h²ω² + 2hc = 4;
+    semi-implicit Euler (damping at v₁): T = 1 + (1 − h²ω²)/(1 + hc), D = 1/(1 + hc), binding where
+    h²ω² − 2hc = 4 — damping shortens the first's step and lengthens the second's."""
+    mass, k = 2.0, 1e7
+    omega = math.sqrt(k / mass)
+    c = 2.0 * zeta * omega  # damping / mass
+    wall = Plane(KelvinVoigt(k, c * mass), normal=(-1.0, 0.0, 0.0), point=(0.01, 0.0, 0.0))
+    limits = {"euler": (-c + math.sqrt(c * c + 4.0 * omega**2)) / omega**2,
+              "semi-implicit-euler": (c + math.sqrt(c * c + 4.0 * omega**2)) / omega**2}
+    for scheme, limit in limits.items():
+        (found,) = contact_stability(armctl.Dynamics(slider(mass)), [wall], np.zeros(1), scheme, 1e-4)
+        assert found.linear_dt == pytest.approx(limit, rel=1e-6), scheme

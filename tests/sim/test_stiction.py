@@ -248,3 +248,42 @@ def test_a_joint_released_brings_its_kinetic_friction_into_the_others_holding_to
                                            np.array([True, True]), np.zeros(2))
     assert stuck.tolist() == [False, True] and direction.tolist() == [1.0, 0.0]
     np.testing.assert_allclose(lam, [0.0, 60.0 - 1.2 * (400.0 - 200.0) / 3.0], rtol=1e-12, atol=1e-12)
+
+
+@pytest.mark.parametrize(("push", "moves"), [(4.0, False), (10.0, True)])
+def test_an_external_push_breaks_a_stuck_joint_loose_beyond_its_friction(push: float, moves: bool) -> None:
+    """A 2 kg slider at rest with 5 N of Coulomb friction and no torque, pushed along its axis by an external
+    wrench of F (h_d = −F, what the arm exerts): below 5 N it stays exactly still; above, it slides at once with
+    q = (F − 5 N) t² / (2 m)."""
+    mass, coulomb = 2.0, 5.0
+    model = slider(mass).with_friction(coulomb=coulomb)
+    res = simulate(model, zero_torque, armctl.Reference.hold([0.0]), 0.5,
+                   disturbance=lambda t: np.array([-push, 0.0, 0.0, 0.0, 0.0, 0.0]))
+    if moves:
+        np.testing.assert_allclose(res.q[:, 0], (push - coulomb) / (2.0 * mass) * res.t**2, rtol=1e-9, atol=1e-12)
+        assert not res.stuck[1:].any()
+    else:
+        assert (res.q == 0.0).all() and (res.qd == 0.0).all() and res.stuck.all()
+        assert res.tau_friction[:, 0] == pytest.approx(push, rel=1e-12)  # the holding torque balances the push
+
+
+def test_two_joints_coasting_to_a_stop_in_the_same_step_stop_where_coulomb_friction_stops_them() -> None:
+    """Two decoupled prismatic joints (x carrying y: M = diag(m₁ + m₂, m₂)) coasting under Coulomb friction F_i
+    alone decelerate at F_i / M_ii and stop for good at t_i = M_ii v_i / F_i, where q_i = M_ii v_i² / (2 F_i)
+    (closed form). Both stops fall within the same 1 ms step, so both events must be located inside it."""
+    from armctl.model.parts import Frame, Joint, Link
+
+    m1, m2 = 1.0, 2.0
+    joints = tuple(Joint(name, "prismatic", axis, np.eye(4), Link(mass, (0, 0, 0), (1e-3, 1e-3, 1e-3)))
+                   for name, axis, mass in (("x", (1.0, 0.0, 0.0), m1), ("y", (0.0, 1.0, 0.0), m2)))
+    model = armctl.RobotModel(joints, name="xy", frames=(Frame("tool", 2, np.eye(4)),), tool_frame="tool")
+    inertia, coulomb, v0 = np.array([m1 + m2, m2]), np.array([4.5, 1.5]), np.array([1.0, 0.5002])
+    stop = inertia * v0 / coulomb
+    assert 0.666 < stop.min() < stop.max() < 0.667  # the same step
+    res = simulate(model.with_friction(coulomb=coulomb), zero_torque, armctl.Reference.hold([0.0, 0.0]), 1.0,
+                   qd0=v0)
+    for i in range(2):
+        t = np.minimum(res.t, stop[i])
+        np.testing.assert_allclose(res.q[:, i], v0[i] * t - 0.5 * coulomb[i] / inertia[i] * t**2, rtol=1e-9,
+                                   atol=1e-12)
+    assert (res.qd[res.t > stop.max()] == 0.0).all() and res.stuck[res.t > stop.max()].all()

@@ -109,7 +109,8 @@ class Environment(ABC):
     def joint_torque(self, kin: PointKinematics, q: FloatArray, qd: FloatArray, stiffness: bool = False
                      ) -> tuple[FloatArray, FloatArray | None, FloatArray | None]:
         """(τ_c, K, D): τ_c = Σ J_pᵀ F_p, the joint torque of the forces on the arm (it is *added* to τ), and,
-        if ``stiffness``, K = ∂τ_c/∂q and D = ∂τ_c/∂q̇ (n×n). ``kin``: :meth:`kinematics` of the plant."""
+        if ``stiffness``, K = Σ J_pᵀ (∂F/∂p) J_p (∂τ_c/∂q without the J-derivative terms, see the module) and
+        D = ∂τ_c/∂q̇ (n×n). ``kin``: :meth:`kinematics` of the plant."""
         n = kin.dyn.n
         tau = np.zeros(n)
         kj = np.zeros((n, n)) if stiffness else None
