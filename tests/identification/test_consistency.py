@@ -112,6 +112,23 @@ def test_massless_link_and_new_rotor_and_asymmetric_friction() -> None:
     assert (fr.coulomb, fr.coulomb_neg) == (pytest.approx(2.5), pytest.approx(1.5))
 
 
+def _excited(truth: armctl.RobotModel, nominal: armctl.RobotModel, duration: float, rate: float,  # type: ignore[no-untyped-def]
+             maxiter: int):
+    """(Dynamics of ``nominal``, its base parameters, t, q, q̇, q̈, τ): the excitation optimised for ``nominal``
+    (6 s period, 3 harmonics, ``maxiter`` iterations) sampled at ``rate`` Hz for ``duration`` s, and the exact
+    torques of ``truth`` along it."""
+    from armctl.dynamics import identification as ident
+
+    dyn = armctl.Dynamics(nominal)
+    base = ident.find_base_parameters(dyn)
+    traj = ident.optimize_excitation(dyn, base, period=6.0, harmonics=3, maxiter=maxiter, acceleration_limit=5.0)
+    t = np.arange(0.0, duration, 1 / rate)
+    q, qd, qdd = traj.trajectory.evaluate(t)
+    true_dyn = armctl.Dynamics(truth)
+    tau = np.array([true_dyn.inverse_dynamics(*x) for x in zip(q, qd, qdd, strict=True)])
+    return dyn, base, t, q, qd, qdd, tau
+
+
 def _pendulum_problem(mass: float):  # type: ignore[no-untyped-def]
     """A pendulum with viscous and asymmetric Coulomb friction, identified from 12 s of data with 2 % torque
     noise, and the same arm with its mass scaled by ``mass``: the prior the consistent estimate starts from."""
@@ -119,13 +136,7 @@ def _pendulum_problem(mass: float):  # type: ignore[no-untyped-def]
 
     truth = armctl.models.pendulum().with_friction(viscous=0.05, coulomb=0.3, coulomb_negative=0.2)
     nominal = truth.perturbed(seed=2, mass=mass)
-    dyn = armctl.Dynamics(nominal)
-    base = ident.find_base_parameters(dyn)
-    traj = ident.optimize_excitation(dyn, base, period=6.0, harmonics=3, maxiter=5, acceleration_limit=5.0)
-    t = np.arange(0.0, 12.0, 1 / 500)
-    q, qd, qdd = traj.trajectory.evaluate(t)
-    true_dyn = armctl.Dynamics(truth)
-    tau = np.array([true_dyn.inverse_dynamics(*x) for x in zip(q, qd, qdd, strict=True)])
+    dyn, base, t, q, _, _, tau = _excited(truth, nominal, duration=12.0, rate=500, maxiter=5)
     tau += 0.02 * np.sqrt((tau**2).mean()) * np.random.default_rng(0).standard_normal(tau.shape)
     result = ident.identify(dyn, ident.prepare_data(t, q, tau, cutoff=5.0), base=base, consistent=False)
     return result, nominal
@@ -154,13 +165,7 @@ def _exact_pendulum(truth: armctl.RobotModel, nominal: armctl.RobotModel, pull: 
     moves down (data no friction can give if it makes F_c⁻ negative)."""
     from armctl.dynamics import identification as ident
 
-    dyn = armctl.Dynamics(nominal)
-    base = ident.find_base_parameters(dyn)
-    traj = ident.optimize_excitation(dyn, base, period=6.0, harmonics=3, maxiter=0, acceleration_limit=5.0)
-    t = np.arange(0.0, 6.0, 1 / 250)
-    q, qd, qdd = traj.trajectory.evaluate(t)
-    true_dyn = armctl.Dynamics(truth)
-    tau = np.array([true_dyn.inverse_dynamics(*x) for x in zip(q, qd, qdd, strict=True)])
+    dyn, base, t, q, qd, qdd, tau = _excited(truth, nominal, duration=6.0, rate=250, maxiter=0)
     tau[:, 0] += pull * (qd[:, 0] < 0)
     return dyn, base, ident.IdentificationData(t, q, qd, qdd, tau)
 
