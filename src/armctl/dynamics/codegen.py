@@ -37,23 +37,29 @@ def library_path(names: list[str], tag: str, cache_dir: str | os.PathLike[str] |
 def compiled(functions: list[cs.Function], tag: str, cache_dir: str | os.PathLike[str] | None = None
              ) -> list[cs.Function]:
     """The same functions, evaluated by C code compiled from them (built on first use, then cached)."""
-    cc = shutil.which(os.environ.get("CC", "cc")) or shutil.which("gcc")
     lib = library_path([f.name() for f in functions], tag, cache_dir)
-    folder, name = lib.parent, lib.stem
     if not lib.exists():
-        if cc is None:
-            raise BackendError("compile=True needs a C compiler (cc or gcc on PATH, or $CC); install one or "
-                               "use compile=False", value=None)
-        folder.mkdir(parents=True, exist_ok=True)
-        with tempfile.TemporaryDirectory(dir=folder) as tmp:
-            gen = cs.CodeGenerator(f"{name}.c", {"with_header": False})
-            for f in functions:
-                gen.add(f)
-            src = Path(gen.generate(tmp + os.sep))
-            tmp_lib = Path(tmp) / f"{name}.so"
-            proc = subprocess.run([cc, *CFLAGS, str(src), "-o", str(tmp_lib), "-lm"], capture_output=True,
-                                  text=True, check=False)
-            if proc.returncode != 0:
-                raise BackendError(f"compiling generated code failed ({cc}): {proc.stderr[-2000:]}", value=str(src))
-            os.replace(tmp_lib, lib)  # atomic: concurrent builders never load a half-written library
+        build(functions, lib)
     return [cs.external(f.name(), str(lib)) for f in functions]
+
+
+def build(functions: list[cs.Function], lib: Path) -> None:
+    """Generate C code for ``functions`` and compile it into the shared library ``lib`` (replaced atomically:
+    concurrent builders never load a half-written library)."""
+    cc = shutil.which(os.environ.get("CC", "cc")) or shutil.which("gcc")
+    folder, name = lib.parent, lib.stem
+    if cc is None:
+        raise BackendError("compiling generated code needs a C compiler (cc or gcc on PATH, or $CC): install "
+                           "one, or do without compiled code (compile=False)", value=None)
+    folder.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(dir=folder) as tmp:
+        gen = cs.CodeGenerator(f"{name}.c", {"with_header": False})
+        for f in functions:
+            gen.add(f)
+        src = Path(gen.generate(tmp + os.sep))
+        tmp_lib = Path(tmp) / f"{name}.so"
+        proc = subprocess.run([cc, *CFLAGS, str(src), "-o", str(tmp_lib), "-lm"], capture_output=True,
+                              text=True, check=False)
+        if proc.returncode != 0:
+            raise BackendError(f"compiling generated code failed ({cc}): {proc.stderr[-2000:]}", value=str(src))
+        os.replace(tmp_lib, lib)
