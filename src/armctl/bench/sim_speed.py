@@ -4,9 +4,11 @@ Run: ``python -m armctl.bench.sim_speed [--quick] [--runs N] [--workers W]``. Pr
 
 * Panda (7 joints), a computed-torque controller at 1 kHz tracking a joint-space sine, 1 ms steps, 10 s of
   simulated time: armctl's real-time factor and cost per control step for RK4 (the default) and the
-  cheapest scheme ("euler"), and the same closed loop with MuJoCo stepping the Panda (loaded from the same
-  URDF, RK4 at 1 ms) from a Python loop — same controller, same reference — plus MuJoCo's bare ``mj_step``
-  loop. Medians over interleaved rounds, so that a busy shared machine slows both alike.
+  cheapest scheme ("euler"), each with the step in Python (calling Pinocchio's ABA) and compiled
+  (``compile=True``: C code generated for the plant, :mod:`armctl.sim.compiled`); and the same closed loop
+  with MuJoCo stepping the Panda (loaded from the same URDF, RK4 at 1 ms) from a Python loop — same
+  controller, same reference — plus MuJoCo's bare ``mj_step`` loop.
+  Medians over interleaved rounds, so that a busy shared machine slows both alike.
 * A sweep of ``--runs`` (default 200) 5 s planar_2r scenes (PD + gravity compensation with different gains,
   stick–slip joint friction) through a process pool of ``--workers`` (default 2) against the same runs
   one after the other; the speed-up.
@@ -33,6 +35,9 @@ from armctl.reference import Reference
 from armctl.sim import simulate, sweep
 
 TARGETS = {"real_time_factor": 30.0, "ratio_to_mujoco": 2.0, "sweep_speedup": 1.7}
+#: the simulator configurations timed: name → (integrator, compile)
+VARIANTS = {"rk4": ("rk4", False), "rk4_compiled": ("rk4", True), "euler": ("euler", False),
+            "euler_compiled": ("euler", True)}
 
 
 class SampledSine:
@@ -116,14 +121,18 @@ def panda_figures(duration: float = 10.0, rounds: int = 3) -> dict[str, Any]:
         m, d = panda_mujoco()
     except ImportError:
         m = d = None
-    samples: dict[str, list[float]] = {"rk4": [], "euler": [], "mujoco_closed_loop": [], "mujoco_bare": []}
+    samples: dict[str, list[float]] = {name: [] for name in (*VARIANTS, "mujoco_closed_loop", "mujoco_bare")}
     error = {}
+    t0 = time.perf_counter()
+    for integ in ("rk4", "euler"):  # build (or load) the compiled steps before any timing
+        simulate(dyn, ctrl, ref, 1e-3, q0=q0, integrator=integ, compile=True)
+    out["compile_or_load_s"] = time.perf_counter() - t0
     for _ in range(rounds):
-        for integ in ("rk4", "euler"):
-            t0 = time.perf_counter()  # the whole call: checks, loop, energies, result
-            res = simulate(dyn, ctrl, ref, duration, q0=q0, integrator=integ)
-            samples[integ].append(time.perf_counter() - t0)
-            error[integ] = float(np.abs(res.q[-1] - ref(duration).q).max())
+        for name, (integ, comp) in VARIANTS.items():
+            t0 = time.perf_counter()  # the whole call: checks, loading the compiled step, loop, energies, result
+            res = simulate(dyn, ctrl, ref, duration, q0=q0, integrator=integ, compile=comp)
+            samples[name].append(time.perf_counter() - t0)
+            error[name] = float(np.abs(res.q[-1] - ref(duration).q).max())
         if m is not None:
             samples["mujoco_closed_loop"].append(mujoco_loop(m, d, ctrl, ref, q0, steps))
             samples["mujoco_bare"].append(mujoco_bare(m, d, q0, steps))
@@ -134,8 +143,8 @@ def panda_figures(duration: float = 10.0, rounds: int = 3) -> dict[str, Any]:
     out["final_tracking_error_rad"] = error
     if "mujoco_closed_loop" in out:
         base = out["mujoco_closed_loop"]["us_per_step"]
-        for integ in ("rk4", "euler"):
-            out[integ]["ratio_to_mujoco"] = out[integ]["us_per_step"] / base
+        for name in VARIANTS:
+            out[name]["ratio_to_mujoco"] = out[name]["us_per_step"] / base
     return out
 
 
@@ -249,7 +258,7 @@ def parallel_ceiling(runs: int = 12, workers: int = 2, rounds: int = 2) -> dict[
 def report(panda: dict[str, Any], sw: dict[str, Any] | None) -> str:
     lines = [f"Panda, {panda['controller']} at 1 kHz, 1 ms steps, {panda['duration_s']:g} s "
              f"({panda['steps']} steps); medians of interleaved rounds"]
-    for name in ("rk4", "euler", "mujoco_closed_loop", "mujoco_bare"):
+    for name in (*VARIANTS, "mujoco_closed_loop", "mujoco_bare"):
         if name in panda:
             f = panda[name]
             extra = f", {f['ratio_to_mujoco']:.2f}× the MuJoCo closed loop" if "ratio_to_mujoco" in f else ""

@@ -1,0 +1,145 @@
+"""``simulate(..., compile=True)``: the integration step as C code generated from the recursive algorithms of
+:mod:`armctl.dynamics.recursive`.
+
+References: the textbook RK4 of :func:`armctl.sim.integrators.rk4` (and the Euler formulas) on Pinocchio's q̈
+for the compiled step; the uncompiled simulator for whole runs.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import armctl
+from armctl.errors import ArmctlError, InvalidParameterError
+from armctl.reference import Reference
+from armctl.sim.compiled import compiled_step
+from armctl.sim.contact import Plane
+from armctl.sim.integrators import rk4
+from armctl.sim.normal_force import KelvinVoigt
+from tests.dynamics.test_recursive import skewed_rpr
+from tests.sim.helpers import ComputedTorque
+
+
+def _textbook(dyn: armctl.Dynamics, scheme: str, q: np.ndarray, v: np.ndarray, tau: np.ndarray, h: float
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    f = dyn.forward_dynamics
+    if scheme == "rk4":
+        return rk4(lambda t, q_, v_, tau_: f(q_, v_, tau_), 0.0, q.copy(), v.copy(), tau, h)
+    a = f(q, v, tau)
+    v1 = v + h * a
+    return q + h * v1, v1, a
+
+
+@pytest.mark.parametrize("scheme", ["rk4", "euler"])
+def test_compiled_step_is_the_scheme_on_pinocchios_accelerations(scheme: str, tmp_path) -> None:
+    model = skewed_rpr()
+    dyn = armctl.Dynamics(model)
+    step = compiled_step(model, scheme, cache_dir=tmp_path)
+    rng = np.random.default_rng(4)
+    q, v = rng.uniform(-1.0, 1.0, (2, model.n))
+    ref_q, ref_v = q.copy(), v.copy()
+    kept = []
+    for k in range(6):
+        tau = rng.uniform(-5.0, 5.0, model.n)
+        h = 1e-3 if k != 3 else 5e-4  # a step of another size in between
+        q, v, a = step(q, v, tau, h)
+        ref_q, ref_v, ref_a = _textbook(dyn, scheme, ref_q, ref_v, tau, h)
+        np.testing.assert_allclose(q, ref_q, rtol=1e-12, atol=1e-14)
+        np.testing.assert_allclose(v, ref_v, rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(a, ref_a, rtol=1e-10, atol=1e-10)
+        kept.append((q, q.copy()))
+    assert np.array_equal(kept[-1][0], kept[-1][1]) and np.array_equal(kept[-2][0], kept[-2][1])
+    # states that are not the last result, or alias the step's own arrays, are read as values; the caller's
+    # arrays are not written
+    q1, v1 = q, v
+    q0, v0 = rng.uniform(-1.0, 1.0, (2, model.n))
+    for qi, vi in ((q0, v0), (v1, q1), (q1, q1)):
+        before = (qi.copy(), vi.copy())
+        want = _textbook(dyn, scheme, before[0], before[1], np.zeros(model.n), 1e-3)
+        got = step(qi, vi, np.zeros(model.n), 1e-3)
+        np.testing.assert_allclose(got[0], want[0], rtol=1e-12, atol=1e-14)
+        np.testing.assert_allclose(got[1], want[1], rtol=1e-12, atol=1e-12)
+        if qi is q0:
+            assert np.array_equal(q0, before[0]) and np.array_equal(v0, before[1])
+
+
+def test_compiled_library_is_cached_per_model(tmp_path) -> None:
+    """One library per model and scheme, loaded (not rebuilt) the second time; a payload changes the numbers
+    built into the code, so it gets its own library, with its own dynamics."""
+    model = armctl.models.planar_2r().reduced(friction=False)
+    compiled_step(model, "euler", cache_dir=tmp_path)
+    libs = list(tmp_path.rglob("*.so"))
+    assert len(libs) == 1
+    stamp = libs[0].stat().st_mtime_ns
+    compiled_step(model, "euler", cache_dir=tmp_path)
+    assert list(tmp_path.rglob("*.so")) == libs and libs[0].stat().st_mtime_ns == stamp
+    heavy = model.with_payload(2.0, (0.0, 0.0, 0.0), np.zeros((3, 3)))
+    step = compiled_step(heavy, "euler", cache_dir=tmp_path)
+    assert len(list(tmp_path.rglob("*.so"))) == 2
+    q, v, tau = np.array([0.3, 0.5]), np.array([0.1, -0.2]), np.array([1.0, 2.0])
+    _, _, a = step(q, v, tau, 1e-3)
+    np.testing.assert_allclose(a, armctl.Dynamics(heavy).forward_dynamics(q, v, tau), rtol=1e-10)
+    assert not np.allclose(a, armctl.Dynamics(model).forward_dynamics(q, v, tau), rtol=1e-3)
+
+
+@pytest.mark.parametrize("integrator", ["rk4", "euler"])
+def test_simulate_compiled_is_the_same_run(integrator: str) -> None:
+    model = armctl.models.planar_3r().reduced(friction=False)
+    dyn = armctl.Dynamics(model)
+    ctrl = ComputedTorque(armctl.Dynamics(model), 400.0, 40.0)  # critically damped at 20 rad/s
+    ref = Reference(np.array([0.5, -0.4, 0.3]))
+    runs = [armctl.sim.simulate(dyn, ctrl, ref, 0.5, q0=np.zeros(3), control_dt=2e-3, dt=5e-4,
+                                integrator=integrator, compile=c) for c in (False, True)]
+    assert [r.info["compiled"] for r in runs] == [False, True]
+    for field in ("q", "qd", "qdd", "tau"):
+        np.testing.assert_allclose(getattr(runs[1], field), getattr(runs[0], field), rtol=1e-10, atol=1e-10)
+    assert np.abs(runs[1].q[-1] - ref.q).max() < 1e-2  # (the run went somewhere: it tracked the set point)
+
+
+def test_simulate_compiled_reports_divergence_as_the_uncompiled_run_does() -> None:
+    model = armctl.models.planar_2r().reduced(friction=False)
+
+    def push(t: float, q: np.ndarray, qd: np.ndarray, ref: Reference) -> np.ndarray:
+        return np.array([1e6, -1e6])
+
+    runs = [armctl.sim.simulate(model, push, Reference(np.zeros(2)), 1.0, saturate=False, max_velocity=50.0,
+                                compile=c) for c in (False, True)]
+    assert all(r.diverged for r in runs)
+    assert runs[1].diverged_at == runs[0].diverged_at
+    assert "max_velocity" in runs[1].divergence
+
+
+@pytest.mark.parametrize("case", ["friction", "contact", "disturbance", "implicit", "rotor_coupling"])
+def test_compile_refuses_what_it_cannot_integrate(case: str) -> None:
+    """Friction, contact, a disturbance, the implicit schemes and the rotors' gyroscopic coupling are not in the
+    generated step: asking for it with them is an error naming the cause and the way out."""
+    model = armctl.models.planar_2r()
+    rigid = model.reduced(friction=False)
+    plant: armctl.RobotModel | armctl.Dynamics = rigid
+    kw: dict = {"compile": True}
+    if case == "friction":
+        plant = rigid.with_friction(viscous=1.0, coulomb=2.0)
+    elif case == "contact":
+        kw["environment"] = Plane(KelvinVoigt(1e4, 10.0), normal=(-1.0, 0.0, 0.0), point=(5.0, 0.0, 0.0))
+    elif case == "disturbance":
+        kw["disturbance"] = lambda t: np.zeros(6)
+    elif case == "implicit":
+        kw["integrator"] = "semi-implicit-euler"
+    else:
+        plant = armctl.Dynamics(rigid, backend="lagrange")  # rotor_coupling=True by default
+    ctrl = ComputedTorque(armctl.Dynamics(rigid), 100.0, 20.0)
+    with pytest.raises(InvalidParameterError) as err:
+        armctl.sim.simulate(plant, ctrl, Reference(np.zeros(2)), 0.01, **kw)
+    expect = {"friction": "friction", "contact": "contact", "disturbance": "disturbance",
+              "implicit": "'semi-implicit-euler'", "rotor_coupling": "rotor_coupling=False"}[case]
+    assert expect in str(err.value) and "compile=False" in str(err.value)
+    # without compile=True the same run goes ahead
+    del kw["compile"]
+    assert armctl.sim.simulate(plant, ctrl, Reference(np.zeros(2)), 0.01, **kw).info["compiled"] is False
+
+
+def test_compile_flag_is_a_boolean() -> None:
+    model = armctl.models.planar_2r().reduced(friction=False)
+    with pytest.raises(ArmctlError, match="compile"):
+        armctl.sim.simulate(model, lambda t, q, qd, r: np.zeros(2), Reference(np.zeros(2)), 0.01, compile="yes")
