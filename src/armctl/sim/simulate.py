@@ -74,7 +74,7 @@ def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
     non-finite torque from the controller or a mass matrix that is no longer positive definite). energy:
     provide ``res.energy``, E = T + U at every sample, computed from the recorded states when first read
     (False: NaN). compile: integrate with C code generated for this plant (:mod:`armctl.sim.compiled`: built
-    on first use, ~3 s for 7 joints, then cached on disk; an RK4 step about three times cheaper) — for
+    on first use, about 2 s for 7 joints, then cached on disk; an RK4 step about five times cheaper) — for
     ``"rk4"`` or ``"euler"`` on a plant without friction, contact or disturbance (else
     :class:`~armctl.errors.InvalidParameterError`).
 
