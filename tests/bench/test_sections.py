@@ -44,7 +44,7 @@ def integ() -> dict[str, Any]:
 
 def test_integrators_section(integ: dict[str, Any], tmp_path: Path) -> None:
     _check_section(integrators, integ, tmp_path)
-    assert set(integ["integrators"]) == set(integrators.INTEGRATORS)
+    assert set(integ["integrators"]) == {*integrators.INTEGRATORS, "rk4-compiled"}
     for d in integ["integrators"].values():
         assert all(c["cost"] > 0 and c["error"] > 0 and not c["diverged"] for c in d["cases"])
 
@@ -80,6 +80,17 @@ def test_rk4_beats_euler_at_every_step(integ: dict[str, Any]) -> None:
         for a, b in zip(rk4, integ["integrators"][name]["cases"], strict=True):
             assert a["step"] == b["step"]
             assert a["error"] < 1e-3 * b["error"]
+
+
+def test_compiled_rk4_series_is_rk4(integ: dict[str, Any]) -> None:
+    """The compiled step is the same scheme on the same model: its errors are RK4's to rounding (far below the
+    finest error, 1e-11 rad here), its own cost is measured."""
+    rk4, compiled = integ["integrators"]["rk4"], integ["integrators"]["rk4-compiled"]
+    for a, b in zip(rk4["cases"], compiled["cases"], strict=True):
+        assert a["step"] == b["step"]
+        assert abs(a["error"] - b["error"]) < 1e-13 + 1e-6 * a["error"]
+        assert b["cost"] > 0 and b["wall_s"] > 0
+    assert compiled["asymptotic_order"] == pytest.approx(rk4["asymptotic_order"], abs=0.01)
 
 
 def test_observed_orders_of_a_power_law() -> None:

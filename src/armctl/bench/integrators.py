@@ -14,7 +14,8 @@ its figures here are that scheme's.
 
 Each integrator ("rk4", "semi-implicit-euler", "implicit-euler") runs through :func:`armctl.sim.simulate` with
 step h = Δt_c / m for m in :data:`SUBSTEPS` (the steps align with the control instants, so the torque jumps
-never fall inside a step).
+never fall inside a step); "rk4-compiled" is RK4 again with ``compile=True`` (the step as generated C code,
+:mod:`armctl.sim.compiled`): the same errors to rounding, at its own cost.
 
 * error [rad]: max over control instants and joints of |q − q_ref|, where q_ref is the independent reference
   solution: ``scipy.integrate.solve_ivp`` with DOP853, rtol 1e-11 and atol 1e-12, on
@@ -44,6 +45,9 @@ if TYPE_CHECKING:
     from armctl.reference import Reference
 
 INTEGRATORS: tuple[str, ...] = ("rk4", "semi-implicit-euler", "implicit-euler")
+#: the chart's series: name → (integrator, compile)
+SERIES: dict[str, tuple[str, bool]] = {**{name: (name, False) for name in INTEGRATORS},
+                                       "rk4-compiled": ("rk4", True)}
 #: control (torque-hold) period Δt_c [s]
 CONTROL_DT = 0.01
 #: simulated time [s]
@@ -116,15 +120,17 @@ def reference_solution(sc: Scenario, rtol: float = REFERENCE_RTOL, atol: float =
     return np.array(out)
 
 
-def run_case(sc: Scenario, q_ref: FloatArray, integrator: str, substeps: int, repeats: int = 1) -> dict[str, Any]:
-    """One integrator at step Δt_c / ``substeps``: error [rad] against ``q_ref`` and cost [s per simulated s]."""
+def run_case(sc: Scenario, q_ref: FloatArray, integrator: str, substeps: int, repeats: int = 1,
+             compile: bool = False) -> dict[str, Any]:
+    """One integrator at step Δt_c / ``substeps``: error [rad] against ``q_ref`` and cost [s per simulated s]
+    (``compile``: with simulate's compiled step, built or loaded before the loop's clock starts)."""
     from armctl.sim import simulate
 
     walls, err = [], math.nan
     for _ in range(repeats):
         res = simulate(sc.dynamics, sc.controller, _hold(sc), sc.duration, q0=sc.q0, qd0=sc.qd0,
                        control_dt=sc.control_dt, dt=sc.control_dt / substeps, integrator=integrator,
-                       saturate=False, energy=False)
+                       saturate=False, energy=False, compile=compile)
         if res.diverged:
             return {"step": sc.control_dt / substeps, "substeps": substeps, "error": math.inf,
                     "cost": math.nan, "diverged": True}
@@ -171,8 +177,8 @@ def run(quick: bool = False) -> dict[str, Any]:
                       "error_estimate_against": "DOP853 rtol 1e-13, atol 1e-14"},
         "error_floor": floor, "integrators": {},
     }
-    for name in INTEGRATORS:
-        cases = [run_case(sc, q_ref, name, m, repeats) for m in SUBSTEPS[quick]]
+    for name, (integrator, compiled) in SERIES.items():
+        cases = [run_case(sc, q_ref, integrator, m, repeats, compiled) for m in SUBSTEPS[quick]]
         steps, errors = [c["step"] for c in cases], [c["error"] for c in cases]
         orders = observed_orders(steps, errors, floor)
         valid = [p for p in orders if p is not None]
@@ -202,7 +208,7 @@ def plot(data: dict[str, Any], path: Path) -> None:
     plt = pyplot()
 
     fig, ax = plt.subplots(figsize=(7.0, 4.8))
-    offsets = [((5, 3), "left"), ((-5, 3), "right"), ((5, -10), "left")]
+    offsets = [((5, 3), "left"), ((-5, 3), "right"), ((5, -10), "left"), ((6, -4), "left")]
     for i, (name, d) in enumerate(data["integrators"].items()):
         pts = [(c["error"], c["cost"], c["step"]) for c in d["cases"]
                if math.isfinite(c["error"]) and c["error"] > 0 and math.isfinite(c["cost"])]
