@@ -28,6 +28,7 @@ from armctl.dynamics import recursive
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError
 from armctl.model.robot import RobotModel
+from armctl.sim.plant import Plant
 
 #: the integrators with a compiled step
 SCHEMES = ("rk4", "euler")
@@ -64,16 +65,20 @@ def step_function(model: RobotModel, scheme: str) -> cs.Function:
     return cs.Function(f"step_{scheme}", [q, v, tau, h], [q1, v1, a1])
 
 
-def check_plant(dyn: Dynamics, scheme: str, simple: bool) -> None:
+def check_plant(dyn: Dynamics, scheme: str, plant: Plant) -> None:
     """Raise :class:`~armctl.errors.InvalidParameterError` if ``compile=True`` cannot integrate this plant."""
     if scheme not in SCHEMES:
         raise InvalidParameterError(f"compile=True has a compiled step for the integrators {SCHEMES}, not "
                                     f"{scheme!r}: use one of them or compile=False", value=scheme)
-    if not simple:
-        raise InvalidParameterError("compile=True integrates only a plant without friction, contact or "
-                                    "disturbance (its step is pure rigid-body dynamics): simulate a friction-free "
-                                    "model (model.reduced(friction=False)) without environment or disturbance, "
-                                    "or use compile=False", value=scheme)
+    if not plant.simple:
+        has = [what for what, present in (("joint friction", plant.friction is not None),
+                                          ("contact", bool(plant.environments)),
+                                          ("a disturbance", plant.disturbance is not None)) if present]
+        raise InvalidParameterError(f"compile=True integrates only a plant without friction, contact or "
+                                    f"disturbance (its step is pure rigid-body dynamics), and this one has "
+                                    f"{' and '.join(has)}: simulate a friction-free model "
+                                    f"(model.reduced(friction=False)) without environment or disturbance, or use "
+                                    f"compile=False", value=has)
     if getattr(dyn, "rotor_coupling", False) and any(j.motor is not None and j.motor.gyroscopic
                                                       for j in dyn.model.joints):
         raise InvalidParameterError("compile=True integrates the model the 'pinocchio' backend expresses, "

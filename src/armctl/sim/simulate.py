@@ -119,7 +119,7 @@ def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
     if boolean(compile, "compile"):
         from armctl.sim.compiled import check_plant, compiled_step
 
-        check_plant(dyn, scheme, pl.simple)
+        check_plant(dyn, scheme, pl)
         fast = compiled_step(dyn.model, scheme)
     simple = pl.simple
     implicit = scheme in ("implicit-euler", "semi-implicit-euler")  # these give no q̈ at the step start
