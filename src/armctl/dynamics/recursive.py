@@ -23,10 +23,6 @@ from armctl.dynamics.lagrange import _axis_rotation
 from armctl.model.robot import RobotModel
 
 
-def _cross(a: Any, b: Any) -> Any:
-    return cs.cross(a, b)
-
-
 def joint_transforms(model: RobotModel, q: cs.SX) -> list[tuple[cs.SX, cs.SX]]:
     """(R_i, t_i) of every joint: frame i's rotation and origin in frame i−1 at the joint position q_i."""
     out = []
@@ -73,27 +69,27 @@ def inverse_dynamics(model: RobotModel, q: cs.SX, qd: cs.SX, qdd: cs.SX, gravity
         r, t = tf[i]
         z = consts[i][3]
         w_in = r.T @ w
-        acc = r.T @ (acc + _cross(wd, t) + _cross(w, _cross(w, t)))
+        acc = r.T @ (acc + cs.cross(wd, t) + cs.cross(w, cs.cross(w, t)))
         if j.kind == "revolute":
-            wd = r.T @ wd + z * qdd[i] + _cross(w_in, z * qd[i])
+            wd = r.T @ wd + z * qdd[i] + cs.cross(w_in, z * qd[i])
             w = w_in + z * qd[i]
         else:
             wd = r.T @ wd
             w = w_in
-            acc = acc + z * qdd[i] + 2 * _cross(w, z * qd[i])
+            acc = acc + z * qdd[i] + 2 * cs.cross(w, z * qd[i])
         kin.append((w, wd, acc))
     tau: list[Any] = [None] * model.n
     f_next = mu_next = None
     for i in reversed(range(model.n)):
         m, h, inertia, z, rotor = consts[i]
         w, wd, acc = kin[i]
-        f = m * acc + _cross(wd, h) + _cross(w, _cross(w, h))
-        mu = inertia @ wd + _cross(w, inertia @ w) + _cross(h, acc)
+        f = m * acc + cs.cross(wd, h) + cs.cross(w, cs.cross(w, h))
+        mu = inertia @ wd + cs.cross(w, inertia @ w) + cs.cross(h, acc)
         if f_next is not None:
             r, t = tf[i + 1]
             rf = r @ f_next
             f = f + rf
-            mu = mu + r @ mu_next + _cross(t, rf)
+            mu = mu + r @ mu_next + cs.cross(t, rf)
         tau[i] = cs.dot(z, mu if model.joints[i].kind == "revolute" else f) + rotor * qdd[i]
         f_next, mu_next = f, mu
     return cs.vertcat(*tau)
@@ -126,14 +122,14 @@ def mass_matrix(model: RobotModel, q: cs.SX, transforms: list[tuple[cs.SX, cs.SX
             ch = rh + cm * t
         cm, ch, ci = cm + m, ch + h, ci + inertia
         if kinds[i] == "revolute":
-            f, mu = _cross(z, ch), ci @ z
+            f, mu = cs.cross(z, ch), ci @ z
         else:
-            f, mu = cm * z, _cross(ch, z)
+            f, mu = cm * z, cs.cross(ch, z)
         mm[i][i] = cs.dot(z, mu if kinds[i] == "revolute" else f) + rotor
         for k in range(i - 1, -1, -1):
             r, t = tf[k + 1]
             f = r @ f
-            mu = r @ mu + _cross(t, f)
+            mu = r @ mu + cs.cross(t, f)
             zk = consts[k][3]
             mm[k][i] = mm[i][k] = cs.dot(zk, mu if kinds[k] == "revolute" else f)
     return cs.vertcat(*[cs.horzcat(*row) for row in mm])
