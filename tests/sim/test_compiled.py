@@ -15,7 +15,7 @@ from armctl.errors import ArmctlError, InvalidParameterError
 from armctl.reference import Reference
 from armctl.sim.compiled import compiled_step
 from armctl.sim.contact import Plane
-from armctl.sim.integrators import rk4
+from armctl.sim.integrators import rk4, semi_implicit_euler
 from armctl.sim.normal_force import KelvinVoigt
 from tests.dynamics.test_recursive import skewed_rpr
 from tests.sim.helpers import ComputedTorque
@@ -23,12 +23,8 @@ from tests.sim.helpers import ComputedTorque
 
 def _textbook(dyn: armctl.Dynamics, scheme: str, q: np.ndarray, v: np.ndarray, tau: np.ndarray, h: float
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    f = dyn.forward_dynamics
-    if scheme == "rk4":
-        return rk4(lambda t, q_, v_, tau_: f(q_, v_, tau_), 0.0, q.copy(), v.copy(), tau, h)
-    a = f(q, v, tau)
-    v1 = v + h * a
-    return q + h * v1, v1, a
+    scheme_step = rk4 if scheme == "rk4" else semi_implicit_euler
+    return scheme_step(lambda t, q_, v_, tau_: dyn.forward_dynamics(q_, v_, tau_), 0.0, q.copy(), v.copy(), tau, h)
 
 
 @pytest.mark.parametrize("scheme", ["rk4", "euler"])

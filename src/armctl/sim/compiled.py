@@ -28,48 +28,41 @@ from armctl.dynamics import recursive
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError
 from armctl.model.robot import RobotModel
+from armctl.sim.integrators import rk4, semi_implicit_euler
 from armctl.sim.plant import Plant
 
 #: the integrators with a compiled step
 SCHEMES = ("rk4", "euler")
 #: bumped when the generated code changes, so that stale cached libraries are not loaded
-_CODE_VERSION = 1
+_CODE_VERSION = 2
 
 Step = Callable[[FloatArray, FloatArray, FloatArray, float], tuple[FloatArray, FloatArray, FloatArray]]
 
 
+def _check_scheme(scheme: str) -> None:
+    if scheme not in SCHEMES:
+        raise InvalidParameterError(f"compile=True has a compiled step for the integrators {SCHEMES}, not "
+                                    f"{scheme!r}: use one of them or compile=False", value=scheme)
+
+
 def step_function(model: RobotModel, scheme: str) -> cs.Function:
     """The CasADi function ``step(q, qd, tau, h) → (q1, qd1, qdd)`` of ``scheme`` ("rk4" or "euler") for
-    ``model``, with q̈ = qdd(q, q̇, τ) of :func:`armctl.dynamics.recursive.forward_dynamics` at the step start."""
+    ``model``: the simulator's own formulas (:func:`armctl.sim.integrators.rk4`,
+    :func:`~armctl.sim.integrators.semi_implicit_euler`) applied to symbols, with q̈ = qdd(q, q̇, τ) of
+    :func:`armctl.dynamics.recursive.forward_dynamics`."""
+    _check_scheme(scheme)
     n = model.n
     q, v, tau = (cs.SX.sym(s, n) for s in ("q", "qd", "tau"))
     h = cs.SX.sym("h")
     fd = recursive.functions(model)["qdd"]
-    a1 = fd(q, v, tau)
-    if scheme == "rk4":
-        h2 = 0.5 * h
-        v2 = v + h2 * a1
-        a2 = fd(q + h2 * v, v2, tau)
-        v3 = v + h2 * a2
-        a3 = fd(q + h2 * v2, v3, tau)
-        v4 = v + h * a3
-        a4 = fd(q + h * v3, v4, tau)
-        q1 = q + h * v + (h * h / 6) * (a1 + a2 + a3)
-        v1 = v + (h / 6) * (a1 + 2 * a2 + 2 * a3 + a4)
-    elif scheme == "euler":
-        v1 = v + h * a1
-        q1 = q + h * v1
-    else:
-        raise InvalidParameterError(f"compile=True has a compiled step for the integrators {SCHEMES}, not "
-                                    f"{scheme!r}: use one of them or compile=False", value=scheme)
+    scheme_step = rk4 if scheme == "rk4" else semi_implicit_euler
+    q1, v1, a1 = scheme_step(lambda t, q_, v_, tau_: fd(q_, v_, tau_), 0.0, q, v, tau, h)  # type: ignore[arg-type]
     return cs.Function(f"step_{scheme}", [q, v, tau, h], [q1, v1, a1])
 
 
 def check_plant(dyn: Dynamics, scheme: str, plant: Plant) -> None:
     """Raise :class:`~armctl.errors.InvalidParameterError` if ``compile=True`` cannot integrate this plant."""
-    if scheme not in SCHEMES:
-        raise InvalidParameterError(f"compile=True has a compiled step for the integrators {SCHEMES}, not "
-                                    f"{scheme!r}: use one of them or compile=False", value=scheme)
+    _check_scheme(scheme)
     if not plant.simple:
         has = [what for what, present in (("joint friction", plant.friction is not None),
                                           ("contact", bool(plant.environments)),
@@ -92,8 +85,7 @@ def _library_function(model: RobotModel, scheme: str, cache_dir: str | os.PathLi
     alone takes ~0.2 s for 7 joints: a simulate call that loads the library does not pay it)."""
     from armctl.dynamics.codegen import build, library_path
 
-    if scheme not in SCHEMES:
-        step_function(model, scheme)  # raises, naming the schemes
+    _check_scheme(scheme)
     name = f"step_{scheme}"
     lib = library_path([name], f"sim-step|{model.fingerprint(inertial=True)}|v{_CODE_VERSION}", cache_dir)
     if not lib.exists():

@@ -115,12 +115,13 @@ def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
     pl = Plant(dyn, sc.friction, sc.environments, sc.disturbance)
     unstable = _check_contacts(dyn, sc.environments, q, scheme, h)
     step = make_step(scheme, pl)
-    fast = fast_step(scheme, pl)
     if boolean(compile, "compile"):
         from armctl.sim.compiled import check_plant, compiled_step
 
         check_plant(dyn, scheme, pl)
         fast = compiled_step(dyn.model, scheme)
+    else:
+        fast = fast_step(scheme, pl)
     simple = pl.simple
     implicit = scheme in ("implicit-euler", "semi-implicit-euler")  # these give no q̈ at the step start
     samples = n_periods + 1
