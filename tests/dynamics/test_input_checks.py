@@ -28,8 +28,14 @@ METHODS: dict[str, tuple[str, ...]] = {
 }
 
 # panda: no friction (the rigid fast paths); puma560: rotors and asymmetric Coulomb friction; the Lagrange
-# backend (CasADi functions) on a small arm
-MODELS = (("panda", "pinocchio"), ("puma560", "pinocchio"), ("planar_2r", "lagrange"))
+# backend (CasADi functions) on a small arm; "compiled": the Pinocchio backend with compile=True (generated C
+# code whose expressions CasADi simplified, the Panda's g₁ free of q₁ for one)
+MODELS = (("panda", "pinocchio"), ("puma560", "pinocchio"), ("planar_2r", "lagrange"), ("panda", "compiled"),
+          ("puma560", "compiled"))
+
+
+def _dynamics(name: str, backend: str) -> armctl.Dynamics:
+    return dynamics(name, "pinocchio", compile=True) if backend == "compiled" else dynamics(name, backend)
 
 
 def _args(n: int, k: int) -> list[np.ndarray]:
@@ -42,7 +48,7 @@ def _args(n: int, k: int) -> list[np.ndarray]:
 # NumPy's RuntimeWarning, then the named error this test checks
 @pytest.mark.filterwarnings("ignore:invalid value encountered:RuntimeWarning")
 def test_every_nonfinite_entry_is_named(name: str, backend: str, method: str) -> None:
-    dyn = dynamics(name, backend)
+    dyn = _dynamics(name, backend)
     fn: Callable[..., object] = getattr(dyn, method)
     names = METHODS[method]
     args = _args(dyn.n, len(names))
@@ -59,7 +65,7 @@ def test_every_nonfinite_entry_is_named(name: str, backend: str, method: str) ->
 @pytest.mark.parametrize(("name", "backend"), MODELS)
 @pytest.mark.parametrize("method", sorted(METHODS))
 def test_wrong_shapes_are_named(name: str, backend: str, method: str) -> None:
-    dyn = dynamics(name, backend)
+    dyn = _dynamics(name, backend)
     names = METHODS[method]
     args = _args(dyn.n, len(names))
     for pos, arg_name in enumerate(names):
@@ -73,7 +79,7 @@ def test_wrong_shapes_are_named(name: str, backend: str, method: str) -> None:
 @pytest.mark.parametrize(("name", "backend"), MODELS)
 @pytest.mark.parametrize("method", sorted(METHODS))
 def test_lists_and_integer_arrays_give_the_same_result(name: str, backend: str, method: str) -> None:
-    dyn = dynamics(name, backend)
+    dyn = _dynamics(name, backend)
     fn = getattr(dyn, method)
     k = len(METHODS[method])
     ints = list(np.random.default_rng(5).integers(-2, 3, (k, dyn.n)))
@@ -89,7 +95,7 @@ def test_big_endian_and_single_precision_arrays_give_the_float64_result(name: st
                                                                        method: str) -> None:
     # Pinocchio reads a big-endian array's bytes as if they were native (τ off by 3 N·m on puma560); float32
     # inputs must be converted before they are combined, not combined in single precision
-    dyn = dynamics(name, backend)
+    dyn = _dynamics(name, backend)
     fn = getattr(dyn, method)
     args = _args(dyn.n, len(METHODS[method]))
     single = [a.astype(np.float32) for a in args]
@@ -104,7 +110,7 @@ def test_big_endian_and_single_precision_arrays_give_the_float64_result(name: st
 def test_object_arrays_are_converted_and_complex_ones_refused(name: str, backend: str, method: str) -> None:
     # an object array of numbers passes the cheap finite test but Pinocchio refuses it: converted, not an
     # escaped Boost ArgumentError; complex values are refused, not cut to their real part
-    dyn = dynamics(name, backend)
+    dyn = _dynamics(name, backend)
     fn = getattr(dyn, method)
     names = METHODS[method]
     args = _args(dyn.n, len(names))
@@ -123,7 +129,7 @@ def test_object_arrays_are_converted_and_complex_ones_refused(name: str, backend
 @pytest.mark.parametrize("method", sorted(METHODS))
 def test_a_result_survives_the_next_call(name: str, backend: str, method: str) -> None:
     # results are fresh arrays: a later call, at another state, leaves an earlier result as it was
-    dyn = dynamics(name, backend)
+    dyn = _dynamics(name, backend)
     fn = getattr(dyn, method)
     k = len(METHODS[method])
     first = fn(*_args(dyn.n, k))
@@ -137,8 +143,8 @@ def test_an_input_the_expression_does_not_contain_is_still_checked() -> None:
     # CasADi simplifies: a frictionless pendulum's τ = (I + m l²) q̈ + m g l sin q holds no q̇, so a NaN q̇ never
     # reaches the result and must be caught on the inputs
     model = armctl.models.pendulum().with_friction(viscous=0.0, coulomb=0.0)
-    for backend in ("lagrange", "pinocchio"):
-        dyn = armctl.Dynamics(model, backend=backend)
+    for dyn in (armctl.Dynamics(model, backend="lagrange"), armctl.Dynamics(model),
+                armctl.Dynamics(model, compile=True)):
         for method in ("inverse_dynamics", "forward_dynamics"):
             with pytest.raises(NonFiniteError, match=r"^qd holds NaN or inf"):
                 getattr(dyn, method)(np.array([0.3]), np.array([np.nan]), np.array([0.1]))
@@ -186,7 +192,8 @@ def test_finite_inputs_too_large_for_floats_raise_with_friction_too(model: armct
 
 
 @pytest.mark.parametrize(("backend", "option", "names"), [
-    ("pinocchio", "compile", "its options: none"), ("lagrange", "compiled", "its options: rotor_coupling, compile")])
+    ("pinocchio", "rotor_coupling", "its options: compile, cache_dir"),
+    ("lagrange", "compiled", "its options: rotor_coupling, compile")])
 def test_an_unknown_backend_option_is_named_with_the_valid_ones(backend: str, option: str, names: str) -> None:
     # it was a bare TypeError without the valid options
     from armctl.errors import InvalidParameterError

@@ -1,8 +1,9 @@
 """Speed of the dynamics through armctl's public API against raw Pinocchio, on the Panda (7 joints).
 
 Run: ``python -m armctl.bench.dynamics_speed``. Prints per-call medians and ratios measured in the same run
-(interleaved rounds), the Lagrange backend's symbolic build time and its compiled inverse dynamics against
-the Pinocchio backend, and each figure's target.
+(interleaved rounds), the regressors again with ``Dynamics(model, compile=True)`` (generated C code), the
+Lagrange backend's symbolic build time and its compiled inverse dynamics against the Pinocchio backend, and
+each figure's target.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ import numpy as np
 
 import armctl
 from armctl.bench.timing import interleaved, paired_ratio
+from armctl.errors import BackendError
 
 TARGETS = {"mass_matrix": 1.5, "inverse_dynamics": 1.5, "regressor": 1.5, "passivity_regressor": 4.0,
            "lagrange_compiled_inverse_dynamics": 10.0, "lagrange_build_seconds": 5.0}
@@ -40,6 +42,17 @@ def run(number: int = 200, rounds: int = 75, seed: int = 0, compile_if_needed: b
         "passivity_regressor": (lambda: dyn.passivity_regressor(q, qd, qd_r, qdd),
                                 lambda: pin.computeJointTorqueRegressor(pm, pd, q, qd, qdd)),
     }
+    # the same regressors with Dynamics(model, compile=True): generated C code (built once, ~2 s, then cached)
+    t0 = time.perf_counter()
+    try:
+        dc = armctl.Dynamics(model, compile=True)
+    except BackendError as e:  # no C compiler: reported, the rest still measured
+        out["compiled_unavailable"] = str(e)
+    else:
+        out["compiled_build_or_load_seconds"] = time.perf_counter() - t0
+        raw = pairs["regressor"][1]
+        pairs["compiled_regressor"] = (lambda: dc.regressor(q, qd, qdd), raw)
+        pairs["compiled_passivity_regressor"] = (lambda: dc.passivity_regressor(q, qd, qd_r, qdd), raw)
     for name, (api, raw) in pairs.items():
         r = paired_ratio(api, raw, number, rounds)
         out[name] = {"api_s": r["candidate_s"], "raw_s": r["reference_s"], "ratio": r["ratio"],
@@ -66,12 +79,22 @@ def run(number: int = 200, rounds: int = 75, seed: int = 0, compile_if_needed: b
 def report(fig: dict[str, Any]) -> str:
     lines = [f"dynamics speed on {fig['model']} ({fig['n']} joints): medians; ratios are medians of per-round "
              "ratios [quartiles]"]
-    for name in ("mass_matrix", "inverse_dynamics", "regressor", "passivity_regressor"):
+    for name in ("mass_matrix", "inverse_dynamics", "regressor", "passivity_regressor", "compiled_regressor",
+                 "compiled_passivity_regressor"):
+        if name not in fig:  # compile=True unavailable (no C compiler)
+            continue
         f = fig[name]
-        ok = "ok" if f["ratio"] <= TARGETS[name] else "MISSED"
+        target = TARGETS[name.removeprefix("compiled_")]
+        ok = "ok" if f["ratio"] <= target else "MISSED"
         q1, q3 = f["ratio_iqr"]
-        lines.append(f"  {name:22s} api {f['api_s'] * 1e6:7.2f} us  raw {f['raw_s'] * 1e6:7.2f} us  "
-                     f"ratio {f['ratio']:5.2f} [{q1:.2f}, {q3:.2f}]  (target <= {TARGETS[name]}: {ok})")
+        label = name.replace("compiled_", "") + (" (compile=True)" if name.startswith("compiled_") else "")
+        lines.append(f"  {label:35s} api {f['api_s'] * 1e6:7.2f} us  raw {f['raw_s'] * 1e6:7.2f} us  "
+                     f"ratio {f['ratio']:5.2f} [{q1:.2f}, {q3:.2f}]  (target <= {target}: {ok})")
+    if "compiled_unavailable" in fig:
+        lines.append(f"  compile=True unavailable: {fig['compiled_unavailable']}")
+    elif "compiled_build_or_load_seconds" in fig:
+        lines.append(f"  compile=True: library built or loaded in {fig['compiled_build_or_load_seconds']:.2f} s "
+                     "(raw: Pinocchio's regressor in both rows)")
     f = fig["lagrange_compiled_inverse_dynamics"]
     if f is None:
         lines.append("  lagrange compiled tau  skipped: not compiled yet (~20 s; run without --quick once)")

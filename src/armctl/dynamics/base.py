@@ -26,7 +26,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from armctl._checks import FLOAT as _FLOAT
-from armctl._checks import FloatArray, vector
+from armctl._checks import FloatArray, boolean, vector
 from armctl.dynamics.regressor import RegressorMethods
 from armctl.errors import ArmctlError, InvalidParameterError, NonFiniteError, UnknownNameError
 from armctl.model.robot import PARAMS_PER_JOINT, RobotModel
@@ -40,7 +40,8 @@ class Dynamics(RegressorMethods, ABC):
     """The dynamics of ``model`` evaluated by ``backend`` (``"pinocchio"`` or ``"lagrange"``).
 
     Calling ``Dynamics(model, backend=...)`` constructs the backend's subclass. Keyword options go to the
-    backend (e.g. ``rotor_coupling``, ``compile`` for the Lagrange backend). A ``RobotModel`` is immutable,
+    backend: ``compile`` (both: generated C code, see :mod:`armctl.dynamics.compiled` for the Pinocchio
+    backend's), ``cache_dir`` (both: where it is kept), ``rotor_coupling`` (Lagrange). A ``RobotModel`` is immutable,
     so a ``Dynamics`` object can be shared, but its workspace is not thread-safe: give each thread its own.
     """
 
@@ -62,7 +63,10 @@ class Dynamics(RegressorMethods, ABC):
     def __new__(cls, model: RobotModel | None = None, backend: str = "pinocchio", **options: Any) -> Dynamics:
         if cls is Dynamics:
             if backend == "pinocchio":
-                from armctl.dynamics.pinocchio_backend import PinocchioDynamics as sub
+                if boolean(options.get("compile", False), "compile"):
+                    from armctl.dynamics.compiled import CompiledDynamics as sub
+                else:
+                    from armctl.dynamics.pinocchio_backend import PinocchioDynamics as sub
             elif backend == "lagrange":
                 from armctl.dynamics.lagrange import LagrangeDynamics as sub
             else:

@@ -7,6 +7,7 @@ with the previous link, k_r I_m q̇_i z_mᵀω_{i−1}, is not expressed (the ``
 from __future__ import annotations
 
 import math
+import os
 from functools import partial
 from typing import Any
 
@@ -14,8 +15,9 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from armctl._checks import FLOAT, FloatArray
+from armctl._checks import FLOAT, FloatArray, boolean
 from armctl.dynamics.base import Dynamics
+from armctl.errors import InvalidParameterError
 from armctl.model.robot import PARAMS_PER_JOINT, RobotModel
 
 _crba = pin.crba
@@ -45,9 +47,17 @@ class PinocchioDynamics(Dynamics):
 
     backend = "pinocchio"
     _nan_propagates = True  # checked entry by entry in tests/dynamics/test_input_checks.py
+    _option_names = ("compile", "cache_dir")
+    #: True for :class:`~armctl.dynamics.compiled.CompiledDynamics` (``compile=True``)
+    _compiled = False
 
-    def __init__(self, model: RobotModel, backend: str | None = None, **options: Any) -> None:
+    def __init__(self, model: RobotModel, backend: str | None = None, compile: bool = False,
+                 cache_dir: str | os.PathLike[str] | None = None, **options: Any) -> None:
+        if boolean(compile, "compile") != self._compiled:
+            raise InvalidParameterError(f"{type(self).__name__} is not made with compile={compile}: use "
+                                        f"armctl.Dynamics(model, compile={compile})", value=compile)
         super().__init__(model, backend, **options)
+        self._cache_dir = cache_dir
         self.pin_model = model.to_pinocchio()
         self.pin_data = self.pin_model.createData()
         self._tool_id = self._frame_id(None)

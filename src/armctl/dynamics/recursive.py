@@ -20,7 +20,7 @@ from typing import Any
 import casadi as cs
 
 from armctl.dynamics.lagrange import _axis_rotation
-from armctl.model.robot import RobotModel
+from armctl.model.robot import PARAMS_PER_JOINT, RobotModel
 
 
 def joint_transforms(model: RobotModel, q: cs.SX) -> list[tuple[cs.SX, cs.SX]]:
@@ -35,20 +35,25 @@ def joint_transforms(model: RobotModel, q: cs.SX) -> list[tuple[cs.SX, cs.SX]]:
     return out
 
 
-def _link_constants(model: RobotModel) -> list[tuple[float, cs.DM, cs.DM, cs.DM, float]]:
-    """(m, h = m c, I about the origin, axis, reflected rotor inertia) of every link, in its frame."""
+def links(model: RobotModel, params: Any = None) -> list[tuple[Any, Any, Any, cs.DM, Any]]:
+    """(m, h = m c, I about the origin, axis, reflected rotor inertia) of every link, in its frame, from the
+    first eleven entries per joint of ``params`` (π of :meth:`armctl.RobotModel.parameters`, 13 per joint;
+    default the model's own, as numbers that fold into the expressions; a CasADi SX vector of symbols for a
+    regressor)."""
+    pi = cs.DM(model.parameters()) if params is None else params
     out = []
-    for j in model.joints:
-        lk = j.link
-        rotor = j.motor.reflected_inertia if j.motor is not None else 0.0
-        out.append((float(lk.mass), cs.DM(lk.mass * lk.com), cs.DM(lk.inertia_about_origin()), cs.DM(j.axis),
-                    float(rotor)))
+    for i, j in enumerate(model.joints):
+        p = pi[PARAMS_PER_JOINT * i: PARAMS_PER_JOINT * i + 11]
+        inertia = cs.vertcat(cs.horzcat(p[4], p[5], p[7]), cs.horzcat(p[5], p[6], p[8]),
+                             cs.horzcat(p[7], p[8], p[9]))
+        out.append((p[0], p[1:4], inertia, cs.DM(j.axis), p[10]))
     return out
 
 
 def inverse_dynamics(model: RobotModel, q: cs.SX, qd: cs.SX, qdd: cs.SX, gravity: bool = True,
-                     transforms: list[tuple[cs.SX, cs.SX]] | None = None) -> cs.SX:
-    """τ = M(q) q̈ + C(q, q̇) q̇ + g(q) by the Newton–Euler recursion (gravity=False: without g).
+                     transforms: list[tuple[cs.SX, cs.SX]] | None = None, params: Any = None) -> cs.SX:
+    """τ = M(q) q̈ + C(q, q̇) q̇ + g(q) by the Newton–Euler recursion (gravity=False: without g), with the
+    inertial parameters ``params`` (see :func:`links`; τ is linear in them).
 
     Forward, in frame i (ω, ω̇ the link's angular velocity and acceleration, a the acceleration of its
     origin; gravity enters as a base acceleration −g₀):
@@ -60,7 +65,7 @@ def inverse_dynamics(model: RobotModel, q: cs.SX, qd: cs.SX, qdd: cs.SX, gravity
         μ_i = I ω̇_i + ω_i × I ω_i + h × a_i + R_{i+1} μ_{i+1} + t_{i+1} × R_{i+1} f_{i+1}
         τ_i = zᵀμ_i (revolute) or zᵀf_i (prismatic), + k_r²I_m q̈_i.
     """
-    consts = _link_constants(model)
+    consts = links(model, params)
     tf = transforms if transforms is not None else joint_transforms(model, q)
     w, wd = cs.SX.zeros(3), cs.SX.zeros(3)
     acc = -cs.SX(cs.DM(model.gravity)) if gravity else cs.SX.zeros(3)
@@ -104,7 +109,7 @@ def mass_matrix(model: RobotModel, q: cs.SX, transforms: list[tuple[cs.SX, cs.SX
     or (m z, h × z) (prismatic); M_ii = zᵀμ (or zᵀf) + k_r²I_m, and M_ki, k < i, is joint k's projection of
     (f, μ) carried down the chain (f ← R f, μ ← R μ + t × R f).
     """
-    consts = _link_constants(model)
+    consts = links(model)
     tf = transforms if transforms is not None else joint_transforms(model, q)
     n = model.n
     kinds = [j.kind for j in model.joints]
