@@ -27,7 +27,6 @@ result only.
 
 from __future__ import annotations
 
-import functools
 import os
 from collections.abc import Callable
 from typing import Any
@@ -36,7 +35,7 @@ import casadi as cs
 import numpy as np
 
 from armctl._checks import FloatArray
-from armctl.dynamics import recursive
+from armctl.dynamics import codegen, recursive
 from armctl.dynamics.pinocchio_backend import PinocchioDynamics
 from armctl.model.robot import PARAMS_PER_JOINT, RobotModel
 
@@ -101,20 +100,10 @@ def symbolic_functions(model: RobotModel) -> list[cs.Function]:
     return out
 
 
-@functools.lru_cache(maxsize=32)
-def _load(name: str, path: str) -> cs.Function:
-    return cs.external(name, path)
-
-
 def library(model: RobotModel, cache_dir: str | os.PathLike[str] | None = None) -> dict[str, cs.Function]:
-    """The compiled functions of ``model`` by name, built if the library is not cached yet (loading alone does
-    not build the symbolic model)."""
-    from armctl.dynamics.codegen import build, library_path
-
-    lib = library_path(list(NAMES), f"dynamics|{model.fingerprint(inertial=True)}|v{_CODE_VERSION}", cache_dir)
-    if not lib.exists():
-        build(symbolic_functions(model), lib)
-    return {name: _load(name, str(lib)) for name in NAMES}
+    """The compiled functions of ``model`` by name, built if the library is not cached yet."""
+    return codegen.cached(list(NAMES), f"dynamics|{model.fingerprint(inertial=True)}|v{_CODE_VERSION}",
+                          lambda: symbolic_functions(model), cache_dir)
 
 
 def _bind(fn: cs.Function, n: int, out: FloatArray, consts: tuple[FloatArray, ...]) -> Callable[..., FloatArray]:

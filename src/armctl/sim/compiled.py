@@ -16,7 +16,6 @@ not positive definite gives a non-finite state, which ``simulate`` reports as a 
 
 from __future__ import annotations
 
-import functools
 import os
 from collections.abc import Callable
 
@@ -81,21 +80,13 @@ def check_plant(dyn: Dynamics, scheme: str, plant: Plant) -> None:
 
 
 def _library_function(model: RobotModel, scheme: str, cache_dir: str | os.PathLike[str] | None) -> cs.Function:
-    """The compiled step function, built only if its library is not cached yet (building the symbolic model
-    alone takes ~0.2 s for 7 joints: a simulate call that loads the library does not pay it)."""
-    from armctl.dynamics.codegen import build, library_path
+    """The compiled step function, built only if its library is not cached yet."""
+    from armctl.dynamics.codegen import cached
 
     _check_scheme(scheme)
     name = f"step_{scheme}"
-    lib = library_path([name], f"sim-step|{model.fingerprint(inertial=True)}|v{_CODE_VERSION}", cache_dir)
-    if not lib.exists():
-        build([step_function(model, scheme)], lib)
-    return _load(name, str(lib))
-
-
-@functools.lru_cache(maxsize=32)
-def _load(name: str, path: str) -> cs.Function:
-    return cs.external(name, path)
+    return cached([name], f"sim-step|{model.fingerprint(inertial=True)}|v{_CODE_VERSION}",
+                  lambda: [step_function(model, scheme)], cache_dir)[name]
 
 
 def compiled_step(model: RobotModel, scheme: str, cache_dir: str | os.PathLike[str] | None = None) -> Step:
