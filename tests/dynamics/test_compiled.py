@@ -18,7 +18,7 @@ import pytest
 import armctl
 from armctl.controllers import Adaptive, ComputedTorque, PassivityBased, PDGravity
 from armctl.dynamics import compiled
-from armctl.errors import InvalidParameterError
+from armctl.errors import BackendError, InvalidParameterError
 from tests.conftest import MODEL_NAMES, model
 from tests.dynamics.test_recursive import skewed_rpr
 
@@ -80,11 +80,13 @@ def test_compiled_terms_agree_with_pinocchio_called_directly(name: str) -> None:
         np.testing.assert_allclose(dc.passivity_torque(q, qd, qd_r, qdd), expected, rtol=1e-9, atol=1e-9)
 
 
-@pytest.mark.parametrize("name", ["puma560", "panda"])
+@pytest.mark.parametrize("name", ["pendulum", "puma560", "panda", "skewed_rpr"])
 def test_every_regressor_entry_matches_the_plain_backend(name: str) -> None:
-    # entry by entry, friction columns included (the Puma's Coulomb friction is asymmetric: the column's ratio
-    # is an input of the compiled code)
-    m = model(name)
+    # entry by entry, friction columns included (the Puma's Coulomb friction is asymmetric, and the RPR arm's
+    # is made so: the column's ratio is an input of the compiled code)
+    m = _model(name)
+    if name == "skewed_rpr":
+        m = m.with_friction(viscous=[0.1, 0.2, 0.3], coulomb=[1.0, 2.0, 0.5], coulomb_negative=[0.5, 2.0, 1.5])
     dc, dp = armctl.Dynamics(m, compile=True), armctl.Dynamics(m)
     for seed in range(3):
         q, qd, qd_r, qdd = _states(m.n, seed=seed)
@@ -133,6 +135,18 @@ def test_objects_sharing_a_library_do_not_share_buffers() -> None:
     q1, q2 = _states(7)[:2]
     for dyn, q in ((a, q1), (b, q2), (a, q2), (b, q1)):
         np.testing.assert_allclose(dyn.gravity_torque(q), plain.gravity_torque(q), rtol=1e-12, atol=1e-12)
+
+
+def test_a_bad_cache_dir_is_named(tmp_path) -> None:
+    m = model("planar_2r")
+    with pytest.raises(InvalidParameterError, match="cache_dir must be a path"):
+        armctl.Dynamics(m, compile=True, cache_dir=123)
+    with pytest.raises(InvalidParameterError, match="pass compile=True too"):
+        armctl.Dynamics(m, cache_dir=tmp_path)
+    blocked = tmp_path / "file"
+    blocked.write_text("not a folder")
+    with pytest.raises(BackendError, match="cannot create the cache folder"):
+        armctl.Dynamics(m, compile=True, cache_dir=blocked / "cache")
 
 
 def test_options_repr_and_pickle() -> None:

@@ -6,6 +6,7 @@ raise a ShapeError; lists and integer arrays must give the same result as float 
 from __future__ import annotations
 
 from collections.abc import Callable
+from functools import cache
 
 import numpy as np
 import pytest
@@ -29,13 +30,21 @@ METHODS: dict[str, tuple[str, ...]] = {
 
 # panda: no friction (the rigid fast paths); puma560: rotors and asymmetric Coulomb friction; the Lagrange
 # backend (CasADi functions) on a small arm; "compiled": the Pinocchio backend with compile=True (generated C
-# code whose expressions CasADi simplified, the Panda's g₁ free of q₁ for one)
+# code whose expressions CasADi simplified, the Panda's g₁ free of q₁ for one; "pendulum_bare": one joint, no
+# motor and no friction, the regressor probe's least favourable case)
 MODELS = (("panda", "pinocchio"), ("puma560", "pinocchio"), ("planar_2r", "lagrange"), ("panda", "compiled"),
-          ("puma560", "compiled"))
+          ("puma560", "compiled"), ("pendulum_bare", "compiled"))
 
 
 def _dynamics(name: str, backend: str) -> armctl.Dynamics:
+    if name == "pendulum_bare":
+        return _bare_pendulum()
     return dynamics(name, "pinocchio", compile=True) if backend == "compiled" else dynamics(name, backend)
+
+
+@cache
+def _bare_pendulum() -> armctl.Dynamics:
+    return armctl.Dynamics(armctl.models.pendulum().reduced(rotors=False, friction=False), compile=True)
 
 
 def _args(n: int, k: int) -> list[np.ndarray]:
@@ -68,8 +77,9 @@ def test_wrong_shapes_are_named(name: str, backend: str, method: str) -> None:
     dyn = _dynamics(name, backend)
     names = METHODS[method]
     args = _args(dyn.n, len(names))
+    wrong = {(dyn.n + 1,), (dyn.n - 1,), (1,), (dyn.n, 1), (1, dyn.n), ()} - {(dyn.n,)}  # n = 1: (1,) is right
     for pos, arg_name in enumerate(names):
-        for shape in ((dyn.n + 1,), (dyn.n - 1,), (1,), (dyn.n, 1), (1, dyn.n), ()):
+        for shape in sorted(wrong):
             broken = list(args)
             broken[pos] = np.ones(shape)
             with pytest.raises(ShapeError, match=rf"^{arg_name} must have shape \({dyn.n},\)"):

@@ -55,9 +55,10 @@ class Dynamics(RegressorMethods, ABC):
     #: Lagrange backend: CasADi simplifies its expressions, and a frictionless pendulum's τ does not depend
     #: on q̇ at all.
     _nan_propagates: bool = False
-    #: A view of the regressor workspace, Y[0, the last link's ten columns], that NaN or inf in any input of
-    #: the (passivity) regressor reaches, by the argument above (only where ``_nan_propagates``); None:
-    #: the fast paths check the inputs.
+    #: A view of the regressor workspace that NaN or inf in any input of the (passivity) regressor reaches
+    #: (only where ``_nan_propagates``; which entries is the backend's business: Pinocchio's Y[0, the last
+    #: link's ten columns] by the argument above, the compiled variant's Y[0, 10] by its carrier); None: the
+    #: fast paths check the inputs.
     _regressor_probe: FloatArray | None = None
 
     def __new__(cls, model: RobotModel | None = None, backend: str = "pinocchio", **options: Any) -> Dynamics:

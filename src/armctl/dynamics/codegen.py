@@ -18,14 +18,18 @@ from pathlib import Path
 
 import casadi as cs
 
-from armctl.errors import BackendError
+from armctl.errors import BackendError, InvalidParameterError
 
 CFLAGS = ("-O1", "-fPIC", "-shared")
 
 
 def cache_root(cache_dir: str | os.PathLike[str] | None = None) -> Path:
     if cache_dir is not None:
-        return Path(cache_dir)
+        try:
+            return Path(os.fspath(cache_dir))
+        except TypeError:
+            raise InvalidParameterError(f"cache_dir must be a path (str or os.PathLike) or None, got {cache_dir!r}",
+                                        value=cache_dir) from None
     env = os.environ.get("ARMCTL_CACHE")
     return Path(env) if env else Path.home() / ".cache" / "armctl"
 
@@ -68,7 +72,11 @@ def build(functions: list[cs.Function], lib: Path) -> None:
     if cc is None:
         raise BackendError("compiling generated code needs a C compiler (cc or gcc on PATH, or $CC): install "
                            "one, or do without compiled code (compile=False)", value=None)
-    folder.mkdir(parents=True, exist_ok=True)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise BackendError(f"cannot create the cache folder for compiled code {str(folder)!r} ({e}): pass a "
+                           "writable cache_dir or set $ARMCTL_CACHE", value=str(folder)) from None
     with tempfile.TemporaryDirectory(dir=folder) as tmp:
         gen = cs.CodeGenerator(f"{name}.c", {"with_header": False})
         for f in functions:

@@ -5,7 +5,7 @@ generated with CasADi from the recursive algorithms of
 :mod:`armctl.dynamics.recursive`, with the model's numbers built in (the regressors from the same recursion
 with the parameters π as symbols, differentiated: τ is linear in π), compiled with the system's C compiler
 and cached on disk by the model's full fingerprint (:mod:`armctl.dynamics.codegen`; a payload or perturbed
-variant builds its own library, about 10 s for the Panda, then milliseconds to load). Each call copies its
+variant builds its own library, 2–3 s for the Panda, then milliseconds to load). Each call copies its
 inputs into fixed arrays that the C code reads in place (CasADi's zero-copy buffers) and returns a copy of
 the result: on the Panda that round trip costs about 1.5 µs, so the terms whose Pinocchio call costs little
 more stay Pinocchio's — inverse dynamics (RNEA) and the mass matrix (CRBA), measured slower compiled — as do

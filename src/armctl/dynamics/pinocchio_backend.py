@@ -56,6 +56,9 @@ class PinocchioDynamics(Dynamics):
         if boolean(compile, "compile") != self._compiled:
             raise InvalidParameterError(f"{type(self).__name__} is not made with compile={compile}: use "
                                         f"armctl.Dynamics(model, compile={compile})", value=compile)
+        if cache_dir is not None and not compile:
+            raise InvalidParameterError(f"cache_dir={cache_dir!r} is where compile=True keeps its code: pass "
+                                        "compile=True too, or no cache_dir", value=cache_dir)
         super().__init__(model, backend, **options)
         self._cache_dir = cache_dir
         self.pin_model = model.to_pinocchio()
