@@ -157,7 +157,7 @@ def test_options_repr_and_pickle() -> None:
     again = pickle.loads(pickle.dumps(dc))
     q = np.array([0.1, 0.2])
     assert again.options["compile"] and np.array_equal(again.gravity_torque(q), dc.gravity_torque(q))
-    assert not hasattr(armctl.Dynamics(m, compile=False), "_c")
+    assert not isinstance(armctl.Dynamics(m, compile=False), compiled.CompiledDynamics)
     with pytest.raises(InvalidParameterError, match="compile must be True or False"):
         armctl.Dynamics(m, compile="yes")
     from armctl.dynamics.pinocchio_backend import PinocchioDynamics

@@ -155,16 +155,15 @@ class CompiledDynamics(PinocchioDynamics):
         super().__init__(model, backend, compile=compile, cache_dir=cache_dir, **options)
         fns = library(model, cache_dir)
         n = self.n
-        zero, self._rho = np.zeros(1), np.array(self._fc_ratio)
+        zero, rho = np.zeros(1), np.array(self._fc_ratio)  # (kept alive by the bound calls)
         vec: dict[str, FloatArray] = {k: np.zeros(n) for k in ("g", "ptau", "qdd")}
         # both regressors write Y (column-major, so Yᵀ here) into one array: the regressor probe sees either
-        self._y_out = np.zeros((PARAMS_PER_JOINT * n, n))
+        y_out = np.zeros((PARAMS_PER_JOINT * n, n))
         calls = {k: _bind(fns[k], n, vec[k], (zero,)) for k in vec}
         for k in ("Y", "Yp"):
-            calls[k] = _bind(fns[k], n, self._y_out, (zero, self._rho))
-        self._c = calls
-        self._bind_primitives()
-        self._regressor_probe = self._y_out[10, :1]  # Y[0, 10] = q̈₁ (+ the carrier): see the module
+            calls[k] = _bind(fns[k], n, y_out, (zero, rho))
+        self._bind_primitives(calls)
+        self._regressor_probe = y_out[10, :1]  # Y[0, 10] = q̈₁ (+ the carrier): see the module
 
     @property
     def options(self) -> dict[str, Any]:
@@ -173,11 +172,10 @@ class CompiledDynamics(PinocchioDynamics):
     def __repr__(self) -> str:
         return f"Dynamics({self.model.name!r}, backend={self.backend!r}, compile=True, n={self.n})"
 
-    def _bind_primitives(self) -> None:
-        """The primitives on the compiled functions, as instance attributes like the plain backend's (each
-        returns a new array, as Pinocchio's do)."""
-        c = self._c
-        g, qdd, y, yp, ptau = (c[k] for k in ("g", "qdd", "Y", "Yp", "ptau"))
+    def _bind_primitives(self, calls: dict[str, Callable[..., FloatArray]]) -> None:
+        """The primitives on the bound compiled functions ``calls``, as instance attributes like the plain
+        backend's (each returns a new array, as Pinocchio's do)."""
+        g, qdd, y, yp, ptau = (calls[k] for k in ("g", "qdd", "Y", "Yp", "ptau"))
         self._gravity = lambda q: g(q).copy()  # type: ignore[method-assign]
         self._forward = lambda q, qd, tau_net: qdd(q, qd, tau_net).copy()  # type: ignore[method-assign]
         zeros = self._zeros
