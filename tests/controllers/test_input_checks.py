@@ -30,8 +30,10 @@ LAWS: dict[str, Callable[[armctl.Dynamics], Controller]] = {
     "adaptive": lambda d: Adaptive(d, 5.0, 20.0, 0.01),
 }
 # panda (Pinocchio, no friction), puma560 (rotors, asymmetric Coulomb friction), the Lagrange backend on the
-# frictionless pendulum (its τ holds no q̇ at all) and on planar_2r
-MODELS = (("panda", "pinocchio"), ("puma560", "pinocchio"), ("pendulum", "lagrange"), ("planar_2r", "lagrange"))
+# frictionless pendulum (its τ holds no q̇ at all) and on planar_2r, and the compiled Pinocchio backend on the
+# Panda (where PD + gravity runs as one call of generated code)
+MODELS = (("panda", "pinocchio"), ("puma560", "pinocchio"), ("pendulum", "lagrange"), ("planar_2r", "lagrange"),
+          ("panda", "compiled"))
 
 
 def _state(n: int) -> tuple[np.ndarray, np.ndarray, armctl.Reference]:
@@ -53,7 +55,7 @@ def _snapshot(c: Controller) -> list[np.ndarray]:
 @pytest.mark.parametrize(("name", "backend"), MODELS)
 @pytest.mark.parametrize("law", sorted(LAWS))
 def test_every_non_finite_entry_is_named_and_changes_nothing(name: str, backend: str, law: str) -> None:
-    dyn = dynamics(name, backend)
+    dyn = dynamics(name, compile=True) if backend == "compiled" else dynamics(name, backend)
     c = LAWS[law](dyn)
     q, qd, ref = _state(dyn.n)
     c(0.0, q, qd, ref)  # start the clock of an integral

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numpy.typing import ArrayLike
 
@@ -23,7 +25,8 @@ class PDGravity(PIDGains, Controller):
     winds up while the joint sticks, the joint breaks away, overshoots, and sticks again on the other side.
 
     kp: proportional gain [N·m/rad]; kd: derivative gain [N·m·s/rad]; ki: integral gain [N·m/(rad·s)] or None
-    (each a scalar, vector or matrix). The integral is accumulated at the control rate.
+    (each a scalar, vector or matrix). The integral is accumulated at the control rate. On
+    ``armctl.Dynamics(model, compile=True)`` the law g + K_p e + K_d ė runs as one call of the generated code.
     """
 
     def __init__(self, dynamics: Dynamics, kp: ArrayLike, kd: ArrayLike, ki: ArrayLike | None = None,
@@ -41,16 +44,33 @@ class PDGravity(PIDGains, Controller):
     def friction(self, value: bool) -> None:
         self._friction = boolean(value, "friction")
 
+    #: the dynamics' fused law g + F·[q_d; q̇_d; q; q̇] (``Dynamics(model, compile=True)``; None for others) and
+    #: the dynamics and gains it was made for: made again at the next step if either changes
+    _law: Any = None
+    _law_for: Any = None
+
     def _gains_changed(self) -> None:
         super()._gains_changed()
         if hasattr(self, "_feedback"):
             self._with_gravity = np.hstack((self._feedback, np.eye(self.n)))
+            self._law_for = None
+
+    def __getstate__(self) -> dict[str, Any]:
+        state = self.__dict__.copy()
+        state.pop("_law", None)  # bound to this process's compiled buffers; made again after unpickling
+        state.pop("_law_for", None)
+        return state
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         dyn = self.dynamics
         assert dyn is not None
-        # g + K_p e + K_d ė = [F, I]·[q_d; q̇_d; q; q̇; g] (F: PIDGains' feedback map): one product adds it all
-        tau = self._with_gravity.dot(np.concatenate((ref.q, ref.qd, q, qd, dyn._gravity(q))))  # q checked by __call__
+        if dyn is not self._law_for:
+            self._law, self._law_for = dyn._pd_gravity_law(self._feedback), dyn
+        law = self._law
+        if law is not None:  # q checked by __call__
+            tau = law(q, qd, ref.q, ref.qd)
+        else:  # g + K_p e + K_d ė = [F, I]·[q_d; q̇_d; q; q̇; g] (F: PIDGains' feedback map): one product adds it all
+            tau = self._with_gravity.dot(np.concatenate((ref.q, ref.qd, q, qd, dyn._gravity(q))))
         if self._ki is not None:
             tau += apply_gain(self._ki, self._integral.update(t, ref.q - q))
         if self._friction and dyn._has_friction:

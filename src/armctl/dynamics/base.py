@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 from abc import ABC, abstractmethod
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -270,6 +271,11 @@ class Dynamics(RegressorMethods, ABC):
         """C(q, q̇) from the Christoffel symbols, c_ij = Σ_k ½(∂M_ij/∂q_k + ∂M_ik/∂q_j − ∂M_jk/∂q_i) q̇_k,
         so that Ṁ − 2C is skew-symmetric."""
         return self._coriolis(self._finite(q, "q"), self._finite(qd, "qd"))
+
+    def _pd_gravity_law(self, feedback: FloatArray) -> Callable[..., FloatArray] | None:
+        """The law τ = g(q) + F·[q_d; q̇_d; q; q̇] as one fused function (q, q̇, q_d, q̇_d) → τ where the backend
+        has one (``compile=True``), else None: then :class:`~armctl.controllers.PDGravity` composes it."""
+        return None
 
     def gravity_torque(self, q: ArrayLike) -> FloatArray:
         """g(q) = ∂U/∂q [N·m]."""
