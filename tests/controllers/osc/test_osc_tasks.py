@@ -33,6 +33,24 @@ def test_rotation_error_is_the_rotation_vector(seed: int, angle: float) -> None:
         assert min(np.abs(w - angle * axis).max(), np.abs(w + angle * axis).max()) < 1e-6
 
 
+@settings(max_examples=80, deadline=None)
+@given(st.integers(0, 10_000), st.sampled_from([1e-9, 0.3, 2.0, 3.1, np.pi - 1e-3, np.pi - 1e-6, np.pi]))
+def test_rotation_error_of_a_rounded_target(seed: int, angle: float) -> None:
+    """A target rounded to four decimals (which the target check accepts: R Rᵀ = I to 1e-4) is not quite a
+    rotation; its error must still be the rotation vector to the rounding's order, also near a half-turn, where
+    an earlier formula (θ from the trace, then the antisymmetric part over 2 sin θ) was off by up to π."""
+    rng = np.random.default_rng(seed)
+    axis = rng.normal(size=3)
+    axis /= np.linalg.norm(axis)
+    rot = Rotation.random(random_state=seed).as_matrix()
+    rot_ref = np.round(Rotation.from_rotvec(angle * axis).as_matrix() @ rot, 4)
+    w = rotation_error(rot_ref, rot)
+    off = np.abs(w - angle * axis).max()
+    if angle > np.pi - 1e-2:  # the axis sign is arbitrary at π, and ill-determined just below it
+        off = min(off, np.abs(w + angle * axis).max())
+    assert off < 5e-4
+
+
 def test_frame_kinematics_against_finite_differences(rng: np.random.Generator) -> None:
     """J from ``position(q + h δ) − position(q − h δ)``, J̇q̇ from ``J(q + h q̇) q̇ − J(q − h q̇) q̇`` — for both
     the Pinocchio one-pass path and the generic path of any backend."""

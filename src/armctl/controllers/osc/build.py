@@ -86,11 +86,11 @@ class StepQP:
     def arrays(self, k: int = 0, frozen: tuple[FloatArray, FloatArray] | None = None) -> tuple[FloatArray, ...]:
         """(H, g, A, b, C, l, u) of level ``k`` without slacks (the hot path of :meth:`problem`)."""
         lay = self.layout
-        Tt = self.levels[k].Tt
-        G = Tt.T.dot(Tt)  # [TᵀT, Tᵀt; tᵀT, tᵀt] (``.dot``: cheaper than ``@`` on small arrays)
+        Tn = self.levels[k].Tn
+        G = Tn.T.dot(Tn)  # [TᵀT, −Tᵀt; −tᵀT, tᵀt] (``.dot``: cheaper than ``@`` on small arrays)
         nx = lay.nx
         H = G[:nx, :nx] + (lay.reg_matrix if k == len(self.levels) - 1 else lay.reg_matrix_upper)
-        g = np.negative(G[:nx, nx])
+        g = G[nx, :nx]  # −Tᵀt: G's last row, a contiguous view (G is symmetric: NumPy's AᵀA is computed so)
         A, b = self.A, self.b
         if frozen is not None and frozen[0].shape[0]:
             A = np.vstack([A, frozen[0]])
@@ -131,12 +131,20 @@ class QPBuilder:
     def build(self, state: ModelState, t: float, ref: Reference) -> StepQP:
         lay = self.layout()
         n = self.n
-        A = lay.A_template.copy()
-        A[:n, :n] = state.mass
-        b = np.empty(A.shape[0])
-        np.negative(state.bias, out=b[:n])
-        if state.friction is not None:
-            b[:n] -= state.friction
+        if not lay.contacts:  # A = [M, −I], b = −(h + τ_f): the common case in as few array operations
+            A = np.concatenate((state.mass, lay.A_template[:, n:]), axis=1)
+            if state.friction is None:
+                b = np.negative(state.bias)
+            else:
+                b = np.add(state.bias, state.friction)
+                np.negative(b, out=b)
+        else:
+            A = lay.A_template.copy()
+            A[:n, :n] = state.mass
+            b = np.empty(A.shape[0])
+            np.negative(state.bias, out=b[:n])
+            if state.friction is not None:
+                b[:n] -= state.friction
         row = n
         for c in lay.contacts:
             gq, gf, rhs = c.equality_rows(state)
@@ -172,4 +180,4 @@ class QPBuilder:
             if J is not None:
                 jr[rows, cols] = J
             jr[rows, nx] = bb
-        return LevelRows(plan.tasks, jr, plan.weights(), plan.slices)
+        return LevelRows(plan.tasks, jr, plan.scale(), plan.slices)

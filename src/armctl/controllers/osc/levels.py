@@ -11,34 +11,36 @@ from armctl.controllers.osc.tasks.base import Task
 
 
 class LevelRows:
-    """Stacked task rows of one level: ``jr`` = [J | b] (m × (nx+1), unweighted), ``sqrt_w`` (m, 1) and the
-    per-task row slices; ``T``, ``t`` the weighted rows W^{1/2} J, W^{1/2} b."""
+    """Stacked task rows of one level: ``jr`` = [J | b] (m × (nx+1), unweighted), ``scale`` (m × (nx+1): each
+    row's square-root weight, negated in the last column) and the per-task row slices; ``T``, ``t`` the weighted
+    rows W^{1/2} J, W^{1/2} b, and ``Tn`` = scale ⊙ jr = [T | −t], whose Gram matrix holds the cost's TᵀT and
+    g = −Tᵀt (see StepQP.arrays)."""
 
-    __slots__ = ("_Tt", "jr", "nx", "slices", "sqrt_w", "tasks")
+    __slots__ = ("_Tn", "jr", "nx", "scale", "slices", "tasks")
 
-    def __init__(self, tasks: tuple[Task, ...], jr: FloatArray, sqrt_w: FloatArray, slices: dict[str, slice]
+    def __init__(self, tasks: tuple[Task, ...], jr: FloatArray, scale: FloatArray, slices: dict[str, slice]
                  ) -> None:
         self.tasks = tasks
         self.jr = jr
         self.nx = jr.shape[1] - 1
-        self.sqrt_w = sqrt_w
+        self.scale = scale
         self.slices = slices
-        self._Tt: FloatArray | None = None
+        self._Tn: FloatArray | None = None
 
     @property
-    def Tt(self) -> FloatArray:
-        """[T | t] = W^{1/2} [J | b]."""
-        if self._Tt is None:
-            self._Tt = self.sqrt_w * self.jr
-        return self._Tt
+    def Tn(self) -> FloatArray:
+        """[T | −t] (an elementwise product of equal shapes: cheaper than broadcasting a column of weights)."""
+        if self._Tn is None:
+            self._Tn = self.scale * self.jr
+        return self._Tn
 
     @property
     def T(self) -> FloatArray:
-        return self.Tt[:, : self.nx]
+        return self.Tn[:, : self.nx]
 
     @property
     def t(self) -> FloatArray:
-        return self.Tt[:, self.nx]
+        return np.negative(self.Tn[:, self.nx])
 
     def residuals(self, x: FloatArray) -> dict[str, FloatArray]:
         """Unweighted residual J_i x_i − b_i of every task of the level at ``x``."""
@@ -69,11 +71,15 @@ class LevelPlan:
         self.m = m
         self.nx = nx
         self.version = -1
-        self.sqrt_w = np.zeros((m, 1))
+        self._scale = np.zeros((m, nx + 1))
 
-    def weights(self) -> FloatArray:
+    def scale(self) -> FloatArray:
+        """The square-root weights of the rows, as LevelRows.scale (m × (nx+1), last column negated)."""
         if self.version != Task.weights_version:
-            self.sqrt_w = np.concatenate([tk.sqrt_weight for tk in self.tasks])[:, None] if self.tasks \
-                else np.zeros((0, 1))
+            scale = np.zeros((self.m, self.nx + 1))
+            if self.tasks:
+                scale[:] = np.concatenate([tk.sqrt_weight for tk in self.tasks])[:, None]
+                scale[:, self.nx] *= -1.0
+            self._scale = scale
             self.version = Task.weights_version
-        return self.sqrt_w
+        return self._scale

@@ -116,8 +116,8 @@ class ModelEvaluator:
         self.dynamics.model.frame(name)
 
     def evaluate(self, q: FloatArray, qd: FloatArray) -> ModelState:
-        """Model terms at (q, q̇)."""
-        fr = self.dynamics.friction_torque(qd) if self.has_friction else None
+        """Model terms at (q, q̇) (finite float (n,) arrays: the controller has checked them)."""
+        fr = self.dynamics._friction(qd) if self.has_friction else None
         if self._pin is not None:
             pd = self._pd
             self._pin.computeAllTerms(self._pm, pd, q, qd)

@@ -9,7 +9,6 @@ errors it still turns about the shortest axis).
 
 from __future__ import annotations
 
-import numpy as np
 from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray
@@ -35,5 +34,5 @@ class FrameOrientationTask(FrameTask):
                    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
         rot, w, dw = self.target.at(t)
         fk = state.frame(self.frame)
-        e = np.array(rotation_error(rot, fk.rotation))
+        e = rotation_error(rot, fk.rotation)
         return fk.jacobian[3:], fk.drift[3:], e, w - fk.velocity[3:], dw
