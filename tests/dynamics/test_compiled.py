@@ -112,6 +112,23 @@ def test_friction_variants_share_a_library_and_keep_their_own_coulomb_ratio(tmp_
     np.testing.assert_allclose(y[:, [12, 25]].diagonal(), [2.0 / 1.25, -0.5 / 1.25])  # F_c^± / F̄_c
 
 
+def test_a_variant_with_another_tool_frame_shares_the_library(tmp_path, monkeypatch) -> None:
+    # the generated code holds joint-space terms only: a tool frame elsewhere changes none of them
+    from dataclasses import replace
+
+    base = armctl.models.planar_2r()
+    armctl.Dynamics(base, compile=True, cache_dir=tmp_path)
+    monkeypatch.setattr(compiled, "symbolic_functions", lambda m: pytest.fail("rebuilt a cached library"))
+    other = replace(base, tool_frame=base.joint_names[0])
+    assert other.fingerprint() != base.fingerprint()
+    dc = armctl.Dynamics(other, compile=True, cache_dir=tmp_path)
+    assert len(list(tmp_path.rglob("*.so"))) == 1
+    q = np.array([0.3, 0.4])
+    np.testing.assert_allclose(dc.frame_pose(q), armctl.Dynamics(other).frame_pose(q), atol=1e-12)  # its own tool
+    assert not np.allclose(dc.frame_pose(q), armctl.Dynamics(base).frame_pose(q))
+    np.testing.assert_allclose(dc.gravity_torque(q), armctl.Dynamics(other).gravity_torque(q), rtol=1e-12)
+
+
 def test_a_payload_builds_its_own_library(tmp_path) -> None:
     arm = armctl.models.planar_2r()
     heavy = arm.with_payload(2.0, (0.05, 0.0, 0.0))

@@ -303,3 +303,6 @@ def test_fingerprint_keys_generated_code_not_friction() -> None:
     assert m.reduced(lock={"joint2": 0.3}).fingerprint(inertial=False) != k
     assert replace(m, gravity=np.array([0.0, -9.81, 0.0])).fingerprint(inertial=False) != k
     assert replace(m, tool_frame="joint3").fingerprint(inertial=False) != k
+    # code of joint-space terms only (compiled dynamics, compiled simulator step) does not depend on the tool frame
+    assert replace(m, tool_frame="joint3").fingerprint(tool=False) == m.fingerprint(tool=False)
+    assert m.with_payload(1.0).fingerprint(tool=False) != m.fingerprint(tool=False)

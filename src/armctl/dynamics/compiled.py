@@ -110,7 +110,7 @@ def symbolic_functions(model: RobotModel) -> list[cs.Function]:
 
 def library(model: RobotModel, cache_dir: str | os.PathLike[str] | None = None) -> dict[str, cs.Function]:
     """The compiled functions of ``model`` by name, built if the library is not cached yet."""
-    return codegen.cached(list(NAMES), f"dynamics|{model.fingerprint(inertial=True)}|v{_CODE_VERSION}",
+    return codegen.cached(list(NAMES), f"dynamics|{model.fingerprint(inertial=True, tool=False)}|v{_CODE_VERSION}",
                           lambda: symbolic_functions(model), cache_dir)
 
 

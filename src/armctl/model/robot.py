@@ -211,14 +211,16 @@ class RobotModel:
         """Names of the entries of :meth:`parameters`, e.g. ``'m[2]'`` for the mass of the third joint's link."""
         return tuple(f"{p}[{i}]" for i in range(self.n) for p in PARAMETER_NAMES)
 
-    def fingerprint(self, inertial: bool = True) -> str:
+    def fingerprint(self, inertial: bool = True, tool: bool = True) -> str:
         """A short hash keying caches of code generated from this model (the ``"lagrange"`` backend's
         compiled CasADi library uses ``fingerprint(inertial=False)``).
 
         Covered: gravity; every joint's kind, axis and placement; for joints with a gyroscopic motor, its gear
         ratio and spin axis (an armature changes no code: it is in π); the tool frame (name, joint,
         placement). ``inertial=True`` adds the link masses, centres of mass, inertia tensors and rotor
-        inertias. Not covered: friction, joint limits, joint names and the frames other than the tool frame.
+        inertias; ``tool=False`` leaves the tool frame out (for code of joint-space terms only: the compiled
+        dynamics and simulator step). Not covered: friction, joint limits, joint names and the frames other than
+        the tool frame.
         So equal fingerprints do *not* mean equal dynamics (models that differ only in friction share one);
         they mean the same generated code, whose π input carries the inertial and friction parameters at run
         time: every payload, perturbed or friction variant of an arm shares ``fingerprint(inertial=False)``."""
@@ -238,9 +240,10 @@ class RobotModel:
                     h.update(np.array([j.motor.inertia]).tobytes())
             elif j.motor is not None and inertial:  # an armature: generated code as without a motor
                 h.update(b"armature" + np.array([j.motor.inertia * j.motor.gear_ratio**2]).tobytes())
-        tool = self.frame(None)
-        h.update(f"{tool.name}:{tool.joint}".encode())
-        h.update(tool.placement.tobytes())
+        if tool:
+            frame = self.frame(None)
+            h.update(f"{frame.name}:{frame.joint}".encode())
+            h.update(frame.placement.tobytes())
         return h.hexdigest()[:16]
 
     def to_pinocchio(self) -> pinocchio.Model:

@@ -85,7 +85,7 @@ def _library_function(model: RobotModel, scheme: str, cache_dir: str | os.PathLi
 
     _check_scheme(scheme)
     name = f"step_{scheme}"
-    return cached([name], f"sim-step|{model.fingerprint(inertial=True)}|v{_CODE_VERSION}",
+    return cached([name], f"sim-step|{model.fingerprint(inertial=True, tool=False)}|v{_CODE_VERSION}",
                   lambda: [step_function(model, scheme)], cache_dir)[name]
 
 
