@@ -27,7 +27,8 @@ import casadi as cs
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, boolean
+from armctl._checks import FloatArray, boolean, check_cache_dir
+from armctl.dynamics import codegen
 from armctl.dynamics.base import _LAGRANGE_OPTIONS, Dynamics
 from armctl.model.robot import PARAMS_PER_JOINT, RobotModel
 
@@ -169,6 +170,7 @@ class LagrangeDynamics(Dynamics):
         super().__init__(model, backend, **options)
         self.rotor_coupling = boolean(rotor_coupling, "rotor_coupling")  # bool("False") would be True
         self.compiled = boolean(compile, "compile")  # checked before the build: "False" would compile
+        check_cache_dir(cache_dir, self.compiled)
         t0 = time.perf_counter()
         s = _Symbols(model, self.rotor_coupling)
         self._sym = s
@@ -189,9 +191,7 @@ class LagrangeDynamics(Dynamics):
         self.build_seconds = time.perf_counter() - t0
         self._cache_dir = cache_dir
         if self.compiled:
-            from armctl.dynamics.codegen import compiled
-
-            fns = compiled(fns, _cache_tag(model, self.rotor_coupling), cache_dir)
+            fns = codegen.compiled(fns, _cache_tag(model, self.rotor_coupling), cache_dir)
         self.functions: dict[str, cs.Function] = {f.name(): f for f in fns}
         with_pi = {"M": 1, "C": 2, "g": 1, "tau": 3, "T": 2, "U": 1}
         self._ev = {f.name(): _Evaluator(f, {with_pi[f.name()]: self._params} if f.name() in with_pi else None)

@@ -15,7 +15,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from armctl._checks import FLOAT, FloatArray, boolean
+from armctl._checks import FLOAT, FloatArray, boolean, check_cache_dir
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError
 from armctl.model.robot import PARAMS_PER_JOINT, RobotModel
@@ -56,9 +56,7 @@ class PinocchioDynamics(Dynamics):
         if boolean(compile, "compile") != self._compiled:
             raise InvalidParameterError(f"{type(self).__name__} is not made with compile={compile}: use "
                                         f"armctl.Dynamics(model, compile={compile})", value=compile)
-        if cache_dir is not None and not compile:
-            raise InvalidParameterError(f"cache_dir={cache_dir!r} is where compile=True keeps its code: pass "
-                                        "compile=True too, or no cache_dir", value=cache_dir)
+        check_cache_dir(cache_dir, compile)
         super().__init__(model, backend, **options)
         self._cache_dir = cache_dir
         self.pin_model = model.to_pinocchio()
