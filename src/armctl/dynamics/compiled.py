@@ -177,7 +177,8 @@ class CompiledDynamics(PinocchioDynamics):
     def _pd_gravity_law(self, feedback: FloatArray) -> Callable[..., FloatArray]:
         """τ = g(q) + F·[q_d; q̇_d; q; q̇] in one call of the generated code, for a PD + gravity controller with
         feedback matrix ``feedback`` = F (n × 4n, copied): a function (q, q̇, q_d, q̇_d) → τ (a new array) on
-        buffers of its own, so that each controller holds its own F. One concatenation copies the four vectors
+        buffers of its own, so that each controller holds its own F; its ``feedback`` attribute is that F, to be
+        overwritten in place when the gains change. One concatenation copies the four vectors
         into the stacked input: about a third of the cost of composing the law from the compiled g and NumPy.
         The caller checks the lengths (a wrong total raises ValueError; the controller's checks see to each
         vector's)."""
@@ -185,9 +186,11 @@ class CompiledDynamics(PinocchioDynamics):
         F = np.array(feedback, dtype=float, order="F")  # CasADi reads a matrix column by column
         if F.shape != (n, 4 * n):
             raise ValueError(f"feedback matrix has shape {F.shape}, not {(n, 4 * n)}")
+        flat = F.ravel(order="K")  # F's own memory, column by column (a view: checked below)
+        assert np.shares_memory(flat, F)
         buf, run = self._pd_function.buffer()
         x, out = np.zeros(4 * n), np.zeros(n)
-        for k, arr in enumerate((x, self._zero, F.reshape(-1, order="F"))):
+        for k, arr in enumerate((x, self._zero, flat)):
             buf.set_arg(k, memoryview(arr))
         buf.set_res(0, memoryview(out))
         concatenate = np.concatenate
@@ -197,7 +200,10 @@ class CompiledDynamics(PinocchioDynamics):
             run()
             return out.copy()
 
-        law.bound = (buf, x, F, self._zero, out)  # type: ignore[attr-defined]  # the buffer reads them: keep alive
+        # CasADi keeps no reference to what its buffer reads: these do. ``feedback``: F itself, which the
+        # controller overwrites in place (F[...] = new gains, the layout kept) when its gains change
+        law.bound = (buf, x, flat, self._zero, out)  # type: ignore[attr-defined]
+        law.feedback = F  # type: ignore[attr-defined]
         return law
 
     @property

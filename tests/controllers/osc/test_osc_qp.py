@@ -219,7 +219,11 @@ def test_controllers_pickle_for_process_pools(rng: np.random.Generator) -> None:
                                   PostureTask(7, weight=1e-3)], contacts=[contact])
     closed = ClosedFormOSC(dyn, pose, PostureTask(7, kp=25.0))
     for ctrl in (qp, closed):
+        ctrl(0.0, Q_HOME, np.zeros(7), armctl.Reference(Q_HOME))  # its layouts and level plans exist
         copy = pickle.loads(pickle.dumps(ctrl))
+        if ctrl is qp:  # the copy's plans belong to the copy's layouts (once they were keyed by the originals' ids)
+            plans, layouts = copy.builder._level_plans, list(copy.builder._layouts.values())
+            assert plans and all(any(k is lay for lay in layouts) for k in plans)
         ctrl.reset()
         for _ in range(3):
             q, qd = _state(rng)

@@ -82,7 +82,6 @@ class StepQP:
         return QPProblem(H, np.zeros(nx + m), A2, np.concatenate([b, lev.t]), C2, self.l, self.u, variables,
                          eq_names + slack_names, lay.ineq_names, k, names)
 
-
     def arrays(self, k: int = 0, frozen: tuple[FloatArray, FloatArray] | None = None) -> tuple[FloatArray, ...]:
         """(H, g, A, b, C, l, u) of level ``k`` without slacks (the hot path of :meth:`problem`)."""
         lay = self.layout
@@ -113,7 +112,9 @@ class QPBuilder:
         self.regularization = float(regularization)
         self.slacks = bool(slacks)
         self._layouts: dict[tuple[str, ...], Layout] = {}
-        self._level_plans: dict[int, list[LevelPlan]] = {}
+        # keyed by the layout itself, not its id(): a pickled builder's copies keep their pairing (pickle keeps
+        # shared objects shared), where ids of the original's layouts could come back as other objects' ids
+        self._level_plans: dict[Layout, list[LevelPlan]] = {}
 
     def layout(self) -> Layout:
         """The layout for the contacts active now."""
@@ -164,9 +165,9 @@ class QPBuilder:
         return StepQP(lay, A, b, lo, up, levels, lay.regularization, self.slacks)
 
     def _plans(self, lay: Layout) -> list[LevelPlan]:
-        plans = self._level_plans.get(id(lay))
+        plans = self._level_plans.get(lay)
         if plans is None:
-            plans = self._level_plans[id(lay)] = [
+            plans = self._level_plans[lay] = [
                 LevelPlan(tuple(tk for tk in self.tasks if tk.priority == k and tk.variable in lay.variables), lay)
                 for k in self.priorities]
         return plans

@@ -116,7 +116,9 @@ class ModelEvaluator:
         self.dynamics.model.frame(name)
 
     def evaluate(self, q: FloatArray, qd: FloatArray) -> ModelState:
-        """Model terms at (q, q̇) (finite float (n,) arrays: the controller has checked them)."""
+        """Model terms at (q, q̇), which must be finite float (n,) arrays: the controller's ``__call__``,
+        ``build`` and ``solve`` check them before they get here, and nothing is checked again (a NaN here gives
+        NaN terms, not an error)."""
         fr = self.dynamics._friction(qd) if self.has_friction else None
         if self._pin is not None:
             pd = self._pd
