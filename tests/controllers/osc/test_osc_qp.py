@@ -247,3 +247,54 @@ def test_a_lower_priority_level_is_solved_not_dropped(panda: armctl.Dynamics, rn
         assert sol.level_status == ("solved", "solved")
         for name, r in sol.residuals.items():
             assert np.abs(r).max() < 1e-3, (name, r)
+
+
+class _CascadeOnly:
+    """ProxQPSolver without ``solve_raw``: the controller takes its generic path (StepQP, solve_cascade)."""
+
+    def __init__(self) -> None:
+        from armctl.controllers.osc.solve import ProxQPSolver
+
+        self._s = ProxQPSolver()
+
+    def solve(self, p: QPProblem, slot: int = 0) -> object:
+        return self._s.solve(p, slot)
+
+    def reset(self) -> None:
+        self._s.reset()
+
+
+def test_the_single_level_path_is_the_generic_one(rng: np.random.Generator) -> None:
+    """A controller with one priority level solves without the step's intermediate objects and puts
+    last_solution together only when asked: torques, logs, the solution (x, residuals, forces) and the QP it
+    shows are those of the generic path (StepQP + solve_cascade, taken with a solver lacking ``solve_raw``),
+    with friction, the default (state-dependent) limits and a contact switched on and off."""
+    dyn = panda_dynamics(friction=True)
+    contact = Contact(mode="sliding", mu=0.5, slip_velocity=1e-3)
+
+    def make(solver: object) -> OperationalSpaceQP:
+        pose = FramePoseTask(kp=200.0)
+        pose.set_target(dyn.frame_pose(Q_HOME))
+        tasks = [pose, ContactForceTask(contact, [0.0, 0.0, 5.0], weight=0.1), PostureTask(7, weight=1e-3)]
+        return OperationalSpaceQP(dyn, tasks, contacts=[contact], solver=solver)
+
+    lean, generic = make("proxsuite"), make(_CascadeOnly())
+    assert lean.last_solution is None
+    for k in range(6):
+        contact.active = k % 3 != 2
+        q, qd = _state(rng)
+        ref = armctl.Reference(q)
+        np.testing.assert_allclose(lean(0.0, q, qd, ref), generic(0.0, q, qd, ref), rtol=1e-7, atol=1e-7)
+        assert lean.last_log.keys() == generic.last_log.keys()
+        a, b = lean.last_solution, generic.last_solution
+        assert a is lean.last_solution  # put together once
+        np.testing.assert_allclose(a.x, b.x, rtol=1e-7, atol=1e-7)
+        assert a.forces.keys() == b.forces.keys() == ({contact.name} if contact.active else set())
+        for name, r in b.residuals.items():
+            np.testing.assert_allclose(a.residuals[name], r, rtol=1e-6, atol=1e-6)
+        pa, pb = a.problem(0), b.problem(0)
+        assert pa.eq_names == pb.eq_names and pa.ineq_names == pb.ineq_names
+        for name in ("H", "g", "A", "b", "C", "l", "u"):
+            np.testing.assert_allclose(getattr(pa, name), getattr(pb, name), rtol=1e-12, atol=1e-12, err_msg=name)
+    lean.reset()
+    assert lean.last_solution is None

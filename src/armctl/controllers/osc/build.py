@@ -38,6 +38,15 @@ from armctl.model.robot import RobotModel
 from armctl.reference import Reference
 
 
+def level_cost(lev: LevelRows, reg_matrix: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """(H, g) of a level's cost without slacks: H = TᵀT + ε I (``reg_matrix``), g = −Tᵀt."""
+    Tn = lev.Tn
+    G = Tn.T.dot(Tn)  # [TᵀT, −Tᵀt; −tᵀT, tᵀt] (``.dot``: cheaper than ``@`` on small arrays)
+    nx = lev.nx
+    # g: G's last row, a contiguous view (G is symmetric: NumPy computes AᵀA so)
+    return G[:nx, :nx] + reg_matrix, G[nx, :nx]
+
+
 class StepQP:
     """Everything one control step solves: the constraints and, per priority level, the task rows.
     :meth:`problem` returns the QP of a level (with rows freezing the levels above, if given)."""
@@ -85,11 +94,7 @@ class StepQP:
     def arrays(self, k: int = 0, frozen: tuple[FloatArray, FloatArray] | None = None) -> tuple[FloatArray, ...]:
         """(H, g, A, b, C, l, u) of level ``k`` without slacks (the hot path of :meth:`problem`)."""
         lay = self.layout
-        Tn = self.levels[k].Tn
-        G = Tn.T.dot(Tn)  # [TᵀT, −Tᵀt; −tᵀT, tᵀt] (``.dot``: cheaper than ``@`` on small arrays)
-        nx = lay.nx
-        H = G[:nx, :nx] + (lay.reg_matrix if k == len(self.levels) - 1 else lay.reg_matrix_upper)
-        g = G[nx, :nx]  # −Tᵀt: G's last row, a contiguous view (G is symmetric: NumPy's AᵀA is computed so)
+        H, g = level_cost(self.levels[k], lay.reg_matrix if k == len(self.levels) - 1 else lay.reg_matrix_upper)
         A, b = self.A, self.b
         if frozen is not None and frozen[0].shape[0]:
             A = np.vstack([A, frozen[0]])
@@ -131,9 +136,15 @@ class QPBuilder:
 
     def build(self, state: ModelState, t: float, ref: Reference) -> StepQP:
         lay = self.layout()
+        A, b, lo, up = self.constraints(lay, state)
+        levels = [self.level(plan, state, t, ref) for plan in self.plans(lay)]
+        return StepQP(lay, A, b, lo, up, levels, lay.regularization, self.slacks)
+
+    def constraints(self, lay: Layout, state: ModelState) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        """(A, b, l, u) of layout ``lay`` at ``state``: equation of motion, contact rows, bounds."""
         n = self.n
         if not lay.contacts:  # A = [M, −I], b = −(h + τ_f): the common case in as few array operations
-            A = np.concatenate((state.mass, lay.A_template[:, n:]), axis=1)
+            A = np.concatenate((state.mass, lay.A_rest), axis=1)
             if state.friction is None:
                 b = np.negative(state.bias)
             else:
@@ -161,10 +172,10 @@ class QPBuilder:
             bounds = [lim.bounds(state) for lim in lay.limits]
             lo = np.concatenate([bd[0] for bd in bounds] + [lay.cone_l])
             up = np.concatenate([bd[1] for bd in bounds] + [lay.cone_u])
-        levels = [self._level(plan, state, t, ref) for plan in self._plans(lay)]
-        return StepQP(lay, A, b, lo, up, levels, lay.regularization, self.slacks)
+        return A, b, lo, up
 
-    def _plans(self, lay: Layout) -> list[LevelPlan]:
+    def plans(self, lay: Layout) -> list[LevelPlan]:
+        """The level plans of layout ``lay``, in priority order (made on first use)."""
         plans = self._level_plans.get(lay)
         if plans is None:
             plans = self._level_plans[lay] = [
@@ -173,7 +184,8 @@ class QPBuilder:
         return plans
 
     @staticmethod
-    def _level(plan: LevelPlan, state: ModelState, t: float, ref: Reference) -> LevelRows:
+    def level(plan: LevelPlan, state: ModelState, t: float, ref: Reference) -> LevelRows:
+        """The task rows of one level at ``state``."""
         jr = plan.template.copy()
         nx = plan.nx
         for tk, rows, cols in plan.entries:

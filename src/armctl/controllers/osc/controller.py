@@ -28,11 +28,11 @@ import numpy as np
 
 from armctl._checks import FloatArray, instances, scalar, vector
 from armctl.controllers.base import Controller
-from armctl.controllers.osc.build import QPBuilder, StepQP
+from armctl.controllers.osc.build import QPBuilder, StepQP, level_cost
 from armctl.controllers.osc.contact import Contact
 from armctl.controllers.osc.hierarchy import OSCSolution, solve_cascade
 from armctl.controllers.osc.limits import JointPositionLimit, JointVelocityLimit, Limit, TorqueLimit
-from armctl.controllers.osc.solve import make_solver
+from armctl.controllers.osc.solve import QPSolution, make_solver
 from armctl.controllers.osc.state import ModelEvaluator
 from armctl.controllers.osc.tasks.base import Task
 from armctl.dynamics.base import Dynamics
@@ -96,7 +96,52 @@ class OperationalSpaceQP(Controller):
         torque = [lim for lim in limits if isinstance(lim, TorqueLimit)]
         self._tau_lo = np.max([-lim.limit for lim in torque], axis=0) if torque else None
         self._tau_up = np.min([lim.limit for lim in torque], axis=0) if torque else None
-        self.last_solution: OSCSolution | None = None
+        self.last_solution = None
+        # one priority level without slacks: the step goes straight from the task rows to the solver, and
+        # last_solution is put together only when asked for (see _solve_single)
+        self._single_level = len(self.builder.priorities) == 1 and not self.builder.slacks
+
+    #: the last single-level step's parts (layout, A, b, l, u, task rows, solver result), until last_solution
+    #: is asked for
+    _pending: tuple[Any, ...] | None = None
+
+    @property
+    def last_solution(self) -> OSCSolution | None:
+        """The :class:`OSCSolution` of the last control step (None before the first or after reset)."""
+        pending = self._pending
+        if pending is not None:
+            self._pending = None
+            self._last_solution = self._single_solution(*pending)
+        return self._last_solution
+
+    @last_solution.setter
+    def last_solution(self, sol: OSCSolution | None) -> None:
+        self._pending = None
+        self._last_solution = sol
+
+    @staticmethod
+    def _single_step(lay: Any, A: FloatArray, b: FloatArray, lo: FloatArray, up: FloatArray, lev: Any) -> StepQP:
+        return StepQP(lay, A, b, lo, up, [lev], lay.regularization, False)
+
+    def _single_solution(self, lay: Any, A: FloatArray, b: FloatArray, lo: FloatArray, up: FloatArray, lev: Any,
+                         sol: QPSolution) -> OSCSolution:
+        return OSCSolution(self._single_step(lay, A, b, lo, up, lev), sol.x[: lay.nx], (sol,), ("solved",), None,
+                           [None])
+
+    def _solve_single(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference, raw: Any
+                      ) -> tuple[QPSolution, Any]:
+        """One priority level, no slacks, a solver with ``solve_raw``: the same QP as :meth:`build` and
+        :func:`solve_cascade` give, without their intermediate objects (a tenth of a step on the Panda); the
+        parts are kept for :attr:`last_solution`. Returns the solver's result and the layout."""
+        bld = self.builder
+        state = self.evaluator.evaluate(q, qd)
+        lay = bld.layout()
+        A, b, lo, up = bld.constraints(lay, state)
+        lev = bld.level(bld.plans(lay)[0], state, t, ref)
+        H, g = level_cost(lev, lay.reg_matrix)
+        sol = raw((H, g, A, b, lay.C, lo, up), 0, lambda: self._single_step(lay, A, b, lo, up, lev).problem(0))
+        self._pending = (lay, A, b, lo, up, lev, sol)
+        return sol, lay
 
     @property
     def priorities(self) -> list[int]:
@@ -116,6 +161,10 @@ class OperationalSpaceQP(Controller):
         return self._solve(scalar(t, "t"), q, qd, ref)
 
     def _solve(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> OSCSolution:
+        raw = getattr(self.solver, "solve_raw", None) if self._single_level else None
+        if raw is not None:
+            self._solve_single(t, q, qd, ref, raw)
+            return self.last_solution  # type: ignore[return-value]
         step = self.builder.build(self.evaluator.evaluate(q, qd), t, ref)
         sol = solve_cascade(step, self.solver)
         self.last_solution = sol
@@ -124,9 +173,19 @@ class OperationalSpaceQP(Controller):
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         """τ = the τ block of the QP solution (clipped onto the torque limits, which it meets to the solver's
         tolerance)."""
+        raw = getattr(self.solver, "solve_raw", None) if self._single_level else None
+        if raw is not None:  # the common case, without the solution object (see _solve_single)
+            qsol, lay = self._solve_single(t, q, qd, ref, raw)
+            x, n = qsol.x, self.n
+            tau = x[n: 2 * n].clip(self._tau_lo, self._tau_up) if self._tau_up is not None else x[n: 2 * n].copy()
+            log: dict[str, Any] = {"qp_iterations": qsol.iterations}
+            for c in lay.contacts:
+                log[f"force[{c.name}]"] = x[lay.variables[c.name]]
+            self.last_log = log
+            return tau
         sol = self._solve(t, q, qd, ref)
         tau = sol.tau.clip(self._tau_lo, self._tau_up) if self._tau_up is not None else sol.tau.copy()
-        log: dict[str, Any] = {"qp_iterations": sol.iterations}
+        log = {"qp_iterations": sol.iterations}
         for name, f in sol.forces.items():
             log[f"force[{name}]"] = f
         if len(sol.level_status) > 1:

@@ -73,3 +73,6 @@ class Layout:
         # equation of motion: A = [M, −I, −J_cᵀ …]; the −I block is constant
         self.A_template = np.zeros((len(self.eq_names), col))
         self.A_template[:n, n:2 * n] = -np.eye(n)
+        #: A's columns right of M's (contiguous: without contacts, A = [M, A_rest] in one concatenation)
+        self.A_rest = np.ascontiguousarray(self.A_template[:, n:])
+        self.A_rest.flags.writeable = False
