@@ -178,10 +178,9 @@ class CompiledDynamics(PinocchioDynamics):
         """τ = g(q) + F·[q_d; q̇_d; q; q̇] in one call of the generated code, for a PD + gravity controller with
         feedback matrix ``feedback`` = F (n × 4n, copied): a function (q, q̇, q_d, q̇_d) → τ (a new array) on
         buffers of its own, so that each controller holds its own F; its ``feedback`` attribute is that F, to be
-        overwritten in place when the gains change. One concatenation copies the four vectors
-        into the stacked input: about a third of the cost of composing the law from the compiled g and NumPy.
-        The caller checks the lengths (a wrong total raises ValueError; the controller's checks see to each
-        vector's)."""
+        overwritten in place when the gains change. One concatenation copies the four vectors into the stacked
+        input: about half the cost of composing the law from the compiled g and NumPy. The caller checks the
+        lengths (a wrong total raises ValueError; the controller's checks see to each vector's)."""
         n = self.n
         F = np.array(feedback, dtype=float, order="F")  # CasADi reads a matrix column by column
         if F.shape != (n, 4 * n):

@@ -102,8 +102,10 @@ class OperationalSpaceQP(Controller):
         self._single_level = len(self.builder.priorities) == 1 and not self.builder.slacks
 
     #: the last single-level step's parts (layout, A, b, l, u, task rows, solver result), until last_solution
-    #: is asked for
+    #: is asked for (class defaults: a controller pickled before these existed takes the generic path)
     _pending: tuple[Any, ...] | None = None
+    _last_solution: OSCSolution | None = None
+    _single_level = False
 
     @property
     def last_solution(self) -> OSCSolution | None:
@@ -131,8 +133,8 @@ class OperationalSpaceQP(Controller):
     def _solve_single(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference, raw: Any
                       ) -> tuple[QPSolution, Any]:
         """One priority level, no slacks, a solver with ``solve_raw``: the same QP as :meth:`build` and
-        :func:`solve_cascade` give, without their intermediate objects (a tenth of a step on the Panda); the
-        parts are kept for :attr:`last_solution`. Returns the solver's result and the layout."""
+        :func:`solve_cascade` give, without their intermediate objects (which cost about a tenth of a step on the
+        Panda); the parts are kept for :attr:`last_solution`. Returns the solver's result and the layout."""
         bld = self.builder
         state = self.evaluator.evaluate(q, qd)
         lay = bld.layout()

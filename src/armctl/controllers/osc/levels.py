@@ -14,7 +14,7 @@ class LevelRows:
     """Stacked task rows of one level: ``jr`` = [J | b] (m × (nx+1), unweighted), ``scale`` (m × (nx+1): each
     row's square-root weight, negated in the last column) and the per-task row slices; ``T``, ``t`` the weighted
     rows W^{1/2} J, W^{1/2} b, and ``Tn`` = scale ⊙ jr = [T | −t], whose Gram matrix holds the cost's TᵀT and
-    g = −Tᵀt (see StepQP.arrays)."""
+    g = −Tᵀt (see build.level_cost)."""
 
     __slots__ = ("_Tn", "jr", "nx", "scale", "slices", "tasks")
 
