@@ -54,6 +54,8 @@ def test_bench_quick_writes_every_scene_and_controller(tmp_path: Path) -> None:
                         assert o == "stable", (controller, kind, k, border)
                     if k > 1.4 * border:
                         assert o == "unstable", (controller, kind, k, border)
+    osc = fig["osc_speed"]  # issue 5's figure: the step holds a solve of the same QP, so it costs more
+    assert _finite(osc) and osc["step_s"] > osc["bare_solve_s"] > 0 and osc["ratio"] > 1
     for name in fig["charts"]:
         assert (tmp_path / name).stat().st_size > 1000
     assert "<img" in (tmp_path / "report.html").read_text()

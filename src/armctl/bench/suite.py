@@ -213,7 +213,7 @@ def _model_sections() -> dict[str, Any]:
 
 def run_suite(quick: bool = False, out: Path = Path("bench-out"), executor: Executor | str | None = None
               ) -> dict[str, Any]:
-    from armctl.bench import controller_speed, dynamics_speed, stability
+    from armctl.bench import controller_speed, dynamics_speed, osc_speed, stability
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -249,6 +249,7 @@ def run_suite(quick: bool = False, out: Path = Path("bench-out"), executor: Exec
         charts[f"{key}.png"] = (mod.__doc__ or key).strip().splitlines()[0]
     section("dynamics_speed", lambda: dynamics_speed.run(number=number, rounds=rounds, compile_if_needed=not quick))
     section("controller_speed", lambda: controller_speed.run(number=number, rounds=rounds))
+    section("osc_speed", lambda: osc_speed.run(count=100, rounds=5) if quick else osc_speed.run())
     figures["total_seconds"] = time.perf_counter() - t_all
     figures["charts"] = charts
     (out / "figures.json").write_text(json.dumps(figures, indent=1, default=_json_default))
@@ -269,7 +270,7 @@ def _json_default(x: Any) -> Any:
 
 
 def summary(figures: dict[str, Any]) -> str:
-    from armctl.bench import controller_speed, dynamics_speed
+    from armctl.bench import controller_speed, dynamics_speed, osc_speed
 
     lines = ["errors in rad (joint scenes) or m (panda_contact: tool position in the table plane); force: RMS "
              "normal-force error after settling [N]; over limits: share of samples beyond the effort limit / "
@@ -287,7 +288,8 @@ def summary(figures: dict[str, Any]) -> str:
         lines.append(f"{r['scene']:14s} {r['method']:26s} {r['rms_error']:9.2e} {r['max_error']:9.2e} {force} "
                      f"{r['compute_s'] * 1e6:8.1f} {r['torque_rms']:8.2f}  {over:>17s}  {outcome}")
     reports = {**{key: mod.summary for key, mod in _model_sections().items()},
-               "dynamics_speed": dynamics_speed.report, "controller_speed": controller_speed.report}
+               "dynamics_speed": dynamics_speed.report, "controller_speed": controller_speed.report,
+               "osc_speed": osc_speed.report}
     for key, report in reports.items():
         if key in figures:  # (every section, after a whole run)
             lines += ["", report(figures[key])]
