@@ -101,9 +101,12 @@ def states(count: int, dt: float = 1e-3) -> tuple[list[tuple[float, np.ndarray, 
     return seq, ctrl, closed
 
 
-def run(count: int = 400, rounds: int = 15) -> dict[str, Any]:
-    """Measure; returns a dict of figures (seconds per step and ratios)."""
+def run(count: int = 400, rounds: int = 15, quick: bool = False) -> dict[str, Any]:
+    """Measure; returns a dict of figures (seconds per step and ratios). ``quick``: 100 states, 5 rounds."""
     from proxsuite import proxqp
+
+    if quick:
+        count, rounds = 100, 5
 
     seq, ctrl, closed = states(count)
     ref = armctl.Reference(Q_HOME)
@@ -183,7 +186,7 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--quick", action="store_true", help="fewer states and rounds")
     ap.add_argument("--json", help="also write the figures to this file")
     a = ap.parse_args(argv)
-    fig = run(count=100, rounds=5) if a.quick else run()
+    fig = run(quick=a.quick)
     print(report(fig))
     if a.json:
         with open(a.json, "w") as fh:

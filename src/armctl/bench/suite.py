@@ -249,7 +249,7 @@ def run_suite(quick: bool = False, out: Path = Path("bench-out"), executor: Exec
         charts[f"{key}.png"] = (mod.__doc__ or key).strip().splitlines()[0]
     section("dynamics_speed", lambda: dynamics_speed.run(number=number, rounds=rounds, compile_if_needed=not quick))
     section("controller_speed", lambda: controller_speed.run(number=number, rounds=rounds))
-    section("osc_speed", lambda: osc_speed.run(count=100, rounds=5) if quick else osc_speed.run())
+    section("osc_speed", lambda: osc_speed.run(quick=quick))
     figures["total_seconds"] = time.perf_counter() - t_all
     figures["charts"] = charts
     (out / "figures.json").write_text(json.dumps(figures, indent=1, default=_json_default))
