@@ -32,12 +32,16 @@ def main() -> None:
     reference = Quintic(q0, q0 + np.array([0.6, 0.4, -0.3, 0.5, 0.4, -0.3, 0.5]), duration=2.0, t0=0.2)
     wn = 20.0
     m_bar = np.diag(model.mass_matrix(q0))
-    for name, controller in (("computed torque", ComputedTorque(model, wn**2, 2 * wn)),
-                             ("passivity-based", PassivityBased(model, wn, wn * m_bar))):
+    for name, controller in (
+        ("computed torque", ComputedTorque(model, wn**2, 2 * wn)),
+        ("passivity-based", PassivityBased(model, wn, wn * m_bar)),
+    ):
         res = simulate(plant, controller, reference, duration=3.0)
         err = np.abs(res.q - np.array([reference(t).q for t in res.t]))
-        print(f"{name:16s} diverged {res.diverged}; max error {err.max():.2e} rad, final {err[-1].max():.2e} rad; "
-              f"stuck joints at the end: {int(res.stuck[-1].sum())}")
+        print(
+            f"{name:16s} diverged {res.diverged}; max error {err.max():.2e} rad, final {err[-1].max():.2e} rad; "
+            f"stuck joints at the end: {int(res.stuck[-1].sum())}"
+        )
         stem = name.replace(" ", "_").replace("-", "_")
         res.save(args.out / f"{stem}.npz")
         assert np.allclose(SimResult.load(args.out / f"{stem}.npz").q, res.q)
@@ -47,9 +51,11 @@ def main() -> None:
             q_end = res.q[-1]
             dg = plant.gravity_torque(q_end) - model.gravity_torque(q_end)
             predicted = np.linalg.solve(model.mass_matrix(q_end), dg) / wn**2
-            print(f"  final error q_d − q      {np.round(reference(3.0).q - q_end, 4)} rad\n"
-                  f"  predicted K_p⁻¹ M̂⁻¹ Δg   {np.round(predicted, 4)} rad (largest where M̂ is small: the wrist;\n"
-                  "  the rest is held by stiction)")
+            print(
+                f"  final error q_d − q      {np.round(reference(3.0).q - q_end, 4)} rad\n"
+                f"  predicted K_p⁻¹ M̂⁻¹ Δg   {np.round(predicted, 4)} rad (largest where M̂ is small: the wrist;\n"
+                "  the rest is held by stiction)"
+            )
     print(f"results and charts in {args.out}/")
 
 

@@ -22,10 +22,12 @@ def main() -> None:
         # the QP regulates the force towards 10 N; the closed form has no force target: its force is whatever
         # its pose stiffness gives, pushing its target 1 cm below the table
         aim = "target 10 N" if method == "osc_qp" else "no force target; 10 N wanted"
-        print(f"{method:16s} normal force after settling {fn[late].min():5.2f}…{fn[late].max():5.2f} N "
-              f"({aim}, RMS error {m['force_rms_error']:.2f} N); in-plane position RMS "
-              f"{m['rms_error'] * 1e3:.2f} mm; contact lost: {m['contact_lost']}; peak torque "
-              f"{np.max(np.abs(res.tau_applied) / sc.plant.effort_limit):.0%} of the limit")
+        print(
+            f"{method:16s} normal force after settling {fn[late].min():5.2f}…{fn[late].max():5.2f} N "
+            f"({aim}, RMS error {m['force_rms_error']:.2f} N); in-plane position RMS "
+            f"{m['rms_error'] * 1e3:.2f} mm; contact lost: {m['contact_lost']}; peak torque "
+            f"{np.max(np.abs(res.tau_applied) / sc.plant.effort_limit):.0%} of the limit"
+        )
 
 
 if __name__ == "__main__":

@@ -20,20 +20,31 @@ def main() -> None:
     model = panda_with_friction()
     dyn = armctl.Dynamics(model)
     traj = time_optimal(dyn, WAYPOINTS, vel_limit="model", torque_limit="model", grid=100, torque_margin=0.1)
-    print(f"time-optimal duration {traj.duration:.3f} s; dense check: worst normalised excess "
-          f"{traj.check.worst_excess:.2e} (≤ 0 means within every limit)")
+    print(
+        f"time-optimal duration {traj.duration:.3f} s; dense check: worst normalised excess "
+        f"{traj.check.worst_excess:.2e} (≤ 0 means within every limit)"
+    )
     # the classic baseline: the same spline with a quintic rest-to-rest timing, uniformly scaled to fit
-    base = uniform_time_scaling(dyn, Trajectory(SplinePath(WAYPOINTS), PolynomialTiming(1.0)), vel_limit="model",
-                                torque_limit="model", torque_margin=0.1)
-    print(f"uniform time scaling: {base.duration:.3f} s, bound by {model.joint_names[base.joint]} {base.kind} "
-          f"(TOPP is {base.duration / traj.duration:.2f}× faster)")
+    base = uniform_time_scaling(
+        dyn,
+        Trajectory(SplinePath(WAYPOINTS), PolynomialTiming(1.0)),
+        vel_limit="model",
+        torque_limit="model",
+        torque_margin=0.1,
+    )
+    print(
+        f"uniform time scaling: {base.duration:.3f} s, bound by {model.joint_names[base.joint]} {base.kind} "
+        f"(TOPP is {base.duration / traj.duration:.2f}× faster)"
+    )
     wn = np.array([30.0, 30.0, 30.0, 30.0, 60.0, 60.0, 100.0])  # higher on the light wrist joints
     controller = ComputedTorque(dyn, wn**2, 2 * wn)
     res = simulate(dyn, controller, traj, duration=round(traj.duration + 0.3, 3), q0=WAYPOINTS[0])
     err = np.abs(res.q - np.array([traj(t).q for t in res.t]))
     usage = np.abs(res.tau_applied).max(axis=0) / model.effort_limit
-    print(f"closed loop: diverged {res.diverged}; max tracking error {err.max() * 1e3:.2f} mrad; peak torque "
-          f"{usage.max():.0%} of the limit ({model.joint_names[int(usage.argmax())]})")
+    print(
+        f"closed loop: diverged {res.diverged}; max tracking error {err.max() * 1e3:.2f} mrad; peak torque "
+        f"{usage.max():.0%} of the limit ({model.joint_names[int(usage.argmax())]})"
+    )
 
 
 if __name__ == "__main__":

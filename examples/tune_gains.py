@@ -42,8 +42,10 @@ def margins(kp: float, kd: float, control_dt: float, name: str) -> tuple[str, di
     margin = SampledDataAnalysis.of(kp, kd, control_dt, delay=1)
     if not margin.stable:
         raise SystemExit(f"{name}: {margin.summary()}")
-    text = (f"; sampled-data gain margin {margin.critical_multiplier:.1f} and phase margin "
-            f"{margin.phase_margin_deg:.0f}° at {1 / control_dt:g} Hz with one period of delay")
+    text = (
+        f"; sampled-data gain margin {margin.critical_multiplier:.1f} and phase margin "
+        f"{margin.phase_margin_deg:.0f}° at {1 / control_dt:g} Hz with one period of delay"
+    )
     return text, {"gain_margin": margin.critical_multiplier, "phase_margin_deg": margin.phase_margin_deg}
 
 
@@ -55,8 +57,10 @@ def tune_contact(name: str, out: Path) -> list[Path]:
     kp, kd = pd_from_bandwidth(wn, 1.0)
     text, record = margins(kp, kd, sc.control_dt, name)
     how = f"pose task: double pole of the decoupled ë = u at ω_n = {wn:g} rad/s{text}"
-    return [write_preset(name, method, {"kp": kp, "kd": kd}, how, "examples/tune_gains.py", out, omega_n=wn,
-                         **record) for method in sc.methods]
+    return [
+        write_preset(name, method, {"kp": kp, "kd": kd}, how, "examples/tune_gains.py", out, omega_n=wn, **record)
+        for method in sc.methods
+    ]
 
 
 def tune(name: str, out: Path) -> list[Path]:
@@ -74,31 +78,62 @@ def tune(name: str, out: Path) -> list[Path]:
     how_ct += text
     paths = []
     for method in ("computed_torque", "computed_torque_reduced"):
-        paths.append(write_preset(name, method, {"kp": kp, "kd": kd}, how_ct, "examples/tune_gains.py", out,
-                                  omega_n=wn, **record))
+        paths.append(
+            write_preset(
+                name, method, {"kp": kp, "kd": kd}, how_ct, "examples/tune_gains.py", out, omega_n=wn, **record
+            )
+        )
     record = {"omega_n": wn}  # the margins above are the computed-torque loop's, not the others'
 
     dyn = sc.dynamics("exact")
     q_start = sc.reference(0.0).q
     m_bar = np.diag(dyn.mass_matrix(q_start))
-    paths.append(write_preset(name, "pd_gravity", {"kp": (wn**2 * m_bar).tolist(), "kd": (2 * wn * m_bar).tolist()},
-                              "K_p = ω_n² M̄, K_d = 2 ω_n M̄ with M̄ = diag M(q_ref(0))", "examples/tune_gains.py",
-                              out, **record))
-    paths.append(write_preset(name, "passivity", {"lam": wn, "kd": (wn * m_bar).tolist()},
-                              "Λ = ω_n, K_D = ω_n M̄", "examples/tune_gains.py", out, **record))
+    paths.append(
+        write_preset(
+            name,
+            "pd_gravity",
+            {"kp": (wn**2 * m_bar).tolist(), "kd": (2 * wn * m_bar).tolist()},
+            "K_p = ω_n² M̄, K_d = 2 ω_n M̄ with M̄ = diag M(q_ref(0))",
+            "examples/tune_gains.py",
+            out,
+            **record,
+        )
+    )
+    paths.append(
+        write_preset(
+            name,
+            "passivity",
+            {"lam": wn, "kd": (wn * m_bar).tolist()},
+            "Λ = ω_n, K_D = ω_n M̄",
+            "examples/tune_gains.py",
+            out,
+            **record,
+        )
+    )
     pi = np.abs(sc.dynamics("reduced").parameters())
     gamma = 0.1 * (pi + 1e-2) / (0.01 * max(float(m_bar.max()), 1e-3))
-    paths.append(write_preset(name, "adaptive", {"lam": wn, "kd": (wn * m_bar).tolist(), "gamma": gamma.tolist(),
-                                                 "projection": True},
-                              "Λ = ω_n, K_D = ω_n M̄; Γ_i = 0.1 (|π_i| + 0.01)/(0.01 max M̄); projection on",
-                              "examples/tune_gains.py", out, **record))
+    paths.append(
+        write_preset(
+            name,
+            "adaptive",
+            {"lam": wn, "kd": (wn * m_bar).tolist(), "gamma": gamma.tolist(), "projection": True},
+            "Λ = ω_n, K_D = ω_n M̄; Γ_i = 0.1 (|π_i| + 0.01)/(0.01 max M̄); projection on",
+            "examples/tune_gains.py",
+            out,
+            **record,
+        )
+    )
     return paths
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--out", type=Path, default=presets_dir(),
-                        help="folder to write the presets to (default: %(default)s, the one armctl reads)")
+    parser.add_argument(
+        "--out",
+        type=Path,
+        default=presets_dir(),
+        help="folder to write the presets to (default: %(default)s, the one armctl reads)",
+    )
     parser.add_argument("--scenes", nargs="*", default=list(BANDWIDTH), help="scenes to tune (default: all)")
     args = parser.parse_args()
     for name in args.scenes:

@@ -24,8 +24,13 @@ def panda_mujoco() -> tuple[object, object]:
     text = re.sub(r"<collision>.*?</collision>", "", text, flags=re.S)
     text = re.sub(r'(<joint name="panda_finger_joint[12]"[^>]*type=)"prismatic"', r'\1"fixed"', text)
     text = re.sub(r"<dynamics[^>]*/>", "", text)
-    text = re.sub(r"(<robot[^>]*>)", r'\1<mujoco><compiler discardvisual="true" fusestatic="false" '
-                  r'balanceinertia="false" angle="radian"/></mujoco>', text, count=1)
+    text = re.sub(
+        r"(<robot[^>]*>)",
+        r'\1<mujoco><compiler discardvisual="true" fusestatic="false" '
+        r'balanceinertia="false" angle="radian"/></mujoco>',
+        text,
+        count=1,
+    )
     m = mujoco.MjModel.from_xml_string(text)
     m.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONSTRAINT | mujoco.mjtDisableBit.mjDSBL_CONTACT
     m.dof_damping[:] = 0.0

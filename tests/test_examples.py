@@ -18,8 +18,15 @@ ARGS = {"tune_gains.py": ["--out", "{tmp}/presets"], "closed_loop_simulation.py"
 def test_example_runs(script: str, tmp_path: Path) -> None:
     args = [a.format(tmp=tmp_path) for a in ARGS.get(script, [])]
     env = {**os.environ, "MPLBACKEND": "Agg"}
-    proc = subprocess.run([sys.executable, str(EXAMPLES / script), *args], cwd=tmp_path, env=env,
-                          capture_output=True, text=True, timeout=600, check=False)
+    proc = subprocess.run(
+        [sys.executable, str(EXAMPLES / script), *args],
+        cwd=tmp_path,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=600,
+        check=False,
+    )
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert proc.stdout.strip(), "an example says what it did"
     if script == "tune_gains.py":
@@ -42,6 +49,7 @@ def test_readme_code_runs_without_warnings(tmp_path: Path) -> None:
     script = tmp_path / "readme.py"
     script.write_text("import warnings\nwarnings.simplefilter('error')\n" + code)
     env = {**os.environ, "MPLBACKEND": "Agg"}
-    proc = subprocess.run([sys.executable, str(script)], cwd=tmp_path, env=env, capture_output=True, text=True,
-                          timeout=600, check=False)
+    proc = subprocess.run(
+        [sys.executable, str(script)], cwd=tmp_path, env=env, capture_output=True, text=True, timeout=600, check=False
+    )
     assert proc.returncode == 0, proc.stderr[-3000:]

@@ -62,26 +62,32 @@ def test_hold_refuses_what_is_not_a_number() -> None:
     assert Reference.hold(np.array([1, 2])).qd.tolist() == [0.0, 0.0]
 
 
-@pytest.mark.parametrize(("build", "match"), [
-    (lambda: Reference([]), r"^Reference q must hold at least one joint position, got \[\]"),
-    (lambda: Reference(np.zeros(0)), r"^Reference q must hold at least one joint position, got array\(\[\]"),
-    (lambda: Reference.hold([]), r"^Reference q must hold at least one joint position, got \[\]"),
-    (lambda: Quintic([], [], 1.0), r"^q0 must be a vector of at least one joint value, got shape \(0,\)"),
-    (lambda: Sinusoid([], 0.1, 1.0), r"^center must be a vector of at least one joint value, got shape \(0,\)"),
-    (lambda: WaypointSpline([0.0, 1.0], np.zeros((2, 0))), r"n >= 1 joints, got shape \(2, 0\)"),
-])
+@pytest.mark.parametrize(
+    ("build", "match"),
+    [
+        (lambda: Reference([]), r"^Reference q must hold at least one joint position, got \[\]"),
+        (lambda: Reference(np.zeros(0)), r"^Reference q must hold at least one joint position, got array\(\[\]"),
+        (lambda: Reference.hold([]), r"^Reference q must hold at least one joint position, got \[\]"),
+        (lambda: Quintic([], [], 1.0), r"^q0 must be a vector of at least one joint value, got shape \(0,\)"),
+        (lambda: Sinusoid([], 0.1, 1.0), r"^center must be a vector of at least one joint value, got shape \(0,\)"),
+        (lambda: WaypointSpline([0.0, 1.0], np.zeros((2, 0))), r"n >= 1 joints, got shape \(2, 0\)"),
+    ],
+)
 def test_a_reference_of_no_joint_is_refused(build: Callable[[], Any], match: str) -> None:
     with pytest.raises(ShapeError, match=match):
         build()
 
 
-@pytest.mark.parametrize(("build", "match"), [
-    (lambda m: Reference(m), r"^Reference q has masked entries: fill them first"),
-    (lambda m: Reference([0.0, 0.0], m), r"^Reference qd has masked entries: fill them first"),
-    (lambda m: Reference.hold(m), r"^Reference q has masked entries: fill them first"),
-    (lambda m: Quintic(m, [0.0, 0.0], 1.0), r"^q0 has masked entries: fill them first"),
-    (lambda m: Sinusoid([0.0, 0.0], m, 1.0), r"^amplitude has masked entries: fill them first"),
-])
+@pytest.mark.parametrize(
+    ("build", "match"),
+    [
+        (lambda m: Reference(m), r"^Reference q has masked entries: fill them first"),
+        (lambda m: Reference([0.0, 0.0], m), r"^Reference qd has masked entries: fill them first"),
+        (lambda m: Reference.hold(m), r"^Reference q has masked entries: fill them first"),
+        (lambda m: Quintic(m, [0.0, 0.0], 1.0), r"^q0 has masked entries: fill them first"),
+        (lambda m: Sinusoid([0.0, 0.0], m, 1.0), r"^amplitude has masked entries: fill them first"),
+    ],
+)
 def test_a_masked_array_is_refused(build: Callable[[Any], Any], match: str) -> None:
     # NumPy drops the mask: the data under it (2.0 here) would have been used
     masked = np.ma.masked_array([1.0, 2.0], mask=[False, True])

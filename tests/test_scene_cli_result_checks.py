@@ -51,8 +51,11 @@ def numeric() -> SimResult:
 
 # ------------------------------------------------------------------------------ 1. logs
 def test_logs_that_are_not_numbers_are_left_out_with_a_warning_naming_them() -> None:
-    with pytest.warns(SimulationWarning, match=r"'none' \(not numbers: NoneType\).*'info' \(not numbers: dict\)"
-                                               r".*'ragged' \(entries of different shapes\)"):
+    with pytest.warns(
+        SimulationWarning,
+        match=r"'none' \(not numbers: NoneType\).*'info' \(not numbers: dict\)"
+        r".*'ragged' \(entries of different shapes\)",
+    ):
         res = _run()
     assert set(res.logs) == {"number"}
     np.testing.assert_array_equal(res.logs["number"], np.arange(len(res.t)))
@@ -111,14 +114,22 @@ def test_load_of_a_partial_file_lists_the_missing_entries(numeric: SimResult, tm
     with np.load(numeric.save(tmp_path / "full")) as data:
         kept = {k: data[k] for k in data.files if k not in ("qd", "energy")}
     np.savez(tmp_path / "part.npz", **kept)
-    with pytest.raises(InvalidParameterError, match=r"part\.npz' is incomplete: it lacks the entries "
-                                                    r"\['qd', 'energy'\]"):
+    with pytest.raises(
+        InvalidParameterError,
+        match=r"part\.npz' is incomplete: it lacks the entries "
+        r"\['qd', 'energy'\]",
+    ):
         SimResult.load(tmp_path / "part.npz")
 
 
-@pytest.mark.parametrize(("meta", "match"), [("{not json", r"has an unreadable entry"),
-                                             (json.dumps({"info": {}}), r"has a 'meta' entry without the keys"),
-                                             (json.dumps([1, 2]), r"has a 'meta' entry without the keys")])
+@pytest.mark.parametrize(
+    ("meta", "match"),
+    [
+        ("{not json", r"has an unreadable entry"),
+        (json.dumps({"info": {}}), r"has a 'meta' entry without the keys"),
+        (json.dumps([1, 2]), r"has a 'meta' entry without the keys"),
+    ],
+)
 def test_load_of_bad_meta_is_a_named_error(numeric: SimResult, tmp_path: Path, meta: str, match: str) -> None:
     with np.load(numeric.save(tmp_path / "full")) as data:
         kept = {k: data[k] for k in data.files}
@@ -128,8 +139,7 @@ def test_load_of_bad_meta_is_a_named_error(numeric: SimResult, tmp_path: Path, m
         SimResult.load(tmp_path / "meta.npz")
 
 
-def test_load_of_an_object_log_written_by_an_old_version_is_a_named_error(numeric: SimResult,
-                                                                          tmp_path: Path) -> None:
+def test_load_of_an_object_log_written_by_an_old_version_is_a_named_error(numeric: SimResult, tmp_path: Path) -> None:
     with np.load(numeric.save(tmp_path / "full")) as data:
         kept = {k: data[k] for k in data.files}
     kept["log:mode"] = np.array([None, None], dtype=object)
@@ -144,10 +154,15 @@ def test_plot_energy_of_a_run_without_samples_is_a_named_error(numeric: SimResul
         _empty(numeric).plot_energy()
 
 
-@pytest.mark.parametrize(("joints", "match"), [([5], r"joint index 5 is out of range: the result has 1 joints"),
-                                               ([-1], r"joints\[0\] \(a joint index 0 … 0\) .*>= 0, got -1"),
-                                               ([0.5], r"joints\[0\].*got 0\.5"),
-                                               ([], r"at least one joint index")])
+@pytest.mark.parametrize(
+    ("joints", "match"),
+    [
+        ([5], r"joint index 5 is out of range: the result has 1 joints"),
+        ([-1], r"joints\[0\] \(a joint index 0 … 0\) .*>= 0, got -1"),
+        ([0.5], r"joints\[0\].*got 0\.5"),
+        ([], r"at least one joint index"),
+    ],
+)
 def test_plot_refuses_bad_joint_indices(numeric: SimResult, joints: Any, match: str) -> None:
     with pytest.raises(InvalidParameterError, match=match):
         numeric.plot(joints=joints)
@@ -194,14 +209,18 @@ def test_metrics_of_a_valid_run_and_of_no_samples(pendulum_run: tuple[Any, SimRe
     m = sc.metrics(res, "pd_gravity", timing_samples=5)
     assert m["compute_s"] > 0 and math.isfinite(m["rms_error"]) and m["limit_violation_share"] == 0.0
     empty = sc.metrics(_empty(res), "pd_gravity")
-    assert all(math.isnan(empty[k]) for k in ("compute_s", "rms_error", "max_error", "torque_rms",
-                                               "limit_violation_share"))
+    assert all(
+        math.isnan(empty[k]) for k in ("compute_s", "rms_error", "max_error", "torque_rms", "limit_violation_share")
+    )
 
 
 def test_scene_gains_are_checked(pendulum_run: tuple[Any, SimResult]) -> None:
     sc, _ = pendulum_run
-    with pytest.raises(UnknownNameError, match=r"unknown pd_gravity gain 'bogus'; valid pd_gravity gains: 'kp', "
-                                               r"'kd', 'ki'"):
+    with pytest.raises(
+        UnknownNameError,
+        match=r"unknown pd_gravity gain 'bogus'; valid pd_gravity gains: 'kp', "
+        r"'kd', 'ki'",
+    ):
         sc.controller("pd_gravity", gains={"kp": 1.0, "kd": 1.0, "bogus": 1})
     with pytest.raises(InvalidParameterError, match=r"gains of 'pd_gravity' lack 'kd'; give kp, kd \(optional: ki\)"):
         sc.controller("pd_gravity", gains={"kp": 1.0})
@@ -219,8 +238,9 @@ def test_limit_violations_of_each_kind(pendulum_run: tuple[Any, SimResult]) -> N
     sc, res = pendulum_run
     joint = sc.plant.joints[0]  # the pendulum has no position range: give its plant one
     limits = dataclasses.replace(joint.limits, lower=-1.0, upper=1.0)
-    sc = dataclasses.replace(sc, plant=dataclasses.replace(sc.plant, joints=(dataclasses.replace(joint,
-                                                                                                  limits=limits),)))
+    sc = dataclasses.replace(
+        sc, plant=dataclasses.replace(sc.plant, joints=(dataclasses.replace(joint, limits=limits),))
+    )
     p = sc.plant
     n = len(res.t)
     tau, qd, q = res.tau.copy(), res.qd.copy(), res.q.copy()
@@ -238,16 +258,18 @@ def test_limit_violations_of_each_kind(pendulum_run: tuple[Any, SimResult]) -> N
     assert {k: m[k] for k in got} == got
 
 
-def test_compute_time_is_a_median_of_replays(pendulum_run: tuple[Any, SimResult],
-                                             monkeypatch: pytest.MonkeyPatch) -> None:
+def test_compute_time_is_a_median_of_replays(
+    pendulum_run: tuple[Any, SimResult], monkeypatch: pytest.MonkeyPatch
+) -> None:
     import armctl.scenes.base as base
 
     sc, res = pendulum_run
     window = sc.replay_window(res, 7)
     assert len(window["t"]) == 7 and window["t"][0] == pytest.approx(float(res.t[7]))  # the middle of 21
     calls: list[int] = []
-    monkeypatch.setattr(base, "replay_times", lambda ctrl, w, passes: calls.append(passes) or
-                        [100.0, 3.0, 1.0, 2.0, 50.0, 4.0][:passes])
+    monkeypatch.setattr(
+        base, "replay_times", lambda ctrl, w, passes: calls.append(passes) or [100.0, 3.0, 1.0, 2.0, 50.0, 4.0][:passes]
+    )
     assert sc.compute_time("pd_gravity", window, rounds=5) == 3.0  # median of the five after the warm-up
     assert calls == [6]
     assert math.isnan(sc.compute_time("pd_gravity", {"t": [], "q": [], "qd": [], "ref": []}))
@@ -256,8 +278,11 @@ def test_compute_time_is_a_median_of_replays(pendulum_run: tuple[Any, SimResult]
 
 def test_dynamics_of_an_unknown_model_is_a_named_error(pendulum_run: tuple[Any, SimResult]) -> None:
     sc, _ = pendulum_run
-    with pytest.raises(UnknownNameError, match=r"unknown scene model 'foo'; valid scene models: 'plant', 'exact', "
-                                               r"'reduced'"):
+    with pytest.raises(
+        UnknownNameError,
+        match=r"unknown scene model 'foo'; valid scene models: 'plant', 'exact', "
+        r"'reduced'",
+    ):
         sc.dynamics("foo")
 
 
@@ -266,12 +291,15 @@ def contact() -> Any:
     return scene("panda_contact")
 
 
-@pytest.mark.parametrize(("kw", "error", "match"), [({"slide_time": 0}, InvalidParameterError,
-                                                     r"slide_time must be > 0, got 0"),
-                                                    ({"force": float("nan")}, NonFiniteError, r"force must be finite"),
-                                                    ({"force": -1.0}, InvalidParameterError, r"force must be >= 0"),
-                                                    ({"slide": "0.1"}, InvalidParameterError,
-                                                     r"slide must be a real number, got '0.1'")])
+@pytest.mark.parametrize(
+    ("kw", "error", "match"),
+    [
+        ({"slide_time": 0}, InvalidParameterError, r"slide_time must be > 0, got 0"),
+        ({"force": float("nan")}, NonFiniteError, r"force must be finite"),
+        ({"force": -1.0}, InvalidParameterError, r"force must be >= 0"),
+        ({"slide": "0.1"}, InvalidParameterError, r"slide must be a real number, got '0.1'"),
+    ],
+)
 def test_press_and_slide_checks_its_parameters(contact: Any, kw: dict[str, Any], error: type, match: str) -> None:
     with pytest.raises(error, match=match):
         PressAndSlide(contact.dynamics("exact"), contact.z_table, contact.mu, **kw)
@@ -286,8 +314,9 @@ def test_contact_scene_gains_are_checked_and_applied(contact: Any) -> None:
 
 
 @pytest.mark.parametrize("method", ["osc_qp", "osc_closed_form"])
-def test_contact_scene_reads_its_presets(contact: Any, method: str, tmp_path: Path,
-                                        monkeypatch: pytest.MonkeyPatch) -> None:
+def test_contact_scene_reads_its_presets(
+    contact: Any, method: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     shipped = load_preset("panda_contact", method)
     assert shipped["written_by"] == "examples/tune_gains.py" and "ω_n = 20" in shipped["how"]
     ctrl = contact.controller(method)
@@ -330,16 +359,26 @@ def no_bench(monkeypatch: pytest.MonkeyPatch) -> list[Path]:
 
 def _out_case(tmp_path: Path, case: str) -> str:
     (tmp_path / "file.txt").write_text("x")
-    return {"empty": "", "blank": "  ", "file": str(tmp_path / "file.txt"),
-            "under_file": str(tmp_path / "file.txt" / "sub")}[case]
+    return {
+        "empty": "",
+        "blank": "  ",
+        "file": str(tmp_path / "file.txt"),
+        "under_file": str(tmp_path / "file.txt" / "sub"),
+    }[case]
 
 
-@pytest.mark.parametrize(("case", "match"), [("empty", r"--out must name a folder, got an empty path"),
-                                             ("blank", r"--out must name a folder, got an empty path"),
-                                             ("file", r"file\.txt' exists and is not a folder"),
-                                             ("under_file", r"sub' cannot be created or written to")])
-def test_bench_refuses_a_bad_out_before_running(tmp_path: Path, capsys: pytest.CaptureFixture[str],
-                                                no_bench: list[Path], case: str, match: str) -> None:
+@pytest.mark.parametrize(
+    ("case", "match"),
+    [
+        ("empty", r"--out must name a folder, got an empty path"),
+        ("blank", r"--out must name a folder, got an empty path"),
+        ("file", r"file\.txt' exists and is not a folder"),
+        ("under_file", r"sub' cannot be created or written to"),
+    ],
+)
+def test_bench_refuses_a_bad_out_before_running(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], no_bench: list[Path], case: str, match: str
+) -> None:
     from armctl.cli import main
 
     with pytest.raises(SystemExit) as exc:
@@ -358,8 +397,9 @@ def test_bench_accepts_a_new_folder(tmp_path: Path, no_bench: list[Path]) -> Non
     assert no_bench == [tmp_path / "a" / "b"] and (tmp_path / "a" / "b").is_dir()
 
 
-def test_bench_reports_the_size_of_the_file_it_wrote(tmp_path: Path, no_bench: list[Path],
-                                                     capsys: pytest.CaptureFixture[str]) -> None:
+def test_bench_reports_the_size_of_the_file_it_wrote(
+    tmp_path: Path, no_bench: list[Path], capsys: pytest.CaptureFixture[str]
+) -> None:
     # it printed the size of an unindented dump, 20 % below the file on disk (written with indent=1)
     from armctl.cli import main
 

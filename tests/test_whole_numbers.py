@@ -47,26 +47,34 @@ def test_every_entry_point_takes_an_integral_float_as_its_integer() -> None:
     assert Contact(facets=np.int32(6)).facets == 6
 
 
-@pytest.mark.parametrize("make", [
-    lambda: simulate(armctl.models.pendulum(), lambda t, q, qd, r: -q, armctl.Reference.hold([0.0]), 0.01,
-                     delay=True),
-    lambda: simulate(armctl.models.pendulum(), lambda t, q, qd, r: -q, armctl.Reference.hold([0.0]), 0.01,
-                     seed=1.5),
-    lambda: sampled_pd_loop(100.0, 10.0, 1e-3, delay=0.5),
-    lambda: FramePositionTask(priority=True),
-    lambda: Contact(facets=2.0),
-])
+@pytest.mark.parametrize(
+    "make",
+    [
+        lambda: simulate(
+            armctl.models.pendulum(), lambda t, q, qd, r: -q, armctl.Reference.hold([0.0]), 0.01, delay=True
+        ),
+        lambda: simulate(
+            armctl.models.pendulum(), lambda t, q, qd, r: -q, armctl.Reference.hold([0.0]), 0.01, seed=1.5
+        ),
+        lambda: sampled_pd_loop(100.0, 10.0, 1e-3, delay=0.5),
+        lambda: FramePositionTask(priority=True),
+        lambda: Contact(facets=2.0),
+    ],
+)
 def test_entry_points_refuse_what_is_not_a_count(make: object) -> None:
     with pytest.raises(InvalidParameterError, match="must be a whole number >= "):
         make()  # type: ignore[operator]
 
 
-@pytest.mark.parametrize(("value", "error", "match"), [
-    ([np.array(1.0), np.array([1.0, 2.0])], "ShapeError", r"different shapes \[\(\), \(2,\)\]"),
-    ([[1.0, 2.0], [3.0]], "ShapeError", r"different shapes \[\(2,\), \(1,\)\]"),
-    (["ab", [1.0, 2.0]], "InvalidParameterError", "must hold real numbers"),
-    ([[[1.0, 2.0], [3.0]], [[1.0, 2.0], [3.0, 4.0]]], "InvalidParameterError", "must hold real numbers"),
-])
+@pytest.mark.parametrize(
+    ("value", "error", "match"),
+    [
+        ([np.array(1.0), np.array([1.0, 2.0])], "ShapeError", r"different shapes \[\(\), \(2,\)\]"),
+        ([[1.0, 2.0], [3.0]], "ShapeError", r"different shapes \[\(2,\), \(1,\)\]"),
+        (["ab", [1.0, 2.0]], "InvalidParameterError", "must hold real numbers"),
+        ([[[1.0, 2.0], [3.0]], [[1.0, 2.0], [3.0, 4.0]]], "InvalidParameterError", "must hold real numbers"),
+    ],
+)
 def test_ragged_arrays_are_named_as_such(value: object, error: str, match: str) -> None:
     # a ragged list made NumPy raise "inhomogeneous shape", reported as "must hold real numbers"
     from armctl import errors

@@ -15,8 +15,21 @@ from armctl.reference import Reference
 from armctl.sim import SimResult, simulate
 
 __version__ = "0.1.0"
-__all__ = ["ArmctlError", "Dynamics", "Reference", "RobotModel", "SimResult", "bench", "controllers", "errors",
-           "models", "planning", "scenes", "simulate", "tuning"]
+__all__ = [
+    "ArmctlError",
+    "Dynamics",
+    "Reference",
+    "RobotModel",
+    "SimResult",
+    "bench",
+    "controllers",
+    "errors",
+    "models",
+    "planning",
+    "scenes",
+    "simulate",
+    "tuning",
+]
 
 # subpackages imported on first use (PEP 562), so that ``import armctl`` does not pay for python-control,
 # matplotlib or the scenes' models: ``armctl.tuning.linearize(...)`` works without importing armctl.tuning

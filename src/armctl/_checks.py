@@ -23,15 +23,15 @@ def real_array(x: ArrayLike, name: str) -> FloatArray:
     than cut to their real part, strings and None rather than passed on to fail somewhere else, booleans rather
     than taken as 0 and 1)."""
     if isinstance(x, np.ma.MaskedArray) and np.ma.getmaskarray(x).any():  # asarray would take the hidden data
-        raise InvalidParameterError(f"{name} has masked entries: fill them first (x.filled(value)), got {x!r}",
-                                    value=x)
+        raise InvalidParameterError(f"{name} has masked entries: fill them first (x.filled(value)), got {x!r}", value=x)
     ragged = None
     try:
         a = np.asarray(x)
         kind = a.dtype.kind
         # complex, text (NumPy would parse "0.3"), or an object array holding any of them
-        if kind in "cUS" or (kind == "O" and any(v is None or isinstance(v, str | bytes | complex | np.complexfloating)
-                                                 for v in a.flat)):  # None: NumPy would make it NaN
+        if kind in "cUS" or (
+            kind == "O" and any(v is None or isinstance(v, str | bytes | complex | np.complexfloating) for v in a.flat)
+        ):  # None: NumPy would make it NaN
             raise TypeError(kind)
         if kind != "b":
             return a.astype(float, copy=False)
@@ -41,8 +41,9 @@ def real_array(x: ArrayLike, name: str) -> FloatArray:
         if ragged is None:
             raise InvalidParameterError(f"{name} must hold real numbers, got {_shown(x)}", value=x) from None
     if ragged is not None:
-        raise ShapeError(f"{name} must be a rectangular array, but its rows have different shapes {ragged}: got "
-                         f"{_shown(x)}", value=x)
+        raise ShapeError(
+            f"{name} must be a rectangular array, but its rows have different shapes {ragged}: got {_shown(x)}", value=x
+        )
     what = "a real number, not a boolean" if a.ndim == 0 else "real numbers, not booleans"
     raise InvalidParameterError(f"{name} must be {what}, got {_shown(x)}", value=x)
 
@@ -120,21 +121,23 @@ def instances(items: Any, cls: type, name: str, label: str, *, single: bool = Fa
             raise TypeError(type(items).__name__)
         out = tuple(items)
     except TypeError:
-        raise InvalidParameterError(f"{name} must be {f'a {label} or ' if single else ''}a sequence of {label} "
-                                    f"objects, got {items!r}", value=items) from None
+        raise InvalidParameterError(
+            f"{name} must be {f'a {label} or ' if single else ''}a sequence of {label} objects, got {items!r}",
+            value=items,
+        ) from None
     for it in out:
         if not isinstance(it, cls):
-            raise InvalidParameterError(f"{name} must be {label} objects, got {it!r} ({type(it).__name__})",
-                                        value=it)
+            raise InvalidParameterError(f"{name} must be {label} objects, got {it!r} ({type(it).__name__})", value=it)
     return out
 
 
 def whole_number(x: Any, name: str, minimum: int = 0) -> int:
     """``x`` as an int: an int, a NumPy integer or a float with an integral value (2.0), at least ``minimum``.
     Booleans, fractions, NaN/inf and anything else raise an InvalidParameterError naming the value."""
-    whole = (not isinstance(x, bool | np.bool_)
-             and (isinstance(x, int | np.integer)
-                  or (isinstance(x, float | np.floating) and math.isfinite(x) and float(x).is_integer())))
+    whole = not isinstance(x, bool | np.bool_) and (
+        isinstance(x, int | np.integer)
+        or (isinstance(x, float | np.floating) and math.isfinite(x) and float(x).is_integer())
+    )
     if not whole or x < minimum:
         raise InvalidParameterError(f"{name} must be a whole number >= {minimum}, got {x!r}", value=x)
     return int(x)
@@ -172,16 +175,14 @@ def gain_matrix(k: ArrayLike, n: int, name: str) -> FloatArray:
             raise ShapeError(f"{name} as a vector must have length {n}, got {a.shape}", value=k)
         a = np.diag(a)
     if a.shape != (n, n):
-        raise ShapeError(f"{name} must be a scalar, a ({n},) vector or a ({n}, {n}) matrix, got {a.shape}",
-                         value=k)
+        raise ShapeError(f"{name} must be a scalar, a ({n},) vector or a ({n}, {n}) matrix, got {a.shape}", value=k)
     if not np.isfinite(a).all():
         raise NonFiniteError(f"{name} holds NaN or inf", value=k)
     if not np.allclose(a, a.T, rtol=1e-10, atol=1e-12):
         raise InvalidParameterError(f"{name} must be symmetric", value=k)
     lo = float(np.linalg.eigvalsh(a).min())
     if lo <= 0:
-        raise InvalidParameterError(f"{name} must be positive definite; its smallest eigenvalue is {lo:g}",
-                                    value=k)
+        raise InvalidParameterError(f"{name} must be positive definite; its smallest eigenvalue is {lo:g}", value=k)
     return a
 
 
@@ -193,8 +194,9 @@ class Gain:
     ``_gains_changed()``, if any, runs after every assignment, so a gain reassigned between calls takes effect.
     ``optional``: None is allowed (no such term)."""
 
-    def __init__(self, doc: str, size: Any = lambda owner: owner.n, label: Any = lambda owner, name: name,
-                 optional: bool = False) -> None:
+    def __init__(
+        self, doc: str, size: Any = lambda owner: owner.n, label: Any = lambda owner, name: name, optional: bool = False
+    ) -> None:
         self.__doc__ = doc
         self.size, self.label, self.optional = size, label, optional
 
@@ -207,8 +209,11 @@ class Gain:
     def __set__(self, obj: Any, value: ArrayLike | None) -> None:
         # a read-only copy: the law's precomputed forms follow assignments only, so the gain must not change
         # under them (a caller's array edited in place, or ``ctrl.kp[0, 0] = …``)
-        full = None if value is None and self.optional else \
-            readonly(np.array(gain_matrix(value, self.size(obj), self.label(obj, self.name))))  # type: ignore[arg-type]
+        full = (
+            None
+            if value is None and self.optional
+            else readonly(np.array(gain_matrix(value, self.size(obj), self.label(obj, self.name))))
+        )  # type: ignore[arg-type]
         setattr(obj, self.full, full)
         setattr(obj, self.compact, None if full is None else compact_gain(full))
         changed = getattr(obj, "_gains_changed", None)
@@ -235,5 +240,7 @@ def apply_gain(k: FloatArray, x: FloatArray) -> FloatArray:
 def check_cache_dir(cache_dir: object, compile: bool) -> None:
     """Refuse a ``cache_dir`` given without ``compile=True`` (it would be ignored: nothing is compiled)."""
     if cache_dir is not None and not compile:
-        raise InvalidParameterError(f"cache_dir={cache_dir!r} is where compile=True keeps its code: pass "
-                                    "compile=True too, or no cache_dir", value=cache_dir)
+        raise InvalidParameterError(
+            f"cache_dir={cache_dir!r} is where compile=True keeps its code: pass compile=True too, or no cache_dir",
+            value=cache_dir,
+        )

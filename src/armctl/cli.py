@@ -58,13 +58,15 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="armctl", description=(__doc__ or "").replace("``", ""))
     sub = parser.add_subparsers(dest="command", required=True)
     b = sub.add_parser("bench", help="run the benchmark suite and write figures.json, charts and report.html")
-    b.add_argument("--quick", action="store_true",
-                   help="a short run (1–2 minutes on 2 cores): coarser grids, fewer repetitions")
+    b.add_argument(
+        "--quick", action="store_true", help="a short run (1–2 minutes on 2 cores): coarser grids, fewer repetitions"
+    )
     b.add_argument("--out", default="bench-out", help="output folder (default: bench-out)")
     b.set_defaults(func=_bench)
     d = sub.add_parser("demo", help="print the dynamics terms of a built-in arm")
-    d.add_argument("--model", default="panda", choices=["pendulum", "planar_2r", "planar_3r", "puma560", "panda",
-                                                         "ur5"])
+    d.add_argument(
+        "--model", default="panda", choices=["pendulum", "planar_2r", "planar_3r", "puma560", "panda", "ur5"]
+    )
     d.add_argument("--backend", default="pinocchio", choices=["pinocchio", "lagrange"])
     d.set_defaults(func=_demo)
     args = parser.parse_args(argv)

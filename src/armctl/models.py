@@ -15,5 +15,15 @@ from armctl.model.library import (
     ur5,
 )
 
-__all__ = ["PUMA_QN", "PUMA_QR", "PUMA_QZ", "panda", "pendulum", "planar_2r", "planar_3r", "puma560",
-           "robot_description", "ur5"]
+__all__ = [
+    "PUMA_QN",
+    "PUMA_QR",
+    "PUMA_QZ",
+    "panda",
+    "pendulum",
+    "planar_2r",
+    "planar_3r",
+    "puma560",
+    "robot_description",
+    "ur5",
+]

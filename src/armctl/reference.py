@@ -26,8 +26,13 @@ class Reference:
         q, qd, qdd = self.q, self.qd, self.qdd
         # the usual case, built every control period by a reference generator: three float64 vectors of one
         # length with a finite sum (a sum that overflows goes the slow way, which checks entry by entry)
-        if (q.__class__ is qd.__class__ is qdd.__class__ is np.ndarray and q.dtype is qd.dtype is qdd.dtype is FLOAT
-                and q.ndim == 1 and q.shape == qd.shape == qdd.shape and q.shape[0]):
+        if (
+            q.__class__ is qd.__class__ is qdd.__class__ is np.ndarray
+            and q.dtype is qd.dtype is qdd.dtype is FLOAT
+            and q.ndim == 1
+            and q.shape == qd.shape == qdd.shape
+            and q.shape[0]
+        ):
             q, qd, qdd = q.copy(), qd.copy(), qdd.copy()
             if math.isfinite(sum(q.tolist()) + sum(qd.tolist()) + sum(qdd.tolist())):
                 q.setflags(write=False)  # (cheaper than through .flags)
@@ -42,8 +47,9 @@ class Reference:
     def _checked(self) -> None:
         """Convert and check the three fields entry by entry, naming what is wrong."""
         if self.q is None:
-            raise InvalidParameterError("Reference q must hold real numbers (q is required: the joint positions), "
-                                        "got None", value=None)
+            raise InvalidParameterError(
+                "Reference q must hold real numbers (q is required: the joint positions), got None", value=None
+            )
         raw_q = self.q
         if raw_q.__class__ is np.ndarray and raw_q.dtype is FLOAT and raw_q.ndim <= 1:  # the usual case
             q: FloatArray | None = raw_q.reshape(-1)

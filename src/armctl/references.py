@@ -33,8 +33,9 @@ def _row(x: ArrayLike, name: str, n: int | None = None, *, broadcast: bool = Fal
         a = np.full(1 if n is None else n, a.item())
     if n is None:
         if a.ndim != 1 or not a.shape[0]:
-            raise ShapeError(f"{name} must be a vector of at least one joint value, got shape {a.shape}: {x!r}",
-                             value=x)
+            raise ShapeError(
+                f"{name} must be a vector of at least one joint value, got shape {a.shape}: {x!r}", value=x
+            )
         n = a.shape[0]
     return vector(a, n, name)
 
@@ -85,8 +86,7 @@ class Sinusoid:
         # read-only copies: the factors below are formed from them once, so the fields must not change later
         c = readonly(np.array(_row(self.center, "center")))
         for name in ("amplitude", "frequency", "phase"):
-            object.__setattr__(self, name, readonly(np.array(_row(getattr(self, name), name, c.size,
-                                                                  broadcast=True))))
+            object.__setattr__(self, name, readonly(np.array(_row(getattr(self, name), name, c.size, broadcast=True))))
         object.__setattr__(self, "center", c)
         self._factors()
 
@@ -119,8 +119,9 @@ class WaypointSpline:
     """A C² cubic spline through ``waypoints`` (k × n) at strictly increasing ``times`` (k,), with clamped
     (zero) end velocities by default; holds the end points outside [times[0], times[-1]]."""
 
-    def __init__(self, times: Sequence[float] | ArrayLike, waypoints: ArrayLike,
-                 bc_type: str | tuple[Any, Any] = "clamped") -> None:
+    def __init__(
+        self, times: Sequence[float] | ArrayLike, waypoints: ArrayLike, bc_type: str | tuple[Any, Any] = "clamped"
+    ) -> None:
         """times: (k,) [s], strictly increasing, k >= 2; waypoints: (k, n) joint positions; bc_type: the end
         conditions, one of :data:`BC_TYPES` (or scipy ``CubicSpline``'s explicit ``((order, value), ...)``)."""
         from scipy.interpolate import CubicSpline
@@ -128,8 +129,11 @@ class WaypointSpline:
         t = _row(times, "times")
         w = real_array(waypoints, "waypoints")
         if w.ndim != 2 or w.shape[0] != t.size or t.size < 2 or not w.shape[1]:
-            raise ShapeError(f"waypoints must be ({t.size}, n) for {t.size} times (at least 2) and n >= 1 joints, "
-                             f"got shape {w.shape}", value=waypoints)
+            raise ShapeError(
+                f"waypoints must be ({t.size}, n) for {t.size} times (at least 2) and n >= 1 joints, "
+                f"got shape {w.shape}",
+                value=waypoints,
+            )
         if not np.isfinite(w).all():
             k, j = np.argwhere(~np.isfinite(w))[0]
             raise NonFiniteError(f"waypoints must be finite; waypoint {k} joint {j} is {w[k, j]}", value=waypoints)
@@ -140,8 +144,9 @@ class WaypointSpline:
         try:
             spline = CubicSpline(t, w, bc_type=bc_type, axis=0)
         except (ValueError, TypeError) as e:  # explicit pairs of the wrong form, periodic with different ends
-            raise InvalidParameterError(f"bc_type={bc_type!r} does not fit these waypoints: {e}",
-                                        value=bc_type) from None
+            raise InvalidParameterError(
+                f"bc_type={bc_type!r} does not fit these waypoints: {e}", value=bc_type
+            ) from None
         self.times, self.waypoints = t, w
         self._s = spline
 

@@ -194,8 +194,7 @@ def test_every_term_has_a_share(fid: dict[str, Any]) -> None:
 def test_term_shares_by_hand() -> None:
     """RMS √(mean_s ‖τ(s)‖²) of each term and its share of the sum, on terms whose RMS is known: a constant
     (3, 4) has RMS 5; rows (1, 0) and (−1, 0) have RMS 1; zeros have 0."""
-    terms = {"a": np.array([[3.0, 4.0], [3.0, 4.0]]), "b": np.array([[1.0, 0.0], [-1.0, 0.0]]),
-             "c": np.zeros((2, 2))}
+    terms = {"a": np.array([[3.0, 4.0], [3.0, 4.0]]), "b": np.array([[1.0, 0.0], [-1.0, 0.0]]), "c": np.zeros((2, 2))}
     out = fidelity.term_shares(terms)
     assert out["rms"] == pytest.approx({"a": 5.0, "b": 1.0, "c": 0.0})
     assert out["shares"] == pytest.approx({"a": 5.0 / 6.0, "b": 1.0 / 6.0, "c": 0.0})
@@ -259,11 +258,18 @@ def test_dropping_the_rotors_breaks_tracking_on_the_2r_arm(fid: dict[str, Any]) 
 
 def test_choose_tie_prefers_fewer_terms() -> None:
     def cand(err: float, cost: float, rotors: bool, friction: bool) -> dict[str, Any]:
-        return {"rms_error": err, "compute_s": cost, "diverged": False,
-                "kept": {"rotors": rotors, "friction": friction}}
+        return {
+            "rms_error": err,
+            "compute_s": cost,
+            "diverged": False,
+            "kept": {"rotors": rotors, "friction": friction},
+        }
 
-    cands = {"full": cand(1.0, 10.0, True, True), "lean": cand(1.5, 10.5, False, True),
-             "bad": cand(3.0, 1.0, False, False)}
+    cands = {
+        "full": cand(1.0, 10.0, True, True),
+        "lean": cand(1.5, 10.5, False, True),
+        "bad": cand(3.0, 1.0, False, False),
+    }
     assert fidelity.choose(cands, "full", factor=2.0, tie=0.1) == "lean"
     assert fidelity.choose(cands, "full", factor=2.0, tie=0.0) == "full"
     assert fidelity.choose(cands, "full", factor=4.0, tie=0.1) == "bad"
@@ -308,8 +314,9 @@ def test_pareto_front_compares_noisy_times_by_their_quartiles() -> None:
     apart = [(9.9, 10.1), (39.0, 41.0), (11.9, 12.1), (10.9, 11.1), (0.0, 0.0)]
     assert pareto_front(points, apart) == [0, 1, 2]
     # a point without quartiles (NaN) is compared by its median: it does not tie with everyone on time
-    assert pareto_front([(1.0, 1.0), (10.0, 0.5), (100.0, 0.1)],
-                        [(0.9, 1.1), (9.0, 11.0), (float("nan"), float("nan"))]) == [0, 1, 2]
+    assert pareto_front(
+        [(1.0, 1.0), (10.0, 0.5), (100.0, 0.1)], [(0.9, 1.1), (9.0, 11.0), (float("nan"), float("nan"))]
+    ) == [0, 1, 2]
 
 
 def test_a_diverged_run_has_no_tracking_error_to_rank() -> None:
@@ -339,11 +346,18 @@ def test_a_failing_method_is_a_row_of_the_bench(monkeypatch: pytest.MonkeyPatch,
     row = suite.run_scene_method("pendulum", "pd_gravity")
     assert row["failed"] == "SolverError: the QP is infeasible at t = 0.3 s"
     assert math.isnan(row["rms_error"]) and math.isnan(row["compute_s"]) and not row["diverged"]
-    ok = {"scene": "pendulum", "method": "computed_torque", "rms_error": 1e-4, "max_error": 2e-4,
-          "torque_rms": 1.0, "compute_s": 1e-5, "compute_s_iqr": [9e-6, 1.1e-5], "diverged": False,
-          "diverged_at": None}
-    late = dict(ok, method="passivity", rms_error=float("nan"), max_error=float("nan"), diverged=True,
-                diverged_at=0.21)
+    ok = {
+        "scene": "pendulum",
+        "method": "computed_torque",
+        "rms_error": 1e-4,
+        "max_error": 2e-4,
+        "torque_rms": 1.0,
+        "compute_s": 1e-5,
+        "compute_s_iqr": [9e-6, 1.1e-5],
+        "diverged": False,
+        "diverged_at": None,
+    }
+    late = dict(ok, method="passivity", rms_error=float("nan"), max_error=float("nan"), diverged=True, diverged_at=0.21)
     suite.time_controllers([row], 1)  # nothing to replay: skipped, not an error
     rows = [dict(row), ok, late]
     suite.plot_pareto(rows, tmp_path / "chart.png")
@@ -376,5 +390,6 @@ def test_a_scene_that_cannot_be_built_is_a_failed_row(monkeypatch: pytest.Monkey
     monkeypatch.setattr(armctl.scenes, "scene", unbuildable)
     rows = suite.scene_matrix("serial", rounds=1)
     assert [(r["scene"], r["method"], r["failed"]) for r in rows] == [
-        ("panda_topp", "(scene)", "InfeasibleError: torque limit of joint 2 exceeded at s = 0.4")]
+        ("panda_topp", "(scene)", "InfeasibleError: torque limit of joint 2 exceeded at s = 0.4")
+    ]
     assert "window" not in rows[0]

@@ -68,10 +68,14 @@ def test_sweep_on_a_dask_local_cluster() -> None:
     from armctl.bench.stability import run_cell
     from armctl.sim import sweep
 
-    cases = [{"controller": "computed_torque", "k": k, "f": 1.0, "period": 0.01, "duration": 1.0, "dt_max": 2e-3}
-             for k in (1.0, 20.0)]
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cl, \
-            distributed.Client(cl) as client:
+    cases = [
+        {"controller": "computed_torque", "k": k, "f": 1.0, "period": 0.01, "duration": 1.0, "dt_max": 2e-3}
+        for k in (1.0, 20.0)
+    ]
+    with (
+        distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cl,
+        distributed.Client(cl) as client,
+    ):
         out = sweep(cases, run=run_cell, executor=client.get_executor(), progress=False)
     assert out == ["stable", "unstable"]  # k* = 4.87 at 100 Hz with one period of delay
     assert np.array_equal(out, sweep(cases, run=run_cell, executor="serial", progress=False))

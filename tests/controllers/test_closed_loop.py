@@ -52,12 +52,15 @@ def test_adaptive_from_zero_converges_and_lyapunov_never_increases() -> None:
     dyn = dynamics("planar_2r")
     pi, gamma = dyn.model.parameters(), 10.0
     ref = Sinusoid([0.3, -0.4], [0.4, 0.5], [0.5, 0.7])
-    res = simulate(dyn, Adaptive(dyn, 5.0, 1000.0, gamma, theta0=np.zeros(26), plant=dyn), ref, 10.0,
-                   q0=[0.4, -0.3])
+    res = simulate(dyn, Adaptive(dyn, 5.0, 1000.0, gamma, theta0=np.zeros(26), plant=dyn), ref, 10.0, q0=[0.4, -0.3])
     s, theta, v = res.logs["s"], res.logs["theta"], res.logs["V"]
     # the logged V(t) against V formed here from the logged s and θ̂, the plant's CRBA and π
-    by_hand = np.array([0.5 * s[k] @ dyn.mass_matrix(res.q[k]) @ s[k] + 0.5 * (theta[k] - pi) @ (theta[k] - pi)
-                        / gamma for k in range(len(res.t))])
+    by_hand = np.array(
+        [
+            0.5 * s[k] @ dyn.mass_matrix(res.q[k]) @ s[k] + 0.5 * (theta[k] - pi) @ (theta[k] - pi) / gamma
+            for k in range(len(res.t))
+        ]
+    )
     np.testing.assert_allclose(v, by_hand, rtol=1e-12)
     assert np.diff(v).max() <= 1e-9 * v[0]  # non-increasing, to integration tolerance
     assert v[-1] < 0.5 * v[0]
@@ -71,8 +74,13 @@ def slotine_li_arm() -> armctl.RobotModel:
     end-effector body me = 2 kg at lce = 0.6 m, δe = 30° off the link axis, Ie = 0.25 kg·m²."""
     z, de = (0.0, 0.0, 1.0), math.radians(30)
     j1 = Joint("joint1", "revolute", z, np.eye(4), Link(1.0, (0.5, 0, 0), np.diag([0.0, 0.12, 0.12])))
-    j2 = Joint("joint2", "revolute", z, transform(None, (1.0, 0, 0)),
-               Link(2.0, (0.6 * math.cos(de), 0.6 * math.sin(de), 0), np.diag([0.125, 0.125, 0.25])))
+    j2 = Joint(
+        "joint2",
+        "revolute",
+        z,
+        transform(None, (1.0, 0, 0)),
+        Link(2.0, (0.6 * math.cos(de), 0.6 * math.sin(de), 0), np.diag([0.125, 0.125, 0.25])),
+    )
     return armctl.RobotModel((j1, j2), name="slotine_li")  # gravity along the joint axes: no gravity torque
 
 
@@ -102,9 +110,11 @@ def test_model_error_computed_torque_degrades_and_adaptation_recovers(tmp_path: 
     rms: dict[str, list[float]] = {"computed torque": [], "passivity-based": [], "adaptive": []}
     for mass in payloads:
         plant = armctl.Dynamics(nominal.with_payload(mass))
-        for name, ctrl in (("computed torque", ComputedTorque(ctrl_dyn, lam**2, 2 * lam)),
-                           ("passivity-based", PassivityBased(ctrl_dyn, lam, kd)),
-                           ("adaptive", Adaptive(ctrl_dyn, lam, kd, gamma=5.0))):
+        for name, ctrl in (
+            ("computed torque", ComputedTorque(ctrl_dyn, lam**2, 2 * lam)),
+            ("passivity-based", PassivityBased(ctrl_dyn, lam, kd)),
+            ("adaptive", Adaptive(ctrl_dyn, lam, kd, gamma=5.0)),
+        ):
             res = simulate(plant, ctrl, ref, 6.0)
             assert not res.diverged
             rms[name].append(float(np.sqrt((tracking_error(res, ref, after=3.0) ** 2).mean())))
@@ -137,10 +147,26 @@ def test_sampled_computed_torque_critical_gain_with_one_period_delay() -> None:
     k_star = SampledDataAnalysis.of(kp0, kd0, period, delay=1).critical_multiplier
     ref = armctl.Reference([0.3, -0.4])
     q0 = [0.31, -0.41]
-    stable = simulate(dyn, ComputedTorque(dyn, 0.9 * k_star * kp0, 0.9 * k_star * kd0), ref, 4.0, q0=q0,
-                      control_dt=period, delay=1, saturate=False)
-    unstable = simulate(dyn, ComputedTorque(dyn, 1.1 * k_star * kp0, 1.1 * k_star * kd0), ref, 4.0, q0=q0,
-                        control_dt=period, delay=1, saturate=False)
+    stable = simulate(
+        dyn,
+        ComputedTorque(dyn, 0.9 * k_star * kp0, 0.9 * k_star * kd0),
+        ref,
+        4.0,
+        q0=q0,
+        control_dt=period,
+        delay=1,
+        saturate=False,
+    )
+    unstable = simulate(
+        dyn,
+        ComputedTorque(dyn, 1.1 * k_star * kp0, 1.1 * k_star * kd0),
+        ref,
+        4.0,
+        q0=q0,
+        control_dt=period,
+        delay=1,
+        saturate=False,
+    )
     assert not stable.diverged and np.abs(stable.q[-1] - ref.q).max() < 1e-6
     grew = unstable.diverged or np.abs(unstable.q[-1] - ref.q).max() > 0.01
     assert grew
@@ -179,8 +205,16 @@ def test_adaptation_drifts_under_disturbance_and_protections_bound_it() -> None:
 
     dev = {}
     for name, options in (("none", {}), ("sigma", {"sigma": 0.5}), ("projection", {"projection": True, "radius": 30})):
-        res = simulate(dyn, Adaptive(dyn, 5.0, 1000.0, 20.0, **options), ref, 20.0, noise_q=1e-3, noise_qd=1e-2,
-                       seed=1, disturbance=disturbance)
+        res = simulate(
+            dyn,
+            Adaptive(dyn, 5.0, 1000.0, 20.0, **options),
+            ref,
+            20.0,
+            noise_q=1e-3,
+            noise_qd=1e-2,
+            seed=1,
+            disturbance=disturbance,
+        )
         d = np.linalg.norm(res.logs["theta"] - pi, axis=1)
         dev[name] = (d[np.searchsorted(res.t, 5.0)], d[-1])
         if name == "projection":

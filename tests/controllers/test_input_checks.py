@@ -32,8 +32,13 @@ LAWS: dict[str, Callable[[armctl.Dynamics], Controller]] = {
 # panda (Pinocchio, no friction), puma560 (rotors, asymmetric Coulomb friction), the Lagrange backend on the
 # frictionless pendulum (its τ holds no q̇ at all) and on planar_2r, and the compiled Pinocchio backend on the
 # Panda (where PD + gravity runs as one call of generated code)
-MODELS = (("panda", "pinocchio"), ("puma560", "pinocchio"), ("pendulum", "lagrange"), ("planar_2r", "lagrange"),
-          ("panda", "compiled"))
+MODELS = (
+    ("panda", "pinocchio"),
+    ("puma560", "pinocchio"),
+    ("pendulum", "lagrange"),
+    ("planar_2r", "lagrange"),
+    ("panda", "compiled"),
+)
 
 
 def _state(n: int) -> tuple[np.ndarray, np.ndarray, armctl.Reference]:
@@ -83,12 +88,16 @@ def test_inputs_that_are_not_real_vectors(law: str) -> None:
     q, qd, ref = _state(dyn.n)
     expected = LAWS[law](dyn)(0.0, q, qd, ref)
     for which in ("q", "qd"):
-        for bad, err in [(np.full(dyn.n, 1.0 + 1.0j), ArmctlError),  # not cut to its real part
-                         (np.full(dyn.n, 0.5 + 0.0j), ArmctlError),  # complex even when it is real
-                         (np.array(["a"] * dyn.n), ArmctlError),
-                         (np.array([0.1] * (dyn.n - 1) + [None], dtype=object), ArmctlError),
-                         (np.zeros((dyn.n, 1)), ShapeError), (np.zeros(dyn.n + 1), ShapeError),
-                         (np.zeros(1), ShapeError), (None, ArmctlError)]:
+        for bad, err in [
+            (np.full(dyn.n, 1.0 + 1.0j), ArmctlError),  # not cut to its real part
+            (np.full(dyn.n, 0.5 + 0.0j), ArmctlError),  # complex even when it is real
+            (np.array(["a"] * dyn.n), ArmctlError),
+            (np.array([0.1] * (dyn.n - 1) + [None], dtype=object), ArmctlError),
+            (np.zeros((dyn.n, 1)), ShapeError),
+            (np.zeros(dyn.n + 1), ShapeError),
+            (np.zeros(1), ShapeError),
+            (None, ArmctlError),
+        ]:
             args = {"q": q, "qd": qd, which: bad}
             with pytest.raises(err, match=rf"^{which} "):
                 LAWS[law](dyn)(0.0, args["q"], args["qd"], ref)
@@ -98,16 +107,25 @@ def test_inputs_that_are_not_real_vectors(law: str) -> None:
             assert np.array_equal(LAWS[law](dyn)(0.0, args["q"], args["qd"], ref), expected), (which, type(same))
     ints = {"q": np.arange(dyn.n) % 2, "qd": np.ones(dyn.n, dtype=int)}
     floats = {k: v.astype(float) for k, v in ints.items()}
-    assert np.array_equal(LAWS[law](dyn)(0.0, ints["q"], ints["qd"], ref),
-                          LAWS[law](dyn)(0.0, floats["q"], floats["qd"], ref))
+    assert np.array_equal(
+        LAWS[law](dyn)(0.0, ints["q"], ints["qd"], ref), LAWS[law](dyn)(0.0, floats["q"], floats["qd"], ref)
+    )
 
 
 def test_only_the_stateless_laws_check_their_result() -> None:
     """The flag itself: a law with state (integral, θ̂) must check its inputs before computing."""
     dyn = dynamics("panda")
     flags = {law: LAWS[law](dyn)._checks_result for law in LAWS}
-    assert flags == {"pd": True, "pd_integral": False, "pd_matrix_gains": True, "ct": True, "ct_integral": False,
-                     "ct_reference_friction": True, "pb": True, "adaptive": False}
+    assert flags == {
+        "pd": True,
+        "pd_integral": False,
+        "pd_matrix_gains": True,
+        "ct": True,
+        "ct_integral": False,
+        "ct_reference_friction": True,
+        "pb": True,
+        "adaptive": False,
+    }
     assert Controller._checks_result is False  # a user's controller: inputs first
 
 
@@ -129,8 +147,13 @@ def test_time_must_be_a_finite_real_number(law: str) -> None:
     c(0.0, q, qd, ref)
     c(1e-3, q, qd, ref)
     before = _snapshot(c)
-    for bad, err in [(np.nan, NonFiniteError), (np.inf, NonFiniteError), ("soon", InvalidParameterError),
-                     (None, InvalidParameterError), (1j, InvalidParameterError)]:
+    for bad, err in [
+        (np.nan, NonFiniteError),
+        (np.inf, NonFiniteError),
+        ("soon", InvalidParameterError),
+        (None, InvalidParameterError),
+        (1j, InvalidParameterError),
+    ]:
         with pytest.raises(err, match=r"^t must be"):
             c(bad, q, qd, ref)  # type: ignore[arg-type]
         for a, b in zip(_snapshot(c), before, strict=True):
@@ -205,13 +228,17 @@ def test_a_one_joint_reference_from_scalars() -> None:
     assert np.isfinite(PDGravity(pendulum, 10.0, 1.0)(0.0, np.array([0.1]), np.array([0.0]), ref)).all()
 
 
-@pytest.mark.parametrize(("make", "gains"), [
-    (lambda d, **g: PDGravity(d, **{"kp": 100.0, "kd": 20.0, **g}), {"kp": 400.0, "kd": np.arange(1.0, 8.0)}),
-    (lambda d, **g: PDGravity(d, **{"kp": 100.0, "kd": 20.0, **g}), {"ki": 3.0}),
-    (lambda d, **g: ComputedTorque(d, **{"kp": 100.0, "kd": 20.0, **g}), {"kp": np.eye(7) * 9.0, "kd": 7.0}),
-    (lambda d, **g: PassivityBased(d, **{"lam": 5.0, "kd": 20.0, **g}), {"lam": 2.0, "kd": np.eye(7) * 3.0}),
-    (lambda d, **g: Adaptive(d, **{"lam": 5.0, "kd": 20.0, "gamma": 0.01, **g}), {"lam": 2.0, "gamma": 0.5}),
-], ids=["pd", "pd_integral_added", "ct", "pb", "adaptive"])
+@pytest.mark.parametrize(
+    ("make", "gains"),
+    [
+        (lambda d, **g: PDGravity(d, **{"kp": 100.0, "kd": 20.0, **g}), {"kp": 400.0, "kd": np.arange(1.0, 8.0)}),
+        (lambda d, **g: PDGravity(d, **{"kp": 100.0, "kd": 20.0, **g}), {"ki": 3.0}),
+        (lambda d, **g: ComputedTorque(d, **{"kp": 100.0, "kd": 20.0, **g}), {"kp": np.eye(7) * 9.0, "kd": 7.0}),
+        (lambda d, **g: PassivityBased(d, **{"lam": 5.0, "kd": 20.0, **g}), {"lam": 2.0, "kd": np.eye(7) * 3.0}),
+        (lambda d, **g: Adaptive(d, **{"lam": 5.0, "kd": 20.0, "gamma": 0.01, **g}), {"lam": 2.0, "gamma": 0.5}),
+    ],
+    ids=["pd", "pd_integral_added", "ct", "pb", "adaptive"],
+)
 def test_gains_reassigned_take_effect(make: Callable[..., Controller], gains: dict[str, object]) -> None:
     # a gain sweep that reassigns ctrl.kp must run the new gain, not the one the controller was built with
     dyn = dynamics("panda")
@@ -301,8 +328,11 @@ def test_text_is_not_a_number() -> None:
     dyn = dynamics("planar_2r")
     q, qd, ref = _state(dyn.n)
     c = PDGravity(dyn, 10.0, 1.0)
-    for bad_ref in (lambda: armctl.Reference("0.3"), lambda: armctl.Reference(b"0.3"),
-                    lambda: armctl.Reference(np.array(["0.1", "0.2"]))):
+    for bad_ref in (
+        lambda: armctl.Reference("0.3"),
+        lambda: armctl.Reference(b"0.3"),
+        lambda: armctl.Reference(np.array(["0.1", "0.2"])),
+    ):
         with pytest.raises(InvalidParameterError, match="must hold real numbers"):
             bad_ref()
     with pytest.raises(InvalidParameterError, match=r"^q must hold real numbers"):
@@ -354,11 +384,13 @@ def test_a_non_finite_torque_from_a_finite_state_raises() -> None:
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # NumPy's overflow warnings on the way
-        cases = [(PDGravity(dyn, 100.0, 10.0), np.array([1e307, 0.0])),
-                 (PassivityBased(dyn, 1e308, 10.0), np.array([1.0, 0.0])),
-                 (ComputedTorque(dyn, 1e308, 1e308, ki=1.0), np.array([1.0, 0.0])),  # with state (integral)
-                 (Adaptive(dyn, 1.0, 10.0, 1.0, theta0=np.full(26, 1e308)), np.array([1.0, 0.5])),
-                 (Overflowing(n=2), z)]
+        cases = [
+            (PDGravity(dyn, 100.0, 10.0), np.array([1e307, 0.0])),
+            (PassivityBased(dyn, 1e308, 10.0), np.array([1.0, 0.0])),
+            (ComputedTorque(dyn, 1e308, 1e308, ki=1.0), np.array([1.0, 0.0])),  # with state (integral)
+            (Adaptive(dyn, 1.0, 10.0, 1.0, theta0=np.full(26, 1e308)), np.array([1.0, 0.5])),
+            (Overflowing(n=2), z),
+        ]
         for ctrl, q in cases:
             with pytest.raises(NonFiniteError, match=rf"^{type(ctrl).__name__} gave a non-finite torque"):
                 ctrl(0.0, q, z, ref)
@@ -381,8 +413,10 @@ def test_computed_torque_numpy_true_compensates_at_the_measured_velocity() -> No
     dyn = armctl.Dynamics(armctl.models.planar_2r().with_friction(viscous=[2.0, 1.0], coulomb=[4.0, 3.0]))
     q, qd = np.array([0.2, -0.3]), np.array([0.5, -0.4])
     ref = armctl.Reference([0.1, 0.0], [-0.6, 0.7], [0.0, 0.0])  # q̇_d opposite to q̇: the two modes differ
-    tau = {flag: ComputedTorque(dyn, 100.0, 20.0, friction=flag)(0.0, q, qd, ref)
-           for flag in (True, np.True_, "reference", False)}
+    tau = {
+        flag: ComputedTorque(dyn, 100.0, 20.0, friction=flag)(0.0, q, qd, ref)
+        for flag in (True, np.True_, "reference", False)
+    }
     fv, fc = np.array([2.0, 1.0]), np.array([4.0, 3.0])
     np.testing.assert_allclose(tau[np.True_] - tau[False], fv * qd + fc * np.sign(qd), rtol=1e-12)
     np.testing.assert_allclose(tau["reference"] - tau[False], fv * ref.qd + fc * np.sign(ref.qd), rtol=1e-12)
@@ -398,8 +432,12 @@ def test_composite_adaptation_is_stable_at_a_step_where_explicit_euler_diverged(
     plant = armctl.Dynamics(armctl.models.pendulum().with_friction(viscous=0.0))
     model = armctl.Dynamics(armctl.models.pendulum().with_friction(viscous=0.0).perturbed(mass=1.5, inertia=1.5))
     ref = Sinusoid([0.3], [0.8], [0.7])
-    runs = {dt: armctl.simulate(plant, Adaptive(model, 10.0, 5.0, 0.5, composite=10.0), ref, 2.0, control_dt=dt,
-                                saturate=False) for dt in (1e-3, 1e-4)}
+    runs = {
+        dt: armctl.simulate(
+            plant, Adaptive(model, 10.0, 5.0, 0.5, composite=10.0), ref, 2.0, control_dt=dt, saturate=False
+        )
+        for dt in (1e-3, 1e-4)
+    }
     assert not any(r.diverged for r in runs.values())
     coarse, fine = (np.asarray(runs[dt].logs["theta"])[-1] for dt in (1e-3, 1e-4))
     assert np.abs(coarse - fine).max() < 0.005 * np.abs(fine).max()  # 0.09 % measured

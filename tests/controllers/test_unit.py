@@ -27,8 +27,9 @@ def test_computed_torque_on_the_reference_is_inverse_dynamics() -> None:
     # off the reference: M (q̈_d + K_d ė + K_p e) + C q̇ + g + τ_f
     q, qd = ref.q + 0.01, ref.qd - 0.02
     v = ref.qdd + 20 * (ref.qd - qd) + 100 * (ref.q - q)
-    expected = (dyn.mass_matrix(q) @ v + dyn.coriolis_matrix(q, qd) @ qd + dyn.gravity_torque(q)
-                + dyn.friction_torque(qd))
+    expected = (
+        dyn.mass_matrix(q) @ v + dyn.coriolis_matrix(q, qd) @ qd + dyn.gravity_torque(q) + dyn.friction_torque(qd)
+    )
     assert np.allclose(ct(0.0, q, qd, ref), expected)
     no_friction = ComputedTorque(dyn, kp=100, kd=20, friction=False)
     assert np.allclose(no_friction(0.0, q, qd, ref), expected - dyn.friction_torque(qd))
@@ -49,15 +50,25 @@ def test_pd_gravity_law(gains: str) -> None:
     ref = armctl.Reference(q + 0.05, qd + 0.1)
     kp, kd = np.arange(1.0, n + 1.0) * 50.0, 10.0
     kp_given = np.diag(kp) + (0.5 * np.eye(n)[::-1] + 0.5 * np.eye(n) if gains == "matrix" else 0.0)
-    c = PDGravity(dyn, kp_given if gains == "matrix" else kp, kd, ki=2.0 if gains == "integral" else None,
-                  friction=gains == "friction")
+    c = PDGravity(
+        dyn,
+        kp_given if gains == "matrix" else kp,
+        kd,
+        ki=2.0 if gains == "integral" else None,
+        friction=gains == "friction",
+    )
     pm = dyn.model.to_pinocchio()
     g = pin.computeGeneralizedGravity(pm, pm.createData(), q)
     expected = g + (kp_given if gains == "matrix" else np.diag(kp)) @ (ref.q - q) + kd * (ref.qd - qd)
     if gains == "friction":
         fr = [j.friction for j in dyn.model.joints]
-        expected += np.array([f.viscous * v + (f.coulomb if v > 0 else -(f.coulomb_negative
-                              if f.coulomb_negative is not None else f.coulomb)) for f, v in zip(fr, qd, strict=True)])
+        expected += np.array(
+            [
+                f.viscous * v
+                + (f.coulomb if v > 0 else -(f.coulomb_negative if f.coulomb_negative is not None else f.coulomb))
+                for f, v in zip(fr, qd, strict=True)
+            ]
+        )
     c(0.0, q, qd, ref)  # the integral starts its clock
     if gains == "integral":
         expected += 2.0 * 0.01 * (ref.q - q)
@@ -79,17 +90,23 @@ def test_the_first_call_only_starts_the_integral_clock() -> None:
     np.testing.assert_allclose(c(0.52, q, qd, ref), pd_law + 50.0 * 0.02 * (ref.q - q), rtol=1e-12, atol=1e-9)
 
 
-def _slotine_li(dyn: armctl.Dynamics, q: np.ndarray, qd: np.ndarray, ref: armctl.Reference, lam: np.ndarray,
-                kd: float | np.ndarray) -> np.ndarray:
+def _slotine_li(
+    dyn: armctl.Dynamics, q: np.ndarray, qd: np.ndarray, ref: armctl.Reference, lam: np.ndarray, kd: float | np.ndarray
+) -> np.ndarray:
     """M q̈_r + C(q, q̇) q̇_r + g + F_v q̇_r + F_c±(q̇) − K_D s, friction straight from the model's joints."""
     qd_r, qdd_r = ref.qd - lam @ (q - ref.q), ref.qdd - lam @ (qd - ref.qd)
     fr = [j.friction for j in dyn.model.joints]
     fv = np.array([f.viscous for f in fr])
-    fc = np.array([f.coulomb if v > 0 else -(f.coulomb if f.coulomb_negative is None else f.coulomb_negative)
-                   for f, v in zip(fr, qd, strict=True)])
+    fc = np.array(
+        [
+            f.coulomb if v > 0 else -(f.coulomb if f.coulomb_negative is None else f.coulomb_negative)
+            for f, v in zip(fr, qd, strict=True)
+        ]
+    )
     kd_s = kd @ (qd - qd_r) if np.ndim(kd) == 2 else kd * (qd - qd_r)
-    return (dyn.mass_matrix(q) @ qdd_r + dyn.coriolis_matrix(q, qd) @ qd_r + dyn.gravity_torque(q) + fv * qd_r
-            + fc - kd_s)
+    return (
+        dyn.mass_matrix(q) @ qdd_r + dyn.coriolis_matrix(q, qd) @ qd_r + dyn.gravity_torque(q) + fv * qd_r + fc - kd_s
+    )
 
 
 def _off_reference(name: str) -> tuple[armctl.Dynamics, int, np.ndarray, np.ndarray, armctl.Reference]:
@@ -121,8 +138,12 @@ def test_full_gain_matrices_in_every_joint_space_law() -> None:
     kp, kd, lam, kd_pb = _spd(n, 1, 100.0), _spd(n, 2, 20.0), _spd(n, 3, 2.0), _spd(n, 4, 5.0)
     e, ed = ref.q - q, ref.qd - qd
     ct = ComputedTorque(dyn, kp, kd)
-    expected = (dyn.mass_matrix(q) @ (ref.qdd + kd @ ed + kp @ e) + dyn.coriolis_matrix(q, qd) @ qd
-                + dyn.gravity_torque(q) + dyn.friction_torque(qd))
+    expected = (
+        dyn.mass_matrix(q) @ (ref.qdd + kd @ ed + kp @ e)
+        + dyn.coriolis_matrix(q, qd) @ qd
+        + dyn.gravity_torque(q)
+        + dyn.friction_torque(qd)
+    )
     np.testing.assert_allclose(ct(0.0, q, qd, ref), expected, rtol=1e-12, atol=1e-9)
     pd = PDGravity(dyn, kp, kd)
     np.testing.assert_allclose(pd(0.0, q, qd, ref), dyn.gravity_torque(q) + kp @ e + kd @ ed, rtol=1e-12, atol=1e-9)
@@ -139,8 +160,7 @@ def test_full_gain_matrices_in_every_joint_space_law() -> None:
 def test_adaptive_with_exact_parameters_is_passivity_based(name: str) -> None:
     dyn, n, q, qd, ref = _off_reference(name)
     ad = Adaptive(dyn, 3.0, 5.0, gamma=0.0 + 1e-9)
-    assert np.allclose(ad(0.0, q, qd, ref), _slotine_li(dyn, q, qd, ref, 3.0 * np.eye(n), 5.0), rtol=1e-12,
-                       atol=1e-10)
+    assert np.allclose(ad(0.0, q, qd, ref), _slotine_li(dyn, q, qd, ref, 3.0 * np.eye(n), 5.0), rtol=1e-12, atol=1e-10)
     assert np.allclose(ad.last_log["theta"], dyn.model.parameters())
 
 
@@ -149,8 +169,7 @@ def _full_gain(p: int) -> np.ndarray:
     return 0.5 * np.eye(p) + 0.01 * (b @ b.T)  # symmetric positive definite, not diagonal
 
 
-@pytest.mark.parametrize("gamma", [0.5, np.linspace(0.1, 1.0, 26), _full_gain(26)],
-                         ids=["scalar", "diagonal", "full"])
+@pytest.mark.parametrize("gamma", [0.5, np.linspace(0.1, 1.0, 26), _full_gain(26)], ids=["scalar", "diagonal", "full"])
 def test_adaptive_update_is_the_gradient_law(gamma: object) -> None:
     """θ̂(t+dt) = θ̂ − dt Γ Yᵀ s, step after step, with a jittering dt (a loop that measures its time)."""
     dyn = dynamics("planar_2r")
@@ -225,8 +244,8 @@ def test_projection_is_the_nearest_psd_pseudo_inertia(values: list[float]) -> No
 
     pi = np.array(values)
     for k in range(2):
-        j = pseudo_inertia(pi[13 * k: 13 * k + 10])
-        proj = pseudo_inertia(project_physical(pi)[13 * k: 13 * k + 10])
+        j = pseudo_inertia(pi[13 * k : 13 * k + 10])
+        proj = pseudo_inertia(project_physical(pi)[13 * k : 13 * k + 10])
         scale = 1.0 + np.abs(j).max()
         assert np.linalg.eigvalsh(proj).min() >= -1e-9 * scale
         assert np.linalg.eigvalsh(proj - j).min() >= -1e-9 * scale
@@ -277,8 +296,12 @@ class Zero(Controller):
 
 def test_bad_input() -> None:
     dyn = dynamics("panda")
-    for bad, err in [((-1.0,), InvalidParameterError), ((np.ones(6),), ShapeError), ((np.nan,), NonFiniteError),
-                     ((np.array([[1.0, 2.0], [0.0, 1.0]]),), ShapeError)]:
+    for bad, err in [
+        ((-1.0,), InvalidParameterError),
+        ((np.ones(6),), ShapeError),
+        ((np.nan,), NonFiniteError),
+        ((np.array([[1.0, 2.0], [0.0, 1.0]]),), ShapeError),
+    ]:
         with pytest.raises(err):
             PDGravity(dyn, *bad, 1.0)
     with pytest.raises(InvalidParameterError, match="positive definite"):
@@ -390,8 +413,11 @@ def test_adaptive_logs_the_lyapunov_function_of_its_plant(gamma: str) -> None:
     ctrl_dyn = dynamics("planar_2r")
     plant = ctrl_dyn.model.with_payload(0.7, (0.05, 0.0, 0.0))
     rng = np.random.default_rng(4)
-    g = {"scalar": 3.0, "diagonal": rng.uniform(0.5, 4.0, 26),
-         "full": (lambda a: a @ a.T + np.eye(26))(rng.standard_normal((26, 26)))}[gamma]
+    g = {
+        "scalar": 3.0,
+        "diagonal": rng.uniform(0.5, 4.0, 26),
+        "full": (lambda a: a @ a.T + np.eye(26))(rng.standard_normal((26, 26))),
+    }[gamma]
     g_inv = np.linalg.inv(np.diag(np.broadcast_to(g, 26)) if np.ndim(g) < 2 else g)
     ad = Adaptive(ctrl_dyn, 2.0, 10.0, g, plant=plant)
     pi = plant.parameters()

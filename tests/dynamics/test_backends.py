@@ -92,8 +92,7 @@ def siciliano_2r(q: np.ndarray, qd: np.ndarray, coupling: bool) -> tuple[np.ndar
     a1, l1, l2, m_l1, m_l2, i_l1, i_l2 = 1.0, 0.5, 0.5, 50.0, 50.0, 10.0, 10.0
     m_m2, i_m1, i_m2, k_r1, k_r2 = 5.0, 0.01, 0.01, 100.0, 100.0
     c2, s2 = math.cos(q[1]), math.sin(q[1])
-    b11 = (i_l1 + m_l1 * l1**2 + k_r1**2 * i_m1 + i_l2 + m_l2 * (a1**2 + l2**2 + 2 * a1 * l2 * c2) + i_m2
-           + m_m2 * a1**2)
+    b11 = i_l1 + m_l1 * l1**2 + k_r1**2 * i_m1 + i_l2 + m_l2 * (a1**2 + l2**2 + 2 * a1 * l2 * c2) + i_m2 + m_m2 * a1**2
     b12 = i_l2 + m_l2 * (l2**2 + a1 * l2 * c2) + (k_r2 * i_m2 if coupling else 0.0)
     b22 = i_l2 + m_l2 * l2**2 + k_r2**2 * i_m2
     h = -m_l2 * a1 * l2 * s2
@@ -105,8 +104,11 @@ def siciliano_2r(q: np.ndarray, qd: np.ndarray, coupling: bool) -> tuple[np.ndar
 
 @pytest.mark.parametrize(("backend", "coupling"), [("pinocchio", False), ("lagrange", True), ("lagrange", False)])
 def test_planar_2r_closed_form(backend: str, coupling: bool) -> None:
-    dyn = dynamics("planar_2r", backend) if backend == "pinocchio" else dynamics(
-        "planar_2r", backend, rotor_coupling=coupling)
+    dyn = (
+        dynamics("planar_2r", backend)
+        if backend == "pinocchio"
+        else dynamics("planar_2r", backend, rotor_coupling=coupling)
+    )
     rng = np.random.default_rng(11)
     for _ in range(10):
         q, qd = rng.uniform(-3, 3, (2, 2))
@@ -136,12 +138,15 @@ def test_compiled_lagrange_matches_and_is_cached(tmp_path: Path) -> None:
     libs = list(tmp_path.rglob("*.so"))
     assert len(libs) == 1 and LagrangeDynamics.is_compiled_cached(m, cache_dir=str(tmp_path))
     built = libs[0].stat().st_mtime_ns
-    b = armctl.Dynamics(m.with_payload(2.0, (0.1, 0, 0)), backend="lagrange", compile=True,
-                        cache_dir=str(tmp_path))  # same kinematics
+    b = armctl.Dynamics(
+        m.with_payload(2.0, (0.1, 0, 0)), backend="lagrange", compile=True, cache_dir=str(tmp_path)
+    )  # same kinematics
     assert list(tmp_path.rglob("*.so")) == libs and libs[0].stat().st_mtime_ns == built  # loaded, not rebuilt
     assert not LagrangeDynamics.is_compiled_cached(model("planar_3r"), cache_dir=str(tmp_path))
-    ref_a, ref_b = dynamics("planar_2r", "lagrange"), armctl.Dynamics(m.with_payload(2.0, (0.1, 0, 0)),
-                                                                       backend="lagrange")
+    ref_a, ref_b = (
+        dynamics("planar_2r", "lagrange"),
+        armctl.Dynamics(m.with_payload(2.0, (0.1, 0, 0)), backend="lagrange"),
+    )
     rng = np.random.default_rng(2)
     q, qd, qdd = rng.uniform(-2, 2, (3, 2))
     assert np.allclose(a.inverse_dynamics(q, qd, qdd), ref_a.inverse_dynamics(q, qd, qdd), rtol=1e-12)
@@ -150,8 +155,9 @@ def test_compiled_lagrange_matches_and_is_cached(tmp_path: Path) -> None:
     assert a.functions["tau"].is_a("External")
 
 
-def test_compiled_libraries_with_and_without_rotor_coupling_are_kept_apart(tmp_path: Path,
-                                                                          monkeypatch: pytest.MonkeyPatch) -> None:
+def test_compiled_libraries_with_and_without_rotor_coupling_are_kept_apart(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     """``compile=True`` with rotor_coupling True (cached in $ARMCTL_CACHE, the codegen module's default), then
     False (cache_dir: the same folder): two libraries, each giving its own model's M (Siciliano's closed form,
     with and without the k_r2 I_m2 coupling term)."""

@@ -36,15 +36,16 @@ def _states(n: int, k: int = 4, seed: int = 5) -> list[np.ndarray]:
     return out
 
 
-def _pin_regressor(pm: pin.Model, pd: pin.Data, m: armctl.RobotModel, q: np.ndarray, v: np.ndarray,
-                   a: np.ndarray) -> np.ndarray:
+def _pin_regressor(
+    pm: pin.Model, pd: pin.Data, m: armctl.RobotModel, q: np.ndarray, v: np.ndarray, a: np.ndarray
+) -> np.ndarray:
     """The rigid-body and rotor columns of Y from Pinocchio's regressor (its ten columns per joint are π's,
     see RobotModel.parameters) and the rotor column q̈_i: Y (n × 13n) without the friction columns."""
     n = m.n
     y = np.zeros((n, 13 * n))
     raw = pin.computeJointTorqueRegressor(pm, pd, q, v, a).reshape(n, 10 * n)  # eigenpy squeezes n = 1
     for j in range(n):
-        y[:, 13 * j: 13 * j + 10] = raw[:, 10 * j: 10 * j + 10]
+        y[:, 13 * j : 13 * j + 10] = raw[:, 10 * j : 10 * j + 10]
         y[j, 13 * j + 10] = a[j]
     return y
 
@@ -61,20 +62,26 @@ def test_compiled_terms_agree_with_pinocchio_called_directly(name: str) -> None:
         q, qd, qd_r, qdd = _states(n, seed=seed)
         tau_f = dc.friction_torque(qd)
         # gravity and forward dynamics (ABA with the friction torque subtracted, as the API defines it)
-        np.testing.assert_allclose(dc.gravity_torque(q), pin.computeGeneralizedGravity(pm, pd, q), rtol=1e-10,
-                                   atol=1e-10)
-        np.testing.assert_allclose(dc.forward_dynamics(q, qd, qdd), pin.aba(pm, pd, q, qd, qdd - tau_f),
-                                   rtol=1e-8, atol=1e-8)
+        np.testing.assert_allclose(
+            dc.gravity_torque(q), pin.computeGeneralizedGravity(pm, pd, q), rtol=1e-10, atol=1e-10
+        )
+        np.testing.assert_allclose(
+            dc.forward_dynamics(q, qd, qdd), pin.aba(pm, pd, q, qd, qdd - tau_f), rtol=1e-8, atol=1e-8
+        )
         # the regressor: Pinocchio's columns, and Y π = τ (RNEA plus friction)
         y = dc.regressor(q, qd, qdd)
         rigid = [c for c in range(13 * n) if c % 13 < 11]
-        np.testing.assert_allclose(y[:, rigid], _pin_regressor(pm, pd, m, q, qd, qdd)[:, rigid], rtol=1e-10,
-                                   atol=1e-10)
+        np.testing.assert_allclose(y[:, rigid], _pin_regressor(pm, pd, m, q, qd, qdd)[:, rigid], rtol=1e-10, atol=1e-10)
         np.testing.assert_allclose(y @ pi, pin.rnea(pm, pd, q, qd, qdd) + tau_f, rtol=1e-10, atol=1e-9)
         # the passivity regressor and torque: M q̈_r + C(q, q̇) q̇_r + g from Pinocchio's M and Coriolis matrix
         coriolis = pin.computeCoriolisMatrix(pm, pd, q, qd)
-        expected = (pin.crba(pm, pd, q) @ qdd + coriolis @ qd_r + pin.computeGeneralizedGravity(pm, pd, q)
-                    + dc.friction_torque(qd) - m.parameters()[11::13] * (qd - qd_r))  # viscous at q̇_r
+        expected = (
+            pin.crba(pm, pd, q) @ qdd
+            + coriolis @ qd_r
+            + pin.computeGeneralizedGravity(pm, pd, q)
+            + dc.friction_torque(qd)
+            - m.parameters()[11::13] * (qd - qd_r)
+        )  # viscous at q̇_r
         yp = dc.passivity_regressor(q, qd, qd_r, qdd)
         np.testing.assert_allclose(yp @ pi, expected, rtol=1e-9, atol=1e-9)
         np.testing.assert_allclose(dc.passivity_torque(q, qd, qd_r, qdd), expected, rtol=1e-9, atol=1e-9)
@@ -91,11 +98,16 @@ def test_every_regressor_entry_matches_the_plain_backend(name: str) -> None:
     for seed in range(3):
         q, qd, qd_r, qdd = _states(m.n, seed=seed)
         np.testing.assert_allclose(dc.regressor(q, qd, qdd), dp.regressor(q, qd, qdd), rtol=1e-10, atol=1e-10)
-        np.testing.assert_allclose(dc.passivity_regressor(q, qd, qd_r, qdd), dp.passivity_regressor(q, qd, qd_r, qdd),
-                                   rtol=1e-10, atol=1e-10)
+        np.testing.assert_allclose(
+            dc.passivity_regressor(q, qd, qd_r, qdd), dp.passivity_regressor(q, qd, qd_r, qdd), rtol=1e-10, atol=1e-10
+        )
         for friction in (None, (qd_r, qd)):  # the primitive's other friction columns
-            np.testing.assert_allclose(dc._rigid_regressor(q, qd, qdd, friction),
-                                       dp._rigid_regressor(q, qd, qdd, friction), rtol=1e-10, atol=1e-10)
+            np.testing.assert_allclose(
+                dc._rigid_regressor(q, qd, qdd, friction),
+                dp._rigid_regressor(q, qd, qdd, friction),
+                rtol=1e-10,
+                atol=1e-10,
+            )
 
 
 def test_friction_variants_share_a_library_and_keep_their_own_coulomb_ratio(tmp_path, monkeypatch) -> None:
@@ -107,8 +119,9 @@ def test_friction_variants_share_a_library_and_keep_their_own_coulomb_ratio(tmp_
     assert len(list(tmp_path.rglob("*.so"))) == 1
     q, qd, qdd = np.array([0.2, -0.4]), np.array([0.5, -0.7]), np.array([0.1, 0.3])
     y = dc.regressor(q, qd, qdd)
-    np.testing.assert_allclose(y @ asym.parameters(), armctl.Dynamics(asym).inverse_dynamics(q, qd, qdd),
-                               rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(
+        y @ asym.parameters(), armctl.Dynamics(asym).inverse_dynamics(q, qd, qdd), rtol=1e-12, atol=1e-12
+    )
     np.testing.assert_allclose(y[:, [12, 25]].diagonal(), [2.0 / 1.25, -0.5 / 1.25])  # F_c^± / F̄_c
 
 
@@ -132,8 +145,10 @@ def test_a_variant_with_another_tool_frame_shares_the_library(tmp_path, monkeypa
 def test_a_payload_builds_its_own_library(tmp_path) -> None:
     arm = armctl.models.planar_2r()
     heavy = arm.with_payload(2.0, (0.05, 0.0, 0.0))
-    a, b = armctl.Dynamics(arm, compile=True, cache_dir=tmp_path), armctl.Dynamics(heavy, compile=True,
-                                                                                   cache_dir=tmp_path)
+    a, b = (
+        armctl.Dynamics(arm, compile=True, cache_dir=tmp_path),
+        armctl.Dynamics(heavy, compile=True, cache_dir=tmp_path),
+    )
     assert len(list(tmp_path.rglob("*.so"))) == 2
     q = np.array([0.3, 0.4])
     np.testing.assert_allclose(b.gravity_torque(q), armctl.Dynamics(heavy).gravity_torque(q), rtol=1e-12)
@@ -189,8 +204,12 @@ def test_controllers_give_the_same_torques_on_compiled_dynamics() -> None:
     dc, dp = armctl.Dynamics(m, compile=True), armctl.Dynamics(m)
     q, qd, qd_r, qdd = _states(m.n)
     ref = armctl.Reference(q + 0.05, qd_r, qdd)
-    laws = (lambda d: PDGravity(d, 100.0, 20.0, friction=True), lambda d: ComputedTorque(d, 100.0, 20.0),
-            lambda d: PassivityBased(d, 5.0, 20.0), lambda d: Adaptive(d, 5.0, 20.0, 0.01, composite=0.5))
+    laws = (
+        lambda d: PDGravity(d, 100.0, 20.0, friction=True),
+        lambda d: ComputedTorque(d, 100.0, 20.0),
+        lambda d: PassivityBased(d, 5.0, 20.0),
+        lambda d: Adaptive(d, 5.0, 20.0, 0.01, composite=0.5),
+    )
     for law in laws:
         c, p = law(dc), law(dp)
         for t in itertools.islice(itertools.count(0.0, 1e-3), 5):  # the adaptive law integrates between calls

@@ -15,14 +15,22 @@ from hypothesis import strategies as st
 import armctl
 from tests.conftest import dynamics
 
-CASES = [("planar_2r", "pinocchio"), ("planar_2r", "lagrange"), ("puma560", "pinocchio"),
-         ("puma560", "lagrange"), ("panda", "pinocchio"), ("ur5", "pinocchio"), ("planar_3r", "lagrange")]
+CASES = [
+    ("planar_2r", "pinocchio"),
+    ("planar_2r", "lagrange"),
+    ("puma560", "pinocchio"),
+    ("puma560", "lagrange"),
+    ("panda", "pinocchio"),
+    ("ur5", "pinocchio"),
+    ("planar_3r", "lagrange"),
+]
 SETTINGS = settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 
 
 def states(n: int, k: int = 3) -> st.SearchStrategy[np.ndarray]:
     return st.lists(st.floats(-3.0, 3.0, allow_nan=False), min_size=k * n, max_size=k * n).map(
-        lambda v: np.asarray(v).reshape(k, n))
+        lambda v: np.asarray(v).reshape(k, n)
+    )
 
 
 @pytest.mark.parametrize(("name", "backend"), CASES)
@@ -64,14 +72,14 @@ def test_regressor_times_parameters_is_inverse_dynamics(name: str, backend: str,
     assert np.allclose(y @ dyn.model.parameters(), tau, rtol=1e-10, atol=1e-10 * np.abs(tau).max())
 
 
-def _slotine_li_form(dyn: armctl.Dynamics, q: np.ndarray, qd: np.ndarray, qd_r: np.ndarray,
-                     qdd_r: np.ndarray) -> np.ndarray:
+def _slotine_li_form(
+    dyn: armctl.Dynamics, q: np.ndarray, qd: np.ndarray, qd_r: np.ndarray, qdd_r: np.ndarray
+) -> np.ndarray:
     """M q̈_r + C(q, q̇) q̇_r + g + F_v q̇_r + τ_c(q̇), the Coulomb levels F_c⁺, −F_c⁻ read from the joints."""
     fr = [j.friction for j in dyn.model.joints]
     fv = np.array([f.viscous for f in fr])
     coulomb = np.where(qd > 0, [f.coulomb for f in fr], 0.0) - np.where(qd < 0, [f.coulomb_neg for f in fr], 0.0)
-    return (dyn.mass_matrix(q) @ qdd_r + dyn.coriolis_matrix(q, qd) @ qd_r + dyn.gravity_torque(q)
-            + fv * qd_r + coulomb)
+    return dyn.mass_matrix(q) @ qdd_r + dyn.coriolis_matrix(q, qd) @ qd_r + dyn.gravity_torque(q) + fv * qd_r + coulomb
 
 
 @pytest.mark.parametrize(("name", "backend"), CASES)
@@ -174,8 +182,9 @@ def test_a_model_built_from_parameters_is_what_the_regressor_predicts(scale: flo
     y_of, tau_of = armctl.Dynamics(model), armctl.Dynamics(new)
     rng = np.random.default_rng(1)
     for q, qd, qdd in rng.uniform(-1.5, 1.5, (5, 3, 6)):
-        np.testing.assert_allclose(y_of.regressor(q, qd, qdd) @ theta, tau_of.inverse_dynamics(q, qd, qdd),
-                                   rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(
+            y_of.regressor(q, qd, qdd) @ theta, tau_of.inverse_dynamics(q, qd, qdd), rtol=1e-12, atol=1e-12
+        )
 
 
 @pytest.mark.parametrize("backend", ["pinocchio", "lagrange"])
@@ -192,5 +201,6 @@ def test_a_rotor_given_to_a_joint_without_a_motor_is_an_armature(backend: str) -
     y_of, tau_of = armctl.Dynamics(model, backend=backend), armctl.Dynamics(new, backend=backend)
     rng = np.random.default_rng(2)
     for q, qd, qdd in rng.uniform(-1.5, 1.5, (5, 3, 3)):
-        np.testing.assert_allclose(y_of.regressor(q, qd, qdd) @ theta, tau_of.inverse_dynamics(q, qd, qdd),
-                                   rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(
+            y_of.regressor(q, qd, qdd) @ theta, tau_of.inverse_dynamics(q, qd, qdd), rtol=1e-12, atol=1e-12
+        )

@@ -32,8 +32,14 @@ METHODS: dict[str, tuple[str, ...]] = {
 # backend (CasADi functions) on a small arm; "compiled": the Pinocchio backend with compile=True (generated C
 # code whose expressions CasADi simplified, the Panda's g₁ free of q₁ for one; "pendulum_bare": one joint, no
 # motor and no friction, the regressor probe's least favourable case)
-MODELS = (("panda", "pinocchio"), ("puma560", "pinocchio"), ("planar_2r", "lagrange"), ("panda", "compiled"),
-          ("puma560", "compiled"), ("pendulum_bare", "compiled"))
+MODELS = (
+    ("panda", "pinocchio"),
+    ("puma560", "pinocchio"),
+    ("planar_2r", "lagrange"),
+    ("panda", "compiled"),
+    ("puma560", "compiled"),
+    ("pendulum_bare", "compiled"),
+)
 
 
 def _dynamics(name: str, backend: str) -> armctl.Dynamics:
@@ -98,19 +104,19 @@ def test_lists_and_integer_arrays_give_the_same_result(name: str, backend: str, 
     assert np.array_equal(fn(*[a.tolist() for a in ints]), expected)
 
 
-
 @pytest.mark.parametrize(("name", "backend"), MODELS)
 @pytest.mark.parametrize("method", sorted(METHODS))
-def test_big_endian_and_single_precision_arrays_give_the_float64_result(name: str, backend: str,
-                                                                       method: str) -> None:
+def test_big_endian_and_single_precision_arrays_give_the_float64_result(name: str, backend: str, method: str) -> None:
     # Pinocchio reads a big-endian array's bytes as if they were native (τ off by 3 N·m on puma560); float32
     # inputs must be converted before they are combined, not combined in single precision
     dyn = _dynamics(name, backend)
     fn = getattr(dyn, method)
     args = _args(dyn.n, len(METHODS[method]))
     single = [a.astype(np.float32) for a in args]
-    for converted, expected_from in (([a.astype(">f8") for a in args], args),
-                                     (single, [a.astype(np.float64) for a in single])):
+    for converted, expected_from in (
+        ([a.astype(">f8") for a in args], args),
+        (single, [a.astype(np.float64) for a in single]),
+    ):
         expected = np.array(fn(*expected_from))
         assert np.array_equal(fn(*converted), expected)
 
@@ -135,6 +141,7 @@ def test_object_arrays_are_converted_and_complex_ones_refused(name: str, backend
             with pytest.raises(InvalidParameterError, match=rf"^{arg_name} must hold real numbers"):
                 fn(*broken)
 
+
 @pytest.mark.parametrize(("name", "backend"), MODELS)
 @pytest.mark.parametrize("method", sorted(METHODS))
 def test_a_result_survives_the_next_call(name: str, backend: str, method: str) -> None:
@@ -153,8 +160,11 @@ def test_an_input_the_expression_does_not_contain_is_still_checked() -> None:
     # CasADi simplifies: a frictionless pendulum's τ = (I + m l²) q̈ + m g l sin q holds no q̇, so a NaN q̇ never
     # reaches the result and must be caught on the inputs
     model = armctl.models.pendulum().with_friction(viscous=0.0, coulomb=0.0)
-    for dyn in (armctl.Dynamics(model, backend="lagrange"), armctl.Dynamics(model),
-                armctl.Dynamics(model, compile=True)):
+    for dyn in (
+        armctl.Dynamics(model, backend="lagrange"),
+        armctl.Dynamics(model),
+        armctl.Dynamics(model, compile=True),
+    ):
         for method in ("inverse_dynamics", "forward_dynamics"):
             with pytest.raises(NonFiniteError, match=r"^qd holds NaN or inf"):
                 getattr(dyn, method)(np.array([0.3]), np.array([np.nan]), np.array([0.1]))
@@ -183,8 +193,12 @@ def test_masked_entries_are_refused_on_the_checked_paths() -> None:
     take float64 arrays as they are and do not look for masks.)"""
     dyn = dynamics("puma560", "pinocchio")  # friction: the checked paths
     masked = np.ma.masked_array(np.ones(6), mask=[0, 1, 0, 0, 0, 0])
-    for call in (lambda: dyn.coriolis_matrix(masked, masked), lambda: dyn.friction_torque(masked),
-                 lambda: dyn.coulomb_offset(masked), lambda: dyn.inverse_dynamics(masked, masked, masked)):
+    for call in (
+        lambda: dyn.coriolis_matrix(masked, masked),
+        lambda: dyn.friction_torque(masked),
+        lambda: dyn.coulomb_offset(masked),
+        lambda: dyn.inverse_dynamics(masked, masked, masked),
+    ):
         with pytest.raises(InvalidParameterError, match=r"^qd? has masked entries: fill them first"):
             call()
     unmasked = np.ma.masked_array(np.full(6, 0.5), mask=False)
@@ -201,9 +215,13 @@ def test_finite_inputs_too_large_for_floats_raise_with_friction_too(model: armct
         dyn.inverse_dynamics(np.zeros(n), np.full(n, 1e200), np.zeros(n))
 
 
-@pytest.mark.parametrize(("backend", "option", "names"), [
-    ("pinocchio", "rotor_coupling", "its options: compile, cache_dir"),
-    ("lagrange", "compiled", "its options: rotor_coupling, compile")])
+@pytest.mark.parametrize(
+    ("backend", "option", "names"),
+    [
+        ("pinocchio", "rotor_coupling", "its options: compile, cache_dir"),
+        ("lagrange", "compiled", "its options: rotor_coupling, compile"),
+    ],
+)
 def test_an_unknown_backend_option_is_named_with_the_valid_ones(backend: str, option: str, names: str) -> None:
     # it was a bare TypeError without the valid options
     from armctl.errors import InvalidParameterError

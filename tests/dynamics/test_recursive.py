@@ -23,16 +23,29 @@ def _placement(rpy: tuple[float, float, float], xyz: tuple[float, float, float])
 def skewed_rpr() -> armctl.RobotModel:
     """Revolute–prismatic–revolute arm with tilted placements, axes along no frame axis, off-axis centres of
     mass, full inertia tensors and armatures."""
-    link = [Link(1.5, (0.1, -0.05, 0.2), np.array([[0.04, 0.002, -0.001], [0.002, 0.05, 0.003],
-                                                    [-0.001, 0.003, 0.03]])),
-            Link(0.8, (0.02, 0.03, -0.1), np.diag([0.01, 0.02, 0.015])),
-            Link(0.5, (0.0, 0.08, 0.05), np.array([[0.006, 0.0, 0.001], [0.0, 0.005, 0.0], [0.001, 0.0, 0.004]]))]
+    link = [
+        Link(1.5, (0.1, -0.05, 0.2), np.array([[0.04, 0.002, -0.001], [0.002, 0.05, 0.003], [-0.001, 0.003, 0.03]])),
+        Link(0.8, (0.02, 0.03, -0.1), np.diag([0.01, 0.02, 0.015])),
+        Link(0.5, (0.0, 0.08, 0.05), np.array([[0.006, 0.0, 0.001], [0.0, 0.005, 0.0], [0.001, 0.0, 0.004]])),
+    ]
     joints = (
-        Joint("j1", "revolute", (0.0, 0.6, 0.8), _placement((0.1, -0.2, 0.3), (0.0, 0.0, 0.3)), link[0],
-              motor=Motor(2e-4, 50.0, gyroscopic=False)),
+        Joint(
+            "j1",
+            "revolute",
+            (0.0, 0.6, 0.8),
+            _placement((0.1, -0.2, 0.3), (0.0, 0.0, 0.3)),
+            link[0],
+            motor=Motor(2e-4, 50.0, gyroscopic=False),
+        ),
         Joint("j2", "prismatic", (0.48, 0.6, 0.64), _placement((0.5, 0.0, -0.4), (0.2, 0.1, 0.0)), link[1]),
-        Joint("j3", "revolute", (1.0, 0.0, 0.0), _placement((0.0, 0.7, 0.2), (0.0, 0.3, 0.1)), link[2],
-              motor=Motor(1e-4, 30.0, gyroscopic=False)),
+        Joint(
+            "j3",
+            "revolute",
+            (1.0, 0.0, 0.0),
+            _placement((0.0, 0.7, 0.2), (0.0, 0.3, 0.1)),
+            link[2],
+            motor=Motor(1e-4, 30.0, gyroscopic=False),
+        ),
     )
     return armctl.RobotModel(joints, name="skewed_rpr", frames=(Frame("tool", 3, np.eye(4)),), tool_frame="tool")
 
@@ -43,9 +56,15 @@ def _value(fn, *args: np.ndarray) -> np.ndarray:
     return out if fn.name() == "M" else out.ravel()
 
 
-MODELS = {"pendulum": armctl.models.pendulum, "planar_2r": armctl.models.planar_2r,
-          "planar_3r": armctl.models.planar_3r, "puma560": armctl.models.puma560, "panda": armctl.models.panda,
-          "ur5": armctl.models.ur5, "skewed_rpr": skewed_rpr}
+MODELS = {
+    "pendulum": armctl.models.pendulum,
+    "planar_2r": armctl.models.planar_2r,
+    "planar_3r": armctl.models.planar_3r,
+    "puma560": armctl.models.puma560,
+    "panda": armctl.models.panda,
+    "ur5": armctl.models.ur5,
+    "skewed_rpr": skewed_rpr,
+}
 
 
 @pytest.mark.parametrize("name", list(MODELS))
@@ -60,13 +79,13 @@ def test_recursions_agree_with_pinocchio(name: str) -> None:
     for _ in range(4):
         q, qd, qdd = rng.uniform(-2.0, 2.0, (3, model.n))
         tau = pin.rnea(pm, pd, q, qd, qdd).copy()
-        np.testing.assert_allclose(_value(fns["tau"], q, qd, qdd), tau, rtol=1e-11,
-                                   atol=1e-11 * np.abs(tau).max())
+        np.testing.assert_allclose(_value(fns["tau"], q, qd, qdd), tau, rtol=1e-11, atol=1e-11 * np.abs(tau).max())
         mass = pin.crba(pm, pd, q).copy()
         mass = np.triu(mass) + np.triu(mass, 1).T  # Pinocchio fills the upper triangle
         np.testing.assert_allclose(_value(fns["M"], q), mass, rtol=1e-11, atol=1e-11 * np.abs(mass).max())
-        np.testing.assert_allclose(_value(fns["qdd"], q, qd, tau), pin.aba(pm, pd, q, qd, tau),
-                                   rtol=1e-9, atol=1e-9 * np.abs(qdd).max())
+        np.testing.assert_allclose(
+            _value(fns["qdd"], q, qd, tau), pin.aba(pm, pd, q, qd, tau), rtol=1e-9, atol=1e-9 * np.abs(qdd).max()
+        )
 
 
 def test_recursions_take_the_gyroscopic_rotor_as_its_armature_only() -> None:
@@ -75,5 +94,4 @@ def test_recursions_take_the_gyroscopic_rotor_as_its_armature_only() -> None:
     assert any(j.motor is not None and j.motor.gyroscopic and j.motor.inertia > 0 for j in model.joints)
     dyn = armctl.Dynamics(model)
     q = np.array([0.4, -1.1])
-    np.testing.assert_allclose(_value(recursive.functions(model)["M"], q), dyn.mass_matrix(q),
-                               rtol=1e-12)
+    np.testing.assert_allclose(_value(recursive.functions(model)["M"], q), dyn.mass_matrix(q), rtol=1e-12)

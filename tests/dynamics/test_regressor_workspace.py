@@ -54,9 +54,15 @@ def test_interleaved_calls_do_not_leak_between_states(puma: armctl.Dynamics) -> 
     fresh._raw_t = fresh._raw_t_free = None
     for seed in range(6):
         q, qd, qdd, qd_r = _states(puma.n, seed=seed)
-        got = (puma.passivity_regressor(q, qd, qd_r, qdd), puma.regressor(q, qd, qdd),
-               puma.passivity_regressor(qd, q, qdd, qd_r))
-        want = (fresh.passivity_regressor(q, qd, qd_r, qdd), fresh.regressor(q, qd, qdd),
-                fresh.passivity_regressor(qd, q, qdd, qd_r))
+        got = (
+            puma.passivity_regressor(q, qd, qd_r, qdd),
+            puma.regressor(q, qd, qdd),
+            puma.passivity_regressor(qd, q, qdd, qd_r),
+        )
+        want = (
+            fresh.passivity_regressor(q, qd, qd_r, qdd),
+            fresh.regressor(q, qd, qdd),
+            fresh.passivity_regressor(qd, q, qdd, qd_r),
+        )
         for a, b in zip(got, want, strict=True):
             assert np.allclose(a, b, rtol=0, atol=1e-12 * np.abs(b).max())

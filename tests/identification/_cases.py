@@ -38,20 +38,21 @@ class Case:
     wrist: tuple[int, ...]
 
 
-def measure(truth: armctl.Dynamics, traj: ident.FourierExcitation, periods: float, seed: int
-            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def measure(
+    truth: armctl.Dynamics, traj: ident.FourierExcitation, periods: float, seed: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(t, q, τ) as a robot would log them: true inverse dynamics along the trajectory, noise added."""
     rng = np.random.default_rng(seed)
     t = np.arange(0.0, periods * traj.period, 1.0 / FS)
     q, qd, qdd = traj.evaluate(t)
     tau = np.array([truth.inverse_dynamics(*x) for x in zip(q, qd, qdd, strict=True)])
     rms = np.sqrt((tau**2).mean(axis=0))
-    return (t, q + NOISE_Q * rng.standard_normal(q.shape),
-            tau + NOISE_TAU * rms * rng.standard_normal(tau.shape))
+    return (t, q + NOISE_Q * rng.standard_normal(q.shape), tau + NOISE_TAU * rms * rng.standard_normal(tau.shape))
 
 
-def true_torque(truth: armctl.Dynamics, traj: ident.FourierExcitation, step: float = 0.01
-                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def true_torque(
+    truth: armctl.Dynamics, traj: ident.FourierExcitation, step: float = 0.01
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Noise-free (q, q̇, q̈, τ) of the truth over one period of ``traj``."""
     t = np.arange(0.0, traj.period, step)
     q, qd, qdd = traj.evaluate(t)
@@ -62,8 +63,10 @@ def panda_truth() -> armctl.RobotModel:
     """The Panda with joint friction (the URDF has none): viscous 0.2–0.6 N·m·s/rad, Coulomb 0.3–1.0 N·m,
     asymmetric on some joints — magnitudes of the order published for the real arm."""
     return armctl.models.panda().with_friction(
-        viscous=[0.6, 0.6, 0.5, 0.5, 0.3, 0.3, 0.2], coulomb=[0.8, 0.9, 0.7, 0.7, 0.4, 0.35, 0.3],
-        coulomb_negative=[0.7, 1.0, 0.6, 0.75, 0.45, 0.3, 0.3])
+        viscous=[0.6, 0.6, 0.5, 0.5, 0.3, 0.3, 0.2],
+        coulomb=[0.8, 0.9, 0.7, 0.7, 0.4, 0.35, 0.3],
+        coulomb_negative=[0.7, 1.0, 0.6, 0.75, 0.45, 0.3, 0.3],
+    )
 
 
 @cache

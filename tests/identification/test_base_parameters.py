@@ -45,8 +45,9 @@ def test_rank_agrees_with_an_svd_and_ignores_inertial_values(name: str) -> None:
     w = np.vstack([dyn.regressor(*rng.uniform(-2, 2, (3, dyn.n))) for _ in range(60)])
     s = np.linalg.svd(w, compute_uv=False)
     assert base.n_base == int(np.sum(s > 1e-9 * s[0]))
-    other = find_base_parameters(armctl.Dynamics(dyn.model.perturbed(mass=1.7, inertia=0.6, com_offset=0.03,
-                                                                     seed=2)), seed=5)
+    other = find_base_parameters(
+        armctl.Dynamics(dyn.model.perturbed(mass=1.7, inertia=0.6, com_offset=0.03, seed=2)), seed=5
+    )
     assert other.independent == base.independent
     np.testing.assert_allclose(other.beta, base.beta, atol=1e-8)
 

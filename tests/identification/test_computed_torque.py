@@ -18,8 +18,11 @@ from tests.identification._cases import Case
 def test_identified_model_tracks_better_than_the_nominal_one(puma_case: Case) -> None:
     traj = puma_case.validation
     errors = {}
-    for name, model in (("identified", puma_case.result.identified_model), ("nominal", puma_case.nominal),
-                        ("truth", puma_case.truth)):
+    for name, model in (
+        ("identified", puma_case.result.identified_model),
+        ("nominal", puma_case.nominal),
+        ("truth", puma_case.truth),
+    ):
         controller = ComputedTorque(armctl.Dynamics(model), kp=25.0, kd=10.0)
         res = simulate(puma_case.truth, controller, traj, 4.0, control_dt=1e-3)
         assert not res.diverged, name

@@ -112,8 +112,13 @@ def test_massless_link_and_new_rotor_and_asymmetric_friction() -> None:
     assert (fr.coulomb, fr.coulomb_neg) == (pytest.approx(2.5), pytest.approx(1.5))
 
 
-def _excited(truth: armctl.RobotModel, nominal: armctl.RobotModel, duration: float, rate: float,  # type: ignore[no-untyped-def]
-             maxiter: int):
+def _excited(
+    truth: armctl.RobotModel,
+    nominal: armctl.RobotModel,
+    duration: float,
+    rate: float,  # type: ignore[no-untyped-def]
+    maxiter: int,
+):
     """(Dynamics of ``nominal``, its base parameters, t, q, q̇, q̈, τ): the excitation optimised for ``nominal``
     (6 s period, 3 harmonics, ``maxiter`` iterations) sampled at ``rate`` Hz for ``duration`` s, and the exact
     torques of ``truth`` along it."""

@@ -38,8 +38,7 @@ def test_parallel_filtering_keeps_coulomb_jumps_consistent() -> None:
     tau = np.array([dyn.inverse_dynamics(*x) for x in zip(q, qd, qdd, strict=True)])
     raw = IdentificationData(t, q, qd, qdd, tau)
     filtered = prepare_data(t, q, tau, cutoff=10.0)
-    exact = IdentificationData(t, q, qd, qdd, tau, sos=filtered.sos, decimate=filtered.decimate,
-                               trim=filtered.trim)
+    exact = IdentificationData(t, q, qd, qdd, tau, sos=filtered.sos, decimate=filtered.decimate, trim=filtered.trim)
     for data in (raw, exact):
         problem = build_problem(dyn, data)
         est = solve_least_squares(problem, weighted=False)
@@ -74,8 +73,7 @@ def test_mismatched_sample_counts_raise(t_len: int, q_len: int, tau_len: int) ->
     with pytest.raises(ShapeError, match=rf"q \({q_len}, 2\), tau \({tau_len}, 2\)"):
         prepare_data(t, np.zeros((q_len, 2)), np.zeros((tau_len, 2)), cutoff=10.0)
     with pytest.raises(ShapeError, match=rf"\({q_len}, 2\)|{t_len} samples"):
-        IdentificationData(t, np.zeros((q_len, 2)), np.zeros((q_len, 2)), np.zeros((q_len, 2)),
-                           np.zeros((tau_len, 2)))
+        IdentificationData(t, np.zeros((q_len, 2)), np.zeros((q_len, 2)), np.zeros((q_len, 2)), np.zeros((tau_len, 2)))
 
 
 def test_other_bad_logs_raise() -> None:
@@ -97,9 +95,17 @@ def test_other_bad_logs_raise() -> None:
         build_problem(dynamics("planar_3r"), IdentificationData(t, z, z, z, z))
 
 
-@pytest.mark.parametrize(("kwargs", "shown"), [({"order": 0}, "order"), ({"order": 2.7}, "2.7"),
-                                               ({"decimate": 1.5}, "1.5"), ({"decimate": 0}, "decimate"),
-                                               ({"trim": -1}, "trim"), ({"order": True}, "True")])
+@pytest.mark.parametrize(
+    ("kwargs", "shown"),
+    [
+        ({"order": 0}, "order"),
+        ({"order": 2.7}, "2.7"),
+        ({"decimate": 1.5}, "1.5"),
+        ({"decimate": 0}, "decimate"),
+        ({"trim": -1}, "trim"),
+        ({"order": True}, "True"),
+    ],
+)
 def test_filter_settings_must_be_whole_numbers(kwargs: dict[str, object], shown: str) -> None:
     # they were truncated silently (order=2.7 ran a 2nd-order filter) or accepted (order=0)
     t = np.arange(0.0, 2.0, 0.002)

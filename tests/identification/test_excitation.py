@@ -15,8 +15,9 @@ from tests.conftest import dynamics
 
 def _random(n: int = 3, harmonics: int = 4, seed: int = 0) -> FourierExcitation:
     rng = np.random.default_rng(seed)
-    return FourierExcitation(rng.standard_normal(n), rng.standard_normal((n, harmonics)),
-                             rng.standard_normal((n, harmonics)), period=6.0)
+    return FourierExcitation(
+        rng.standard_normal(n), rng.standard_normal((n, harmonics)), rng.standard_normal((n, harmonics)), period=6.0
+    )
 
 
 def test_velocity_and_acceleration_are_the_derivatives_of_position() -> None:
@@ -45,8 +46,9 @@ def test_periodic_and_reference() -> None:
 
 def test_optimised_trajectory_respects_limits_on_a_dense_grid() -> None:
     dyn = dynamics("planar_3r")
-    design = optimize_excitation(dyn, acceleration_limit=3.0, velocity_limit=1.0, period=5.0, harmonics=3,
-                                 maxiter=15, seed=1)
+    design = optimize_excitation(
+        dyn, acceleration_limit=3.0, velocity_limit=1.0, period=5.0, harmonics=3, maxiter=15, seed=1
+    )
     t = np.linspace(0.0, 5.0, 20001)
     q, qd, qdd = design.trajectory.evaluate(t)
     m = dyn.model
@@ -94,12 +96,14 @@ def test_velocity_limit_is_the_smaller_of_the_models_and_the_given(model_limit: 
     """velocity_limit, if given, is the smaller of the two (docstring): checked on a dense grid of the design
     against min(model's joint velocity limit, given), both set by hand; the design moves near that bound."""
     base = dynamics("planar_3r").model
-    joints = tuple(dataclasses.replace(j, limits=dataclasses.replace(j.limits, velocity=model_limit))
-                   for j in base.joints)
+    joints = tuple(
+        dataclasses.replace(j, limits=dataclasses.replace(j.limits, velocity=model_limit)) for j in base.joints
+    )
     dyn = armctl.Dynamics(dataclasses.replace(base, joints=joints))
     assert np.all(dyn.model.velocity_limit == model_limit)
-    design = optimize_excitation(dyn, acceleration_limit=100.0, velocity_limit=given, period=5.0, harmonics=3,
-                                 maxiter=0, seed=1)
+    design = optimize_excitation(
+        dyn, acceleration_limit=100.0, velocity_limit=given, period=5.0, harmonics=3, maxiter=0, seed=1
+    )
     qd = np.abs(design.trajectory.evaluate(np.linspace(0.0, 5.0, 20001))[1]).max(axis=0)
     bound = min(model_limit, given)
     assert np.all(qd <= bound * (1 + 1e-9))
@@ -118,11 +122,14 @@ def test_optimiser_constraint_basis_is_the_fourier_series() -> None:
     omega = 2 * np.pi / period
     t = np.linspace(0.0, period, 50, endpoint=False)
     a, b = rng.standard_normal(nh), rng.standard_normal(nh)
-    q = sum(a[k] / (omega * (k + 1)) * np.sin(omega * (k + 1) * t) - b[k] / (omega * (k + 1))
-            * np.cos(omega * (k + 1) * t) for k in range(nh))
+    q = sum(
+        a[k] / (omega * (k + 1)) * np.sin(omega * (k + 1) * t) - b[k] / (omega * (k + 1)) * np.cos(omega * (k + 1) * t)
+        for k in range(nh)
+    )
     qd = sum(a[k] * np.cos(omega * (k + 1) * t) + b[k] * np.sin(omega * (k + 1) * t) for k in range(nh))
-    qdd = sum(omega * (k + 1) * (-a[k] * np.sin(omega * (k + 1) * t) + b[k] * np.cos(omega * (k + 1) * t))
-              for k in range(nh))
+    qdd = sum(
+        omega * (k + 1) * (-a[k] * np.sin(omega * (k + 1) * t) + b[k] * np.cos(omega * (k + 1) * t)) for k in range(nh)
+    )
     basis = _Basis(omega, nh, t)
     for mat, expected in ((basis.pos, q), (basis.vel, qd), (basis.acc, qdd)):
         np.testing.assert_allclose(mat @ np.r_[a, b], expected, atol=1e-12)

@@ -102,8 +102,9 @@ def test_estimates_agree_with_truth_within_their_uncertainty(which: str, request
 
 
 @pytest.mark.parametrize("which", CASES)
-def test_optimised_excitation_is_better_conditioned_and_within_limits(which: str,
-                                                                        request: pytest.FixtureRequest) -> None:
+def test_optimised_excitation_is_better_conditioned_and_within_limits(
+    which: str, request: pytest.FixtureRequest
+) -> None:
     c: Case = request.getfixturevalue(which)
     assert c.design.condition_number < 0.8 * c.design.initial_condition_number  # improved by a margin
     t = np.linspace(0, c.design.trajectory.period, 5001)

@@ -23,8 +23,9 @@ def dyn() -> armctl.Dynamics:
 @pytest.fixture(scope="module")
 def traj() -> ident.FourierExcitation:
     rng = np.random.default_rng(0)
-    return ident.FourierExcitation([0.1, -0.2], 0.5 * rng.standard_normal((2, 4)), 0.5 * rng.standard_normal((2, 4)),
-                                   5.0)
+    return ident.FourierExcitation(
+        [0.1, -0.2], 0.5 * rng.standard_normal((2, 4)), 0.5 * rng.standard_normal((2, 4)), 5.0
+    )
 
 
 @pytest.fixture(scope="module")
@@ -50,8 +51,9 @@ def result(dyn: armctl.Dynamics, data: ident.IdentificationData) -> ident.Identi
 
 
 @pytest.mark.parametrize("weighted", [True, False])
-def test_cost_ratio_is_about_one_on_noise_free_data(dyn: armctl.Dynamics, data: ident.IdentificationData,
-                                                    weighted: bool) -> None:
+def test_cost_ratio_is_about_one_on_noise_free_data(
+    dyn: armctl.Dynamics, data: ident.IdentificationData, weighted: bool
+) -> None:
     cons = ident.identify(dyn, data, weighted=weighted).consistent
     assert cons is not None and cons.converged, cons
     assert 0.999 <= cons.cost_ratio <= 1.01, cons.cost_ratio  # was 2.4e302 (round-off over a 1e-300 floor)
@@ -99,8 +101,12 @@ def test_tiny_torques_give_finite_standard_deviations(problem: ident.Identificat
 # 5. strings are not booleans
 
 
-def test_strings_are_not_booleans(dyn: armctl.Dynamics, data: ident.IdentificationData,
-                                  problem: ident.IdentificationProblem, result: ident.IdentificationResult) -> None:
+def test_strings_are_not_booleans(
+    dyn: armctl.Dynamics,
+    data: ident.IdentificationData,
+    problem: ident.IdentificationProblem,
+    result: ident.IdentificationResult,
+) -> None:
     with pytest.raises(InvalidParameterError, match="weighted must be True or False, got 'False'"):
         ident.solve_least_squares(problem, weighted="False")  # type: ignore[arg-type]
     with pytest.raises(InvalidParameterError, match="offsets must be True or False, got 'no'"):
@@ -130,8 +136,15 @@ def test_bad_design_counts(dyn: armctl.Dynamics, name: str, value: object) -> No
         ident.optimize_excitation(dyn, acceleration_limit=5.0, **dict(CHEAP, **{name: value}))
 
 
-@pytest.mark.parametrize(("rtol", "match"), [("x", "rtol must be a real number"), (None, "rtol must be a real number"),
-                                             (0.0, "rtol must be > 0"), (1.0, "rtol must be < 1")])
+@pytest.mark.parametrize(
+    ("rtol", "match"),
+    [
+        ("x", "rtol must be a real number"),
+        (None, "rtol must be a real number"),
+        (0.0, "rtol must be > 0"),
+        (1.0, "rtol must be < 1"),
+    ],
+)
 def test_bad_rtol(problem: ident.IdentificationProblem, rtol: object, match: str) -> None:
     with pytest.raises(InvalidParameterError, match=match):
         ident.solve_least_squares(problem, rtol=rtol)  # type: ignore[arg-type]
@@ -174,8 +187,14 @@ def test_bad_identification_data(data: ident.IdentificationData) -> None:
         replace(data, trim=-1)
     with pytest.raises(InvalidParameterError, match="q must hold real numbers"):
         replace(data, q=data.q + 0j)
-    short = ident.IdentificationData(data.t[:10], data.q[:10], data.qd[:10], data.qdd[:10], data.tau[:10],
-                                     sos=np.array([[1.0, 0.0, 0.0, 1.0, 0.5, 0.1]] * 4))
+    short = ident.IdentificationData(
+        data.t[:10],
+        data.q[:10],
+        data.qd[:10],
+        data.qdd[:10],
+        data.tau[:10],
+        sos=np.array([[1.0, 0.0, 0.0, 1.0, 0.5, 0.1]] * 4),
+    )
     with pytest.raises(InvalidParameterError, match="10 samples are too few for the filter sos"):
         short.reduce(short.tau)
 
@@ -240,14 +259,27 @@ def test_an_offset_no_motion_can_excite_is_named_with_its_cause() -> None:
     from armctl.model.parts import JointFriction, Motor
 
     fr = JointFriction(0.1, 0.5)
-    rows = [DHLink(d=0.4, a=0.4, mass=5, com=(-0.2, 0, 0), inertia=(0.02, 0.1, 0.1), motor=Motor(1e-4, 80),
-                   friction=fr),
-            DHLink(a=0.3, alpha=math.pi, mass=3, com=(-0.15, 0, 0), inertia=(0.01, 0.05, 0.05), motor=Motor(1e-4, 60),
-                   friction=fr),
-            DHLink(kind="prismatic", mass=1, com=(0, 0, -0.1), inertia=(0.01, 0.01, 0.001), motor=Motor(1e-5, 1000),
-                   friction=fr),
-            DHLink(d=0.05, mass=0.5, com=(0, 0, 0.02), inertia=(0.001, 0.001, 0.0005), motor=Motor(1e-5, 50),
-                   friction=fr)]
+    rows = [
+        DHLink(d=0.4, a=0.4, mass=5, com=(-0.2, 0, 0), inertia=(0.02, 0.1, 0.1), motor=Motor(1e-4, 80), friction=fr),
+        DHLink(
+            a=0.3,
+            alpha=math.pi,
+            mass=3,
+            com=(-0.15, 0, 0),
+            inertia=(0.01, 0.05, 0.05),
+            motor=Motor(1e-4, 60),
+            friction=fr,
+        ),
+        DHLink(
+            kind="prismatic",
+            mass=1,
+            com=(0, 0, -0.1),
+            inertia=(0.01, 0.01, 0.001),
+            motor=Motor(1e-5, 1000),
+            friction=fr,
+        ),
+        DHLink(d=0.05, mass=0.5, com=(0, 0, 0.02), inertia=(0.001, 0.001, 0.0005), motor=Motor(1e-5, 50), friction=fr),
+    ]
     model = armctl.RobotModel.from_dh(rows, name="scara")
     dyn = armctl.Dynamics(model)
     t = np.linspace(0.0, 10.0, 2000)

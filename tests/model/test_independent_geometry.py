@@ -31,8 +31,10 @@ def _tr(x: float = 0.0, z: float = 0.0) -> np.ndarray:
     return t
 
 
-LINKS = [DHLink(d=0.3, a=0.4, alpha=0.7, offset=0.3, mass=2.0, com=(-0.1, 0.02, 0.03), inertia=(0.05, 0.02, 0.04)),
-         DHLink(d=-0.1, a=0.25, alpha=-0.4, offset=-0.5, mass=1.0, com=(0.05, 0.0, 0.01), inertia=(0.01, 0.02, 0.015))]
+LINKS = [
+    DHLink(d=0.3, a=0.4, alpha=0.7, offset=0.3, mass=2.0, com=(-0.1, 0.02, 0.03), inertia=(0.05, 0.02, 0.04)),
+    DHLink(d=-0.1, a=0.25, alpha=-0.4, offset=-0.5, mass=1.0, com=(0.05, 0.0, 0.01), inertia=(0.01, 0.02, 0.015)),
+]
 TOOL = _rx(0.4) @ _tr(x=0.05, z=0.12)
 Q = np.array([0.6, -0.9])
 
@@ -58,8 +60,9 @@ def test_modified_dh_tool_pose_is_the_written_product() -> None:
 def test_a_rotated_link_inertia_enters_as_r_i_rt() -> None:
     # one revolute link (standard DH, α = 0.7, offset 0.3) with a full inertia tensor: M = I_zz of the body about
     # the joint axis, from the link frame's rotation R (scipy) as zᵀ R I Rᵀ z plus m·(distance of the com)²
-    link = DHLink(a=0.3, alpha=0.7, offset=0.3, mass=2.0, com=(-0.1, 0.05, 0.02), inertia=(0.05, 0.01, -0.004, 0.03,
-                                                                                             0.006, 0.04))
+    link = DHLink(
+        a=0.3, alpha=0.7, offset=0.3, mass=2.0, com=(-0.1, 0.05, 0.02), inertia=(0.05, 0.01, -0.004, 0.03, 0.006, 0.04)
+    )
     model = armctl.RobotModel.from_dh([link], gravity=(0.0, 0.0, 0.0))
     q = 0.4
     frame = _rz(q + 0.3) @ _tr(x=0.3) @ _rx(0.7)  # the link frame in the base

@@ -35,8 +35,7 @@ def test_builtin_sizes_and_tool_frames(model_name: str) -> None:
 def test_parameters_layout() -> None:
     """π per joint: m, m·c, inertia about the joint origin (parallel axis), k_r² I_m, F_v, F_c."""
     link = Link(2.0, (0.1, 0.2, 0.3), np.diag([0.01, 0.02, 0.03]))
-    joint = Joint("j", "revolute", (0, 0, 1), np.eye(4), link, Motor(1e-4, 10.0),
-                  JointFriction(0.5, 1.0, 3.0))
+    joint = Joint("j", "revolute", (0, 0, 1), np.eye(4), link, Motor(1e-4, 10.0), JointFriction(0.5, 1.0, 3.0))
     pi = armctl.RobotModel((joint,)).parameters()
     c = np.array([0.1, 0.2, 0.3])
     i_o = np.diag([0.01, 0.02, 0.03]) + 2.0 * (c @ c * np.eye(3) - np.outer(c, c))
@@ -50,14 +49,18 @@ def test_parameters_layout() -> None:
 
 def test_standard_and_modified_dh_describe_the_same_arm() -> None:
     """A 3-link arm written in both conventions has the same dynamics and tool pose."""
-    std = [DHLink(d=0.3, a=0.0, alpha=math.pi / 2, mass=2.0, com=(0, -0.1, 0), inertia=(0.02, 0.01, 0.02)),
-           DHLink(a=0.5, mass=1.5, com=(-0.25, 0, 0), inertia=(0.001, 0.03, 0.03)),
-           DHLink(a=0.4, mass=1.0, com=(-0.2, 0, 0), inertia=(0.001, 0.015, 0.015))]
+    std = [
+        DHLink(d=0.3, a=0.0, alpha=math.pi / 2, mass=2.0, com=(0, -0.1, 0), inertia=(0.02, 0.01, 0.02)),
+        DHLink(a=0.5, mass=1.5, com=(-0.25, 0, 0), inertia=(0.001, 0.03, 0.03)),
+        DHLink(a=0.4, mass=1.0, com=(-0.2, 0, 0), inertia=(0.001, 0.015, 0.015)),
+    ]
     # modified: row i holds alpha_{i-1}, a_{i-1}, d_i; link bodies are given in frame {i} = joint frame i, which in
     # the standard convention is frame {i-1} · Rz(q): re-express each body there
-    mdh = [DHLink(d=0.3, mass=2.0, com=(0, 0, 0.1), inertia=(0.02, 0.02, 0.01)),
-           DHLink(alpha=math.pi / 2, mass=1.5, com=(0.25, 0, 0), inertia=(0.001, 0.03, 0.03)),
-           DHLink(a=0.5, mass=1.0, com=(0.2, 0, 0), inertia=(0.001, 0.015, 0.015))]
+    mdh = [
+        DHLink(d=0.3, mass=2.0, com=(0, 0, 0.1), inertia=(0.02, 0.02, 0.01)),
+        DHLink(alpha=math.pi / 2, mass=1.5, com=(0.25, 0, 0), inertia=(0.001, 0.03, 0.03)),
+        DHLink(a=0.5, mass=1.0, com=(0.2, 0, 0), inertia=(0.001, 0.015, 0.015)),
+    ]
     tool = np.eye(4)
     tool[0, 3] = 0.4
     a = armctl.Dynamics(armctl.RobotModel.from_dh(std, "standard"))
@@ -79,11 +82,15 @@ def test_dh_motor_axis_is_in_the_dh_frame_of_the_link_it_rides_on(convention: st
     alphas, offsets = (math.pi / 2, -0.7, 0.0), (0.2, -0.4, 0.0)
 
     def rows(axes: list[tuple[float, ...] | None]) -> list[DHLink]:
-        bodies = [dict(d=0.3, mass=2.0, com=(0, -0.1, 0), inertia=(0.02, 0.01, 0.02)),
-                  dict(a=0.5, mass=1.5, com=(-0.25, 0, 0), inertia=(0.001, 0.03, 0.03)),
-                  dict(a=0.4, mass=1.0, com=(-0.2, 0, 0), inertia=(0.001, 0.015, 0.015))]
-        return [DHLink(alpha=al, offset=off, motor=Motor(inertia=2e-4, gear_ratio=-60.0, axis=ax), **body)
-                for al, off, ax, body in zip(alphas, offsets, axes, bodies, strict=True)]
+        bodies = [
+            dict(d=0.3, mass=2.0, com=(0, -0.1, 0), inertia=(0.02, 0.01, 0.02)),
+            dict(a=0.5, mass=1.5, com=(-0.25, 0, 0), inertia=(0.001, 0.03, 0.03)),
+            dict(a=0.4, mass=1.0, com=(-0.2, 0, 0), inertia=(0.001, 0.015, 0.015)),
+        ]
+        return [
+            DHLink(alpha=al, offset=off, motor=Motor(inertia=2e-4, gear_ratio=-60.0, axis=ax), **body)
+            for al, off, ax, body in zip(alphas, offsets, axes, bodies, strict=True)
+        ]
 
     def rz_rx(theta: float, alpha: float) -> np.ndarray:
         c, s_, ca, sa = math.cos(theta), math.sin(theta), math.cos(alpha), math.sin(alpha)
@@ -175,13 +182,16 @@ def test_puma560_physical_variant() -> None:
     assert np.allclose(a.inverse_dynamics(q, q, q), b.inverse_dynamics(q, q, q))
 
 
-@pytest.mark.parametrize(("kwargs", "match"), [
-    ({"mass": -1.0}, "mass"),
-    ({"mass": 1.0, "inertia": (1.0, 1.0, -0.1)}, "positive semi-definite"),
-    ({"mass": 1.0, "inertia": (0.1, 0.1, 0.5)}, "triangle inequality"),
-    ({"mass": 1.0, "inertia": np.ones((2, 2))}, "3×3"),
-    ({"mass": 1.0, "com": (0, 0)}, "3 components"),
-])
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"mass": -1.0}, "mass"),
+        ({"mass": 1.0, "inertia": (1.0, 1.0, -0.1)}, "positive semi-definite"),
+        ({"mass": 1.0, "inertia": (0.1, 0.1, 0.5)}, "triangle inequality"),
+        ({"mass": 1.0, "inertia": np.ones((2, 2))}, "3×3"),
+        ({"mass": 1.0, "com": (0, 0)}, "3 components"),
+    ],
+)
 def test_bad_link_raises_named_errors(kwargs: dict, match: str) -> None:
     with pytest.raises(ArmctlError, match=match):
         Link(**kwargs)

@@ -24,8 +24,13 @@ def _2r() -> armctl.RobotModel:
 
 
 def _joint(**kwargs: Any) -> Joint:
-    args: dict[str, Any] = {"name": "j", "kind": "revolute", "axis": (0, 0, 1), "placement": np.eye(4),
-                            "link": Link(1.0)}
+    args: dict[str, Any] = {
+        "name": "j",
+        "kind": "revolute",
+        "axis": (0, 0, 1),
+        "placement": np.eye(4),
+        "link": Link(1.0),
+    }
     return Joint(**{**args, **kwargs})
 
 
@@ -38,15 +43,18 @@ def test_with_friction_refuses_none(arg: str) -> None:
         _2r().with_friction(**{arg: None})
 
 
-@pytest.mark.parametrize(("value", "error", "match"), [
-    (math.nan, NonFiniteError, r"viscous holds NaN or inf: \[nan nan\]"),
-    ([0.1, math.inf], NonFiniteError, r"viscous holds NaN or inf: \[0\.1 inf\]"),
-    ("0.5", InvalidParameterError, r"viscous must hold real numbers, got '0\.5'"),
-    (["0.5", "0.5"], InvalidParameterError, r"viscous must hold real numbers, got \['0\.5', '0\.5'\]"),
-    (True, InvalidParameterError, r"viscous must be a real number, not a boolean, got True"),
-    (np.array([True, False]), InvalidParameterError, r"viscous must be real numbers, not booleans"),
-    ([0.5, -1.0], InvalidParameterError, r"viscous must be >= 0, got \[0\.5, -1\.0\]"),
-])
+@pytest.mark.parametrize(
+    ("value", "error", "match"),
+    [
+        (math.nan, NonFiniteError, r"viscous holds NaN or inf: \[nan nan\]"),
+        ([0.1, math.inf], NonFiniteError, r"viscous holds NaN or inf: \[0\.1 inf\]"),
+        ("0.5", InvalidParameterError, r"viscous must hold real numbers, got '0\.5'"),
+        (["0.5", "0.5"], InvalidParameterError, r"viscous must hold real numbers, got \['0\.5', '0\.5'\]"),
+        (True, InvalidParameterError, r"viscous must be a real number, not a boolean, got True"),
+        (np.array([True, False]), InvalidParameterError, r"viscous must be real numbers, not booleans"),
+        ([0.5, -1.0], InvalidParameterError, r"viscous must be >= 0, got \[0\.5, -1\.0\]"),
+    ],
+)
 def test_with_friction_checks_values_when_the_variant_is_made(value: object, error: type, match: str) -> None:
     with pytest.raises(error, match=match):
         _2r().with_friction(viscous=value)
@@ -63,13 +71,16 @@ def test_with_friction_valid_input_unchanged() -> None:
     assert np.allclose(tau - tau0, [1.5, 2.5])  # F_v q̇ + F_c for q̇ = 1
 
 
-@pytest.mark.parametrize(("kwargs", "error", "match"), [
-    ({"viscous": None}, InvalidParameterError, r"friction viscous must be a real number, got None"),
-    ({"coulomb": "1"}, InvalidParameterError, r"friction coulomb must be a real number, got '1'"),
-    ({"viscous": [1, 2]}, InvalidParameterError, r"friction viscous must be a real number, got \[1, 2\]"),
-    ({"static": True}, InvalidParameterError, r"friction static must be a real number, not a boolean, got True"),
-    ({"stribeck_velocity": math.nan}, NonFiniteError, r"friction stribeck_velocity must be finite, got nan"),
-])
+@pytest.mark.parametrize(
+    ("kwargs", "error", "match"),
+    [
+        ({"viscous": None}, InvalidParameterError, r"friction viscous must be a real number, got None"),
+        ({"coulomb": "1"}, InvalidParameterError, r"friction coulomb must be a real number, got '1'"),
+        ({"viscous": [1, 2]}, InvalidParameterError, r"friction viscous must be a real number, got \[1, 2\]"),
+        ({"static": True}, InvalidParameterError, r"friction static must be a real number, not a boolean, got True"),
+        ({"stribeck_velocity": math.nan}, NonFiniteError, r"friction stribeck_velocity must be finite, got nan"),
+    ],
+)
 def test_joint_friction_checks_its_values(kwargs: dict, error: type, match: str) -> None:
     with pytest.raises(error, match=match):
         JointFriction(**kwargs)
@@ -84,100 +95,244 @@ PART_CASES: list[tuple[str, Callable[[], object], type, str]] = [
     ("Link mass bool", lambda: Link(True), InvalidParameterError, r"link mass \[kg\] .*not a boolean, got True"),
     ("Link mass nan", lambda: Link(math.nan), NonFiniteError, r"link mass \[kg\] must be finite, got nan"),
     ("Link com text", lambda: Link(1.0, ["1", "2", "3"]), InvalidParameterError, r"link com .*\['1', '2', '3'\]"),
-    ("Link com bools", lambda: Link(1.0, [True, False, True]), InvalidParameterError,
-     r"link com must be real numbers, not booleans, got \[True, False, True\]"),
+    (
+        "Link com bools",
+        lambda: Link(1.0, [True, False, True]),
+        InvalidParameterError,
+        r"link com must be real numbers, not booleans, got \[True, False, True\]",
+    ),
     ("Link inertia text", lambda: Link(1.0, inertia="abc"), InvalidParameterError, r"link inertia .*'abc'"),
-    ("Link inertia bools", lambda: Link(1.0, inertia=[True] * 3), InvalidParameterError,
-     r"link inertia must be real numbers, not booleans"),
-    ("Link physical text", lambda: Link(1.0, physical="no"), InvalidParameterError,
-     r"link physical must be True or False, got 'no'"),
-    ("payload text", lambda: _2r().with_payload("2"), InvalidParameterError,
-     r"payload mass \[kg\] must be a real number, got '2'"),
+    (
+        "Link inertia bools",
+        lambda: Link(1.0, inertia=[True] * 3),
+        InvalidParameterError,
+        r"link inertia must be real numbers, not booleans",
+    ),
+    (
+        "Link physical text",
+        lambda: Link(1.0, physical="no"),
+        InvalidParameterError,
+        r"link physical must be True or False, got 'no'",
+    ),
+    (
+        "payload text",
+        lambda: _2r().with_payload("2"),
+        InvalidParameterError,
+        r"payload mass \[kg\] must be a real number, got '2'",
+    ),
     ("payload bool", lambda: _2r().with_payload(True), InvalidParameterError, r"payload mass .*got True"),
-    ("payload com bools", lambda: _2r().with_payload(1.0, com=[True] * 3), InvalidParameterError,
-     r"payload com must be real numbers, not booleans"),
-    ("payload inertia text", lambda: _2r().with_payload(1.0, inertia="abc"), InvalidParameterError,
-     r"payload inertia must hold real numbers, got 'abc'"),
+    (
+        "payload com bools",
+        lambda: _2r().with_payload(1.0, com=[True] * 3),
+        InvalidParameterError,
+        r"payload com must be real numbers, not booleans",
+    ),
+    (
+        "payload inertia text",
+        lambda: _2r().with_payload(1.0, inertia="abc"),
+        InvalidParameterError,
+        r"payload inertia must hold real numbers, got 'abc'",
+    ),
     ("Motor inertia text", lambda: Motor("1e-4"), InvalidParameterError, r"rotor inertia .*got '1e-4'"),
-    ("Motor gear None", lambda: Motor(1e-4, None), InvalidParameterError,
-     r"gear ratio must be a real number, got None"),
-    ("Motor axis bools", lambda: Motor(axis=[True, False, False]), InvalidParameterError,
-     r"motor axis must be real numbers, not booleans"),
+    (
+        "Motor gear None",
+        lambda: Motor(1e-4, None),
+        InvalidParameterError,
+        r"gear ratio must be a real number, got None",
+    ),
+    (
+        "Motor axis bools",
+        lambda: Motor(axis=[True, False, False]),
+        InvalidParameterError,
+        r"motor axis must be real numbers, not booleans",
+    ),
     ("JointLimits text", lambda: JointLimits("0", "1"), InvalidParameterError, r"joint lower limit .*got '0'"),
     ("JointLimits None", lambda: JointLimits(None), InvalidParameterError, r"joint lower limit .*got None"),
     ("JointLimits bool", lambda: JointLimits(0.0, True), InvalidParameterError, r"joint upper limit .*got True"),
     ("JointLimits nan", lambda: JointLimits(math.nan), NonFiniteError, r"joint lower limit is NaN"),
-    ("DHLink motor", lambda: DHLink(motor=5), InvalidParameterError,
-     r"DH link motor must be an armctl.model.Motor or None, got 5 \(int\)"),
-    ("DHLink limits", lambda: DHLink(limits=(0, 1)), InvalidParameterError,
-     r"DH link limits .*must be an armctl.model.JointLimits, got \(0, 1\) \(tuple\)"),
-    ("DHLink friction", lambda: DHLink(friction=0.5), InvalidParameterError,
-     r"DH link friction .*must be an armctl.model.JointFriction, got 0.5"),
+    (
+        "DHLink motor",
+        lambda: DHLink(motor=5),
+        InvalidParameterError,
+        r"DH link motor must be an armctl.model.Motor or None, got 5 \(int\)",
+    ),
+    (
+        "DHLink limits",
+        lambda: DHLink(limits=(0, 1)),
+        InvalidParameterError,
+        r"DH link limits .*must be an armctl.model.JointLimits, got \(0, 1\) \(tuple\)",
+    ),
+    (
+        "DHLink friction",
+        lambda: DHLink(friction=0.5),
+        InvalidParameterError,
+        r"DH link friction .*must be an armctl.model.JointFriction, got 0.5",
+    ),
     ("DHLink d text", lambda: DHLink(d="0.3"), InvalidParameterError, r"DH parameter d .*got '0.3'"),
     ("DHLink a None", lambda: DHLink(a=None), InvalidParameterError, r"DH parameter a .*got None"),
     ("DHLink alpha bool", lambda: DHLink(alpha=True), InvalidParameterError, r"DH parameter alpha .*got True"),
     ("DHLink mass text", lambda: DHLink(mass="1"), InvalidParameterError, r"link mass \[kg\] .*got '1'"),
     ("DHLink com", lambda: DHLink(com=(0, 0)), ShapeError, r"link com must have 3 components"),
     ("DHLink name", lambda: DHLink(name=5), InvalidParameterError, r"DH link name must be a str, got 5"),
-    ("DH row", lambda: armctl.RobotModel.from_dh([5]), InvalidParameterError,
-     r"DH row 0 must be a DHLink or a dict of its arguments, got 5"),
+    (
+        "DH row",
+        lambda: armctl.RobotModel.from_dh([5]),
+        InvalidParameterError,
+        r"DH row 0 must be a DHLink or a dict of its arguments, got 5",
+    ),
     ("DH row key", lambda: armctl.RobotModel.from_dh([{"mas": 1.0}]), InvalidParameterError, r"DH row 0: .*'mas'"),
-    ("DH table text", lambda: armctl.RobotModel.from_dh("ab"), InvalidParameterError,
-     r"a DH table must be a sequence .*got 'ab'"),
-    ("DH gravity text", lambda: armctl.RobotModel.from_dh([DHLink(a=1.0)], gravity=["0", "0", "-9.81"]),
-     InvalidParameterError, r"gravity .*must hold real numbers, got \['0', '0', '-9.81'\]"),
-    ("DH tool bools", lambda: armctl.RobotModel.from_dh([DHLink(a=1.0)], tool=np.eye(4, dtype=bool)),
-     InvalidParameterError, r"tool must be real numbers, not booleans"),
-    ("Joint link", lambda: _joint(link=5), InvalidParameterError,
-     r"joint 'j' link must be an armctl.model.Link, got 5 \(int\)"),
+    (
+        "DH table text",
+        lambda: armctl.RobotModel.from_dh("ab"),
+        InvalidParameterError,
+        r"a DH table must be a sequence .*got 'ab'",
+    ),
+    (
+        "DH gravity text",
+        lambda: armctl.RobotModel.from_dh([DHLink(a=1.0)], gravity=["0", "0", "-9.81"]),
+        InvalidParameterError,
+        r"gravity .*must hold real numbers, got \['0', '0', '-9.81'\]",
+    ),
+    (
+        "DH tool bools",
+        lambda: armctl.RobotModel.from_dh([DHLink(a=1.0)], tool=np.eye(4, dtype=bool)),
+        InvalidParameterError,
+        r"tool must be real numbers, not booleans",
+    ),
+    (
+        "Joint link",
+        lambda: _joint(link=5),
+        InvalidParameterError,
+        r"joint 'j' link must be an armctl.model.Link, got 5 \(int\)",
+    ),
     ("Joint motor", lambda: _joint(motor=5), InvalidParameterError, r"joint 'j' motor must be an armctl.model.Motor"),
-    ("Joint friction", lambda: _joint(friction=None), InvalidParameterError,
-     r"joint 'j' friction .*must be an armctl.model.JointFriction, got None"),
-    ("Joint limits", lambda: _joint(limits=(0, 1)), InvalidParameterError,
-     r"joint 'j' limits .*must be an armctl.model.JointLimits, got \(0, 1\)"),
+    (
+        "Joint friction",
+        lambda: _joint(friction=None),
+        InvalidParameterError,
+        r"joint 'j' friction .*must be an armctl.model.JointFriction, got None",
+    ),
+    (
+        "Joint limits",
+        lambda: _joint(limits=(0, 1)),
+        InvalidParameterError,
+        r"joint 'j' limits .*must be an armctl.model.JointLimits, got \(0, 1\)",
+    ),
     ("Joint name", lambda: _joint(name=5), InvalidParameterError, r"joint name must be a str, got 5"),
     ("Joint axis text", lambda: _joint(axis=["0", "0", "1"]), InvalidParameterError, r"joint 'j' axis .*'1'\]"),
-    ("Joint axis bools", lambda: _joint(axis=[False, False, True]), InvalidParameterError,
-     r"joint 'j' axis must be real numbers, not booleans"),
-    ("Joint placement bools", lambda: _joint(placement=np.eye(4, dtype=bool)), InvalidParameterError,
-     r"joint 'j' placement must be real numbers, not booleans"),
-    ("Frame joint fraction", lambda: Frame("f", 1.5, None), InvalidParameterError,
-     r"frame 'f' joint index must be a whole number >= 0, got 1.5"),
+    (
+        "Joint axis bools",
+        lambda: _joint(axis=[False, False, True]),
+        InvalidParameterError,
+        r"joint 'j' axis must be real numbers, not booleans",
+    ),
+    (
+        "Joint placement bools",
+        lambda: _joint(placement=np.eye(4, dtype=bool)),
+        InvalidParameterError,
+        r"joint 'j' placement must be real numbers, not booleans",
+    ),
+    (
+        "Frame joint fraction",
+        lambda: Frame("f", 1.5, None),
+        InvalidParameterError,
+        r"frame 'f' joint index must be a whole number >= 0, got 1.5",
+    ),
     ("Frame joint bool", lambda: Frame("f", True, None), InvalidParameterError, r"frame 'f' joint index .*got True"),
     ("Frame name", lambda: Frame(5, 1, None), InvalidParameterError, r"frame name must be a str, got 5"),
-    ("model frames", lambda: armctl.RobotModel(_2r().joints, frames=[5]), InvalidParameterError,
-     r"frames must be armctl.model.Frame objects, got 5"),
+    (
+        "model frames",
+        lambda: armctl.RobotModel(_2r().joints, frames=[5]),
+        InvalidParameterError,
+        r"frames must be armctl.model.Frame objects, got 5",
+    ),
     ("model joints", lambda: armctl.RobotModel(5), InvalidParameterError, r"joints must be a sequence .*got 5"),
-    ("model name", lambda: armctl.RobotModel(_2r().joints, name=5), InvalidParameterError,
-     r"model name must be a str, got 5"),
-    ("model gravity bools", lambda: armctl.RobotModel(_2r().joints, gravity=[False, False, True]),
-     InvalidParameterError, r"gravity must be real numbers, not booleans"),
-    ("perturbed seed -1.0", lambda: _2r().perturbed(noise=0.1, seed=-1.0), InvalidParameterError,
-     r"perturbed\(\): seed must be a whole number >= 0, got -1.0"),
-    ("perturbed seed 1.5", lambda: _2r().perturbed(noise=0.1, seed=1.5), InvalidParameterError,
-     r"perturbed\(\): seed must be a whole number >= 0, got 1.5"),
-    ("perturbed factor bool", lambda: _2r().perturbed(mass=True), InvalidParameterError,
-     r"perturbed\(\): mass must be finite and >= 0 .*got True"),
-    ("reduced rotors text", lambda: _2r().reduced(rotors="no"), InvalidParameterError,
-     r"reduced\(\): rotors must be True or False, got 'no'"),
-    ("reduced lock bool", lambda: _2r().reduced(lock={"joint1": True}), InvalidParameterError,
-     r"lock position of joint 'joint1' must be a real number, not a boolean, got True"),
+    (
+        "model name",
+        lambda: armctl.RobotModel(_2r().joints, name=5),
+        InvalidParameterError,
+        r"model name must be a str, got 5",
+    ),
+    (
+        "model gravity bools",
+        lambda: armctl.RobotModel(_2r().joints, gravity=[False, False, True]),
+        InvalidParameterError,
+        r"gravity must be real numbers, not booleans",
+    ),
+    (
+        "perturbed seed -1.0",
+        lambda: _2r().perturbed(noise=0.1, seed=-1.0),
+        InvalidParameterError,
+        r"perturbed\(\): seed must be a whole number >= 0, got -1.0",
+    ),
+    (
+        "perturbed seed 1.5",
+        lambda: _2r().perturbed(noise=0.1, seed=1.5),
+        InvalidParameterError,
+        r"perturbed\(\): seed must be a whole number >= 0, got 1.5",
+    ),
+    (
+        "perturbed factor bool",
+        lambda: _2r().perturbed(mass=True),
+        InvalidParameterError,
+        r"perturbed\(\): mass must be finite and >= 0 .*got True",
+    ),
+    (
+        "reduced rotors text",
+        lambda: _2r().reduced(rotors="no"),
+        InvalidParameterError,
+        r"reduced\(\): rotors must be True or False, got 'no'",
+    ),
+    (
+        "reduced lock bool",
+        lambda: _2r().reduced(lock={"joint1": True}),
+        InvalidParameterError,
+        r"lock position of joint 'joint1' must be a real number, not a boolean, got True",
+    ),
     ("reduced lock int", lambda: _2r().reduced(lock=5), InvalidParameterError, r"lock must be a joint name.*got 5"),
-    ("with_parameters bools", lambda: _2r().with_parameters(_2r().parameters() > 0), InvalidParameterError,
-     r"pi must be real numbers, not booleans"),
-    ("with_parameters offset bools", lambda: _2r().with_parameters(_2r().parameters(), coulomb_offset=[False] * 2),
-     InvalidParameterError, r"coulomb_offset must be real numbers, not booleans"),
-    ("with_parameters physical", lambda: _2r().with_parameters(_2r().parameters(), physical="yes"),
-     InvalidParameterError, r"physical must be True or False, got 'yes'"),
-    ("puma560 physical", lambda: armctl.models.puma560(physical="yes"), InvalidParameterError,
-     r"puma560\(\): physical must be True or False, got 'yes'"),
-    ("pseudo_inertia bools", lambda: pseudo_inertia(np.ones(10, dtype=bool)), InvalidParameterError,
-     r"link parameters must be real numbers, not booleans"),
-    ("from_pseudo_inertia text", lambda: from_pseudo_inertia([["1"] * 4] * 4), InvalidParameterError,
-     r"pseudo-inertias must hold real numbers"),
+    (
+        "with_parameters bools",
+        lambda: _2r().with_parameters(_2r().parameters() > 0),
+        InvalidParameterError,
+        r"pi must be real numbers, not booleans",
+    ),
+    (
+        "with_parameters offset bools",
+        lambda: _2r().with_parameters(_2r().parameters(), coulomb_offset=[False] * 2),
+        InvalidParameterError,
+        r"coulomb_offset must be real numbers, not booleans",
+    ),
+    (
+        "with_parameters physical",
+        lambda: _2r().with_parameters(_2r().parameters(), physical="yes"),
+        InvalidParameterError,
+        r"physical must be True or False, got 'yes'",
+    ),
+    (
+        "puma560 physical",
+        lambda: armctl.models.puma560(physical="yes"),
+        InvalidParameterError,
+        r"puma560\(\): physical must be True or False, got 'yes'",
+    ),
+    (
+        "pseudo_inertia bools",
+        lambda: pseudo_inertia(np.ones(10, dtype=bool)),
+        InvalidParameterError,
+        r"link parameters must be real numbers, not booleans",
+    ),
+    (
+        "from_pseudo_inertia text",
+        lambda: from_pseudo_inertia([["1"] * 4] * 4),
+        InvalidParameterError,
+        r"pseudo-inertias must hold real numbers",
+    ),
     ("is_physical text", lambda: is_physical(["1"] * 13), InvalidParameterError, r"pi must hold real numbers"),
-    ("projection bools", lambda: projection(np.ones(13, dtype=bool)), InvalidParameterError,
-     r"pi must be real numbers, not booleans"),
+    (
+        "projection bools",
+        lambda: projection(np.ones(13, dtype=bool)),
+        InvalidParameterError,
+        r"pi must be real numbers, not booleans",
+    ),
 ]
 
 
@@ -201,13 +356,15 @@ def test_valid_parts_unchanged() -> None:
     Link(1.0, caller)
     assert caller.flags.writeable  # the part's read-only copy is its own
     m = _2r()
-    assert np.array_equal(m.perturbed(noise=0.1, seed=np.int64(3)).parameters(),
-                          m.perturbed(noise=0.1, seed=3.0).parameters())
+    assert np.array_equal(
+        m.perturbed(noise=0.1, seed=np.int64(3)).parameters(), m.perturbed(noise=0.1, seed=3.0).parameters()
+    )
     assert m.reduced(lock=None).n == 2 and m.reduced(rotors=np.bool_(False)).has_motors is False
 
 
-@pytest.mark.parametrize("moments", [(1.0, 1.0, 3.0), (0.1, 0.2, 0.45), (0.5, 1.0, 1.6), (1.0, 2.0, 3.0),
-                                     (2.0, 2.0, 3.0)])
+@pytest.mark.parametrize(
+    "moments", [(1.0, 1.0, 3.0), (0.1, 0.2, 0.45), (0.5, 1.0, 1.6), (1.0, 2.0, 3.0), (2.0, 2.0, 3.0)]
+)
 def test_link_takes_the_moments_of_some_mass_distribution_only(moments: tuple[float, float, float]) -> None:
     """Principal moments a mass distribution can have: Σ = ½ tr(I) 1 − I = ∫ r rᵀ dm positive semi-definite
     (computed here; I₁ + I₂ ≥ I₃, a flat plate (1, 2, 3) on the edge). Link (a rotated, full tensor) refuses
@@ -235,11 +392,14 @@ def test_urdf_lock_takes_one_name() -> None:
     assert "shoulder_pan_joint" in m.frame_names
 
 
-@pytest.mark.parametrize(("value", "error", "match"), [
-    (math.nan, NonFiniteError, r"lock position of joint 'shoulder_pan_joint' must be finite, got nan"),
-    ("0.5", InvalidParameterError, r"lock position of joint 'shoulder_pan_joint' must be a real number, got '0.5'"),
-    (True, InvalidParameterError, r"lock position of joint 'shoulder_pan_joint' .*not a boolean, got True"),
-])
+@pytest.mark.parametrize(
+    ("value", "error", "match"),
+    [
+        (math.nan, NonFiniteError, r"lock position of joint 'shoulder_pan_joint' must be finite, got nan"),
+        ("0.5", InvalidParameterError, r"lock position of joint 'shoulder_pan_joint' must be a real number, got '0.5'"),
+        (True, InvalidParameterError, r"lock position of joint 'shoulder_pan_joint' .*not a boolean, got True"),
+    ],
+)
 def test_urdf_lock_positions_are_checked(value: object, error: type, match: str) -> None:
     with pytest.raises(error, match=match):
         armctl.RobotModel.from_urdf(_ur5(), lock={"shoulder_pan_joint": value})
@@ -266,10 +426,19 @@ _URDF = """<robot name="r">
 """
 
 
-@pytest.mark.parametrize(("values", "match"), [
-    ({"mass": -1.0, "lower": -1, "upper": 1}, r"joint 'shoulder' \(link 'upper_arm'\): link mass \[kg\] must be >= 0"),
-    ({"mass": 1.0, "lower": 1, "upper": -1}, r"joint 'elbow' \(link 'forearm'\): joint lower limit 1.0 is above upper"),
-])
+@pytest.mark.parametrize(
+    ("values", "match"),
+    [
+        (
+            {"mass": -1.0, "lower": -1, "upper": 1},
+            r"joint 'shoulder' \(link 'upper_arm'\): link mass \[kg\] must be >= 0",
+        ),
+        (
+            {"mass": 1.0, "lower": 1, "upper": -1},
+            r"joint 'elbow' \(link 'forearm'\): joint lower limit 1.0 is above upper",
+        ),
+    ],
+)
 def test_urdf_errors_name_the_joint_and_link(tmp_path: pathlib.Path, values: dict, match: str) -> None:
     path = tmp_path / "arm.urdf"
     path.write_text(_URDF.format(**values))

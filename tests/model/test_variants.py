@@ -43,8 +43,17 @@ def _arm() -> armctl.RobotModel:
         link = Link(mass, rng.uniform(-0.2, 0.2, 3), r @ box @ r.T)
         motor = Motor(rng.uniform(1e-4, 1e-3), (-1) ** i * rng.uniform(5.0, 50.0), rng.normal(size=3))
         friction = JointFriction(rng.uniform(0.1, 0.5), rng.uniform(0.1, 1.0), rng.uniform(0.1, 1.0))
-        joints.append(Joint(f"j{i}", "prismatic" if i == _PRISMATIC else "revolute", axis,
-                            _random_transform(rng), link, motor, friction))
+        joints.append(
+            Joint(
+                f"j{i}",
+                "prismatic" if i == _PRISMATIC else "revolute",
+                axis,
+                _random_transform(rng),
+                link,
+                motor,
+                friction,
+            )
+        )
     frames = [Frame("target", 0, _random_transform(rng)), Frame("tool", _N, _random_transform(rng, 0.2))]
     frames += [Frame(f"on_link{i}", i, _random_transform(rng, 0.2)) for i in range(1, _N + 1)]
     return armctl.RobotModel(tuple(joints), name="bevel", frames=tuple(frames), tool_frame="tool")
@@ -54,7 +63,7 @@ def _hand_pose(model: armctl.RobotModel, q: np.ndarray, frame: str) -> np.ndarra
     """World pose of a frame by composing the chain by hand: P_1 M_1(q_1) … P_k M_k(q_k) F."""
     f = model.frame(frame)
     t = np.eye(4)
-    for j, qj in zip(model.joints[:f.joint], q[:f.joint], strict=True):
+    for j, qj in zip(model.joints[: f.joint], q[: f.joint], strict=True):
         motion = np.eye(4)
         if j.kind == "revolute":
             motion[:3, :3] = Rotation.from_rotvec(j.axis * qj).as_matrix()
@@ -65,12 +74,12 @@ def _hand_pose(model: armctl.RobotModel, q: np.ndarray, frame: str) -> np.ndarra
 
 
 LOCKS = [
-    {"j1": 0.7},                # a revolute joint in the middle: joint 3's rotor rides on the merged link
-    {"j0": -0.4},               # the first joint: link 1 (and joint 2's rotor) merge into the world
-    {"j2": 0.15},               # a prismatic joint
-    {"j1": 0.7, "j2": -0.1},    # two adjacent joints: placements compose over both
-    {"j0": 0.3, "j1": -1.2},    # the first two
-    {"j4": 0.9},                # the last joint, which carries the tool frame
+    {"j1": 0.7},  # a revolute joint in the middle: joint 3's rotor rides on the merged link
+    {"j0": -0.4},  # the first joint: link 1 (and joint 2's rotor) merge into the world
+    {"j2": 0.15},  # a prismatic joint
+    {"j1": 0.7, "j2": -0.1},  # two adjacent joints: placements compose over both
+    {"j0": 0.3, "j1": -1.2},  # the first two
+    {"j4": 0.9},  # the last joint, which carries the tool frame
 ]
 
 
@@ -221,8 +230,9 @@ def test_perturbed_noise_scales_each_link_as_a_whole() -> None:
     assert np.std(factors) > 0.05  # the factors are there and differ between links
 
 
-def _frame_jacobians(arm: armctl.RobotModel, q: np.ndarray, frame: str, point: np.ndarray
-                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _frame_jacobians(
+    arm: armctl.RobotModel, q: np.ndarray, frame: str, point: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(R, J_v, J_ω) of a frame composed by hand: its world rotation R, the Jacobian of the world position of
     ``point`` (given in the frame) and the angular-velocity Jacobian, by central differences (ω^ = Ṙ Rᵀ)."""
     h, n = 1e-6, arm.n
@@ -250,10 +260,12 @@ def test_payload_is_a_body_given_in_the_frames_axes(frame: str | None) -> None:
     q = np.array([0.4, -0.7, 0.12, 1.1, -0.5])
     rot, jv, jw = _frame_jacobians(arm, q, frame or "tool", com)
     d0, d1 = armctl.Dynamics(arm), armctl.Dynamics(heavy)
-    np.testing.assert_allclose(d1.mass_matrix(q) - d0.mass_matrix(q),
-                               mass * jv.T @ jv + jw.T @ rot @ inertia @ rot.T @ jw, rtol=0, atol=1e-8)
-    np.testing.assert_allclose(d1.gravity_torque(q) - d0.gravity_torque(q), -mass * jv.T @ arm.gravity,
-                               rtol=0, atol=1e-8)
+    np.testing.assert_allclose(
+        d1.mass_matrix(q) - d0.mass_matrix(q), mass * jv.T @ jv + jw.T @ rot @ inertia @ rot.T @ jw, rtol=0, atol=1e-8
+    )
+    np.testing.assert_allclose(
+        d1.gravity_torque(q) - d0.gravity_torque(q), -mass * jv.T @ arm.gravity, rtol=0, atol=1e-8
+    )
 
 
 def test_with_parameters_keeps_static_friction_only_above_both_new_levels() -> None:
@@ -261,8 +273,9 @@ def test_with_parameters_keeps_static_friction_only_above_both_new_levels() -> N
     and dropped otherwise (not an error). New levels F̄_c (1 ± ρ), ρ = (F_c⁺ − F_c⁻)/(F_c⁺ + F_c⁻) the model's:
     joint 1 (ρ = ½, F̄_c = 1.5) 2.25/0.75 and joint 2 (ρ = −½) 0.75/2.25 straddle the static 2.0; joint 3
     (ρ = ½, F̄_c = 1.2) 1.8/0.6 stays below it."""
-    base = armctl.models.planar_3r().with_friction(coulomb=[1.5, 0.5, 1.5], coulomb_negative=[0.5, 1.5, 0.5],
-                                                   static=2.0)
+    base = armctl.models.planar_3r().with_friction(
+        coulomb=[1.5, 0.5, 1.5], coulomb_negative=[0.5, 1.5, 0.5], static=2.0
+    )
     pi = base.parameters().copy()
     pi[[12, 25, 38]] = 1.5, 1.5, 1.2
     new = [j.friction for j in base.with_parameters(pi).joints]
@@ -272,8 +285,15 @@ def test_with_parameters_keeps_static_friction_only_above_both_new_levels() -> N
         assert f.static == static
 
 
-@pytest.mark.parametrize("kwargs", [{"viscous": [1.0, 2.0, 3.0]}, {"coulomb": [[1.0, 2.0]]},
-                                    {"static": [5.0]}, {"stribeck_velocity": np.zeros((2, 2))}])
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        {"viscous": [1.0, 2.0, 3.0]},
+        {"coulomb": [[1.0, 2.0]]},
+        {"static": [5.0]},
+        {"stribeck_velocity": np.zeros((2, 2))},
+    ],
+)
 def test_with_friction_wrong_length_is_a_shape_error(kwargs: dict) -> None:
     (arg,) = kwargs
     with pytest.raises(ShapeError, match=rf"with_friction\(\): {arg} must be a scalar or an \(2,\) vector"):

@@ -81,8 +81,9 @@ def test_locking_the_first_joint_keeps_its_frames(route: str, backend: str) -> N
     every frame's pose and Jacobian equal those of Pinocchio's full model at q1 = 0.6 (the Jacobian's columns
     of the six free joints)."""
     if route == "from_urdf":
-        model = armctl.RobotModel.from_urdf(armctl.models.robot_description(PANDA),
-                                            lock={"panda_joint1": Q1, **FINGERS})
+        model = armctl.RobotModel.from_urdf(
+            armctl.models.robot_description(PANDA), lock={"panda_joint1": Q1, **FINGERS}
+        )
     else:
         model = armctl.models.panda().reduced(lock={"panda_joint1": Q1})
     assert model.joint_names == tuple(f"panda_joint{i}" for i in range(2, 8))
@@ -94,8 +95,7 @@ def test_locking_the_first_joint_keeps_its_frames(route: str, backend: str) -> N
     rng = np.random.default_rng(12)
     for _ in range(3):
         q = rng.uniform(-1.5, 1.5, model.n)
-        ref, data = _reference(PANDA, {"panda_joint1": Q1, **dict(zip(model.joint_names, q, strict=True)),
-                                       **FINGERS})
+        ref, data = _reference(PANDA, {"panda_joint1": Q1, **dict(zip(model.joint_names, q, strict=True)), **FINGERS})
         cols = [ref.idx_vs[ref.getJointId(j)] for j in model.joint_names]
         for name in names:
             fid = ref.getFrameId(name)
@@ -167,11 +167,14 @@ def test_a_root_link_called_world_is_the_world_frame(tmp_path: object, backend: 
     assert not dyn.jacobian([0.4, -0.7], "mount").any()
 
 
-@pytest.mark.parametrize("extra", [
-    '<joint name="w" type="fixed"><parent link="base"/><child link="world"/><origin xyz="0 0 1"/></joint>'
-    '<link name="world"/>',  # fixed to the world, but not at its origin
-    '<joint name="w" type="fixed"><parent link="l2"/><child link="world"/></joint><link name="world"/>',
-])
+@pytest.mark.parametrize(
+    "extra",
+    [
+        '<joint name="w" type="fixed"><parent link="base"/><child link="world"/><origin xyz="0 0 1"/></joint>'
+        '<link name="world"/>',  # fixed to the world, but not at its origin
+        '<joint name="w" type="fixed"><parent link="l2"/><child link="world"/></joint><link name="world"/>',
+    ],
+)
 def test_a_link_called_world_elsewhere_is_refused(tmp_path: object, extra: str) -> None:
     """'world' is the world frame: a link of that name that is not the world's origin is a load error."""
     with pytest.raises(ModelLoadError, match="'world' is reserved"):

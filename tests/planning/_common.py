@@ -9,13 +9,15 @@ import numpy as np
 
 import armctl
 
-PANDA_WAYPOINTS = np.array([
-    [0.03, 0.79, -1.03, -0.90, -0.55, 1.72, 0.95],
-    [-0.26, 0.09, -1.37, -1.19, 0.11, 1.55, 0.84],
-    [-0.57, -0.08, -1.06, -1.72, -0.86, 1.42, 0.73],
-    [-0.64, -0.03, 1.39, -0.88, 0.65, 1.95, -0.65],
-    [-0.98, 0.83, 0.05, -2.15, 0.36, 2.39, 0.33],
-])
+PANDA_WAYPOINTS = np.array(
+    [
+        [0.03, 0.79, -1.03, -0.90, -0.55, 1.72, 0.95],
+        [-0.26, 0.09, -1.37, -1.19, 0.11, 1.55, 0.84],
+        [-0.57, -0.08, -1.06, -1.72, -0.86, 1.42, 0.73],
+        [-0.64, -0.03, 1.39, -0.88, 0.65, 1.95, -0.65],
+        [-0.98, 0.83, 0.05, -2.15, 0.36, 2.39, 0.33],
+    ]
+)
 
 # joint friction of a geared arm: viscous [N·m·s/rad], Coulomb up / down [N·m]
 PANDA_VISCOUS = np.array([0.6, 0.6, 0.5, 0.5, 0.2, 0.2, 0.1])
@@ -32,8 +34,7 @@ def panda(friction: bool = False) -> armctl.Dynamics:
 
 
 @cache
-def flat_pendulum(viscous: float = 0.0, coulomb: float = 0.0, coulomb_negative: float | None = None
-                  ) -> armctl.Dynamics:
+def flat_pendulum(viscous: float = 0.0, coulomb: float = 0.0, coulomb_negative: float | None = None) -> armctl.Dynamics:
     """The library's pendulum with gravity switched off and the given friction: M q̈ + friction = τ with a
     constant M (the rod about its end plus the reflected rotor)."""
     model = dataclasses.replace(armctl.models.pendulum(), gravity=np.zeros(3))

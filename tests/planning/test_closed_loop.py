@@ -21,12 +21,14 @@ from armctl.planning import time_optimal
 from armctl.sim import simulate
 from tests.planning._common import panda
 
-WAYPOINTS = np.array([
-    [0.0, -0.6, 0.0, -2.2, 0.0, 1.6, 0.8],
-    [0.8, -0.3, 0.4, -1.8, 0.5, 1.9, 0.2],
-    [1.2, -0.9, -0.3, -2.4, -0.4, 1.3, 1.2],
-    [0.3, -0.5, 0.5, -1.5, 0.3, 2.2, 0.0],
-])
+WAYPOINTS = np.array(
+    [
+        [0.0, -0.6, 0.0, -2.2, 0.0, 1.6, 0.8],
+        [0.8, -0.3, 0.4, -1.8, 0.5, 1.9, 0.2],
+        [1.2, -0.9, -0.3, -2.4, -0.4, 1.3, 1.2],
+        [0.3, -0.5, 0.5, -1.5, 0.3, 2.2, 0.0],
+    ]
+)
 
 
 def test_panda_tracks_the_time_optimal_trajectory_within_limits() -> None:

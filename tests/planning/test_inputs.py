@@ -13,31 +13,37 @@ from tests.planning._common import PANDA_WAYPOINTS, panda
 N = 7
 
 
-@pytest.mark.parametrize(("kwargs", "error", "match"), [
-    ({"waypoints": PANDA_WAYPOINTS[:, :6]}, ShapeError, r"6 joints .* the arm 7"),
-    ({"waypoints": PANDA_WAYPOINTS[0]}, ShapeError, "waypoints must be an"),
-    ({"waypoints": [PANDA_WAYPOINTS[0], PANDA_WAYPOINTS[1][:3]]}, ShapeError,
-     r"rows have different shapes \[\(7,\), \(3,\)\]"),
-    ({"waypoints": np.where(np.eye(5, 7) > 0, np.nan, PANDA_WAYPOINTS)}, NonFiniteError, "waypoint 0 joint 0"),
-    ({"torque_limit": np.ones(6)}, ShapeError, "torque limit must be a scalar, an \\(7,\\)"),
-    ({"torque_limit": np.ones((7, 3))}, ShapeError, "torque limit"),
-    ({"torque_limit": -5.0}, InvalidParameterError, "must be > 0"),
-    ({"vel_limit": np.r_[1.0, 1.0, 0.0, 1.0, 1.0, 1.0, 1.0]}, InvalidParameterError, "joint 2 is 0"),
-    ({"acc_limit": np.nan}, NonFiniteError, "NaN"),
-    ({"torque_limit": np.column_stack([np.full(N, 5.0), np.full(N, -5.0)])}, InvalidParameterError, "lower 5"),
-    ({"vel_limit": np.column_stack([np.full(N, 0.5), np.full(N, 2.0)])}, InvalidParameterError, "contain 0"),
-    ({"acc_limit": "model"}, InvalidParameterError, "acceleration limit"),
-    ({"torque_limit": "lots"}, InvalidParameterError, "torque limit"),
-    ({"torque_limit": None}, InvalidParameterError, "no limit given"),
-    ({"torque_margin": 1.0}, InvalidParameterError, "torque_margin"),
-    ({"torque_margin": 0.1, "torque_limit": None, "vel_limit": 1.0}, InvalidParameterError, "needs a torque_limit"),
-    ({"grid": 1}, InvalidParameterError, "grid must be >= 2"),
-    ({"grid": np.array([0.0, 0.6, 0.4, 1.0])}, InvalidParameterError, "increase strictly"),
-    ({"grid": np.array([0.1, 0.5, 1.0])}, InvalidParameterError, "from 0 to 1"),
-    ({"tol": -1.0}, InvalidParameterError, "tol"),
-    ({"oversample": 0}, InvalidParameterError, "oversample"),
-    ({"discretization": "spectral"}, InvalidParameterError, "discretization"),
-])
+@pytest.mark.parametrize(
+    ("kwargs", "error", "match"),
+    [
+        ({"waypoints": PANDA_WAYPOINTS[:, :6]}, ShapeError, r"6 joints .* the arm 7"),
+        ({"waypoints": PANDA_WAYPOINTS[0]}, ShapeError, "waypoints must be an"),
+        (
+            {"waypoints": [PANDA_WAYPOINTS[0], PANDA_WAYPOINTS[1][:3]]},
+            ShapeError,
+            r"rows have different shapes \[\(7,\), \(3,\)\]",
+        ),
+        ({"waypoints": np.where(np.eye(5, 7) > 0, np.nan, PANDA_WAYPOINTS)}, NonFiniteError, "waypoint 0 joint 0"),
+        ({"torque_limit": np.ones(6)}, ShapeError, "torque limit must be a scalar, an \\(7,\\)"),
+        ({"torque_limit": np.ones((7, 3))}, ShapeError, "torque limit"),
+        ({"torque_limit": -5.0}, InvalidParameterError, "must be > 0"),
+        ({"vel_limit": np.r_[1.0, 1.0, 0.0, 1.0, 1.0, 1.0, 1.0]}, InvalidParameterError, "joint 2 is 0"),
+        ({"acc_limit": np.nan}, NonFiniteError, "NaN"),
+        ({"torque_limit": np.column_stack([np.full(N, 5.0), np.full(N, -5.0)])}, InvalidParameterError, "lower 5"),
+        ({"vel_limit": np.column_stack([np.full(N, 0.5), np.full(N, 2.0)])}, InvalidParameterError, "contain 0"),
+        ({"acc_limit": "model"}, InvalidParameterError, "acceleration limit"),
+        ({"torque_limit": "lots"}, InvalidParameterError, "torque limit"),
+        ({"torque_limit": None}, InvalidParameterError, "no limit given"),
+        ({"torque_margin": 1.0}, InvalidParameterError, "torque_margin"),
+        ({"torque_margin": 0.1, "torque_limit": None, "vel_limit": 1.0}, InvalidParameterError, "needs a torque_limit"),
+        ({"grid": 1}, InvalidParameterError, "grid must be >= 2"),
+        ({"grid": np.array([0.0, 0.6, 0.4, 1.0])}, InvalidParameterError, "increase strictly"),
+        ({"grid": np.array([0.1, 0.5, 1.0])}, InvalidParameterError, "from 0 to 1"),
+        ({"tol": -1.0}, InvalidParameterError, "tol"),
+        ({"oversample": 0}, InvalidParameterError, "oversample"),
+        ({"discretization": "spectral"}, InvalidParameterError, "discretization"),
+    ],
+)
 def test_time_optimal_rejects_bad_input(kwargs: dict, error: type[ArmctlError], match: str) -> None:
     args = {"waypoints": PANDA_WAYPOINTS, "torque_limit": "model"}
     args.update(kwargs)
@@ -101,16 +107,25 @@ def test_uniform_time_scaling_rejects_bad_input() -> None:
 
 # waypoints inside the Panda's ranges whose cubic spline overshoots joint 3's upper limit (−0.0698 rad) between
 # waypoints 1 and 2, both at −0.08
-OVERSHOOT = np.array([[0.0, 0.0, 0.0, -2.0, 0.0, 1.5, 0.0], [0.3, 0.2, 0.0, -0.08, 0.0, 1.5, 0.0],
-                      [0.6, 0.4, 0.0, -0.08, 0.0, 1.5, 0.0], [0.9, 0.2, 0.0, -2.0, 0.0, 1.5, 0.0]])
+OVERSHOOT = np.array(
+    [
+        [0.0, 0.0, 0.0, -2.0, 0.0, 1.5, 0.0],
+        [0.3, 0.2, 0.0, -0.08, 0.0, 1.5, 0.0],
+        [0.6, 0.4, 0.0, -0.08, 0.0, 1.5, 0.0],
+        [0.9, 0.2, 0.0, -2.0, 0.0, 1.5, 0.0],
+    ]
+)
 
 
 def test_a_path_leaving_the_joint_ranges_is_refused() -> None:
     dyn = armctl.Dynamics(armctl.models.panda())
     lower, upper = dyn.model.lower, dyn.model.upper
     assert ((OVERSHOOT >= lower) & (OVERSHOOT <= upper)).all()
-    with pytest.raises(InfeasibleError, match=r"joint 3 \('panda_joint4'\) leaves its range .* between waypoints 1 and "
-                       r"2: the path overshoots"):
+    with pytest.raises(
+        InfeasibleError,
+        match=r"joint 3 \('panda_joint4'\) leaves its range .* between waypoints 1 and "
+        r"2: the path overshoots",
+    ):
         time_optimal(dyn, OVERSHOOT, vel_limit="model", torque_limit="model")
     # planned anyway, the trajectory does leave the range (sampled densely, against the model's limit)
     traj = time_optimal(dyn, OVERSHOOT, vel_limit="model", torque_limit="model", position_limit=None)
@@ -124,10 +139,13 @@ def test_a_path_leaving_the_joint_ranges_is_refused() -> None:
         time_optimal(dyn, PANDA_WAYPOINTS, torque_limit="model", position_limit="yes")  # type: ignore[arg-type]
 
 
-@pytest.mark.parametrize(("limits", "waypoints", "kind"), [
-    ({"vel_limit": [[0.0, 1.0]]}, [[1.0], [0.0]], "velocity"),
-    ({"acc_limit": [[-1.0, 0.0]]}, [[0.0], [1.0]], "acceleration"),
-])
+@pytest.mark.parametrize(
+    ("limits", "waypoints", "kind"),
+    [
+        ({"vel_limit": [[0.0, 1.0]]}, [[1.0], [0.0]], "velocity"),
+        ({"acc_limit": [[-1.0, 0.0]]}, [[0.0], [1.0]], "acceleration"),
+    ],
+)
 def test_bounds_that_forbid_the_direction_of_the_path_are_named(limits: dict, waypoints: list, kind: str) -> None:
     # the pendulum moving down with q̇ ∈ [0, 1], or up from rest with q̈ ∈ [−1, 0]: no timing moves it (it used to
     # raise a SolverError about a "degenerate" zero-speed stage)

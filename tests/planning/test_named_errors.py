@@ -28,22 +28,38 @@ from armctl.planning import (
 from tests.planning._common import PANDA_WAYPOINTS, panda
 
 
-@pytest.mark.parametrize(("args", "error", "match"), [
-    (([np.nan, 0.0], [1.0, 1.0], 1.0, 1.0), NonFiniteError, r"^start holds NaN or inf: array\(\[nan,  0\.\]\)"),
-    (([np.inf, 0.0], [1.0, 1.0], 1.0, 1.0), NonFiniteError, r"^start holds NaN or inf: array\(\[inf,  0\.\]\)"),
-    (([0.0, 0.0], [1.0, np.nan], 1.0, 1.0), NonFiniteError, r"^end holds NaN or inf: array\(\[ 1., nan\]\)"),
-    (([1.0, 1.0], [1.0, 1.0], 1.0, 1.0), InvalidParameterError, r"^start and end coincide \(\[1\.0, 1\.0\]\)"),
-    ((0.0, [1.0, 1.0], 1.0, 1.0), ShapeError,
-     r"^start and end must be vectors of the same length, got start 0\.0 \(shape \(\)\) and end \[1\.0, 1\.0\]"),
-    (([0.0, 0.0], [1.0, 1.0], [1.0, 1.0, 1.0], 1.0), ShapeError,
-     r"^vel_limit must be a scalar or an \(2,\) vector, got shape \(3,\)"),
-    (([0.0, 0.0], [1.0, 1.0], 1.0, [[1.0]]), ShapeError, r"^acc_limit must be a scalar or an \(2,\) vector"),
-    (([0.0, 0.0], [1.0, 1.0], [1.0, 0.0], 1.0), InvalidParameterError,
-     r"^vel_limit of joint 1 is 0; a limit must be > 0"),
-    (([0.0, 0.0], [1.0, 1.0], 1.0, -2.0), InvalidParameterError, r"^acc_limit must be >= 0, got \[-2\.0, -2\.0\]"),
-    (([0.0, 0.0], [1.0, 1.0], "fast", 1.0), InvalidParameterError, r"^vel_limit must hold real numbers, got 'fast'"),
-    ((["a", "b"], [1.0, 1.0], 1.0, 1.0), InvalidParameterError, r"^start must hold real numbers, got \['a', 'b'\]"),
-])
+@pytest.mark.parametrize(
+    ("args", "error", "match"),
+    [
+        (([np.nan, 0.0], [1.0, 1.0], 1.0, 1.0), NonFiniteError, r"^start holds NaN or inf: array\(\[nan,  0\.\]\)"),
+        (([np.inf, 0.0], [1.0, 1.0], 1.0, 1.0), NonFiniteError, r"^start holds NaN or inf: array\(\[inf,  0\.\]\)"),
+        (([0.0, 0.0], [1.0, np.nan], 1.0, 1.0), NonFiniteError, r"^end holds NaN or inf: array\(\[ 1., nan\]\)"),
+        (([1.0, 1.0], [1.0, 1.0], 1.0, 1.0), InvalidParameterError, r"^start and end coincide \(\[1\.0, 1\.0\]\)"),
+        (
+            (0.0, [1.0, 1.0], 1.0, 1.0),
+            ShapeError,
+            r"^start and end must be vectors of the same length, got start 0\.0 \(shape \(\)\) and end \[1\.0, 1\.0\]",
+        ),
+        (
+            ([0.0, 0.0], [1.0, 1.0], [1.0, 1.0, 1.0], 1.0),
+            ShapeError,
+            r"^vel_limit must be a scalar or an \(2,\) vector, got shape \(3,\)",
+        ),
+        (([0.0, 0.0], [1.0, 1.0], 1.0, [[1.0]]), ShapeError, r"^acc_limit must be a scalar or an \(2,\) vector"),
+        (
+            ([0.0, 0.0], [1.0, 1.0], [1.0, 0.0], 1.0),
+            InvalidParameterError,
+            r"^vel_limit of joint 1 is 0; a limit must be > 0",
+        ),
+        (([0.0, 0.0], [1.0, 1.0], 1.0, -2.0), InvalidParameterError, r"^acc_limit must be >= 0, got \[-2\.0, -2\.0\]"),
+        (
+            ([0.0, 0.0], [1.0, 1.0], "fast", 1.0),
+            InvalidParameterError,
+            r"^vel_limit must hold real numbers, got 'fast'",
+        ),
+        ((["a", "b"], [1.0, 1.0], 1.0, 1.0), InvalidParameterError, r"^start must hold real numbers, got \['a', 'b'\]"),
+    ],
+)
 def test_line_min_time_rejects_bad_input(args: tuple[Any, ...], error: type[ArmctlError], match: str) -> None:
     # a NaN in start used to give 2.0 and an inf "v_max must be > 0, got 0.0"
     with pytest.raises(error, match=match):
@@ -54,36 +70,73 @@ def test_line_min_time_of_valid_input() -> None:
     assert line_min_time(0.0, 1.0, 1.0, 1.0) == bang_bang_duration(1.0, 1.0, 1.0) == 2.0  # one joint, scalars
     # the slowest joint sets the time; a joint that does not move imposes nothing
     # (ṡ ≤ min(1/2, 1/1) = 0.5, s̈ ≤ min(4/2, 1/1) = 1: a trapezoid)
-    assert math.isclose(line_min_time([0.0, 0.0, 0.3], [2.0, 1.0, 0.3], [1.0, 1.0, 1e-3], [4.0, 1.0, 1e-3]),
-                        bang_bang_duration(1.0, 0.5, 1.0))
+    assert math.isclose(
+        line_min_time([0.0, 0.0, 0.3], [2.0, 1.0, 0.3], [1.0, 1.0, 1e-3], [4.0, 1.0, 1e-3]),
+        bang_bang_duration(1.0, 0.5, 1.0),
+    )
 
 
-@pytest.mark.parametrize(("build", "error", "match"), [
-    (lambda: SplinePath("ab"), InvalidParameterError, r"^waypoints must hold real numbers, got 'ab'"),
-    (lambda: SplinePath([["a", "b"], ["c", "d"]]), InvalidParameterError,
-     r"^waypoints must hold real numbers, got \[\['a', 'b'\], \['c', 'd'\]\]"),
-    (lambda: SplinePath([[0j, 1.0], [1.0, 2.0]]), InvalidParameterError, r"^waypoints must hold real numbers"),
-    (lambda: LinePath("ab", [1.0, 2.0]), InvalidParameterError, r"^start must hold real numbers, got 'ab'"),
-    (lambda: LinePath(None, [1.0, 2.0]), InvalidParameterError, r"^start must hold real numbers, got None"),
-    (lambda: LinePath([0.0, 1.0], ["a", "b"]), InvalidParameterError, r"^end must hold real numbers, got \['a', 'b'\]"),
-    (lambda: LinePath([0.0, 1.0], [0.0, 1.0]), InvalidParameterError, r"^start and end coincide \(\[0\.0, 1\.0\]\)"),
-    (lambda: LinePath([0.0, 1.0], [[0.0, 1.0]]), ShapeError, r"^start and end must be vectors of the same length"),
-    (lambda: LinePath([0.0, 0.0], [1.0, 1.0])("a"), InvalidParameterError,
-     r"^path parameter s must hold real numbers, got 'a'"),
-    (lambda: LinePath([0.0, 0.0], [1.0, 1.0]).derivatives(["0.5"]), InvalidParameterError,
-     r"^path parameter s must hold real numbers, got \['0\.5'\]"),
-    (lambda: LinePath([0.0, 0.0], [1.0, 1.0]).at("0.5"), InvalidParameterError,
-     r"^path parameter s must be a real number, got '0\.5'"),
-    (lambda: SplinePath(PANDA_WAYPOINTS)("a"), InvalidParameterError,
-     r"^path parameter s must hold real numbers, got 'a'"),
-    (lambda: SplinePath(PANDA_WAYPOINTS).at("0.5"), InvalidParameterError,
-     r"^path parameter s must be a real number, got '0\.5'"),
-    (lambda: SplinePath(PANDA_WAYPOINTS).at(None), InvalidParameterError,
-     r"^path parameter s must be a real number, got None"),
-    (lambda: SplinePath(PANDA_WAYPOINTS)(0.5j), InvalidParameterError,
-     r"^path parameter s must hold real numbers, got 0\.5j"),
-    (lambda: SplinePath(PANDA_WAYPOINTS)(np.nan), NonFiniteError, r"^path parameter s holds NaN or inf: nan"),
-])
+@pytest.mark.parametrize(
+    ("build", "error", "match"),
+    [
+        (lambda: SplinePath("ab"), InvalidParameterError, r"^waypoints must hold real numbers, got 'ab'"),
+        (
+            lambda: SplinePath([["a", "b"], ["c", "d"]]),
+            InvalidParameterError,
+            r"^waypoints must hold real numbers, got \[\['a', 'b'\], \['c', 'd'\]\]",
+        ),
+        (lambda: SplinePath([[0j, 1.0], [1.0, 2.0]]), InvalidParameterError, r"^waypoints must hold real numbers"),
+        (lambda: LinePath("ab", [1.0, 2.0]), InvalidParameterError, r"^start must hold real numbers, got 'ab'"),
+        (lambda: LinePath(None, [1.0, 2.0]), InvalidParameterError, r"^start must hold real numbers, got None"),
+        (
+            lambda: LinePath([0.0, 1.0], ["a", "b"]),
+            InvalidParameterError,
+            r"^end must hold real numbers, got \['a', 'b'\]",
+        ),
+        (
+            lambda: LinePath([0.0, 1.0], [0.0, 1.0]),
+            InvalidParameterError,
+            r"^start and end coincide \(\[0\.0, 1\.0\]\)",
+        ),
+        (lambda: LinePath([0.0, 1.0], [[0.0, 1.0]]), ShapeError, r"^start and end must be vectors of the same length"),
+        (
+            lambda: LinePath([0.0, 0.0], [1.0, 1.0])("a"),
+            InvalidParameterError,
+            r"^path parameter s must hold real numbers, got 'a'",
+        ),
+        (
+            lambda: LinePath([0.0, 0.0], [1.0, 1.0]).derivatives(["0.5"]),
+            InvalidParameterError,
+            r"^path parameter s must hold real numbers, got \['0\.5'\]",
+        ),
+        (
+            lambda: LinePath([0.0, 0.0], [1.0, 1.0]).at("0.5"),
+            InvalidParameterError,
+            r"^path parameter s must be a real number, got '0\.5'",
+        ),
+        (
+            lambda: SplinePath(PANDA_WAYPOINTS)("a"),
+            InvalidParameterError,
+            r"^path parameter s must hold real numbers, got 'a'",
+        ),
+        (
+            lambda: SplinePath(PANDA_WAYPOINTS).at("0.5"),
+            InvalidParameterError,
+            r"^path parameter s must be a real number, got '0\.5'",
+        ),
+        (
+            lambda: SplinePath(PANDA_WAYPOINTS).at(None),
+            InvalidParameterError,
+            r"^path parameter s must be a real number, got None",
+        ),
+        (
+            lambda: SplinePath(PANDA_WAYPOINTS)(0.5j),
+            InvalidParameterError,
+            r"^path parameter s must hold real numbers, got 0\.5j",
+        ),
+        (lambda: SplinePath(PANDA_WAYPOINTS)(np.nan), NonFiniteError, r"^path parameter s holds NaN or inf: nan"),
+    ],
+)
 def test_paths_name_what_is_not_a_number(build: Callable[[], Any], error: type[ArmctlError], match: str) -> None:
     with pytest.raises(error, match=match):
         build()
@@ -108,8 +161,11 @@ def _trajectory() -> Trajectory:
 def test_check_trajectory_names_bad_arguments() -> None:
     dyn, traj = panda(), _trajectory()
     limits = joint_limits(dyn.model, torque_limit="model")
-    with pytest.raises(InvalidParameterError, match=r"^limits must be an armctl\.planning\.JointLimits, got 'model'; "
-                                                     r"build one with armctl\.planning\.joint_limits"):
+    with pytest.raises(
+        InvalidParameterError,
+        match=r"^limits must be an armctl\.planning\.JointLimits, got 'model'; "
+        r"build one with armctl\.planning\.joint_limits",
+    ):
         check_trajectory(dyn, traj, "model")  # type: ignore[arg-type]
     with pytest.raises(InvalidParameterError, match=r"^dyn must be an armctl\.Dynamics, got RobotModel"):
         check_trajectory(dyn.model, traj, limits)  # type: ignore[arg-type]
@@ -135,15 +191,18 @@ def test_a_grid_that_is_not_numbers_is_named(grid: object) -> None:
         time_optimal(panda(), PANDA_WAYPOINTS, torque_limit="model", grid=grid)  # type: ignore[arg-type]
 
 
-@pytest.mark.parametrize(("kwargs", "error", "match"), [
-    ({"tol": "a"}, InvalidParameterError, r"^tol must be a real number, got 'a'"),
-    ({"tol": float("nan")}, NonFiniteError, r"^tol must be a number >= 0 or float\('inf'\).*got nan"),
-    ({"tol": -0.1}, InvalidParameterError, r"^tol must be >= 0, got -0\.1"),
-    ({"oversample": "a"}, InvalidParameterError, r"^oversample must be a whole number >= 1, got 'a'"),
-    ({"oversample": 2.7}, InvalidParameterError, r"^oversample must be a whole number >= 1, got 2\.7"),
-    ({"max_grid": "many"}, InvalidParameterError, r"^max_grid must be a whole number >= 2, got 'many'"),
-    ({"viscous_passes": 1.5}, InvalidParameterError, r"^viscous_passes must be a whole number >= 1, got 1\.5"),
-])
+@pytest.mark.parametrize(
+    ("kwargs", "error", "match"),
+    [
+        ({"tol": "a"}, InvalidParameterError, r"^tol must be a real number, got 'a'"),
+        ({"tol": float("nan")}, NonFiniteError, r"^tol must be a number >= 0 or float\('inf'\).*got nan"),
+        ({"tol": -0.1}, InvalidParameterError, r"^tol must be >= 0, got -0\.1"),
+        ({"oversample": "a"}, InvalidParameterError, r"^oversample must be a whole number >= 1, got 'a'"),
+        ({"oversample": 2.7}, InvalidParameterError, r"^oversample must be a whole number >= 1, got 2\.7"),
+        ({"max_grid": "many"}, InvalidParameterError, r"^max_grid must be a whole number >= 2, got 'many'"),
+        ({"viscous_passes": 1.5}, InvalidParameterError, r"^viscous_passes must be a whole number >= 1, got 1\.5"),
+    ],
+)
 def test_time_optimal_names_bad_settings(kwargs: dict[str, Any], error: type[ArmctlError], match: str) -> None:
     # tol="a" and oversample="a" used to raise a raw ValueError; oversample=2.7 ran with 2
     with pytest.raises(error, match=match):
@@ -152,8 +211,9 @@ def test_time_optimal_names_bad_settings(kwargs: dict[str, Any], error: type[Arm
 
 def test_time_optimal_settings_of_valid_input() -> None:
     # tol=inf accepts any result (documented); integral floats and NumPy integers are whole numbers
-    traj = time_optimal(panda(), PANDA_WAYPOINTS, torque_limit="model", grid=20, tol=float("inf"),
-                        oversample=np.int64(3), max_grid=40.0)
+    traj = time_optimal(
+        panda(), PANDA_WAYPOINTS, torque_limit="model", grid=20, tol=float("inf"), oversample=np.int64(3), max_grid=40.0
+    )
     assert traj.check is not None and len(traj.info["history"]) == 1
 
 
@@ -179,12 +239,15 @@ def test_timing_and_sampling_name_bad_times_and_counts() -> None:
         uniform_time_scaling(panda(), traj, torque_limit="model", samples=50.5)  # type: ignore[arg-type]
 
 
-@pytest.mark.parametrize(("kwargs", "match"), [
-    ({"repeat": 1.5}, r"^repeat must be a whole number >= 1, got 1\.5"),
-    ({"grids": [10.5]}, r"^grids\[0\] must be a whole number >= 2, got 10\.5"),
-    ({"grids": [10, "x"]}, r"^grids\[1\] must be a whole number >= 2, got 'x'"),
-    ({"grids": []}, r"^grids must hold at least one grid size, got none"),
-])
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"repeat": 1.5}, r"^repeat must be a whole number >= 1, got 1\.5"),
+        ({"grids": [10.5]}, r"^grids\[0\] must be a whole number >= 2, got 10\.5"),
+        ({"grids": [10, "x"]}, r"^grids\[1\] must be a whole number >= 2, got 'x'"),
+        ({"grids": []}, r"^grids must hold at least one grid size, got none"),
+    ],
+)
 def test_grid_convergence_counts_are_whole_numbers(kwargs: dict[str, Any], match: str) -> None:
     dyn = armctl.Dynamics(armctl.models.pendulum())
     with pytest.raises(InvalidParameterError, match=match):

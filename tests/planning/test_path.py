@@ -45,12 +45,15 @@ def test_two_waypoints_give_the_straight_line() -> None:
     np.testing.assert_allclose(SplinePath([a, b])(s), LinePath(a, b)(s), atol=1e-12)
 
 
-@pytest.mark.parametrize(("waypoints", "error"), [
-    (np.zeros(7), ShapeError),                                # a single configuration
-    (np.zeros((1, 7)), ShapeError),                           # one waypoint
-    (np.array([[0.0, np.nan], [1.0, 1.0]]), NonFiniteError),  # NaN
-    (np.array([[0.0, 0.0], [0.0, 0.0], [1.0, 1.0]]), InvalidParameterError),  # repeated waypoint
-])
+@pytest.mark.parametrize(
+    ("waypoints", "error"),
+    [
+        (np.zeros(7), ShapeError),  # a single configuration
+        (np.zeros((1, 7)), ShapeError),  # one waypoint
+        (np.array([[0.0, np.nan], [1.0, 1.0]]), NonFiniteError),  # NaN
+        (np.array([[0.0, 0.0], [0.0, 0.0], [1.0, 1.0]]), InvalidParameterError),  # repeated waypoint
+    ],
+)
 def test_bad_waypoints_raise(waypoints: np.ndarray, error: type[ArmctlError]) -> None:
     with pytest.raises(error):
         SplinePath(waypoints)

@@ -25,8 +25,9 @@ def test_rows_reproduce_inverse_dynamics_along_the_path(name: str) -> None:
     if name == "panda":
         dyn, waypoints = panda(friction=True), PANDA_WAYPOINTS
     else:
-        model = armctl.models.planar_2r().with_friction(viscous=[3.0, 2.0], coulomb=[4.0, 2.0],
-                                                        coulomb_negative=[5.0, 1.0])
+        model = armctl.models.planar_2r().with_friction(
+            viscous=[3.0, 2.0], coulomb=[4.0, 2.0], coulomb_negative=[5.0, 1.0]
+        )
         dyn = armctl.Dynamics(model, backend="lagrange", rotor_coupling=False)
         waypoints = np.array([[0.0, 0.3], [0.6, -0.4], [1.2, 0.5]])
     path = SplinePath(waypoints)
@@ -70,8 +71,8 @@ def _check_viscous_line(problem, b, c, up, down) -> None:  # type: ignore[no-unt
         true_visc = fv * problem.dq * np.sqrt(x)
         rows_up = b[:, up] * x + c[:, up] - problem.b[:, up] * x - problem.c[:, up]
         rows_down = -(b[:, down] * x + c[:, down]) + problem.b[:, down] * x + problem.c[:, down]
-        assert (rows_up >= true_visc - 1e-12).all()      # upper bound side: never below the true term
-        assert (rows_down <= true_visc + 1e-12).all()    # lower bound side: never above it
+        assert (rows_up >= true_visc - 1e-12).all()  # upper bound side: never below the true term
+        assert (rows_down <= true_visc + 1e-12).all()  # lower bound side: never above it
 
 
 def test_coulomb_takes_both_values_around_a_reversal() -> None:
@@ -84,8 +85,8 @@ def test_coulomb_takes_both_values_around_a_reversal() -> None:
     flips = np.flatnonzero(sign[:-1] != sign[1:])
     assert flips.size == 1
     i = flips[0]
-    assert (lo[i:i + 2] == -6.0).all() and (hi[i:i + 2] == 4.0).all()
-    far = np.r_[0:i - 1, i + 3:problem.grid + 1]
+    assert (lo[i : i + 2] == -6.0).all() and (hi[i : i + 2] == 4.0).all()
+    far = np.r_[0 : i - 1, i + 3 : problem.grid + 1]
     np.testing.assert_array_equal(lo[far], hi[far])  # exact elsewhere
     np.testing.assert_array_equal(hi[far], np.where(sign[far] > 0, 4.0, -6.0))
 
@@ -135,7 +136,7 @@ def test_least_violation_lp_imposes_the_rows_at_the_stage_end(i: int, x: float) 
     problem = build_problem(dyn, path, joint_limits(dyn.model, torque_limit=limit), grid=8)
     t, (u_star, _), _ = _stage_lp(problem, problem.linearized(None), i, None, x)
 
-    s = problem.s[i:i + 2]
+    s = problem.s[i : i + 2]
     q, dq, ddq = (d[:, 0] for d in path.derivatives(s))
     assert np.all(ddq == pytest.approx(2.0))
     two_delta = np.array([0.0, 2.0 * (s[1] - s[0])])
@@ -145,8 +146,12 @@ def test_least_violation_lp_imposes_the_rows_at_the_stage_end(i: int, x: float) 
     def violation(u: float) -> float:
         return float(np.abs(alpha + beta * u).max()) / limit - 1.0
 
-    kinks = [-alpha[0] / beta[0], -alpha[1] / beta[1], -(alpha[0] - alpha[1]) / (beta[0] - beta[1]),
-             -(alpha[0] + alpha[1]) / (beta[0] + beta[1])]
+    kinks = [
+        -alpha[0] / beta[0],
+        -alpha[1] / beta[1],
+        -(alpha[0] - alpha[1]) / (beta[0] - beta[1]),
+        -(alpha[0] + alpha[1]) / (beta[0] + beta[1]),
+    ]
     expected = min(violation(u) for u in kinks)
     assert t == pytest.approx(expected, rel=1e-7, abs=1e-9)
     assert violation(u_star) == pytest.approx(expected, rel=1e-7, abs=1e-9)

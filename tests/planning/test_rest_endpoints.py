@@ -44,8 +44,11 @@ def test_end_pose_the_arm_cannot_hold_is_refused() -> None:
     # the reviewer's case: toppra "throws" the rod to 1.2 rad, braking on the last stage, but it cannot rest there
     need = _holding_torque(1.2)
     assert 4.5 < need < 4.6  # 2 · 9.81 · 0.25 · sin 1.2 = 4.572 N·m
-    with pytest.raises(InfeasibleError, match=r"joint 0 \('joint1'\) torque at the end pose .*gravity alone needs "
-                                              r"4\.572 N·m, the limit is 4\.5: .*cannot hold itself at rest") as e:
+    with pytest.raises(
+        InfeasibleError,
+        match=r"joint 0 \('joint1'\) torque at the end pose .*gravity alone needs "
+        r"4\.572 N·m, the limit is 4\.5: .*cannot hold itself at rest",
+    ) as e:
         time_optimal(_pendulum(), LinePath([0.2], [1.2]), torque_limit=4.5, grid=100)
     v = e.value.value
     assert v["endpoint"] == "end" and v["s"] == 1.0 and v["joint"] == 0 and v["constraint"] == "torque"
@@ -67,8 +70,9 @@ def test_torque_margin_applies_to_the_rest_poses() -> None:
     path = LinePath([0.2], [1.2])
     assert _holding_torque(1.2) < 5.0
     time_optimal(_pendulum(), path, torque_limit=5.0)
-    with pytest.raises(InfeasibleError, match=r"end pose .*the limit is 4 \(80 % of the range, torque_margin=0\.2\)"
-                       ) as e:
+    with pytest.raises(
+        InfeasibleError, match=r"end pose .*the limit is 4 \(80 % of the range, torque_margin=0\.2\)"
+    ) as e:
         time_optimal(_pendulum(), path, torque_limit=5.0, torque_margin=0.2)
     assert e.value.value["limit"] == pytest.approx(5.0 * (1 - 0.2), rel=1e-12)
     assert e.value.value["needed"] == pytest.approx(_holding_torque(1.2), rel=1e-9)

@@ -46,13 +46,17 @@ def test_closed_form_factor_matches_a_brute_force_search() -> None:
     assert result.duration == pytest.approx(0.4 * result.factor)
 
 
-@pytest.mark.parametrize(("start", "end", "kind", "bounds"), [
-    (-0.3, 1.2, "torque", (-3.0, 40.0)),  # braking at the top pulls below −3 N·m
-    (1.2, -0.3, "velocity", (-0.5, 5.0)),  # moving down: q̇ < 0 meets the tight lower bound
-    (-0.3, 1.2, "acceleration", (-1.0, 50.0)),  # q̈ takes both signs: the lower bound is the tighter
-])
-def test_asymmetric_bounds_bind_on_their_own_side(start: float, end: float, kind: str,
-                                                  bounds: tuple[float, float]) -> None:
+@pytest.mark.parametrize(
+    ("start", "end", "kind", "bounds"),
+    [
+        (-0.3, 1.2, "torque", (-3.0, 40.0)),  # braking at the top pulls below −3 N·m
+        (1.2, -0.3, "velocity", (-0.5, 5.0)),  # moving down: q̇ < 0 meets the tight lower bound
+        (-0.3, 1.2, "acceleration", (-1.0, 50.0)),  # q̈ takes both signs: the lower bound is the tighter
+    ],
+)
+def test_asymmetric_bounds_bind_on_their_own_side(
+    start: float, end: float, kind: str, bounds: tuple[float, float]
+) -> None:
     """With (lower, upper) bounds whose lower side is the tighter one, the closed-form factor equals a brute-force
     search over r on the closed-form pendulum (τ, q̇/r, q̈/r² checked against both sides); the upper side alone
     would allow a faster scaling, so the lower side is what binds."""
@@ -64,8 +68,11 @@ def test_asymmetric_bounds_bind_on_their_own_side(start: float, end: float, kind
     q, qd, qdd = smp.q[:, 0], smp.qd[:, 0], smp.qdd[:, 0]
 
     def value(r: float) -> np.ndarray:  # slowed by r: q̇/r, q̈/r²
-        return {"torque": lambda: _pendulum_torque(q, qd / r, qdd / r**2), "velocity": lambda: qd / r,
-                "acceleration": lambda: qdd / r**2}[kind]()
+        return {
+            "torque": lambda: _pendulum_torque(q, qd / r, qdd / r**2),
+            "velocity": lambda: qd / r,
+            "acceleration": lambda: qdd / r**2,
+        }[kind]()
 
     lower, upper = bounds
     rs = np.linspace(0.2, 20.0, 19801)
@@ -81,10 +88,17 @@ def test_scaled_trajectory_sits_at_its_limit() -> None:
     result = uniform_time_scaling(dyn, nominal, vel_limit="model", acc_limit=10.0, torque_limit="model")
     smp = result.trajectory.sample(num=1001)
     inner = slice(1, -1)  # at rest the model's kinetic friction is zero
-    tau = np.array([dyn.inverse_dynamics(q, qd, qdd) for q, qd, qdd in
-                    zip(smp.q[inner], smp.qd[inner], smp.qdd[inner], strict=True)])
-    used = max((np.abs(tau) / dyn.model.effort_limit).max(), (np.abs(smp.qd) / dyn.model.velocity_limit).max(),
-               (np.abs(smp.qdd) / 10.0).max())
+    tau = np.array(
+        [
+            dyn.inverse_dynamics(q, qd, qdd)
+            for q, qd, qdd in zip(smp.q[inner], smp.qd[inner], smp.qdd[inner], strict=True)
+        ]
+    )
+    used = max(
+        (np.abs(tau) / dyn.model.effort_limit).max(),
+        (np.abs(smp.qd) / dyn.model.velocity_limit).max(),
+        (np.abs(smp.qdd) / 10.0).max(),
+    )
     assert used == pytest.approx(1.0, abs=2e-3)
     assert result.trajectory.check.ok(2e-3)
     faster = Trajectory(nominal.path, PolynomialTiming(0.99 * result.duration))  # the same law, 1 % too fast

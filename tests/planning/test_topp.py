@@ -110,8 +110,14 @@ def _swing_bang_bang(distance: float, tau: float, fv: float, help_braking: bool,
         a = solve_ivp(phase(1.0, fv), [0.0, t_switch], [start, 0.0], rtol=1e-11, atol=1e-12, events=stop)
         if a.status == 1:  # stalled below the gravity peak
             return -math.inf, math.inf
-        b = solve_ivp(phase(-1.0, fv if help_braking else 0.0), [t_switch, t_switch + 10.0], a.y[:, -1],
-                      rtol=1e-11, atol=1e-12, events=stop)
+        b = solve_ivp(
+            phase(-1.0, fv if help_braking else 0.0),
+            [t_switch, t_switch + 10.0],
+            a.y[:, -1],
+            rtol=1e-11,
+            atol=1e-12,
+            events=stop,
+        )
         return float(b.y[0, -1]) - start, float(b.t[-1])
 
     t_switch = brentq(lambda ts: max(run(ts)[0], -1.0) - distance, 0.05, 3.0, xtol=1e-12)
@@ -130,8 +136,9 @@ def test_viscous_swing_through_a_pose_it_cannot_hold(tau: float, grid: int, with
 
 
 @pytest.mark.parametrize(("fv", "tau", "start", "end"), [(1.0, 6.0, 1.0, 2.5), (1.0, 5.0, 0.2, 1.2)])
-def test_viscous_moves_end_within_half_a_percent_of_the_bang_bang(fv: float, tau: float, start: float,
-                                                                  end: float) -> None:
+def test_viscous_moves_end_within_half_a_percent_of_the_bang_bang(
+    fv: float, tau: float, start: float, end: float
+) -> None:
     # moves where the steeper viscous line beats the tangent (planned with the tangent alone they took 3-5 %
     # longer than the optimum of the planner's own model at every grid)
     dyn = armctl.Dynamics(armctl.models.pendulum().with_friction(viscous=fv, coulomb=0.0))
@@ -146,8 +153,11 @@ def test_viscous_infeasibility_says_the_plan_is_conservative() -> None:
     with pytest.raises(ValueError, match="f\\(a\\) and f\\(b\\) must have different signs"):
         _swing_bang_bang(2.2, 4.5, 1.0, help_braking=True)
     dyn = armctl.Dynamics(armctl.models.pendulum().with_friction(viscous=1.0, coulomb=0.0))
-    with pytest.raises(InfeasibleError, match=r"gravity alone needs 4\.905 N·m.*Viscous friction is planned with a "
-                       r"line above F_v q̇"):
+    with pytest.raises(
+        InfeasibleError,
+        match=r"gravity alone needs 4\.905 N·m.*Viscous friction is planned with a "
+        r"line above F_v q̇",
+    ):
         time_optimal(dyn, LinePath([0.0], [2.2]), torque_limit=4.5)
 
 
@@ -196,8 +206,9 @@ def test_collocation_converges_to_first_order_and_its_failure_says_so() -> None:
     # end by O(Δ), so the excess halves per doubling of the grid (interpolation's falls ~4× per doubling)
     dyn = panda()
     with pytest.raises(SolverError, match=r"collocation imposes .* discretization='interpolation'") as err:
-        time_optimal(dyn, PANDA_WAYPOINTS, vel_limit="model", acc_limit=5.0, grid=100, max_grid=800,
-                     discretization="collocation")
+        time_optimal(
+            dyn, PANDA_WAYPOINTS, vel_limit="model", acc_limit=5.0, grid=100, max_grid=800, discretization="collocation"
+        )
     excess = [h["worst_excess"] for h in err.value.result.info["history"]]
     assert len(excess) == 4 and excess[-1] > 1e-2
     for coarse, fine in itertools.pairwise(excess):
@@ -296,6 +307,7 @@ def test_a_viscous_solve_that_stalls_is_dropped_when_the_other_moves(monkeypatch
                 x[40:42] = 0.0
                 return toppra_adapter.ToppraOutput("Ok", x, out.K)
             return out
+
         return run
 
     durations = []

@@ -49,8 +49,7 @@ class ForceControl(Controller):
 
     def compute(self, t: float, q: np.ndarray, qd: np.ndarray, ref: Reference) -> np.ndarray:
         jac = self.dynamics.jacobian(q)[:3]
-        return (self.dynamics.gravity_torque(q) + jac.T @ self.force - self.kd * qd
-                + self.kp * (ref.q - q))
+        return self.dynamics.gravity_torque(q) + jac.T @ self.force - self.kd * qd + self.kp * (ref.q - q)
 
 
 class OpenLoop:
@@ -81,6 +80,12 @@ def slider(mass: float = 2.0, effort: float = float("inf"), vertical: bool = Fal
     """One prismatic joint moving a point-like body of ``mass`` [kg] along world x (horizontal: gravity does
     nothing) or z (``vertical``); tool frame at the body."""
     axis = (0.0, 0.0, 1.0) if vertical else (1.0, 0.0, 0.0)
-    joint = Joint("slide", "prismatic", axis, np.eye(4), Link(mass, (0, 0, 0), (1e-3, 1e-3, 1e-3)),
-                  limits=JointLimits(effort=effort))
+    joint = Joint(
+        "slide",
+        "prismatic",
+        axis,
+        np.eye(4),
+        Link(mass, (0, 0, 0), (1e-3, 1e-3, 1e-3)),
+        limits=JointLimits(effort=effort),
+    )
     return armctl.RobotModel((joint,), name="slider", frames=(Frame("tool", 1, np.eye(4)),), tool_frame="tool")

@@ -30,8 +30,15 @@ def _creep(dt: float, integrator: str = "rk4") -> tuple[armctl.sim.SimResult, li
     floor = Plane(KelvinVoigt(K), normal=(0.0, 0.0, 1.0), point=(0.0, 0.0, DEPTH), friction=MU, slip_velocity=SLIP)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        res = simulate(slider(MASS), OpenLoop(lambda t: np.array([PUSH])), armctl.Reference.hold([0.0]), 0.05,
-                       environment=floor, integrator=integrator, dt=dt)
+        res = simulate(
+            slider(MASS),
+            OpenLoop(lambda t: np.array([PUSH])),
+            armctl.Reference.hold([0.0]),
+            0.05,
+            environment=floor,
+            integrator=integrator,
+            dt=dt,
+        )
     return res, [w for w in caught if issubclass(w.category, SimulationWarning)]
 
 
@@ -65,15 +72,27 @@ def test_points_sticking_together_add_their_damping(split: str) -> None:
     from armctl.sim.contact import ContactPoint
 
     def floor(points: object = None) -> Plane:
-        return Plane(KelvinVoigt(K), normal=(0.0, 0.0, 1.0), point=(0.0, 0.0, DEPTH), friction=MU,
-                     slip_velocity=SLIP, points=points)  # type: ignore[arg-type]
+        return Plane(
+            KelvinVoigt(K),
+            normal=(0.0, 0.0, 1.0),
+            point=(0.0, 0.0, DEPTH),
+            friction=MU,
+            slip_velocity=SLIP,
+            points=points,
+        )  # type: ignore[arg-type]
 
-    envs = ([floor([ContactPoint(), ContactPoint(offset=(0.0, 0.01, 0.0))])] if split == "points"
-            else [floor(), floor()])
+    envs = [floor([ContactPoint(), ContactPoint(offset=(0.0, 0.01, 0.0))])] if split == "points" else [floor(), floor()]
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        res = simulate(slider(MASS), OpenLoop(lambda t: np.array([PUSH])), armctl.Reference.hold([0.0]), 0.05,
-                       environment=envs, dt=1e-4, energy=False)
+        res = simulate(
+            slider(MASS),
+            OpenLoop(lambda t: np.array([PUSH])),
+            armctl.Reference.hold([0.0]),
+            0.05,
+            environment=envs,
+            dt=1e-4,
+            energy=False,
+        )
     (item,) = res.info["unstable_friction"]
     assert item["rate_dt"] == pytest.approx(2.0 * RATE * 1e-4, rel=1e-6) and len(item["points"]) == 2
     assert item["normal_force"] == pytest.approx(2.0 * FN)
@@ -87,8 +106,14 @@ def test_a_point_sliding_fast_is_not_judged_by_the_law_below_its_slip_velocity()
     floor = Plane(KelvinVoigt(K), normal=(0.0, 0.0, 1.0), point=(0.0, 0.0, DEPTH), friction=MU, slip_velocity=SLIP)
     with warnings.catch_warnings():
         warnings.simplefilter("error", SimulationWarning)
-        res = simulate(slider(MASS), OpenLoop(lambda t: np.array([MU * FN + 4.0])), armctl.Reference.hold([0.0]),
-                       0.5, environment=floor, qd0=[0.2])
+        res = simulate(
+            slider(MASS),
+            OpenLoop(lambda t: np.array([MU * FN + 4.0])),
+            armctl.Reference.hold([0.0]),
+            0.5,
+            environment=floor,
+            qd0=[0.2],
+        )
     np.testing.assert_allclose(res.qd[:, 0], 0.2 + 4.0 / MASS * res.t, rtol=1e-12)
     assert "unstable_friction" not in res.info
 
@@ -109,8 +134,14 @@ def test_semi_implicit_euler_books_a_spring_wall_work_exactly() -> None:
     # ~ω h × 2π times the oscillation energy per period
     mass, k = 2.0, 2.0 * (0.3 / 1e-3) ** 2
     wall = Plane(KelvinVoigt(k), normal=(-1.0, 0.0, 0.0), point=(0.0, 0.0, 0.0))
-    res = simulate(slider(mass), OpenLoop(lambda t: np.array([PUSH])), armctl.Reference.hold([0.0]), 1.0,
-                   environment=wall, integrator="semi-implicit-euler")
+    res = simulate(
+        slider(mass),
+        OpenLoop(lambda t: np.array([PUSH])),
+        armctl.Reference.hold([0.0]),
+        1.0,
+        environment=wall,
+        integrator="semi-implicit-euler",
+    )
     balance = res.energy_balance()
     stored = 0.5 * k * (2.0 * PUSH / k) ** 2  # the spring at the deepest point of the exact bounce
     assert np.abs(balance).max() < 0.2 * stored
@@ -118,15 +149,25 @@ def test_semi_implicit_euler_books_a_spring_wall_work_exactly() -> None:
     assert abs(balance[half:].mean() - balance[:half].mean()) < 0.02 * stored  # no trend
 
 
-def _swing(k: float, integrator: str, dt: float | None = None
-           ) -> tuple[armctl.sim.SimResult, list[warnings.WarningMessage]]:
+def _swing(
+    k: float, integrator: str, dt: float | None = None
+) -> tuple[armctl.sim.SimResult, list[warnings.WarningMessage]]:
     """The pendulum swung at 3 rad/s into an undamped Hunt–Crossley wall (stiffness k, exponent 1.5), 2 s."""
     dyn = armctl.Dynamics(armctl.models.pendulum())
     wall = Plane(HuntCrossley(k, 0.0, 1.5), normal=(-1.0, 0.0, 0.0), point=(0.2, 0.0, 0.0))
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        res = simulate(dyn, OpenLoop(lambda t: np.zeros(1)), armctl.Reference([0.0]), 2.0, qd0=[3.0],
-                       environment=wall, integrator=integrator, friction="smooth", dt=dt)
+        res = simulate(
+            dyn,
+            OpenLoop(lambda t: np.zeros(1)),
+            armctl.Reference([0.0]),
+            2.0,
+            qd0=[3.0],
+            environment=wall,
+            integrator=integrator,
+            friction="smooth",
+            dt=dt,
+        )
     return res, [w for w in caught if issubclass(w.category, SimulationWarning)]
 
 
@@ -140,10 +181,12 @@ def test_first_order_schemes_gaining_energy_on_a_stiffening_wall_are_reported(in
     assert warned == [] and good.energy[-1] < good.energy[0] - 0.5
     bad, warned = _swing(1e8, integrator)
     assert bad.energy.max() > bad.energy[0] + 0.5  # the scheme made energy …
-    assert any("no force supplied" in str(w.message) or "a compliant surface only gives back" in str(w.message)
-               for w in warned)  # … and says so
-    assert max(bad.info["energy_gain"] if integrator == "semi-implicit-euler" else 0.0,
-               bad.info["environment_work"]) > 0.5
+    assert any(
+        "no force supplied" in str(w.message) or "a compliant surface only gives back" in str(w.message) for w in warned
+    )  # … and says so
+    assert (
+        max(bad.info["energy_gain"] if integrator == "semi-implicit-euler" else 0.0, bad.info["environment_work"]) > 0.5
+    )
 
 
 @functools.cache
@@ -175,11 +218,22 @@ def test_a_plane_s_friction_is_judged_from_its_own_columns_of_the_contact_forces
     (never touched): the floor's normal force must be read from its own column of res.contact_force."""
     from armctl.sim.contact import ContactPoint
 
-    far = Plane(KelvinVoigt(K), normal=(-1.0, 0.0, 0.0), point=(5.0, 0.0, 0.0),
-                points=[ContactPoint(), ContactPoint(offset=(0.0, 0.01, 0.0))])
+    far = Plane(
+        KelvinVoigt(K),
+        normal=(-1.0, 0.0, 0.0),
+        point=(5.0, 0.0, 0.0),
+        points=[ContactPoint(), ContactPoint(offset=(0.0, 0.01, 0.0))],
+    )
     floor = Plane(KelvinVoigt(K), normal=(0.0, 0.0, 1.0), point=(0.0, 0.0, DEPTH), friction=MU, slip_velocity=SLIP)
-    res, warned = _quiet(slider(MASS), OpenLoop(lambda t: np.array([PUSH])), armctl.Reference.hold([0.0]), 0.05,
-                         environment=[far, floor], dt=1e-3, energy=False)
+    res, warned = _quiet(
+        slider(MASS),
+        OpenLoop(lambda t: np.array([PUSH])),
+        armctl.Reference.hold([0.0]),
+        0.05,
+        environment=[far, floor],
+        dt=1e-3,
+        energy=False,
+    )
     (item,) = res.info["unstable_friction"]
     assert item["points"] == [(1, 0)] and item["normal_force"] == pytest.approx(FN, rel=1e-9)
     assert item["rate_dt"] == pytest.approx(RATE * 1e-3, rel=1e-6)
@@ -205,8 +259,9 @@ def test_friction_of_a_point_that_can_only_move_along_the_normal_is_not_judged()
     model = slider(MASS, vertical=True)
     weight = float(armctl.Dynamics(model).gravity_torque(np.zeros(1))[0])  # m g
     floor = Plane(KelvinVoigt(K), friction=MU, slip_velocity=SLIP)
-    res, warned = _quiet(model, OpenLoop(lambda t: np.zeros(1)), armctl.Reference.hold([-weight / K]), 0.05,
-                         environment=floor)
+    res, warned = _quiet(
+        model, OpenLoop(lambda t: np.zeros(1)), armctl.Reference.hold([-weight / K]), 0.05, environment=floor
+    )
     assert weight == pytest.approx(MASS * 9.81, rel=1e-3)
     assert warned == [] and "unstable_friction" not in res.info
     np.testing.assert_allclose(res.q[:, 0], -weight / K, rtol=1e-9)
@@ -217,8 +272,9 @@ def test_a_run_starting_inside_a_wall_may_take_back_its_spring_energy() -> None:
     the spring energy ½ k δ₀² it started with — positive, and not an instability (it is not judged)."""
     model = slider(MASS, vertical=True)
     depth = 0.01
-    res, warned = _quiet(model, OpenLoop(lambda t: np.zeros(1)), armctl.Reference.hold([-depth]), 0.1,
-                         environment=Plane(KelvinVoigt(K)))
+    res, warned = _quiet(
+        model, OpenLoop(lambda t: np.zeros(1)), armctl.Reference.hold([-depth]), 0.1, environment=Plane(KelvinVoigt(K))
+    )
     assert warned == [] and "environment_work" not in res.info
     flying = res.q[:, 0] > 0.0
     assert flying[-20:].all()
@@ -231,8 +287,14 @@ def test_a_disturbance_pushing_into_a_wall_is_not_taken_for_the_wall_s_work() ->
     depth F / k."""
     push, zeta = 50.0, 0.5
     wall = Plane(KelvinVoigt(K, 2.0 * zeta * np.sqrt(K * MASS)), normal=(-1.0, 0.0, 0.0), point=(DEPTH, 0.0, 0.0))
-    res, warned = _quiet(slider(MASS), OpenLoop(lambda t: np.zeros(1)), armctl.Reference.hold([0.0]), 1.0,
-                         environment=wall, disturbance=lambda t: np.array([-push, 0.0, 0.0, 0.0, 0.0, 0.0]))
+    res, warned = _quiet(
+        slider(MASS),
+        OpenLoop(lambda t: np.zeros(1)),
+        armctl.Reference.hold([0.0]),
+        1.0,
+        environment=wall,
+        disturbance=lambda t: np.array([-push, 0.0, 0.0, 0.0, 0.0, 0.0]),
+    )
     assert warned == [] and "environment_work" not in res.info
     assert res.work_external.max() > 0.8 * push * DEPTH  # the push's work up to the wall, F × 1 cm
     assert res.q[-1, 0] == pytest.approx(DEPTH + push / K, rel=1e-6)
@@ -243,10 +305,21 @@ def test_friction_is_judged_on_the_contact_samples_of_a_run_mostly_out_of_contac
     of the run) comes to rest on it with its friction below v_slip = 0.2 mm/s. There the tangential block of J M⁻¹
     Jᵀ is cos²45° / m, so the friction's decay rate is a = μ f_n cos²45° / (m v_slip): a h ≈ 8 > 2.785."""
     slip, tilt = 2e-4, math.radians(45.0)
-    floor = Plane(KelvinVoigt(K), normal=(-math.sin(tilt), 0.0, math.cos(tilt)), point=(0.0, 0.0, 0.0), friction=MU,
-                  slip_velocity=slip)
-    res, warned = _quiet(slider(MASS), OpenLoop(lambda t: np.array([PUSH])), armctl.Reference.hold([-0.2]), 1.0,
-                         environment=floor, energy=False)
+    floor = Plane(
+        KelvinVoigt(K),
+        normal=(-math.sin(tilt), 0.0, math.cos(tilt)),
+        point=(0.0, 0.0, 0.0),
+        friction=MU,
+        slip_velocity=slip,
+    )
+    res, warned = _quiet(
+        slider(MASS),
+        OpenLoop(lambda t: np.array([PUSH])),
+        armctl.Reference.hold([-0.2]),
+        1.0,
+        environment=floor,
+        energy=False,
+    )
     touching = np.abs(res.contact_force).max(axis=(1, 2)) > 0.0
     assert 0 < touching.sum() < 0.5 * len(res.t)
     (item,) = res.info["unstable_friction"]
@@ -262,8 +335,14 @@ def test_a_first_order_run_that_stays_in_contact_is_judged_against_its_first_ord
     depth of the law, k δᵖ = F."""
     k, exponent = 1e6, 1.5
     wall = Plane(HuntCrossley(k, 20.0, exponent), normal=(-1.0, 0.0, 0.0), point=(0.0, 0.0, 0.0))
-    res, warned = _quiet(slider(MASS), OpenLoop(lambda t: np.array([PUSH])), armctl.Reference.hold([-0.01]), 0.5,
-                         environment=wall, integrator="semi-implicit-euler")
+    res, warned = _quiet(
+        slider(MASS),
+        OpenLoop(lambda t: np.array([PUSH])),
+        armctl.Reference.hold([-0.01]),
+        0.5,
+        environment=wall,
+        integrator="semi-implicit-euler",
+    )
     touching = np.abs(res.contact_force).max(axis=(1, 2)) > 0.0
     first = int(np.argmax(touching))
     assert 0 < first and touching[first:].all()

@@ -17,8 +17,18 @@ def test_pinocchio_and_lagrange_plants_give_the_same_run(integrator: str) -> Non
     model = armctl.models.planar_2r().reduced(rotors=False).with_friction(viscous=5.0, coulomb=20.0, static=30.0)
     ctrl = PDGravity(armctl.Dynamics(model.reduced(friction=False)), 2000.0, 300.0)
     wall = Plane(KelvinVoigt(1e5, 1e3), normal=(-1.0, 0.0, 0.0), point=(1.6, 0.0, 0.0), friction=0.3)
-    runs = [simulate(armctl.Dynamics(model, backend=b), ctrl, armctl.Reference.hold([0.4, -0.2]), 0.5,
-                     q0=[1.0, -0.5], environment=wall, integrator=integrator) for b in ("pinocchio", "lagrange")]
+    runs = [
+        simulate(
+            armctl.Dynamics(model, backend=b),
+            ctrl,
+            armctl.Reference.hold([0.4, -0.2]),
+            0.5,
+            q0=[1.0, -0.5],
+            environment=wall,
+            integrator=integrator,
+        )
+        for b in ("pinocchio", "lagrange")
+    ]
     assert runs[0].contact_force[:, 0, 0].max() > 1000.0 and runs[0].info["stick_events"] > 0
     np.testing.assert_allclose(runs[1].q, runs[0].q, atol=1e-10)
     np.testing.assert_allclose(runs[1].contact_force, runs[0].contact_force, atol=1e-6)

@@ -21,8 +21,9 @@ from tests.dynamics.test_recursive import skewed_rpr
 from tests.sim.helpers import ComputedTorque
 
 
-def _textbook(dyn: armctl.Dynamics, scheme: str, q: np.ndarray, v: np.ndarray, tau: np.ndarray, h: float
-              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _textbook(
+    dyn: armctl.Dynamics, scheme: str, q: np.ndarray, v: np.ndarray, tau: np.ndarray, h: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     scheme_step = rk4 if scheme == "rk4" else semi_implicit_euler
     return scheme_step(lambda t, q_, v_, tau_: dyn.forward_dynamics(q_, v_, tau_), 0.0, q.copy(), v.copy(), tau, h)
 
@@ -85,8 +86,12 @@ def test_simulate_compiled_is_the_same_run(integrator: str) -> None:
     dyn = armctl.Dynamics(model)
     ctrl = ComputedTorque(armctl.Dynamics(model), 400.0, 40.0)  # critically damped at 20 rad/s
     ref = Reference(np.array([0.5, -0.4, 0.3]))
-    runs = [armctl.sim.simulate(dyn, ctrl, ref, 0.5, q0=np.zeros(3), control_dt=2e-3, dt=5e-4,
-                                integrator=integrator, compile=c) for c in (False, True)]
+    runs = [
+        armctl.sim.simulate(
+            dyn, ctrl, ref, 0.5, q0=np.zeros(3), control_dt=2e-3, dt=5e-4, integrator=integrator, compile=c
+        )
+        for c in (False, True)
+    ]
     assert [r.info["compiled"] for r in runs] == [False, True]
     for field in ("q", "qd", "qdd", "tau"):
         np.testing.assert_allclose(getattr(runs[1], field), getattr(runs[0], field), rtol=1e-10, atol=1e-10)
@@ -99,8 +104,10 @@ def test_simulate_compiled_reports_divergence_as_the_uncompiled_run_does() -> No
     def push(t: float, q: np.ndarray, qd: np.ndarray, ref: Reference) -> np.ndarray:
         return np.array([1e6, -1e6])
 
-    runs = [armctl.sim.simulate(model, push, Reference(np.zeros(2)), 1.0, saturate=False, max_velocity=50.0,
-                                compile=c) for c in (False, True)]
+    runs = [
+        armctl.sim.simulate(model, push, Reference(np.zeros(2)), 1.0, saturate=False, max_velocity=50.0, compile=c)
+        for c in (False, True)
+    ]
     assert all(r.diverged for r in runs)
     assert runs[1].diverged_at == runs[0].diverged_at
     assert "max_velocity" in runs[1].divergence
@@ -127,8 +134,13 @@ def test_compile_refuses_what_it_cannot_integrate(case: str) -> None:
     ctrl = ComputedTorque(armctl.Dynamics(rigid), 100.0, 20.0)
     with pytest.raises(InvalidParameterError) as err:
         armctl.sim.simulate(plant, ctrl, Reference(np.zeros(2)), 0.01, **kw)
-    expect = {"friction": "has joint friction:", "contact": "has contact:", "disturbance": "has a disturbance:",
-              "implicit": "'semi-implicit-euler'", "rotor_coupling": "rotor_coupling=False"}[case]
+    expect = {
+        "friction": "has joint friction:",
+        "contact": "has contact:",
+        "disturbance": "has a disturbance:",
+        "implicit": "'semi-implicit-euler'",
+        "rotor_coupling": "rotor_coupling=False",
+    }[case]
     assert expect in str(err.value) and "compile=False" in str(err.value)
     assert case != "friction" or "model.reduced(friction=False)" in str(err.value)
     # without compile=True the same run goes ahead

@@ -73,8 +73,14 @@ def test_rk4_fails_on_the_stiffest_contact_where_the_implicit_scheme_holds() -> 
     z_floor = dyn.frame_pose(PANDA_Q0)[2, 3] - 0.01
     floor = Plane(KelvinVoigt(1e8, 2 * 0.7 * math.sqrt(3e8)), point=(0.0, 0.0, z_floor))
     with pytest.warns(SimulationWarning, match="'rk4' is unstable on this contact"):
-        res = simulate(dyn, ForceControl(dyn, [0.0, 0.0, -20.0], kd=5.0, kp=20.0), armctl.Reference.hold(PANDA_Q0),
-                       1.5, environment=floor, integrator="rk4")
+        res = simulate(
+            dyn,
+            ForceControl(dyn, [0.0, 0.0, -20.0], kd=5.0, kp=20.0),
+            armctl.Reference.hold(PANDA_Q0),
+            1.5,
+            environment=floor,
+            integrator="rk4",
+        )
     assert res.info["unstable_contacts"]
     settled = not res.diverged and abs(-res.contact_force[-1, 0, 2] - 19.6) < 1.0
     assert not settled
@@ -95,8 +101,9 @@ def test_hunt_crossley_bounce_matches_an_independent_ode_solution() -> None:
         f = k * (-z) * (1.0 - d * v) if z < 0 else 0.0  # δ = −z, δ̇ = −v
         return [v, -g + max(f, 0.0) / mass]
 
-    ref = solve_ivp(rhs, (0.0, 0.25), [h0, 0.0], method="DOP853", rtol=1e-11, atol=1e-13, max_step=1e-4,
-                    dense_output=True)
+    ref = solve_ivp(
+        rhs, (0.0, 0.25), [h0, 0.0], method="DOP853", rtol=1e-11, atol=1e-13, max_step=1e-4, dense_output=True
+    )
     np.testing.assert_allclose(res.q[:, 0], ref.sol(res.t)[0], atol=1e-7)
     # Hunt–Crossley's approximation of the restitution: apex after the bounce ≈ e² h0
     after = res.t > 0.15
@@ -111,10 +118,12 @@ def test_coulomb_friction_along_the_wall_is_mu_times_the_normal_force() -> None:
     dyn = armctl.Dynamics(model)
     q0 = np.array([0.5, -1.4])  # tool at x = 1.500, z = −0.304
     mu = 0.5
-    floor = Plane(KelvinVoigt(1e6, 2e4), normal=(0.0, 0.0, 1.0), point=(0.0, 0.0, -0.31), friction=mu,
-                  slip_velocity=1e-3)
-    res = simulate(dyn, ForceControl(dyn, [400.0, 0.0, -500.0], kd=100.0), armctl.Reference.hold(q0), 1.0,
-                   environment=floor)
+    floor = Plane(
+        KelvinVoigt(1e6, 2e4), normal=(0.0, 0.0, 1.0), point=(0.0, 0.0, -0.31), friction=mu, slip_velocity=1e-3
+    )
+    res = simulate(
+        dyn, ForceControl(dyn, [400.0, 0.0, -500.0], kd=100.0), armctl.Reference.hold(q0), 1.0, environment=floor
+    )
     h = res.contact_force[:, 0]
     v = np.array([dyn.jacobian(q)[:3] @ qd for q, qd in zip(res.q, res.qd, strict=True)])
     sliding = (h[:, 2] < -1.0) & (np.abs(v[:, 0]) > 1e-3)
@@ -132,8 +141,15 @@ def test_several_contact_points_and_force_sensors() -> None:
     z_floor = dyn.frame_pose(PANDA_Q0)[2, 3] - 0.01
     floor = Plane(KelvinVoigt(1e5, 2e3), point=(0.0, 0.0, z_floor), points=points)
     sensors = [ForceSensor("panda_hand", world_axes=True), ForceSensor("panda_hand"), ForceSensor("panda_joint1")]
-    res = simulate(dyn, ForceControl(dyn, [0.0, 0.0, -30.0], kd=5.0, kp=20.0), armctl.Reference.hold(PANDA_Q0),
-                   1.0, environment=floor, sensors=sensors, integrator="implicit-euler")
+    res = simulate(
+        dyn,
+        ForceControl(dyn, [0.0, 0.0, -30.0], kd=5.0, kp=20.0),
+        armctl.Reference.hold(PANDA_Q0),
+        1.0,
+        environment=floor,
+        sensors=sensors,
+        integrator="implicit-euler",
+    )
     assert res.contact_force.shape == (1001, 2, 3) and res.sensor.shape == (1001, 3, 6)
     q = res.q[-1]
     tcp, hand, tool = (dyn.frame_pose(q, f) for f in ("panda_hand_tcp", "panda_hand", None))
@@ -143,8 +159,9 @@ def test_several_contact_points_and_force_sensors() -> None:
     force = h.sum(axis=0)
     moment = sum(np.cross(p - hand[:3, 3], f) for p, f in zip(pos, h, strict=True))
     np.testing.assert_allclose(res.sensor[-1, 0], np.concatenate([force, moment]), atol=1e-9)
-    np.testing.assert_allclose(res.sensor[-1, 1], np.concatenate([hand[:3, :3].T @ force, hand[:3, :3].T @ moment]),
-                               atol=1e-9)
+    np.testing.assert_allclose(
+        res.sensor[-1, 1], np.concatenate([hand[:3, :3].T @ force, hand[:3, :3].T @ moment]), atol=1e-9
+    )
     np.testing.assert_allclose(res.sensor[-1, 2, :3], force, atol=1e-9)  # a base sensor sees every contact
     tool_moment = sum(np.cross(p - tool[:3, 3], f) for p, f in zip(pos, h, strict=True))
     np.testing.assert_allclose(res.wrench[-1], np.concatenate([force, tool_moment]), atol=1e-9)
@@ -166,8 +183,14 @@ def test_constant_disturbance_wrench_is_applied_and_logged(integrator: str) -> N
     model = armctl.models.planar_2r()
     dyn = armctl.Dynamics(model)
     hd = np.array([400.0, 0.0, -300.0, 0.0, 150.0, 0.0])
-    res = simulate(dyn, PDGravity(dyn, kp=2e4, kd=3e3), armctl.Reference.hold([0.3, 0.5]), 3.0,
-                   disturbance=lambda t: hd, integrator=integrator)
+    res = simulate(
+        dyn,
+        PDGravity(dyn, kp=2e4, kd=3e3),
+        armctl.Reference.hold([0.3, 0.5]),
+        3.0,
+        disturbance=lambda t: hd,
+        integrator=integrator,
+    )
     q = res.q[-1]
     jac = dyn.jacobian(q)
     np.testing.assert_allclose(res.wrench, np.tile(hd, (len(res.t), 1)))

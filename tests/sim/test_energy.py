@@ -31,13 +31,16 @@ def _free_run(name: str, integrator: str, duration: float = 10.0) -> tuple[armct
     outside = (np.asarray(q0) < model.lower) | (np.asarray(q0) > model.upper)  # the Panda hangs past joint 2's
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        res = simulate(model, zero_torque, armctl.Reference.hold(q0), duration, qd0=qd0, integrator=integrator,
-                       saturate=False)
+        res = simulate(
+            model, zero_torque, armctl.Reference.hold(q0), duration, qd0=qd0, integrator=integrator, saturate=False
+        )
     said = [str(w.message) for w in caught if issubclass(w.category, SimulationWarning)]
     assert len(said) == outside.any()  # a start outside the position limits is said, once; inside, nothing
     if outside.any():
-        assert said[0].startswith("the run starts outside the model's position limits: joint 1 ('panda_joint2') "
-                                  "at 2.842 outside [-1.763, 1.763]")
+        assert said[0].startswith(
+            "the run starts outside the model's position limits: joint 1 ('panda_joint2') "
+            "at 2.842 outside [-1.763, 1.763]"
+        )
     dyn = armctl.Dynamics(model)
     kinetic = np.array([dyn.kinetic_energy(q, v) for q, v in zip(res.q[::5], res.qd[::5], strict=True)])
     energy = kinetic + [dyn.potential_energy(q) for q in res.q[::5]]
@@ -82,13 +85,23 @@ def test_velocity_euler_drifts_where_symplectic_does_not() -> None:
 def _balance_scene(integrator: str, dt: float, friction: str, mu: float = 0.0) -> armctl.sim.SimResult:
     """planar_2r under a PD towards a set-point behind a Hunt–Crossley wall, with viscous + Coulomb (+
     Stribeck) joint friction and tangential friction μ at the wall: every term of the balance is at work."""
-    model = armctl.models.planar_2r().with_friction(viscous=[30.0, 20.0], coulomb=[40.0, 25.0],
-                                                    static=[60.0, 35.0], stribeck_velocity=0.05)
+    model = armctl.models.planar_2r().with_friction(
+        viscous=[30.0, 20.0], coulomb=[40.0, 25.0], static=[60.0, 35.0], stribeck_velocity=0.05
+    )
     dyn = armctl.Dynamics(model)
     ctrl = PDGravity(armctl.Dynamics(model.reduced(friction=False)), kp=3000.0, kd=300.0)
     wall = Plane(HuntCrossley(2e5, 0.5), normal=(-1.0, 0.0, 0.0), point=(1.55, 0.0, 0.0), friction=mu)
-    return simulate(dyn, ctrl, armctl.Reference.hold([0.4, -0.2]), 1.0, q0=[1.0, -0.5], dt=dt,
-                    integrator=integrator, friction=friction, environment=wall)
+    return simulate(
+        dyn,
+        ctrl,
+        armctl.Reference.hold([0.4, -0.2]),
+        1.0,
+        q0=[1.0, -0.5],
+        dt=dt,
+        integrator=integrator,
+        friction=friction,
+        environment=wall,
+    )
 
 
 def test_energy_balance_closes_to_fourth_order_with_rk4() -> None:
@@ -140,8 +153,7 @@ def test_kelvin_voigt_contact_work_is_external_work() -> None:
     model = armctl.models.pendulum().reduced(friction=False)
     floor = Plane(KelvinVoigt(2e4, 50.0), normal=(-1.0, 0.0, 0.0), point=(0.3, 0.0, 0.0))
     res = simulate(model, zero_torque, armctl.Reference.hold([0.0]), 2.0, q0=[-1.2], dt=2e-4)
-    res_c = simulate(model, zero_torque, armctl.Reference.hold([0.0]), 2.0, q0=[-1.2], dt=2e-4,
-                     environment=floor)
+    res_c = simulate(model, zero_torque, armctl.Reference.hold([0.0]), 2.0, q0=[-1.2], dt=2e-4, environment=floor)
     assert abs(res.energy[-1] - res.energy[0]) < 1e-9
     lost = res_c.energy[-1] - res_c.energy[0]
     assert lost < -0.1

@@ -17,16 +17,19 @@ def test_a_huge_plane_normal_is_normalised_not_lost() -> None:
     np.testing.assert_allclose(Plane(KelvinVoigt(1e4), normal=(3e-300, 4e-300, 0.0)).normal, [0.6, 0.8, 0.0])
 
 
-@pytest.mark.parametrize(("make", "message"), [
-    (lambda: Plane(KelvinVoigt(1e4), normal="abc"), "plane normal must hold real numbers"),
-    (lambda: Plane(KelvinVoigt(1e4), point=["a", "b", "c"]), "plane point must hold real numbers"),
-    (lambda: Plane(KelvinVoigt(1e4), points=5), "points must be a non-empty sequence of ContactPoint"),
-    (lambda: HuntCrossley.from_restitution(1e4, 2.0, 1.0), r"restitution must be in \[0, 1\].*got 2"),
-    (lambda: KelvinVoigt(1e3).depth_at(-5.0), "force must be >= 0, got -5"),
-    (lambda: HuntCrossley(1e3, exponent=1.5).depth_at(-5.0), "force must be >= 0, got -5"),
-    (lambda: ForceSensor(world_axes="no"), "world_axes must be True or False, got 'no'"),
-    (lambda: StickSlip(armctl.models.pendulum(), stribeck="no"), "stribeck must be True or False, got 'no'"),
-])
+@pytest.mark.parametrize(
+    ("make", "message"),
+    [
+        (lambda: Plane(KelvinVoigt(1e4), normal="abc"), "plane normal must hold real numbers"),
+        (lambda: Plane(KelvinVoigt(1e4), point=["a", "b", "c"]), "plane point must hold real numbers"),
+        (lambda: Plane(KelvinVoigt(1e4), points=5), "points must be a non-empty sequence of ContactPoint"),
+        (lambda: HuntCrossley.from_restitution(1e4, 2.0, 1.0), r"restitution must be in \[0, 1\].*got 2"),
+        (lambda: KelvinVoigt(1e3).depth_at(-5.0), "force must be >= 0, got -5"),
+        (lambda: HuntCrossley(1e3, exponent=1.5).depth_at(-5.0), "force must be >= 0, got -5"),
+        (lambda: ForceSensor(world_axes="no"), "world_axes must be True or False, got 'no'"),
+        (lambda: StickSlip(armctl.models.pendulum(), stribeck="no"), "stribeck must be True or False, got 'no'"),
+    ],
+)
 def test_bad_environment_values_are_named(make: object, message: str) -> None:
     with pytest.raises(InvalidParameterError, match=message):
         make()  # type: ignore[operator]
@@ -45,8 +48,9 @@ def test_a_tiny_stribeck_velocity_gives_a_finite_friction_slope() -> None:
     sliding = (np.array([0.5]), np.array([1.0]))
     np.testing.assert_array_equal(StickSlip(tiny).slope(*sliding), [0.05])
     np.testing.assert_array_equal(SmoothFriction(tiny).slope(sliding[0]), [0.05])
-    res = simulate(tiny, lambda t, q, qd, r: np.array([2.0]), armctl.Reference.hold([0.0]), 0.2,
-                   integrator="implicit-euler")
+    res = simulate(
+        tiny, lambda t, q, qd, r: np.array([2.0]), armctl.Reference.hold([0.0]), 0.2, integrator="implicit-euler"
+    )
     ref = simulate(tiny, lambda t, q, qd, r: np.array([2.0]), armctl.Reference.hold([0.0]), 0.2, integrator="rk4")
     assert not res.diverged and abs(res.q[-1, 0] - ref.q[-1, 0]) < 5e-3  # first order against fourth
     normal = armctl.models.pendulum().with_friction(viscous=0.05, coulomb=0.3, static=0.45, stribeck_velocity=0.1)
@@ -60,5 +64,10 @@ def test_a_tiny_stribeck_velocity_gives_a_finite_friction_slope() -> None:
 @pytest.mark.parametrize("returned", ["abc", {"a": 1.0}, ["1"] * 6, np.array([1j, 0, 0, 0, 0, 0])])
 def test_a_disturbance_that_is_not_real_numbers_is_named(returned: object) -> None:
     with pytest.raises(InvalidParameterError, match=r"^disturbance\(t\) at t = 0 s must hold real numbers"):
-        simulate(armctl.models.planar_2r(), lambda t, q, qd, r: np.zeros(2), armctl.Reference.hold([0.1, 0.2]),
-                 0.01, disturbance=lambda t: returned)
+        simulate(
+            armctl.models.planar_2r(),
+            lambda t, q, qd, r: np.zeros(2),
+            armctl.Reference.hold([0.1, 0.2]),
+            0.01,
+            disturbance=lambda t: returned,
+        )

@@ -23,8 +23,9 @@ def test_fast_rk4_is_rk4_step_after_step_and_keeps_its_results() -> None:
         tau = rng.uniform(-5.0, 5.0, 7)
         h = 1e-3 if k != 3 else 5e-4  # a step of another size in between
         q, v, a1 = step(q, v, tau, h)
-        ref_q, ref_v, ref_a1 = rk4(lambda t, q_, v_, tau_: dyn.forward_dynamics(q_, v_, tau_), 0.0, ref_q, ref_v,
-                                   tau, h)
+        ref_q, ref_v, ref_a1 = rk4(
+            lambda t, q_, v_, tau_: dyn.forward_dynamics(q_, v_, tau_), 0.0, ref_q, ref_v, tau, h
+        )
         np.testing.assert_allclose(q, ref_q, rtol=1e-13, atol=1e-15)
         np.testing.assert_allclose(v, ref_v, rtol=1e-13, atol=1e-15)
         np.testing.assert_allclose(a1, ref_a1, rtol=1e-13, atol=1e-13)
@@ -35,8 +36,9 @@ def test_fast_rk4_is_rk4_step_after_step_and_keeps_its_results() -> None:
     q0, v0 = rng.uniform(-1.0, 1.0, (2, 7))
     q0_copy, v0_copy = q0.copy(), v0.copy()
     q, v, _ = step(q0, v0, np.zeros(7), 1e-3)
-    ref_q, ref_v, _ = rk4(lambda t, q_, v_, tau_: dyn.forward_dynamics(q_, v_, tau_), 0.0, q0_copy, v0_copy,
-                          np.zeros(7), 1e-3)
+    ref_q, ref_v, _ = rk4(
+        lambda t, q_, v_, tau_: dyn.forward_dynamics(q_, v_, tau_), 0.0, q0_copy, v0_copy, np.zeros(7), 1e-3
+    )
     np.testing.assert_allclose(q, ref_q, rtol=1e-13, atol=1e-15)
     assert np.array_equal(q0, q0_copy) and np.array_equal(v0, v0_copy)
 
@@ -49,8 +51,9 @@ def test_fast_rk4_takes_its_own_results_in_any_order() -> None:
     assert step is not None
 
     def textbook(q: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        q1, v1, _ = rk4(lambda t, q_, v_, tau_: dyn.forward_dynamics(q_, v_, tau_), 0.0, q.copy(), v.copy(),
-                        np.zeros(7), 1e-3)
+        q1, v1, _ = rk4(
+            lambda t, q_, v_, tau_: dyn.forward_dynamics(q_, v_, tau_), 0.0, q.copy(), v.copy(), np.zeros(7), 1e-3
+        )
         return q1, v1
 
     rng = np.random.default_rng(5)

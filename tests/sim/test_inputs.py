@@ -20,47 +20,53 @@ def run(**kw: object) -> armctl.sim.SimResult:
     return simulate(**args)  # type: ignore[arg-type]
 
 
-@pytest.mark.parametrize(("kwargs", "error", "shown"), [
-    ({"duration": -1.0}, InvalidParameterError, "-1.0"),
-    ({"duration": 0.0}, InvalidParameterError, "duration"),
-    ({"duration": float("nan")}, NonFiniteError, "nan"),
-    ({"duration": 0.0105}, InvalidParameterError, "0.0105"),
-    ({"control_dt": -1e-3}, InvalidParameterError, "-0.001"),
-    ({"control_dt": "fast"}, InvalidParameterError, "fast"),
-    ({"dt": 0.0}, InvalidParameterError, "dt"),
-    ({"dt": 3e-4}, InvalidParameterError, "0.0003"),
-    ({"dt": 2e-3}, InvalidParameterError, "0.002"),
-    ({"integrator": "rk45"}, UnknownNameError, "rk45"),
-    ({"q0": [0.0, 0.0, 0.0]}, ShapeError, "(3,)"),
-    ({"qd0": [np.nan, 0.0]}, NonFiniteError, "nan"),
-    ({"noise_q": -0.1}, InvalidParameterError, "-0.1"),
-    ({"noise_qd": [0.1, 0.1, 0.1]}, ShapeError, "(3,)"),
-    ({"delay": -1}, InvalidParameterError, "-1"),
-    ({"delay": 1.5}, InvalidParameterError, "1.5"),
-    ({"max_velocity": 0.0}, InvalidParameterError, "max_velocity"),
-    ({"max_velocity": True}, InvalidParameterError, "max_velocity must be a positive number"),  # was 1 rad/s
-    ({"saturate": "no"}, InvalidParameterError, "saturate must be True or False, got 'no'"),  # was truthy
-    ({"energy": "no"}, InvalidParameterError, "energy must be True or False"),
-    ({"reset": 0}, InvalidParameterError, "reset must be True or False, got 0"),
-    ({"friction": "lugre"}, UnknownNameError, "lugre"),
-    ({"environment": "wall"}, InvalidParameterError, "wall"),
-    ({"environment": Plane(KelvinVoigt(1e4), points=[ContactPoint("elbow")])}, UnknownNameError, "elbow"),
-    ({"sensors": [ForceSensor("wrist")]}, UnknownNameError, "wrist"),
-    ({"disturbance": 3.0}, InvalidParameterError, "float"),
-    ({"plant": "planar_2r"}, InvalidParameterError, "str"),
-    ({"controller": None}, InvalidParameterError, "NoneType"),
-    ({"reference": [0.1, 0.2]}, InvalidParameterError, "list"),
-    ({"reference": armctl.Reference.hold([0.1, 0.2, 0.3])}, ShapeError, "3 joints"),
-    ({"reference": lambda t: [0.0, 0.0]}, InvalidParameterError, "list"),
-    ({"seed": "abc", "noise_q": 0.1}, InvalidParameterError, "abc"),
-    ({"seed": 1.5, "noise_q": 0.1}, InvalidParameterError, "1.5"),
-    ({"duration": True}, InvalidParameterError, "True"),
-    ({"duration": 1e-12}, InvalidParameterError, "use 0.001 s (one control period)"),
-    ({"q0": [3.0, 0.0], "max_position": 2.0}, InvalidParameterError, "beyond max_position = 2"),
-    ({"qd0": [0.0, 5.0], "max_velocity": 2.0}, InvalidParameterError, "beyond max_velocity = 2"),
-    ({"reference": armctl.Reference.hold([3.0, 0.0]), "max_position": 2.0}, InvalidParameterError,
-     "the reference at t = 0"),
-])
+@pytest.mark.parametrize(
+    ("kwargs", "error", "shown"),
+    [
+        ({"duration": -1.0}, InvalidParameterError, "-1.0"),
+        ({"duration": 0.0}, InvalidParameterError, "duration"),
+        ({"duration": float("nan")}, NonFiniteError, "nan"),
+        ({"duration": 0.0105}, InvalidParameterError, "0.0105"),
+        ({"control_dt": -1e-3}, InvalidParameterError, "-0.001"),
+        ({"control_dt": "fast"}, InvalidParameterError, "fast"),
+        ({"dt": 0.0}, InvalidParameterError, "dt"),
+        ({"dt": 3e-4}, InvalidParameterError, "0.0003"),
+        ({"dt": 2e-3}, InvalidParameterError, "0.002"),
+        ({"integrator": "rk45"}, UnknownNameError, "rk45"),
+        ({"q0": [0.0, 0.0, 0.0]}, ShapeError, "(3,)"),
+        ({"qd0": [np.nan, 0.0]}, NonFiniteError, "nan"),
+        ({"noise_q": -0.1}, InvalidParameterError, "-0.1"),
+        ({"noise_qd": [0.1, 0.1, 0.1]}, ShapeError, "(3,)"),
+        ({"delay": -1}, InvalidParameterError, "-1"),
+        ({"delay": 1.5}, InvalidParameterError, "1.5"),
+        ({"max_velocity": 0.0}, InvalidParameterError, "max_velocity"),
+        ({"max_velocity": True}, InvalidParameterError, "max_velocity must be a positive number"),  # was 1 rad/s
+        ({"saturate": "no"}, InvalidParameterError, "saturate must be True or False, got 'no'"),  # was truthy
+        ({"energy": "no"}, InvalidParameterError, "energy must be True or False"),
+        ({"reset": 0}, InvalidParameterError, "reset must be True or False, got 0"),
+        ({"friction": "lugre"}, UnknownNameError, "lugre"),
+        ({"environment": "wall"}, InvalidParameterError, "wall"),
+        ({"environment": Plane(KelvinVoigt(1e4), points=[ContactPoint("elbow")])}, UnknownNameError, "elbow"),
+        ({"sensors": [ForceSensor("wrist")]}, UnknownNameError, "wrist"),
+        ({"disturbance": 3.0}, InvalidParameterError, "float"),
+        ({"plant": "planar_2r"}, InvalidParameterError, "str"),
+        ({"controller": None}, InvalidParameterError, "NoneType"),
+        ({"reference": [0.1, 0.2]}, InvalidParameterError, "list"),
+        ({"reference": armctl.Reference.hold([0.1, 0.2, 0.3])}, ShapeError, "3 joints"),
+        ({"reference": lambda t: [0.0, 0.0]}, InvalidParameterError, "list"),
+        ({"seed": "abc", "noise_q": 0.1}, InvalidParameterError, "abc"),
+        ({"seed": 1.5, "noise_q": 0.1}, InvalidParameterError, "1.5"),
+        ({"duration": True}, InvalidParameterError, "True"),
+        ({"duration": 1e-12}, InvalidParameterError, "use 0.001 s (one control period)"),
+        ({"q0": [3.0, 0.0], "max_position": 2.0}, InvalidParameterError, "beyond max_position = 2"),
+        ({"qd0": [0.0, 5.0], "max_velocity": 2.0}, InvalidParameterError, "beyond max_velocity = 2"),
+        (
+            {"reference": armctl.Reference.hold([3.0, 0.0]), "max_position": 2.0},
+            InvalidParameterError,
+            "the reference at t = 0",
+        ),
+    ],
+)
 def test_bad_input_raises_a_named_error(kwargs: dict[str, object], error: type, shown: str) -> None:
     with pytest.raises(error) as info:
         run(**kwargs)
@@ -95,17 +101,20 @@ def test_controller_for_another_arm_is_refused() -> None:
         run(controller=ctrl)
 
 
-@pytest.mark.parametrize(("make", "error"), [
-    (lambda: KelvinVoigt(-1.0), InvalidParameterError),
-    (lambda: KelvinVoigt(1e4, damping=-2.0), InvalidParameterError),
-    (lambda: HuntCrossley(1e4, exponent=0.5), InvalidParameterError),
-    (lambda: Plane(KelvinVoigt(1e4), normal=(0.0, 0.0, 0.0)), InvalidParameterError),
-    (lambda: Plane(KelvinVoigt(1e4), point=(0.0, 1.0)), InvalidParameterError),
-    (lambda: Plane("stiff"), InvalidParameterError),  # type: ignore[arg-type]
-    (lambda: Plane(KelvinVoigt(1e4), friction=-0.1), InvalidParameterError),
-    (lambda: Plane(KelvinVoigt(1e4), points=[]), InvalidParameterError),
-    (lambda: ContactPoint(None, (0.0, 1.0)), InvalidParameterError),
-])
+@pytest.mark.parametrize(
+    ("make", "error"),
+    [
+        (lambda: KelvinVoigt(-1.0), InvalidParameterError),
+        (lambda: KelvinVoigt(1e4, damping=-2.0), InvalidParameterError),
+        (lambda: HuntCrossley(1e4, exponent=0.5), InvalidParameterError),
+        (lambda: Plane(KelvinVoigt(1e4), normal=(0.0, 0.0, 0.0)), InvalidParameterError),
+        (lambda: Plane(KelvinVoigt(1e4), point=(0.0, 1.0)), InvalidParameterError),
+        (lambda: Plane("stiff"), InvalidParameterError),  # type: ignore[arg-type]
+        (lambda: Plane(KelvinVoigt(1e4), friction=-0.1), InvalidParameterError),
+        (lambda: Plane(KelvinVoigt(1e4), points=[]), InvalidParameterError),
+        (lambda: ContactPoint(None, (0.0, 1.0)), InvalidParameterError),
+    ],
+)
 def test_bad_environment_parameters(make: object, error: type) -> None:
     with pytest.raises(error):
         make()  # type: ignore[operator]
@@ -151,8 +160,7 @@ def test_a_controller_cannot_change_the_state_in_place(integrator: str, friction
         return -q - qd
 
     res = simulate(plant, meddling, REF, 0.05, integrator=integrator, friction=fric, q0=[0.3, -0.2])
-    ref = simulate(plant, lambda t, q, qd, r: -q - qd, REF, 0.05, integrator=integrator, friction=fric,
-                   q0=[0.3, -0.2])
+    ref = simulate(plant, lambda t, q, qd, r: -q - qd, REF, 0.05, integrator=integrator, friction=fric, q0=[0.3, -0.2])
     np.testing.assert_array_equal(res.q, ref.q)
     assert abs(res.q[-1] - res.q[0]).max() > 1e-4  # the arm moved: the runs are not trivially equal
 
@@ -171,9 +179,15 @@ def test_lists_integers_and_other_float_types_are_taken_as_torques(returned: obj
     assert res.tau.dtype == np.float64
 
 
-@pytest.mark.parametrize(("kind", "times"), [("float32", {"control_dt": 1e-3, "dt": 1e-4}),
-                                             ("float32", {"duration": 0.01}), ("float16", {"duration": 0.1}),
-                                             ("array32", {"control_dt": 1e-3})])
+@pytest.mark.parametrize(
+    ("kind", "times"),
+    [
+        ("float32", {"control_dt": 1e-3, "dt": 1e-4}),
+        ("float32", {"duration": 0.01}),
+        ("float16", {"duration": 0.1}),
+        ("array32", {"control_dt": 1e-3}),
+    ],
+)
 def test_times_given_in_a_lower_precision_are_the_decimals_they_print_as(kind: str, times: dict) -> None:
     # float32(1e-3) is 0.0010000000475 s: 1 s was "not a whole number of control periods (1000); use … 1 s"
     def make(v: float) -> object:

@@ -15,8 +15,9 @@ from armctl.errors import UnknownNameError
 from armctl.sim import HuntCrossley, KelvinVoigt, Plane, SmoothFriction, StickSlip
 from armctl.sim.friction import make_friction, stribeck_curve
 
-MODEL = armctl.models.planar_2r().with_friction(viscous=[2.0, 1.0], coulomb=[5.0, 3.0], coulomb_negative=[4.0, 3.0],
-                                                static=[7.0, 3.5], stribeck_velocity=[0.1, 0.0])
+MODEL = armctl.models.planar_2r().with_friction(
+    viscous=[2.0, 1.0], coulomb=[5.0, 3.0], coulomb_negative=[4.0, 3.0], static=[7.0, 3.5], stribeck_velocity=[0.1, 0.0]
+)
 
 
 def test_smooth_friction_is_tanh_times_the_stribeck_level() -> None:
@@ -68,13 +69,17 @@ def test_kelvin_voigt_and_hunt_crossley_forces() -> None:
 
 
 @settings(max_examples=30, deadline=None)
-@given(p=st.lists(st.floats(-0.01, 0.01), min_size=3, max_size=3),
-       v=st.lists(st.floats(-0.5, 0.5), min_size=3, max_size=3), mu=st.sampled_from([0.0, 0.6]))
+@given(
+    p=st.lists(st.floats(-0.01, 0.01), min_size=3, max_size=3),
+    v=st.lists(st.floats(-0.5, 0.5), min_size=3, max_size=3),
+    mu=st.sampled_from([0.0, 0.6]),
+)
 def test_plane_force_derivatives_match_finite_differences(p: list[float], v: list[float], mu: float) -> None:
     """∂F/∂p and ∂F/∂v of a tilted Hunt–Crossley plane with friction, away from the kinks (contact edge, slip
     velocity), against central differences."""
-    plane = Plane(HuntCrossley(1e5, 0.3), normal=(0.2, -0.1, 1.0), point=(0.0, 0.0, 0.005), friction=mu,
-                  slip_velocity=0.05)
+    plane = Plane(
+        HuntCrossley(1e5, 0.3), normal=(0.2, -0.1, 1.0), point=(0.0, 0.0, 0.005), friction=mu, slip_velocity=0.05
+    )
     pv, vv = np.array(p), np.array(v)
     force, dfdp, dfdv = plane.force(pv, vv, True)
     if force is None:

@@ -38,8 +38,7 @@ def test_panda_open_loop_trajectory_matches_mujoco_rk4(q0: list[float]) -> None:
     qd0 = np.linspace(-0.3, 0.3, 7)
     dyn = armctl.Dynamics(armctl.models.panda())
     profile = Profile(dyn, q0)
-    res = simulate(dyn, OpenLoop(profile), armctl.Reference.hold(q0), 1.0, qd0=qd0, integrator="rk4",
-                   saturate=False)
+    res = simulate(dyn, OpenLoop(profile), armctl.Reference.hold(q0), 1.0, qd0=qd0, integrator="rk4", saturate=False)
 
     m, d = panda_mujoco()
     m.opt.integrator = mujoco.mjtIntegrator.mjINT_RK4

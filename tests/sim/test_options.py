@@ -49,8 +49,9 @@ def exact_zoh(gain: float, period: float, steps: int, delay: int, q0: float, r: 
 def test_zero_order_hold_with_substeps_and_delay_is_the_exact_discretisation(dt: float | None, delay: int) -> None:
     gain, period = 400.0, 2e-3
     ctrl = PositionP(gain)
-    res = simulate(slider(MASS), ctrl, armctl.Reference.hold([0.0]), 0.5, q0=[0.1], control_dt=period, dt=dt,
-                   delay=delay)
+    res = simulate(
+        slider(MASS), ctrl, armctl.Reference.hold([0.0]), 0.5, q0=[0.1], control_dt=period, dt=dt, delay=delay
+    )
     expected = exact_zoh(gain, period, 250, delay, 0.1)
     np.testing.assert_allclose(res.q[:, 0], expected, atol=1e-12)
     assert res.info["substeps"] == (1 if dt is None else round(period / dt))
@@ -115,8 +116,14 @@ def test_qdd_is_the_acceleration_at_each_sample() -> None:
     """Recorded q̈ against Dynamics.forward_dynamics of the recorded state and applied torque."""
     dyn = armctl.Dynamics(armctl.models.planar_2r())
     for integrator in ("rk4", "implicit-euler", "semi-implicit-euler", "euler"):
-        res = simulate(dyn, ComputedTorque(dyn, 50.0, 10.0), armctl.Reference.hold([0.5, -0.5]), 0.05,
-                       integrator=integrator, q0=[0.0, 0.0])
+        res = simulate(
+            dyn,
+            ComputedTorque(dyn, 50.0, 10.0),
+            armctl.Reference.hold([0.5, -0.5]),
+            0.05,
+            integrator=integrator,
+            q0=[0.0, 0.0],
+        )
         for k in (0, 17, 50):
             expected = dyn.forward_dynamics(res.q[k], res.qd[k], res.tau_applied[k])
             np.testing.assert_allclose(res.qdd[k], expected, rtol=1e-9, atol=1e-9)
@@ -130,9 +137,18 @@ def test_runs_are_deterministic() -> None:
     model = armctl.models.planar_2r().with_friction(viscous=10.0, coulomb=30.0, static=40.0)
     dyn = armctl.Dynamics(model)
     wall = Plane(KelvinVoigt(1e5, 1e3), normal=(-1.0, 0.0, 0.0), point=(1.6, 0.0, 0.0), friction=0.3)
-    runs = [simulate(model, ComputedTorque(dyn, 100.0, 20.0), armctl.Reference.hold([0.4, -0.2]), 0.5,
-                     q0=[1.0, -0.5], environment=wall, integrator=integ)
-            for integ in ("rk4", "rk4", "implicit-euler", "implicit-euler")]
+    runs = [
+        simulate(
+            model,
+            ComputedTorque(dyn, 100.0, 20.0),
+            armctl.Reference.hold([0.4, -0.2]),
+            0.5,
+            q0=[1.0, -0.5],
+            environment=wall,
+            integrator=integ,
+        )
+        for integ in ("rk4", "rk4", "implicit-euler", "implicit-euler")
+    ]
     for a, b in (runs[:2], runs[2:]):
         np.testing.assert_array_equal(a.q, b.q)
         np.testing.assert_array_equal(a.contact_force, b.contact_force)

@@ -17,25 +17,47 @@ from tests.sim.helpers import ComputedTorque, ForceControl
 @pytest.fixture(scope="module")
 def result() -> SimResult:
     dyn = armctl.Dynamics(armctl.models.planar_2r().with_friction(viscous=2.0, coulomb=5.0))
-    return simulate(dyn, ComputedTorque(dyn, 100.0, 20.0), armctl.Reference.hold([0.3, 0.2]), 0.3,
-                    noise_q=1e-4, seed=3, delay=1)
+    return simulate(
+        dyn, ComputedTorque(dyn, 100.0, 20.0), armctl.Reference.hold([0.3, 0.2]), 0.3, noise_q=1e-4, seed=3, delay=1
+    )
 
 
 def test_save_and_load_round_trip(result: SimResult, tmp_path: Path) -> None:
     path = result.save(tmp_path / "run")
     assert path.suffix == ".npz"
     back = SimResult.load(path)
-    for name in ("t", "q", "qd", "qdd", "tau", "tau_applied", "tau_friction", "tau_ext", "wrench", "contact_force",
-                 "sensor", "q_measured", "qd_measured", "stuck", "energy", "work_actuator", "work_friction",
-                 "work_external"):
+    for name in (
+        "t",
+        "q",
+        "qd",
+        "qdd",
+        "tau",
+        "tau_applied",
+        "tau_friction",
+        "tau_ext",
+        "wrench",
+        "contact_force",
+        "sensor",
+        "q_measured",
+        "qd_measured",
+        "stuck",
+        "energy",
+        "work_actuator",
+        "work_friction",
+        "work_external",
+    ):
         np.testing.assert_array_equal(getattr(back, name), getattr(result, name), err_msg=name)
     np.testing.assert_array_equal(back.logs["error_norm"], result.logs["error_norm"])
     assert back.info == result.info and back.diverged is False and back.diverged_at is None
 
 
 def test_a_diverged_result_round_trips(tmp_path: Path) -> None:
-    res = simulate(armctl.models.pendulum(), lambda t, q, qd, ref: np.array([np.nan]) if t > 0.01 else np.zeros(1),
-                   armctl.Reference.hold([0.0]), 0.05)
+    res = simulate(
+        armctl.models.pendulum(),
+        lambda t, q, qd, ref: np.array([np.nan]) if t > 0.01 else np.zeros(1),
+        armctl.Reference.hold([0.0]),
+        0.05,
+    )
     back = SimResult.load(res.save(tmp_path / "bad.npz"))
     assert back.diverged and back.diverged_at == res.diverged_at and back.divergence == res.divergence
     np.testing.assert_array_equal(back.diverged_q, res.diverged_q)
@@ -59,10 +81,15 @@ def test_plots_are_figures(result: SimResult) -> None:
 
     dyn = armctl.Dynamics(armctl.models.planar_2r())
     wall = Plane(KelvinVoigt(1e5, 1e3), normal=(-1.0, 0.0, 0.0), point=(1.7, 0.0, 0.0))
-    touching = simulate(dyn, ForceControl(dyn, [100.0, 0.0, 0.0], kd=300.0), armctl.Reference.hold([0.6, -1.2]), 0.2,
-                        environment=wall)
-    for fig in (result.plot(), result.plot(("qdd", "tau_friction"), joints=[1]), result.plot_energy(),
-                touching.plot_wrench()):
+    touching = simulate(
+        dyn, ForceControl(dyn, [100.0, 0.0, 0.0], kd=300.0), armctl.Reference.hold([0.6, -1.2]), 0.2, environment=wall
+    )
+    for fig in (
+        result.plot(),
+        result.plot(("qdd", "tau_friction"), joints=[1]),
+        result.plot_energy(),
+        touching.plot_wrench(),
+    ):
         assert isinstance(fig, Figure) and fig.axes
     with pytest.raises(armctl.errors.UnknownNameError):
         result.plot(("torque",))

@@ -21,8 +21,9 @@ from tests.sim.helpers import OpenLoop, slider
 PANDA_Q0 = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8])  # hand pointing down
 
 
-@pytest.mark.parametrize(("scheme", "limit"), [("rk4", 2.0 * math.sqrt(2.0)), ("euler", 2.0),
-                                               ("semi-implicit-euler", 2.0)])
+@pytest.mark.parametrize(
+    ("scheme", "limit"), [("rk4", 2.0 * math.sqrt(2.0)), ("euler", 2.0), ("semi-implicit-euler", 2.0)]
+)
 def test_largest_stable_step_of_an_undamped_contact(scheme: str, limit: float) -> None:
     mass, k = 2.0, 1e7
     wall = Plane(KelvinVoigt(k), normal=(-1.0, 0.0, 0.0), point=(0.01, 0.0, 0.0))
@@ -66,12 +67,15 @@ def test_simulate_warns_and_records_an_unstable_contact() -> None:
         assert "unstable on a contact" in repr(res)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        res = simulate(slider(2.0), push, armctl.Reference.hold([0.0]), 0.1, environment=wall,
-                       integrator="implicit-euler")
+        res = simulate(
+            slider(2.0), push, armctl.Reference.hold([0.0]), 0.1, environment=wall, integrator="implicit-euler"
+        )
         assert "unstable_contacts" not in res.info
         soft = Plane(KelvinVoigt(1e5), normal=(-1.0, 0.0, 0.0), point=(0.01, 0.0, 0.0))
-        assert "unstable_contacts" not in simulate(slider(2.0), push, armctl.Reference.hold([0.0]), 0.1,
-                                                   environment=soft).info
+        assert (
+            "unstable_contacts"
+            not in simulate(slider(2.0), push, armctl.Reference.hold([0.0]), 0.1, environment=soft).info
+        )
 
 
 @pytest.mark.parametrize("zeta", [0.05, 0.5, 2.0])
@@ -114,8 +118,9 @@ def test_one_sided_contact_gaining_energy_below_the_linear_limit_is_reported(zet
         dt = 1e-3 / math.ceil(1e-3 / bad.info["unstable_contacts"][0]["max_dt"])  # the step it recommends
         with warnings.catch_warnings():
             warnings.simplefilter("error")
-            good = simulate(slider(mass), run, armctl.Reference.hold([0.0]), 0.5, environment=wall, integrator=scheme,
-                            dt=dt)
+            good = simulate(
+                slider(mass), run, armctl.Reference.hold([0.0]), 0.5, environment=wall, integrator=scheme, dt=dt
+            )
         assert np.abs(good.contact_force).max() <= 1.02 * 2.0 * push
     with warnings.catch_warnings():
         warnings.simplefilter("error")
@@ -144,8 +149,15 @@ def _press(law: object, integrator: str) -> tuple[armctl.sim.SimResult, list[war
     dyn = armctl.Dynamics(armctl.models.planar_2r())
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        res = simulate(dyn, PDGravity(dyn, 2000.0, 200.0), armctl.Reference([-0.5, 0.3]), 0.5, q0=[0.0, 0.0],
-                       environment=Plane(law, point=(0.0, 0.0, -0.3)), integrator=integrator)  # type: ignore[arg-type]
+        res = simulate(
+            dyn,
+            PDGravity(dyn, 2000.0, 200.0),
+            armctl.Reference([-0.5, 0.3]),
+            0.5,
+            q0=[0.0, 0.0],
+            environment=Plane(law, point=(0.0, 0.0, -0.3)),
+            integrator=integrator,
+        )  # type: ignore[arg-type]
     return res, [w for w in caught if issubclass(w.category, SimulationWarning)]
 
 
@@ -183,8 +195,10 @@ def test_euler_variants_limit_of_a_damped_contact_in_closed_form(zeta: float) ->
     omega = math.sqrt(k / mass)
     c = 2.0 * zeta * omega  # damping / mass
     wall = Plane(KelvinVoigt(k, c * mass), normal=(-1.0, 0.0, 0.0), point=(0.01, 0.0, 0.0))
-    limits = {"euler": (-c + math.sqrt(c * c + 4.0 * omega**2)) / omega**2,
-              "semi-implicit-euler": (c + math.sqrt(c * c + 4.0 * omega**2)) / omega**2}
+    limits = {
+        "euler": (-c + math.sqrt(c * c + 4.0 * omega**2)) / omega**2,
+        "semi-implicit-euler": (c + math.sqrt(c * c + 4.0 * omega**2)) / omega**2,
+    }
     for scheme, limit in limits.items():
         (found,) = contact_stability(armctl.Dynamics(slider(mass)), [wall], np.zeros(1), scheme, 1e-4)
         assert found.linear_dt == pytest.approx(limit, rel=1e-6), scheme

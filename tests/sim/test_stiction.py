@@ -30,8 +30,9 @@ def pendulum(**friction: float) -> armctl.RobotModel:
 def test_pendulum_held_by_coulomb_friction_does_not_move_at_all(integrator: str) -> None:
     q0 = 0.3
     assert gravity_pendulum(q0) < 3.0
-    res = simulate(pendulum(viscous=0.05, coulomb=3.0), zero_torque, armctl.Reference.hold([q0]), 10.0,
-                   integrator=integrator)
+    res = simulate(
+        pendulum(viscous=0.05, coulomb=3.0), zero_torque, armctl.Reference.hold([q0]), 10.0, integrator=integrator
+    )
     assert not res.diverged and len(res.t) == 10001
     assert (res.q == q0).all()  # bit for bit: no creep
     assert (res.qd == 0.0).all() and (res.qdd == 0.0).all()  # no chatter
@@ -50,10 +51,10 @@ def test_noisy_controller_below_breakaway_does_not_make_it_chatter() -> None:
     assert (res.q == 0.3).all() and (res.qd == 0.0).all()
 
 
-@pytest.mark.parametrize(("rate", "coulomb", "static"), [(1.0, 3.0, None), (-1.0, 3.0, None), (2.0, 2.0, 3.5),
-                                                          (-0.5, 1.0, 2.5)])
-def test_torque_ramp_breaks_away_at_the_predicted_torque(rate: float, coulomb: float, static: float | None
-                                                         ) -> None:
+@pytest.mark.parametrize(
+    ("rate", "coulomb", "static"), [(1.0, 3.0, None), (-1.0, 3.0, None), (2.0, 2.0, 3.5), (-0.5, 1.0, 2.5)]
+)
+def test_torque_ramp_breaks_away_at_the_predicted_torque(rate: float, coulomb: float, static: float | None) -> None:
     q0 = 0.3
     breakaway = coulomb if static is None else static
     # net torque τ − g(q0) reaches ±F_s
@@ -70,16 +71,19 @@ def test_torque_ramp_breaks_away_at_the_predicted_torque(rate: float, coulomb: f
     assert res.info["breakaway_events"] >= 1
 
 
-@pytest.mark.parametrize(("rate", "up", "down"), [(1.0, 3.0, 2.0), (-1.0, 3.0, 2.0), (1.0, 1.5, 2.5),
-                                                 (-1.0, 1.5, 2.5)])
+@pytest.mark.parametrize(("rate", "up", "down"), [(1.0, 3.0, 2.0), (-1.0, 3.0, 2.0), (1.0, 1.5, 2.5), (-1.0, 1.5, 2.5)])
 def test_asymmetric_breakaway_levels_each_hold_their_own_side(rate: float, up: float, down: float) -> None:
     # Coulomb F_c⁺ = up for motion in +q, F_c⁻ = down for −q (no static level: each side breaks away at its
     # own): a ramp in +τ breaks away when τ − g(q0) reaches +F_c⁺, one in −τ when it reaches −F_c⁻. Swapping
     # the two levels anywhere in the stick–slip solve moves each prediction by |F_c⁺ − F_c⁻| = 1 N·m
     q0 = 0.3
     predicted = gravity_pendulum(q0) + (up if rate > 0 else -down)
-    res = simulate(pendulum(coulomb=up, coulomb_negative=down), OpenLoop(Ramp([0.0], [rate])),
-                   armctl.Reference.hold([q0]), round(abs(predicted) * 1.3 + 0.2, 1))
+    res = simulate(
+        pendulum(coulomb=up, coulomb_negative=down),
+        OpenLoop(Ramp([0.0], [rate])),
+        armctl.Reference.hold([q0]),
+        round(abs(predicted) * 1.3 + 0.2, 1),
+    )
     moved = np.flatnonzero(res.q[:, 0] != q0)
     assert moved.size, "it never broke away"
     k = moved[0] - 1
@@ -135,8 +139,7 @@ HANG = -math.pi / 2  # planar_2r hanging straight down
 
 
 def _two_link(static1: float) -> armctl.RobotModel:
-    return armctl.models.planar_2r().with_friction(viscous=[0.0, 5.0], coulomb=[static1, 20.0],
-                                                   static=[static1, 30.0])
+    return armctl.models.planar_2r().with_friction(viscous=[0.0, 5.0], coulomb=[static1, 20.0], static=[static1, 30.0])
 
 
 def _drive(t: float) -> np.ndarray:
@@ -168,8 +171,12 @@ def test_coupling_breaks_a_stuck_joint_loose_when_the_reaction_exceeds_its_stati
     locked = _two_link(static1=1e5).reduced(lock={"joint1": HANG})
     ref = simulate(locked, OpenLoop(lambda t: _drive(t)[1:]), armctl.Reference.hold([0.0]), 2.0)
     rigid = armctl.Dynamics(armctl.models.planar_2r())
-    reaction = np.array([-rigid.inverse_dynamics([HANG, q], [0.0, v], [0.0, a])[0]
-                         for q, v, a in zip(ref.q[:, 0], ref.qd[:, 0], ref.qdd[:, 0], strict=True)])
+    reaction = np.array(
+        [
+            -rigid.inverse_dynamics([HANG, q], [0.0, v], [0.0, a])[0]
+            for q, v, a in zip(ref.q[:, 0], ref.qd[:, 0], ref.qdd[:, 0], strict=True)
+        ]
+    )
     static1 = 0.6 * np.abs(reaction).max()
     predicted = int(np.flatnonzero(np.abs(reaction) > static1)[0])
     res = simulate(_two_link(static1), OpenLoop(_drive), armctl.Reference.hold([HANG, 0.0]), 2.0)
@@ -191,12 +198,15 @@ def test_pendulum_sticks_exactly_when_gravity_is_below_breakaway(q0: float, marg
 
 
 @settings(max_examples=12, deadline=None)
-@given(q0=st.lists(st.floats(-2.0, 2.0), min_size=3, max_size=3),
-       static=st.lists(st.floats(0.5, 40.0), min_size=3, max_size=3),
-       ratio=st.floats(0.3, 1.0),
-       torque=st.lists(st.floats(-10.0, 10.0), min_size=3, max_size=3))
-def test_several_joints_stick_and_slip_consistently(q0: list[float], static: list[float], ratio: float,
-                                                    torque: list[float]) -> None:
+@given(
+    q0=st.lists(st.floats(-2.0, 2.0), min_size=3, max_size=3),
+    static=st.lists(st.floats(0.5, 40.0), min_size=3, max_size=3),
+    ratio=st.floats(0.3, 1.0),
+    torque=st.lists(st.floats(-10.0, 10.0), min_size=3, max_size=3),
+)
+def test_several_joints_stick_and_slip_consistently(
+    q0: list[float], static: list[float], ratio: float, torque: list[float]
+) -> None:
     """planar_3r from rest under random constant torques and random stiction: whatever sticks or slips, a
     stuck joint has exactly zero velocity and a holding torque within its breakaway band, and the energy
     balance closes (the stick solve and the events lose or make no energy)."""
@@ -244,8 +254,9 @@ def test_a_joint_released_brings_its_kinetic_friction_into_the_others_holding_to
 
     model = armctl.models.planar_2r().with_friction(coulomb=[200.0, 40.0], static=[250.0, 50.0])
     mass = np.array([[3.0, 1.2], [1.2, 1.0]])
-    stuck, direction, lam = solve_sticking(StickSlip(model), mass, np.array([400.0, 60.0]),
-                                           np.array([True, True]), np.zeros(2))
+    stuck, direction, lam = solve_sticking(
+        StickSlip(model), mass, np.array([400.0, 60.0]), np.array([True, True]), np.zeros(2)
+    )
     assert stuck.tolist() == [False, True] and direction.tolist() == [1.0, 0.0]
     np.testing.assert_allclose(lam, [0.0, 60.0 - 1.2 * (400.0 - 200.0) / 3.0], rtol=1e-12, atol=1e-12)
 
@@ -257,8 +268,13 @@ def test_an_external_push_breaks_a_stuck_joint_loose_beyond_its_friction(push: f
     q = (F − 5 N) t² / (2 m)."""
     mass, coulomb = 2.0, 5.0
     model = slider(mass).with_friction(coulomb=coulomb)
-    res = simulate(model, zero_torque, armctl.Reference.hold([0.0]), 0.5,
-                   disturbance=lambda t: np.array([-push, 0.0, 0.0, 0.0, 0.0, 0.0]))
+    res = simulate(
+        model,
+        zero_torque,
+        armctl.Reference.hold([0.0]),
+        0.5,
+        disturbance=lambda t: np.array([-push, 0.0, 0.0, 0.0, 0.0, 0.0]),
+    )
     if moves:
         np.testing.assert_allclose(res.q[:, 0], (push - coulomb) / (2.0 * mass) * res.t**2, rtol=1e-9, atol=1e-12)
         assert not res.stuck[1:].any()
@@ -274,16 +290,16 @@ def test_two_joints_coasting_to_a_stop_in_the_same_step_stop_where_coulomb_frict
     from armctl.model.parts import Frame, Joint, Link
 
     m1, m2 = 1.0, 2.0
-    joints = tuple(Joint(name, "prismatic", axis, np.eye(4), Link(mass, (0, 0, 0), (1e-3, 1e-3, 1e-3)))
-                   for name, axis, mass in (("x", (1.0, 0.0, 0.0), m1), ("y", (0.0, 1.0, 0.0), m2)))
+    joints = tuple(
+        Joint(name, "prismatic", axis, np.eye(4), Link(mass, (0, 0, 0), (1e-3, 1e-3, 1e-3)))
+        for name, axis, mass in (("x", (1.0, 0.0, 0.0), m1), ("y", (0.0, 1.0, 0.0), m2))
+    )
     model = armctl.RobotModel(joints, name="xy", frames=(Frame("tool", 2, np.eye(4)),), tool_frame="tool")
     inertia, coulomb, v0 = np.array([m1 + m2, m2]), np.array([4.5, 1.5]), np.array([1.0, 0.5002])
     stop = inertia * v0 / coulomb
     assert 0.666 < stop.min() < stop.max() < 0.667  # the same step
-    res = simulate(model.with_friction(coulomb=coulomb), zero_torque, armctl.Reference.hold([0.0, 0.0]), 1.0,
-                   qd0=v0)
+    res = simulate(model.with_friction(coulomb=coulomb), zero_torque, armctl.Reference.hold([0.0, 0.0]), 1.0, qd0=v0)
     for i in range(2):
         t = np.minimum(res.t, stop[i])
-        np.testing.assert_allclose(res.q[:, i], v0[i] * t - 0.5 * coulomb[i] / inertia[i] * t**2, rtol=1e-9,
-                                   atol=1e-12)
+        np.testing.assert_allclose(res.q[:, i], v0[i] * t - 0.5 * coulomb[i] / inertia[i] * t**2, rtol=1e-9, atol=1e-12)
     assert (res.qd[res.t > stop.max()] == 0.0).all() and res.stuck[res.t > stop.max()].all()

@@ -26,9 +26,18 @@ def final_state(res: SimResult) -> tuple[bool, float, float]:
 
 def cases(gains: list[float]) -> list[dict[str, object]]:
     # each case gets its own Dynamics (a Dynamics' workspace is not shared between threads)
-    return [{"plant": MODEL, "controller": PDGravity(armctl.Dynamics(MODEL), kp, 0.1 * kp),
-             "reference": armctl.Reference.hold([0.3, -0.2]), "duration": 0.3, "q0": [0.0, 0.0],
-             "max_velocity": 20.0, "saturate": False} for kp in gains]
+    return [
+        {
+            "plant": MODEL,
+            "controller": PDGravity(armctl.Dynamics(MODEL), kp, 0.1 * kp),
+            "reference": armctl.Reference.hold([0.3, -0.2]),
+            "duration": 0.3,
+            "q0": [0.0, 0.0],
+            "max_velocity": 20.0,
+            "saturate": False,
+        }
+        for kp in gains
+    ]
 
 
 GAINS = [2e3, 1e4, 5e4, 3e7]  # the last one is far too stiff for a 1 kHz loop
@@ -149,16 +158,19 @@ def test_unpicklable_errors_arrive_when_exceptions_pickle_through_tblib() -> Non
     import sys
 
     pytest.importorskip("tblib")
-    code = ("from tblib import pickling_support\n"
-            "pickling_support.install()\n"
-            "from armctl.errors import ArmctlError\n"
-            "from armctl.sim import sweep\n"
-            "from tests.sim.test_sweep import GAINS, _raises_unpicklable, cases\n"
-            "try:\n"
-            "    sweep(cases(GAINS[:1]), run=_raises_unpicklable, max_workers=1, progress=False)\n"
-            "except ArmctlError as exc:\n"
-            "    print(type(exc).__name__, str(exc).splitlines()[0][:60])\n")
+    code = (
+        "from tblib import pickling_support\n"
+        "pickling_support.install()\n"
+        "from armctl.errors import ArmctlError\n"
+        "from armctl.sim import sweep\n"
+        "from tests.sim.test_sweep import GAINS, _raises_unpicklable, cases\n"
+        "try:\n"
+        "    sweep(cases(GAINS[:1]), run=_raises_unpicklable, max_workers=1, progress=False)\n"
+        "except ArmctlError as exc:\n"
+        "    print(type(exc).__name__, str(exc).splitlines()[0][:60])\n"
+    )
     root = Path(__file__).resolve().parents[2]
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, cwd=root)
-    assert out.stdout.startswith("ArmctlError _Unpicklable: broken with 1 and 2 (raised in a worker"), \
-        out.stderr[-2000:]
+    assert out.stdout.startswith("ArmctlError _Unpicklable: broken with 1 and 2 (raised in a worker"), out.stderr[
+        -2000:
+    ]

@@ -15,9 +15,33 @@ from hypothesis import strategies as st
 from armctl.errors import ArmctlError, InvalidParameterError, ModelLoadError
 from armctl.tuning.presets import load_preset, write_preset
 
-AWKWARD = ["line1\nline2", "tab\there", "ctrl\x01char", "nul\x00", "del\x7f", "esc\x1b[0m", "\r\n", "\b\f",
-           'say "hi"', "'single'", '"""', "back\\slash", "\\u0041 is not A", "\\", "trailing\\", "ω_n = 20 rad/s",
-           "🤖", "", " ", "é\u0301", "\u2028", "\ufeff", "#not a comment", "a = b", "[gains]"]
+AWKWARD = [
+    "line1\nline2",
+    "tab\there",
+    "ctrl\x01char",
+    "nul\x00",
+    "del\x7f",
+    "esc\x1b[0m",
+    "\r\n",
+    "\b\f",
+    'say "hi"',
+    "'single'",
+    '"""',
+    "back\\slash",
+    "\\u0041 is not A",
+    "\\",
+    "trailing\\",
+    "ω_n = 20 rad/s",
+    "🤖",
+    "",
+    " ",
+    "é\u0301",
+    "\u2028",
+    "\ufeff",
+    "#not a comment",
+    "a = b",
+    "[gains]",
+]
 
 
 @pytest.mark.parametrize("text", AWKWARD)
@@ -28,13 +52,39 @@ def test_awkward_strings_round_trip(tmp_path: Path, text: str) -> None:
 
 
 def test_values_round_trip(tmp_path: Path) -> None:
-    gains = {"kp": np.array([1.5, 2.0, 1e-300, 1.7976931348623157e308]), "kd": np.float64(0.1), "n": np.int64(3),
-             "flag": np.bool_(True), "m": np.eye(2), "k i": [1, 2.5], "a.b": -0.0, "": 7}
-    write_preset("s", "m", gains, "how", "me", tmp_path, gain_margin=math.inf, lost=-math.inf, nested={"x": [1, "y"]},
-                 flags=(True, False))
+    gains = {
+        "kp": np.array([1.5, 2.0, 1e-300, 1.7976931348623157e308]),
+        "kd": np.float64(0.1),
+        "n": np.int64(3),
+        "flag": np.bool_(True),
+        "m": np.eye(2),
+        "k i": [1, 2.5],
+        "a.b": -0.0,
+        "": 7,
+    }
+    write_preset(
+        "s",
+        "m",
+        gains,
+        "how",
+        "me",
+        tmp_path,
+        gain_margin=math.inf,
+        lost=-math.inf,
+        nested={"x": [1, "y"]},
+        flags=(True, False),
+    )
     back = load_preset("s", "m", tmp_path)
-    assert back["gains"] == {"kp": [1.5, 2.0, 1e-300, 1.7976931348623157e308], "kd": 0.1, "n": 3, "flag": True,
-                             "m": [[1.0, 0.0], [0.0, 1.0]], "k i": [1, 2.5], "a.b": 0.0, "": 7}
+    assert back["gains"] == {
+        "kp": [1.5, 2.0, 1e-300, 1.7976931348623157e308],
+        "kd": 0.1,
+        "n": 3,
+        "flag": True,
+        "m": [[1.0, 0.0], [0.0, 1.0]],
+        "k i": [1, 2.5],
+        "a.b": 0.0,
+        "": 7,
+    }
     assert math.copysign(1.0, back["gains"]["a.b"]) == -1.0
     assert back["gain_margin"] == math.inf and back["lost"] == -math.inf
     assert back["nested"] == {"x": [1, "y"]} and back["flags"] == [True, False]
@@ -42,8 +92,12 @@ def test_values_round_trip(tmp_path: Path) -> None:
     assert math.isnan(load_preset("s", "nan", tmp_path)["gains"]["kp"])
 
 
-NUMBERS = (st.lists(st.floats(allow_nan=False), max_size=4) | st.integers(-(2**63), 2**63 - 1)
-           | st.floats(allow_nan=False) | st.booleans())
+NUMBERS = (
+    st.lists(st.floats(allow_nan=False), max_size=4)
+    | st.integers(-(2**63), 2**63 - 1)
+    | st.floats(allow_nan=False)
+    | st.booleans()
+)
 
 
 @settings(max_examples=200, deadline=None)
@@ -58,8 +112,17 @@ def test_any_string_and_number_round_trips(how: str, key: str, value: str, gains
     assert all(back[k] == v for k, v in record.items())
 
 
-@pytest.mark.parametrize("content", [b'how = "line1\nline2"\n[gains]\nkp = 1.0\n', b"[gains\n", b"kp = = 1\n",
-                                     b'how = "\xff\xfe"\n[gains]\n', b"gains = 3\n", b'scene = "s"\n'])
+@pytest.mark.parametrize(
+    "content",
+    [
+        b'how = "line1\nline2"\n[gains]\nkp = 1.0\n',
+        b"[gains\n",
+        b"kp = = 1\n",
+        b'how = "\xff\xfe"\n[gains]\n',
+        b"gains = 3\n",
+        b'scene = "s"\n',
+    ],
+)
 def test_malformed_file_raises_armctl_error_naming_it(tmp_path: Path, content: bytes) -> None:
     path = tmp_path / "s.m.toml"
     path.write_bytes(content)
@@ -68,13 +131,23 @@ def test_malformed_file_raises_armctl_error_naming_it(tmp_path: Path, content: b
     assert isinstance(info.value, ArmctlError) and info.value.value == str(path)
 
 
-@pytest.mark.parametrize(("gains", "record", "named"), [
-    ({"kp": None}, {}, "gains.kp"), ({"kp": 1 + 2j}, {}, "gains.kp"), ({"kp": np.array([1j])}, {}, "gains.kp"),
-    ({"kp": 1.0}, {"when": object()}, "when"), ({"kp": 1.0}, {"note": "lone \ud800"}, "note"),
-    ({1: 1.0}, {}, "1"),
-])
-def test_value_toml_cannot_hold_raises_and_leaves_the_file(tmp_path: Path, gains: dict, record: dict,  # type: ignore[type-arg]
-                                                           named: str) -> None:
+@pytest.mark.parametrize(
+    ("gains", "record", "named"),
+    [
+        ({"kp": None}, {}, "gains.kp"),
+        ({"kp": 1 + 2j}, {}, "gains.kp"),
+        ({"kp": np.array([1j])}, {}, "gains.kp"),
+        ({"kp": 1.0}, {"when": object()}, "when"),
+        ({"kp": 1.0}, {"note": "lone \ud800"}, "note"),
+        ({1: 1.0}, {}, "1"),
+    ],
+)
+def test_value_toml_cannot_hold_raises_and_leaves_the_file(
+    tmp_path: Path,
+    gains: dict,
+    record: dict,  # type: ignore[type-arg]
+    named: str,
+) -> None:
     write_preset("s", "m", {"kp": 2.0}, "before", "me", tmp_path)
     with pytest.raises(InvalidParameterError, match=named):
         write_preset("s", "m", gains, "after", "me", tmp_path, **record)

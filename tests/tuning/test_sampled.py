@@ -23,7 +23,7 @@ def radius(kp: float, kd: float, period: float, delay: int) -> float:
     size = 2 * (delay + 1)
     big = np.zeros((size, size))
     big[:2, :2] = a
-    big[:2, 2 * delay: 2 * delay + 2] -= b @ np.array([[kp, kd]])
+    big[:2, 2 * delay : 2 * delay + 2] -= b @ np.array([[kp, kd]])
     big[2:, :-2] = np.eye(2 * delay)
     return float(np.abs(np.linalg.eigvals(big)).max())
 
@@ -79,10 +79,15 @@ def phase_margin(kp: float, kd: float, period: float, delay: int) -> tuple[float
 
 
 # the last: heavily overdamped (poles at −0.001 and −10 rad/s), where python-control's interpolating fallback failed
-STABLE = [(400, 40, 1e-3, 1), (2500, 100, 1e-3, 1), (100, 20, 5e-3, 2), (900, 60, 2e-3, 0), (1.0, 2.0, 1e-3, 1),
-          (0.01, 10.0, 1e-4, 0)]
-UNSTABLE = [(1e6, 2000, 1e-3, 1), (4e5, 1200, 1e-3, 1), (1e5, 400, 1e-3, 2), (4e5, 4000, 1e-3, 0),
-            (1e5, 2500, 2e-3, 0)]
+STABLE = [
+    (400, 40, 1e-3, 1),
+    (2500, 100, 1e-3, 1),
+    (100, 20, 5e-3, 2),
+    (900, 60, 2e-3, 0),
+    (1.0, 2.0, 1e-3, 1),
+    (0.01, 10.0, 1e-4, 0),
+]
+UNSTABLE = [(1e6, 2000, 1e-3, 1), (4e5, 1200, 1e-3, 1), (1e5, 400, 1e-3, 2), (4e5, 4000, 1e-3, 0), (1e5, 2500, 2e-3, 0)]
 NEVER_STABLE = [(1e6, 1000, 1e-3, 1), (1e6, 1400, 1e-3, 1), (1e6, 400, 1e-3, 0), (400, 0.0, 1e-3, 0)]
 
 
@@ -91,10 +96,12 @@ def test_critical_multiplier_is_the_stability_boundary(kp: float, kd: float, per
     got = SampledDataAnalysis.of(kp, kd, period, delay)
     expected = bisect_boundary(kp, kd, period, delay)
     assert got.critical_multiplier == pytest.approx(expected, rel=1e-6)
-    assert radius(kp * got.critical_multiplier * (1 - 1e-6), kd * got.critical_multiplier * (1 - 1e-6), period,
-                  delay) < 1
-    assert radius(kp * got.critical_multiplier * (1 + 1e-6), kd * got.critical_multiplier * (1 + 1e-6), period,
-                  delay) > 1
+    assert (
+        radius(kp * got.critical_multiplier * (1 - 1e-6), kd * got.critical_multiplier * (1 - 1e-6), period, delay) < 1
+    )
+    assert (
+        radius(kp * got.critical_multiplier * (1 + 1e-6), kd * got.critical_multiplier * (1 + 1e-6), period, delay) > 1
+    )
     if delay == 0:
         assert got.critical_multiplier == pytest.approx(jury_boundary(kp, kd, period), rel=1e-9)
 
@@ -119,14 +126,16 @@ def test_phase_margin_of_a_lightly_damped_loop() -> None:
     got = SampledDataAnalysis.of(kp, kd, period, delay)
     w = math.sqrt((kd**2 + math.sqrt(kd**4 + 4 * kp**2)) / 2)
     assert got.crossover_rad_s == pytest.approx(w, rel=1e-6)
-    assert got.phase_margin_deg == pytest.approx(math.degrees(math.atan(w * kd / kp) - w * (delay + 0.5) * period),
-                                                 abs=1e-4)
+    assert got.phase_margin_deg == pytest.approx(
+        math.degrees(math.atan(w * kd / kp) - w * (delay + 0.5) * period), abs=1e-4
+    )
     assert got.phase_margin_deg == pytest.approx(phase_margin(kp, kd, period, delay)[0], abs=1e-6)
 
 
 @pytest.mark.parametrize(("kp", "kd", "period", "delay"), UNSTABLE)
-def test_unstable_loop_reports_the_multiplier_that_stabilises_it(kp: float, kd: float, period: float,
-                                                                 delay: int) -> None:
+def test_unstable_loop_reports_the_multiplier_that_stabilises_it(
+    kp: float, kd: float, period: float, delay: int
+) -> None:
     """The loop is unstable at the given gains: k* < 1 (not the inf of a loop "with no upper margin")."""
     assert radius(kp, kd, period, delay) > 1
     got = SampledDataAnalysis.of(kp, kd, period, delay)
@@ -152,7 +161,8 @@ def test_large_margin_is_accurate() -> None:
     kp, period = 1e-3, 1e-3
     kd = kp * period / 2 * 1.1
     assert SampledDataAnalysis.of(kp, kd, period, 0).critical_multiplier == pytest.approx(
-        jury_boundary(kp, kd, period), rel=1e-9)
+        jury_boundary(kp, kd, period), rel=1e-9
+    )
     kp, kd, period, delay = 1.0, 1.0 * 1e-4 * 3.5 * 1.001, 1e-4, 3
     got = SampledDataAnalysis.of(kp, kd, period, delay).critical_multiplier
     k = got * (1 - 1e-6)

@@ -92,8 +92,7 @@ def candidates(model: RobotModel, compiled: bool) -> dict[str, Callable[[], Dyna
     out["lagrange_vm_nc"] = lambda: armctl.Dynamics(model, backend="lagrange", rotor_coupling=False)
     out["lagrange_vm"] = lambda: armctl.Dynamics(model, backend="lagrange", rotor_coupling=True)
     if compiled:
-        out["lagrange_compiled"] = lambda: armctl.Dynamics(model, backend="lagrange", rotor_coupling=True,
-                                                           compile=True)
+        out["lagrange_compiled"] = lambda: armctl.Dynamics(model, backend="lagrange", rotor_coupling=True, compile=True)
     return out
 
 
@@ -102,8 +101,9 @@ def relative_rms(tau: FloatArray, ref: FloatArray) -> float:
     return float(np.sqrt(((tau - ref) ** 2).sum() / (ref**2).sum()))
 
 
-def measure_arm(name: str, compiled: bool, states: int = 200, number: int = 200, rounds: int = 5,
-                seed: int = 0) -> dict[str, Any]:
+def measure_arm(
+    name: str, compiled: bool, states: int = 200, number: int = 200, rounds: int = 5, seed: int = 0
+) -> dict[str, Any]:
     """Every candidate on arm ``name``: relative RMS error against the coupled Lagrange reference and median
     seconds per inverse-dynamics call."""
     import armctl
@@ -133,24 +133,43 @@ def measure_arm(name: str, compiled: bool, states: int = 200, number: int = 200,
         return call
 
     times = interleaved({k: cycling(d) for k, d in dyns.items()}, number=number, rounds=rounds)
-    coupling = (relative_rms(taus["lagrange_vm_nc"], ref)
-                if model.has_motors else 0.0)  # the rotor-coupling term's own share of τ
-    cands = {k: {"label": LABELS[k], "backend": dyns[k].backend, "error": relative_rms(taus[k], ref),
-                 "cost_s": times[k], "build_s": build[k]} for k in dyns}
-    return {"arm": name, "n": model.n, "has_motors": bool(model.has_motors),
-            "has_friction": bool(model.has_friction), "states": states,
-            "rotor_coupling_share": coupling, "tau_rms": float(np.sqrt((ref**2).sum(axis=1).mean())),
-            "candidates": cands}
+    coupling = (
+        relative_rms(taus["lagrange_vm_nc"], ref) if model.has_motors else 0.0
+    )  # the rotor-coupling term's own share of τ
+    cands = {
+        k: {
+            "label": LABELS[k],
+            "backend": dyns[k].backend,
+            "error": relative_rms(taus[k], ref),
+            "cost_s": times[k],
+            "build_s": build[k],
+        }
+        for k in dyns
+    }
+    return {
+        "arm": name,
+        "n": model.n,
+        "has_motors": bool(model.has_motors),
+        "has_friction": bool(model.has_friction),
+        "states": states,
+        "rotor_coupling_share": coupling,
+        "tau_rms": float(np.sqrt((ref**2).sum(axis=1).mean())),
+        "candidates": cands,
+    }
 
 
 def run(quick: bool = False) -> dict[str, Any]:
     """Measure every arm; returns every number behind the chart (errors dimensionless, costs in seconds)."""
     number, rounds, states = (100, 15, 100) if quick else (200, 31, 300)
     arms = {name: measure_arm(name, name in COMPILED_ARMS[quick], states, number, rounds) for name in ARMS[quick]}
-    return {"reference": "lagrange backend, rotor_coupling=True, full model (friction included)",
-            "error": "relative RMS of inverse_dynamics over random states",
-            "cost": "median seconds per inverse_dynamics call, interleaved rounds",
-            "number": number, "rounds": rounds, "arms": arms}
+    return {
+        "reference": "lagrange backend, rotor_coupling=True, full model (friction included)",
+        "error": "relative RMS of inverse_dynamics over random states",
+        "cost": "median seconds per inverse_dynamics call, interleaved rounds",
+        "number": number,
+        "rounds": rounds,
+        "arms": arms,
+    }
 
 
 def summary(data: dict[str, Any]) -> str:
@@ -176,8 +195,14 @@ def plot(data: dict[str, Any], path: Path) -> None:
         for i, (k, c) in enumerate(ranked):
             e = max(c["error"], ZERO_ERROR_PLOT)
             ax.scatter([e], [c["cost_s"]], color=colors[k], label=c["label"], zorder=3)
-            ax.annotate(k, (e, c["cost_s"]), textcoords="offset points", xytext=(4, 3 if i % 2 else -9),
-                        fontsize=7, ha="right" if e > 1e-6 else "left")
+            ax.annotate(
+                k,
+                (e, c["cost_s"]),
+                textcoords="offset points",
+                xytext=(4, 3 if i % 2 else -9),
+                fontsize=7,
+                ha="right" if e > 1e-6 else "left",
+            )
         ax.set_xlim(ZERO_ERROR_PLOT / 10, 10.0)
         ax.margins(y=0.2)
         ax.set_xscale("log")

@@ -35,14 +35,26 @@ def run(number: int = 200, rounds: int = 75, seed: int = 0) -> dict[str, Any]:
     except BackendError as e:  # no C compiler
         out["compiled_unavailable"] = str(e)
     for variant, d in variants.items():
-        controllers = {"PDGravity": PDGravity(d, 100.0, 20.0), "ComputedTorque": ComputedTorque(d, 100.0, 20.0),
-                       "PassivityBased": PassivityBased(d, 5.0, 20.0), "Adaptive": Adaptive(d, 5.0, 20.0, 0.01)}
+        controllers = {
+            "PDGravity": PDGravity(d, 100.0, 20.0),
+            "ComputedTorque": ComputedTorque(d, 100.0, 20.0),
+            "PassivityBased": PassivityBased(d, 5.0, 20.0),
+            "Adaptive": Adaptive(d, 5.0, 20.0, 0.01),
+        }
         for name, c in controllers.items():
             clock = itertools.count(1e-3, 1e-3)  # Python floats; the adaptive law integrates between calls
-            r = paired_ratio(lambda c=c, clock=clock: c(next(clock), q, qd, ref),
-                             lambda: pin.rnea(pm, pd, q, qd, qdd), number, rounds)
-            fig = {"step_s": r["candidate_s"], "rnea_s": r["reference_s"], "ratio": r["ratio"],
-                   "ratio_iqr": (r["ratio_q1"], r["ratio_q3"])}
+            r = paired_ratio(
+                lambda c=c, clock=clock: c(next(clock), q, qd, ref),
+                lambda: pin.rnea(pm, pd, q, qd, qdd),
+                number,
+                rounds,
+            )
+            fig = {
+                "step_s": r["candidate_s"],
+                "rnea_s": r["reference_s"],
+                "ratio": r["ratio"],
+                "ratio_iqr": (r["ratio_q1"], r["ratio_q3"]),
+            }
             if variant:
                 out.setdefault(variant, {})[name] = fig
             else:
@@ -58,9 +70,11 @@ def report(fig: dict[str, Any]) -> str:
                 continue
             f = figs[name]
             q1, q3 = f["ratio_iqr"]
-            lines.append(f"  {name + label:30s} {f['step_s'] * 1e6:7.2f} us  RNEA {f['rnea_s'] * 1e6:5.2f} us  ratio "
-                         f"{f['ratio']:5.2f} [{q1:.2f}, {q3:.2f}]  (target <= {target}: "
-                         f"{'ok' if f['ratio'] <= target else 'MISSED'})")
+            lines.append(
+                f"  {name + label:30s} {f['step_s'] * 1e6:7.2f} us  RNEA {f['rnea_s'] * 1e6:5.2f} us  ratio "
+                f"{f['ratio']:5.2f} [{q1:.2f}, {q3:.2f}]  (target <= {target}: "
+                f"{'ok' if f['ratio'] <= target else 'MISSED'})"
+            )
     if "compiled_unavailable" in fig:
         lines.append(f"  compile=True unavailable: {fig['compiled_unavailable']}")
     return "\n".join(lines)

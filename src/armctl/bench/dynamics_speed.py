@@ -17,8 +17,14 @@ import armctl
 from armctl.bench.timing import interleaved, paired_ratio
 from armctl.errors import BackendError
 
-TARGETS = {"mass_matrix": 1.5, "inverse_dynamics": 1.5, "regressor": 1.5, "passivity_regressor": 4.0,
-           "lagrange_compiled_inverse_dynamics": 10.0, "lagrange_build_seconds": 5.0}
+TARGETS = {
+    "mass_matrix": 1.5,
+    "inverse_dynamics": 1.5,
+    "regressor": 1.5,
+    "passivity_regressor": 4.0,
+    "lagrange_compiled_inverse_dynamics": 10.0,
+    "lagrange_build_seconds": 5.0,
+}
 
 
 def run(number: int = 200, rounds: int = 75, seed: int = 0, compile_if_needed: bool = True) -> dict[str, Any]:
@@ -37,10 +43,11 @@ def run(number: int = 200, rounds: int = 75, seed: int = 0, compile_if_needed: b
     pairs = {
         "mass_matrix": (lambda: dyn.mass_matrix(q), lambda: pin.crba(pm, pd, q)),
         "inverse_dynamics": (lambda: dyn.inverse_dynamics(q, qd, qdd), lambda: pin.rnea(pm, pd, q, qd, qdd)),
-        "regressor": (lambda: dyn.regressor(q, qd, qdd),
-                      lambda: pin.computeJointTorqueRegressor(pm, pd, q, qd, qdd)),
-        "passivity_regressor": (lambda: dyn.passivity_regressor(q, qd, qd_r, qdd),
-                                lambda: pin.computeJointTorqueRegressor(pm, pd, q, qd, qdd)),
+        "regressor": (lambda: dyn.regressor(q, qd, qdd), lambda: pin.computeJointTorqueRegressor(pm, pd, q, qd, qdd)),
+        "passivity_regressor": (
+            lambda: dyn.passivity_regressor(q, qd, qd_r, qdd),
+            lambda: pin.computeJointTorqueRegressor(pm, pd, q, qd, qdd),
+        ),
     }
     # the same regressors with Dynamics(model, compile=True): generated C code (built once, ~2 s, then cached)
     t0 = time.perf_counter()
@@ -55,8 +62,12 @@ def run(number: int = 200, rounds: int = 75, seed: int = 0, compile_if_needed: b
         pairs["compiled_passivity_regressor"] = (lambda: dc.passivity_regressor(q, qd, qd_r, qdd), raw)
     for name, (api, raw) in pairs.items():
         r = paired_ratio(api, raw, number, rounds)
-        out[name] = {"api_s": r["candidate_s"], "raw_s": r["reference_s"], "ratio": r["ratio"],
-                     "ratio_iqr": (r["ratio_q1"], r["ratio_q3"])}
+        out[name] = {
+            "api_s": r["candidate_s"],
+            "raw_s": r["reference_s"],
+            "ratio": r["ratio"],
+            "ratio_iqr": (r["ratio_q1"], r["ratio_q3"]),
+        }
     t0 = time.perf_counter()
     lag_vm = armctl.Dynamics(model, backend="lagrange")
     out["lagrange_build_seconds"] = time.perf_counter() - t0
@@ -69,18 +80,37 @@ def run(number: int = 200, rounds: int = 75, seed: int = 0, compile_if_needed: b
     t0 = time.perf_counter()
     lag = armctl.Dynamics(model, backend="lagrange", compile=True)
     out["lagrange_compile_or_load_seconds"] = time.perf_counter() - t0
-    t = interleaved({"lag": lambda: lag.inverse_dynamics(q, qd, qdd), "pin": lambda: dyn.inverse_dynamics(q, qd, qdd),
-                     "vm": lambda: lag_vm.inverse_dynamics(q, qd, qdd)}, max(number // 10, 50), rounds)
-    out["lagrange_compiled_inverse_dynamics"] = {"api_s": t["lag"], "pinocchio_backend_s": t["pin"],
-                                                 "ratio": t["lag"] / t["pin"], "casadi_vm_s": t["vm"]}
+    t = interleaved(
+        {
+            "lag": lambda: lag.inverse_dynamics(q, qd, qdd),
+            "pin": lambda: dyn.inverse_dynamics(q, qd, qdd),
+            "vm": lambda: lag_vm.inverse_dynamics(q, qd, qdd),
+        },
+        max(number // 10, 50),
+        rounds,
+    )
+    out["lagrange_compiled_inverse_dynamics"] = {
+        "api_s": t["lag"],
+        "pinocchio_backend_s": t["pin"],
+        "ratio": t["lag"] / t["pin"],
+        "casadi_vm_s": t["vm"],
+    }
     return out
 
 
 def report(fig: dict[str, Any]) -> str:
-    lines = [f"dynamics speed on {fig['model']} ({fig['n']} joints): medians; ratios are medians of per-round "
-             "ratios [quartiles]"]
-    for name in ("mass_matrix", "inverse_dynamics", "regressor", "passivity_regressor", "compiled_regressor",
-                 "compiled_passivity_regressor"):
+    lines = [
+        f"dynamics speed on {fig['model']} ({fig['n']} joints): medians; ratios are medians of per-round "
+        "ratios [quartiles]"
+    ]
+    for name in (
+        "mass_matrix",
+        "inverse_dynamics",
+        "regressor",
+        "passivity_regressor",
+        "compiled_regressor",
+        "compiled_passivity_regressor",
+    ):
         if name not in fig:  # compile=True unavailable (no C compiler)
             continue
         f = fig[name]
@@ -88,26 +118,34 @@ def report(fig: dict[str, Any]) -> str:
         ok = "ok" if f["ratio"] <= target else "MISSED"
         q1, q3 = f["ratio_iqr"]
         label = name.replace("compiled_", "") + (" (compile=True)" if name.startswith("compiled_") else "")
-        lines.append(f"  {label:35s} api {f['api_s'] * 1e6:7.2f} us  raw {f['raw_s'] * 1e6:7.2f} us  "
-                     f"ratio {f['ratio']:5.2f} [{q1:.2f}, {q3:.2f}]  (target <= {target}: {ok})")
+        lines.append(
+            f"  {label:35s} api {f['api_s'] * 1e6:7.2f} us  raw {f['raw_s'] * 1e6:7.2f} us  "
+            f"ratio {f['ratio']:5.2f} [{q1:.2f}, {q3:.2f}]  (target <= {target}: {ok})"
+        )
     if "compiled_unavailable" in fig:
         lines.append(f"  compile=True unavailable: {fig['compiled_unavailable']}")
     elif "compiled_build_or_load_seconds" in fig:
-        lines.append(f"  compile=True: library built or loaded in {fig['compiled_build_or_load_seconds']:.2f} s "
-                     "(raw: Pinocchio's regressor in both rows)")
+        lines.append(
+            f"  compile=True: library built or loaded in {fig['compiled_build_or_load_seconds']:.2f} s "
+            "(raw: Pinocchio's regressor in both rows)"
+        )
     f = fig["lagrange_compiled_inverse_dynamics"]
     if f is None:
         lines.append("  lagrange compiled tau  skipped: not compiled yet (~20 s; run without --quick once)")
     else:
         ok = "ok" if f["ratio"] <= TARGETS["lagrange_compiled_inverse_dynamics"] else "MISSED"
-        lines.append(f"  lagrange compiled tau  {f['api_s'] * 1e6:7.2f} us  pinocchio backend "
-                     f"{f['pinocchio_backend_s'] * 1e6:6.2f} us  ratio of medians {f['ratio']:5.2f}  "
-                     f"(target <= 10: {ok}); "
-                     f"CasADi VM {f['casadi_vm_s'] * 1e6:.1f} us")
+        lines.append(
+            f"  lagrange compiled tau  {f['api_s'] * 1e6:7.2f} us  pinocchio backend "
+            f"{f['pinocchio_backend_s'] * 1e6:6.2f} us  ratio of medians {f['ratio']:5.2f}  "
+            f"(target <= 10: {ok}); "
+            f"CasADi VM {f['casadi_vm_s'] * 1e6:.1f} us"
+        )
     b = fig["lagrange_build_seconds"]
     load = fig["lagrange_compile_or_load_seconds"]
-    lines.append(f"  lagrange symbolic build {b:.2f} s (target <= 5: {'ok' if b <= 5 else 'MISSED'})"
-                 + (f"; compile or cached load {load:.2f} s" if load is not None else ""))
+    lines.append(
+        f"  lagrange symbolic build {b:.2f} s (target <= 5: {'ok' if b <= 5 else 'MISSED'})"
+        + (f"; compile or cached load {load:.2f} s" if load is not None else "")
+    )
     return "\n".join(lines)
 
 

@@ -60,22 +60,30 @@ SAMPLES = {True: 200, False: 500}
 #: closed-loop runs are cut to this many seconds in quick mode
 QUICK_DURATION = 2.0
 #: (rotors, friction) kept by each variant of the scene's exact model
-VARIANTS: dict[str, tuple[bool, bool]] = {"full": (True, True), "no_friction": (True, False),
-                                          "no_rotors": (False, True), "rigid": (False, False)}
+VARIANTS: dict[str, tuple[bool, bool]] = {
+    "full": (True, True),
+    "no_friction": (True, False),
+    "no_rotors": (False, True),
+    "rigid": (False, False),
+}
 BACKENDS: tuple[str, ...] = ("pinocchio", "lagrange")
 #: relative compute-time difference below which two candidates count as equally cheap
 TIE = 0.1
 
 
-def model_terms(exact: RobotModel, plant: RobotModel, reference: Callable[[float], Reference], times: FloatArray
-                ) -> dict[str, FloatArray]:
+def model_terms(
+    exact: RobotModel, plant: RobotModel, reference: Callable[[float], Reference], times: FloatArray
+) -> dict[str, FloatArray]:
     """Each term of the required torque (see the module docstring) at ``times`` [s]: name → (S, n) [N·m].
     ``exact``: the controller-side full model; ``plant``: the true arm (its friction is used)."""
     import armctl
 
     links = armctl.Dynamics(exact.reduced(rotors=False, friction=False))
-    full = (armctl.Dynamics(exact.reduced(friction=False), backend="lagrange", rotor_coupling=True)
-            if exact.has_motors else None)
+    full = (
+        armctl.Dynamics(exact.reduced(friction=False), backend="lagrange", rotor_coupling=True)
+        if exact.has_motors
+        else None
+    )
     plant_dyn = armctl.Dynamics(plant)
     out: dict[str, list[FloatArray]] = {k: [] for k in TERMS}
     for t in times:
@@ -87,8 +95,11 @@ def model_terms(exact: RobotModel, plant: RobotModel, reference: Callable[[float
         out["inertia"].append(inertia)
         out["coriolis"].append(coriolis)
         out["gravity"].append(gravity)
-        rotor = (full.inverse_dynamics(q, qd, qdd) - (inertia + coriolis + gravity) if full is not None
-                 else np.zeros(exact.n))
+        rotor = (
+            full.inverse_dynamics(q, qd, qdd) - (inertia + coriolis + gravity)
+            if full is not None
+            else np.zeros(exact.n)
+        )
         out["rotor"].append(rotor)
         out["friction"].append(plant_dyn.friction_torque(qd))
         out["contact"].append(np.zeros(exact.n))
@@ -104,12 +115,18 @@ def term_shares(terms: dict[str, FloatArray]) -> dict[str, Any]:
     shares = {k: (r / total if total > 0 else 0.0) for k, r in rms.items()}
     per_joint = {k: np.sqrt((v**2).mean(axis=0)).tolist() for k, v in terms.items()}
     required = sum(terms.values())
-    return {"rms": rms, "shares": shares, "rms_per_joint": per_joint, "sum_of_term_rms": total,
-            "required_rms": float(np.sqrt((required**2).sum(axis=1).mean())) if len(terms) else 0.0}
+    return {
+        "rms": rms,
+        "shares": shares,
+        "rms_per_joint": per_joint,
+        "sum_of_term_rms": total,
+        "required_rms": float(np.sqrt((required**2).sum(axis=1).mean())) if len(terms) else 0.0,
+    }
 
 
-def candidate_models(exact: RobotModel, backends: tuple[str, ...]
-                     ) -> dict[str, tuple[RobotModel, str, dict[str, bool]]]:
+def candidate_models(
+    exact: RobotModel, backends: tuple[str, ...]
+) -> dict[str, tuple[RobotModel, str, dict[str, bool]]]:
     """key "variant/backend" → (model, backend, terms kept) for every variant of :data:`VARIANTS` and backend
     in ``backends``; a variant identical to an earlier one (e.g. "no rotors" on an arm without motors) is
     left out."""
@@ -127,8 +144,9 @@ def candidate_models(exact: RobotModel, backends: tuple[str, ...]
     return out
 
 
-def choose(candidates: dict[str, dict[str, Any]], baseline: str, factor: float = FACTOR, tie: float = TIE
-           ) -> str | None:
+def choose(
+    candidates: dict[str, dict[str, Any]], baseline: str, factor: float = FACTOR, tie: float = TIE
+) -> str | None:
     """The cheapest candidate (``compute_s``) with ``rms_error`` ≤ ``factor`` × the baseline's and not
     diverged; candidates within ``tie`` (relative) of the cheapest count as equally cheap and the one keeping
     fewer terms wins among them. None if the baseline itself diverged (or has no error): there is then no
@@ -166,8 +184,7 @@ def closed_loop(name: str, quick: bool, rounds: int = 5, timing_states: int = 10
     gains = sc.gains("computed_torque")
     duration = min(sc.duration, QUICK_DURATION) if quick else sc.duration
     plant = sc.dynamics("plant")
-    options = {"control_dt": sc.control_dt, "dt": sc.dt, "integrator": sc.integrator, "q0": sc.q0,
-               **sc.sim_options}
+    options = {"control_dt": sc.control_dt, "dt": sc.dt, "integrator": sc.integrator, "q0": sc.q0, **sc.sim_options}
     controllers: dict[str, Controller] = {}
     results: dict[str, Any] = {}
     recorded: Any = None
@@ -177,15 +194,25 @@ def closed_loop(name: str, quick: bool, rounds: int = 5, timing_states: int = 10
         want = np.array([sc.reference(float(t)).q for t in res.t])
         err = np.abs(res.q - want)
         controllers[key] = ctrl
-        results[key] = diverged_errors({"variant": key.split("/")[0], "backend": backend, "kept": kept,
-                                        "rms_error": float(np.sqrt((err**2).mean())), "max_error": float(err.max()),
-                                        "diverged": bool(res.diverged), "diverged_at": res.diverged_at,
-                                        "sim_wall_s": float(res.info["wall_time"])})
+        results[key] = diverged_errors(
+            {
+                "variant": key.split("/")[0],
+                "backend": backend,
+                "kept": kept,
+                "rms_error": float(np.sqrt((err**2).mean())),
+                "max_error": float(err.max()),
+                "diverged": bool(res.diverged),
+                "diverged_at": res.diverged_at,
+                "sim_wall_s": float(res.info["wall_time"]),
+            }
+        )
         if key == baseline:
             recorded = res
     idx = np.linspace(0, len(recorded.t) - 1, min(timing_states, len(recorded.t))).astype(int)
-    states = [(float(recorded.t[k]), recorded.q_measured[k], recorded.qd_measured[k],
-               sc.reference(float(recorded.t[k]))) for k in idx]
+    states = [
+        (float(recorded.t[k]), recorded.q_measured[k], recorded.qd_measured[k], sc.reference(float(recorded.t[k])))
+        for k in idx
+    ]
 
     def replay(ctrl: Controller) -> Callable[[], FloatArray]:
         pos = [0]
@@ -201,10 +228,17 @@ def closed_loop(name: str, quick: bool, rounds: int = 5, timing_states: int = 10
     for k, t in times.items():
         results[k]["compute_s"] = t
     choice = choose(results, baseline)
-    return {"duration": duration, "gains": {k: _plain(v) for k, v in gains.items()}, "baseline": baseline,
-            "threshold": FACTOR * results[baseline]["rms_error"], "tie": TIE, "candidates": results, "choice": choice,
-            "choice_kept": results[choice]["kept"] if choice else None,
-            "choice_backend": results[choice]["backend"] if choice else None}
+    return {
+        "duration": duration,
+        "gains": {k: _plain(v) for k, v in gains.items()},
+        "baseline": baseline,
+        "threshold": FACTOR * results[baseline]["rms_error"],
+        "tie": TIE,
+        "candidates": results,
+        "choice": choice,
+        "choice_kept": results[choice]["kept"] if choice else None,
+        "choice_backend": results[choice]["backend"] if choice else None,
+    }
 
 
 def _plain(x: Any) -> Any:
@@ -218,8 +252,13 @@ def run(quick: bool = False) -> dict[str, Any]:
     the chart (torques in N·m, errors in rad, times in s)."""
     from armctl.scenes import scene
 
-    data: dict[str, Any] = {"factor": FACTOR, "terms": list(TERMS), "baseline": "full/<scene backend>",
-                            "controller": "computed_torque at the scene's preset gains", "scenes": {}}
+    data: dict[str, Any] = {
+        "factor": FACTOR,
+        "terms": list(TERMS),
+        "baseline": "full/<scene backend>",
+        "controller": "computed_torque at the scene's preset gains",
+        "scenes": {},
+    }
     for name in SCENES:
         sc = scene(name)
         times = np.linspace(0.0, sc.duration, SAMPLES[quick])
@@ -231,26 +270,34 @@ def run(quick: bool = False) -> dict[str, Any]:
 
 def summary(data: dict[str, Any]) -> str:
     """Per scene: the term shares and the chosen model."""
-    lines = [f"model fidelity: each term's RMS torque as a share of the sum of the terms' RMS; cheapest model "
-             f"within {data['factor']:g}× the full model's tracking error (computed torque)"]
+    lines = [
+        f"model fidelity: each term's RMS torque as a share of the sum of the terms' RMS; cheapest model "
+        f"within {data['factor']:g}× the full model's tracking error (computed torque)"
+    ]
     for name, s in data["scenes"].items():
         shares = ", ".join(f"{k} {v:.0%}" for k, v in s["shares"].items() if v >= 0.005)
         cl = s["closed_loop"]
         b = cl["candidates"][cl["baseline"]]
         lines.append(f"  {name:11s} {shares}")
         if cl["choice"] is None:
-            lines.append(f"  {'':11s} no choice: the full model {cl['baseline']} diverged at "
-                         f"{b['diverged_at']:.2f} s, so no model is sufficient against it (runs of "
-                         f"{cl['duration']:g} s)")
+            lines.append(
+                f"  {'':11s} no choice: the full model {cl['baseline']} diverged at "
+                f"{b['diverged_at']:.2f} s, so no model is sufficient against it (runs of "
+                f"{cl['duration']:g} s)"
+            )
             continue
         c = cl["candidates"][cl["choice"]]
-        lines.append(f"  {'':11s} choice {cl['choice']} ({c['compute_s'] * 1e6:.1f} µs/step, RMS error "
-                     f"{c['rms_error']:.2e} rad) vs {cl['baseline']} ({b['compute_s'] * 1e6:.1f} µs/step, "
-                     f"{b['rms_error']:.2e} rad), runs of {cl['duration']:g} s")
+        lines.append(
+            f"  {'':11s} choice {cl['choice']} ({c['compute_s'] * 1e6:.1f} µs/step, RMS error "
+            f"{c['rms_error']:.2e} rad) vs {cl['baseline']} ({b['compute_s'] * 1e6:.1f} µs/step, "
+            f"{b['rms_error']:.2e} rad), runs of {cl['duration']:g} s"
+        )
         diverged = [k for k, v in cl["candidates"].items() if v["diverged"]]
         if diverged:
-            lines.append(f"  {'':11s} diverged: " + ", ".join(
-                f"{k} at {cl['candidates'][k]['diverged_at']:.2f} s" for k in diverged))
+            lines.append(
+                f"  {'':11s} diverged: "
+                + ", ".join(f"{k} at {cl['candidates'][k]['diverged_at']:.2f} s" for k in diverged)
+            )
     return "\n".join(lines)
 
 
@@ -280,18 +327,38 @@ def plot(data: dict[str, Any], path: Path) -> None:
             us = c["compute_s"] * 1e6
             if c["diverged"]:  # no error to plot: a cross at the top of the panel, at its compute time
                 ax.plot(us, 0.97, "x", color="C3", ms=9, mew=2, transform=ax.get_xaxis_transform(), zorder=4)
-                ax.annotate(f"{key}: diverged at {c['diverged_at']:.2f} s", (us, 0.97),
-                            xycoords=ax.get_xaxis_transform(), textcoords="offset points", xytext=(5, -10),
-                            fontsize=7, color="C3")
+                ax.annotate(
+                    f"{key}: diverged at {c['diverged_at']:.2f} s",
+                    (us, 0.97),
+                    xycoords=ax.get_xaxis_transform(),
+                    textcoords="offset points",
+                    xytext=(5, -10),
+                    fontsize=7,
+                    color="C3",
+                )
                 continue
             ax.scatter([us], [c["rms_error"]], marker=markers[c["backend"]], color="C0", zorder=3)
             left = c["backend"] == "pinocchio"  # usually the cheaper: its label goes left, Lagrange's right
-            ax.annotate(c["variant"], (us, c["rms_error"]), textcoords="offset points", xytext=(-5 if left else 5, 3),
-                        ha="right" if left else "left", fontsize=7)
+            ax.annotate(
+                c["variant"],
+                (us, c["rms_error"]),
+                textcoords="offset points",
+                xytext=(-5 if left else 5, 3),
+                ha="right" if left else "left",
+                fontsize=7,
+            )
         if cl["choice"] is not None:
             ch = cl["candidates"][cl["choice"]]
-            ax.scatter([ch["compute_s"] * 1e6], [ch["rms_error"]], s=220, facecolors="none", edgecolors="C2",
-                       linewidths=2, zorder=4, label=f"choice: {cl['choice']}")
+            ax.scatter(
+                [ch["compute_s"] * 1e6],
+                [ch["rms_error"]],
+                s=220,
+                facecolors="none",
+                edgecolors="C2",
+                linewidths=2,
+                zorder=4,
+                label=f"choice: {cl['choice']}",
+            )
             ax.axhline(cl["threshold"], color="C2", ls="--", lw=1, label=f"{data['factor']:g}× full model's error")
         else:
             ax.text(0.02, 0.02, "no choice: the full model diverged", transform=ax.transAxes, fontsize=7, color="C3")

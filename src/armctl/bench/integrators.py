@@ -46,8 +46,7 @@ if TYPE_CHECKING:
 
 INTEGRATORS: tuple[str, ...] = ("rk4", "semi-implicit-euler", "implicit-euler")
 #: the chart's series: name → (integrator, compile)
-SERIES: dict[str, tuple[str, bool]] = {**{name: (name, False) for name in INTEGRATORS},
-                                       "rk4-compiled": ("rk4", True)}
+SERIES: dict[str, tuple[str, bool]] = {**{name: (name, False) for name in INTEGRATORS}, "rk4-compiled": ("rk4", True)}
 #: control (torque-hold) period Δt_c [s]
 CONTROL_DT = 0.01
 #: simulated time [s]
@@ -120,25 +119,49 @@ def reference_solution(sc: Scenario, rtol: float = REFERENCE_RTOL, atol: float =
     return np.array(out)
 
 
-def run_case(sc: Scenario, q_ref: FloatArray, integrator: str, substeps: int, repeats: int = 1,
-             compile: bool = False) -> dict[str, Any]:
+def run_case(
+    sc: Scenario, q_ref: FloatArray, integrator: str, substeps: int, repeats: int = 1, compile: bool = False
+) -> dict[str, Any]:
     """One integrator at step Δt_c / ``substeps``: error [rad] against ``q_ref`` and cost [s per simulated s]
     (``compile``: with simulate's compiled step, built or loaded before the loop's clock starts)."""
     from armctl.sim import simulate
 
     walls, err = [], math.nan
     for _ in range(repeats):
-        res = simulate(sc.dynamics, sc.controller, _hold(sc), sc.duration, q0=sc.q0, qd0=sc.qd0,
-                       control_dt=sc.control_dt, dt=sc.control_dt / substeps, integrator=integrator,
-                       saturate=False, energy=False, compile=compile)
+        res = simulate(
+            sc.dynamics,
+            sc.controller,
+            _hold(sc),
+            sc.duration,
+            q0=sc.q0,
+            qd0=sc.qd0,
+            control_dt=sc.control_dt,
+            dt=sc.control_dt / substeps,
+            integrator=integrator,
+            saturate=False,
+            energy=False,
+            compile=compile,
+        )
         if res.diverged:
-            return {"step": sc.control_dt / substeps, "substeps": substeps, "error": math.inf,
-                    "cost": math.nan, "diverged": True}
+            return {
+                "step": sc.control_dt / substeps,
+                "substeps": substeps,
+                "error": math.inf,
+                "cost": math.nan,
+                "diverged": True,
+            }
         walls.append(float(res.info["wall_time"]))
         err = float(np.abs(res.q - q_ref).max())
     wall = min(walls)
-    return {"step": sc.control_dt / substeps, "substeps": substeps, "error": err, "cost": wall / sc.duration,
-            "wall_s": wall, "cost_per_step": wall / (sc.periods * substeps), "diverged": False}
+    return {
+        "step": sc.control_dt / substeps,
+        "substeps": substeps,
+        "error": err,
+        "cost": wall / sc.duration,
+        "wall_s": wall,
+        "cost_per_step": wall / (sc.periods * substeps),
+        "diverged": False,
+    }
 
 
 def _hold(sc: Scenario) -> Reference:
@@ -152,8 +175,9 @@ def observed_orders(steps: list[float], errors: list[float], floor: float) -> li
     """p_i = log(e_i / e_{i+1}) / log(h_i / h_{i+1}) for consecutive step sizes, None where the finer error is
     below ``floor`` (there the reference's own error would bias the estimate)."""
     out: list[float | None] = []
-    for (h0, e0), (h1, e1) in zip(zip(steps, errors, strict=True), zip(steps[1:], errors[1:], strict=True),
-                                  strict=False):
+    for (h0, e0), (h1, e1) in zip(
+        zip(steps, errors, strict=True), zip(steps[1:], errors[1:], strict=True), strict=False
+    ):
         ok = all(math.isfinite(e) and e > 0 for e in (e0, e1)) and e1 > floor
         out.append(math.log(e0 / e1) / math.log(h0 / h1) if ok else None)
     return out
@@ -169,36 +193,52 @@ def run(quick: bool = False) -> dict[str, Any]:
     floor = FLOOR_FACTOR * max(ref_err, 1e-15)
     repeats = 1 if quick else 3
     data: dict[str, Any] = {
-        "scenario": {"plant": sc.dynamics.model.name, "backend": sc.dynamics.backend, "duration": sc.duration,
-                     "control_dt": sc.control_dt, "torque": "open-loop feed-forward: inverse dynamics along the "
-                     "sinusoid, zero-order held", "sinusoid": REFERENCE, "friction": "none", "repeats": repeats},
-        "reference": {"method": "scipy.integrate.solve_ivp DOP853", "rtol": REFERENCE_RTOL, "atol": REFERENCE_ATOL,
-                      "restarted_each_control_period": True, "error_estimate": ref_err,
-                      "error_estimate_against": "DOP853 rtol 1e-13, atol 1e-14"},
-        "error_floor": floor, "integrators": {},
+        "scenario": {
+            "plant": sc.dynamics.model.name,
+            "backend": sc.dynamics.backend,
+            "duration": sc.duration,
+            "control_dt": sc.control_dt,
+            "torque": "open-loop feed-forward: inverse dynamics along the sinusoid, zero-order held",
+            "sinusoid": REFERENCE,
+            "friction": "none",
+            "repeats": repeats,
+        },
+        "reference": {
+            "method": "scipy.integrate.solve_ivp DOP853",
+            "rtol": REFERENCE_RTOL,
+            "atol": REFERENCE_ATOL,
+            "restarted_each_control_period": True,
+            "error_estimate": ref_err,
+            "error_estimate_against": "DOP853 rtol 1e-13, atol 1e-14",
+        },
+        "error_floor": floor,
+        "integrators": {},
     }
     for name, (integrator, compiled) in SERIES.items():
         cases = [run_case(sc, q_ref, integrator, m, repeats, compiled) for m in SUBSTEPS[quick]]
         steps, errors = [c["step"] for c in cases], [c["error"] for c in cases]
         orders = observed_orders(steps, errors, floor)
         valid = [p for p in orders if p is not None]
-        data["integrators"][name] = {"cases": cases, "orders": orders,
-                                     "asymptotic_order": valid[-1] if valid else None}
+        data["integrators"][name] = {"cases": cases, "orders": orders, "asymptotic_order": valid[-1] if valid else None}
     return data
 
 
 def summary(data: dict[str, Any]) -> str:
     """A few lines: per integrator, the error and cost range and the observed order."""
     s = data["scenario"]
-    lines = [f"integrators on {s['plant']} ({s['duration']:g} s open loop, torque held every "
-             f"{s['control_dt'] * 1e3:g} ms); error vs {data['reference']['method']} "
-             f"(own error ~{data['reference']['error_estimate']:.1e} rad)"]
+    lines = [
+        f"integrators on {s['plant']} ({s['duration']:g} s open loop, torque held every "
+        f"{s['control_dt'] * 1e3:g} ms); error vs {data['reference']['method']} "
+        f"(own error ~{data['reference']['error_estimate']:.1e} rad)"
+    ]
     for name, d in data["integrators"].items():
         c = d["cases"]
         order = d["asymptotic_order"]
-        lines.append(f"  {name:20s} h {c[0]['step'] * 1e3:g}…{c[-1]['step'] * 1e3:g} ms: error "
-                     f"{c[0]['error']:.1e}…{c[-1]['error']:.1e} rad, cost {c[0]['cost']:.3f}…{c[-1]['cost']:.3f} s/s, "
-                     f"order {'n/a' if order is None else f'{order:.2f}'}")
+        lines.append(
+            f"  {name:20s} h {c[0]['step'] * 1e3:g}…{c[-1]['step'] * 1e3:g} ms: error "
+            f"{c[0]['error']:.1e}…{c[-1]['error']:.1e} rad, cost {c[0]['cost']:.3f}…{c[-1]['cost']:.3f} s/s, "
+            f"order {'n/a' if order is None else f'{order:.2f}'}"
+        )
     return "\n".join(lines)
 
 
@@ -210,14 +250,17 @@ def plot(data: dict[str, Any], path: Path) -> None:
     fig, ax = plt.subplots(figsize=(7.0, 4.8))
     offsets = [((5, 3), "left"), ((-5, 3), "right"), ((5, -10), "left"), ((6, -4), "left")]
     for i, (name, d) in enumerate(data["integrators"].items()):
-        pts = [(c["error"], c["cost"], c["step"]) for c in d["cases"]
-               if math.isfinite(c["error"]) and c["error"] > 0 and math.isfinite(c["cost"])]
+        pts = [
+            (c["error"], c["cost"], c["step"])
+            for c in d["cases"]
+            if math.isfinite(c["error"]) and c["error"] > 0 and math.isfinite(c["cost"])
+        ]
         if not pts:
             continue
         order = d["asymptotic_order"]
         label = f"{name} (order {order:.2f})" if order is not None else name
         if name == "implicit-euler":  # nothing stiff here to treat implicitly (see the module)
-            label += ", = \"euler\" here"
+            label += ', = "euler" here'
         ax.plot([p[0] for p in pts], [p[1] for p in pts], "o-", label=label)
         xytext, ha = offsets[i % len(offsets)]
         for e, c, h in pts:

@@ -145,8 +145,12 @@ def run(count: int = 400, rounds: int = 15, quick: bool = False) -> dict[str, An
 
     # CPU time (process_time) rather than wall time: on a shared machine a long Python step is preempted more
     # often than a short C++ solve, which would inflate their ratio
-    samples = interleaved_samples({"step": step, "bare_solve": bare_solve, "closed_form": closed_form,
-                                   "cold_solve": cold_solve}, number=count, rounds=rounds, clock=time.process_time)
+    samples = interleaved_samples(
+        {"step": step, "bare_solve": bare_solve, "closed_form": closed_form, "cold_solve": cold_solve},
+        number=count,
+        rounds=rounds,
+        clock=time.process_time,
+    )
     t = {k: statistics.median(v) for k, v in samples.items()}
     # ratios round by round (each round runs every candidate once, back to back), then their median
     ratios = [a / b for a, b in zip(samples["step"], samples["bare_solve"], strict=True)]
@@ -156,29 +160,39 @@ def run(count: int = 400, rounds: int = 15, quick: bool = False) -> dict[str, An
     for tt, q, qd in seq:
         ctrl(tt, q, qd, ref)
         iters.append(ctrl.last_solution.iterations)  # type: ignore[union-attr]
-    return {"model": "panda", "qp_size": {"variables": int(H.shape[0]), "equalities": int(b.shape[0]),
-                                          "inequalities": int(l.shape[0])},
-            "states": count, "step_s": t["step"], "bare_solve_s": t["bare_solve"], "closed_form_s": t["closed_form"],
-            "cold_solve_s": t["cold_solve"], "ratio": ratio, "ratio_iqr": (q1, q3),
-            "closed_form_ratio": statistics.median(closed_ratios), "target_ratio": TARGET_RATIO,
-            "median_iterations": float(np.median(iters))}
+    return {
+        "model": "panda",
+        "qp_size": {"variables": int(H.shape[0]), "equalities": int(b.shape[0]), "inequalities": int(l.shape[0])},
+        "states": count,
+        "step_s": t["step"],
+        "bare_solve_s": t["bare_solve"],
+        "closed_form_s": t["closed_form"],
+        "cold_solve_s": t["cold_solve"],
+        "ratio": ratio,
+        "ratio_iqr": (q1, q3),
+        "closed_form_ratio": statistics.median(closed_ratios),
+        "target_ratio": TARGET_RATIO,
+        "median_iterations": float(np.median(iters)),
+    }
 
 
 def report(fig: dict[str, Any]) -> str:
     us = 1e6
     s = fig["qp_size"]
-    return "\n".join([
-        f"OSC QP step on {fig['model']}: pose + posture + torque limits; QP {s['variables']} variables, "
-        f"{s['equalities']} equalities, {s['inequalities']} inequalities; {fig['states']} states, "
-        f"median {fig['median_iterations']:.0f} solver iterations",
-        f"  step (model terms + build + solve)  {fig['step_s'] * us:8.1f} µs",
-        f"  bare proxsuite update+solve (warm)  {fig['bare_solve_s'] * us:8.1f} µs",
-        f"  ratio step / bare                   {fig['ratio']:8.2f}   [{fig['ratio_iqr'][0]:.2f}, "
-        f"{fig['ratio_iqr'][1]:.2f}] (median of per-round ratios [quartiles]; target <= {fig['target_ratio']:g})",
-        f"  closed-form OSC baseline            {fig['closed_form_s'] * us:8.1f} µs   "
-        f"({fig['closed_form_ratio']:.2f} x bare)",
-        f"  proxsuite one-shot dense.solve      {fig['cold_solve_s'] * us:8.1f} µs   (cold, for reference)",
-    ])
+    return "\n".join(
+        [
+            f"OSC QP step on {fig['model']}: pose + posture + torque limits; QP {s['variables']} variables, "
+            f"{s['equalities']} equalities, {s['inequalities']} inequalities; {fig['states']} states, "
+            f"median {fig['median_iterations']:.0f} solver iterations",
+            f"  step (model terms + build + solve)  {fig['step_s'] * us:8.1f} µs",
+            f"  bare proxsuite update+solve (warm)  {fig['bare_solve_s'] * us:8.1f} µs",
+            f"  ratio step / bare                   {fig['ratio']:8.2f}   [{fig['ratio_iqr'][0]:.2f}, "
+            f"{fig['ratio_iqr'][1]:.2f}] (median of per-round ratios [quartiles]; target <= {fig['target_ratio']:g})",
+            f"  closed-form OSC baseline            {fig['closed_form_s'] * us:8.1f} µs   "
+            f"({fig['closed_form_ratio']:.2f} x bare)",
+            f"  proxsuite one-shot dense.solve      {fig['cold_solve_s'] * us:8.1f} µs   (cold, for reference)",
+        ]
+    )
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -38,8 +38,12 @@ def save_figure(fig: Any, path: Path, dpi: int = 110) -> None:
     pyplot().close(fig)
 
 
-def section_main(run: Callable[..., dict[str, Any]], summary: Callable[[dict[str, Any]], str],
-                 plot: Callable[[dict[str, Any], Path], None], chart: str) -> None:
+def section_main(
+    run: Callable[..., dict[str, Any]],
+    summary: Callable[[dict[str, Any]], str],
+    plot: Callable[[dict[str, Any], Path], None],
+    chart: str,
+) -> None:
     """Command line of a bench section: ``run`` (``--quick`` for the short version), print ``summary``, write
     the chart ``chart`` in the working directory."""
     data = run(quick="--quick" in sys.argv)
@@ -63,23 +67,26 @@ SCOPE = (
     "the operational-space controllers (on one joint they reduce to computed torque) and no gain × model-error "
     "map for PD+gravity (its loop gain does not depend on an inertia estimate). The adaptive law runs with its "
     "preset's Γ; its dashed border is for θ̂ frozen.",
-    "Integrators: a frictionless, contact-free arm, on which \"implicit-euler\" has nothing to treat implicitly "
-    "and is the \"euler\" scheme (velocity form, q₁ = q + h q̇₁); the implicit schemes earn their cost on stiff "
+    'Integrators: a frictionless, contact-free arm, on which "implicit-euler" has nothing to treat implicitly '
+    'and is the "euler" scheme (velocity form, q₁ = q + h q̇₁); the implicit schemes earn their cost on stiff '
     "contact (tests/sim/test_contact.py).",
 )
 
 
 def write_report(out: Path, figures: dict[str, Any], charts: dict[str, str], summary: str) -> Path:
-    parts = ["<!doctype html><html><head><meta charset='utf-8'><title>armctl bench</title>",
-             "<style>body{font-family:sans-serif;max-width:1200px;margin:2em auto;color:#222}"
-             "img{max-width:100%;border:1px solid #ddd;margin:.5em 0}pre{background:#f6f6f6;padding:1em;"
-             "overflow-x:auto;font-size:12px}</style></head><body>",
-             "<h1>armctl bench</h1>",
-             f"<p>{'Quick run' if figures.get('quick') else 'Full run'} started {html.escape(figures['started'])}, "
-             f"{figures.get('total_seconds', 0):.0f} s. Every number behind the charts is in "
-             "<a href='figures.json'>figures.json</a>.</p>",
-             "<h2>Summary</h2>", f"<pre>{html.escape(summary)}</pre>",
-             "<h2>Scope</h2><ul>" + "".join(f"<li>{html.escape(n)}</li>" for n in SCOPE) + "</ul>"]
+    parts = [
+        "<!doctype html><html><head><meta charset='utf-8'><title>armctl bench</title>",
+        "<style>body{font-family:sans-serif;max-width:1200px;margin:2em auto;color:#222}"
+        "img{max-width:100%;border:1px solid #ddd;margin:.5em 0}pre{background:#f6f6f6;padding:1em;"
+        "overflow-x:auto;font-size:12px}</style></head><body>",
+        "<h1>armctl bench</h1>",
+        f"<p>{'Quick run' if figures.get('quick') else 'Full run'} started {html.escape(figures['started'])}, "
+        f"{figures.get('total_seconds', 0):.0f} s. Every number behind the charts is in "
+        "<a href='figures.json'>figures.json</a>.</p>",
+        "<h2>Summary</h2>",
+        f"<pre>{html.escape(summary)}</pre>",
+        "<h2>Scope</h2><ul>" + "".join(f"<li>{html.escape(n)}</li>" for n in SCOPE) + "</ul>",
+    ]
     for name, caption in charts.items():
         parts.append(f"<h2>{html.escape(caption)}</h2><img src='{html.escape(name)}' alt='{html.escape(caption)}'>")
     parts.append("</body></html>")

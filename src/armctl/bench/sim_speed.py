@@ -36,8 +36,12 @@ from armctl.sim import simulate, sweep
 
 TARGETS = {"real_time_factor": 30.0, "ratio_to_mujoco": 2.0, "sweep_speedup": 1.7}
 #: the simulator configurations timed: name → (integrator, compile)
-VARIANTS = {"rk4": ("rk4", False), "rk4_compiled": ("rk4", True), "euler": ("euler", False),
-            "euler_compiled": ("euler", True)}
+VARIANTS = {
+    "rk4": ("rk4", False),
+    "rk4_compiled": ("rk4", True),
+    "euler": ("euler", False),
+    "euler_compiled": ("euler", True),
+}
 
 
 class SampledSine:
@@ -50,8 +54,13 @@ class SampledSine:
         for k in range(n_samples):
             t = k * period
             s, c = math.sin(omega * t), math.cos(omega * t)
-            self.table.append(Reference(q0 + amplitude * s, np.full(len(q0), amplitude * omega * c),
-                                        np.full(len(q0), -amplitude * omega**2 * s)))
+            self.table.append(
+                Reference(
+                    q0 + amplitude * s,
+                    np.full(len(q0), amplitude * omega * c),
+                    np.full(len(q0), -amplitude * omega**2 * s),
+                )
+            )
 
     def __call__(self, t: float) -> Reference:
         return self.table[min(round(t / self.period), len(self.table) - 1)]
@@ -67,8 +76,13 @@ def panda_mujoco() -> tuple[Any, Any]:
         text = re.sub(rf"<{tag}>.*?</{tag}>", "", text, flags=re.S)
     text = re.sub(r"<dynamics[^>]*/>", "", text)
     text = re.sub(r'(<joint name="panda_finger_joint[12]"[^>]*type=)"prismatic"', r'\1"fixed"', text)
-    text = re.sub(r"(<robot[^>]*>)", r'\1<mujoco><compiler discardvisual="true" fusestatic="false" '
-                  r'balanceinertia="false"/></mujoco>', text, count=1)
+    text = re.sub(
+        r"(<robot[^>]*>)",
+        r'\1<mujoco><compiler discardvisual="true" fusestatic="false" '
+        r'balanceinertia="false"/></mujoco>',
+        text,
+        count=1,
+    )
     m = mujoco.MjModel.from_xml_string(text)
     m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONSTRAINT) | int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
     m.dof_damping[:] = 0.0
@@ -176,8 +190,15 @@ def sweep_cases(runs: int) -> list[dict[str, Any]]:
     ctrl_model = model.reduced(friction=False)
     ref = me.SweepSine([0.3, -0.5], 0.4, 1.5)
     gains = np.geomspace(500.0, 5e4, runs)
-    return [{"plant": model, "controller": PDGravity(armctl.Dynamics(ctrl_model), kp, 2 * math.sqrt(kp * 250.0)),
-             "reference": ref, "duration": 5.0} for kp in gains]
+    return [
+        {
+            "plant": model,
+            "controller": PDGravity(armctl.Dynamics(ctrl_model), kp, 2 * math.sqrt(kp * 250.0)),
+            "reference": ref,
+            "duration": 5.0,
+        }
+        for kp in gains
+    ]
 
 
 def sweep_figures(runs: int = 200, workers: int = 2, blocks: int = 4) -> dict[str, Any]:
@@ -218,10 +239,18 @@ def sweep_figures(runs: int = 200, workers: int = 2, blocks: int = 4) -> dict[st
     cpu_pool = (children.ru_utime - children0.ru_utime) + (children.ru_stime - children0.ru_stime)
     if pooled != serial:
         raise RuntimeError("pooled and serial sweeps disagree")
-    return {"runs": runs, "workers": workers, "serial_s": t_serial, "pool_s": t_pool, "speedup": t_serial / t_pool,
-            "s_per_run_serial": t_serial / runs, "cpu_serial_s": cpu_serial, "cpu_pool_workers_s": cpu_pool,
-            "idle_machine_speedup_bound": workers * cpu_serial / cpu_pool if cpu_pool > 0 else math.nan,
-            "load_average_1min": load}
+    return {
+        "runs": runs,
+        "workers": workers,
+        "serial_s": t_serial,
+        "pool_s": t_pool,
+        "speedup": t_serial / t_pool,
+        "s_per_run_serial": t_serial / runs,
+        "cpu_serial_s": cpu_serial,
+        "cpu_pool_workers_s": cpu_pool,
+        "idle_machine_speedup_bound": workers * cpu_serial / cpu_pool if cpu_pool > 0 else math.nan,
+        "load_average_1min": load,
+    }
 
 
 def _serial_block(runs: int) -> None:
@@ -251,33 +280,45 @@ def parallel_ceiling(runs: int = 12, workers: int = 2, rounds: int = 2) -> dict[
             raise RuntimeError("a block of the parallel-ceiling measurement failed")
         together.append(time.perf_counter() - t0)
     t_alone, t_together = statistics.median(alone), statistics.median(together)
-    return {"runs": runs, "workers": workers, "alone_s": t_alone, "together_s": t_together,
-            "ceiling": workers * t_alone / t_together}
+    return {
+        "runs": runs,
+        "workers": workers,
+        "alone_s": t_alone,
+        "together_s": t_together,
+        "ceiling": workers * t_alone / t_together,
+    }
 
 
 def report(panda: dict[str, Any], sw: dict[str, Any] | None) -> str:
-    lines = [f"Panda, {panda['controller']} at 1 kHz, 1 ms steps, {panda['duration_s']:g} s "
-             f"({panda['steps']} steps); medians of interleaved rounds"]
+    lines = [
+        f"Panda, {panda['controller']} at 1 kHz, 1 ms steps, {panda['duration_s']:g} s "
+        f"({panda['steps']} steps); medians of interleaved rounds"
+    ]
     for name in (*VARIANTS, "mujoco_closed_loop", "mujoco_bare"):
         if name in panda:
             f = panda[name]
             extra = f", {f['ratio_to_mujoco']:.2f}× the MuJoCo closed loop" if "ratio_to_mujoco" in f else ""
-            lines.append(f"  {name:<20} {f['us_per_step']:7.1f} µs/step  real-time ×{f['real_time_factor']:6.1f}"
-                         f"{extra}")
+            lines.append(
+                f"  {name:<20} {f['us_per_step']:7.1f} µs/step  real-time ×{f['real_time_factor']:6.1f}{extra}"
+            )
     lines.append(f"  targets: real-time ×≥{TARGETS['real_time_factor']:g}, ≤{TARGETS['ratio_to_mujoco']:g}× MuJoCo")
     if sw is not None:
-        lines.append(f"Sweep of {sw['runs']} × 5 s planar_2r runs: serial {sw['serial_s']:.1f} s, process pool of "
-                     f"{sw['workers']} {sw['pool_s']:.1f} s: speed-up ×{sw['speedup']:.2f} "
-                     f"(target ≥{TARGETS['sweep_speedup']:g}); 1-min load average during the sweep "
-                     f"{min(sw['load_average_1min']):.1f}–{max(sw['load_average_1min']):.1f} on "
-                     f"{__import__('os').cpu_count()} CPUs; CPU time serial {sw['cpu_serial_s']:.1f} s, pool "
-                     f"workers {sw['cpu_pool_workers_s']:.1f} s: on an idle machine at most "
-                     f"×{sw['idle_machine_speedup_bound']:.2f}")
+        lines.append(
+            f"Sweep of {sw['runs']} × 5 s planar_2r runs: serial {sw['serial_s']:.1f} s, process pool of "
+            f"{sw['workers']} {sw['pool_s']:.1f} s: speed-up ×{sw['speedup']:.2f} "
+            f"(target ≥{TARGETS['sweep_speedup']:g}); 1-min load average during the sweep "
+            f"{min(sw['load_average_1min']):.1f}–{max(sw['load_average_1min']):.1f} on "
+            f"{__import__('os').cpu_count()} CPUs; CPU time serial {sw['cpu_serial_s']:.1f} s, pool "
+            f"workers {sw['cpu_pool_workers_s']:.1f} s: on an idle machine at most "
+            f"×{sw['idle_machine_speedup_bound']:.2f}"
+        )
         ceil = sw.get("parallel_ceiling")
         if ceil is not None:
-            lines.append(f"  machine ceiling: {ceil['runs']} runs in {ceil['workers']} independent processes at once "
-                         f"{ceil['together_s']:.1f} s vs one alone {ceil['alone_s']:.1f} s: no code can exceed "
-                         f"×{ceil['ceiling']:.2f} here now")
+            lines.append(
+                f"  machine ceiling: {ceil['runs']} runs in {ceil['workers']} independent processes at once "
+                f"{ceil['together_s']:.1f} s vs one alone {ceil['alone_s']:.1f} s: no code can exceed "
+                f"×{ceil['ceiling']:.2f} here now"
+            )
     return "\n".join(lines)
 
 

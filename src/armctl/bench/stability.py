@@ -107,9 +107,19 @@ def run_cell(controller: str, k: float, f: float, period: float, duration: float
     """Simulate one cell (``duration`` [s], integration step ≤ ``dt_max``) and classify it."""
     from armctl.sim import simulate
 
-    res = simulate(_pendulum(), make_controller(controller, k, f), armctl.Reference([SET_POINT]), duration,
-                   q0=[SET_POINT + OFFSET], control_dt=period, dt=_step(period, dt_max), delay=1, saturate=False,
-                   friction="smooth", max_velocity=1e3)
+    res = simulate(
+        _pendulum(),
+        make_controller(controller, k, f),
+        armctl.Reference([SET_POINT]),
+        duration,
+        q0=[SET_POINT + OFFSET],
+        control_dt=period,
+        dt=_step(period, dt_max),
+        delay=1,
+        saturate=False,
+        friction="smooth",
+        max_velocity=1e3,
+    )
     if res.diverged:
         return "unstable"
     err = abs(res.q[-1, 0] - SET_POINT)
@@ -123,9 +133,11 @@ def _step(period: float, dt_max: float) -> float:
     return period / math.ceil(period / dt_max - 1e-9)
 
 
-def maps(quick: bool = False, executor: Executor | str | None = None,
-         controllers: tuple[str, ...] = ("computed_torque", "pd_gravity", "passivity", "adaptive")
-         ) -> dict[str, Any]:
+def maps(
+    quick: bool = False,
+    executor: Executor | str | None = None,
+    controllers: tuple[str, ...] = ("computed_torque", "pd_gravity", "passivity", "adaptive"),
+) -> dict[str, Any]:
     """For each controller a "rate_gain" map (control period × k, exact model) and a "gain_error" map
     (k × f at 100 Hz), each with its theory border; every cell simulated."""
     from armctl.sim import sweep
@@ -135,30 +147,59 @@ def maps(quick: bool = False, executor: Executor | str | None = None,
     fs = [0.5, 1.0, 2.0] if quick else [0.5, 0.75, 1.0, 1.5, 2.0, 3.0]
     duration, dt_max = (1.5, 2e-3) if quick else (2.0, 1e-3)
     base_period = 0.01
-    out: dict[str, Any] = {"set_point": SET_POINT, "offset": OFFSET, "duration": duration, "delay_periods": 1,
-                           "k": ks, "rates_hz": rates, "inertia_factors": fs}
+    out: dict[str, Any] = {
+        "set_point": SET_POINT,
+        "offset": OFFSET,
+        "duration": duration,
+        "delay_periods": 1,
+        "k": ks,
+        "rates_hz": rates,
+        "inertia_factors": fs,
+    }
     cases: list[dict[str, Any]] = []
     index: list[tuple[str, str, int, int]] = []
     for c in controllers:
         for i, r in enumerate(rates):
             for j, k in enumerate(ks):
-                cases.append({"controller": c, "k": float(k), "f": 1.0, "period": 1.0 / r, "duration": duration,
-                              "dt_max": dt_max})
+                cases.append(
+                    {
+                        "controller": c,
+                        "k": float(k),
+                        "f": 1.0,
+                        "period": 1.0 / r,
+                        "duration": duration,
+                        "dt_max": dt_max,
+                    }
+                )
                 index.append((c, "rate_gain", i, j))
         if c == "pd_gravity":
             continue  # PD + gravity's loop gain does not depend on an inertia estimate
         for i, f in enumerate(fs):
             for j, k in enumerate(ks):
-                cases.append({"controller": c, "k": float(k), "f": float(f), "period": base_period,
-                              "duration": duration, "dt_max": dt_max})
+                cases.append(
+                    {
+                        "controller": c,
+                        "k": float(k),
+                        "f": float(f),
+                        "period": base_period,
+                        "duration": duration,
+                        "dt_max": dt_max,
+                    }
+                )
                 index.append((c, "gain_error", i, j))
     outcomes = sweep(cases, run=run_cell, executor=executor, progress=True)
     for c in controllers:
-        out[c] = {"rate_gain": {"outcome": [[""] * len(ks) for _ in rates],
-                                "border_k": [critical_multiplier(c, 1.0, 1.0 / r) for r in rates]}}
+        out[c] = {
+            "rate_gain": {
+                "outcome": [[""] * len(ks) for _ in rates],
+                "border_k": [critical_multiplier(c, 1.0, 1.0 / r) for r in rates],
+            }
+        }
         if c != "pd_gravity":
-            out[c]["gain_error"] = {"outcome": [[""] * len(ks) for _ in fs],
-                                    "border_k": [critical_multiplier(c, f, base_period) for f in fs]}
+            out[c]["gain_error"] = {
+                "outcome": [[""] * len(ks) for _ in fs],
+                "border_k": [critical_multiplier(c, f, base_period) for f in fs],
+            }
     for (c, kind, i, j), o in zip(index, outcomes, strict=True):
         out[c][kind]["outcome"][i][j] = o
     return out
@@ -185,10 +226,19 @@ def plot(data: dict[str, Any], path_for: Callable[[str], Any]) -> list[str]:
             for i, y in enumerate(ys):
                 for j, k in enumerate(data["k"]):
                     ax.scatter(k, y, s=160, marker="s", color=colour[m["outcome"][i][j]])
-            ax.plot(m["border_k"], ys, "k--", label="theory: sampled-data border"
-                    + (" (θ̂ frozen)" if c == "adaptive" else ""))
-            ax.set(xscale="log", yscale="log", xlabel="gain multiplier k", ylabel=ylabel,
-                   title=f"{c.replace('_', ' ')}: {kind.replace('_', ' × ')}")
+            ax.plot(
+                m["border_k"],
+                ys,
+                "k--",
+                label="theory: sampled-data border" + (" (θ̂ frozen)" if c == "adaptive" else ""),
+            )
+            ax.set(
+                xscale="log",
+                yscale="log",
+                xlabel="gain multiplier k",
+                ylabel=ylabel,
+                title=f"{c.replace('_', ' ')}: {kind.replace('_', ' × ')}",
+            )
             keys = [plt.Line2D([], [], ls="", marker="s", ms=8, color=colour[o], label=o) for o in colour]
             handles = [*keys, *ax.get_legend_handles_labels()[0]]
             # below the axes: inside, the key covered cells

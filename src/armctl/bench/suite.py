@@ -22,8 +22,16 @@ SCENE_NAMES = ("pendulum", "planar_2r", "panda_topp", "panda_contact")
 
 
 #: the measures of a scene row, NaN in the row of a method that failed
-_MEASURES = ("rms_error", "max_error", "torque_rms", "compute_s", "limit_violation_share", "torque_violation_share",
-             "velocity_violation_share", "position_violation_share")
+_MEASURES = (
+    "rms_error",
+    "max_error",
+    "torque_rms",
+    "compute_s",
+    "limit_violation_share",
+    "torque_violation_share",
+    "velocity_violation_share",
+    "position_violation_share",
+)
 
 
 def run_scene_method(scene: str, method: str) -> dict[str, Any]:
@@ -40,15 +48,25 @@ def run_scene_method(scene: str, method: str) -> dict[str, Any]:
         res = sc.run(method)
     except ArmctlError as exc:
         return _failed_row(scene, method, exc)
-    return {"scene": scene, "method": method, **sc.metrics(res, method, timing_rounds=0),
-            "window": sc.replay_window(res, sc.timing_samples)}
+    return {
+        "scene": scene,
+        "method": method,
+        **sc.metrics(res, method, timing_rounds=0),
+        "window": sc.replay_window(res, sc.timing_samples),
+    }
 
 
 def _failed_row(scene: str, method: str, exc: Exception) -> dict[str, Any]:
     """The row of a method (or, as method "(scene)", a whole scene) that failed with ``exc``."""
-    return {"scene": scene, "method": method, **dict.fromkeys(_MEASURES, float("nan")), "diverged": False,
-            "diverged_at": None, "failed": f"{type(exc).__name__}: {exc}",
-            "window": {"t": [], "q": np.zeros((0, 0)), "qd": np.zeros((0, 0)), "ref": []}}
+    return {
+        "scene": scene,
+        "method": method,
+        **dict.fromkeys(_MEASURES, float("nan")),
+        "diverged": False,
+        "diverged_at": None,
+        "failed": f"{type(exc).__name__}: {exc}",
+        "window": {"t": [], "q": np.zeros((0, 0)), "qd": np.zeros((0, 0)), "ref": []},
+    }
 
 
 def time_controllers(rows: list[dict[str, Any]], rounds: int) -> None:
@@ -108,9 +126,14 @@ def pareto_front(points: list[tuple[float, float]], spans: list[tuple[float, flo
     the intervals: j is faster than i only if hi_j < lo_i, and overlapping intervals are a tie, so timing noise
     alone cannot move a point on or off the front. j beats i if it is faster and no less accurate, or tied and
     more accurate. Without spans this is the usual strict Pareto order."""
-    spans = [(x, x) for x, _ in points] if spans is None else [
-        (lo, hi) if math.isfinite(lo) and math.isfinite(hi) else (x, x)  # no quartiles: the point itself
-        for (x, _), (lo, hi) in zip(points, spans, strict=True)]
+    spans = (
+        [(x, x) for x, _ in points]
+        if spans is None
+        else [
+            (lo, hi) if math.isfinite(lo) and math.isfinite(hi) else (x, x)  # no quartiles: the point itself
+            for (x, _), (lo, hi) in zip(points, spans, strict=True)
+        ]
+    )
     finite = [math.isfinite(x) and math.isfinite(y) for x, y in points]
 
     def beats(j: int, i: int) -> bool:
@@ -119,8 +142,11 @@ def pareto_front(points: list[tuple[float, float]], spans: list[tuple[float, flo
         faster, slower = hi_j < lo_i, hi_i < lo_j
         return (faster and yj <= yi) or (not faster and not slower and yj < yi)
 
-    return [i for i in range(len(points)) if finite[i]
-            and not any(finite[j] and beats(j, i) for j in range(len(points)) if j != i)]
+    return [
+        i
+        for i in range(len(points))
+        if finite[i] and not any(finite[j] and beats(j, i) for j in range(len(points)) if j != i)
+    ]
 
 
 def _failure_note(r: dict[str, Any], brief: bool = True) -> str | None:
@@ -153,29 +179,62 @@ def plot_pareto(rows: list[dict[str, Any]], path: Path) -> None:
         placed: list[tuple[float, float]] = []
         for i, (r, (x, y), (lo, hi)) in enumerate(zip(mine, pts, spans, strict=True)):
             color = "#d62828" if i in front else "#577590"
-            ax.errorbar(x, y, xerr=[[max(x - lo, 0.0)], [max(hi - x, 0.0)]], fmt="o", ms=7, color=color, zorder=3,
-                        capsize=2, lw=1)
+            ax.errorbar(
+                x,
+                y,
+                xerr=[[max(x - lo, 0.0)], [max(hi - x, 0.0)]],
+                fmt="o",
+                ms=7,
+                color=color,
+                zorder=3,
+                capsize=2,
+                lw=1,
+            )
             # a label near an earlier one's point (in decades) goes one line lower for each such neighbour
-            near = sum(1 for px, py in placed if x > 0 and y > 0 and abs(math.log10(x / px)) < 0.25
-                       and abs(math.log10(y / py)) < 0.25)
+            near = sum(
+                1
+                for px, py in placed
+                if x > 0 and y > 0 and abs(math.log10(x / px)) < 0.25 and abs(math.log10(y / py)) < 0.25
+            )
             placed.append((x, y))
-            ax.annotate(r["method"].replace("_", " "), (x, y), fontsize=7, xytext=(4, 3 - 10 * near),
-                        textcoords="offset points")
+            ax.annotate(
+                r["method"].replace("_", " "), (x, y), fontsize=7, xytext=(4, 3 - 10 * near), textcoords="offset points"
+            )
         fx = sorted(pts[i] for i in front)
         if fx:
             ax.plot(*zip(*fx, strict=True), color="#d62828", lw=1, label="Pareto front")
         failed = [(r, note) for r in rows if r["scene"] == name and (note := _failure_note(r)) is not None]
         for r, _ in failed:
             if math.isfinite(r["compute_s"]):
-                ax.plot(r["compute_s"] * 1e6, 0.97, "x", color="#d62828", ms=9, mew=2,
-                        transform=ax.get_xaxis_transform(), clip_on=False, zorder=4)
+                ax.plot(
+                    r["compute_s"] * 1e6,
+                    0.97,
+                    "x",
+                    color="#d62828",
+                    ms=9,
+                    mew=2,
+                    transform=ax.get_xaxis_transform(),
+                    clip_on=False,
+                    zorder=4,
+                )
         if failed:  # under the axis label, where no point can sit
-            ax.text(0.0, -0.2, "\n".join(f"✕ {r['method'].replace('_', ' ')}: {note}" for r, note in failed),
-                    transform=ax.transAxes, fontsize=7, color="#d62828", va="top")
+            ax.text(
+                0.0,
+                -0.2,
+                "\n".join(f"✕ {r['method'].replace('_', ' ')}: {note}" for r, note in failed),
+                transform=ax.transAxes,
+                fontsize=7,
+                color="#d62828",
+                va="top",
+            )
         ax.margins(x=0.15, y=0.25)
-        ax.set(xscale="log", yscale="log", xlabel="compute time per control step [µs]",
-               ylabel="RMS tracking error [rad]" if name != "panda_contact" else "RMS tool position error [m]",
-               title=name)
+        ax.set(
+            xscale="log",
+            yscale="log",
+            xlabel="compute time per control step [µs]",
+            ylabel="RMS tracking error [rad]" if name != "panda_contact" else "RMS tool position error [m]",
+            title=name,
+        )
         plain_log_ticks(ax)
         if fx:
             ax.legend(fontsize=8)
@@ -190,17 +249,28 @@ def topp_convergence(quick: bool) -> dict[str, Any]:
 
     dyn = armctl.Dynamics(armctl.models.planar_2r())
     grids = (10, 20, 50, 100, 200) if quick else (10, 20, 50, 100, 200, 500, 1000)
-    study = grid_convergence(dyn, [0.0, 0.0], [1.0, -0.8], [1.0, 1.5], [3.0, 4.0], grids=grids,
-                             repeat=1 if quick else 3)
-    return {"grids": study.grids.tolist(), "durations": study.durations.tolist(), "errors": study.errors.tolist(),
-            "compute_s": study.compute_times.tolist(), "analytic_duration": study.reference}
+    study = grid_convergence(
+        dyn, [0.0, 0.0], [1.0, -0.8], [1.0, 1.5], [3.0, 4.0], grids=grids, repeat=1 if quick else 3
+    )
+    return {
+        "grids": study.grids.tolist(),
+        "durations": study.durations.tolist(),
+        "errors": study.errors.tolist(),
+        "compute_s": study.compute_times.tolist(),
+        "analytic_duration": study.reference,
+    }
 
 
 def plot_topp(data: dict[str, Any], path: Path) -> None:
     from armctl.planning.convergence import ConvergenceStudy, plot_convergence
 
-    study = ConvergenceStudy(np.array(data["grids"]), np.array(data["durations"]), np.array(data["errors"]),
-                             np.array(data["compute_s"]), data["analytic_duration"])
+    study = ConvergenceStudy(
+        np.array(data["grids"]),
+        np.array(data["durations"]),
+        np.array(data["errors"]),
+        np.array(data["compute_s"]),
+        data["analytic_duration"],
+    )
     plot_convergence(study).savefig(path, dpi=90)
 
 
@@ -211,8 +281,9 @@ def _model_sections() -> dict[str, Any]:
     return {"backends": backends, "integrators": integrators, "fidelity": fidelity}
 
 
-def run_suite(quick: bool = False, out: Path = Path("bench-out"), executor: Executor | str | None = None
-              ) -> dict[str, Any]:
+def run_suite(
+    quick: bool = False, out: Path = Path("bench-out"), executor: Executor | str | None = None
+) -> dict[str, Any]:
     from armctl.bench import controller_speed, dynamics_speed, osc_speed, stability
 
     out = Path(out)
@@ -231,15 +302,19 @@ def run_suite(quick: bool = False, out: Path = Path("bench-out"), executor: Exec
 
     section("scenes", lambda: scene_matrix(executor, rounds=5 if quick else 15))
     plot_pareto(figures["scenes"], out / "speed_accuracy.png")
-    charts["speed_accuracy.png"] = ("Tracking error against compute time per control step, per scene (bars: "
-                                    "timing quartiles; diverged or failed methods listed in their panel)")
+    charts["speed_accuracy.png"] = (
+        "Tracking error against compute time per control step, per scene (bars: "
+        "timing quartiles; diverged or failed methods listed in their panel)"
+    )
     section("stability_maps", lambda: stability.maps(quick=quick, executor=executor))
     for name in stability.plot(figures["stability_maps"], lambda n: out / n):
         key = name.removeprefix("stability_").removesuffix(".png")
-        panels = "control rate × gain" + (" and model error × gain" if "gain_error" in figures["stability_maps"][key]
-                                          else "")
-        charts[name] = (f"Stability map of {key.replace('_', ' ')}: {panels} (cells simulated, dashed line: "
-                        "sampled-data theory)")
+        panels = "control rate × gain" + (
+            " and model error × gain" if "gain_error" in figures["stability_maps"][key] else ""
+        )
+        charts[name] = (
+            f"Stability map of {key.replace('_', ' ')}: {panels} (cells simulated, dashed line: sampled-data theory)"
+        )
     section("topp_convergence", lambda: topp_convergence(quick))
     plot_topp(figures["topp_convergence"], out / "topp_convergence.png")
     charts["topp_convergence.png"] = "TOPP-RA duration error and compute time against grid size"
@@ -272,24 +347,32 @@ def _json_default(x: Any) -> Any:
 def summary(figures: dict[str, Any]) -> str:
     from armctl.bench import controller_speed, dynamics_speed, osc_speed
 
-    lines = ["errors in rad (joint scenes) or m (panda_contact: tool position in the table plane); force: RMS "
-             "normal-force error after settling [N]; over limits: share of samples beyond the effort limit / "
-             "velocity limit (+1 %) / position range; a run that diverged has no error (its error until then is in "
-             "figures.json)",
-             f"{'scene':14s} {'method':26s} {'RMS err':>9s} {'max err':>9s} {'force':>6s} {'step µs':>8s} "
-             f"{'τ RMS':>8s}  {'over τ / q̇ / q':>17s}  outcome"]
+    lines = [
+        "errors in rad (joint scenes) or m (panda_contact: tool position in the table plane); force: RMS "
+        "normal-force error after settling [N]; over limits: share of samples beyond the effort limit / "
+        "velocity limit (+1 %) / position range; a run that diverged has no error (its error until then is in "
+        "figures.json)",
+        f"{'scene':14s} {'method':26s} {'RMS err':>9s} {'max err':>9s} {'force':>6s} {'step µs':>8s} "
+        f"{'τ RMS':>8s}  {'over τ / q̇ / q':>17s}  outcome",
+    ]
     for r in figures.get("scenes", []):
         force = f"{r['force_rms_error']:6.2f}" if "force_rms_error" in r else f"{'-':>6s}"
-        over = " / ".join(f"{r.get(f'{k}_violation_share', float('nan')):.1%}" for k in ("torque", "velocity",
-                                                                                          "position"))
+        over = " / ".join(
+            f"{r.get(f'{k}_violation_share', float('nan')):.1%}" for k in ("torque", "velocity", "position")
+        )
         outcome = _failure_note(r, brief=False) or "ok"
         if r.get("contact_lost"):
             outcome += ", contact lost"
-        lines.append(f"{r['scene']:14s} {r['method']:26s} {r['rms_error']:9.2e} {r['max_error']:9.2e} {force} "
-                     f"{r['compute_s'] * 1e6:8.1f} {r['torque_rms']:8.2f}  {over:>17s}  {outcome}")
-    reports = {**{key: mod.summary for key, mod in _model_sections().items()},
-               "dynamics_speed": dynamics_speed.report, "controller_speed": controller_speed.report,
-               "osc_speed": osc_speed.report}
+        lines.append(
+            f"{r['scene']:14s} {r['method']:26s} {r['rms_error']:9.2e} {r['max_error']:9.2e} {force} "
+            f"{r['compute_s'] * 1e6:8.1f} {r['torque_rms']:8.2f}  {over:>17s}  {outcome}"
+        )
+    reports = {
+        **{key: mod.summary for key, mod in _model_sections().items()},
+        "dynamics_speed": dynamics_speed.report,
+        "controller_speed": controller_speed.report,
+        "osc_speed": osc_speed.report,
+    }
     for key, report in reports.items():
         if key in figures:  # (every section, after a whole run)
             lines += ["", report(figures[key])]

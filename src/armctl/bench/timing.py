@@ -17,8 +17,12 @@ def per_call(fn: Callable[[], object], number: int, clock: Callable[[], float] =
     return (clock() - t0) / number
 
 
-def interleaved_samples(candidates: dict[str, Callable[[], object]], number: int = 1000, rounds: int = 15,
-                        clock: Callable[[], float] = time.perf_counter) -> dict[str, list[float]]:
+def interleaved_samples(
+    candidates: dict[str, Callable[[], object]],
+    number: int = 1000,
+    rounds: int = 15,
+    clock: Callable[[], float] = time.perf_counter,
+) -> dict[str, list[float]]:
     """Seconds per call of each candidate in each of ``rounds`` alternating rounds (after a warm-up)."""
     for fn in candidates.values():
         per_call(fn, max(1, number // 10), clock)
@@ -29,14 +33,19 @@ def interleaved_samples(candidates: dict[str, Callable[[], object]], number: int
     return samples
 
 
-def interleaved(candidates: dict[str, Callable[[], object]], number: int = 1000, rounds: int = 15,
-                clock: Callable[[], float] = time.perf_counter) -> dict[str, float]:
+def interleaved(
+    candidates: dict[str, Callable[[], object]],
+    number: int = 1000,
+    rounds: int = 15,
+    clock: Callable[[], float] = time.perf_counter,
+) -> dict[str, float]:
     """Median seconds per call of each candidate, measured in alternating rounds."""
     return {k: statistics.median(v) for k, v in interleaved_samples(candidates, number, rounds, clock).items()}
 
 
-def paired_ratio(candidate: Callable[[], object], reference: Callable[[], object], number: int = 200,
-                 rounds: int = 75) -> dict[str, float]:
+def paired_ratio(
+    candidate: Callable[[], object], reference: Callable[[], object], number: int = 200, rounds: int = 75
+) -> dict[str, float]:
     """Cost of ``candidate`` relative to ``reference``: in each round both run ``number`` calls back to back
     and their ratio is taken; returns the median ratio with its quartiles (``ratio_q1``, ``ratio_q3``), and
     the median seconds per call of each. Pairing the ratio round by round cancels the slow swings of a
@@ -54,5 +63,10 @@ def paired_ratio(candidate: Callable[[], object], reference: Callable[[], object
             ref.append(per_call(reference, number))
     ratios = sorted(c / r for c, r in zip(cand, ref, strict=True))
     q1, med, q3 = statistics.quantiles(ratios, n=4)
-    return {"ratio": med, "ratio_q1": q1, "ratio_q3": q3, "candidate_s": statistics.median(cand),
-            "reference_s": statistics.median(ref)}
+    return {
+        "ratio": med,
+        "ratio_q1": q1,
+        "ratio_q3": q3,
+        "candidate_s": statistics.median(cand),
+        "reference_s": statistics.median(ref),
+    }

@@ -65,7 +65,8 @@ def cases(grid: int = 100) -> tuple[Callable[[], float], Callable[[], float]]:
         path = ta.SplineInterpolator(knots, w)
         pc_vel = tc.JointVelocityConstraint(vlim)
         pc_tau = tc.SecondOrderConstraint.joint_torque_constraint(
-            lambda q, qd, qdd: pin.rnea(pm, pd, q, qd, qdd), tlim, np.zeros(n), discretization_scheme=1)
+            lambda q, qd, qdd: pin.rnea(pm, pd, q, qd, qdd), tlim, np.zeros(n), discretization_scheme=1
+        )
         inst = algo.TOPPRA([pc_vel, pc_tau], path, gridpoints=grid_s, solver_wrapper="seidel")
         traj = inst.compute_trajectory(0.0, 0.0)
         return float(traj.duration)
@@ -82,8 +83,13 @@ def measure(rounds: int = 15, number: int = 5, grid: int = 100) -> dict[str, flo
 
     wrapped, direct = cases(grid)
     med = interleaved({"armctl": wrapped, "toppra": direct}, number, rounds)
-    return {"armctl_s": med["armctl"], "toppra_s": med["toppra"], "ratio": med["armctl"] / med["toppra"],
-            "duration_armctl": wrapped(), "duration_toppra": direct()}
+    return {
+        "armctl_s": med["armctl"],
+        "toppra_s": med["toppra"],
+        "ratio": med["armctl"] / med["toppra"],
+        "duration_armctl": wrapped(),
+        "duration_toppra": direct(),
+    }
 
 
 def convergence_chart(path: str) -> Any:
@@ -112,8 +118,10 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
         for n, err, t in zip(study.grids, study.errors, study.compute_times, strict=True):
             print(f"  N = {int(n):5d}   |T_N - T|/T = {err:.2e}   {1e3 * t:7.2f} ms")
     r = measure(args.rounds, args.number, args.grid)
-    print(f"panda, 6 waypoints, {args.grid} grid intervals, velocity + torque limits "
-          f"(median of {args.rounds} rounds x {args.number} calls)")
+    print(
+        f"panda, 6 waypoints, {args.grid} grid intervals, velocity + torque limits "
+        f"(median of {args.rounds} rounds x {args.number} calls)"
+    )
     print(f"  armctl.planning.time_optimal : {1e3 * r['armctl_s']:8.2f} ms   duration {r['duration_armctl']:.4f} s")
     print(f"  toppra direct (pinocchio.rnea): {1e3 * r['toppra_s']:8.2f} ms   duration {r['duration_toppra']:.4f} s")
     verdict = "met" if r["ratio"] <= TARGET else "NOT met"

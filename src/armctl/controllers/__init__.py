@@ -21,5 +21,12 @@ from armctl.controllers.osc import ClosedFormOSC, OperationalSpaceQP
 from armctl.controllers.passivity import PassivityBased
 from armctl.controllers.pd import PDGravity
 
-__all__ = ["Adaptive", "ClosedFormOSC", "ComputedTorque", "Controller", "OperationalSpaceQP", "PDGravity",
-           "PassivityBased"]
+__all__ = [
+    "Adaptive",
+    "ClosedFormOSC",
+    "ComputedTorque",
+    "Controller",
+    "OperationalSpaceQP",
+    "PDGravity",
+    "PassivityBased",
+]

@@ -68,10 +68,22 @@ class Adaptive(SlidingGains, Controller):
 
     gamma = Gain("Γ (13n×13n).", size=lambda owner: 13 * owner.n)
 
-    def __init__(self, dynamics: Dynamics, lam: ArrayLike, kd: ArrayLike, gamma: ArrayLike,
-                 theta0: ArrayLike | None = None, *, projection: bool = False, sigma: float = 0.0,
-                 dead_zone: float = 0.0, composite: float = 0.0, filter_bandwidth: float = 20.0,
-                 radius: float | None = None, plant: Dynamics | RobotModel | None = None) -> None:
+    def __init__(
+        self,
+        dynamics: Dynamics,
+        lam: ArrayLike,
+        kd: ArrayLike,
+        gamma: ArrayLike,
+        theta0: ArrayLike | None = None,
+        *,
+        projection: bool = False,
+        sigma: float = 0.0,
+        dead_zone: float = 0.0,
+        composite: float = 0.0,
+        filter_bandwidth: float = 20.0,
+        radius: float | None = None,
+        plant: Dynamics | RobotModel | None = None,
+    ) -> None:
         super().__init__(dynamics)
         p = 13 * self.n
         self.lam, self.kd, self.gamma = lam, kd, gamma
@@ -116,8 +128,9 @@ class Adaptive(SlidingGains, Controller):
         if isinstance(value, RobotModel):
             value = Dynamics(value)
         if not isinstance(value, Dynamics):
-            raise InvalidParameterError(f"plant must be an armctl.Dynamics, a RobotModel or None, got "
-                                        f"{type(value).__name__}", value=value)
+            raise InvalidParameterError(
+                f"plant must be an armctl.Dynamics, a RobotModel or None, got {type(value).__name__}", value=value
+            )
         if value.n != self.n:
             raise ShapeError(f"plant has {value.n} joints, the controller {self.n}", value=value.n)
         self._plant = value

@@ -27,8 +27,9 @@ class Controller(ABC):
 
     def __init__(self, dynamics: Dynamics | None = None, n: int | None = None) -> None:
         if dynamics is not None and not isinstance(dynamics, Dynamics):
-            raise InvalidParameterError(f"dynamics must be an armctl.Dynamics, got {type(dynamics).__name__}",
-                                        value=dynamics)
+            raise InvalidParameterError(
+                f"dynamics must be an armctl.Dynamics, got {type(dynamics).__name__}", value=dynamics
+            )
         if dynamics is None and n is None:
             raise InvalidParameterError("a controller without dynamics needs n (the number of joints)", value=n)
         self.dynamics = dynamics
@@ -59,8 +60,12 @@ class Controller(ABC):
         if t.__class__ is not float:
             t = scalar(t, "t")
         try:
-            ok = (q.dtype is _FLOAT and qd.dtype is _FLOAT and q.ndim == qd.ndim == 1  # type: ignore[union-attr]
-                  and len(q) == len(qd) == self.n)  # type: ignore[arg-type]  (ints: cheaper than shape tuples)
+            ok = (
+                q.dtype is _FLOAT
+                and qd.dtype is _FLOAT
+                and q.ndim == qd.ndim == 1  # type: ignore[union-attr]
+                and len(q) == len(qd) == self.n
+            )  # type: ignore[arg-type]  (ints: cheaper than shape tuples)
         except AttributeError:
             ok = False
         if ok:
@@ -86,8 +91,11 @@ class Controller(ABC):
         self._nonfinite_torque(tau, q, qd)
 
     def _nonfinite_torque(self, tau: Any, q: Any, qd: Any) -> NoReturn:
-        raise NonFiniteError(f"{type(self).__name__} gave a non-finite torque {tau} from a finite state (q = {q}, "
-                             f"qd = {qd}): its gains, its estimates or the state are too large for floats", value=tau)
+        raise NonFiniteError(
+            f"{type(self).__name__} gave a non-finite torque {tau} from a finite state (q = {q}, "
+            f"qd = {qd}): its gains, its estimates or the state are too large for floats",
+            value=tau,
+        )
 
     def _checked(self, t: float, q: ArrayLike, qd: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """(q, q̇) as finite float (n,) arrays; a named error if t, q or q̇ is not what it should be."""

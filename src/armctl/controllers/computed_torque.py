@@ -29,8 +29,9 @@ class ComputedTorque(PIDGains, Controller):
     at all (False).
     """
 
-    def __init__(self, dynamics: Dynamics, kp: ArrayLike, kd: ArrayLike, ki: ArrayLike | None = None,
-                 friction: bool | str = True) -> None:
+    def __init__(
+        self, dynamics: Dynamics, kp: ArrayLike, kd: ArrayLike, ki: ArrayLike | None = None, friction: bool | str = True
+    ) -> None:
         super().__init__(dynamics)
         self._set_gains(kp, kd, ki)
         self.friction = friction

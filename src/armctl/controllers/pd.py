@@ -29,8 +29,9 @@ class PDGravity(PIDGains, Controller):
     ``armctl.Dynamics(model, compile=True)`` the law g + K_p e + K_d ė runs as one call of the generated code.
     """
 
-    def __init__(self, dynamics: Dynamics, kp: ArrayLike, kd: ArrayLike, ki: ArrayLike | None = None,
-                 friction: bool = False) -> None:
+    def __init__(
+        self, dynamics: Dynamics, kp: ArrayLike, kd: ArrayLike, ki: ArrayLike | None = None, friction: bool = False
+    ) -> None:
         super().__init__(dynamics)
         self._set_gains(kp, kd, ki)
         self.friction = friction

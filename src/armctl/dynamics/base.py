@@ -83,10 +83,12 @@ class Dynamics(RegressorMethods, ABC):
             raise UnknownNameError("backend", backend, (self.backend,))
         if options:
             own = ", ".join(self._option_names) or "none"
-            other = ("" if self.backend == "lagrange" else
-                     f"; backend='lagrange' takes {', '.join(_LAGRANGE_OPTIONS)}")
-            raise InvalidParameterError(f"unknown Dynamics option(s) {sorted(options)} for backend {self.backend!r} "
-                                        f"(its options: {own}){other}", value=dict(options))
+            other = "" if self.backend == "lagrange" else f"; backend='lagrange' takes {', '.join(_LAGRANGE_OPTIONS)}"
+            raise InvalidParameterError(
+                f"unknown Dynamics option(s) {sorted(options)} for backend {self.backend!r} "
+                f"(its options: {own}){other}",
+                value=dict(options),
+            )
         self.model = model
         self.n = model.n
         self._shape = (self.n,)
@@ -107,8 +109,9 @@ class Dynamics(RegressorMethods, ABC):
         self._has_friction = self._has_viscous or self._has_coulomb
         # τ_f = [diag F_v, diag F_c,mean (, diag F_c,offset)]·[q̇; sgn q̇ (; |sgn q̇|)]: one product where the
         # term by term form takes five to seven array operations
-        blocks = [np.diag(self._fv), np.diag(self._fc_mean)] + ([np.diag(self._fc_offset)] if self._has_asymmetry
-                                                               else [])
+        blocks = [np.diag(self._fv), np.diag(self._fc_mean)] + (
+            [np.diag(self._fc_offset)] if self._has_asymmetry else []
+        )
         self._friction_map = np.hstack(blocks)
         self._params = model.parameters()
         # flat indices of Y[i, 13 i + c] for the rotor (c = 10), viscous (11) and Coulomb (12) columns,
@@ -143,8 +146,9 @@ class Dynamics(RegressorMethods, ABC):
         """M q̈ + C q̇ + g (rotors included, no friction)."""
 
     @abstractmethod
-    def _rigid_regressor(self, q: FloatArray, qd: FloatArray, qdd: FloatArray,
-                         friction: tuple[FloatArray, FloatArray] | None = None) -> FloatArray:
+    def _rigid_regressor(
+        self, q: FloatArray, qd: FloatArray, qdd: FloatArray, friction: tuple[FloatArray, FloatArray] | None = None
+    ) -> FloatArray:
         """n × 13n regressor of M q̈ + C q̇ + g; the friction columns hold ``friction`` = (v, w): the viscous
         column's diagonal v and the Coulomb column's :meth:`_coulomb_column` of w (sgn w for a symmetric
         friction), or zeros."""
@@ -227,7 +231,9 @@ class Dynamics(RegressorMethods, ABC):
             return InvalidParameterError(
                 f"the mass matrix of {self.model.name!r} is not positive definite at q = {q} (smallest "
                 f"eigenvalue {np.linalg.eigvalsh(m).min():.3g}); joint {name!r} moves the least inertia (M_kk = "
-                f"{d[k]:.3g}): give the links it carries mass and inertia, or its motor a rotor inertia", value=q)
+                f"{d[k]:.3g}): give the links it carries mass and inertia, or its motor a rotor inertia",
+                value=q,
+            )
         return NonFiniteError(f"result is not finite although every input is: {out!r}", value=out)
 
     def _inputs(self, names: tuple[str, ...], *args: Any) -> tuple[FloatArray, ...]:
@@ -249,9 +255,11 @@ class Dynamics(RegressorMethods, ABC):
         try:  # each sum raises TypeError unless its array is 1-D with real entries; len then fixes the length;
             # native float64 only (Pinocchio reads a big-endian array's bytes as native; float32 would be
             # combined in single precision)
-            return (a.dtype is b.dtype is c.dtype is d.dtype is _FLOAT  # type: ignore[no-any-return]
-                    and math.isfinite(sum(a.tolist()) + sum(b.tolist()) + sum(c.tolist()) + sum(d.tolist()))
-                    and len(a) == len(b) == len(c) == len(d) == self.n)
+            return (
+                a.dtype is b.dtype is c.dtype is d.dtype is _FLOAT  # type: ignore[no-any-return]
+                and math.isfinite(sum(a.tolist()) + sum(b.tolist()) + sum(c.tolist()) + sum(d.tolist()))
+                and len(a) == len(b) == len(c) == len(d) == self.n
+            )
         except (AttributeError, TypeError, OverflowError):  # not arrays, entries not real numbers, huge ints
             return False
 
@@ -302,15 +310,19 @@ class Dynamics(RegressorMethods, ABC):
             return self._friction_map.dot(np.concatenate((v, sign)))  # type: ignore[no-any-return]
         return self._fv * v
 
-    def inverse_dynamics(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike,
-                         wrench: ArrayLike | None = None) -> FloatArray:
+    def inverse_dynamics(
+        self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, wrench: ArrayLike | None = None
+    ) -> FloatArray:
         """τ = M q̈ + C q̇ + g + τ_f(q̇) + J(q)ᵀ h_e, with ``wrench`` h_e = [f; μ] at the tool frame in
         world-aligned axes (the force the arm exerts on the environment)."""
         if wrench is None:
             try:  # _call's fast path, inlined: this is called every control step
                 # ndim: an int, cheaper than comparing shape tuples; Pinocchio checks the lengths
-                if (self._nan_propagates and q.ndim == qd.ndim == qdd.ndim == 1  # type: ignore[union-attr]
-                        and q.dtype is qd.dtype is qdd.dtype is _FLOAT):  # type: ignore[union-attr]  (as in _call)
+                if (
+                    self._nan_propagates
+                    and q.ndim == qd.ndim == qdd.ndim == 1  # type: ignore[union-attr]
+                    and q.dtype is qd.dtype is qdd.dtype is _FLOAT
+                ):  # type: ignore[union-attr]  (as in _call)
                     out = self._rigid_torque(q, qd, qdd)
                     if math.isfinite(out.item(0)):  # NaN/inf in any input shows up in τ₁ (_nan_propagates)
                         if not self._has_friction:
@@ -330,8 +342,9 @@ class Dynamics(RegressorMethods, ABC):
             raise self._nonfinite_result(q, tau)
         return tau
 
-    def forward_dynamics(self, q: ArrayLike, qd: ArrayLike, tau: ArrayLike,
-                         wrench: ArrayLike | None = None) -> FloatArray:
+    def forward_dynamics(
+        self, q: ArrayLike, qd: ArrayLike, tau: ArrayLike, wrench: ArrayLike | None = None
+    ) -> FloatArray:
         """q̈ = M⁻¹ (τ − C q̇ − g − τ_f(q̇) − Jᵀ h_e). Coulomb friction here is the kinetic one
         (sgn q̇, zero at rest); stick–slip is the simulator's business."""
         if self._has_friction or wrench is not None:

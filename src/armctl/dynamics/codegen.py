@@ -28,8 +28,9 @@ def cache_root(cache_dir: str | os.PathLike[str] | None = None) -> Path:
         try:
             return Path(os.fspath(cache_dir))
         except TypeError:
-            raise InvalidParameterError(f"cache_dir must be a path (str or os.PathLike) or None, got {cache_dir!r}",
-                                        value=cache_dir) from None
+            raise InvalidParameterError(
+                f"cache_dir must be a path (str or os.PathLike) or None, got {cache_dir!r}", value=cache_dir
+            ) from None
     env = os.environ.get("ARMCTL_CACHE")
     return Path(env) if env else Path.home() / ".cache" / "armctl"
 
@@ -40,16 +41,18 @@ def library_path(names: list[str], tag: str, cache_dir: str | os.PathLike[str] |
     return cache_root(cache_dir) / "casadi" / f"armctl_{key.hexdigest()[:20]}.so"
 
 
-def compiled(functions: list[cs.Function], tag: str, cache_dir: str | os.PathLike[str] | None = None
-             ) -> list[cs.Function]:
+def compiled(
+    functions: list[cs.Function], tag: str, cache_dir: str | os.PathLike[str] | None = None
+) -> list[cs.Function]:
     """The same functions, evaluated by C code compiled from them (built on first use, then cached)."""
     names = [f.name() for f in functions]
     found = cached(names, tag, lambda: functions, cache_dir)
     return [found[name] for name in names]
 
 
-def cached(names: list[str], tag: str, make: Callable[[], list[cs.Function]],
-           cache_dir: str | os.PathLike[str] | None = None) -> dict[str, cs.Function]:
+def cached(
+    names: list[str], tag: str, make: Callable[[], list[cs.Function]], cache_dir: str | os.PathLike[str] | None = None
+) -> dict[str, cs.Function]:
     """The compiled functions ``names`` by name, from the library of ``tag``; ``make()`` (the symbolic
     functions, in the order of ``names``) is called only if the library is not cached yet, so that loading does
     not pay for building the symbolic model (0.2 s for 7 joints)."""
@@ -70,21 +73,28 @@ def build(functions: list[cs.Function], lib: Path) -> None:
     cc = shutil.which(os.environ.get("CC", "cc")) or shutil.which("gcc")
     folder, name = lib.parent, lib.stem
     if cc is None:
-        raise BackendError("compiling generated code needs a C compiler (cc or gcc on PATH, or $CC): install "
-                           "one, or do without compiled code (compile=False)", value=None)
+        raise BackendError(
+            "compiling generated code needs a C compiler (cc or gcc on PATH, or $CC): install "
+            "one, or do without compiled code (compile=False)",
+            value=None,
+        )
     try:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as e:
-        raise BackendError(f"cannot create the cache folder for compiled code {str(folder)!r} ({e}): pass a "
-                           "writable cache_dir or set $ARMCTL_CACHE", value=str(folder)) from None
+        raise BackendError(
+            f"cannot create the cache folder for compiled code {str(folder)!r} ({e}): pass a "
+            "writable cache_dir or set $ARMCTL_CACHE",
+            value=str(folder),
+        ) from None
     with tempfile.TemporaryDirectory(dir=folder) as tmp:
         gen = cs.CodeGenerator(f"{name}.c", {"with_header": False})
         for f in functions:
             gen.add(f)
         src = Path(gen.generate(tmp + os.sep))
         tmp_lib = Path(tmp) / f"{name}.so"
-        proc = subprocess.run([cc, *CFLAGS, str(src), "-o", str(tmp_lib), "-lm"], capture_output=True,
-                              text=True, check=False)
+        proc = subprocess.run(
+            [cc, *CFLAGS, str(src), "-o", str(tmp_lib), "-lm"], capture_output=True, text=True, check=False
+        )
         if proc.returncode != 0:
             raise BackendError(f"compiling generated code failed ({cc}): {proc.stderr[-2000:]}", value=str(src))
         os.replace(tmp_lib, lib)

@@ -55,8 +55,7 @@ def _carry(out: cs.SX, inputs: list[cs.SX], zero: cs.SX) -> cs.SX:
     return cs.densify(out + carrier * cs.SX(out.sparsity(), 1.0))
 
 
-def _regressor(model: RobotModel, tau: Callable[[cs.SX], cs.SX], viscous: cs.SX, coulomb: cs.SX,
-               rho: cs.SX) -> cs.SX:
+def _regressor(model: RobotModel, tau: Callable[[cs.SX], cs.SX], viscous: cs.SX, coulomb: cs.SX, rho: cs.SX) -> cs.SX:
     """Y (n × 13n) of the rigid part τ(π) (linear in π) with the friction columns: viscous ``viscous_i`` and
     Coulomb κ(c_i) = sgn c_i (1 + ρ_i sgn c_i) at ``coulomb`` (see Dynamics.coulomb_column). The rotor
     column is ∂τ/∂(k_r²I_m): q̈_i on the diagonal, from the recursion like the rest."""
@@ -77,7 +76,8 @@ def symbolic_functions(model: RobotModel) -> list[cs.Function]:
     included (see the module)."""
     n = model.n
     q, qd, qdd, a, w, tau, v, c, qd_r, qdd_r, rho = (
-        cs.SX.sym(s, n) for s in ("q", "qd", "qdd", "a", "w", "tau", "v", "c", "qd_r", "qdd_r", "rho"))
+        cs.SX.sym(s, n) for s in ("q", "qd", "qdd", "a", "w", "tau", "v", "c", "qd_r", "qdd_r", "rho")
+    )
     zero = cs.SX.sym("zero")
     x, feedback = cs.SX.sym("x", 4 * n), cs.SX.sym("F", n, 4 * n)
     zeros = cs.SX.zeros(n)
@@ -97,7 +97,7 @@ def symbolic_functions(model: RobotModel) -> list[cs.Function]:
         "Y": ([q, qd, qdd, v, c], _regressor(model, lambda p: rnea(qd, qdd, p), v, c, rho)),
         "Yp": ([q, a, w, qdd_r, qd_r, qd], _regressor(model, passivity, qd_r, qd, rho)),
         # PD + gravity on x = [q_d; q̇_d; q; q̇] stacked (one copy in: see CompiledDynamics._pd_gravity_law)
-        "pd": ([x], cs.substitute(gravity, q, x[2 * n: 3 * n]) + cs.mtimes(feedback, x)),
+        "pd": ([x], cs.substitute(gravity, q, x[2 * n : 3 * n]) + cs.mtimes(feedback, x)),
     }
     consts_of = {"Y": [zero, rho], "Yp": [zero, rho], "pd": [zero, feedback]}
     out = []
@@ -110,8 +110,12 @@ def symbolic_functions(model: RobotModel) -> list[cs.Function]:
 
 def library(model: RobotModel, cache_dir: str | os.PathLike[str] | None = None) -> dict[str, cs.Function]:
     """The compiled functions of ``model`` by name, built if the library is not cached yet."""
-    return codegen.cached(list(NAMES), f"dynamics|{model.fingerprint(inertial=True, tool=False)}|v{_CODE_VERSION}",
-                          lambda: symbolic_functions(model), cache_dir)
+    return codegen.cached(
+        list(NAMES),
+        f"dynamics|{model.fingerprint(inertial=True, tool=False)}|v{_CODE_VERSION}",
+        lambda: symbolic_functions(model),
+        cache_dir,
+    )
 
 
 def _bind(fn: cs.Function, n: int, out: FloatArray, consts: tuple[FloatArray, ...]) -> Callable[..., FloatArray]:
@@ -158,8 +162,14 @@ class CompiledDynamics(PinocchioDynamics):
 
     _compiled = True
 
-    def __init__(self, model: RobotModel, backend: str | None = None, compile: bool = True,
-                 cache_dir: str | os.PathLike[str] | None = None, **options: Any) -> None:
+    def __init__(
+        self,
+        model: RobotModel,
+        backend: str | None = None,
+        compile: bool = True,
+        cache_dir: str | os.PathLike[str] | None = None,
+        **options: Any,
+    ) -> None:
         super().__init__(model, backend, compile=compile, cache_dir=cache_dir, **options)
         fns = library(model, cache_dir)
         n = self.n
@@ -220,18 +230,27 @@ class CompiledDynamics(PinocchioDynamics):
         self._forward = lambda q, qd, tau_net: qdd(q, qd, tau_net).copy()  # type: ignore[method-assign]
         zeros = self._zeros
 
-        def rigid_regressor(q: FloatArray, qd: FloatArray, qdd_: FloatArray,
-                            friction: tuple[FloatArray, FloatArray] | None = None) -> FloatArray:
+        def rigid_regressor(
+            q: FloatArray, qd: FloatArray, qdd_: FloatArray, friction: tuple[FloatArray, FloatArray] | None = None
+        ) -> FloatArray:
             v, w = friction if friction is not None else (zeros, zeros)
             return y(q, qd, qdd_, v, w).T.copy(order="K")  # type: ignore[no-any-return]
 
-        def passivity_regressor(q: FloatArray, qd: FloatArray, qd_r: FloatArray, qdd_r: FloatArray,
-                                a: FloatArray, w: FloatArray, copy: bool = True) -> FloatArray:
+        def passivity_regressor(
+            q: FloatArray,
+            qd: FloatArray,
+            qd_r: FloatArray,
+            qdd_r: FloatArray,
+            a: FloatArray,
+            w: FloatArray,
+            copy: bool = True,
+        ) -> FloatArray:
             out = yp(q, a, w, qdd_r, qd_r, qd).T
             return out.copy(order="K") if copy else out  # type: ignore[no-any-return]
 
-        def passivity_torque(q: FloatArray, qd: FloatArray, qd_r: FloatArray, qdd_r: FloatArray, a: FloatArray,
-                             w: FloatArray) -> FloatArray:
+        def passivity_torque(
+            q: FloatArray, qd: FloatArray, qd_r: FloatArray, qdd_r: FloatArray, a: FloatArray, w: FloatArray
+        ) -> FloatArray:
             return self._add_passivity_friction(ptau(q, a, w, qdd_r).copy(), qd, qd_r)
 
         self._rigid_regressor = rigid_regressor  # type: ignore[method-assign]

@@ -76,12 +76,13 @@ class _Symbols:
             omega.append(w)
             self.axes.append(z)
             v = cs.jtimes(p, q, qd)  # ṗ = J_P q̇
-            m, mc = pi[k * i], pi[k * i + 1: k * i + 4]
+            m, mc = pi[k * i], pi[k * i + 1 : k * i + 4]
             ixx, ixy, iyy, ixz, iyz, izz = (pi[k * i + 4 + j] for j in range(6))
             inertia = cs.vertcat(cs.horzcat(ixx, ixy, ixz), cs.horzcat(ixy, iyy, iyz), cs.horzcat(ixz, iyz, izz))
             w_local = r.T @ w
-            kinetic += 0.5 * m * cs.dot(v, v) + cs.dot(v, cs.cross(w, r @ mc)) + 0.5 * cs.dot(w_local,
-                                                                                           inertia @ w_local)
+            kinetic += (
+                0.5 * m * cs.dot(v, v) + cs.dot(v, cs.cross(w, r @ mc)) + 0.5 * cs.dot(w_local, inertia @ w_local)
+            )
             potential -= cs.dot(g0, m * p + r @ mc)
             rotor = pi[k * i + 10]  # k_r² I_m (a parameter of every joint; zero without a motor)
             kinetic += 0.5 * rotor * qd[i] ** 2
@@ -99,8 +100,9 @@ class _Symbols:
         self.coriolis = 0.5 * (mdot + jac - jac.T)
         # τ = d/dt ∂L/∂q̇ − ∂L/∂q, with the time derivative as directional derivatives (forward mode): the
         # same τ as M q̈ + C q̇ + g, but an expression several times smaller than going through C
-        self.tau = (cs.jtimes(momentum, qd, self.qdd) + cs.jtimes(momentum, q, qd)
-                    - cs.gradient(kinetic, q) + self.gravity)
+        self.tau = (
+            cs.jtimes(momentum, qd, self.qdd) + cs.jtimes(momentum, q, qd) - cs.gradient(kinetic, q) + self.gravity
+        )
         self.regressor = cs.jacobian(self.tau, pi)
 
     def frame(self, model: RobotModel, name: str | None) -> tuple[cs.SX, cs.SX]:
@@ -165,8 +167,16 @@ class LagrangeDynamics(Dynamics):
     backend = "lagrange"
     _option_names = _LAGRANGE_OPTIONS
 
-    def __init__(self, model: RobotModel, backend: str | None = None, *, rotor_coupling: bool = True,
-                 compile: bool = False, cache_dir: str | None = None, **options: Any) -> None:
+    def __init__(
+        self,
+        model: RobotModel,
+        backend: str | None = None,
+        *,
+        rotor_coupling: bool = True,
+        compile: bool = False,
+        cache_dir: str | None = None,
+        **options: Any,
+    ) -> None:
         super().__init__(model, backend, **options)
         self.rotor_coupling = boolean(rotor_coupling, "rotor_coupling")  # bool("False") would be True
         self.compiled = boolean(compile, "compile")  # checked before the build: "False" would compile
@@ -177,25 +187,29 @@ class LagrangeDynamics(Dynamics):
         q, qd, qdd, pi = s.q, s.qd, s.qdd, s.pi
         tool_pose, tool_jac = s.frame(model, None)
         # outputs dense: the zero-copy evaluator writes every entry, structural zeros included
-        fns = [cs.Function(name, args, [cs.densify(out)]) for name, args, out in (
-            ("M", [q, pi], s.mass),
-            ("C", [q, qd, pi], s.coriolis),
-            ("g", [q, pi], s.gravity),
-            ("tau", [q, qd, qdd, pi], s.tau),
-            ("Y", [q, qd, qdd], s.regressor),
-            ("T", [q, qd, pi], s.kinetic),
-            ("U", [q, pi], s.potential),
-            ("tool_J", [q], tool_jac),
-            ("tool_pose", [q], tool_pose),
-        )]
+        fns = [
+            cs.Function(name, args, [cs.densify(out)])
+            for name, args, out in (
+                ("M", [q, pi], s.mass),
+                ("C", [q, qd, pi], s.coriolis),
+                ("g", [q, pi], s.gravity),
+                ("tau", [q, qd, qdd, pi], s.tau),
+                ("Y", [q, qd, qdd], s.regressor),
+                ("T", [q, qd, pi], s.kinetic),
+                ("U", [q, pi], s.potential),
+                ("tool_J", [q], tool_jac),
+                ("tool_pose", [q], tool_pose),
+            )
+        ]
         self.build_seconds = time.perf_counter() - t0
         self._cache_dir = cache_dir
         if self.compiled:
             fns = codegen.compiled(fns, _cache_tag(model, self.rotor_coupling), cache_dir)
         self.functions: dict[str, cs.Function] = {f.name(): f for f in fns}
         with_pi = {"M": 1, "C": 2, "g": 1, "tau": 3, "T": 2, "U": 1}
-        self._ev = {f.name(): _Evaluator(f, {with_pi[f.name()]: self._params} if f.name() in with_pi else None)
-                    for f in fns}
+        self._ev = {
+            f.name(): _Evaluator(f, {with_pi[f.name()]: self._params} if f.name() in with_pi else None) for f in fns
+        }
         self._frame_fns: dict[str, tuple[_Evaluator, _Evaluator]] = {}
 
     @staticmethod
@@ -203,8 +217,9 @@ class LagrangeDynamics(Dynamics):
         """Whether ``compile=True`` would load a cached library (instead of compiling, ~20 s for 7 joints)."""
         from armctl.dynamics.codegen import library_path
 
-        return library_path(list(_FUNCTION_NAMES), _cache_tag(model, boolean(rotor_coupling, "rotor_coupling")),
-                            cache_dir).exists()
+        return library_path(
+            list(_FUNCTION_NAMES), _cache_tag(model, boolean(rotor_coupling, "rotor_coupling")), cache_dir
+        ).exists()
 
     @property
     def options(self) -> dict[str, Any]:
@@ -228,11 +243,12 @@ class LagrangeDynamics(Dynamics):
     def _rigid_torque(self, q: FloatArray, qd: FloatArray, qdd: FloatArray) -> FloatArray:
         return self._ev["tau"](q, qd, qdd).reshape(-1)
 
-    def _rigid_regressor(self, q: FloatArray, qd: FloatArray, qdd: FloatArray,
-                         friction: tuple[FloatArray, FloatArray] | None = None) -> FloatArray:
+    def _rigid_regressor(
+        self, q: FloatArray, qd: FloatArray, qdd: FloatArray, friction: tuple[FloatArray, FloatArray] | None = None
+    ) -> FloatArray:
         y = self._ev["Y"](q, qd, qdd)
         if friction is not None:
-            y.put(self._diag_idx[self.n:], np.concatenate((friction[0], self._coulomb_column(friction[1]))))
+            y.put(self._diag_idx[self.n :], np.concatenate((friction[0], self._coulomb_column(friction[1]))))
         return y
 
     def _kinetic(self, q: FloatArray, qd: FloatArray) -> float:
@@ -246,8 +262,10 @@ class LagrangeDynamics(Dynamics):
             return self._ev["tool_pose"], self._ev["tool_J"]
         if frame not in self._frame_fns:
             pose, jac = self._sym.frame(self.model, frame)
-            self._frame_fns[frame] = (_Evaluator(cs.Function("pose", [self._sym.q], [cs.densify(pose)])),
-                                      _Evaluator(cs.Function("J", [self._sym.q], [cs.densify(jac)])))
+            self._frame_fns[frame] = (
+                _Evaluator(cs.Function("pose", [self._sym.q], [cs.densify(pose)])),
+                _Evaluator(cs.Function("J", [self._sym.q], [cs.densify(jac)])),
+            )
         return self._frame_fns[frame]
 
     def _jacobian(self, q: FloatArray, frame: str | None) -> FloatArray:
@@ -273,4 +291,3 @@ class LagrangeDynamics(Dynamics):
             out[i, :i] += row[:i]
             out[:i, i] += row[:i]
         return out
-

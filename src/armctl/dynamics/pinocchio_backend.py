@@ -51,11 +51,20 @@ class PinocchioDynamics(Dynamics):
     #: True for :class:`~armctl.dynamics.compiled.CompiledDynamics` (``compile=True``)
     _compiled = False
 
-    def __init__(self, model: RobotModel, backend: str | None = None, compile: bool = False,
-                 cache_dir: str | os.PathLike[str] | None = None, **options: Any) -> None:
+    def __init__(
+        self,
+        model: RobotModel,
+        backend: str | None = None,
+        compile: bool = False,
+        cache_dir: str | os.PathLike[str] | None = None,
+        **options: Any,
+    ) -> None:
         if boolean(compile, "compile") != self._compiled:
-            raise InvalidParameterError(f"{type(self).__name__} is not made with compile={compile}: use "
-                                        f"armctl.Dynamics(model, compile={compile})", value=compile)
+            raise InvalidParameterError(
+                f"{type(self).__name__} is not made with compile={compile}: use "
+                f"armctl.Dynamics(model, compile={compile})",
+                value=compile,
+            )
         check_cache_dir(cache_dir, compile)
         super().__init__(model, backend, **options)
         self._cache_dir = cache_dir
@@ -76,8 +85,7 @@ class PinocchioDynamics(Dynamics):
         self.pin_model_free.gravity = pin.Motion.Zero()
         self.pin_data_free = self.pin_model_free.createData()
         self._rigid_torque_free = partial(pin.rnea, self.pin_model_free, self.pin_data_free)
-        self._raw_regressor_free = partial(pin.computeJointTorqueRegressor, self.pin_model_free,
-                                           self.pin_data_free)
+        self._raw_regressor_free = partial(pin.computeJointTorqueRegressor, self.pin_model_free, self.pin_data_free)
         self._init_regressor_workspace()
 
     def _init_regressor_workspace(self) -> None:
@@ -90,8 +98,9 @@ class PinocchioDynamics(Dynamics):
         self._yt = np.zeros((n, PARAMS_PER_JOINT, n))
         self._yt_rigid = self._yt[:, :10, :]
         flat = self._yt.reshape(-1)
-        self._yt_rotor, self._yt_viscous, self._yt_coulomb = (flat[c * n::PARAMS_PER_JOINT * n + 1]
-                                                              for c in (10, 11, 12))
+        self._yt_rotor, self._yt_viscous, self._yt_coulomb = (
+            flat[c * n :: PARAMS_PER_JOINT * n + 1] for c in (10, 11, 12)
+        )
         self._y = self._yt.reshape(PARAMS_PER_JOINT * n, n).T  # (n, 13n), column-major view
         # Y[0, 13(n−1) + c], c < 10: the first joint's torque per inertial parameter of the last link, which
         # every input reaches (see Dynamics._regressor_probe)
@@ -104,8 +113,11 @@ class PinocchioDynamics(Dynamics):
         for data, fn in ((self.pin_data, self._raw_regressor), (self.pin_data_free, self._raw_regressor_free)):
             view = data.jointTorqueRegressor
             out = fn(*args)
-            shared &= bool(np.shares_memory(view, data.jointTorqueRegressor) and np.array_equal(view, out)
-                           and view.T.flags.c_contiguous)
+            shared &= bool(
+                np.shares_memory(view, data.jointTorqueRegressor)
+                and np.array_equal(view, out)
+                and view.T.flags.c_contiguous
+            )
         self._raw_t = self.pin_data.jointTorqueRegressor.T.reshape(n, 10, n) if shared else None
         self._raw_t_free = self.pin_data_free.jointTorqueRegressor.T.reshape(n, 10, n) if shared else None
 
@@ -145,8 +157,9 @@ class PinocchioDynamics(Dynamics):
     def _rigid_torque(self, q: FloatArray, qd: FloatArray, qdd: FloatArray) -> FloatArray:
         return pin.rnea(self.pin_model, self.pin_data, q, qd, qdd)
 
-    def _rigid_regressor(self, q: FloatArray, qd: FloatArray, qdd: FloatArray,
-                         friction: tuple[FloatArray, FloatArray] | None = None) -> FloatArray:
+    def _rigid_regressor(
+        self, q: FloatArray, qd: FloatArray, qdd: FloatArray, friction: tuple[FloatArray, FloatArray] | None = None
+    ) -> FloatArray:
         out = self._raw_regressor(q, qd, qdd)  # _raw_blocks, inlined
         self._yt_rigid[...] = self._raw_t if self._raw_t is not None else out.T.reshape(self.n, 10, self.n)
         self._yt_rotor[...] = qdd
@@ -157,8 +170,16 @@ class PinocchioDynamics(Dynamics):
     #     M q̈_r + C(q, q̇) q̇_r + g = R(q, q̇_r + s/2, q̈_r) − h₀(s/2)
     # since h(u + v) − h(u − v) = 4 C(q, u) v with u ± v = (q̇ ± q̇_r)/2: one subtraction of two evaluations.
     # The primitives take a = q̇_r + s/2 and w = s/2 (see Dynamics).
-    def _passivity_regressor(self, q: FloatArray, qd: FloatArray, qd_r: FloatArray, qdd_r: FloatArray,
-                             a: FloatArray, w: FloatArray, copy: bool = True) -> FloatArray:
+    def _passivity_regressor(
+        self,
+        q: FloatArray,
+        qd: FloatArray,
+        qd_r: FloatArray,
+        qdd_r: FloatArray,
+        a: FloatArray,
+        w: FloatArray,
+        copy: bool = True,
+    ) -> FloatArray:
         if self._raw_t is not None:  # both regressors stay in Pinocchio's workspaces: subtract them there
             self._raw_regressor(q, a, qdd_r)
             self._raw_regressor_free(q, w, self._zeros)
@@ -175,8 +196,9 @@ class PinocchioDynamics(Dynamics):
         self._coulomb_column(qd, self._yt_coulomb)
         return self._y.copy(order="K") if copy else self._y  # type: ignore[no-any-return]
 
-    def _passivity_torque(self, q: FloatArray, qd: FloatArray, qd_r: FloatArray, qdd_r: FloatArray,
-                          a: FloatArray, w: FloatArray) -> FloatArray:
+    def _passivity_torque(
+        self, q: FloatArray, qd: FloatArray, qd_r: FloatArray, qdd_r: FloatArray, a: FloatArray, w: FloatArray
+    ) -> FloatArray:
         tau = self._rigid_torque(q, a, qdd_r)
         tau -= self._rigid_torque_free(q, w, self._zeros)
         return self._add_passivity_friction(tau, qd, qd_r)

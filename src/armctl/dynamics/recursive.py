@@ -43,15 +43,21 @@ def links(model: RobotModel, params: Any = None) -> list[tuple[Any, Any, Any, cs
     pi = cs.DM(model.parameters()) if params is None else params
     out = []
     for i, j in enumerate(model.joints):
-        p = pi[PARAMS_PER_JOINT * i: PARAMS_PER_JOINT * i + 11]
-        inertia = cs.vertcat(cs.horzcat(p[4], p[5], p[7]), cs.horzcat(p[5], p[6], p[8]),
-                             cs.horzcat(p[7], p[8], p[9]))
+        p = pi[PARAMS_PER_JOINT * i : PARAMS_PER_JOINT * i + 11]
+        inertia = cs.vertcat(cs.horzcat(p[4], p[5], p[7]), cs.horzcat(p[5], p[6], p[8]), cs.horzcat(p[7], p[8], p[9]))
         out.append((p[0], p[1:4], inertia, cs.DM(j.axis), p[10]))
     return out
 
 
-def inverse_dynamics(model: RobotModel, q: cs.SX, qd: cs.SX, qdd: cs.SX, gravity: bool = True,
-                     transforms: list[tuple[cs.SX, cs.SX]] | None = None, params: Any = None) -> cs.SX:
+def inverse_dynamics(
+    model: RobotModel,
+    q: cs.SX,
+    qd: cs.SX,
+    qdd: cs.SX,
+    gravity: bool = True,
+    transforms: list[tuple[cs.SX, cs.SX]] | None = None,
+    params: Any = None,
+) -> cs.SX:
     """τ = M(q) q̈ + C(q, q̇) q̇ + g(q) by the Newton–Euler recursion (gravity=False: without g), with the
     inertial parameters ``params`` (see :func:`links`; τ is linear in them).
 
@@ -177,7 +183,8 @@ def functions(model: RobotModel) -> dict[str, cs.Function]:
     """CasADi functions ``tau(q, qd, qdd)``, ``M(q)`` and ``qdd(q, qd, tau)`` of this model (numbers built in)."""
     n = model.n
     q, qd, qdd, tau = (cs.SX.sym(s, n) for s in ("q", "qd", "qdd", "tau"))
-    return {"tau": cs.Function("tau", [q, qd, qdd], [inverse_dynamics(model, q, qd, qdd)]),
-            "M": cs.Function("M", [q], [mass_matrix(model, q)]),
-            "qdd": cs.Function("qdd", [q, qd, tau], [forward_dynamics(model, q, qd, tau)])}
-
+    return {
+        "tau": cs.Function("tau", [q, qd, qdd], [inverse_dynamics(model, q, qd, qdd)]),
+        "M": cs.Function("M", [q], [mass_matrix(model, q)]),
+        "qdd": cs.Function("qdd", [q, qd, tau], [forward_dynamics(model, q, qd, tau)]),
+    }

@@ -33,8 +33,9 @@ class RegressorMethods:
         _halves: FloatArray
         _diag_idx: Any
 
-        def _rigid_regressor(self, q: FloatArray, qd: FloatArray, qdd: FloatArray,
-                             friction: tuple[FloatArray, FloatArray] | None = None) -> FloatArray: ...
+        def _rigid_regressor(
+            self, q: FloatArray, qd: FloatArray, qdd: FloatArray, friction: tuple[FloatArray, FloatArray] | None = None
+        ) -> FloatArray: ...
         def _rigid_torque(self, q: FloatArray, qd: FloatArray, qdd: FloatArray) -> FloatArray: ...
         def _friction(self, qd: FloatArray, viscous_at: FloatArray | None = None) -> FloatArray: ...
         def _inputs(self, names: tuple[str, ...], *args: Any) -> tuple[FloatArray, ...]: ...
@@ -53,8 +54,10 @@ class RegressorMethods:
         (:mod:`armctl.dynamics.identification.problem`).
         """
         try:  # _inputs' fast path, inlined
-            if (q.ndim == qd.ndim == qdd.ndim == 1  # type: ignore[union-attr]  (Pinocchio checks the lengths)
-                    and q.dtype is qd.dtype is qdd.dtype is _FLOAT):  # type: ignore[union-attr]  (as in _call)
+            if (
+                q.ndim == qd.ndim == qdd.ndim == 1  # type: ignore[union-attr]  (Pinocchio checks the lengths)
+                and q.dtype is qd.dtype is qdd.dtype is _FLOAT
+            ):  # type: ignore[union-attr]  (as in _call)
                 probe = self._regressor_probe
                 if probe is not None:  # the result shows any non-finite input
                     y = self._rigid_regressor(q, qd, qdd, (qd, qd))  # type: ignore[arg-type]
@@ -115,9 +118,11 @@ class RegressorMethods:
         probe = self._regressor_probe
         if probe is not None:  # the result shows any non-finite input: check only what it would not show
             try:
-                if (q.dtype is qd.dtype is qd_r.dtype is qdd_r.dtype is _FLOAT  # type: ignore[union-attr]
-                        and q.ndim == qd.ndim == qd_r.ndim == qdd_r.ndim == 1  # type: ignore[union-attr]
-                        and len(qd) == len(qd_r) == self.n):  # (q̇ − q̇_r would broadcast)
+                if (
+                    q.dtype is qd.dtype is qd_r.dtype is qdd_r.dtype is _FLOAT  # type: ignore[union-attr]
+                    and q.ndim == qd.ndim == qd_r.ndim == qdd_r.ndim == 1  # type: ignore[union-attr]
+                    and len(qd) == len(qd_r) == self.n
+                ):  # (q̇ − q̇_r would broadcast)
                     y = self._passivity_regressor(q, qd, qd_r, qdd_r, *self._polarisation(qd, qd_r))
                     if math.isfinite(sum(probe.tolist())):
                         return y
@@ -141,16 +146,25 @@ class RegressorMethods:
     # a = q̇_r + s/2 and w = s/2, s = q̇ − q̇_r (the Slotine–Li controllers form them in the same product as the
     # rest of their law, armctl.controllers.passivity.sliding_map, and call these directly). copy=False may
     # return a workspace that the next regressor call overwrites.
-    def _passivity_regressor(self, q: FloatArray, qd: FloatArray, qd_r: FloatArray, qdd_r: FloatArray,
-                             a: FloatArray, w: FloatArray, copy: bool = True) -> FloatArray:
+    def _passivity_regressor(
+        self,
+        q: FloatArray,
+        qd: FloatArray,
+        qd_r: FloatArray,
+        qdd_r: FloatArray,
+        a: FloatArray,
+        w: FloatArray,
+        copy: bool = True,
+    ) -> FloatArray:
         y = self._rigid_regressor(q, a * _SQRT_HALF, 0.5 * qdd_r)
         y *= 2.0
         y -= self._rigid_regressor(q, w, self._zeros)
-        y.put(self._diag_idx[self.n:], np.concatenate((qd_r, self._coulomb_column(qd))))
+        y.put(self._diag_idx[self.n :], np.concatenate((qd_r, self._coulomb_column(qd))))
         return y
 
-    def _passivity_torque(self, q: FloatArray, qd: FloatArray, qd_r: FloatArray, qdd_r: FloatArray,
-                          a: FloatArray, w: FloatArray) -> FloatArray:
+    def _passivity_torque(
+        self, q: FloatArray, qd: FloatArray, qd_r: FloatArray, qdd_r: FloatArray, a: FloatArray, w: FloatArray
+    ) -> FloatArray:
         tau = self._rigid_torque(q, a * _SQRT_HALF, 0.5 * qdd_r)
         tau *= 2.0
         tau -= self._rigid_torque(q, w, self._zeros)

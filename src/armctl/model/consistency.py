@@ -31,8 +31,7 @@ def _pseudo_inertia_by_definition(p: FloatArray) -> FloatArray:
     """J of ten link parameters (..., 10) → (..., 4, 4), term by term as defined above."""
     m, h = p[..., 0], p[..., 1:4]
     ixx, ixy, iyy, ixz, iyz, izz = (p[..., k] for k in range(4, 10))
-    i_bar = np.stack([np.stack([ixx, ixy, ixz], -1), np.stack([ixy, iyy, iyz], -1),
-                      np.stack([ixz, iyz, izz], -1)], -2)
+    i_bar = np.stack([np.stack([ixx, ixy, ixz], -1), np.stack([ixy, iyy, iyz], -1), np.stack([ixz, iyz, izz], -1)], -2)
     tr = np.trace(i_bar, axis1=-2, axis2=-1)[..., None, None]
     sigma = 0.5 * tr * np.eye(3) - i_bar
     top = np.concatenate([sigma, h[..., :, None]], -1)
@@ -44,9 +43,24 @@ def _parameters_by_definition(a: FloatArray) -> FloatArray:
     """The ten link parameters of pseudo-inertias (..., 4, 4): Ī = tr(Σ) 1 − Σ, term by term."""
     sigma, h, m = a[..., :3, :3], a[..., :3, 3], a[..., 3, 3]
     i_bar = np.trace(sigma, axis1=-2, axis2=-1)[..., None, None] * np.eye(3) - sigma
-    return np.concatenate([m[..., None], h, np.stack([i_bar[..., 0, 0], i_bar[..., 0, 1], i_bar[..., 1, 1],
-                                                      i_bar[..., 0, 2], i_bar[..., 1, 2], i_bar[..., 2, 2]], -1)],
-                          -1)
+    return np.concatenate(
+        [
+            m[..., None],
+            h,
+            np.stack(
+                [
+                    i_bar[..., 0, 0],
+                    i_bar[..., 0, 1],
+                    i_bar[..., 1, 1],
+                    i_bar[..., 0, 2],
+                    i_bar[..., 1, 2],
+                    i_bar[..., 2, 2],
+                ],
+                -1,
+            ),
+        ],
+        -1,
+    )
 
 
 # Both maps are linear: as matrices (vec J = row-major J), made once from the definitions, they cost one

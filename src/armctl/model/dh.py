@@ -61,8 +61,9 @@ class DHLink:
         for k in ("d", "a", "alpha", "offset"):
             object.__setattr__(self, k, scalar(getattr(self, k), f"DH parameter {k}"))
         if not isinstance(self.kind, str) or self.kind not in JOINT_KINDS:
-            raise InvalidParameterError(f"DH joint kind must be one of {JOINT_KINDS}, got {self.kind!r}",
-                                        value=self.kind)
+            raise InvalidParameterError(
+                f"DH joint kind must be one of {JOINT_KINDS}, got {self.kind!r}", value=self.kind
+            )
         if self.name is not None:
             name_text(self.name, "DH link name")
         body = Link(self.mass, self.com, self.inertia, self.physical)  # checks the body here, not in from_dh
@@ -75,19 +76,32 @@ class DHLink:
 
 def _std(link: DHLink) -> FloatArray:
     """Rz(θ_off) Tz(d) Tx(a) Rx(α): the link-frame offset from the joint frame (standard DH)."""
-    return (transform(rot(_Z, link.offset)) @ transform(None, [0, 0, link.d]) @ transform(None, [link.a, 0, 0])
-            @ transform(rot(_X, link.alpha)))
+    return (
+        transform(rot(_Z, link.offset))
+        @ transform(None, [0, 0, link.d])
+        @ transform(None, [link.a, 0, 0])
+        @ transform(rot(_X, link.alpha))
+    )
 
 
 def _mod(link: DHLink) -> FloatArray:
     """Rx(α) Tx(a) Rz(θ_off) Tz(d): the joint frame in the previous link frame (modified DH)."""
-    return (transform(rot(_X, link.alpha)) @ transform(None, [link.a, 0, 0]) @ transform(rot(_Z, link.offset))
-            @ transform(None, [0, 0, link.d]))
+    return (
+        transform(rot(_X, link.alpha))
+        @ transform(None, [link.a, 0, 0])
+        @ transform(rot(_Z, link.offset))
+        @ transform(None, [0, 0, link.d])
+    )
 
 
-def model_from_dh(links: Sequence[Any], convention: str = "standard", gravity: ArrayLike = (0, 0, -9.81),
-                  tool: ArrayLike | None = None, name: str = "dh_robot", base: ArrayLike | None = None
-                  ) -> RobotModel:
+def model_from_dh(
+    links: Sequence[Any],
+    convention: str = "standard",
+    gravity: ArrayLike = (0, 0, -9.81),
+    tool: ArrayLike | None = None,
+    name: str = "dh_robot",
+    base: ArrayLike | None = None,
+) -> RobotModel:
     """Joint i's frame is the DH frame in which its axis is z; link bodies are re-expressed there.
 
     standard: frame {i−1} · Rz(q_i) is joint i's frame, link frame {i} = joint frame · Rz(θ_off)Tz(d)Tx(a)Rx(α).
@@ -95,8 +109,9 @@ def model_from_dh(links: Sequence[Any], convention: str = "standard", gravity: A
     A tool transform (4×4) is given in the last DH link frame and becomes the frame ``"tool"``.
     """
     if convention not in ("standard", "modified"):
-        raise InvalidParameterError(f"DH convention must be 'standard' or 'modified', got {convention!r}",
-                                    value=convention)
+        raise InvalidParameterError(
+            f"DH convention must be 'standard' or 'modified', got {convention!r}", value=convention
+        )
     rows = [_row(lk, i) for i, lk in enumerate(_rows(links))]
     if not rows:
         raise InvalidParameterError("a DH table needs at least one link", value=links)
@@ -117,8 +132,9 @@ def model_from_dh(links: Sequence[Any], convention: str = "standard", gravity: A
             prev_offset = np.eye(4)
         last_link_frame = link_frame
         body = Link(row.mass, row.com, row.inertia, row.physical).transformed(link_frame[:3, :3], link_frame[:3, 3])
-        joints.append(Joint(row.name or f"joint{i + 1}", row.kind, _Z, placement, body, motor, row.friction,
-                            row.limits))
+        joints.append(
+            Joint(row.name or f"joint{i + 1}", row.kind, _Z, placement, body, motor, row.friction, row.limits)
+        )
     tool_t = last_link_frame @ homogeneous(tool, "tool")
     frames = (Frame("tool", len(joints), tool_t),)
     return RobotModel(tuple(joints), name=name, gravity=gravity, frames=frames, tool_frame="tool")
@@ -131,8 +147,9 @@ def _rows(links: Any) -> list[Any]:
             raise TypeError(type(links).__name__)
         return list(links)
     except TypeError:
-        raise InvalidParameterError("a DH table must be a sequence of DHLink (or of dicts of DHLink's "
-                                    f"arguments), got {links!r}", value=links) from None
+        raise InvalidParameterError(
+            f"a DH table must be a sequence of DHLink (or of dicts of DHLink's arguments), got {links!r}", value=links
+        ) from None
 
 
 def _row(row: Any, i: int) -> DHLink:
@@ -145,4 +162,3 @@ def _row(row: Any, i: int) -> DHLink:
         except TypeError as e:  # an unknown key
             raise InvalidParameterError(f"DH row {i}: {e}; the keys are DHLink's arguments", value=row) from None
     raise InvalidParameterError(f"DH row {i} must be a DHLink or a dict of its arguments, got {row!r}", value=row)
-

@@ -50,8 +50,9 @@ def link_from_parameters(p: ArrayLike, physical: bool = True, name: str = "link"
         m, c, ic = 0.0, np.zeros(3), io
     else:
         c = h / m
-        ic = _round_off(io - m * (float(c @ c) * np.eye(3) - np.outer(c, c)),
-                        1e-10 * max(float(np.abs(io).max()), m * float(c @ c)))
+        ic = _round_off(
+            io - m * (float(c @ c) * np.eye(3) - np.outer(c, c)), 1e-10 * max(float(np.abs(io).max()), m * float(c @ c))
+        )
     try:
         return Link(m, c, ic, physical)
     except InvalidParameterError as e:
@@ -70,8 +71,13 @@ def _round_off(ic: FloatArray, tol: float) -> FloatArray:
     return (v * w) @ v.T
 
 
-def model_from_parameters(model: RobotModel, pi: ArrayLike, coulomb_offset: ArrayLike | None = None,
-                          physical: bool = True, name: str | None = None) -> RobotModel:
+def model_from_parameters(
+    model: RobotModel,
+    pi: ArrayLike,
+    coulomb_offset: ArrayLike | None = None,
+    physical: bool = True,
+    name: str | None = None,
+) -> RobotModel:
     """``model`` with its inertial, rotor and friction parameters replaced by π (13 n,), laid out as
     :meth:`RobotModel.parameters` returns them; kinematics, limits and frames unchanged.
 
@@ -99,8 +105,9 @@ def model_from_parameters(model: RobotModel, pi: ArrayLike, coulomb_offset: Arra
         link = link_from_parameters(row, physical, label)
         rotor, fv, fc = (float(v) for v in row[10:13])
         if rotor < 0 or fv < 0:
-            raise InvalidParameterError(f"{label}: rotor inertia {rotor:g} and viscous friction {fv:g} must be "
-                                        ">= 0", value=row[10:12])
+            raise InvalidParameterError(
+                f"{label}: rotor inertia {rotor:g} and viscous friction {fv:g} must be >= 0", value=row[10:12]
+            )
         if j.motor is not None:
             motor: Motor | None = replace(j.motor, inertia=rotor / j.motor.gear_ratio**2)
         else:

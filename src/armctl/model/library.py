@@ -45,8 +45,16 @@ def pendulum() -> RobotModel:
     length, mass = 0.5, 2.0
     i = mass * length**2 / 12.0
     link = Link(mass, (0.0, 0.0, -length / 2), np.diag([i, i, 0.0]))
-    joint = Joint("joint1", "revolute", _PLANE_AXIS, np.eye(4), link, Motor(5e-5, 50.0),
-                  JointFriction(viscous=0.05), JointLimits(effort=20.0, velocity=10.0))
+    joint = Joint(
+        "joint1",
+        "revolute",
+        _PLANE_AXIS,
+        np.eye(4),
+        link,
+        Motor(5e-5, 50.0),
+        JointFriction(viscous=0.05),
+        JointLimits(effort=20.0, velocity=10.0),
+    )
     tip = Frame("tool", 1, transform(None, (0.0, 0.0, -length)))
     return RobotModel((joint,), name="pendulum", frames=(tip,), tool_frame="tool")
 
@@ -61,12 +69,15 @@ def planar_2r() -> RobotModel:
 
     motor2_body = Link(m_m, (a, 0.0, 0.0), np.diag([i_m / 2, i_m, i_m / 2]))
     limits = JointLimits(effort=5000.0, velocity=5.0)
-    j1 = Joint("joint1", "revolute", _PLANE_AXIS, np.eye(4), link().combined(motor2_body), Motor(i_m, k_r),
-               limits=limits)
-    j2 = Joint("joint2", "revolute", _PLANE_AXIS, transform(None, (a, 0.0, 0.0)), link(), Motor(i_m, k_r),
-               limits=limits)
-    return RobotModel((j1, j2), name="planar_2r", frames=(Frame("tool", 2, transform(None, (a, 0, 0))),),
-                      tool_frame="tool")
+    j1 = Joint(
+        "joint1", "revolute", _PLANE_AXIS, np.eye(4), link().combined(motor2_body), Motor(i_m, k_r), limits=limits
+    )
+    j2 = Joint(
+        "joint2", "revolute", _PLANE_AXIS, transform(None, (a, 0.0, 0.0)), link(), Motor(i_m, k_r), limits=limits
+    )
+    return RobotModel(
+        (j1, j2), name="planar_2r", frames=(Frame("tool", 2, transform(None, (a, 0, 0))),), tool_frame="tool"
+    )
 
 
 def planar_3r() -> RobotModel:
@@ -75,8 +86,16 @@ def planar_3r() -> RobotModel:
     joints = []
     offset = 0.0
     for k, (length, mass) in enumerate(zip(lengths, masses, strict=True)):
-        joints.append(Joint(f"joint{k + 1}", "revolute", _PLANE_AXIS, transform(None, (offset, 0.0, 0.0)),
-                            _rod(mass, length), limits=JointLimits(effort=200.0, velocity=5.0)))
+        joints.append(
+            Joint(
+                f"joint{k + 1}",
+                "revolute",
+                _PLANE_AXIS,
+                transform(None, (offset, 0.0, 0.0)),
+                _rod(mass, length),
+                limits=JointLimits(effort=200.0, velocity=5.0),
+            )
+        )
         offset = length
     tool = Frame("tool", 3, transform(None, (lengths[-1], 0.0, 0.0)))
     return RobotModel(tuple(joints), name="planar_3r", frames=(tool,), tool_frame="tool")
@@ -87,6 +106,7 @@ def planar_3r() -> RobotModel:
 # qlim [deg]. Source: Robotics Toolbox for MATLAB, models/mdl_puma560.m (Corke & Armstrong-Helouvry 1994;
 # limits after Wang & Chen 1991); no pedestal (the Python toolbox adds 26.45 in to d1).
 # As published, links 1 and 3 violate the triangle inequality of principal moments (see puma560()).
+# fmt: off
 _PUMA = (
     (0.0, 0.0, math.pi / 2, 0.0, (0, 0, 0), (0, 0.35, 0, 0, 0, 0), 200e-6, -62.6111, 1.48e-3,
      (0.395, -0.435), (-160, 160)),
@@ -101,6 +121,7 @@ _PUMA = (
     (0.0, 0.0, 0.0, 0.09, (0, 0, 0.032), (0.15e-3, 0.15e-3, 0.04e-3, 0, 0, 0), 33e-6, 76.686, 36.7e-6,
      (3.96e-3, -10.5e-3), (-266, 266)),
 )
+# fmt: on
 
 
 PUMA_QZ = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)  #: zero angles, L-shaped pose
@@ -132,11 +153,21 @@ def puma560(physical: bool = False) -> RobotModel:
         if physical and k == 2:
             izz = 0.020
         tensor = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]], dtype=float)
-        rows.append(DHLink(d=d, a=a, alpha=alpha, mass=m, com=r, inertia=tensor, motor=Motor(jm, g),
-                           friction=JointFriction(viscous=b * g * g, coulomb=abs(g) * tc[0],
-                                                  coulomb_negative=abs(g) * abs(tc[1])),
-                           limits=JointLimits(math.radians(qlim[0]), math.radians(qlim[1])),
-                           name=f"joint{k + 1}", physical=physical or k not in (0, 2)))
+        rows.append(
+            DHLink(
+                d=d,
+                a=a,
+                alpha=alpha,
+                mass=m,
+                com=r,
+                inertia=tensor,
+                motor=Motor(jm, g),
+                friction=JointFriction(viscous=b * g * g, coulomb=abs(g) * tc[0], coulomb_negative=abs(g) * abs(tc[1])),
+                limits=JointLimits(math.radians(qlim[0]), math.radians(qlim[1])),
+                name=f"joint{k + 1}",
+                physical=physical or k not in (0, 2),
+            )
+        )
     return RobotModel.from_dh(rows, convention="standard", name="puma560")
 
 
@@ -147,14 +178,17 @@ def _robots_dir() -> Path:
     try:
         dist = distribution("example-robot-data")
     except PackageNotFoundError:
-        raise ModelLoadError("the example-robot-data package is not installed: pip install example-robot-data",
-                             value="example-robot-data") from None
+        raise ModelLoadError(
+            "the example-robot-data package is not installed: pip install example-robot-data",
+            value="example-robot-data",
+        ) from None
     for rel in ("cmeel.prefix/share/example-robot-data/robots", "share/example-robot-data/robots"):
         path = Path(str(dist.locate_file(rel)))
         if path.is_dir():
             return path
-    raise ModelLoadError("example-robot-data is installed but its robots folder was not found",
-                         value=str(dist.locate_file("")))
+    raise ModelLoadError(
+        "example-robot-data is installed but its robots folder was not found", value=str(dist.locate_file(""))
+    )
 
 
 def robot_description(relative: str) -> Path:
@@ -174,8 +208,9 @@ def panda() -> RobotModel:
     path = robot_description("panda_description/urdf/panda.urdf")
     model = RobotModel.from_urdf(path, lock=("panda_finger_joint1", "panda_finger_joint2"), name="panda")
     tool = "panda_hand_tcp" if "panda_hand_tcp" in model.frame_names else "panda_hand"
-    return RobotModel(model.joints, name="panda", gravity=model.gravity, frames=model.frames,
-                      tool_frame=tool).reduced(friction=False)
+    return RobotModel(model.joints, name="panda", gravity=model.gravity, frames=model.frames, tool_frame=tool).reduced(
+        friction=False
+    )
 
 
 def ur5() -> RobotModel:

@@ -79,8 +79,10 @@ def inertia_tensor(x: ArrayLike, name: str = "inertia", triangle: bool = True) -
         xx, xy, xz, yy, yz, zz = a
         a = np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
     if a.shape != (3, 3):
-        raise ShapeError(f"{name} must be 3×3, 3 principal moments or 6 values (Ixx, Ixy, Ixz, Iyy, Iyz, Izz);"
-                         f" got shape {a.shape}", value=x)
+        raise ShapeError(
+            f"{name} must be 3×3, 3 principal moments or 6 values (Ixx, Ixy, Ixz, Iyy, Iyz, Izz); got shape {a.shape}",
+            value=x,
+        )
     if not np.isfinite(a).all():
         raise NonFiniteError(f"{name} must be finite, got {a.tolist()}", value=x)
     scale = max(float(np.abs(a).max()), 1e-300)
@@ -92,11 +94,15 @@ def inertia_tensor(x: ArrayLike, name: str = "inertia", triangle: bool = True) -
     if ev[0] < -tol:
         raise InvalidParameterError(
             f"{name} is not positive semi-definite: principal moments {ev.tolist()} (a rigid body has none "
-            "negative; a point mass or slender rod may have zeros)", value=x)
+            "negative; a point mass or slender rod may have zeros)",
+            value=x,
+        )
     if triangle and ev[0] + ev[1] < ev[2] - tol:
         raise InvalidParameterError(
             f"{name} violates the triangle inequality of principal moments: {ev[0]:g} + {ev[1]:g} < {ev[2]:g};"
-            " no rigid body has these moments (check units and which axis is which)", value=x)
+            " no rigid body has these moments (check units and which axis is which)",
+            value=x,
+        )
     return readonly(a)
 
 
@@ -129,8 +135,7 @@ class Link:
 
     def transformed(self, rotation: FloatArray, translation: FloatArray) -> Link:
         """This body expressed in a frame where a point x of the old frame is ``rotation @ x + translation``."""
-        return Link(self.mass, rotation @ self.com + translation, rotation @ self.inertia @ rotation.T,
-                    self.physical)
+        return Link(self.mass, rotation @ self.com + translation, rotation @ self.inertia @ rotation.T, self.physical)
 
     def combined(self, other: Link) -> Link:
         """The rigid union of two bodies given in the same frame."""
@@ -166,8 +171,7 @@ class Motor:
         i = scalar(self.inertia, "rotor inertia [kg·m²]", nonnegative=True)
         k = scalar(self.gear_ratio, "gear ratio")
         if k == 0:
-            raise InvalidParameterError(f"gear ratio must be non-zero, got {self.gear_ratio!r}",
-                                        value=self.gear_ratio)
+            raise InvalidParameterError(f"gear ratio must be non-zero, got {self.gear_ratio!r}", value=self.gear_ratio)
         object.__setattr__(self, "inertia", i)
         object.__setattr__(self, "gear_ratio", k)
         object.__setattr__(self, "gyroscopic", boolean(self.gyroscopic, "gyroscopic"))
@@ -205,8 +209,9 @@ class JointFriction:
             object.__setattr__(self, name, scalar(v, f"friction {name}", nonnegative=True))
         if self.static is not None and self.static < max(self.coulomb, self.coulomb_neg) - 1e-12:
             raise InvalidParameterError(
-                f"static friction {self.static} must be >= the Coulomb levels ({self.coulomb}, "
-                f"{self.coulomb_neg})", value=self.static)
+                f"static friction {self.static} must be >= the Coulomb levels ({self.coulomb}, {self.coulomb_neg})",
+                value=self.static,
+            )
 
     @property
     def coulomb_neg(self) -> float:
@@ -241,8 +246,7 @@ class JointLimits:
     def __post_init__(self) -> None:
         vals = {k: _limit(getattr(self, k), f"joint {k} limit") for k in ("lower", "upper", "velocity", "effort")}
         if vals["lower"] > vals["upper"]:
-            raise InvalidParameterError(f"joint lower limit {vals['lower']} is above upper {vals['upper']}",
-                                        value=vals)
+            raise InvalidParameterError(f"joint lower limit {vals['lower']} is above upper {vals['upper']}", value=vals)
         if vals["velocity"] <= 0 or vals["effort"] <= 0:
             raise InvalidParameterError(f"velocity and effort limits must be > 0: {vals}", value=vals)
         for k, v in vals.items():
@@ -272,8 +276,9 @@ class Joint:
     def __post_init__(self) -> None:
         name_text(self.name, "joint name")
         if not isinstance(self.kind, str) or self.kind not in JOINT_KINDS:
-            raise InvalidParameterError(f"joint {self.name!r}: kind must be one of {JOINT_KINDS}, got "
-                                        f"{self.kind!r}", value=self.kind)
+            raise InvalidParameterError(
+                f"joint {self.name!r}: kind must be one of {JOINT_KINDS}, got {self.kind!r}", value=self.kind
+            )
         instance_of(self.link, Link, f"joint {self.name!r} link")
         instance_of(self.motor, Motor, f"joint {self.name!r} motor", optional=True)
         instance_of(self.friction, JointFriction, f"joint {self.name!r} friction (JointFriction() for none)")
@@ -315,10 +320,15 @@ def homogeneous(x: ArrayLike | None, name: str = "transform") -> FloatArray:
     if t.shape != (4, 4):
         raise ShapeError(f"{name} must be a 4×4 homogeneous transform, got shape {t.shape}", value=x)
     r = t[:3, :3]
-    if (not np.isfinite(t).all() or not np.allclose(r.T @ r, np.eye(3), atol=1e-6)
-            or not np.allclose(t[3], [0, 0, 0, 1]) or np.linalg.det(r) < 0):
-        raise InvalidParameterError(f"{name} is not a rigid transform (orthonormal rotation, det +1, last row "
-                                    f"0 0 0 1): {t.tolist()}", value=x)
+    if (
+        not np.isfinite(t).all()
+        or not np.allclose(r.T @ r, np.eye(3), atol=1e-6)
+        or not np.allclose(t[3], [0, 0, 0, 1])
+        or np.linalg.det(r) < 0
+    ):
+        raise InvalidParameterError(
+            f"{name} is not a rigid transform (orthonormal rotation, det +1, last row 0 0 0 1): {t.tolist()}", value=x
+        )
     return readonly(t)
 
 

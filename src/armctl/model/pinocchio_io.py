@@ -40,22 +40,35 @@ def build_pinocchio(model: RobotModel) -> pinocchio.Model:
         lim = j.limits
         big = 1e300
         jid = pm.addJoint(
-            i, _joint_model(j), pin.SE3(j.placement[:3, :3].copy(), j.placement[:3, 3].copy()), j.name,
-            np.array([min(lim.effort, big)]), np.array([min(lim.velocity, big)]),
-            np.array([max(lim.lower, -big)]), np.array([min(lim.upper, big)]))
-        pm.appendBodyToJoint(jid, pin.Inertia(j.link.mass, j.link.com.copy(), j.link.inertia.copy()),
-                             pin.SE3.Identity())
+            i,
+            _joint_model(j),
+            pin.SE3(j.placement[:3, :3].copy(), j.placement[:3, 3].copy()),
+            j.name,
+            np.array([min(lim.effort, big)]),
+            np.array([min(lim.velocity, big)]),
+            np.array([max(lim.lower, -big)]),
+            np.array([min(lim.upper, big)]),
+        )
+        pm.appendBodyToJoint(
+            jid, pin.Inertia(j.link.mass, j.link.com.copy(), j.link.inertia.copy()), pin.SE3.Identity()
+        )
         pm.addFrame(pin.Frame(j.name, jid, 0, pin.SE3.Identity(), pin.FrameType.JOINT), False)
     for f in model.frames:
-        pm.addFrame(pin.Frame(f.name, f.joint, 0, pin.SE3(f.placement[:3, :3].copy(),
-                                                          f.placement[:3, 3].copy()),
-                              pin.FrameType.OP_FRAME), False)
+        pm.addFrame(
+            pin.Frame(
+                f.name,
+                f.joint,
+                0,
+                pin.SE3(f.placement[:3, :3].copy(), f.placement[:3, 3].copy()),
+                pin.FrameType.OP_FRAME,
+            ),
+            False,
+        )
     pm.armature = np.array([j.motor.reflected_inertia if j.motor is not None else 0.0 for j in model.joints])
     return pm
 
 
-def joints_from_pinocchio(pm: pinocchio.Model, source: str, physical: bool = True
-                          ) -> tuple[list[Joint], list[Frame]]:
+def joints_from_pinocchio(pm: pinocchio.Model, source: str, physical: bool = True) -> tuple[list[Joint], list[Frame]]:
     """Read a serial, one-dof-per-joint pinocchio.Model back into joints and frames (motors not included).
     ``physical=False`` accepts inertias that violate the triangle inequality (see :class:`Link`).
 
@@ -68,24 +81,33 @@ def joints_from_pinocchio(pm: pinocchio.Model, source: str, physical: bool = Tru
     import pinocchio as pin
 
     if pm.nq != pm.nv:
-        raise ModelLoadError(f"{source}: joints with nq != nv (continuous or floating joints) are not "
-                             f"supported; joint types: {[jt.shortname() for jt in pm.joints[1:]]}", value=source)
+        raise ModelLoadError(
+            f"{source}: joints with nq != nv (continuous or floating joints) are not "
+            f"supported; joint types: {[jt.shortname() for jt in pm.joints[1:]]}",
+            value=source,
+        )
     data = pm.createData()
     pin.forwardKinematics(pm, data, pin.neutral(pm))
     joints: list[Joint] = []
     for jid in range(1, pm.njoints):
         if pm.joints[jid].nv != 1:
-            raise ModelLoadError(f"{source}: only one-dof joints are supported; joint {pm.names[jid]!r} is a "
-                                 f"{pm.joints[jid].shortname()} with {pm.joints[jid].nv} degrees of freedom (lock it "
-                                 f"with lock=[{pm.names[jid]!r}] if it may stay fixed)", value=source)
+            raise ModelLoadError(
+                f"{source}: only one-dof joints are supported; joint {pm.names[jid]!r} is a "
+                f"{pm.joints[jid].shortname()} with {pm.joints[jid].nv} degrees of freedom (lock it "
+                f"with lock=[{pm.names[jid]!r}] if it may stay fixed)",
+                value=source,
+            )
         if pm.parents[jid] != jid - 1:
             parent = pm.parents[jid]
             beyond = [pm.names[k] for k in range(parent + 1, pm.njoints)]  # every joint past the branching one
-            raise ModelLoadError(f"{source}: only serial chains of one-dof joints are supported (joint "
-                                 f"{pm.names[jid]!r} has parent {pm.names[parent]!r}, which already has a child "
-                                 f"joint). Lock the joints of the extra branches, e.g. "
-                                 f"RobotModel.from_urdf(..., lock={beyond!r}) to keep the chain up to "
-                                 f"{pm.names[parent]!r}", value=source)
+            raise ModelLoadError(
+                f"{source}: only serial chains of one-dof joints are supported (joint "
+                f"{pm.names[jid]!r} has parent {pm.names[parent]!r}, which already has a child "
+                f"joint). Lock the joints of the extra branches, e.g. "
+                f"RobotModel.from_urdf(..., lock={beyond!r}) to keep the chain up to "
+                f"{pm.names[parent]!r}",
+                value=source,
+            )
         s = np.asarray(data.joints[jid].S).reshape(6)
         kind = "prismatic" if np.linalg.norm(s[:3]) > 0.5 else "revolute"
         axis = s[:3] if kind == "prismatic" else s[3:]
@@ -97,23 +119,28 @@ def joints_from_pinocchio(pm: pinocchio.Model, source: str, physical: bool = Tru
                 lower=float(pm.lowerPositionLimit[idx]) if pm.lowerPositionLimit[idx] > -1e10 else -np.inf,
                 upper=float(pm.upperPositionLimit[idx]) if pm.upperPositionLimit[idx] < 1e10 else np.inf,
                 velocity=float(pm.velocityLimit[idx]) if 0 < pm.velocityLimit[idx] < 1e10 else np.inf,
-                effort=float(pm.effortLimit[idx]) if 0 < pm.effortLimit[idx] < 1e10 else np.inf)
+                effort=float(pm.effortLimit[idx]) if 0 < pm.effortLimit[idx] < 1e10 else np.inf,
+            )
             fric = JointFriction(viscous=float(pm.damping[idx]), coulomb=float(pm.friction[idx]))
             link = Link(inert.mass, inert.lever, inert.inertia, physical)
         except (InvalidParameterError, NonFiniteError, ShapeError) as e:  # name the joint and its links
             links = [f.name for f in pm.frames if f.parentJoint == jid and f.type == pin.FrameType.BODY]
             carried = f"link{'s' if len(links) > 1 else ''} {', '.join(map(repr, links))}"
             raise type(e)(f"{source}: joint {pm.names[jid]!r} ({carried}): {e}", value=e.value) from None
-        joints.append(Joint(pm.names[jid], kind, axis, transform(pl.rotation, pl.translation), link, None, fric,
-                            lim))
+        joints.append(Joint(pm.names[jid], kind, axis, transform(pl.rotation, pl.translation), link, None, fric, lim))
     names = set(pm.names)
-    frames = [Frame(f.name, int(f.parentJoint), transform(f.placement.rotation, f.placement.translation))
-              for f in pm.frames if f.name not in names and f.name != "universe"]
+    frames = [
+        Frame(f.name, int(f.parentJoint), transform(f.placement.rotation, f.placement.translation))
+        for f in pm.frames
+        if f.name not in names and f.name != "universe"
+    ]
     for f in frames:
         if f.name == "world" and (f.joint != 0 or not np.allclose(f.placement, np.eye(4), rtol=0, atol=1e-12)):
             where = f"on joint {pm.names[f.joint]!r}" if f.joint else "fixed to the world away from its origin"
-            raise ModelLoadError(f"{source}: a frame called 'world' {where}; 'world' is reserved for the world "
-                                 "frame (rename the link)", value=source)
+            raise ModelLoadError(
+                f"{source}: a frame called 'world' {where}; 'world' is reserved for the world frame (rename the link)",
+                value=source,
+            )
     frames = [f for f in frames if f.name != "world"]
     seen: set[str] = set()
     unique = [f for f in frames if not (f.name in seen or seen.add(f.name))]
@@ -146,8 +173,9 @@ def lock_positions(lock: Any, names: Sequence[str]) -> dict[str, float]:
                 raise TypeError("bytes")
             items = [(name, 0.0) for name in lock]
         except TypeError:
-            raise InvalidParameterError(f"lock must be a joint name, joint names or a mapping joint name → "
-                                        f"position, got {lock!r}", value=lock) from None
+            raise InvalidParameterError(
+                f"lock must be a joint name, joint names or a mapping joint name → position, got {lock!r}", value=lock
+            ) from None
     positions: dict[str, float] = {}
     for name, value in items:
         if not isinstance(name, str) or name not in names:
@@ -165,8 +193,11 @@ def lock_joints(model: RobotModel, positions: Mapping[str, float]) -> RobotModel
     import pinocchio as pin
 
     if len(positions) == model.n:
-        raise InvalidParameterError(f"cannot lock every joint of {model.name!r} ({sorted(positions)}): a model "
-                                    "needs at least one free joint; leave one out of lock", value=positions)
+        raise InvalidParameterError(
+            f"cannot lock every joint of {model.name!r} ({sorted(positions)}): a model "
+            "needs at least one free joint; leave one out of lock",
+            value=positions,
+        )
     q = np.zeros(model.n)
     for name, v in positions.items():
         q[model.joint_index(name)] = v

@@ -42,7 +42,19 @@ if TYPE_CHECKING:
 
 #: Names of the 13 dynamic parameters of one joint, in the order of :meth:`RobotModel.parameters`.
 PARAMETER_NAMES: tuple[str, ...] = (
-    "m", "mcx", "mcy", "mcz", "Ixx", "Ixy", "Iyy", "Ixz", "Iyz", "Izz", "Im_reflected", "Fv", "Fc",
+    "m",
+    "mcx",
+    "mcy",
+    "mcz",
+    "Ixx",
+    "Ixy",
+    "Iyy",
+    "Ixz",
+    "Iyz",
+    "Izz",
+    "Im_reflected",
+    "Fv",
+    "Fc",
 )
 PARAMS_PER_JOINT = len(PARAMETER_NAMES)
 
@@ -74,15 +86,22 @@ class RobotModel:
         g = np.array(vector(self.gravity, 3, "gravity"))  # a copy, made read-only below
         for f in frames:
             if not 0 <= f.joint <= len(joints):
-                raise InvalidParameterError(f"frame {f.name!r} is attached to joint {f.joint}, but the model "
-                                            f"has joints 1..{len(joints)} (0 is the world)", value=f.joint)
+                raise InvalidParameterError(
+                    f"frame {f.name!r} is attached to joint {f.joint}, but the model "
+                    f"has joints 1..{len(joints)} (0 is the world)",
+                    value=f.joint,
+                )
         all_names = ["world", *names, *(f.name for f in frames)]
         if "universe" in all_names:  # Pinocchio's own name for its world frame: a second one is ambiguous there
-            raise InvalidParameterError("the name 'universe' is reserved (Pinocchio's world frame, which armctl "
-                                        "calls 'world'): rename that joint or frame", value="universe")
+            raise InvalidParameterError(
+                "the name 'universe' is reserved (Pinocchio's world frame, which armctl "
+                "calls 'world'): rename that joint or frame",
+                value="universe",
+            )
         if len(set(all_names)) != len(all_names):
-            raise InvalidParameterError(f"frame names must be unique (joint names count as frames): "
-                                        f"{all_names}", value=all_names)
+            raise InvalidParameterError(
+                f"frame names must be unique (joint names count as frames): {all_names}", value=all_names
+            )
         object.__setattr__(self, "joints", joints)
         object.__setattr__(self, "frames", frames)
         object.__setattr__(self, "gravity", readonly(g))
@@ -91,17 +110,29 @@ class RobotModel:
 
     # ----------------------------------------------------------------------------------------- builders
     @classmethod
-    def from_dh(cls, links: Sequence[Any], convention: str = "standard", gravity: ArrayLike = (0, 0, -9.81),
-                tool: ArrayLike | None = None, name: str = "dh_robot", base: ArrayLike | None = None
-                ) -> RobotModel:
+    def from_dh(
+        cls,
+        links: Sequence[Any],
+        convention: str = "standard",
+        gravity: ArrayLike = (0, 0, -9.81),
+        tool: ArrayLike | None = None,
+        name: str = "dh_robot",
+        base: ArrayLike | None = None,
+    ) -> RobotModel:
         """A model from a Denavit–Hartenberg table of :class:`~armctl.model.dh.DHLink` (see there)."""
         from armctl.model.dh import model_from_dh
 
         return model_from_dh(links, convention=convention, gravity=gravity, tool=tool, name=name, base=base)
 
     @classmethod
-    def from_urdf(cls, path: str, tool_frame: str | None = None, lock: Sequence[str] | Mapping[str, float] = (),
-                  gravity: ArrayLike = (0, 0, -9.81), name: str | None = None) -> RobotModel:
+    def from_urdf(
+        cls,
+        path: str,
+        tool_frame: str | None = None,
+        lock: Sequence[str] | Mapping[str, float] = (),
+        gravity: ArrayLike = (0, 0, -9.81),
+        name: str | None = None,
+    ) -> RobotModel:
         """A model from a URDF file through Pinocchio's parser. ``lock``: joints held fixed (a name, names, or a
         mapping name → position; checked as in :meth:`reduced`). URDF ``<dynamics damping friction>`` become
         viscous and Coulomb friction. Every link and fixed joint becomes a named frame, those fixed to the
@@ -121,9 +152,11 @@ class RobotModel:
     def __repr__(self) -> str:  # a summary: the dataclass's own repr prints every array of every joint
         kinds = "".join("P" if j.kind == "prismatic" else "R" for j in self.joints)
         mass = sum(j.link.mass for j in self.joints)
-        return (f"RobotModel({self.name!r}: {self.n} joints {kinds}, {mass:.4g} kg of links, "
-                f"motors={self.has_motors}, friction={self.has_friction}, tool_frame={self.tool_frame!r}, "
-                f"gravity={self.gravity.tolist()}, {len(self.frames)} named frames besides the joints)")
+        return (
+            f"RobotModel({self.name!r}: {self.n} joints {kinds}, {mass:.4g} kg of links, "
+            f"motors={self.has_motors}, friction={self.has_friction}, tool_frame={self.tool_frame!r}, "
+            f"gravity={self.gravity.tolist()}, {len(self.frames)} named frames besides the joints)"
+        )
 
     @property
     def joint_names(self) -> tuple[str, ...]:
@@ -201,9 +234,18 @@ class RobotModel:
             lk = j.link
             io = lk.inertia_about_origin()
             rotor = j.motor.reflected_inertia if j.motor is not None else 0.0
-            out[PARAMS_PER_JOINT * i: PARAMS_PER_JOINT * (i + 1)] = [
-                lk.mass, *(lk.mass * lk.com), io[0, 0], io[0, 1], io[1, 1], io[0, 2], io[1, 2], io[2, 2],
-                rotor, j.friction.viscous, j.friction.coulomb_mean,
+            out[PARAMS_PER_JOINT * i : PARAMS_PER_JOINT * (i + 1)] = [
+                lk.mass,
+                *(lk.mass * lk.com),
+                io[0, 0],
+                io[0, 1],
+                io[1, 1],
+                io[0, 2],
+                io[1, 2],
+                io[2, 2],
+                rotor,
+                j.friction.viscous,
+                j.friction.coulomb_mean,
             ]
         return readonly(out)
 
@@ -253,26 +295,34 @@ class RobotModel:
         return build_pinocchio(self)
 
     # ----------------------------------------------------------------------------------------- variants
-    def with_payload(self, mass: float, com: ArrayLike = (0.0, 0.0, 0.0),
-                     inertia: ArrayLike = (0.0, 0.0, 0.0), frame: str | None = None) -> RobotModel:
+    def with_payload(
+        self,
+        mass: float,
+        com: ArrayLike = (0.0, 0.0, 0.0),
+        inertia: ArrayLike = (0.0, 0.0, 0.0),
+        frame: str | None = None,
+    ) -> RobotModel:
         """This arm carrying a rigid payload: ``mass`` [kg], centre of mass ``com`` and ``inertia`` about it,
         both in the axes of ``frame`` (default: the tool frame). ``inertia``: a 3×3 tensor, 3 principal moments
         or 6 values in URDF order (Ixx, Ixy, Ixz, Iyy, Iyz, Izz) — not π's order (Ixx, Ixy, Iyy, Ixz, Iyz, Izz,
         Pinocchio's, and about the joint frame, not the centre of mass)."""
         f = self.frame(frame)
         if f.joint == 0:
-            raise InvalidParameterError(f"a payload cannot be attached to frame {f.name!r}: it is fixed to the "
-                                        "world", value=frame)
+            raise InvalidParameterError(
+                f"a payload cannot be attached to frame {f.name!r}: it is fixed to the world", value=frame
+            )
         mass = scalar(mass, "payload mass [kg]", nonnegative=True)
         payload = Link(mass, vec3(com, "payload com"), inertia_tensor(inertia, "payload inertia")).transformed(
-            f.placement[:3, :3], f.placement[:3, 3])
+            f.placement[:3, :3], f.placement[:3, 3]
+        )
         idx = f.joint - 1
         joints = list(self.joints)
         joints[idx] = replace(joints[idx], link=joints[idx].link.combined(payload))
         return replace(self, joints=tuple(joints), name=f"{self.name}+payload")
 
-    def with_parameters(self, pi: ArrayLike, coulomb_offset: ArrayLike | None = None, physical: bool = True
-                        ) -> RobotModel:
+    def with_parameters(
+        self, pi: ArrayLike, coulomb_offset: ArrayLike | None = None, physical: bool = True
+    ) -> RobotModel:
         """This arm's kinematics with the dynamic parameters π (13 a joint, the layout of :meth:`parameters`);
         ``coulomb_offset``: ½(F_c⁺ − F_c⁻) per joint (default: this model's); ``physical`` as for :class:`Link`.
         Raises :class:`~armctl.errors.InvalidParameterError` if π is not that of physical bodies."""
@@ -280,9 +330,14 @@ class RobotModel:
 
         return model_from_parameters(self, pi, coulomb_offset=coulomb_offset, physical=physical)
 
-    def with_friction(self, viscous: ArrayLike = 0.0, coulomb: ArrayLike = 0.0,
-                      coulomb_negative: ArrayLike | None = None, static: ArrayLike | None = None,
-                      stribeck_velocity: ArrayLike = 0.0) -> RobotModel:
+    def with_friction(
+        self,
+        viscous: ArrayLike = 0.0,
+        coulomb: ArrayLike = 0.0,
+        coulomb_negative: ArrayLike | None = None,
+        static: ArrayLike | None = None,
+        stribeck_velocity: ArrayLike = 0.0,
+    ) -> RobotModel:
         """This arm with the given joint friction (each a scalar for all joints or an (n,) vector, finite and
         >= 0; ``coulomb_negative`` and ``static`` may be None: the Coulomb level, see
         :class:`~armctl.model.parts.JointFriction`)."""
@@ -293,15 +348,27 @@ class RobotModel:
             name = f"with_friction(): {what}"
             return nonnegative_vector(x, self.n, name).tolist()  # type: ignore[no-any-return]
 
-        cols = zip(per_joint(viscous, "viscous"), per_joint(coulomb, "coulomb"),
-                   per_joint(coulomb_negative, "coulomb_negative", True), per_joint(static, "static", True),
-                   per_joint(stribeck_velocity, "stribeck_velocity"), strict=True)
+        cols = zip(
+            per_joint(viscous, "viscous"),
+            per_joint(coulomb, "coulomb"),
+            per_joint(coulomb_negative, "coulomb_negative", True),
+            per_joint(static, "static", True),
+            per_joint(stribeck_velocity, "stribeck_velocity"),
+            strict=True,
+        )
         joints = tuple(replace(j, friction=JointFriction(*c)) for j, c in zip(self.joints, cols, strict=True))
         return replace(self, joints=joints)
 
-    def perturbed(self, mass: float = 1.0, inertia: float = 1.0, com_offset: float = 0.0,
-                  friction: float = 1.0, rotor: float = 1.0, noise: float = 0.0,
-                  seed: int | None = None) -> RobotModel:
+    def perturbed(
+        self,
+        mass: float = 1.0,
+        inertia: float = 1.0,
+        com_offset: float = 0.0,
+        friction: float = 1.0,
+        rotor: float = 1.0,
+        noise: float = 0.0,
+        seed: int | None = None,
+    ) -> RobotModel:
         """A deliberately wrong copy of this arm, for model-error studies.
 
         mass, inertia, friction, rotor: factors on every link mass, every inertia tensor about the centre of
@@ -310,35 +377,44 @@ class RobotModel:
         link (seeded by ``seed``), clipped to stay physical.
         """
         factor = "a factor, 1 leaves it unchanged"
-        for nm, v, hint in (("mass", mass, factor), ("inertia", inertia, factor), ("friction", friction, factor),
-                            ("rotor", rotor, factor),
-                            ("com_offset", com_offset, "a distance in m, 0 for none"),
-                            ("noise", noise, "a relative standard deviation, 0 for none")):
+        for nm, v, hint in (
+            ("mass", mass, factor),
+            ("inertia", inertia, factor),
+            ("friction", friction, factor),
+            ("rotor", rotor, factor),
+            ("com_offset", com_offset, "a distance in m, 0 for none"),
+            ("noise", noise, "a relative standard deviation, 0 for none"),
+        ):
             try:
                 ok = not isinstance(v, bool | np.bool_) and math.isfinite(v) and v >= 0
             except TypeError:
                 ok = False
             if not ok:
-                raise InvalidParameterError(f"perturbed(): {nm} must be finite and >= 0 ({hint}), got {v!r}",
-                                            value=v)
+                raise InvalidParameterError(f"perturbed(): {nm} must be finite and >= 0 ({hint}), got {v!r}", value=v)
         rng = np.random.default_rng(None if seed is None else whole_number(seed, "perturbed(): seed"))
         joints = []
         for j in self.joints:
             f_noise = max(0.05, 1.0 + noise * rng.standard_normal()) if noise else 1.0
             d = rng.standard_normal(3)
             d *= com_offset / max(float(np.linalg.norm(d)), 1e-12)
-            link = Link(j.link.mass * mass * f_noise, j.link.com + d, j.link.inertia * inertia * f_noise,
-                        j.link.physical)
+            link = Link(
+                j.link.mass * mass * f_noise, j.link.com + d, j.link.inertia * inertia * f_noise, j.link.physical
+            )
             motor = replace(j.motor, inertia=j.motor.inertia * rotor) if j.motor is not None else None
             fr = j.friction
-            fr = JointFriction(fr.viscous * friction, fr.coulomb * friction,
-                               None if fr.coulomb_negative is None else fr.coulomb_negative * friction,
-                               None if fr.static is None else fr.static * friction, fr.stribeck_velocity)
+            fr = JointFriction(
+                fr.viscous * friction,
+                fr.coulomb * friction,
+                None if fr.coulomb_negative is None else fr.coulomb_negative * friction,
+                None if fr.static is None else fr.static * friction,
+                fr.stribeck_velocity,
+            )
             joints.append(replace(j, link=link, motor=motor, friction=fr))
         return replace(self, joints=tuple(joints), name=f"{self.name}~perturbed")
 
-    def reduced(self, rotors: bool = True, friction: bool = True,
-                lock: Sequence[str] | Mapping[str, float] = ()) -> RobotModel:
+    def reduced(
+        self, rotors: bool = True, friction: bool = True, lock: Sequence[str] | Mapping[str, float] = ()
+    ) -> RobotModel:
         """A simpler model of this arm: ``rotors=False`` drops the motors, ``friction=False`` the friction,
         ``lock`` holds joints fixed (names locked at 0, or a mapping name → position), merging their links
         into the previous one. With ``lock``, the locked joints' frames and every other frame stay (attached
@@ -356,11 +432,11 @@ class RobotModel:
 
         rotors, friction = boolean(rotors, "reduced(): rotors"), boolean(friction, "reduced(): friction")
         positions = lock_positions(lock, self.joint_names)
-        joints = tuple(replace(j, motor=j.motor if rotors else None,
-                               friction=j.friction if friction else JointFriction()) for j in self.joints)
+        joints = tuple(
+            replace(j, motor=j.motor if rotors else None, friction=j.friction if friction else JointFriction())
+            for j in self.joints
+        )
         model = replace(self, joints=joints)
         if positions:
             model = lock_joints(model, positions)
         return model
-
-

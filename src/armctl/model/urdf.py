@@ -12,9 +12,13 @@ from armctl.errors import InvalidParameterError, ModelLoadError, UnknownNameErro
 from armctl.model.robot import RobotModel
 
 
-def model_from_urdf(path: str | os.PathLike[str], tool_frame: str | None = None,
-                    lock: Sequence[str] | Mapping[str, float] = (), gravity: ArrayLike = (0, 0, -9.81),
-                    name: str | None = None) -> RobotModel:
+def model_from_urdf(
+    path: str | os.PathLike[str],
+    tool_frame: str | None = None,
+    lock: Sequence[str] | Mapping[str, float] = (),
+    gravity: ArrayLike = (0, 0, -9.81),
+    name: str | None = None,
+) -> RobotModel:
     import pinocchio as pin
 
     from armctl.model.pinocchio_io import joints_from_pinocchio, lock_positions
@@ -38,8 +42,9 @@ def model_from_urdf(path: str | os.PathLike[str], tool_frame: str | None = None,
             ids.append(jid)
         pm = pin.buildReducedModel(pm, ids, q)
     joints, frames = joints_from_pinocchio(pm, path)
-    model = RobotModel(tuple(joints), name=name or pm.name or os.path.basename(path),
-                       gravity=gravity, frames=tuple(frames))
+    model = RobotModel(
+        tuple(joints), name=name or pm.name or os.path.basename(path), gravity=gravity, frames=tuple(frames)
+    )
     if tool_frame is not None:
         if tool_frame not in model.frame_names:
             raise UnknownNameError("frame", tool_frame, model.frame_names)

@@ -52,15 +52,24 @@ class PathAdapter(AbstractGeometricPath):  # type: ignore[misc]
 class RowsConstraint(LinearConstraint):  # type: ignore[misc]
     """Precomputed rows a u + b x + c ≤ g (F = I) and 0 ≤ x ≤ x_max, valid on one grid only."""
 
-    def __init__(self, s: FloatArray, a: FloatArray, b: FloatArray, c: FloatArray, g: FloatArray,
-                 x_max: FloatArray, interpolation: bool) -> None:
+    def __init__(
+        self,
+        s: FloatArray,
+        a: FloatArray,
+        b: FloatArray,
+        c: FloatArray,
+        g: FloatArray,
+        x_max: FloatArray,
+        interpolation: bool,
+    ) -> None:
         super().__init__()
         self._s, self._a, self._b, self._c, self._g = s, a, b, c, g
         self._xbound = np.stack([np.zeros_like(x_max), x_max], axis=1)
         self.dof = a.shape[1]
         self.identical = True
-        self.set_discretization_type(DiscretizationType.Interpolation if interpolation
-                                     else DiscretizationType.Collocation)
+        self.set_discretization_type(
+            DiscretizationType.Interpolation if interpolation else DiscretizationType.Collocation
+        )
         self._format_string = f"    armctl rows: {a.shape[1]}\n"
 
     def compute_constraint_params(self, path: Any, gridpoints: FloatArray, *args: Any, **kwargs: Any) -> tuple:
@@ -72,8 +81,9 @@ class RowsConstraint(LinearConstraint):  # type: ignore[misc]
         if self.discretization_type == DiscretizationType.Interpolation:
             # toppra's helper takes and returns the bounds as (.., xbound, ubound) while the constraint API
             # returns (.., ubound, xbound): passing (None, xbound) gives back (None, xbound) as required
-            return canlinear_colloc_to_interpolate(self._a, self._b, self._c, eye, self._g, None, self._xbound,
-                                                   gridpoints, identical=True)
+            return canlinear_colloc_to_interpolate(
+                self._a, self._b, self._c, eye, self._g, None, self._xbound, gridpoints, identical=True
+            )
         return self._a, self._b, self._c, eye, self._g, None, self._xbound
 
 
@@ -91,13 +101,24 @@ class ToppraOutput:
         return self.code == "Ok"
 
 
-def run_toppra(path: Path, s: FloatArray, a: FloatArray, b: FloatArray, c: FloatArray, g: FloatArray,
-               x_max: FloatArray, interpolation: bool = True) -> ToppraOutput:
+def run_toppra(
+    path: Path,
+    s: FloatArray,
+    a: FloatArray,
+    b: FloatArray,
+    c: FloatArray,
+    g: FloatArray,
+    x_max: FloatArray,
+    interpolation: bool = True,
+) -> ToppraOutput:
     """TOPP-RA, rest to rest, on the rows (see :class:`RowsConstraint`)."""
     cons = RowsConstraint(s, a, b, c, g, x_max, interpolation)
     algo = TOPPRA([cons], PathAdapter(path), gridpoints=s, solver_wrapper="seidel")
     _, sd, _, K = algo.compute_parameterization(0.0, 0.0, return_data=True)
     code = algo.problem_data.return_code
     x = None if sd is None else np.asarray(sd, dtype=float) ** 2
-    return ToppraOutput(code.name if isinstance(code, ParameterizationReturnCode) else str(code), x,
-                        None if K is None else np.asarray(K, dtype=float))
+    return ToppraOutput(
+        code.name if isinstance(code, ParameterizationReturnCode) else str(code),
+        x,
+        None if K is None else np.asarray(K, dtype=float),
+    )

@@ -70,9 +70,16 @@ class ConvergenceStudy:
     reference: float
 
 
-def grid_convergence(dyn: Dynamics, start: ArrayLike, end: ArrayLike, vel_limit: ArrayLike, acc_limit: ArrayLike,
-                     grids: Sequence[int] = (10, 20, 50, 100, 200, 500, 1000), repeat: int = 3,
-                     position_limit: str | None = "model") -> ConvergenceStudy:
+def grid_convergence(
+    dyn: Dynamics,
+    start: ArrayLike,
+    end: ArrayLike,
+    vel_limit: ArrayLike,
+    acc_limit: ArrayLike,
+    grids: Sequence[int] = (10, 20, 50, 100, 200, 500, 1000),
+    repeat: int = 3,
+    position_limit: str | None = "model",
+) -> ConvergenceStudy:
     """Solve the straight-line move on each grid (velocity and acceleration limits only) and compare with
     :func:`line_min_time`; the compute time is the least of ``repeat`` calls (after one warm-up call, which
     pays for importing toppra). position_limit: as in :func:`~armctl.planning.time_optimal`."""
@@ -86,8 +93,9 @@ def grid_convergence(dyn: Dynamics, start: ArrayLike, end: ArrayLike, vel_limit:
     ref = line_min_time(start, end, vel_limit, acc_limit)
 
     def solve(n: int) -> float:
-        return time_optimal(dyn, path, vel_limit=vel_limit, acc_limit=acc_limit, grid=n,
-                            position_limit=position_limit).duration
+        return time_optimal(
+            dyn, path, vel_limit=vel_limit, acc_limit=acc_limit, grid=n, position_limit=position_limit
+        ).duration
 
     solve(sizes[0])
     durations, times = [], []
@@ -100,8 +108,13 @@ def grid_convergence(dyn: Dynamics, start: ArrayLike, end: ArrayLike, vel_limit:
         times.append(best)
         durations.append(duration)
     dur = np.array(durations)
-    return ConvergenceStudy(readonly(np.array(sizes, dtype=float)), readonly(dur), readonly(np.abs(dur - ref) / ref),
-                            readonly(np.array(times)), ref)
+    return ConvergenceStudy(
+        readonly(np.array(sizes, dtype=float)),
+        readonly(dur),
+        readonly(np.abs(dur - ref) / ref),
+        readonly(np.array(times)),
+        ref,
+    )
 
 
 def plot_convergence(study: ConvergenceStudy) -> Any:
@@ -111,8 +124,11 @@ def plot_convergence(study: ConvergenceStudy) -> Any:
     fig = Figure(figsize=(9.0, 3.6), layout="constrained")
     ax_err, ax_time = fig.subplots(1, 2)
     ax_err.loglog(study.grids, np.maximum(study.errors, 1e-16), "o-")
-    ax_err.set(xlabel="grid size N (stages)", ylabel="|T_N − T| / T",
-               title=f"duration error (bang-bang T = {study.reference:.4g} s)")
+    ax_err.set(
+        xlabel="grid size N (stages)",
+        ylabel="|T_N − T| / T",
+        title=f"duration error (bang-bang T = {study.reference:.4g} s)",
+    )
     ax_time.loglog(study.grids, 1e3 * study.compute_times, "s-", color="C1")
     ax_time.set(xlabel="grid size N (stages)", ylabel="compute time [ms]", title="time_optimal compute time")
     for ax in (ax_err, ax_time):

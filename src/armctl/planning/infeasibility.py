@@ -36,8 +36,13 @@ def _row_scales(problem: TimeScalingProblem) -> FloatArray:
 Binding = list[tuple[int, int, float]]  # (row, gridpoint, dual)
 
 
-def _stage_lp(problem: TimeScalingProblem, rows: tuple[FloatArray, FloatArray, FloatArray], i: int,
-              k_next: FloatArray | None, x_fixed: float | None) -> tuple[float, FloatArray, Binding]:
+def _stage_lp(
+    problem: TimeScalingProblem,
+    rows: tuple[FloatArray, FloatArray, FloatArray],
+    i: int,
+    k_next: FloatArray | None,
+    x_fixed: float | None,
+) -> tuple[float, FloatArray, Binding]:
     """Least-violation LP at stage i: (t*, (u*, x*), [(row, gridpoint, dual), …] sorted by |dual|)."""
     from scipy.optimize import linprog
 
@@ -59,8 +64,13 @@ def _stage_lp(problem: TimeScalingProblem, rows: tuple[FloatArray, FloatArray, F
         ub += [float(k_next[1]), -float(k_next[0])]
     x_hi = float(problem.x_max[i]) if x_fixed is None else x_fixed
     x_lo = 0.0 if x_fixed is None else x_fixed
-    res = linprog([0.0, 0.0, 1.0], A_ub=np.array(A), b_ub=np.array(ub),
-                  bounds=[(-1e8, 1e8), (x_lo, x_hi), (-1.0, None)], method="highs")
+    res = linprog(
+        [0.0, 0.0, 1.0],
+        A_ub=np.array(A),
+        b_ub=np.array(ub),
+        bounds=[(-1e8, 1e8), (x_lo, x_hi), (-1.0, None)],
+        method="highs",
+    )
     if res.status != 0:  # the hard bounds alone conflict: the velocity sets themselves are empty
         return np.inf, np.full(2, np.nan), []
     duals = res.ineqlin.marginals[: len(tag)]
@@ -80,16 +90,23 @@ def _where(problem: TimeScalingProblem, p: int) -> str:
 
 def _limit_text(problem: TimeScalingProblem, kind: str, bound: float) -> str:
     margin = problem.limits.torque_margin if kind == "torque" else 0.0
-    return f"the limit is {bound:.4g}" + (f" ({100 * (1 - margin):.3g} % of the range, torque_margin={margin})"
-                                          if margin else "")
+    return f"the limit is {bound:.4g}" + (
+        f" ({100 * (1 - margin):.3g} % of the range, torque_margin={margin})" if margin else ""
+    )
 
 
 def _message(problem: TimeScalingProblem, label: RowLabel, p: int, need: float) -> tuple[str, dict[str, Any]]:
     lim = problem.limits.planned()[label.kind]
     bound = float(lim.upper[label.joint] if label.side == "upper" else lim.lower[label.joint])
     limit_txt = _limit_text(problem, label.kind, bound)
-    value = {"constraint": label.kind, "joint": label.joint, "side": label.side, "s": float(problem.s[p]),
-             "needed": need, "limit": bound}
+    value = {
+        "constraint": label.kind,
+        "joint": label.joint,
+        "side": label.side,
+        "s": float(problem.s[p]),
+        "needed": need,
+        "limit": bound,
+    }
     head = f"{_joint(problem, label.joint)} {label.kind} at {_where(problem, p)}"
     if label.kind == "torque":
         grav = float(problem.gravity[p, label.joint])
@@ -101,8 +118,10 @@ def _message(problem: TimeScalingProblem, label: RowLabel, p: int, need: float) 
             value["needed"] = static
             what = "gravity alone needs" if fric == 0 else f"gravity and Coulomb friction alone need ({fric:+.3g})"
             return f"{head}: {what} {static:.4g} N·m, {limit_txt}", value
-        return (f"{head}: following the path needs at least {need:.4g} N·m there (gravity {grav:.4g} N·m), "
-                f"{limit_txt}", value)
+        return (
+            f"{head}: following the path needs at least {need:.4g} N·m there (gravity {grav:.4g} N·m), {limit_txt}",
+            value,
+        )
     return f"{head}: following the path needs at least {need:.4g} {lim.unit} there, {limit_txt}", value
 
 
@@ -148,12 +167,25 @@ def rest_overload(problem: TimeScalingProblem) -> InfeasibleError | None:
     pose = "start" if p == 0 else "end"
     when = "before t = 0" if p == 0 else "after the motion, t > T"
     need = float(problem.gravity[p, j])
-    value = {"constraint": "torque", "joint": j, "side": side, "s": float(problem.s[p]), "needed": need,
-             "limit": bound, "gravity": need, "excess": excess, "endpoint": pose}
-    return InfeasibleError(f"{_joint(problem, j)} torque at the {pose} pose (s = {problem.s[p]:.3g}): gravity alone "
-                           f"needs {need:.4g} N·m, {_limit_text(problem, 'torque', bound)}: the arm cannot hold itself "
-                           f"at rest at its {pose} pose, where a rest-to-rest trajectory waits ({when}). Raise the "
-                           f"limit, lighten the load or change the {pose} of the path.", value=value, problem=problem)
+    value = {
+        "constraint": "torque",
+        "joint": j,
+        "side": side,
+        "s": float(problem.s[p]),
+        "needed": need,
+        "limit": bound,
+        "gravity": need,
+        "excess": excess,
+        "endpoint": pose,
+    }
+    return InfeasibleError(
+        f"{_joint(problem, j)} torque at the {pose} pose (s = {problem.s[p]:.3g}): gravity alone "
+        f"needs {need:.4g} N·m, {_limit_text(problem, 'torque', bound)}: the arm cannot hold itself "
+        f"at rest at its {pose} pose, where a rest-to-rest trajectory waits ({when}). Raise the "
+        f"limit, lighten the load or change the {pose} of the path.",
+        value=value,
+        problem=problem,
+    )
 
 
 def no_motion(problem: TimeScalingProblem, i: int) -> InfeasibleError:
@@ -167,16 +199,26 @@ def no_motion(problem: TimeScalingProblem, i: int) -> InfeasibleError:
         for j in range(dq.shape[0]):
             if (dq[j] > 0 and b.upper[j] <= 0) or (dq[j] < 0 and b.lower[j] >= 0):
                 way = "up" if dq[j] > 0 else "down"
-                found.append(f"{_joint(problem, j)} {kind} bounds [{b.lower[j]:.4g}, {b.upper[j]:.4g}] {b.unit} "
-                             f"leave it no way to move {way}, as the path does there")
+                found.append(
+                    f"{_joint(problem, j)} {kind} bounds [{b.lower[j]:.4g}, {b.upper[j]:.4g}] {b.unit} "
+                    f"leave it no way to move {way}, as the path does there"
+                )
     why = "; ".join(found) if found else "no timing within the limits gets the arm moving there"
-    return InfeasibleError(f"the limits allow no motion along the path at {_where(problem, i)}: {why}. Widen the "
-                           "bounds or change the path.", value={"s": float(problem.s[i]), "bounds": found},
-                           problem=problem)
+    return InfeasibleError(
+        f"the limits allow no motion along the path at {_where(problem, i)}: {why}. Widen the "
+        "bounds or change the path.",
+        value={"s": float(problem.s[i]), "bounds": found},
+        problem=problem,
+    )
 
 
-def diagnose(problem: TimeScalingProblem, rows: tuple[FloatArray, FloatArray, FloatArray], code: str,
-             x: FloatArray | None, K: FloatArray | None) -> ArmctlError:
+def diagnose(
+    problem: TimeScalingProblem,
+    rows: tuple[FloatArray, FloatArray, FloatArray],
+    code: str,
+    x: FloatArray | None,
+    K: FloatArray | None,
+) -> ArmctlError:
     """The error to raise for a failed toppra solve of ``problem`` (with the rows actually solved).
 
     In order: a failed forward pass is numerical (SolverError); a point where gravity and Coulomb friction
@@ -188,9 +230,12 @@ def diagnose(problem: TimeScalingProblem, rows: tuple[FloatArray, FloatArray, Fl
     N = problem.grid
     if code == "ErrUnknown":  # the backward pass succeeded, the forward pass did not
         first = int(np.flatnonzero(~np.isfinite(x))[0]) if x is not None and not np.isfinite(x).all() else 0
-        return SolverError(f"toppra's forward pass failed at s = {problem.s[first]:.4g} although the path is "
-                           "controllable (a numerical failure, toppra issue #226); try another grid size",
-                           value=first, problem=problem)
+        return SolverError(
+            f"toppra's forward pass failed at s = {problem.s[first]:.4g} although the path is "
+            "controllable (a numerical failure, toppra issue #226); try another grid size",
+            value=first,
+            problem=problem,
+        )
     if K is None:
         return SolverError(f"toppra failed with code {code} and no controllable sets", value=code, problem=problem)
     bad = np.flatnonzero(np.isnan(K).any(axis=1))
@@ -202,31 +247,46 @@ def diagnose(problem: TimeScalingProblem, rows: tuple[FloatArray, FloatArray, Fl
         label = problem.labels[r]
         msg, value = _message(problem, label, p, 0.0)
         value["excess"] = t
-        return InfeasibleError(f"{msg}: the arm cannot hold itself there and {fail_at}. Raise the limit, lighten "
-                               "the load or change the path.", value=value, problem=problem)
+        return InfeasibleError(
+            f"{msg}: the arm cannot hold itself there and {fail_at}. Raise the limit, lighten "
+            "the load or change the path.",
+            value=value,
+            problem=problem,
+        )
     k_next = K[i + 1] if i < N else np.zeros(2)
     t, _, binding = _stage_lp(problem, rows, i, None, x_fixed)
     dynamic = t <= 1e-9
     if dynamic:  # the point itself is feasible: what fails is reaching a controllable velocity beyond it
         t, _, binding = _stage_lp(problem, rows, i, k_next, x_fixed)
     if not np.isfinite(t) or not binding:
-        return SolverError(f"toppra found no controllable path velocity at s = {problem.s[i]:.4g} and the stage's "
-                           "bounds conflict by themselves (velocity sets empty)", value=i, problem=problem)
+        return SolverError(
+            f"toppra found no controllable path velocity at s = {problem.s[i]:.4g} and the stage's "
+            "bounds conflict by themselves (velocity sets empty)",
+            value=i,
+            problem=problem,
+        )
     if t <= 1e-9:
-        return SolverError(f"toppra reported the path uncontrollable at s = {problem.s[i]:.4g} (code {code}), but "
-                           "every limit can be met there: a numerical failure of the solver (toppra issues #14, "
-                           "#17); try another grid size", value=i, problem=problem)
+        return SolverError(
+            f"toppra reported the path uncontrollable at s = {problem.s[i]:.4g} (code {code}), but "
+            "every limit can be met there: a numerical failure of the solver (toppra issues #14, "
+            "#17); try another grid size",
+            value=i,
+            problem=problem,
+        )
     r, p, _ = binding[0]
     label = problem.labels[r]
     sign = 1.0 if label.side == "upper" else -1.0
     need = sign * float(problem.g[r] + t * _row_scales(problem)[r])
     msg, value = _message(problem, label, p, need)
     if dynamic:
-        msg += (" at the path speed needed to go on from there (the motion cannot be slowed or sped up in time "
-                "within the limits)")
+        msg += (
+            " at the path speed needed to go on from there (the motion cannot be slowed or sped up in time "
+            "within the limits)"
+        )
     others = [problem.labels[rr] for rr, _, _ in binding[1:] if problem.labels[rr] != label]
     if others:
         msg += "; also binding: " + ", ".join(f"{_joint(problem, o.joint)} {o.kind} ({o.side})" for o in others[:3])
     value["excess"] = t
-    return InfeasibleError(msg + ". Raise the limit, lighten the load or change the path.", value=value,
-                           problem=problem)
+    return InfeasibleError(
+        msg + ". Raise the limit, lighten the load or change the path.", value=value, problem=problem
+    )

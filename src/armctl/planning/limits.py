@@ -87,9 +87,11 @@ def bounds(value: Any, kind: str, model: RobotModel) -> Bounds | None:
             raise InvalidParameterError(f"{name} must be {valid}; got {value!r}", value=value)
         lim = np.array(model.velocity_limit if kind == "velocity" else model.effort_limit, dtype=float)
         if not np.isfinite(lim).all():
-            raise InvalidParameterError(f"{name}='model' but model {model.name!r} has no {kind} limit on joints "
-                                        f"{np.flatnonzero(~np.isfinite(lim)).tolist()}; give the limits explicitly",
-                                        value=lim)
+            raise InvalidParameterError(
+                f"{name}='model' but model {model.name!r} has no {kind} limit on joints "
+                f"{np.flatnonzero(~np.isfinite(lim)).tolist()}; give the limits explicitly",
+                value=lim,
+            )
         value = lim
     try:
         a = np.array(value, dtype=float)
@@ -99,12 +101,16 @@ def bounds(value: Any, kind: str, model: RobotModel) -> Bounds | None:
         a = np.full(n, float(a))
     if a.shape == (n,):
         if np.isnan(a).any() or np.isinf(a).any():
-            raise NonFiniteError(f"{name} holds NaN or inf: {a}; give finite limits (use None for no limit)",
-                                 value=value)
+            raise NonFiniteError(
+                f"{name} holds NaN or inf: {a}; give finite limits (use None for no limit)", value=value
+            )
         if (a <= 0).any():
             j = int(np.argmin(a))
-            raise InvalidParameterError(f"{name} of joint {j} is {a[j]:g} {UNITS[kind]}; a symmetric limit must be "
-                                        "> 0 (give an (n, 2) array for asymmetric bounds)", value=value)
+            raise InvalidParameterError(
+                f"{name} of joint {j} is {a[j]:g} {UNITS[kind]}; a symmetric limit must be "
+                "> 0 (give an (n, 2) array for asymmetric bounds)",
+                value=value,
+            )
         lower, upper = -a, a
     elif a.shape == (n, 2):
         if not np.isfinite(a).all():
@@ -112,35 +118,58 @@ def bounds(value: Any, kind: str, model: RobotModel) -> Bounds | None:
         lower, upper = a[:, 0].copy(), a[:, 1].copy()
         if (lower >= upper).any():
             j = int(np.argmax(lower - upper))
-            raise InvalidParameterError(f"{name} of joint {j}: lower {lower[j]:g} must be below upper {upper[j]:g} "
-                                        f"{UNITS[kind]}; columns are (lower, upper)", value=value)
+            raise InvalidParameterError(
+                f"{name} of joint {j}: lower {lower[j]:g} must be below upper {upper[j]:g} "
+                f"{UNITS[kind]}; columns are (lower, upper)",
+                value=value,
+            )
         if kind != "torque" and ((lower > 0).any() or (upper < 0).any()):
             j = int(np.flatnonzero((lower > 0) | (upper < 0))[0])
-            raise InvalidParameterError(f"{name} of joint {j} is [{lower[j]:g}, {upper[j]:g}] {UNITS[kind]}; it must "
-                                        "contain 0, since the motion starts and ends at rest", value=value)
+            raise InvalidParameterError(
+                f"{name} of joint {j} is [{lower[j]:g}, {upper[j]:g}] {UNITS[kind]}; it must "
+                "contain 0, since the motion starts and ends at rest",
+                value=value,
+            )
     else:
-        raise ShapeError(f"{name} must be a scalar, an ({n},) vector or an ({n}, 2) array of (lower, upper), got "
-                         f"shape {a.shape}", value=value)
+        raise ShapeError(
+            f"{name} must be a scalar, an ({n},) vector or an ({n}, 2) array of (lower, upper), got shape {a.shape}",
+            value=value,
+        )
     return Bounds(kind, readonly(lower), readonly(upper))
 
 
-def joint_limits(model: RobotModel, vel_limit: Any = None, acc_limit: Any = None, torque_limit: Any = None,
-                 torque_margin: float = 0.0) -> JointLimits:
+def joint_limits(
+    model: RobotModel,
+    vel_limit: Any = None,
+    acc_limit: Any = None,
+    torque_limit: Any = None,
+    torque_margin: float = 0.0,
+) -> JointLimits:
     """All limits of a time-scaling problem, checked; at least one must be imposed."""
     try:
         m = float(torque_margin)
     except (TypeError, ValueError):
-        raise InvalidParameterError(f"torque_margin must be a number in [0, 1), got {torque_margin!r}",
-                                    value=torque_margin) from None
+        raise InvalidParameterError(
+            f"torque_margin must be a number in [0, 1), got {torque_margin!r}", value=torque_margin
+        ) from None
     if not 0.0 <= m < 1.0:
-        raise InvalidParameterError(f"torque_margin must be in [0, 1) (0.1 plans with 90 % of the torque range), got "
-                                    f"{torque_margin!r}", value=torque_margin)
-    lim = JointLimits(bounds(vel_limit, "velocity", model), bounds(acc_limit, "acceleration", model),
-                      bounds(torque_limit, "torque", model), m)
+        raise InvalidParameterError(
+            f"torque_margin must be in [0, 1) (0.1 plans with 90 % of the torque range), got {torque_margin!r}",
+            value=torque_margin,
+        )
+    lim = JointLimits(
+        bounds(vel_limit, "velocity", model),
+        bounds(acc_limit, "acceleration", model),
+        bounds(torque_limit, "torque", model),
+        m,
+    )
     if lim.velocity is None and lim.acceleration is None and lim.torque is None:
-        raise InvalidParameterError("no limit given: with no velocity, acceleration or torque limit the fastest "
-                                    "motion takes no time; pass vel_limit=, acc_limit= and/or torque_limit= "
-                                    "('model' uses the model's limits)", value=None)
+        raise InvalidParameterError(
+            "no limit given: with no velocity, acceleration or torque limit the fastest "
+            "motion takes no time; pass vel_limit=, acc_limit= and/or torque_limit= "
+            "('model' uses the model's limits)",
+            value=None,
+        )
     if m and lim.torque is None:
         raise InvalidParameterError(f"torque_margin={m} needs a torque_limit", value=m)
     return lim

@@ -89,8 +89,9 @@ class Path(ABC):
         if not np.isfinite(ss).all():
             raise NonFiniteError(f"path parameter s holds NaN or inf: {s!r}", value=s)
         if ss.size and (ss.min() < -1e-12 or ss.max() > 1.0 + 1e-12):
-            raise InvalidParameterError(f"path parameter s must lie in [0, 1], got values in "
-                                        f"[{ss.min():g}, {ss.max():g}]", value=s)
+            raise InvalidParameterError(
+                f"path parameter s must lie in [0, 1], got values in [{ss.min():g}, {ss.max():g}]", value=s
+            )
         return np.clip(ss, 0.0, 1.0)
 
     def __repr__(self) -> str:
@@ -113,17 +114,23 @@ class SplinePath(Path):
 
         w = np.array(real_array(waypoints, "waypoints"))
         if w.ndim != 2 or w.shape[0] < 2 or w.shape[1] < 1:
-            raise ShapeError(f"waypoints must be an (m, n) array with m >= 2 waypoints of n joints, got shape "
-                             f"{w.shape}", value=waypoints)
+            raise ShapeError(
+                f"waypoints must be an (m, n) array with m >= 2 waypoints of n joints, got shape {w.shape}",
+                value=waypoints,
+            )
         if not np.isfinite(w).all():
             bad = np.argwhere(~np.isfinite(w))[0]
-            raise NonFiniteError(f"waypoint {bad[0]} joint {bad[1]} is {w[tuple(bad)]}; waypoints must be finite",
-                                 value=waypoints)
+            raise NonFiniteError(
+                f"waypoint {bad[0]} joint {bad[1]} is {w[tuple(bad)]}; waypoints must be finite", value=waypoints
+            )
         steps = np.linalg.norm(np.diff(w, axis=0), axis=1)
         if (steps <= 1e-12 * max(1.0, float(np.abs(w).max()))).any():
             k = int(np.argmin(steps))
-            raise InvalidParameterError(f"waypoints {k} and {k + 1} coincide; remove the repeated waypoint (a "
-                                        "path that stops has no time-optimal scaling through the stop)", value=w)
+            raise InvalidParameterError(
+                f"waypoints {k} and {k + 1} coincide; remove the repeated waypoint (a "
+                "path that stops has no time-optimal scaling through the stop)",
+                value=w,
+            )
         if isinstance(knots, str):
             if knots == "chord":
                 s = np.concatenate(([0.0], np.cumsum(steps))) / steps.sum()
@@ -191,15 +198,20 @@ class LinePath(Path):
         if a.ndim > 1 or a.size == 0:
             raise ShapeError(f"start must be a non-empty vector, got shape {a.shape}: {start!r}", value=start)
         if b.ndim > 1 or b.size != a.size:
-            raise ShapeError(f"start and end must be vectors of the same length, got start {start!r} (shape "
-                             f"{a.shape}) and end {end!r} (shape {b.shape})", value=end)
+            raise ShapeError(
+                f"start and end must be vectors of the same length, got start {start!r} (shape "
+                f"{a.shape}) and end {end!r} (shape {b.shape})",
+                value=end,
+            )
         self.n = a.size
         self.start = readonly(np.array(vector(a.reshape(-1), self.n, "start")))
         self.end = readonly(np.array(vector(b.reshape(-1), self.n, "end")))
         delta = self.end - self.start
         if not np.abs(delta).max() > 0.0:
-            raise InvalidParameterError(f"start and end coincide ({self.start.tolist()}): a line path needs two "
-                                        "distinct configurations", value=end)
+            raise InvalidParameterError(
+                f"start and end coincide ({self.start.tolist()}): a line path needs two distinct configurations",
+                value=end,
+            )
         self.delta = readonly(delta)
         self.waypoints = readonly(np.stack([self.start, self.end]))
 
@@ -223,6 +235,9 @@ def as_path(path_or_waypoints: Path | ArrayLike, n: int | None = None) -> Path:
     :class:`SplinePath`. With ``n`` given, the path must have n joints."""
     path = path_or_waypoints if isinstance(path_or_waypoints, Path) else SplinePath(path_or_waypoints)
     if n is not None and path.n != n:
-        raise ShapeError(f"the path has {path.n} joints (waypoints of width {path.n}), the arm {n}; give waypoints "
-                         f"as an (m, {n}) array", value=path_or_waypoints)
+        raise ShapeError(
+            f"the path has {path.n} joints (waypoints of width {path.n}), the arm {n}; give waypoints "
+            f"as an (m, {n}) array",
+            value=path_or_waypoints,
+        )
     return path

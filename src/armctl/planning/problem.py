@@ -94,8 +94,7 @@ class TimeScalingProblem:
     def has_viscous(self) -> bool:
         return bool(self.w.any())
 
-    def linearized(self, x0: ArrayLike | None, keep: float | None = None
-                   ) -> tuple[FloatArray, FloatArray, FloatArray]:
+    def linearized(self, x0: ArrayLike | None, keep: float | None = None) -> tuple[FloatArray, FloatArray, FloatArray]:
         """(a, b, c) of the rows with w √x replaced by a line α + β x ≥ √x (4αβ ≥ 1), or dropped (x0=None).
 
         The line is the tangent at x₀ (N+1,) > 0, α = √x₀/2, β = 1/(2√x₀), exact at x₀ — unless ``keep``
@@ -125,8 +124,9 @@ def gridpoints(grid: int | ArrayLike) -> FloatArray:
     try:
         s = np.asarray(grid, dtype=float)
     except (TypeError, ValueError):
-        raise InvalidParameterError(f"grid must be an integer N >= 2 or an array of gridpoints from 0 to 1, got "
-                                    f"{grid!r}", value=grid) from None
+        raise InvalidParameterError(
+            f"grid must be an integer N >= 2 or an array of gridpoints from 0 to 1, got {grid!r}", value=grid
+        ) from None
     if s.ndim != 1 or s.shape[0] < 3:
         raise ShapeError(f"grid must be an integer N >= 2 or an array of >= 3 gridpoints, got {grid!r}", value=grid)
     if not np.isfinite(s).all():
@@ -136,23 +136,24 @@ def gridpoints(grid: int | ArrayLike) -> FloatArray:
     return s
 
 
-def _rigid_coefficients(dyn: Dynamics, q: FloatArray, dq: FloatArray, ddq: FloatArray
-                        ) -> tuple[FloatArray, FloatArray, FloatArray]:
+def _rigid_coefficients(
+    dyn: Dynamics, q: FloatArray, dq: FloatArray, ddq: FloatArray
+) -> tuple[FloatArray, FloatArray, FloatArray]:
     """a = M q', b = M q'' + C(q, q') q', c = g at every row of q (the rigid-body part, no friction), from
     one batch of 3 (N+1) inverse-dynamics evaluations."""
     m = q.shape[0]
     zero = np.zeros_like(q)
-    tau = rigid_torques(dyn, np.concatenate((q, q, q)), np.concatenate((zero, zero, dq)),
-                        np.concatenate((zero, dq, ddq)))
+    tau = rigid_torques(
+        dyn, np.concatenate((q, q, q)), np.concatenate((zero, zero, dq)), np.concatenate((zero, dq, ddq))
+    )
     c = tau[:m]
-    return tau[m:2 * m] - c, tau[2 * m:] - c, c
+    return tau[m : 2 * m] - c, tau[2 * m :] - c, c
 
 
 def friction_parameters(dyn: Dynamics) -> tuple[FloatArray, FloatArray, FloatArray]:
     """(F_v, F_c⁺, F_c⁻) of the joints, (n,) each [N·m·s/rad, N·m, N·m]."""
     fr = [j.friction for j in dyn.model.joints]
-    return (np.array([f.viscous for f in fr]), np.array([f.coulomb for f in fr]),
-            np.array([f.coulomb_neg for f in fr]))
+    return (np.array([f.viscous for f in fr]), np.array([f.coulomb for f in fr]), np.array([f.coulomb_neg for f in fr]))
 
 
 def coulomb_sides(dq: FloatArray, fc_pos: FloatArray, fc_neg: FloatArray) -> FloatArray:
@@ -233,19 +234,24 @@ def stationary_point(path: Path, s: FloatArray, per_stage: int = 8) -> float | N
     return None
 
 
-def build_problem(dyn: Dynamics, path: Path, limits: JointLimits, grid: int | ArrayLike = 100,
-                  discretization: str = "interpolation") -> TimeScalingProblem:
+def build_problem(
+    dyn: Dynamics, path: Path, limits: JointLimits, grid: int | ArrayLike = 100, discretization: str = "interpolation"
+) -> TimeScalingProblem:
     """The :class:`TimeScalingProblem` of ``path`` under ``limits`` on ``grid`` (see the module docstring)."""
     if discretization not in DISCRETIZATIONS:
-        raise InvalidParameterError(f"discretization must be one of {DISCRETIZATIONS}, got {discretization!r}",
-                                    value=discretization)
+        raise InvalidParameterError(
+            f"discretization must be one of {DISCRETIZATIONS}, got {discretization!r}", value=discretization
+        )
     s = gridpoints(grid)
     q, dq, ddq = path.derivatives(s)
     still = stationary_point(path, s)
     if still is not None:
-        raise InvalidParameterError(f"the path is stationary (q'(s) = 0) at s = {still:.4g}: there the path "
-                                    "velocity is unbounded and the scaling ill-posed (toppra issue #104); remove "
-                                    "the stop from the path or split the path there", value=still)
+        raise InvalidParameterError(
+            f"the path is stationary (q'(s) = 0) at s = {still:.4g}: there the path "
+            "velocity is unbounded and the scaling ill-posed (toppra issue #104); remove "
+            "the stop from the path or split the path there",
+            value=still,
+        )
     n = dyn.n
     rows_a, rows_b, rows_c, rows_w, rows_g, labels = [], [], [], [], [], []
     gravity = np.zeros_like(q)
@@ -276,8 +282,22 @@ def build_problem(dyn: Dynamics, path: Path, limits: JointLimits, grid: int | Ar
     g = np.concatenate(rows_g) if m else np.zeros(0)
     for name, arr in zip("abcw", arrays, strict=True):
         if not np.isfinite(arr).all():
-            raise NonFiniteError(f"the dynamics gave non-finite path coefficients {name}(s); check the model",
-                                 value=arr)
-    return TimeScalingProblem(dyn, path, limits, readonly(s), readonly(q), readonly(dq), readonly(ddq),
-                              *map(readonly, arrays), readonly(g), readonly(velocity_bound(path, s, limits)),
-                              readonly(gravity), readonly(coul), tuple(labels), discretization)
+            raise NonFiniteError(
+                f"the dynamics gave non-finite path coefficients {name}(s); check the model", value=arr
+            )
+    return TimeScalingProblem(
+        dyn,
+        path,
+        limits,
+        readonly(s),
+        readonly(q),
+        readonly(dq),
+        readonly(ddq),
+        *map(readonly, arrays),
+        readonly(g),
+        readonly(velocity_bound(path, s, limits)),
+        readonly(gravity),
+        readonly(coul),
+        tuple(labels),
+        discretization,
+    )

@@ -66,9 +66,16 @@ def _speed_root(v: FloatArray, lower: FloatArray, upper: FloatArray, power: int)
     return lim if power == 1 else np.sqrt(lim)  # type: ignore[no-any-return]
 
 
-def uniform_time_scaling(dyn: Dynamics, trajectory: Trajectory, vel_limit: Any = None, acc_limit: Any = None,
-                         torque_limit: Any = None, *, torque_margin: float = 0.0, samples: int = 1001
-                         ) -> UniformScaling:
+def uniform_time_scaling(
+    dyn: Dynamics,
+    trajectory: Trajectory,
+    vel_limit: Any = None,
+    acc_limit: Any = None,
+    torque_limit: Any = None,
+    *,
+    torque_margin: float = 0.0,
+    samples: int = 1001,
+) -> UniformScaling:
     """The smallest uniform scale factor r that makes ``trajectory`` respect the limits (at ``samples`` evenly
     spaced times), and the scaled trajectory, whose ``check`` looks 10 times more densely (between those samples
     the limits may be exceeded a little, and the check says by how much). Limits as in
@@ -80,8 +87,9 @@ def uniform_time_scaling(dyn: Dynamics, trajectory: Trajectory, vel_limit: Any =
     if not isinstance(dyn, Dynamics):
         raise InvalidParameterError(f"dyn must be an armctl.Dynamics, got {type(dyn).__name__}", value=dyn)
     if not isinstance(trajectory, Trajectory):
-        raise InvalidParameterError(f"trajectory must be an armctl.planning.Trajectory, got "
-                                    f"{type(trajectory).__name__}", value=trajectory)
+        raise InvalidParameterError(
+            f"trajectory must be an armctl.planning.Trajectory, got {type(trajectory).__name__}", value=trajectory
+        )
     if trajectory.n != dyn.n:
         raise InvalidParameterError(f"the trajectory has {trajectory.n} joints, the arm {dyn.n}", value=trajectory)
     samples = whole_number(samples, "samples", 2)
@@ -107,8 +115,9 @@ def uniform_time_scaling(dyn: Dynamics, trajectory: Trajectory, vel_limit: Any =
             raise InfeasibleError(
                 f"joint {j} ({dyn.model.joint_names[j]!r}) torque at s = {smp.s[k]:.3g} (t = {smp.t[k]:.3g} s): "
                 f"gravity and Coulomb friction alone need {h[k, j]:.4g} N·m, the limit is {bound:.4g}; no uniform "
-                "slowing down fits the limits", value={"joint": int(j), "s": float(smp.s[k]), "needed": float(h[k, j]),
-                                                      "limit": float(bound)})
+                "slowing down fits the limits",
+                value={"joint": int(j), "s": float(smp.s[k]), "needed": float(h[k, j]), "limit": float(bound)},
+            )
         z_by_kind["torque"] = np.minimum(_first_root(d, e, h - tau.upper), _first_root(-d, -e, tau.lower - h))
     kind = min(z_by_kind, key=lambda k: float(z_by_kind[k].min()))
     z = z_by_kind[kind]

@@ -67,8 +67,7 @@ class GridTiming(Timing):
     def __init__(self, s: ArrayLike, x: ArrayLike) -> None:
         ss, xx = np.array(s, dtype=float), np.array(x, dtype=float)
         if ss.ndim != 1 or xx.shape != ss.shape or ss.shape[0] < 2:
-            raise ShapeError(f"s and x must be vectors of the same length >= 2, got {ss.shape} and {xx.shape}",
-                             value=x)
+            raise ShapeError(f"s and x must be vectors of the same length >= 2, got {ss.shape} and {xx.shape}", value=x)
         if not (np.isfinite(ss).all() and np.isfinite(xx).all()):
             raise NonFiniteError("the path velocity profile holds NaN or inf", value=x)
         if (xx < -1e-12).any():
@@ -79,8 +78,11 @@ class GridTiming(Timing):
         speed = sd[:-1] + sd[1:]
         if (speed <= 0).any():
             i = int(np.flatnonzero(speed <= 0)[0])
-            raise SolverError(f"the path velocity is zero on the whole stage s = [{ss[i]:.4g}, {ss[i + 1]:.4g}]: the "
-                              "motion would stop there for ever (a degenerate time-scaling result)", value=xx)
+            raise SolverError(
+                f"the path velocity is zero on the whole stage s = [{ss[i]:.4g}, {ss[i + 1]:.4g}]: the "
+                "motion would stop there for ever (a degenerate time-scaling result)",
+                value=xx,
+            )
         self.s, self.x, self.sd = readonly(ss), readonly(xx), readonly(sd)
         self.u = readonly((xx[1:] - xx[:-1]) / (2.0 * delta))
         self.t = readonly(np.concatenate(([0.0], np.cumsum(2.0 * delta / speed))))
@@ -128,8 +130,11 @@ class PolynomialTiming(Timing):
     def _at(self, t: float) -> tuple[float, float, float]:
         T = self._duration
         r = t / T
-        return (r**3 * (10.0 - 15.0 * r + 6.0 * r**2), 30.0 * r**2 * (1.0 - r) ** 2 / T,
-                60.0 * r * (1.0 - r) * (1.0 - 2.0 * r) / T**2)
+        return (
+            r**3 * (10.0 - 15.0 * r + 6.0 * r**2),
+            30.0 * r**2 * (1.0 - r) ** 2 / T,
+            60.0 * r * (1.0 - r) * (1.0 - 2.0 * r) / T**2,
+        )
 
 
 class ScaledTiming(Timing):

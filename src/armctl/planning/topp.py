@@ -96,15 +96,18 @@ def solve_problem(problem: TimeScalingProblem, viscous_passes: int = 2) -> Traje
         still = [(x[:-1] <= 0.0) & (x[1:] <= 0.0) for x in found]
         if all(st.any() for st in still):
             raise no_motion(problem, int(np.flatnonzero(still[0])[0]))
-        timing = min((GridTiming(problem.s, x) for x, st in zip(found, still, strict=True) if not st.any()),
-                     key=lambda g: g.duration)
+        timing = min(
+            (GridTiming(problem.s, x) for x, st in zip(found, still, strict=True) if not st.any()),
+            key=lambda g: g.duration,
+        )
         passes += 1
         if (x0 is not None or not problem.has_viscous) and (best is None or timing.duration < best.duration):
             best = timing
         x0 = np.maximum(timing.x, 1e-9 * max(float(timing.x.max()), 1e-12))
     assert best is not None
-    return Trajectory(problem.path, best, info={"grid": problem.grid, "passes": passes,
-                                                  "solve_time": time.perf_counter() - t0})
+    return Trajectory(
+        problem.path, best, info={"grid": problem.grid, "passes": passes, "solve_time": time.perf_counter() - t0}
+    )
 
 
 def check_range(model: RobotModel, path: Path) -> None:
@@ -128,14 +131,18 @@ def check_range(model: RobotModel, path: Path) -> None:
         return
     k = path.piece(float(s[i]))
     at_knot = np.isclose(knots, s[i], rtol=0.0, atol=1e-12)
-    where = (f"at waypoint {int(np.flatnonzero(at_knot)[0])}" if at_knot.any() else
-             f"between waypoints {k} and {k + 1}: the path overshoots there; add a waypoint or move them")
+    where = (
+        f"at waypoint {int(np.flatnonzero(at_knot)[0])}"
+        if at_knot.any()
+        else f"between waypoints {k} and {k + 1}: the path overshoots there; add a waypoint or move them"
+    )
     unit = "m" if model.joints[j].kind == "prismatic" else "rad"
     raise InfeasibleError(
         f"joint {j} ({model.joint_names[j]!r}) leaves its range [{lo[j]:.4g}, {hi[j]:.4g}] {unit} along the path: "
         f"{q[i, j]:.4g} at s = {s[i]:.4g}, {where} (a timing cannot change the path; position_limit=None plans it "
-        "anyway)", value={"joint": j, "s": float(s[i]), "q": float(q[i, j]), "lower": float(lo[j]),
-                          "upper": float(hi[j])})
+        "anyway)",
+        value={"joint": j, "s": float(s[i]), "q": float(q[i, j]), "lower": float(lo[j]), "upper": float(hi[j])},
+    )
 
 
 def _viscous_note(error: Exception, viscous: bool) -> Exception:
@@ -143,21 +150,30 @@ def _viscous_note(error: Exception, viscous: bool) -> Exception:
     over-estimate of viscous friction, not the limits themselves, may be what leaves no timing."""
     if not viscous or not isinstance(error, InfeasibleError):
         return error
-    return InfeasibleError(f"{error} (Viscous friction is planned with a line above F_v q̇ at every speed, and "
-                           "without it toppra found a timing: one may exist that this conservative plan misses; "
-                           "a different grid may find it.)", value=error.value, problem=error.problem)
+    return InfeasibleError(
+        f"{error} (Viscous friction is planned with a line above F_v q̇ at every speed, and "
+        "without it toppra found a timing: one may exist that this conservative plan misses; "
+        "a different grid may find it.)",
+        value=error.value,
+        problem=error.problem,
+    )
 
 
 def _checked_profile(problem: TimeScalingProblem, x: FloatArray) -> FloatArray:
     """toppra's x = ṡ², checked: finite, ≥ 0, within the velocity bound, zero at both ends."""
     if not np.isfinite(x).all():
         i = int(np.flatnonzero(~np.isfinite(x))[0])
-        raise SolverError(f"toppra returned a non-finite path velocity at s = {problem.s[i]:.4g}", value=x,
-                          problem=problem)
+        raise SolverError(
+            f"toppra returned a non-finite path velocity at s = {problem.s[i]:.4g}", value=x, problem=problem
+        )
     scale = max(float(x.max()), 1e-12)
     if x.min() < -1e-9 * scale or (x > problem.x_max * (1 + 1e-6) + 1e-12).any() or max(x[0], x[-1]) > 1e-9 * scale:
-        raise SolverError("toppra returned a path velocity profile outside its own bounds (negative, above the "
-                          "velocity bound or not at rest at the ends)", value=x, problem=problem)
+        raise SolverError(
+            "toppra returned a path velocity profile outside its own bounds (negative, above the "
+            "velocity bound or not at rest at the ends)",
+            value=x,
+            problem=problem,
+        )
     x = np.clip(x, 0.0, problem.x_max)
     x[0] = x[-1] = 0.0
     return x
@@ -177,8 +193,9 @@ def _tolerance(tol: Any) -> float:
     try:
         return scalar(tol, "tol", nonnegative=True)
     except NonFiniteError:
-        raise NonFiniteError(f"tol must be a number >= 0 or float('inf') (accept any result), got {tol!r}",
-                             value=tol) from None
+        raise NonFiniteError(
+            f"tol must be a number >= 0 or float('inf') (accept any result), got {tol!r}", value=tol
+        ) from None
 
 
 def _collocation_note(problem: TimeScalingProblem, history: list[dict[str, Any]]) -> str:
@@ -187,19 +204,33 @@ def _collocation_note(problem: TimeScalingProblem, history: list[dict[str, Any]]
     and how far the grid would have to go."""
     if problem.discretization != "collocation":
         return ""
-    note = ("; collocation imposes the limits at the start of each stage only, so its excess shrinks only in "
-            "proportion to the stage width")
+    note = (
+        "; collocation imposes the limits at the start of each stage only, so its excess shrinks only in "
+        "proportion to the stage width"
+    )
     excess = [h["worst_excess"] for h in history]
     if len(excess) >= 2 and 0.0 < excess[-1] < excess[-2]:
         note += f" (here ×{excess[-1] / excess[-2]:.2f} per doubling)"
     return note + ": discretization='interpolation' (the default) meets the limits on far coarser grids"
 
 
-def time_optimal(dyn: Dynamics, waypoints: Path | ArrayLike, vel_limit: Any = None, acc_limit: Any = None,
-                 torque_limit: Any = None, grid: int | ArrayLike = 100, *, torque_margin: float = 0.0,
-                 tol: float = 1e-2, refine: bool = True, max_grid: int = 1600, oversample: int = 10,
-                 viscous_passes: int = 2, discretization: str = "interpolation",
-                 position_limit: str | None = "model") -> Trajectory:
+def time_optimal(
+    dyn: Dynamics,
+    waypoints: Path | ArrayLike,
+    vel_limit: Any = None,
+    acc_limit: Any = None,
+    torque_limit: Any = None,
+    grid: int | ArrayLike = 100,
+    *,
+    torque_margin: float = 0.0,
+    tol: float = 1e-2,
+    refine: bool = True,
+    max_grid: int = 1600,
+    oversample: int = 10,
+    viscous_passes: int = 2,
+    discretization: str = "interpolation",
+    position_limit: str | None = "model",
+) -> Trajectory:
     """The time-optimal rest-to-rest trajectory along ``waypoints`` within the given limits.
 
     dyn: the arm's :class:`~armctl.Dynamics` (torques are τ = ``dyn.inverse_dynamics``, friction included).
@@ -236,8 +267,9 @@ def time_optimal(dyn: Dynamics, waypoints: Path | ArrayLike, vel_limit: Any = No
     if isinstance(position_limit, str) and position_limit == "model":
         check_range(dyn.model, geo)
     elif position_limit is not None:
-        raise InvalidParameterError(f'position_limit must be "model" or None, got {position_limit!r}',
-                                    value=position_limit)
+        raise InvalidParameterError(
+            f'position_limit must be "model" or None, got {position_limit!r}', value=position_limit
+        )
     tol = _tolerance(tol)
     oversample = whole_number(oversample, "oversample", 1)
     max_grid = whole_number(max_grid, "max_grid", 2)
@@ -254,10 +286,14 @@ def time_optimal(dyn: Dynamics, waypoints: Path | ArrayLike, vel_limit: Any = No
         nxt = _refined(grid)
         if not refine or len(gridpoints(nxt)) - 1 > max_grid:
             worst = check.worst()
-            raise SolverError(f"the time-optimal trajectory exceeds a limit by more than tol = {tol:g} on a grid of "
-                              f"{problem.grid} stages: {worst}" + ("" if refine else "; pass refine=True") +
-                              " (or raise max_grid or tol; the trajectory is in .result)" + _collocation_note(
-                                  problem, history),
-                              value=check, problem=problem, result=Trajectory(geo, traj.timing, check,
-                                                                              {"history": history}))
+            raise SolverError(
+                f"the time-optimal trajectory exceeds a limit by more than tol = {tol:g} on a grid of "
+                f"{problem.grid} stages: {worst}"
+                + ("" if refine else "; pass refine=True")
+                + " (or raise max_grid or tol; the trajectory is in .result)"
+                + _collocation_note(problem, history),
+                value=check,
+                problem=problem,
+                result=Trajectory(geo, traj.timing, check, {"history": history}),
+            )
         grid = nxt

@@ -1,6 +1,6 @@
 """`Trajectory`: a path traversed with a timing law, q(t) = q(s(t)), evaluated as a :class:`~armctl.Reference`.
 
-    q̇ = q'(s) ṡ,    q̈ = q'(s) s̈ + q''(s) ṡ².
+q̇ = q'(s) ṡ,    q̈ = q'(s) s̈ + q''(s) ṡ².
 """
 
 from __future__ import annotations
@@ -48,13 +48,15 @@ class Trajectory:
     info: how it was computed (grid, passes, solve time, …).
     """
 
-    def __init__(self, path: Path, timing: Timing, check: LimitCheck | None = None,
-                 info: dict[str, Any] | None = None) -> None:
+    def __init__(
+        self, path: Path, timing: Timing, check: LimitCheck | None = None, info: dict[str, Any] | None = None
+    ) -> None:
         if not isinstance(path, Path):
             raise InvalidParameterError(f"path must be an armctl.planning.Path, got {type(path).__name__}", value=path)
         if not isinstance(timing, Timing):
-            raise InvalidParameterError(f"timing must be an armctl.planning.Timing, got {type(timing).__name__}",
-                                        value=timing)
+            raise InvalidParameterError(
+                f"timing must be an armctl.planning.Timing, got {type(timing).__name__}", value=timing
+            )
         self.path = path
         self.timing = timing
         self.check = check

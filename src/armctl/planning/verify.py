@@ -52,10 +52,15 @@ class LimitReport:
 
     def __str__(self) -> str:
         state = f"exceeds its bound by {100 * self.excess:.3g} %" if self.excess > 0 else "within"
-        when = (f"t = {self.t:.4g} s" if self.rest is None else
-                f"rest at the {self.rest} pose ({'t < 0' if self.rest == 'start' else f't > {self.t:.4g} s'})")
-        return (f"{self.kind}: worst {100 * self.ratio:.4g} % of the range at joint {self.joint}, {when} "
-                f"(s = {self.s:.4g}): {self.value:.5g} {self.unit} vs bound {self.bound:.5g} — {state}")
+        when = (
+            f"t = {self.t:.4g} s"
+            if self.rest is None
+            else f"rest at the {self.rest} pose ({'t < 0' if self.rest == 'start' else f't > {self.t:.4g} s'})"
+        )
+        return (
+            f"{self.kind}: worst {100 * self.ratio:.4g} % of the range at joint {self.joint}, {when} "
+            f"(s = {self.s:.4g}): {self.value:.5g} {self.unit} vs bound {self.bound:.5g} — {state}"
+        )
 
 
 @dataclass(frozen=True)
@@ -128,33 +133,42 @@ def _report(kind: str, bounds: Bounds, values: FloatArray, smp: Samples, moving:
     mid = 0.5 * (bounds.upper[j] + bounds.lower[j])
     bound = float(bounds.upper[j] if v >= mid else bounds.lower[j])
     rest = None if k < moving else ("start" if k == moving else "end")
-    return LimitReport(kind, float(util[k, j]), int(j), float(smp.t[k]), float(smp.s[k]), v, bound, bounds.unit,
-                       rest)
+    return LimitReport(kind, float(util[k, j]), int(j), float(smp.t[k]), float(smp.s[k]), v, bound, bounds.unit, rest)
 
 
-def check_trajectory(dyn: Dynamics, traj: Trajectory, limits: JointLimits, oversample: int = 10,
-                     samples: Samples | None = None) -> LimitCheck:
+def check_trajectory(
+    dyn: Dynamics, traj: Trajectory, limits: JointLimits, oversample: int = 10, samples: Samples | None = None
+) -> LimitCheck:
     """Check ``traj`` densely against the planned ``limits`` (torque bounds with their margin applied) and
     report the worst utilisation of each. ``samples``: use these instead of :func:`sample_times`. The rest
     states at both ends (:func:`rest_samples`) are always checked too."""
     if not isinstance(dyn, Dynamics):
         raise InvalidParameterError(f"dyn must be an armctl.Dynamics, got {type(dyn).__name__}", value=dyn)
     if not isinstance(traj, Trajectory):
-        raise InvalidParameterError(f"traj must be an armctl.planning.Trajectory, got {type(traj).__name__}",
-                                    value=traj)
+        raise InvalidParameterError(
+            f"traj must be an armctl.planning.Trajectory, got {type(traj).__name__}", value=traj
+        )
     if not isinstance(limits, JointLimits):
-        raise InvalidParameterError(f"limits must be an armctl.planning.JointLimits, got {limits!r}; build one with "
-                                    "armctl.planning.joint_limits(dyn.model, vel_limit=..., acc_limit=..., "
-                                    "torque_limit=...) ('model' there uses the model's limits)", value=limits)
+        raise InvalidParameterError(
+            f"limits must be an armctl.planning.JointLimits, got {limits!r}; build one with "
+            "armctl.planning.joint_limits(dyn.model, vel_limit=..., acc_limit=..., "
+            "torque_limit=...) ('model' there uses the model's limits)",
+            value=limits,
+        )
     if samples is not None and not isinstance(samples, Samples):
-        raise InvalidParameterError(f"samples must be None or armctl.planning.Samples (from traj.sample), got "
-                                    f"{type(samples).__name__}", value=samples)
+        raise InvalidParameterError(
+            f"samples must be None or armctl.planning.Samples (from traj.sample), got {type(samples).__name__}",
+            value=samples,
+        )
     if traj.n != dyn.n:
         raise ShapeError(f"the trajectory has {traj.n} joints, the arm {dyn.n}", value=traj)
     for kind, b in limits.planned().items():
         if b.lower.shape != (dyn.n,):
-            raise ShapeError(f"the {kind} limits are for {b.lower.shape[0]} joints, the arm has {dyn.n}; build them "
-                             "with joint_limits(dyn.model, ...)", value=limits)
+            raise ShapeError(
+                f"the {kind} limits are for {b.lower.shape[0]} joints, the arm has {dyn.n}; build them "
+                "with joint_limits(dyn.model, ...)",
+                value=limits,
+            )
     moving = samples if samples is not None else traj.sample(sample_times(traj, oversample))
     smp = _joined(moving, rest_samples(traj))
     reports: dict[str, LimitReport] = {}

@@ -11,8 +11,12 @@ from armctl.scenes.joint_scenes import pendulum, planar_2r
 from armctl.scenes.panda_contact import ContactScene, PressAndSlide, panda_contact
 from armctl.scenes.panda_topp import panda_topp
 
-SCENES: dict[str, Callable[[], Scene]] = {"pendulum": pendulum, "planar_2r": planar_2r, "panda_topp": panda_topp,
-                                          "panda_contact": panda_contact}
+SCENES: dict[str, Callable[[], Scene]] = {
+    "pendulum": pendulum,
+    "planar_2r": planar_2r,
+    "panda_topp": panda_topp,
+    "panda_contact": panda_contact,
+}
 
 
 def scene(name: str) -> Scene:
@@ -21,5 +25,15 @@ def scene(name: str) -> Scene:
     return SCENES[name]()
 
 
-__all__ = ["JOINT_METHODS", "SCENES", "ContactScene", "PressAndSlide", "Scene", "panda_contact", "panda_topp",
-           "pendulum", "planar_2r", "scene"]
+__all__ = [
+    "JOINT_METHODS",
+    "SCENES",
+    "ContactScene",
+    "PressAndSlide",
+    "Scene",
+    "panda_contact",
+    "panda_topp",
+    "pendulum",
+    "planar_2r",
+    "scene",
+]

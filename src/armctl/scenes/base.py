@@ -36,9 +36,12 @@ from armctl.tuning.presets import load_preset
 JOINT_METHODS = ("pd_gravity", "computed_torque", "computed_torque_reduced", "passivity", "adaptive")
 #: the gain keys of each built-in method: (required, optional)
 GAIN_KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
-    "pd_gravity": (("kp", "kd"), ("ki",)), "computed_torque": (("kp", "kd"), ("ki",)),
-    "computed_torque_reduced": (("kp", "kd"), ("ki",)), "passivity": (("lam", "kd"), ()),
-    "adaptive": (("lam", "kd", "gamma"), ("projection", "sigma"))}
+    "pd_gravity": (("kp", "kd"), ("ki",)),
+    "computed_torque": (("kp", "kd"), ("ki",)),
+    "computed_torque_reduced": (("kp", "kd"), ("ki",)),
+    "passivity": (("lam", "kd"), ()),
+    "adaptive": (("lam", "kd", "gamma"), ("projection", "sigma")),
+}
 #: the models a scene holds
 MODELS = ("plant", "exact", "reduced")
 
@@ -47,8 +50,9 @@ def check_gains(method: str, gains: Any, required: tuple[str, ...], optional: tu
     """``gains`` as a dict; raise if it is not a mapping, has a key that is neither ``required`` nor
     ``optional`` (UnknownNameError listing the valid ones) or lacks a required one."""
     if not isinstance(gains, Mapping):
-        raise InvalidParameterError(f"gains of {method!r} must be a dict such as {{'kp': ..., 'kd': ...}}, "
-                                    f"got {gains!r}", value=gains)
+        raise InvalidParameterError(
+            f"gains of {method!r} must be a dict such as {{'kp': ..., 'kd': ...}}, got {gains!r}", value=gains
+        )
     valid = (*required, *optional)
     for key in gains:
         if key not in valid:
@@ -56,8 +60,10 @@ def check_gains(method: str, gains: Any, required: tuple[str, ...], optional: tu
     missing = [k for k in required if k not in gains]
     if missing:
         extra = f" (optional: {', '.join(optional)})" if optional else ""
-        raise InvalidParameterError(f"gains of {method!r} lack {', '.join(map(repr, missing))}; give "
-                                    f"{', '.join(required)}{extra}", value=dict(gains))
+        raise InvalidParameterError(
+            f"gains of {method!r} lack {', '.join(map(repr, missing))}; give {', '.join(required)}{extra}",
+            value=dict(gains),
+        )
     return dict(gains)
 
 
@@ -121,8 +127,9 @@ class Scene:
         """Dynamics of the ``plant``, ``exact`` or ``reduced`` model (pickles by rebuilding)."""
         if not isinstance(which, str) or which not in MODELS:
             raise UnknownNameError("scene model", which, MODELS)
-        return Dynamics({"plant": self.plant, "exact": self.exact, "reduced": self.reduced}[which],
-                        backend=self.backend)
+        return Dynamics(
+            {"plant": self.plant, "exact": self.exact, "reduced": self.reduced}[which], backend=self.backend
+        )
 
     def gains(self, method: str) -> dict[str, Any]:
         return dict(load_preset(self.name, method)["gains"])
@@ -143,9 +150,14 @@ class Scene:
         if method == "passivity":
             return PassivityBased(self.dynamics("exact"), g["lam"], g["kd"])
         if method == "adaptive":
-            return Adaptive(self.dynamics("reduced"), g["lam"], g["kd"], g["gamma"],
-                            projection=boolean(g.get("projection", True), "gains['projection']"),
-                            sigma=g.get("sigma", 0.0))
+            return Adaptive(
+                self.dynamics("reduced"),
+                g["lam"],
+                g["kd"],
+                g["gamma"],
+                projection=boolean(g.get("projection", True), "gains['projection']"),
+                sigma=g.get("sigma", 0.0),
+            )
         raise UnknownNameError("method", method, self.methods)  # pragma: no cover
 
     def run(self, method: str, gains: dict[str, Any] | None = None, **overrides: Any) -> Any:
@@ -154,19 +166,31 @@ class Scene:
         plant, controller and reference are the scene's (build another scene to change them)."""
         from armctl.sim import simulate
 
-        valid = tuple(p for p in inspect.signature(simulate).parameters if p not in ("plant", "controller",
-                                                                                     "reference"))
+        valid = tuple(
+            p for p in inspect.signature(simulate).parameters if p not in ("plant", "controller", "reference")
+        )
         for key in overrides:
             if key not in valid:
                 raise UnknownNameError("simulate option", key, valid)
-        options = {"control_dt": self.control_dt, "dt": self.dt, "integrator": self.integrator, "q0": self.q0,
-                   **self.sim_options, **overrides}
+        options = {
+            "control_dt": self.control_dt,
+            "dt": self.dt,
+            "integrator": self.integrator,
+            "q0": self.q0,
+            **self.sim_options,
+            **overrides,
+        }
         duration = options.pop("duration", self.duration)
-        return simulate(self.dynamics("plant"), self.controller(method, gains), self.reference, duration,
-                        **options)
+        return simulate(self.dynamics("plant"), self.controller(method, gains), self.reference, duration, **options)
 
-    def metrics(self, res: Any, method: str, gains: dict[str, Any] | None = None,
-                timing_samples: int | None = None, timing_rounds: int = 5) -> dict[str, Any]:
+    def metrics(
+        self,
+        res: Any,
+        method: str,
+        gains: dict[str, Any] | None = None,
+        timing_samples: int | None = None,
+        timing_rounds: int = 5,
+    ) -> dict[str, Any]:
         """Tracking error (RMS, max) [rad], torque RMS [N·m], the share of samples beyond the plant's limits
         (``limit_violation_share``: any of ``torque_violation_share``, the command beyond the effort limits;
         ``velocity_violation_share``, a joint more than :data:`VELOCITY_TOLERANCE` beyond its velocity limit;
@@ -177,18 +201,27 @@ class Scene:
         shares included). A run that diverged has no tracking error (NaN): the error of its samples before
         the divergence, which can look better than a stable method's, is kept apart as
         ``rms_error_until_divergence`` and ``max_error_until_divergence``."""
-        timing_samples = whole_number(self.timing_samples if timing_samples is None else timing_samples,
-                                      "timing_samples", 1)
+        timing_samples = whole_number(
+            self.timing_samples if timing_samples is None else timing_samples, "timing_samples", 1
+        )
         want = np.array([self.reference(t).q for t in res.t])
         err = np.abs(res.q - want) if len(res.t) else np.zeros((0, self.plant.n))
         shares = self.limit_violations(res)
         timing_rounds = whole_number(timing_rounds, "timing_rounds", 0)
-        step = (self.compute_time(method, self.replay_window(res, timing_samples), gains, timing_rounds)
-                if timing_rounds else float("nan"))
-        out = {"rms_error": float(np.sqrt((err**2).mean())) if err.size else float("nan"),
-               "max_error": float(err.max()) if err.size else float("nan"),
-               "torque_rms": float(np.sqrt((res.tau_applied**2).mean())) if len(res.t) else float("nan"),
-               **shares, "diverged": bool(res.diverged), "diverged_at": res.diverged_at, "compute_s": step}
+        step = (
+            self.compute_time(method, self.replay_window(res, timing_samples), gains, timing_rounds)
+            if timing_rounds
+            else float("nan")
+        )
+        out = {
+            "rms_error": float(np.sqrt((err**2).mean())) if err.size else float("nan"),
+            "max_error": float(err.max()) if err.size else float("nan"),
+            "torque_rms": float(np.sqrt((res.tau_applied**2).mean())) if len(res.t) else float("nan"),
+            **shares,
+            "diverged": bool(res.diverged),
+            "diverged_at": res.diverged_at,
+            "compute_s": step,
+        }
         return diverged_errors(out)
 
     def limit_violations(self, res: Any) -> dict[str, float]:
@@ -197,12 +230,16 @@ class Scene:
         if not len(res.t):
             return {f"{k}_violation_share": float("nan") for k in ("limit", *keys)}
         p = self.plant
-        over = {"torque": np.abs(res.tau) > p.effort_limit * (1 + 1e-9),
-                "velocity": np.abs(res.qd) > p.velocity_limit * (1 + VELOCITY_TOLERANCE),
-                "position": (res.q < p.lower) | (res.q > p.upper)}
+        over = {
+            "torque": np.abs(res.tau) > p.effort_limit * (1 + 1e-9),
+            "velocity": np.abs(res.qd) > p.velocity_limit * (1 + VELOCITY_TOLERANCE),
+            "position": (res.q < p.lower) | (res.q > p.upper),
+        }
         rows = {k: v.any(axis=1) for k, v in over.items()}
-        return {"limit_violation_share": float(np.logical_or.reduce(list(rows.values())).mean()),
-                **{f"{k}_violation_share": float(rows[k].mean()) for k in keys}}
+        return {
+            "limit_violation_share": float(np.logical_or.reduce(list(rows.values())).mean()),
+            **{f"{k}_violation_share": float(rows[k].mean()) for k in keys},
+        }
 
     def replay_window(self, res: Any, samples: int = 200) -> dict[str, Any]:
         """A contiguous window of ``samples`` recorded states from the middle of a run, as the controller
@@ -212,11 +249,16 @@ class Scene:
         first = (len(res.t) - count) // 2
         idx = np.arange(first, first + count)
         t = [float(res.t[k]) for k in idx]
-        return {"t": t, "q": res.q_measured[idx].copy(), "qd": res.qd_measured[idx].copy(),
-                "ref": [self.reference(tk) for tk in t]}
+        return {
+            "t": t,
+            "q": res.q_measured[idx].copy(),
+            "qd": res.qd_measured[idx].copy(),
+            "ref": [self.reference(tk) for tk in t],
+        }
 
-    def compute_time(self, method: str, window: dict[str, Any], gains: dict[str, Any] | None = None,
-                     rounds: int = 5) -> float:
+    def compute_time(
+        self, method: str, window: dict[str, Any], gains: dict[str, Any] | None = None, rounds: int = 5
+    ) -> float:
         """Seconds per control step of ``method``'s controller replaying ``window`` (as a loop would see the
         states: warm starts stay warm), so the simulator's own cost is not counted: the median over
         ``rounds`` passes after a warm-up pass, the controller reset before each. NaN for an empty window."""

@@ -18,9 +18,15 @@ def pendulum() -> Scene:
     def reference(t: float):  # type: ignore[no-untyped-def]
         return move(t) if t < 2.2 else back(t)
 
-    return Scene("pendulum", "geared single joint: out-and-back minimum-jerk move with stick–slip friction",
-                 plant=plant, exact=plant, reduced=plant.reduced(rotors=False, friction=False),
-                 reference=reference, duration=4.0)
+    return Scene(
+        "pendulum",
+        "geared single joint: out-and-back minimum-jerk move with stick–slip friction",
+        plant=plant,
+        exact=plant,
+        reduced=plant.reduced(rotors=False, friction=False),
+        reference=reference,
+        duration=4.0,
+    )
 
 
 def planar_2r(payload: float = 10.0) -> Scene:
@@ -30,6 +36,13 @@ def planar_2r(payload: float = 10.0) -> Scene:
     nominal = library.planar_2r()
     plant = nominal.with_payload(payload)
     ref = Sinusoid([0.3, -0.4], [0.4, 0.5], [0.5, 0.7])
-    return Scene("planar_2r", f"two-link arm tracking sinusoids with a {payload:g} kg payload, unknown to the "
-                 "reduced model (computed_torque_reduced, adaptive)",
-                 plant=plant, exact=plant, reduced=nominal, reference=ref, duration=5.0)
+    return Scene(
+        "planar_2r",
+        f"two-link arm tracking sinusoids with a {payload:g} kg payload, unknown to the "
+        "reduced model (computed_torque_reduced, adaptive)",
+        plant=plant,
+        exact=plant,
+        reduced=nominal,
+        reference=ref,
+        duration=5.0,
+    )

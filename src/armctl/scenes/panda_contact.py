@@ -39,9 +39,19 @@ class PressAndSlide(Controller):
     ``kp``, ``kd``: the pose task's gains (see :class:`FramePoseTask`; ``kd=None``: its default). ``force`` ≥ 0,
     ``slide_start`` ≥ 0 and ``slide_time`` > 0 must be finite."""
 
-    def __init__(self, dyn: Dynamics, z_table: float, mu: float, force: float = 10.0, slide: float = 0.1,
-                 slide_start: float = 0.75, slide_time: float = 1.0, closed_form: bool = False,
-                 kp: ArrayLike = 400.0, kd: ArrayLike | None = None) -> None:
+    def __init__(
+        self,
+        dyn: Dynamics,
+        z_table: float,
+        mu: float,
+        force: float = 10.0,
+        slide: float = 0.1,
+        slide_start: float = 0.75,
+        slide_time: float = 1.0,
+        closed_form: bool = False,
+        kp: ArrayLike = 400.0,
+        kd: ArrayLike | None = None,
+    ) -> None:
         super().__init__(dyn)
         self.p0, self.z_table = dyn.frame_pose(Q_HOME), scalar(z_table, "z_table")
         mu = scalar(mu, "mu", nonnegative=True)
@@ -58,8 +68,9 @@ class PressAndSlide(Controller):
         else:
             self.contact = Contact(mode="sliding", mu=mu, kd=100.0, active=False)
             self.force_task = ContactForceTask(self.contact, 0.0, weight=1.0)
-            self.ctrl = OperationalSpaceQP(dyn, [self.pose, self.force_task, PostureTask(dyn.n, kp=25.0, priority=1)],
-                                           contacts=[self.contact])
+            self.ctrl = OperationalSpaceQP(
+                dyn, [self.pose, self.force_task, PostureTask(dyn.n, kp=25.0, priority=1)], contacts=[self.contact]
+            )
 
     def target(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Tool pose, twist and acceleration targets at time t [s]."""
@@ -96,8 +107,9 @@ class PressAndSlide(Controller):
 
 
 def panda_contact_model() -> Any:
-    return library.panda().with_friction(viscous=[0.5, 0.5, 0.5, 0.5, 0.2, 0.2, 0.2],
-                                         coulomb=[0.8, 0.8, 0.8, 0.8, 0.3, 0.3, 0.3])
+    return library.panda().with_friction(
+        viscous=[0.5, 0.5, 0.5, 0.5, 0.2, 0.2, 0.2], coulomb=[0.8, 0.8, 0.8, 0.8, 0.3, 0.3, 0.3]
+    )
 
 
 class ContactScene(Scene):
@@ -115,11 +127,23 @@ class ContactScene(Scene):
         if method not in self.methods:
             raise UnknownNameError("method", method, self.methods)
         g = check_gains(method, self.gains(method) if gains is None else gains, (), ("kp", "kd"))
-        return PressAndSlide(self.dynamics("exact"), self.z_table, self.mu, closed_form=method == "osc_closed_form",
-                             kp=g.get("kp", 400.0), kd=g.get("kd"))
+        return PressAndSlide(
+            self.dynamics("exact"),
+            self.z_table,
+            self.mu,
+            closed_form=method == "osc_closed_form",
+            kp=g.get("kp", 400.0),
+            kd=g.get("kd"),
+        )
 
-    def metrics(self, res: Any, method: str, gains: dict[str, Any] | None = None,
-                timing_samples: int | None = None, timing_rounds: int = 5) -> dict[str, Any]:
+    def metrics(
+        self,
+        res: Any,
+        method: str,
+        gains: dict[str, Any] | None = None,
+        timing_samples: int | None = None,
+        timing_rounds: int = 5,
+    ) -> dict[str, Any]:
         out = super().metrics(res, method, gains, timing_samples, timing_rounds)
         if not len(res.t):  # a run without samples: nothing to measure
             out.update({"force_rms_error": float("nan"), "contact_lost": False, "error_unit": "m"})
@@ -132,10 +156,17 @@ class ContactScene(Scene):
         fn = -res.contact_force[:, 0, 2] if res.contact_force.size else np.zeros(len(res.t))
         touch = np.flatnonzero(fn > 0)
         settled = (res.t >= res.t[touch[0]] + 0.4) if touch.size else np.zeros(len(res.t), bool)
-        out.update({"rms_error": float(np.sqrt((err**2).mean())), "max_error": float(err.max()),
-                    "force_rms_error": float(np.sqrt(((fn[settled] - 10.0) ** 2).mean())) if settled.any() else
-                    float("nan"),
-                    "contact_lost": bool(touch.size and (fn[touch[0] + 1:] <= 0).any()), "error_unit": "m"})
+        out.update(
+            {
+                "rms_error": float(np.sqrt((err**2).mean())),
+                "max_error": float(err.max()),
+                "force_rms_error": float(np.sqrt(((fn[settled] - 10.0) ** 2).mean()))
+                if settled.any()
+                else float("nan"),
+                "contact_lost": bool(touch.size and (fn[touch[0] + 1 :] <= 0).any()),
+                "error_unit": "m",
+            }
+        )
         return diverged_errors(out)
 
 
@@ -145,13 +176,21 @@ def panda_contact() -> Scene:
     model = panda_contact_model()
     z_table = float(Dynamics(model).frame_pose(Q_HOME)[2, 3]) - 0.005
     plane = Plane(KelvinVoigt(2e4, 50.0), normal=(0, 0, 1), point=(0, 0, z_table), friction=0.3)
-    sc = ContactScene("panda_contact", "Panda with joint friction pressing 10 N on a table (surface friction "
-                      "μ = 0.3) and sliding 10 cm",
-                      plant=model, exact=model, reduced=model, reference=lambda t: Reference(Q_HOME), duration=1.95,
-                      # 0.2 ms steps: below its 1 mm/s slip velocity the table's friction is a viscous law of slope
-                      # μ f_n / v_slip, which RK4 integrates only below 0.4 ms here (at the closed form's 21 N;
-                      # armctl.sim.after_run): at 1 ms the tangential force chatters
-                      dt=2e-4,
-                      methods=("osc_qp", "osc_closed_form"), q0=Q_HOME, sim_options={"environment": plane})
+    sc = ContactScene(
+        "panda_contact",
+        "Panda with joint friction pressing 10 N on a table (surface friction μ = 0.3) and sliding 10 cm",
+        plant=model,
+        exact=model,
+        reduced=model,
+        reference=lambda t: Reference(Q_HOME),
+        duration=1.95,
+        # 0.2 ms steps: below its 1 mm/s slip velocity the table's friction is a viscous law of slope
+        # μ f_n / v_slip, which RK4 integrates only below 0.4 ms here (at the closed form's 21 N;
+        # armctl.sim.after_run): at 1 ms the tangential force chatters
+        dt=2e-4,
+        methods=("osc_qp", "osc_closed_form"),
+        q0=Q_HOME,
+        sim_options={"environment": plane},
+    )
     sc.z_table = z_table
     return sc

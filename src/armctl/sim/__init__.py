@@ -17,6 +17,18 @@ from armctl.sim.simulate import simulate
 from armctl.sim.sweep import sweep
 
 __all__ = [
-    "INTEGRATORS", "ContactPoint", "Environment", "ForceSensor", "FrictionModel", "HuntCrossley", "KelvinVoigt",
-    "NormalForce", "Plane", "SimResult", "SmoothFriction", "StickSlip", "simulate", "sweep",
+    "INTEGRATORS",
+    "ContactPoint",
+    "Environment",
+    "ForceSensor",
+    "FrictionModel",
+    "HuntCrossley",
+    "KelvinVoigt",
+    "NormalForce",
+    "Plane",
+    "SimResult",
+    "SmoothFriction",
+    "StickSlip",
+    "simulate",
+    "sweep",
 ]

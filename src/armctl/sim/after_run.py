@@ -85,11 +85,15 @@ def check_energy_gain(res: SimResult, scheme: str) -> None:
             gain, tolerance = float(balance[-1]), FIRST_ORDER_TOLERANCE
     res.info["energy_gain"] = gain
     if gain > tolerance * scale:
-        warnings.warn(f"the arm gained {gain:.3g} J that no force supplied ({100 * gain / scale:.0f}% of the "
-                      f"energy exchanged; E − E₀ − W in res.energy_balance()): {scheme!r} was likely unstable on a "
-                      "contact (e.g. Hunt–Crossley with an exponent above 1 stiffens with depth, which the check "
-                      "before the run cannot judge). Past that point the run is not the arm's motion: use "
-                      "integrator='implicit-euler' or a smaller dt", SimulationWarning, stacklevel=4)
+        warnings.warn(
+            f"the arm gained {gain:.3g} J that no force supplied ({100 * gain / scale:.0f}% of the "
+            f"energy exchanged; E − E₀ − W in res.energy_balance()): {scheme!r} was likely unstable on a "
+            "contact (e.g. Hunt–Crossley with an exponent above 1 stiffens with depth, which the check "
+            "before the run cannot judge). Past that point the run is not the arm's motion: use "
+            "integrator='implicit-euler' or a smaller dt",
+            SimulationWarning,
+            stacklevel=4,
+        )
 
 
 def check_passive_work(res: SimResult, scheme: str) -> None:
@@ -100,17 +104,20 @@ def check_passive_work(res: SimResult, scheme: str) -> None:
     res.info["environment_work"] = work
     scale = _scale(res)
     if work > (ENERGY_GAIN_TOLERANCE if scheme == "rk4" else FIRST_ORDER_TOLERANCE) * scale:
-        warnings.warn(f"the contact did {work:.3g} J of work on the arm ({100 * work / scale:.0f}% of the energy "
-                      "exchanged), but a compliant surface only gives back what it stored (from a start out of "
-                      f"contact its work is <= 0): {scheme!r} was unstable on it. Past that point the run is not the "
-                      "arm's motion: use integrator='implicit-euler' or a smaller dt", SimulationWarning, stacklevel=4)
+        warnings.warn(
+            f"the contact did {work:.3g} J of work on the arm ({100 * work / scale:.0f}% of the energy "
+            "exchanged), but a compliant surface only gives back what it stored (from a start out of "
+            f"contact its work is <= 0): {scheme!r} was unstable on it. Past that point the run is not the "
+            "arm's motion: use integrator='implicit-euler' or a smaller dt",
+            SimulationWarning,
+            stacklevel=4,
+        )
 
 
 def starts_in_contact(dyn: Dynamics, environments: Sequence[Environment], q: FloatArray) -> bool:
     """True if a contact point of a plane is inside it at configuration q (its spring then holds energy that
     the run may give back)."""
-    return any(env.depth(p) > 0.0 for env in environments if isinstance(env, Plane)
-               for p, _ in env.kinematics(dyn)(q))
+    return any(env.depth(p) > 0.0 for env in environments if isinstance(env, Plane) for p, _ in env.kinematics(dyn)(q))
 
 
 #: the contact samples at which :func:`check_friction_slope` evaluates the rate, at most (those of the largest
@@ -118,8 +125,9 @@ def starts_in_contact(dyn: Dynamics, environments: Sequence[Environment], q: Flo
 FRICTION_SAMPLES = 400
 
 
-def check_friction_slope(res: SimResult, dyn: Dynamics, environments: Sequence[Environment], scheme: str,
-                         h: float) -> list[dict[str, Any]]:
+def check_friction_slope(
+    res: SimResult, dyn: Dynamics, environments: Sequence[Environment], scheme: str, h: float
+) -> list[dict[str, Any]]:
     """If an explicit ``scheme`` cannot integrate the planes' friction regularisation at step h (see the
     module), a warning and, for ``res.info["unstable_friction"]``, the worst sample: ``t``, ``rate_dt``, the
     ``points`` (environment, point) sticking there, their total ``normal_force``, ``limit``, ``max_dt`` and
@@ -136,7 +144,7 @@ def check_friction_slope(res: SimResult, dyn: Dynamics, environments: Sequence[E
     for e, env in enumerate(environments):
         if isinstance(env, Plane) and env.friction > 0.0:
             tangent = np.eye(3) - np.outer(env.normal, env.normal)
-            fn = -(res.contact_force[:, col:col + len(env.points), :] @ env.normal)  # on the arm (N, P)
+            fn = -(res.contact_force[:, col : col + len(env.points), :] @ env.normal)  # on the arm (N, P)
             planes.append((e, env, env.kinematics(dyn), tangent, np.maximum(fn, 0.0)))
         col += len(env.points)
     if not planes:
@@ -163,8 +171,15 @@ def check_friction_slope(res: SimResult, dyn: Dynamics, environments: Sequence[E
             continue
         rate = float(np.linalg.eigvals(np.linalg.solve(dyn.mass_matrix(q), damping)).real.max())
         if rate * h > limit and (worst is None or rate * h > worst["rate_dt"]):
-            worst = {"t": float(res.t[k]), "points": points, "normal_force": force, "rate_dt": rate * h,
-                     "limit": limit, "max_dt": limit / rate, "min_slip_velocity": slip * rate * h / limit}
+            worst = {
+                "t": float(res.t[k]),
+                "points": points,
+                "normal_force": force,
+                "rate_dt": rate * h,
+                "limit": limit,
+                "max_dt": limit / rate,
+                "min_slip_velocity": slip * rate * h / limit,
+            }
     if worst is None:
         return []
     where = ", ".join(f"environment {e} point {p}" for e, p in worst["points"])
@@ -174,12 +189,16 @@ def check_friction_slope(res: SimResult, dyn: Dynamics, environments: Sequence[E
         f"f_n = {worst['normal_force']:.3g} N: decay rate × dt = {worst['rate_dt']:.3g} > {limit:g}): the friction "
         f"swings between ±μ f_n instead of holding the contact. Use dt <= {worst['max_dt']:.3g} s, slip_velocity >= "
         f"{worst['min_slip_velocity']:.3g} m/s, or integrator='semi-implicit-euler' or 'implicit-euler' (both take "
-        "it implicitly)", SimulationWarning, stacklevel=4)
+        "it implicitly)",
+        SimulationWarning,
+        stacklevel=4,
+    )
     return [worst]
 
 
-def after_run(res: SimResult, dyn: Dynamics, environments: Sequence[Environment], scheme: str, h: float,
-              disturbed: bool = False) -> None:
+def after_run(
+    res: SimResult, dyn: Dynamics, environments: Sequence[Environment], scheme: str, h: float, disturbed: bool = False
+) -> None:
     """The checks of the module on a finished run with contact that did not diverge: the friction's slope for
     the explicit schemes; the energy balance (if ``res.energy`` was asked for) for RK4, and for the other
     explicit schemes where the check before the run could not judge a contact; the environments' work when

@@ -40,8 +40,11 @@ Step = Callable[[FloatArray, FloatArray, FloatArray, float], tuple[FloatArray, F
 
 def _check_scheme(scheme: str) -> None:
     if scheme not in SCHEMES:
-        raise InvalidParameterError(f"compile=True has a compiled step for the integrators {SCHEMES}, not "
-                                    f"{scheme!r}: use one of them or compile=False", value=scheme)
+        raise InvalidParameterError(
+            f"compile=True has a compiled step for the integrators {SCHEMES}, not "
+            f"{scheme!r}: use one of them or compile=False",
+            value=scheme,
+        )
 
 
 def step_function(model: RobotModel, scheme: str) -> cs.Function:
@@ -63,20 +66,32 @@ def check_plant(dyn: Dynamics, scheme: str, plant: Plant) -> None:
     """Raise :class:`~armctl.errors.InvalidParameterError` if ``compile=True`` cannot integrate this plant."""
     _check_scheme(scheme)
     if not plant.simple:
-        has = [what for what, present in (("joint friction", plant.friction is not None),
-                                          ("contact", bool(plant.environments)),
-                                          ("a disturbance", plant.disturbance is not None)) if present]
-        raise InvalidParameterError(f"compile=True integrates only a plant without friction, contact or "
-                                    f"disturbance (its step is pure rigid-body dynamics), and this one has "
-                                    f"{' and '.join(has)}: simulate a friction-free model "
-                                    f"(model.reduced(friction=False)) without environment or disturbance, or use "
-                                    f"compile=False", value=has)
-    if getattr(dyn, "rotor_coupling", False) and any(j.motor is not None and j.motor.gyroscopic
-                                                      for j in dyn.model.joints):
-        raise InvalidParameterError("compile=True integrates the model the 'pinocchio' backend expresses, "
-                                    "without the rotors' gyroscopic coupling this 'lagrange' plant has: use "
-                                    "rotor_coupling=False, the 'pinocchio' backend, or compile=False",
-                                    value=dyn.backend)
+        has = [
+            what
+            for what, present in (
+                ("joint friction", plant.friction is not None),
+                ("contact", bool(plant.environments)),
+                ("a disturbance", plant.disturbance is not None),
+            )
+            if present
+        ]
+        raise InvalidParameterError(
+            f"compile=True integrates only a plant without friction, contact or "
+            f"disturbance (its step is pure rigid-body dynamics), and this one has "
+            f"{' and '.join(has)}: simulate a friction-free model "
+            f"(model.reduced(friction=False)) without environment or disturbance, or use "
+            f"compile=False",
+            value=has,
+        )
+    if getattr(dyn, "rotor_coupling", False) and any(
+        j.motor is not None and j.motor.gyroscopic for j in dyn.model.joints
+    ):
+        raise InvalidParameterError(
+            "compile=True integrates the model the 'pinocchio' backend expresses, "
+            "without the rotors' gyroscopic coupling this 'lagrange' plant has: use "
+            "rotor_coupling=False, the 'pinocchio' backend, or compile=False",
+            value=dyn.backend,
+        )
 
 
 def _library_function(model: RobotModel, scheme: str, cache_dir: str | os.PathLike[str] | None) -> cs.Function:
@@ -85,8 +100,12 @@ def _library_function(model: RobotModel, scheme: str, cache_dir: str | os.PathLi
 
     _check_scheme(scheme)
     name = f"step_{scheme}"
-    return cached([name], f"sim-step|{model.fingerprint(inertial=True, tool=False)}|v{_CODE_VERSION}",
-                  lambda: [step_function(model, scheme)], cache_dir)[name]
+    return cached(
+        [name],
+        f"sim-step|{model.fingerprint(inertial=True, tool=False)}|v{_CODE_VERSION}",
+        lambda: [step_function(model, scheme)],
+        cache_dir,
+    )[name]
 
 
 def compiled_step(model: RobotModel, scheme: str, cache_dir: str | os.PathLike[str] | None = None) -> Step:
@@ -111,8 +130,7 @@ def compiled_step(model: RobotModel, scheme: str, cache_dir: str | os.PathLike[s
         evals.append((buf, run))  # the buffer kept alive with its function
     turn = [0]
 
-    def step(q: FloatArray, v: FloatArray, tau: FloatArray, h: float
-             ) -> tuple[FloatArray, FloatArray, FloatArray]:
+    def step(q: FloatArray, v: FloatArray, tau: FloatArray, h: float) -> tuple[FloatArray, FloatArray, FloatArray]:
         i = turn[0]
         q_in, v_in = rows[i]
         if q is not q_in or v is not v_in:  # not the last step's result: copy the state in

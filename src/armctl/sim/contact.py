@@ -39,8 +39,9 @@ class ContactPoint:
     def __post_init__(self) -> None:
         o = np.array(self.offset, dtype=float)
         if o.shape != (3,) or not np.isfinite(o).all():
-            raise InvalidParameterError(f"contact point offset must be a finite 3-vector, got {self.offset!r}",
-                                        value=self.offset)
+            raise InvalidParameterError(
+                f"contact point offset must be a finite 3-vector, got {self.offset!r}", value=self.offset
+            )
         object.__setattr__(self, "offset", readonly(o))
 
 
@@ -65,8 +66,13 @@ class PointKinematics:
 
             ids = [dyn._frame_id(f) for f in self.frames]  # type: ignore[attr-defined]
             if all(i != 0 for i in ids):
-                self._pin = (pin.computeFrameJacobian, dyn.pin_model, dyn.pin_data, ids,  # type: ignore[attr-defined]
-                             pin.LOCAL_WORLD_ALIGNED)
+                self._pin = (
+                    pin.computeFrameJacobian,
+                    dyn.pin_model,
+                    dyn.pin_data,
+                    ids,  # type: ignore[attr-defined]
+                    pin.LOCAL_WORLD_ALIGNED,
+                )
 
     def __call__(self, q: FloatArray) -> list[tuple[FloatArray, FloatArray]]:
         """[(p, J_p)] for every point at configuration q."""
@@ -106,8 +112,9 @@ class Environment(ABC):
         """The evaluator of this environment's points for ``dyn`` (build once, call at every step)."""
         return PointKinematics(dyn, self.points)
 
-    def joint_torque(self, kin: PointKinematics, q: FloatArray, qd: FloatArray, stiffness: bool = False
-                     ) -> tuple[FloatArray, FloatArray | None, FloatArray | None]:
+    def joint_torque(
+        self, kin: PointKinematics, q: FloatArray, qd: FloatArray, stiffness: bool = False
+    ) -> tuple[FloatArray, FloatArray | None, FloatArray | None]:
         """(τ_c, K, D): τ_c = Σ J_pᵀ F_p, the joint torque of the forces on the arm (it is *added* to τ), and,
         if ``stiffness``, K = Σ J_pᵀ (∂F/∂p) J_p (∂τ_c/∂q without the J-derivative terms, see the module) and
         D = ∂τ_c/∂q̇ (n×n). ``kin``: :meth:`kinematics` of the plant."""
@@ -136,8 +143,9 @@ class Environment(ABC):
         return hs, ps
 
     @abstractmethod
-    def force(self, p: FloatArray, v: FloatArray, derivatives: bool
-              ) -> tuple[FloatArray | None, FloatArray | None, FloatArray | None]:
+    def force(
+        self, p: FloatArray, v: FloatArray, derivatives: bool
+    ) -> tuple[FloatArray | None, FloatArray | None, FloatArray | None]:
         """(F, ∂F/∂p, ∂F/∂v): the force on the arm [N] at a point at p [m] moving at v [m/s], or
         (None, None, None) without contact."""
 
@@ -156,19 +164,27 @@ class Plane(Environment):
     F = f_n n + F_t.
     """
 
-    def __init__(self, law: NormalForce, normal: ArrayLike = (0.0, 0.0, 1.0), point: ArrayLike = (0.0, 0.0, 0.0),
-                 friction: float = 0.0, slip_velocity: float = 1e-3,
-                 points: Sequence[ContactPoint] | None = None) -> None:
+    def __init__(
+        self,
+        law: NormalForce,
+        normal: ArrayLike = (0.0, 0.0, 1.0),
+        point: ArrayLike = (0.0, 0.0, 0.0),
+        friction: float = 0.0,
+        slip_velocity: float = 1e-3,
+        points: Sequence[ContactPoint] | None = None,
+    ) -> None:
         if not isinstance(law, NormalForce):
-            raise InvalidParameterError(f"law must be a NormalForce (KelvinVoigt, HuntCrossley), got {law!r}",
-                                        value=law)
+            raise InvalidParameterError(
+                f"law must be a NormalForce (KelvinVoigt, HuntCrossley), got {law!r}", value=law
+            )
         nrm = np.array(real_array(normal, "plane normal"), dtype=float)
         if nrm.shape == (3,) and np.isfinite(nrm).all() and np.abs(nrm).max() > 0.0:
             nrm = nrm / np.abs(nrm).max()  # first: the norm of (1e300, 0, 0) would overflow
         length = float(np.linalg.norm(nrm)) if nrm.shape == (3,) and np.isfinite(nrm).all() else 0.0
         if length < 1e-12:
-            raise InvalidParameterError(f"plane normal must be a finite non-zero 3-vector, got {normal!r}",
-                                        value=normal)
+            raise InvalidParameterError(
+                f"plane normal must be a finite non-zero 3-vector, got {normal!r}", value=normal
+            )
         pt = real_array(point, "plane point")
         if pt.shape != (3,) or not np.isfinite(pt).all():
             raise InvalidParameterError(f"plane point must be a finite 3-vector, got {point!r}", value=point)
@@ -183,8 +199,9 @@ class Plane(Environment):
         except TypeError:
             pts = ()
         if not pts or not all(isinstance(p, ContactPoint) for p in pts):
-            raise InvalidParameterError(f"points must be a non-empty sequence of ContactPoint, got {points!r}",
-                                        value=points)
+            raise InvalidParameterError(
+                f"points must be a non-empty sequence of ContactPoint, got {points!r}", value=points
+            )
         self.points = pts
         self._nn = np.outer(self.normal, self.normal)
         self._tangent_projector = np.eye(3) - self._nn
@@ -193,8 +210,9 @@ class Plane(Environment):
         """Penetration δ [m] of a point at p (negative: outside)."""
         return float(self.normal @ (self.point - np.asarray(p, dtype=float)))
 
-    def force(self, p: FloatArray, v: FloatArray, derivatives: bool
-              ) -> tuple[FloatArray | None, FloatArray | None, FloatArray | None]:
+    def force(
+        self, p: FloatArray, v: FloatArray, derivatives: bool
+    ) -> tuple[FloatArray | None, FloatArray | None, FloatArray | None]:
         n = self.normal
         depth = float(n @ (self.point - p))
         if depth <= 0.0:
@@ -225,8 +243,10 @@ class Plane(Environment):
         return force, dfdp, dfdv
 
     def __repr__(self) -> str:
-        return (f"Plane({self.law!r}, normal={self.normal.tolist()}, point={self.point.tolist()}, "
-                f"friction={self.friction:g}, {len(self.points)} point(s))")
+        return (
+            f"Plane({self.law!r}, normal={self.normal.tolist()}, point={self.point.tolist()}, "
+            f"friction={self.friction:g}, {len(self.points)} point(s))"
+        )
 
 
 @dataclass(frozen=True, eq=False)
@@ -242,8 +262,9 @@ class ForceSensor:
     def __post_init__(self) -> None:
         object.__setattr__(self, "world_axes", boolean(self.world_axes, "world_axes"))
 
-    def reading(self, dyn: Dynamics, q: FloatArray, forces: FloatArray, positions: FloatArray,
-                joints: FloatArray) -> FloatArray:
+    def reading(
+        self, dyn: Dynamics, q: FloatArray, forces: FloatArray, positions: FloatArray, joints: FloatArray
+    ) -> FloatArray:
         """The (6,) reading from the contact forces on the environment (P, 3), their positions (P, 3) and the
         1-based joint index each point rides on (P,)."""
         mount = dyn.model.frame(self.frame).joint

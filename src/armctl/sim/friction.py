@@ -52,8 +52,10 @@ class FrictionModel(ABC):
 
     def __init__(self, model: RobotModel, stribeck: bool = True) -> None:
         if not isinstance(model, RobotModel):
-            raise InvalidParameterError(f"a friction model takes the plant's RobotModel (dynamics.model), got "
-                                        f"{type(model).__name__}", value=model)
+            raise InvalidParameterError(
+                f"a friction model takes the plant's RobotModel (dynamics.model), got {type(model).__name__}",
+                value=model,
+            )
         stribeck = boolean(stribeck, "stribeck")
         fr = [j.friction for j in model.joints]
         self.n = model.n
@@ -71,8 +73,13 @@ class FrictionModel(ABC):
         self.has_viscous = bool(self.viscous.any())
         self.has_coulomb = bool(self.coulomb_pos.any() or self.coulomb_neg.any())
         self.has_stribeck = bool(self.hump_pos.any() or self.hump_neg.any())
-        self.is_zero = not (self.has_viscous or self.has_coulomb or self.has_stribeck
-                            or self.breakaway_pos.any() or self.breakaway_neg.any())
+        self.is_zero = not (
+            self.has_viscous
+            or self.has_coulomb
+            or self.has_stribeck
+            or self.breakaway_pos.any()
+            or self.breakaway_neg.any()
+        )
 
     @abstractmethod
     def torque(self, qd: FloatArray, direction: FloatArray) -> FloatArray:
@@ -173,8 +180,7 @@ def make_friction(spec: str | FrictionModel, model: RobotModel) -> FrictionModel
     """The friction model named ``spec`` ("stick-slip" or "smooth") for ``model``, or ``spec`` itself."""
     if isinstance(spec, FrictionModel):
         if spec.n != model.n:
-            raise InvalidParameterError(f"friction model is for {spec.n} joints, the plant has {model.n}",
-                                        value=spec)
+            raise InvalidParameterError(f"friction model is for {spec.n} joints, the plant has {model.n}", value=spec)
         return spec
     if spec == "stick-slip":
         return StickSlip(model)
@@ -183,8 +189,7 @@ def make_friction(spec: str | FrictionModel, model: RobotModel) -> FrictionModel
     raise UnknownNameError("friction model", spec, FRICTION_MODELS)
 
 
-def stribeck_curve(qd: float, coulomb: float, static: float, stribeck_velocity: float, viscous: float = 0.0
-                   ) -> float:
+def stribeck_curve(qd: float, coulomb: float, static: float, stribeck_velocity: float, viscous: float = 0.0) -> float:
     """The kinetic friction magnitude at speed |q̇| (a scalar helper for plots and docs)."""
     s = abs(qd)
     hump = (static - coulomb) * math.exp(-((s / stribeck_velocity) ** 2)) if stribeck_velocity > 0 else 0.0

@@ -15,8 +15,9 @@ NEWTON_TOL = 1e-11
 NEWTON_MAX_ITER = 25
 
 
-def implicit_euler(plant: Plant, t: float, q: FloatArray, v: FloatArray, tau: FloatArray, h: float
-                   ) -> tuple[FloatArray, FloatArray, None, float, float]:
+def implicit_euler(
+    plant: Plant, t: float, q: FloatArray, v: FloatArray, tau: FloatArray, h: float
+) -> tuple[FloatArray, FloatArray, None, float, float]:
     """One backward-Euler step (see :mod:`armctl.sim.integrators`); returns (q₁, q̇₁, None, W_f, W_e)."""
     n = plant.n
     if plant.all_stuck:
@@ -59,8 +60,9 @@ def implicit_euler(plant: Plant, t: float, q: FloatArray, v: FloatArray, tau: Fl
     return q1, v1, None, wf, we
 
 
-def symplectic_euler(plant: Plant, t: float, q: FloatArray, v: FloatArray, tau: FloatArray, h: float
-                     ) -> tuple[FloatArray, FloatArray, None, float, float]:
+def symplectic_euler(
+    plant: Plant, t: float, q: FloatArray, v: FloatArray, tau: FloatArray, h: float
+) -> tuple[FloatArray, FloatArray, None, float, float]:
     """One step of symplectic Euler in momentum form (see :mod:`armctl.sim.integrators`)."""
     if plant.all_stuck:
         return q, v, None, 0.0, 0.0
@@ -109,8 +111,9 @@ def symplectic_euler(plant: Plant, t: float, q: FloatArray, v: FloatArray, tau: 
     return q1, v1, None, wf, we
 
 
-def _symplectic_conservative(plant: Plant, q: FloatArray, v: FloatArray, mass: FloatArray, base: FloatArray,
-                             p0: FloatArray, h: float) -> tuple[FloatArray, FloatArray, None, float, float]:
+def _symplectic_conservative(
+    plant: Plant, q: FloatArray, v: FloatArray, mass: FloatArray, base: FloatArray, p0: FloatArray, h: float
+) -> tuple[FloatArray, FloatArray, None, float, float]:
     """Symplectic Euler without friction or external forces: fixed-point iteration on a Cholesky factor."""
     chol, info = lapack.dpotrf(mass)
     if info != 0:
@@ -129,8 +132,9 @@ def _symplectic_conservative(plant: Plant, q: FloatArray, v: FloatArray, mass: F
     return q1, constrained_accel(plant._mass(q1), mass @ vb, None), None, 0.0, 0.0
 
 
-def _newton_update(jac: FloatArray, res: FloatArray, stuck: np.ndarray | None, x: FloatArray, scheme: str
-                   ) -> tuple[FloatArray, bool]:
+def _newton_update(
+    jac: FloatArray, res: FloatArray, stuck: np.ndarray | None, x: FloatArray, scheme: str
+) -> tuple[FloatArray, bool]:
     """One Newton step x − J⁻¹r of the implicit schemes, stuck joints held (their rows and columns replaced by
     the identity, residual zero); returns the new x and whether the step was below the tolerance. ``jac`` and
     ``res`` are modified."""

@@ -48,8 +48,10 @@ INTEGRATORS = ("rk4", "semi-implicit-euler", "implicit-euler", "euler")
 #: step(t, q, q̇, τ, h) → (q₁, q̇₁, a(t, q, q̇) or None, friction work, external work)
 Step = Callable[[float, FloatArray, FloatArray, FloatArray, float], tuple[FloatArray, FloatArray, Any, float, float]]
 
-def rk4(f: Callable[..., FloatArray], t: float, q: FloatArray, v: FloatArray, tau: FloatArray, h: float
-        ) -> tuple[FloatArray, FloatArray, FloatArray]:
+
+def rk4(
+    f: Callable[..., FloatArray], t: float, q: FloatArray, v: FloatArray, tau: FloatArray, h: float
+) -> tuple[FloatArray, FloatArray, FloatArray]:
     """One RK4 step of q̈ = f(t, q, q̇, τ); returns (q₁, q̇₁, a₁)."""
     h2 = 0.5 * h
     a1 = f(t, q, v, tau)
@@ -63,8 +65,9 @@ def rk4(f: Callable[..., FloatArray], t: float, q: FloatArray, v: FloatArray, ta
     return q + h * v + (h * h / 6.0) * (a1 + s23), v + (h / 6.0) * (a1 + a4 + 2.0 * s23), a1
 
 
-def rk4_work(g: Callable[..., tuple[FloatArray, float, float]], t: float, q: FloatArray, v: FloatArray,
-             tau: FloatArray, h: float) -> tuple[FloatArray, FloatArray, FloatArray, float, float]:
+def rk4_work(
+    g: Callable[..., tuple[FloatArray, float, float]], t: float, q: FloatArray, v: FloatArray, tau: FloatArray, h: float
+) -> tuple[FloatArray, FloatArray, FloatArray, float, float]:
     """RK4 of q̈ with the powers (p_f, p_e) = g(...)[1:] integrated alongside (stages as in :func:`rk4`,
     computed as products of :func:`_rk4_coefficients` with the rows [q, q̇, a₁, a₂, a₃, a₄])."""
     c = _rk4_coefficients(h)
@@ -88,8 +91,9 @@ def rk4_work(g: Callable[..., tuple[FloatArray, float, float]], t: float, q: Flo
     return x[0], x[1], a1, h6 * (f1 + 2.0 * (f2 + f3) + f4), h6 * (e1 + 2.0 * (e2 + e3) + e4)
 
 
-def semi_implicit_euler(f: Callable[..., FloatArray], t: float, q: FloatArray, v: FloatArray, tau: FloatArray,
-                        h: float) -> tuple[FloatArray, FloatArray, FloatArray]:
+def semi_implicit_euler(
+    f: Callable[..., FloatArray], t: float, q: FloatArray, v: FloatArray, tau: FloatArray, h: float
+) -> tuple[FloatArray, FloatArray, FloatArray]:
     """q̇₁ = q̇ + h f(t, q, q̇, τ), q₁ = q + h q̇₁."""
     a = f(t, q, v, tau)
     v1 = v + h * a
@@ -101,10 +105,12 @@ def _rk4_coefficients(h: float) -> tuple[FloatArray, ...]:
     """Matrices giving (q, q̇) of RK4's stages 2, 3, 4 and of the result from the rows [q, q̇, a₁], [q, q̇, a₁, a₂],
     [q, q̇, a₁, a₂, a₃] and [q, q̇, a₁, a₂, a₃, a₄] (only rows already computed are multiplied)."""
     h2, hh = 0.5 * h, h * h
-    return (np.array([[1.0, h2, 0.0], [0.0, 1.0, h2]]),  # q + h/2 q̇, q̇ + h/2 a₁
-            np.array([[1.0, h2, hh / 4, 0.0], [0.0, 1.0, 0.0, h2]]),  # q + h/2 q̇₂, q̇ + h/2 a₂
-            np.array([[1.0, h, 0.0, hh / 2, 0.0], [0.0, 1.0, 0.0, 0.0, h]]),  # q + h q̇₃, q̇ + h a₃
-            np.array([[1.0, h, hh / 6, hh / 6, hh / 6, 0.0], [0.0, 1.0, h / 6, h / 3, h / 3, h / 6]]))  # q₁, q̇₁
+    return (
+        np.array([[1.0, h2, 0.0], [0.0, 1.0, h2]]),  # q + h/2 q̇, q̇ + h/2 a₁
+        np.array([[1.0, h2, hh / 4, 0.0], [0.0, 1.0, 0.0, h2]]),  # q + h/2 q̇₂, q̇ + h/2 a₂
+        np.array([[1.0, h, 0.0, hh / 2, 0.0], [0.0, 1.0, 0.0, 0.0, h]]),  # q + h q̇₃, q̇ + h a₃
+        np.array([[1.0, h, hh / 6, hh / 6, hh / 6, 0.0], [0.0, 1.0, h / 6, h / 3, h / 3, h / 6]]),
+    )  # q₁, q̇₁
 
 
 def fast_step(name: str, plant: Plant) -> Callable[..., tuple[FloatArray, FloatArray, FloatArray]] | None:
@@ -122,8 +128,7 @@ def fast_step(name: str, plant: Plant) -> Callable[..., tuple[FloatArray, FloatA
     views = [(b, b[:3], b[:4], b[:5], b[0], b[1], b[:2]) for b in bufs]  # slices made once, not per stage
     turn = [0]
 
-    def rk4_step(q: FloatArray, v: FloatArray, tau: FloatArray, h: float
-                 ) -> tuple[FloatArray, FloatArray, FloatArray]:
+    def rk4_step(q: FloatArray, v: FloatArray, tau: FloatArray, h: float) -> tuple[FloatArray, FloatArray, FloatArray]:
         c0, c1, c2, c3 = _rk4_coefficients(h)  # ``.dot``: a third of the cost of ``@`` on these small arrays
         rows, rows3, rows4, rows5, row_q, row_v, rows2 = views[turn[0]]
         if row_q is not q or row_v is not v:  # not the last step's result: copy the state in, as a new pair
@@ -144,8 +149,9 @@ def fast_step(name: str, plant: Plant) -> Callable[..., tuple[FloatArray, FloatA
     step_h = [0.0, np.zeros(plant.n)]  # h and h as an (n,) array: a product with an array costs less than
     # one with a Python float, and the in-place additions allocate nothing
 
-    def euler_step(q: FloatArray, v: FloatArray, tau: FloatArray, h: float
-                   ) -> tuple[FloatArray, FloatArray, FloatArray]:
+    def euler_step(
+        q: FloatArray, v: FloatArray, tau: FloatArray, h: float
+    ) -> tuple[FloatArray, FloatArray, FloatArray]:
         a = fwd(q, v, tau)
         if h != step_h[0]:
             step_h[0], step_h[1] = h, np.full(plant.n, h)
@@ -177,11 +183,15 @@ def make_step(name: str, plant: Plant) -> Step:
     if name == "euler":
         if plant.simple:
             fwd = plant._forward
-            return lambda t, q, v, tau, h: (*semi_implicit_euler(lambda t, q, v, tau: fwd(q, v, tau),
-                                                                 t, q, v, tau, h), 0.0, 0.0)
+            return lambda t, q, v, tau, h: (
+                *semi_implicit_euler(lambda t, q, v, tau: fwd(q, v, tau), t, q, v, tau, h),
+                0.0,
+                0.0,
+            )
 
-        def euler_work(t: float, q: FloatArray, v: FloatArray, tau: FloatArray, h: float
-                       ) -> tuple[FloatArray, FloatArray, FloatArray, float, float]:
+        def euler_work(
+            t: float, q: FloatArray, v: FloatArray, tau: FloatArray, h: float
+        ) -> tuple[FloatArray, FloatArray, FloatArray, float, float]:
             # the work of the step's forces at the mean velocity (q̇ + q̇₁)/2: for a constant M the kinetic
             # energy changes by exactly h Fᵀ(q̇ + q̇₁)/2, so the balance does not drift. At the start velocity
             # it drifted by h²Fᵀq̈ a step, ∝ h ∫|F|²/m dt, and read as energy gained on a stable contact

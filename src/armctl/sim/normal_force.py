@@ -72,18 +72,24 @@ class HuntCrossley(NormalForce):
         self.dissipation = scalar(dissipation, "contact dissipation", nonnegative=True)
         self.exponent = scalar(exponent, "contact exponent", positive=True)
         if self.exponent < 1.0:
-            raise InvalidParameterError(f"contact exponent must be >= 1 (its stiffness would be infinite at first "
-                                        f"touch), got {exponent}", value=exponent)
+            raise InvalidParameterError(
+                f"contact exponent must be >= 1 (its stiffness would be infinite at first touch), got {exponent}",
+                value=exponent,
+            )
 
     @classmethod
-    def from_restitution(cls, stiffness: float, restitution: float, impact_velocity: float,
-                         exponent: float = 1.0) -> HuntCrossley:
+    def from_restitution(
+        cls, stiffness: float, restitution: float, impact_velocity: float, exponent: float = 1.0
+    ) -> HuntCrossley:
         """The law whose impacts at ``impact_velocity`` [m/s] rebound with coefficient of restitution e
         (d = 3(1 − e) / (2 v_impact), Hunt & Crossley's approximation, good for e near 1)."""
         e = scalar(restitution, "restitution", nonnegative=True)
         if e > 1.0:
-            raise InvalidParameterError(f"restitution must be in [0, 1] (1: no loss; a passive contact cannot return "
-                                        f"more energy than it took), got {e:g}", value=restitution)
+            raise InvalidParameterError(
+                f"restitution must be in [0, 1] (1: no loss; a passive contact cannot return "
+                f"more energy than it took), got {e:g}",
+                value=restitution,
+            )
         v = scalar(impact_velocity, "impact velocity", positive=True)
         return cls(stiffness, 1.5 * (1.0 - e) / v, exponent)
 

@@ -39,8 +39,13 @@ class Plant:
     (holding friction torques of the stuck joints).
     """
 
-    def __init__(self, dyn: Dynamics, friction: FrictionModel | None = None,
-                 environments: Sequence[Environment] = (), disturbance: Disturbance | None = None) -> None:
+    def __init__(
+        self,
+        dyn: Dynamics,
+        friction: FrictionModel | None = None,
+        environments: Sequence[Environment] = (),
+        disturbance: Disturbance | None = None,
+    ) -> None:
         self.dyn = dyn
         self.n = n = dyn.n
         self.friction = None if friction is None or friction.is_zero else friction
@@ -73,8 +78,9 @@ class Plant:
         if h.__class__ is not np.ndarray or h.dtype != np.float64:  # text, dicts, complex: named errors
             h = real_array(h, f"disturbance(t) at t = {t:g} s")
         if h.shape != (6,):
-            raise ShapeError(f"disturbance(t) must return a (6,) wrench [f; moment], got shape {h.shape} at "
-                             f"t = {t}", value=h)
+            raise ShapeError(
+                f"disturbance(t) must return a (6,) wrench [f; moment], got shape {h.shape} at t = {t}", value=h
+            )
         if not math.isfinite(sum(h.tolist())):
             raise NonFiniteError(f"disturbance(t) returned a non-finite wrench {h} at t = {t}", value=h)
         return h
@@ -88,8 +94,7 @@ class Plant:
             tau -= self.dyn._jacobian(q, None).T @ self.disturbance_wrench(t)
         return tau
 
-    def external_stiffness(self, t: float, q: FloatArray, qd: FloatArray
-                           ) -> tuple[FloatArray, FloatArray, FloatArray]:
+    def external_stiffness(self, t: float, q: FloatArray, qd: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         """(τ_e, K, D): :meth:`external` with its derivatives in q and q̇ (the disturbance taken as given)."""
         n = self.n
         tau, kj, dj = np.zeros(n), np.zeros((n, n)), np.zeros((n, n))
@@ -133,8 +138,7 @@ class Plant:
         return self.friction.slope(qd, self.direction)  # type: ignore[union-attr]
 
     # ------------------------------------------------------------------------------ stick–slip
-    def begin(self, t: float, q: FloatArray, qd: FloatArray, tau: FloatArray, held: FloatArray | None = None
-              ) -> None:
+    def begin(self, t: float, q: FloatArray, qd: FloatArray, tau: FloatArray, held: FloatArray | None = None) -> None:
         """Decide which joints stick for the step starting at (t, q, q̇) under τ (see
         :mod:`armctl.sim.stick_slip`); ``held``: joints kept stuck whatever their holding torque."""
         sticky = self.sticky
@@ -190,8 +194,9 @@ class Plant:
         a, f, e = self.accel_forces(t, q, qd, tau)
         return a, -float(qd @ f) if f is not None else 0.0, float(qd @ e) if e is not None else 0.0
 
-    def accel_forces(self, t: float, q: FloatArray, qd: FloatArray, tau: FloatArray
-                     ) -> tuple[FloatArray, FloatArray | None, FloatArray | None]:
+    def accel_forces(
+        self, t: float, q: FloatArray, qd: FloatArray, tau: FloatArray
+    ) -> tuple[FloatArray, FloatArray | None, FloatArray | None]:
         """(q̈, τ_f, τ_e): :meth:`accel` with the friction torque (against the motion) and the external torque
         (added to τ) it used, each None if the plant has none."""
         net = tau

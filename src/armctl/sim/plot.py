@@ -15,8 +15,17 @@ if TYPE_CHECKING:
 
     from armctl.sim.result import SimResult
 
-_UNITS = {"q": "rad", "qd": "rad/s", "qdd": "rad/s²", "tau": "N·m", "tau_applied": "N·m", "tau_friction": "N·m",
-          "tau_ext": "N·m", "q_measured": "rad", "qd_measured": "rad/s"}
+_UNITS = {
+    "q": "rad",
+    "qd": "rad/s",
+    "qdd": "rad/s²",
+    "tau": "N·m",
+    "tau_applied": "N·m",
+    "tau_friction": "N·m",
+    "tau_ext": "N·m",
+    "q_measured": "rad",
+    "qd_measured": "rad/s",
+}
 
 
 def _figure(rows: int, height: float = 2.2) -> tuple[Figure, Any]:
@@ -33,8 +42,9 @@ def _mark_divergence(res: SimResult, axes: Any) -> None:
             ax.axvline(res.diverged_at, color="red", linestyle="--", linewidth=1)
 
 
-def plot_joints(res: SimResult, quantities: tuple[str, ...] | str = ("q", "qd", "tau_applied"),
-                joints: Any = None) -> Figure:
+def plot_joints(
+    res: SimResult, quantities: tuple[str, ...] | str = ("q", "qd", "tau_applied"), joints: Any = None
+) -> Figure:
     """One panel per quantity (any per-joint array of the result: "q", "qd", "qdd", "tau", "tau_applied",
     "tau_friction", "tau_ext", "q_measured", "qd_measured"; one name or a sequence of them), one line per joint
     (``joints``: 0-based indices 0 … n − 1, default all; negative indices are refused; lines are labelled
@@ -43,8 +53,9 @@ def plot_joints(res: SimResult, quantities: tuple[str, ...] | str = ("q", "qd", 
         quantities = (quantities,)
     quantities = tuple(quantities)
     if not quantities:
-        raise InvalidParameterError(f"quantities must name at least one of {', '.join(_UNITS)}; got ()",
-                                    value=quantities)
+        raise InvalidParameterError(
+            f"quantities must name at least one of {', '.join(_UNITS)}; got ()", value=quantities
+        )
     for name in quantities:
         if not isinstance(name, str) or name not in _UNITS:
             raise UnknownNameError("quantity", name, tuple(_UNITS))
@@ -54,12 +65,15 @@ def plot_joints(res: SimResult, quantities: tuple[str, ...] | str = ("q", "qd", 
         given = np.atleast_1d(np.asarray(joints, dtype=object))
         idx = [whole_number(j, f"joints[{i}] (a joint index 0 … {res.n - 1})", 0) for i, j in enumerate(given)]
         if not idx:
-            raise InvalidParameterError(f"joints must list at least one joint index in 0 … {res.n - 1}, "
-                                        f"got {joints!r}", value=joints)
+            raise InvalidParameterError(
+                f"joints must list at least one joint index in 0 … {res.n - 1}, got {joints!r}", value=joints
+            )
         for j in idx:
             if j >= res.n:
-                raise InvalidParameterError(f"joint index {j} is out of range: the result has {res.n} joints, "
-                                            f"indices 0 … {res.n - 1}", value=joints)
+                raise InvalidParameterError(
+                    f"joint index {j} is out of range: the result has {res.n} joints, indices 0 … {res.n - 1}",
+                    value=joints,
+                )
     fig, axes = _figure(len(quantities))
     for ax, name in zip(axes, quantities, strict=True):
         data = getattr(res, name)
@@ -77,8 +91,11 @@ def plot_energy(res: SimResult) -> Figure:
     """Energy E − E(0) against the work of actuators, friction and external wrenches, and the balance
     residual E − E(0) − W. Raises an InvalidParameterError for a result without samples."""
     if not len(res.t):
-        raise InvalidParameterError("the result has no samples (the run stopped before its first one): there is "
-                                    "no energy to plot; check res.divergence", value=res)
+        raise InvalidParameterError(
+            "the result has no samples (the run stopped before its first one): there is "
+            "no energy to plot; check res.divergence",
+            value=res,
+        )
     fig, axes = _figure(2, 2.8)
     ax = axes[0]
     ax.plot(res.t, res.energy - res.energy[0], label="E − E(0)", linewidth=1.5)

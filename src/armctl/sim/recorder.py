@@ -19,8 +19,15 @@ from armctl.sim.result import SimResult
 class Recorder:
     """Rows 0..N for the samples t_k = k·control_dt."""
 
-    def __init__(self, n: int, samples: int, control_dt: float, environments: tuple[Environment, ...],
-                 sensors: tuple[ForceSensor, ...], measured: bool) -> None:
+    def __init__(
+        self,
+        n: int,
+        samples: int,
+        control_dt: float,
+        environments: tuple[Environment, ...],
+        sensors: tuple[ForceSensor, ...],
+        measured: bool,
+    ) -> None:
         self.samples = samples
         self.control_dt = control_dt
         z = np.zeros
@@ -77,8 +84,14 @@ class Recorder:
             self.logs.setdefault(key, []).append(np.array(val, copy=True))
             self.log_rows.setdefault(key, []).append(k)
 
-    def result(self, rows: int, dyn: Dynamics, energy: bool, info: dict[str, Any],
-               divergence: tuple[float, str, FloatArray, FloatArray] | None) -> SimResult:
+    def result(
+        self,
+        rows: int,
+        dyn: Dynamics,
+        energy: bool,
+        info: dict[str, Any],
+        divergence: tuple[float, str, FloatArray, FloatArray] | None,
+    ) -> SimResult:
         """The SimResult of the first ``rows`` samples."""
         r = slice(0, rows)
         q, qd = self.q[r], self.qd[r]
@@ -104,19 +117,42 @@ class Recorder:
             if idx != list(range(len(idx))):
                 logs[f"{key}:sample"] = np.array(idx)
         if skipped:
-            warnings.warn(f"controller log entries not recorded: {', '.join(skipped)}; only numbers and arrays of "
-                          "one shape per key are stacked into SimResult.logs — log such values as numbers "
-                          "(e.g. NaN for 'none') or keep them in the controller", SimulationWarning, stacklevel=3)
+            warnings.warn(
+                f"controller log entries not recorded: {', '.join(skipped)}; only numbers and arrays of "
+                "one shape per key are stacked into SimResult.logs — log such values as numbers "
+                "(e.g. NaN for 'none') or keep them in the controller",
+                SimulationWarning,
+                stacklevel=3,
+            )
         d = divergence
         return SimResult(
-            t=np.arange(rows) * self.control_dt, q=q, qd=qd, qdd=self.qdd[r], tau=self.tau[r],
-            tau_applied=self.tau_applied[r], tau_friction=self.tau_friction[r], tau_ext=self.tau_ext[r],
-            wrench=self.wrench[r], contact_force=self.contact_force[r], sensor=self.sensor[r],
-            q_measured=self.q_measured[r], qd_measured=self.qd_measured[r], stuck=self.stuck[r],
-            work_actuator=work_act, work_friction=self.work_friction[r], work_external=self.work_external[r],
-            diverged=d is not None, diverged_at=None if d is None else d[0], divergence="" if d is None else d[1],
-            diverged_q=None if d is None else d[2], diverged_qd=None if d is None else d[3], logs=logs, info=info,
-            _energy=None if energy else np.full(rows, np.nan), _energy_of=partial(energies, dyn) if energy else None)
+            t=np.arange(rows) * self.control_dt,
+            q=q,
+            qd=qd,
+            qdd=self.qdd[r],
+            tau=self.tau[r],
+            tau_applied=self.tau_applied[r],
+            tau_friction=self.tau_friction[r],
+            tau_ext=self.tau_ext[r],
+            wrench=self.wrench[r],
+            contact_force=self.contact_force[r],
+            sensor=self.sensor[r],
+            q_measured=self.q_measured[r],
+            qd_measured=self.qd_measured[r],
+            stuck=self.stuck[r],
+            work_actuator=work_act,
+            work_friction=self.work_friction[r],
+            work_external=self.work_external[r],
+            diverged=d is not None,
+            diverged_at=None if d is None else d[0],
+            divergence="" if d is None else d[1],
+            diverged_q=None if d is None else d[2],
+            diverged_qd=None if d is None else d[3],
+            logs=logs,
+            info=info,
+            _energy=None if energy else np.full(rows, np.nan),
+            _energy_of=partial(energies, dyn) if energy else None,
+        )
 
 
 def energies(dyn: Dynamics, q: FloatArray, qd: FloatArray) -> FloatArray:

@@ -22,8 +22,25 @@ import numpy as np
 from armctl._checks import FloatArray
 from armctl.errors import InvalidParameterError
 
-_ARRAYS = ("t", "q", "qd", "qdd", "tau", "tau_applied", "tau_friction", "tau_ext", "wrench", "contact_force",
-           "sensor", "q_measured", "qd_measured", "stuck", "work_actuator", "work_friction", "work_external")
+_ARRAYS = (
+    "t",
+    "q",
+    "qd",
+    "qdd",
+    "tau",
+    "tau_applied",
+    "tau_friction",
+    "tau_ext",
+    "wrench",
+    "contact_force",
+    "sensor",
+    "q_measured",
+    "qd_measured",
+    "stuck",
+    "work_actuator",
+    "work_friction",
+    "work_external",
+)
 
 
 @dataclass(frozen=True, eq=False)
@@ -130,8 +147,10 @@ class SimResult:
         state = f"diverged at t = {self.diverged_at:g} s ({self.divergence})" if self.diverged else "ok"
         if self.info.get("unstable_contacts"):
             state += ", integrator unstable on a contact (see info['unstable_contacts'])"
-        return (f"SimResult({len(self.t)} samples, {self.duration:g} s, n = {self.n}, "
-                f"{self.info.get('integrator', '?')}, {state})")
+        return (
+            f"SimResult({len(self.t)} samples, {self.duration:g} s, n = {self.n}, "
+            f"{self.info.get('integrator', '?')}, {state})"
+        )
 
     # ------------------------------------------------------------------------------ files
     def save(self, path: str | Path) -> Path:
@@ -150,16 +169,25 @@ class SimResult:
                 raise InvalidParameterError(
                     f"log {k!r} holds Python objects (e.g. None or dicts), which a SimResult file cannot store; "
                     "convert it to numbers or drop it (dataclasses.replace(result, logs=...)) before saving",
-                    value=k)
+                    value=k,
+                )
             arrays[f"log:{k}"] = v
-        meta = {"diverged": self.diverged, "diverged_at": self.diverged_at, "divergence": self.divergence,
-                "info": self.info, "format": "armctl.SimResult/1"}
+        meta = {
+            "diverged": self.diverged,
+            "diverged_at": self.diverged_at,
+            "divergence": self.divergence,
+            "info": self.info,
+            "format": "armctl.SimResult/1",
+        }
         arrays["meta"] = np.array(json.dumps(meta, default=_jsonable))
         try:
             np.savez_compressed(path, **arrays)
         except OSError as e:
-            raise InvalidParameterError(f"cannot write the SimResult to {str(path)!r}: {e.strerror or e}; pass a "
-                                        "path in an existing, writable folder", value=str(path)) from e
+            raise InvalidParameterError(
+                f"cannot write the SimResult to {str(path)!r}: {e.strerror or e}; pass a "
+                "path in an existing, writable folder",
+                value=str(path),
+            ) from e
         return path
 
     @classmethod
@@ -169,8 +197,7 @@ class SimResult:
         path = Path(path)
 
         def bad(why: str) -> InvalidParameterError:
-            return InvalidParameterError(f"{str(path)!r} {why}; pass a file written by SimResult.save",
-                                         value=str(path))
+            return InvalidParameterError(f"{str(path)!r} {why}; pass a file written by SimResult.save", value=str(path))
 
         if not path.is_file():
             raise bad("does not exist" if not path.exists() else "is not a file")
@@ -198,8 +225,14 @@ class SimResult:
         keys = ("diverged", "diverged_at", "divergence", "info")
         if not isinstance(meta, dict) or any(k not in meta for k in keys):
             raise bad(f"has a 'meta' entry without the keys {list(keys)}")
-        return cls(**kw, diverged=bool(meta["diverged"]), diverged_at=meta["diverged_at"],
-                   divergence=meta["divergence"], logs=logs, info=meta["info"])
+        return cls(
+            **kw,
+            diverged=bool(meta["diverged"]),
+            diverged_at=meta["diverged_at"],
+            divergence=meta["divergence"],
+            logs=logs,
+            info=meta["info"],
+        )
 
     # ------------------------------------------------------------------------------ plots
     def plot(self, quantities: tuple[str, ...] | str = ("q", "qd", "tau_applied"), joints: Any = None) -> Any:

@@ -31,8 +31,9 @@ def plant_dynamics(plant: Any) -> Dynamics:
         return plant
     if isinstance(plant, RobotModel):
         return Dynamics(plant)
-    raise InvalidParameterError(f"plant must be an armctl.Dynamics or an armctl.RobotModel, got "
-                                f"{type(plant).__name__}", value=plant)
+    raise InvalidParameterError(
+        f"plant must be an armctl.Dynamics or an armctl.RobotModel, got {type(plant).__name__}", value=plant
+    )
 
 
 def _as_written(x: Any) -> Any:
@@ -61,7 +62,8 @@ def periods(duration: Any, control_dt: Any, dt: Any) -> tuple[float, float, int,
         raise InvalidParameterError(
             f"control_dt = {control_dt} s must be a whole multiple of the integration step dt = {dt} s "
             f"(it is {ratio:.6g} steps); choose dt = control_dt / k, e.g. dt = {control_dt / max(m, 1):g}",
-            value=dt)
+            value=dt,
+        )
     steps = duration / control_dt
     n_steps = round(steps)
     if n_steps < 1 or abs(steps - n_steps) > _REL * max(steps, 1.0):
@@ -69,7 +71,9 @@ def periods(duration: Any, control_dt: Any, dt: Any) -> tuple[float, float, int,
         use = f"{lo:g} s or {hi:g} s" if lo > 0 else f"{max(hi, control_dt):g} s (one control period)"
         raise InvalidParameterError(
             f"duration = {duration} s is not a whole number of control periods of {control_dt} s "
-            f"({steps:.6g}); use {use}", value=duration)
+            f"({steps:.6g}); use {use}",
+            value=duration,
+        )
     return control_dt, control_dt / m, n_steps, m
 
 
@@ -87,14 +91,17 @@ def reference_source(reference: Any, n: int) -> tuple[Reference | None, Callable
     if callable(reference):
         check_reference(reference(0.0), n, 0.0)
         return None, reference
-    raise InvalidParameterError(f"reference must be an armctl.Reference or a callable t -> Reference, got "
-                                f"{type(reference).__name__}", value=reference)
+    raise InvalidParameterError(
+        f"reference must be an armctl.Reference or a callable t -> Reference, got {type(reference).__name__}",
+        value=reference,
+    )
 
 
 def check_reference(ref: Any, n: int, t: float) -> Reference:
     if not isinstance(ref, Reference):
-        raise InvalidParameterError(f"reference(t) must return an armctl.Reference, got {type(ref).__name__} at "
-                                    f"t = {t}", value=ref)
+        raise InvalidParameterError(
+            f"reference(t) must return an armctl.Reference, got {type(ref).__name__} at t = {t}", value=ref
+        )
     if ref.q.shape[0] != n:
         raise ShapeError(f"reference has {ref.n} joints, the plant {n} (at t = {t})", value=ref)
     return ref
@@ -104,8 +111,10 @@ def controller_call(controller: Any, n: int) -> Callable[..., Any]:
     """The fastest correct way to call ``controller``: a :class:`Controller`'s ``compute`` (the simulator's
     state and references are already checked), else the callable itself."""
     if not callable(controller):
-        raise InvalidParameterError(f"controller must be callable as controller(t, q, qd, ref) -> tau, got "
-                                    f"{type(controller).__name__}", value=controller)
+        raise InvalidParameterError(
+            f"controller must be callable as controller(t, q, qd, ref) -> tau, got {type(controller).__name__}",
+            value=controller,
+        )
     cn = getattr(controller, "n", None)
     if isinstance(cn, int | np.integer) and int(cn) != n:
         raise ShapeError(f"controller is for {cn} joints, the plant has {n}", value=controller)
@@ -114,18 +123,24 @@ def controller_call(controller: Any, n: int) -> Callable[..., Any]:
     return controller  # type: ignore[no-any-return]
 
 
-def initial_state(q0: ArrayLike | None, qd0: ArrayLike | None, ref0: Reference, n: int, max_position: float,
-                  max_velocity: float) -> tuple[FloatArray, FloatArray]:
+def initial_state(
+    q0: ArrayLike | None, qd0: ArrayLike | None, ref0: Reference, n: int, max_position: float, max_velocity: float
+) -> tuple[FloatArray, FloatArray]:
     """(q0, q̇0) as fresh arrays, within the run's bounds; None starts on the reference at t = 0."""
     q = ref0.q if q0 is None else vector(q0, n, "q0")
     qd = ref0.qd if qd0 is None else vector(qd0, n, "qd0")
-    for name, x, limit, bound_name in (("q0", q, max_position, "max_position"),
-                                       ("qd0", qd, max_velocity, "max_velocity")):
+    for name, x, limit, bound_name in (
+        ("q0", q, max_position, "max_position"),
+        ("qd0", qd, max_velocity, "max_velocity"),
+    ):
         worst = float(np.abs(x).max()) if len(x) else 0.0
         if worst > limit:
             source = name if (q0 if name == "q0" else qd0) is not None else f"{name} (the reference at t = 0)"
-            raise InvalidParameterError(f"{source} reaches {worst:g}, beyond {bound_name} = {limit:g}: the run "
-                                        f"would stop as diverged before it starts; raise {bound_name}", value=x)
+            raise InvalidParameterError(
+                f"{source} reaches {worst:g}, beyond {bound_name} = {limit:g}: the run "
+                f"would stop as diverged before it starts; raise {bound_name}",
+                value=x,
+            )
     return np.array(q, dtype=float), np.array(qd, dtype=float)
 
 
@@ -135,12 +150,18 @@ def warn_outside_limits(model: RobotModel, q: FloatArray) -> None:
     lower, upper = model.lower, model.upper
     outside = np.flatnonzero((q < lower) | (q > upper))
     if outside.size:
-        joints = "; ".join(f"joint {i} ({model.joint_names[i]!r}) at {q[i]:.4g} outside [{lower[i]:.4g}, "
-                           f"{upper[i]:.4g}]" for i in outside)
-        warnings.warn(f"the run starts outside the model's position limits: {joints}. The simulator does not stop "
-                      "a joint at its limits, but a controller that keeps them (a JointPositionLimit in an "
-                      "operational-space QP) acts hard from the first step; for a revolute joint, the same pose "
-                      "2π away may be inside the range", SimulationWarning, stacklevel=3)
+        joints = "; ".join(
+            f"joint {i} ({model.joint_names[i]!r}) at {q[i]:.4g} outside [{lower[i]:.4g}, {upper[i]:.4g}]"
+            for i in outside
+        )
+        warnings.warn(
+            f"the run starts outside the model's position limits: {joints}. The simulator does not stop "
+            "a joint at its limits, but a controller that keeps them (a JointPositionLimit in an "
+            "operational-space QP) acts hard from the first step; for a revolute joint, the same pose "
+            "2π away may be inside the range",
+            SimulationWarning,
+            stacklevel=3,
+        )
 
 
 def seed_value(seed: Any) -> int:
@@ -187,6 +208,8 @@ def scene(dyn: Dynamics, friction: Any, environment: Any, sensors: Any, disturba
     for s in sens:
         dyn.model.frame(s.frame)
     if disturbance is not None and not callable(disturbance):
-        raise InvalidParameterError(f"disturbance must be a callable t -> (6,) wrench or None, got "
-                                    f"{type(disturbance).__name__}", value=disturbance)
+        raise InvalidParameterError(
+            f"disturbance must be a callable t -> (6,) wrench or None, got {type(disturbance).__name__}",
+            value=disturbance,
+        )
     return Scene(make_friction(friction, dyn.model), envs, sens, disturbance)

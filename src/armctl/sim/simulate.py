@@ -41,17 +41,32 @@ _GT = float.__gt__
 _FLOAT = np.dtype(float)
 
 
-def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
-             reference: Reference | Callable[[float], Reference], duration: float,
-             q0: ArrayLike | None = None, qd0: ArrayLike | None = None, control_dt: float = 1e-3,
-             dt: float | None = None, integrator: str = "rk4", *,
-             friction: str | FrictionModel = "stick-slip",
-             environment: Environment | Sequence[Environment] | None = None,
-             sensors: ForceSensor | Sequence[ForceSensor] = (),
-             disturbance: Callable[[float], ArrayLike] | None = None,
-             saturate: bool = True, noise_q: ArrayLike = 0.0, noise_qd: ArrayLike = 0.0, seed: int | None = None,
-             delay: int = 0, max_velocity: float = 1e3, max_position: float = math.inf, reset: bool = True,
-             energy: bool = True, compile: bool = False) -> SimResult:
+def simulate(
+    plant: Dynamics | RobotModel,
+    controller: Callable[..., ArrayLike],
+    reference: Reference | Callable[[float], Reference],
+    duration: float,
+    q0: ArrayLike | None = None,
+    qd0: ArrayLike | None = None,
+    control_dt: float = 1e-3,
+    dt: float | None = None,
+    integrator: str = "rk4",
+    *,
+    friction: str | FrictionModel = "stick-slip",
+    environment: Environment | Sequence[Environment] | None = None,
+    sensors: ForceSensor | Sequence[ForceSensor] = (),
+    disturbance: Callable[[float], ArrayLike] | None = None,
+    saturate: bool = True,
+    noise_q: ArrayLike = 0.0,
+    noise_qd: ArrayLike = 0.0,
+    seed: int | None = None,
+    delay: int = 0,
+    max_velocity: float = 1e3,
+    max_position: float = math.inf,
+    reset: bool = True,
+    energy: bool = True,
+    compile: bool = False,
+) -> SimResult:
     """Simulate ``controller`` driving ``plant`` along ``reference`` for ``duration`` seconds.
 
     plant: the true arm, a Dynamics or a RobotModel (its friction, payload, … are the truth; it may differ
@@ -95,12 +110,18 @@ def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
     fixed_ref, ref_fn = setup.reference_source(reference, n)
     ref0 = fixed_ref if fixed_ref is not None else ref_fn(0.0)  # type: ignore[misc]
     call = setup.controller_call(controller, n)
-    sig_q, sig_qd = (nonnegative_vector(noise_q, n, "noise_q (a standard deviation)"),
-                      nonnegative_vector(noise_qd, n, "noise_qd (a standard deviation)"))
+    sig_q, sig_qd = (
+        nonnegative_vector(noise_q, n, "noise_q (a standard deviation)"),
+        nonnegative_vector(noise_qd, n, "noise_qd (a standard deviation)"),
+    )
     lag = setup.delay_periods(delay)
     if lag >= n_periods > 0:
-        warnings.warn(f"delay = {lag} control periods is not shorter than the run ({n_periods} periods): the "
-                      "controller sees only the first measurement", SimulationWarning, stacklevel=2)
+        warnings.warn(
+            f"delay = {lag} control periods is not shorter than the run ({n_periods} periods): the "
+            "controller sees only the first measurement",
+            SimulationWarning,
+            stacklevel=2,
+        )
     saturate, reset, energy = (boolean(saturate, "saturate"), boolean(reset, "reset"), boolean(energy, "energy"))
     vmax, qmax = setup.bound(max_velocity, "max_velocity"), setup.bound(max_position, "max_position")
     q, v = setup.initial_state(q0, qd0, ref0, n, qmax, vmax)
@@ -187,17 +208,20 @@ def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
             except ValueError as exc:
                 if "read-only" not in str(exc):
                     raise
-                raise InvalidParameterError(f"the controller wrote into a read-only array at t = {t:g} s ({exc}); "
-                                            "the q and q̇ it is given are read-only views of the run's record: "
-                                            "work on a copy (q = q.copy()) or on new arrays (e = q - ref.q)",
-                                            value=t) from exc
+                raise InvalidParameterError(
+                    f"the controller wrote into a read-only array at t = {t:g} s ({exc}); "
+                    "the q and q̇ it is given are read-only views of the run's record: "
+                    "work on a copy (q = q.copy()) or on new arrays (e = q - ref.q)",
+                    value=t,
+                ) from exc
             if tau.__class__ is not np.ndarray or tau.dtype is not _FLOAT:  # complex or text: named errors
                 tau = real_array(tau, f"the controller's torque at t = {t:g} s")
             if has_log and controller.last_log:  # type: ignore[union-attr]
                 rec.log_controller(k, controller.last_log)  # type: ignore[union-attr]
             if tau.shape != shape:
-                raise ShapeError(f"the controller returned a torque of shape {tau.shape} at t = {t}; expected "
-                                 f"({n},)", value=tau)
+                raise ShapeError(
+                    f"the controller returned a torque of shape {tau.shape} at t = {t}; expected ({n},)", value=tau
+                )
             tl = tau.tolist()
             if not math.isfinite(sum(tl)):
                 divergence, rows = (t, f"the controller returned a non-finite torque {tau}", q, v), k
@@ -228,17 +252,33 @@ def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
                     wf += dwf
                     we += dwe
             except (NotPositiveDefinite, np.linalg.LinAlgError) as exc:  # (the latter: the Lagrange backend's)
-                divergence, rows = (t + cdt, f"{exc} during the control period from t = {t:g} s",
-                                    Q[k].copy(), QD[k].copy()), k + 1
+                divergence, rows = (
+                    (t + cdt, f"{exc} during the control period from t = {t:g} s", Q[k].copy(), QD[k].copy()),
+                    k + 1,
+                )
                 break
     TAUA[:] = TAU
     if clipped:
         TAUA[clipped] = np.clip(TAU[clipped], -limit, limit)
     wall = time.perf_counter() - t0
-    info = {"plant": dyn.model.name, "n": n, "backend": dyn.backend, "integrator": scheme, "control_dt": cdt,
-            "dt": h, "substeps": m, "periods": n_periods, "friction": sc.friction.name if pl.friction else "none",
-            "saturate": bool(saturate), "delay": lag, "compiled": bool(compile), "seed": seed, "wall_time": wall,
-            "real_time_factor": (rows - 1) * cdt / wall if wall > 0 and rows > 1 else math.nan, **pl.stats}
+    info = {
+        "plant": dyn.model.name,
+        "n": n,
+        "backend": dyn.backend,
+        "integrator": scheme,
+        "control_dt": cdt,
+        "dt": h,
+        "substeps": m,
+        "periods": n_periods,
+        "friction": sc.friction.name if pl.friction else "none",
+        "saturate": bool(saturate),
+        "delay": lag,
+        "compiled": bool(compile),
+        "seed": seed,
+        "wall_time": wall,
+        "real_time_factor": (rows - 1) * cdt / wall if wall > 0 and rows > 1 else math.nan,
+        **pl.stats,
+    }
     if unstable:
         info["unstable_contacts"] = unstable
     if divergence is not None:
@@ -248,20 +288,37 @@ def simulate(plant: Dynamics | RobotModel, controller: Callable[..., ArrayLike],
     return res
 
 
-def _check_contacts(dyn: Dynamics, environments: Sequence[Environment], q0: FloatArray, scheme: str, h: float
-                    ) -> list[dict[str, float]]:
+def _check_contacts(
+    dyn: Dynamics, environments: Sequence[Environment], q0: FloatArray, scheme: str, h: float
+) -> list[dict[str, float]]:
     """Warn (:class:`~armctl.errors.SimulationWarning`) about every contact point the integrator cannot
     integrate stably at step h (see :mod:`armctl.sim.stability`); returns them for ``info``."""
     if not environments:
         return []
     found = [c for c in contact_stability(dyn, environments, q0, scheme, h) if not c.stable]
     for c in found:
-        why = (f"one-step growth ×{c.radius:.3g}" if c.radius > 1.0 + 1e-12 else
-               f"linearly stable, but as a one-sided contact beyond ω·dt = {c.one_sided:g}, where impacts can "
-               "gain energy")
-        warnings.warn(f"environment {c.environment}, contact point {c.point}: {scheme!r} is unstable on this contact "
-                      f"at dt = {h:g} s (ω·dt = {c.omega_h:.3g}, {why}): once in contact the arm gains energy the "
-                      f"contact never had. Use dt <= {c.max_dt:.3g} s (at the initial configuration) or "
-                      "integrator='implicit-euler'", SimulationWarning, stacklevel=3)
-    return [{"environment": c.environment, "point": c.point, "omega_dt": c.omega_h, "growth": c.radius,
-             "one_sided_limit": c.one_sided, "max_dt": c.max_dt} for c in found]
+        why = (
+            f"one-step growth ×{c.radius:.3g}"
+            if c.radius > 1.0 + 1e-12
+            else f"linearly stable, but as a one-sided contact beyond ω·dt = {c.one_sided:g}, where impacts can "
+            "gain energy"
+        )
+        warnings.warn(
+            f"environment {c.environment}, contact point {c.point}: {scheme!r} is unstable on this contact "
+            f"at dt = {h:g} s (ω·dt = {c.omega_h:.3g}, {why}): once in contact the arm gains energy the "
+            f"contact never had. Use dt <= {c.max_dt:.3g} s (at the initial configuration) or "
+            "integrator='implicit-euler'",
+            SimulationWarning,
+            stacklevel=3,
+        )
+    return [
+        {
+            "environment": c.environment,
+            "point": c.point,
+            "omega_dt": c.omega_h,
+            "growth": c.radius,
+            "one_sided_limit": c.one_sided,
+            "max_dt": c.max_dt,
+        }
+        for c in found
+    ]

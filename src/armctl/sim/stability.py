@@ -154,12 +154,14 @@ def checkable(env: Environment) -> bool:
     """True if :func:`contact_stability` can judge ``env``: a plane with a linear normal law (Kelvin–Voigt,
     or Hunt–Crossley with exponent 1)."""
     law = getattr(env, "law", None)
-    return isinstance(env, Plane) and (isinstance(law, KelvinVoigt)
-                                       or (isinstance(law, HuntCrossley) and law.exponent == 1.0))
+    return isinstance(env, Plane) and (
+        isinstance(law, KelvinVoigt) or (isinstance(law, HuntCrossley) and law.exponent == 1.0)
+    )
 
 
-def contact_stability(dyn: Dynamics, environments: Sequence[Environment], q: FloatArray, scheme: str, h: float
-                      ) -> list[ContactStability]:
+def contact_stability(
+    dyn: Dynamics, environments: Sequence[Environment], q: FloatArray, scheme: str, h: float
+) -> list[ContactStability]:
     """The stability of every contact point of the planes in ``environments`` at configuration ``q`` for
     integrator ``scheme`` and step ``h`` [s] (empty for ``"implicit-euler"`` and for laws it cannot judge)."""
     if scheme == "implicit-euler":
@@ -180,6 +182,9 @@ def contact_stability(dyn: Dynamics, environments: Sequence[Environment], q: Flo
                 continue
             w2, c = law.stiffness * inv_mass, damping * inv_mass
             omega = math.sqrt(w2)
-            out.append(ContactStability(e, p, omega * h, _radius(scheme, w2, c, h), _max_step(scheme, w2, c, h),
-                                        SAFE_OMEGA_H[scheme], omega))
+            out.append(
+                ContactStability(
+                    e, p, omega * h, _radius(scheme, w2, c, h), _max_step(scheme, w2, c, h), SAFE_OMEGA_H[scheme], omega
+                )
+            )
     return out

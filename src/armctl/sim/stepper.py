@@ -18,8 +18,9 @@ from armctl.sim.integrators import Step
 from armctl.sim.plant import Plant
 
 
-def advance(plant: Plant, step: Step, t: float, q: FloatArray, v: FloatArray, tau: FloatArray, h: float,
-            begun: bool = False) -> tuple[FloatArray, FloatArray, FloatArray | None, float, float]:
+def advance(
+    plant: Plant, step: Step, t: float, q: FloatArray, v: FloatArray, tau: FloatArray, h: float, begun: bool = False
+) -> tuple[FloatArray, FloatArray, FloatArray | None, float, float]:
     """Integrate from (t, q, q̇) over h under τ; returns (q₁, q̇₁, a at the start or None, W_f, W_e).
     ``begun``: :meth:`Plant.begin` was already called for this state."""
     if plant.sticky is None:

@@ -50,9 +50,14 @@ def constrained_accel(mass: FloatArray, rhs: FloatArray, stuck: FloatArray | Non
     return a  # type: ignore[no-any-return]
 
 
-def solve_sticking(friction: StickSlip, mass: FloatArray, rhs: FloatArray, candidates: FloatArray,
-                   direction: FloatArray, held: FloatArray | None = None
-                   ) -> tuple[FloatArray, FloatArray, FloatArray]:
+def solve_sticking(
+    friction: StickSlip,
+    mass: FloatArray,
+    rhs: FloatArray,
+    candidates: FloatArray,
+    direction: FloatArray,
+    held: FloatArray | None = None,
+) -> tuple[FloatArray, FloatArray, FloatArray]:
     """(stuck, direction, λ) for the joints ``candidates`` at rest.
 
     mass: M(q); rhs: r (every torque but the friction of the candidates); direction: sliding direction of
@@ -76,8 +81,13 @@ def solve_sticking(friction: StickSlip, mass: FloatArray, rhs: FloatArray, candi
             if i in free_held:
                 continue
             x = lam_l[i]
-            ratio = (x / bp[i] if bp[i] > 0 else math.inf) if x > 0 else (-x / bn[i] if bn[i] > 0 else math.inf) \
-                if x < 0 else 0.0
+            ratio = (
+                (x / bp[i] if bp[i] > 0 else math.inf)
+                if x > 0
+                else (-x / bn[i] if bn[i] > 0 else math.inf)
+                if x < 0
+                else 0.0
+            )
             if ratio > worst:
                 worst, k = ratio, i
         if k < 0:

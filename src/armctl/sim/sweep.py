@@ -42,8 +42,10 @@ class ProgressBar:
         elapsed = time.perf_counter() - self.start
         filled = int(self.width * done / self.total) if self.total else self.width
         left = f", ~{elapsed / done * (self.total - done):.1f} s left" if 0 < done < self.total else ""
-        self.stream.write(f"\r[{'#' * filled}{'.' * (self.width - filled)}] {done:>{len(str(self.total))}}/"
-                          f"{self.total} {self.label}  {elapsed:.1f} s{left}  ")
+        self.stream.write(
+            f"\r[{'#' * filled}{'.' * (self.width - filled)}] {done:>{len(str(self.total))}}/"
+            f"{self.total} {self.label}  {elapsed:.1f} s{left}  "
+        )
         if done >= self.total:
             self.stream.write("\n")
         self.stream.flush()
@@ -54,8 +56,7 @@ def _run_case(run: Callable[..., Any], case: Mapping[str, Any], summary: Callabl
     return out if summary is None else summary(out)
 
 
-def _run_case_in_worker(run: Callable[..., Any], case: Mapping[str, Any],
-                        summary: Callable[[Any], Any] | None) -> Any:
+def _run_case_in_worker(run: Callable[..., Any], case: Mapping[str, Any], summary: Callable[[Any], Any] | None) -> Any:
     """:func:`_run_case` in a pool's worker: an exception that cannot be pickled (which a process pool would
     report only as a broken pool, without its message) comes back as an ArmctlError carrying its type,
     message and traceback."""
@@ -65,8 +66,10 @@ def _run_case_in_worker(run: Callable[..., Any], case: Mapping[str, Any],
         try:
             pickle.loads(pickle.dumps(exc))
         except Exception:
-            text = (f"{type(exc).__name__}: {exc} (raised in a worker, and it cannot be pickled, so it is passed "
-                    f"on as text; the worker's traceback:\n{traceback.format_exc()})")
+            text = (
+                f"{type(exc).__name__}: {exc} (raised in a worker, and it cannot be pickled, so it is passed "
+                f"on as text; the worker's traceback:\n{traceback.format_exc()})"
+            )
         else:
             raise
     # raised here, outside the handler, so that it carries no context: a pickler that follows exception
@@ -74,9 +77,15 @@ def _run_case_in_worker(run: Callable[..., Any], case: Mapping[str, Any],
     raise ArmctlError(text)
 
 
-def sweep(cases: Iterable[Mapping[str, Any]], *, run: Callable[..., Any] | None = None,
-          summary: Callable[[Any], Any] | None = None, executor: Executor | str | None = None,
-          max_workers: int | None = None, progress: bool | TextIO = True) -> list[Any]:
+def sweep(
+    cases: Iterable[Mapping[str, Any]],
+    *,
+    run: Callable[..., Any] | None = None,
+    summary: Callable[[Any], Any] | None = None,
+    executor: Executor | str | None = None,
+    max_workers: int | None = None,
+    progress: bool | TextIO = True,
+) -> list[Any]:
     """Run ``run(**case)`` for every case and return the outputs (or ``summary(output)``) in case order.
 
     executor: an Executor (used as given and not shut down; e.g. a ThreadPoolExecutor, or a Dask
@@ -92,15 +101,16 @@ def sweep(cases: Iterable[Mapping[str, Any]], *, run: Callable[..., Any] | None 
     try:
         case_list = list(cases)
     except TypeError:
-        raise InvalidParameterError(f"cases must be an iterable of keyword-argument mappings, got {cases!r}",
-                                    value=cases) from None
+        raise InvalidParameterError(
+            f"cases must be an iterable of keyword-argument mappings, got {cases!r}", value=cases
+        ) from None
     if not (isinstance(progress, bool | np.bool_) or callable(getattr(progress, "write", None))):
-        raise InvalidParameterError(f"progress must be True, False or a text stream, got {progress!r}",
-                                    value=progress)
+        raise InvalidParameterError(f"progress must be True, False or a text stream, got {progress!r}", value=progress)
     for i, c in enumerate(case_list):
         if not isinstance(c, Mapping):
-            raise InvalidParameterError(f"case {i} must be a mapping of keyword arguments, got {type(c).__name__}",
-                                        value=c)
+            raise InvalidParameterError(
+                f"case {i} must be a mapping of keyword arguments, got {type(c).__name__}", value=c
+            )
     bar = None
     if progress:
         bar = ProgressBar(len(case_list), None if progress is True else progress)  # type: ignore[arg-type]
@@ -112,11 +122,13 @@ def sweep(cases: Iterable[Mapping[str, Any]], *, run: Callable[..., Any] | None 
                 bar.update(i + 1)
         return out
     if executor is not None and not callable(getattr(executor, "submit", None)):
-        raise InvalidParameterError(f"executor must be an Executor (with a submit method), 'serial' or None, got "
-                                    f"{executor!r}", value=executor)
+        raise InvalidParameterError(
+            f"executor must be an Executor (with a submit method), 'serial' or None, got {executor!r}", value=executor
+        )
     own = executor is None
-    if max_workers is not None and (isinstance(max_workers, bool) or not isinstance(max_workers, int)
-                                    or max_workers < 1):
+    if max_workers is not None and (
+        isinstance(max_workers, bool) or not isinstance(max_workers, int) or max_workers < 1
+    ):
         raise InvalidParameterError(f"max_workers must be a positive integer, got {max_workers!r}", value=max_workers)
     pool: Executor = ProcessPoolExecutor(max_workers or os.cpu_count() or 1) if own else executor  # type: ignore[assignment]
     results: list[Any] = [None] * len(case_list)

@@ -33,8 +33,9 @@ def linearize(dyn: Dynamics, q0: ArrayLike, step: float = 1e-6) -> Any:
     q0 = vector(q0, dyn.n, "q0")
     step = scalar(step, "step", positive=True)
     if not 1e-10 <= step <= 0.1:  # below: q₀ ± step rounds to q₀ (∂g/∂q = 0); above: not a derivative
-        raise InvalidParameterError(f"step must be in [1e-10, 0.1] rad for central differences of g, got {step:g}",
-                                    value=step)
+        raise InvalidParameterError(
+            f"step must be in [1e-10, 0.1] rad for central differences of g, got {step:g}", value=step
+        )
     n = dyn.n
     try:
         m_inv = np.linalg.inv(dyn.mass_matrix(q0))
@@ -59,13 +60,14 @@ def pd_from_bandwidth(omega_n: float, zeta: float = 1.0) -> tuple[float, float]:
     z = scalar(zeta, "zeta", positive=True)
     kp, kd = w * w, 2 * z * w
     if not (0.0 < kp < math.inf and 0.0 < kd < math.inf):
-        raise InvalidParameterError(f"omega_n = {w:g} rad/s with zeta = {z:g} gives gains beyond floating point "
-                                    f"(K_p = {kp:g}, K_d = {kd:g})", value=(omega_n, zeta))
+        raise InvalidParameterError(
+            f"omega_n = {w:g} rad/s with zeta = {z:g} gives gains beyond floating point (K_p = {kp:g}, K_d = {kd:g})",
+            value=(omega_n, zeta),
+        )
     return kp, kd
 
 
-def lqr_gains(position_weight: float, velocity_weight: float = 0.0, effort_weight: float = 1.0
-              ) -> tuple[float, float]:
+def lqr_gains(position_weight: float, velocity_weight: float = 0.0, effort_weight: float = 1.0) -> tuple[float, float]:
     """(K_p, K_d) minimising ∫ q_p e² + q_v ė² + r v² dt for ë = v (one joint; the same for every joint of a
     computed-torque loop).
 
@@ -82,9 +84,12 @@ def lqr_gains(position_weight: float, velocity_weight: float = 0.0, effort_weigh
     kp = math.sqrt(qp / r)
     kd = math.sqrt(qv / r + 2.0 * kp)
     if not (math.isfinite(kd) and kp > 0.0):
-        raise InvalidParameterError(f"the weights' ratios are beyond floating point: q_p/r = {qp / r:g}, "
-                                    f"q_v/r = {qv / r:g}; rescale position_weight, velocity_weight and "
-                                    "effort_weight together (only their ratios matter)", value=(qp, qv, r))
+        raise InvalidParameterError(
+            f"the weights' ratios are beyond floating point: q_p/r = {qp / r:g}, "
+            f"q_v/r = {qv / r:g}; rescale position_weight, velocity_weight and "
+            "effort_weight together (only their ratios matter)",
+            value=(qp, qv, r),
+        )
     return kp, kd
 
 

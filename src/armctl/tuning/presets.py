@@ -49,8 +49,11 @@ def _candidates() -> tuple[Path, ...]:
     import site
 
     share = Path("share") / "armctl" / "controllers"
-    return (Path(__file__).resolve().parents[3] / "controllers", Path(sys.prefix) / share,
-            Path(site.getuserbase()) / share)
+    return (
+        Path(__file__).resolve().parents[3] / "controllers",
+        Path(sys.prefix) / share,
+        Path(site.getuserbase()) / share,
+    )
 
 
 def preset_path(scene: str, method: str, folder: Path | None = None) -> Path:
@@ -62,15 +65,20 @@ def load_preset(scene: str, method: str, folder: Path | None = None) -> dict[str
     path = preset_path(scene, method, folder)
     if not path.is_file():
         have = sorted(p.name for p in path.parent.glob("*.toml")) if path.parent.is_dir() else []
-        raise ModelLoadError(f"no preset {path.name} in {path.parent} (have: {have}); run the tuning examples "
-                             "(examples/tune_gains.py in the source repository) to write it, or point ARMCTL_PRESETS "
-                             "at a folder that holds it", value=str(path))
+        raise ModelLoadError(
+            f"no preset {path.name} in {path.parent} (have: {have}); run the tuning examples "
+            "(examples/tune_gains.py in the source repository) to write it, or point ARMCTL_PRESETS "
+            "at a folder that holds it",
+            value=str(path),
+        )
     try:
         with path.open("rb") as f:
             data = tomllib.load(f)
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
-        raise ModelLoadError(f"preset {path} is not valid TOML ({e}); fix the file or write it again "
-                             "(examples/tune_gains.py)", value=str(path)) from e
+        raise ModelLoadError(
+            f"preset {path} is not valid TOML ({e}); fix the file or write it again (examples/tune_gains.py)",
+            value=str(path),
+        ) from e
     if not isinstance(data.get("gains"), dict):
         raise ModelLoadError(f"preset {path} has no [gains] table", value=str(path))
     return data
@@ -110,12 +118,15 @@ def _toml_value(v: Any, name: str) -> str:
         return "{" + ", ".join(f"{_toml_key(k)} = {_toml_value(x, name)}" for k, x in v.items()) + "}"
     if hasattr(v, "tolist") and not isinstance(v, complex):  # NumPy arrays and scalars
         return _toml_value(v.tolist(), name)
-    raise InvalidParameterError(f"{name} = {v!r}: a preset holds strings, booleans, real numbers, lists and tables, "
-                                f"not {type(v).__name__}", value=v)
+    raise InvalidParameterError(
+        f"{name} = {v!r}: a preset holds strings, booleans, real numbers, lists and tables, not {type(v).__name__}",
+        value=v,
+    )
 
 
-def write_preset(scene: str, method: str, gains: dict[str, Any], how: str, written_by: str,
-                 folder: Path | None = None, **record: Any) -> Path:
+def write_preset(
+    scene: str, method: str, gains: dict[str, Any], how: str, written_by: str, folder: Path | None = None, **record: Any
+) -> Path:
     """Write a preset (gains plus the tuning record) and return its path."""
     path = preset_path(scene, method, folder)
     fields = {"scene": scene, "method": method, "written_by": written_by, "how": how, **record}

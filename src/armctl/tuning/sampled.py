@@ -61,7 +61,7 @@ def spectral_radius(kp: float, kd: float, period: float, delay: int = 1) -> floa
     size = 2 * (d + 1)
     big = np.zeros((size, size))
     big[:2, :2] = [[1.0, t], [0.0, 1.0]]
-    big[:2, 2 * d: 2 * d + 2] -= np.array([[t * t / 2], [t]]) @ np.array([[kp, kd]])
+    big[:2, 2 * d : 2 * d + 2] -= np.array([[t * t / 2], [t]]) @ np.array([[kp, kd]])
     if d:
         big[2:, :-2] = np.eye(2 * d)
     try:
@@ -73,9 +73,12 @@ def spectral_radius(kp: float, kd: float, period: float, delay: int = 1) -> floa
 
 
 def _beyond_analysis(kp: float, kd: float, t: float) -> InvalidParameterError:
-    return InvalidParameterError(f"the sampled loop cannot be analysed in floating point: K_p T² = {kp * t * t:g}, "
-                                 f"K_d T = {kd * t:g} (period T = {t:g} s); stable loops have K_p T² < 4 and "
-                                 "K_d T < 2", value=(kp, kd, t))
+    return InvalidParameterError(
+        f"the sampled loop cannot be analysed in floating point: K_p T² = {kp * t * t:g}, "
+        f"K_d T = {kd * t:g} (period T = {t:g} s); stable loops have K_p T² < 4 and "
+        "K_d T < 2",
+        value=(kp, kd, t),
+    )
 
 
 def _frequency_response(kp: float, kd: float, period: float, delay: int, w: Any) -> Any:
@@ -106,8 +109,9 @@ def _gain_crossings(kp: float, kd: float, period: float, delay: int) -> list[flo
     return crossings
 
 
-def _stable_ranges(kp: float, kd: float, period: float, delay: int, crossings: list[float]
-                   ) -> list[tuple[float, float]]:
+def _stable_ranges(
+    kp: float, kd: float, period: float, delay: int, crossings: list[float]
+) -> list[tuple[float, float]]:
     """The open intervals of multipliers k > 0 for which the loop with gains k (kp, kd) is stable, given every k
     at which a closed-loop pole can cross the unit circle: between two crossings the number of unstable poles is
     constant, so one evaluation of the closed loop inside each interval classifies it (stable neighbours merged)."""
@@ -150,8 +154,11 @@ def _phase_margin(kp: float, kd: float, period: float, delay: int) -> tuple[floa
     side = np.sign(np.log(np.abs(_frequency_response(kp, kd, period, delay, w))))
     best = (math.inf, math.nan)
     for i in np.flatnonzero(side[:-1] != side[1:]):
-        wc = float(w[i + 1]) if side[i + 1] == 0 else float(brentq(log_gain, w[i], w[i + 1], xtol=1e-14 * w[i],
-                                                                       rtol=4 * np.finfo(float).eps))
+        wc = (
+            float(w[i + 1])
+            if side[i + 1] == 0
+            else float(brentq(log_gain, w[i], w[i + 1], xtol=1e-14 * w[i], rtol=4 * np.finfo(float).eps))
+        )
         pm = math.degrees(float(np.angle(-_frequency_response(kp, kd, period, delay, wc))))
         best = min(best, (pm, wc))
     return best
@@ -186,8 +193,10 @@ class SampledDataAnalysis:
         gap = self.spectral_radius - 1.0
         radius = f"1 {'+' if gap > 0 else '-'} {abs(gap):.2g}" if 0 < abs(gap) < 1e-4 else f"{self.spectral_radius:.6g}"
         if self.stable:
-            return (f"stable (spectral radius {radius}): gain margin {self.critical_multiplier:.4g}, "
-                    f"phase margin {self.phase_margin_deg:.3g}° at {self.crossover_rad_s:.4g} rad/s")
+            return (
+                f"stable (spectral radius {radius}): gain margin {self.critical_multiplier:.4g}, "
+                f"phase margin {self.phase_margin_deg:.3g}° at {self.crossover_rad_s:.4g} rad/s"
+            )
         if self.critical_multiplier > 0:
             fix = f"scale both gains below {self.critical_multiplier:.4g} to stabilise it"
         else:

@@ -17,8 +17,9 @@ Q_HOME = np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])
 def panda_dynamics(backend: str = "pinocchio", friction: bool = False) -> armctl.Dynamics:
     model = armctl.models.panda()
     if friction:
-        model = model.with_friction(viscous=[0.5, 0.5, 0.5, 0.5, 0.2, 0.2, 0.2],
-                                    coulomb=[0.8, 0.8, 0.8, 0.8, 0.3, 0.3, 0.3])
+        model = model.with_friction(
+            viscous=[0.5, 0.5, 0.5, 0.5, 0.2, 0.2, 0.2], coulomb=[0.8, 0.8, 0.8, 0.8, 0.3, 0.3, 0.3]
+        )
     return armctl.Dynamics(model, backend=backend)
 
 

@@ -46,8 +46,7 @@ def test_closed_form_realises_the_task_and_keeps_the_posture_in_the_null_space(p
     assert np.abs(accs[0] - accs[1]).max() > 1e-2  # the posture does act, only where the task does not see it
 
 
-def test_near_a_singularity_closed_form_torque_spikes_while_the_qp_stays_within_limits(panda: armctl.Dynamics
-                                                                                       ) -> None:
+def test_near_a_singularity_closed_form_torque_spikes_while_the_qp_stays_within_limits(panda: armctl.Dynamics) -> None:
     """Approaching Q_SINGULAR with a pose error along the singular direction: the closed-form torque grows like
     1/σ_min and leaves the limits far behind; the QP's torque never does, and its task error degrades smoothly
     (the achieved task acceleration stays bounded)."""
@@ -60,8 +59,9 @@ def test_near_a_singularity_closed_form_torque_spikes_while_the_qp_stays_within_
         q[3] += d
         sigma = np.linalg.svd(panda.jacobian(q), compute_uv=False).min()
         cf = ClosedFormOSC(panda, _pose_task(panda, q, offset), PostureTask(7, kp=25.0))
-        qp = OperationalSpaceQP(panda, [_pose_task(panda, q, offset), PostureTask(7, kp=25.0, priority=1)],
-                                limits=[TorqueLimit()])
+        qp = OperationalSpaceQP(
+            panda, [_pose_task(panda, q, offset), PostureTask(7, kp=25.0, priority=1)], limits=[TorqueLimit()]
+        )
         ref = armctl.Reference(q)
         ratios_cf.append(np.max(np.abs(cf(0.0, q, np.zeros(7), ref)) / limit))
         tau = qp(0.0, q, np.zeros(7), ref)

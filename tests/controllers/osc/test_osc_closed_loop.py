@@ -36,15 +36,19 @@ def _circle(p0: np.ndarray, radius: float = 0.05, freq: float = 0.5):  # type: i
         pose = p0.copy()
         pose[0, 3] += radius * (c - 1.0)
         pose[1, 3] += radius * s
-        return (pose, np.array([-radius * w * s, radius * w * c, 0, 0, 0, 0.0]),
-                np.array([-radius * w * w * c, -radius * w * w * s, 0, 0, 0, 0.0]))
+        return (
+            pose,
+            np.array([-radius * w * s, radius * w * c, 0, 0, 0, 0.0]),
+            np.array([-radius * w * w * c, -radius * w * w * s, 0, 0, 0, 0.0]),
+        )
 
     return fn
 
 
 def _position_errors(dyn: armctl.Dynamics, res, target) -> np.ndarray:  # type: ignore[no-untyped-def]
-    return np.array([np.linalg.norm(dyn.frame_pose(q)[:3, 3] - target(t)[0][:3, 3]) for t, q in zip(res.t, res.q,
-                                                                                                       strict=True)])
+    return np.array(
+        [np.linalg.norm(dyn.frame_pose(q)[:3, 3] - target(t)[0][:3, 3]) for t, q in zip(res.t, res.q, strict=True)]
+    )
 
 
 def test_circle_tracking_with_the_exact_model() -> None:
@@ -78,7 +82,7 @@ def test_press_and_slide_on_a_table_with_friction() -> None:
     assert not res.diverged and scene.touched is not None
     fn = -res.contact_force[:, 0, 2]  # the table's push on the arm [N]
     touch = int(np.searchsorted(res.t, scene.touched))
-    assert (fn[touch + 1:] > 0).all()  # never leaves the table
+    assert (fn[touch + 1 :] > 0).all()  # never leaves the table
     settled = res.t >= scene.touched + 0.4
     assert np.abs(fn[settled] - 10.0).max() <= 1.0, (fn[settled].min(), fn[settled].max())
     x = np.array([dyn.frame_pose(q)[:3, 3] for q in res.q])
@@ -112,8 +116,11 @@ def test_through_a_singularity_closed_form_spikes_and_the_qp_degrades_gracefully
     for kind in ("closed_form", "qp"):
         task = FramePoseTask(kp=100.0)
         task.set_trajectory(target)
-        ctrl = (ClosedFormOSC(dyn, task, PostureTask(7, kp=25.0)) if kind == "closed_form"
-                else OperationalSpaceQP(dyn, [task, PostureTask(7, kp=25.0, priority=1)]))
+        ctrl = (
+            ClosedFormOSC(dyn, task, PostureTask(7, kp=25.0))
+            if kind == "closed_form"
+            else OperationalSpaceQP(dyn, [task, PostureTask(7, kp=25.0, priority=1)])
+        )
         res = sim.simulate(dyn, ctrl, lambda t: armctl.Reference(path(t), v), 1.0, q0=path(0.0), qd0=v)
         assert not res.diverged
         sigma = min(np.linalg.svd(dyn.jacobian(q), compute_uv=False).min() for q in res.q[400:600])
@@ -138,15 +145,15 @@ def test_tight_torque_limits_posture_gives_way_before_the_task() -> None:
     w = 4 * math.pi
 
     def ref(t: float) -> armctl.Reference:
-        return armctl.Reference(Q_HOME + swing * math.sin(w * t), swing * w * math.cos(w * t),
-                                -swing * w * w * math.sin(w * t))
+        return armctl.Reference(
+            Q_HOME + swing * math.sin(w * t), swing * w * math.cos(w * t), -swing * w * w * math.sin(w * t)
+        )
 
     out = {}
     for scale in (1.0, 0.28):
         task = FramePositionTask(kp=400.0)
         task.set_target(p_hold)
-        ctrl = OperationalSpaceQP(dyn, [task, PostureTask(7, kp=400.0, priority=1)],
-                                  limits=[TorqueLimit(scale=scale)])
+        ctrl = OperationalSpaceQP(dyn, [task, PostureTask(7, kp=400.0, priority=1)], limits=[TorqueLimit(scale=scale)])
         res = sim.simulate(dyn, ctrl, ref, 1.0, q0=Q_HOME, qd0=ref(0.0).qd)
         assert not res.diverged
         limit = scale * dyn.model.effort_limit

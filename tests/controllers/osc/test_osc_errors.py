@@ -42,13 +42,16 @@ def test_unknown_frame_lists_the_valid_names(panda: armctl.Dynamics) -> None:
         OperationalSpaceQP(panda, [PostureTask(7)], contacts=[Contact("gripper")])
 
 
-@pytest.mark.parametrize("make", [
-    lambda: PostureTask(6),  # a 6-joint posture on a 7-joint arm: raised when given to the controller
-    lambda: FramePoseTask(kp=np.ones(3)),
-    lambda: FramePositionTask(kp=100.0, kd=np.ones(4)),
-    lambda: FramePositionTask(weight=[1.0, 1.0]),
-    lambda: PostureTask(7, kp=np.ones((7, 6))),
-])
+@pytest.mark.parametrize(
+    "make",
+    [
+        lambda: PostureTask(6),  # a 6-joint posture on a 7-joint arm: raised when given to the controller
+        lambda: FramePoseTask(kp=np.ones(3)),
+        lambda: FramePositionTask(kp=100.0, kd=np.ones(4)),
+        lambda: FramePositionTask(weight=[1.0, 1.0]),
+        lambda: PostureTask(7, kp=np.ones((7, 6))),
+    ],
+)
 def test_tasks_of_the_wrong_size(panda: armctl.Dynamics, make) -> None:  # type: ignore[no-untyped-def]
     with pytest.raises(ShapeError):
         OperationalSpaceQP(panda, [make()])
@@ -69,7 +72,6 @@ def test_targets_of_the_wrong_size(panda: armctl.Dynamics) -> None:
         OperationalSpaceQP(panda, [FramePositionTask()])(0.0, Q_HOME, np.zeros(7), armctl.Reference(Q_HOME))
 
 
-
 def _rotation(rx: float, ry: float, rz: float) -> np.ndarray:
     """R_z R_y R_x, written out (not from the code under test)."""
     cx, sx, cy, sy, cz, sz = np.cos(rx), np.sin(rx), np.cos(ry), np.sin(ry), np.cos(rz), np.sin(rz)
@@ -83,8 +85,12 @@ def test_rotation_and_pose_targets_must_be_rotations(panda: armctl.Dynamics) -> 
     # a reflection, a scaled or a zero matrix would give a zero rotation error: the task would think it is there
     rot = _rotation(0.1, 0.2, 0.3)
     orientation, pose = FrameOrientationTask(), FramePoseTask()
-    for bad, why in [(rot @ np.diag([1.0, 1.0, -1.0]), "reflection"), (2.0 * rot, "not orthonormal"),
-                     (np.zeros((3, 3)), "not orthonormal"), (rot + 1e-3, "not orthonormal")]:
+    for bad, why in [
+        (rot @ np.diag([1.0, 1.0, -1.0]), "reflection"),
+        (2.0 * rot, "not orthonormal"),
+        (np.zeros((3, 3)), "not orthonormal"),
+        (rot + 1e-3, "not orthonormal"),
+    ]:
         with pytest.raises(InvalidParameterError, match=why):
             orientation.set_target(bad)
         pose_matrix = np.eye(4)
@@ -119,12 +125,19 @@ def test_build_and_solve_check_their_inputs(panda: armctl.Dynamics) -> None:
         with pytest.raises(ShapeError, match=r"^qd"):
             method(0.0, Q_HOME, np.zeros(6), ref)
 
-@pytest.mark.parametrize(("kwargs", "message"), [
-    ({"weight": -1.0}, r"weight must be >= 0, got \[-1.0"), ({"weight": [1.0, -0.1, 1.0]}, r"weight must be >= 0"),
-    ({"kp": -5.0}, "kp must be positive definite"),
-    ({"kp": [[1.0, 2.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], "kd": 1.0}, "kp must be symmetric"),
-    ({"priority": -1}, "priority must be a whole number >= 0, got -1"),
-    ({"priority": 1.5}, "priority must be a whole number >= 0, got 1.5"), ({"weight": np.nan}, "weight holds NaN")])
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"weight": -1.0}, r"weight must be >= 0, got \[-1.0"),
+        ({"weight": [1.0, -0.1, 1.0]}, r"weight must be >= 0"),
+        ({"kp": -5.0}, "kp must be positive definite"),
+        ({"kp": [[1.0, 2.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], "kd": 1.0}, "kp must be symmetric"),
+        ({"priority": -1}, "priority must be a whole number >= 0, got -1"),
+        ({"priority": 1.5}, "priority must be a whole number >= 0, got 1.5"),
+        ({"weight": np.nan}, "weight holds NaN"),
+    ],
+)
 def test_negative_weights_gains_and_bad_priorities(kwargs: dict, message: str) -> None:
     with pytest.raises(ArmctlError, match=message):
         FramePositionTask(**kwargs)
@@ -185,10 +198,18 @@ def test_a_row_that_binds_the_conflict_is_named_with_zero() -> None:
     from armctl.controllers.osc.diagnose import conflicting_rows
     from armctl.controllers.osc.solve import ProxQPSolver
 
-    p = QPProblem(np.eye(2), np.zeros(2), np.array([[0.5, -1.0], [1.0, 0.0]]), np.array([0.0, 5.0]),
-                  np.array([[0.0, 1.0]]), np.array([-1.0]), np.array([1.0]),
-                  {"qdd": slice(0, 1), "tau": slice(1, 2)}, ("dynamics[j]", "contact.acceleration[x]"),
-                  ("torque_limit[j]",))
+    p = QPProblem(
+        np.eye(2),
+        np.zeros(2),
+        np.array([[0.5, -1.0], [1.0, 0.0]]),
+        np.array([0.0, 5.0]),
+        np.array([[0.0, 1.0]]),
+        np.array([-1.0]),
+        np.array([1.0]),
+        {"qdd": slice(0, 1), "tau": slice(1, 2)},
+        ("dynamics[j]", "contact.acceleration[x]"),
+        ("torque_limit[j]",),
+    )
     rows = conflicting_rows(p)
     assert rows is not None and set(rows) == {"torque_limit[j]", "contact.acceleration[x]"}
     assert rows["torque_limit[j]"] == pytest.approx(1.5, abs=1e-6)
@@ -199,22 +220,45 @@ def test_a_row_that_binds_the_conflict_is_named_with_zero() -> None:
     assert "contact.acceleration[x], torque_limit[j] (relax by 1.5)" in str(err.value)
 
 
-@pytest.mark.parametrize(("make", "error", "message"), [
-    (lambda d: OperationalSpaceQP(d, None), InvalidParameterError, "tasks must be a Task or a sequence"),
-    (lambda d: OperationalSpaceQP(d, [PostureTask(7)], limits=5), InvalidParameterError,
-     "limits must be a Limit or a sequence"),
-    (lambda d: PostureTask(0), InvalidParameterError, r"n \(the number of joints\) must be a whole number >= 1"),
-    (lambda d: PostureTask("a"), InvalidParameterError, "must be a whole number >= 1, got 'a'"),
-    (lambda d: OperationalSpaceQP(d, [PostureTask(7)], limits=[TorqueLimit(["a"] * 7)]), InvalidParameterError,
-     "torque limit must hold real numbers"),
-    # an infinite braking limit would turn the viability bounds into NaN (inf · 0) and so switch them off
-    (lambda d: OperationalSpaceQP(d, [PostureTask(7)], limits=[JointPositionLimit(1e-3, max_deceleration=np.inf)]),
-     NonFiniteError, r"max_deceleration must be finite for every joint, got \[inf"),
-    (lambda d: OperationalSpaceQP(d, [PostureTask(7)], limits=[JointVelocityLimit(1e-3, max_deceleration=np.nan)]),
-     NonFiniteError, "max_deceleration must be finite"),
-])
-def test_containers_counts_and_limits_are_checked(panda: armctl.Dynamics, make, error: type,  # type: ignore[no-untyped-def]
-                                                 message: str) -> None:
+@pytest.mark.parametrize(
+    ("make", "error", "message"),
+    [
+        (lambda d: OperationalSpaceQP(d, None), InvalidParameterError, "tasks must be a Task or a sequence"),
+        (
+            lambda d: OperationalSpaceQP(d, [PostureTask(7)], limits=5),
+            InvalidParameterError,
+            "limits must be a Limit or a sequence",
+        ),
+        (lambda d: PostureTask(0), InvalidParameterError, r"n \(the number of joints\) must be a whole number >= 1"),
+        (lambda d: PostureTask("a"), InvalidParameterError, "must be a whole number >= 1, got 'a'"),
+        (
+            lambda d: OperationalSpaceQP(d, [PostureTask(7)], limits=[TorqueLimit(["a"] * 7)]),
+            InvalidParameterError,
+            "torque limit must hold real numbers",
+        ),
+        # an infinite braking limit would turn the viability bounds into NaN (inf · 0) and so switch them off
+        (
+            lambda d: OperationalSpaceQP(
+                d, [PostureTask(7)], limits=[JointPositionLimit(1e-3, max_deceleration=np.inf)]
+            ),
+            NonFiniteError,
+            r"max_deceleration must be finite for every joint, got \[inf",
+        ),
+        (
+            lambda d: OperationalSpaceQP(
+                d, [PostureTask(7)], limits=[JointVelocityLimit(1e-3, max_deceleration=np.nan)]
+            ),
+            NonFiniteError,
+            "max_deceleration must be finite",
+        ),
+    ],
+)
+def test_containers_counts_and_limits_are_checked(
+    panda: armctl.Dynamics,
+    make,
+    error: type,  # type: ignore[no-untyped-def]
+    message: str,
+) -> None:
     with pytest.raises(error, match=message):
         make(panda)
 

@@ -27,8 +27,9 @@ from .conftest import Q_HOME
 DT = 1e-3
 
 
-def _run_against_upper_limit(limit: JointPositionLimit | JointVelocityLimit, q: np.ndarray, qd: np.ndarray,
-                             steps: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _run_against_upper_limit(
+    limit: JointPositionLimit | JointVelocityLimit, q: np.ndarray, qd: np.ndarray, steps: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Push every joint as hard as the bounds allow towards its upper limit, integrating the exact discrete
     double integrator q⁺ = q + Δt q̇ + ½Δt² q̈, q̇⁺ = q̇ + Δt q̈; returns the q, q̇ and q̈ histories."""
     qs, qds, accs = [], [], []
@@ -64,6 +65,7 @@ def _largest_viable_acceleration(gap: float, v: float, a_max: float) -> float:
     double integrator) after which the joint is still short of its limit (``gap`` ahead, moving at v towards
     it) and, if it still moves towards the limit, can stop before it braking at a_max (v⁺² ≤ 2 a_max gap⁺);
     never below −a_max (no more braking than that is asked for)."""
+
     def viable(a: float) -> bool:
         gap1, v1 = gap - DT * v - 0.5 * DT * DT * a, v + DT * a
         return gap1 >= 0.0 and (v1 <= 0.0 or v1 * v1 <= 2.0 * a_max * gap1)
@@ -87,9 +89,13 @@ def test_position_bounds_are_the_largest_viable_accelerations(panda: armctl.Dyna
     states = [(rng.uniform(lo_lim - 0.02, up_lim + 0.02), rng.uniform(-3.0, 3.0, 7)) for _ in range(40)]
     # 5 mm from a limit at 2.5 rad/s towards it: too fast to stop, on both sides; 1 mm from it, less than
     # half a step away at 2.5 rad/s, or moving away at 3 rad/s
-    states += [(up_lim - 0.005, np.full(7, 2.5)), (lo_lim + 0.005, np.full(7, -2.5)),
-               (up_lim - 0.001, np.full(7, 2.5)), (up_lim - 0.001, np.full(7, -3.0)),
-               (rng.uniform(up_lim - 0.05, up_lim), rng.uniform(-1.0, 3.0, 7))]
+    states += [
+        (up_lim - 0.005, np.full(7, 2.5)),
+        (lo_lim + 0.005, np.full(7, -2.5)),
+        (up_lim - 0.001, np.full(7, 2.5)),
+        (up_lim - 0.001, np.full(7, -3.0)),
+        (rng.uniform(up_lim - 0.05, up_lim), rng.uniform(-1.0, 3.0, 7)),
+    ]
     for q, qd in states:
         lo, up = lim.bounds(SimpleNamespace(q=q, qd=qd))  # type: ignore[arg-type]
         for i in range(7):
@@ -142,8 +148,9 @@ def test_fixed_contact_force_stays_in_the_friction_pyramid(panda: armctl.Dynamic
     mu = 0.5
     contact = Contact(mode="fixed", mu=mu, facets=4)
     force_task = ContactForceTask(contact, [10.0, 0.0, 10.0], weight=1.0)
-    ctrl = OperationalSpaceQP(panda, [force_task, PostureTask(7, weight=1e-3)], limits=[TorqueLimit()],
-                              contacts=[contact])
+    ctrl = OperationalSpaceQP(
+        panda, [force_task, PostureTask(7, weight=1e-3)], limits=[TorqueLimit()], contacts=[contact]
+    )
     sol = ctrl.solve(0.0, Q_HOME, np.zeros(7), armctl.Reference(Q_HOME))
     f = sol.forces[contact.name]
     fn, ft = f[2], f[:2]
@@ -161,8 +168,12 @@ def test_sliding_contact_force_follows_coulomb(panda: armctl.Dynamics) -> None:
     contact = Contact(mode="sliding", mu=mu, slip_velocity=1e-4)
     task = FramePositionTask(kp=100.0, weight=[1.0, 1.0, 0.0])
     task.set_target(panda.frame_pose(Q_HOME)[:3, 3] + [0.05, 0.0, 0.0], [0.1, 0.0, 0.0])
-    ctrl = OperationalSpaceQP(panda, [task, ContactForceTask(contact, 10.0, weight=1.0),
-                                      PostureTask(7, weight=1e-3)], limits=[TorqueLimit()], contacts=[contact])
+    ctrl = OperationalSpaceQP(
+        panda,
+        [task, ContactForceTask(contact, 10.0, weight=1.0), PostureTask(7, weight=1e-3)],
+        limits=[TorqueLimit()],
+        contacts=[contact],
+    )
     v_tool = np.array([0.08, -0.06, 0.0])  # sliding along the surface
     qd = np.linalg.pinv(panda.jacobian(Q_HOME)[:3]) @ v_tool
     f = ctrl.solve(0.0, Q_HOME, qd, armctl.Reference(Q_HOME)).forces[contact.name]
@@ -178,8 +189,9 @@ def test_fixed_contact_damps_the_contact_point_velocity(panda: armctl.Dynamics) 
 
     kd = 50.0
     contact = Contact(mode="fixed", mu=0.8, kd=kd)
-    ctrl = OperationalSpaceQP(panda, [PostureTask(7, weight=1e-2), ContactForceTask(contact, [0.0, 0.0, 10.0])],
-                              limits=[], contacts=[contact])
+    ctrl = OperationalSpaceQP(
+        panda, [PostureTask(7, weight=1e-2), ContactForceTask(contact, [0.0, 0.0, 10.0])], limits=[], contacts=[contact]
+    )
     qd = np.array([0.3, -0.2, 0.1, 0.4, -0.3, 0.2, 0.1])
     sol = ctrl.solve(0.0, Q_HOME, qd, armctl.Reference(Q_HOME))
     full = pin.buildModelFromUrdf(str(armctl.models.robot_description("panda_description/urdf/panda.urdf")))

@@ -58,8 +58,9 @@ def _tasks(refs: dict, priorities: dict[str, int], weights: dict[str, float] | N
 def test_three_strict_levels_match_the_null_space_recursion(panda: armctl.Dynamics) -> None:
     q, qd = Q_HOME + 0.1, np.linspace(-0.3, 0.3, 7)
     refs = _setup(panda, q, qd)
-    ctrl = OperationalSpaceQP(panda, _tasks(refs, {"position": 0, "orientation": 1, "posture": 2}),
-                              limits=[TorqueLimit()])
+    ctrl = OperationalSpaceQP(
+        panda, _tasks(refs, {"position": 0, "orientation": 1, "posture": 2}), limits=[TorqueLimit()]
+    )
     assert ctrl.priorities == [0, 1, 2]
     sol = ctrl.solve(0.0, q, qd, armctl.Reference(q))
     # reference: x₁ = J₁⁺b₁, then each level in the null space of those above
@@ -77,8 +78,9 @@ def test_weights_inside_a_level_are_weighted_least_squares(panda: armctl.Dynamic
     q, qd = Q_HOME - 0.1, np.zeros(7)
     refs = _setup(panda, q, qd)
     w = {"position": 4.0, "orientation": 1.0, "posture": 0.05}
-    ctrl = OperationalSpaceQP(panda, _tasks(refs, {"position": 0, "orientation": 0, "posture": 0}, w),
-                              limits=[TorqueLimit()])
+    ctrl = OperationalSpaceQP(
+        panda, _tasks(refs, {"position": 0, "orientation": 0, "posture": 0}, w), limits=[TorqueLimit()]
+    )
     sol = ctrl.solve(0.0, q, qd, armctl.Reference(q))
     A = np.vstack([np.sqrt(w[k]) * refs[k][0] for k in ("position", "orientation", "posture")])
     b = np.concatenate([np.sqrt(w[k]) * refs[k][1] for k in ("position", "orientation", "posture")])
@@ -131,8 +133,9 @@ def test_a_level_whose_solve_fails_still_outranks_the_levels_below(panda: armctl
     q, qd = Q_HOME + 0.1, np.linspace(-0.3, 0.3, 7)
     refs = _setup(panda, q, qd)
     priorities = {"position": 0, "orientation": 1, "posture": 2}
-    ctrl = OperationalSpaceQP(panda, _tasks(refs, priorities), limits=[TorqueLimit()], solver=FailsOnLevel1(),
-                              slacks=True)  # slacks: the solver's own solve() is used for every level
+    ctrl = OperationalSpaceQP(
+        panda, _tasks(refs, priorities), limits=[TorqueLimit()], solver=FailsOnLevel1(), slacks=True
+    )  # slacks: the solver's own solve() is used for every level
     sol = ctrl.solve(0.0, q, qd, armctl.Reference(q))
     assert sol.level_status[0] == "solved" and sol.level_status[1].startswith("kept level 0")
     assert sol.level_status[2] == "solved"
@@ -174,4 +177,4 @@ def test_frozen_rows_are_an_orthonormal_basis_of_the_levels_above(panda: armctl.
     assert len(frozen) == np.linalg.matrix_rank(rows) == 6
     np.testing.assert_allclose(F @ F.T, np.eye(6), atol=1e-12)
     np.testing.assert_allclose(rows @ F.T @ F, rows, atol=1e-10)  # same row space
-    np.testing.assert_allclose(F @ sol.x, F @ sol.solutions[1].x[:p.nx], atol=1e-6)
+    np.testing.assert_allclose(F @ sol.x, F @ sol.solutions[1].x[: p.nx], atol=1e-6)

@@ -50,8 +50,7 @@ def test_contact_force_enters_as_minus_jacobian_transpose(rng: np.random.Generat
     contact = Contact(mode="fixed", mu=0.8)
     task = FramePositionTask()
     task.set_target([0.4, 0.0, 0.5])
-    ctrl = OperationalSpaceQP(dyn, [task, ContactForceTask(contact, [0.0, 0.0, 10.0])], limits=[],
-                              contacts=[contact])
+    ctrl = OperationalSpaceQP(dyn, [task, ContactForceTask(contact, [0.0, 0.0, 10.0])], limits=[], contacts=[contact])
     q, qd = _state(rng)
     p = ctrl.build(0.0, q, qd, armctl.Reference(q)).problem(0)
     v = p.variables
@@ -115,8 +114,11 @@ def test_qpsolvers_and_proxsuite_agree(panda: armctl.Dynamics, rng: np.random.Ge
     for solver in ("proxsuite", QpsolversSolver("proxqp", eps_abs=1e-10, eps_rel=0.0)):
         task = FramePoseTask(kp=300.0)
         task.set_target(panda.frame_pose(Q_HOME))
-        tasks.append(OperationalSpaceQP(panda, [task, PostureTask(7, weight=1e-2)], limits=[TorqueLimit(scale=0.2)],
-                                        solver=solver))
+        tasks.append(
+            OperationalSpaceQP(
+                panda, [task, PostureTask(7, weight=1e-2)], limits=[TorqueLimit(scale=0.2)], solver=solver
+            )
+        )
     previous = None
     for _ in range(3):
         q, qd = _state(rng)
@@ -131,6 +133,7 @@ def test_warm_start_reuses_the_previous_solution(panda: armctl.Dynamics) -> None
     """A controller that solved the previous period starts from that solution: at the next state it needs
     fewer iterations than a fresh (cold) controller solving the same problem, and reaches the same answer.
     The target is 10 cm away, so that neither solve is trivial."""
+
     def make() -> OperationalSpaceQP:
         task = FramePoseTask()
         target = panda.frame_pose(Q_HOME)
@@ -156,9 +159,11 @@ def test_a_warm_start_takes_the_new_state_dependent_bounds(panda: armctl.Dynamic
     """The velocity limit's bound q̈ ≤ (q̇_max − q̇)/Δt changes with the state while its rows C stay the same:
     a controller warm-started from a period at rest must take the new bound (written out here), as a cold one
     does, when the joints come within 0.5 mrad/s of the limit."""
+
     def make() -> OperationalSpaceQP:
-        return OperationalSpaceQP(panda, [PostureTask(7, kp=100.0)],
-                                  limits=[TorqueLimit(), JointVelocityLimit(1e-3, limit=1.0)])
+        return OperationalSpaceQP(
+            panda, [PostureTask(7, kp=100.0)], limits=[TorqueLimit(), JointVelocityLimit(1e-3, limit=1.0)]
+        )
 
     ref = armctl.Reference(Q_HOME + 0.5)  # the posture pulls every joint up, at ~50 rad/s²
     warm, cold = make(), make()
@@ -192,8 +197,9 @@ def test_slacks_report_how_far_each_task_is_from_met(panda: armctl.Dynamics) -> 
     for slacks in (False, True):
         task = FramePositionTask(kp=100.0)
         task.set_target(panda.frame_pose(Q_HOME)[:3, 3] + [0.05, 0.0, 0.0])
-        ctrl = OperationalSpaceQP(panda, [task, PostureTask(7, kp=50.0, weight=1e-2, priority=1)],
-                                  limits=[TorqueLimit()], slacks=slacks)
+        ctrl = OperationalSpaceQP(
+            panda, [task, PostureTask(7, kp=50.0, weight=1e-2, priority=1)], limits=[TorqueLimit()], slacks=slacks
+        )
         sols.append(ctrl.solve(0.0, Q_HOME, np.zeros(7), armctl.Reference(Q_HOME)))
     plain, slack = sols
     np.testing.assert_allclose(plain.x, slack.x, atol=1e-6)
@@ -215,8 +221,11 @@ def test_controllers_pickle_for_process_pools(rng: np.random.Generator) -> None:
     contact = Contact(mode="sliding", mu=0.5, slip_velocity=1e-3)
     pose = FramePoseTask(kp=200.0)
     pose.set_target(dyn.frame_pose(Q_HOME))
-    qp = OperationalSpaceQP(dyn, [pose, ContactForceTask(contact, [0.0, 0.0, 5.0], weight=0.1),
-                                  PostureTask(7, weight=1e-3)], contacts=[contact])
+    qp = OperationalSpaceQP(
+        dyn,
+        [pose, ContactForceTask(contact, [0.0, 0.0, 5.0], weight=0.1), PostureTask(7, weight=1e-3)],
+        contacts=[contact],
+    )
     closed = ClosedFormOSC(dyn, pose, PostureTask(7, kp=25.0))
     for ctrl in (qp, closed):
         ctrl(0.0, Q_HOME, np.zeros(7), armctl.Reference(Q_HOME))  # its layouts and level plans exist

@@ -148,8 +148,7 @@ def test_pose_task_residual_is_the_textbook_law(panda: armctl.Dynamics) -> None:
     task = FramePoseTask(kp=kp, kd=kd)
     task.set_target(target, twist, acc)
     fk = state.frame(None)
-    e = np.concatenate([target[:3, 3] - fk.position,
-                        Rotation.from_matrix(target[:3, :3] @ fk.rotation.T).as_rotvec()])
+    e = np.concatenate([target[:3, 3] - fk.position, Rotation.from_matrix(target[:3, :3] @ fk.rotation.T).as_rotvec()])
     expected = acc + kd @ (twist - fk.jacobian @ state.qd) + kp @ e - fk.drift
     ref = armctl.Reference(Q_HOME)
     np.testing.assert_allclose(task.residual(state, 0.0, ref)[1], expected, rtol=1e-10, atol=1e-10)
@@ -166,8 +165,7 @@ def test_pose_task_residual_is_the_textbook_law(panda: armctl.Dynamics) -> None:
 
     shifted = Shifted(kp=kp, kd=kd)
     shifted.set_target(target, twist, acc)
-    np.testing.assert_allclose(shifted.residual(state, 0.0, ref)[1], expected + kp[:, 2] * 0.05, rtol=1e-10,
-                               atol=1e-10)
+    np.testing.assert_allclose(shifted.residual(state, 0.0, ref)[1], expected + kp[:, 2] * 0.05, rtol=1e-10, atol=1e-10)
 
 
 def test_posture_residual_is_the_textbook_law(panda: armctl.Dynamics) -> None:
@@ -184,8 +182,9 @@ def test_posture_residual_is_the_textbook_law(panda: armctl.Dynamics) -> None:
     assert J is None
     np.testing.assert_allclose(got, ref.qdd + kd @ (ref.qd - qd) + kp @ (ref.q - q), rtol=1e-12, atol=1e-12)
     task.kp = 3.0
-    np.testing.assert_allclose(task.residual(state, 0.0, ref)[1], ref.qdd + kd @ (ref.qd - qd) + 3.0 * (ref.q - q),
-                               rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(
+        task.residual(state, 0.0, ref)[1], ref.qdd + kd @ (ref.qd - qd) + 3.0 * (ref.q - q), rtol=1e-12, atol=1e-12
+    )
 
     class Offset(PostureTask):
         def kinematics(self, s, t, r):  # type: ignore[no-untyped-def]
@@ -193,5 +192,9 @@ def test_posture_residual_is_the_textbook_law(panda: armctl.Dynamics) -> None:
             return J, d, err + 0.01, ed, a
 
     offset = Offset(7, kp=kp, kd=kd)
-    np.testing.assert_allclose(offset.residual(state, 0.0, ref)[1],
-                               ref.qdd + kd @ (ref.qd - qd) + kp @ (ref.q - q + 0.01), rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(
+        offset.residual(state, 0.0, ref)[1],
+        ref.qdd + kd @ (ref.qd - qd) + kp @ (ref.q - q + 0.01),
+        rtol=1e-12,
+        atol=1e-12,
+    )

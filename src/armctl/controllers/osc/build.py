@@ -51,8 +51,17 @@ class StepQP:
     """Everything one control step solves: the constraints and, per priority level, the task rows.
     :meth:`problem` returns the QP of a level (with rows freezing the levels above, if given)."""
 
-    def __init__(self, layout: Layout, A: FloatArray, b: FloatArray, l: FloatArray, u: FloatArray,  # noqa: E741
-                 levels: list[LevelRows], regularization: FloatArray, slacks: bool) -> None:
+    def __init__(
+        self,
+        layout: Layout,
+        A: FloatArray,
+        b: FloatArray,
+        l: FloatArray,  # noqa: E741
+        u: FloatArray,
+        levels: list[LevelRows],
+        regularization: FloatArray,
+        slacks: bool,
+    ) -> None:
         self.layout = layout
         self.A, self.b, self.l, self.u = A, b, l, u
         self.levels = levels
@@ -83,13 +92,25 @@ class StepQP:
         H = np.diag(np.concatenate([reg, np.ones(m)]))
         A2 = np.zeros((A.shape[0] + m, nx + m))
         A2[: A.shape[0], :nx] = A
-        A2[A.shape[0]:, :nx] = lev.T
-        A2[A.shape[0]:, nx:] = -np.eye(m)
+        A2[A.shape[0] :, :nx] = lev.T
+        A2[A.shape[0] :, nx:] = -np.eye(m)
         C2 = np.hstack([lay.C, np.zeros((lay.C.shape[0], m))])
         variables = dict(lay.variables, slack=slice(nx, nx + m))
         slack_names = tuple(f"slack[{t.name}][{i}]" for t in lev.tasks for i in range(t.dim))
-        return QPProblem(H, np.zeros(nx + m), A2, np.concatenate([b, lev.t]), C2, self.l, self.u, variables,
-                         eq_names + slack_names, lay.ineq_names, k, names)
+        return QPProblem(
+            H,
+            np.zeros(nx + m),
+            A2,
+            np.concatenate([b, lev.t]),
+            C2,
+            self.l,
+            self.u,
+            variables,
+            eq_names + slack_names,
+            lay.ineq_names,
+            k,
+            names,
+        )
 
     def arrays(self, k: int = 0, frozen: tuple[FloatArray, FloatArray] | None = None) -> tuple[FloatArray, ...]:
         """(H, g, A, b, C, l, u) of level ``k`` without slacks (the hot path of :meth:`problem`)."""
@@ -106,8 +127,15 @@ class QPBuilder:
     """Builds a :class:`StepQP` per control step for fixed tasks, limits and contacts (contacts may be switched
     on and off: one :class:`Layout` is kept per set of active contacts)."""
 
-    def __init__(self, model: RobotModel, tasks: Sequence[Task], limits: Sequence[Limit],
-                 contacts: Sequence[Contact], regularization: float = 1e-8, slacks: bool = False) -> None:
+    def __init__(
+        self,
+        model: RobotModel,
+        tasks: Sequence[Task],
+        limits: Sequence[Limit],
+        contacts: Sequence[Contact],
+        regularization: float = 1e-8,
+        slacks: bool = False,
+    ) -> None:
         self.model = model
         self.n = model.n
         self.tasks = tuple(tasks)
@@ -130,8 +158,9 @@ class QPBuilder:
         active = tuple(c.name for c in self.contacts if c.active)
         lay = self._layouts.get(active)
         if lay is None:
-            lay = self._layouts[active] = Layout(self.model, self.limits, [c for c in self.contacts if c.active],
-                                                     self.regularization)
+            lay = self._layouts[active] = Layout(
+                self.model, self.limits, [c for c in self.contacts if c.active], self.regularization
+            )
         return lay
 
     def build(self, state: ModelState, t: float, ref: Reference) -> StepQP:
@@ -162,9 +191,9 @@ class QPBuilder:
             gq, gf, rhs = c.equality_rows(state)
             cols = lay.variables[c.name]
             A[:n, cols] = -state.frame(c.frame).jacobian[:3].T
-            A[row: row + 3, :n] = gq
-            A[row: row + 3, cols] = gf
-            b[row: row + 3] = rhs
+            A[row : row + 3, :n] = gq
+            A[row : row + 3, cols] = gf
+            b[row : row + 3] = rhs
             row += 3
         if lay.constant_bounds is not None:
             lo, up = lay.constant_bounds
@@ -180,7 +209,8 @@ class QPBuilder:
         if plans is None:
             plans = self._level_plans[lay] = [
                 LevelPlan(tuple(tk for tk in self.tasks if tk.priority == k and tk.variable in lay.variables), lay)
-                for k in self.priorities]
+                for k in self.priorities
+            ]
         return plans
 
     @staticmethod

@@ -38,8 +38,7 @@ class ClosedFormOSC(Controller):
         if not isinstance(task, MotionTask) or isinstance(task, PostureTask):
             raise InvalidParameterError(f"task must be a frame MotionTask, got {type(task).__name__}", value=task)
         if posture is not None and not isinstance(posture, PostureTask):
-            raise InvalidParameterError(f"posture must be a PostureTask, got {type(posture).__name__}",
-                                        value=posture)
+            raise InvalidParameterError(f"posture must be a PostureTask, got {type(posture).__name__}", value=posture)
         self.evaluator = ModelEvaluator(dynamics)
         task.check(self.evaluator, self.n, {})
         if posture is not None:

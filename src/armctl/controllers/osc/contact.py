@@ -38,9 +38,19 @@ class Contact:
 
     dim = 3
 
-    def __init__(self, frame: str | None = None, normal: ArrayLike = (0.0, 0.0, 1.0), mu: float = 0.5,
-                 mode: str = "fixed", facets: int = 4, kd: float = 50.0, min_force: float = 0.0,
-                 slip_velocity: float = 1e-3, name: str | None = None, active: bool = True) -> None:
+    def __init__(
+        self,
+        frame: str | None = None,
+        normal: ArrayLike = (0.0, 0.0, 1.0),
+        mu: float = 0.5,
+        mode: str = "fixed",
+        facets: int = 4,
+        kd: float = 50.0,
+        min_force: float = 0.0,
+        slip_velocity: float = 1e-3,
+        name: str | None = None,
+        active: bool = True,
+    ) -> None:
         if mode not in MODES:
             raise UnknownNameError("contact mode", mode, MODES)
         nrm = vector(normal, 3, "normal")
@@ -70,16 +80,20 @@ class Contact:
             self._cone = np.vstack([self.normal, dirs - mu_in * self.normal])
             self._cone_l = np.r_[self.min_force, np.full(self.facets, -np.inf)]
             self._cone_u = np.r_[np.inf, np.zeros(self.facets)]
-            self._cone_names = [f"unilateral[{self.name}]"] + [f"friction_cone[{self.name},{i}]"
-                                                              for i in range(self.facets)]
+            self._cone_names = [f"unilateral[{self.name}]"] + [
+                f"friction_cone[{self.name},{i}]" for i in range(self.facets)
+            ]
             self.eq_names = [f"{self.name}.acceleration[{c}]" for c in "xyz"]
         else:
             self._cone = self.normal[None, :].copy()
             self._cone_l = np.array([self.min_force])
             self._cone_u = np.array([np.inf])
             self._cone_names = [f"unilateral[{self.name}]"]
-            self.eq_names = [f"{self.name}.normal_acceleration", f"{self.name}.friction[t1]",
-                             f"{self.name}.friction[t2]"]
+            self.eq_names = [
+                f"{self.name}.normal_acceleration",
+                f"{self.name}.friction[t1]",
+                f"{self.name}.friction[t2]",
+            ]
 
     def equality_rows(self, state: ModelState) -> tuple[FloatArray, FloatArray, FloatArray]:
         """(G_q (3×n) on q̈, G_f (3×3) on f, rhs (3,)) of the rows G_q q̈ + G_f f = rhs."""
@@ -92,7 +106,7 @@ class Contact:
         gq = np.zeros((3, n))
         gq[0] = nrm @ jv
         vt = self.tangents @ vel  # tangential velocity in (t1, t2)
-        s = vt / math.sqrt(float(vt @ vt) + self.slip_velocity ** 2)
+        s = vt / math.sqrt(float(vt @ vt) + self.slip_velocity**2)
         gf = np.zeros((3, 3))
         gf[1:] = self.tangents + self.mu * s[:, None] * nrm[None, :]
         rhs = np.zeros(3)

@@ -64,12 +64,21 @@ class OperationalSpaceQP(Controller):
     dt: control period [s] for the default limits.
     """
 
-    def __init__(self, dynamics: Dynamics, tasks: Sequence[Task], limits: Sequence[Limit] | None = None,
-                 contacts: Sequence[Contact] = (), solver: str | Any = "proxsuite", regularization: float = 1e-8,
-                 slacks: bool = False, dt: float = 1e-3) -> None:
+    def __init__(
+        self,
+        dynamics: Dynamics,
+        tasks: Sequence[Task],
+        limits: Sequence[Limit] | None = None,
+        contacts: Sequence[Contact] = (),
+        solver: str | Any = "proxsuite",
+        regularization: float = 1e-8,
+        slacks: bool = False,
+        dt: float = 1e-3,
+    ) -> None:
         if not isinstance(dynamics, Dynamics):
-            raise InvalidParameterError(f"dynamics must be an armctl.Dynamics, got {type(dynamics).__name__}",
-                                        value=dynamics)
+            raise InvalidParameterError(
+                f"dynamics must be an armctl.Dynamics, got {type(dynamics).__name__}", value=dynamics
+            )
         super().__init__(dynamics)
         tasks = instances(tasks, Task, "tasks", "Task", single=True)
         if not tasks:
@@ -83,16 +92,20 @@ class OperationalSpaceQP(Controller):
         cdims = {c.name: c.dim for c in contacts}
         for t in tasks:
             t.check(self.evaluator, self.n, cdims)
-        limits = (default_limits(scalar(dt, "dt", positive=True)) if limits is None
-                  else instances(limits, Limit, "limits", "Limit", single=True))
+        limits = (
+            default_limits(scalar(dt, "dt", positive=True))
+            if limits is None
+            else instances(limits, Limit, "limits", "Limit", single=True)
+        )
         for lim in limits:
             lim.bind(dynamics.model)
         self.tasks = tasks
         self.limits = tuple(limits)
         self.contacts = contacts
         self.solver = make_solver(solver)
-        self.builder = QPBuilder(dynamics.model, tasks, limits, contacts,
-                                 scalar(regularization, "regularization", positive=True), slacks)
+        self.builder = QPBuilder(
+            dynamics.model, tasks, limits, contacts, scalar(regularization, "regularization", positive=True), slacks
+        )
         torque = [lim for lim in limits if isinstance(lim, TorqueLimit)]
         self._tau_lo = np.max([-lim.limit for lim in torque], axis=0) if torque else None
         self._tau_up = np.min([lim.limit for lim in torque], axis=0) if torque else None
@@ -125,13 +138,16 @@ class OperationalSpaceQP(Controller):
     def _single_step(lay: Any, A: FloatArray, b: FloatArray, lo: FloatArray, up: FloatArray, lev: Any) -> StepQP:
         return StepQP(lay, A, b, lo, up, [lev], lay.regularization, False)
 
-    def _single_solution(self, lay: Any, A: FloatArray, b: FloatArray, lo: FloatArray, up: FloatArray, lev: Any,
-                         sol: QPSolution) -> OSCSolution:
-        return OSCSolution(self._single_step(lay, A, b, lo, up, lev), sol.x[: lay.nx], (sol,), ("solved",), None,
-                           [None])
+    def _single_solution(
+        self, lay: Any, A: FloatArray, b: FloatArray, lo: FloatArray, up: FloatArray, lev: Any, sol: QPSolution
+    ) -> OSCSolution:
+        return OSCSolution(
+            self._single_step(lay, A, b, lo, up, lev), sol.x[: lay.nx], (sol,), ("solved",), None, [None]
+        )
 
-    def _solve_single(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference, raw: Any
-                      ) -> tuple[QPSolution, Any]:
+    def _solve_single(
+        self, t: float, q: FloatArray, qd: FloatArray, ref: Reference, raw: Any
+    ) -> tuple[QPSolution, Any]:
         """One priority level, no slacks, a solver with ``solve_raw``: the same QP as :meth:`build` and
         :func:`solve_cascade` give, without their intermediate objects (which cost about a tenth of a step on the
         Panda); the parts are kept for :attr:`last_solution`. Returns the solver's result and the layout."""
@@ -179,7 +195,7 @@ class OperationalSpaceQP(Controller):
         if raw is not None:  # the common case, without the solution object (see _solve_single)
             qsol, lay = self._solve_single(t, q, qd, ref, raw)
             x, n = qsol.x, self.n
-            tau = x[n: 2 * n].clip(self._tau_lo, self._tau_up) if self._tau_up is not None else x[n: 2 * n].copy()
+            tau = x[n : 2 * n].clip(self._tau_lo, self._tau_up) if self._tau_up is not None else x[n : 2 * n].copy()
             log: dict[str, Any] = {"qp_iterations": qsol.iterations}
             for c in lay.contacts:
                 log[f"force[{c.name}]"] = x[lay.variables[c.name]]
@@ -200,4 +216,3 @@ class OperationalSpaceQP(Controller):
         super().reset()
         self.solver.reset()
         self.last_solution = None
-

@@ -45,10 +45,10 @@ def conflicting_rows(p: QPProblem, tol: float = 1e-6) -> dict[str, float] | None
     o = nx + 2 * mr
     C = np.zeros((2 * mi + ns, nv))
     C[:mi, :nx] = p.C
-    C[:mi, o: o + mi] = np.eye(mi)
-    C[mi: 2 * mi, :nx] = p.C
-    C[mi: 2 * mi, o + mi: o + 2 * mi] = -np.eye(mi)
-    C[2 * mi:, nx:] = np.eye(ns)
+    C[:mi, o : o + mi] = np.eye(mi)
+    C[mi : 2 * mi, :nx] = p.C
+    C[mi : 2 * mi, o + mi : o + 2 * mi] = -np.eye(mi)
+    C[2 * mi :, nx:] = np.eye(ns)
     lo = np.r_[np.nan_to_num(p.l, neginf=-_BIG), np.full(mi, -_BIG), np.zeros(ns)]
     up = np.r_[np.full(mi, _BIG), np.nan_to_num(p.u, posinf=_BIG), np.full(ns, _BIG)]
     qp = proxqp.dense.QP(nv, me, C.shape[0])
@@ -80,16 +80,26 @@ def raise_failure(p: QPProblem, solver: str, status: str, result: Any) -> NoRetu
     """Raise InfeasibleError (with the conflicting rows) or SolverError for a failed solve of ``p``."""
     rows = conflicting_rows(p)
     if rows is None:
-        raise SolverError(f"{solver} failed on the QP of priority level {p.level} ({status}) and so did the "
-                          "elastic program that looks for conflicting rows; the problem is likely badly scaled "
-                          "(check gains, weights and limits)", value=status, problem=p, result=result)
+        raise SolverError(
+            f"{solver} failed on the QP of priority level {p.level} ({status}) and so did the "
+            "elastic program that looks for conflicting rows; the problem is likely badly scaled "
+            "(check gains, weights and limits)",
+            value=status,
+            problem=p,
+            result=result,
+        )
     if rows:
         shown = ", ".join(f"{k} (relax by {v:.4g})" if v > 0 else k for k, v in rows.items())
         raise InfeasibleError(
             f"the QP of priority level {p.level} has no feasible point ({solver}: {status}); conflicting rows "
             f"(coupled through the equation of motion): {shown}. Relax one of these limits or contacts.",
-            value=rows, problem=p)
-    raise SolverError(f"{solver} failed on the QP of priority level {p.level} ({status}) although it is "
-                      "feasible; try a looser eps_abs or another solver (solver='qpsolvers:<name>')",
-                      value=status, problem=p, result=result)
-
+            value=rows,
+            problem=p,
+        )
+    raise SolverError(
+        f"{solver} failed on the QP of priority level {p.level} ({status}) although it is "
+        "feasible; try a looser eps_abs or another solver (solver='qpsolvers:<name>')",
+        value=status,
+        problem=p,
+        result=result,
+    )

@@ -35,9 +35,15 @@ class OSCSolution:
 
     __slots__ = ("_frozen", "forces", "iterations", "level_status", "qdd", "slacks", "solutions", "step", "tau", "x")
 
-    def __init__(self, step: StepQP, x: FloatArray, solutions: tuple[QPSolution | None, ...],
-                 level_status: tuple[str, ...], slacks: dict[str, FloatArray] | None,
-                 frozen: list[tuple[FloatArray, FloatArray] | None]) -> None:
+    def __init__(
+        self,
+        step: StepQP,
+        x: FloatArray,
+        solutions: tuple[QPSolution | None, ...],
+        level_status: tuple[str, ...],
+        slacks: dict[str, FloatArray] | None,
+        frozen: list[tuple[FloatArray, FloatArray] | None],
+    ) -> None:
         v = step.layout.variables
         self.step = step
         self.x = x

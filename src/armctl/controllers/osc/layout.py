@@ -22,8 +22,9 @@ UPPER_REGULARIZATION_FACTOR = 1e-4
 class Layout:
     """Variable blocks and the constant parts (C, names) for one set of active contacts."""
 
-    def __init__(self, model: RobotModel, limits: Sequence[Limit], contacts: Sequence[Contact],
-                 regularization: float) -> None:
+    def __init__(
+        self, model: RobotModel, limits: Sequence[Limit], contacts: Sequence[Contact], regularization: float
+    ) -> None:
         n = model.n
         self.n = n
         self.contacts = tuple(contacts)
@@ -33,8 +34,9 @@ class Layout:
             self.variables[c.name] = slice(col, col + c.dim)
             col += c.dim
         self.nx = col
-        self.eq_names = tuple([f"dynamics[{j}]" for j in model.joint_names]
-                              + [nm for c in contacts for nm in c.eq_names])
+        self.eq_names = tuple(
+            [f"dynamics[{j}]" for j in model.joint_names] + [nm for c in contacts for nm in c.eq_names]
+        )
         rows: list[FloatArray] = []
         names: list[str] = []
         lo: list[FloatArray] = []
@@ -66,13 +68,15 @@ class Layout:
         self.constant_bounds: tuple[FloatArray, FloatArray] | None = None
         if all(lim.constant for lim in limits):
             bounds = [lim.bounds(None) for lim in limits]  # type: ignore[arg-type]
-            self.constant_bounds = (np.concatenate([bd[0] for bd in bounds] + [self.cone_l]),
-                                    np.concatenate([bd[1] for bd in bounds] + [self.cone_u]))
+            self.constant_bounds = (
+                np.concatenate([bd[0] for bd in bounds] + [self.cone_l]),
+                np.concatenate([bd[1] for bd in bounds] + [self.cone_u]),
+            )
             for a in self.constant_bounds:
                 a.flags.writeable = False
         # equation of motion: A = [M, −I, −J_cᵀ …]; the −I block is constant
         self.A_template = np.zeros((len(self.eq_names), col))
-        self.A_template[:n, n:2 * n] = -np.eye(n)
+        self.A_template[:n, n : 2 * n] = -np.eye(n)
         #: A's columns right of M's (contiguous: without contacts, A = [M, A_rest] in one concatenation)
         self.A_rest = np.ascontiguousarray(self.A_template[:, n:])
         self.A_rest.flags.writeable = False

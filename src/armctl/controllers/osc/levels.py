@@ -18,8 +18,7 @@ class LevelRows:
 
     __slots__ = ("_Tn", "jr", "nx", "scale", "slices", "tasks")
 
-    def __init__(self, tasks: tuple[Task, ...], jr: FloatArray, scale: FloatArray, slices: dict[str, slice]
-                 ) -> None:
+    def __init__(self, tasks: tuple[Task, ...], jr: FloatArray, scale: FloatArray, slices: dict[str, slice]) -> None:
         self.tasks = tasks
         self.jr = jr
         self.nx = jr.shape[1] - 1

@@ -73,5 +73,11 @@ class QPProblem:
         lo = np.isfinite(self.l)
         G = np.vstack([self.C[up], -self.C[lo]])
         h = np.concatenate([self.u[up], -self.l[lo]])
-        return qpsolvers.Problem(np.array(self.H), np.array(self.g), G if len(h) else None, h if len(h) else None,
-                                 np.array(self.A) if len(self.b) else None, np.array(self.b) if len(self.b) else None)
+        return qpsolvers.Problem(
+            np.array(self.H),
+            np.array(self.g),
+            G if len(h) else None,
+            h if len(h) else None,
+            np.array(self.A) if len(self.b) else None,
+            np.array(self.b) if len(self.b) else None,
+        )

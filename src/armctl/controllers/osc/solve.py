@@ -66,8 +66,7 @@ class ProxQPSolver:
         """Solve ``p``, warm-started from the last solution of the same slot and shape."""
         return self.solve_raw((p.H, p.g, p.A, p.b, p.C, p.l, p.u), slot, lambda: p)
 
-    def solve_raw(self, arrays: tuple[FloatArray, ...], slot: int, problem: Callable[[], QPProblem]
-                  ) -> QPSolution:
+    def solve_raw(self, arrays: tuple[FloatArray, ...], slot: int, problem: Callable[[], QPProblem]) -> QPSolution:
         """Solve the QP (H, g, A, b, C, l, u); ``problem()`` gives the named problem for a diagnosis."""
         H, g, A, b, C, l, u = arrays  # noqa: E741
         key = (slot, H.shape[0], b.shape[0], l.shape[0])
@@ -129,8 +128,7 @@ class QpsolversSolver:
 
     def solve(self, p: QPProblem, slot: int = 0) -> QPSolution:
         key = (slot, p.nx)
-        sol = self._qpsolvers.solve_problem(p.to_qpsolvers(), self.solver, initvals=self._x.get(key),
-                                            **self.options)
+        sol = self._qpsolvers.solve_problem(p.to_qpsolvers(), self.solver, initvals=self._x.get(key), **self.options)
         if not sol.found or sol.x is None or not np.isfinite(sol.x).all():
             self._x.pop(key, None)
             raise_failure(p, self.name, "not found", sol)
@@ -139,7 +137,7 @@ class QpsolversSolver:
 
 
 def make_solver(solver: str | Any) -> Any:
-    """"proxsuite" (default), "qpsolvers:NAME" or an object with ``solve(problem, slot)`` and ``reset()``."""
+    """ "proxsuite" (default), "qpsolvers:NAME" or an object with ``solve(problem, slot)`` and ``reset()``."""
     if not isinstance(solver, str):
         if not (callable(getattr(solver, "solve", None)) and callable(getattr(solver, "reset", None))):
             raise UnknownNameError("solver", solver, ["proxsuite", "qpsolvers:<name>"])

@@ -34,8 +34,9 @@ class FrameKinematics:
 
     __slots__ = ("drift", "jacobian", "position", "rotation", "velocity")
 
-    def __init__(self, position: FloatArray, rotation: FloatArray, jacobian: FloatArray, velocity: FloatArray,
-                 drift: FloatArray) -> None:
+    def __init__(
+        self, position: FloatArray, rotation: FloatArray, jacobian: FloatArray, velocity: FloatArray, drift: FloatArray
+    ) -> None:
         self.position = position
         self.rotation = rotation
         self.jacobian = jacobian
@@ -52,8 +53,15 @@ class ModelState:
 
     __slots__ = ("_evaluator", "_frames", "bias", "friction", "mass", "q", "qd")
 
-    def __init__(self, evaluator: ModelEvaluator, q: FloatArray, qd: FloatArray, mass: FloatArray,
-                 bias: FloatArray, friction: FloatArray | None) -> None:
+    def __init__(
+        self,
+        evaluator: ModelEvaluator,
+        q: FloatArray,
+        qd: FloatArray,
+        mass: FloatArray,
+        bias: FloatArray,
+        friction: FloatArray | None,
+    ) -> None:
         self._evaluator = evaluator
         self._frames: dict[str | None, FrameKinematics] = {}
         self.q = q

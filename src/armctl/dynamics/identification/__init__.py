@@ -25,8 +25,23 @@ from armctl.dynamics.identification.report import format_report, validation_plot
 from armctl.model.from_parameters import model_from_parameters
 
 __all__ = [
-    "BaseParameters", "ConsistentEstimate", "ExcitationDesign", "FourierExcitation", "IdentificationData",
-    "IdentificationProblem", "IdentificationResult", "LeastSquaresEstimate", "ValidationResult", "build_problem",
-    "consistent_estimate", "find_base_parameters", "format_report", "identify", "model_from_parameters",
-    "optimize_excitation", "prepare_data", "solve_least_squares", "validation_plot",
+    "BaseParameters",
+    "ConsistentEstimate",
+    "ExcitationDesign",
+    "FourierExcitation",
+    "IdentificationData",
+    "IdentificationProblem",
+    "IdentificationResult",
+    "LeastSquaresEstimate",
+    "ValidationResult",
+    "build_problem",
+    "consistent_estimate",
+    "find_base_parameters",
+    "format_report",
+    "identify",
+    "model_from_parameters",
+    "optimize_excitation",
+    "prepare_data",
+    "solve_least_squares",
+    "validation_plot",
 ]

@@ -132,8 +132,9 @@ def random_states(dynamics: Dynamics, samples: int, rng: np.random.Generator) ->
     return np.stack([q, rng.standard_normal((samples, n)), rng.standard_normal((samples, n))], axis=1)
 
 
-def find_base_parameters(dynamics: Dynamics, samples: int | None = None, seed: int = 0,
-                         tol: float = 1e-8) -> BaseParameters:
+def find_base_parameters(
+    dynamics: Dynamics, samples: int | None = None, seed: int = 0, tol: float = 1e-8
+) -> BaseParameters:
     """The base parameters of ``dynamics``' arm, by pivoted QR of the regressor stacked at random states.
 
     samples: number of random states S (default max(30, 4n)); the stacked W is (S n × 13n). seed: of the
@@ -144,13 +145,17 @@ def find_base_parameters(dynamics: Dynamics, samples: int | None = None, seed: i
     n, p = dynamics.n, PARAMS_PER_JOINT * dynamics.n
     s = whole_number(samples, "samples", minimum=1) if samples is not None else max(30, 4 * n)
     if s * n < p:
-        raise InvalidParameterError(f"samples={s} gives {s * n} rows for {p} columns; use at least "
-                                    f"{-(-p // n)} samples", value=samples)
+        raise InvalidParameterError(
+            f"samples={s} gives {s * n} rows for {p} columns; use at least {-(-p // n)} samples", value=samples
+        )
     tol = scalar(tol, "tol", positive=True)
     if not TOL_RANGE[0] <= tol <= TOL_RANGE[1]:
-        raise InvalidParameterError(f"tol must be in [{TOL_RANGE[0]:g}, {TOL_RANGE[1]:g}] (relative to the largest "
-                                    f"pivot: smaller counts round-off as independent, larger drops identifiable "
-                                    f"parameters; default 1e-8), got {tol!r}", value=tol)
+        raise InvalidParameterError(
+            f"tol must be in [{TOL_RANGE[0]:g}, {TOL_RANGE[1]:g}] (relative to the largest "
+            f"pivot: smaller counts round-off as independent, larger drops identifiable "
+            f"parameters; default 1e-8), got {tol!r}",
+            value=tol,
+        )
     rng = np.random.default_rng(whole_number(seed, "seed"))
     w = np.vstack([identification_regressor(dynamics, *x) for x in random_states(dynamics, s, rng)])
     _, r, perm = scipy.linalg.qr(w, mode="economic", pivoting=True)

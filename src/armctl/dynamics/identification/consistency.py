@@ -80,15 +80,22 @@ def check_prior_weight(prior_weight: float) -> float:
     """``prior_weight`` checked: a real number in :data:`PRIOR_WEIGHT_RANGE`."""
     lam = scalar(prior_weight, "prior_weight", positive=True)
     if not PRIOR_WEIGHT_RANGE[0] <= lam <= PRIOR_WEIGHT_RANGE[1]:
-        raise InvalidParameterError(f"prior_weight must be in [{PRIOR_WEIGHT_RANGE[0]:g}, {PRIOR_WEIGHT_RANGE[1]:g}] "
-                                    f"(relative to the data's scale; default 1e-6), got {prior_weight!r}",
-                                    value=prior_weight)
+        raise InvalidParameterError(
+            f"prior_weight must be in [{PRIOR_WEIGHT_RANGE[0]:g}, {PRIOR_WEIGHT_RANGE[1]:g}] "
+            f"(relative to the data's scale; default 1e-6), got {prior_weight!r}",
+            value=prior_weight,
+        )
     return lam
 
 
-def consistent_estimate(problem: IdentificationProblem, model: RobotModel, estimate: LeastSquaresEstimate | None = None,
-                        prior: ArrayLike | None = None, prior_weight: float = 1e-6, max_evaluations: int = 300
-                        ) -> ConsistentEstimate:
+def consistent_estimate(
+    problem: IdentificationProblem,
+    model: RobotModel,
+    estimate: LeastSquaresEstimate | None = None,
+    prior: ArrayLike | None = None,
+    prior_weight: float = 1e-6,
+    max_evaluations: int = 300,
+) -> ConsistentEstimate:
     """The physically consistent estimate of ``model``'s π from ``problem`` (see the module).
 
     estimate: a least-squares estimate of the same problem, whose per-joint noise levels weight the rows
@@ -150,8 +157,12 @@ def consistent_estimate(problem: IdentificationProblem, model: RobotModel, estim
     if np.isfinite(res.x).all():
         res = scipy.optimize.least_squares(residual, res.x, method="trf", **opts)
     if not np.isfinite(res.x).all() or res.status < 0:
-        raise SolverError(f"consistent estimate failed ({res.message}); with prior_weight={prior_weight!r} and "
-                          f"max_evaluations={max_evaluations!r}", problem=problem, result=res)
+        raise SolverError(
+            f"consistent estimate failed ({res.message}); with prior_weight={prior_weight!r} and "
+            f"max_evaluations={max_evaluations!r}",
+            problem=problem,
+            result=res,
+        )
     converged = res.status > 0
     if not converged:
         again = scipy.optimize.least_squares(residual, res.x, method="trf", **dict(opts, max_nfev=50))
@@ -163,9 +174,16 @@ def consistent_estimate(problem: IdentificationProblem, model: RobotModel, estim
     e = y - w @ theta
     rss = float(((e * wt) ** 2).sum())
     fitted = model_from_parameters(model, pi, delta, physical=True)
-    return ConsistentEstimate(pi, delta, theta, fitted, np.sqrt((e.reshape(-1, n) ** 2).mean(axis=0)),
-                              (rss + floor) / (rss_ls + floor),
-                              bool(converged), str(res.message))
+    return ConsistentEstimate(
+        pi,
+        delta,
+        theta,
+        fitted,
+        np.sqrt((e.reshape(-1, n) ** 2).mean(axis=0)),
+        (rss + floor) / (rss_ls + floor),
+        bool(converged),
+        str(res.message),
+    )
 
 
 class _Layout:
@@ -180,7 +198,7 @@ class _Layout:
         """(π, δ, (∂π/∂x, ∂δ/∂x))."""
         n, k = self.n, PARAMS_PER_JOINT
         p, jac = parameters_from_factor(x[: 10 * n].reshape(n, 10))
-        s = x[10 * n:].reshape(-1, n)  # rows: rotor, viscous, Coulomb (+), [Coulomb (−)]
+        s = x[10 * n :].reshape(-1, n)  # rows: rotor, viscous, Coulomb (+), [Coulomb (−)]
         sq = s**2
         pos, neg = (sq[2], sq[3]) if self.offsets else (sq[2], sq[2])
         pi = np.concatenate([p, sq[0][:, None], sq[1][:, None], (0.5 * (pos + neg))[:, None]], axis=1).ravel()
@@ -188,7 +206,7 @@ class _Layout:
         ddelta = np.zeros((n, self.size))
         joints = np.arange(n)
         for i in range(n):
-            dpi[i, :10, 10 * i: 10 * i + 10] = jac[i]
+            dpi[i, :10, 10 * i : 10 * i + 10] = jac[i]
         tail = 10 * n + joints
         dpi[joints, 10, tail] = 2.0 * s[0]
         dpi[joints, 11, tail + n] = 2.0 * s[1]

@@ -58,8 +58,11 @@ class IdentificationData:
             raise ShapeError(f"q must be (samples, n), got shape {shape}", value=self.q)
         for name, a in arrays.items():
             if a.shape != shape:
-                raise ShapeError(f"{name} has shape {a.shape} but q has {shape}: every signal needs one row per "
-                                 "sample and one column per joint", value=a)
+                raise ShapeError(
+                    f"{name} has shape {a.shape} but q has {shape}: every signal needs one row per "
+                    "sample and one column per joint",
+                    value=a,
+                )
         if t.shape != (shape[0],):
             raise ShapeError(f"t has {t.shape[0]} samples but q has {shape[0]}", value=self.t)
         for name, a in (("t", t), *arrays.items()):
@@ -71,15 +74,21 @@ class IdentificationData:
         if self.sos is not None:
             sos = np.array(real_array(self.sos, "sos"))
             if sos.ndim != 2 or sos.shape[0] < 1 or sos.shape[1] != 6:
-                raise ShapeError(f"sos must be second-order sections of shape (sections, 6) (scipy.signal.butter(..., "
-                                 f"output='sos')), got shape {sos.shape}", value=self.sos)
+                raise ShapeError(
+                    f"sos must be second-order sections of shape (sections, 6) (scipy.signal.butter(..., "
+                    f"output='sos')), got shape {sos.shape}",
+                    value=self.sos,
+                )
             if not np.isfinite(sos).all() or np.any(sos[:, 3] == 0):
-                raise InvalidParameterError("sos must be finite with a nonzero leading denominator coefficient "
-                                            "(column 3) in every section", value=self.sos)
+                raise InvalidParameterError(
+                    "sos must be finite with a nonzero leading denominator coefficient (column 3) in every section",
+                    value=self.sos,
+                )
             object.__setattr__(self, "sos", readonly(sos))
         if len(self.kept) < 1:
-            raise InvalidParameterError(f"{shape[0]} samples leave none after trim={self.trim} at each end",
-                                        value=self.trim)
+            raise InvalidParameterError(
+                f"{shape[0]} samples leave none after trim={self.trim} at each end", value=self.trim
+            )
 
     @property
     def n(self) -> int:
@@ -106,10 +115,13 @@ class IdentificationData:
             try:
                 a = scipy.signal.sosfiltfilt(np.array(self.sos), a, axis=0)
             except ValueError as e:  # fewer samples than the filter's padding
-                raise InvalidParameterError(f"{self.samples} samples are too few for the filter sos "
-                                            f"({self.sos.shape[0]} sections): {e}; record more samples or use "
-                                            "a lower filter order", value=self.samples) from None
-        return a[self.trim: self.samples - self.trim: self.decimate]
+                raise InvalidParameterError(
+                    f"{self.samples} samples are too few for the filter sos "
+                    f"({self.sos.shape[0]} sections): {e}; record more samples or use "
+                    "a lower filter order",
+                    value=self.samples,
+                ) from None
+        return a[self.trim : self.samples - self.trim : self.decimate]
 
 
 def _uniform_step(t: FloatArray) -> float:
@@ -118,13 +130,24 @@ def _uniform_step(t: FloatArray) -> float:
         raise InvalidParameterError("t must hold at least two strictly increasing sample times", value=t)
     step = float(np.median(dt))
     if np.abs(dt - step).max() > 1e-3 * step:
-        raise InvalidParameterError(f"samples must be uniformly spaced (step {step:g} s, found steps from "
-                                    f"{dt.min():g} to {dt.max():g} s); resample the log first", value=t)
+        raise InvalidParameterError(
+            f"samples must be uniformly spaced (step {step:g} s, found steps from "
+            f"{dt.min():g} to {dt.max():g} s); resample the log first",
+            value=t,
+        )
     return step
 
 
-def prepare_data(t: ArrayLike, q: ArrayLike, tau: ArrayLike, *, cutoff: float, order: int = 4,
-                 decimate: int | None = None, trim: int | None = None) -> IdentificationData:
+def prepare_data(
+    t: ArrayLike,
+    q: ArrayLike,
+    tau: ArrayLike,
+    *,
+    cutoff: float,
+    order: int = 4,
+    decimate: int | None = None,
+    trim: int | None = None,
+) -> IdentificationData:
     """A log of joint positions and torques made ready for identification: q filtered and differentiated
     now; the filter, trimming and decimation recorded, to be applied to τ and to the regressor alike when
     the problem is built (parallel filtering, see the module).
@@ -139,8 +162,11 @@ def prepare_data(t: ArrayLike, q: ArrayLike, tau: ArrayLike, *, cutoff: float, o
     tt = real_array(t, "t").reshape(-1)
     qq, tq = real_array(q, "q"), real_array(tau, "tau")
     if qq.ndim != 2 or tq.shape != qq.shape or tt.shape != (qq.shape[0],):
-        raise ShapeError(f"t (S,), q (S, n) and tau (S, n) must have one row per sample; got t {tt.shape}, "
-                         f"q {qq.shape}, tau {tq.shape}", value=(tt.shape, qq.shape, tq.shape))
+        raise ShapeError(
+            f"t (S,), q (S, n) and tau (S, n) must have one row per sample; got t {tt.shape}, "
+            f"q {qq.shape}, tau {tq.shape}",
+            value=(tt.shape, qq.shape, tq.shape),
+        )
     for name, a in (("t", tt), ("q", qq), ("tau", tq)):
         if not np.isfinite(a).all():
             raise NonFiniteError(f"{name} holds NaN or inf", value=a)
@@ -148,20 +174,24 @@ def prepare_data(t: ArrayLike, q: ArrayLike, tau: ArrayLike, *, cutoff: float, o
     fs = 1.0 / dt
     fc = scalar(cutoff, "cutoff", positive=True)
     if fc >= 0.5 * fs:
-        raise InvalidParameterError(f"cutoff {fc:g} Hz must be below the Nyquist frequency {0.5 * fs:g} Hz",
-                                    value=cutoff)
+        raise InvalidParameterError(
+            f"cutoff {fc:g} Hz must be below the Nyquist frequency {0.5 * fs:g} Hz", value=cutoff
+        )
     order = whole_number(order, "order", minimum=1)
     decimate = whole_number(decimate, "decimate", minimum=1) if decimate is not None else None
     trim = whole_number(trim, "trim") if trim is not None else None
     k = decimate if decimate is not None else max(1, int(fs / (4.0 * fc)))
     if k < 1 or fs / k < 2.0 * fc:
-        raise InvalidParameterError(f"decimate={k} puts the new Nyquist frequency {0.5 * fs / max(k, 1):g} Hz "
-                                    f"below the cutoff {fc:g} Hz (aliasing); use decimate <= {int(fs / (2 * fc))}",
-                                    value=decimate)
+        raise InvalidParameterError(
+            f"decimate={k} puts the new Nyquist frequency {0.5 * fs / max(k, 1):g} Hz "
+            f"below the cutoff {fc:g} Hz (aliasing); use decimate <= {int(fs / (2 * fc))}",
+            value=decimate,
+        )
     drop = int(trim) if trim is not None else math.ceil(3.0 * fs / fc)
     if drop < 0 or qq.shape[0] - 2 * drop < 3 * k or qq.shape[0] <= 3 * 2 * (int(order) + 1):
-        raise InvalidParameterError(f"{qq.shape[0]} samples are too few for trim={drop} at each end and "
-                                    f"decimate={k}", value=trim)
+        raise InvalidParameterError(
+            f"{qq.shape[0]} samples are too few for trim={drop} at each end and decimate={k}", value=trim
+        )
     sos = scipy.signal.butter(int(order), fc, fs=fs, output="sos")
     q_f = scipy.signal.sosfiltfilt(sos, qq, axis=0)
     qd = np.gradient(q_f, dt, axis=0)

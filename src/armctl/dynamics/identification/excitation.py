@@ -39,15 +39,19 @@ class FourierExcitation:
         q0 = np.array(real_array(self.q0, "q0")).reshape(-1)
         a, b = np.array(real_array(self.a, "a")), np.array(real_array(self.b, "b"))
         if a.ndim != 2 or a.shape != b.shape or a.shape[0] != q0.shape[0] or a.shape[1] < 1:
-            raise ShapeError(f"a and b must both be (n, N) with n = len(q0) = {q0.shape[0]} and N >= 1; got "
-                             f"{a.shape} and {b.shape}", value=(self.a, self.b))
+            raise ShapeError(
+                f"a and b must both be (n, N) with n = len(q0) = {q0.shape[0]} and N >= 1; got {a.shape} and {b.shape}",
+                value=(self.a, self.b),
+            )
         if not (np.isfinite(q0).all() and np.isfinite(a).all() and np.isfinite(b).all()):
             raise InvalidParameterError("Fourier coefficients must be finite", value=(self.q0, self.a, self.b))
         period = scalar(self.period, "period", positive=True)
         if not math.isfinite(2.0 * math.pi * a.shape[1] / period):
-            raise InvalidParameterError(f"period={self.period!r} s is too small: the top harmonic's frequency "
-                                        f"2π·{a.shape[1]}/period overflows; use a period of seconds",
-                                        value=self.period)
+            raise InvalidParameterError(
+                f"period={self.period!r} s is too small: the top harmonic's frequency "
+                f"2π·{a.shape[1]}/period overflows; use a period of seconds",
+                value=self.period,
+            )
         object.__setattr__(self, "q0", readonly(q0))
         object.__setattr__(self, "a", readonly(a))
         object.__setattr__(self, "b", readonly(b))
@@ -110,17 +114,23 @@ class FourierExcitation:
         f = f[:, None]
         return FourierExcitation(self.q0, self.a * f, self.b * f, self.period)
 
-    def within(self, lower: ArrayLike, upper: ArrayLike, velocity: ArrayLike, acceleration: ArrayLike,
-               tol: float = 1e-9) -> bool:
+    def within(
+        self, lower: ArrayLike, upper: ArrayLike, velocity: ArrayLike, acceleration: ArrayLike, tol: float = 1e-9
+    ) -> bool:
         """True if the trajectory stays within the position, velocity [rad/s] and acceleration [rad/s²]
         limits (checked on a dense grid). Each limit is a scalar or an (n,) vector (±inf: none); tol ≥ 0."""
-        lo, hi, vel, acc = (per_joint(x, self.n, name) for x, name in (
-            (lower, "lower"), (upper, "upper"), (velocity, "velocity"), (acceleration, "acceleration")))
+        lo, hi, vel, acc = (
+            per_joint(x, self.n, name)
+            for x, name in ((lower, "lower"), (upper, "upper"), (velocity, "velocity"), (acceleration, "acceleration"))
+        )
         for x, name in ((lo, "lower"), (hi, "upper"), (vel, "velocity"), (acc, "acceleration")):
             if np.isnan(x).any():
                 raise NonFiniteError(f"{name} holds NaN: {x.tolist()}", value=x)
         eps = scalar(tol, "tol", nonnegative=True)
         qmin, qmax, vmax, amax = self.extremes()
-        return bool(np.all(qmin >= lo - eps) and np.all(qmax <= hi + eps)
-                    and np.all(vmax <= vel + eps) and np.all(amax <= acc + eps))
-
+        return bool(
+            np.all(qmin >= lo - eps)
+            and np.all(qmax <= hi + eps)
+            and np.all(vmax <= vel + eps)
+            and np.all(amax <= acc + eps)
+        )

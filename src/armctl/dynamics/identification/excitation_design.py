@@ -46,8 +46,9 @@ class ExcitationDesign:
     message: str
 
 
-def stacked_base_regressor(dynamics: Dynamics, base: BaseParameters, q: FloatArray, qd: FloatArray,
-                           qdd: FloatArray) -> FloatArray:
+def stacked_base_regressor(
+    dynamics: Dynamics, base: BaseParameters, q: FloatArray, qd: FloatArray, qdd: FloatArray
+) -> FloatArray:
     """W_b (S n × r): the base regressor Y_b stacked over S samples of (q, q̇, q̈), each (S, n)."""
     cols = list(base.independent)
     return np.vstack([identification_regressor(dynamics, q[k], qd[k], qdd[k])[:, cols] for k in range(q.shape[0])])
@@ -72,15 +73,29 @@ def _limit(value: ArrayLike | None, model_value: FloatArray, name: str) -> Float
             raise ShapeError(f"{name} must be a scalar or a ({n},) vector, got shape {v.shape}", value=value)
         out = np.minimum(np.broadcast_to(v, (n,)), model_value)
     if not (np.isfinite(out).all() and (out > 0).all()):
-        raise InvalidParameterError(f"{name} must be finite and > 0 for every joint, got {out}; the model gives "
-                                    f"none for some joints, so pass one", value=value)
+        raise InvalidParameterError(
+            f"{name} must be finite and > 0 for every joint, got {out}; the model gives "
+            f"none for some joints, so pass one",
+            value=value,
+        )
     return out
 
 
-def optimize_excitation(dynamics: Dynamics, base: BaseParameters | None = None, *, acceleration_limit: ArrayLike,
-                        velocity_limit: ArrayLike | None = None, period: float = 10.0, harmonics: int = 5,
-                        position_margin: float = 0.05, samples: int = 60, grid: int = 100, starts: int = 8,
-                        maxiter: int = 40, seed: int = 0) -> ExcitationDesign:
+def optimize_excitation(
+    dynamics: Dynamics,
+    base: BaseParameters | None = None,
+    *,
+    acceleration_limit: ArrayLike,
+    velocity_limit: ArrayLike | None = None,
+    period: float = 10.0,
+    harmonics: int = 5,
+    position_margin: float = 0.05,
+    samples: int = 60,
+    grid: int = 100,
+    starts: int = 8,
+    maxiter: int = 40,
+    seed: int = 0,
+) -> ExcitationDesign:
     """An excitation trajectory within the joint limits with a small cond(W_b).
 
     acceleration_limit: q̈_max [rad/s²] (scalar or (n,)); a model carries none. velocity_limit: q̇_max
@@ -102,16 +117,20 @@ def optimize_excitation(dynamics: Dynamics, base: BaseParameters | None = None, 
     starts, maxiter = whole_number(starts, "starts", minimum=1), whole_number(maxiter, "maxiter")
     seed = whole_number(seed, "seed")
     if samples * n < base.n_base or grid < 4 * nh:
-        raise InvalidParameterError(f"need samples·n >= {base.n_base} base parameters and grid >= 4·harmonics; got "
-                                    f"harmonics={harmonics}, samples={samples}, grid={grid} (n = {n})",
-                                    value=(harmonics, samples, grid))
+        raise InvalidParameterError(
+            f"need samples·n >= {base.n_base} base parameters and grid >= 4·harmonics; got "
+            f"harmonics={harmonics}, samples={samples}, grid={grid} (n = {n})",
+            value=(harmonics, samples, grid),
+        )
     vmax = _limit(velocity_limit, model.velocity_limit, "velocity_limit")
     amax = _limit(acceleration_limit, np.full(n, np.inf), "acceleration_limit")
     lo = np.where(np.isfinite(model.lower), model.lower + margin, -np.inf)
     hi = np.where(np.isfinite(model.upper), model.upper - margin, np.inf)
     if np.any(hi - lo <= 0):
-        raise InvalidParameterError(f"position_margin={margin} leaves no range for some joints "
-                                    f"(limits {model.lower} .. {model.upper})", value=position_margin)
+        raise InvalidParameterError(
+            f"position_margin={margin} leaves no range for some joints (limits {model.lower} .. {model.upper})",
+            value=position_margin,
+        )
     bounded = np.isfinite(lo) & np.isfinite(hi)
     center = np.where(bounded, 0.5 * (np.where(bounded, lo, 0.0) + np.where(bounded, hi, 0.0)), 0.0)
     omega = 2.0 * math.pi / period
@@ -119,7 +138,7 @@ def optimize_excitation(dynamics: Dynamics, base: BaseParameters | None = None, 
     basis = _Basis(omega, nh, np.linspace(0.0, period, int(grid), endpoint=False))
 
     def unpack(x: FloatArray) -> FourierExcitation:
-        return FourierExcitation(x[:n], x[n:n + n * nh].reshape(n, nh), x[n + n * nh:].reshape(n, nh), period)
+        return FourierExcitation(x[:n], x[n : n + n * nh].reshape(n, nh), x[n + n * nh :].reshape(n, nh), period)
 
     evaluations = 0
 
@@ -135,10 +154,13 @@ def optimize_excitation(dynamics: Dynamics, base: BaseParameters | None = None, 
     values = [objective(x) for x in candidates]
     x0 = candidates[int(np.argmin(values))]
     initial = math.exp(min(values))
-    res = scipy.optimize.minimize(objective, x0, method="SLSQP",
-                                  constraints=[{"type": "ineq", "fun": lambda x: b_ub - a_ub @ x,
-                                                "jac": lambda x: -a_ub}],
-                                  options={"maxiter": int(maxiter), "ftol": 1e-4})
+    res = scipy.optimize.minimize(
+        objective,
+        x0,
+        method="SLSQP",
+        constraints=[{"type": "ineq", "fun": lambda x: b_ub - a_ub @ x, "jac": lambda x: -a_ub}],
+        options={"maxiter": int(maxiter), "ftol": 1e-4},
+    )
     x = res.x if np.all(a_ub @ res.x <= b_ub + 1e-6) and res.fun <= math.log(initial) else x0
     trajectory = _fit_into(unpack(x), lo, hi, vmax, amax)
     q, qd, qdd = trajectory.evaluate(t_obj)
@@ -150,7 +172,9 @@ def optimize_excitation(dynamics: Dynamics, base: BaseParameters | None = None, 
             f"{vpeak.max():.3g} rad/s and {apeak.max():.3g} rad/s² over its {samples} samples (limits "
             f"velocity_limit={vmax.tolist()}, acceleration_limit={amax.tolist()}, period={period:g} s, "
             f"harmonics={nh}); raise acceleration_limit / velocity_limit, use a period of seconds, or more "
-            f"samples, harmonics and starts", value=cond)
+            f"samples, harmonics and starts",
+            value=cond,
+        )
     return ExcitationDesign(trajectory, cond, initial, evaluations, str(res.message))
 
 
@@ -166,15 +190,19 @@ class _Basis:
         self.acc = np.hstack([-s * wl, c * wl])
         self.nh = harmonics
 
-    def constraints(self, n: int, lo: FloatArray, hi: FloatArray, vmax: FloatArray, amax: FloatArray
-                    ) -> tuple[FloatArray, FloatArray]:
+    def constraints(
+        self, n: int, lo: FloatArray, hi: FloatArray, vmax: FloatArray, amax: FloatArray
+    ) -> tuple[FloatArray, FloatArray]:
         """A x ≤ b for every grid point and joint."""
         g, nh = self.pos.shape[0], self.nh
         rows, rhs = [], []
         for i in range(n):
-            cols = np.r_[n + i * nh: n + (i + 1) * nh, n + n * nh + i * nh: n + n * nh + (i + 1) * nh]
-            for mat, bound, with_q0 in ((self.pos, hi[i], True), (self.vel, vmax[i], False),
-                                        (self.acc, amax[i], False)):
+            cols = np.r_[n + i * nh : n + (i + 1) * nh, n + n * nh + i * nh : n + n * nh + (i + 1) * nh]
+            for mat, bound, with_q0 in (
+                (self.pos, hi[i], True),
+                (self.vel, vmax[i], False),
+                (self.acc, amax[i], False),
+            ):
                 for sign, lim in ((1.0, bound), (-1.0, -lo[i] if with_q0 else bound)):
                     if not np.isfinite(lim):
                         continue
@@ -187,19 +215,28 @@ class _Basis:
         return np.vstack(rows), np.concatenate(rhs)
 
 
-def _random_start(rng: np.random.Generator, center: FloatArray, lo: FloatArray, hi: FloatArray, vmax: FloatArray,
-                  amax: FloatArray, omega: float, nh: int, period: float) -> FloatArray:
+def _random_start(
+    rng: np.random.Generator,
+    center: FloatArray,
+    lo: FloatArray,
+    hi: FloatArray,
+    vmax: FloatArray,
+    amax: FloatArray,
+    omega: float,
+    nh: int,
+    period: float,
+) -> FloatArray:
     """Random coefficients (decaying with the harmonic), scaled to use 90% of the tightest limit."""
     n = center.shape[0]
     decay = 1.0 / np.arange(1, nh + 1)
-    traj = FourierExcitation(center, rng.standard_normal((n, nh)) * decay, rng.standard_normal((n, nh)) * decay,
-                             period)
+    traj = FourierExcitation(center, rng.standard_normal((n, nh)) * decay, rng.standard_normal((n, nh)) * decay, period)
     traj = _fit_into(traj, lo, hi, vmax, amax, fill=0.9)
     return np.concatenate([traj.q0, traj.a.ravel(), traj.b.ravel()])
 
 
-def _fit_into(traj: FourierExcitation, lo: FloatArray, hi: FloatArray, vmax: FloatArray, amax: FloatArray,
-              fill: float = 1.0) -> FourierExcitation:
+def _fit_into(
+    traj: FourierExcitation, lo: FloatArray, hi: FloatArray, vmax: FloatArray, amax: FloatArray, fill: float = 1.0
+) -> FourierExcitation:
     """Scale each joint's motion about q0 (clipped into the range) so that it uses at most ``fill`` of its
     tightest limit (positions, velocities, accelerations, on a dense grid); never scales up. Between grid
     points a band-limited signal can exceed its sampled maximum by up to ~(ω_max Δt)²/8 of it (ω_max the top
@@ -213,7 +250,8 @@ def _fit_into(traj: FourierExcitation, lo: FloatArray, hi: FloatArray, vmax: Flo
     dev_up = np.maximum((q - q0).max(axis=0), 1e-300)
     dev_dn = np.maximum((q0 - q).max(axis=0), 1e-300)
     with np.errstate(divide="ignore", invalid="ignore"):
-        ratios = np.vstack([(hi - q0) / dev_up, (q0 - lo) / dev_dn, vmax / np.abs(qd).max(axis=0),
-                            amax / np.abs(qdd).max(axis=0)])
+        ratios = np.vstack(
+            [(hi - q0) / dev_up, (q0 - lo) / dev_dn, vmax / np.abs(qd).max(axis=0), amax / np.abs(qdd).max(axis=0)]
+        )
     ratios = np.where(np.isnan(ratios), np.inf, ratios)
     return traj.scaled(np.minimum(1.0, fill * ratios.min(axis=0)))

@@ -50,11 +50,19 @@ class ValidationResult:
                 raise NonFiniteError(f"{k} holds NaN or inf", value=a)
             object.__setattr__(self, k, readonly(a))
         m = self.measured
-        if m.ndim != 2 or self.predicted.shape != m.shape or self.t.shape != m.shape[:1] or m.shape[0] < 1 \
-                or m.shape[1] < 1:
-            raise ShapeError(f"t (S,), predicted (S, n) and measured (S, n) must match with S >= 1 samples and "
-                             f"n >= 1 joints; got t {self.t.shape}, predicted {self.predicted.shape}, measured "
-                             f"{m.shape}", value=(self.t.shape, self.predicted.shape, m.shape))
+        if (
+            m.ndim != 2
+            or self.predicted.shape != m.shape
+            or self.t.shape != m.shape[:1]
+            or m.shape[0] < 1
+            or m.shape[1] < 1
+        ):
+            raise ShapeError(
+                f"t (S,), predicted (S, n) and measured (S, n) must match with S >= 1 samples and "
+                f"n >= 1 joints; got t {self.t.shape}, predicted {self.predicted.shape}, measured "
+                f"{m.shape}",
+                value=(self.t.shape, self.predicted.shape, m.shape),
+            )
 
     @property
     def rms_error(self) -> FloatArray:
@@ -118,8 +126,10 @@ class IdentificationResult:
         theta = self._theta(consistent)
         arrays = [np.atleast_2d(real_array(a, name)) for a, name in ((q, "q"), (qd, "qd"), (qdd, "qdd"))]
         if any(a.ndim != 2 or a.shape != arrays[0].shape or a.shape[1] != self.problem.n for a in arrays):
-            raise ShapeError(f"q, qd, qdd must each be (S, {self.problem.n}); got {[a.shape for a in arrays]}",
-                             value=[a.shape for a in arrays])
+            raise ShapeError(
+                f"q, qd, qdd must each be (S, {self.problem.n}); got {[a.shape for a in arrays]}",
+                value=[a.shape for a in arrays],
+            )
         for a, name in zip(arrays, ("q", "qd", "qdd"), strict=True):
             if not np.isfinite(a).all():
                 raise NonFiniteError(f"{name} holds NaN or inf", value=a)
@@ -129,8 +139,9 @@ class IdentificationResult:
     def validate(self, data: IdentificationData, consistent: bool = False) -> ValidationResult:
         """Predicted against measured torques on (fresh) data, processed like the identification data."""
         if not isinstance(data, IdentificationData):
-            raise InvalidParameterError(f"data must be an IdentificationData (see prepare_data), got "
-                                        f"{type(data).__name__}", value=data)
+            raise InvalidParameterError(
+                f"data must be an IdentificationData (see prepare_data), got {type(data).__name__}", value=data
+            )
         theta = self._theta(consistent)
         problem = build_problem(self.dynamics, data, self.base, self.problem.offsets)
         predicted = (problem.regressor @ theta).reshape(-1, problem.n)
@@ -149,9 +160,18 @@ class IdentificationResult:
         return validation_plot(validation, joint_names=self.model.joint_names, **kwargs)
 
 
-def identify(model: RobotModel | Dynamics, data: IdentificationData | Sequence[IdentificationData], *,
-             weighted: bool = True, consistent: bool = True, offsets: bool = True, base: BaseParameters | None = None,
-             prior: ArrayLike | None = None, prior_weight: float = 1e-6, rtol: float = 1e-7) -> IdentificationResult:
+def identify(
+    model: RobotModel | Dynamics,
+    data: IdentificationData | Sequence[IdentificationData],
+    *,
+    weighted: bool = True,
+    consistent: bool = True,
+    offsets: bool = True,
+    base: BaseParameters | None = None,
+    prior: ArrayLike | None = None,
+    prior_weight: float = 1e-6,
+    rtol: float = 1e-7,
+) -> IdentificationResult:
     """Identify the dynamic parameters of ``model``'s arm from measured data.
 
     model: a RobotModel (or a Dynamics of one): its kinematics are trusted; its inertial and friction

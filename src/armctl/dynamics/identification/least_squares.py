@@ -59,8 +59,9 @@ def check_excitation(w: FloatArray, names: tuple[str, ...], rtol: float = 1e-7) 
     """The singular values of W with unit-norm columns; raise IdentifiabilityError if some are below
     ``rtol`` times the largest, with those directions (rows, in the unknowns' units, unit norm)."""
     if w.shape[0] < w.shape[1]:
-        raise IdentifiabilityError(f"{w.shape[0]} equations for {w.shape[1]} unknowns: record more samples",
-                                   value=w.shape, directions=None)
+        raise IdentifiabilityError(
+            f"{w.shape[0]} equations for {w.shape[1]} unknowns: record more samples", value=w.shape, directions=None
+        )
     norms = np.linalg.norm(w, axis=0)
     scale = np.where(norms > 0, norms, 1.0)  # a zero column stays zero and shows as a zero singular value
     _, s, vt = np.linalg.svd(w / scale, full_matrices=False)
@@ -78,34 +79,44 @@ def check_excitation(w: FloatArray, names: tuple[str, ...], rtol: float = 1e-7) 
         f"the data do not excite {len(dirs)} of {w.shape[1]} parameter combinations (relative singular value "
         f"below {rtol:g}); the trajectory must move them, e.g. an optimised excitation "
         f"(optimize_excitation) over more joints. Unidentifiable directions (largest components):\n"
-        + "\n".join(lines) + more, value=s, directions=readonly(dirs))
+        + "\n".join(lines)
+        + more,
+        value=s,
+        directions=readonly(dirs),
+    )
 
 
 def check_torque(problem: IdentificationProblem) -> None:
     """Raise IdentifiabilityError if the problem's torques are all zero: they carry no information on the
     parameters (every estimate would be zero, its standard deviation 0/0)."""
     if not np.any(problem.torque):
-        raise IdentifiabilityError("the torques (tau) of the data are all zero: they carry no information on the "
-                                   "parameters; identify from the measured joint torques of the moving arm",
-                                   value=problem.torque, directions=None)
+        raise IdentifiabilityError(
+            "the torques (tau) of the data are all zero: they carry no information on the "
+            "parameters; identify from the measured joint torques of the moving arm",
+            value=problem.torque,
+            directions=None,
+        )
 
 
 def excitation_rtol(rtol: float) -> float:
     """``rtol`` checked: a real number in (0, 1)."""
     v = scalar(rtol, "rtol", positive=True)
     if v >= 1.0:
-        raise InvalidParameterError(f"rtol must be < 1 (a singular value relative to the largest; default 1e-7), "
-                                    f"got {rtol!r}", value=rtol)
+        raise InvalidParameterError(
+            f"rtol must be < 1 (a singular value relative to the largest; default 1e-7), got {rtol!r}", value=rtol
+        )
     return v
 
 
-def solve_least_squares(problem: IdentificationProblem, weighted: bool = True, rtol: float = 1e-7
-                        ) -> LeastSquaresEstimate:
+def solve_least_squares(
+    problem: IdentificationProblem, weighted: bool = True, rtol: float = 1e-7
+) -> LeastSquaresEstimate:
     """OLS (``weighted=False``) or WLS estimate of the problem's unknowns (see the module). rtol: relative
     singular-value threshold of the excitation check, in (0, 1)."""
     if not isinstance(problem, IdentificationProblem):
-        raise InvalidParameterError(f"problem must be an IdentificationProblem (see build_problem), got "
-                                    f"{type(problem).__name__}", value=problem)
+        raise InvalidParameterError(
+            f"problem must be an IdentificationProblem (see build_problem), got {type(problem).__name__}", value=problem
+        )
     w, y, n = problem.regressor, problem.torque, problem.n
     p, rows = w.shape[1], w.shape[0]
     weighted = boolean(weighted, "weighted")
@@ -138,5 +149,13 @@ def solve_least_squares(problem: IdentificationProblem, weighted: bool = True, r
         cov = var * np.linalg.inv(w.T @ w)
         cond = float(np.linalg.cond(w))
     noise_std = np.sqrt((r**2).sum(axis=0) / max(s_count - p / n, 1.0))
-    return LeastSquaresEstimate(theta, np.sqrt(np.clip(np.diag(cov), 0.0, None)), cov, noise_std,
-                                np.sqrt((r**2).mean(axis=0)), cond, bool(weighted), problem.names)
+    return LeastSquaresEstimate(
+        theta,
+        np.sqrt(np.clip(np.diag(cov), 0.0, None)),
+        cov,
+        noise_std,
+        np.sqrt((r**2).mean(axis=0)),
+        cond,
+        bool(weighted),
+        problem.names,
+    )

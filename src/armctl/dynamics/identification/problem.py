@@ -47,18 +47,24 @@ class IdentificationProblem:
         object.__setattr__(self, "n", n)
         object.__setattr__(self, "offsets", boolean(self.offsets, "offsets"))
         if not isinstance(self.base, BaseParameters):
-            raise InvalidParameterError(f"base must be a BaseParameters (see find_base_parameters), got "
-                                        f"{type(self.base).__name__}", value=self.base)
+            raise InvalidParameterError(
+                f"base must be a BaseParameters (see find_base_parameters), got {type(self.base).__name__}",
+                value=self.base,
+            )
         w = np.array(real_array(self.regressor, "regressor"))
         y = np.array(real_array(self.torque, "torque")).reshape(-1)
         if w.ndim != 2 or w.shape[0] != y.shape[0] or w.shape[1] != len(self.names) or y.shape[0] % self.n:
-            raise ShapeError(f"regressor {w.shape}, torque {y.shape} and {len(self.names)} names do not match "
-                             f"(n = {self.n})", value=(w.shape, y.shape))
+            raise ShapeError(
+                f"regressor {w.shape}, torque {y.shape} and {len(self.names)} names do not match (n = {self.n})",
+                value=(w.shape, y.shape),
+            )
         for name, a in (("regressor", w), ("torque", y)):
             if not np.isfinite(a).all():
                 first = np.argwhere(~np.isfinite(a))[0].tolist()
-                raise NonFiniteError(f"{name} holds NaN or inf (first at index {first}); check the data the "
-                                     "problem was built from", value=a)
+                raise NonFiniteError(
+                    f"{name} holds NaN or inf (first at index {first}); check the data the problem was built from",
+                    value=a,
+                )
         object.__setattr__(self, "regressor", readonly(w))
         object.__setattr__(self, "torque", readonly(y))
 
@@ -79,8 +85,9 @@ def offset_names(n: int) -> tuple[str, ...]:
     return tuple(f"Fc_offset[{i}]" for i in range(n))
 
 
-def problem_regressor(dynamics: Dynamics, base: BaseParameters, q: FloatArray, qd: FloatArray, qdd: FloatArray,
-                      offsets: bool) -> FloatArray:
+def problem_regressor(
+    dynamics: Dynamics, base: BaseParameters, q: FloatArray, qd: FloatArray, qdd: FloatArray, offsets: bool
+) -> FloatArray:
     """The regressor blocks [Y_b  O] (S, n, p) for samples (S, n) of q, q̇, q̈ (see the module)."""
     n = dynamics.n
     cols = list(base.independent)
@@ -105,8 +112,12 @@ def structural_offsets(dynamics: Dynamics, base: BaseParameters, seed: int = 0) 
     return [i for i in range(n) if np.linalg.norm(residual[:, i]) <= 1e-8 * np.linalg.norm(cols[:, i])]
 
 
-def build_problem(dynamics: Dynamics, data: IdentificationData | Sequence[IdentificationData],
-                  base: BaseParameters | None = None, offsets: bool = True) -> IdentificationProblem:
+def build_problem(
+    dynamics: Dynamics,
+    data: IdentificationData | Sequence[IdentificationData],
+    base: BaseParameters | None = None,
+    offsets: bool = True,
+) -> IdentificationProblem:
     """Stack the regressor of ``dynamics``' arm over ``data`` (one experiment or several).
 
     The regressor is evaluated at every sample, then it and τ are filtered and decimated alike
@@ -114,21 +125,28 @@ def build_problem(dynamics: Dynamics, data: IdentificationData | Sequence[Identi
     :func:`find_base_parameters`). offsets: add the Coulomb asymmetry of each joint as an unknown.
     """
     offsets = boolean(offsets, "offsets")
-    experiments = [data] if isinstance(data, IdentificationData) else \
-        list(data) if isinstance(data, Sequence) and not isinstance(data, str | bytes) else [data]
+    experiments = (
+        [data]
+        if isinstance(data, IdentificationData)
+        else list(data)
+        if isinstance(data, Sequence) and not isinstance(data, str | bytes)
+        else [data]
+    )
     if not experiments or not all(isinstance(d, IdentificationData) for d in experiments):
-        raise InvalidParameterError(f"data must be an IdentificationData (see prepare_data) or a non-empty sequence "
-                                    f"of them, got {data!r:.80}", value=data)
+        raise InvalidParameterError(
+            f"data must be an IdentificationData (see prepare_data) or a non-empty sequence of them, got {data!r:.80}",
+            value=data,
+        )
     for d in experiments:
         if d.n != dynamics.n:
             raise ShapeError(f"data have {d.n} joints, the model {dynamics.n}", value=d.n)
     base = base if base is not None else find_base_parameters(dynamics)
     if not isinstance(base, BaseParameters):
-        raise InvalidParameterError(f"base must be a BaseParameters (see find_base_parameters), got "
-                                    f"{type(base).__name__}", value=base)
+        raise InvalidParameterError(
+            f"base must be a BaseParameters (see find_base_parameters), got {type(base).__name__}", value=base
+        )
     if base.n_full != dynamics.n * 13:
-        raise ShapeError(f"base parameters are for {base.n_full // 13} joints, the model has {dynamics.n}",
-                         value=base)
+        raise ShapeError(f"base parameters are for {base.n_full // 13} joints, the model has {dynamics.n}", value=base)
     if offsets:
         lumped = structural_offsets(dynamics, base)
         if lumped:
@@ -136,8 +154,10 @@ def build_problem(dynamics: Dynamics, data: IdentificationData | Sequence[Identi
                 f"the Coulomb offset of joint(s) {lumped} (0-based) cannot be told apart from the base parameters "
                 "for any motion: its column |sgn q̇_i| is a combination of theirs, as when the joint's load has a "
                 "constant part (the gravity load of a vertical prismatic axis). No trajectory can excite it; pass "
-                "offsets=False (the Coulomb asymmetry is then not estimated)", value=lumped,
-                directions=None)
+                "offsets=False (the Coulomb asymmetry is then not estimated)",
+                value=lumped,
+                directions=None,
+            )
     ws, ys = [], []
     for d in experiments:
         w = problem_regressor(dynamics, base, d.q, d.qd, d.qdd, offsets)

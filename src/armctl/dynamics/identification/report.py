@@ -23,8 +23,7 @@ def _joint_table(names: Sequence[str], columns: dict[str, np.ndarray]) -> list[s
     return rows
 
 
-def format_report(result: IdentificationResult, validation: ValidationResult | None = None,
-                  max_name: int = 60) -> str:
+def format_report(result: IdentificationResult, validation: ValidationResult | None = None, max_name: int = 60) -> str:
     """A plain-text report of an identification: the data and their conditioning, each estimated base
     parameter ± its standard deviation (σ and σ/|θ| in %), the residual torque per joint, the physically
     consistent estimate and, if given, the validation errors."""
@@ -47,15 +46,25 @@ def format_report(result: IdentificationResult, validation: ValidationResult | N
     lines += _joint_table(names, {"noise σ": est.noise_std, "residual RMS": est.residual_rms})
     if result.consistent is not None:
         c = result.consistent
-        lines += ["", f"Physically consistent estimate: cost ratio {c.cost_ratio:.4g} (1 = as good as least squares),"
-                  f" {'converged' if c.converged else 'NOT converged'} ({c.message})"]
+        lines += [
+            "",
+            f"Physically consistent estimate: cost ratio {c.cost_ratio:.4g} (1 = as good as least squares),"
+            f" {'converged' if c.converged else 'NOT converged'} ({c.message})",
+        ]
         masses = c.pi.reshape(prob.n, -1)[:, 0]
-        lines += _joint_table(names, {"mass [kg]": masses, "residual RMS": c.residual_rms,
-                                      "Coulomb offset": c.coulomb_offset})
+        lines += _joint_table(
+            names, {"mass [kg]": masses, "residual RMS": c.residual_rms, "Coulomb offset": c.coulomb_offset}
+        )
     if validation is not None:
         lines += ["", "Validation"]
-        lines += _joint_table(names, {"RMS error": validation.rms_error, "RMS torque": validation.rms_torque,
-                                      "relative %": 100.0 * validation.relative_error})
+        lines += _joint_table(
+            names,
+            {
+                "RMS error": validation.rms_error,
+                "RMS torque": validation.rms_torque,
+                "relative %": 100.0 * validation.relative_error,
+            },
+        )
     return "\n".join(lines)
 
 
@@ -63,18 +72,26 @@ def _joint_names(joint_names: Sequence[str] | None, n: int) -> list[str]:
     """``joint_names`` checked (n strings), or "joint 1" … "joint n" for None."""
     if joint_names is None:
         return [f"joint {i + 1}" for i in range(n)]
-    if isinstance(joint_names, str | bytes) or not isinstance(joint_names, Sequence) \
-            or not all(isinstance(x, str) for x in joint_names):
-        raise InvalidParameterError(f"joint_names must be a sequence of {n} strings, got {joint_names!r}",
-                                    value=joint_names)
+    if (
+        isinstance(joint_names, str | bytes)
+        or not isinstance(joint_names, Sequence)
+        or not all(isinstance(x, str) for x in joint_names)
+    ):
+        raise InvalidParameterError(
+            f"joint_names must be a sequence of {n} strings, got {joint_names!r}", value=joint_names
+        )
     if len(joint_names) != n:
-        raise ShapeError(f"joint_names has {len(joint_names)} names for {n} joints: give one per joint",
-                         value=joint_names)
+        raise ShapeError(
+            f"joint_names has {len(joint_names)} names for {n} joints: give one per joint", value=joint_names
+        )
     return list(joint_names)
 
 
-def validation_plot(validation: ValidationResult, joint_names: Sequence[str] | None = None,
-                    title: str = "Identified model: predicted vs measured torque") -> Figure:
+def validation_plot(
+    validation: ValidationResult,
+    joint_names: Sequence[str] | None = None,
+    title: str = "Identified model: predicted vs measured torque",
+) -> Figure:
     """A figure with one row per joint: measured and predicted torque [N·m] against time [s], and their
     difference. joint_names: one per joint (default "joint 1", …). Returns the matplotlib Figure (not shown,
     not saved)."""
@@ -83,8 +100,10 @@ def validation_plot(validation: ValidationResult, joint_names: Sequence[str] | N
     from armctl.dynamics.identification.identify import ValidationResult
 
     if not isinstance(validation, ValidationResult):
-        raise InvalidParameterError(f"validation must be a ValidationResult (IdentificationResult.validate), got "
-                                    f"{type(validation).__name__}", value=validation)
+        raise InvalidParameterError(
+            f"validation must be a ValidationResult (IdentificationResult.validate), got {type(validation).__name__}",
+            value=validation,
+        )
     n = validation.measured.shape[1]
     names = _joint_names(joint_names, n)
     fig = Figure(figsize=(9.0, 1.8 * n + 0.8), layout="constrained")
@@ -93,11 +112,9 @@ def validation_plot(validation: ValidationResult, joint_names: Sequence[str] | N
     for i, ax in enumerate(axes):
         ax.plot(validation.t, validation.measured[:, i], color="0.3", lw=1.2, label="measured")
         ax.plot(validation.t, validation.predicted[:, i], color="C0", lw=1.0, ls="--", label="predicted")
-        ax.plot(validation.t, validation.predicted[:, i] - validation.measured[:, i], color="C3", lw=0.8,
-                label="error")
+        ax.plot(validation.t, validation.predicted[:, i] - validation.measured[:, i], color="C3", lw=0.8, label="error")
         ax.set_ylabel(f"{names[i]}\nτ [N·m]")
-        ax.text(0.99, 0.95, f"RMS error {100 * rel[i]:.2f}%", transform=ax.transAxes, ha="right", va="top",
-                fontsize=8)
+        ax.text(0.99, 0.95, f"RMS error {100 * rel[i]:.2f}%", transform=ax.transAxes, ha="right", va="top", fontsize=8)
     axes[0].legend(loc="upper left", fontsize=8, ncols=3)
     axes[-1].set_xlabel("t [s]")
     fig.suptitle(title)

@@ -24,11 +24,15 @@ class AccelerationLimit(Limit):
     def bind(self, model: RobotModel) -> None:
         super().bind(model)
         self.upper = per_joint(self._upper, np.zeros(0), model.n, "acceleration upper limit", positive=False)
-        self.lower = (-self.upper if self._lower is None
-                      else per_joint(self._lower, np.zeros(0), model.n, "acceleration lower limit", positive=False))
+        self.lower = (
+            -self.upper
+            if self._lower is None
+            else per_joint(self._lower, np.zeros(0), model.n, "acceleration lower limit", positive=False)
+        )
         if (self.lower > self.upper).any():
-            raise InvalidParameterError(f"acceleration limits: lower {self.lower.tolist()} above upper "
-                                        f"{self.upper.tolist()}", value=self._lower)
+            raise InvalidParameterError(
+                f"acceleration limits: lower {self.lower.tolist()} above upper {self.upper.tolist()}", value=self._lower
+            )
 
     def bounds(self, state: ModelState) -> tuple[FloatArray, FloatArray]:
         return self.lower, self.upper

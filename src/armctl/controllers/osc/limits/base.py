@@ -18,14 +18,16 @@ from armctl.errors import InvalidParameterError, NonFiniteError
 from armctl.model.robot import RobotModel
 
 
-def per_joint(x: ArrayLike | None, default: FloatArray, n: int, name: str, positive: bool = True,
-              finite: bool = False) -> FloatArray:
+def per_joint(
+    x: ArrayLike | None, default: FloatArray, n: int, name: str, positive: bool = True, finite: bool = False
+) -> FloatArray:
     """``x`` as an (n,) vector (a scalar is broadcast; None takes ``default``), checked > 0 if ``positive``;
     ±inf (no limit) is allowed unless ``finite``."""
     a = np.array(_checks.per_joint(default if x is None else x, n, name))  # a copy: the limit's own
     if np.isnan(a).any() or (finite and not np.isfinite(a).all()):
-        raise NonFiniteError(f"{name} must be {'finite' if finite else 'a number'} for every joint, got "
-                             f"{a.tolist()}", value=x)
+        raise NonFiniteError(
+            f"{name} must be {'finite' if finite else 'a number'} for every joint, got {a.tolist()}", value=x
+        )
     if positive and (a <= 0).any():
         raise InvalidParameterError(f"{name} must be > 0, got {a.tolist()}", value=x)
     return a

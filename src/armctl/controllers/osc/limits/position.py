@@ -42,8 +42,14 @@ class JointPositionLimit(Limit):
 
     kind = "position_limit"
 
-    def __init__(self, dt: float = 1e-3, max_deceleration: ArrayLike = 10.0, margin: float = 0.0,
-                 lower: ArrayLike | None = None, upper: ArrayLike | None = None) -> None:
+    def __init__(
+        self,
+        dt: float = 1e-3,
+        max_deceleration: ArrayLike = 10.0,
+        margin: float = 0.0,
+        lower: ArrayLike | None = None,
+        upper: ArrayLike | None = None,
+    ) -> None:
         self.dt = scalar(dt, "dt", positive=True)
         self.margin = scalar(margin, "margin", nonnegative=True)
         self._amax, self._lo, self._up = max_deceleration, lower, upper
@@ -57,8 +63,11 @@ class JointPositionLimit(Limit):
         for arr in (self.max_deceleration, self.lower, self.upper):
             readonly(arr)
         if (self.lower >= self.upper).any():
-            raise InvalidParameterError(f"position limits (with margin {self.margin}) leave no range: lower "
-                                        f"{self.lower.tolist()}, upper {self.upper.tolist()}", value=self.margin)
+            raise InvalidParameterError(
+                f"position limits (with margin {self.margin}) leave no range: lower "
+                f"{self.lower.tolist()}, upper {self.upper.tolist()}",
+                value=self.margin,
+            )
         # Both sides at once, each as an upper bound: the gap g = [q_max − q; q − q_min] and the velocity
         # towards the limit v = [q̇; −q̇]. The position bound 2(g − Δt v)/Δt², the discriminant
         # a²Δt² + 8a g − 4aΔt v and the part of the viability bound outside the root, −v/Δt − a/2, are affine
@@ -68,10 +77,13 @@ class JointPositionLimit(Limit):
         s_q = np.vstack((-eye, eye))  # g = gap0 + s_q q
         s_v = np.vstack((eye, -eye))  # v = s_v q̇
         gap0 = np.concatenate((self.upper, -self.lower))
-        self._affine = np.vstack((
-            np.hstack((2.0 / dt**2 * s_q, -2.0 / dt * s_v)),  # position bound
-            np.hstack((8.0 * a[:, None] * s_q, -4.0 * dt * a[:, None] * s_v)),  # discriminant
-            np.hstack((np.zeros((2 * n, n)), -s_v / dt))))  # viability bound without the root
+        self._affine = np.vstack(
+            (
+                np.hstack((2.0 / dt**2 * s_q, -2.0 / dt * s_v)),  # position bound
+                np.hstack((8.0 * a[:, None] * s_q, -4.0 * dt * a[:, None] * s_v)),  # discriminant
+                np.hstack((np.zeros((2 * n, n)), -s_v / dt)),
+            )
+        )  # viability bound without the root
         self._offset = np.concatenate((2.0 / dt**2 * gap0, (a * dt) ** 2 + 8.0 * a * gap0, -0.5 * a))
         self._neg_a = -a
         self._root_factor = np.full(2 * n, 0.5 / dt)
@@ -80,7 +92,7 @@ class JointPositionLimit(Limit):
         m = len(self._neg_a)
         y = self._affine.dot(np.concatenate((state.q, state.qd)))
         y += self._offset
-        pos, disc, via = y[:m], y[m:2 * m], y[2 * m:]
+        pos, disc, via = y[:m], y[m : 2 * m], y[2 * m :]
         root = np.maximum(disc, 0.0)
         np.sqrt(root, out=root)
         root *= self._root_factor

@@ -7,5 +7,12 @@ from armctl.controllers.osc.tasks.frame_pose import FramePoseTask
 from armctl.controllers.osc.tasks.frame_position import FramePositionTask
 from armctl.controllers.osc.tasks.posture import PostureTask
 
-__all__ = ["ContactForceTask", "FrameOrientationTask", "FramePoseTask", "FramePositionTask", "MotionTask",
-           "PostureTask", "Task"]
+__all__ = [
+    "ContactForceTask",
+    "FrameOrientationTask",
+    "FramePoseTask",
+    "FramePositionTask",
+    "MotionTask",
+    "PostureTask",
+    "Task",
+]

@@ -81,8 +81,15 @@ class MotionTask(Task):
     kp = Gain("K_p (dim×dim); may be reassigned between control periods (checked again).", size=_dim, label=_label)
     kd = Gain("K_d (dim×dim); may be reassigned between control periods (checked again).", size=_dim, label=_label)
 
-    def __init__(self, dim: int, name: str, kp: ArrayLike, kd: ArrayLike | None = None, weight: ArrayLike = 1.0,
-                 priority: int = 0) -> None:
+    def __init__(
+        self,
+        dim: int,
+        name: str,
+        kp: ArrayLike,
+        kd: ArrayLike | None = None,
+        weight: ArrayLike = 1.0,
+        priority: int = 0,
+    ) -> None:
         super().__init__(dim, name, weight, priority)
         self.kp = kp
         if kd is None:  # critical damping: K_d = 2 K_p^½ (the symmetric square root; 2√k_p for a scalar)
@@ -91,8 +98,9 @@ class MotionTask(Task):
         self.kd = kd
 
     @abstractmethod
-    def kinematics(self, state: ModelState, t: float, ref: Reference
-                   ) -> tuple[FloatArray | None, FloatArray | None, FloatArray, FloatArray, FloatArray]:
+    def kinematics(
+        self, state: ModelState, t: float, ref: Reference
+    ) -> tuple[FloatArray | None, FloatArray | None, FloatArray, FloatArray, FloatArray]:
         """(J, drift J̇q̇, error e, velocity error ė, feed-forward acceleration ẍ_ref); J None: the identity,
         drift None: zero."""
 
@@ -104,12 +112,12 @@ class MotionTask(Task):
             self._law = np.hstack((eye, self._kd_matrix, self._kp_matrix))
             self._law_drift = np.hstack((self._law, -eye))
 
-    def desired_acceleration(self, state: ModelState, t: float, ref: Reference
-                             ) -> tuple[FloatArray | None, FloatArray, FloatArray]:
+    def desired_acceleration(
+        self, state: ModelState, t: float, ref: Reference
+    ) -> tuple[FloatArray | None, FloatArray, FloatArray]:
         """(J, J̇q̇, ẍ*) with ẍ* = ẍ_ref + K_d ė + K_p e."""
         jac, drift, e, ed, acc = self.kinematics(state, t, ref)
-        return (jac, np.zeros(self.dim) if drift is None else drift,
-                self._law.dot(np.concatenate((acc, ed, e))))
+        return (jac, np.zeros(self.dim) if drift is None else drift, self._law.dot(np.concatenate((acc, ed, e))))
 
     def residual(self, state: ModelState, t: float, ref: Reference) -> tuple[FloatArray | None, FloatArray]:
         """(J, ẍ* − J̇q̇)."""

@@ -36,11 +36,17 @@ class ContactForceTask(Task):
     for 10 (or (0, 0, 10)), not −10. A target with a negative normal component (a pull, which a contact
     cannot give) is refused with :class:`~armctl.errors.InvalidParameterError`."""
 
-    def __init__(self, contact: Contact, force: Force = (0.0, 0.0, 0.0), weight: ArrayLike = 1e-3,
-                 priority: int = 0, name: str | None = None, normal_only: bool | None = None) -> None:
+    def __init__(
+        self,
+        contact: Contact,
+        force: Force = (0.0, 0.0, 0.0),
+        weight: ArrayLike = 1e-3,
+        priority: int = 0,
+        name: str | None = None,
+        normal_only: bool | None = None,
+    ) -> None:
         if not isinstance(contact, Contact):
-            raise InvalidParameterError(f"contact must be an osc.Contact, got {type(contact).__name__}",
-                                        value=contact)
+            raise InvalidParameterError(f"contact must be an osc.Contact, got {type(contact).__name__}", value=contact)
         self.normal_only = contact.mode == "sliding" if normal_only is None else bool(normal_only)
         self.identity_jacobian = not self.normal_only
         super().__init__(1 if self.normal_only else contact.dim, name or f"force[{contact.name}]", weight, priority)
@@ -61,7 +67,9 @@ class ContactForceTask(Task):
                 f"{self.name}: the target force {a.tolist()} has a normal component of {normal:g} N, a pull that a "
                 f"contact cannot give. The force is the environment's on the robot, along the normal "
                 f"{self.contact.normal.tolist()} (from the surface towards the robot) when pressing: to press with "
-                f"{-normal:g} N, ask for {-normal:g}" + ("" if self.normal_only else " times the normal"), value=force)
+                f"{-normal:g} N, ask for {-normal:g}" + ("" if self.normal_only else " times the normal"),
+                value=force,
+            )
         return a
 
     def set_target(self, force: Force) -> None:

@@ -1,6 +1,6 @@
 """`FramePoseTask`: position and orientation of a frame together (6 rows, [linear; angular]).
 
-    e = [p_ref − p;  log(R_ref Rᵀ)],   ė = V_ref − J q̇,   J = the 6×n frame Jacobian,   drift = J̇ q̇
+e = [p_ref − p;  log(R_ref Rᵀ)],   ė = V_ref − J q̇,   J = the 6×n frame Jacobian,   drift = J̇ q̇
 """
 
 from __future__ import annotations
@@ -20,16 +20,25 @@ class FramePoseTask(FrameTask):
     rows [linear; angular]). Target: :meth:`set_target` (4×4 pose in the world, twist [v; ω] (6,),
     acceleration [a; ω̇] (6,), world axes) or :meth:`set_trajectory`."""
 
-    def __init__(self, frame: str | None = None, kp: ArrayLike = 400.0, kd: ArrayLike | None = None,
-                 weight: ArrayLike = 1.0, priority: int = 0, name: str | None = None) -> None:
+    def __init__(
+        self,
+        frame: str | None = None,
+        kp: ArrayLike = 400.0,
+        kd: ArrayLike | None = None,
+        weight: ArrayLike = 1.0,
+        priority: int = 0,
+        name: str | None = None,
+    ) -> None:
         super().__init__(6, "pose", (4, 4), frame, kp, kd, weight, priority, name)
 
-    def set_target(self, pose: ArrayLike, twist: ArrayLike | None = None,
-                   acceleration: ArrayLike | None = None) -> None:
+    def set_target(
+        self, pose: ArrayLike, twist: ArrayLike | None = None, acceleration: ArrayLike | None = None
+    ) -> None:
         self.target.set(pose, twist, acceleration)
 
-    def kinematics(self, state: ModelState, t: float, ref: Reference
-                   ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+    def kinematics(
+        self, state: ModelState, t: float, ref: Reference
+    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
         pose, twist, acc = self.target.at(t)
         fk = state.frame(self.frame)
         e = np.empty(6)
@@ -52,6 +61,7 @@ class FramePoseTask(FrameTask):
             return super().residual(state, t, ref)  # type: ignore[return-value]
         pose, twist, acc = self.target.at(t)
         fk = state.frame(self.frame)
-        x = np.concatenate((acc, twist, fk.velocity, pose[:3, 3], fk.position,
-                            rotation_error(pose[:3, :3], fk.rotation), fk.drift))
+        x = np.concatenate(
+            (acc, twist, fk.velocity, pose[:3, 3], fk.position, rotation_error(pose[:3, :3], fk.rotation), fk.drift)
+        )
         return fk.jacobian, self._pose_law.dot(x)

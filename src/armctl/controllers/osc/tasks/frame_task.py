@@ -12,8 +12,18 @@ class FrameTask(MotionTask):
     """A motion task of dimension ``dim`` on ``frame`` (default: the tool frame), named ``kind[frame]`` unless
     ``name`` is given; its target value has shape ``target_shape``."""
 
-    def __init__(self, dim: int, kind: str, target_shape: tuple[int, ...], frame: str | None, kp: ArrayLike,
-                 kd: ArrayLike | None, weight: ArrayLike, priority: int, name: str | None) -> None:
+    def __init__(
+        self,
+        dim: int,
+        kind: str,
+        target_shape: tuple[int, ...],
+        frame: str | None,
+        kp: ArrayLike,
+        kd: ArrayLike | None,
+        weight: ArrayLike,
+        priority: int,
+        name: str | None,
+    ) -> None:
         name = name or f"{kind}[{frame or 'tool'}]"
         super().__init__(dim, name, kp, kd, weight, priority)
         self.frame = frame

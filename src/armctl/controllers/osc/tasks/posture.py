@@ -24,10 +24,18 @@ class PostureTask(MotionTask):
 
     identity_jacobian = True
 
-    def __init__(self, n: int, kp: ArrayLike = 100.0, kd: ArrayLike | None = None, weight: ArrayLike = 1e-2,
-                 priority: int = 0, name: str = "posture") -> None:
-        super().__init__(whole_number(n, f"{name}: n (the number of joints)", minimum=1), name, kp, kd, weight,
-                         priority)
+    def __init__(
+        self,
+        n: int,
+        kp: ArrayLike = 100.0,
+        kd: ArrayLike | None = None,
+        weight: ArrayLike = 1e-2,
+        priority: int = 0,
+        name: str = "posture",
+    ) -> None:
+        super().__init__(
+            whole_number(n, f"{name}: n (the number of joints)", minimum=1), name, kp, kd, weight, priority
+        )
         self._fixed: Reference | None = None
 
     def set_target(self, q: ArrayLike | None, qd: ArrayLike | None = None, qdd: ArrayLike | None = None) -> None:
@@ -36,11 +44,13 @@ class PostureTask(MotionTask):
 
     def check(self, evaluator: object, n: int, contacts: dict[str, int]) -> None:
         if self.dim != n:
-            raise ShapeError(f"{self.name}: a posture task of {self.dim} joints on a model of {n} joints",
-                             value=self.dim)
+            raise ShapeError(
+                f"{self.name}: a posture task of {self.dim} joints on a model of {n} joints", value=self.dim
+            )
 
-    def kinematics(self, state: ModelState, t: float, ref: Reference
-                   ) -> tuple[None, None, FloatArray, FloatArray, FloatArray]:
+    def kinematics(
+        self, state: ModelState, t: float, ref: Reference
+    ) -> tuple[None, None, FloatArray, FloatArray, FloatArray]:
         r = self._fixed or ref
         return None, None, r.q - state.q, r.qd - state.qd, r.qdd  # type: ignore[return-value]
 

@@ -29,11 +29,23 @@ def rotation_defect(entries: list[float], shape: tuple[int, ...]) -> str | None:
         a, b, c, _, d, e, f, _, g, h, i = entries[:11]
     else:
         a, b, c, d, e, f, g, h, i = entries
-    gram = (a * a + b * b + c * c - 1.0, d * d + e * e + f * f - 1.0, g * g + h * h + i * i - 1.0,
-            a * d + b * e + c * f, a * g + b * h + c * i, d * g + e * h + f * i)  # R Rᵀ − I, upper triangle
+    gram = (
+        a * a + b * b + c * c - 1.0,
+        d * d + e * e + f * f - 1.0,
+        g * g + h * h + i * i - 1.0,
+        a * d + b * e + c * f,
+        a * g + b * h + c * i,
+        d * g + e * h + f * i,
+    )  # R Rᵀ − I, upper triangle
     tol = ROTATION_TOL
-    if not (-tol <= gram[0] <= tol and -tol <= gram[1] <= tol and -tol <= gram[2] <= tol  # chained tests:
-            and -tol <= gram[3] <= tol and -tol <= gram[4] <= tol and -tol <= gram[5] <= tol):  # no calls
+    if not (
+        -tol <= gram[0] <= tol
+        and -tol <= gram[1] <= tol
+        and -tol <= gram[2] <= tol  # chained tests:
+        and -tol <= gram[3] <= tol
+        and -tol <= gram[4] <= tol
+        and -tol <= gram[5] <= tol
+    ):  # no calls
         worst = max(abs(x) for x in gram)
         return f"its rotation is not orthonormal: |R Rᵀ − I| reaches {worst:.3g} (tolerance {ROTATION_TOL:g})"
     if a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g) < 0.0:
@@ -55,11 +67,17 @@ class TargetHolder:
     def _check(self, value: Any, velocity: Any, acceleration: Any) -> tuple[FloatArray, FloatArray, FloatArray]:
         shape = self.value_shape
         try:  # fast path: float arrays of the right shapes, all finite (one sum, NaN/inf propagate into it)
-            if (value.dtype is FLOAT and velocity.dtype is FLOAT and acceleration.dtype is FLOAT
-                    and value.shape == shape and velocity.shape == acceleration.shape == (self.rate,)):
+            if (
+                value.dtype is FLOAT
+                and velocity.dtype is FLOAT
+                and acceleration.dtype is FLOAT
+                and value.shape == shape
+                and velocity.shape == acceleration.shape == (self.rate,)
+            ):
                 entries = value.ravel().tolist()
-                if (math.isfinite(sum(entries) + sum(velocity.tolist()) + sum(acceleration.tolist()))
-                        and (len(shape) == 1 or rotation_defect(entries, shape) is None)):
+                if math.isfinite(sum(entries) + sum(velocity.tolist()) + sum(acceleration.tolist())) and (
+                    len(shape) == 1 or rotation_defect(entries, shape) is None
+                ):
                     return value, velocity, acceleration
         except (AttributeError, TypeError):  # not arrays; an np.matrix (whose tolist is nested); object entries
             pass
@@ -70,12 +88,18 @@ class TargetHolder:
             why = rotation_defect(val.ravel().tolist(), shape)
             if why is not None:
                 kind = "pose" if shape == (4, 4) else "rotation"
-                hint = "" if why.startswith("the last row") else \
-                    "; orthonormalise it (e.g. pinocchio.Quaternion(R).normalized().matrix())"
+                hint = (
+                    ""
+                    if why.startswith("the last row")
+                    else "; orthonormalise it (e.g. pinocchio.Quaternion(R).normalized().matrix())"
+                )
                 raise InvalidParameterError(f"{self.owner}: the target is not a {kind} — {why}{hint}", value=value)
         vel = np.zeros(self.rate) if velocity is None else vector(velocity, self.rate, f"{self.owner}: velocity")
-        acc = (np.zeros(self.rate) if acceleration is None
-               else vector(acceleration, self.rate, f"{self.owner}: acceleration"))
+        acc = (
+            np.zeros(self.rate)
+            if acceleration is None
+            else vector(acceleration, self.rate, f"{self.owner}: acceleration")
+        )
         return val, vel, acc
 
     def set(self, value: Any, velocity: Any = None, acceleration: Any = None) -> None:
@@ -84,8 +108,11 @@ class TargetHolder:
 
     def follow(self, fn: Trajectory) -> None:
         if not callable(fn):
-            raise InvalidParameterError(f"{self.owner}: a trajectory must be callable t -> (value, velocity, "
-                                        f"acceleration), got {type(fn).__name__}", value=fn)
+            raise InvalidParameterError(
+                f"{self.owner}: a trajectory must be callable t -> (value, velocity, "
+                f"acceleration), got {type(fn).__name__}",
+                value=fn,
+            )
         self._trajectory = fn
         self._constant = None
 
@@ -98,10 +125,10 @@ class TargetHolder:
         if self._trajectory is not None:
             out = self._trajectory(t)
             if not isinstance(out, tuple) or len(out) != 3:
-                raise InvalidParameterError(f"{self.owner}: the trajectory must return (value, velocity, "
-                                            f"acceleration), got {out!r}", value=out)
+                raise InvalidParameterError(
+                    f"{self.owner}: the trajectory must return (value, velocity, acceleration), got {out!r}", value=out
+                )
             return self._check(*out)
         if self._constant is None:
-            raise InvalidParameterError(f"{self.owner} has no target: call set_target(...) or "
-                                        "set_trajectory(fn) first")
+            raise InvalidParameterError(f"{self.owner} has no target: call set_target(...) or set_trajectory(fn) first")
         return self._constant
