@@ -14,7 +14,7 @@ from numpy.typing import ArrayLike, NDArray
 from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
 
 FloatArray = NDArray[np.float64]
-#: the dtype of a float array (a singleton: fast paths test ``a.dtype is FLOAT``)
+#: the dtype of a native float array (compare with ``==``: an unpickled array's dtype is an equal, distinct object)
 FLOAT = np.dtype(np.float64)
 
 
@@ -244,3 +244,28 @@ def check_cache_dir(cache_dir: object, compile: bool) -> None:
             f"cache_dir={cache_dir!r} is where compile=True keeps its code: pass compile=True too, or no cache_dir",
             value=cache_dir,
         )
+
+
+def all_finite(a: FloatArray) -> bool:
+    """True if every entry of the float array ``a`` is finite.
+
+    The sum of the entries is finite exactly when no entry is NaN or inf, unless finite entries add up beyond
+    the range of floats: then False, and callers take their careful path (``np.isfinite``). A vector is summed
+    as Python floats, which avoids NumPy's per-call overhead on the short vectors of a control step."""
+    if a.ndim == 1:
+        return math.isfinite(sum(a.tolist()))
+    return math.isfinite(a.sum())
+
+
+def float_vectors(a: Any, b: Any, c: Any, d: Any = None) -> bool:
+    """True if ``a``, ``b``, ``c`` (and ``d`` if given) are native float64 1-D ndarrays (finite or not; their
+    lengths are not compared)."""
+    try:
+        return (
+            type(a) is type(b) is type(c) is np.ndarray
+            and a.ndim == b.ndim == c.ndim == 1
+            and a.dtype == b.dtype == c.dtype == FLOAT
+            and (d is None or (type(d) is np.ndarray and d.ndim == 1 and d.dtype == FLOAT))
+        )
+    except AttributeError:
+        return False

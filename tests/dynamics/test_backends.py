@@ -204,7 +204,7 @@ def test_pinocchio_forward_dynamics_in_the_world_convention_is_abas_default_one(
     pd = pm.createData()
     rng = np.random.default_rng(11)
     for q, qd, tau in rng.uniform(-2.0, 2.0, (5, 3, dyn.n)):
-        got = dyn._forward(q, qd, tau)
+        got = dyn.kernel.aba(q, qd, tau)
         local = pin.aba(pm, pd, q, qd, tau).copy()
         by_hand = np.linalg.solve(pin.crba(pm, pd, q).copy(), tau - pin.rnea(pm, pd, q, qd, np.zeros(dyn.n)))
         scale = max(1.0, float(np.abs(local).max()))

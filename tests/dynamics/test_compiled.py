@@ -103,8 +103,8 @@ def test_every_regressor_entry_matches_the_plain_backend(name: str) -> None:
         )
         for friction in (None, (qd_r, qd)):  # the primitive's other friction columns
             np.testing.assert_allclose(
-                dc._rigid_regressor(q, qd, qdd, friction),
-                dp._rigid_regressor(q, qd, qdd, friction),
+                dc.kernel.regressor(q, qd, qdd, friction),
+                dp.kernel.regressor(q, qd, qdd, friction),
                 rtol=1e-10,
                 atol=1e-10,
             )

@@ -31,10 +31,10 @@ def test_results_are_fresh_arrays(puma: armctl.Dynamics) -> None:
 
 def test_copy_path_matches_view_path(puma: armctl.Dynamics) -> None:
     q, qd, qdd, qd_r = _states(puma.n)
-    assert puma._raw_t is not None  # this Pinocchio/eigenpy hands out the view
+    assert puma.kernel._raw_t is not None  # this Pinocchio/eigenpy hands out the view
     view = (puma.regressor(q, qd, qdd), puma.passivity_regressor(q, qd, qd_r, qdd))
     other = armctl.Dynamics(puma.model)
-    other._raw_t = other._raw_t_free = None  # as if eigenpy returned copies only
+    other.kernel._raw_t = other.kernel._raw_t_free = None  # as if eigenpy returned copies only
     copy = (other.regressor(q, qd, qdd), other.passivity_regressor(q, qd, qd_r, qdd))
     for a, b in zip(view, copy, strict=True):
         assert np.allclose(a, b, rtol=0, atol=1e-12 * np.abs(a).max())
@@ -51,7 +51,7 @@ def test_interleaved_calls_do_not_leak_between_states(puma: armctl.Dynamics) -> 
     # the passivity regressor subtracts in Pinocchio's own workspace; every later call, of either kind and
     # at any state, must still give what a fresh object (clean workspaces, copy path) gives
     fresh = armctl.Dynamics(puma.model)
-    fresh._raw_t = fresh._raw_t_free = None
+    fresh.kernel._raw_t = fresh.kernel._raw_t_free = None
     for seed in range(6):
         q, qd, qdd, qd_r = _states(puma.n, seed=seed)
         got = (

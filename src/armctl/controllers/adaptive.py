@@ -172,7 +172,7 @@ class Adaptive(SlidingGains, Controller):
         qd_r, qdd_r, s, kd_s, a, w = sliding(q, qd, ref, self._sliding)
         # q, q̇ checked by Controller.__call__; Y may be the dynamics' workspace (read before the next
         # regressor call: the composite term makes one, so it needs a copy)
-        y = dyn._passivity_regressor(q, qd, qd_r, qdd_r, a, w, copy=bool(self.composite))
+        y = dyn.kernel.passivity_regressor(q, qd, qd_r, qdd_r, a, w, copy=bool(self.composite))
         dt = 0.0 if self._t_prev is None else t - self._t_prev  # ≤ 0 for a new run without reset: no update
         # the filters run inside the dead zone too; they start at the first call with composite on
         composite = bool(self.composite) and dt > 0 and self._qd_prev is not None

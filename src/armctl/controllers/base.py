@@ -12,10 +12,10 @@ import math
 from abc import ABC, abstractmethod
 from typing import Any, NoReturn
 
+import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FLOAT as _FLOAT
-from armctl._checks import FloatArray, scalar, vector, whole_number
+from armctl._checks import FLOAT, FloatArray, all_finite, scalar, vector, whole_number
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
 from armctl.reference import Reference
@@ -53,38 +53,38 @@ class Controller(ABC):
         return cls.compute is cls._result_checked_compute
 
     def __call__(self, t: float, q: ArrayLike, qd: ArrayLike, ref: Reference) -> FloatArray:
-        """τ for the measured state (q, q̇) at time t [s] and the reference ``ref``."""
-        # the cheap tests first: this runs every control period
-        if ref.__class__ is not Reference or len(ref.q) != self.n:  # a Reference's arrays are 1-D
+        """τ [N·m] for the measured state (q [rad], q̇ [rad/s]) at time t [s] and the reference ``ref``.
+
+        The inputs are checked here, once (named errors), and handed to :meth:`compute`; a non-finite τ from a
+        finite state raises :class:`~armctl.errors.NonFiniteError`."""
+        if type(ref) is not Reference or len(ref.q) != self.n:  # a Reference's arrays are 1-D
             self.check_reference(ref)  # raises, unless ref is a subclass of the right size
-        if t.__class__ is not float:
+        if type(t) is not float:
             t = scalar(t, "t")
-        try:
-            ok = (
-                q.dtype is _FLOAT
-                and qd.dtype is _FLOAT
-                and q.ndim == qd.ndim == 1  # type: ignore[union-attr]
-                and len(q) == len(qd) == self.n
-            )  # type: ignore[arg-type]  (ints: cheaper than shape tuples)
-        except AttributeError:
-            ok = False
-        if ok:
-            if self._checks_result:
-                try:
-                    tau = self.compute(t, q, qd, ref)  # type: ignore[arg-type]
-                except (RuntimeWarning, FloatingPointError):  # NumPy's warnings made errors: name the input
-                    self._checked(t, q, qd)
-                    raise  # the inputs were finite: the law's own
-                if math.isfinite(sum(tau.tolist()) + t):  # t too: the stateless laws do not use it
-                    return tau
-                self._checked(t, q, qd)  # NonFiniteError if an input is the cause
-                self._nonfinite_torque(tau, q, qd)
-            ok = math.isfinite(sum(q.tolist()) + sum(qd.tolist()) + t)  # type: ignore[union-attr]
-        if not ok:
+        shape = self._shape
+        if not (
+            type(q) is np.ndarray
+            and type(qd) is np.ndarray
+            and q.dtype == FLOAT
+            and qd.dtype == FLOAT
+            and q.shape == qd.shape == shape
+        ):
+            q, qd = self._checked(t, q, qd)
+        elif self._checks_result:  # NaN or inf in q or q̇ reaches τ: one check, of τ
+            try:
+                tau = self.compute(t, q, qd, ref)  # type: ignore[arg-type]
+            except (RuntimeWarning, FloatingPointError):  # NumPy's warnings made errors: name the input
+                self._checked(t, q, qd)
+                raise  # the inputs were finite: the law's own
+            if all_finite(tau) and math.isfinite(t):
+                return tau
+            self._checked(t, q, qd)  # NonFiniteError if an input is the cause
+            self._nonfinite_torque(tau, q, qd)
+        elif not (all_finite(q) and all_finite(qd) and math.isfinite(t)):  # type: ignore[arg-type]
             q, qd = self._checked(t, q, qd)
         tau = self.compute(t, q, qd, ref)  # type: ignore[arg-type]
         try:
-            if math.isfinite(sum(tau.tolist())):
+            if all_finite(tau):
                 return tau
         except (AttributeError, TypeError):  # not a float array: a user's law may return a list
             return tau

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 from numpy.typing import ArrayLike
 
@@ -36,11 +34,6 @@ class ComputedTorque(PIDGains, Controller):
         self._set_gains(kp, kd, ki)
         self.friction = friction
 
-    def __setstate__(self, state: dict[str, Any]) -> None:
-        if "friction" in state:  # pickled when friction was a plain attribute
-            state["_friction"] = state.pop("friction")
-        self.__dict__.update(state)
-
     @property
     def friction(self) -> bool | str:
         """True (at the measured velocity), ``"reference"`` (at the reference velocity) or False."""
@@ -61,14 +54,13 @@ class ComputedTorque(PIDGains, Controller):
             self._command = np.hstack((np.eye(self.n), self._feedback))
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
-        dyn = self.dynamics
-        assert dyn is not None
+        kernel = self.dynamics.kernel  # type: ignore[union-attr]
         v = self._command.dot(np.concatenate((ref.qdd, ref.q, ref.qd, q, qd)))  # q̈_d + K_d ė + K_p e
         if self._ki is not None:
             v += apply_gain(self._ki, self._integral.update(t, ref.q - q))
-        tau = dyn._rigid_torque(q, qd, v)  # q, q̇ checked by Controller.__call__, v finite from them and ref
-        if self._friction and dyn._has_friction:
-            tau += dyn._friction(ref.qd if self._friction == "reference" else qd)
+        tau = kernel.rnea(q, qd, v)
+        if self._friction and kernel.friction.any:
+            tau += kernel.friction.torque(ref.qd if self._friction == "reference" else qd)
         return tau
 
     _result_checked_compute = compute  # stateless without an integral (see Controller)

@@ -24,8 +24,7 @@ def sliding_map(lam: FloatArray, kd: FloatArray) -> FloatArray:
 
 
 def sliding(q: FloatArray, qd: FloatArray, ref: Reference, p: FloatArray) -> tuple[FloatArray, ...]:
-    """(q̇_r, q̈_r, s, K_D s, a, w), the rows of one product with P = :func:`sliding_map`: contiguous (n,) views
-    (taken by index: unpacking the (6, n) array by iteration costs twice as much)."""
+    """(q̇_r, q̈_r, s, K_D s, a, w), the rows of one product with P = :func:`sliding_map`: contiguous (n,) views."""
     r = p.dot(np.concatenate((ref.q, ref.qd, ref.qdd, q, qd))).reshape(6, -1)
     return r[0], r[1], r[2], r[3], r[4], r[5]
 
@@ -62,10 +61,8 @@ class PassivityBased(SlidingGains, Controller):
         self._checks_result = self._own_law()
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
-        dyn = self.dynamics
-        assert dyn is not None
         qd_r, qdd_r, _, kd_s, a, w = sliding(q, qd, ref, self._sliding)
-        tau = dyn._passivity_torque(q, qd, qd_r, qdd_r, a, w)  # q, q̇ checked by Controller.__call__
+        tau = self.dynamics.kernel.passivity_torque(q, qd, qd_r, qdd_r, a, w)  # type: ignore[union-attr]
         tau -= kd_s
         return tau
 

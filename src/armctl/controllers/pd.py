@@ -45,8 +45,9 @@ class PDGravity(PIDGains, Controller):
     def friction(self, value: bool) -> None:
         self._friction = boolean(value, "friction")
 
-    #: the dynamics' fused law g + F·[q_d; q̇_d; q; q̇] (``Dynamics(model, compile=True)``; None for others) and
-    #: the dynamics it was made for: made again at the next step if ``dynamics`` is another object
+    #: the kernel's fused law g + F·[q_d; q̇_d; q; q̇] (``Dynamics(model, compile=True)``; None for others) and
+    #: the kernel it was made for: made again at the next step on another kernel (another dynamics object,
+    #: another thread)
     _law: Any = None
     _law_for: Any = None
 
@@ -54,7 +55,7 @@ class PDGravity(PIDGains, Controller):
         super()._gains_changed()
         if hasattr(self, "_feedback"):
             self._with_gravity = np.hstack((self._feedback, np.eye(self.n)))
-            if self._law is not None:  # new gains into the law's own F (~1 µs; binding a new law: ~25 µs)
+            if self._law is not None:  # new gains into the law's own F, in place (binding a new law costs more)
                 self._law.feedback[...] = self._feedback
 
     def __getstate__(self) -> dict[str, Any]:
@@ -64,19 +65,18 @@ class PDGravity(PIDGains, Controller):
         return state
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
-        dyn = self.dynamics
-        assert dyn is not None
-        if dyn is not self._law_for:
-            self._law, self._law_for = dyn._pd_gravity_law(self._feedback), dyn
+        kernel = self.dynamics.kernel  # type: ignore[union-attr]
+        if kernel is not self._law_for:
+            self._law, self._law_for = kernel.pd_gravity_law(self._feedback), kernel
         law = self._law
-        if law is not None:  # q checked by __call__
+        if law is not None:
             tau = law(q, qd, ref.q, ref.qd)
         else:  # g + K_p e + K_d ė = [F, I]·[q_d; q̇_d; q; q̇; g] (F: PIDGains' feedback map): one product adds it all
-            tau = self._with_gravity.dot(np.concatenate((ref.q, ref.qd, q, qd, dyn._gravity(q))))
+            tau = self._with_gravity.dot(np.concatenate((ref.q, ref.qd, q, qd, kernel.gravity(q))))
         if self._ki is not None:
             tau += apply_gain(self._ki, self._integral.update(t, ref.q - q))
-        if self._friction and dyn._has_friction:
-            tau += dyn._friction(qd)
+        if self._friction and kernel.friction.any:
+            tau += kernel.friction.torque(qd)
         return tau
 
     _result_checked_compute = compute  # stateless without an integral (see Controller)

@@ -1,79 +1,112 @@
-"""`Dynamics`: evaluation of the Lagrange model of an arm, behind one interface and two backends.
+"""`Dynamics`: the checked evaluation of the Lagrange model of an arm, behind one interface and two backends.
 
     M(q) q̈ + C(q, q̇) q̇ + g(q) = τ − F_v q̇ − F_c sgn(q̇) − J(q)ᵀ h_e
 
-``armctl.Dynamics(model, backend="pinocchio")`` returns the backend's object:
+``armctl.Dynamics(model, backend="pinocchio")`` makes the backend's object, looked up in a registry of
+backends (:func:`register_backend`):
 
-* ``"pinocchio"`` (:class:`~armctl.dynamics.pinocchio_backend.PinocchioDynamics`): RNEA / CRBA / ABA /
-  Coriolis matrix / joint-torque regressor of Pinocchio; rotors as reflected inertia (armature).
+* ``"pinocchio"`` (:class:`~armctl.dynamics.pinocchio_backend.PinocchioDynamics`): RNEA / CRBA / ABA / Coriolis
+  matrix / joint-torque regressor of Pinocchio; rotors as reflected inertia (armature). With ``compile=True``
+  (:class:`~armctl.dynamics.compiled.CompiledDynamics`) its hot terms run as generated C code.
 * ``"lagrange"`` (:class:`~armctl.dynamics.lagrange.LagrangeDynamics`): the Lagrange formulation built with
   CasADi from the kinetic and potential energies, including the rotors' gyroscopic coupling.
 
-A backend implements a handful of private primitives (rigid-body terms, Jacobian, energies, regressor of the
-rigid-body part); this base adds input checks, friction and the end-effector wrench, and
-:class:`~armctl.dynamics.regressor.RegressorMethods` the regressors and the base (identifiable) parameters, so
-both backends expose the same API. Every method checks shapes and finiteness and raises an
-:class:`~armctl.errors.ArmctlError` subclass naming the value.
+Every public method checks its inputs (shapes, finiteness, real numbers) and raises an
+:class:`~armctl.errors.ArmctlError` subclass naming the value, then evaluates on the backend's
+:class:`~armctl.dynamics.kernel.Kernel` (``dyn.kernel``), the unchecked primitives that code with checked
+inputs calls directly. Each thread gets a kernel of its own, so one ``Dynamics`` can be shared between threads.
 """
 
 from __future__ import annotations
 
 import math
-from abc import ABC, abstractmethod
+import threading
 from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FLOAT as _FLOAT
-from armctl._checks import FloatArray, boolean, vector
+from armctl._checks import FLOAT, FloatArray, all_finite, float_vectors, vector
+from armctl.dynamics.friction_terms import FrictionTerms
+from armctl.dynamics.kernel import Kernel
 from armctl.dynamics.regressor import RegressorMethods
-from armctl.errors import ArmctlError, InvalidParameterError, NonFiniteError, UnknownNameError
-from armctl.model.robot import PARAMS_PER_JOINT, RobotModel
+from armctl.errors import InvalidParameterError, NonFiniteError, UnknownNameError
+from armctl.model.robot import RobotModel
 
-BACKENDS = ("pinocchio", "lagrange")
-#: the keyword options of the Lagrange backend (the Pinocchio backend takes none)
-_LAGRANGE_OPTIONS = ("rotor_coupling", "compile", "cache_dir")
+#: backend name → function of the options giving the class that implements it (see :func:`register_backend`)
+_BACKENDS: dict[str, Callable[[dict[str, Any]], type[Dynamics]]] = {}
 
 
-class Dynamics(RegressorMethods, ABC):
-    """The dynamics of ``model`` evaluated by ``backend`` (``"pinocchio"`` or ``"lagrange"``).
+def register_backend(name: str, resolve: Callable[[dict[str, Any]], type[Dynamics]]) -> None:
+    """Make ``armctl.Dynamics(model, backend=name, **options)`` build ``resolve(options)(model, **options)``.
 
-    Calling ``Dynamics(model, backend=...)`` constructs the backend's subclass. Keyword options go to the
-    backend: ``compile`` (both: generated C code, see :mod:`armctl.dynamics.compiled` for the Pinocchio
-    backend's), ``cache_dir`` (both: where it is kept), ``rotor_coupling`` (Lagrange). A ``RobotModel`` is immutable,
-    so a ``Dynamics`` object can be shared, but its workspace is not thread-safe: give each thread its own.
+    Parameters
+    ----------
+    name : str
+        The backend's name.
+    resolve : callable
+        Options (a dict) → the :class:`Dynamics` subclass to instantiate; it may import lazily.
+    """
+    _BACKENDS[name] = resolve
+
+
+def backend_names() -> tuple[str, ...]:
+    """The names of the registered backends."""
+    return tuple(_BACKENDS)
+
+
+def _pinocchio(options: dict[str, Any]) -> type[Dynamics]:
+    if options.get("compile", False) is True:
+        from armctl.dynamics.compiled import CompiledDynamics
+
+        return CompiledDynamics
+    from armctl.dynamics.pinocchio_backend import PinocchioDynamics
+
+    return PinocchioDynamics
+
+
+def _lagrange(options: dict[str, Any]) -> type[Dynamics]:
+    from armctl.dynamics.lagrange import LagrangeDynamics
+
+    return LagrangeDynamics
+
+
+register_backend("pinocchio", _pinocchio)
+register_backend("lagrange", _lagrange)
+#: the registered backends' names at import
+BACKENDS = backend_names()
+
+
+class Dynamics(RegressorMethods):
+    """The dynamics of ``model`` evaluated by ``backend``.
+
+    Parameters
+    ----------
+    model : RobotModel
+        The arm (immutable).
+    backend : {"pinocchio", "lagrange"}
+        Which evaluation (see the module).
+    **options
+        The backend's options: ``compile`` (both: generated C code), ``cache_dir`` (both: where it is
+        kept), ``rotor_coupling`` (Lagrange).
+
+    Notes
+    -----
+    One object can be shared between threads: each thread evaluates on a kernel (workspace) of its own.
     """
 
+    #: the backend's name
     backend: str = ""
-    #: the keyword options this backend takes
-    _option_names: tuple[str, ...] = ()
-    #: True if a NaN or inf in any entry of any input of the rigid-body primitives always reaches their result
-    #: (numerical algorithms such as Pinocchio's, where NaN·0 = NaN); then the fast paths check the result
-    #: instead of the inputs. Inverse dynamics checks τ₁ alone: the models are serial chains, and in the RNEA
-    #: the force on the first joint sums every link's, so any non-finite input reaches it. Not so for the
-    #: Lagrange backend: CasADi simplifies its expressions, and a frictionless pendulum's τ does not depend
-    #: on q̇ at all.
-    _nan_propagates: bool = False
-    #: A view of the regressor workspace that NaN or inf in any input of the (passivity) regressor reaches
-    #: (only where ``_nan_propagates``; which entries is the backend's business: Pinocchio's Y[0, the last
-    #: link's ten columns] by the argument above, the compiled variant's Y[0, 10] by its carrier); None: the
-    #: fast paths check the inputs.
-    _regressor_probe: FloatArray | None = None
+    #: the keyword options the backend takes
+    option_names: tuple[str, ...] = ()
 
     def __new__(cls, model: RobotModel | None = None, backend: str = "pinocchio", **options: Any) -> Dynamics:
         if cls is Dynamics:
-            if backend == "pinocchio":
-                if boolean(options.get("compile", False), "compile"):
-                    from armctl.dynamics.compiled import CompiledDynamics as sub
-                else:
-                    from armctl.dynamics.pinocchio_backend import PinocchioDynamics as sub
-            elif backend == "lagrange":
-                from armctl.dynamics.lagrange import LagrangeDynamics as sub
-            else:
-                raise UnknownNameError("backend", backend, BACKENDS)
-            return super().__new__(sub)
+            resolve = _BACKENDS.get(backend) if isinstance(backend, str) else None
+            if resolve is None:
+                raise UnknownNameError("backend", backend, backend_names())
+            return super().__new__(resolve(options))
         return super().__new__(cls)
 
     def __init__(self, model: RobotModel, backend: str | None = None, **options: Any) -> None:
@@ -82,42 +115,30 @@ class Dynamics(RegressorMethods, ABC):
         if backend is not None and backend != self.backend:
             raise UnknownNameError("backend", backend, (self.backend,))
         if options:
-            own = ", ".join(self._option_names) or "none"
-            other = "" if self.backend == "lagrange" else f"; backend='lagrange' takes {', '.join(_LAGRANGE_OPTIONS)}"
+            own = ", ".join(self.option_names) or "none"
             raise InvalidParameterError(
-                f"unknown Dynamics option(s) {sorted(options)} for backend {self.backend!r} "
-                f"(its options: {own}){other}",
+                f"unknown Dynamics option(s) {sorted(options)} for backend {self.backend!r} (its options: {own})",
                 value=dict(options),
             )
         self.model = model
         self.n = model.n
         self._shape = (self.n,)
-        self._zeros = np.zeros(self.n)
-        self._halves = np.full(self.n, 0.5)
-        fr = [j.friction for j in model.joints]
-        self._fv = np.array([f.viscous for f in fr])
-        fc_pos = np.array([f.coulomb for f in fr])
-        fc_neg = np.array([f.coulomb_neg for f in fr])
-        self._fc_mean = 0.5 * (fc_pos + fc_neg)
-        self._fc_offset = 0.5 * (fc_pos - fc_neg)
-        self._has_viscous = bool(self._fv.any())
-        self._has_coulomb = bool(self._fc_mean.any())
-        self._has_asymmetry = bool(self._fc_offset.any())
-        # ρ = δ / F_c,mean (|ρ| ≤ 1 as F_c± ≥ 0; 0 without Coulomb friction): the regressor's Coulomb column
-        # is sgn q̇ (1 + ρ sgn q̇), so that F_c,mean times it is F_c⁺ or −F_c⁻ (see _coulomb_column)
-        self._fc_ratio = np.divide(self._fc_offset, self._fc_mean, out=np.zeros(self.n), where=self._fc_mean > 0)
-        self._has_friction = self._has_viscous or self._has_coulomb
-        # τ_f = [diag F_v, diag F_c,mean (, diag F_c,offset)]·[q̇; sgn q̇ (; |sgn q̇|)]: one product where the
-        # term by term form takes five to seven array operations
-        blocks = [np.diag(self._fv), np.diag(self._fc_mean)] + (
-            [np.diag(self._fc_offset)] if self._has_asymmetry else []
-        )
-        self._friction_map = np.hstack(blocks)
+        self.friction = FrictionTerms(model)
         self._params = model.parameters()
-        # flat indices of Y[i, 13 i + c] for the rotor (c = 10), viscous (11) and Coulomb (12) columns,
-        # in a C-ordered (n, 13n) array
-        k, rows = PARAMS_PER_JOINT, np.arange(self.n)
-        self._diag_idx = np.concatenate([rows * k * self.n + k * rows + c for c in (10, 11, 12)])
+        self._local = _PerThread(self)  # this thread's kernel is made now: a backend that cannot be built fails here
+        #: NaN or inf in an input always reaches the result (the kernel's nan_propagates): checking the result of
+        #: a call suffices on the path that takes native float64 vectors as they are (see _evaluate)
+        self._propagates = self._local.kernel.nan_propagates
+
+    def new_kernel(self) -> Kernel:
+        """A new kernel (workspace) of this object's backend: what :attr:`kernel` gives each thread."""
+        raise NotImplementedError(f"{type(self).__name__} has no kernel: make Dynamics objects by armctl.Dynamics")
+
+    @property
+    def kernel(self) -> Kernel:
+        """This thread's :class:`~armctl.dynamics.kernel.Kernel`: the unchecked primitives, for code whose
+        inputs are checked already (made on first use in each thread)."""
+        return self._local.kernel
 
     def __reduce__(self) -> tuple[Any, ...]:
         # rebuilt from the (immutable) model and options: workspaces and compiled functions are not pickled
@@ -131,251 +152,247 @@ class Dynamics(RegressorMethods, ABC):
     def __repr__(self) -> str:
         return f"Dynamics({self.model.name!r}, backend={self.backend!r}, n={self.n})"
 
-    # ------------------------------------------------------------------------ backend primitives
-    @abstractmethod
-    def _mass(self, q: FloatArray) -> FloatArray: ...
-
-    @abstractmethod
-    def _coriolis(self, q: FloatArray, qd: FloatArray) -> FloatArray: ...
-
-    @abstractmethod
-    def _gravity(self, q: FloatArray) -> FloatArray: ...
-
-    @abstractmethod
-    def _rigid_torque(self, q: FloatArray, qd: FloatArray, qdd: FloatArray) -> FloatArray:
-        """M q̈ + C q̇ + g (rotors included, no friction)."""
-
-    @abstractmethod
-    def _rigid_regressor(
-        self, q: FloatArray, qd: FloatArray, qdd: FloatArray, friction: tuple[FloatArray, FloatArray] | None = None
-    ) -> FloatArray:
-        """n × 13n regressor of M q̈ + C q̇ + g; the friction columns hold ``friction`` = (v, w): the viscous
-        column's diagonal v and the Coulomb column's :meth:`_coulomb_column` of w (sgn w for a symmetric
-        friction), or zeros."""
-
-    @abstractmethod
-    def _jacobian(self, q: FloatArray, frame: str | None) -> FloatArray: ...
-
-    @abstractmethod
-    def _kinetic(self, q: FloatArray, qd: FloatArray) -> float: ...
-
-    @abstractmethod
-    def _potential(self, q: FloatArray) -> float: ...
-
-    @abstractmethod
-    def frame_pose(self, q: ArrayLike, frame: str | None = None) -> FloatArray:
-        """4×4 pose of ``frame`` (default: the tool frame) in the world."""
-
-    def _forward(self, q: FloatArray, qd: FloatArray, tau_net: FloatArray) -> FloatArray:
-        """q̈ = M⁻¹ (τ_net − C q̇ − g); backends may do better."""
-        if tau_net.shape != self._shape:  # primitives refuse wrong lengths (see the public API's fast paths)
-            raise ValueError(f"tau_net has shape {tau_net.shape}, not {self._shape}")
-        return np.linalg.solve(self._mass(q), tau_net - self._rigid_torque(q, qd, np.zeros(self.n)))
-
-    # ------------------------------------------------------------------------------- public API
-    # Hot paths are written EAFP: the backend is called with what the caller passed; only if it refuses
-    # (wrong type or size) are the inputs converted and checked, so that the error names the value. Where NaN
-    # or inf in an input always reaches the result (``_nan_propagates``), only the result is checked; the slow
-    # path then names the input. Otherwise the inputs are checked first.
-    # So every backend primitive must raise on an input of the wrong length (Pinocchio does; the Lagrange
-    # backend's evaluators check), and the fast paths only rule out what a primitive would take silently
-    # (an (n, 1) column). tests/dynamics/test_input_checks.py tries every entry and shape on both backends.
-    def _q(self, q: ArrayLike, name: str = "q") -> FloatArray:
-        return vector(q, self.n, name)
-
-    def _finite(self, x: Any, name: str) -> FloatArray:
-        """``x`` if it is already a finite float (n,) array (the fast case), else checked by :func:`vector`."""
-        try:
-            if x.dtype is _FLOAT and x.shape == self._shape and math.isfinite(sum(x.tolist())):
-                return x  # type: ignore[no-any-return]
-        except (AttributeError, TypeError):  # not an array; a masked one (tolist gives None where masked)
-            pass
+    # ---------------------------------------------------------------------------- input checks
+    # The public methods are the boundary: they check what they are given and evaluate on the kernel. An input
+    # that already is a finite native float64 (n,) vector passes with one test; anything else goes through
+    # vector(), which converts it or raises a named error.
+    def _vector(self, x: Any, name: str) -> FloatArray:
+        """``x`` as a finite float (n,) array: ``x`` itself if it is one, else converted or a named error."""
+        if type(x) is np.ndarray and x.dtype == FLOAT and x.shape == self._shape and math.isfinite(sum(x.tolist())):
+            return x
         return vector(x, self.n, name)
 
-    def _call(self, fn: Any, names: tuple[str, ...], *args: Any) -> FloatArray:
-        """``fn(*args)`` → an (n,) result, on the fast path; if ``fn`` refuses the inputs or the result is not
-        finite, check every input (raising a named error) and retry."""
-        if self._nan_propagates:
-            try:
-                for a in args:  # eigenpy would take an (n, 1) column too; Pinocchio checks the lengths but
-                    if a.ndim != 1 or a.dtype is not _FLOAT:  # reads a big-endian array's bytes as native
-                        raise TypeError
-                out = fn(*args)
-                if math.isfinite(sum(out.tolist())):  # NaN/inf anywhere in the inputs shows up here
-                    return out  # type: ignore[no-any-return]
-            except Exception:
-                pass
-        return self._checked_call(fn, names, *args)
+    def _evaluate(self, fn: Callable[..., Any], names: tuple[str, ...], *args: Any) -> Any:
+        """``fn(*args)`` (a kernel primitive) on checked inputs, its result checked: a non-finite result from
+        finite inputs is an overflow (named) or a mass matrix that is not positive definite (named).
 
-    def _checked_call(self, fn: Any, names: tuple[str, ...], *args: Any) -> FloatArray:
-        """``fn(*args)`` on checked inputs (named errors), its result checked: the slow path of :meth:`_call`."""
-        args = self._inputs(names, *args)
+        On a kernel where NaN propagates, native float64 vectors are passed as they are and only the result is
+        checked (one check instead of one per input); the inputs are checked when it is not finite."""
+        if self._propagates and _same_shape(args, self._shape):
+            try:
+                out = fn(*args)
+            except Exception:  # a length the kernel refuses, a singular M: the careful path names it
+                out = None
+            if out is not None and all_finite(out):
+                return out
+        args = tuple(self._vector(a, nm) for a, nm in zip(args, names, strict=True))
         try:
             out = fn(*args)
         except np.linalg.LinAlgError:  # the Lagrange backend's forward dynamics: M(q) singular
-            raise self._nonfinite_result(args[0], None) from None
-        if not np.isfinite(out).all():
-            raise self._nonfinite_result(args[0], out)
-        return out  # type: ignore[no-any-return]
+            raise self._local.kernel.nonfinite_error(args[0], None) from None
+        if np.isfinite(out).all():
+            return out
+        raise self._overflow(out, names, args)
 
-    def _nonfinite_result(self, q: FloatArray, out: FloatArray | None) -> ArmctlError:
-        """The error for a result that is not finite (or could not be computed) although every input is: a
-        mass matrix that is not positive definite at q is named as such, with the joint of least inertia."""
-        m = self._mass(q)
+    def _overflow(self, out: Any, names: tuple[str, ...], args: tuple[FloatArray, ...]) -> Exception:
+        """The error for a non-finite result from finite inputs ``args``."""
+        error = self._local.kernel.nonfinite_error(args[0], out)
+        if not isinstance(error, NonFiniteError):  # a mass matrix that is not positive definite
+            return error
+        big = max(range(len(args)), key=lambda i: float(np.abs(args[i]).max(initial=0.0)))
+        x = args[big]
+        j = int(np.argmax(np.abs(x)))
+        return NonFiniteError(
+            f"the result overflowed (is not finite) although every input is finite: {names[big]}[{j}] = "
+            f"{x[j]:.3g} is too large (quadratic terms of it exceed the range of floats, ~1.8e308); check its "
+            "units and scale",
+            value=x,
+        )
+
+    def check_mass_matrix(self, q: ArrayLike) -> None:
+        """Raise :class:`~armctl.errors.InvalidParameterError` if M(q) is not positive definite (naming the
+        joint of least inertia and what to give it)."""
+        qv = self._vector(q, "q")
+        k = self._local.kernel
         try:
-            np.linalg.cholesky(m)
+            np.linalg.cholesky(k.mass(qv))
         except np.linalg.LinAlgError:
-            d = np.diag(m)
-            k = int(np.argmin(d))
-            name = self.model.joints[k].name
-            return InvalidParameterError(
-                f"the mass matrix of {self.model.name!r} is not positive definite at q = {q} (smallest "
-                f"eigenvalue {np.linalg.eigvalsh(m).min():.3g}); joint {name!r} moves the least inertia (M_kk = "
-                f"{d[k]:.3g}): give the links it carries mass and inertia, or its motor a rotor inertia",
-                value=q,
-            )
-        return NonFiniteError(f"result is not finite although every input is: {out!r}", value=out)
+            raise k.nonfinite_error(qv, None) from None
 
-    def _inputs(self, names: tuple[str, ...], *args: Any) -> tuple[FloatArray, ...]:
-        """The inputs as finite (n,) arrays: one cheap test when they already are, else named errors."""
-        try:
-            total = 0.0
-            for a in args:
-                if a.shape != self._shape or a.dtype is not _FLOAT:  # e.g. an object array: converted below
-                    raise TypeError
-                total += sum(a.tolist())
-            if math.isfinite(total):
-                return args
-        except (AttributeError, TypeError):
-            pass
-        return tuple(vector(a, self.n, nm) for a, nm in zip(args, names, strict=True))
-
-    def _checked4(self, a: Any, b: Any, c: Any, d: Any) -> bool:
-        """True if the four inputs are finite float (n,) arrays already (the fast case of :meth:`_inputs`)."""
-        try:  # each sum raises TypeError unless its array is 1-D with real entries; len then fixes the length;
-            # native float64 only (Pinocchio reads a big-endian array's bytes as native; float32 would be
-            # combined in single precision)
-            return (
-                a.dtype is b.dtype is c.dtype is d.dtype is _FLOAT  # type: ignore[no-any-return]
-                and math.isfinite(sum(a.tolist()) + sum(b.tolist()) + sum(c.tolist()) + sum(d.tolist()))
-                and len(a) == len(b) == len(c) == len(d) == self.n
-            )
-        except (AttributeError, TypeError, OverflowError):  # not arrays, entries not real numbers, huge ints
-            return False
-
+    # ------------------------------------------------------------------------------- public API
     def mass_matrix(self, q: ArrayLike) -> FloatArray:
-        """M(q) (n×n, symmetric positive definite) [kg·m² / kg]."""
-        try:  # the fast path of _finite, inlined: this is called every control step. The sum of q.tolist()
-            # raises TypeError unless q is 1-D with real entries (an (n, 1) column gives a list of lists), and
-            # the backend checks the length: no shape test needed. The dtype must be native float64: Pinocchio
-            # reads a big-endian array's bytes as if they were native
-            if q.dtype is _FLOAT and math.isfinite(sum(q.tolist())):  # type: ignore[union-attr]
-                return self._mass(q)
-        except Exception:  # not an array; complex entries; a length or an object array the backend refuses
-            pass
-        return self._mass(vector(q, self.n, "q"))
+        """M(q) (n×n, symmetric positive definite) [kg·m² / kg].
+
+        Parameters
+        ----------
+        q : (n,) array_like
+            Joint positions [rad or m].
+        """
+        k = self._local.kernel
+        if type(q) is np.ndarray and q.dtype == FLOAT and q.ndim == 1 and math.isfinite(sum(q.tolist())):
+            try:  # the kernel refuses a wrong length: then vector() names it
+                return k.mass(q)
+            except ValueError:
+                pass
+        return k.mass(vector(q, self.n, "q"))
 
     def coriolis_matrix(self, q: ArrayLike, qd: ArrayLike) -> FloatArray:
-        """C(q, q̇) from the Christoffel symbols, c_ij = Σ_k ½(∂M_ij/∂q_k + ∂M_ik/∂q_j − ∂M_jk/∂q_i) q̇_k,
-        so that Ṁ − 2C is skew-symmetric."""
-        return self._coriolis(self._finite(q, "q"), self._finite(qd, "qd"))
+        """C(q, q̇) (n×n) from the Christoffel symbols, c_ij = Σ_k ½(∂M_ij/∂q_k + ∂M_ik/∂q_j − ∂M_jk/∂q_i) q̇_k,
+        so that Ṁ − 2C is skew-symmetric.
 
-    def _pd_gravity_law(self, feedback: FloatArray) -> Callable[..., FloatArray] | None:
-        """The law τ = g(q) + F·[q_d; q̇_d; q; q̇] as one fused function (q, q̇, q_d, q̇_d) → τ where the backend
-        has one (``compile=True``), else None: then :class:`~armctl.controllers.PDGravity` composes it."""
-        return None
+        Parameters
+        ----------
+        q, qd : (n,) array_like
+            Joint positions [rad or m] and velocities [rad/s or m/s].
+        """
+        return self._evaluate(self._local.kernel.coriolis, ("q", "qd"), q, qd)  # type: ignore[no-any-return]
 
     def gravity_torque(self, q: ArrayLike) -> FloatArray:
-        """g(q) = ∂U/∂q [N·m]."""
-        try:  # inlined fast path, as in mass_matrix
-            if q.dtype is _FLOAT and math.isfinite(sum(q.tolist())):  # type: ignore[union-attr]
-                return self._gravity(q)
-        except Exception:  # as in mass_matrix
-            pass
-        return self._gravity(vector(q, self.n, "q"))
+        """g(q) = ∂U/∂q [N·m or N].
+
+        Parameters
+        ----------
+        q : (n,) array_like
+            Joint positions [rad or m].
+        """
+        k = self._local.kernel
+        if type(q) is np.ndarray and q.dtype == FLOAT and q.ndim == 1 and math.isfinite(sum(q.tolist())):
+            try:  # the kernel refuses a wrong length: then vector() names it
+                return k.gravity(q)
+            except ValueError:
+                pass
+        return k.gravity(vector(q, self.n, "q"))
 
     def friction_torque(self, qd: ArrayLike) -> FloatArray:
-        """τ_f = F_v q̇ + F_c⁺ (q̇ > 0) or − F_c⁻ (q̇ < 0); zero Coulomb part at rest (the simulator handles
-        stiction)."""
-        return self._friction(self._finite(qd, "qd"))
+        """τ_f = F_v q̇ + F_c⁺ (q̇ > 0) or − F_c⁻ (q̇ < 0) [N·m or N]; zero Coulomb part at rest (the simulator
+        handles stiction).
 
-    def _friction(self, qd: FloatArray, viscous_at: FloatArray | None = None) -> FloatArray:
-        """τ_f(q̇), with the viscous part taken at ``viscous_at`` instead of q̇ if given (the Slotine–Li law
-        takes it at q̇_r)."""
-        v = qd if viscous_at is None else viscous_at
-        if self._has_coulomb:  # [F_v, F_c,mean, F_c,offset]·[v; sgn q̇; |sgn q̇|]: one product (see __init__)
-            sign = np.sign(qd)
-            if self._has_asymmetry:
-                return self._friction_map.dot(np.concatenate((v, sign, np.abs(sign))))  # type: ignore[no-any-return]
-            return self._friction_map.dot(np.concatenate((v, sign)))  # type: ignore[no-any-return]
-        return self._fv * v
+        Parameters
+        ----------
+        qd : (n,) array_like
+            Joint velocities [rad/s or m/s].
+        """
+        return self._evaluate(self.friction.torque, ("qd",), qd)  # type: ignore[no-any-return]
 
     def inverse_dynamics(
         self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, wrench: ArrayLike | None = None
     ) -> FloatArray:
-        """τ = M q̈ + C q̇ + g + τ_f(q̇) + J(q)ᵀ h_e, with ``wrench`` h_e = [f; μ] at the tool frame in
-        world-aligned axes (the force the arm exerts on the environment)."""
-        if wrench is None:
-            try:  # _call's fast path, inlined: this is called every control step
-                # ndim: an int, cheaper than comparing shape tuples; Pinocchio checks the lengths
-                if (
-                    self._nan_propagates
-                    and q.ndim == qd.ndim == qdd.ndim == 1  # type: ignore[union-attr]
-                    and q.dtype is qd.dtype is qdd.dtype is _FLOAT
-                ):  # type: ignore[union-attr]  (as in _call)
-                    out = self._rigid_torque(q, qd, qdd)
-                    if math.isfinite(out.item(0)):  # NaN/inf in any input shows up in τ₁ (_nan_propagates)
-                        if not self._has_friction:
-                            return out  # type: ignore[no-any-return]
-                        if q.__class__ is qd.__class__ is qdd.__class__ is np.ndarray:  # (masked: to the checks)
-                            out += self._friction(qd)  # type: ignore[arg-type]  (finite, length n: Pinocchio took it)
-                            return out  # type: ignore[no-any-return]
-            except Exception:
-                pass
-        q, qd, qdd = self._inputs(("q", "qd", "qdd"), q, qd, qdd)  # the checked path (as _checked_call's)
-        tau = self._rigid_torque(q, qd, qdd)
-        if self._has_friction:
-            tau += self._friction(qd)
+        """τ = M q̈ + C q̇ + g + τ_f(q̇) + J(q)ᵀ h_e [N·m or N].
+
+        Parameters
+        ----------
+        q, qd, qdd : (n,) array_like
+            Joint positions, velocities and accelerations [rad, rad/s, rad/s²; m, m/s, m/s² for prismatic].
+        wrench : (6,) array_like, optional
+            h_e = [f; μ] at the tool frame in world-aligned axes [N, N·m]: the wrench the arm exerts on the
+            environment.
+        """
+        k = self._local.kernel
+        if wrench is None and self._propagates and float_vectors(q, qd, qdd):
+            try:  # rnea refuses a wrong length: then the careful path names it
+                tau = k.rnea(q, qd, qdd)
+            except ValueError:
+                tau = None
+            if tau is not None:
+                if self.friction.any:
+                    tau += self.friction.torque(qd)
+                if math.isfinite(sum(tau.tolist())):
+                    return tau
+        tau = self._evaluate(k.inverse_dynamics, ("q", "qd", "qdd"), q, qd, qdd)
         if wrench is not None:
-            tau += self._jacobian(q, None).T @ vector(wrench, 6, "wrench")
-        if not np.isfinite(tau).all():  # finite inputs too large for floats (as _checked_call says)
-            raise self._nonfinite_result(q, tau)
-        return tau
+            qv = self._vector(q, "q")
+            tau += k.jacobian(qv, None).T @ vector(wrench, 6, "wrench")
+            if not np.isfinite(tau).all():
+                raise self._overflow(tau, ("wrench",), (vector(wrench, 6, "wrench"),))
+        return tau  # type: ignore[no-any-return]
 
     def forward_dynamics(
         self, q: ArrayLike, qd: ArrayLike, tau: ArrayLike, wrench: ArrayLike | None = None
     ) -> FloatArray:
-        """q̈ = M⁻¹ (τ − C q̇ − g − τ_f(q̇) − Jᵀ h_e). Coulomb friction here is the kinetic one
-        (sgn q̇, zero at rest); stick–slip is the simulator's business."""
-        if self._has_friction or wrench is not None:
-            q, qd, tau = self._inputs(("q", "qd", "tau"), q, qd, tau)
-            if self._has_friction:
-                tau = tau - self._friction(qd)
-            if wrench is not None:
-                tau = tau - self._jacobian(q, None).T @ vector(wrench, 6, "wrench")
-            return self._checked_call(self._forward, ("q", "qd", "tau"), q, qd, tau)
-        return self._call(self._forward, ("q", "qd", "tau"), q, qd, tau)
+        """q̈ = M⁻¹ (τ − C q̇ − g − τ_f(q̇) − Jᵀ h_e) [rad/s² or m/s²]. Coulomb friction here is the kinetic one
+        (sgn q̇, zero at rest); stick–slip is the simulator's business.
+
+        Parameters
+        ----------
+        q, qd : (n,) array_like
+            Joint positions [rad or m] and velocities [rad/s or m/s].
+        tau : (n,) array_like
+            Joint torques [N·m or N].
+        wrench : (6,) array_like, optional
+            h_e at the tool frame (see :meth:`inverse_dynamics`).
+        """
+        k = self._local.kernel
+        if not self.friction.any and wrench is None:
+            return self._evaluate(k.aba, ("q", "qd", "tau"), q, qd, tau)  # type: ignore[no-any-return]
+        q, qd, tau = (self._vector(x, nm) for x, nm in ((q, "q"), (qd, "qd"), (tau, "tau")))
+        net = tau - self.friction.torque(qd) if self.friction.any else tau
+        if wrench is not None:
+            net = net - k.jacobian(q, None).T @ vector(wrench, 6, "wrench")
+        return self._evaluate(k.aba, ("q", "qd", "tau"), q, qd, net)  # type: ignore[no-any-return]
 
     def jacobian(self, q: ArrayLike, frame: str | None = None) -> FloatArray:
-        """Geometric Jacobian (6×n) of ``frame`` (default: the tool frame) at its origin, world-aligned axes,
-        rows [linear; angular]."""
+        """Geometric Jacobian (6×n) of ``frame`` at its origin, world-aligned axes, rows [linear; angular].
+
+        Parameters
+        ----------
+        q : (n,) array_like
+            Joint positions [rad or m].
+        frame : str, optional
+            A frame of the model (default: the tool frame).
+
+        Raises
+        ------
+        UnknownNameError
+            ``frame`` is not a frame of the model (the error lists them).
+        """
         if frame is not None:
-            self.model.frame(frame)  # raises UnknownNameError listing the valid names
-        return self._jacobian(self._q(q), frame)
+            self.model.frame(frame)
+        return self._local.kernel.jacobian(self._vector(q, "q"), frame)
+
+    def frame_pose(self, q: ArrayLike, frame: str | None = None) -> FloatArray:
+        """4×4 homogeneous pose of ``frame`` (default: the tool frame) in the world [m].
+
+        Parameters
+        ----------
+        q : (n,) array_like
+            Joint positions [rad or m].
+        frame : str, optional
+            A frame of the model (default: the tool frame).
+        """
+        if frame is not None:
+            self.model.frame(frame)
+        return self._local.kernel.frame_pose(self._vector(q, "q"), frame)
 
     def kinetic_energy(self, q: ArrayLike, qd: ArrayLike) -> float:
-        """T = ½ q̇ᵀ M(q) q̇ [J] (links and rotors)."""
-        return self._kinetic(self._q(q), self._q(qd, "qd"))
+        """T = ½ q̇ᵀ M q̇ [J] (links and rotors).
+
+        Parameters
+        ----------
+        q, qd : (n,) array_like
+            Joint positions [rad or m] and velocities [rad/s or m/s].
+        """
+        return float(self._evaluate(lambda a, b: np.array(self._local.kernel.kinetic(a, b)), ("q", "qd"), q, qd))
 
     def potential_energy(self, q: ArrayLike) -> float:
         """U = −Σ m_i g₀ᵀ p_Ci [J] over the model's moving links, zero with every centre of mass at the world
         origin's height. Bodies fixed to the world are not counted, a constant: a URDF's base link, links a
-        ``reduced(lock=...)`` merged into the world (MuJoCo's energy, which counts them, differs by that)."""
-        return self._potential(self._q(q))
+        ``reduced(lock=...)`` merged into the world (MuJoCo's energy, which counts them, differs by that).
+
+        Parameters
+        ----------
+        q : (n,) array_like
+            Joint positions [rad or m].
+        """
+        return float(self._local.kernel.potential(self._vector(q, "q")))
 
     def parameters(self) -> FloatArray:
         """π of the model these dynamics evaluate (see :meth:`RobotModel.parameters`)."""
         return self._params
+
+
+class _PerThread(threading.local):
+    """Each thread's kernel of one :class:`Dynamics` (made on the thread's first use)."""
+
+    def __init__(self, dynamics: Dynamics) -> None:
+        self.kernel = dynamics.new_kernel()
+
+
+def _same_shape(args: tuple[Any, ...], shape: tuple[int]) -> bool:
+    """True if every one of ``args`` is a native float64 ndarray of ``shape`` (finite or not)."""
+    for x in args:
+        if type(x) is not np.ndarray or x.dtype != FLOAT or x.shape != shape:
+            return False
+    return True
 
 
 def _make(model: RobotModel, backend: str, options: dict[str, Any]) -> Dynamics:

@@ -7,12 +7,11 @@ with the parameters π as symbols, differentiated: τ is linear in π), compiled
 and cached on disk by the model's full fingerprint (:mod:`armctl.dynamics.codegen`; a payload or perturbed
 variant builds its own library, 2–3 s for the Panda, then milliseconds to load). Each call copies its
 inputs into fixed arrays that the C code reads in place (CasADi's zero-copy buffers) and returns a copy of
-the result: on the Panda that round trip costs about 1.5 µs, so the terms whose Pinocchio call costs little
-more stay Pinocchio's — inverse dynamics (RNEA) and the mass matrix (CRBA), measured slower compiled — as do
-the Coriolis matrix, Jacobians, frames and energies. ``python -m armctl.bench.dynamics_speed`` and
-``controller_speed`` time both variants. :class:`~armctl.controllers.PDGravity` on these dynamics runs its
-whole law τ = g(q) + F·[q_d; q̇_d; q; q̇] as one call of the generated code (F, the gains, an input of it), at
-about half the cost of composing it from the compiled g and NumPy.
+the result; the terms whose Pinocchio call costs little more than that round trip stay Pinocchio's — inverse
+dynamics (RNEA) and the mass matrix (CRBA) — as do the Coriolis matrix, Jacobians, frames and energies
+(``python -m armctl.bench.dynamics_speed`` and ``controller_speed`` time both variants).
+:class:`~armctl.controllers.PDGravity` on these dynamics runs its whole law τ = g(q) + F·[q_d; q̇_d; q; q̇] as
+one call of the generated code (F, the gains, an input of it).
 
 The model is the one the ``"pinocchio"`` backend expresses (rotors as reflected inertia, no gyroscopic
 coupling); every term agrees with Pinocchio's RNEA, ABA and regressor to rounding
@@ -23,8 +22,7 @@ Non-finite inputs: CasADi simplifies its expressions, so an output entry need no
 Panda's τ₁ does not depend on q₁: its axis is along gravity). Every output entry that is not structurally
 zero therefore carries Σ 0·xᵢ over all inputs, with the 0 an input of the code that the compiler cannot fold
 (0·x = 0 for finite x, NaN for NaN or inf): a NaN or inf in any input reaches the result, as it does through
-Pinocchio's numerical algorithms, and the fast paths of :class:`~armctl.dynamics.base.Dynamics` check the
-result only.
+Pinocchio's numerical algorithms (the kernel's ``nan_propagates``), and checking a result is enough.
 """
 
 from __future__ import annotations
@@ -38,7 +36,7 @@ import numpy as np
 
 from armctl._checks import FloatArray
 from armctl.dynamics import codegen, recursive
-from armctl.dynamics.pinocchio_backend import PinocchioDynamics
+from armctl.dynamics.pinocchio_backend import PinocchioDynamics, PinocchioKernel
 from armctl.model.robot import PARAMS_PER_JOINT, RobotModel
 
 #: bumped when the generated code changes, so that stale cached libraries are not loaded
@@ -153,50 +151,60 @@ def _bind(fn: cs.Function, n: int, out: FloatArray, consts: tuple[FloatArray, ..
     return call
 
 
-class CompiledDynamics(PinocchioDynamics):
-    """The ``"pinocchio"`` backend with gravity, forward dynamics, the passivity torque and both regressors
-    evaluated by generated C code (see the module). Made by ``armctl.Dynamics(model,
-    compile=True, cache_dir=None)``; ``cache_dir``: where compiled libraries are kept (default
-    ``$ARMCTL_CACHE`` or ``~/.cache/armctl``). Not thread-safe (each object has its own buffers): give each
-    thread its own."""
+class CompiledKernel(PinocchioKernel):
+    """The Pinocchio kernel with gravity, forward dynamics, the passivity torque and both regressors on the
+    generated code's functions ``functions`` (by name), each bound to buffers of this kernel's own."""
 
-    _compiled = True
-
-    def __init__(
-        self,
-        model: RobotModel,
-        backend: str | None = None,
-        compile: bool = True,
-        cache_dir: str | os.PathLike[str] | None = None,
-        **options: Any,
-    ) -> None:
-        super().__init__(model, backend, compile=compile, cache_dir=cache_dir, **options)
-        fns = library(model, cache_dir)
+    def __init__(self, model: RobotModel, pin_model: Any, functions: dict[str, cs.Function]) -> None:
+        super().__init__(model, pin_model)
         n = self.n
-        zero, rho = np.zeros(1), np.array(self._fc_ratio)  # (kept alive by the bound calls)
+        self._pd_function = functions["pd"]
+        self._zero = zero = np.zeros(1)
+        rho = np.array(self.friction.ratio)  # (kept alive by the bound calls)
         vec: dict[str, FloatArray] = {k: np.zeros(n) for k in ("g", "ptau", "qdd")}
-        # both regressors write Y (column-major, so Yᵀ here) into one array: the regressor probe sees either
-        y_out = np.zeros((PARAMS_PER_JOINT * n, n))
-        calls = {k: _bind(fns[k], n, vec[k], (zero,)) for k in vec}
+        y_out = np.zeros((PARAMS_PER_JOINT * n, n))  # both regressors write Y (column-major: Yᵀ here) into it
+        calls = {k: _bind(functions[k], n, vec[k], (zero,)) for k in vec}
         for k in ("Y", "Yp"):
-            calls[k] = _bind(fns[k], n, y_out, (zero, rho))
-        self._bind_primitives(calls)
-        self._regressor_probe = y_out[10, :1]  # Y[0, 10] = q̈₁ (+ the carrier): see the module
-        self._pd_function, self._zero = fns["pd"], zero
+            calls[k] = _bind(functions[k], n, y_out, (zero, rho))
+        g, qdd, self._y_call, self._yp_call, self._ptau_call = (calls[k] for k in ("g", "qdd", "Y", "Yp", "ptau"))
+        self.gravity = lambda q: g(q).copy()
+        self.aba = lambda q, qd, tau: qdd(q, qd, tau).copy()
 
-    def _pd_gravity_law(self, feedback: FloatArray) -> Callable[..., FloatArray]:
+    def regressor(
+        self, q: FloatArray, qd: FloatArray, qdd: FloatArray, friction: tuple[FloatArray, FloatArray] | None = None
+    ) -> FloatArray:
+        v, w = friction if friction is not None else (self.zeros, self.zeros)
+        return self._y_call(q, qd, qdd, v, w).T.copy(order="K")  # type: ignore[no-any-return]
+
+    def passivity_regressor(
+        self,
+        q: FloatArray,
+        qd: FloatArray,
+        qd_r: FloatArray,
+        qdd_r: FloatArray,
+        a: FloatArray,
+        w: FloatArray,
+        copy: bool = True,
+    ) -> FloatArray:
+        out = self._yp_call(q, a, w, qdd_r, qd_r, qd).T
+        return out.copy(order="K") if copy else out  # type: ignore[no-any-return]
+
+    def passivity_torque(
+        self, q: FloatArray, qd: FloatArray, qd_r: FloatArray, qdd_r: FloatArray, a: FloatArray, w: FloatArray
+    ) -> FloatArray:
+        return self.add_passivity_friction(self._ptau_call(q, a, w, qdd_r).copy(), qd, qd_r)
+
+    def pd_gravity_law(self, feedback: FloatArray) -> Callable[..., FloatArray]:
         """τ = g(q) + F·[q_d; q̇_d; q; q̇] in one call of the generated code, for a PD + gravity controller with
         feedback matrix ``feedback`` = F (n × 4n, copied): a function (q, q̇, q_d, q̇_d) → τ (a new array) on
         buffers of its own, so that each controller holds its own F; its ``feedback`` attribute is that F, to be
         overwritten in place when the gains change. One concatenation copies the four vectors into the stacked
-        input: about half the cost of composing the law from the compiled g and NumPy. The caller checks the
-        lengths (a wrong total raises ValueError; the controller's checks see to each vector's)."""
+        input. The caller checks the lengths (a wrong total raises ValueError)."""
         n = self.n
         F = np.array(feedback, dtype=float, order="F")  # CasADi reads a matrix column by column
         if F.shape != (n, 4 * n):
             raise ValueError(f"feedback matrix has shape {F.shape}, not {(n, 4 * n)}")
-        flat = F.ravel(order="K")  # F's own memory, column by column (a view: checked below)
-        assert np.shares_memory(flat, F)
+        flat = F.ravel(order="K")  # F's own memory, column by column (a view)
         buf, run = self._pd_function.buffer()
         x, out = np.zeros(4 * n), np.zeros(n)
         for k, arr in enumerate((x, self._zero, flat)):
@@ -215,44 +223,32 @@ class CompiledDynamics(PinocchioDynamics):
         law.feedback = F  # type: ignore[attr-defined]
         return law
 
+
+class CompiledDynamics(PinocchioDynamics):
+    """The ``"pinocchio"`` backend with gravity, forward dynamics, the passivity torque and both regressors
+    evaluated by generated C code (see the module). Made by ``armctl.Dynamics(model, compile=True,
+    cache_dir=None)``; ``cache_dir``: where compiled libraries are kept (default ``$ARMCTL_CACHE`` or
+    ``~/.cache/armctl``)."""
+
+    compiled = True
+
+    def __init__(
+        self,
+        model: RobotModel,
+        backend: str | None = None,
+        compile: bool = True,
+        cache_dir: str | os.PathLike[str] | None = None,
+        **options: Any,
+    ) -> None:
+        self._functions = library(model, cache_dir)
+        super().__init__(model, backend, compile=compile, cache_dir=cache_dir, **options)
+
+    def new_kernel(self) -> CompiledKernel:
+        return CompiledKernel(self.model, self.pin_model, self._functions)
+
     @property
     def options(self) -> dict[str, Any]:
         return {"compile": True, "cache_dir": self._cache_dir}
 
     def __repr__(self) -> str:
         return f"Dynamics({self.model.name!r}, backend={self.backend!r}, compile=True, n={self.n})"
-
-    def _bind_primitives(self, calls: dict[str, Callable[..., FloatArray]]) -> None:
-        """The primitives on the bound compiled functions ``calls``, as instance attributes like the plain
-        backend's (each returns a new array, as Pinocchio's do)."""
-        g, qdd, y, yp, ptau = (calls[k] for k in ("g", "qdd", "Y", "Yp", "ptau"))
-        self._gravity = lambda q: g(q).copy()  # type: ignore[method-assign]
-        self._forward = lambda q, qd, tau_net: qdd(q, qd, tau_net).copy()  # type: ignore[method-assign]
-        zeros = self._zeros
-
-        def rigid_regressor(
-            q: FloatArray, qd: FloatArray, qdd_: FloatArray, friction: tuple[FloatArray, FloatArray] | None = None
-        ) -> FloatArray:
-            v, w = friction if friction is not None else (zeros, zeros)
-            return y(q, qd, qdd_, v, w).T.copy(order="K")  # type: ignore[no-any-return]
-
-        def passivity_regressor(
-            q: FloatArray,
-            qd: FloatArray,
-            qd_r: FloatArray,
-            qdd_r: FloatArray,
-            a: FloatArray,
-            w: FloatArray,
-            copy: bool = True,
-        ) -> FloatArray:
-            out = yp(q, a, w, qdd_r, qd_r, qd).T
-            return out.copy(order="K") if copy else out  # type: ignore[no-any-return]
-
-        def passivity_torque(
-            q: FloatArray, qd: FloatArray, qd_r: FloatArray, qdd_r: FloatArray, a: FloatArray, w: FloatArray
-        ) -> FloatArray:
-            return self._add_passivity_friction(ptau(q, a, w, qdd_r).copy(), qd, qd_r)
-
-        self._rigid_regressor = rigid_regressor  # type: ignore[method-assign]
-        self._passivity_regressor = passivity_regressor  # type: ignore[method-assign]
-        self._passivity_torque = passivity_torque  # type: ignore[method-assign]

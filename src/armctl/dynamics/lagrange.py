@@ -29,7 +29,8 @@ from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray, boolean, check_cache_dir
 from armctl.dynamics import codegen
-from armctl.dynamics.base import _LAGRANGE_OPTIONS, Dynamics
+from armctl.dynamics.base import Dynamics
+from armctl.dynamics.kernel import Kernel
 from armctl.model.robot import PARAMS_PER_JOINT, RobotModel
 
 
@@ -155,17 +156,75 @@ class _Evaluator:
         return out
 
 
+class LagrangeKernel(Kernel):
+    """The primitives on the CasADi functions ``functions`` (by name) of :class:`LagrangeDynamics`, each
+    evaluated through buffers of this kernel's own, with the model's π bound where a function takes it."""
+
+    def __init__(self, model: RobotModel, functions: dict[str, cs.Function], symbols: _Symbols) -> None:
+        super().__init__(model)
+        params = model.parameters()
+        with_pi = {"M": 1, "C": 2, "g": 1, "tau": 3, "T": 2, "U": 1}
+        ev = {
+            name: _Evaluator(f, {with_pi[name]: params} if name in with_pi else None) for name, f in functions.items()
+        }
+        self._ev, self._sym = ev, symbols
+        self._frame_fns: dict[str, tuple[_Evaluator, _Evaluator]] = {}
+        self.mass = ev["M"]
+        self.coriolis = ev["C"]
+        g, tau, energy, potential = ev["g"], ev["tau"], ev["T"], ev["U"]
+        self.gravity = lambda q: g(q).reshape(-1)
+        self.rnea = lambda q, qd, qdd: tau(q, qd, qdd).reshape(-1)
+        self.aba = self.solve_aba
+        self._energy = energy
+        self.potential = lambda q: float(potential(q)[0, 0])
+
+    def kinetic(self, q: FloatArray, qd: FloatArray) -> float:
+        return float(self._energy(q, qd)[0, 0])
+
+    def regressor(
+        self, q: FloatArray, qd: FloatArray, qdd: FloatArray, friction: tuple[FloatArray, FloatArray] | None = None
+    ) -> FloatArray:
+        y = self._ev["Y"](q, qd, qdd)
+        if friction is not None:
+            y.put(self._diag_idx[self.n :], np.concatenate((friction[0], self.friction.coulomb_column(friction[1]))))
+        return y
+
+    def _frame_functions(self, frame: str | None) -> tuple[_Evaluator, _Evaluator]:
+        if frame is None:
+            return self._ev["tool_pose"], self._ev["tool_J"]
+        if frame not in self._frame_fns:
+            pose, jac = self._sym.frame(self.model, frame)
+            self._frame_fns[frame] = (
+                _Evaluator(cs.Function("pose", [self._sym.q], [cs.densify(pose)])),
+                _Evaluator(cs.Function("J", [self._sym.q], [cs.densify(jac)])),
+            )
+        return self._frame_fns[frame]
+
+    def jacobian(self, q: FloatArray, frame: str | None = None) -> FloatArray:
+        return self._frame_functions(frame)[1](q)
+
+    def frame_pose(self, q: FloatArray, frame: str | None = None) -> FloatArray:
+        return np.ascontiguousarray(self._frame_functions(frame)[0](q))
+
+
 class LagrangeDynamics(Dynamics):
     """Dynamics from the Lagrange formulation in CasADi.
 
-    rotor_coupling: include the rotors' gyroscopic coupling k_r I_m q̇_i z_mᵀω_{i−1} (default True; with
-    False the model is exactly what the ``"pinocchio"`` backend expresses). compile: generate C code and
-    compile it (cached on disk; see :func:`armctl.dynamics.codegen.compiled`). cache_dir: where compiled
-    code is cached (default ``$ARMCTL_CACHE`` or ``~/.cache/armctl``).
+    Parameters
+    ----------
+    model : RobotModel
+        The arm.
+    rotor_coupling : bool
+        Include the rotors' gyroscopic coupling k_r I_m q̇_i z_mᵀω_{i−1} (default True; with False the model is
+        exactly what the ``"pinocchio"`` backend expresses).
+    compile : bool
+        Generate C code and compile it (cached on disk; see :func:`armctl.dynamics.codegen.compiled`).
+    cache_dir : str or path, optional
+        Where compiled code is cached (default ``$ARMCTL_CACHE`` or ``~/.cache/armctl``).
     """
 
     backend = "lagrange"
-    _option_names = _LAGRANGE_OPTIONS
+    option_names = ("rotor_coupling", "compile", "cache_dir")
 
     def __init__(
         self,
@@ -177,7 +236,6 @@ class LagrangeDynamics(Dynamics):
         cache_dir: str | None = None,
         **options: Any,
     ) -> None:
-        super().__init__(model, backend, **options)
         self.rotor_coupling = boolean(rotor_coupling, "rotor_coupling")  # bool("False") would be True
         self.compiled = boolean(compile, "compile")  # checked before the build: "False" would compile
         check_cache_dir(cache_dir, self.compiled)
@@ -206,15 +264,14 @@ class LagrangeDynamics(Dynamics):
         if self.compiled:
             fns = codegen.compiled(fns, _cache_tag(model, self.rotor_coupling), cache_dir)
         self.functions: dict[str, cs.Function] = {f.name(): f for f in fns}
-        with_pi = {"M": 1, "C": 2, "g": 1, "tau": 3, "T": 2, "U": 1}
-        self._ev = {
-            f.name(): _Evaluator(f, {with_pi[f.name()]: self._params} if f.name() in with_pi else None) for f in fns
-        }
-        self._frame_fns: dict[str, tuple[_Evaluator, _Evaluator]] = {}
+        super().__init__(model, backend, **options)
+
+    def new_kernel(self) -> LagrangeKernel:
+        return LagrangeKernel(self.model, self.functions, self._sym)
 
     @staticmethod
     def is_compiled_cached(model: RobotModel, rotor_coupling: bool = True, cache_dir: str | None = None) -> bool:
-        """Whether ``compile=True`` would load a cached library (instead of compiling, ~20 s for 7 joints)."""
+        """Whether ``compile=True`` would load a cached library (instead of compiling it)."""
         from armctl.dynamics.codegen import library_path
 
         return library_path(
@@ -231,62 +288,26 @@ class LagrangeDynamics(Dynamics):
         ``regressor``, ``kinetic``, ``potential``, and the symbols ``q``, ``qd``, ``qdd``, ``pi``)."""
         return self._sym
 
-    def _mass(self, q: FloatArray) -> FloatArray:
-        return self._ev["M"](q)
-
-    def _coriolis(self, q: FloatArray, qd: FloatArray) -> FloatArray:
-        return self._ev["C"](q, qd)
-
-    def _gravity(self, q: FloatArray) -> FloatArray:
-        return self._ev["g"](q).reshape(-1)
-
-    def _rigid_torque(self, q: FloatArray, qd: FloatArray, qdd: FloatArray) -> FloatArray:
-        return self._ev["tau"](q, qd, qdd).reshape(-1)
-
-    def _rigid_regressor(
-        self, q: FloatArray, qd: FloatArray, qdd: FloatArray, friction: tuple[FloatArray, FloatArray] | None = None
-    ) -> FloatArray:
-        y = self._ev["Y"](q, qd, qdd)
-        if friction is not None:
-            y.put(self._diag_idx[self.n :], np.concatenate((friction[0], self._coulomb_column(friction[1]))))
-        return y
-
-    def _kinetic(self, q: FloatArray, qd: FloatArray) -> float:
-        return float(self._ev["T"](q, qd)[0, 0])
-
-    def _potential(self, q: FloatArray) -> float:
-        return float(self._ev["U"](q)[0, 0])
-
-    def _frame_functions(self, frame: str | None) -> tuple[_Evaluator, _Evaluator]:
-        if frame is None:
-            return self._ev["tool_pose"], self._ev["tool_J"]
-        if frame not in self._frame_fns:
-            pose, jac = self._sym.frame(self.model, frame)
-            self._frame_fns[frame] = (
-                _Evaluator(cs.Function("pose", [self._sym.q], [cs.densify(pose)])),
-                _Evaluator(cs.Function("J", [self._sym.q], [cs.densify(jac)])),
-            )
-        return self._frame_fns[frame]
-
-    def _jacobian(self, q: FloatArray, frame: str | None) -> FloatArray:
-        return self._frame_functions(frame)[1](q)
-
-    def frame_pose(self, q: ArrayLike, frame: str | None = None) -> FloatArray:
-        self.model.frame(frame)
-        return np.ascontiguousarray(self._frame_functions(frame)[0](self._q(q)))
-
     def rotor_coupling_matrix(self, q: ArrayLike) -> FloatArray:
         """The rotors' gyroscopic contribution to M (n×n, symmetric): entry (i, j) = (j, i) =
         k_r,i I_m,i z_m,iᵀ J_O,j^(i−1) for j < i, where J_O^(i−1) is the angular Jacobian of link i−1 — the
         difference between the model's M with and without the coupling. It describes the model, whatever this
-        object's ``rotor_coupling`` (with False its M leaves this term out)."""
-        qv = self._q(q)
+        object's ``rotor_coupling`` (with False its M leaves this term out).
+
+        Parameters
+        ----------
+        q : (n,) array_like
+            Joint positions [rad or m].
+        """
+        qv = self._vector(q, "q")
+        k = self.kernel
         out = np.zeros((self.n, self.n))
         for i, joint in enumerate(self.model.joints):
             if joint.motor is None or not joint.motor.gyroscopic or i == 0:
                 continue
-            z_m = self.frame_pose(qv, self.model.joints[i - 1].name)[:3, :3] @ joint.motor_axis
-            jw = self._jacobian(qv, self.model.joints[i - 1].name)[3:]
+            previous = self.model.joints[i - 1].name
+            z_m = k.frame_pose(qv, previous)[:3, :3] @ joint.motor_axis
+            jw = k.jacobian(qv, previous)[3:]
             row = joint.motor.gear_ratio * joint.motor.inertia * (z_m @ jw)
             out[i, :i] += row[:i]
             out[:i, i] += row[:i]

@@ -1,38 +1,31 @@
 """Rigid-body inverse dynamics M q̈ + C(q, q̇) q̇ + g at many states at once (private).
 
 On the Pinocchio backend: Pinocchio's ``rneaInParallel`` (one thread, a pool built from the backend's own
-model) when this Pinocchio has it, else its ``rnea`` in a loop — the function the backend's
-``inverse_dynamics`` calls, without the per-call checks. On any other backend: ``dyn.inverse_dynamics`` minus
-``dyn.friction_torque``, state by state. The tests check both against ``dyn.inverse_dynamics``.
+model) when this Pinocchio has it; else the kernel's ``rnea`` state by state. The tests check both against
+``dyn.inverse_dynamics``.
 """
 
 from __future__ import annotations
 
 import numpy as np
+import pinocchio as pin
 
 from armctl._checks import FloatArray
 from armctl.dynamics.base import Dynamics
+from armctl.dynamics.pinocchio_backend import PinocchioKernel
 
 
 def rigid_torques(dyn: Dynamics, q: FloatArray, qd: FloatArray, qdd: FloatArray) -> FloatArray:
     """(m, n) torques of the rigid-body dynamics (rotors included, no friction) at the m rows of q, q̇, q̈."""
     m, n = q.shape
-    if dyn.backend == "pinocchio":
-        import pinocchio as pin
-
-        pm = dyn.pin_model  # type: ignore[attr-defined]
-        if hasattr(pin, "rneaInParallel") and hasattr(pin, "ModelPool"):
-            tau = np.zeros((n, m), order="F")
-            cols = [np.asfortranarray(a.T) for a in (q, qd, qdd)]
-            pin.rneaInParallel(1, pin.ModelPool(pm, 1), *cols, tau)
-            return tau.T
-        pd = dyn.pin_data  # type: ignore[attr-defined]
-        q, qd, qdd = (np.ascontiguousarray(a) for a in (q, qd, qdd))
-        return np.array([pin.rnea(pm, pd, q[k], qd[k], qdd[k]) for k in range(m)]).reshape(m, n)
-    out = np.empty((m, n))
-    for k in range(m):
-        out[k] = dyn.inverse_dynamics(q[k], qd[k], qdd[k]) - dyn.friction_torque(qd[k])
-    return out
+    kernel = dyn.kernel
+    if isinstance(kernel, PinocchioKernel) and hasattr(pin, "rneaInParallel") and hasattr(pin, "ModelPool"):
+        tau = np.zeros((n, m), order="F")
+        cols = [np.asfortranarray(a.T) for a in (q, qd, qdd)]
+        pin.rneaInParallel(1, pin.ModelPool(kernel.pin_model, 1), *cols, tau)
+        return tau.T
+    q, qd, qdd = (np.ascontiguousarray(a, dtype=float) for a in (q, qd, qdd))
+    return np.array([kernel.rnea(q[k], qd[k], qdd[k]) for k in range(m)]).reshape(m, n)
 
 
 def friction_torques(dyn: Dynamics, qd: FloatArray, direction: FloatArray | None = None) -> FloatArray:

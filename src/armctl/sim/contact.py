@@ -19,10 +19,12 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+import pinocchio as pin
 from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray, boolean, readonly, real_array, scalar
 from armctl.dynamics.base import Dynamics
+from armctl.dynamics.pinocchio_backend import PinocchioKernel
 from armctl.errors import InvalidParameterError
 from armctl.model.robot import RobotModel
 from armctl.sim.normal_force import NormalForce
@@ -61,18 +63,11 @@ class PointKinematics:
         #: 1-based joint each point rides on (0: the world)
         self.joints = np.array([dyn.model.frame(p.frame).joint for p in self.points])
         self._pin = None
-        if getattr(dyn, "backend", "") == "pinocchio":
-            import pinocchio as pin
-
-            ids = [dyn._frame_id(f) for f in self.frames]  # type: ignore[attr-defined]
+        self._kernel = kernel = dyn.kernel
+        if isinstance(kernel, PinocchioKernel):  # Pinocchio's frame Jacobian leaves the frame's pose in its data
+            ids = [kernel.frame_id(f) for f in self.frames]
             if all(i != 0 for i in ids):
-                self._pin = (
-                    pin.computeFrameJacobian,
-                    dyn.pin_model,
-                    dyn.pin_data,
-                    ids,  # type: ignore[attr-defined]
-                    pin.LOCAL_WORLD_ALIGNED,
-                )
+                self._pin = (pin.computeFrameJacobian, kernel.pin_model, kernel.pin_data, ids, pin.LOCAL_WORLD_ALIGNED)
 
     def __call__(self, q: FloatArray) -> list[tuple[FloatArray, FloatArray]]:
         """[(p, J_p)] for every point at configuration q."""
@@ -84,9 +79,10 @@ class PointKinematics:
                 oMf = pd.oMf[fid]
                 frames.append((oMf.translation, oMf.rotation, jac))
         else:
+            k = self._kernel
             for f in self.frames:
-                pose = self.dyn.frame_pose(q, f)
-                frames.append((pose[:3, 3], pose[:3, :3], self.dyn._jacobian(q, f)))
+                pose = k.frame_pose(q, f)
+                frames.append((pose[:3, 3], pose[:3, :3], k.jacobian(q, f)))
         out = []
         for point, slot in zip(self.points, self._slot, strict=True):
             origin, rot, jac = frames[slot]

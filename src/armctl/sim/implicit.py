@@ -22,8 +22,8 @@ def implicit_euler(
     n = plant.n
     if plant.all_stuck:
         return q, v, None, 0.0, 0.0
-    mass = plant._mass(q)
-    base = tau - plant._rigid(q, v, plant._zeros)  # τ − C q̇ − g, explicit
+    mass = plant.mass(q)
+    base = tau - plant.rnea(q, v, plant.zeros)  # τ − C q̇ − g, explicit
     fr = plant.friction
     stuck = plant.stuck
     if plant.simple:  # nothing implicit to solve: one linear solve
@@ -31,7 +31,7 @@ def implicit_euler(
         return q + h * v1, v1, None, 0.0, 0.0
     t1 = t + h
     v1 = v.copy()
-    f = e = plant._zeros
+    f = e = plant.zeros
     for _ in range(NEWTON_MAX_ITER):
         q1 = q + h * v1
         jac = mass.copy()
@@ -66,19 +66,19 @@ def symplectic_euler(
     """One step of symplectic Euler in momentum form (see :mod:`armctl.sim.integrators`)."""
     if plant.all_stuck:
         return q, v, None, 0.0, 0.0
-    dyn = plant.dyn
+    kernel = plant.kernel
     n = plant.n
-    mass = plant._mass(q)
-    base = tau - dyn._gravity(q)
+    mass = plant.mass(q)
+    base = tau - kernel.gravity(q)
     p0 = mass @ v
     stuck = plant.stuck
     if plant.simple:
         return _symplectic_conservative(plant, q, v, mass, base, p0, h)
     vb = v.copy()
-    f = e = plant._zeros
+    f = e = plant.zeros
     kj = None
     for _ in range(NEWTON_MAX_ITER):
-        force = base + dyn._coriolis(q, vb).T @ vb
+        force = base + kernel.coriolis(q, vb).T @ vb
         jac = mass.copy()
         if plant.friction is not None:
             f = plant.kinetic_friction(vb)
@@ -99,7 +99,7 @@ def symplectic_euler(
     if stuck is not None:
         vb[stuck] = 0.0
     q1 = q + h * vb
-    v1 = constrained_accel(plant._mass(q1), mass @ vb, stuck)
+    v1 = constrained_accel(plant.mass(q1), mass @ vb, stuck)
     wf = -h * float(vb @ f) if plant.friction is not None else 0.0
     we = 0.0
     if plant.has_external:  # the trapezoid in q of the force at v̄, τ_e(q₁) ≈ τ_e(q) + K h v̄: exact for a linear
@@ -118,7 +118,7 @@ def _symplectic_conservative(
     chol, info = lapack.dpotrf(mass)
     if info != 0:
         raise NotPositiveDefinite(f"mass matrix not positive definite (LAPACK info {info})")
-    coriolis = plant.dyn._coriolis
+    coriolis = plant.kernel.coriolis
     vb = v
     for _ in range(NEWTON_MAX_ITER):
         new = lapack.dpotrs(chol, p0 + h * (base + coriolis(q, vb).T @ vb))[0]
@@ -129,7 +129,7 @@ def _symplectic_conservative(
     else:
         plant.stats["implicit_unconverged"] += 1
     q1 = q + h * vb
-    return q1, constrained_accel(plant._mass(q1), mass @ vb, None), None, 0.0, 0.0
+    return q1, constrained_accel(plant.mass(q1), mass @ vb, None), None, 0.0, 0.0
 
 
 def _newton_update(

@@ -118,7 +118,7 @@ def fast_step(name: str, plant: Plant) -> Callable[..., tuple[FloatArray, FloatA
     that calls the backend's forward dynamics directly (the simulator's hot path); else None."""
     if not plant.simple or name not in ("rk4", "euler"):
         return None
-    fwd = plant._forward
+    fwd = plant.forward
     # RK4 as linear combinations of the rows [q, q̇, a₁, a₂, a₃, a₄] of one array: each stage's (q, q̇) is one
     # small matrix product of the rows computed so far, instead of four vector operations (which dominated).
     # Two such arrays take turns: a step writes its (q₁, q̇₁) straight into the first two rows of the other,
@@ -171,7 +171,7 @@ def make_step(name: str, plant: Plant) -> Step:
         return lambda t, q, v, tau, h: implicit_euler(plant, t, q, v, tau, h)
     if name == "rk4":
         if plant.simple:
-            fwd = plant._forward
+            fwd = plant.forward
 
             def f(t: float, q: FloatArray, v: FloatArray, tau: FloatArray) -> FloatArray:
                 return fwd(q, v, tau)  # type: ignore[no-any-return]
@@ -182,7 +182,7 @@ def make_step(name: str, plant: Plant) -> Step:
         return lambda t, q, v, tau, h: symplectic_euler(plant, t, q, v, tau, h)
     if name == "euler":
         if plant.simple:
-            fwd = plant._forward
+            fwd = plant.forward
             return lambda t, q, v, tau, h: (
                 *semi_implicit_euler(lambda t, q, v, tau: fwd(q, v, tau), t, q, v, tau, h),
                 0.0,

@@ -59,9 +59,11 @@ class Plant:
         self.simple = self.friction is None and not self.has_external
         self._zeros = np.zeros(n)
         self._capable = self.sticky.capable.astype(float) if self.sticky is not None else self._zeros
-        self._forward = dyn._forward
-        self._mass = dyn._mass
-        self._rigid = dyn._rigid_torque
+        self.kernel = k = dyn.kernel
+        self.forward = k.aba
+        self.mass = k.mass
+        self.rnea = k.rnea
+        self.zeros = k.zeros
         self.direction = np.zeros(n)
         self._stickslip = isinstance(f, StickSlip)
         self._fv = f.viscous if f is not None else self._zeros
@@ -91,7 +93,7 @@ class Plant:
         for env, kin in zip(self.environments, self.kinematics, strict=True):
             tau += env.joint_torque(kin, q, qd)[0]
         if self.disturbance is not None:
-            tau -= self.dyn._jacobian(q, None).T @ self.disturbance_wrench(t)
+            tau -= self.kernel.jacobian(q, None).T @ self.disturbance_wrench(t)
         return tau
 
     def external_stiffness(self, t: float, q: FloatArray, qd: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
@@ -104,7 +106,7 @@ class Plant:
             kj += ke  # type: ignore[operator]
             dj += de  # type: ignore[operator]
         if self.disturbance is not None:
-            tau -= self.dyn._jacobian(q, None).T @ self.disturbance_wrench(t)
+            tau -= self.kernel.jacobian(q, None).T @ self.disturbance_wrench(t)
         return tau, kj, dj
 
     def friction_torque(self, qd: FloatArray) -> FloatArray:
@@ -155,8 +157,8 @@ class Plant:
         net = tau - self.kinetic_friction(qd)
         if self.has_external:
             net = net + self.external(t, q, qd)
-        rhs = net - self._rigid(q, qd, self._zeros)
-        stuck, direction, lam = solve_sticking(sticky, self._mass(q), rhs, cand, self.direction, held)
+        rhs = net - self.rnea(q, qd, self.zeros)
+        stuck, direction, lam = solve_sticking(sticky, self.mass(q), rhs, cand, self.direction, held)
         self.stats["breakaway_events"] += int((cand & ~stuck).sum())
         self._set_direction(direction)
         self.hold = lam
@@ -211,10 +213,10 @@ class Plant:
 
     def _solve(self, q: FloatArray, qd: FloatArray, net: FloatArray) -> FloatArray:
         if self.stuck is None:
-            return self._forward(q, qd, net)  # type: ignore[no-any-return]
+            return self.forward(q, qd, net)  # type: ignore[no-any-return]
         if self.all_stuck:
             return np.zeros(self.n)
-        return constrained_accel(self._mass(q), net - self._rigid(q, qd, self._zeros), self.stuck)
+        return constrained_accel(self.mass(q), net - self.rnea(q, qd, self.zeros), self.stuck)
 
     def kinetic(self, q: FloatArray, qd: FloatArray) -> float:
-        return 0.5 * float(qd @ self._mass(q) @ qd)
+        return 0.5 * float(qd @ self.mass(q) @ qd)

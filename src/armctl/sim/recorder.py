@@ -161,7 +161,8 @@ def energies(dyn: Dynamics, q: FloatArray, qd: FloatArray) -> FloatArray:
     armature (Pinocchio does not count armature consistently there); ½q̇ᵀMq̇ from CRBA otherwise."""
     pm = getattr(dyn, "pin_model", None)
     if pm is None:
-        return np.array([dyn._kinetic(p, v) + dyn._potential(p) for p, v in zip(q, qd, strict=True)])
+        k = dyn.kernel
+        return np.array([k.kinetic(p, v) + k.potential(p) for p, v in zip(q, qd, strict=True)])
     import pinocchio as pin
 
     pd = pm.createData()

@@ -127,10 +127,7 @@ def simulate(
     q, v = setup.initial_state(q0, qd0, ref0, n, qmax, vmax)
     setup.warn_outside_limits(dyn.model, q)
     seed = setup.seed_value(seed)
-    try:  # a plant whose M is singular from the start is a model to fix, not a run that diverged
-        np.linalg.cholesky(dyn.mass_matrix(q))
-    except np.linalg.LinAlgError:
-        raise dyn._nonfinite_result(q, None) from None
+    dyn.check_mass_matrix(q)  # a plant whose M is singular from the start is a model to fix, not a run that diverged
     sc = setup.scene(dyn, friction, environment, sensors, disturbance)
 
     pl = Plant(dyn, sc.friction, sc.environments, sc.disturbance)

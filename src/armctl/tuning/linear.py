@@ -37,10 +37,8 @@ def linearize(dyn: Dynamics, q0: ArrayLike, step: float = 1e-6) -> Any:
             f"step must be in [1e-10, 0.1] rad for central differences of g, got {step:g}", value=step
         )
     n = dyn.n
-    try:
-        m_inv = np.linalg.inv(dyn.mass_matrix(q0))
-    except np.linalg.LinAlgError:
-        raise dyn._nonfinite_result(q0, None) from None  # names the singular mass matrix
+    dyn.check_mass_matrix(q0)  # names a singular mass matrix
+    m_inv = np.linalg.inv(dyn.mass_matrix(q0))
     dg = np.empty((n, n))
     for j in range(n):
         e = np.zeros(n)

@@ -55,7 +55,7 @@ class ClosedFormOSC(Controller):
         try:
             minv_jt = np.linalg.solve(M, J.T)
         except np.linalg.LinAlgError:
-            raise self.dynamics._nonfinite_result(q, None) from None  # type: ignore[union-attr]  (names M)
+            raise self.dynamics.kernel.nonfinite_error(q) from None  # type: ignore[union-attr]  (names M)
         lam_inv = J @ minv_jt
         try:
             lam = np.linalg.inv(lam_inv)

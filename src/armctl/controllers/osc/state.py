@@ -127,7 +127,7 @@ class ModelEvaluator:
         """Model terms at (q, q̇), which must be finite float (n,) arrays: the controller's ``__call__``,
         ``build`` and ``solve`` check them before they get here, and nothing is checked again (a NaN here gives
         NaN terms, not an error)."""
-        fr = self.dynamics._friction(qd) if self.has_friction else None
+        fr = self.dynamics.friction.torque(qd) if self.has_friction else None
         if self._pin is not None:
             pd = self._pd
             self._pin.computeAllTerms(self._pm, pd, q, qd)

@@ -44,7 +44,7 @@ def identification_regressor(dynamics: Dynamics, q: FloatArray, qd: FloatArray, 
     unknowns of their own, so it must not take the ratio of the two levels from the model, which the
     regressor's Coulomb column of an asymmetric friction carries (:meth:`~armctl.Dynamics.coulomb_column`)."""
     y = dynamics.regressor(q, qd, qdd)
-    if dynamics._has_asymmetry:
+    if dynamics.friction.has_asymmetry:
         joints = np.arange(dynamics.n)
         y[joints, PARAMS_PER_JOINT * joints + PARAMS_PER_JOINT - 1] = np.sign(qd)
     return y
