@@ -86,3 +86,9 @@ class IdentifiabilityError(ArmctlError, ValueError):
 class SimulationWarning(UserWarning):
     """A simulation ran, but part of its result is not to be trusted (e.g. an explicit integrator beyond its
     stability limit on a stiff contact); the result's ``info`` says which part and how to fix it."""
+
+
+class CacheWarning(UserWarning):
+    """A compiled library found in the cache failed its checks (truncated, altered, built for another model)
+    and was rebuilt; the message names the file and what was wrong with it. Nothing to fix: the rebuilt
+    library is used and cached."""

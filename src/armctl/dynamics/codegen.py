@@ -2,28 +2,56 @@
 
 The cache key is the model's fingerprint, the backend options, the CasADi version and the compiler flags,
 so a changed model rebuilds and an unchanged one loads in milliseconds. The cache lives in
-``$ARMCTL_CACHE`` (default ``~/.cache/armctl``); it is safe to delete.
+``$ARMCTL_CACHE`` (default ``~/.cache/armctl``), in its ``casadi`` folder; it is safe to delete.
+
+A library is opened only after it is checked (:mod:`armctl.dynamics.library_cache`): its record's SHA-256 and
+key before the dynamic loader sees it, the key generated into it after. A library that fails a check is
+rebuilt with a :class:`~armctl.errors.CacheWarning`; a freshly compiled library that fails to load or holds
+the wrong key is never cached and raises :class:`~armctl.errors.BackendError` naming the compiler. Loaded
+libraries are kept for the life of the process, so each is checked once per process.
 """
 
 from __future__ import annotations
 
-import functools
 import hashlib
 import os
 import shutil
 import subprocess
 import tempfile
+import threading
+import warnings
+from collections import OrderedDict
 from collections.abc import Callable
 from pathlib import Path
 
 import casadi as cs
 
-from armctl.errors import BackendError, InvalidParameterError
+from armctl.dynamics import library_cache
+from armctl.errors import BackendError, CacheWarning, InvalidParameterError
 
 CFLAGS = ("-O1", "-fPIC", "-shared")
+#: bumped when what a library holds besides the user's functions changes (the key function)
+_LAYOUT = 2
+#: libraries loaded by this process, by path, most recently used last (at most _KEEP)
+_loaded: OrderedDict[Path, dict[str, cs.Function]] = OrderedDict()
+_KEEP = 64
+#: folders whose stale temporary folders this process has cleaned
+_cleaned: set[Path] = set()
+#: one thread of the process loads or builds at a time (builds across processes: the build lock)
+_mutex = threading.Lock()
+
+
+def _after_fork() -> None:  # a child forked while another thread held the mutex would wait for it forever
+    global _mutex
+    _mutex = threading.Lock()
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_after_fork)
 
 
 def cache_root(cache_dir: str | os.PathLike[str] | None = None) -> Path:
+    """The cache folder: ``cache_dir`` if given, else ``$ARMCTL_CACHE``, else ``~/.cache/armctl``."""
     if cache_dir is not None:
         try:
             return Path(os.fspath(cache_dir))
@@ -35,10 +63,21 @@ def cache_root(cache_dir: str | os.PathLike[str] | None = None) -> Path:
     return Path(env) if env else Path.home() / ".cache" / "armctl"
 
 
+def cache_key(names: list[str], tag: str) -> str:
+    """The full key (SHA-256, 64 hex digits) of the library of the functions ``names`` with cache ``tag``."""
+    return hashlib.sha256(f"{tag}|{cs.__version__}|{CFLAGS}|{names}|{_LAYOUT}".encode()).hexdigest()
+
+
 def library_path(names: list[str], tag: str, cache_dir: str | os.PathLike[str] | None = None) -> Path:
-    """Where the compiled library of the functions ``names`` with cache ``tag`` lives (it may not exist yet)."""
-    key = hashlib.sha256(f"{tag}|{cs.__version__}|{CFLAGS}|{names}".encode())
-    return cache_root(cache_dir) / "casadi" / f"armctl_{key.hexdigest()[:20]}.so"
+    """Where the compiled library of the functions ``names`` with cache ``tag`` lives (it may not exist yet): an
+    absolute path (CasADi looks for a relative one in its own folders first)."""
+    return cache_root(cache_dir).absolute() / "casadi" / f"armctl_{cache_key(names, tag)[:20]}.so"
+
+
+def is_cached(names: list[str], tag: str, cache_dir: str | os.PathLike[str] | None = None) -> bool:
+    """Whether the library of ``names`` and ``tag`` is cached and passes its checksum (loading it would not
+    compile)."""
+    return library_cache.check(library_path(names, tag, cache_dir), cache_key(names, tag)) is None
 
 
 def compiled(
@@ -55,29 +94,45 @@ def cached(
 ) -> dict[str, cs.Function]:
     """The compiled functions ``names`` by name, from the library of ``tag``; ``make()`` (the symbolic
     functions, in the order of ``names``) is called only if the library is not cached yet, so that loading does
-    not pay for building the symbolic model (0.2 s for 7 joints)."""
+    not pay for building the symbolic model (0.2 s for 7 joints).
+
+    Raises
+    ------
+    BackendError
+        No C compiler, a compiler that fails or writes something that is not the library, or a cache folder
+        that cannot be written to when a library has to be built.
+
+    Warns
+    -----
+    CacheWarning
+        The cached library failed its checks (truncated, altered, foreign) and was rebuilt.
+    """
+    names = list(names)
     lib = library_path(names, tag, cache_dir)
-    if not lib.exists():
-        build(make(), lib)
-    return {name: _load(name, str(lib)) for name in names}
+    with _mutex:
+        found = _loaded.get(lib)
+        if found is None:
+            found = _load_or_build(names, cache_key(names, tag), lib, make)
+            _loaded[lib] = found
+            while len(_loaded) > _KEEP:
+                _loaded.popitem(last=False)
+        else:
+            _loaded.move_to_end(lib)
+    return dict(found)
 
 
-@functools.lru_cache(maxsize=64)
-def _load(name: str, path: str) -> cs.Function:
-    return cs.external(name, path)
-
-
-def build(functions: list[cs.Function], lib: Path) -> None:
-    """Generate C code for ``functions`` and compile it into the shared library ``lib`` (replaced atomically:
-    concurrent builders never load a half-written library)."""
-    cc = shutil.which(os.environ.get("CC", "cc")) or shutil.which("gcc")
-    folder, name = lib.parent, lib.stem
-    if cc is None:
-        raise BackendError(
-            "compiling generated code needs a C compiler (cc or gcc on PATH, or $CC): install "
-            "one, or do without compiled code (compile=False)",
-            value=None,
-        )
+def _load_or_build(
+    names: list[str], key: str, lib: Path, make: Callable[[], list[cs.Function]]
+) -> dict[str, cs.Function]:
+    """The functions from ``lib`` if it passes its checks, else from a fresh build (under the build lock)."""
+    folder = lib.parent
+    if folder not in _cleaned:
+        _cleaned.add(folder)
+        library_cache.clean_stale(folder)
+    if library_cache.check(lib, key) is None:
+        found, _ = _open(lib, names, key)
+        if found is not None:
+            return found
     try:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as e:
@@ -86,15 +141,106 @@ def build(functions: list[cs.Function], lib: Path) -> None:
             "writable cache_dir or set $ARMCTL_CACHE",
             value=str(folder),
         ) from None
-    with tempfile.TemporaryDirectory(dir=folder) as tmp:
-        gen = cs.CodeGenerator(f"{name}.c", {"with_header": False})
+    with library_cache.build_lock(lib):  # another process may be building it: wait, then look again
+        reason = library_cache.check(lib, key)
+        if reason is None:
+            found, reason = _open(lib, names, key)
+            if found is not None:
+                return found
+        if reason != library_cache.MISSING:
+            warnings.warn(
+                f"the cached compiled library {str(lib)!r} cannot be trusted ({reason}); rebuilding it",
+                CacheWarning,
+                stacklevel=4,
+            )
+        library_cache.clean_stale(folder)
+        return build(make(), lib, key)
+
+
+def _open(path: Path, names: list[str], key: str) -> tuple[dict[str, cs.Function] | None, str | None]:
+    """The functions ``names`` loaded from the library ``path`` and the reason (None) if it loads and its key
+    function returns ``key``; (None, the reason) if not."""
+    try:
+        found = {name: cs.external(name, str(path)) for name in names}
+        stamp = cs.external(library_cache.KEY_FUNCTION, str(path))
+    except RuntimeError as e:
+        return None, f"it does not load: {_loader_error(str(e), str(path))}"
+    if not library_cache.key_matches(stamp, key):
+        return None, "the key generated into it is another model's"
+    return found, None
+
+
+def _loader_error(message: str, path: str) -> str:
+    """What the dynamic loader said about ``path`` in CasADi's ``message`` (which lists every folder it tried)."""
+    for line in message.splitlines():
+        head, _, said = line.strip().partition(f"{path}: ")
+        if head == "Error code: " and said:
+            return said
+    return message.strip().splitlines()[-1][:300]
+
+
+def _compiler() -> str:
+    cc = shutil.which(os.environ.get("CC", "cc")) or shutil.which("gcc")
+    if cc is None:
+        raise BackendError(
+            "compiling generated code needs a C compiler (cc or gcc on PATH, or $CC): install "
+            "one, or do without compiled code (compile=False)",
+            value=None,
+        )
+    return cc
+
+
+def build(functions: list[cs.Function], lib: Path, key: str) -> dict[str, cs.Function]:
+    """Generate C code for ``functions`` (and the key function of ``key``), compile it into a temporary
+    folder beside ``lib``, load it from there and check its key, then publish it as ``lib`` (renamed: never
+    seen half-written) with its record. Returns the loaded functions by name. The caller holds the build lock.
+
+    Raises
+    ------
+    BackendError
+        No C compiler; the compiler failed, or exited without error but wrote no library, one that does not
+        load, or one that holds another key (nothing is cached then); the folder cannot be written to.
+    """
+    cc = _compiler()
+    folder, stem = lib.parent, lib.stem
+    try:
+        tmp = Path(tempfile.mkdtemp(prefix=f"{stem}-", suffix=".build", dir=folder))
+    except OSError as e:
+        raise library_cache.unwritable(folder, e) from None
+    try:
+        gen = cs.CodeGenerator(f"{stem}.c", {"with_header": False})
         for f in functions:
             gen.add(f)
-        src = Path(gen.generate(tmp + os.sep))
-        tmp_lib = Path(tmp) / f"{name}.so"
+        gen.add(library_cache.key_function(key))
+        try:
+            src = Path(gen.generate(str(tmp) + os.sep))
+        except RuntimeError as e:
+            raise BackendError(f"cannot write generated code into {str(tmp)!r}: {e}", value=str(folder)) from None
+        tmp_lib = tmp / f"{stem}.so"
         proc = subprocess.run(
             [cc, *CFLAGS, str(src), "-o", str(tmp_lib), "-lm"], capture_output=True, text=True, check=False
         )
         if proc.returncode != 0:
             raise BackendError(f"compiling generated code failed ({cc}): {proc.stderr[-2000:]}", value=str(src))
-        os.replace(tmp_lib, lib)
+        names = [f.name() for f in functions]
+        try:
+            data = tmp_lib.read_bytes()
+        except OSError:
+            found, reason = None, "wrote no library"
+        else:
+            found, reason = _open(tmp_lib, names, key)
+            reason = reason and f"wrote a library that cannot be used: {reason}"
+        if found is None:
+            raise BackendError(
+                f"the C compiler {cc!r} exited without error but {reason}; nothing was cached: set $CC to a "
+                "working C compiler (e.g. gcc or clang), or do without compiled code (compile=False)",
+                value=cc,
+            )
+        try:
+            os.replace(tmp_lib, lib)  # loaded from its temporary name: the mapping stays valid
+            library_cache.write_record(lib, key, data, tmp)
+        except OSError as e:
+            raise library_cache.unwritable(folder, e) from None
+        return found
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)

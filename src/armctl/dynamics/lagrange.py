@@ -272,11 +272,9 @@ class LagrangeDynamics(Dynamics):
     @staticmethod
     def is_compiled_cached(model: RobotModel, rotor_coupling: bool = True, cache_dir: str | None = None) -> bool:
         """Whether ``compile=True`` would load a cached library (instead of compiling it)."""
-        from armctl.dynamics.codegen import library_path
-
-        return library_path(
+        return codegen.is_cached(
             list(_FUNCTION_NAMES), _cache_tag(model, boolean(rotor_coupling, "rotor_coupling")), cache_dir
-        ).exists()
+        )
 
     @property
     def options(self) -> dict[str, Any]:
