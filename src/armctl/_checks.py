@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import datetime
 import math
+import os
 from typing import Any
 
 import numpy as np
@@ -287,4 +288,44 @@ def check_cache_dir(cache_dir: object, compile: bool) -> None:
         raise InvalidParameterError(
             f"cache_dir={cache_dir!r} is where compile=True keeps its code: pass compile=True too, or no cache_dir",
             value=cache_dir,
+        )
+
+
+def memory_limit() -> float:
+    """The memory [bytes] a process may use at most: the machine's physical memory, or a smaller limit of its
+    control group (a container's); inf where neither can be read."""
+    limit = math.inf
+    try:
+        limit = float(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
+    except (AttributeError, ValueError, OSError):  # no sysconf (Windows)
+        pass
+    for path in ("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory/memory.limit_in_bytes"):
+        try:
+            with open(path) as f:
+                text = f.read().strip()
+            if text.isdigit():
+                limit = min(limit, float(text))
+        except OSError:
+            pass
+    return limit
+
+
+def byte_size(nbytes: float) -> str:
+    """A size for people: 3.2 GB, 1.4 TB, …"""
+    for unit in ("B", "kB", "MB", "GB", "TB", "PB"):
+        if nbytes < 1000.0 or unit == "PB":
+            return f"{nbytes:.3g} {unit}"
+        nbytes /= 1000.0
+    raise AssertionError  # pragma: no cover
+
+
+def check_memory(nbytes: float, what: str, fix: str, value: Any) -> None:
+    """Raise an InvalidParameterError before a request allocates more than :func:`memory_limit`: ``what`` names
+    the request ("duration = 1e7 s …"), ``fix`` says how to make it smaller."""
+    limit = memory_limit()
+    if nbytes > limit:
+        raise InvalidParameterError(
+            f"{what} needs at least {byte_size(nbytes)} of memory, more than the {byte_size(limit)} this machine "
+            f"has: {fix}",
+            value=value,
         )
