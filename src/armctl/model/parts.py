@@ -100,7 +100,8 @@ def inertia_tensor(x: ArrayLike, name: str = "inertia", triangle: bool = True) -
     if triangle and ev[0] + ev[1] < ev[2] - tol:
         raise InvalidParameterError(
             f"{name} violates the triangle inequality of principal moments: {ev[0]:g} + {ev[1]:g} < {ev[2]:g};"
-            " no rigid body has these moments (check units and which axis is which)",
+            " no rigid body has these moments (check units and which axis is which; physical=False takes them,"
+            " as some published data sets need)",
             value=x,
         )
     return readonly(a)

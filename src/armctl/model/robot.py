@@ -160,16 +160,23 @@ class RobotModel:
         lock: Sequence[str] | Mapping[str, float] = (),
         gravity: ArrayLike = (0, 0, -9.81),
         name: str | None = None,
+        physical: bool = True,
     ) -> RobotModel:
         """A model from a URDF file through Pinocchio's parser. ``lock``: joints held fixed (a name, names, or a
         mapping name → position; checked as in :meth:`reduced`). URDF ``<dynamics damping friction>`` become
         viscous and Coulomb friction. Every link and fixed joint becomes a named frame, those fixed to the
         world included (the base link, and with the first joint locked its link and the locked joint's frame);
         a root link called ``"world"`` is the model's own ``"world"`` frame (a ``"world"`` frame elsewhere raises
-        :class:`~armctl.errors.ModelLoadError`)."""
+        :class:`~armctl.errors.ModelLoadError`). ``physical``: False accepts link inertias that violate the
+        triangle inequality, as published data sets have some (see :class:`~armctl.model.parts.Link`).
+
+        The file is checked before Pinocchio reads it (:mod:`armctl.model.urdf_checks`): a number it cannot read
+        (an ``<inertial>`` that would leave its link massless), duplicate or missing names, a link called
+        ``universe``, and a ``<mimic>`` joint not given in ``lock`` (a model's joints are independent) raise
+        :class:`~armctl.errors.ModelLoadError` naming the link or joint."""
         from armctl.model.urdf import model_from_urdf
 
-        return model_from_urdf(path, tool_frame=tool_frame, lock=lock, gravity=gravity, name=name)
+        return model_from_urdf(path, tool_frame=tool_frame, lock=lock, gravity=gravity, name=name, physical=physical)
 
     # ------------------------------------------------------------------------------------------ queries
     @property
