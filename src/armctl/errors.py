@@ -86,3 +86,8 @@ class IdentifiabilityError(ArmctlError, ValueError):
 class SimulationWarning(UserWarning):
     """A simulation ran, but part of its result is not to be trusted (e.g. an explicit integrator beyond its
     stability limit on a stiff contact); the result's ``info`` says which part and how to fix it."""
+
+
+class IdentificationWarning(UserWarning):
+    """An identification input or result is not to be trusted in part (e.g. the kept samples still hold a
+    filter's start-up transient); the message says which part and how to fix it."""
