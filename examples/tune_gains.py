@@ -116,8 +116,11 @@ def tune(name: str, out: Path) -> list[Path]:
         write_preset(
             name,
             "adaptive",
-            {"lam": wn, "kd": (wn * m_bar).tolist(), "gamma": gamma.tolist(), "projection": True},
-            "Λ = ω_n, K_D = ω_n M̄; Γ_i = 0.1 (|π_i| + 0.01)/(0.01 max M̄); projection on",
+            # no projection: the textbook law, whose V = ½ sᵀMs + ½ θ̃ᵀΓ⁻¹θ̃ does not increase (the projection
+            # onto the physical set is nearest in the pseudo-inertia's norm, not Γ⁻¹'s, and can raise V)
+            {"lam": wn, "kd": (wn * m_bar).tolist(), "gamma": gamma.tolist(), "projection": False},
+            "Λ = ω_n, K_D = ω_n M̄; Γ_i = 0.1 (|π_i| + 0.01)/(0.01 max M̄); projection off (the textbook law: V "
+            "non-increasing)",
             "examples/tune_gains.py",
             out,
             **record,

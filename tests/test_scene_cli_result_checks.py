@@ -228,8 +228,8 @@ def test_scene_gains_are_checked(pendulum_run: tuple[Any, SimResult]) -> None:
         sc.controller("passivity", gains=[1.0, 2.0])  # type: ignore[arg-type]
     with pytest.raises(InvalidParameterError, match=r"gains\['projection'\] must be True or False, got 'no'"):
         sc.controller("adaptive", gains={**sc.gains("adaptive"), "projection": "no"})
-    assert sc.controller("adaptive", gains={**sc.gains("adaptive"), "projection": False}).projection is False
-    assert sc.controller("adaptive").projection is True  # the preset
+    assert sc.controller("adaptive", gains={**sc.gains("adaptive"), "projection": True}).projection is True
+    assert sc.controller("adaptive").projection is False  # the preset: the textbook law (V non-increasing)
 
 
 def test_limit_violations_of_each_kind(pendulum_run: tuple[Any, SimResult]) -> None:

@@ -5,7 +5,9 @@ They are written for the hot path: a 7-vector is checked in well under a microse
 
 from __future__ import annotations
 
+import datetime
 import math
+import os
 from typing import Any
 
 import numpy as np
@@ -21,21 +23,31 @@ FLOAT = np.dtype(np.float64)
 def real_array(x: ArrayLike, name: str) -> FloatArray:
     """``x`` as a float array; raise if it holds anything but real numbers (complex values are refused rather
     than cut to their real part, strings and None rather than passed on to fail somewhere else, booleans rather
-    than taken as 0 and 1)."""
+    than taken as 0 and 1, dates and durations (``datetime64``, ``timedelta64``) rather than taken as counts of
+    their unit, masked entries rather than read through the mask)."""
     if isinstance(x, np.ma.MaskedArray) and np.ma.getmaskarray(x).any():  # asarray would take the hidden data
         raise InvalidParameterError(f"{name} has masked entries: fill them first (x.filled(value)), got {x!r}", value=x)
     ragged = None
     try:
         a = np.asarray(x)
         kind = a.dtype.kind
-        # complex, text (NumPy would parse "0.3"), or an object array holding any of them
-        if kind in "cUS" or (
-            kind == "O" and any(v is None or isinstance(v, str | bytes | complex | np.complexfloating) for v in a.flat)
-        ):  # None: NumPy would make it NaN
+        if kind in "mM":  # datetime64 / timedelta64: astype(float) would give days, seconds, … since 1970
+            raise InvalidParameterError(
+                f"{name} must hold real numbers, not dates or durations ({a.dtype}): convert them to seconds "
+                f"first (e.g. (t - t[0]) / np.timedelta64(1, 's')), got {_shown(x)}",
+                value=x,
+            )
+        # complex, text (NumPy would parse "0.3"), or an object array holding any of them, or a boolean, a date,
+        # a masked element among numbers
+        if kind in "cUS" or (kind == "O" and any(map(_not_a_number, a.flat))):  # None: NumPy would make it NaN
             raise TypeError(kind)
         if kind != "b":
+            if kind != "O" and isinstance(x, list | tuple) and _holds_bool(x):  # [1.0, True]: NumPy gives 1.0
+                raise TypeError("bool")
             return a.astype(float, copy=False)
     except (TypeError, ValueError, OverflowError) as exc:
+        if isinstance(exc, InvalidParameterError):
+            raise
         if isinstance(exc, ValueError) and "inhomogeneous" in str(exc):  # rows of different shapes?
             ragged = _row_shapes(x)
         if ragged is None:
@@ -46,6 +58,37 @@ def real_array(x: ArrayLike, name: str) -> FloatArray:
         )
     what = "a real number, not a boolean" if a.ndim == 0 else "real numbers, not booleans"
     raise InvalidParameterError(f"{name} must be {what}, got {_shown(x)}", value=x)
+
+
+#: what an object array may not hold where numbers are meant (NumPy would convert each to a float)
+_NOT_NUMBERS = (
+    str,
+    bytes,
+    complex,
+    bool,
+    np.complexfloating,
+    np.bool_,
+    np.datetime64,
+    np.timedelta64,
+    datetime.date,
+    datetime.timedelta,
+    np.ma.core.MaskedConstant,
+)
+
+
+def _not_a_number(v: Any) -> bool:
+    return v is None or isinstance(v, _NOT_NUMBERS)
+
+
+def _holds_bool(x: list[Any] | tuple[Any, ...]) -> bool:
+    """Whether a (nested) list or tuple of numbers holds a boolean."""
+    types = set(map(type, x))
+    if not _BOOLS.isdisjoint(types):
+        return True
+    return (list in types or tuple in types) and any(_holds_bool(v) for v in x if isinstance(v, list | tuple))
+
+
+_BOOLS = frozenset((bool, np.bool_))
 
 
 def _row_shapes(x: Any) -> list[tuple[int, ...]] | None:
@@ -89,6 +132,8 @@ def scalar(x: Any, name: str, *, positive: bool = False, nonnegative: bool = Fal
     arrays and booleans are refused by name."""
     if isinstance(x, bool | np.bool_):  # float(True) would be 1.0
         raise InvalidParameterError(f"{name} must be a real number, not a boolean, got {x!r}", value=x)
+    if isinstance(x, np.ma.MaskedArray) and np.ma.getmaskarray(x).any():  # float(np.ma.masked) would be NaN
+        raise InvalidParameterError(f"{name} is masked: give a number (x.filled(value)), got {x!r}", value=x)
     try:
         if isinstance(x, str | bytes | complex | np.complexfloating):  # float("0.5") would parse text
             raise TypeError(type(x).__name__)
@@ -134,7 +179,7 @@ def instances(items: Any, cls: type, name: str, label: str, *, single: bool = Fa
 def whole_number(x: Any, name: str, minimum: int = 0) -> int:
     """``x`` as an int: an int, a NumPy integer or a float with an integral value (2.0), at least ``minimum``.
     Booleans, fractions, NaN/inf and anything else raise an InvalidParameterError naming the value."""
-    whole = not isinstance(x, bool | np.bool_) and (
+    whole = not isinstance(x, bool | np.bool_ | np.timedelta64) and (  # (a timedelta64 is a NumPy integer)
         isinstance(x, int | np.integer)
         or (isinstance(x, float | np.floating) and math.isfinite(x) and float(x).is_integer())
     )
@@ -269,3 +314,43 @@ def float_vectors(a: Any, b: Any, c: Any, d: Any = None) -> bool:
         )
     except AttributeError:
         return False
+
+
+def memory_limit() -> float:
+    """The memory [bytes] a process may use at most: the machine's physical memory, or a smaller limit of its
+    control group (a container's); inf where neither can be read."""
+    limit = math.inf
+    try:
+        limit = float(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
+    except (AttributeError, ValueError, OSError):  # no sysconf (Windows)
+        pass
+    for path in ("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory/memory.limit_in_bytes"):
+        try:
+            with open(path) as f:
+                text = f.read().strip()
+            if text.isdigit():
+                limit = min(limit, float(text))
+        except OSError:
+            pass
+    return limit
+
+
+def byte_size(nbytes: float) -> str:
+    """A size for people: 3.2 GB, 1.4 TB, …"""
+    for unit in ("B", "kB", "MB", "GB", "TB", "PB"):
+        if nbytes < 1000.0 or unit == "PB":
+            return f"{nbytes:.3g} {unit}"
+        nbytes /= 1000.0
+    raise AssertionError  # pragma: no cover
+
+
+def check_memory(nbytes: float, what: str, fix: str, value: Any) -> None:
+    """Raise an InvalidParameterError before a request allocates more than :func:`memory_limit`: ``what`` names
+    the request ("duration = 1e7 s …"), ``fix`` says how to make it smaller."""
+    limit = memory_limit()
+    if nbytes > limit:
+        raise InvalidParameterError(
+            f"{what} needs at least {byte_size(nbytes)} of memory, more than the {byte_size(limit)} this machine "
+            f"has: {fix}",
+            value=value,
+        )

@@ -92,3 +92,8 @@ class CacheWarning(UserWarning):
     """A compiled library found in the cache failed its checks (truncated, altered, built for another model)
     and was rebuilt; the message names the file and what was wrong with it. Nothing to fix: the rebuilt
     library is used and cached."""
+
+
+class IdentificationWarning(UserWarning):
+    """An identification input or result is not to be trusted in part (e.g. the kept samples still hold a
+    filter's start-up transient); the message says which part and how to fix it."""

@@ -10,7 +10,13 @@ import pytest
 
 import armctl
 import armctl.dynamics.identification as ident
-from armctl.errors import IdentifiabilityError, InvalidParameterError, NonFiniteError, ShapeError
+from armctl.errors import (
+    IdentifiabilityError,
+    IdentificationWarning,
+    InvalidParameterError,
+    NonFiniteError,
+    ShapeError,
+)
 
 CHEAP = {"samples": 20, "grid": 40, "starts": 1, "maxiter": 0}
 
@@ -187,14 +193,15 @@ def test_bad_identification_data(data: ident.IdentificationData) -> None:
         replace(data, trim=-1)
     with pytest.raises(InvalidParameterError, match="q must hold real numbers"):
         replace(data, q=data.q + 0j)
-    short = ident.IdentificationData(
-        data.t[:10],
-        data.q[:10],
-        data.qd[:10],
-        data.qdd[:10],
-        data.tau[:10],
-        sos=np.array([[1.0, 0.0, 0.0, 1.0, 0.5, 0.1]] * 4),
-    )
+    with pytest.warns(IdentificationWarning, match="trim=0 leaves the filter's start-up transient"):
+        short = ident.IdentificationData(
+            data.t[:10],
+            data.q[:10],
+            data.qd[:10],
+            data.qdd[:10],
+            data.tau[:10],
+            sos=np.array([[1.0, 0.0, 0.0, 1.0, 0.5, 0.1]] * 4),
+        )
     with pytest.raises(InvalidParameterError, match="10 samples are too few for the filter sos"):
         short.reduce(short.tau)
 

@@ -131,7 +131,12 @@ def model_from_dh(
             link_frame = np.eye(4)
             prev_offset = np.eye(4)
         last_link_frame = link_frame
-        body = Link(row.mass, row.com, row.inertia, row.physical).transformed(link_frame[:3, :3], link_frame[:3, 3])
+        try:  # the body moves from the DH link frame {i} to the joint frame: its moments about a new origin
+            body = Link(row.mass, row.com, row.inertia, row.physical).transformed(link_frame[:3, :3], link_frame[:3, 3])
+        except InvalidParameterError as e:
+            raise InvalidParameterError(
+                f"DH row {i} ({row.name or f'joint{i + 1}'}), its body in the joint frame: {e}", value=e.value
+            ) from None
         joints.append(
             Joint(row.name or f"joint{i + 1}", row.kind, _Z, placement, body, motor, row.friction, row.limits)
         )

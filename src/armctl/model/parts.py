@@ -100,7 +100,8 @@ def inertia_tensor(x: ArrayLike, name: str = "inertia", triangle: bool = True) -
     if triangle and ev[0] + ev[1] < ev[2] - tol:
         raise InvalidParameterError(
             f"{name} violates the triangle inequality of principal moments: {ev[0]:g} + {ev[1]:g} < {ev[2]:g};"
-            " no rigid body has these moments (check units and which axis is which)",
+            " no rigid body has these moments (check units and which axis is which; physical=False takes them,"
+            " as some published data sets need)",
             value=x,
         )
     return readonly(a)
@@ -127,6 +128,15 @@ class Link:
         object.__setattr__(self, "com", vec3(self.com, "link com"))
         object.__setattr__(self, "physical", boolean(self.physical, "link physical"))
         object.__setattr__(self, "inertia", inertia_tensor(self.inertia, "link inertia", self.physical))
+        with np.errstate(over="ignore", invalid="ignore"):
+            first, second = self.mass * self.com, self.inertia_about_origin()
+        if not (np.isfinite(first).all() and np.isfinite(second).all()):  # the parameters π are made of these
+            raise InvalidParameterError(
+                f"link mass {self.mass:g} kg with com {self.com.tolist()} m overflows its parameters (first moment "
+                f"m·c = {first.tolist()}, inertia about the joint origin I + m(|c|²1 − c cᵀ) with diagonal "
+                f"{np.diag(second).tolist()}): give a mass and centre of mass whose products stay finite",
+                value=self.mass,
+            )
 
     def inertia_about_origin(self) -> FloatArray:
         """Inertia tensor about the joint-frame origin (parallel-axis theorem)."""
@@ -172,6 +182,12 @@ class Motor:
         k = scalar(self.gear_ratio, "gear ratio")
         if k == 0:
             raise InvalidParameterError(f"gear ratio must be non-zero, got {self.gear_ratio!r}", value=self.gear_ratio)
+        if not np.isfinite(k * k * i):  # the reflected inertia k_r² I_m, a parameter of π
+            raise InvalidParameterError(
+                f"rotor inertia {i:g} kg·m² and gear ratio {k:g} overflow the reflected inertia k_r² I_m: give "
+                "values whose product stays finite",
+                value=(i, k),
+            )
         object.__setattr__(self, "inertia", i)
         object.__setattr__(self, "gear_ratio", k)
         object.__setattr__(self, "gyroscopic", boolean(self.gyroscopic, "gyroscopic"))

@@ -59,6 +59,33 @@ PARAMETER_NAMES: tuple[str, ...] = (
 PARAMS_PER_JOINT = len(PARAMETER_NAMES)
 
 
+def _check_scale(joints: tuple[Joint, ...], gravity: FloatArray) -> None:
+    """Raise if the parameters overflow the dynamics: bounds of the gravity torques (|g| Σ m_j ℓ_j) and of the
+    mass matrix's entries (Σ tr I_j + m_j ℓ_j² + k_r² I_m), ℓ_j = 2 (reach of joint j's origin + |c_j|) bounding
+    the lever of link j's centre of mass about any joint axis (a prismatic joint adds its range, where finite),
+    must be finite. A model with finite parameters may still fail this (a payload of 1e308 kg weighs inf N)."""
+    reach = weight = inertia = 0.0
+    g = float(np.linalg.norm(gravity))
+    with np.errstate(over="ignore", invalid="ignore"):
+        for j in joints:
+            reach += float(np.linalg.norm(j.placement[:3, 3]))
+            if j.kind == "prismatic":
+                travel = max(abs(j.limits.lower), abs(j.limits.upper))
+                reach += travel if math.isfinite(travel) else 0.0
+            lk = j.link
+            lever = 2.0 * (reach + float(np.linalg.norm(lk.com)))
+            weight += g * lk.mass * lever
+            inertia += float(np.trace(lk.inertia)) + lk.mass * lever * lever
+            inertia += j.motor.reflected_inertia if j.motor is not None else 0.0
+            if not (math.isfinite(weight) and math.isfinite(inertia)):
+                raise InvalidParameterError(
+                    f"joint {j.name!r}: its link ({lk.mass:g} kg, centre of mass up to {lever:g} m from the joint "
+                    f"axes) overflows the dynamics: gravity torques up to {weight:g} N·m, mass-matrix entries up "
+                    f"to {inertia:g} kg·m² (|g| = {g:g} m/s²); give parameters whose dynamics stay finite",
+                    value=lk.mass,
+                )
+
+
 @dataclass(frozen=True, eq=False)  # numpy fields: compare by identity
 class RobotModel:
     """A serial manipulator: joints (each with its link, motor, friction, limits), named frames, gravity.
@@ -102,6 +129,7 @@ class RobotModel:
             raise InvalidParameterError(
                 f"frame names must be unique (joint names count as frames): {all_names}", value=all_names
             )
+        _check_scale(joints, g)
         object.__setattr__(self, "joints", joints)
         object.__setattr__(self, "frames", frames)
         object.__setattr__(self, "gravity", readonly(g))
@@ -132,16 +160,23 @@ class RobotModel:
         lock: Sequence[str] | Mapping[str, float] = (),
         gravity: ArrayLike = (0, 0, -9.81),
         name: str | None = None,
+        physical: bool = True,
     ) -> RobotModel:
         """A model from a URDF file through Pinocchio's parser. ``lock``: joints held fixed (a name, names, or a
         mapping name → position; checked as in :meth:`reduced`). URDF ``<dynamics damping friction>`` become
         viscous and Coulomb friction. Every link and fixed joint becomes a named frame, those fixed to the
         world included (the base link, and with the first joint locked its link and the locked joint's frame);
         a root link called ``"world"`` is the model's own ``"world"`` frame (a ``"world"`` frame elsewhere raises
-        :class:`~armctl.errors.ModelLoadError`)."""
+        :class:`~armctl.errors.ModelLoadError`). ``physical``: False accepts link inertias that violate the
+        triangle inequality, as published data sets have some (see :class:`~armctl.model.parts.Link`).
+
+        The file is checked before Pinocchio reads it (:mod:`armctl.model.urdf_checks`): a number it cannot read
+        (an ``<inertial>`` that would leave its link massless), duplicate or missing names, a link called
+        ``universe``, and a ``<mimic>`` joint not given in ``lock`` (a model's joints are independent) raise
+        :class:`~armctl.errors.ModelLoadError` naming the link or joint."""
         from armctl.model.urdf import model_from_urdf
 
-        return model_from_urdf(path, tool_frame=tool_frame, lock=lock, gravity=gravity, name=name)
+        return model_from_urdf(path, tool_frame=tool_frame, lock=lock, gravity=gravity, name=name, physical=physical)
 
     # ------------------------------------------------------------------------------------------ queries
     @property

@@ -8,6 +8,7 @@ from dataclasses import replace
 
 from numpy.typing import ArrayLike
 
+from armctl._checks import boolean
 from armctl.errors import InvalidParameterError, ModelLoadError, UnknownNameError
 from armctl.model.robot import RobotModel
 
@@ -18,16 +19,23 @@ def model_from_urdf(
     lock: Sequence[str] | Mapping[str, float] = (),
     gravity: ArrayLike = (0, 0, -9.81),
     name: str | None = None,
+    physical: bool = True,
 ) -> RobotModel:
+    """See :meth:`RobotModel.from_urdf`. The file is checked first (:mod:`armctl.model.urdf_checks`): what
+    urdfdom would drop or refuse with only a line on the standard error stream raises
+    :class:`~armctl.errors.ModelLoadError` naming the link or joint."""
     import pinocchio as pin
 
     from armctl.model.pinocchio_io import joints_from_pinocchio, lock_positions
+    from armctl.model.urdf_checks import check_urdf
 
     if not isinstance(path, str | os.PathLike):
         raise InvalidParameterError(f"URDF path must be a str or a path, got {path!r}", value=path)
     path = os.fspath(path)
     if not os.path.isfile(path):
         raise ModelLoadError(f"URDF file not found: {path!r}", value=path)
+    physical = boolean(physical, "physical")
+    mimic = check_urdf(path)
     try:
         pm = pin.buildModelFromUrdf(path)
     except Exception as exc:  # pinocchio raises plain ValueError/RuntimeError with the parser's words
@@ -41,7 +49,16 @@ def model_from_urdf(
             q[pm.idx_qs[jid]] = value
             ids.append(jid)
         pm = pin.buildReducedModel(pm, ids, q)
-    joints, frames = joints_from_pinocchio(pm, path)
+    joints, frames = joints_from_pinocchio(pm, path, physical)
+    free = [j for j in mimic if j not in positions]
+    if free:
+        pairs = ", ".join(f"{j!r} follows {mimic[j]!r}" for j in free)
+        raise ModelLoadError(
+            f"{path}: <mimic> joints are not supported ({pairs}): a model's joints move independently, so each "
+            f"would move on its own. Lock them (lock={free!r}) to hold them fixed, or remove their <mimic> element "
+            "to make them independent joints",
+            value=path,
+        )
     model = RobotModel(
         tuple(joints), name=name or pm.name or os.path.basename(path), gravity=gravity, frames=tuple(frames)
     )

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from armctl._checks import FloatArray, readonly
+from armctl._checks import FloatArray, readonly, real_array, scalar
 from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
 from armctl.model.robot import RobotModel
 
@@ -93,10 +93,7 @@ def bounds(value: Any, kind: str, model: RobotModel) -> Bounds | None:
                 value=lim,
             )
         value = lim
-    try:
-        a = np.array(value, dtype=float)
-    except (TypeError, ValueError):
-        raise InvalidParameterError(f"{name} must be numeric, got {value!r}", value=value) from None
+    a = np.array(real_array(value, name))  # a copy (made read-only below); True, "2.0", dates are refused
     if a.ndim == 0:
         a = np.full(n, float(a))
     if a.shape == (n,):
@@ -146,12 +143,7 @@ def joint_limits(
     torque_margin: float = 0.0,
 ) -> JointLimits:
     """All limits of a time-scaling problem, checked; at least one must be imposed."""
-    try:
-        m = float(torque_margin)
-    except (TypeError, ValueError):
-        raise InvalidParameterError(
-            f"torque_margin must be a number in [0, 1), got {torque_margin!r}", value=torque_margin
-        ) from None
+    m = scalar(torque_margin, "torque_margin")  # "0.1", True and NaN are refused, not converted
     if not 0.0 <= m < 1.0:
         raise InvalidParameterError(
             f"torque_margin must be in [0, 1) (0.1 plans with 90 % of the torque range), got {torque_margin!r}",

@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, scalar, whole_number
+from armctl._checks import FloatArray, check_memory, scalar, whole_number
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InfeasibleError, InvalidParameterError, NonFiniteError, SolverError
 from armctl.model.robot import RobotModel
@@ -186,6 +186,26 @@ def _refined(grid: int | ArrayLike) -> int | FloatArray:
     return np.sort(np.concatenate((s, 0.5 * (s[1:] + s[:-1]))))
 
 
+#: bytes a plan needs per stage and joint at least, besides those of the dense check (path derivatives, the
+#: constraint rows of every limit, toppra's controllable sets), and per stage, joint and dense-check sample
+PLAN_BYTES_PER_STAGE, CHECK_BYTES_PER_SAMPLE = 8 * 60, 8 * 10
+
+
+def _check_grid_memory(grid: int | ArrayLike, n: int, oversample: int) -> None:
+    """Refuse a grid too large to plan on this machine, before its gridpoints are made."""
+    if isinstance(grid, int | np.integer) and not isinstance(grid, bool):
+        stages = float(grid)
+    else:
+        stages = float(max(np.size(grid) - 1, 0))  # the user's own gridpoints
+    check_memory(
+        (stages + 1) * n * (PLAN_BYTES_PER_STAGE + CHECK_BYTES_PER_SAMPLE * oversample),
+        f"a time-optimal plan on a grid of {stages:.4g} stages for {n} joints (oversample={oversample})",
+        "use a smaller grid (a hundred to a few thousand stages is usual: refine doubles it where the dense "
+        "check needs more, up to max_grid)",
+        grid,
+    )
+
+
 def _tolerance(tol: Any) -> float:
     """``tol`` as a float >= 0, ``inf`` included (accept any result)."""
     if isinstance(tol, float | np.floating) and tol == math.inf:
@@ -276,6 +296,7 @@ def time_optimal(
     viscous_passes = whole_number(viscous_passes, "viscous_passes", 1)
     history: list[dict[str, Any]] = []
     while True:
+        _check_grid_memory(grid, dyn.n, oversample)
         problem = build_problem(dyn, geo, limits, grid, discretization)
         traj = solve_problem(problem, viscous_passes)
         check = check_trajectory(dyn, traj, limits, oversample)

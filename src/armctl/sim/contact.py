@@ -39,7 +39,7 @@ class ContactPoint:
     offset: FloatArray = field(default_factory=lambda: np.zeros(3))
 
     def __post_init__(self) -> None:
-        o = np.array(self.offset, dtype=float)
+        o = np.array(real_array(self.offset, "contact point offset"))  # a copy; text, None, booleans refused
         if o.shape != (3,) or not np.isfinite(o).all():
             raise InvalidParameterError(
                 f"contact point offset must be a finite 3-vector, got {self.offset!r}", value=self.offset

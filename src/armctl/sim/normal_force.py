@@ -18,9 +18,27 @@ Hertz's law for spheres, p = 1 a linear spring. Prefer it for impacts.
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from typing import Any
 
 from armctl._checks import scalar
 from armctl.errors import InvalidParameterError
+
+#: the largest contact coefficient taken (stiffness [N/m or N/mᵖ], damping [N·s/m], dissipation [s/m]): real
+#: contacts lie around 1e3 to 1e10 N/m; far larger ones overflow the forces and the step's stability check
+LARGEST_COEFFICIENT = 1e150
+
+
+def coefficient(x: Any, name: str, unit: str, *, positive: bool = False) -> float:
+    """A contact law's coefficient: a finite real number, > 0 if ``positive`` else >= 0, at most
+    :data:`LARGEST_COEFFICIENT`."""
+    v = scalar(x, f"{name} [{unit}]", positive=positive, nonnegative=not positive)
+    if v > LARGEST_COEFFICIENT:
+        raise InvalidParameterError(
+            f"{name} = {v:g} {unit} is beyond what a simulation can represent (at most {LARGEST_COEFFICIENT:g}; "
+            "real contacts lie around 1e3 to 1e10 N/m): its forces and the step's stability check would overflow",
+            value=x,
+        )
+    return v
 
 
 class NormalForce(ABC):
@@ -45,8 +63,8 @@ class KelvinVoigt(NormalForce):
     """Spring–damper contact f_n = max(0, k δ + b δ̇). stiffness: k [N/m] > 0; damping: b [N·s/m] ≥ 0."""
 
     def __init__(self, stiffness: float, damping: float = 0.0) -> None:
-        self._k = scalar(stiffness, "contact stiffness", positive=True)
-        self.damping = scalar(damping, "contact damping", nonnegative=True)
+        self._k = coefficient(stiffness, "contact stiffness", "N/m", positive=True)
+        self.damping = coefficient(damping, "contact damping", "N·s/m")
 
     @property
     def stiffness(self) -> float:
@@ -68,8 +86,8 @@ class HuntCrossley(NormalForce):
     stiffness: k [N/mᵖ] > 0; dissipation: d [s/m] ≥ 0 (Hunt–Crossley's 3α/2); exponent: p ≥ 1 (1.5: Hertz)."""
 
     def __init__(self, stiffness: float, dissipation: float = 0.0, exponent: float = 1.0) -> None:
-        self._k = scalar(stiffness, "contact stiffness", positive=True)
-        self.dissipation = scalar(dissipation, "contact dissipation", nonnegative=True)
+        self._k = coefficient(stiffness, "contact stiffness", "N/mᵖ", positive=True)
+        self.dissipation = coefficient(dissipation, "contact dissipation", "s/m")
         self.exponent = scalar(exponent, "contact exponent", positive=True)
         if self.exponent < 1.0:
             raise InvalidParameterError(

@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, scalar, vector, whole_number
+from armctl._checks import FloatArray, check_memory, scalar, vector, whole_number
 from armctl.controllers.base import Controller
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError, ShapeError, SimulationWarning, UnknownNameError
@@ -47,8 +47,16 @@ def _as_written(x: Any) -> Any:
     return x
 
 
-def periods(duration: Any, control_dt: Any, dt: Any) -> tuple[float, float, int, int]:
-    """(control_dt, dt, number of control periods N, sub-steps per period m), checked."""
+#: bytes a run records per sample and joint at least (q, q̇, q̈, τ, applied τ, friction and external torques,
+#: the reference's q, q̇, q̈ in the result), and per sample besides (t, wrench, work)
+RECORD_BYTES_PER_JOINT, RECORD_BYTES = 8 * 10, 8 * 9
+
+
+def periods(duration: Any, control_dt: Any, dt: Any, n: int | None = None) -> tuple[float, float, int, int]:
+    """(control_dt, dt, number of control periods N, sub-steps per period m), checked; a run too long to record
+    on this machine (N + 1 samples of an ``n``-joint arm, see :data:`RECORD_BYTES_PER_JOINT`; None counts one
+    joint, the least a run records) raises an :class:`~armctl.errors.InvalidParameterError` saying how much
+    memory it would need, before anything is allocated."""
     for name, x in (("duration", duration), ("control_dt", control_dt), ("dt", dt)):
         if isinstance(x, bool | np.bool_):
             raise InvalidParameterError(f"{name} must be a time in s, got {x!r}", value=x)
@@ -74,6 +82,14 @@ def periods(duration: Any, control_dt: Any, dt: Any) -> tuple[float, float, int,
             f"({steps:.6g}); use {use}",
             value=duration,
         )
+    check_memory(
+        (n_steps + 1) * (RECORD_BYTES + RECORD_BYTES_PER_JOINT * (1 if n is None else n)),
+        f"duration = {duration:g} s at control_dt = {control_dt:g} s is {n_steps:.4g} control periods; recording "
+        f"them{'' if n is None else f' for a {n}-joint arm'}",
+        "shorten the run or raise control_dt, or run it in pieces (the end state of one run, res.q[-1] and "
+        "res.qd[-1], is q0 and qd0 of the next)",
+        duration,
+    )
     return control_dt, control_dt / m, n_steps, m
 
 

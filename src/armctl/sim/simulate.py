@@ -105,7 +105,7 @@ def simulate(
     """
     dyn = setup.plant_dynamics(plant)
     n = dyn.n
-    cdt, h, n_periods, m = setup.periods(duration, control_dt, dt)
+    cdt, h, n_periods, m = setup.periods(duration, control_dt, dt, n=n)
     scheme = setup.integrator_name(integrator)
     fixed_ref, ref_fn = setup.reference_source(reference, n)
     ref0 = fixed_ref if fixed_ref is not None else ref_fn(0.0)  # type: ignore[misc]

@@ -23,7 +23,7 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, scalar, vector, whole_number
+from armctl._checks import FloatArray, boolean, scalar, vector, whole_number
 from armctl.controllers.osc.state import ModelState
 from armctl.errors import InvalidParameterError, UnknownNameError
 
@@ -67,7 +67,7 @@ class Contact:
         self.min_force = scalar(min_force, "min_force", nonnegative=True)
         self.slip_velocity = scalar(slip_velocity, "slip_velocity", positive=True)
         self.facets = int(facets)
-        self.active = bool(active)
+        self.active = boolean(active, "active")  # bool("False") would be True
         # tangent basis (t1, t2) and the pyramid's facet directions
         a = np.eye(3)[int(np.argmin(np.abs(self.normal)))]
         t1 = np.cross(self.normal, a)

@@ -15,7 +15,7 @@ Too little excitation raises :class:`~armctl.errors.IdentifiabilityError` with t
 
 from armctl.dynamics.identification.base_parameters import BaseParameters, find_base_parameters
 from armctl.dynamics.identification.consistency import ConsistentEstimate, consistent_estimate
-from armctl.dynamics.identification.data import IdentificationData, prepare_data
+from armctl.dynamics.identification.data import IdentificationData, prepare_data, settling_samples
 from armctl.dynamics.identification.excitation import FourierExcitation
 from armctl.dynamics.identification.excitation_design import ExcitationDesign, optimize_excitation
 from armctl.dynamics.identification.identify import IdentificationResult, ValidationResult, identify
@@ -42,6 +42,7 @@ __all__ = [
     "model_from_parameters",
     "optimize_excitation",
     "prepare_data",
+    "settling_samples",
     "solve_least_squares",
     "validation_plot",
 ]

@@ -59,7 +59,9 @@ class ConsistentEstimate:
     nothing, and 1 rather than a ratio of round-off on noise-free data. converged: the solver met its
     tolerance, or used up its budget with the fit stalled (50 more evaluations change the weighted residual
     sum of squares by less than 10⁻⁵ relative: what still moves is the prior's choice in directions the data
-    do not see). message: the solver's.
+    do not see). message: why it stopped, in words that agree with ``converged``: the solver's own message
+    when it met its tolerance (or did not, with the budget spent and the fit still moving), else that the fit
+    had settled when the budget ran out.
     """
 
     pi: FloatArray
@@ -163,11 +165,24 @@ def consistent_estimate(
             problem=problem,
             result=res,
         )
-    converged = res.status > 0
+    converged, message = res.status > 0, str(res.message)
     if not converged:
         again = scipy.optimize.least_squares(residual, res.x, method="trf", **dict(opts, max_nfev=50))
         fit, fit_again = (rss_ls + floor + float(x.fun[:nu] @ x.fun[:nu]) for x in (res, again))  # weighted RSS
-        converged = again.status > 0 or abs(fit - fit_again) <= 1e-5 * fit
+        change = abs(fit - fit_again) / fit
+        if again.status > 0:
+            converged, message = True, f"{again.message} (within 50 evaluations past the budget of {budget})"
+        elif change <= 1e-5:  # the budget ran out on a fit that no longer moves: said so, not the solver's words
+            converged = True
+            message = (
+                f"the fit has settled: the budget of {budget} evaluations ran out, and 50 more change the weighted "
+                f"residual sum of squares by {change:.2g} relative (below 1e-5)"
+            )
+        else:
+            message = (
+                f"{res.message} The fit is still moving: 50 more evaluations change the weighted residual sum of "
+                f"squares by {change:.2g} relative; raise max_evaluations (now {budget})"
+            )
         res = again if again.cost <= res.cost else res
     pi, delta, _ = layout.unpack(res.x)
     theta = unknowns(pi, delta)
@@ -182,7 +197,7 @@ def consistent_estimate(
         np.sqrt((e.reshape(-1, n) ** 2).mean(axis=0)),
         (rss + floor) / (rss_ls + floor),
         bool(converged),
-        str(res.message),
+        message,
     )
 
 
