@@ -86,3 +86,18 @@ class IdentifiabilityError(ArmctlError, ValueError):
 class SimulationWarning(UserWarning):
     """A simulation ran, but part of its result is not to be trusted (e.g. an explicit integrator beyond its
     stability limit on a stiff contact); the result's ``info`` says which part and how to fix it."""
+
+
+class WorkerDiedError(ArmctlError, RuntimeError):
+    """The process running a sweep case died (a signal such as SIGKILL, ``os._exit``, a crash in compiled
+    code), also on its retry. ``.value`` is the case."""
+
+
+class RunTimeoutError(ArmctlError, TimeoutError):
+    """A sweep case ran longer than the sweep's ``timeout``; its process was stopped. ``.value`` is the
+    case."""
+
+
+class SweepWarning(UserWarning):
+    """Some cases of a sweep failed; the sweep's result holds a ``CaseFailure`` for each (type, message,
+    traceback and the case)."""
