@@ -79,19 +79,21 @@ def _worker_main(conn: Connection, parent: int, stack_file: str | None) -> None:
 
 
 def _receive(conn: Connection, parent: int, cases: queue.SimpleQueue[tuple[int, bytes] | None]) -> None:
+    """The worker's receiving thread: cases into ``cases`` until None; if the parent process is gone, nobody
+    waits for the running case's outcome any more, so the worker ends at once (no orphan runs on)."""
     if STACK_SIGNAL is not None:  # the stack signal is for the thread that runs the cases
         signal.pthread_sigmask(signal.SIG_BLOCK, {STACK_SIGNAL})
     try:
         while True:
             while not conn.poll(1.0):
                 if os.getppid() != parent:
-                    raise EOFError
+                    os._exit(0)
             msg = conn.recv()
             cases.put(msg)
             if msg is None:
                 return
     except (EOFError, OSError):
-        cases.put(None)
+        os._exit(0)
 
 
 @dataclass
