@@ -7,6 +7,7 @@ from __future__ import annotations
 import difflib
 import inspect
 import math
+import numbers
 import pickle
 from collections.abc import Callable, Iterable, Mapping
 from concurrent.futures import Executor
@@ -16,6 +17,7 @@ from armctl.errors import InvalidParameterError
 
 
 def case_list(cases: Iterable[Mapping[str, Any]]) -> list[Mapping[str, Any]]:
+    """The cases as a list, each a mapping."""
     try:
         case_list = list(cases)
     except TypeError:
@@ -31,11 +33,12 @@ def case_list(cases: Iterable[Mapping[str, Any]]) -> list[Mapping[str, Any]]:
 
 
 def check_timeout(timeout: float | None, executor: Executor | str | None) -> None:
+    """A timeout is a positive finite number of seconds, and only for the sweep's own pool."""
     if timeout is None:
         return
     if (
         isinstance(timeout, bool)
-        or not isinstance(timeout, int | float)
+        or not isinstance(timeout, numbers.Real)
         or not (timeout > 0 and math.isfinite(timeout))
     ):
         raise InvalidParameterError(f"timeout must be a positive number of seconds, got {timeout!r}", value=timeout)

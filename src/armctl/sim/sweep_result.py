@@ -66,7 +66,7 @@ class CaseFailure:
         return f"case {self.index}: {self.message}"
 
 
-class SweepResult(list):  # type: ignore[type-arg]
+class SweepResult(list[Any]):
     """The outcomes of a sweep in case order: each case's result, or a :class:`CaseFailure`.
 
     A plain list in every other respect (it compares equal to a list of the same items). ``failures`` lists
@@ -118,15 +118,9 @@ class ErrorReport:
     pickled: bytes | None = None
 
     @classmethod
-    def of(cls, exc: BaseException, *, keep: bool = True) -> ErrorReport:
-        """Describe ``exc`` (inside its ``except`` block or not). ``keep``: also pickle the exception."""
-        blob = None
-        if keep:
-            try:
-                blob = pickle.dumps(exc)
-                pickle.loads(blob)
-            except Exception:
-                blob = None
+    def of(cls, exc: BaseException) -> ErrorReport:
+        """Describe ``exc``, with the exception pickled if it survives a round trip."""
+        blob: bytes | None = pickle.dumps(exc) if _round_trips(exc) else None
         text = "".join(tb.format_exception(type(exc), exc, exc.__traceback__))
         return cls(type_name(type(exc)), str(exc), text, blob)
 
@@ -141,6 +135,14 @@ class ErrorReport:
             f"{self.error_type}: {self.message} (raised in a worker, and it cannot be pickled, so it is passed on "
             f"as text; the worker's traceback:\n{self.traceback})"
         )
+
+
+def _round_trips(exc: BaseException) -> bool:
+    try:
+        pickle.loads(pickle.dumps(exc))
+    except Exception:
+        return False
+    return True
 
 
 def type_name(cls: type) -> str:
