@@ -97,3 +97,18 @@ class CacheWarning(UserWarning):
 class IdentificationWarning(UserWarning):
     """An identification input or result is not to be trusted in part (e.g. the kept samples still hold a
     filter's start-up transient); the message says which part and how to fix it."""
+
+
+class WorkerDiedError(ArmctlError, RuntimeError):
+    """The process running a sweep case died (a signal such as SIGKILL, ``os._exit``, a crash in compiled
+    code), also on its retry. ``.value`` is the case."""
+
+
+class RunTimeoutError(ArmctlError, TimeoutError):
+    """A sweep case ran longer than the sweep's ``timeout``; its process was stopped. ``.value`` is the
+    case."""
+
+
+class SweepWarning(UserWarning):
+    """Some cases of a sweep failed; the sweep's result holds a ``CaseFailure`` for each (type, message,
+    traceback and the case)."""

@@ -1,19 +1,18 @@
-"""Sweeps: the same answers through a process pool, a thread pool and serially; a progress bar; diverged runs
-as answers; a bad case raised with its index (issue 3)."""
+"""Sweeps: the same answers through the sweep's own process pool, a ProcessPoolExecutor, a thread pool and
+serially; diverged runs as answers; failures recorded per case, or raised with the case's index on request."""
 
 from __future__ import annotations
 
-import io
 import threading
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 import armctl
-from armctl.errors import ArmctlError, InvalidParameterError, UnknownNameError
-from armctl.sim import SimResult, sweep
+from armctl.errors import ArmctlError, InvalidParameterError, SweepWarning, UnknownNameError
+from armctl.sim import CaseFailure, SimResult, SweepResult, sweep
 from tests.sim.helpers import PDGravity
 
 MODEL = armctl.models.planar_2r()
@@ -44,16 +43,16 @@ GAINS = [2e3, 1e4, 5e4, 3e7]  # the last one is far too stiff for a 1 kHz loop
 
 
 def test_process_pool_thread_pool_and_serial_agree() -> None:
-    stream = io.StringIO()
-    pooled = sweep(cases(GAINS), summary=final_state, max_workers=2, progress=stream)
+    pooled = sweep(cases(GAINS), summary=final_state, max_workers=2, progress=False)
+    with ProcessPoolExecutor(2) as ex:
+        theirs = sweep(cases(GAINS), summary=final_state, executor=ex, progress=False)
     with ThreadPoolExecutor(2) as ex:
         threaded = sweep(cases(GAINS), summary=final_state, executor=ex, progress=False)
     serial = sweep(cases(GAINS), summary=final_state, executor="serial", progress=False)
-    assert pooled == threaded == serial
-    assert [d for d, _, _ in serial] == [False, False, False, True]  # divergence is an answer
+    assert pooled == theirs == threaded == serial
+    assert isinstance(pooled, SweepResult) and pooled.all_ok and pooled.counts["ok"] == 4
+    assert [d for d, _, _ in serial] == [False, False, False, True]  # divergence is an answer, not a failure
     assert serial[2][1] < serial[0][1]  # stiffer gain, smaller final error
-    bar = stream.getvalue()
-    assert "4/4 runs" in bar and "[" + "#" * 30 + "]" in bar
 
 
 def test_full_results_come_back_without_summary() -> None:
@@ -71,14 +70,22 @@ def _square(x: int) -> int:
     return x * x
 
 
-def test_a_bad_case_is_raised_with_its_index() -> None:
-    bad = cases(GAINS[:2])
+def test_a_bad_case_is_recorded_or_raised_with_its_index() -> None:
+    bad = cases(GAINS[:3])
     bad[1]["duration"] = -1.0
-    with pytest.raises(InvalidParameterError) as info:
-        sweep(bad, executor="serial", progress=False)
-    assert "sweep case 1" in "".join(getattr(info.value, "__notes__", []))
-    with pytest.raises(InvalidParameterError):
-        sweep(bad, max_workers=2, progress=False)
+    for executor in ("serial", None):
+        with pytest.warns(SweepWarning, match="case 1 raised armctl.errors.InvalidParameterError"):
+            out = sweep(bad, executor=executor, max_workers=2, progress=False)
+        assert isinstance(out[0], SimResult) and isinstance(out[2], SimResult)  # the others come back
+        fail = out[1]
+        assert isinstance(fail, CaseFailure) and not fail.ok and fail.case is bad[1] and fail.index == 1
+        assert fail.kind == "raised" and fail.error_type == "armctl.errors.InvalidParameterError"
+        assert "duration" in fail.message and fail.message in fail.traceback
+        assert "in simulate" in fail.traceback  # where it was raised
+        assert isinstance(fail.exception, InvalidParameterError)
+        with pytest.raises(InvalidParameterError) as info:
+            sweep(bad, executor=executor, max_workers=2, progress=False, on_error="raise")
+        assert "sweep case 1" in "".join(getattr(info.value, "__notes__", []))
 
 
 class _Unpicklable(Exception):
@@ -97,14 +104,23 @@ def test_errors_in_a_process_pool_arrive_with_their_message() -> None:
     bad = cases(GAINS[:2])
     bad[1]["integrator"] = "rk5"
     with pytest.raises(UnknownNameError, match="unknown integrator 'rk5'") as info:  # pickled by its arguments
-        sweep(bad, max_workers=2, progress=False)
+        sweep(bad, max_workers=2, progress=False, on_error="raise")
     assert info.value.valid == armctl.sim.INTEGRATORS and info.value.value == "rk5"
     assert "sweep case 1" in "".join(getattr(info.value, "__notes__", []))
-    with pytest.raises(ArmctlError, match=r"_Unpicklable: broken with 1 and 2 \(raised in a worker") as info:
-        sweep(cases(GAINS[:1]), run=_raises_unpicklable, max_workers=1, progress=False)
-    assert "_raises_unpicklable" in str(info.value)  # the worker's traceback
+    with pytest.warns(SweepWarning):
+        out = sweep(cases(GAINS[:1]), run=_raises_unpicklable, max_workers=1, progress=False)
+    fail = out[0]
+    assert fail.error_type == "tests.sim.test_sweep._Unpicklable" and fail.message == "broken with 1 and 2"
+    assert "_raises_unpicklable" in fail.traceback  # the worker's traceback
+    # the exception itself cannot travel back: an ArmctlError carries its type, message and traceback
+    assert type(fail.exception) is ArmctlError and "_raises_unpicklable" in str(fail.exception)
+    with pytest.raises(ArmctlError, match=r"_Unpicklable: broken with 1 and 2 \(raised in a worker"):
+        sweep(cases(GAINS[:1]), run=_raises_unpicklable, max_workers=1, progress=False, on_error="raise")
+    with ThreadPoolExecutor(2) as pool, pytest.warns(SweepWarning):
+        out = sweep(cases(GAINS[:1]), run=_raises_unpicklable, executor=pool, progress=False)
+    assert isinstance(out[0].exception, _Unpicklable)  # threads: the exception as it was raised
     with pytest.raises(_Unpicklable, match="broken with 1 and 2"), ThreadPoolExecutor(2) as pool:
-        sweep(cases(GAINS[:1]), run=_raises_unpicklable, executor=pool, progress=False)  # threads: as it is
+        sweep(cases(GAINS[:1]), run=_raises_unpicklable, executor=pool, progress=False, on_error="raise")
 
 
 def test_every_error_class_pickles() -> None:
@@ -165,12 +181,11 @@ def test_unpicklable_errors_arrive_when_exceptions_pickle_through_tblib() -> Non
         "from armctl.sim import sweep\n"
         "from tests.sim.test_sweep import GAINS, _raises_unpicklable, cases\n"
         "try:\n"
-        "    sweep(cases(GAINS[:1]), run=_raises_unpicklable, max_workers=1, progress=False)\n"
+        "    sweep(cases(GAINS[:1]), run=_raises_unpicklable, max_workers=1, progress=False, on_error='raise')\n"
         "except ArmctlError as exc:\n"
-        "    print(type(exc).__name__, str(exc).splitlines()[0][:60])\n"
+        "    print(type(exc).__name__, str(exc).splitlines()[0][:80])\n"
     )
     root = Path(__file__).resolve().parents[2]
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, cwd=root)
-    assert out.stdout.startswith("ArmctlError _Unpicklable: broken with 1 and 2 (raised in a worker"), out.stderr[
-        -2000:
-    ]
+    expected = "ArmctlError tests.sim.test_sweep._Unpicklable: broken with 1 and 2 (raised in a worker"
+    assert out.stdout.startswith(expected), out.stderr[-2000:]

@@ -25,8 +25,9 @@ def test_a_run_too_long_to_record_is_refused() -> None:
     m = armctl.models.pendulum()
     with pytest.raises(
         InvalidParameterError,
-        match=r"^duration = 1e\+07 s at control_dt = 0\.001 s is 1e\+10 control periods; recording them for a 1-joint arm needs "
-        r"at least 1\.\d+ TB of memory, more than the .* this machine has: shorten the run or raise control_dt",
+        match=r"^duration = 1e\+07 s at control_dt = 0\.001 s is 1e\+10 control periods; recording them for a "
+        r"1-joint arm needs at least 1\.\d+ TB of memory, more than the .* this machine has: shorten the run or "
+        r"raise control_dt",
     ) as info:
         simulate(m, _pd(m), armctl.Reference.hold([0.0]), 1e7)
     assert info.value.value == 1e7

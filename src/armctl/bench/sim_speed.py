@@ -224,10 +224,10 @@ def sweep_figures(runs: int = 200, workers: int = 2, blocks: int = 4) -> dict[st
     try:
         for chunk in chunks:
             t0 = time.perf_counter()
-            pooled += sweep(chunk, summary=me.rms_error, executor=pool, progress=True)
+            pooled += sweep(chunk, summary=me.rms_error, executor=pool, progress=True, on_error="raise")
             t_pool += time.perf_counter() - t0
             t0, c0 = time.perf_counter(), time.process_time()
-            serial += sweep(chunk, summary=me.rms_error, executor="serial", progress=True)
+            serial += sweep(chunk, summary=me.rms_error, executor="serial", progress=True, on_error="raise")
             t_serial += time.perf_counter() - t0
             cpu_serial += time.process_time() - c0
             load.append(os.getloadavg()[0])

@@ -187,7 +187,7 @@ def maps(
                     }
                 )
                 index.append((c, "gain_error", i, j))
-    outcomes = sweep(cases, run=run_cell, executor=executor, progress=True)
+    outcomes = sweep(cases, run=run_cell, executor=executor, progress=True, on_error="raise")
     for c in controllers:
         out[c] = {
             "rate_gain": {

@@ -114,7 +114,7 @@ def scene_matrix(executor: Executor | str | None = None, rounds: int = 9) -> lis
             unbuilt.append(_failed_row(name, "(scene)", exc))
             continue
         cases += [{"scene": name, "method": m} for m in methods]
-    rows = sweep(cases, run=run_scene_method, executor=executor, progress=True) + unbuilt
+    rows = sweep(cases, run=run_scene_method, executor=executor, progress=True, on_error="raise") + unbuilt
     time_controllers(rows, rounds)
     return rows
 

@@ -5,7 +5,7 @@ controller runs at its own rate with a zero-order hold. Modules: ``simulate`` (t
 its arguments, ``recorder`` keeps the samples), ``plant`` (the equations of motion), ``integrators`` and
 ``implicit`` (the schemes), ``stepper`` (a step with stick–slip events), ``friction`` and ``stick_slip``,
 ``contact`` and ``normal_force``, ``result`` (:class:`SimResult`), ``plot``, ``sweep`` (many runs through an
-Executor).
+Executor; ``sweep_result``: one outcome per case, ``sweep_pool``: its own process pool, ``sweep_progress``).
 """
 
 from armctl.sim.contact import ContactPoint, Environment, ForceSensor, Plane
@@ -15,9 +15,11 @@ from armctl.sim.normal_force import HuntCrossley, KelvinVoigt, NormalForce
 from armctl.sim.result import SimResult
 from armctl.sim.simulate import simulate
 from armctl.sim.sweep import sweep
+from armctl.sim.sweep_result import CaseFailure, SweepResult
 
 __all__ = [
     "INTEGRATORS",
+    "CaseFailure",
     "ContactPoint",
     "Environment",
     "ForceSensor",
@@ -29,6 +31,7 @@ __all__ = [
     "SimResult",
     "SmoothFriction",
     "StickSlip",
+    "SweepResult",
     "simulate",
     "sweep",
 ]

@@ -1,162 +1,253 @@
-"""`sweep`: many simulations through any ``concurrent.futures.Executor``, with a progress bar.
+"""`sweep`: many simulations through any ``concurrent.futures.Executor``, one outcome per case.
 
-Each case is a mapping of keyword arguments for ``run`` (by default :func:`armctl.sim.simulate`). Cases are
-sent to the executor's workers, so with a process pool (the default) everything in a case must pickle:
-Dynamics and RobotModel objects do (a Dynamics is rebuilt from its model in the worker), controllers do if
-their class is importable, and references must be Reference objects or module-level callables, not lambdas.
-``summary`` runs in the worker on each result, so that only what is needed travels back. With a thread
-pool, cases must not share a Dynamics object (its workspace is not thread-safe): give each its own, or pass
-the plant as a RobotModel (``simulate`` then builds one per run).
+Each case is a mapping of keyword arguments for ``run`` (by default :func:`armctl.sim.simulate`). A case
+that fails, because ``run`` raised, its worker process died or it ran past ``timeout``, is recorded as a
+:class:`~armctl.sim.sweep_result.CaseFailure` in its place, and the other cases' results come back.
 
-A run that diverges is a result (``res.diverged``), not an error; an exception in a case (a bad input) stops
-the sweep and is raised with the case's index.
+Cases sent to worker processes are pickled, so everything in them must pickle: Dynamics and RobotModel objects
+do (a Dynamics is rebuilt from its model in the worker), controllers do if their class is importable, and
+references must be Reference objects or module-level callables, not lambdas. A case that does not pickle is
+refused before anything starts, naming the case and the key. ``summary`` runs in the worker on each result,
+so that only what is needed travels back. With a thread pool, cases must not share a Dynamics object (its
+workspace is not thread-safe): give each its own, or pass the plant as a RobotModel (``simulate`` then builds
+one per run).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import pickle
-import sys
-import time
 import traceback
+import warnings
 from collections.abc import Callable, Iterable, Mapping
-from concurrent.futures import Executor, Future, ProcessPoolExecutor, ThreadPoolExecutor, as_completed
-from typing import Any, TextIO
+from concurrent.futures import BrokenExecutor, Executor, Future, ProcessPoolExecutor, ThreadPoolExecutor, as_completed
+from typing import Any, Literal, TextIO
 
 import numpy as np
 
-from armctl.errors import ArmctlError, InvalidParameterError
+from armctl.errors import InvalidParameterError, RunTimeoutError, SweepWarning, WorkerDiedError
+from armctl.sim import sweep_checks as checks
+from armctl.sim.sweep_pool import WorkerPool, run_one, run_pickled
+from armctl.sim.sweep_progress import Progress
+from armctl.sim.sweep_result import CaseFailure, ErrorReport, SweepResult, type_name
 
-
-class ProgressBar:
-    """A one-line text progress bar: ``[#######.....]  70/100  12.3 s, ~5.1 s left``."""
-
-    def __init__(self, total: int, stream: TextIO | None = None, width: int = 30, label: str = "runs") -> None:
-        self.total, self.width, self.label = total, width, label
-        self.stream = sys.stderr if stream is None else stream
-        self.done = 0
-        self.start = time.perf_counter()
-
-    def update(self, done: int) -> None:
-        self.done = done
-        elapsed = time.perf_counter() - self.start
-        filled = int(self.width * done / self.total) if self.total else self.width
-        left = f", ~{elapsed / done * (self.total - done):.1f} s left" if 0 < done < self.total else ""
-        self.stream.write(
-            f"\r[{'#' * filled}{'.' * (self.width - filled)}] {done:>{len(str(self.total))}}/"
-            f"{self.total} {self.label}  {elapsed:.1f} s{left}  "
-        )
-        if done >= self.total:
-            self.stream.write("\n")
-        self.stream.flush()
-
-
-def _run_case(run: Callable[..., Any], case: Mapping[str, Any], summary: Callable[[Any], Any] | None) -> Any:
-    out = run(**case)
-    return out if summary is None else summary(out)
-
-
-def _run_case_in_worker(run: Callable[..., Any], case: Mapping[str, Any], summary: Callable[[Any], Any] | None) -> Any:
-    """:func:`_run_case` in a pool's worker: an exception that cannot be pickled (which a process pool would
-    report only as a broken pool, without its message) comes back as an ArmctlError carrying its type,
-    message and traceback."""
-    try:
-        return _run_case(run, case, summary)
-    except Exception as exc:
-        try:
-            pickle.loads(pickle.dumps(exc))
-        except Exception:
-            text = (
-                f"{type(exc).__name__}: {exc} (raised in a worker, and it cannot be pickled, so it is passed "
-                f"on as text; the worker's traceback:\n{traceback.format_exc()})"
-            )
-        else:
-            raise
-    # raised here, outside the handler, so that it carries no context: a pickler that follows exception
-    # chains (tblib's, which dask installs) would meet the unpicklable exception again
-    raise ArmctlError(text)
+ON_ERROR = ("record", "raise")
 
 
 def sweep(
     cases: Iterable[Mapping[str, Any]],
-    *,
     run: Callable[..., Any] | None = None,
-    summary: Callable[[Any], Any] | None = None,
     executor: Executor | str | None = None,
     max_workers: int | None = None,
     progress: bool | TextIO = True,
-) -> list[Any]:
-    """Run ``run(**case)`` for every case and return the outputs (or ``summary(output)``) in case order.
+    *,
+    summary: Callable[[Any], Any] | None = None,
+    on_error: Literal["record", "raise"] = "record",
+    timeout: float | None = None,
+) -> SweepResult:
+    """Run ``run(**case)`` for every case; return one outcome per case, in case order.
 
-    executor: an Executor (used as given and not shut down; e.g. a ThreadPoolExecutor, or a Dask
-    ``client.get_executor()``), ``"serial"`` (in this process, one after the other) or None: a
-    ProcessPoolExecutor with ``max_workers`` processes (default: the number of CPUs), shut down at the end.
-    progress: True (a bar on stderr), False, or a text stream to draw the bar on.
+    Parameters
+    ----------
+    cases : iterable of mappings
+        Keyword arguments for ``run``, one mapping per run. Every key must be a parameter of ``run`` and every
+        required parameter given; this is checked for all cases before anything runs.
+    run : callable, optional
+        The function to run (default :func:`armctl.sim.simulate`).
+    executor : Executor, "serial" or None
+        None: the sweep's own pool of ``max_workers`` processes, stopped at the end. A worker process that
+        dies is replaced and its case retried once; ``timeout`` is enforced. ``"serial"``: in this process,
+        one case after the other (a run that ends its process, by ``os._exit`` or a crash, ends the caller's
+        too). An Executor (a ``ThreadPoolExecutor``, a ``ProcessPoolExecutor``, a Dask
+        ``client.get_executor()``) is used as given and not shut down. If a ``ProcessPoolExecutor`` breaks
+        (a worker died), the cases it had not finished continue on a pool of the sweep's own, as their retry.
+        On Dask, a ``KilledWorker`` (the scheduler's own retries spent) is recorded as a dead worker.
+    max_workers : int, optional
+        Processes of the sweep's own pool (default: the number of CPUs, at most one per case).
+    progress : bool or text stream
+        True: progress on stderr; False: none; or a stream to write it on. On a terminal it is a live bar;
+        elsewhere (a log file) a line at the start, the end and at most every 30 s.
+    summary : callable, optional
+        ``summary(output)`` is returned instead of the output; it runs in the worker, so that only what is
+        needed travels back.
+    on_error : {"record", "raise"}
+        ``"record"`` (default): a failed case is a :class:`~armctl.sim.sweep_result.CaseFailure` in the
+        result, and a :class:`~armctl.errors.SweepWarning` names the failed cases at the end. ``"raise"``: the
+        first failure stops the sweep and is raised, with a note naming the case's index: the run's own
+        exception, or :class:`~armctl.errors.WorkerDiedError` / :class:`~armctl.errors.RunTimeoutError`.
+    timeout : float, optional
+        Longest run [s], from the moment the case starts in its worker. A run past it has its worker process
+        killed (and replaced) and is recorded as timed out; it is not retried. Enforced on the sweep's own
+        pool only (``executor=None``; ``max_workers=1`` runs one case at a time): a run in this process or in
+        a thread cannot be stopped, and another executor's workers are not the sweep's to kill.
+
+    Returns
+    -------
+    SweepResult
+        A list with, for case ``i``, ``summary(run(**cases[i]))`` (or the output without ``summary``), or a
+        :class:`~armctl.sim.sweep_result.CaseFailure`; ``.failures`` lists the failures, ``.counts`` counts
+        ok / raised / worker_died / timed_out.
+
+    Raises
+    ------
+    InvalidParameterError
+        A bad argument; a case that is not a mapping, has a key that is not a parameter of ``run`` (a
+        close match is suggested), lacks a required one, or (for worker processes) does not pickle.
+    Exception
+        With ``on_error="raise"``, the first failure.
     """
     if run is None:
         from armctl.sim.simulate import simulate as run
     for name, fn in (("run", run), ("summary", summary)):
         if fn is not None and not callable(fn):
             raise InvalidParameterError(f"{name} must be a function, got {fn!r}", value=fn)
-    try:
-        case_list = list(cases)
-    except TypeError:
-        raise InvalidParameterError(
-            f"cases must be an iterable of keyword-argument mappings, got {cases!r}", value=cases
-        ) from None
+    case_list = checks.case_list(cases)
     if not (isinstance(progress, bool | np.bool_) or callable(getattr(progress, "write", None))):
         raise InvalidParameterError(f"progress must be True, False or a text stream, got {progress!r}", value=progress)
-    for i, c in enumerate(case_list):
-        if not isinstance(c, Mapping):
-            raise InvalidParameterError(
-                f"case {i} must be a mapping of keyword arguments, got {type(c).__name__}", value=c
-            )
-    bar = None
-    if progress:
-        bar = ProgressBar(len(case_list), None if progress is True else progress)  # type: ignore[arg-type]
-    if executor == "serial":
-        out = []
-        for i, c in enumerate(case_list):
-            out.append(_checked(i, lambda c=c: _run_case(run, c, summary)))  # type: ignore[misc]
-            if bar:
-                bar.update(i + 1)
-        return out
-    if executor is not None and not callable(getattr(executor, "submit", None)):
-        raise InvalidParameterError(
-            f"executor must be an Executor (with a submit method), 'serial' or None, got {executor!r}", value=executor
-        )
-    own = executor is None
+    if on_error not in ON_ERROR:
+        raise InvalidParameterError(f"on_error must be 'record' or 'raise', got {on_error!r}", value=on_error)
     if max_workers is not None and (
         isinstance(max_workers, bool) or not isinstance(max_workers, int) or max_workers < 1
     ):
         raise InvalidParameterError(f"max_workers must be a positive integer, got {max_workers!r}", value=max_workers)
-    pool: Executor = ProcessPoolExecutor(max_workers or os.cpu_count() or 1) if own else executor  # type: ignore[assignment]
-    results: list[Any] = [None] * len(case_list)
-    try:
-        # threads share this process: nothing is pickled, so exceptions travel as they are
-        work = _run_case if isinstance(pool, ThreadPoolExecutor) else _run_case_in_worker
-        futures: dict[Future[Any], int] = {pool.submit(work, run, c, summary): i for i, c in enumerate(case_list)}
+    if executor is not None and executor != "serial" and not callable(getattr(executor, "submit", None)):
+        raise InvalidParameterError(
+            f"executor must be an Executor (with a submit method), 'serial' or None, got {executor!r}", value=executor
+        )
+    checks.check_timeout(timeout, executor)
+    checks.check_keywords(case_list, run)
+    blobs = None
+    if executor is None or isinstance(executor, ProcessPoolExecutor):
+        blobs = checks.pickled(case_list, run, summary, pickle.dumps)
+    elif executor != "serial" and not isinstance(executor, ThreadPoolExecutor):
+        blobs = checks.pickled(case_list, run, summary, checks.other_pickler())
+
+    out = SweepResult([None] * len(case_list))
+    bar = Progress(len(case_list), None if progress is True else progress) if progress else None  # type: ignore[arg-type]
+
+    def record(i: int, outcome: Any) -> None:
+        out[i] = outcome
+        failed = isinstance(outcome, CaseFailure)
         if bar:
-            bar.update(0)
-        for done, fut in enumerate(as_completed(futures), start=1):
+            bar.update(failed)
+        if failed and on_error == "raise":
+            exc = outcome.exception
+            if hasattr(exc, "add_note"):
+                exc.add_note(f"(in sweep case {i})")
+            raise exc
+
+    workers = min(max_workers or os.cpu_count() or 1, max(len(case_list), 1))
+    try:
+        if executor == "serial":
+            for i, c in enumerate(case_list):
+                record(i, _call_here(i, c, run, summary))
+        elif executor is None:
+            _own_pool(list(enumerate(blobs)), {}, case_list, workers, timeout, record)  # type: ignore[arg-type]
+        else:
+            broken = _through(executor, case_list, blobs, run, summary, record)  # type: ignore[arg-type]
+            if broken:  # a ProcessPoolExecutor broke: the cases it left run on a pool of ours
+                tasks = [(i, blobs[i]) for i in sorted(broken)]  # type: ignore[index]
+                _own_pool(tasks, broken, case_list, workers, None, record)
+    finally:
+        if bar:
+            bar.close()
+    if out.failures:
+        warnings.warn(
+            f"sweep of {out.describe()}; the failed cases are CaseFailure entries", SweepWarning, stacklevel=2
+        )
+    return out
+
+
+def _failure(i: int, case: Mapping[str, Any], exc: BaseException, kind: str = "raised", tries: int = 1) -> CaseFailure:
+    text = "".join(traceback.format_exception(type(exc), exc, exc.__traceback__))
+    return CaseFailure(i, case, kind, type_name(type(exc)), str(exc), text, tries, exc)  # type: ignore[arg-type]
+
+
+def _from_report(i: int, case: Mapping[str, Any], report: ErrorReport) -> CaseFailure:
+    return CaseFailure(i, case, "raised", report.error_type, report.message, report.traceback, 1, report.exception())
+
+
+def _call_here(i: int, case: Mapping[str, Any], run: Callable[..., Any], summary: Callable[[Any], Any] | None) -> Any:
+    try:
+        return run_one(run, case, summary)
+    except Exception as exc:
+        return _failure(i, case, exc)
+
+
+def _own_pool(
+    tasks: list[tuple[int, bytes]],
+    tries: dict[int, int],
+    cases: list[Mapping[str, Any]],
+    workers: int,
+    timeout: float | None,
+    record: Callable[[int, Any], None],
+) -> None:
+    with WorkerPool(workers, timeout) as pool:
+        for i, outcome in pool.run(tasks, tries):
+            kind = outcome[0]
+            if kind == "ok":
+                record(i, pickle.loads(outcome[1]))
+            elif kind == "error":
+                record(i, _from_report(i, cases[i], outcome[1]))
+            else:
+                died = kind == "died"
+                exc = (WorkerDiedError if died else RunTimeoutError)(outcome[1], value=cases[i])
+                failure = _failure(i, cases[i], exc, "worker_died" if died else "timed_out", outcome[2])
+                if outcome[3]:
+                    text = f"{failure.traceback}\nThe run's stack when it was stopped:\n{outcome[3]}"
+                    failure = dataclasses.replace(failure, traceback=text)
+                record(i, failure)
+
+
+def _through(
+    executor: Executor,
+    cases: list[Mapping[str, Any]],
+    blobs: list[bytes] | None,
+    run: Callable[..., Any],
+    summary: Callable[[Any], Any] | None,
+    record: Callable[[int, Any], None],
+) -> dict[int, int]:
+    """Run every case on a given executor. Returns the cases a broken ProcessPoolExecutor left undone, with
+    the attempts they had (1 if it broke under them, 0 if it was broken before they were submitted)."""
+    futures: dict[Future[Any], int] = {}
+    broken: dict[int, int] = {}
+    try:
+        for i, c in enumerate(cases):
+            try:  # threads: nothing is pickled, the case's own exception comes back from the future
+                fut = (
+                    executor.submit(run_one, run, c, summary)
+                    if blobs is None
+                    else executor.submit(run_pickled, blobs[i])
+                )
+            except BrokenExecutor:
+                if not isinstance(executor, ProcessPoolExecutor):
+                    raise
+                broken.update(dict.fromkeys(range(i, len(cases)), 0))
+                break
+            futures[fut] = i
+        for fut in as_completed(futures):
             i = futures[fut]
-            results[i] = _checked(i, fut.result)
-            if bar:
-                bar.update(done)
+            try:
+                got = fut.result()
+            except BrokenExecutor as exc:
+                if isinstance(executor, ProcessPoolExecutor):
+                    broken[i] = 1
+                else:
+                    record(i, _failure(i, cases[i], exc))
+                continue
+            except Exception as exc:  # the executor's own failure, or the run's exception from a thread
+                died = type(exc).__name__ == "KilledWorker"
+                record(i, _failure(i, cases[i], exc, "worker_died" if died else "raised"))
+                continue
+            if blobs is None:
+                record(i, got)
+            elif got[0] == "ok":
+                record(i, pickle.loads(got[1]))
+            else:
+                record(i, _from_report(i, cases[i], got[1]))
     except BaseException:
-        for fut in futures if "futures" in locals() else ():
+        for fut in futures:
             fut.cancel()
         raise
-    finally:
-        if own:
-            pool.shutdown(wait=True, cancel_futures=True)
-    return results
-
-
-def _checked(i: int, fn: Callable[[], Any]) -> Any:
-    try:
-        return fn()
-    except Exception as exc:
-        if hasattr(exc, "add_note"):
-            exc.add_note(f"(in sweep case {i})")
-        raise
+    return broken

@@ -1,0 +1,38 @@
+"""A sweep on a Dask cluster (a local one, worker processes) keeps one outcome per case: a run that raises and
+a run that kills its worker each time (Dask's ``KilledWorker``) are recorded, the other results come back."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from armctl.errors import SweepWarning
+from armctl.sim import CaseFailure, sweep
+from tests.sim.test_sweep_failures import _cases, _job
+
+
+@pytest.mark.slow
+def test_killed_worker_and_raising_run_on_dask_are_recorded(tmp_path: Path) -> None:
+    import dask
+    import distributed  # in the test extra: missing, the test fails rather than skips
+
+    cs = _cases(tmp_path / "starts.log", {1: "raise", 3: "sigkill"}, n=5)
+    with (
+        # one retry, as the sweep's own pool gives; one task per worker at a time, so that a case queued on the
+        # worker that dies is not counted as a suspect of its death
+        dask.config.set({"distributed.scheduler.allowed-failures": 1, "distributed.scheduler.worker-saturation": 1.0}),
+        distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cl,
+        distributed.Client(cl) as client,
+    ):
+        with pytest.warns(SweepWarning, match="1 raised, 1 worker died"):
+            out = sweep(cs, run=_job, executor=client.get_executor(), progress=False)
+        # Dask's workers receive cases through cloudpickle, so a lambda is not refused there
+        lam = sweep([{"x": 2}], run=lambda x: x + 1, executor=client.get_executor(), progress=False)
+    assert [out[i] for i in (0, 2, 4)] == [0, 4, 16] and lam == [3]
+    raised, killed = out[1], out[3]
+    assert isinstance(raised, CaseFailure) and raised.kind == "raised" and raised.case is cs[1]
+    assert (raised.error_type, raised.message) == ("ValueError", "x = 1 is not allowed")
+    assert "in _job" in raised.traceback  # the worker's traceback
+    assert isinstance(killed, CaseFailure) and killed.kind == "worker_died" and killed.case is cs[3]
+    assert killed.error_type == "distributed.scheduler.KilledWorker" and "workers died" in killed.message
