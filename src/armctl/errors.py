@@ -86,3 +86,8 @@ class IdentifiabilityError(ArmctlError, ValueError):
 class SimulationWarning(UserWarning):
     """A simulation ran, but part of its result is not to be trusted (e.g. an explicit integrator beyond its
     stability limit on a stiff contact); the result's ``info`` says which part and how to fix it."""
+
+
+class SolverWarning(UserWarning):
+    """A solver needed help during a run (a fallback, a lower priority level kept from the level above) but the
+    run went on; the warning says what happened and how often, once per run."""
