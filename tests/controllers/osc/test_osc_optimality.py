@@ -92,6 +92,7 @@ def test_the_solution_shown_satisfies_the_public_problems_kkt_conditions() -> No
         assert (cx <= u + 1e-8).all() and (cx >= l - 1e-8).all()
         assert (qp.z[cx < u - 1e-6] <= 1e-9).all() and (qp.z[cx > l + 1e-6] >= -1e-9).all()  # complementarity
         assert residuals((H, g, A, b, C, l, u), sol.x, qp.y, qp.z).ok()
+        assert ctrl.verify_last_step()
         free = np.flatnonzero((cx < u - 1.0) & (cx > l + 1.0))
         spurious = qp.z.copy()
         spurious[free[0]] = 10.0  # a multiplier on a bound 1 N·m away

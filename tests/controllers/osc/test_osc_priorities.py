@@ -72,6 +72,7 @@ def test_three_strict_levels_match_the_null_space_recursion(panda: armctl.Dynami
         N = N - np.linalg.pinv(JN, rcond=1e-10) @ JN
     np.testing.assert_allclose(sol.qdd, x, atol=1e-4)
     assert sol.level_status == ("solved", "solved", "solved")
+    assert ctrl.verify_last_step()  # every level's solution passes the optimality check again
 
 
 def test_weights_inside_a_level_are_weighted_least_squares(panda: armctl.Dynamics) -> None:
