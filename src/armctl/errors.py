@@ -112,3 +112,8 @@ class RunTimeoutError(ArmctlError, TimeoutError):
 class SweepWarning(UserWarning):
     """Some cases of a sweep failed; the sweep's result holds a ``CaseFailure`` for each (type, message,
     traceback and the case)."""
+
+
+class SolverWarning(UserWarning):
+    """A solver needed help during a run (a fallback, a lower priority level kept from the level above) but the
+    run went on; the warning says what happened and how often, once per run."""

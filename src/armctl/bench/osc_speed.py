@@ -1,21 +1,31 @@
-"""Speed of one operational-space QP control step on the Panda, against a bare proxsuite solve of the same QPs.
+"""Cost of one operational-space QP control step on the Panda, against one raw RNEA and against a bare proxsuite
+solve of the same QPs, on two sets of states.
 
 Run: ``python -m armctl.bench.osc_speed [--quick]``.
 
-Set-up: pose task on the tool frame (weight 1) + posture task (weight 1e-3) + torque limits, one priority
-level; the x = [q̈, τ] QP has 14 variables, 7 equality and 7 inequality rows. A sequence of states is made by
-running the controller on its own model along a 10 cm circle (so the QPs change from step to step as in a
-real loop); the circle is sampled at the control instants beforehand, so that a step pays a table lookup for
-its target (still checked by the task) instead of the trajectory's own arithmetic. Measured, as medians of
-interleaved rounds over that sequence (CPU time of this process):
+Set-up: pose task on the tool frame (kp 400) + posture task (kp 100, weight 1e-3, the same level) + the URDF's
+torque limits; the QP on [q̈; τ] has 14 variables, 7 equality and 7 inequality rows (the controller solves it on
+q̈ alone). Two sets of states, each run through one controller in turn, as a loop would:
 
-* ``step``: ``controller(t, q, q̇, ref)`` — model terms, QP build, warm-started proxsuite solve, τ;
-* ``bare_solve``: proxsuite dense ``update`` + ``solve`` of the very same QPs (H, g, A, b, C, l, u), warm-started
-  from the previous one — the solver alone;
-* ``closed_form``: the closed-form OSC baseline (Λ = (J M⁻¹ Jᵀ)⁻¹) on the same states;
-* ``cold_solve``: proxsuite's one-shot ``dense.solve`` of the same QPs (no warm start), for reference.
+* ``circle``: the controller on its own model along a 10 cm circle (the QPs change smoothly from step to step);
+  the circle is sampled at the control instants beforehand, so that a step pays a table lookup for its target
+  (still checked by the task) instead of the trajectory's own arithmetic;
+* ``random``: states near the ready pose, q = ready + N(0, 0.1 rad), q̇ = N(0, 0.3 rad/s), the pose target the
+  ready pose's tool pose (each step's QP unrelated to the previous one).
 
-Target: step / bare_solve ≤ 4.
+Measured per set, as CPU time of this process in interleaved rounds (ratios taken round by round, then their
+median and quartiles):
+
+* ``step``: ``controller(t, q, q̇, ref)`` — input checks, model terms, QP build, solve, optimality check, τ;
+* ``rnea``: one raw ``pinocchio.rnea`` at the same states;
+* ``bare_solve``: proxsuite dense ``update`` + ``solve`` of the same QPs (H, g, A, b, C, l, u of
+  ``ctrl.build(...).problem(0)``), warm-started from the previous one — the solver alone, unchecked;
+* ``check``: the optimality check of each step's solution, run again (``verify_last_step``);
+
+and, on one pass: the QPs solved by each stage of the solver chain (``stages``; fallbacks are "cold",
+"defaults", "second") and the steps whose τ differs from quadprog's cold optimum by more than 1e-4 N·m
+(``wrong``, if quadprog is installed). On the circle also the closed-form OSC baseline and proxsuite's
+one-shot cold ``dense.solve``, for reference.
 """
 
 from __future__ import annotations
@@ -25,24 +35,20 @@ import json
 import math
 import statistics
 import time
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 
 import armctl
 from armctl.bench.timing import interleaved_samples
-from armctl.controllers.osc import (
-    ClosedFormOSC,
-    FramePoseTask,
-    OperationalSpaceQP,
-    PostureTask,
-    TorqueLimit,
-)
+from armctl.controllers.osc import ClosedFormOSC, FramePoseTask, OperationalSpaceQP, PostureTask, TorqueLimit
 
-TARGET_RATIO = 4.0
-
+#: what the checks of this benchmark ask: the step within 15 RNEA on both sets of states
+TARGETS = {"ratio_rnea": 15.0}
 
 Q_HOME = np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])
+States = list[tuple[float, np.ndarray, np.ndarray]]
 
 
 def _circle(center: np.ndarray, rot: np.ndarray, radius: float = 0.05, freq: float = 0.5) -> Any:
@@ -78,16 +84,19 @@ class _Sampled:
         return self.table[min(round(t / self.dt), len(self.table) - 1)]
 
 
-def states(count: int, dt: float = 1e-3) -> tuple[list[tuple[float, np.ndarray, np.ndarray]], Any, Any]:
+def _controller(dyn: armctl.Dynamics, pose: FramePoseTask) -> OperationalSpaceQP:
+    return OperationalSpaceQP(dyn, [pose, PostureTask(dyn.n, kp=100.0, weight=1e-3)], limits=[TorqueLimit()])
+
+
+def states(count: int, dt: float = 1e-3) -> tuple[States, Any, Any]:
     """``count`` (t, q, q̇) along the circle, from the controller acting on its own model (semi-implicit
-    Euler), and the two controllers to time."""
+    Euler), and the QP and closed-form controllers to time."""
     dyn = armctl.Dynamics(armctl.models.panda())
     pose0 = dyn.frame_pose(Q_HOME)
     pose = FramePoseTask(kp=400.0)
     pose.set_trajectory(_Sampled(_circle(pose0[:3, 3], pose0[:3, :3]), dt, count))
-    posture = PostureTask(dyn.n, kp=100.0, weight=1e-3)
-    ctrl = OperationalSpaceQP(dyn, [pose, posture], limits=[TorqueLimit()])
-    closed = ClosedFormOSC(dyn, pose, posture)
+    ctrl = _controller(dyn, pose)
+    closed = ClosedFormOSC(dyn, pose, PostureTask(dyn.n, kp=100.0, weight=1e-3))
     ref = armctl.Reference(Q_HOME)
     q, qd = Q_HOME.copy(), np.zeros(dyn.n)
     seq = []
@@ -101,19 +110,42 @@ def states(count: int, dt: float = 1e-3) -> tuple[list[tuple[float, np.ndarray, 
     return seq, ctrl, closed
 
 
-def run(count: int = 400, rounds: int = 15, quick: bool = False) -> dict[str, Any]:
-    """Measure; returns a dict of figures (seconds per step and ratios). ``quick``: 100 states, 5 rounds."""
+def random_states(count: int, seed: int = 0) -> tuple[States, OperationalSpaceQP]:
+    """``count`` states near the ready pose (q = ready + N(0, 0.1), q̇ = N(0, 0.3)) and the controller, whose
+    pose target is the ready pose's tool pose."""
+    dyn = armctl.Dynamics(armctl.models.panda())
+    pose = FramePoseTask(kp=400.0)
+    pose.set_target(dyn.frame_pose(Q_HOME))
+    rng = np.random.default_rng(seed)
+    seq = [(0.0, Q_HOME + rng.normal(0.0, 0.1, dyn.n), rng.normal(0.0, 0.3, dyn.n)) for _ in range(count)]
+    return seq, _controller(dyn, pose)
+
+
+def _ratio(num: list[float], den: list[float]) -> tuple[float, tuple[float, float]]:
+    """Median and quartiles of the per-round ratios."""
+    q1, med, q3 = statistics.quantiles([a / b for a, b in zip(num, den, strict=True)], n=4)
+    return med, (q1, q3)
+
+
+def _cycle(seq: States) -> Callable[[], tuple[float, np.ndarray, np.ndarray]]:
+    count, i = len(seq), [0]
+
+    def nxt() -> tuple[float, np.ndarray, np.ndarray]:
+        k = i[0]
+        i[0] = (k + 1) % count
+        return seq[k]
+
+    return nxt
+
+
+def measure(seq: States, ctrl: OperationalSpaceQP, rounds: int, extra: dict[str, Any] | None = None) -> dict[str, Any]:
+    """The figures of one set of states (module docstring); ``extra``: more candidates to time, by name."""
+    import pinocchio as pin
     from proxsuite import proxqp
 
-    if quick:
-        count, rounds = 100, 5
-
-    seq, ctrl, closed = states(count)
     ref = armctl.Reference(Q_HOME)
-    qps = []
-    for t, q, qd in seq:
-        step = ctrl.build(t, q, qd, ref)
-        qps.append(tuple(np.array(a) for a in step.arrays(0)))
+    count = len(seq)
+    qps = [tuple(np.array(a) for a in ctrl.build(t, q, qd, ref).arrays(0)) for t, q, qd in seq]
     H, g, A, b, C, l, u = qps[0]  # noqa: E741
     bare = proxqp.dense.QP(H.shape[0], b.shape[0], l.shape[0])
     bare.settings.eps_abs = ctrl.solver.eps_abs
@@ -121,78 +153,146 @@ def run(count: int = 400, rounds: int = 15, quick: bool = False) -> dict[str, An
     bare.init(H, g, A, b, C, l, u)
     bare.solve()
     bare.settings.initial_guess = proxqp.InitialGuess.WARM_START_WITH_PREVIOUS_RESULT
-    idx = {"step": 0, "bare": 0, "closed": 0, "cold": 0}
-
-    def cycle(name: str) -> int:
-        i = idx[name]
-        idx[name] = (i + 1) % count
-        return i
+    pm = ctrl.dynamics.model.to_pinocchio()
+    pd = pm.createData()
+    zero = np.zeros(ctrl.n)
+    nxt = {k: _cycle(seq) for k in ("step", "rnea", "check")}
+    qp_index = [0]
 
     def step() -> None:
-        t, q, qd = seq[cycle("step")]
-        ctrl(t, q, qd, ref)
+        ctrl(*nxt["step"](), ref)
+
+    def rnea() -> None:
+        _, q, qd = nxt["rnea"]()
+        pin.rnea(pm, pd, q, qd, zero)
 
     def bare_solve() -> None:
-        bare.update(*qps[cycle("bare")])
+        k = qp_index[0]
+        qp_index[0] = (k + 1) % count
+        bare.update(*qps[k])
         bare.solve()
 
+    candidates = {"step": step, "rnea": rnea, "bare_solve": bare_solve, **(extra or {})}
+    samples = interleaved_samples(candidates, number=count, rounds=rounds, clock=time.process_time)
+    out: dict[str, Any] = {f"{k}_s": statistics.median(v) for k, v in samples.items()}
+    out["ratio_rnea"], out["ratio_rnea_iqr"] = _ratio(samples["step"], samples["rnea"])
+    out["ratio_bare"], out["ratio_bare_iqr"] = _ratio(samples["step"], samples["bare_solve"])
+    # one pass from a fresh controller: the stages of the solver chain, the fallbacks, and τ against quadprog
+    ctrl.reset()
+    fallbacks = 0
+    taus = []
+    for t, q, qd in seq:
+        taus.append(ctrl(t, q, qd, ref))
+        fallbacks += ctrl.last_log["qp_fallbacks"]
+    out["stages"] = ctrl.fallback_counts
+    out["fallbacks"] = fallbacks
+    out["wrong"] = _wrong(ctrl, seq, taus, ref)
+    # the optimality check of each step's solution, timed on its own (the step just made)
+    checks = []
+    for _ in range(max(1, rounds // 3)):
+        total = 0.0
+        for t, q, qd in seq:
+            ctrl(t, q, qd, ref)
+            t0 = time.process_time()
+            for _ in range(20):
+                ctrl.verify_last_step()
+            total += (time.process_time() - t0) / 20
+        checks.append(total / count)
+    out["check_s"] = statistics.median(checks)
+    out["check_share"] = out["check_s"] / out["step_s"]
+    ctrl.reset()
+    return out
+
+
+def _wrong(ctrl: OperationalSpaceQP, seq: States, taus: list[np.ndarray], ref: armctl.Reference) -> int | None:
+    """Steps whose τ is more than 1e-4 N·m from quadprog's cold optimum of the same QP (None without quadprog)."""
+    try:
+        import qpsolvers
+    except ImportError:  # pragma: no cover - a dependency
+        return None
+    if "quadprog" not in qpsolvers.available_solvers:
+        return None
+    wrong = 0
+    for (t, q, qd), tau in zip(seq, taus, strict=True):
+        p = ctrl.build(t, q, qd, ref).problem(0)
+        sol = qpsolvers.solve_problem(p.to_qpsolvers(), "quadprog")
+        wrong += not sol.found or float(np.abs(tau - sol.x[p.variables["tau"]]).max()) > 1e-4
+    return wrong
+
+
+def run(count: int = 400, rounds: int = 15, quick: bool = False) -> dict[str, Any]:
+    """Measure; returns a dict of figures per set of states (seconds per call and ratios). ``quick``: 100 states,
+    5 rounds."""
+    from proxsuite import proxqp
+
+    if quick:
+        count, rounds = 100, 5
+    seq, ctrl, closed = states(count)
+    ref = armctl.Reference(Q_HOME)
+    closed_next = _cycle(seq)
+    cold = [tuple(np.array(a) for a in ctrl.build(t, q, qd, ref).arrays(0)) for t, q, qd in seq]
+    cold_index = [0]
+
     def closed_form() -> None:
-        t, q, qd = seq[cycle("closed")]
-        closed(t, q, qd, ref)
+        closed(*closed_next(), ref)
 
     def cold_solve() -> None:
-        proxqp.dense.solve(*qps[cycle("cold")], eps_abs=ctrl.solver.eps_abs, eps_rel=0.0)
+        k = cold_index[0]
+        cold_index[0] = (k + 1) % count
+        proxqp.dense.solve(*cold[k], eps_abs=ctrl.solver.eps_abs, eps_rel=0.0)
 
-    # CPU time (process_time) rather than wall time: on a shared machine a long Python step is preempted more
-    # often than a short C++ solve, which would inflate their ratio
-    samples = interleaved_samples(
-        {"step": step, "bare_solve": bare_solve, "closed_form": closed_form, "cold_solve": cold_solve},
-        number=count,
-        rounds=rounds,
-        clock=time.process_time,
-    )
-    t = {k: statistics.median(v) for k, v in samples.items()}
-    # ratios round by round (each round runs every candidate once, back to back), then their median
-    ratios = [a / b for a, b in zip(samples["step"], samples["bare_solve"], strict=True)]
-    closed_ratios = [a / b for a, b in zip(samples["closed_form"], samples["bare_solve"], strict=True)]
-    q1, ratio, q3 = statistics.quantiles(ratios, n=4)
-    iters = []
-    for tt, q, qd in seq:
-        ctrl(tt, q, qd, ref)
-        iters.append(ctrl.last_solution.iterations)  # type: ignore[union-attr]
+    circle = measure(seq, ctrl, rounds, {"closed_form": closed_form, "cold_solve": cold_solve})
+    rseq, rctrl = random_states(count)
+    random = measure(rseq, rctrl, rounds)
     return {
         "model": "panda",
-        "qp_size": {"variables": int(H.shape[0]), "equalities": int(b.shape[0]), "inequalities": int(l.shape[0])},
+        "qp_size": {"variables": 14, "equalities": 7, "inequalities": 7},
         "states": count,
-        "step_s": t["step"],
-        "bare_solve_s": t["bare_solve"],
-        "closed_form_s": t["closed_form"],
-        "cold_solve_s": t["cold_solve"],
-        "ratio": ratio,
-        "ratio_iqr": (q1, q3),
-        "closed_form_ratio": statistics.median(closed_ratios),
-        "target_ratio": TARGET_RATIO,
-        "median_iterations": float(np.median(iters)),
+        "rounds": rounds,
+        "circle": circle,
+        "random": random,
     }
+
+
+def checks(fig: dict[str, Any]) -> dict[str, bool]:
+    """This benchmark's checks against :data:`TARGETS`, by name: the step within 15 RNEA on each set of states,
+    and no step's τ off quadprog's optimum."""
+    out = {}
+    for name in ("circle", "random"):
+        out[f"{name}: step / RNEA <= {TARGETS['ratio_rnea']:g}"] = fig[name]["ratio_rnea"] <= TARGETS["ratio_rnea"]
+        if fig[name]["wrong"] is not None:
+            out[f"{name}: every torque the optimum"] = fig[name]["wrong"] == 0
+    return out
 
 
 def report(fig: dict[str, Any]) -> str:
     us = 1e6
     s = fig["qp_size"]
-    return "\n".join(
-        [
-            f"OSC QP step on {fig['model']}: pose + posture + torque limits; QP {s['variables']} variables, "
-            f"{s['equalities']} equalities, {s['inequalities']} inequalities; {fig['states']} states, "
-            f"median {fig['median_iterations']:.0f} solver iterations",
-            f"  step (model terms + build + solve)  {fig['step_s'] * us:8.1f} µs",
-            f"  bare proxsuite update+solve (warm)  {fig['bare_solve_s'] * us:8.1f} µs",
-            f"  ratio step / bare                   {fig['ratio']:8.2f}   [{fig['ratio_iqr'][0]:.2f}, "
-            f"{fig['ratio_iqr'][1]:.2f}] (median of per-round ratios [quartiles]; target <= {fig['target_ratio']:g})",
-            f"  closed-form OSC baseline            {fig['closed_form_s'] * us:8.1f} µs   "
-            f"({fig['closed_form_ratio']:.2f} x bare)",
-            f"  proxsuite one-shot dense.solve      {fig['cold_solve_s'] * us:8.1f} µs   (cold, for reference)",
+    lines = [
+        f"OSC QP step on {fig['model']}: pose + posture + torque limits (QP on [q̈; τ]: {s['variables']} variables, "
+        f"{s['equalities']} equalities, {s['inequalities']} inequalities; solved on q̈ alone); {fig['states']} "
+        f"states per set, {fig['rounds']} rounds; ratios: median of per-round ratios [quartiles]"
+    ]
+    for name, title in (("circle", "along a 10 cm circle"), ("random", "random states near the ready pose")):
+        f = fig[name]
+        stages = ", ".join(f"{k} {v}" for k, v in sorted(f["stages"].items()))
+        wrong = "" if f["wrong"] is None else f"; τ off quadprog's optimum by > 1e-4 N·m: {f['wrong']}"
+        lines += [
+            f"  {title}:",
+            f"    step                      {f['step_s'] * us:8.1f} µs   {f['ratio_rnea']:6.2f} x RNEA "
+            f"[{f['ratio_rnea_iqr'][0]:.2f}, {f['ratio_rnea_iqr'][1]:.2f}]   {f['ratio_bare']:5.2f} x bare solve "
+            f"[{f['ratio_bare_iqr'][0]:.2f}, {f['ratio_bare_iqr'][1]:.2f}]",
+            f"    raw RNEA                  {f['rnea_s'] * us:8.2f} µs",
+            f"    bare proxsuite solve      {f['bare_solve_s'] * us:8.1f} µs   (warm, unchecked)",
+            f"    optimality check          {f['check_s'] * us:8.2f} µs   ({f['check_share']:.1%} of the step)",
+            f"    QPs by stage: {stages}; fallbacks {f['fallbacks']}{wrong}",
         ]
-    )
+        if "closed_form_s" in f:
+            lines += [
+                f"    closed-form OSC baseline  {f['closed_form_s'] * us:8.1f} µs",
+                f"    proxsuite dense.solve     {f['cold_solve_s'] * us:8.1f} µs   (one-shot, cold)",
+            ]
+    return "\n".join(lines)
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -71,7 +71,8 @@ def simulate(
 
     plant: the true arm, a Dynamics or a RobotModel (its friction, payload, … are the truth; it may differ
     from the controller's own model). controller: ``tau = controller(t, q, qd, ref)``; its ``reset()`` is
-    called first (``reset=True``) and its ``last_log`` dict recorded after every call. reference: a Reference
+    called first (``reset=True``), its ``end_run()`` (if it has one) after the last step, and its ``last_log``
+    dict recorded after every call. reference: a Reference
     or a callable t → Reference. duration [s]: a whole number of control periods. q0, qd0: initial state
     (None: the reference at t = 0). control_dt: controller period Δt_c [s]. dt: integration step [s]; Δt_c
     must be a whole multiple of it (None: Δt_c). integrator: "rk4", "semi-implicit-euler"
@@ -254,6 +255,9 @@ def simulate(
                     k + 1,
                 )
                 break
+    end_run = getattr(controller, "end_run", None)
+    if callable(end_run):
+        end_run()  # the controller's account of the run (e.g. the OSC's solver fallbacks), once
     TAUA[:] = TAU
     if clipped:
         TAUA[clipped] = np.clip(TAU[clipped], -limit, limit)

@@ -1,4 +1,4 @@
-"""Fixtures of the operational-space QP tests (issue 5): the Panda and its Dynamics, shared per session."""
+"""Fixtures of the operational-space QP tests: the Panda and its Dynamics, shared by the tests."""
 
 from __future__ import annotations
 

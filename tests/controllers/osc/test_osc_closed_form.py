@@ -1,5 +1,5 @@
 """The closed-form operational-space baseline (Λ = (J M⁻¹ Jᵀ)⁻¹, dynamically consistent null space) and how it
-compares with the QP near a singular configuration (issue 5), without simulation: the plant's response is
+compares with the QP near a singular configuration, without simulation: the plant's response is
 the forward dynamics of the exact model."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Closed-loop behaviour of the operational-space QP in armctl's simulator (issue 5), with joint friction
+"""Closed-loop behaviour of the operational-space QP in armctl's simulator, with joint friction
 (viscous + Coulomb, real stiction in the plant). Errors are measured from the plant's own kinematics against
 the references written here."""
 

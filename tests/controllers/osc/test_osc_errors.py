@@ -1,4 +1,4 @@
-"""Bad input and infeasible problems raise ArmctlError subclasses that name the value (issue 5)."""
+"""Bad input and infeasible problems raise ArmctlError subclasses that name the value."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Limits and contacts of the operational-space QP (issue 5): viability of the position bounds and the
+"""Limits and contacts of the operational-space QP: viability of the position bounds and the
 velocity bounds checked on the exact discrete double integrator, the linearised friction cone, Coulomb's law
 of a sliding contact."""
 
@@ -60,15 +60,16 @@ def test_position_bounds_keep_every_joint_stoppable(panda: armctl.Dynamics) -> N
     assert (up > 100).all() and (lo < -100).all()
 
 
-def _largest_viable_acceleration(gap: float, v: float, a_max: float) -> float:
+def _largest_viable_acceleration(gap: float, v: float, a_max: float, reserve: float = 0.1) -> float:
     """The viability bound from its definition, by bisection: the largest q̈ held over one step Δt (exact
     double integrator) after which the joint is still short of its limit (``gap`` ahead, moving at v towards
-    it) and, if it still moves towards the limit, can stop before it braking at a_max (v⁺² ≤ 2 a_max gap⁺);
-    never below −a_max (no more braking than that is asked for)."""
+    it) and, if it still moves towards the limit, can stop before it braking at the plan's (1 − reserve) a_max
+    (v⁺² ≤ 2 (1 − reserve) a_max gap⁺); never below −a_max (no more braking than that is asked for)."""
+    a_plan = (1.0 - reserve) * a_max
 
     def viable(a: float) -> bool:
         gap1, v1 = gap - DT * v - 0.5 * DT * DT * a, v + DT * a
-        return gap1 >= 0.0 and (v1 <= 0.0 or v1 * v1 <= 2.0 * a_max * gap1)
+        return gap1 >= 0.0 and (v1 <= 0.0 or v1 * v1 <= 2.0 * a_plan * gap1)
 
     if not viable(-a_max):
         return -a_max

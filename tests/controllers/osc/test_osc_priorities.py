@@ -1,4 +1,4 @@
-"""Weights inside a level and strict priorities across levels (issue 5), against references written here:
+"""Weights inside a level and strict priorities across levels, against references written here:
 the classic null-space recursion for unconstrained levels, weighted least squares inside a level, and
 scipy's bounded least squares for a level under torque limits."""
 
@@ -72,6 +72,7 @@ def test_three_strict_levels_match_the_null_space_recursion(panda: armctl.Dynami
         N = N - np.linalg.pinv(JN, rcond=1e-10) @ JN
     np.testing.assert_allclose(sol.qdd, x, atol=1e-4)
     assert sol.level_status == ("solved", "solved", "solved")
+    assert ctrl.verify_last_step()  # every level's solution passes the optimality check again
 
 
 def test_weights_inside_a_level_are_weighted_least_squares(panda: armctl.Dynamics) -> None:
@@ -119,23 +120,29 @@ def test_tight_torque_limits_lower_priority_gives_way_first(panda: armctl.Dynami
 
 
 def test_a_level_whose_solve_fails_still_outranks_the_levels_below(panda: armctl.Dynamics) -> None:
-    """Level 1 fails (a solver made to fail there): the controller keeps level 0's solution for it, and level 2
-    may not move level 1's residual away from what that solution gives it."""
+    """Level 1 fails (a solver made to fail there, in every mode, and no second solver): the controller keeps
+    level 0's solution for it, and level 2 may not move level 1's residual away from what that solution gives
+    it."""
     from armctl.controllers.osc.solve import ProxQPSolver
     from armctl.errors import SolverError
 
     class FailsOnLevel1(ProxQPSolver):
-        def solve(self, p, slot=0):  # type: ignore[no-untyped-def]
+        def solve_raw(self, arrays, slot=0, mode="warm"):  # type: ignore[no-untyped-def]
             if slot == 1:
                 raise SolverError("made to fail")
-            return super().solve(p, slot)
+            return super().solve_raw(arrays, slot, mode)
 
     q, qd = Q_HOME + 0.1, np.linspace(-0.3, 0.3, 7)
     refs = _setup(panda, q, qd)
     priorities = {"position": 0, "orientation": 1, "posture": 2}
     ctrl = OperationalSpaceQP(
-        panda, _tasks(refs, priorities), limits=[TorqueLimit()], solver=FailsOnLevel1(), slacks=True
-    )  # slacks: the solver's own solve() is used for every level
+        panda,
+        _tasks(refs, priorities),
+        limits=[TorqueLimit()],
+        solver=FailsOnLevel1(),
+        fallback_solver=None,
+        slacks=True,
+    )
     sol = ctrl.solve(0.0, q, qd, armctl.Reference(q))
     assert sol.level_status[0] == "solved" and sol.level_status[1].startswith("kept level 0")
     assert sol.level_status[2] == "solved"

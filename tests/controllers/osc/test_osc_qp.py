@@ -1,4 +1,4 @@
-"""The QP of the operational-space controller (issue 5): its rows against the Dynamics API (an independent
+"""The QP of the operational-space controller: its rows against the Dynamics API (an independent
 evaluation of the same Lagrange model), its solution against hand-written task accelerations, build
 separately from solve, and proxsuite against qpsolvers."""
 
@@ -130,29 +130,27 @@ def test_qpsolvers_and_proxsuite_agree(panda: armctl.Dynamics, rng: np.random.Ge
 
 
 def test_warm_start_reuses_the_previous_solution(panda: armctl.Dynamics) -> None:
-    """A controller that solved the previous period starts from that solution: at the next state it needs
-    fewer iterations than a fresh (cold) controller solving the same problem, and reaches the same answer.
-    The target is 10 cm away, so that neither solve is trivial."""
+    """ProxQP warm-started from the previous period's QP needs fewer iterations at the next state than a fresh
+    (cold) solver on the same QP, and reaches the same answer. The target is 10 cm away, so that neither solve
+    is trivial."""
+    from armctl.controllers.osc.solve import ProxQPSolver
 
-    def make() -> OperationalSpaceQP:
-        task = FramePoseTask()
-        target = panda.frame_pose(Q_HOME)
-        target[:3, 3] += [0.1, 0.0, -0.05]
-        task.set_target(target)
-        return OperationalSpaceQP(panda, [task, PostureTask(7)], limits=[TorqueLimit()])
-
+    task = FramePoseTask()
+    target = panda.frame_pose(Q_HOME)
+    target[:3, 3] += [0.1, 0.0, -0.05]
+    task.set_target(target)
+    ctrl = OperationalSpaceQP(panda, [task, PostureTask(7)], limits=[TorqueLimit()])
     ref = armctl.Reference(Q_HOME)
     qd = np.full(7, 0.1)
-    warm, cold = make(), make()
-    warm(0.0, Q_HOME, qd, ref)
-    tau_warm = warm(0.001, Q_HOME + 1e-4, qd, ref)
-    tau_cold = cold(0.001, Q_HOME + 1e-4, qd, ref)
-    assert warm.last_solution is not None and cold.last_solution is not None
-    assert cold.last_solution.iterations > 0
-    assert warm.last_solution.iterations < cold.last_solution.iterations
-    np.testing.assert_allclose(tau_warm, tau_cold, atol=1e-4 * np.abs(tau_cold).max())
+    first = ctrl.build(0.0, Q_HOME, qd, ref).arrays(0)
+    second = ctrl.build(0.001, Q_HOME + 1e-4, qd, ref).arrays(0)
+    warm, cold = ProxQPSolver(), ProxQPSolver()
+    warm.solve_raw(first)
+    a, b = warm.solve_raw(second), cold.solve_raw(second)
+    assert 0 < a.iterations < b.iterations
+    np.testing.assert_allclose(a.x, b.x, atol=1e-4 * np.abs(b.x).max())
     warm.reset()
-    assert warm.last_solution is None
+    assert warm.solve_raw(second).iterations == b.iterations  # cold again
 
 
 def test_a_warm_start_takes_the_new_state_dependent_bounds(panda: armctl.Dynamics) -> None:
@@ -242,9 +240,9 @@ def test_controllers_pickle_for_process_pools(rng: np.random.Generator) -> None:
 
 def test_a_lower_priority_level_is_solved_not_dropped(panda: armctl.Dynamics, rng: np.random.Generator) -> None:
     """Position (level 0) above orientation (level 1), no limits: six task rows on seven joints with free
-    torques, so both levels are met exactly. ProxQP used to report the second level DUAL_INFEASIBLE (its test
-    for an unbounded QP fired on the ε-flat directions of a strictly convex one), and the controller kept the
-    first level's answer: the orientation task was ignored (residual 340 rad/s²)."""
+    torques, so both levels are met exactly. (With its default ``eps_dual_inf`` ProxQP reports the second level
+    DUAL_INFEASIBLE — its test for an unbounded QP fires on the ε-flat directions of a strictly convex one — and
+    a controller that kept the first level's answer would ignore the orientation task: residual 340 rad/s².)"""
     for _ in range(6):
         q = Q_HOME + rng.uniform(-0.3, 0.3, 7)
         qd = rng.uniform(-0.5, 0.5, 7)

@@ -1,4 +1,4 @@
-"""Tasks of the operational-space QP (issue 5): errors, Jacobians and drifts against finite differences of the
+"""Tasks of the operational-space QP: errors, Jacobians and drifts against finite differences of the
 frame pose and scipy's rotations; the three forms of a gain."""
 
 from __future__ import annotations

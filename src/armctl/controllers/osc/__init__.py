@@ -4,11 +4,15 @@
 
 Parts, one concept a file: ``state`` (model terms of one step), ``tasks/`` (error + Jacobian), ``limits/``
 (bounds on q̈ or τ), ``contact`` (force variables, contact rows, friction cones), ``build`` (the QP),
-``problem`` (the inspectable QP), ``solve`` (proxsuite / qpsolvers), ``diagnose`` (conflicting rows),
-``hierarchy`` (cascaded priorities), ``controller`` (the controller), ``closed_form`` (Khatib's baseline).
+``problem`` (the inspectable QP), ``reduced`` (the same QP on q̈ alone), ``scale`` (out-of-scale task rows
+refused), ``solve`` (proxsuite / qpsolvers), ``active_set`` (a dual active-set solver), ``optimality`` (the KKT
+check), ``chain`` (verified optimum, with fallbacks), ``diagnose`` (conflicting rows), ``hierarchy`` (cascaded
+priorities), ``controller`` (the controller), ``closed_form`` (Khatib's baseline).
 """
 
+from armctl.controllers.osc.active_set import DualActiveSetSolver
 from armctl.controllers.osc.build import QPBuilder, StepQP
+from armctl.controllers.osc.chain import QPFailure, SolverChain
 from armctl.controllers.osc.closed_form import ClosedFormOSC
 from armctl.controllers.osc.contact import Contact
 from armctl.controllers.osc.controller import OperationalSpaceQP, default_limits
@@ -32,6 +36,7 @@ __all__ = [
     "ClosedFormOSC",
     "Contact",
     "ContactForceTask",
+    "DualActiveSetSolver",
     "FrameOrientationTask",
     "FramePoseTask",
     "FramePositionTask",
@@ -44,9 +49,11 @@ __all__ = [
     "PostureTask",
     "ProxQPSolver",
     "QPBuilder",
+    "QPFailure",
     "QPProblem",
     "QPSolution",
     "QpsolversSolver",
+    "SolverChain",
     "StepQP",
     "Task",
     "TorqueLimit",

@@ -17,10 +17,19 @@ and τ goes to the arm. Task targets:
 Contacts are switched with ``contact.active``. The QP of a period can be looked at before (or instead of)
 solving it: :meth:`OperationalSpaceQP.build` returns the :class:`~armctl.controllers.osc.build.StepQP`,
 ``.problem(k)`` the :class:`~armctl.controllers.osc.problem.QPProblem` (H, g, A, b, C, l, u) of level k.
+
+Every QP is solved by a :class:`~armctl.controllers.osc.chain.SolverChain`: τ comes only from a solution
+verified against the QP's optimality conditions (:mod:`~armctl.controllers.osc.optimality`), re-solved
+(cold start, the solver's default settings, a second solver) when the first answer fails the check. With one
+priority level and no active contact the QP is solved on q̈ alone (:mod:`~armctl.controllers.osc.reduced`:
+the same optimum). Each step's fallbacks are in ``last_log["qp_fallbacks"]``; :meth:`end_run` (which
+:func:`armctl.sim.simulate` calls) warns once with what happened during the run and how often.
 """
 
 from __future__ import annotations
 
+import warnings
+from collections import Counter
 from collections.abc import Sequence
 from typing import Any
 
@@ -28,15 +37,21 @@ import numpy as np
 
 from armctl._checks import FloatArray, instances, scalar, vector
 from armctl.controllers.base import Controller
-from armctl.controllers.osc.build import QPBuilder, StepQP, level_cost
+from armctl.controllers.osc.build import QPBuilder, StepQP
+from armctl.controllers.osc.chain import QPFailure, SolverChain
 from armctl.controllers.osc.contact import Contact
+from armctl.controllers.osc.diagnose import raise_unsolved
 from armctl.controllers.osc.hierarchy import OSCSolution, solve_cascade
+from armctl.controllers.osc.layout import Layout
 from armctl.controllers.osc.limits import JointPositionLimit, JointVelocityLimit, Limit, TorqueLimit
-from armctl.controllers.osc.solve import QPSolution, make_solver
+from armctl.controllers.osc.optimality import accept, residuals
+from armctl.controllers.osc.reduced import QddQP, QddStep
+from armctl.controllers.osc.scale import check_level_scale
+from armctl.controllers.osc.solve import make_second_solver, make_solver
 from armctl.controllers.osc.state import ModelEvaluator
 from armctl.controllers.osc.tasks.base import Task
 from armctl.dynamics.base import Dynamics
-from armctl.errors import InvalidParameterError
+from armctl.errors import InvalidParameterError, SolverWarning
 from armctl.reference import Reference
 
 
@@ -59,9 +74,12 @@ class OperationalSpaceQP(Controller):
     tasks: :class:`~armctl.controllers.osc.tasks.Task` objects; ``task.priority`` (0 first) orders levels
     strictly, ``task.weight`` trades tasks off inside a level. limits: :class:`~armctl.controllers.osc.limits.Limit`
     objects (default :func:`default_limits` with ``dt``). contacts: :class:`Contact` objects. solver:
-    "proxsuite" (dense ProxQP, warm-started), "qpsolvers:NAME", or an object with ``solve``/``reset``.
-    regularization: ε of ½ε‖x‖² in every level. slacks: task rows as constraints with slack variables.
-    dt: control period [s] for the default limits.
+    "proxsuite" (dense ProxQP, warm-started), "qpsolvers:NAME", or an object with ``solve``/``reset`` (and
+    ``solve_raw``, see :mod:`~armctl.controllers.osc.solve`). fallback_solver: the last stage of the solver
+    chain — "active-set" (:class:`~armctl.controllers.osc.active_set.DualActiveSetSolver`), "qpsolvers:NAME",
+    an object with ``solve_raw`` and ``reset``, or None (no second solver). regularization: ε of ½ε‖x‖² in
+    every level. slacks: task rows as constraints with slack variables. dt: control period [s] for the default
+    limits.
     """
 
     def __init__(
@@ -74,6 +92,7 @@ class OperationalSpaceQP(Controller):
         regularization: float = 1e-8,
         slacks: bool = False,
         dt: float = 1e-3,
+        fallback_solver: str | Any = "active-set",
     ) -> None:
         if not isinstance(dynamics, Dynamics):
             raise InvalidParameterError(
@@ -103,22 +122,25 @@ class OperationalSpaceQP(Controller):
         self.limits = tuple(limits)
         self.contacts = contacts
         self.solver = make_solver(solver)
+        self.chain = SolverChain(self.solver, make_second_solver(fallback_solver))
         self.builder = QPBuilder(
             dynamics.model, tasks, limits, contacts, scalar(regularization, "regularization", positive=True), slacks
         )
         torque = [lim for lim in limits if isinstance(lim, TorqueLimit)]
         self._tau_lo = np.max([-lim.limit for lim in torque], axis=0) if torque else None
         self._tau_up = np.min([lim.limit for lim in torque], axis=0) if torque else None
-        self.last_solution = None
-        # one priority level without slacks: the step goes straight from the task rows to the solver, and
-        # last_solution is put together only when asked for (see _solve_single)
-        self._single_level = len(self.builder.priorities) == 1 and not self.builder.slacks
-
-    #: the last single-level step's parts (layout, A, b, l, u, task rows, solver result), until last_solution
-    #: is asked for (class defaults: a controller pickled before these existed takes the generic path)
-    _pending: tuple[Any, ...] | None = None
-    _last_solution: OSCSolution | None = None
-    _single_level = False
+        # one priority level without slacks: the QP on q̈ alone whenever no contact is active (see reduced)
+        self._qdd_path = (
+            len(self.builder.priorities) == 1
+            and not self.builder.slacks
+            and callable(getattr(self.solver, "solve_raw", None))
+        )
+        self._qdd: dict[Layout, QddQP] = {}
+        self._pending: tuple[QddQP, QddStep] | None = None
+        self._last_solution: OSCSolution | None = None
+        self._steps = 0
+        self._kept: Counter[int] = Counter()
+        self._kept_reason: dict[int, str] = {}
 
     @property
     def last_solution(self) -> OSCSolution | None:
@@ -126,7 +148,9 @@ class OperationalSpaceQP(Controller):
         pending = self._pending
         if pending is not None:
             self._pending = None
-            self._last_solution = self._single_solution(*pending)
+            qp, result = pending
+            step, mapped = qp.public(result)
+            self._last_solution = OSCSolution(step, mapped.x, (mapped,), ("solved",), None, [None])
         return self._last_solution
 
     @last_solution.setter
@@ -134,37 +158,16 @@ class OperationalSpaceQP(Controller):
         self._pending = None
         self._last_solution = sol
 
-    @staticmethod
-    def _single_step(lay: Any, A: FloatArray, b: FloatArray, lo: FloatArray, up: FloatArray, lev: Any) -> StepQP:
-        return StepQP(lay, A, b, lo, up, [lev], lay.regularization, False)
-
-    def _single_solution(
-        self, lay: Any, A: FloatArray, b: FloatArray, lo: FloatArray, up: FloatArray, lev: Any, sol: QPSolution
-    ) -> OSCSolution:
-        return OSCSolution(
-            self._single_step(lay, A, b, lo, up, lev), sol.x[: lay.nx], (sol,), ("solved",), None, [None]
-        )
-
-    def _solve_single(
-        self, t: float, q: FloatArray, qd: FloatArray, ref: Reference, raw: Any
-    ) -> tuple[QPSolution, Any]:
-        """One priority level, no slacks, a solver with ``solve_raw``: the same QP as :meth:`build` and
-        :func:`solve_cascade` give, without their intermediate objects (which cost about a tenth of a step on the
-        Panda); the parts are kept for :attr:`last_solution`. Returns the solver's result and the layout."""
-        bld = self.builder
-        state = self.evaluator.evaluate(q, qd)
-        lay = bld.layout()
-        A, b, lo, up = bld.constraints(lay, state)
-        lev = bld.level(bld.plans(lay)[0], state, t, ref)
-        H, g = level_cost(lev, lay.reg_matrix)
-        sol = raw((H, g, A, b, lay.C, lo, up), 0, lambda: self._single_step(lay, A, b, lo, up, lev).problem(0))
-        self._pending = (lay, A, b, lo, up, lev, sol)
-        return sol, lay
-
     @property
     def priorities(self) -> list[int]:
         """The priority levels in solving order."""
         return list(self.builder.priorities)
+
+    @property
+    def fallback_counts(self) -> dict[str, int]:
+        """QPs solved since :meth:`reset` by each stage of the solver chain ("active set", "warm", and the
+        fallbacks "cold", "defaults", "second"); "failed" counts QPs none solved."""
+        return dict(self.chain.counts)
 
     def build(self, t: float, q: Any, qd: Any, ref: Reference) -> StepQP:
         """The QPs of one control period at (q, q̇), not solved (``.problem(k)`` for level k)."""
@@ -176,43 +179,122 @@ class OperationalSpaceQP(Controller):
         """Build and solve one control period; raises InfeasibleError naming the conflicting rows."""
         self.check_reference(ref)
         q, qd = vector(q, self.n, "q"), vector(qd, self.n, "qd")
-        return self._solve(scalar(t, "t"), q, qd, ref)
+        self.compute(scalar(t, "t"), q, qd, ref)
+        return self.last_solution  # type: ignore[return-value]
 
-    def _solve(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> OSCSolution:
-        raw = getattr(self.solver, "solve_raw", None) if self._single_level else None
-        if raw is not None:
-            self._solve_single(t, q, qd, ref, raw)
-            return self.last_solution  # type: ignore[return-value]
-        step = self.builder.build(self.evaluator.evaluate(q, qd), t, ref)
-        sol = solve_cascade(step, self.solver)
-        self.last_solution = sol
-        return sol
+    def _qdd_step(self, lay: Layout, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
+        """One level without contact forces: the QP on q̈ alone (see reduced)."""
+        qp = self._qdd.get(lay)
+        if qp is None:
+            qp = self._qdd[lay] = QddQP(self.builder, lay)
+        result = qp.step(self.evaluator.evaluate(q, qd), t, ref, self.chain)
+        self._pending = (qp, result)
+        sol = result.solution
+        tau = result.tau.copy()
+        if sol is None:  # the unconstrained minimum, within every bound
+            self.last_log = {"qp_iterations": 0, "qp_fallbacks": 0}
+            return tau
+        self.last_log = {"qp_iterations": sol.iterations, "qp_fallbacks": sol.fallbacks}
+        if self._tau_up is not None:
+            np.minimum(tau, self._tau_up, out=tau)
+            np.maximum(tau, self._tau_lo, out=tau)
+        return tau
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
-        """τ = the τ block of the QP solution (clipped onto the torque limits, which it meets to the solver's
+        """τ of the verified optimum (clipped onto the torque limits, which it meets to the optimality check's
         tolerance)."""
-        raw = getattr(self.solver, "solve_raw", None) if self._single_level else None
-        if raw is not None:  # the common case, without the solution object (see _solve_single)
-            qsol, lay = self._solve_single(t, q, qd, ref, raw)
-            x, n = qsol.x, self.n
-            tau = x[n : 2 * n].clip(self._tau_lo, self._tau_up) if self._tau_up is not None else x[n : 2 * n].copy()
-            log: dict[str, Any] = {"qp_iterations": qsol.iterations}
-            for c in lay.contacts:
-                log[f"force[{c.name}]"] = x[lay.variables[c.name]]
-            self.last_log = log
-            return tau
-        sol = self._solve(t, q, qd, ref)
+        self._steps += 1
+        self._pending = self._last_solution = None
+        if self._qdd_path:
+            lay = self.builder.layout()
+            if not lay.contacts:
+                return self._qdd_step(lay, t, q, qd, ref)
+        state = self.evaluator.evaluate(q, qd)
+        step = self.builder.build(state, t, ref)
+        for lev in step.levels:
+            check_level_scale(lev, state, t, ref)
+        try:
+            sol = solve_cascade(step, self.chain)
+        except QPFailure as err:
+            raise_unsolved(step.problem(0), err.attempts)
+        self.last_solution = sol
         tau = sol.tau.clip(self._tau_lo, self._tau_up) if self._tau_up is not None else sol.tau.copy()
-        log = {"qp_iterations": sol.iterations}
+        log: dict[str, Any] = {"qp_iterations": sol.iterations, "qp_fallbacks": sol.fallbacks}
         for name, f in sol.forces.items():
             log[f"force[{name}]"] = f
         if len(sol.level_status) > 1:
             log["level_status"] = sol.level_status
+            for k, status in enumerate(sol.level_status):
+                if status != "solved":
+                    self._kept[k] += 1
+                    self._kept_reason[k] = status
         self.last_log = log
         return tau
 
+    def verify_last_step(self) -> bool:
+        """Run the optimality check of the last step's solution again (every level): True if it passes, as it
+        did when the step accepted it. For tests and for timing what the check costs; a step never needs it."""
+        pending = self._pending
+        if pending is not None:
+            return pending[0].verify(pending[1])
+        sol = self._last_solution
+        if sol is None:
+            raise InvalidParameterError("there is no last step to verify (call the controller first)")
+        for k, qs in enumerate(sol.solutions):
+            if qs is None:
+                continue
+            p = sol.problem(k)
+            arrays = (p.H, p.g, p.A, p.b, p.C, p.l, p.u)
+            x = qs.x[: p.nx]
+            if qs.active is None or qs.z is None:
+                if not residuals(arrays, x, qs.y, qs.z).ok():
+                    return False
+            elif not accept(arrays, x, qs.z, qs.active):
+                return False
+        return True
+
+    def run_summary(self) -> str | None:
+        """What the solver chain had to do since :meth:`reset` (fallbacks by stage, lower levels kept from
+        the level above), in words; None if every QP was verified at the first try of a stage before the
+        fallbacks."""
+        counts = self.chain.counts
+        parts = []
+        taken = {stage: counts[stage] for stage in ("cold", "defaults", "second") if counts[stage]}
+        if taken:
+            what = {"cold": "a cold start", "defaults": "the solver's default settings", "second": "the second solver"}
+            shown = ", ".join(f"{n} by {what[stage]}" for stage, n in taken.items())
+            total = sum(taken.values())
+            parts.append(
+                f"the warm-started solution failed the optimality check (or the solver failed) and the QP was "
+                f"re-solved {total} time{'s' if total > 1 else ''}: {shown}"
+            )
+        for k, n in sorted(self._kept.items()):
+            parts.append(
+                f"priority level {k} had no verified optimum on {n} steps and kept the solution of the level above "
+                f"(last: {self._kept_reason[k]}); OSCSolution.diagnose({k}) names conflicting rows"
+            )
+        if not parts:
+            return None
+        return f"OperationalSpaceQP over {self._steps} control steps: " + "; ".join(parts)
+
+    def end_run(self) -> str | None:
+        """End of a run: warn once (:class:`~armctl.errors.SolverWarning`) with :meth:`run_summary` if there is
+        anything to report, and start counting afresh; returns the summary. :func:`armctl.sim.simulate` calls
+        it after the last step; call it after a loop of your own."""
+        msg = self.run_summary()
+        if msg is not None:
+            warnings.warn(msg, SolverWarning, stacklevel=2)
+        self.chain.counts.clear()
+        self._kept.clear()
+        self._kept_reason.clear()
+        self._steps = 0
+        return msg
+
     def reset(self) -> None:
-        """Forget the warm start and the last solution."""
+        """Forget the warm starts, the last solution and the run's counts."""
         super().reset()
-        self.solver.reset()
+        self.chain.reset()
         self.last_solution = None
+        self._kept.clear()
+        self._kept_reason.clear()
+        self._steps = 0

@@ -103,3 +103,25 @@ def raise_failure(p: QPProblem, solver: str, status: str, result: Any) -> NoRetu
         problem=p,
         result=result,
     )
+
+
+def raise_unsolved(p: QPProblem, attempts: list[tuple[str, str]]) -> NoReturn:
+    """Raise InfeasibleError (with the conflicting rows) or SolverError for ``p``, which no stage of the
+    controller's solver chain solved (``attempts``: what each stage did)."""
+    tried = "; ".join(f"{stage}: {what}" for stage, what in attempts)
+    rows = conflicting_rows(p)
+    if rows:
+        shown = ", ".join(f"{k} (relax by {v:.4g})" if v > 0 else k for k, v in rows.items())
+        raise InfeasibleError(
+            f"the QP of priority level {p.level} has no feasible point; conflicting rows (coupled through the "
+            f"equation of motion): {shown}. Relax one of these limits or contacts.",
+            value=rows,
+            problem=p,
+        )
+    feasible = "although it is feasible" if rows is not None else "and the search for conflicting rows failed too"
+    raise SolverError(
+        f"no solver found a verified optimum of the QP of priority level {p.level} {feasible} ({tried}); the "
+        "problem is likely badly scaled: check the gains, weights and limits",
+        value=attempts,
+        problem=p,
+    )

@@ -10,9 +10,11 @@ optimal set of the level above). The rows are compressed to an orthonormal basis
 the part of T_j outside the span so far, keeping singular values above ``rank_tol`` relative to the largest),
 so that dependent rows (a pose task above a posture task, say) never make the equality rows rank-deficient.
 
-A lower level whose solve fails (it can only be numerical: x_{k−1} is feasible for it) keeps x_{k−1}, and the
-levels below it are solved with its residual frozen at that value (T_k x = T_k x_{k−1}), so that they still
-cannot degrade it; its status is reported, nothing is hidden.
+Every level is solved by the controller's :class:`~armctl.controllers.osc.chain.SolverChain` (a verified
+optimum, with fallbacks). A lower level for which no stage finds one (it can only be numerical: x_{k−1} is
+feasible for it) keeps x_{k−1}, and the levels below it are solved with its residual frozen at that value
+(T_k x = T_k x_{k−1}), so that they still cannot degrade it; its status is reported, nothing is hidden — and
+nothing is diagnosed there: :meth:`OSCSolution.diagnose` looks for conflicting rows when asked.
 """
 
 from __future__ import annotations
@@ -20,10 +22,12 @@ from __future__ import annotations
 import numpy as np
 
 from armctl._checks import FloatArray
+from armctl.controllers.osc import diagnose as _diagnose
 from armctl.controllers.osc.build import StepQP
+from armctl.controllers.osc.chain import QPFailure, SolverChain
 from armctl.controllers.osc.problem import QPProblem
 from armctl.controllers.osc.solve import QPSolution
-from armctl.errors import InfeasibleError, SolverError
+from armctl.errors import SolverError
 
 
 class OSCSolution:
@@ -72,6 +76,17 @@ class OSCSolution:
         """The QP that was solved for ``level`` (with its rows freezing the levels above)."""
         return self.step.problem(level, self._frozen[level])
 
+    @property
+    def fallbacks(self) -> int:
+        """Fallback stages the solver chain took in this step, summed over the levels."""
+        return sum(s.fallbacks for s in self.solutions if s is not None)
+
+    def diagnose(self, level: int = 0) -> dict[str, float] | None:
+        """The rows of ``level``'s QP that conflict (:func:`~armctl.controllers.osc.diagnose.conflicting_rows`:
+        name → how much to relax it; empty if the QP is feasible, None if the diagnosis itself failed). An
+        elastic program of a few ms: run it when a level was kept (see ``level_status``), not in a loop."""
+        return _diagnose.conflicting_rows(self.problem(level))
+
 
 def _extend_basis(F: FloatArray, T: FloatArray, rank_tol: float) -> FloatArray:
     """Orthonormal rows spanning rows(F) + rows(T)."""
@@ -84,14 +99,10 @@ def _extend_basis(F: FloatArray, T: FloatArray, rank_tol: float) -> FloatArray:
     return np.vstack([F, vt[keep]]) if keep.any() else F
 
 
-def solve_cascade(step: StepQP, solver: object, rank_tol: float = 1e-9) -> OSCSolution:
-    """Solve the levels of ``step`` in priority order with ``solver`` (an object with ``solve(problem, slot)``;
-    ``solve_raw(arrays, slot, problem_factory)`` is used when present and there are no slacks)."""
+def solve_cascade(step: StepQP, chain: SolverChain, rank_tol: float = 1e-9) -> OSCSolution:
+    """Solve the levels of ``step`` in priority order with ``chain``. Raises
+    :class:`~armctl.controllers.osc.chain.QPFailure` if level 0 has no verified optimum."""
     nx = step.layout.nx
-    raw = getattr(solver, "solve_raw", None) if not step.slacks else None
-    if raw is not None and len(step.levels) == 1:  # the common case, kept lean
-        sol = raw(step.arrays(0), 0, lambda: step.problem(0))
-        return OSCSolution(step, sol.x[:nx], (sol,), ("solved",), None, [None])
     F = np.zeros((0, nx))
     x: FloatArray | None = None
     sols: list[QPSolution | None] = []
@@ -102,16 +113,18 @@ def solve_cascade(step: StepQP, solver: object, rank_tol: float = 1e-9) -> OSCSo
     for k, lev in enumerate(step.levels):
         frozen = None if x is None else (F, F.dot(x))
         frozen_rows.append(frozen)
+        if step.slacks:
+            p = step.problem(k, frozen)
+            arrays = (p.H, p.g, p.A, p.b, p.C, p.l, p.u)
+        else:
+            arrays = step.arrays(k, frozen)
         try:
-            if raw is not None:
-                sol = raw(step.arrays(k, frozen), k, lambda k=k, fr=frozen: step.problem(k, fr))
-            else:
-                sol = solver.solve(step.problem(k, frozen), k)  # type: ignore[attr-defined]
-        except (InfeasibleError, SolverError) as err:
+            sol = chain.solve(arrays, k, lambda k=k, fr=frozen: step.problem(k, fr))
+        except QPFailure as err:
             if x is None:
                 raise
             sols.append(None)
-            status.append(f"kept level {k - 1}: {type(err).__name__}")
+            status.append(f"kept level {k - 1}: no verified optimum ({err.attempts[-1][1] if err.attempts else ''})")
             if k < last:  # the levels below keep this level's residual at x_{k−1}: it gives way to none of them
                 F = _extend_basis(F, lev.T, rank_tol)
             continue

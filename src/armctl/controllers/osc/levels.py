@@ -49,13 +49,16 @@ class LevelRows:
 
 class LevelPlan:
     """What does not change between steps for one level and one layout: its tasks, their rows and columns,
-    [J | b] with the identity blocks already in place, and the square-root weights."""
+    [J | b] with the identity blocks already in place, and the square-root weights. ``extra_rows`` rows of
+    weight ``extra_weight`` follow the tasks' rows (left zero: the caller fills them every step; they are no
+    task's and no residual reports them)."""
 
-    def __init__(self, tasks: tuple[Task, ...], lay: Layout) -> None:
+    def __init__(self, tasks: tuple[Task, ...], lay: Layout, extra_rows: int = 0, extra_weight: float = 0.0) -> None:
         self.tasks = tasks
         m = sum(tk.dim for tk in tasks)
         nx = lay.nx
-        self.template = np.zeros((m, nx + 1))
+        self.extra = (int(extra_rows), float(extra_weight))
+        self.template = np.zeros((m + self.extra[0], nx + 1))
         self.slices: dict[str, slice] = {}
         self.entries: list[tuple[Task, slice, slice | None]] = []
         r = 0
@@ -70,15 +73,16 @@ class LevelPlan:
         self.m = m
         self.nx = nx
         self.version = -1
-        self._scale = np.zeros((m, nx + 1))
+        self._scale = np.zeros(self.template.shape)
 
     def scale(self) -> FloatArray:
-        """The square-root weights of the rows, as LevelRows.scale (m × (nx+1), last column negated)."""
+        """The square-root weights of the rows, as LevelRows.scale (rows × (nx+1), last column negated)."""
         if self.version != Task.weights_version:
-            scale = np.zeros((self.m, self.nx + 1))
+            scale = np.zeros(self.template.shape)
             if self.tasks:
-                scale[:] = np.concatenate([tk.sqrt_weight for tk in self.tasks])[:, None]
-                scale[:, self.nx] *= -1.0
+                scale[: self.m] = np.concatenate([tk.sqrt_weight for tk in self.tasks])[:, None]
+            scale[self.m :] = np.sqrt(self.extra[1])
+            scale[:, self.nx] *= -1.0
             self._scale = scale
             self.version = Task.weights_version
         return self._scale

@@ -17,6 +17,9 @@ import numpy as np
 
 from armctl._checks import FloatArray
 
+#: a QP as the arrays (H, g, A, b, C, l, u) of the module's formulation
+Arrays = tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]
+
 
 @dataclass(frozen=True)
 class QPProblem:

@@ -6,19 +6,22 @@ With the control period Δt, the next state under a constant q̈ is q⁺ = q + �
 Two bounds on q̈ for the upper limit q_max (the lower one is symmetric):
 
 * position:  q⁺ ≤ q_max  ⇔  q̈ ≤ 2 (q_max − q − Δt q̇) / Δt²
-* viability: from q⁺ the joint can still stop before q_max braking at a_max, (q̇⁺)² ≤ 2 a_max (q_max − q⁺);
-  solving the quadratic in q̈ gives
-      q̈ ≤ [−(2Δt q̇ + a_max Δt²) + Δt √(a_max² Δt² + 8 a_max (q_max − q) − 4 a_max Δt q̇)] / (2Δt²)
+* viability: from q⁺ the joint can still stop before q_max braking at a = (1 − ρ) a_max,
+  (q̇⁺)² ≤ 2 a (q_max − q⁺); solving the quadratic in q̈ gives
+      q̈ ≤ [−(2Δt q̇ + a Δt²) + Δt √(a² Δt² + 8 a (q_max − q) − 4 a Δt q̇)] / (2Δt²)
   (a negative discriminant means the joint can no longer stop in time: the bound is then −a_max).
 
 Each bound is clamped to ≥ −a_max (the strongest braking asked for) so that a joint that has strayed
 outside the viable set brakes at a_max instead of making the QP infeasible.
 
-The bounds are exact for the discrete model, which holds q̈ over the period; a real arm (or the simulator)
-holds the torque instead, and as q and q̇ change within the period M(q)⁻¹(τ − h) drifts from the q̈ the QP
-chose. Braking at a_max into a limit then stops slightly beyond it: on the Panda, driven by a posture task
-into joint 4's upper limit at the default 10 rad/s², by 0.94 mrad (an independent review's closed-loop run;
-the plant braked at 9.95–9.97 rad/s²). A ``margin`` of a few mrad covers it.
+What the bounds guarantee: for the discrete model, which holds q̈ over the period, a joint that starts inside
+the viable set stays there and never passes its limit, exactly. A real arm (or the simulator) holds the torque
+instead, and as q and q̇ change within the period M(q)⁻¹(τ − h) drifts from the q̈ the QP chose: braking
+exactly at the viability boundary, the arm brakes a little less than planned (on the Panda at full stretch,
+1–2 % less) and drifts outside the viable set. Hence the reserve ρ (``reserve``, default 0.1): the plan
+brakes at (1 − ρ) a_max, and a joint that drifted out of the plan's viable set is asked for up to a_max, which
+brings it back as long as the drift of a held torque stays below ρ a_max. With ρ = 0 (the plan at a_max, no
+reserve) the Panda overshot a limit by up to 1.7 mrad when driven towards a target out of reach.
 """
 
 from __future__ import annotations
@@ -35,7 +38,8 @@ from armctl.model.robot import RobotModel
 
 class JointPositionLimit(Limit):
     """q_min + margin ≤ q ≤ q_max − margin [rad], enforced through q̈ bounds (see the module); ``dt`` the
-    control period [s], ``max_deceleration`` a_max [rad/s²] the braking the joints can count on. The settings
+    control period [s], ``max_deceleration`` a_max [rad/s²] the braking the joints can count on, ``reserve`` ρ
+    the fraction of it the plan keeps for corrections (the plan brakes at (1 − ρ) a_max). The settings
     are taken when the limit is bound to a model (by the controller) and kept as read-only arrays: to change
     them, make a new limit. Near the point where a joint can only just stop (discriminant ≈ 0) the bound is
     accurate to ~1e-4 rad/s² (the affine form rounds q_max and q before they cancel)."""
@@ -49,9 +53,16 @@ class JointPositionLimit(Limit):
         margin: float = 0.0,
         lower: ArrayLike | None = None,
         upper: ArrayLike | None = None,
+        reserve: float = 0.1,
     ) -> None:
         self.dt = scalar(dt, "dt", positive=True)
         self.margin = scalar(margin, "margin", nonnegative=True)
+        self.reserve = scalar(reserve, "reserve", nonnegative=True)
+        if self.reserve >= 1.0:
+            raise InvalidParameterError(
+                f"reserve is the fraction of max_deceleration kept for corrections, in [0, 1); got {reserve}",
+                value=reserve,
+            )
         self._amax, self._lo, self._up = max_deceleration, lower, upper
 
     def bind(self, model: RobotModel) -> None:
@@ -72,7 +83,8 @@ class JointPositionLimit(Limit):
         # towards the limit v = [q̇; −q̇]. The position bound 2(g − Δt v)/Δt², the discriminant
         # a²Δt² + 8a g − 4aΔt v and the part of the viability bound outside the root, −v/Δt − a/2, are affine
         # in [q; q̇]: one product y = B [q; q̇] + c gives all three (12 array operations a step instead of 40)
-        dt, a = self.dt, np.concatenate([self.max_deceleration] * 2)
+        dt, a_full = self.dt, np.concatenate([self.max_deceleration] * 2)
+        a = (1.0 - self.reserve) * a_full  # the plan's braking
         eye = np.eye(n)
         s_q = np.vstack((-eye, eye))  # g = gap0 + s_q q
         s_v = np.vstack((eye, -eye))  # v = s_v q̇
@@ -85,7 +97,7 @@ class JointPositionLimit(Limit):
             )
         )  # viability bound without the root
         self._offset = np.concatenate((2.0 / dt**2 * gap0, (a * dt) ** 2 + 8.0 * a * gap0, -0.5 * a))
-        self._neg_a = -a
+        self._neg_a = -a_full
         self._root_factor = np.full(2 * n, 0.5 / dt)
 
     def bounds(self, state: ModelState) -> tuple[FloatArray, FloatArray]:

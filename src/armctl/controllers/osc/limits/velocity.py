@@ -4,6 +4,12 @@
 
 each bound clamped to ±a_max (so that a joint already too fast is asked to brake at a_max, not at an
 impossible (q̇_max − q̇)/Δt, which would make the QP infeasible against the torque limits).
+
+What the bound guarantees: for the discrete model, which holds q̈ over the period, q̇ one period ahead,
+q̇ + Δt q̈, is within ±q̇_max exactly (a joint inside its limits stays inside). A real arm (or the simulator)
+holds the torque instead, and M(q)⁻¹(τ − h) drifts within the period from the q̈ the QP chose, so q̇ can end the
+period beyond the limit by Δt times that drift: on the Panda riding its velocity limits, by at most 0.06 % in
+the closed-loop tests (which allow 0.1 %).
 """
 
 from __future__ import annotations

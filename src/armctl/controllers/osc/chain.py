@@ -1,0 +1,184 @@
+"""`SolverChain`: one QP of a control step, solved until a verified optimum is found.
+
+Stages, in order, each ending in the same check (:mod:`~armctl.controllers.osc.optimality`): the active set the
+candidate points at is solved exactly and accepted only if every row holds and every multiplier has its sign —
+i.e. the KKT conditions, the duality gap included, hold to the stated tolerances.
+
+1. ``"active set"`` — the active set of the slot's last verified optimum (consecutive control steps rarely
+   change which limits bind), solved exactly by one direct solve; if the check refuses it, up to
+   :data:`PDAS_STEPS` steps of the primal-dual active-set method from it (drop the rows whose multiplier has
+   the wrong sign, take the rows the point violates), each solved exactly and checked. Skipped on a slot's
+   first QP.
+2. ``"warm"`` — the primary solver (ProxQP), warm-started from the slot's previous solution.
+3. ``"cold"`` — the primary solver from scratch (a warm start from an unrelated state can stop at a point
+   that is not the optimum, or report a feasible QP infeasible).
+4. ``"defaults"`` — the primary solver from scratch with its default settings.
+5. ``"second"`` — a second solver (by default :class:`~armctl.controllers.osc.active_set.DualActiveSetSolver`,
+   an active-set method).
+
+Stages 3–5 are fallbacks: each one taken is counted (``counts``, and per step ``QPSolution.fallbacks``). If no
+stage gives a verified optimum, :class:`QPFailure` is raised with what each stage did; the controller decides
+what that means (a diagnosis for level 0, the level above's solution kept for a lower level).
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from armctl._checks import FloatArray
+from armctl.controllers.osc.active_set import DualActiveSetSolver
+from armctl.controllers.osc.optimality import ActiveSets, active_set_of, residuals
+from armctl.controllers.osc.problem import Arrays, QPProblem
+from armctl.controllers.osc.solve import QPSolution
+from armctl.errors import InfeasibleError, SolverError
+
+#: the stages in order (module docstring); those after "warm" are fallbacks
+STAGES = ("active set", "warm", "cold", "defaults", "second")
+FALLBACKS = ("cold", "defaults", "second")
+#: the most active sets the first stage tries
+PDAS_STEPS = 4
+
+
+class QPFailure(SolverError):
+    """No stage of the chain found a verified optimum; ``attempts`` holds (stage, what happened) pairs."""
+
+    def __init__(self, attempts: list[tuple[str, str]]) -> None:
+        shown = "; ".join(f"{stage}: {what}" for stage, what in attempts)
+        super().__init__(f"no verified optimum ({shown})", value=attempts)
+        self.attempts = attempts
+
+
+class SolverChain:
+    """The stages of the module docstring around a ``primary`` solver (an object with ``solve_raw(arrays,
+    slot, mode)``, or a user's object with ``solve(problem, slot)`` and ``reset()``) and a ``second`` one (an
+    object with ``solve_raw``; "active-set": :class:`~armctl.controllers.osc.active_set.DualActiveSetSolver`;
+    None: no fifth stage)."""
+
+    def __init__(self, primary: Any, second: Any = "active-set") -> None:
+        self.primary = primary
+        self.second = DualActiveSetSolver() if isinstance(second, str) and second == "active-set" else second
+        self._raw = callable(getattr(primary, "solve_raw", None))
+        #: the last verified optimum's active set, per (slot, n, equalities, inequalities)
+        self._active: dict[tuple[int, int, int, int], np.ndarray] = {}
+        #: verified optima by the stage that found them, and QPs no stage solved ("failed"), since reset()
+        self.counts: Counter[str] = Counter()
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        return (SolverChain, (self.primary, self.second))  # starts cold, as after reset()
+
+    def reset(self) -> None:
+        """Forget the warm starts and the counts."""
+        self.primary.reset()
+        if self.second is not None:
+            self.second.reset()
+        self._active.clear()
+        self.counts.clear()
+
+    def _call(self, solver: Any, arrays: Arrays, slot: int, mode: str, problem: Callable[[], QPProblem]) -> Any:
+        if solver is self.second or self._raw:
+            return solver.solve_raw(arrays, slot, mode)
+        if mode == "defaults":  # a user's solver has no notion of its defaults
+            return None
+        if mode == "cold":
+            solver.reset()
+        return solver.solve(problem(), slot)
+
+    @staticmethod
+    def key(arrays: Arrays, slot: int) -> tuple[int, int, int, int]:
+        """What the warm starts and active sets are kept by: (slot, variables, equalities, inequalities)."""
+        return (slot, arrays[1].shape[0], arrays[3].shape[0], arrays[5].shape[0])
+
+    def last_active(self, key: tuple[int, int, int, int]) -> np.ndarray | None:
+        """The active set of the last verified optimum of ``key`` (None before the first)."""
+        return self._active.get(key)
+
+    def record(self, key: tuple[int, int, int, int], active: np.ndarray) -> None:
+        """A verified optimum with active set ``active`` found by a caller's own first stage (counted as
+        "active set")."""
+        self._active[key] = active
+        self.counts["active set"] += 1
+
+    def solve(
+        self,
+        arrays: Arrays,
+        slot: int = 0,
+        problem: Callable[[], QPProblem] | None = None,
+        start: np.ndarray | None = None,
+        unconstrained: tuple[FloatArray, FloatArray] | None = None,
+    ) -> QPSolution:
+        """The verified optimum of the QP ``arrays`` = (H, g, A, b, C, l, u) (``slot``: one per priority level,
+        for warm starts; ``problem()``: the named problem, for a user's solver that takes one; ``start``: the
+        active set to start the first stage from, instead of the last one; ``unconstrained``: H's Cholesky factor
+        and the unconstrained minimum, if the caller has them, see :class:`ActiveSets`). Raises
+        :class:`QPFailure`."""
+        key = self.key(arrays, slot)
+        active = self._active.get(key) if start is None else start
+        seen: list[bytes] = []
+        sets = ActiveSets(arrays, unconstrained)
+        while active is not None and len(seen) < PDAS_STEPS:
+            seen.append(active.tobytes())
+            sol = sets.solve(active)
+            if sol is None:
+                break
+            following = sets.following(sol[0], sol[2], active)
+            if following is None:
+                self._active[key] = active
+                self.counts["active set"] += 1
+                return QPSolution(sol[0], "solved", 0, "active set", sol[1], sol[2], "active set", 0, active)
+            active = None if following.tobytes() in seen else following
+        attempts: list[tuple[str, str]] = []
+        fallbacks = 0
+        for stage in STAGES[1:]:
+            solver = self.second if stage == "second" else self.primary
+            if solver is None:
+                continue
+            mode = "warm" if stage == "second" else stage
+            if stage in FALLBACKS:
+                fallbacks += 1
+            try:
+                sol = self._call(solver, arrays, slot, mode, problem or _no_problem)
+            except (SolverError, InfeasibleError) as err:
+                attempts.append((stage, str(err)))
+                continue
+            if sol is None:
+                fallbacks -= 1
+                continue
+            found = self._verify(sets, sol)
+            if found is None:
+                attempts.append((stage, f"{getattr(solver, 'name', type(solver).__name__)}: not the optimum"))
+                continue
+            x, y, z, active = found
+            self._active[key] = active
+            self.counts[stage] += 1
+            return QPSolution(x, "solved", sol.iterations, sol.solver, y, z, stage, fallbacks, active)
+        self._active.pop(key, None)
+        self.counts["failed"] += 1
+        raise QPFailure(attempts)
+
+    @staticmethod
+    def _verify(sets: ActiveSets, sol: QPSolution) -> tuple[FloatArray, FloatArray, FloatArray, np.ndarray] | None:
+        """The optimum that ``sol`` points at, verified: its active set solved exactly and accepted, or else
+        ``sol`` itself if its KKT residuals (with its multipliers) are within the tolerances; None if neither."""
+        arrays = sets.arrays
+        x = np.asarray(sol.x, dtype=float)[: arrays[1].shape[0]]
+        if not np.isfinite(x).all():
+            return None
+        candidates = [active_set_of(arrays, x, sol.z)]
+        if sol.z is not None:  # and the rows at their bounds, in case the multipliers mislead
+            candidates.append(active_set_of(arrays, x, None))
+        for active in candidates:
+            exact = sets.solve(active)
+            if exact is not None and sets.following(exact[0], exact[2], active) is None:
+                return exact[0], exact[1], exact[2], active
+        if sol.z is not None and (sol.y is not None or not arrays[3].shape[0]):
+            if residuals(arrays, x, sol.y, sol.z).ok():
+                return x, sol.y if sol.y is not None else np.zeros(0), sol.z, candidates[0]
+        return None
+
+
+def _no_problem() -> QPProblem:
+    raise SolverError("this solver needs the named problem, which was not given")

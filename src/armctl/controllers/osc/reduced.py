@@ -1,0 +1,242 @@
+"""`QddQP`: the QP of one priority level without contact forces, solved on q̈ alone.
+
+Without contact forces the equation of motion gives τ outright, τ = M q̈ + h' with h' = C q̇ + g + τ_f, so the
+QP over x = [q̈; τ] that :class:`~armctl.controllers.osc.build.StepQP` shows,
+
+    min ½‖W^{1/2}(J q̈ − b)‖² + ½ε(‖q̈‖² + ‖τ‖²)   s.t.   M q̈ − τ = −h',   l ≤ C [q̈; τ] ≤ u,
+
+is, with τ substituted, the QP over q̈ alone (as in TSID)
+
+    min ½‖W^{1/2}(J q̈ − b)‖² + ½ε‖q̈‖² + ½ε‖M q̈ + h'‖²
+    s.t. l_τ − h' ≤ M q̈ ≤ u_τ − h'   (each torque limit's rows)
+         l_q̈ ≤ q̈ ≤ u_q̈               (each acceleration, position or velocity limit's rows)
+
+— the same optimum exactly (the same cost at every feasible point), with half the variables, no equality
+rows, and inequality rows that are the public problem's one for one (their multipliers are the same). The
+regularisation enters as 2n rows below the task rows, √ε [I | 0] and √ε [M | −h'], so that one Gram product
+of the stacked rows gives H and g.
+
+Each step first tries the unconstrained minimum when the last verified optimum had no active row (consecutive
+steps rarely change which limits bind): q̈ = −H⁻¹g by a Cholesky solve, τ = M q̈ + h', accepted if every
+torque and q̈ bound holds (exactly, so that τ needs no clipping) — the optimality check of
+:mod:`~armctl.controllers.osc.optimality` for an empty active set, with no multiplier and so no gap.
+Otherwise the whole QP goes to the controller's :class:`~armctl.controllers.osc.chain.SolverChain`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.linalg import lapack
+
+from armctl._checks import FloatArray
+from armctl.controllers.osc.build import QPBuilder, StepQP
+from armctl.controllers.osc.chain import QPFailure, SolverChain
+from armctl.controllers.osc.diagnose import raise_unsolved
+from armctl.controllers.osc.layout import Layout
+from armctl.controllers.osc.levels import LevelPlan, LevelRows
+from armctl.controllers.osc.optimality import accept, residuals
+from armctl.controllers.osc.problem import Arrays
+from armctl.controllers.osc.scale import MAX_TASK_RHS, refuse_scale
+from armctl.controllers.osc.solve import QPSolution
+from armctl.controllers.osc.state import ModelState
+from armctl.reference import Reference
+
+_MAX_RHS2 = MAX_TASK_RHS**2
+
+
+class _QddLayout:
+    """The variable blocks of the q̈-only QP (what a LevelPlan reads of a layout)."""
+
+    def __init__(self, n: int) -> None:
+        self.nx = n
+        self.variables = {"qdd": slice(0, n)}
+
+
+class QddStep:
+    """What one step of :class:`QddQP` leaves for :meth:`QddQP.public`: the bounds of every limit (l, u per
+    limit), q̈, τ, and the QP ``arrays`` with the chain's ``solution`` (both None for the unconstrained
+    minimum)."""
+
+    __slots__ = ("arrays", "bounds", "qdd", "solution", "tau")
+
+    def __init__(
+        self,
+        bounds: list[tuple[FloatArray, FloatArray]],
+        qdd: FloatArray,
+        tau: FloatArray,
+        arrays: Arrays | None = None,
+        solution: QPSolution | None = None,
+    ) -> None:
+        self.bounds, self.qdd, self.tau, self.arrays, self.solution = bounds, qdd, tau, arrays, solution
+
+
+class QddQP:
+    """Builds and solves the q̈-only QP of the module docstring for a single-level builder and a layout without
+    contacts, and maps its solution back to the public problem. Holds its stacked rows as a workspace: the
+    rows of one step are valid until the next (:meth:`public` copies what it keeps)."""
+
+    def __init__(self, builder: QPBuilder, lay: Layout) -> None:
+        n = builder.n
+        self.n = n
+        self.layout = lay
+        self.builder = builder
+        eps = builder.regularization
+        tasks = tuple(tk for tk in builder.tasks if tk.variable in lay.variables)
+        self.plan = LevelPlan(tasks, _QddLayout(n), extra_rows=2 * n, extra_weight=eps)  # type: ignore[arg-type]
+        m = self.m = self.plan.m
+        self.rows = self.plan.template.copy()  # [J | b] of the tasks; √ε-weighted [I | 0]; [M | −h']
+        self.rows[m : m + n, :n] = np.eye(n)
+        self.mass_rows = slice(m + n, m + 2 * n)
+        self.weighted = np.empty_like(self.rows)
+        self.tau_rows: list[slice] = []
+        blocks = []
+        for k, lim in enumerate(lay.limits):
+            if lim.variable == "tau":
+                self.tau_rows.append(slice(k * n, (k + 1) * n))
+                blocks.append(np.zeros((n, n)))
+            else:
+                blocks.append(np.eye(n))
+        self.C_template = np.vstack(blocks) if blocks else np.zeros((0, n))
+        self.no_rows = np.zeros((0, n)), np.zeros(0)
+        self.key = (0, n, 0, self.C_template.shape[0])  # SolverChain.key of the arrays, slot 0
+        self.no_active = np.zeros(self.C_template.shape[0], dtype=np.int8)
+        self.no_active.flags.writeable = False
+        # the torque bounds, all torque limits together
+        torque = [lim.bounds(None) for lim in lay.limits if lim.variable == "tau"]  # type: ignore[arg-type]
+        self.tau_check = (
+            (np.max([b[0] for b in torque], axis=0), np.min([b[1] for b in torque], axis=0)) if torque else None
+        )
+        self.qdd_limits = [k for k, lim in enumerate(lay.limits) if lim.variable != "tau"]
+        self.constant = (
+            [lim.bounds(None) for lim in lay.limits]  # type: ignore[arg-type]
+            if lay.constant_bounds is not None
+            else None
+        )
+        for a in (self.C_template, *self.no_rows):
+            a.flags.writeable = False
+
+    def step(self, state: ModelState, t: float, ref: Reference, chain: SolverChain) -> QddStep:
+        """The verified optimum at ``state``: its q̈ and τ, and what :meth:`public` needs. Raises
+        InvalidParameterError for rows out of scale (:mod:`~armctl.controllers.osc.scale`); if the chain finds
+        no verified optimum, InfeasibleError naming the conflicting rows or SolverError."""
+        n = self.n
+        rows = self.rows
+        for tk, r, cols in self.plan.entries:
+            J, bb = tk.residual(state, t, ref)
+            if J is not None:
+                rows[r, cols] = J
+            rows[r, n] = bb
+        mass = state.mass
+        hf = state.bias if state.friction is None else state.bias + state.friction
+        mr = self.mass_rows
+        rows[mr, :n] = mass
+        np.negative(hf, out=rows[mr, n])
+        tn = np.multiply(self.plan.scale(), rows, out=self.weighted)
+        G = tn.T.dot(tn)
+        if not G[n, n] <= _MAX_RHS2:  # ‖W^{1/2} b‖² + ε‖h'‖² (NaN too)
+            plan = self.plan
+            refuse_scale(plan.tasks, list(plan.slices.values()), rows, n, state, t, ref)
+        H, g = G[:n, :n], G[n, :n]
+        bounds = self.constant if self.constant is not None else [lim.bounds(state) for lim in self.layout.limits]
+        active = chain.last_active(self.key)
+        start = unconstrained = None
+        if active is None or not active.any():
+            factor, x, info = lapack.dposv(H, g)
+            if info == 0:
+                np.negative(x, out=x)
+                tau = mass.dot(x)
+                tau += hf
+                if self._holds(x, tau, bounds):
+                    chain.record(self.key, self.no_active)
+                    return QddStep(bounds, x, tau)
+                start, unconstrained = self._violated(x, tau, bounds), (factor, x)
+        arrays = self.arrays(H, g, mass, hf, bounds)
+        try:
+            sol = chain.solve(arrays, 0, start=start, unconstrained=unconstrained)
+        except QPFailure as err:
+            raise_unsolved(self.public_step(bounds).problem(0), err.attempts)
+        tau = mass.dot(sol.x)
+        tau += hf
+        return QddStep(bounds, sol.x, tau, arrays, sol)
+
+    def verify(self, result: QddStep) -> bool:
+        """The optimality check of ``result``, run again (what a step pays for it): the bounds for the
+        unconstrained minimum, :func:`~armctl.controllers.osc.optimality.accept` for an active set."""
+        if result.solution is None or result.arrays is None:
+            return self._holds(result.qdd, result.tau, result.bounds)
+        sol = result.solution
+        if sol.active is None or sol.z is None:  # a solver's own point, accepted on its KKT residuals
+            return residuals(result.arrays, sol.x, sol.y, sol.z).ok()
+        return accept(result.arrays, sol.x, sol.z, sol.active)
+
+    def _holds(self, x: FloatArray, tau: FloatArray, bounds: list[tuple[FloatArray, FloatArray]]) -> bool:
+        """Every torque and q̈ bound holds at (q̈, τ)."""
+        check = self.tau_check
+        if check is not None and not ((tau >= check[0]).all() and (tau <= check[1]).all()):
+            return False
+        for k in self.qdd_limits:
+            lo, up = bounds[k]
+            if not ((x >= lo).all() and (x <= up).all()):
+                return False
+        return True
+
+    def _violated(self, x: FloatArray, tau: FloatArray, bounds: list[tuple[FloatArray, FloatArray]]) -> np.ndarray:
+        """The rows (q̈, τ) violates, at the bound each violates (+1 upper, −1 lower): where the first stage of
+        the chain starts from after the unconstrained minimum."""
+        rows = np.zeros(self.C_template.shape[0], dtype=np.int8)
+        n = self.n
+        for k, (lo, up) in enumerate(bounds):
+            v = tau if self.layout.limits[k].variable == "tau" else x
+            blk = rows[k * n : (k + 1) * n]
+            blk[v > up] = 1
+            blk[v < lo] = -1
+        return rows
+
+    def arrays(
+        self,
+        H: FloatArray,
+        g: FloatArray,
+        mass: FloatArray,
+        hf: FloatArray,
+        bounds: list[tuple[FloatArray, FloatArray]],
+    ) -> Arrays:
+        """The QP (H, g, A, b, C, l, u) on q̈ (its rows those of the public problem, torque rows shifted by h')."""
+        C = self.C_template.copy()
+        lo = np.concatenate([b[0] for b in bounds]) if bounds else np.zeros(0)
+        up = np.concatenate([b[1] for b in bounds]) if bounds else np.zeros(0)
+        for r in self.tau_rows:
+            C[r] = mass
+            lo[r] -= hf
+            up[r] -= hf
+        A, b = self.no_rows
+        return (np.ascontiguousarray(H), g.copy(), A, b, C, lo, up)
+
+    def public(self, result: QddStep) -> tuple[StepQP, QPSolution]:
+        """The public :class:`StepQP` of the last step (x = [q̈; τ]) and its solution mapped onto it: x = [q̈; τ],
+        the multipliers y = ε τ + Σ z_τ of the equation of motion and z (the same rows)."""
+        step = self.public_step(result.bounds)
+        sol = result.solution
+        z = np.zeros(self.C_template.shape[0]) if sol is None or sol.z is None else sol.z
+        y = self.builder.regularization * result.tau
+        for r in self.tau_rows:
+            y = y + z[r]
+        x = np.concatenate((result.qdd, result.tau))
+        if sol is None:
+            return step, QPSolution(x, "solved", 0, "active set", y, z, "active set", 0, np.zeros(z.shape[0], np.int8))
+        return step, QPSolution(x, sol.status, sol.iterations, sol.solver, y, z, sol.stage, sol.fallbacks, sol.active)
+
+    def public_step(self, bounds: list[tuple[FloatArray, FloatArray]]) -> StepQP:
+        """The public :class:`StepQP` of the rows in the workspace (those of the last step)."""
+        n, m = self.n, self.m
+        lay = self.layout
+        mr = self.mass_rows
+        mass, hf = self.rows[mr, :n], -self.rows[mr, n]
+        A = np.concatenate((mass, lay.A_rest), axis=1)
+        lo = np.concatenate([b[0] for b in bounds]) if bounds else np.zeros(0)
+        up = np.concatenate([b[1] for b in bounds]) if bounds else np.zeros(0)
+        plan = self.builder.plans(lay)[0]
+        task_rows = np.zeros((m, lay.nx + 1))
+        task_rows[:, :n] = self.rows[:m, :n]
+        task_rows[:, lay.nx] = self.rows[:m, n]
+        levels = [LevelRows(plan.tasks, task_rows, plan.scale(), plan.slices)]
+        return StepQP(lay, A, -hf, lo, up, levels, lay.regularization, False)

@@ -1,0 +1,32 @@
+"""`armctl.bench.osc_speed`: its figures on both sets of states, its checks, and a report without targets."""
+
+from __future__ import annotations
+
+import math
+
+from armctl.bench import osc_speed
+
+
+def test_osc_speed_figures_checks_and_report() -> None:
+    fig = osc_speed.run(count=40, rounds=3)
+    for name in ("circle", "random"):
+        f = fig[name]
+        for key in ("step_s", "rnea_s", "bare_solve_s", "check_s", "ratio_rnea", "ratio_bare", "check_share"):
+            assert math.isfinite(f[key]) and f[key] > 0, (name, key)
+        assert f["step_s"] > f["rnea_s"] and f["ratio_rnea"] > 1  # a step holds model terms, QP and check
+        assert f["ratio_rnea_iqr"][0] <= f["ratio_rnea"] <= f["ratio_rnea_iqr"][1]
+        assert 0 < f["check_share"] < 1
+        assert sum(f["stages"].values()) >= 40 and f["stages"].get("failed", 0) == 0
+        assert f["wrong"] == 0  # every torque quadprog's optimum of the same QP (quadprog: the test extra)
+    assert "closed_form_s" in fig["circle"] and "closed_form_s" not in fig["random"]
+    verdicts = osc_speed.checks(fig)
+    assert set(verdicts) == {
+        "circle: step / RNEA <= 15",
+        "random: step / RNEA <= 15",
+        "circle: every torque the optimum",
+        "random: every torque the optimum",
+    }
+    assert verdicts["circle: every torque the optimum"] and verdicts["random: every torque the optimum"]
+    text = osc_speed.report(fig)
+    assert "x RNEA" in text and "x bare solve" in text and "optimality check" in text
+    assert "target" not in text.lower() and "missed" not in text.lower()
