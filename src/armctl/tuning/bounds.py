@@ -2,7 +2,7 @@
 
 For q in the joint ranges and any vectors (Kelly, Santibáñez & Loría, *Control of Robot Manipulators in Joint
 Space*, Springer 2005, ch. 4; the inertia bounds also in Spong, Hutchinson & Vidyasagar, *Robot Modeling and
-Control*, §7.5 / Richter's lecture 10):
+Control*, 2006, ch. 7):
 
     λ_m I ≤ M(q) ≤ λ_M I                                           λ_m, λ_M  [kg·m²]
     ‖g(x) − g(y)‖ ≤ k_g ‖x − y‖,   k_g ≥ sup ‖∂g/∂q‖              k_g       [N·m/rad]
