@@ -35,8 +35,9 @@ class Verdict:
     def summary(self) -> str:
         state = "holds" if self.holds else "fails"
         basis = "certified bounds" if self.certified else "sampled estimates of the bounds"
+        unit = f" {self.unit}" if self.unit else ""
         return (
-            f"{self.name}: {state} ({self.condition}; margin {self.margin:.4g} {self.unit}, factor "
+            f"{self.name}: {state} ({self.condition}; margin {self.margin:.4g}{unit}, factor "
             f"{self.factor:.4g}; on {basis}). Source: {self.source}"
         )
 
