@@ -155,7 +155,7 @@ def maps(
 
     rates = [100.0, 1000.0] if quick else [100.0, 200.0, 500.0, 1000.0, 2000.0]
     ks = list(np.geomspace(0.5, 64.0, 5 if quick else 9))
-    fs = [0.5, 1.0, 2.0, 3.0] if quick else [0.5, 0.75, 1.0, 1.5, 2.0, 3.0]
+    fs = [0.5, 1.0, 2.0] if quick else [0.5, 0.75, 1.0, 1.5, 2.0, 3.0]
     duration, dt_max = (1.5, 2e-3) if quick else (2.0, 1e-3)
     base_period = 0.01
     out: dict[str, Any] = {
