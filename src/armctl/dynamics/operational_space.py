@@ -193,6 +193,20 @@ def _task_jacobian(dyn: Dynamics, q: FloatArray, frame: str | None, rows: tuple[
     return jac
 
 
+def operational_space_terms(
+    mass: FloatArray, jacobian: FloatArray, drift: FloatArray, coriolis: FloatArray, gravity: FloatArray
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """(Λ, J̄, μ, p) from the joint-space terms at one state: M (n×n), the task Jacobian J (m×n, full row rank),
+    J̇ q̇ (m,), C q̇ (n,) and g (n,). Unchecked (a controller that has these terms already calls this on its hot
+    path); raises ``numpy.linalg.LinAlgError`` if M is not positive definite."""
+    chol = np.linalg.cholesky(mass)
+    a = np.linalg.solve(chol, jacobian.T)  # L⁻¹ Jᵀ, so that J M⁻¹ Jᵀ = aᵀ a
+    lam = np.linalg.inv(a.T @ a)
+    lam = 0.5 * (lam + lam.T)
+    jbar = np.linalg.solve(chol.T, a) @ lam  # M⁻¹ Jᵀ Λ
+    return lam, jbar, jbar.T @ coriolis - lam @ drift, jbar.T @ gravity
+
+
 def operational_space_model(
     dyn: Dynamics,
     q: ArrayLike,
@@ -216,22 +230,17 @@ def operational_space_model(
     tol = scalar(singular_tolerance, "singular_tolerance", nonnegative=True)
     jac = _task_jacobian(dyn, q, frame, rws, tol)
     mass = dyn.mass_matrix(q)
+    drift = frame_drift(dyn, q, qd, frame)[list(rws)]
     try:
-        chol = np.linalg.cholesky(mass)
+        lam, jbar, mu, p = operational_space_terms(
+            mass, jac, drift, dyn.coriolis_matrix(q, qd) @ qd, dyn.gravity_torque(q)
+        )
     except np.linalg.LinAlgError:
         raise InvalidParameterError(
             f"the mass matrix of {dyn.model.name!r} is not positive definite at q = {q.tolist()} (smallest "
             f"eigenvalue {np.linalg.eigvalsh(mass).min():.3g}): give every moving link mass and inertia",
             value=q,
         ) from None
-    a = np.linalg.solve(chol, jac.T)  # L⁻¹ Jᵀ, so that J M⁻¹ Jᵀ = aᵀ a
-    lam = np.linalg.inv(a.T @ a)
-    lam = 0.5 * (lam + lam.T)
-    jbar = np.linalg.solve(chol.T, a) @ lam  # M⁻¹ Jᵀ Λ
-    drift = frame_drift(dyn, q, qd, frame)[list(rws)]
-    coriolis = dyn.coriolis_matrix(q, qd) @ qd
-    mu = jbar.T @ coriolis - lam @ drift
-    p = jbar.T @ dyn.gravity_torque(q)
     name = dyn.model.frame(frame).name
     return OperationalSpaceModel(
         readonly(lam), readonly(mu), readonly(p), readonly(jbar), readonly(jac), readonly(drift), rws, name
@@ -245,7 +254,9 @@ def dynamic_manipulability(
     rows: str | Sequence[int | str] = "pose",
     torque_scale: ArrayLike | str | None = None,
 ) -> DynamicManipulability:
-    """The dynamic manipulability ellipsoid of ``frame`` at q along ``rows`` (see the module docstring).
+    """The dynamic manipulability ellipsoid of ``frame`` at q along ``rows`` (see the module docstring). Along
+    rows the arm cannot move the frame (the six rows of a planar arm) the ellipsoid is flat: zero lengths and a
+    zero measure; pick the rows it can move (``rows="xz"``).
 
     ``torque_scale``: None (unit-norm torques, as Siciliano), ``"limits"`` (the joints' effort limits [N·m]), or
     a scalar or (n,) vector of scales s > 0: the ellipsoid is then the image of ‖diag(s)⁻¹ τ‖ ≤ 1.
