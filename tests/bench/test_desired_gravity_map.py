@@ -9,7 +9,7 @@ import pytest
 from scipy.optimize import brentq
 
 from armctl.bench import desired_gravity_map as dgm
-from armctl.bench.stability import computed_torque_textbook
+from armctl.bench.textbook_borders import computed_torque_textbook
 
 
 def test_exact_border_of_the_pendulum() -> None:
@@ -33,7 +33,7 @@ def test_cells_on_either_side_of_the_exact_border() -> None:
 def test_computed_torque_textbook_borders() -> None:
     """The small-gain interval of f narrows towards the premise's f < 2 as the gains (and the damping) grow; the
     conservatism is the largest stable f over the guaranteed one."""
-    tb = computed_torque_textbook([0.5, 8.0], [1.0, 3.0], [["stable", "stable"], ["stable", "unstable"]])
+    tb = computed_torque_textbook([0.5, 8.0], [1.0, 3.0], [["stable", "stable"], ["stable", "unstable"]], 100.0, 20.0)
     assert tb["premise_f_max"] == 2.0
     assert tb["small_gain_f_max"][0] < tb["small_gain_f_max"][1] < 2.0
     assert tb["largest_stable_f"] == [3.0, 1.0]

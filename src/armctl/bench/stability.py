@@ -20,7 +20,8 @@ A cell is *stable* when the error shrinks below a tenth of the initial offset, *
 diverges or the error ends larger than it started, *marginal* otherwise.
 
 Beside the sampled-data border the maps draw the textbook's continuous-time conditions
-(:mod:`armctl.tuning.conditions`), and say where they are conservative:
+(:mod:`armctl.tuning.conditions`, drawn by :mod:`armctl.bench.textbook_borders`), and say where they are
+conservative:
 
 * computed torque with M̂ = f·M: the premise ‖I − M⁻¹M̂‖ = |1 − f| < 1 of the robust-control chapters (f < 2),
   and the small-gain condition |1 − f| γ(k) < 1 (γ the L1 norm of the error filter's impulse response at the
@@ -42,6 +43,8 @@ from typing import Any
 import numpy as np
 
 import armctl
+from armctl.bench.textbook_borders import caption as caption  # the report's captions, re-exported
+from armctl.bench.textbook_borders import computed_torque_textbook, draw_textbook
 from armctl.controllers import Adaptive, ComputedTorque, PassivityBased, PDGravity
 from armctl.tuning.sampled import spectral_radius
 
@@ -215,31 +218,13 @@ def maps(
         out[c][kind]["outcome"][i][j] = o
     if "computed_torque" in controllers:
         out["computed_torque"]["gain_error"]["textbook"] = computed_torque_textbook(
-            ks, fs, out["computed_torque"]["gain_error"]["outcome"]
+            ks, fs, out["computed_torque"]["gain_error"]["outcome"], KP0, KD0
         )
     if "pd_gravity" in controllers:
         from armctl.bench.desired_gravity_map import desired_gravity_map
 
         out["pd_desired_gravity"] = desired_gravity_map(quick=quick, executor=executor)
     return out
-
-
-def computed_torque_textbook(ks: list[float], fs: list[float], outcome: list[list[str]]) -> dict[str, Any]:
-    """The textbook borders of the computed-torque model-error map, per gain multiplier k: the premise α < 1
-    (f < 2) and the small-gain interval of f, |1 − f| γ(k) < 1; and, where the simulation settles at a larger f
-    than the small-gain condition guarantees, by how much (the largest stable f over the guaranteed one)."""
-    from armctl.tuning.inertia_estimate import impulse_l1_norms
-
-    gammas = [impulse_l1_norms(k * KP0, k * KD0)[1] for k in ks]
-    f_max = [1.0 + 1.0 / g for g in gammas]
-    stable_f = [max((f for i, f in enumerate(fs) if outcome[i][j] == "stable"), default=0.0) for j in range(len(ks))]
-    return {
-        "premise_f_max": 2.0,
-        "small_gain_f_min": [1.0 - 1.0 / g for g in gammas],
-        "small_gain_f_max": f_max,
-        "largest_stable_f": stable_f,
-        "conservatism": [sf / fm for sf, fm in zip(stable_f, f_max, strict=True)],
-    }
 
 
 def plot(data: dict[str, Any], path_for: Callable[[str], Any]) -> list[str]:
@@ -276,7 +261,7 @@ def plot(data: dict[str, Any], path_for: Callable[[str], Any]) -> list[str]:
                 ylabel=ylabel,
                 title=f"{c.replace('_', ' ')}: {kind.replace('_', ' × ')}",
             )
-            _draw_textbook(ax, c, kind, m, data["k"])
+            draw_textbook(ax, c, kind, m, data["k"])
             keys = [plt.Line2D([], [], ls="", marker="s", ms=8, color=colour[o], label=o) for o in colour]
             handles = [*keys, *ax.get_legend_handles_labels()[0]]
             # below the axes: inside, the key covered cells
@@ -293,34 +278,3 @@ def plot(data: dict[str, Any], path_for: Callable[[str], Any]) -> list[str]:
         plot_desired_gravity(data["pd_desired_gravity"], path_for(name))
         names.append(name)
     return names
-
-
-def caption(key: str, data: dict[str, Any]) -> str:
-    """The report's caption of the chart ``stability_<key>.png``."""
-    if key == "pd_desired_gravity":
-        return (
-            "Stability map of PD with desired gravity compensation: gain × set-point on the pendulum with gravity "
-            "(cells simulated from several starts; dashed: the textbook's K_p = k_g, solid: the exact border)"
-        )
-    panels = "control rate × gain" + (" and model error × gain" if "gain_error" in data.get(key, {}) else "")
-    extra = ", dotted: textbook continuous-time conditions" if key in ("computed_torque", "pd_gravity") else ""
-    name = key.replace("_", " ")
-    return f"Stability map of {name}: {panels} (cells simulated, dashed line: sampled-data theory{extra})"
-
-
-def _draw_textbook(ax: Any, controller: str, kind: str, m: dict[str, Any], ks: list[float]) -> None:
-    """The textbook's continuous-time borders on a panel, where there are some."""
-    if controller == "computed_torque" and "textbook" in m:
-        tb = m["textbook"]
-        ax.axhline(tb["premise_f_max"], color="#555555", ls=":", label="textbook premise ‖I − M⁻¹M̂‖ < 1 (f < 2)")
-        ax.plot(ks, tb["small_gain_f_max"], color="#1d3557", ls=":", marker=".", label="textbook small gain: f below")
-        worst = max(tb["conservatism"], default=0.0)
-        if worst > 1.0:
-            _note(ax, f"simulated stable up to {worst:.2g}× the largest f the small-gain condition guarantees")
-    elif controller == "pd_gravity" and kind == "rate_gain":
-        _note(ax, "textbook (continuous time, k_g = 0): stable at every gain")
-
-
-def _note(ax: Any, text: str) -> None:
-    """A second line under the panel's title."""
-    ax.set_title(f"{ax.get_title()}\n{text}", fontsize=9)

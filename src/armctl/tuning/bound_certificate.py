@@ -11,10 +11,10 @@ joint ranges turns that into rigorous bounds. On a box with centre q₀ and half
   coefficients scaled by diag(M̄)^(−½), which is the tighter bound along light joints; the better of the two
   is kept.
 * k_g: ‖∂²U(q₀ + δ)‖ ≤ max over vertices ‖H(q₀) + Σ ±r_j ∂_jH(q₀)‖ + ½ rᵀ B_H r (a norm is convex).
-* k_C and k_M: ‖F(q₀ + δ)‖ ≤ ‖F(q₀)‖ + Σ_j r_j L_j with L_j bounding ‖∂F/∂q_j‖ everywhere, for the stacked maps
-  F = [C(q, e₁) … C(q, eₙ)] and [∂₁M … ∂ₙM] (n × n²): ‖C(q, x) y‖ = ‖F (x ⊗ y)‖ ≤ ‖F‖ ‖x‖ ‖y‖, and the
-  same for ∂M, so ‖F‖ bounds the constants (this last step is itself a relaxation: a rank-one x ⊗ y need not
-  reach ‖F‖).
+* k_C and k_M: the same for the norms of the stacked maps F = [C(q, e₁) … C(q, eₙ)] and [∂₁M … ∂ₙM] (n × n²),
+  whose values and first derivatives at q₀ come from the Fourier series of M: ‖F(q₀ + δ)‖ ≤ max over vertices
+  ‖F(q₀) + Σ ±r_j ∂_jF(q₀)‖ + ½ rᵀ B_F r. As ‖C(q, x) y‖ = ‖F (x ⊗ y)‖ ≤ ‖F‖ ‖x‖ ‖y‖ (and the same for ∂M), ‖F‖
+  bounds the constants; this last step is itself a relaxation (a unit x ⊗ y need not reach ‖F‖).
 
 The boxes whose bound is furthest out are split first (along the dimension that contributes most to the
 remainder) until the best bound is within ``tolerance`` of the best value found at a point, or ``max_boxes``
@@ -24,89 +24,21 @@ ranges either way. A small slack covers round-off (a multiple of the fit's resid
 
 from __future__ import annotations
 
-import heapq
-import itertools
 from collections.abc import Callable
-from dataclasses import dataclass
 
 import numpy as np
 
 from armctl._checks import FloatArray
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError
+from armctl.tuning.branch_and_bound import (
+    MAX_VERTEX_DIMENSION,
+    Certificate,
+    branch_and_bound,
+    spectral_norms,
+    vertices,
+)
 from armctl.tuning.trig_poly import TrigPoly, depends_on, stencil_derivatives
-
-#: up to this many varying angles a box is bounded at its 2^d vertices; beyond, by Weyl's inequality
-MAX_VERTEX_DIMENSION = 8
-
-
-@dataclass(frozen=True)
-class Certificate:
-    """A rigorous bound over the ranges, ``best`` the most extreme value met at a box centre (at ``where``),
-    ``boxes`` evaluated, ``converged``: the bound is within the tolerance of ``best``."""
-
-    bound: float
-    best: float
-    where: FloatArray | None
-    boxes: int
-    converged: bool
-
-
-def branch_and_bound(
-    evaluate: Callable[[FloatArray, FloatArray], tuple[float, float]],
-    lo: FloatArray,
-    hi: FloatArray,
-    split: Callable[[FloatArray], int],
-    tolerance: float,
-    max_boxes: int,
-    best: float,
-    atol: float = 0.0,
-) -> tuple[float, float, FloatArray | None, int, bool]:
-    """Minimise over the box [lo, hi]: ``evaluate(c, r)`` gives (a lower bound over the box with centre c and
-    half-widths r, the value at c). Stops when the lower bound is within ``tolerance`` |best| + ``atol`` of the
-    best value or after ``max_boxes`` boxes. Returns (lower bound over the whole box, best value, its centre or
-    None if the ``best`` given was never improved, boxes evaluated, converged)."""
-    heap: list[tuple[float, int, FloatArray, FloatArray]] = []
-    where: FloatArray | None = None
-    count = 0
-
-    def push(c: FloatArray, r: FloatArray) -> None:
-        nonlocal best, where, count
-        lower, value = evaluate(c, r)
-        count += 1
-        if value < best:
-            best, where = value, c
-        heapq.heappush(heap, (min(lower, value), count, c, r))
-
-    push((lo + hi) / 2, (hi - lo) / 2)
-    converged = False
-    while True:
-        lower, _, c, r = heap[0]
-        if best - lower <= tolerance * abs(best) + atol:
-            converged = True
-            break
-        if count >= max_boxes or not r.size or r.max() <= 0:
-            break
-        heapq.heappop(heap)
-        j = split(r)
-        for side in (-1.0, 1.0):
-            rr = r.copy()
-            rr[j] /= 2
-            cc = c.copy()
-            cc[j] += side * rr[j]
-            push(cc, rr)
-    return heap[0][0], best, where, count, converged
-
-
-def _vertices(d: int) -> FloatArray:
-    return np.array(list(itertools.product((-1.0, 1.0), repeat=d)), dtype=float).reshape(2**d, d)
-
-
-def _spectral(coef: np.ndarray) -> FloatArray:
-    """Spectral norms of a stack of (complex) matrices, via the largest eigenvalue of A Aᴴ."""
-    a = coef.reshape(len(coef), coef.shape[1], -1)
-    gram = a @ np.conj(a.transpose(0, 2, 1))
-    return np.sqrt(np.maximum(np.linalg.eigvalsh(gram)[:, -1], 0.0))  # type: ignore[no-any-return]
 
 
 class RevoluteModel:
@@ -160,14 +92,14 @@ class RevoluteModel:
         mean = np.real(poly.coef[np.all(poly.freqs == 0, axis=1)][0]) if len(poly.coef) else np.eye(n)
         weights = np.maximum(np.abs(np.diag(mean)), 1e-300)
         s = 1.0 / np.sqrt(weights)
-        b_abs = poly.curvature(_spectral) if d else np.zeros((0, 0))
-        b_rel = poly.curvature(lambda c: _spectral(c * s[:, None] * s[None, :])) if d else np.zeros((0, 0))
+        b_abs = poly.curvature(spectral_norms) if d else np.zeros((0, 0))
+        b_rel = poly.curvature(lambda c: spectral_norms(c * s[:, None] * s[None, :])) if d else np.zeros((0, 0))
         # entrywise: |R_ab| ≤ ½ rᵀ B^{ab} r, then R ⪰ −diag(Σ_b |R_ab| w_b / w_a) for any w > 0; w = diag(M̄)^(−½)
         # keeps the shift of a light joint's row small (its couplings to heavy joints are scaled down)
         k_abs = np.abs(poly.freqs).astype(float)
         b_entry = np.einsum("kj,kl,kab->abjl", k_abs, k_abs, np.abs(poly.coef)) if d else np.zeros((n, n, 0, 0))
         ratio = s[None, :] / s[:, None]  # w_b / w_a with w = s
-        vertices = _vertices(d)
+        signs = vertices(d)
         eye, wdiag = np.eye(n), np.diag(weights)
         anchor = (lo + hi) / 2
 
@@ -181,7 +113,7 @@ class RevoluteModel:
             if d > MAX_VERTEX_DIMENSION:  # Weyl: the linear part moves eigenvalues by at most Σ r_j ‖∂_jM‖
                 spread = float(np.sum(r * np.linalg.norm(dm, 2, axis=(1, 2))))
                 return -sense * (value + sense * (spread + e_abs)), -sense * value
-            corners = m0 + np.einsum("vj,jab->vab", vertices * r, dm)
+            corners = m0 + np.einsum("vj,jab->vab", signs * r, dm)
             if sense < 0:
                 shift = np.sum(0.5 * np.einsum("abjl,j,l->ab", b_entry, r, r) * ratio, axis=1) + self.slack_m
                 shifts = np.stack([e_abs * eye, e_rel * wdiag + self.slack_m * eye, np.diag(shift)])
@@ -213,7 +145,7 @@ class RevoluteModel:
         dhess = 1j * np.einsum("km,kij->kmij", k, hess)  # ∂_m H_k = i k_m H_k (over the active m)
         sizes = np.abs(c) * np.sum(k * k, axis=1)  # ‖k kᵀ‖ |c_k|
         b_h = np.einsum("kj,kl,k->jl", np.abs(k), np.abs(k), sizes)
-        vertices = _vertices(d)
+        signs = vertices(d)
         anchor = (lo + hi) / 2
 
         def evaluate(cc: FloatArray, r: FloatArray) -> tuple[float, float]:
@@ -229,7 +161,7 @@ class RevoluteModel:
             if d > MAX_VERTEX_DIMENSION:
                 spread = float(np.sum(r * np.linalg.norm(dh, 2, axis=(1, 2))))
                 return -(value + spread + remainder), -value
-            corners = h0 + np.einsum("vj,jab->vab", vertices * r, dh)
+            corners = h0 + np.einsum("vj,jab->vab", signs * r, dh)
             outer = float(np.abs(np.linalg.eigvalsh(corners)).max()) + remainder
             return -outer, -value
 
@@ -265,10 +197,10 @@ class RevoluteModel:
         act = poly.active
         d = len(act)
         k = poly.freqs.astype(float)
-        sizes = _spectral(self._stack_coefficients(kind)) if d else np.zeros(0)
+        sizes = spectral_norms(self._stack_coefficients(kind)) if d else np.zeros(0)
         b_f = np.einsum("kj,kl,k->jl", np.abs(k), np.abs(k), sizes)
         flat = poly.coef.reshape(len(poly.coef), -1)
-        vertices = _vertices(d)
+        signs = vertices(d)
         anchor = (lo + hi) / 2
 
         def evaluate(c: FloatArray, r: FloatArray) -> tuple[float, float]:
@@ -289,7 +221,7 @@ class RevoluteModel:
             if d > MAX_VERTEX_DIMENSION:
                 spread = float(np.sum(r * np.linalg.norm(df, 2, axis=(1, 2))))
                 return -(value + spread + remainder), -value
-            corners = f0 + np.einsum("vl,lab->vab", vertices * r, df)
+            corners = f0 + np.einsum("vl,lab->vab", signs * r, df)
             gram = corners @ corners.transpose(0, 2, 1)
             outer = float(np.sqrt(max(np.linalg.eigvalsh(gram)[:, -1].max(), 0.0))) + remainder
             return -outer, -value
