@@ -8,8 +8,8 @@ joint ranges turns that into rigorous bounds. On a box with centre q₀ and half
   :meth:`TrigPoly.curvature`). λ_min of the affine part is concave in δ, so its minimum over the box is at a
   vertex; hence λ_min(M) ≥ min over the 2^d vertices of λ_min(M(q₀) + Σ ±r_j ∂_jM(q₀)) − ½ rᵀBr, and likewise
   for λ_max. The remainder is also bounded relative to the mean inertia, R ⪰ −ε diag(M̄) with ε from the
-  coefficients scaled by diag(M̄)^(−½), which is the tighter bound along light joints; the better of the two
-  is kept.
+  coefficients scaled by diag(M̄)^(−½), and entry by entry, R ⪰ −diag(Σ_b |R_ab| w_b / w_a) with
+  w = diag(M̄)^(−½) (which keeps the shift of a light joint's row small); the best of the three is kept.
 * k_g: ‖∂²U(q₀ + δ)‖ ≤ max over vertices ‖H(q₀) + Σ ±r_j ∂_jH(q₀)‖ + ½ rᵀ B_H r (a norm is convex).
 * k_C and k_M: the same for the norms of the stacked maps F = [C(q, e₁) … C(q, eₙ)] and [∂₁M … ∂ₙM] (n × n²),
   whose values and first derivatives at q₀ come from the Fourier series of M: ‖F(q₀ + δ)‖ ≤ max over vertices
