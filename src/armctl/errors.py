@@ -56,6 +56,16 @@ class BackendError(ArmctlError, RuntimeError):
     """A dynamics backend cannot evaluate what was asked (e.g. a term it cannot express)."""
 
 
+class SingularConfigurationError(ArmctlError, ValueError):
+    """A configuration is (near) singular for what was asked: a task Jacobian without full row rank. Carries the
+    smallest singular value (``.sigma_min``) and the task direction it belongs to (``.direction``)."""
+
+    def __init__(self, message: str, *, value: Any = None, sigma_min: float = 0.0, direction: Any = None) -> None:
+        super().__init__(message, value=value)
+        self.sigma_min = sigma_min
+        self.direction = direction
+
+
 class InfeasibleError(ArmctlError, ValueError):
     """A problem (QP, time scaling, identification) has no solution; the error says which constraint binds
     and carries the problem (``.problem``) where there is one."""

@@ -18,6 +18,18 @@ adaptation itself destabilises the loop fall inside it (with Γ → 0 the map wo
 
 A cell is *stable* when the error shrinks below a tenth of the initial offset, *unstable* when the run
 diverges or the error ends larger than it started, *marginal* otherwise.
+
+Beside the sampled-data border the maps draw the textbook's continuous-time conditions
+(:mod:`armctl.tuning.conditions`, drawn by :mod:`armctl.bench.textbook_borders`), and say where they are
+conservative:
+
+* computed torque with M̂ = f·M: the premise ‖I − M⁻¹M̂‖ = |1 − f| < 1 of the robust-control chapters (f < 2),
+  and the small-gain condition |1 − f| γ(k) < 1 (γ the L1 norm of the error filter's impulse response at the
+  gains k·(K_p⁰, K_d⁰)), from which the largest f each gain is guaranteed for; the cells show how far beyond it
+  the loop still settles, and that at high gains sampling, which neither condition sees, fails first;
+* PD + gravity on this gravity-free arm: k_g = 0, so the textbook guarantees every gain; only sampling limits it;
+* PD with desired gravity compensation, on the pendulum with gravity (:mod:`armctl.bench.desired_gravity_map`):
+  K_p > k_g against the exact border of a second equilibrium, set-point by set-point.
 """
 
 from __future__ import annotations
@@ -31,6 +43,8 @@ from typing import Any
 import numpy as np
 
 import armctl
+from armctl.bench.textbook_borders import caption as caption  # the report's captions, re-exported
+from armctl.bench.textbook_borders import computed_torque_textbook, draw_textbook
 from armctl.controllers import Adaptive, ComputedTorque, PassivityBased, PDGravity
 from armctl.tuning.sampled import spectral_radius
 
@@ -202,6 +216,14 @@ def maps(
             }
     for (c, kind, i, j), o in zip(index, outcomes, strict=True):
         out[c][kind]["outcome"][i][j] = o
+    if "computed_torque" in controllers:
+        out["computed_torque"]["gain_error"]["textbook"] = computed_torque_textbook(
+            ks, fs, out["computed_torque"]["gain_error"]["outcome"], KP0, KD0
+        )
+    if "pd_gravity" in controllers:
+        from armctl.bench.desired_gravity_map import desired_gravity_map
+
+        out["pd_desired_gravity"] = desired_gravity_map(quick=quick, executor=executor)
     return out
 
 
@@ -239,6 +261,7 @@ def plot(data: dict[str, Any], path_for: Callable[[str], Any]) -> list[str]:
                 ylabel=ylabel,
                 title=f"{c.replace('_', ' ')}: {kind.replace('_', ' × ')}",
             )
+            draw_textbook(ax, c, kind, m, data["k"])
             keys = [plt.Line2D([], [], ls="", marker="s", ms=8, color=colour[o], label=o) for o in colour]
             handles = [*keys, *ax.get_legend_handles_labels()[0]]
             # below the axes: inside, the key covered cells
@@ -247,5 +270,11 @@ def plot(data: dict[str, Any], path_for: Callable[[str], Any]) -> list[str]:
         name = f"stability_{c}.png"
         fig.savefig(path_for(name), dpi=90)
         plt.close(fig)
+        names.append(name)
+    if "pd_desired_gravity" in data:
+        from armctl.bench.desired_gravity_map import plot as plot_desired_gravity
+
+        name = "stability_pd_desired_gravity.png"
+        plot_desired_gravity(data["pd_desired_gravity"], path_for(name))
         names.append(name)
     return names

@@ -309,12 +309,7 @@ def run_suite(
     section("stability_maps", lambda: stability.maps(quick=quick, executor=executor))
     for name in stability.plot(figures["stability_maps"], lambda n: out / n):
         key = name.removeprefix("stability_").removesuffix(".png")
-        panels = "control rate × gain" + (
-            " and model error × gain" if "gain_error" in figures["stability_maps"][key] else ""
-        )
-        charts[name] = (
-            f"Stability map of {key.replace('_', ' ')}: {panels} (cells simulated, dashed line: sampled-data theory)"
-        )
+        charts[name] = stability.caption(key, figures["stability_maps"])
     section("topp_convergence", lambda: topp_convergence(quick))
     plot_topp(figures["topp_convergence"], out / "topp_convergence.png")
     charts["topp_convergence.png"] = "TOPP-RA duration error and compute time against grid size"

@@ -2,6 +2,7 @@
 
 ==========================  =================================================================================
 :class:`PDGravity`           set-point PD with gravity compensation (Takegaki–Arimoto)
+:class:`PDDesiredGravity`    set-point PD with gravity compensated at the set-point, g(q_d)
 :class:`ComputedTorque`      inverse dynamics + PD (+ integral)
 :class:`PassivityBased`      Slotine–Li: M q̈_r + C q̇_r + g − K_D s
 :class:`Adaptive`            Slotine–Li adaptive law on the passivity regressor, with projection, σ-modification,
@@ -20,6 +21,7 @@ from armctl.controllers.computed_torque import ComputedTorque
 from armctl.controllers.osc import ClosedFormOSC, OperationalSpaceQP
 from armctl.controllers.passivity import PassivityBased
 from armctl.controllers.pd import PDGravity
+from armctl.controllers.pd_desired_gravity import PDDesiredGravity
 
 __all__ = [
     "Adaptive",
@@ -27,6 +29,7 @@ __all__ = [
     "ComputedTorque",
     "Controller",
     "OperationalSpaceQP",
+    "PDDesiredGravity",
     "PDGravity",
     "PassivityBased",
 ]

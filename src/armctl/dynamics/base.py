@@ -21,8 +21,8 @@ from __future__ import annotations
 
 import math
 import threading
-from collections.abc import Callable
-from typing import Any
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -33,6 +33,9 @@ from armctl.dynamics.kernel import Kernel
 from armctl.dynamics.regressor import RegressorMethods
 from armctl.errors import InvalidParameterError, NonFiniteError, UnknownNameError
 from armctl.model.robot import RobotModel
+
+if TYPE_CHECKING:
+    from armctl.dynamics.operational_space import DynamicManipulability, OperationalSpaceModel
 
 #: backend name → function of the options giving the class that implements it (see :func:`register_backend`)
 _BACKENDS: dict[str, Callable[[dict[str, Any]], type[Dynamics]]] = {}
@@ -378,6 +381,35 @@ class Dynamics(RegressorMethods):
     def parameters(self) -> FloatArray:
         """π of the model these dynamics evaluate (see :meth:`RobotModel.parameters`)."""
         return self._params
+
+    def operational_space_model(
+        self,
+        q: ArrayLike,
+        qd: ArrayLike,
+        frame: str | None = None,
+        rows: str | Sequence[int | str] = "pose",
+        singular_tolerance: float = 1e-6,
+    ) -> OperationalSpaceModel:
+        """Λ ẍ + μ + p = F of ``frame`` (default: the tool frame) at (q, q̇): ``.Lambda`` = (J M⁻¹ Jᵀ)⁻¹,
+        ``.mu``, ``.p``, ``.Jbar`` = M⁻¹ Jᵀ Λ, along ``rows`` ("pose", "position", or axes such as "xz"); a
+        :class:`~armctl.errors.SingularConfigurationError` where J's σ_min/σ_max < ``singular_tolerance``.
+        See :func:`armctl.dynamics.operational_space.operational_space_model`."""
+        from armctl.dynamics.operational_space import operational_space_model
+
+        return operational_space_model(self, q, qd, frame, rows, singular_tolerance)
+
+    def dynamic_manipulability(
+        self,
+        q: ArrayLike,
+        frame: str | None = None,
+        rows: str | Sequence[int | str] = "pose",
+        torque_scale: ArrayLike | str | None = None,
+    ) -> DynamicManipulability:
+        """The dynamic manipulability ellipsoid of ``frame`` at q (Yoshikawa): ``.axes``, ``.lengths``,
+        ``.measure``. See :func:`armctl.dynamics.operational_space.dynamic_manipulability`."""
+        from armctl.dynamics.operational_space import dynamic_manipulability
+
+        return dynamic_manipulability(self, q, frame, rows, torque_scale)
 
 
 class _PerThread(threading.local):

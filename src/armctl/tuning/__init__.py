@@ -1,16 +1,36 @@
-"""Tuning on python-control: linear models of the error dynamics, gains, sampled-data margins; and
-:func:`sweep` (the simulator's, :func:`armctl.sim.sweep`, here too) to run many closed loops for a gain study."""
+"""Tuning on python-control: linear models of the error dynamics, gains, sampled-data margins; bounds on the
+dynamic model over the joint ranges (:func:`model_bounds`) and the textbook stability conditions they give
+(:mod:`armctl.tuning.conditions`); and :func:`sweep` (the simulator's, :func:`armctl.sim.sweep`, here too) to
+run many closed loops for a gain study."""
 
 from armctl.sim.sweep import sweep
+from armctl.tuning.bounds import Bound, ModelBounds, model_bounds
+from armctl.tuning.conditions import (
+    computed_torque_condition,
+    pd_desired_gravity_condition,
+    pid_condition,
+    sampled_data_condition,
+)
+from armctl.tuning.inertia_estimate import robust_inertia_estimate
 from armctl.tuning.linear import closed_loop_poles, linearize, lqr_gains, pd_from_bandwidth
 from armctl.tuning.sampled import SampledDataAnalysis, sampled_pd_loop, spectral_radius
+from armctl.tuning.verdict import Verdict
 
 __all__ = [
+    "Bound",
+    "ModelBounds",
     "SampledDataAnalysis",
+    "Verdict",
     "closed_loop_poles",
+    "computed_torque_condition",
     "linearize",
     "lqr_gains",
+    "model_bounds",
+    "pd_desired_gravity_condition",
     "pd_from_bandwidth",
+    "pid_condition",
+    "robust_inertia_estimate",
+    "sampled_data_condition",
     "sampled_pd_loop",
     "spectral_radius",
     "sweep",

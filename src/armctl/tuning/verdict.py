@@ -1,0 +1,69 @@
+"""`Verdict`: what a textbook stability condition says about given gains, with its margin and source."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from armctl._checks import gain_matrix
+from armctl.errors import InvalidParameterError
+from armctl.tuning.bounds import ModelBounds
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """The outcome of one stability condition.
+
+    ``holds``: the condition is met. ``margin``: how far inside it (> 0) or outside (< 0), in ``unit``;
+    ``factor``: the same as a ratio (> 1 inside; e.g. λ_min(K_p)/k_g). ``condition``: the inequality with the
+    numbers put in. ``certified``: every model constant it rests on is a certified bound (else estimates
+    from a sample: the condition may fail somewhere the sample missed). ``source``: where the condition is
+    proved. ``details``: the other figures (named in each function's docstring)."""
+
+    name: str
+    holds: bool
+    margin: float
+    factor: float
+    unit: str
+    condition: str
+    certified: bool
+    source: str
+    details: dict[str, Any] = field(default_factory=dict)
+
+    def summary(self) -> str:
+        state = "holds" if self.holds else "fails"
+        basis = "certified bounds" if self.certified else "sampled estimates of the bounds"
+        unit = f" {self.unit}" if self.unit else ""
+        return (
+            f"{self.name}: {state} ({self.condition}; margin {self.margin:.4g}{unit}, factor "
+            f"{self.factor:.4g}; on {basis}). Source: {self.source}"
+        )
+
+    def __str__(self) -> str:
+        return self.summary()
+
+
+def certified_inputs(bounds: ModelBounds, *names: str) -> bool:
+    """True if the constants ``names`` of ``bounds`` are certified; raise if an inertia bound is not usable."""
+    if not isinstance(bounds, ModelBounds):
+        raise InvalidParameterError(
+            f"bounds must be a ModelBounds (armctl.tuning.model_bounds(dynamics)), got {type(bounds).__name__}",
+            value=bounds,
+        )
+    for name in names:
+        if not bounds.details[name].informative:
+            raise InvalidParameterError(
+                f"the certified {name} of {bounds.model!r} is not positive ({bounds.details[name].value:.3g}): the "
+                "certificate ran out of boxes; raise max_boxes, narrow joint_ranges, or use method='sampled'",
+                value=bounds.details[name].value,
+            )
+    return all(bounds.details[name].certified for name in names)
+
+
+def eigen_range(gain: Any, n: int, name: str) -> tuple[float, float]:
+    """(λ_min, λ_max) of a gain given as a scalar, a vector (diagonal) or a symmetric positive definite matrix."""
+    k = gain_matrix(gain, n, name)
+    eig = np.linalg.eigvalsh(k)
+    return float(eig[0]), float(eig[-1])
