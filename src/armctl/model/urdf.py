@@ -43,7 +43,11 @@ def model_from_urdf(
         pm = pin.buildReducedModel(pm, ids, q)
     joints, frames = joints_from_pinocchio(pm, path)
     model = RobotModel(
-        tuple(joints), name=name or pm.name or os.path.basename(path), gravity=gravity, frames=tuple(frames)
+        tuple(joints),
+        name=name or pm.name or os.path.basename(path),
+        gravity=gravity,
+        frames=tuple(frames),
+        source=path,
     )
     if tool_frame is not None:
         if tool_frame not in model.frame_names:
