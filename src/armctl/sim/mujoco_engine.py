@@ -93,7 +93,7 @@ def simulate_mujoco(
     plant: a :class:`~armctl.sim.mujoco_plant.MujocoPlant`, or a Dynamics / RobotModel (then
     :meth:`MujocoPlant.from_model`). integrator: one of MuJoCo's, ``"rk4"``, ``"euler"``, ``"implicit"``,
     ``"implicitfast"`` or ``"discrete"`` (:data:`~armctl.sim.mujoco_plant.MUJOCO_INTEGRATORS`). Joint friction is
-    the plant's ``frictionless``/``damping`` (``friction`` must stay at its default); contact is the scene's
+    the plant's ``frictionloss`` and ``damping`` (``friction`` must stay at its default); contact is the scene's
     (``environment`` must be None); ``compile`` must be False. ``sensors`` read the contacts of the links at and
     beyond their joint, as in the native engine."""
     mj = require_mujoco("simulate(..., engine='mujoco')")
@@ -201,7 +201,16 @@ def simulate_mujoco(
                 j = k - lag if k >= lag else 0
                 qm, vm = QMR[j], QDMR[j]
             ref = fixed_ref if fixed_ref is not None else setup.check_reference(ref_fn(t), n, t)  # type: ignore[misc]
-            tau = call(t, qm, vm, ref)
+            try:
+                tau = call(t, qm, vm, ref)
+            except ValueError as exc:
+                if "read-only" not in str(exc):
+                    raise
+                raise InvalidParameterError(
+                    f"the controller wrote into a read-only array at t = {t:g} s ({exc}); the q and q̇ it is given are "
+                    "read-only views of the run's record: work on a copy (q = q.copy()) or on new arrays",
+                    value=t,
+                ) from exc
             if not isinstance(tau, np.ndarray) or tau.dtype != np.float64:
                 tau = real_array(tau, f"the controller's torque at t = {t:g} s")
             if has_log and controller.last_log:
@@ -232,7 +241,7 @@ def simulate_mujoco(
                 if not simple:
                     tf, te = ro.torques(d)
                     if s == 0:
-                        _record(rec, ro, d, dyn, k, q, tf, te, hd)
+                        ro.record(rec, d, dyn, k, q, tf, te, hd)
                 if k == n_periods:
                     break
                 before = d.qpos[qadr] if not simple else None
@@ -255,6 +264,7 @@ def simulate_mujoco(
         "mujoco": mj.__version__,
         "plant": model.name,
         "n": n,
+        "backend": "mujoco",
         "integrator": integrator,
         "control_dt": cdt,
         "dt": h,
@@ -272,27 +282,3 @@ def simulate_mujoco(
     if divergence is not None:
         divergence = (divergence[0], divergence[1], np.array(divergence[2]), np.array(divergence[3]))
     return rec.result(rows, dyn, energy, info, divergence)
-
-
-def _record(rec: Recorder, ro: Readout, d: Any, dyn: Dynamics, k: int, q: Any, tf: Any, te: Any, hd: Any) -> None:
-    """Friction, external torques, contacts, wrench and sensors at sample k (after the sample's forward dynamics;
-    tf, te: :meth:`Readout.torques`; hd: the disturbance wrench or None)."""
-    rec.tau_friction[k] = tf
-    rec.stuck[k] = ro.stuck()
-    hs, moments, ps, links = ro.contacts(d)
-    f, mom = np.zeros(3), np.zeros(3)
-    if len(hs):
-        tool = dyn.frame_pose(q, None)[:3, 3]
-        np.add.at(rec.contact_force[k], links - 1, hs)
-        f += hs.sum(axis=0)
-        r = ps - tool
-        mom += moments.sum(axis=0)  # r × h, written out (np.cross costs tens of µs on short arrays)
-        mom += (r[:, [1, 2, 0]] * hs[:, [2, 0, 1]] - r[:, [2, 0, 1]] * hs[:, [1, 2, 0]]).sum(axis=0)
-    for i, sensor in enumerate(rec.sensors):
-        rec.sensor[k, i] = sensor.reading(dyn, q, hs, ps, links)
-    if hd is not None:
-        f += hd[:3]
-        mom += hd[3:]
-        te = te + dyn.jacobian(q).T @ hd
-    rec.tau_ext[k] = te
-    rec.wrench[k, :3], rec.wrench[k, 3:] = f, mom
