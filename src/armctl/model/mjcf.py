@@ -43,7 +43,8 @@ def compile_mjcf(source: Any, what: str = "RobotModel.from_mjcf") -> tuple[Any, 
     mj = require_mujoco(what)
     if isinstance(source, mj.MjModel):
         return source, None
-    if isinstance(source, mj.MjSpec):
+    spec_type = getattr(mj, "MjSpec", None)  # (MuJoCo >= 3.2)
+    if spec_type is not None and isinstance(source, spec_type):
         try:
             return source.compile(), None
         except Exception as exc:  # MuJoCo raises ValueError with the compiler's message

@@ -228,11 +228,10 @@ def simulate_mujoco(
                 clipped.append(k)
             TAU[k] = tau
             for s in range(m_sub):
-                qs = d.qpos[qadr] if s else q
                 hd = None
                 if disturbance is not None:
                     hd = vector(real_array(disturbance(t + s * h), "disturbance(t)"), 6, "disturbance(t) (a wrench)")
-                    qfrc[vadr] = tau_a - dyn.jacobian(qs).T @ hd
+                    qfrc[vadr] = tau_a - dyn.jacobian(d.qpos[qadr] if s else q).T @ hd
                 else:
                     qfrc[vadr] = tau_a
                 forward(m, d)
