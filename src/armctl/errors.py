@@ -52,6 +52,11 @@ class ModelLoadError(ArmctlError, OSError):
     """A robot description (URDF, DH table) cannot be read or does not describe a supported arm."""
 
 
+class OptionalDependencyError(ArmctlError, ImportError):
+    """A feature needs a package that is not installed (an optional extra); the message names the ``pip install``
+    command that adds it."""
+
+
 class BackendError(ArmctlError, RuntimeError):
     """A dynamics backend cannot evaluate what was asked (e.g. a term it cannot express)."""
 

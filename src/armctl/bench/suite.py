@@ -275,10 +275,18 @@ def plot_topp(data: dict[str, Any], path: Path) -> None:
 
 
 def _model_sections() -> dict[str, Any]:
-    """The sections on the models' cost against accuracy, by key: backends, integrators, fidelity."""
+    """The sections on the models' cost against accuracy, by key: backends, integrators, fidelity, and the plant
+    engines where MuJoCo is installed."""
+    from importlib.util import find_spec
+
     from armctl.bench import backends, fidelity, integrators
 
-    return {"backends": backends, "integrators": integrators, "fidelity": fidelity}
+    sections = {"backends": backends, "integrators": integrators, "fidelity": fidelity}
+    if find_spec("mujoco") is not None:
+        from armctl.bench import engines
+
+        sections["engines"] = engines
+    return sections
 
 
 def run_suite(

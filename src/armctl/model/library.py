@@ -208,9 +208,9 @@ def panda() -> RobotModel:
     path = robot_description("panda_description/urdf/panda.urdf")
     model = RobotModel.from_urdf(path, lock=("panda_finger_joint1", "panda_finger_joint2"), name="panda")
     tool = "panda_hand_tcp" if "panda_hand_tcp" in model.frame_names else "panda_hand"
-    return RobotModel(model.joints, name="panda", gravity=model.gravity, frames=model.frames, tool_frame=tool).reduced(
-        friction=False
-    )
+    return RobotModel(
+        model.joints, name="panda", gravity=model.gravity, frames=model.frames, tool_frame=tool, source=model.source
+    ).reduced(friction=False)
 
 
 def ur5() -> RobotModel:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import hashlib
 import math
+import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
@@ -90,9 +91,10 @@ def _check_scale(joints: tuple[Joint, ...], gravity: FloatArray) -> None:
 class RobotModel:
     """A serial manipulator: joints (each with its link, motor, friction, limits), named frames, gravity.
 
-    Build one with :meth:`from_dh`, :meth:`from_urdf`, one of :mod:`armctl.models`, or directly from
-    :class:`~armctl.model.parts.Joint` objects. Every joint frame is also a named frame (the joint's name);
-    ``tool_frame`` names the frame used when a method is given ``frame=None``.
+    Build one with :meth:`from_dh`, :meth:`from_urdf`, :meth:`from_mjcf`, one of :mod:`armctl.models`, or directly
+    from :class:`~armctl.model.parts.Joint` objects. Every joint frame is also a named frame (the joint's name);
+    ``tool_frame`` names the frame used when a method is given ``frame=None``. ``source``: the description file the
+    model was read from (URDF or MJCF; None for a model built in code), where :meth:`to_mjcf` finds its meshes.
     """
 
     joints: tuple[Joint, ...]
@@ -100,6 +102,7 @@ class RobotModel:
     gravity: FloatArray = field(default_factory=lambda: np.array([0.0, 0.0, -9.81]))
     frames: tuple[Frame, ...] = ()
     tool_frame: str | None = None
+    source: str | None = None
 
     def __post_init__(self) -> None:
         joints = instances(self.joints, Joint, "joints", "armctl.model.Joint")
@@ -133,6 +136,10 @@ class RobotModel:
         object.__setattr__(self, "joints", joints)
         object.__setattr__(self, "frames", frames)
         object.__setattr__(self, "gravity", readonly(g))
+        if isinstance(self.source, os.PathLike):
+            object.__setattr__(self, "source", os.fspath(self.source))
+        if self.source is not None:
+            name_text(self.source, "model source (a file path)")
         if self.tool_frame is not None and self.tool_frame not in all_names:
             raise UnknownNameError("frame", self.tool_frame, all_names)
 
@@ -177,6 +184,31 @@ class RobotModel:
         from armctl.model.urdf import model_from_urdf
 
         return model_from_urdf(path, tool_frame=tool_frame, lock=lock, gravity=gravity, name=name, physical=physical)
+
+    @classmethod
+    def from_mjcf(
+        cls, path_or_xml: Any, tool_frame: str | None = None, base: str | None = None, name: str | None = None
+    ) -> RobotModel:
+        """A model from an MJCF (MuJoCo) description: a file path, an XML text, a ``mujoco.MjSpec`` or a compiled
+        ``mujoco.MjModel`` (needs ``pip install "armctl[mujoco]"``). The serial chain of hinge and slide joints
+        from the body ``base`` (None: the one subtree of the world with joints); inertias as MuJoCo compiles them,
+        ``damping`` / ``frictionloss`` / ``armature`` as viscous friction / Coulomb friction / reflected rotor
+        inertia, ranges, actuator force ranges as effort limits, named bodies and sites as frames, gravity (see
+        :mod:`armctl.model.mjcf`). Raises :class:`~armctl.errors.ModelLoadError` for what a RobotModel cannot
+        hold (free or ball joints, branches with joints, joint springs), naming it."""
+        from armctl.model.mjcf import model_from_mjcf
+
+        return model_from_mjcf(path_or_xml, tool_frame=tool_frame, base=base, name=name)
+
+    def to_mjcf(self, meshes: Any = None, contacts: bool = True) -> str:
+        """This arm as an MJCF text MuJoCo compiles to the same dynamics (see :mod:`armctl.model.mjcf_export`):
+        one body per joint, explicit inertias, armature k_r²I_m, damping F_v, frictionloss F_c, ranges, a torque
+        motor per joint with a finite effort limit, the frames as sites. ``meshes``: the URDF whose collision
+        meshes to attach (None: :attr:`source` if it is a URDF; False: simple shapes, a capsule per link).
+        ``contacts``: the arm's geoms collide with the rest of a scene (never with each other)."""
+        from armctl.model.mjcf_export import model_to_mjcf
+
+        return model_to_mjcf(self, meshes=meshes, contacts=contacts)
 
     # ------------------------------------------------------------------------------------------ queries
     @property

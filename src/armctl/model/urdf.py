@@ -60,7 +60,11 @@ def model_from_urdf(
             value=path,
         )
     model = RobotModel(
-        tuple(joints), name=name or pm.name or os.path.basename(path), gravity=gravity, frames=tuple(frames)
+        tuple(joints),
+        name=name or pm.name or os.path.basename(path),
+        gravity=gravity,
+        frames=tuple(frames),
+        source=path,
     )
     if tool_frame is not None:
         if tool_frame not in model.frame_names:

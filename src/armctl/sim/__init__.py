@@ -5,12 +5,14 @@ controller runs at its own rate with a zero-order hold. Modules: ``simulate`` (t
 its arguments, ``recorder`` keeps the samples), ``plant`` (the equations of motion), ``integrators`` and
 ``implicit`` (the schemes), ``stepper`` (a step with stick–slip events), ``friction`` and ``stick_slip``,
 ``contact`` and ``normal_force``, ``result`` (:class:`SimResult`), ``plot``, ``sweep`` (many runs through an
-Executor; ``sweep_result``: one outcome per case, ``sweep_pool``: its own process pool, ``sweep_progress``).
+Executor; ``sweep_result``: one outcome per case, ``sweep_pool``: its own process pool, ``sweep_progress``);
+``mujoco_engine`` and ``mujoco_plant``: the same loop on a MuJoCo plant (``engine="mujoco"``).
 """
 
 from armctl.sim.contact import ContactPoint, Environment, ForceSensor, Plane
 from armctl.sim.friction import FrictionModel, SmoothFriction, StickSlip
 from armctl.sim.integrators import INTEGRATORS
+from armctl.sim.mujoco_plant import MujocoPlant
 from armctl.sim.normal_force import HuntCrossley, KelvinVoigt, NormalForce
 from armctl.sim.result import SimResult
 from armctl.sim.simulate import simulate
@@ -26,6 +28,7 @@ __all__ = [
     "FrictionModel",
     "HuntCrossley",
     "KelvinVoigt",
+    "MujocoPlant",
     "NormalForce",
     "Plane",
     "SimResult",

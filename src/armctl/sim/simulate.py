@@ -66,6 +66,7 @@ def simulate(
     reset: bool = True,
     energy: bool = True,
     compile: bool = False,
+    engine: str = "native",
 ) -> SimResult:
     """Simulate ``controller`` driving ``plant`` along ``reference`` for ``duration`` seconds.
 
@@ -92,7 +93,9 @@ def simulate(
     (False: NaN). compile: integrate with C code generated for this plant (:mod:`armctl.sim.compiled`: built
     on first use, about 2 s for 7 joints, then cached on disk; an RK4 step about five times cheaper) — for
     ``"rk4"`` or ``"euler"`` on a plant without friction, contact or disturbance (else
-    :class:`~armctl.errors.InvalidParameterError`).
+    :class:`~armctl.errors.InvalidParameterError`). engine: ``"native"`` (armctl's integrators) or ``"mujoco"``
+    (MuJoCo integrates the plant, a :class:`~armctl.sim.mujoco_plant.MujocoPlant` scene or the model's MJCF; see
+    :mod:`armctl.sim.mujoco_engine` for what it takes and records).
 
     Returns a :class:`~armctl.sim.result.SimResult`; a run that diverges returns the samples before it with
     ``diverged=True``, ``diverged_at``, ``divergence`` and the offending state — it does not raise. A contact
@@ -104,6 +107,11 @@ def simulate(
     environments (``res.info["environment_work"]``) and a plane's friction too stiff below its slip velocity
     for the step (``res.info["unstable_friction"]``), each with a warning.
     """
+    if engine != "native":  # MuJoCo integrates the plant: armctl.sim.mujoco_engine
+        args = dict(locals())
+        from armctl.sim.mujoco_engine import run_engine
+
+        return run_engine(**args)
     dyn = setup.plant_dynamics(plant)
     n = dyn.n
     cdt, h, n_periods, m = setup.periods(duration, control_dt, dt, n=n)
