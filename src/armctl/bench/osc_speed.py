@@ -171,7 +171,6 @@ def run(count: int = 400, rounds: int = 15, quick: bool = False) -> dict[str, An
         "ratio": ratio,
         "ratio_iqr": (q1, q3),
         "closed_form_ratio": statistics.median(closed_ratios),
-        "target_ratio": TARGET_RATIO,
         "median_iterations": float(np.median(iters)),
     }
 
@@ -187,12 +186,17 @@ def report(fig: dict[str, Any]) -> str:
             f"  step (model terms + build + solve)  {fig['step_s'] * us:8.1f} µs",
             f"  bare proxsuite update+solve (warm)  {fig['bare_solve_s'] * us:8.1f} µs",
             f"  ratio step / bare                   {fig['ratio']:8.2f}   [{fig['ratio_iqr'][0]:.2f}, "
-            f"{fig['ratio_iqr'][1]:.2f}] (median of per-round ratios [quartiles]; target <= {fig['target_ratio']:g})",
+            f"{fig['ratio_iqr'][1]:.2f}] (median of per-round ratios [quartiles])",
             f"  closed-form OSC baseline            {fig['closed_form_s'] * us:8.1f} µs   "
             f"({fig['closed_form_ratio']:.2f} x bare)",
             f"  proxsuite one-shot dense.solve      {fig['cold_solve_s'] * us:8.1f} µs   (cold, for reference)",
         ]
     )
+
+
+def missed(fig: dict[str, Any]) -> list[str]:
+    """The step's ratio to the bare solve if above :data:`TARGET_RATIO` (the benchmark's tests check it)."""
+    return [f"step / bare solve: {fig['ratio']:.2f} > {TARGET_RATIO:g}"] if fig["ratio"] > TARGET_RATIO else []
 
 
 def main(argv: list[str] | None = None) -> None:

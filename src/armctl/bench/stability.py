@@ -207,11 +207,9 @@ def maps(
 
 def plot(data: dict[str, Any], path_for: Callable[[str], Any]) -> list[str]:
     """One PNG per controller (two panels); returns the file names."""
-    import matplotlib
+    from armctl.bench.report import plain_log_ticks, pyplot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     colour = {"stable": "#2a9d4a", "marginal": "#e9c46a", "unstable": "#d62828"}
     names = []
     for c in ("computed_torque", "pd_gravity", "passivity", "adaptive"):
@@ -237,15 +235,22 @@ def plot(data: dict[str, Any], path_for: Callable[[str], Any]) -> list[str]:
                 yscale="log",
                 xlabel="gain multiplier k",
                 ylabel=ylabel,
-                title=f"{c.replace('_', ' ')}: {kind.replace('_', ' × ')}",
+                title=f"{c.replace('_', ' ')}: {kind.replace('_', ' × ')}\n"
+                "one-joint pendulum, horizontal plane, 1 period of delay",
             )
-            keys = [plt.Line2D([], [], ls="", marker="s", ms=8, color=colour[o], label=o) for o in colour]
+            plain_log_ticks(ax)
+            present = {o for row in m["outcome"] for o in row}  # only the outcomes the map has
+            keys = [
+                plt.Line2D([], [], ls="", marker="s", ms=8, color=colour[o], label=f"{o} (simulated cell)")
+                for o in colour
+                if o in present
+            ]
             handles = [*keys, *ax.get_legend_handles_labels()[0]]
             # below the axes: inside, the key covered cells
             ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2, fontsize=8)
         fig.tight_layout()
         name = f"stability_{c}.png"
-        fig.savefig(path_for(name), dpi=90)
+        fig.savefig(path_for(name), dpi=110)
         plt.close(fig)
         names.append(name)
     return names

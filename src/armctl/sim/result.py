@@ -334,6 +334,14 @@ class SimResult:
 
         return plot_energy(self)
 
+    def playback(self, path: str | Path, model: RobotModel | None = None, **options: Any) -> Path:
+        """Write the run as a standalone HTML page that plays the arm's motion in 3D (see
+        :func:`armctl.sim.playback.playback` for ``options``: fps, meshes, environment, title); returns its
+        path."""
+        from armctl.sim.playback import playback
+
+        return playback(self, path, model, **options)
+
     def plot_wrench(self) -> Any:
         """A matplotlib Figure of the contact wrench and forces (see :func:`armctl.sim.plot.plot_wrench`)."""
         from armctl.sim.plot import plot_wrench
