@@ -70,9 +70,8 @@ def _figures(tmp_path: Path) -> tuple[dict[str, Any], dict[str, Any]]:
     from armctl.references import Quintic
 
     model = armctl.models.planar_2r()
-    res = armctl.sim.simulate(
-        model, armctl.controllers.ComputedTorque(armctl.Dynamics(model), 100.0, 20.0), Quintic([0, 0], [1, -1], 1.0), 1.0
-    )
+    ctrl = armctl.controllers.ComputedTorque(armctl.Dynamics(model), 100.0, 20.0)
+    res = armctl.sim.simulate(model, ctrl, Quintic([0, 0], [1, -1], 1.0), 1.0)
     res.playback(tmp_path / "playback_planar_2r.html", meshes="shapes")
     rows = [
         _row(scene="planar_2r", method="computed_torque", rms_error=1e-4, playback="playback_planar_2r.html"),

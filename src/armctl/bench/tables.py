@@ -126,9 +126,10 @@ def fidelity(data: dict[str, Any]) -> list[Table]:
         shares.rows.append([text(name), *(num(s["shares"][k], ".1f", 100.0, " %") for k in data["terms"])])
         cl = s["closed_loop"]
         for key, c in cl["candidates"].items():
-            state = "diverged" if c["diverged"] else "chosen" if key == cl["choice"] else ""
-            if key == cl["baseline"]:
-                state = (state + ", " if state else "") + "baseline"
+            notes = ["diverged" if c["diverged"] else "chosen" if key == cl["choice"] else ""]
+            notes.append("full model" if key == cl["baseline"] else "")
+            notes.append(c.get("status", "ok") if c.get("status", "ok") not in ("ok", "diverged") else "")
+            state = ", ".join(n for n in notes if n)
             models.rows.append(
                 [
                     text(name),
