@@ -14,6 +14,7 @@ import shutil
 import subprocess
 import tempfile
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -52,11 +53,13 @@ class PageReport:
     value: Any = None
     screenshot: bytes = b""
     requests: list[str] = field(default_factory=list)
-    #: the screenshot taken after evaluating ``then`` (empty without it)
-    screenshot_after: bytes = b""
+    #: the screenshots taken after evaluating each expression of ``then``, in turn
+    screenshots_after: list[bytes] = field(default_factory=list)
+    #: the value of each expression of ``then``
+    values_after: list[Any] = field(default_factory=list)
 
 
-async def _session(ws_url: str, page: Path, expression: str, settle: float, then: str | None) -> PageReport:
+async def _session(ws_url: str, page: Path, expression: str, settle: float, then: Sequence[str]) -> PageReport:
     import websockets
 
     report = PageReport()
@@ -114,18 +117,20 @@ async def _session(ws_url: str, page: Path, expression: str, settle: float, then
         report.value = value["result"].get("value")
         shot = await call("Page.captureScreenshot", session, format="png")
         report.screenshot = base64.b64decode(shot["data"])
-        if then is not None:
-            await call("Runtime.evaluate", session, expression=then, returnByValue=True)
+        for step in then:
+            done = await call("Runtime.evaluate", session, expression=step, returnByValue=True)
+            report.values_after.append(done["result"].get("value"))
             await asyncio.sleep(0.5)
             shot = await call("Page.captureScreenshot", session, format="png")
-            report.screenshot_after = base64.b64decode(shot["data"])
+            report.screenshots_after.append(base64.b64decode(shot["data"]))
         task.cancel()
     return report
 
 
-def open_page(page: Path, expression: str = "true", settle: float = 2.0, then: str | None = None) -> PageReport:
+def open_page(page: Path, expression: str = "true", settle: float = 2.0, then: Sequence[str] = ()) -> PageReport:
     """Load ``page`` (a local file) in a fresh headless Chromium, wait for it to load and ``settle`` seconds
-    more, evaluate ``expression`` and take a screenshot; then, if given, evaluate ``then`` and take another."""
+    more, evaluate ``expression`` and take a screenshot; then evaluate each expression of ``then`` in turn,
+    taking a screenshot after each."""
     exe = chromium()
     assert exe is not None
     with tempfile.TemporaryDirectory() as profile:

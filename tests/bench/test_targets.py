@@ -1,9 +1,11 @@
 """The benchmark's own speed targets: checked here, never printed by the bench. Each ``missed`` function is
-tested on figures at and beyond its targets; the live checks (slow) measure the figures on this machine, and
-measure once more on a miss (a shared machine's load can swing one measurement)."""
+tested on figures at and beyond its targets. The live checks measure the figures on this machine (once more on
+a miss: a shared machine's load can swing one measurement); they run where ``ARMCTL_SPEED_TARGETS=1`` is set,
+on a quiet machine — a loaded one (CI shares two cores) measures the load as much as the code."""
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable
 from typing import Any
 
@@ -49,22 +51,30 @@ def test_osc_target() -> None:
     assert osc_speed.missed({"ratio": osc_speed.TARGET_RATIO + 0.5}) == ["step / bare solve: 4.50 > 4"]
 
 
+live = pytest.mark.skipif(
+    os.environ.get("ARMCTL_SPEED_TARGETS") != "1", reason="speed targets: set ARMCTL_SPEED_TARGETS=1 on a quiet machine"
+)
+
+
 def _live(measure: Callable[[], dict[str, Any]], missed: Callable[[dict[str, Any]], list[str]]) -> None:
     first = missed(measure())
     if first:
         assert missed(measure()) == [], first
 
 
+@live
 @pytest.mark.slow
 def test_controller_steps_meet_their_targets() -> None:
     _live(lambda: controller_speed.run(number=100, rounds=15), controller_speed.missed)
 
 
+@live
 @pytest.mark.slow
 def test_dynamics_calls_meet_their_targets() -> None:
     _live(lambda: dynamics_speed.run(number=100, rounds=15, compile_if_needed=False), dynamics_speed.missed)
 
 
+@live
 @pytest.mark.slow
 def test_osc_step_meets_its_target() -> None:
     _live(lambda: osc_speed.run(quick=True), osc_speed.missed)

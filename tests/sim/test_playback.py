@@ -122,22 +122,30 @@ def test_contact_forces_are_arrows(contact_page: Path) -> None:
 
 @needs_chromium
 def test_playback_page_in_headless_chromium(contact_page: Path) -> None:
-    """No console error, no request beyond the page itself, a WebGL canvas, the animation as long as the run,
-    and the arm on the screenshot: hiding it changes a visible share of the pixels."""
+    """No console error, no request beyond the page itself, a WebGL canvas, the animation as long as the run;
+    the slider moves the arm (the view at its start and at its end differ, and the time shown follows), and the
+    arm is on the screenshot (hiding it changes a visible share of the pixels)."""
     probe = """(() => {
         const c = document.querySelector('canvas');
         const gl = c && (c.getContext('webgl2') || c.getContext('webgl'));
         return {canvas: !!c, webgl: !!gl, duration: window.armctlViewer.animator.duration,
                 slider: document.getElementById('armctl-slider').max};
     })()"""
-    hide = """(() => { const v = window.armctlViewer; v.animator.pause();
+
+    def slide(t: float) -> str:
+        return f"""(() => {{ const s = document.getElementById('armctl-slider'); s.value = {t};
+            s.dispatchEvent(new Event('input')); return document.getElementById('armctl-time').textContent; }})()"""
+
+    hide = """(() => { const v = window.armctlViewer;
         v.scene_tree.find(['meshcat', 'panda']).object.visible = false; v.set_dirty(); })()"""
-    report = open_page(contact_page, probe, settle=3.0, then=hide)
+    report = open_page(contact_page, probe, settle=3.0, then=[slide(0.0), slide(1.0), hide])
     keep_screenshot(report.screenshot, "armctl-playback.png")
     assert report.errors == []
     assert all(u.startswith(("file:", "data:")) for u in report.requests), report.requests
     assert report.value["canvas"] and report.value["webgl"]
     assert report.value["duration"] == pytest.approx(1.0) and float(report.value["slider"]) == pytest.approx(1.0)
-    before, after = grey(report.screenshot), grey(report.screenshot_after)
-    assert before.std() > 5.0  # not one colour
-    assert (np.abs(before - after) > 10.0).mean() > 0.005  # the arm covers a visible share of the view
+    assert report.values_after[:2] == ["t = 0.000 s", "t = 1.000 s"]
+    start, end, hidden = (grey(png) for png in report.screenshots_after)
+    assert start.std() > 5.0  # not one colour
+    assert (np.abs(start - end) > 10.0).mean() > 0.001  # the slider moved the arm
+    assert (np.abs(end - hidden) > 10.0).mean() > 0.005  # the arm covers a visible share of the view

@@ -139,7 +139,8 @@ def write_report(out: Path, figures: dict[str, Any], charts: dict[str, Any], sum
     :data:`armctl.bench.suite.SECTION_TITLES`, then any other) its tables, charts and playbacks; the scope of
     the run and the console text last. ``charts``: file name → {"section", "caption"} (a bare caption string
     is put under the section "charts")."""
-    from armctl.bench.suite import SECTION_TITLES, scene_title
+    from armctl.bench.outcomes import scene_title
+    from armctl.bench.suite import SECTION_TITLES
     from armctl.bench.tables import TABLES
 
     esc = html.escape

@@ -10,8 +10,6 @@ shrinks grids, repetitions and runs so the whole bench takes a few minutes on 2 
 from __future__ import annotations
 
 import json
-import math
-import textwrap
 import time
 import warnings
 from collections.abc import Callable
@@ -20,6 +18,11 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from armctl.bench.outcomes import outcome, scene_title, scenes_summary
+from armctl.bench.pareto import pareto_front, plot_pareto
+
+__all__ = ["outcome", "pareto_front", "plot_pareto", "run_suite", "scene_matrix", "scene_title", "summary"]
 
 SCENE_NAMES = ("pendulum", "planar_2r", "panda_topp", "panda_contact")
 
@@ -153,178 +156,6 @@ def scene_matrix(
     rows = sweep(cases, run=run_scene_method, executor=executor, progress=True) + unbuilt
     time_controllers(rows, rounds)
     return rows
-
-
-def pareto_front(points: list[tuple[float, float]], spans: list[tuple[float, float]] | None = None) -> list[int]:
-    """Indices of the points (x, y) no other point beats (both minimised; non-finite points are never on it).
-
-    ``spans``: an interval (lo, hi) around each x — the quartiles of a noisy timing. Then x is compared by
-    the intervals: j is faster than i only if hi_j < lo_i, and overlapping intervals are a tie, so timing noise
-    alone cannot move a point on or off the front. j beats i if it is faster and no less accurate, or tied and
-    more accurate. Without spans this is the usual strict Pareto order."""
-    spans = (
-        [(x, x) for x, _ in points]
-        if spans is None
-        else [
-            (lo, hi) if math.isfinite(lo) and math.isfinite(hi) else (x, x)  # no quartiles: the point itself
-            for (x, _), (lo, hi) in zip(points, spans, strict=True)
-        ]
-    )
-    finite = [math.isfinite(x) and math.isfinite(y) for x, y in points]
-
-    def beats(j: int, i: int) -> bool:
-        (lo_i, hi_i), (lo_j, hi_j) = spans[i], spans[j]
-        yi, yj = points[i][1], points[j][1]
-        faster, slower = hi_j < lo_i, hi_i < lo_j
-        return (faster and yj <= yi) or (not faster and not slower and yj < yi)
-
-    return [
-        i
-        for i in range(len(points))
-        if finite[i] and not any(finite[j] and beats(j, i) for j in range(len(points)) if j != i)
-    ]
-
-
-def _failure_note(r: dict[str, Any], brief: bool = True) -> str | None:
-    """How a method failed on its scene, or None: the error's type (``brief``, for a chart) or its whole text."""
-    if r.get("failed"):
-        return f"failed: {r['failed'].split(':')[0]}" if brief else f"FAILED ({r['failed']})"
-    if r["diverged"]:
-        return f"diverged at {r['diverged_at']:.2f} s"
-    return None
-
-
-def outcome(r: dict[str, Any]) -> str:
-    """A scene row's outcome in words: how it failed or diverged, else what it did beyond the plant's limits
-    (the share of samples saturated, over the velocity limit, outside the position range) and whether a
-    contact was lost; "ok" for a run within every limit."""
-    failure = _failure_note(r, brief=False)
-    if failure:
-        return failure
-    notes = []
-    for key, words in (
-        ("torque_violation_share", "saturated"),
-        ("velocity_violation_share", "over velocity limit"),
-        ("position_violation_share", "outside position range"),
-    ):
-        share = r.get(key, 0.0)
-        if isinstance(share, float) and share > 0.0:
-            notes.append(f"{words} on {share:.1%}")
-    if r.get("contact_lost"):
-        notes.append("contact lost")
-    return "; ".join(notes) if notes else "ok"
-
-
-def scene_title(name: str, rows: list[dict[str, Any]]) -> str:
-    """A scene's arm and task, from its rows (``plant``, ``joints``, ``description``): e.g. "panda (7 joints):
-    Panda tracking a time-optimal path …"; the name alone if no row has them (a scene that failed)."""
-    for r in rows:
-        if r["scene"] == name and r.get("description"):
-            joints = f"{r['joints']} joint{'s' if r['joints'] != 1 else ''}"
-            return f"{r['plant']} ({joints}): {r['description']}"
-    return name
-
-
-def plot_pareto(rows: list[dict[str, Any]], path: Path) -> None:
-    """Tracking error against compute time per step, log-log, one panel per scene (two columns): the
-    quartiles of the timing as horizontal bars, the Pareto front (:func:`pareto_front` on those quartiles)
-    marked, and every method that diverged or failed listed in its panel (a cross at the top where its time is
-    known); a legend explains the markers."""
-    from matplotlib.lines import Line2D
-
-    from armctl.bench.report import plain_log_ticks, pyplot
-
-    plt = pyplot()
-    scenes = [s for s in SCENE_NAMES if any(r["scene"] == s for r in rows)]
-    cols = min(2, len(scenes))
-    nrows = math.ceil(len(scenes) / cols)
-    fig, axes = plt.subplots(nrows, cols, figsize=(6.4 * cols, 4.9 * nrows), squeeze=False)
-    for ax in axes.flat[len(scenes) :]:
-        ax.set_visible(False)
-    for ax, name in zip(axes.flat, scenes, strict=False):
-        mine = [r for r in rows if r["scene"] == name and _failure_note(r) is None]
-        pts = [(r["compute_s"] * 1e6, r["rms_error"]) for r in mine]
-        spans = [tuple(1e6 * v for v in r.get("compute_s_iqr", (r["compute_s"],) * 2)) for r in mine]
-        front = set(pareto_front(pts, spans))  # type: ignore[arg-type]
-        placed: list[tuple[float, float]] = []
-        for i, (r, (x, y), (lo, hi)) in enumerate(zip(mine, pts, spans, strict=True)):
-            color = "#d62828" if i in front else "#577590"
-            marker = "o" if outcome(r) == "ok" else "D"
-            ax.errorbar(
-                x,
-                y,
-                xerr=[[max(x - lo, 0.0)], [max(hi - x, 0.0)]],
-                fmt=marker,
-                ms=7,
-                color=color,
-                zorder=3,
-                capsize=3,
-                lw=1,
-            )
-            # a label near an earlier one's point (in decades) goes one line lower for each such neighbour
-            near = sum(
-                1
-                for px, py in placed
-                if x > 0 and y > 0 and abs(math.log10(x / px)) < 0.3 and abs(math.log10(y / py)) < 0.3
-            )
-            placed.append((x, y))
-            ax.annotate(
-                r["method"].replace("_", " "), (x, y), fontsize=9, xytext=(6, 4 - 12 * near), textcoords="offset points"
-            )
-        fx = sorted(pts[i] for i in front)
-        if fx:
-            ax.plot(*zip(*fx, strict=True), color="#d62828", lw=1)
-        failed = [(r, note) for r in rows if r["scene"] == name and (note := _failure_note(r)) is not None]
-        for r, _ in failed:
-            if math.isfinite(r["compute_s"]):
-                ax.plot(
-                    r["compute_s"] * 1e6,
-                    0.97,
-                    "x",
-                    color="#d62828",
-                    ms=9,
-                    mew=2,
-                    transform=ax.get_xaxis_transform(),
-                    clip_on=False,
-                    zorder=4,
-                )
-        if failed:  # under the axis label, where no point can sit
-            ax.text(
-                0.0,
-                -0.2,
-                "\n".join(f"✕ {r['method'].replace('_', ' ')}: {note}" for r, note in failed),
-                transform=ax.transAxes,
-                fontsize=9,
-                color="#d62828",
-                va="top",
-            )
-        ax.margins(x=0.25, y=0.3)
-        ax.set(
-            xscale="log",
-            yscale="log",
-            xlabel="compute time per control step [µs]",
-            ylabel="RMS tracking error [rad]" if name != "panda_contact" else "RMS tool position error [m]",
-        )
-        ax.set_title(f"{name}\n{textwrap.fill(scene_title(name, rows), 60)}", fontsize=10)
-        ax.grid(True, which="both", alpha=0.25)
-        plain_log_ticks(ax)
-    key = [
-        Line2D([], [], ls="", marker="o", color="#577590", ms=7, label="method within the plant's limits"),
-        Line2D([], [], ls="", marker="D", color="#577590", ms=7, label="method saturated or beyond a limit"),
-        Line2D([], [], color="#d62828", marker="o", ms=7, lw=1, label="Pareto front (no method faster and better)"),
-        Line2D([], [], color="#577590", marker="|", ms=12, lw=1, label="bar: quartiles of the step's time"),
-        Line2D([], [], ls="", marker="x", color="#d62828", ms=9, mew=2, label="diverged or failed (listed)"),
-    ]
-    fig.legend(handles=key, loc="lower center", ncol=3, fontsize=10, frameon=False)
-    fig.tight_layout(rect=(0, 0.08, 1, 1))
-    save(fig, path)
-
-
-def save(fig: Any, path: Path) -> None:
-    """Write a chart (the format from the suffix: the report's are SVG) and free it."""
-    from armctl.bench.report import save_figure
-
-    save_figure(fig, path, dpi=110)
 
 
 def topp_convergence(quick: bool) -> dict[str, Any]:
@@ -500,28 +331,6 @@ def _json_default(x: Any) -> Any:
     if isinstance(x, np.ndarray):
         return x.tolist()
     return str(x)
-
-
-def scenes_summary(rows: list[dict[str, Any]]) -> str:
-    """The scene matrix as text: one row per scene and method."""
-    lines = [
-        "errors in rad (joint scenes) or m (panda_contact: tool position in the table plane); force: RMS "
-        "normal-force error after settling [N]; over limits: share of samples beyond the effort limit / "
-        "velocity limit (+1 %) / position range; a run that diverged has no error (its error until then is in "
-        "figures.json)",
-        f"{'scene':14s} {'method':26s} {'RMS err':>9s} {'max err':>9s} {'force':>6s} {'step µs':>8s} "
-        f"{'τ RMS':>8s}  {'over τ / q̇ / q':>17s}  outcome",
-    ]
-    for r in rows:
-        force = f"{r['force_rms_error']:6.2f}" if "force_rms_error" in r else f"{'-':>6s}"
-        over = " / ".join(
-            f"{r.get(f'{k}_violation_share', float('nan')):.1%}" for k in ("torque", "velocity", "position")
-        )
-        lines.append(
-            f"{r['scene']:14s} {r['method']:26s} {r['rms_error']:9.2e} {r['max_error']:9.2e} {force} "
-            f"{r['compute_s'] * 1e6:8.1f} {r['torque_rms']:8.2f}  {over:>17s}  {outcome(r)}"
-        )
-    return "\n".join(lines)
 
 
 def stability_summary(maps: dict[str, Any]) -> str:

@@ -35,7 +35,7 @@ def text(s: Any) -> Cell:
 
 
 def scenes(rows: list[dict[str, Any]]) -> list[Table]:
-    from armctl.bench.suite import outcome, scene_title
+    from armctl.bench.outcomes import outcome, scene_title
 
     names = list(dict.fromkeys(r["scene"] for r in rows))
     t = Table(
