@@ -34,7 +34,7 @@ def sections(total: int) -> Any:
         disable=not _terminal(),
         file=sys.stderr,
         dynamic_ncols=True,
-        bar_format="{desc}: {n_fmt}/{total_fmt} sections |{bar}| {elapsed}",
+        bar_format="{desc}{n_fmt}/{total_fmt} sections |{bar}| {elapsed}",
     )
 
 
