@@ -59,7 +59,7 @@ class PageReport:
     values_after: list[Any] = field(default_factory=list)
 
 
-async def _session(ws_url: str, page: Path, expression: str, settle: float, then: Sequence[str]) -> PageReport:
+async def _visit(ws_url: str, page: Path, expression: str, settle: float, then: Sequence[str]) -> PageReport:
     import websockets
 
     report = PageReport()
@@ -84,14 +84,14 @@ async def _session(ws_url: str, page: Path, expression: str, settle: float, then
                 elif method == "Network.requestWillBeSent":
                     report.requests.append(params["request"]["url"])
 
-        async def call(method: str, session: str | None = None, **params: Any) -> Any:
+        async def call(method: str, tab: str | None = None, **params: Any) -> Any:
             nonlocal counter
             counter += 1
             fut: asyncio.Future[Any] = asyncio.get_running_loop().create_future()
             pending[counter] = fut
             msg: dict[str, Any] = {"id": counter, "method": method, "params": params}
-            if session:
-                msg["sessionId"] = session
+            if tab:
+                msg["sessionId"] = tab
             await ws.send(json.dumps(msg))
             out = await asyncio.wait_for(fut, 120)
             if "error" in out:
@@ -100,28 +100,28 @@ async def _session(ws_url: str, page: Path, expression: str, settle: float, then
 
         task = asyncio.create_task(reader())
         target = await call("Target.createTarget", url="about:blank")
-        session = (await call("Target.attachToTarget", targetId=target["targetId"], flatten=True))["sessionId"]
+        tab = (await call("Target.attachToTarget", targetId=target["targetId"], flatten=True))["sessionId"]
         for domain in ("Runtime", "Log", "Page", "Network"):
-            await call(f"{domain}.enable", session)
+            await call(f"{domain}.enable", tab)
         size = {"width": 1280, "height": 900, "deviceScaleFactor": 1, "mobile": False}
-        await call("Emulation.setDeviceMetricsOverride", session, **size)
-        await call("Page.navigate", session, url=page.resolve().as_uri())
+        await call("Emulation.setDeviceMetricsOverride", tab, **size)
+        await call("Page.navigate", tab, url=page.resolve().as_uri())
         deadline = time.monotonic() + 120
         while time.monotonic() < deadline:
-            state = await call("Runtime.evaluate", session, expression="document.readyState", returnByValue=True)
+            state = await call("Runtime.evaluate", tab, expression="document.readyState", returnByValue=True)
             if state["result"].get("value") == "complete":
                 break
             await asyncio.sleep(0.2)
         await asyncio.sleep(settle)
-        value = await call("Runtime.evaluate", session, expression=expression, returnByValue=True, awaitPromise=True)
+        value = await call("Runtime.evaluate", tab, expression=expression, returnByValue=True, awaitPromise=True)
         report.value = value["result"].get("value")
-        shot = await call("Page.captureScreenshot", session, format="png")
+        shot = await call("Page.captureScreenshot", tab, format="png")
         report.screenshot = base64.b64decode(shot["data"])
         for step in then:
-            done = await call("Runtime.evaluate", session, expression=step, returnByValue=True)
+            done = await call("Runtime.evaluate", tab, expression=step, returnByValue=True)
             report.values_after.append(done["result"].get("value"))
             await asyncio.sleep(0.5)
-            shot = await call("Page.captureScreenshot", session, format="png")
+            shot = await call("Page.captureScreenshot", tab, format="png")
             report.screenshots_after.append(base64.b64decode(shot["data"]))
         task.cancel()
     return report
@@ -153,7 +153,7 @@ def open_page(page: Path, expression: str = "true", settle: float = 2.0, then: S
                 if not line and proc.poll() is not None:
                     break
             assert ws_url, "chromium did not start its DevTools endpoint"
-            return asyncio.run(_session(ws_url, page, expression, settle, then))
+            return asyncio.run(_visit(ws_url, page, expression, settle, then))
         finally:
             proc.terminate()
             try:

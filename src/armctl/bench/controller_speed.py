@@ -80,7 +80,7 @@ def report(fig: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-def missed(fig: dict[str, Any]) -> list[str]:
+def beyond_targets(fig: dict[str, Any]) -> list[str]:
     """The laws whose ratio to RNEA is above its :data:`TARGETS` entry (the benchmark's tests check it)."""
     out = []
     for label, figs in (("", fig), (" (compile=True)", fig.get("compiled", {}))):

@@ -3,7 +3,7 @@
 Run: ``python -m armctl.bench.dynamics_speed``. Prints per-call medians and ratios measured in the same run
 (interleaved rounds), the regressors again with ``Dynamics(model, compile=True)`` (generated C code), the
 Lagrange backend's symbolic build time and its compiled inverse dynamics against the Pinocchio backend.
-:data:`TARGETS` are the benchmark's own checks (its tests call :func:`missed`); they are not printed.
+:data:`TARGETS` are the benchmark's own checks (its tests call :func:`beyond_targets`); they are not printed.
 """
 
 from __future__ import annotations
@@ -144,7 +144,7 @@ def report(fig: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-def missed(fig: dict[str, Any]) -> list[str]:
+def beyond_targets(fig: dict[str, Any]) -> list[str]:
     """The figures beyond their :data:`TARGETS` entry (the benchmark's tests check it)."""
     out = []
     for name in ("mass_matrix", "inverse_dynamics", "regressor", "passivity_regressor"):

@@ -194,7 +194,7 @@ def report(fig: dict[str, Any]) -> str:
     )
 
 
-def missed(fig: dict[str, Any]) -> list[str]:
+def beyond_targets(fig: dict[str, Any]) -> list[str]:
     """The step's ratio to the bare solve if above :data:`TARGET_RATIO` (the benchmark's tests check it)."""
     return [f"step / bare solve: {fig['ratio']:.2f} > {TARGET_RATIO:g}"] if fig["ratio"] > TARGET_RATIO else []
 
