@@ -1,6 +1,7 @@
 """A closed-loop simulation script: the Panda carrying a 1.5 kg payload its controller does not know,
 tracking a minimum-jerk move against joint friction with stiction, with computed torque and with the
-passivity-based law at the same bandwidth. Saves the result (npz) and a chart.
+passivity-based law at the same bandwidth. Saves the result (npz), a chart and a 3D playback (an HTML page; it
+needs the meshcat package: pip install armctl[view]).
 
 Run: python examples/closed_loop_simulation.py [--out DIR]
 """
@@ -37,7 +38,7 @@ def main() -> None:
         ("passivity-based", PassivityBased(model, wn, wn * m_bar)),
     ):
         res = simulate(plant, controller, reference, duration=3.0)
-        err = np.abs(res.q - np.array([reference(t).q for t in res.t]))
+        err = np.abs(res.error)
         print(
             f"{name:16s} diverged {res.diverged}; max error {err.max():.2e} rad, final {err[-1].max():.2e} rad; "
             f"stuck joints at the end: {int(res.stuck[-1].sum())}"
@@ -46,6 +47,7 @@ def main() -> None:
         res.save(args.out / f"{stem}.npz")
         assert np.allclose(SimResult.load(args.out / f"{stem}.npz").q, res.q)
         res.plot().savefig(args.out / f"{stem}.png")
+        res.playback(args.out / f"{stem}.html", meshes="collision")  # the run in 3D, with a time slider
         if name == "computed torque":
             # the payload's weight is a torque the model lacks: at rest, M̂ K_p e = Δg, so e = K_p⁻¹ M̂⁻¹ Δg
             q_end = res.q[-1]
@@ -56,7 +58,7 @@ def main() -> None:
                 f"  predicted K_p⁻¹ M̂⁻¹ Δg   {np.round(predicted, 4)} rad (largest where M̂ is small: the wrist;\n"
                 "  the rest is held by stiction)"
             )
-    print(f"results and charts in {args.out}/")
+    print(f"results, charts and playbacks in {args.out}/")
 
 
 if __name__ == "__main__":

@@ -174,7 +174,9 @@ def test_plot_refuses_no_quantities_and_takes_one_name(numeric: SimResult) -> No
     with pytest.raises(UnknownNameError, match=r"unknown quantity 'torque'"):
         numeric.plot(quantities=("q", "torque"))
     fig = numeric.plot("qd", joints=np.array([0]))
-    assert len(fig.axes) == 1 and fig.axes[0].get_legend().get_texts()[0].get_text() == "joint 1"
+    # the joint is labelled with the plant's name for it; the legend stands beside the panel, off the curves
+    labels = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert len(fig.axes) == 1 and labels == [armctl.models.pendulum().joint_names[0], "reference (dashed)"]
 
 
 # ------------------------------------------------------------------------------ 3. scenes

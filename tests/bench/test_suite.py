@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from armctl.cli import main
+from tests.browser import chromium, keep_screenshot, open_page
 
 
 def _finite(x: object) -> bool:
@@ -21,10 +22,15 @@ def _finite(x: object) -> bool:
 
 
 @pytest.mark.slow
-def test_bench_quick_writes_every_scene_and_controller(tmp_path: Path) -> None:
+def test_bench_quick_writes_every_scene_and_controller(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from armctl.bench.suite import SECTION_TITLES
     from armctl.scenes import SCENES, scene
 
     assert main(["bench", "--quick", "--out", str(tmp_path)]) == 0
+    printed = capsys.readouterr().out
+    # every section's results as it finished, and no internal speed target among them
+    assert all(f"== {title} (" in printed for title in SECTION_TITLES.values())
+    assert "target" not in printed.lower()
     fig = json.loads((tmp_path / "figures.json").read_text())
     rows = {(r["scene"], r["method"]): r for r in fig["scenes"]}
     for name in SCENES:
@@ -59,7 +65,16 @@ def test_bench_quick_writes_every_scene_and_controller(tmp_path: Path) -> None:
         assert _finite(osc[name]) and osc[name]["step_s"] > osc[name]["rnea_s"] > 0 and osc[name]["ratio_rnea"] > 1
     for name in fig["charts"]:
         assert (tmp_path / name).stat().st_size > 1000
-    assert "<img" in (tmp_path / "report.html").read_text()
+    page = (tmp_path / "report.html").read_text()
+    assert "<img" in page and page.count("<table class='sortable'>") >= len(SECTION_TITLES)
+    for name in SCENES:  # each scene's playback, written and embedded
+        assert (tmp_path / f"playback_{name}.html").stat().st_size > 100_000
+        assert f"<iframe src='playback_{name}.html'" in page
+    if chromium() is not None:
+        report = open_page(tmp_path / "report.html", "document.querySelectorAll('table').length", settle=3.0)
+        keep_screenshot(report.screenshot, "armctl-bench-report.png")
+        assert report.errors == [] and report.value >= len(SECTION_TITLES)
+        assert all(u.startswith(("file:", "data:")) for u in report.requests), report.requests
 
 
 def test_sweep_on_a_dask_local_cluster() -> None:

@@ -73,7 +73,8 @@ def test_the_model_reproduces_the_joint_space_dynamics(name: str, backend: str, 
     rhs = osm.Jbar.T @ tau
     scale = np.abs(osm.Lambda).max() * (np.abs(xdd).max() + 1) + np.abs(rhs).max()
     assert np.abs(lhs - rhs).max() <= 1e-6 * scale
-    np.testing.assert_allclose(osm.jacobian @ osm.Jbar, np.eye(6), atol=1e-8)
+    # J J̄ = J M⁻¹ Jᵀ Λ = I to rounding, which grows with Λ's condition number near a singularity
+    np.testing.assert_allclose(osm.jacobian @ osm.Jbar, np.eye(6), atol=max(1e-8, 1e-14 * np.linalg.cond(osm.Lambda)))
     np.testing.assert_allclose(osm.Lambda, osm.Lambda.T, atol=0)
     assert np.linalg.eigvalsh(osm.Lambda).min() > 0
     assert np.allclose(osm.acceleration(osm.Jbar.T @ tau), xdd, rtol=1e-5, atol=1e-6 * np.abs(xdd).max())

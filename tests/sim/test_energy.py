@@ -35,7 +35,11 @@ def _free_run(name: str, integrator: str, duration: float = 10.0) -> tuple[armct
             model, zero_torque, armctl.Reference.hold(q0), duration, qd0=qd0, integrator=integrator, saturate=False
         )
     said = [str(w.message) for w in caught if issubclass(w.category, SimulationWarning)]
-    assert len(said) == outside.any()  # a start outside the position limits is said, once; inside, nothing
+    # a start outside the position limits is said, once; inside, nothing. A free swing may also overrun a limit
+    # (the Panda's, which it is said after the run): no other warning
+    assert all(s.startswith(("the run starts outside", "the run went beyond")) for s in said)
+    said = [s for s in said if s.startswith("the run starts outside")]
+    assert len(said) == outside.any()
     if outside.any():
         assert said[0].startswith(
             "the run starts outside the model's position limits: joint 1 ('panda_joint2') "

@@ -158,7 +158,9 @@ def _press(law: object, integrator: str) -> tuple[armctl.sim.SimResult, list[war
             environment=Plane(law, point=(0.0, 0.0, -0.3)),
             integrator=integrator,
         )  # type: ignore[arg-type]
-    return res, [w for w in caught if issubclass(w.category, SimulationWarning)]
+    # (a run thrown off the wall may also overrun a velocity limit, said in a warning of its own)
+    said = [w for w in caught if issubclass(w.category, SimulationWarning)]
+    return res, [w for w in said if not str(w.message).startswith("the run went beyond the plant's limits")]
 
 
 def test_energy_gained_on_a_contact_that_could_not_be_checked_is_reported() -> None:

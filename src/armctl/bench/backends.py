@@ -161,7 +161,12 @@ def measure_arm(
 def run(quick: bool = False) -> dict[str, Any]:
     """Measure every arm; returns every number behind the chart (errors dimensionless, costs in seconds)."""
     number, rounds, states = (100, 15, 100) if quick else (200, 31, 300)
-    arms = {name: measure_arm(name, name in COMPILED_ARMS[quick], states, number, rounds) for name in ARMS[quick]}
+    from armctl.bench.progress import steps
+
+    arms = {
+        name: measure_arm(name, name in COMPILED_ARMS[quick], states, number, rounds)
+        for name in steps(ARMS[quick], "backends: arms")
+    }
     return {
         "reference": "lagrange backend, rotor_coupling=True, full model (friction included)",
         "error": "relative RMS of inverse_dynamics over random states",
@@ -188,9 +193,14 @@ def plot(data: dict[str, Any], path: Path) -> None:
     plt = pyplot()
 
     arms = data["arms"]
-    fig, axes = plt.subplots(1, len(arms), figsize=(5.2 * len(arms), 4.4), squeeze=False)
+    cols = min(2, len(arms))  # two panels a row: readable at a page's width
+    rows = -(-len(arms) // cols)
+    fig, grid = plt.subplots(rows, cols, figsize=(6.0 * cols, 4.6 * rows), squeeze=False)
+    axes = grid.flat[: len(arms)]
+    for ax in grid.flat[len(arms) :]:
+        ax.set_visible(False)
     colors = {k: f"C{i}" for i, k in enumerate(LABELS)}
-    for ax, (name, arm) in zip(axes[0], arms.items(), strict=True):
+    for ax, (name, arm) in zip(axes, arms.items(), strict=True):
         ranked = sorted(arm["candidates"].items(), key=lambda kv: kv[1]["cost_s"])
         for i, (k, c) in enumerate(ranked):
             e = max(c["error"], ZERO_ERROR_PLOT)
@@ -199,25 +209,35 @@ def plot(data: dict[str, Any], path: Path) -> None:
                 k,
                 (e, c["cost_s"]),
                 textcoords="offset points",
-                xytext=(4, 3 if i % 2 else -9),
-                fontsize=7,
+                xytext=(4, 3 if i % 2 else -11),
+                fontsize=9,
                 ha="right" if e > 1e-6 else "left",
             )
         ax.set_xlim(ZERO_ERROR_PLOT / 10, 10.0)
         ax.margins(y=0.2)
         ax.set_xscale("log")
         ax.set_yscale("log")
-        ax.set_title(f"{name} ({arm['n']} joints{', motors' if arm['has_motors'] else ''})", fontsize=10)
+        ax.set_title(f"{name} ({arm['n']} joints{', motors' if arm['has_motors'] else ''})", fontsize=11)
         ax.set_xlabel("relative RMS error of τ vs exact Lagrange")
+        ax.set_ylabel("median time per inverse_dynamics call [s]")
         ax.grid(True, which="both", alpha=0.3)
-    axes[0][0].set_ylabel("median time per inverse_dynamics call [s]")
     handles: dict[str, Any] = {}
-    for ax in axes[0]:
+    for ax in axes:
         for h, lab in zip(*ax.get_legend_handles_labels(), strict=True):
             handles.setdefault(lab, h)
-    fig.legend(list(handles.values()), list(handles), loc="lower center", ncol=4, fontsize=7)
-    fig.suptitle(f"Dynamics backends: cost vs accuracy (zero error drawn at {ZERO_ERROR_PLOT:g})", fontsize=11)
-    fig.tight_layout(rect=(0, 0.1, 1, 0.95))
+    spare = list(grid.flat[len(arms) :])
+    if spare:  # the key in the empty panel
+        spare[0].set_visible(True)
+        spare[0].axis("off")
+        spare[0].legend(list(handles.values()), list(handles), loc="center", fontsize=10, title="backend")
+    else:
+        fig.legend(list(handles.values()), list(handles), loc="lower center", ncol=3, fontsize=10)
+    fig.suptitle(
+        f"Dynamics backends: cost vs accuracy (points: backends, colour in the key; zero error drawn at "
+        f"{ZERO_ERROR_PLOT:g})",
+        fontsize=12,
+    )
+    fig.tight_layout(rect=(0, 0.0 if spare else 0.12 / rows, 1, 0.96))
     save_figure(fig, path)
 
 

@@ -13,6 +13,7 @@ import armctl
 from armctl.bench.timing import paired_ratio
 from armctl.errors import BackendError
 
+#: the benchmark's own checks (its tests), not printed: the largest ratio to RNEA each law's step should keep
 TARGETS = {"PDGravity": 3.0, "ComputedTorque": 4.0, "PassivityBased": 7.0, "Adaptive": 14.0}
 
 
@@ -65,19 +66,28 @@ def run(number: int = 200, rounds: int = 75, seed: int = 0) -> dict[str, Any]:
 def report(fig: dict[str, Any]) -> str:
     lines = [f"control step on {fig['model']}, ratio to one raw RNEA (median of per-round ratios, quartiles)"]
     for label, figs in (("", fig), (" (compile=True)", fig.get("compiled", {}))):
-        for name, target in TARGETS.items():
+        for name in TARGETS:
             if name not in figs:
                 continue
             f = figs[name]
             q1, q3 = f["ratio_iqr"]
             lines.append(
-                f"  {name + label:30s} {f['step_s'] * 1e6:7.2f} us  RNEA {f['rnea_s'] * 1e6:5.2f} us  ratio "
-                f"{f['ratio']:5.2f} [{q1:.2f}, {q3:.2f}]  (target <= {target}: "
-                f"{'ok' if f['ratio'] <= target else 'MISSED'})"
+                f"  {name + label:30s} {f['step_s'] * 1e6:7.2f} µs  RNEA {f['rnea_s'] * 1e6:5.2f} µs  ratio "
+                f"{f['ratio']:5.2f} [{q1:.2f}, {q3:.2f}]"
             )
     if "compiled_unavailable" in fig:
         lines.append(f"  compile=True unavailable: {fig['compiled_unavailable']}")
     return "\n".join(lines)
+
+
+def beyond_targets(fig: dict[str, Any]) -> list[str]:
+    """The laws whose ratio to RNEA is above its :data:`TARGETS` entry (the benchmark's tests check it)."""
+    out = []
+    for label, figs in (("", fig), (" (compile=True)", fig.get("compiled", {}))):
+        for name, target in TARGETS.items():
+            if name in figs and figs[name]["ratio"] > target:
+                out.append(f"{name}{label}: ratio {figs[name]['ratio']:.2f} > {target}")
+    return out
 
 
 def main() -> None:

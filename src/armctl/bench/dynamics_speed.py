@@ -2,8 +2,8 @@
 
 Run: ``python -m armctl.bench.dynamics_speed``. Prints per-call medians and ratios measured in the same run
 (interleaved rounds), the regressors again with ``Dynamics(model, compile=True)`` (generated C code), the
-Lagrange backend's symbolic build time and its compiled inverse dynamics against the Pinocchio backend, and
-each figure's target.
+Lagrange backend's symbolic build time and its compiled inverse dynamics against the Pinocchio backend.
+:data:`TARGETS` are the benchmark's own checks (its tests call :func:`beyond_targets`); they are not printed.
 """
 
 from __future__ import annotations
@@ -114,13 +114,11 @@ def report(fig: dict[str, Any]) -> str:
         if name not in fig:  # compile=True unavailable (no C compiler)
             continue
         f = fig[name]
-        target = TARGETS[name.removeprefix("compiled_")]
-        ok = "ok" if f["ratio"] <= target else "MISSED"
         q1, q3 = f["ratio_iqr"]
         label = name.replace("compiled_", "") + (" (compile=True)" if name.startswith("compiled_") else "")
         lines.append(
-            f"  {label:35s} api {f['api_s'] * 1e6:7.2f} us  raw {f['raw_s'] * 1e6:7.2f} us  "
-            f"ratio {f['ratio']:5.2f} [{q1:.2f}, {q3:.2f}]  (target <= {target}: {ok})"
+            f"  {label:35s} api {f['api_s'] * 1e6:7.2f} µs  raw {f['raw_s'] * 1e6:7.2f} µs  "
+            f"ratio {f['ratio']:5.2f} [{q1:.2f}, {q3:.2f}]"
         )
     if "compiled_unavailable" in fig:
         lines.append(f"  compile=True unavailable: {fig['compiled_unavailable']}")
@@ -133,20 +131,32 @@ def report(fig: dict[str, Any]) -> str:
     if f is None:
         lines.append("  lagrange compiled tau  skipped: not compiled yet (~20 s; run without --quick once)")
     else:
-        ok = "ok" if f["ratio"] <= TARGETS["lagrange_compiled_inverse_dynamics"] else "MISSED"
         lines.append(
-            f"  lagrange compiled tau  {f['api_s'] * 1e6:7.2f} us  pinocchio backend "
-            f"{f['pinocchio_backend_s'] * 1e6:6.2f} us  ratio of medians {f['ratio']:5.2f}  "
-            f"(target <= 10: {ok}); "
-            f"CasADi VM {f['casadi_vm_s'] * 1e6:.1f} us"
+            f"  lagrange compiled tau  {f['api_s'] * 1e6:7.2f} µs  pinocchio backend "
+            f"{f['pinocchio_backend_s'] * 1e6:6.2f} µs  ratio of medians {f['ratio']:5.2f}; "
+            f"CasADi VM {f['casadi_vm_s'] * 1e6:.1f} µs"
         )
     b = fig["lagrange_build_seconds"]
     load = fig["lagrange_compile_or_load_seconds"]
     lines.append(
-        f"  lagrange symbolic build {b:.2f} s (target <= 5: {'ok' if b <= 5 else 'MISSED'})"
-        + (f"; compile or cached load {load:.2f} s" if load is not None else "")
+        f"  lagrange symbolic build {b:.2f} s" + (f"; compile or cached load {load:.2f} s" if load is not None else "")
     )
     return "\n".join(lines)
+
+
+def beyond_targets(fig: dict[str, Any]) -> list[str]:
+    """The figures beyond their :data:`TARGETS` entry (the benchmark's tests check it)."""
+    out = []
+    for name in ("mass_matrix", "inverse_dynamics", "regressor", "passivity_regressor"):
+        for key in (name, f"compiled_{name}"):
+            if key in fig and fig[key]["ratio"] > TARGETS[name]:
+                out.append(f"{key}: ratio {fig[key]['ratio']:.2f} > {TARGETS[name]}")
+    f = fig.get("lagrange_compiled_inverse_dynamics")
+    if f is not None and f["ratio"] > TARGETS["lagrange_compiled_inverse_dynamics"]:
+        out.append(f"lagrange compiled inverse dynamics: ratio {f['ratio']:.2f}")
+    if fig["lagrange_build_seconds"] > TARGETS["lagrange_build_seconds"]:
+        out.append(f"lagrange symbolic build: {fig['lagrange_build_seconds']:.2f} s")
+    return out
 
 
 def main() -> None:

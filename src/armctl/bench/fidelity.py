@@ -18,7 +18,9 @@
    runs in closed loop with the scene's plant, integrator and rates, on candidate controller-side models:
    the scene's exact model and its reductions (no friction, no rotors, neither; a reduction identical to
    another model is skipped), each with the ``"pinocchio"`` and ``"lagrange"`` (CasADi VM, rotor coupling)
-   backends — in quick mode the scene's own backend only, and the runs cut to :data:`QUICK_DURATION` seconds.
+   backends — in quick mode the scene's own backend only where that leaves a reduction to compare (else both
+   backends, so that the full model is never compared with itself alone), and the runs cut to
+   :data:`QUICK_DURATION` seconds.
    The baseline ("the full model") is the scene's exact model on the scene's backend, the one the plant is
    simulated with: the scenes simulate their plant with the Pinocchio backend, which has no rotor coupling,
    so a controller that models the coupling is, against that plant, slightly wrong.
@@ -172,15 +174,18 @@ def _dynamics(model: RobotModel, backend: str) -> Dynamics:
 def closed_loop(name: str, quick: bool, rounds: int = 5, timing_states: int = 100) -> dict[str, Any]:
     """Every candidate model of scene ``name`` under computed torque: RMS and max tracking error [rad],
     divergence, median compute time per controller call [s]; and the choice."""
+    import warnings
+
     from armctl.bench.timing import interleaved
     from armctl.controllers import ComputedTorque
+    from armctl.errors import SimulationWarning
     from armctl.scenes import scene
     from armctl.scenes.base import diverged_errors
     from armctl.sim import simulate
 
     sc = scene(name)
     baseline = f"full/{sc.backend}"
-    backends = (sc.backend,) if quick else BACKENDS
+    backends = (sc.backend,) if quick and len(candidate_models(sc.exact, (sc.backend,))) > 1 else BACKENDS
     gains = sc.gains("computed_torque")
     duration = min(sc.duration, QUICK_DURATION) if quick else sc.duration
     plant = sc.dynamics("plant")
@@ -190,7 +195,9 @@ def closed_loop(name: str, quick: bool, rounds: int = 5, timing_states: int = 10
     recorded: Any = None
     for key, (model, backend, kept) in candidate_models(sc.exact, backends).items():
         ctrl = ComputedTorque(_dynamics(model, backend), gains["kp"], gains["kd"], gains.get("ki"))
-        res = simulate(plant, ctrl, sc.reference, duration, **options)
+        with warnings.catch_warnings():  # a limit overrun is recorded in the candidate's "status" instead
+            warnings.simplefilter("ignore", SimulationWarning)
+            res = simulate(plant, ctrl, sc.reference, duration, **options)
         want = np.array([sc.reference(float(t)).q for t in res.t])
         err = np.abs(res.q - want)
         controllers[key] = ctrl
@@ -203,6 +210,7 @@ def closed_loop(name: str, quick: bool, rounds: int = 5, timing_states: int = 10
                 "max_error": float(err.max()),
                 "diverged": bool(res.diverged),
                 "diverged_at": res.diverged_at,
+                "status": res.status,
                 "sim_wall_s": float(res.info["wall_time"]),
             }
         )
@@ -259,12 +267,20 @@ def run(quick: bool = False) -> dict[str, Any]:
         "controller": "computed_torque at the scene's preset gains",
         "scenes": {},
     }
-    for name in SCENES:
+    from armctl.bench.progress import steps
+
+    for name in steps(SCENES, "fidelity: scenes"):
         sc = scene(name)
         times = np.linspace(0.0, sc.duration, SAMPLES[quick])
         shares = term_shares(model_terms(sc.exact, sc.plant, sc.reference, times))
         cl = closed_loop(name, quick, rounds=21 if quick else 31)
-        data["scenes"][name] = {"samples": len(times), **shares, "closed_loop": cl}
+        data["scenes"][name] = {
+            "plant": sc.plant.name,
+            "joints": sc.plant.n,
+            "samples": len(times),
+            **shares,
+            "closed_loop": cl,
+        }
     return data
 
 
@@ -287,11 +303,34 @@ def summary(data: dict[str, Any]) -> str:
             )
             continue
         c = cl["candidates"][cl["choice"]]
-        lines.append(
-            f"  {'':11s} choice {cl['choice']} ({c['compute_s'] * 1e6:.1f} µs/step, RMS error "
-            f"{c['rms_error']:.2e} rad) vs {cl['baseline']} ({b['compute_s'] * 1e6:.1f} µs/step, "
-            f"{b['rms_error']:.2e} rad), runs of {cl['duration']:g} s"
+        others = ", ".join(
+            f"{k} {v['rms_error']:.2e} rad"
+            for k, v in cl["candidates"].items()
+            if k not in (cl["choice"], cl["baseline"]) and not v["diverged"]
         )
+        if cl["choice"] == cl["baseline"]:
+            within = [
+                k
+                for k, v in cl["candidates"].items()
+                if k != cl["baseline"] and not v["diverged"] and v["rms_error"] <= cl["threshold"]
+            ]
+            verdict = (
+                f"no reduction stays within {data['factor']:g}× its error"
+                if not within
+                else f"the cheapest of the models within {data['factor']:g}× its error"
+            )
+            lines.append(
+                f"  {'':11s} {len(cl['candidates'])} models, runs of {cl['duration']:g} s: the full model "
+                f"{cl['baseline']} ({b['compute_s'] * 1e6:.1f} µs/step, RMS error {b['rms_error']:.2e} rad) is "
+                f"needed, {verdict}; the others: {others or 'none'}"
+            )
+        else:
+            lines.append(
+                f"  {'':11s} {len(cl['candidates'])} models, runs of {cl['duration']:g} s: choice {cl['choice']} "
+                f"({c['compute_s'] * 1e6:.1f} µs/step, RMS error {c['rms_error']:.2e} rad) against the full model "
+                f"{cl['baseline']} ({b['compute_s'] * 1e6:.1f} µs/step, {b['rms_error']:.2e} rad); the others: "
+                f"{others or 'none'}"
+            )
         diverged = [k for k, v in cl["candidates"].items() if v["diverged"]]
         if diverged:
             lines.append(
@@ -307,8 +346,12 @@ def plot(data: dict[str, Any], path: Path) -> None:
     writes a PNG to ``path``."""
     plt = pyplot()
     scenes = data["scenes"]
-    fig, axes = plt.subplots(1, 1 + len(scenes), figsize=(4.2 * (1 + len(scenes)), 4.6), squeeze=False)
-    ax = axes[0][0]
+    cols = 2  # two panels a row: readable at a page's width
+    rows = -(-(1 + len(scenes)) // cols)
+    fig, grid = plt.subplots(rows, cols, figsize=(6.2 * cols, 4.9 * rows), squeeze=False)
+    for extra in grid.flat[1 + len(scenes) :]:
+        extra.set_visible(False)
+    ax = grid.flat[0]
     names = list(scenes)
     bottom = np.zeros(len(names))
     for i, term in enumerate(data["terms"]):
@@ -318,10 +361,10 @@ def plot(data: dict[str, Any], path: Path) -> None:
     ax.set_ylim(0, 1)
     ax.set_ylabel("share of Σ term RMS torques")
     ax.set_title("Model terms along each reference", fontsize=10)
-    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.1), ncol=3)
+    ax.legend(fontsize=9, loc="upper center", bbox_to_anchor=(0.5, -0.1), ncol=3)
     ax.tick_params(axis="x", labelsize=8)
     markers = {"pinocchio": "o", "lagrange": "s"}
-    for ax, name in zip(axes[0][1:], names, strict=True):
+    for ax, name in zip(grid.flat[1 : 1 + len(names)], names, strict=True):
         cl = scenes[name]["closed_loop"]
         for key, c in cl["candidates"].items():
             us = c["compute_s"] * 1e6
@@ -333,7 +376,7 @@ def plot(data: dict[str, Any], path: Path) -> None:
                     xycoords=ax.get_xaxis_transform(),
                     textcoords="offset points",
                     xytext=(5, -10),
-                    fontsize=7,
+                    fontsize=9,
                     color="C3",
                 )
                 continue
@@ -345,7 +388,7 @@ def plot(data: dict[str, Any], path: Path) -> None:
                 textcoords="offset points",
                 xytext=(-5 if left else 5, 3),
                 ha="right" if left else "left",
-                fontsize=7,
+                fontsize=9,
             )
         if cl["choice"] is not None:
             ch = cl["candidates"][cl["choice"]]
@@ -361,7 +404,7 @@ def plot(data: dict[str, Any], path: Path) -> None:
             )
             ax.axhline(cl["threshold"], color="C2", ls="--", lw=1, label=f"{data['factor']:g}× full model's error")
         else:
-            ax.text(0.02, 0.02, "no choice: the full model diverged", transform=ax.transAxes, fontsize=7, color="C3")
+            ax.text(0.02, 0.02, "no choice: the full model diverged", transform=ax.transAxes, fontsize=9, color="C3")
         costs = [c["compute_s"] * 1e6 for c in cl["candidates"].values()]
         ax.set_xscale("log")
         ax.set_yscale("log")
@@ -370,10 +413,12 @@ def plot(data: dict[str, Any], path: Path) -> None:
         ax.margins(y=0.2)
         ax.set_xlabel("controller compute time per step [µs]")
         ax.set_ylabel("RMS tracking error [rad]")
-        ax.set_title(f"{name}\ncomputed torque, candidate models, {cl['duration']:g} s runs", fontsize=10)
+        arm = scenes[name]
+        who = f"{arm['plant']} ({arm['joints']} joints)" if "plant" in arm else name
+        ax.set_title(f"{name}: {who}\ncomputed torque on candidate models, {cl['duration']:g} s runs", fontsize=11)
         ax.grid(True, which="both", alpha=0.3)
         if cl["choice"] is not None:
-            ax.legend(fontsize=7, loc="best")
+            ax.legend(fontsize=9, loc="best")
     shown = dict.fromkeys(c["backend"] for s in scenes.values() for c in s["closed_loop"]["candidates"].values())
     symbols = {"pinocchio": "○ Pinocchio", "lagrange": "□ Lagrange VM"}
     fig.suptitle(f"Model no more than a scene needs ({', '.join(symbols[b] for b in shown)})", fontsize=11)

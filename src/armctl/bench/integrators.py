@@ -214,7 +214,9 @@ def run(quick: bool = False) -> dict[str, Any]:
         "error_floor": floor,
         "integrators": {},
     }
-    for name, (integrator, compiled) in SERIES.items():
+    from armctl.bench.progress import steps as progress
+
+    for name, (integrator, compiled) in progress(SERIES.items(), "integrators", total=len(SERIES)):
         cases = [run_case(sc, q_ref, integrator, m, repeats, compiled) for m in SUBSTEPS[quick]]
         steps, errors = [c["step"] for c in cases], [c["error"] for c in cases]
         orders = observed_orders(steps, errors, floor)
@@ -247,7 +249,7 @@ def plot(data: dict[str, Any], path: Path) -> None:
     point labelled by its step size [ms]; writes a PNG to ``path``."""
     plt = pyplot()
 
-    fig, ax = plt.subplots(figsize=(7.0, 4.8))
+    fig, ax = plt.subplots(figsize=(8.0, 5.4))
     offsets = [((5, 3), "left"), ((-5, 3), "right"), ((5, -10), "left"), ((6, -4), "left")]
     for i, (name, d) in enumerate(data["integrators"].items()):
         pts = [
@@ -264,7 +266,7 @@ def plot(data: dict[str, Any], path: Path) -> None:
         ax.plot([p[0] for p in pts], [p[1] for p in pts], "o-", label=label)
         xytext, ha = offsets[i % len(offsets)]
         for e, c, h in pts:
-            ax.annotate(f"{h * 1e3:g}", (e, c), textcoords="offset points", xytext=xytext, ha=ha, fontsize=7)
+            ax.annotate(f"{h * 1e3:g}", (e, c), textcoords="offset points", xytext=xytext, ha=ha, fontsize=9)
     ax.axvline(data["error_floor"], color="0.6", ls=":", lw=1, label="order-estimate floor")
     ax.set_xscale("log")
     ax.set_yscale("log")
@@ -273,7 +275,7 @@ def plot(data: dict[str, Any], path: Path) -> None:
     s = data["scenario"]
     ax.set_title(f"Integrators on {s['plant']}: cost vs accuracy (labels: step [ms])", fontsize=10)
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=9)
     fig.tight_layout()
     save_figure(fig, path)
 

@@ -118,22 +118,28 @@ def _adaptive_gamma() -> Any:
 
 
 def run_cell(controller: str, k: float, f: float, period: float, duration: float = 2.0, dt_max: float = 1e-3) -> str:
-    """Simulate one cell (``duration`` [s], integration step ≤ ``dt_max``) and classify it."""
+    """Simulate one cell (``duration`` [s], integration step ≤ ``dt_max``) and classify it (an unstable cell
+    overruns the pendulum's limits by design: the run's warnings about it are not printed)."""
+    import warnings
+
+    from armctl.errors import SimulationWarning
     from armctl.sim import simulate
 
-    res = simulate(
-        _pendulum(),
-        make_controller(controller, k, f),
-        armctl.Reference([SET_POINT]),
-        duration,
-        q0=[SET_POINT + OFFSET],
-        control_dt=period,
-        dt=_step(period, dt_max),
-        delay=1,
-        saturate=False,
-        friction="smooth",
-        max_velocity=1e3,
-    )
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", SimulationWarning)
+        res = simulate(
+            _pendulum(),
+            make_controller(controller, k, f),
+            armctl.Reference([SET_POINT]),
+            duration,
+            q0=[SET_POINT + OFFSET],
+            control_dt=period,
+            dt=_step(period, dt_max),
+            delay=1,
+            saturate=False,
+            friction="smooth",
+            max_velocity=1e3,
+        )
     if res.diverged:
         return "unstable"
     err = abs(res.q[-1, 0] - SET_POINT)
@@ -229,11 +235,9 @@ def maps(
 
 def plot(data: dict[str, Any], path_for: Callable[[str], Any]) -> list[str]:
     """One PNG per controller (two panels); returns the file names."""
-    import matplotlib
+    from armctl.bench.report import plain_log_ticks, pyplot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     colour = {"stable": "#2a9d4a", "marginal": "#e9c46a", "unstable": "#d62828"}
     names = []
     for c in ("computed_torque", "pd_gravity", "passivity", "adaptive"):
@@ -259,16 +263,23 @@ def plot(data: dict[str, Any], path_for: Callable[[str], Any]) -> list[str]:
                 yscale="log",
                 xlabel="gain multiplier k",
                 ylabel=ylabel,
-                title=f"{c.replace('_', ' ')}: {kind.replace('_', ' × ')}",
+                title=f"{c.replace('_', ' ')}: {kind.replace('_', ' × ')}\n"
+                "one-joint pendulum, horizontal plane, 1 period of delay",
             )
             draw_textbook(ax, c, kind, m, data["k"])
-            keys = [plt.Line2D([], [], ls="", marker="s", ms=8, color=colour[o], label=o) for o in colour]
+            plain_log_ticks(ax)
+            present = {o for row in m["outcome"] for o in row}  # only the outcomes the map has
+            keys = [
+                plt.Line2D([], [], ls="", marker="s", ms=8, color=colour[o], label=f"{o} (simulated cell)")
+                for o in colour
+                if o in present
+            ]
             handles = [*keys, *ax.get_legend_handles_labels()[0]]
             # below the axes: inside, the key covered cells
             ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2, fontsize=8)
         fig.tight_layout()
         name = f"stability_{c}.png"
-        fig.savefig(path_for(name), dpi=90)
+        fig.savefig(path_for(name), dpi=110)
         plt.close(fig)
         names.append(name)
     if "pd_desired_gravity" in data:

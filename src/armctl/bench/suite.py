@@ -1,22 +1,28 @@
 """``armctl bench``: every scene × controller, stability maps, TOPP convergence, the dynamics backends', the
 integrators' and the models' cost against accuracy — written to ``figures.json`` (every number behind the
-charts), PNG charts and ``report.html``, with a summary table printed.
+charts), charts, a 3D playback of each scene and ``report.html``.
 
-Sections run in turn; the simulation-heavy ones go through an ``Executor`` (a process pool by default).
-``quick`` shrinks grids and repetitions so the whole run takes 1–2 minutes on 2 cores.
+Sections run in turn, under a progress bar (:mod:`armctl.bench.progress`), and each one's results are printed
+as it finishes; the simulation-heavy ones go through an ``Executor`` (a process pool by default). ``quick``
+shrinks grids, repetitions and runs so the whole bench takes a few minutes on 2 cores.
 """
 
 from __future__ import annotations
 
 import json
-import math
 import time
+import warnings
 from collections.abc import Callable
 from concurrent.futures import Executor
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from armctl.bench.outcomes import outcome, scene_title, scenes_summary
+from armctl.bench.pareto import pareto_front, plot_pareto
+
+__all__ = ["outcome", "pareto_front", "plot_pareto", "run_suite", "scene_matrix", "scene_title", "summary"]
 
 SCENE_NAMES = ("pendulum", "planar_2r", "panda_topp", "panda_contact")
 
@@ -34,26 +40,49 @@ _MEASURES = (
 )
 
 
-def run_scene_method(scene: str, method: str) -> dict[str, Any]:
-    """Simulate one method on one scene (runs in a worker process): its metrics, untimed, and the window of
-    recorded states that :func:`time_controllers` replays to time it. A method that fails — its controller
-    raises an :class:`~armctl.errors.ArmctlError` (an infeasible QP, say), or the scene cannot be built (a plan
-    its limits refuse) — is a result too: a row with ``failed`` (the error's type and message) and NaN
-    measures, so the rest of the benchmark still runs and shows it."""
-    from armctl.errors import ArmctlError
+def run_scene_method(scene: str, method: str, playback: str | None = None) -> dict[str, Any]:
+    """Simulate one method on one scene (runs in a worker process): its metrics, untimed, the run's status
+    and limit report, and the window of recorded states that :func:`time_controllers` replays to time it.
+    ``playback``: write the run's 3D playback to this path (collision meshes: a small page). A method that
+    fails — its controller raises an :class:`~armctl.errors.ArmctlError` (an infeasible QP, say), or the scene
+    cannot be built (a plan its limits refuse) — is a result too: a row with ``failed`` (the error's type and
+    message) and NaN measures, so the rest of the benchmark still runs and shows it. The run's warnings
+    (saturation, limit overruns, …) are kept in the row, not printed: the outcome column says them."""
+    from armctl.errors import ArmctlError, BackendError, SimulationWarning
     from armctl.scenes import scene as make
 
     try:
         sc = make(scene)
-        res = sc.run(method)
+        with warnings.catch_warnings(record=True) as said:
+            warnings.simplefilter("always", SimulationWarning)
+            res = sc.run(method)
     except ArmctlError as exc:
         return _failed_row(scene, method, exc)
-    return {
+    row = {
         "scene": scene,
         "method": method,
+        "plant": sc.plant.name,
+        "joints": sc.plant.n,
+        "description": sc.description,
         **sc.metrics(res, method, timing_rounds=0),
+        "status": res.status,
+        "limits": res.limits.as_dict() if res.limits is not None else None,
+        "warnings": sorted({str(w.message) for w in said if issubclass(w.category, SimulationWarning)}),
         "window": sc.replay_window(res, sc.timing_samples),
     }
+    if playback is not None:
+        try:
+            title = f"{scene}, {method.replace('_', ' ')} ({res.info.get('plant', '')}): {res.status}"
+            env = sc.sim_options.get("environment")
+            row["playback"] = res.playback(playback, meshes="collision", environment=env, title=title).name
+        except BackendError as exc:  # meshcat not installed: the report says so instead
+            row["playback_unavailable"] = str(exc)
+    return row
+
+
+def showcase(methods: tuple[str, ...]) -> str:
+    """The method whose run a scene's playback shows: computed torque where the scene has it, else its first."""
+    return "computed_torque" if "computed_torque" in methods else methods[0]
 
 
 def _failed_row(scene: str, method: str, exc: Exception) -> dict[str, Any]:
@@ -99,12 +128,18 @@ def time_controllers(rows: list[dict[str, Any]], rounds: int) -> None:
         del r["window"]
 
 
-def scene_matrix(executor: Executor | str | None = None, rounds: int = 9) -> list[dict[str, Any]]:
+def scene_matrix(
+    executor: Executor | str | None = None, rounds: int = 9, playback_dir: Path | None = None
+) -> list[dict[str, Any]]:
+    """Every method on every scene (:func:`run_scene_method`), timed afterwards (:func:`time_controllers`);
+    with ``playback_dir``, each scene's :func:`showcase` run is also written there as
+    ``playback_<scene>.html``."""
     from armctl.errors import ArmctlError
     from armctl.scenes import SCENES, scene
     from armctl.sim import sweep
 
-    cases, unbuilt = [], []
+    cases: list[dict[str, Any]] = []
+    unbuilt = []
     for name in SCENE_NAMES:
         if name not in SCENES:
             continue
@@ -113,134 +148,14 @@ def scene_matrix(executor: Executor | str | None = None, rounds: int = 9) -> lis
         except ArmctlError as exc:  # the scene itself cannot be built: one failed row stands for it
             unbuilt.append(_failed_row(name, "(scene)", exc))
             continue
-        cases += [{"scene": name, "method": m} for m in methods]
+        for m in methods:
+            case: dict[str, Any] = {"scene": name, "method": m}
+            if playback_dir is not None and m == showcase(methods):
+                case["playback"] = str(Path(playback_dir) / f"playback_{name}.html")
+            cases.append(case)
     rows = sweep(cases, run=run_scene_method, executor=executor, progress=True, on_error="raise") + unbuilt
     time_controllers(rows, rounds)
     return rows
-
-
-def pareto_front(points: list[tuple[float, float]], spans: list[tuple[float, float]] | None = None) -> list[int]:
-    """Indices of the points (x, y) no other point beats (both minimised; non-finite points are never on it).
-
-    ``spans``: an interval (lo, hi) around each x — the quartiles of a noisy timing. Then x is compared by
-    the intervals: j is faster than i only if hi_j < lo_i, and overlapping intervals are a tie, so timing noise
-    alone cannot move a point on or off the front. j beats i if it is faster and no less accurate, or tied and
-    more accurate. Without spans this is the usual strict Pareto order."""
-    spans = (
-        [(x, x) for x, _ in points]
-        if spans is None
-        else [
-            (lo, hi) if math.isfinite(lo) and math.isfinite(hi) else (x, x)  # no quartiles: the point itself
-            for (x, _), (lo, hi) in zip(points, spans, strict=True)
-        ]
-    )
-    finite = [math.isfinite(x) and math.isfinite(y) for x, y in points]
-
-    def beats(j: int, i: int) -> bool:
-        (lo_i, hi_i), (lo_j, hi_j) = spans[i], spans[j]
-        yi, yj = points[i][1], points[j][1]
-        faster, slower = hi_j < lo_i, hi_i < lo_j
-        return (faster and yj <= yi) or (not faster and not slower and yj < yi)
-
-    return [
-        i
-        for i in range(len(points))
-        if finite[i] and not any(finite[j] and beats(j, i) for j in range(len(points)) if j != i)
-    ]
-
-
-def _failure_note(r: dict[str, Any], brief: bool = True) -> str | None:
-    """How a method failed on its scene, or None: the error's type (``brief``, for a chart) or its whole text."""
-    if r.get("failed"):
-        return f"failed: {r['failed'].split(':')[0]}" if brief else f"FAILED ({r['failed']})"
-    if r["diverged"]:
-        return f"diverged at {r['diverged_at']:.2f} s"
-    return None
-
-
-def plot_pareto(rows: list[dict[str, Any]], path: Path) -> None:
-    """Tracking error against compute time per step, log-log, one panel per scene: the quartiles of the
-    timing as horizontal bars, the Pareto front (:func:`pareto_front` on those quartiles) marked, and every
-    method that diverged or failed listed in its panel (a cross at the top where its time is known)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from armctl.bench.report import plain_log_ticks
-
-    scenes = [s for s in SCENE_NAMES if any(r["scene"] == s for r in rows)]
-    fig, axes = plt.subplots(1, len(scenes), figsize=(4.6 * len(scenes), 4.0), squeeze=False)
-    for ax, name in zip(axes[0], scenes, strict=True):
-        mine = [r for r in rows if r["scene"] == name and _failure_note(r) is None]
-        pts = [(r["compute_s"] * 1e6, r["rms_error"]) for r in mine]
-        spans = [tuple(1e6 * v for v in r.get("compute_s_iqr", (r["compute_s"],) * 2)) for r in mine]
-        front = set(pareto_front(pts, spans))  # type: ignore[arg-type]
-        placed: list[tuple[float, float]] = []
-        for i, (r, (x, y), (lo, hi)) in enumerate(zip(mine, pts, spans, strict=True)):
-            color = "#d62828" if i in front else "#577590"
-            ax.errorbar(
-                x,
-                y,
-                xerr=[[max(x - lo, 0.0)], [max(hi - x, 0.0)]],
-                fmt="o",
-                ms=7,
-                color=color,
-                zorder=3,
-                capsize=2,
-                lw=1,
-            )
-            # a label near an earlier one's point (in decades) goes one line lower for each such neighbour
-            near = sum(
-                1
-                for px, py in placed
-                if x > 0 and y > 0 and abs(math.log10(x / px)) < 0.25 and abs(math.log10(y / py)) < 0.25
-            )
-            placed.append((x, y))
-            ax.annotate(
-                r["method"].replace("_", " "), (x, y), fontsize=7, xytext=(4, 3 - 10 * near), textcoords="offset points"
-            )
-        fx = sorted(pts[i] for i in front)
-        if fx:
-            ax.plot(*zip(*fx, strict=True), color="#d62828", lw=1, label="Pareto front")
-        failed = [(r, note) for r in rows if r["scene"] == name and (note := _failure_note(r)) is not None]
-        for r, _ in failed:
-            if math.isfinite(r["compute_s"]):
-                ax.plot(
-                    r["compute_s"] * 1e6,
-                    0.97,
-                    "x",
-                    color="#d62828",
-                    ms=9,
-                    mew=2,
-                    transform=ax.get_xaxis_transform(),
-                    clip_on=False,
-                    zorder=4,
-                )
-        if failed:  # under the axis label, where no point can sit
-            ax.text(
-                0.0,
-                -0.2,
-                "\n".join(f"✕ {r['method'].replace('_', ' ')}: {note}" for r, note in failed),
-                transform=ax.transAxes,
-                fontsize=7,
-                color="#d62828",
-                va="top",
-            )
-        ax.margins(x=0.15, y=0.25)
-        ax.set(
-            xscale="log",
-            yscale="log",
-            xlabel="compute time per control step [µs]",
-            ylabel="RMS tracking error [rad]" if name != "panda_contact" else "RMS tool position error [m]",
-            title=name,
-        )
-        plain_log_ticks(ax)
-        if fx:
-            ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
 
 
 def topp_convergence(quick: bool) -> dict[str, Any]:
@@ -271,7 +186,23 @@ def plot_topp(data: dict[str, Any], path: Path) -> None:
         np.array(data["compute_s"]),
         data["analytic_duration"],
     )
-    plot_convergence(study).savefig(path, dpi=90)
+    from armctl.bench.report import plain_log_ticks
+
+    fig = plot_convergence(study)
+    fig.set_size_inches(10.0, 4.6)
+    fig.suptitle(
+        "planar_2r (2 joints), rest to rest from q = (0, 0) to (1, −0.8) rad under velocity and acceleration\n"
+        "limits: TOPP-RA's duration against the analytic bang-bang one (each marker: one grid size)",
+        fontsize=11,
+    )
+    import matplotlib.ticker as ticker
+
+    for ax in fig.axes:
+        plain_log_ticks(ax)  # grid sizes and milliseconds read plainly: 10, 20, 50 …
+        if "compute" not in ax.get_ylabel():  # the error spans decades: powers of ten, labelled as such
+            ax.yaxis.set_major_locator(ticker.LogLocator(base=10.0))
+            ax.yaxis.set_major_formatter(ticker.LogFormatterSciNotation())
+    fig.savefig(path, dpi=110)
 
 
 def _model_sections() -> dict[str, Any]:
@@ -289,53 +220,108 @@ def _model_sections() -> dict[str, Any]:
     return sections
 
 
+#: the report's title of each section, in the order they run
+SECTION_TITLES = {
+    "scenes": "Scenes × controllers",
+    "stability_maps": "Stability maps",
+    "topp_convergence": "TOPP convergence",
+    "backends": "Dynamics backends: cost against accuracy",
+    "integrators": "Integrators: cost against accuracy",
+    "fidelity": "Model fidelity: the cheapest sufficient model",
+    "engines": "Plant engines: armctl's and MuJoCo's integrators, cost against accuracy",
+    "dynamics_speed": "Dynamics speed",
+    "controller_speed": "Controller step speed",
+    "osc_speed": "Operational-space QP step speed",
+}
+
+
 def run_suite(
     quick: bool = False, out: Path = Path("bench-out"), executor: Executor | str | None = None
 ) -> dict[str, Any]:
+    """Run every section in turn (its results printed as it finishes), then write ``figures.json``, the charts,
+    the scenes' playbacks and ``report.html`` into ``out``."""
     from armctl.bench import controller_speed, dynamics_speed, osc_speed, stability
+    from armctl.bench.progress import sections
+    from armctl.bench.report import write_report
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     figures: dict[str, Any] = {"quick": quick, "started": time.strftime("%Y-%m-%d %H:%M:%S")}
-    charts: dict[str, str] = {}
+    charts: dict[str, dict[str, str]] = {}  # file name → {"section", "caption"}
     number, rounds = (100, 15) if quick else (200, 75)  # paired rounds: see bench.timing.paired_ratio
     t_all = time.perf_counter()
 
-    def section(key: str, fn: Callable[[], Any]) -> Any:
-        print(f"\n== {key}", flush=True)
-        t0 = time.perf_counter()
-        figures[key] = fn()
-        figures.setdefault("section_seconds", {})[key] = time.perf_counter() - t0
-        return figures[key]
+    def chart(name: str, section: str, caption: str) -> None:
+        charts[name] = {"section": section, "caption": caption}
 
-    section("scenes", lambda: scene_matrix(executor, rounds=5 if quick else 15))
-    plot_pareto(figures["scenes"], out / "speed_accuracy.png")
-    charts["speed_accuracy.png"] = (
-        "Tracking error against compute time per control step, per scene (bars: "
-        "timing quartiles; diverged or failed methods listed in their panel)"
-    )
-    section("stability_maps", lambda: stability.maps(quick=quick, executor=executor))
-    for name in stability.plot(figures["stability_maps"], lambda n: out / n):
-        key = name.removeprefix("stability_").removesuffix(".png")
-        charts[name] = stability.caption(key, figures["stability_maps"])
-    section("topp_convergence", lambda: topp_convergence(quick))
-    plot_topp(figures["topp_convergence"], out / "topp_convergence.png")
-    charts["topp_convergence.png"] = "TOPP-RA duration error and compute time against grid size"
-    for key, mod in _model_sections().items():
-        section(key, lambda mod=mod: mod.run(quick=quick))
-        mod.plot(figures[key], out / f"{key}.png")
-        charts[f"{key}.png"] = (mod.__doc__ or key).strip().splitlines()[0]
-    section("dynamics_speed", lambda: dynamics_speed.run(number=number, rounds=rounds, compile_if_needed=not quick))
-    section("controller_speed", lambda: controller_speed.run(number=number, rounds=rounds))
-    section("osc_speed", lambda: osc_speed.run(quick=quick))
+    def after_scenes() -> None:
+        plot_pareto(figures["scenes"], out / "speed_accuracy.svg")
+        chart(
+            "speed_accuracy.svg",
+            "scenes",
+            "RMS tracking error against the controller's compute time per step, one panel per scene (its arm "
+            "and task in the title). Circles: within the plant's limits; diamonds: saturated or beyond a limit "
+            "(see the outcome column); red: the Pareto front; horizontal bars: the timing's quartiles; crosses: "
+            "methods that diverged or failed.",
+        )
+
+    def after_stability() -> None:
+        for name in stability.plot(figures["stability_maps"], lambda n: out / n):
+            key = name.removeprefix("stability_").removesuffix(".png")
+            chart(name, "stability_maps", stability.caption(key, figures["stability_maps"]))
+
+    def after_topp() -> None:
+        plot_topp(figures["topp_convergence"], out / "topp_convergence.svg")
+        chart(
+            "topp_convergence.svg",
+            "topp_convergence",
+            "TOPP-RA on a planar 2R arm: duration error against the analytic bang-bang duration, and compute "
+            "time, against the grid size.",
+        )
+
+    def after_model_section(key: str, mod: Any) -> Callable[[], None]:
+        def after() -> None:
+            mod.plot(figures[key], out / f"{key}.svg")
+            chart(f"{key}.svg", key, (mod.__doc__ or key).strip().splitlines()[0])
+
+        return after
+
+    plan: list[tuple[str, Callable[[], Any], Callable[[], None] | None]] = [
+        ("scenes", lambda: scene_matrix(executor, rounds=5 if quick else 15, playback_dir=out), after_scenes),
+        ("stability_maps", lambda: stability.maps(quick=quick, executor=executor), after_stability),
+        ("topp_convergence", lambda: topp_convergence(quick), after_topp),
+        *(
+            (key, (lambda mod=mod: mod.run(quick=quick)), after_model_section(key, mod))
+            for key, mod in _model_sections().items()
+        ),
+        (
+            "dynamics_speed",
+            lambda: dynamics_speed.run(number=number, rounds=rounds, compile_if_needed=not quick),
+            None,
+        ),
+        ("controller_speed", lambda: controller_speed.run(number=number, rounds=rounds), None),
+        ("osc_speed", lambda: osc_speed.run(quick=quick), None),
+    ]
+    bar = sections(len(plan))
+    try:
+        for key, fn, after in plan:
+            bar.set_description(SECTION_TITLES.get(key, key))
+            t0 = time.perf_counter()
+            figures[key] = fn()
+            if after is not None:
+                after()
+            figures.setdefault("section_seconds", {})[key] = time.perf_counter() - t0
+            bar.clear()
+            print(f"\n== {SECTION_TITLES.get(key, key)} ({time.perf_counter() - t0:.0f} s)", flush=True)
+            print(section_summary(key, figures[key]), flush=True)
+            bar.update()
+    finally:
+        bar.close()
     figures["total_seconds"] = time.perf_counter() - t_all
     figures["charts"] = charts
     (out / "figures.json").write_text(json.dumps(figures, indent=1, default=_json_default))
-    text = summary(figures)
-    print("\n" + text)
-    from armctl.bench.report import write_report
-
-    write_report(out, figures, charts, text)
+    report = write_report(out, figures, charts, summary(figures))
+    print(f"\ntotal {figures['total_seconds']:.1f} s ({report.name} in {out})", flush=True)
     return figures
 
 
@@ -347,37 +333,47 @@ def _json_default(x: Any) -> Any:
     return str(x)
 
 
-def summary(figures: dict[str, Any]) -> str:
+def stability_summary(maps: dict[str, Any]) -> str:
+    """Per controller and map: how many cells were stable, marginal and unstable."""
+    lines = [
+        "stability maps (one-joint pendulum in a horizontal plane, one period of delay): cells stable / "
+        "marginal / unstable"
+    ]
+    for c, kinds in maps.items():
+        if not isinstance(kinds, dict) or "rate_gain" not in kinds:
+            continue
+        for kind, data in kinds.items():
+            cells = [o for row in data["outcome"] for o in row]
+            counts = " / ".join(str(cells.count(o)) for o in ("stable", "marginal", "unstable"))
+            lines.append(f"  {c.replace('_', ' '):18s} {kind.replace('_', ' × '):14s} {counts}")
+    return "\n".join(lines)
+
+
+def topp_summary(data: dict[str, Any]) -> str:
+    lines = [f"TOPP-RA on planar 2R, analytic duration {data['analytic_duration']:.6f} s"]
+    for n, err, t in zip(data["grids"], data["errors"], data["compute_s"], strict=True):
+        lines.append(f"  N = {int(n):5d}   |T_N − T|/T = {err:.2e}   {1e3 * t:7.2f} ms")
+    return "\n".join(lines)
+
+
+def section_summary(key: str, data: Any) -> str:
+    """The text of one section's results (as printed when it finishes)."""
     from armctl.bench import controller_speed, dynamics_speed, osc_speed
 
-    lines = [
-        "errors in rad (joint scenes) or m (panda_contact: tool position in the table plane); force: RMS "
-        "normal-force error after settling [N]; over limits: share of samples beyond the effort limit / "
-        "velocity limit (+1 %) / position range; a run that diverged has no error (its error until then is in "
-        "figures.json)",
-        f"{'scene':14s} {'method':26s} {'RMS err':>9s} {'max err':>9s} {'force':>6s} {'step µs':>8s} "
-        f"{'τ RMS':>8s}  {'over τ / q̇ / q':>17s}  outcome",
-    ]
-    for r in figures.get("scenes", []):
-        force = f"{r['force_rms_error']:6.2f}" if "force_rms_error" in r else f"{'-':>6s}"
-        over = " / ".join(
-            f"{r.get(f'{k}_violation_share', float('nan')):.1%}" for k in ("torque", "velocity", "position")
-        )
-        outcome = _failure_note(r, brief=False) or "ok"
-        if r.get("contact_lost"):
-            outcome += ", contact lost"
-        lines.append(
-            f"{r['scene']:14s} {r['method']:26s} {r['rms_error']:9.2e} {r['max_error']:9.2e} {force} "
-            f"{r['compute_s'] * 1e6:8.1f} {r['torque_rms']:8.2f}  {over:>17s}  {outcome}"
-        )
-    reports = {
-        **{key: mod.summary for key, mod in _model_sections().items()},
+    texts: dict[str, Callable[[Any], str]] = {
+        "scenes": scenes_summary,
+        "stability_maps": stability_summary,
+        "topp_convergence": topp_summary,
+        **{k: mod.summary for k, mod in _model_sections().items()},
         "dynamics_speed": dynamics_speed.report,
         "controller_speed": controller_speed.report,
         "osc_speed": osc_speed.report,
     }
-    for key, report in reports.items():
-        if key in figures:  # (every section, after a whole run)
-            lines += ["", report(figures[key])]
-    lines.append(f"\ntotal {figures['total_seconds']:.1f} s")
-    return "\n".join(lines)
+    return texts[key](data) if key in texts else json.dumps(data, indent=1, default=_json_default)[:2000]
+
+
+def summary(figures: dict[str, Any]) -> str:
+    """Every section's text, in order (the report keeps it, below its tables)."""
+    parts = [section_summary(key, figures[key]) for key in SECTION_TITLES if key in figures]
+    parts.append(f"total {figures.get('total_seconds', 0.0):.1f} s")
+    return "\n\n".join(parts)

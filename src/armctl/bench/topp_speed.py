@@ -124,8 +124,7 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
     )
     print(f"  armctl.planning.time_optimal : {1e3 * r['armctl_s']:8.2f} ms   duration {r['duration_armctl']:.4f} s")
     print(f"  toppra direct (pinocchio.rnea): {1e3 * r['toppra_s']:8.2f} ms   duration {r['duration_toppra']:.4f} s")
-    verdict = "met" if r["ratio"] <= TARGET else "NOT met"
-    print(f"  ratio {r['ratio']:.3f} (target <= {TARGET}: {verdict})")
+    print(f"  ratio {r['ratio']:.3f}")
     return r
 
 

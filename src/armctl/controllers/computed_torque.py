@@ -25,6 +25,12 @@ class ComputedTorque(PIDGains, Controller):
     (``"reference"``: a feedforward that pushes a stuck joint the way it should move — the feedback alone,
     scaled by M, needs large errors to break stiction on light joints — and does not chatter at rest), or not
     at all (False).
+
+    ``last_log`` (recorded by :func:`armctl.simulate` into ``res.logs``) holds the terms of the commanded
+    acceleration v [rad/s²], which add up to it: ``"feedforward"`` q̈_d and ``"feedback"`` K_p e + K_d ė, and
+    with an integral ``"integral"`` K_i ∫e dt; with friction compensation also ``"friction"`` τ_f [N·m], added
+    to M v + C q̇ + g. (The torque of the feedback alone, M(q)·feedback, would cost a second evaluation of the
+    model.) The logged arrays are those the law computed, not copies: read them before the next call.
     """
 
     def __init__(
@@ -50,17 +56,30 @@ class ComputedTorque(PIDGains, Controller):
 
     def _gains_changed(self) -> None:
         super()._gains_changed()
-        if hasattr(self, "_feedback"):  # v = [I, F]·[q̈_d; q_d; q̇_d; q; q̇] (F: PIDGains' K_p e + K_d ė)
-            self._command = np.hstack((np.eye(self.n), self._feedback))
+        if hasattr(self, "_feedback"):
+            # [v; K_p e + K_d ė] = [[I, F], [0, F]]·[q̈_d; q_d; q̇_d; q; q̇] (F: PIDGains' K_p e + K_d ė): the command
+            # and its feedback term (for the log) from one product, which costs about what v's alone does
+            n = self.n
+            self._command = np.vstack(
+                (np.hstack((np.eye(n), self._feedback)), np.hstack((np.zeros((n, n)), self._feedback)))
+            )
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         kernel = self.dynamics.kernel  # type: ignore[union-attr]
-        v = self._command.dot(np.concatenate((ref.qdd, ref.q, ref.qd, q, qd)))  # q̈_d + K_d ė + K_p e
+        both = self._command.dot(np.concatenate((ref.qdd, ref.q, ref.qd, q, qd)))
+        n = self.n
+        v = both[:n]  # q̈_d + K_d ė + K_p e
+        log = {"feedforward": ref.qdd, "feedback": both[n:]}
         if self._ki is not None:
-            v += apply_gain(self._ki, self._integral.update(t, ref.q - q))
+            integral = apply_gain(self._ki, self._integral.update(t, ref.q - q))
+            v += integral
+            log["integral"] = integral
         tau = kernel.rnea(q, qd, v)
         if self._friction and kernel.friction.any:
-            tau += kernel.friction.torque(ref.qd if self._friction == "reference" else qd)
+            friction = kernel.friction.torque(ref.qd if self._friction == "reference" else qd)
+            tau += friction
+            log["friction"] = friction
+        self.last_log = log
         return tau
 
     _result_checked_compute = compute  # stateless without an integral (see Controller)

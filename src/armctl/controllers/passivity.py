@@ -52,6 +52,10 @@ class PassivityBased(SlidingGains, Controller):
     same gains. The model terms come from two inverse-dynamics evaluations (``Dynamics.passivity_torque``).
 
     lam: Λ [1/s]; kd: K_D [N·m·s/rad] (scalar, vector or matrix).
+
+    ``last_log`` (recorded by :func:`armctl.simulate` into ``res.logs``) holds the terms of τ = model − damping
+    [N·m]: ``"model"`` M q̈_r + C q̇_r + g + F_v q̇_r + F_c sgn(q̇), ``"damping"`` K_D s, and the sliding variable
+    ``"s"`` [rad/s]. The logged arrays are those the law computed, not copies: read them before the next call.
     """
 
     def __init__(self, dynamics: Dynamics, lam: ArrayLike, kd: ArrayLike) -> None:
@@ -61,9 +65,9 @@ class PassivityBased(SlidingGains, Controller):
         self._checks_result = self._own_law()
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
-        qd_r, qdd_r, _, kd_s, a, w = sliding(q, qd, ref, self._sliding)
-        tau = self.dynamics.kernel.passivity_torque(q, qd, qd_r, qdd_r, a, w)  # type: ignore[union-attr]
-        tau -= kd_s
-        return tau
+        qd_r, qdd_r, s, kd_s, a, w = sliding(q, qd, ref, self._sliding)
+        model = self.dynamics.kernel.passivity_torque(q, qd, qd_r, qdd_r, a, w)  # type: ignore[union-attr]
+        self.last_log = {"model": model, "damping": kd_s, "s": s}
+        return model - kd_s
 
     _result_checked_compute = compute  # stateless (see Controller)

@@ -27,6 +27,12 @@ class PDGravity(PIDGains, Controller):
     kp: proportional gain [N·m/rad]; kd: derivative gain [N·m·s/rad]; ki: integral gain [N·m/(rad·s)] or None
     (each a scalar, vector or matrix). The integral is accumulated at the control rate. On
     ``armctl.Dynamics(model, compile=True)`` the law g + K_p e + K_d ė runs as one call of the generated code.
+
+    ``last_log`` (recorded by :func:`armctl.simulate` into ``res.logs``) holds the terms of τ [N·m], which add
+    up to it: ``"feedback"`` K_p e + K_d ė, ``"gravity"`` g(q), and where used ``"integral"`` K_i ∫e dt and
+    ``"friction"`` τ_f(q̇). The fused law of ``compile=True`` computes τ in one call and logs only the
+    integral and friction terms (splitting it would cost a second evaluation). The logged arrays are those the
+    law computed, not copies: read them before the next call.
     """
 
     def __init__(
@@ -54,7 +60,12 @@ class PDGravity(PIDGains, Controller):
     def _gains_changed(self) -> None:
         super()._gains_changed()
         if hasattr(self, "_feedback"):
-            self._with_gravity = np.hstack((self._feedback, np.eye(self.n)))
+            # [τ; K_p e + K_d ė] = [[F, I], [F, 0]]·[q_d; q̇_d; q; q̇; g]: the torque and its feedback term (for the
+            # log) from one product
+            n = self.n
+            self._with_gravity = np.vstack(
+                (np.hstack((self._feedback, np.eye(n))), np.hstack((self._feedback, np.zeros((n, n)))))
+            )
             if self._law is not None:  # new gains into the law's own F, in place (binding a new law costs more)
                 self._law.feedback[...] = self._feedback
 
@@ -71,12 +82,22 @@ class PDGravity(PIDGains, Controller):
         law = self._law
         if law is not None:
             tau = law(q, qd, ref.q, ref.qd)
+            log: dict[str, Any] = {}
         else:  # g + K_p e + K_d ė = [F, I]·[q_d; q̇_d; q; q̇; g] (F: PIDGains' feedback map): one product adds it all
-            tau = self._with_gravity.dot(np.concatenate((ref.q, ref.qd, q, qd, kernel.gravity(q))))
+            g = kernel.gravity(q)
+            both = self._with_gravity.dot(np.concatenate((ref.q, ref.qd, q, qd, g)))
+            n = self.n
+            tau = both[:n]
+            log = {"feedback": both[n:], "gravity": g}
         if self._ki is not None:
-            tau += apply_gain(self._ki, self._integral.update(t, ref.q - q))
+            integral = apply_gain(self._ki, self._integral.update(t, ref.q - q))
+            tau += integral
+            log["integral"] = integral
         if self._friction and kernel.friction.any:
-            tau += kernel.friction.torque(qd)
+            friction = kernel.friction.torque(qd)
+            tau += friction
+            log["friction"] = friction
+        self.last_log = log
         return tau
 
     _result_checked_compute = compute  # stateless without an integral (see Controller)

@@ -4,16 +4,19 @@ The plant is the truth (friction with real stiction, contact environments, distu
 controller runs at its own rate with a zero-order hold. Modules: ``simulate`` (the loop; ``setup`` checks
 its arguments, ``recorder`` keeps the samples), ``plant`` (the equations of motion), ``integrators`` and
 ``implicit`` (the schemes), ``stepper`` (a step with stick–slip events), ``friction`` and ``stick_slip``,
-``contact`` and ``normal_force``, ``result`` (:class:`SimResult`), ``plot``, ``sweep`` (many runs through an
-Executor; ``sweep_result``: one outcome per case, ``sweep_pool``: its own process pool, ``sweep_progress``);
-``mujoco_engine`` and ``mujoco_plant``: the same loop on a MuJoCo plant (``engine="mujoco"``).
+``contact`` and ``normal_force``, ``result`` (:class:`SimResult`, with ``sampled_reference`` and ``limits``),
+``plot``, ``playback`` (a run in 3D as a standalone HTML page; ``visuals``: the arm's shapes), ``sweep`` (many
+runs through an Executor; ``sweep_result``: one outcome per case, ``sweep_pool``: its own process pool,
+``sweep_progress``); ``mujoco_engine`` and ``mujoco_plant``: the same loop on a MuJoCo plant (``engine="mujoco"``).
 """
 
 from armctl.sim.contact import ContactPoint, Environment, ForceSensor, Plane
 from armctl.sim.friction import FrictionModel, SmoothFriction, StickSlip
 from armctl.sim.integrators import INTEGRATORS
+from armctl.sim.limits import LimitReport
 from armctl.sim.mujoco_plant import MujocoPlant
 from armctl.sim.normal_force import HuntCrossley, KelvinVoigt, NormalForce
+from armctl.sim.playback import playback
 from armctl.sim.result import SimResult
 from armctl.sim.simulate import simulate
 from armctl.sim.sweep import sweep
@@ -28,6 +31,7 @@ __all__ = [
     "FrictionModel",
     "HuntCrossley",
     "KelvinVoigt",
+    "LimitReport",
     "MujocoPlant",
     "NormalForce",
     "Plane",
@@ -35,6 +39,7 @@ __all__ = [
     "SmoothFriction",
     "StickSlip",
     "SweepResult",
+    "playback",
     "simulate",
     "sweep",
 ]

@@ -25,13 +25,18 @@ _UNITS = {
     "tau_ext": "N·m",
     "q_measured": "rad",
     "qd_measured": "rad/s",
+    "error": "rad",
 }
+#: the quantities drawn over their reference (dashed, in the joint's colour), and the reference's field
+_REFERENCE_OF = {"q": "q", "qd": "qd", "qdd": "qdd", "q_measured": "q", "qd_measured": "qd"}
+#: the panel titles
+_LABELS = {"error": "error q_d − q"}
 
 
 def _figure(rows: int, height: float = 2.2) -> tuple[Figure, Any]:
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(8, height * rows), layout="constrained")
+    fig = Figure(figsize=(9.5, height * rows), layout="constrained")
     axes = fig.subplots(rows, 1, sharex=True, squeeze=False)[:, 0]
     return fig, axes
 
@@ -43,12 +48,16 @@ def _mark_divergence(res: SimResult, axes: Any) -> None:
 
 
 def plot_joints(
-    res: SimResult, quantities: tuple[str, ...] | str = ("q", "qd", "tau_applied"), joints: Any = None
+    res: SimResult,
+    quantities: tuple[str, ...] | str = ("q", "qd", "error", "tau_applied"),
+    joints: Any = None,
 ) -> Figure:
     """One panel per quantity (any per-joint array of the result: "q", "qd", "qdd", "tau", "tau_applied",
-    "tau_friction", "tau_ext", "q_measured", "qd_measured"; one name or a sequence of them), one line per joint
-    (``joints``: 0-based indices 0 … n − 1, default all; negative indices are refused; lines are labelled
-    "joint j + 1")."""
+    "tau_friction", "tau_ext", "q_measured", "qd_measured", and "error", the tracking error q_d − q; one name
+    or a sequence of them), one line per joint (``joints``: 0-based indices 0 … n − 1, default all; negative
+    indices are refused), labelled with the plant's joint names. Positions, velocities and accelerations are
+    drawn over their reference (dashed, in the joint's colour) when the result holds it. The legend stands to
+    the right of the panels, off the curves; a run that diverged is marked by a red dashed line."""
     if isinstance(quantities, str):
         quantities = (quantities,)
     quantities = tuple(quantities)
@@ -59,6 +68,12 @@ def plot_joints(
     for name in quantities:
         if not isinstance(name, str) or name not in _UNITS:
             raise UnknownNameError("quantity", name, tuple(_UNITS))
+    if "error" in quantities and res.reference is None:
+        raise InvalidParameterError(
+            "the result does not hold its reference (a file saved without one), so it has no error to plot; "
+            "leave 'error' out of quantities",
+            value=quantities,
+        )
     if joints is None:
         idx = list(range(res.n))
     else:
@@ -74,14 +89,33 @@ def plot_joints(
                     f"joint index {j} is out of range: the result has {res.n} joints, indices 0 … {res.n - 1}",
                     value=joints,
                 )
+    names = res.joint_names
     fig, axes = _figure(len(quantities))
+    overlaid = False
     for ax, name in zip(axes, quantities, strict=True):
-        data = getattr(res, name)
-        for j in idx:
-            ax.plot(res.t, data[:, j], label=f"joint {j + 1}", linewidth=1)
-        ax.set_ylabel(f"{name} [{_UNITS[name]}]")
+        data = res.error if name == "error" else getattr(res, name)
+        ref_name = _REFERENCE_OF.get(name)
+        ref = getattr(res.reference, ref_name) if ref_name and res.reference is not None else None
+        for c, j in enumerate(idx):
+            color = f"C{c % 10}"
+            ax.plot(res.t, data[:, j], label=names[j], linewidth=1, color=color)
+            if ref is not None:
+                ax.plot(res.t, ref[:, j], linewidth=1, linestyle="--", color=color, alpha=0.8)
+                overlaid = True
+        if name == "error":
+            ax.axhline(0.0, color="black", linewidth=0.5)
+        ax.set_ylabel(f"{_LABELS.get(name, name)} [{_UNITS[name]}]")
         ax.grid(True, alpha=0.3)
-    axes[0].legend(loc="upper right", fontsize="small", ncol=min(len(idx), 4))
+    handles, labels = axes[0].get_legend_handles_labels()
+    if overlaid:
+        from matplotlib.lines import Line2D
+
+        handles.append(Line2D([], [], color="gray", linestyle="--", linewidth=1))
+        labels.append("reference (dashed)")
+    fig.legend(handles, labels, loc="outside right upper", fontsize="small")
+    title = res.info.get("plant")
+    if title:
+        fig.suptitle(f"{title}: {res.status}", fontsize="medium")
     axes[-1].set_xlabel("t [s]")
     _mark_divergence(res, axes)
     return fig

@@ -11,9 +11,12 @@ import numpy as np
 from armctl._checks import FloatArray
 from armctl.dynamics.base import Dynamics
 from armctl.errors import SimulationWarning
+from armctl.reference import Reference
 from armctl.sim.contact import Environment, ForceSensor
+from armctl.sim.limits import LimitReport, check_limits
 from armctl.sim.plant import Plant
 from armctl.sim.result import SimResult
+from armctl.sim.sampled_reference import SampledReference
 
 
 class Recorder:
@@ -38,6 +41,10 @@ class Recorder:
         self.points = [(env, i) for env in environments for i in range(len(env.points))]
         self.wrench = z((samples, 6))
         self.contact_force = z((samples, len(self.points), 3))
+        self.contact_position = z((samples, len(self.points), 3))
+        #: the Reference given to the controller at each sample (stacked at the end: a list slot is the cheapest
+        #: thing to fill every control period)
+        self.references: list[Reference | None] = [None] * samples
         self.sensors = sensors
         self.sensor = z((samples, len(sensors), 6))
         self.measured = measured
@@ -66,6 +73,7 @@ class Recorder:
                 positions.append(p)
             hs, ps = np.concatenate(forces), np.concatenate(positions)
             self.contact_force[k] = hs
+            self.contact_position[k] = ps
             f += hs.sum(axis=0)
             m += np.cross(ps - tool, hs).sum(axis=0)
             if self.sensors:
@@ -125,8 +133,23 @@ class Recorder:
                 stacklevel=3,
             )
         d = divergence
+        t = np.arange(rows) * self.control_dt
+        model = dyn.model
+        limits = LimitReport.of_run(
+            self.tau[r],
+            q,
+            qd,
+            model.effort_limit,
+            model.velocity_limit,
+            model.lower,
+            model.upper,
+            model.joint_names,
+            clipped=bool(info.get("saturate", True)),
+        )
+        check_limits(limits, stacklevel=4)
+        refs = self.references[:rows]
         return SimResult(
-            t=np.arange(rows) * self.control_dt,
+            t=t,
             q=q,
             qd=qd,
             qdd=self.qdd[r],
@@ -150,6 +173,10 @@ class Recorder:
             diverged_qd=None if d is None else d[3],
             logs=logs,
             info=info,
+            reference=SampledReference.of(t, refs, model.n) if all(x is not None for x in refs) else None,  # type: ignore[arg-type]
+            limits=limits,
+            contact_position=self.contact_position[r],
+            plant=model,
             _energy=None if energy else np.full(rows, np.nan),
             _energy_of=partial(energies, dyn) if energy else None,
         )

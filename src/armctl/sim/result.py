@@ -15,12 +15,17 @@ import zipfile
 from collections.abc import Callable
 from dataclasses import dataclass, field, fields
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from armctl._checks import FloatArray
 from armctl.errors import InvalidParameterError
+from armctl.sim.limits import LimitReport
+from armctl.sim.sampled_reference import SampledReference
+
+if TYPE_CHECKING:
+    from armctl.model.robot import RobotModel
 
 _ARRAYS = (
     "t",
@@ -65,6 +70,13 @@ class SimResult:
     :class:`~armctl.errors.SimulationWarning` naming it).
     info: settings and counters (integrator, steps, sub-steps, stick events, wall time, …); ``unstable_contacts``:
     the contact points the integrator cannot integrate stably at this step (see :mod:`armctl.sim.stability`).
+
+    The run's context: reference, the :class:`~armctl.sim.sampled_reference.SampledReference` the controller
+    was given at every sample (``reference.q``, ``.qd``, ``.qdd`` over t), with :attr:`error` = reference.q − q;
+    limits, a :class:`~armctl.sim.limits.LimitReport` of how close each joint came to the plant's torque,
+    velocity and position limits, summed up by :attr:`status`; contact_position (N, P, 3): where each contact
+    point was [m, world]; plant: the true arm's :class:`~armctl.RobotModel` (its joint names label the plots,
+    its geometry the :meth:`playback`; not saved by :meth:`save`).
     """
 
     t: FloatArray
@@ -91,12 +103,16 @@ class SimResult:
     diverged_qd: FloatArray | None = None
     logs: dict[str, FloatArray] = field(default_factory=dict)
     info: dict[str, Any] = field(default_factory=dict)
+    reference: SampledReference | None = None
+    limits: LimitReport | None = None
+    contact_position: FloatArray | None = None
+    plant: RobotModel | None = field(default=None, repr=False)
     #: the energies, or None with ``_energy_of(q, qd)`` to compute them when first asked for
     _energy: FloatArray | None = field(default=None, repr=False)
     _energy_of: Callable[[FloatArray, FloatArray], FloatArray] | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
-        for name in (*_ARRAYS, "diverged_q", "diverged_qd", "_energy"):
+        for name in (*_ARRAYS, "diverged_q", "diverged_qd", "_energy", "contact_position"):
             a = getattr(self, name)
             if a is not None:
                 a = np.array(a, copy=True)
@@ -143,14 +159,64 @@ class SimResult:
             return np.zeros(0)
         return energy - energy[0] - self.work  # type: ignore[no-any-return]
 
+    @property
+    def error(self) -> FloatArray:
+        """Tracking error e = reference.q − q at every sample (N, n) [rad or m]. Raises an InvalidParameterError
+        for a result without its reference (one read from a file written before results kept it)."""
+        if self.reference is None:
+            raise InvalidParameterError(
+                "this result does not hold its reference (it was saved without one): compute the error "
+                "from the reference itself, e.g. np.array([ref(t).q for t in res.t]) - res.q",
+                value=None,
+            )
+        e = self.reference.q - self.q
+        e.flags.writeable = False
+        return e  # type: ignore[no-any-return]
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        """The plant's joint names (``"joint 0"`` … where the result does not know them)."""
+        if self.plant is not None:
+            return self.plant.joint_names
+        if self.limits is not None and len(self.limits.joint_names) == self.n:
+            return self.limits.joint_names
+        return tuple(f"joint {j}" for j in range(self.n))
+
+    @property
+    def status(self) -> str:
+        """``"diverged"`` (the run stopped early), ``"saturated"`` (some joint's torque sat at its limit on most
+        samples, see :data:`armctl.sim.limits.SATURATION_SHARE`), ``"over limits"`` (a joint went beyond its
+        velocity limit or outside its position range), or ``"ok"``; the first that applies. Details in
+        :attr:`limits`."""
+        if self.diverged:
+            return "diverged"
+        if self.limits is not None and self.limits.is_saturated:
+            return "saturated"
+        if self.limits is not None and self.limits.overrun:
+            return "over limits"
+        return "ok"
+
     def __repr__(self) -> str:
-        state = f"diverged at t = {self.diverged_at:g} s ({self.divergence})" if self.diverged else "ok"
+        head = f"SimResult({self.info.get('plant', '?')}, n = {self.n}, {len(self.t)} samples over {self.duration:g} s"
+        head += f", {self.info.get('integrator', '?')}"
+        lines = [head + f"): {self.status}"]
+        if self.diverged:
+            lines.append(f"  diverged at t = {self.diverged_at:g} s ({self.divergence})")
+        if self.reference is not None and len(self.t):
+            e = np.abs(self.error)
+            lines.append(
+                f"  tracking error: RMS {float(np.sqrt((e**2).mean())):.3g}, max {float(e.max()):.3g} "
+                f"({self.joint_names[int(e.max(axis=0).argmax())]}) [rad or m]"
+            )
+        if len(self.t):
+            peak = np.abs(self.tau_applied).max(axis=0)
+            lines.append(f"  peak |τ applied| {float(peak.max()):.3g} N·m ({self.joint_names[int(peak.argmax())]})")
+        if self.limits is not None:
+            for text in filter(None, (self.limits.saturation_text(), *self.limits.overrun_texts())):
+                lines.append(f"  {text}")
         if self.info.get("unstable_contacts"):
-            state += ", integrator unstable on a contact (see info['unstable_contacts'])"
-        return (
-            f"SimResult({len(self.t)} samples, {self.duration:g} s, n = {self.n}, "
-            f"{self.info.get('integrator', '?')}, {state})"
-        )
+            lines.append("  integrator unstable on a contact (see info['unstable_contacts'])")
+        return "\n".join(lines)
 
     # ------------------------------------------------------------------------------ files
     def save(self, path: str | Path) -> Path:
@@ -161,9 +227,15 @@ class SimResult:
         if path.suffix != ".npz":
             path = path.with_name(path.name + ".npz")
         arrays: dict[str, Any] = {name: getattr(self, name) for name in (*_ARRAYS, "energy")}
-        for name in ("diverged_q", "diverged_qd"):
+        for name in ("diverged_q", "diverged_qd", "contact_position"):
             if getattr(self, name) is not None:
                 arrays[name] = getattr(self, name)
+        if self.reference is not None:
+            for name in ("q", "qd", "qdd"):
+                arrays[f"reference_{name}"] = getattr(self.reference, name)
+        if self.limits is not None:
+            for name in ("effort", "velocity", "lower", "upper"):
+                arrays[f"limit_{name}"] = getattr(self.limits, name)
         for k, v in self.logs.items():
             if v.dtype.kind == "O":
                 raise InvalidParameterError(
@@ -179,6 +251,8 @@ class SimResult:
             "info": self.info,
             "format": "armctl.SimResult/1",
         }
+        if self.limits is not None:
+            meta["limits"] = {"joint_names": list(self.limits.joint_names), "clipped": self.limits.clipped}
         arrays["meta"] = np.array(json.dumps(meta, default=_jsonable))
         try:
             np.savez_compressed(path, **arrays)
@@ -217,14 +291,26 @@ class SimResult:
                 meta = json.loads(str(data["meta"]))
                 kw: dict[str, Any] = {name: data[name] for name in _ARRAYS}
                 kw["_energy"] = data["energy"]
-                for name in ("diverged_q", "diverged_qd"):
+                for name in ("diverged_q", "diverged_qd", "contact_position"):
                     kw[name] = data[name] if name in data.files else None
                 logs = {k[4:]: data[k] for k in data.files if k.startswith("log:")}
+                extra = {k: data[k] for k in data.files if k.startswith(("reference_", "limit_"))}
             except (ValueError, OSError, EOFError, zipfile.BadZipFile) as e:  # bad JSON, object arrays, corrupt
                 raise bad(f"has an unreadable entry ({e})") from e
         keys = ("diverged", "diverged_at", "divergence", "info")
         if not isinstance(meta, dict) or any(k not in meta for k in keys):
             raise bad(f"has a 'meta' entry without the keys {list(keys)}")
+        if all(f"reference_{k}" in extra for k in ("q", "qd", "qdd")):  # (files of older versions lack them)
+            kw["reference"] = SampledReference(kw["t"], *(extra[f"reference_{k}"] for k in ("q", "qd", "qdd")))
+        if all(f"limit_{k}" in extra for k in ("effort", "velocity", "lower", "upper")) and "limits" in meta:
+            kw["limits"] = LimitReport.of_run(
+                kw["tau"],
+                kw["q"],
+                kw["qd"],
+                *(extra[f"limit_{k}"] for k in ("effort", "velocity", "lower", "upper")),
+                joint_names=tuple(meta["limits"]["joint_names"]),
+                clipped=bool(meta["limits"]["clipped"]),
+            )
         return cls(
             **kw,
             diverged=bool(meta["diverged"]),
@@ -235,8 +321,9 @@ class SimResult:
         )
 
     # ------------------------------------------------------------------------------ plots
-    def plot(self, quantities: tuple[str, ...] | str = ("q", "qd", "tau_applied"), joints: Any = None) -> Any:
-        """A matplotlib Figure with one panel per quantity (see :func:`armctl.sim.plot.plot_joints`)."""
+    def plot(self, quantities: tuple[str, ...] | str = ("q", "qd", "error", "tau_applied"), joints: Any = None) -> Any:
+        """A matplotlib Figure with one panel per quantity, the reference overlaid and the joints named (see
+        :func:`armctl.sim.plot.plot_joints`)."""
         from armctl.sim.plot import plot_joints
 
         return plot_joints(self, quantities, joints)
@@ -246,6 +333,14 @@ class SimResult:
         from armctl.sim.plot import plot_energy
 
         return plot_energy(self)
+
+    def playback(self, path: str | Path, model: RobotModel | None = None, **options: Any) -> Path:
+        """Write the run as a standalone HTML page that plays the arm's motion in 3D (see
+        :func:`armctl.sim.playback.playback` for ``options``: fps, meshes, environment, title); returns its
+        path."""
+        from armctl.sim.playback import playback
+
+        return playback(self, path, model, **options)
 
     def plot_wrench(self) -> Any:
         """A matplotlib Figure of the contact wrench and forces (see :func:`armctl.sim.plot.plot_wrench`)."""

@@ -170,6 +170,7 @@ def simulate(
 
     Q, QD, QDD, TAU, TAUA = rec.q, rec.qd, rec.qdd, rec.tau, rec.tau_applied
     QM, QDM, WF, WE = rec.q_measured, rec.qd_measured, rec.work_friction, rec.work_external
+    REFS = rec.references  # the reference given at each sample, for res.reference
     # read-only views of the recorded rows: the controller is given these (it cannot change the record)
     QR, QDR, QMR, QDMR = Q.view(), QD.view(), QM.view(), QDM.view()
     for view in (QR, QDR, QMR, QDMR):
@@ -209,6 +210,7 @@ def simulate(
                 j = k - lag if k >= lag else 0
                 qm, vm = QMR[j], QDMR[j]
             ref = fixed_ref if fixed_ref is not None else setup.check_reference(ref_fn(t), n, t)  # type: ignore[misc]
+            REFS[k] = ref
             try:
                 tau = call(t, qm, vm, ref)
             except ValueError as exc:

@@ -1,0 +1,196 @@
+"""How close a run came to the plant's limits, joint by joint: :class:`LimitReport` (``res.limits``).
+
+For joint j with effort limit τ̄_j, velocity limit q̇̄_j and position range [q_j⁻, q_j⁺], over the N samples:
+
+* ``saturated[j]`` = #{k : |τ_kj| > τ̄_j} / N, the share of samples whose command the motor cannot give
+  (clipped to ±τ̄_j when the run saturates, ``saturate=True``);
+* ``torque_peak[j]`` = max_k |τ_kj| / τ̄_j (the command, before clipping: above 1 it asked for more);
+* ``velocity_peak[j]`` = max_k |q̇_kj| / q̇̄_j and ``velocity_over[j]``, the share of samples with
+  |q̇_kj| > (1 + :data:`VELOCITY_TOLERANCE`) q̇̄_j;
+* ``position_overrun[j]`` = max_k max(q_j⁻ − q_kj, q_kj − q_j⁺, 0) [rad or m] and ``position_over[j]``, the
+  share of samples outside the range.
+
+An infinite limit is never reached (its ratios are 0). A run is *saturated* when some joint's torque sits at
+its limit on more than :data:`SATURATION_SHARE` of the samples; a velocity beyond its tolerance or a position
+outside its range is an *overrun*. :func:`check_limits` warns about both after a run.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+
+from armctl._checks import FloatArray
+from armctl.errors import SimulationWarning
+
+#: share of the samples above which a joint whose torque sits at its limit makes the run "saturated"
+SATURATION_SHARE = 0.5
+#: a joint counts as over its velocity limit beyond (1 + this) times it: a time-optimal reference runs exactly
+#: at the limit, which tracking then grazes
+VELOCITY_TOLERANCE = 0.01
+
+_PER_JOINT = (
+    "effort",
+    "velocity",
+    "lower",
+    "upper",
+    "saturated",
+    "torque_peak",
+    "velocity_peak",
+    "velocity_over",
+    "position_overrun",
+    "position_over",
+)
+
+
+@dataclass(frozen=True, eq=False)
+class LimitReport:
+    """Per joint (arrays of length n, read-only; see the module for the definitions): the plant's limits
+    (``effort`` [N·m], ``velocity`` [rad/s], ``lower``/``upper`` [rad]), ``saturated`` (share of samples),
+    ``torque_peak`` and ``velocity_peak`` (peak over limit), ``velocity_over`` (share of samples),
+    ``position_overrun`` [rad] and ``position_over`` (share of samples). ``joint_names``: the plant's;
+    ``clipped``: whether the run clipped the command at the limits (``saturate=True``); ``samples``: N."""
+
+    joint_names: tuple[str, ...]
+    effort: FloatArray
+    velocity: FloatArray
+    lower: FloatArray
+    upper: FloatArray
+    saturated: FloatArray
+    torque_peak: FloatArray
+    velocity_peak: FloatArray
+    velocity_over: FloatArray
+    position_overrun: FloatArray
+    position_over: FloatArray
+    clipped: bool = True
+    samples: int = 0
+
+    def __post_init__(self) -> None:
+        for name in _PER_JOINT:
+            a = np.array(getattr(self, name), dtype=float)
+            a.flags.writeable = False
+            object.__setattr__(self, name, a)
+        object.__setattr__(self, "joint_names", tuple(self.joint_names))
+
+    @classmethod
+    def of_run(
+        cls,
+        tau: FloatArray,
+        q: FloatArray,
+        qd: FloatArray,
+        effort: FloatArray,
+        velocity: FloatArray,
+        lower: FloatArray,
+        upper: FloatArray,
+        joint_names: tuple[str, ...],
+        clipped: bool = True,
+    ) -> LimitReport:
+        """The report of a run that commanded ``tau`` and moved through ``q``, ``qd`` (each (N, n)) on a plant
+        with these limits (each (n,))."""
+        n = len(effort)
+        if not len(tau):
+            zero = np.zeros(n)
+            return cls(joint_names, effort, velocity, lower, upper, *([zero] * 6), clipped=clipped, samples=0)
+        with np.errstate(invalid="ignore", divide="ignore"):  # |x| / inf = 0; inf / inf does not occur (finite x)
+            abs_tau, abs_qd = np.abs(tau), np.abs(qd)
+            beyond = np.maximum(np.maximum(lower - q, q - upper), 0.0)
+            return cls(
+                joint_names,
+                effort,
+                velocity,
+                lower,
+                upper,
+                saturated=(abs_tau > effort).mean(axis=0),
+                torque_peak=abs_tau.max(axis=0) / effort,
+                velocity_peak=abs_qd.max(axis=0) / velocity,
+                velocity_over=(abs_qd > velocity * (1.0 + VELOCITY_TOLERANCE)).mean(axis=0),
+                position_overrun=beyond.max(axis=0),
+                position_over=(beyond > 0.0).mean(axis=0),
+                clipped=clipped,
+                samples=len(tau),
+            )
+
+    # ------------------------------------------------------------------------------------------ verdicts
+    @property
+    def n(self) -> int:
+        return len(self.effort)
+
+    def _name(self, j: int) -> str:
+        return self.joint_names[j] if j < len(self.joint_names) else f"joint {j}"
+
+    def saturated_joints(self, share: float = SATURATION_SHARE) -> list[int]:
+        """Indices of the joints whose torque is at its limit on more than ``share`` of the samples."""
+        return [int(j) for j in np.flatnonzero(self.saturated > share)]
+
+    @property
+    def is_saturated(self) -> bool:
+        """Some joint's torque sits at its limit on more than :data:`SATURATION_SHARE` of the samples."""
+        return bool(self.saturated_joints())
+
+    @property
+    def overrun(self) -> bool:
+        """Some joint went beyond its velocity limit (past the tolerance) or outside its position range."""
+        return bool((self.velocity_over > 0).any() or (self.position_over > 0).any())
+
+    def saturation_text(self) -> str:
+        """ "" or, for a saturated run, which joints and on what share of the samples."""
+        joints = self.saturated_joints()
+        if not joints:
+            return ""
+        each = ", ".join(f"{self._name(j)} {self.saturated[j]:.0%} (peak {self.torque_peak[j]:.3g}×)" for j in joints)
+        return f"torque at its limit on most samples: {each}"
+
+    def overrun_texts(self) -> list[str]:
+        """One line per limit overrun: which joint, how far and on what share of the samples."""
+        out = []
+        for j in np.flatnonzero(self.velocity_over > 0):
+            out.append(
+                f"{self._name(j)} over its velocity limit ({self.velocity[j]:.3g}) on {self.velocity_over[j]:.1%} "
+                f"of samples, peak {self.velocity_peak[j]:.0%} of it"
+            )
+        for j in np.flatnonzero(self.position_over > 0):
+            out.append(
+                f"{self._name(j)} outside its position range [{self.lower[j]:.3g}, {self.upper[j]:.3g}] on "
+                f"{self.position_over[j]:.1%} of samples, by up to {self.position_overrun[j]:.3g}"
+            )
+        return out
+
+    def as_dict(self) -> dict[str, object]:
+        """Plain lists and numbers (for JSON)."""
+        out: dict[str, object] = {name: getattr(self, name).tolist() for name in _PER_JOINT}
+        out.update(joint_names=list(self.joint_names), clipped=self.clipped, samples=self.samples)
+        return out
+
+    def __repr__(self) -> str:
+        rows = [
+            f"  {self._name(j):24s} sat {self.saturated[j]:6.1%}  |τ|/lim {self.torque_peak[j]:6.3g}  "
+            f"|q̇|/lim {self.velocity_peak[j]:6.3g}  q beyond {self.position_overrun[j]:.3g}"
+            for j in range(self.n)
+        ]
+        return "LimitReport(\n" + "\n".join(rows) + "\n)"
+
+
+def check_limits(limits: LimitReport, stacklevel: int = 3) -> None:
+    """Warn (:class:`~armctl.errors.SimulationWarning`) if the run was saturated or overran a limit."""
+    sat = limits.saturation_text()
+    if sat:
+        how = (
+            "the motors gave their limit instead of the command"
+            if limits.clipped
+            else "with saturate=False the plant was given torques its motors cannot produce"
+        )
+        warnings.warn(
+            f"{sat}: {how}, so the controller's law did not hold on those samples (res.status == 'saturated', "
+            "per joint in res.limits). Lower the gains, slow the reference or check the torque limits",
+            SimulationWarning,
+            stacklevel=stacklevel,
+        )
+    over = limits.overrun_texts()
+    if over:
+        warnings.warn(
+            "the run went beyond the plant's limits: " + "; ".join(over) + " (per joint in res.limits)",
+            SimulationWarning,
+            stacklevel=stacklevel,
+        )

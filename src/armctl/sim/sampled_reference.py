@@ -1,0 +1,54 @@
+"""`SampledReference`: the reference a run's controller was given, at every sample (``res.reference``)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from armctl._checks import FloatArray
+from armctl.reference import Reference
+
+
+@dataclass(frozen=True, eq=False)
+class SampledReference:
+    """The reference (q_d, q̇_d, q̈_d) at the sample times ``t`` (N,) [s]: ``q`` [rad or m], ``qd``, ``qdd``
+    (each (N, n), read-only), row k being what the controller was given at t_k."""
+
+    t: FloatArray
+    q: FloatArray
+    qd: FloatArray
+    qdd: FloatArray
+
+    def __post_init__(self) -> None:
+        for name in ("t", "q", "qd", "qdd"):
+            a = np.array(getattr(self, name), dtype=float)
+            a.flags.writeable = False
+            object.__setattr__(self, name, a)
+
+    @classmethod
+    def of(cls, t: FloatArray, references: list[Reference], n: int) -> SampledReference:
+        """Stack the References given at the times ``t`` (n joints; no references: empty arrays)."""
+        if not references:
+            empty = np.zeros((0, n))
+            return cls(np.asarray(t, dtype=float), empty, empty, empty)
+        first = references[0]
+        if all(r is first for r in references):  # a fixed reference
+            rows = len(references)
+            return cls(t, np.tile(first.q, (rows, 1)), np.tile(first.qd, (rows, 1)), np.tile(first.qdd, (rows, 1)))
+        # one concatenation of the rows (about 25 times cheaper than np.array of a list of arrays)
+        return cls(
+            t,
+            *(np.concatenate([getattr(r, name) for r in references]).reshape(-1, n) for name in ("q", "qd", "qdd")),
+        )
+
+    def __len__(self) -> int:
+        return len(self.t)
+
+    def __getitem__(self, k: int) -> Reference:
+        """The Reference of sample k."""
+        return Reference(self.q[k], self.qd[k], self.qdd[k])
+
+    def __repr__(self) -> str:
+        n = self.q.shape[1] if self.q.ndim == 2 else 0
+        return f"SampledReference({len(self.t)} samples, n = {n})"
