@@ -19,8 +19,9 @@ solving it: :meth:`OperationalSpaceQP.build` returns the :class:`~armctl.control
 ``.problem(k)`` the :class:`~armctl.controllers.osc.problem.QPProblem` (H, g, A, b, C, l, u) of level k.
 
 Every QP is solved by a :class:`~armctl.controllers.osc.chain.SolverChain`: τ comes only from a solution
-verified against the QP's optimality conditions (:mod:`~armctl.controllers.osc.optimality`), re-solved
-(cold start, the solver's default settings, a second solver) when the first answer fails the check. With one
+verified against the QP's optimality conditions (:mod:`~armctl.controllers.osc.optimality`). Its first stage
+is DAQP (a dual active-set solver in C) started from the last step's active set; a QP whose answer fails the
+check goes on to the primary solver (ProxQP: warm start, cold start, default settings) and a second solver. With one
 priority level and no active contact the QP is solved on q̈ alone (:mod:`~armctl.controllers.osc.reduced`:
 the same optimum). Each step's fallbacks are in ``last_log["qp_fallbacks"]``; :meth:`end_run` (which
 :func:`armctl.sim.simulate` calls) warns once with what happened during the run and how often.
@@ -44,7 +45,7 @@ from armctl.controllers.osc.diagnose import raise_unsolved
 from armctl.controllers.osc.hierarchy import OSCSolution, solve_cascade
 from armctl.controllers.osc.layout import Layout
 from armctl.controllers.osc.limits import JointPositionLimit, JointVelocityLimit, Limit, TorqueLimit
-from armctl.controllers.osc.optimality import accept, residuals
+from armctl.controllers.osc.optimality import verified
 from armctl.controllers.osc.reduced import QddQP, QddStep
 from armctl.controllers.osc.scale import check_level_scale
 from armctl.controllers.osc.solve import make_second_solver, make_solver
@@ -244,12 +245,7 @@ class OperationalSpaceQP(Controller):
             if qs is None:
                 continue
             p = sol.problem(k)
-            arrays = (p.H, p.g, p.A, p.b, p.C, p.l, p.u)
-            x = qs.x[: p.nx]
-            if qs.active is None or qs.z is None:
-                if not residuals(arrays, x, qs.y, qs.z).ok():
-                    return False
-            elif not accept(arrays, x, qs.z, qs.active):
+            if not verified((p.H, p.g, p.A, p.b, p.C, p.l, p.u), qs.x[: p.nx], qs.y, qs.z):
                 return False
         return True
 
