@@ -198,3 +198,35 @@ def test_posture_residual_is_the_textbook_law(panda: armctl.Dynamics) -> None:
         rtol=1e-12,
         atol=1e-12,
     )
+
+
+def test_a_weight_changed_between_steps_takes_effect_for_its_own_controller_only() -> None:
+    """A task's weight or gain counts its own changes (``revision``): changed between steps, it changes its
+    controller's τ to that of a fresh controller with the new weight, and leaves another controller's alone."""
+    from armctl.controllers.osc import OperationalSpaceQP
+
+    dyn = panda_dynamics()
+
+    def tasks() -> list[object]:
+        pose = FramePoseTask(kp=400.0)
+        target = dyn.frame_pose(Q_HOME)
+        target[:3, 3] += [0.05, 0.0, 0.0]
+        pose.set_target(target)
+        return [pose, PostureTask(7, kp=100.0, weight=1e-3)]
+
+    mine, theirs = tasks(), tasks()
+    ctrl, other = OperationalSpaceQP(dyn, mine), OperationalSpaceQP(dyn, theirs)
+    ref = armctl.Reference(Q_HOME - 0.1)
+    q, qd = Q_HOME + 0.05, np.full(7, 0.1)
+    before, other_before = ctrl(0.0, q, qd, ref), other(0.0, q, qd, ref)
+    revision = mine[1].revision
+    mine[1].weight = 0.5
+    mine[0].kd = 10.0
+    assert mine[1].revision == revision + 1 and theirs[1].revision == revision
+    fresh = tasks()
+    fresh[1].weight = 0.5
+    fresh[0].kd = 10.0
+    after = ctrl(0.0, q, qd, ref)
+    np.testing.assert_allclose(after, OperationalSpaceQP(dyn, fresh)(0.0, q, qd, ref), atol=1e-9)
+    assert np.abs(after - before).max() > 1e-2
+    np.testing.assert_array_equal(other(0.0, q, qd, ref), other_before)
