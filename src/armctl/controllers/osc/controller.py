@@ -44,7 +44,13 @@ from armctl.controllers.osc.contact import Contact
 from armctl.controllers.osc.diagnose import raise_unsolved
 from armctl.controllers.osc.hierarchy import OSCSolution, solve_cascade
 from armctl.controllers.osc.layout import Layout
-from armctl.controllers.osc.limits import JointPositionLimit, JointVelocityLimit, Limit, TorqueLimit
+from armctl.controllers.osc.limits import (
+    AccelerationLimit,
+    JointPositionLimit,
+    JointVelocityLimit,
+    Limit,
+    TorqueLimit,
+)
 from armctl.controllers.osc.optimality import verified
 from armctl.controllers.osc.reduced import QddQP, QddStep
 from armctl.controllers.osc.scale import check_level_scale
@@ -54,6 +60,9 @@ from armctl.controllers.osc.tasks.base import Task
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError, SolverWarning
 from armctl.reference import Reference
+
+#: the limits whose bounds read only q and q̇ of a step's state (the generated path gives them no more)
+_PLAIN_LIMITS = (TorqueLimit, JointPositionLimit, JointVelocityLimit, AccelerationLimit)
 
 
 def default_limits(dt: float = 1e-3) -> list[Limit]:
@@ -137,6 +146,8 @@ class OperationalSpaceQP(Controller):
             and callable(getattr(self.solver, "solve_raw", None))
         )
         self._qdd: dict[Layout, QddQP] = {}
+        if self._qdd_path and not self.contacts:  # made now: on compile=True its code is built or loaded here
+            self._qdd_qp(self.builder.layout())
         self._pending: tuple[QddQP, QddStep] | None = None
         self._last_solution: OSCSolution | None = None
         self._steps = 0
@@ -183,12 +194,27 @@ class OperationalSpaceQP(Controller):
         self.compute(scalar(t, "t"), q, qd, ref)
         return self.last_solution  # type: ignore[return-value]
 
-    def _qdd_step(self, lay: Layout, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
-        """One level without contact forces: the QP on q̈ alone (see reduced)."""
+    def _qdd_qp(self, lay: Layout) -> QddQP:
+        """The q̈-only QP of layout ``lay`` (made on first use), with its data from generated code on
+        ``Dynamics(model, compile=True)`` when the tasks and limits are built-in ones (see generated)."""
         qp = self._qdd.get(lay)
         if qp is None:
-            qp = self._qdd[lay] = QddQP(self.builder, lay)
-        result = qp.step(self.evaluator.evaluate(q, qd), t, ref, self.chain)
+            qp = QddQP(self.builder, lay)
+            if getattr(self.dynamics, "compiled", False) and all(type(lim) in _PLAIN_LIMITS for lim in lay.limits):
+                from armctl.controllers.osc.generated import GeneratedQddData, supported  # CasADi: on compile=True
+
+                if supported(qp.plan.tasks):
+                    qp.generated = GeneratedQddData(self.dynamics, qp.plan.tasks, self.builder.regularization)
+            self._qdd[lay] = qp
+        return qp
+
+    def _qdd_step(self, lay: Layout, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
+        """One level without contact forces: the QP on q̈ alone (see reduced)."""
+        qp = self._qdd.get(lay) or self._qdd_qp(lay)
+        if qp.generated is not None:
+            result = qp.step_generated(q, qd, t, ref, self.chain, self.evaluator.evaluate)
+        else:
+            result = qp.step(self.evaluator.evaluate(q, qd), t, ref, self.chain)
         self._pending = (qp, result)
         sol = result.solution
         tau = result.tau.copy()

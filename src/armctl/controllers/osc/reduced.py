@@ -24,6 +24,8 @@ no gap. Otherwise the whole QP goes to the controller's :class:`~armctl.controll
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, Any
+
 import numpy as np
 from scipy.linalg import lapack
 
@@ -39,6 +41,9 @@ from armctl.controllers.osc.scale import MAX_TASK_RHS, refuse_scale
 from armctl.controllers.osc.solve import QPSolution
 from armctl.controllers.osc.state import ModelState
 from armctl.reference import Reference
+
+if TYPE_CHECKING:
+    from armctl.controllers.osc.generated import GeneratedQddData
 
 _MAX_RHS2 = MAX_TASK_RHS**2
 
@@ -56,7 +61,7 @@ class QddStep:
     limit), q̈, τ, and the QP ``arrays`` with the chain's ``solution`` (both None for the unconstrained
     minimum)."""
 
-    __slots__ = ("arrays", "bounds", "qdd", "solution", "tau")
+    __slots__ = ("arrays", "bounds", "generated", "qdd", "solution", "tau")
 
     def __init__(
         self,
@@ -65,8 +70,11 @@ class QddStep:
         tau: FloatArray,
         arrays: Arrays | None = None,
         solution: QPSolution | None = None,
+        generated: GeneratedQddData | None = None,
     ) -> None:
         self.bounds, self.qdd, self.tau, self.arrays, self.solution = bounds, qdd, tau, arrays, solution
+        #: the generated code whose outputs hold this step's rows (None: they are in the workspace already)
+        self.generated = generated
 
 
 class QddQP:
@@ -74,8 +82,10 @@ class QddQP:
     contacts, and maps its solution back to the public problem. Holds its stacked rows as a workspace: the
     rows of one step are valid until the next (:meth:`public` copies what it keeps)."""
 
-    def __init__(self, builder: QPBuilder, lay: Layout) -> None:
+    def __init__(self, builder: QPBuilder, lay: Layout, generated: GeneratedQddData | None = None) -> None:
         n = builder.n
+        #: the QP's data from generated code (:mod:`~armctl.controllers.osc.generated`), or None: from NumPy
+        self.generated = generated
         self.n = n
         self.layout = lay
         self.builder = builder
@@ -150,14 +160,58 @@ class QddQP:
                 chain.record(self.key, self.no_active)
                 return QddStep(bounds, x, tau)
             unconstrained = (factor, x)
+        return self._solve(H, g, mass, hf, bounds, chain, unconstrained, None)
+
+    def step_generated(
+        self, q: FloatArray, qd: FloatArray, t: float, ref: Reference, chain: SolverChain, evaluate: Any
+    ) -> QddStep:
+        """:meth:`step` with the QP's data from the generated code (``self.generated``); ``evaluate(q, qd)``
+        gives the :class:`ModelState` of the NumPy path, which takes over when the rows are out of scale (to
+        name the task, see :mod:`~armctl.controllers.osc.scale`)."""
+        gen = self.generated
+        gen.run(q, qd, t, ref)  # type: ignore[union-attr]
+        if not gen.c[0] <= _MAX_RHS2:  # type: ignore[union-attr]  # ‖W^{1/2} b‖² + ε‖h'‖² (NaN too)
+            return self.step(evaluate(q, qd), t, ref, chain)
+        if self.constant is not None:
+            bounds = self.constant
+        else:  # the built-in limits read q and q̇ only (see controller: the generated path takes no others)
+            state = ModelState(None, q, qd, gen.M, gen.hf, None)  # type: ignore[arg-type, union-attr]
+            bounds = [lim.bounds(state) for lim in self.layout.limits]
+        x, tau = gen.qdd0, gen.tau0  # type: ignore[union-attr]
+        if self._holds(x, tau, bounds):
+            chain.record(self.key, self.no_active)
+            return QddStep(bounds, x.copy(), tau.copy(), generated=gen)
+        return self._solve(gen.H, gen.g, gen.M, gen.hf, bounds, chain, None, gen)  # type: ignore[union-attr]
+
+    def _solve(
+        self,
+        H: FloatArray,
+        g: FloatArray,
+        mass: FloatArray,
+        hf: FloatArray,
+        bounds: list[tuple[FloatArray, FloatArray]],
+        chain: SolverChain,
+        unconstrained: tuple[FloatArray, FloatArray] | None,
+        generated: GeneratedQddData | None,
+    ) -> QddStep:
+        """The verified optimum from the solver chain (past the unconstrained minimum)."""
         arrays = self.arrays(H, g, mass, hf, bounds)
         try:
             sol = chain.solve(arrays, 0, unconstrained=unconstrained)
         except QPFailure as err:
+            if generated is not None:
+                self._fill_rows(generated)
             raise_unsolved(self.public_step(bounds).problem(0), err.attempts)
         tau = mass.dot(sol.x)
         tau += hf
-        return QddStep(bounds, sol.x, tau, arrays, sol)
+        return QddStep(bounds, sol.x, tau, arrays, sol, generated)
+
+    def _fill_rows(self, gen: GeneratedQddData) -> None:
+        """The workspace's rows from the generated code's outputs (as :meth:`step` would have left them)."""
+        n, m, mr = self.n, self.m, self.mass_rows
+        self.rows[:m] = gen.rows
+        self.rows[mr, :n] = gen.M
+        np.negative(gen.hf, out=self.rows[mr, n])
 
     def verify(self, result: QddStep) -> bool:
         """The optimality check of ``result``, run again (what a step pays for it): the bounds for the
@@ -195,7 +249,7 @@ class QddQP:
         """The QP (H, g, A, b, C, l, u) on q̈ (its rows those of the public problem, torque rows shifted by h')."""
         if self.torque_only:  # one torque limit: C = M, bounds shifted by h'
             lo, up = bounds[0]
-            return (np.ascontiguousarray(H), g.copy(), *self.no_rows, mass.copy(), lo - hf, up - hf)
+            return (np.array(H), g.copy(), *self.no_rows, mass.copy(), lo - hf, up - hf)
         C = self.C_template.copy()
         lo = np.concatenate([b[0] for b in bounds]) if bounds else np.zeros(0)
         up = np.concatenate([b[1] for b in bounds]) if bounds else np.zeros(0)
@@ -204,11 +258,13 @@ class QddQP:
             lo[r] -= hf
             up[r] -= hf
         A, b = self.no_rows
-        return (np.ascontiguousarray(H), g.copy(), A, b, C, lo, up)
+        return (np.array(H), g.copy(), A, b, C, lo, up)
 
     def public(self, result: QddStep) -> tuple[StepQP, QPSolution]:
         """The public :class:`StepQP` of the last step (x = [q̈; τ]) and its solution mapped onto it: x = [q̈; τ],
         the multipliers y = ε τ + Σ z_τ of the equation of motion and z (the same rows)."""
+        if result.generated is not None:
+            self._fill_rows(result.generated)
         step = self.public_step(result.bounds)
         sol = result.solution
         z = np.zeros(self.C_template.shape[0]) if sol is None or sol.z is None else sol.z
