@@ -192,8 +192,16 @@ def osc_speed(fig: dict[str, Any]) -> list[Table]:
         f"{s['inequalities']} inequalities; solved on q̈ alone)",
         ["states", "step [µs]", "against one RNEA", "against the bare solve", "optimality check [µs]", "fallbacks"],
     )
-    for name, label in (("circle", "along a 10 cm circle"), ("random", "random near the ready pose")):
-        f = fig[name]
+    sets = [
+        (fig[name], label)
+        for name, label in (("circle", "along a 10 cm circle"), ("random", "random near the ready pose"))
+    ]
+    if "compiled" in fig:
+        sets += [
+            (fig["compiled"][name], f"{label}, compile=True")
+            for name, label in (("circle", "along a 10 cm circle"), ("random", "random near the ready pose"))
+        ]
+    for f, label in sets:
         t.rows.append(
             [
                 text(label),
