@@ -194,14 +194,26 @@ def _task_jacobian(dyn: Dynamics, q: FloatArray, frame: str | None, rows: tuple[
 
 
 def operational_space_terms(
-    mass: FloatArray, jacobian: FloatArray, drift: FloatArray, coriolis: FloatArray, gravity: FloatArray
+    mass: FloatArray,
+    jacobian: FloatArray,
+    drift: FloatArray,
+    coriolis: FloatArray,
+    gravity: FloatArray,
+    damping: float = 0.0,
 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
     """(Λ, J̄, μ, p) from the joint-space terms at one state: M (n×n), the task Jacobian J (m×n, full row rank),
     J̇ q̇ (m,), C q̇ (n,) and g (n,). Unchecked (a controller that has these terms already calls this on its hot
-    path); raises ``numpy.linalg.LinAlgError`` if M is not positive definite."""
+    path); raises ``numpy.linalg.LinAlgError`` if M is not positive definite, or J M⁻¹ Jᵀ is singular.
+
+    ``damping`` δ² ≥ 0 [the units of J M⁻¹ Jᵀ] gives the damped inverse Λ = (J M⁻¹ Jᵀ + δ² I)⁻¹ (still
+    J̄ = M⁻¹ Jᵀ Λ, μ and p from it), bounded by 1/δ² where J loses rank; then J J̄ = I − δ² Λ instead of I, and
+    the task's equation holds only along the directions whose eigenvalue of J M⁻¹ Jᵀ is large against δ²."""
     chol = np.linalg.cholesky(mass)
     a = np.linalg.solve(chol, jacobian.T)  # L⁻¹ Jᵀ, so that J M⁻¹ Jᵀ = aᵀ a
-    lam = np.linalg.inv(a.T @ a)
+    lam_inv = a.T @ a
+    if damping:
+        lam_inv.flat[:: lam_inv.shape[0] + 1] += damping
+    lam = np.linalg.inv(lam_inv)
     lam = 0.5 * (lam + lam.T)
     jbar = np.linalg.solve(chol.T, a) @ lam  # M⁻¹ Jᵀ Λ
     return lam, jbar, jbar.T @ coriolis - lam @ drift, jbar.T @ gravity
