@@ -18,13 +18,15 @@ Contacts are switched with ``contact.active``. The QP of a period can be looked 
 solving it: :meth:`OperationalSpaceQP.build` returns the :class:`~armctl.controllers.osc.build.StepQP`,
 ``.problem(k)`` the :class:`~armctl.controllers.osc.problem.QPProblem` (H, g, A, b, C, l, u) of level k.
 
-Every QP is solved by a :class:`~armctl.controllers.osc.chain.SolverChain`: τ comes only from a solution
-verified against the QP's optimality conditions (:mod:`~armctl.controllers.osc.optimality`). Its first stage
-is DAQP (a dual active-set solver in C) started from the last step's active set; a QP whose answer fails the
-check goes on to the primary solver (ProxQP: warm start, cold start, default settings) and a second solver. With one
-priority level and no active contact the QP is solved on q̈ alone (:mod:`~armctl.controllers.osc.reduced`:
-the same optimum). Each step's fallbacks are in ``last_log["qp_fallbacks"]``; :meth:`end_run` (which
-:func:`armctl.sim.simulate` calls) warns once with what happened during the run and how often.
+Every QP is solved by a :class:`~armctl.controllers.osc.chain.SolverChain`: τ comes only from a solution verified
+against the QP's optimality conditions (:mod:`~armctl.controllers.osc.optimality`). Its first stage is DAQP (a dual
+active-set solver in C) started from the last step's active set; a QP whose answer fails the check goes on to the
+primary solver (ProxQP: warm start, cold start, default settings) and a second solver. With one priority level and
+no active contact the QP is solved on q̈ alone (:mod:`~armctl.controllers.osc.reduced`: the same optimum), and on
+``Dynamics(model, compile=True)`` its data come from one call of generated C code
+(:mod:`~armctl.controllers.osc.generated`) when its tasks and limits are built-in ones. Each step's fallbacks are
+in ``last_log["qp_fallbacks"]``; :meth:`end_run` (which :func:`armctl.sim.simulate` calls) warns once with what
+happened during the run and how often.
 """
 
 from __future__ import annotations
@@ -211,8 +213,9 @@ class OperationalSpaceQP(Controller):
     def _qdd_step(self, lay: Layout, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         """One level without contact forces: the QP on q̈ alone (see reduced)."""
         qp = self._qdd.get(lay) or self._qdd_qp(lay)
-        if qp.generated is not None:
-            result = qp.step_generated(q, qd, t, ref, self.chain, self.evaluator.evaluate)
+        gen = qp.generated
+        if gen is not None:
+            result = qp.step_generated(gen, q, qd, t, ref, self.chain, self.evaluator.evaluate)
         else:
             result = qp.step(self.evaluator.evaluate(q, qd), t, ref, self.chain)
         self._pending = (qp, result)

@@ -24,7 +24,8 @@ no gap. Otherwise the whole QP goes to the controller's :class:`~armctl.controll
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.linalg import lapack
@@ -163,25 +164,31 @@ class QddQP:
         return self._solve(H, g, mass, hf, bounds, chain, unconstrained, None)
 
     def step_generated(
-        self, q: FloatArray, qd: FloatArray, t: float, ref: Reference, chain: SolverChain, evaluate: Any
+        self,
+        gen: GeneratedQddData,
+        q: FloatArray,
+        qd: FloatArray,
+        t: float,
+        ref: Reference,
+        chain: SolverChain,
+        evaluate: Callable[[FloatArray, FloatArray], ModelState],
     ) -> QddStep:
-        """:meth:`step` with the QP's data from the generated code (``self.generated``); ``evaluate(q, qd)``
-        gives the :class:`ModelState` of the NumPy path, which takes over when the rows are out of scale (to
-        name the task, see :mod:`~armctl.controllers.osc.scale`)."""
-        gen = self.generated
-        gen.run(q, qd, t, ref)  # type: ignore[union-attr]
-        if not gen.c[0] <= _MAX_RHS2:  # type: ignore[union-attr]  # ‖W^{1/2} b‖² + ε‖h'‖² (NaN too)
+        """:meth:`step` with the QP's data from the generated code ``gen`` (this QP's ``generated``);
+        ``evaluate(q, qd)`` gives the :class:`ModelState` of the NumPy path, which takes over when the rows are out
+        of scale (to name the task, see :mod:`~armctl.controllers.osc.scale`)."""
+        gen.run(q, qd, t, ref)
+        if not gen.c[0] <= _MAX_RHS2:  # ‖W^{1/2} b‖² + ε‖h'‖² (NaN too)
             return self.step(evaluate(q, qd), t, ref, chain)
         if self.constant is not None:
             bounds = self.constant
         else:  # the built-in limits read q and q̇ only (see controller: the generated path takes no others)
-            state = ModelState(None, q, qd, gen.M, gen.hf, None)  # type: ignore[arg-type, union-attr]
+            state = ModelState(None, q, qd, gen.M, gen.hf, None)  # type: ignore[arg-type]
             bounds = [lim.bounds(state) for lim in self.layout.limits]
-        x, tau = gen.qdd0, gen.tau0  # type: ignore[union-attr]
+        x, tau = gen.qdd0, gen.tau0
         if self._holds(x, tau, bounds):
             chain.record(self.key, self.no_active)
             return QddStep(bounds, x.copy(), tau.copy(), generated=gen)
-        return self._solve(gen.H, gen.g, gen.M, gen.hf, bounds, chain, None, gen)  # type: ignore[union-attr]
+        return self._solve(gen.H, gen.g, gen.M, gen.hf, bounds, chain, None, gen)
 
     def _solve(
         self,
