@@ -33,6 +33,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike
+from scipy.linalg import lapack
 
 from armctl._checks import FloatArray, nonnegative_vector, readonly, scalar, vector
 from armctl.errors import InvalidParameterError, SingularConfigurationError
@@ -208,15 +209,21 @@ def operational_space_terms(
     ``damping`` δ² ≥ 0 [the units of J M⁻¹ Jᵀ] gives the damped inverse Λ = (J M⁻¹ Jᵀ + δ² I)⁻¹ (still
     J̄ = M⁻¹ Jᵀ Λ, μ and p from it), bounded by 1/δ² where J loses rank; then J J̄ = I − δ² Λ instead of I, and
     the task's equation holds only along the directions whose eigenvalue of J M⁻¹ Jᵀ is large against δ²."""
-    chol = np.linalg.cholesky(mass)
-    a = np.linalg.solve(chol, jacobian.T)  # L⁻¹ Jᵀ, so that J M⁻¹ Jᵀ = aᵀ a
-    lam_inv = a.T @ a
+    # LAPACK directly: NumPy's linalg wrappers cost several µs a call on matrices this small
+    chol, info = lapack.dpotrf(mass, lower=1, clean=1)  # M = L Lᵀ
+    if info:
+        raise np.linalg.LinAlgError("the mass matrix is not positive definite")
+    a, _ = lapack.dtrtrs(chol, jacobian.T, lower=1)  # L⁻¹ Jᵀ, so that J M⁻¹ Jᵀ = aᵀ a
+    lam_inv = a.T.dot(a)
     if damping:
         lam_inv.flat[:: lam_inv.shape[0] + 1] += damping
-    lam = np.linalg.inv(lam_inv)
+    _, _, lam, info = lapack.dgesv(lam_inv, np.eye(lam_inv.shape[0]))  # LU: fails only if singular outright
+    if info:
+        raise np.linalg.LinAlgError("J M⁻¹ Jᵀ is singular")
     lam = 0.5 * (lam + lam.T)
-    jbar = np.linalg.solve(chol.T, a) @ lam  # M⁻¹ Jᵀ Λ
-    return lam, jbar, jbar.T @ coriolis - lam @ drift, jbar.T @ gravity
+    minv_jt, _ = lapack.dtrtrs(chol, a, lower=1, trans=1)  # L⁻ᵀ L⁻¹ Jᵀ = M⁻¹ Jᵀ
+    jbar = minv_jt.dot(lam)  # M⁻¹ Jᵀ Λ
+    return lam, jbar, jbar.T.dot(coriolis) - lam.dot(drift), jbar.T.dot(gravity)
 
 
 def operational_space_model(

@@ -28,6 +28,7 @@ import warnings
 from typing import Any
 
 import numpy as np
+from scipy.linalg import lapack
 
 from armctl._checks import FloatArray, scalar
 from armctl.controllers.base import Controller
@@ -86,9 +87,12 @@ class ClosedFormOSC(Controller):
         coriolis = state.bias - gravity  # C q̇
         try:
             terms = operational_space_terms(mass, jacobian, drift, coriolis, gravity)
-            lam = np.linalg.eigvalsh(terms[0])  # Λ's eigenvalues, ascending: 1 / those of J M⁻¹ Jᵀ
         except np.linalg.LinAlgError:  # M not positive definite, or J M⁻¹ Jᵀ singular outright
             terms, lam = None, None
+        else:
+            lam, _, info = lapack.dsyev(terms[0], compute_v=0)  # Λ's eigenvalues, ascending: 1 / J M⁻¹ Jᵀ's
+            if info:
+                lam = None
         if lam is not None and np.isfinite(lam).all() and 0.0 < lam[-1] <= self.condition_limit * lam[0]:
             return (*terms, 0.0)  # type: ignore[misc]
         if lam is not None and np.isfinite(lam).all() and lam[0] > 0.0:
