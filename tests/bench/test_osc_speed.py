@@ -32,4 +32,5 @@ def test_osc_speed_figures_checks_and_report() -> None:
     assert all(ok for name, ok in verdicts.items() if name.endswith("every torque the optimum"))
     text = osc_speed.report(fig)
     assert "x RNEA" in text and "x bare solve" in text and "optimality check" in text and "compile=True" in text
-    assert "target" not in text.lower() and "missed" not in text.lower()
+    assert "target" not in text.lower()  # the benchmark's own checks are not printed
+    assert "missed" not in text.lower()
