@@ -12,7 +12,7 @@ import numpy as np
 import armctl
 from armctl.controllers import Controller
 from armctl.model.parts import Frame, Joint, JointLimits, Link
-from armctl.reference import Reference
+from armctl.references import Reference
 
 
 class PDGravity(Controller):

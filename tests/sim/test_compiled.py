@@ -12,7 +12,7 @@ import pytest
 
 import armctl
 from armctl.errors import ArmctlError, InvalidParameterError
-from armctl.reference import Reference
+from armctl.references import Reference
 from armctl.sim.compiled import compiled_step
 from armctl.sim.contact import Plane
 from armctl.sim.integrators import rk4, semi_implicit_euler

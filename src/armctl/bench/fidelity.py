@@ -49,7 +49,7 @@ if TYPE_CHECKING:
     from armctl.controllers.base import Controller
     from armctl.dynamics.base import Dynamics
     from armctl.model.robot import RobotModel
-    from armctl.reference import Reference
+    from armctl.references import Reference
 
 #: the joint-space scenes (computed torque is compared on them; the contact scene's controllers are
 #: operational-space ones, outside this section)

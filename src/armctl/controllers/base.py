@@ -18,7 +18,7 @@ from numpy.typing import ArrayLike
 from armctl._checks import FLOAT, FloatArray, all_finite, scalar, vector, whole_number
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
-from armctl.reference import Reference
+from armctl.references import Reference
 
 
 class Controller(ABC):

@@ -10,7 +10,7 @@ from armctl.controllers.base import Controller
 from armctl.controllers.integral import PIDGains
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError
-from armctl.reference import Reference
+from armctl.references import Reference
 
 
 class ComputedTorque(PIDGains, Controller):

@@ -8,7 +8,7 @@ from numpy.typing import ArrayLike
 from armctl._checks import FloatArray, Gain
 from armctl.controllers.base import Controller
 from armctl.dynamics.base import Dynamics
-from armctl.reference import Reference
+from armctl.references import Reference
 
 
 def sliding_map(lam: FloatArray, kd: FloatArray) -> FloatArray:

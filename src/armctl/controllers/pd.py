@@ -11,7 +11,7 @@ from armctl._checks import FloatArray, apply_gain, boolean
 from armctl.controllers.base import Controller
 from armctl.controllers.integral import PIDGains
 from armctl.dynamics.base import Dynamics
-from armctl.reference import Reference
+from armctl.references import Reference
 
 
 class PDGravity(PIDGains, Controller):

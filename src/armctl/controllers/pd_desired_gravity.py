@@ -8,7 +8,7 @@ from armctl._checks import FloatArray, apply_gain
 from armctl.controllers.base import Controller
 from armctl.controllers.integral import PIDGains
 from armctl.dynamics.base import Dynamics
-from armctl.reference import Reference
+from armctl.references import Reference
 
 
 class PDDesiredGravity(PIDGains, Controller):

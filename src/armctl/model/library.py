@@ -1,4 +1,4 @@
-"""Built-in arms, each with the model it needs and no more.
+"""Built-in arms, each with the model it needs and no more (reached as :mod:`armctl.models`).
 
 ==================  ==========================================================================================
 ``pendulum()``      one link in a vertical plane driven through a gear by a motor: rotor inertia, gear ratio,

@@ -15,7 +15,7 @@ from armctl._checks import FloatArray, readonly, real_array, scalar, whole_numbe
 from armctl.errors import InvalidParameterError
 from armctl.planning.path import Path
 from armctl.planning.timing import Timing
-from armctl.reference import Reference
+from armctl.references import Reference
 
 if TYPE_CHECKING:
     from armctl.planning.verify import LimitCheck

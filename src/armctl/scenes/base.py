@@ -30,7 +30,7 @@ from armctl.controllers import Adaptive, ComputedTorque, Controller, PassivityBa
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError, UnknownNameError
 from armctl.model.robot import RobotModel
-from armctl.reference import Reference
+from armctl.references import Reference
 from armctl.tuning.presets import load_preset
 
 JOINT_METHODS = ("pd_gravity", "computed_torque", "computed_torque_reduced", "passivity", "adaptive")

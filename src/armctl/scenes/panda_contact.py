@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from armctl import models
 from armctl._checks import boolean, scalar
 from armctl.controllers.base import Controller
 from armctl.controllers.osc import (
@@ -23,8 +24,7 @@ from armctl.controllers.osc import (
 )
 from armctl.dynamics.base import Dynamics
 from armctl.errors import UnknownNameError
-from armctl.model import library
-from armctl.reference import Reference
+from armctl.references import Reference
 from armctl.scenes.base import Scene, check_gains, diverged_errors
 
 Q_HOME = np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])  # the Panda's "ready" posture
@@ -107,7 +107,7 @@ class PressAndSlide(Controller):
 
 
 def panda_contact_model() -> Any:
-    return library.panda().with_friction(
+    return models.panda().with_friction(
         viscous=[0.5, 0.5, 0.5, 0.5, 0.2, 0.2, 0.2], coulomb=[0.8, 0.8, 0.8, 0.8, 0.3, 0.3, 0.3]
     )
 

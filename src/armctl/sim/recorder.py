@@ -11,7 +11,7 @@ import numpy as np
 from armctl._checks import FloatArray
 from armctl.dynamics.base import Dynamics
 from armctl.errors import SimulationWarning
-from armctl.reference import Reference
+from armctl.references import Reference
 from armctl.sim.contact import Environment, ForceSensor
 from armctl.sim.limits import LimitReport, check_limits
 from armctl.sim.plant import Plant

@@ -17,7 +17,7 @@ from armctl.controllers.base import Controller
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError, ShapeError, SimulationWarning, UnknownNameError
 from armctl.model.robot import RobotModel
-from armctl.reference import Reference
+from armctl.references import Reference
 from armctl.sim.contact import Environment, ForceSensor
 from armctl.sim.friction import FrictionModel, make_friction
 from armctl.sim.integrators import INTEGRATORS

@@ -24,7 +24,7 @@ from armctl._checks import FloatArray, boolean, nonnegative_vector, real_array
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError, ShapeError, SimulationWarning
 from armctl.model.robot import RobotModel
-from armctl.reference import Reference
+from armctl.references import Reference
 from armctl.sim import setup
 from armctl.sim.after_run import after_run
 from armctl.sim.contact import Environment, ForceSensor

@@ -75,7 +75,7 @@ def _description_parts(model: RobotModel, name: str, meshes: str) -> list[Part] 
     import pinocchio as pin
     from pinocchio.visualize.meshcat_visualizer import DaeMeshGeometry
 
-    from armctl.model.library import robot_description
+    from armctl.models import robot_description
 
     relative, locked = DESCRIPTIONS[name]
     path = str(robot_description(relative))

@@ -35,7 +35,7 @@ from armctl.controllers.osc.problem import QPProblem
 from armctl.controllers.osc.state import ModelState
 from armctl.controllers.osc.tasks.base import Task
 from armctl.model.robot import RobotModel
-from armctl.reference import Reference
+from armctl.references import Reference
 
 
 def level_cost(lev: LevelRows, reg_matrix: FloatArray) -> tuple[FloatArray, FloatArray]:

@@ -25,7 +25,7 @@ from armctl.controllers.osc.tasks.base import MotionTask
 from armctl.controllers.osc.tasks.posture import PostureTask
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError
-from armctl.reference import Reference
+from armctl.references import Reference
 
 
 class ClosedFormOSC(Controller):

@@ -52,7 +52,7 @@ from armctl.controllers.osc.state import ModelEvaluator
 from armctl.controllers.osc.tasks.base import Task
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError, SolverWarning
-from armctl.reference import Reference
+from armctl.references import Reference
 
 
 def default_limits(dt: float = 1e-3) -> list[Limit]:

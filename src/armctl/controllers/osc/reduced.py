@@ -39,7 +39,7 @@ from armctl.controllers.osc.problem import Arrays
 from armctl.controllers.osc.scale import MAX_TASK_RHS, refuse_scale
 from armctl.controllers.osc.solve import QPSolution
 from armctl.controllers.osc.state import ModelState
-from armctl.reference import Reference
+from armctl.references import Reference
 
 _MAX_RHS2 = MAX_TASK_RHS**2
 

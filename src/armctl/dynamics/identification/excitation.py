@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray, per_joint, readonly, real_array, scalar, whole_number
 from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
-from armctl.reference import Reference
+from armctl.references import Reference
 
 
 @dataclass(frozen=True)

@@ -22,7 +22,7 @@ from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray, Gain, nonnegative_vector, whole_number
 from armctl.controllers.osc.state import ModelState
-from armctl.reference import Reference
+from armctl.references import Reference
 
 
 class Task(ABC):

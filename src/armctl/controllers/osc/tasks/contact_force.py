@@ -21,7 +21,7 @@ from armctl.controllers.osc.contact import Contact
 from armctl.controllers.osc.state import ModelState
 from armctl.controllers.osc.tasks.base import Task
 from armctl.errors import InvalidParameterError, UnknownNameError
-from armctl.reference import Reference
+from armctl.references import Reference
 
 Force = ArrayLike | float | Callable[[float], ArrayLike]
 

@@ -15,7 +15,7 @@ from armctl._checks import FloatArray, vector, whole_number
 from armctl.controllers.osc.state import ModelState
 from armctl.controllers.osc.tasks.base import MotionTask
 from armctl.errors import ShapeError
-from armctl.reference import Reference
+from armctl.references import Reference
 
 
 class PostureTask(MotionTask):
