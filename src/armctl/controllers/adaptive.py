@@ -15,7 +15,7 @@ from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError, ShapeError
 from armctl.model import RobotModel
 from armctl.model.consistency import project_physical, projection
-from armctl.reference import Reference
+from armctl.references import Reference
 
 
 class Adaptive(SlidingGains, Controller):
@@ -65,7 +65,7 @@ class Adaptive(SlidingGains, Controller):
     """
 
     _outside = False  # whether the last projection changed θ̂ (see _project); reset() clears it
-    _plant: Dynamics | None = None  # (a class default too: objects pickled before plant existed)
+    _plant: Dynamics | None
     _gamma_factor: Any = None
 
     gamma = Gain("Γ (13n×13n).", size=lambda owner: 13 * owner.n)
@@ -102,11 +102,6 @@ class Adaptive(SlidingGains, Controller):
             self.theta0 = project_physical(self.theta0)
         self.plant = plant
         self.reset()
-
-    def __setstate__(self, state: dict[str, Any]) -> None:
-        if "projection" in state:  # pickled when projection was a plain attribute
-            state["_projection"] = bool(state.pop("projection"))
-        self.__dict__.update(state)
 
     @property
     def projection(self) -> bool:
