@@ -22,8 +22,9 @@ class Timing(ABC):
         """T [s]."""
 
     @abstractmethod
-    def _evaluate(self, t: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """(s, ṡ, s̈) at times t (m,) inside [0, T]."""
+    def evaluate_inside(self, t: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """(s, ṡ, s̈) at times t [s] (m,), each finite and inside [0, T]: not checked (:meth:`evaluate` checks t
+        and handles the times outside)."""
 
     def evaluate(self, t: ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray]:
         """(s, ṡ, s̈) at times t [s] (a scalar or an (m,) vector; arrays of the same shape come back). Inside
@@ -38,7 +39,7 @@ class Timing(ABC):
         s = np.where(flat > self.duration, 1.0, 0.0)
         sd, sdd = np.zeros_like(flat), np.zeros_like(flat)
         if inside.any():
-            s[inside], sd[inside], sdd[inside] = self._evaluate(flat[inside])
+            s[inside], sd[inside], sdd[inside] = self.evaluate_inside(flat[inside])
         shape = tt.shape
         return s.reshape(shape), sd.reshape(shape), sdd.reshape(shape)
 
@@ -48,10 +49,11 @@ class Timing(ABC):
             t = scalar(t, "t")  # a real finite scalar, or raise naming t
         if t < 0.0 or t > self.duration:
             return (0.0 if t < 0.0 else 1.0), 0.0, 0.0
-        return self._at(t)
+        return self.at_inside(t)
 
-    def _at(self, t: float) -> tuple[float, float, float]:
-        s, sd, sdd = self._evaluate(np.array([t]))
+    def at_inside(self, t: float) -> tuple[float, float, float]:
+        """(s, ṡ, s̈) at one time t [s], a finite float inside [0, T]: not checked (:meth:`at` checks t)."""
+        s, sd, sdd = self.evaluate_inside(np.array([t]))
         return float(s[0]), float(sd[0]), float(sdd[0])
 
 
@@ -92,7 +94,7 @@ class GridTiming(Timing):
     def duration(self) -> float:
         return float(self.t[-1])
 
-    def _evaluate(self, t: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+    def evaluate_inside(self, t: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         i = np.clip(np.searchsorted(self.t, t, side="right") - 1, 0, self.u.shape[0] - 1)
         tau = np.clip(t - self.t[i], 0.0, self.t[i + 1] - self.t[i])
         u = self.u[i]
@@ -100,7 +102,7 @@ class GridTiming(Timing):
         sd = np.maximum(self.sd[i] + u * tau, 0.0)
         return s, sd, u
 
-    def _at(self, t: float) -> tuple[float, float, float]:
+    def at_inside(self, t: float) -> tuple[float, float, float]:
         ts, ss, sds, us = self._lists
         i = min(max(bisect_right(ts, t) - 1, 0), len(us) - 1)
         tau = min(max(t - ts[i], 0.0), ts[i + 1] - ts[i])
@@ -119,7 +121,7 @@ class PolynomialTiming(Timing):
     def duration(self) -> float:
         return self._duration
 
-    def _evaluate(self, t: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+    def evaluate_inside(self, t: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         T = self._duration
         r = t / T
         s = r**3 * (10.0 - 15.0 * r + 6.0 * r**2)
@@ -127,7 +129,7 @@ class PolynomialTiming(Timing):
         sdd = 60.0 * r * (1.0 - r) * (1.0 - 2.0 * r) / T**2
         return s, sd, sdd
 
-    def _at(self, t: float) -> tuple[float, float, float]:
+    def at_inside(self, t: float) -> tuple[float, float, float]:
         T = self._duration
         r = t / T
         return (
@@ -151,12 +153,12 @@ class ScaledTiming(Timing):
     def duration(self) -> float:
         return self.factor * self.base.duration
 
-    def _evaluate(self, t: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+    def evaluate_inside(self, t: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         r = self.factor
-        s, sd, sdd = self.base._evaluate(np.minimum(t / r, self.base.duration))
+        s, sd, sdd = self.base.evaluate_inside(np.minimum(t / r, self.base.duration))
         return s, sd / r, sdd / r**2
 
-    def _at(self, t: float) -> tuple[float, float, float]:
+    def at_inside(self, t: float) -> tuple[float, float, float]:
         r = self.factor
-        s, sd, sdd = self.base._at(min(t / r, self.base.duration))
+        s, sd, sdd = self.base.at_inside(min(t / r, self.base.duration))
         return s, sd / r, sdd / (r * r)
