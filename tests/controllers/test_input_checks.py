@@ -17,7 +17,7 @@ import pytest
 import armctl
 from armctl.controllers import Adaptive, ComputedTorque, Controller, PassivityBased, PDGravity
 from armctl.errors import ArmctlError, InvalidParameterError, NonFiniteError, ShapeError
-from tests.conftest import dynamics
+from tests.helpers.arms import dynamics
 
 LAWS: dict[str, Callable[[armctl.Dynamics], Controller]] = {
     "pd": lambda d: PDGravity(d, 100.0, 20.0),

@@ -15,7 +15,7 @@ from armctl.controllers import Adaptive, ComputedTorque, Controller, PassivityBa
 from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
 from armctl.model.consistency import is_physical, project_physical, projection
 from armctl.references import Quintic, Sinusoid, WaypointSpline
-from tests.conftest import dynamics
+from tests.helpers.arms import dynamics
 
 REF7 = armctl.Reference(np.full(7, 0.1), np.full(7, 0.2), np.full(7, -0.3))
 

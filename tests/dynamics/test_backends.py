@@ -15,7 +15,7 @@ import pinocchio as pin
 import pytest
 
 import armctl
-from tests.conftest import dynamics, model
+from tests.helpers.arms import dynamics, model
 
 G = 9.81
 

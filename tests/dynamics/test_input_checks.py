@@ -13,7 +13,7 @@ import pytest
 
 import armctl
 from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
-from tests.conftest import dynamics
+from tests.helpers.arms import dynamics
 
 # method name → its vector arguments, in order
 METHODS: dict[str, tuple[str, ...]] = {

@@ -8,7 +8,7 @@ import pytest
 import armctl
 from armctl.errors import ArmctlError, InfeasibleError, InvalidParameterError, NonFiniteError, ShapeError
 from armctl.planning import LinePath, PolynomialTiming, SplinePath, Trajectory, time_optimal, uniform_time_scaling
-from tests.planning._common import PANDA_WAYPOINTS, panda
+from tests.planning.helpers import PANDA_WAYPOINTS, panda
 
 N = 7
 

@@ -25,7 +25,7 @@ from armctl.planning import (
     time_optimal,
     uniform_time_scaling,
 )
-from tests.planning._common import PANDA_WAYPOINTS, panda
+from tests.planning.helpers import PANDA_WAYPOINTS, panda
 
 
 @pytest.mark.parametrize(

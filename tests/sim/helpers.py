@@ -1,11 +1,16 @@
-"""Tiny controllers and models for the simulator's tests (module level, so that they pickle for sweeps).
+"""Helpers of the simulator's tests: tiny controllers and models, and a job that fails on demand for the sweeps
+(module level, so that they pickle for sweeps).
 
 They are written here from the textbook laws, on purpose independent of ``armctl.controllers``.
 """
 
 from __future__ import annotations
 
+import os
+import signal
+import time
 from collections.abc import Callable
+from pathlib import Path
 
 import numpy as np
 
@@ -89,3 +94,27 @@ def slider(mass: float = 2.0, effort: float = float("inf"), vertical: bool = Fal
         limits=JointLimits(effort=effort),
     )
     return armctl.RobotModel((joint,), name="slider", frames=(Frame("tool", 1, np.eye(4)),), tool_frame="tool")
+
+
+def failing_job(x: int, log: str, mode: str = "ok") -> int:
+    """x², after noting the start in ``log``; or fail the way ``mode`` says."""
+    with open(log, "a") as f:
+        f.write(f"{x}\n")
+    if mode == "raise":
+        raise ValueError(f"x = {x} is not allowed")
+    if mode == "exit":
+        os._exit(7)
+    if mode == "sigkill":
+        os.kill(os.getpid(), signal.SIGKILL)
+    if mode == "exit-once" and Path(log).read_text().split().count(str(x)) == 1:
+        os._exit(7)  # dies on its first start only
+    if mode == "hang":
+        time.sleep(3600)
+    if mode == "slow":
+        time.sleep(0.5)
+    return x * x
+
+
+def failing_cases(log: Path, modes: dict[int, str], n: int = 6) -> list[dict[str, object]]:
+    """n cases of :func:`failing_job`, all "ok" but those ``modes`` names, noting their starts in ``log``."""
+    return [{"x": x, "log": str(log), "mode": modes.get(x, "ok")} for x in range(n)]

@@ -24,7 +24,7 @@ import numpy as np
 
 from armctl._checks import FLOAT, FloatArray, real_array
 from armctl.errors import InvalidParameterError, ShapeError
-from armctl.reference import Reference
+from armctl.references import Reference
 from armctl.sim import setup
 from armctl.sim.integrators import Step
 from armctl.sim.plant import Plant

@@ -22,8 +22,8 @@ from __future__ import annotations
 import os
 import re
 import sys
-from importlib import resources
 from collections.abc import Mapping
+from importlib import resources
 from pathlib import Path
 from typing import Any
 

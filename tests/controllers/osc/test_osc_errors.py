@@ -29,8 +29,7 @@ from armctl.errors import (
     ShapeError,
     UnknownNameError,
 )
-
-from .conftest import Q_HOME
+from tests.controllers.osc.helpers import Q_HOME
 
 
 def test_unknown_frame_lists_the_valid_names(panda: armctl.Dynamics) -> None:

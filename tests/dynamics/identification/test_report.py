@@ -9,7 +9,7 @@ import numpy as np
 
 import armctl
 import armctl.dynamics.identification as ident
-from tests.identification._cases import Case, measure
+from tests.dynamics.identification.helpers import Case, measure
 
 
 def test_validation_on_fresh_noisy_data_and_report(puma_case: Case) -> None:

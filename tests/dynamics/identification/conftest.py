@@ -1,10 +1,10 @@
-"""Session fixtures: the identified Puma 560 and Panda (see ``_cases``)."""
+"""Session fixtures: the identified Puma 560 and Panda (see ``helpers``)."""
 
 from __future__ import annotations
 
 import pytest
 
-from tests.identification._cases import Case, case
+from tests.dynamics.identification.helpers import Case, case
 
 
 @pytest.fixture(scope="session")

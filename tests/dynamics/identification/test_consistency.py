@@ -10,7 +10,7 @@ import armctl
 from armctl.dynamics.identification import model_from_parameters
 from armctl.dynamics.identification.pseudo_inertia import factor_of, is_consistent, parameters_from_factor
 from armctl.errors import InvalidParameterError
-from tests.conftest import MODEL_NAMES, model
+from tests.helpers.arms import MODEL_NAMES, model
 
 
 def _params(mass: float, com: np.ndarray, inertia_c: np.ndarray) -> np.ndarray:

@@ -1,4 +1,4 @@
-"""Shared test data for the planning tests: a panda path inside its joint ranges, models with friction."""
+"""Helpers of the planning tests: a panda path inside its joint ranges, models with friction."""
 
 from __future__ import annotations
 

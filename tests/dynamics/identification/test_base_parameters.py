@@ -8,7 +8,7 @@ import pytest
 import armctl
 from armctl.dynamics.identification import find_base_parameters
 from armctl.errors import InvalidParameterError
-from tests.conftest import MODEL_NAMES, dynamics
+from tests.helpers.arms import MODEL_NAMES, dynamics
 
 
 @pytest.mark.parametrize(("name", "count"), [("pendulum", 5), ("planar_2r", 11), ("planar_3r", 17)])

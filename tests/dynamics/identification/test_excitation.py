@@ -10,7 +10,7 @@ import pytest
 import armctl
 from armctl.dynamics.identification import FourierExcitation, optimize_excitation
 from armctl.errors import InvalidParameterError, ShapeError
-from tests.conftest import dynamics
+from tests.helpers.arms import dynamics
 
 
 def _random(n: int = 3, harmonics: int = 4, seed: int = 0) -> FourierExcitation:

@@ -7,7 +7,7 @@ import pytest
 
 from armctl.dynamics.identification import IdentificationData, build_problem, prepare_data, solve_least_squares
 from armctl.errors import IdentificationWarning, InvalidParameterError, NonFiniteError, ShapeError
-from tests.conftest import dynamics
+from tests.helpers.arms import dynamics
 
 
 def test_derivatives_of_a_noisy_sine_match_the_closed_form() -> None:

@@ -1,4 +1,4 @@
-"""Issue 8: computed torque with the identified model tracks better than with the nominal perturbed model it
+"""Computed torque with the identified model tracks better than with the nominal perturbed model it
 started from.
 
 The plant is the true Puma 560 (published parameters, asymmetric Coulomb friction with stick–slip in the
@@ -12,7 +12,7 @@ import numpy as np
 import armctl
 from armctl.controllers import ComputedTorque
 from armctl.sim import simulate
-from tests.identification._cases import Case
+from tests.dynamics.identification.helpers import Case
 
 
 def test_identified_model_tracks_better_than_the_nominal_one(puma_case: Case) -> None:

@@ -15,7 +15,7 @@ import scipy.signal
 import armctl
 import armctl.dynamics.identification as ident
 from armctl.errors import IdentificationWarning, InvalidParameterError
-from tests.identification._cases import Case
+from tests.dynamics.identification.helpers import Case
 
 FS, FC = 1000.0, 5.0
 _W = 2 * np.pi * np.array([0.2, 0.5, 0.9])  # a slow multi-sine motion, well inside the cutoff
@@ -125,7 +125,7 @@ def test_the_consistent_estimate_never_says_converged_with_a_budget_exceeded(pum
 
 
 def test_a_budget_too_small_says_so() -> None:
-    from tests.identification.test_consistency import _pendulum_problem
+    from tests.dynamics.identification.test_consistency import _pendulum_problem
 
     result, nominal = _pendulum_problem(0.6)
     short = ident.consistent_estimate(result.problem, nominal, result.estimate, max_evaluations=3)

@@ -17,7 +17,7 @@ from armctl.dynamics.identification import (
 from armctl.dynamics.identification.base_parameters import BaseParameters
 from armctl.dynamics.identification.problem import IdentificationProblem
 from armctl.errors import IdentifiabilityError, InvalidParameterError, ShapeError
-from tests.conftest import dynamics
+from tests.helpers.arms import dynamics
 
 
 def _linear_problem(w: np.ndarray, y: np.ndarray, n: int) -> IdentificationProblem:
