@@ -11,6 +11,7 @@ import signal
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -18,6 +19,8 @@ import armctl
 from armctl.controllers import Controller
 from armctl.model.parts import Frame, Joint, JointLimits, Link
 from armctl.references import Reference
+from armctl.sim import SimResult, simulate
+from armctl.sim.result import _ARRAYS
 
 
 class PDGravity(Controller):
@@ -118,3 +121,25 @@ def failing_job(x: int, log: str, mode: str = "ok") -> int:
 def failing_cases(log: Path, modes: dict[int, str], n: int = 6) -> list[dict[str, object]]:
     """n cases of :func:`failing_job`, all "ok" but those ``modes`` names, noting their starts in ``log``."""
     return [{"x": x, "log": str(log), "mode": modes.get(x, "ok")} for x in range(n)]
+
+
+class LoggingController:
+    """A controller holding zero torque whose log has numbers, None, dicts and ragged arrays."""
+
+    def __init__(self) -> None:
+        self.last_log: dict[str, Any] = {}
+
+    def __call__(self, t: float, q: np.ndarray, qd: np.ndarray, ref: Any) -> np.ndarray:
+        k = round(t / 1e-3)
+        self.last_log = {"number": float(k), "none": None, "info": {"k": k}, "ragged": np.zeros(1 + k % 2)}
+        return np.zeros(1)
+
+
+def logging_run() -> SimResult:
+    """10 ms of the pendulum held by :class:`LoggingController`."""
+    return simulate(armctl.models.pendulum(), LoggingController(), armctl.Reference.hold([0.0]), 0.01)
+
+
+def without_samples(res: SimResult) -> SimResult:
+    """``res`` cut to no samples (a run stopped before its first one)."""
+    return SimResult(**{name: getattr(res, name)[:0] for name in _ARRAYS})

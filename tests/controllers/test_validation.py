@@ -1,10 +1,15 @@
-"""`Controller.__call__` checks q and q̇ on a cheap fast path. The built-in laws without state check only τ
-(``_checks_result``: a NaN/inf in any entry of q or q̇ reaches τ through the PD or sliding term), and the
-inputs only when τ is not finite. Whatever the law, every entry of q and q̇ made NaN, +inf or −inf must raise a
-NonFiniteError naming that input and leave the controller's state (integral, θ̂) as it was; arrays that are not
-real numbers must raise an ArmctlError naming the input; lists, integer and object arrays of numbers must give
-the float result. Time must be finite, never runs an integral backwards, and a controller keeps no reference to
-the caller's arrays."""
+"""Bad input to the controllers raises a named ArmctlError, and leaves the controller as it was.
+
+* ``Controller.__call__`` checks q and q̇ on a cheap fast path. The built-in laws without state check only τ
+  (``_checks_result``: a NaN/inf in any entry of q or q̇ reaches τ through the PD or sliding term), and the
+  inputs only when τ is not finite. Whatever the law, every entry of q and q̇ made NaN, +inf or −inf must raise
+  a NonFiniteError naming that input and leave the controller's state (integral, θ̂) as it was; arrays that are
+  not real numbers must raise an ArmctlError naming the input; lists, integer and object arrays of numbers must
+  give the float result. Time must be finite, never runs an integral backwards, and a controller keeps no
+  reference to the caller's arrays.
+* A masked array is not read through its mask: a masked entry is refused by name by the dynamics' regressors
+  and by every controller (before, the hidden value was used, and with ``ki=`` or ``Adaptive`` a bare TypeError
+  came from the controller's base class)."""
 
 from __future__ import annotations
 
@@ -29,6 +34,8 @@ LAWS: dict[str, Callable[[armctl.Dynamics], Controller]] = {
     "pb": lambda d: PassivityBased(d, 5.0, 20.0),
     "adaptive": lambda d: Adaptive(d, 5.0, 20.0, 0.01),
 }
+
+
 # panda (Pinocchio, no friction), puma560 (rotors, asymmetric Coulomb friction), the Lagrange backend on the
 # frictionless pendulum (its τ holds no q̇ at all) and on planar_2r, and the compiled Pinocchio backend on the
 # Panda (where PD + gravity runs as one call of generated code)
@@ -442,3 +449,27 @@ def test_composite_adaptation_is_stable_at_a_step_where_explicit_euler_diverged(
     coarse, fine = (np.asarray(runs[dt].logs["theta"])[-1] for dt in (1e-3, 1e-4))
     assert np.abs(coarse - fine).max() < 0.005 * np.abs(fine).max()  # 0.09 % measured
     assert np.abs(runs[1e-3].q[-1] - runs[1e-4].q[-1]).max() < 1e-4
+
+
+CONTROLLERS = {
+    "ComputedTorque": lambda d: ComputedTorque(d, 100.0, 20.0),
+    "PDGravity": lambda d: PDGravity(d, 100.0, 20.0),
+    "PDGravity(ki=)": lambda d: PDGravity(d, 100.0, 20.0, ki=10.0),
+    "PassivityBased": lambda d: PassivityBased(d, 5.0, 20.0),
+    "Adaptive": lambda d: Adaptive(d, 5.0, 20.0, 0.1),
+}
+
+
+def _masked() -> np.ma.MaskedArray:
+    return np.ma.masked_array([0.1, 1e6], mask=[False, True])  # the hidden entry would be a wild value
+
+
+@pytest.mark.parametrize("make", sorted(CONTROLLERS))
+@pytest.mark.parametrize("position", ["q", "qd"])
+def test_controllers_refuse_a_masked_entry(make: str, position: str) -> None:
+    dyn = armctl.Dynamics(armctl.models.planar_2r())
+    ctrl = CONTROLLERS[make](dyn)
+    z = np.zeros(2)
+    args = {"q": z, "qd": z, position: _masked()}
+    with pytest.raises(InvalidParameterError, match=rf"^{position} has masked entries"):
+        ctrl(0.0, args["q"], args["qd"], armctl.Reference(z, z, z))

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import pickle
 import re
 from collections.abc import Callable
 from typing import Any
@@ -9,6 +10,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+import armctl
 from armctl.errors import ArmctlError, InvalidParameterError, NonFiniteError, ShapeError, UnknownNameError
 from armctl.references import Quintic, Reference, Sinusoid, WaypointSpline
 
@@ -17,6 +19,7 @@ REFERENCES: dict[str, Callable[[], Any]] = {
     "Sinusoid": lambda: Sinusoid([0.0, 0.0], 0.1, 1.0),
     "WaypointSpline": lambda: WaypointSpline([0.0, 1.0, 2.0], [[0.0, 0.0], [1.0, 2.0], [0.0, 1.0]]),
 }
+
 
 BAD_TIMES = [
     (np.array([0.1, 0.2]), InvalidParameterError, r"^t must be a real number, got array\(\[0\.1, 0\.2\]\)"),
@@ -177,7 +180,6 @@ def test_sinusoid_is_the_formula() -> None:
 def test_sinusoid_keeps_copies_and_pickles() -> None:
     """The caller's arrays changing afterwards changes nothing (q̇ stays the derivative of q), and a pickled
     Sinusoid gives the same reference."""
-    import pickle
 
     c, a, f = np.zeros(2), np.array([0.3, 0.1]), np.array([0.5, 1.0])
     ref_fn = Sinusoid(c, a, f)
@@ -192,3 +194,10 @@ def test_sinusoid_keeps_copies_and_pickles() -> None:
     copy = pickle.loads(pickle.dumps(ref_fn))(0.2)
     for name in ("q", "qd", "qdd"):
         assert np.array_equal(getattr(copy, name), getattr(after, name)), name
+
+
+def test_a_reference_of_three_empty_arrays_is_refused() -> None:
+    """Three empty float64 vectors (the form the cheap check of Reference takes) hold no joint: refused with
+    the ShapeError an empty q alone gets, not a reference of n = 0."""
+    with pytest.raises(ShapeError, match="at least one joint position"):
+        armctl.Reference(np.zeros(0), np.zeros(0), np.zeros(0))
