@@ -1,4 +1,5 @@
-"""The speed benchmark runs and both of its solvers agree on the problem (no timing is asserted)."""
+"""`armctl.bench.topp_speed`: the TOPP speed benchmark runs and both of its solvers agree on the problem (no timing
+is asserted)."""
 
 from __future__ import annotations
 
