@@ -78,7 +78,7 @@ class Scenario:
 
     def controller(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         """The open-loop torque profile as a controller: τ(t_k) regardless of the state."""
-        return self.torques[round(t / self.control_dt)]  # type: ignore[no-any-return]
+        return self.torques[round(t / self.control_dt)]
 
 
 def scenario(control_dt: float = CONTROL_DT, duration: float = DURATION) -> Scenario:

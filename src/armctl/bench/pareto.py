@@ -61,7 +61,7 @@ def plot_pareto(rows: list[dict[str, Any]], path: Path) -> None:
         mine = [r for r in rows if r["scene"] == name and failure_note(r) is None]
         pts = [(r["compute_s"] * 1e6, r["rms_error"]) for r in mine]
         spans = [tuple(1e6 * v for v in r.get("compute_s_iqr", (r["compute_s"],) * 2)) for r in mine]
-        front = set(pareto_front(pts, spans))  # type: ignore[arg-type]
+        front = set(pareto_front(pts, spans))
         placed: list[tuple[float, float]] = []
         for i, (r, (x, y), (lo, hi)) in enumerate(zip(mine, pts, spans, strict=True)):
             color = "#d62828" if i in front else "#577590"

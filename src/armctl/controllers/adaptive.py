@@ -64,11 +64,16 @@ class Adaptive(SlidingGains, Controller):
     mass-matrix evaluation a step (and with a full Γ two triangular solves).
     """
 
+    dynamics: Dynamics  # given to __init__, never None
+
     _outside = False  # whether the last projection changed θ̂ (see _project); reset() clears it
     _plant: Dynamics | None
     _gamma_factor: Any = None
 
     gamma = Gain("Γ (13n×13n).", size=lambda owner: 13 * owner.n)
+    _gamma: FloatArray  # Γ in the compact form the Gain keeps (its diagonal if diagonal)
+    _gamma_matrix: FloatArray
+    _gamma_dt: FloatArray  # Γ·dt for the control period _dt (a diagonal Γ)
 
     def __init__(
         self,
@@ -149,7 +154,7 @@ class Adaptive(SlidingGains, Controller):
 
     def _gains_changed(self) -> None:
         super()._gains_changed()
-        self._dt, self._gamma_dt = 0.0, None  # Γ·dt formed anew at the next update
+        self._dt = 0.0  # Γ·dt formed anew at the next update (no update has dt = 0)
         self._gamma_factor = None  # and Γ's Cholesky factor, for V
 
     def reset(self) -> None:
@@ -233,4 +238,4 @@ class Adaptive(SlidingGains, Controller):
         a = self.composite * dt
         gw = self._gamma[:, None] * w_f.T if self._gamma.ndim == 1 else self._gamma.dot(w_f.T)  # Γ W_fᵀ
         inner = np.eye(w_f.shape[0]) + a * w_f.dot(gw)
-        return b - a * gw.dot(np.linalg.solve(inner, w_f.dot(b)))  # type: ignore[no-any-return]
+        return b - a * gw.dot(np.linalg.solve(inner, w_f.dot(b)))

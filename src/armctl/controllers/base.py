@@ -72,7 +72,7 @@ class Controller(ABC):
             q, qd = self._checked(t, q, qd)
         elif self._checks_result:  # NaN or inf in q or q̇ reaches τ: one check, of τ
             try:
-                tau = self.compute(t, q, qd, ref)  # type: ignore[arg-type]
+                tau = self.compute(t, q, qd, ref)
             except (RuntimeWarning, FloatingPointError):  # NumPy's warnings made errors: name the input
                 self._checked(t, q, qd)
                 raise  # the inputs were finite: the law's own
@@ -80,9 +80,9 @@ class Controller(ABC):
                 return tau
             self._checked(t, q, qd)  # NonFiniteError if an input is the cause
             self._nonfinite_torque(tau, q, qd)
-        elif not (all_finite(q) and all_finite(qd) and math.isfinite(t)):  # type: ignore[arg-type]
+        elif not (all_finite(q) and all_finite(qd) and math.isfinite(t)):
             q, qd = self._checked(t, q, qd)
-        tau = self.compute(t, q, qd, ref)  # type: ignore[arg-type]
+        tau = self.compute(t, q, qd, ref)
         try:
             if all_finite(tau):
                 return tau

@@ -33,6 +33,8 @@ class ComputedTorque(PIDGains, Controller):
     model.) The logged arrays are those the law computed, not copies: read them before the next call.
     """
 
+    dynamics: Dynamics  # given to __init__, never None
+
     def __init__(
         self, dynamics: Dynamics, kp: ArrayLike, kd: ArrayLike, ki: ArrayLike | None = None, friction: bool | str = True
     ) -> None:
@@ -65,7 +67,7 @@ class ComputedTorque(PIDGains, Controller):
             )
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
-        kernel = self.dynamics.kernel  # type: ignore[union-attr]
+        kernel = self.dynamics.kernel
         both = self._command.dot(np.concatenate((ref.qdd, ref.q, ref.qd, q, qd)))
         n = self.n
         v = both[:n]  # q̈_d + K_d ė + K_p e

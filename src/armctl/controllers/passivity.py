@@ -37,10 +37,15 @@ class SlidingGains:
 
     lam = Gain("Λ (n×n); may be reassigned between calls (checked again).")
     kd = Gain("K_D (n×n); may be reassigned between calls (checked again).")
+    # what the Gain descriptors keep: the compact forms and the matrices
+    _lam: FloatArray
+    _kd: FloatArray
+    _lam_matrix: FloatArray
+    _kd_matrix: FloatArray
 
     def _gains_changed(self) -> None:
         if hasattr(self, "_kd"):  # Λ and K_D both set
-            self._sliding = sliding_map(self._lam_matrix, self._kd_matrix)  # type: ignore[attr-defined]
+            self._sliding = sliding_map(self._lam_matrix, self._kd_matrix)
 
 
 class PassivityBased(SlidingGains, Controller):
@@ -58,6 +63,8 @@ class PassivityBased(SlidingGains, Controller):
     ``"s"`` [rad/s]. The logged arrays are those the law computed, not copies: read them before the next call.
     """
 
+    dynamics: Dynamics  # given to __init__, never None
+
     def __init__(self, dynamics: Dynamics, lam: ArrayLike, kd: ArrayLike) -> None:
         super().__init__(dynamics)
         self.lam, self.kd = lam, kd
@@ -66,7 +73,7 @@ class PassivityBased(SlidingGains, Controller):
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         qd_r, qdd_r, s, kd_s, a, w = sliding(q, qd, ref, self._sliding)
-        model = self.dynamics.kernel.passivity_torque(q, qd, qd_r, qdd_r, a, w)  # type: ignore[union-attr]
+        model = self.dynamics.kernel.passivity_torque(q, qd, qd_r, qdd_r, a, w)
         self.last_log = {"model": model, "damping": kd_s, "s": s}
         return model - kd_s
 

@@ -35,6 +35,8 @@ class PDGravity(PIDGains, Controller):
     law computed, not copies: read them before the next call.
     """
 
+    dynamics: Dynamics  # given to __init__, never None
+
     def __init__(
         self, dynamics: Dynamics, kp: ArrayLike, kd: ArrayLike, ki: ArrayLike | None = None, friction: bool = False
     ) -> None:
@@ -76,7 +78,7 @@ class PDGravity(PIDGains, Controller):
         return state
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
-        kernel = self.dynamics.kernel  # type: ignore[union-attr]
+        kernel = self.dynamics.kernel
         if kernel is not self._law_for:
             self._law, self._law_for = kernel.pd_gravity_law(self._feedback), kernel
         law = self._law

@@ -25,6 +25,8 @@ class PDDesiredGravity(PIDGains, Controller):
     kp: proportional gain [N·m/rad]; kd: derivative gain [N·m·s/rad] (each a scalar, vector or s.p.d. matrix).
     """
 
+    dynamics: Dynamics  # given to __init__, never None
+
     def __init__(self, dynamics: Dynamics, kp: ArrayLike, kd: ArrayLike) -> None:
         super().__init__(dynamics)
         self._set_gains(kp, kd, None)

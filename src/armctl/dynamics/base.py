@@ -22,7 +22,7 @@ from __future__ import annotations
 import math
 import threading
 from collections.abc import Callable, Sequence
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -239,7 +239,7 @@ class Dynamics(RegressorMethods):
         q, qd : (n,) array_like
             Joint positions [rad or m] and velocities [rad/s or m/s].
         """
-        return self._evaluate(self._local.kernel.coriolis, ("q", "qd"), q, qd)  # type: ignore[no-any-return]
+        return self._evaluate(self._local.kernel.coriolis, ("q", "qd"), q, qd)
 
     def gravity_torque(self, q: ArrayLike) -> FloatArray:
         """g(q) = ∂U/∂q [N·m or N].
@@ -266,7 +266,7 @@ class Dynamics(RegressorMethods):
         qd : (n,) array_like
             Joint velocities [rad/s or m/s].
         """
-        return self._evaluate(self.friction.torque, ("qd",), qd)  # type: ignore[no-any-return]
+        return self._evaluate(self.friction.torque, ("qd",), qd)
 
     def inverse_dynamics(
         self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, wrench: ArrayLike | None = None
@@ -289,7 +289,7 @@ class Dynamics(RegressorMethods):
                 tau = None
             if tau is not None:
                 if self.friction.any:
-                    tau += self.friction.torque(qd)
+                    tau += self.friction.torque(cast(FloatArray, qd))  # (float_vectors checked it)
                 if math.isfinite(sum(tau.tolist())):
                     return tau
         tau = self._evaluate(k.inverse_dynamics, ("q", "qd", "qdd"), q, qd, qdd)
@@ -299,7 +299,7 @@ class Dynamics(RegressorMethods):
                 tau = tau + k.jacobian(qv, None).T @ h
             if not np.isfinite(tau).all():
                 raise self._overflow(tau, ("wrench",), (h,), qv)
-        return tau  # type: ignore[no-any-return]
+        return tau
 
     def forward_dynamics(
         self, q: ArrayLike, qd: ArrayLike, tau: ArrayLike, wrench: ArrayLike | None = None
@@ -318,7 +318,7 @@ class Dynamics(RegressorMethods):
         """
         k = self._local.kernel
         if not self.friction.any and wrench is None:
-            return self._evaluate(k.aba, ("q", "qd", "tau"), q, qd, tau)  # type: ignore[no-any-return]
+            return self._evaluate(k.aba, ("q", "qd", "tau"), q, qd, tau)
         q, qd, tau = (self._vector(x, nm) for x, nm in ((q, "q"), (qd, "qd"), (tau, "tau")))
         with np.errstate(over="ignore", invalid="ignore"):
             net = tau - self.friction.torque(qd) if self.friction.any else tau
@@ -328,7 +328,7 @@ class Dynamics(RegressorMethods):
         if not np.isfinite(net).all():  # τ − τ_f − Jᵀh beyond the range of floats: name the largest input
             names, args = (("tau", "qd", "wrench"), (tau, qd, h)) if wrench is not None else (("tau", "qd"), (tau, qd))
             raise self._overflow(net, names, args, q)
-        return self._evaluate(k.aba, ("q", "qd", "tau"), q, qd, net)  # type: ignore[no-any-return]
+        return self._evaluate(k.aba, ("q", "qd", "tau"), q, qd, net)
 
     def jacobian(self, q: ArrayLike, frame: str | None = None) -> FloatArray:
         """Geometric Jacobian (6×n) of ``frame`` at its origin, world-aligned axes, rows [linear; angular].

@@ -144,7 +144,7 @@ def puma560(physical: bool = False) -> RobotModel:
     depends on them, link 1 only turns about y1) and link 3 I_zz = 0.020 (from 0.0125).
     Named poses: :data:`PUMA_QZ`, :data:`PUMA_QR`, :data:`PUMA_QN`."""
     physical = boolean(physical, "puma560(): physical")
-    rows = []
+    rows: list[DHLink] = []
     for d, a, alpha, m, r, inert, jm, g, b, tc, qlim in _PUMA:
         ixx, iyy, izz, ixy, iyz, ixz = inert
         k = len(rows)

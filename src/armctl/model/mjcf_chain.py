@@ -196,7 +196,7 @@ class _ChainReader:
 
     def sites(self, b: int, i: int, pose: FloatArray) -> None:
         m = self.m
-        for s in np.flatnonzero(m.site_bodyid == b):
+        for s in np.flatnonzero(m.site_bodyid == b).tolist():
             self.frame(_name(m, "site", s), i, pose @ _pose(m.site_pos[s], m.site_quat[s]), "site")
 
     def body(self, b: int, i: int, parent_pose: FloatArray) -> None:

@@ -16,7 +16,7 @@ Conventions (the textbook's, see ``shared/references``):
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -107,7 +107,7 @@ def inertia_tensor(x: ArrayLike, name: str = "inertia", triangle: bool = True) -
     return readonly(a)
 
 
-@dataclass(frozen=True, eq=False)  # numpy fields: compare by identity
+@dataclass(frozen=True, eq=False, init=False)  # numpy fields: compare by identity
 class Link:
     """An (augmented) link body.
 
@@ -119,15 +119,19 @@ class Link:
     """
 
     mass: float
-    com: FloatArray = field(default_factory=lambda: np.zeros(3))
-    inertia: FloatArray = field(default_factory=lambda: np.zeros((3, 3)))
-    physical: bool = True
+    com: FloatArray
+    inertia: FloatArray
+    physical: bool
 
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "mass", scalar(self.mass, "link mass [kg]", nonnegative=True))
-        object.__setattr__(self, "com", vec3(self.com, "link com"))
-        object.__setattr__(self, "physical", boolean(self.physical, "link physical"))
-        object.__setattr__(self, "inertia", inertia_tensor(self.inertia, "link inertia", self.physical))
+    def __init__(
+        self, mass: float, com: ArrayLike | None = None, inertia: ArrayLike | None = None, physical: bool = True
+    ) -> None:
+        object.__setattr__(self, "mass", scalar(mass, "link mass [kg]", nonnegative=True))
+        object.__setattr__(self, "com", vec3(np.zeros(3) if com is None else com, "link com"))
+        object.__setattr__(self, "physical", boolean(physical, "link physical"))
+        object.__setattr__(
+            self, "inertia", inertia_tensor(np.zeros((3, 3)) if inertia is None else inertia, "link inertia", physical)
+        )
         with np.errstate(over="ignore", invalid="ignore"):
             first, second = self.mass * self.com, self.inertia_about_origin()
         if not (np.isfinite(first).all() and np.isfinite(second).all()):  # the parameters π are made of these
@@ -161,7 +165,7 @@ class Link:
         return Link(m, c, i, physical)
 
 
-@dataclass(frozen=True, eq=False)  # numpy fields: compare by identity
+@dataclass(frozen=True, eq=False, init=False)  # numpy fields: compare by identity
 class Motor:
     """A motor driving a joint through a rigid gear.
 
@@ -172,16 +176,18 @@ class Motor:
     :func:`~armctl.model.from_parameters.model_from_parameters` gives a joint that had no motor).
     """
 
-    inertia: float = 0.0
-    gear_ratio: float = 1.0
-    axis: FloatArray | None = None
-    gyroscopic: bool = True
+    inertia: float
+    gear_ratio: float
+    axis: FloatArray | None
+    gyroscopic: bool
 
-    def __post_init__(self) -> None:
-        i = scalar(self.inertia, "rotor inertia [kg·m²]", nonnegative=True)
-        k = scalar(self.gear_ratio, "gear ratio")
+    def __init__(
+        self, inertia: float = 0.0, gear_ratio: float = 1.0, axis: ArrayLike | None = None, gyroscopic: bool = True
+    ) -> None:
+        i = scalar(inertia, "rotor inertia [kg·m²]", nonnegative=True)
+        k = scalar(gear_ratio, "gear ratio")
         if k == 0:
-            raise InvalidParameterError(f"gear ratio must be non-zero, got {self.gear_ratio!r}", value=self.gear_ratio)
+            raise InvalidParameterError(f"gear ratio must be non-zero, got {gear_ratio!r}", value=gear_ratio)
         if not np.isfinite(k * k * i):  # the reflected inertia k_r² I_m, a parameter of π
             raise InvalidParameterError(
                 f"rotor inertia {i:g} kg·m² and gear ratio {k:g} overflow the reflected inertia k_r² I_m: give "
@@ -190,12 +196,13 @@ class Motor:
             )
         object.__setattr__(self, "inertia", i)
         object.__setattr__(self, "gear_ratio", k)
-        object.__setattr__(self, "gyroscopic", boolean(self.gyroscopic, "gyroscopic"))
-        if self.axis is not None:
-            a = vec3(self.axis, "motor axis")
+        object.__setattr__(self, "gyroscopic", boolean(gyroscopic, "gyroscopic"))
+        object.__setattr__(self, "axis", None)
+        if axis is not None:
+            a = vec3(axis, "motor axis")
             nrm = float(np.linalg.norm(a))
             if nrm < 1e-12:
-                raise InvalidParameterError("motor axis must be non-zero", value=self.axis)
+                raise InvalidParameterError("motor axis must be non-zero", value=axis)
             object.__setattr__(self, "axis", readonly(a / nrm))
 
     @property
@@ -270,9 +277,12 @@ class JointLimits:
 
 
 JOINT_KINDS = ("revolute", "prismatic")
+# a joint's defaults: no friction, no limits (immutable, so one object serves every joint)
+_NO_FRICTION = JointFriction()
+_NO_LIMITS = JointLimits()
 
 
-@dataclass(frozen=True, eq=False)  # numpy fields: compare by identity
+@dataclass(frozen=True, eq=False, init=False)  # numpy fields: compare by identity
 class Joint:
     """One joint of a serial chain and the link it moves.
 
@@ -285,11 +295,27 @@ class Joint:
     axis: FloatArray
     placement: FloatArray
     link: Link
-    motor: Motor | None = None
-    friction: JointFriction = field(default_factory=JointFriction)
-    limits: JointLimits = field(default_factory=JointLimits)
+    motor: Motor | None
+    friction: JointFriction
+    limits: JointLimits
 
-    def __post_init__(self) -> None:
+    def __init__(
+        self,
+        name: str,
+        kind: str,
+        axis: ArrayLike,
+        placement: ArrayLike,
+        link: Link,
+        motor: Motor | None = None,
+        friction: JointFriction = _NO_FRICTION,
+        limits: JointLimits = _NO_LIMITS,
+    ) -> None:
+        values = (("name", name), ("kind", kind), ("axis", axis), ("placement", placement), ("link", link))
+        for key, value in (*values, ("motor", motor), ("friction", friction), ("limits", limits)):
+            object.__setattr__(self, key, value)
+        self._check()
+
+    def _check(self) -> None:
         name_text(self.name, "joint name")
         if not isinstance(self.kind, str) or self.kind not in JOINT_KINDS:
             raise InvalidParameterError(
@@ -314,18 +340,20 @@ class Joint:
         return readonly(self.placement[:3, :3] @ self.axis)
 
 
-@dataclass(frozen=True, eq=False)  # numpy fields: compare by identity
+@dataclass(frozen=True, eq=False, init=False)  # numpy fields: compare by identity
 class Frame:
-    """A named frame rigidly attached to joint ``joint`` (0: the world, i: the i-th joint, 1-based)."""
+    """A named frame rigidly attached to joint ``joint`` (0: the world, i: the i-th joint, 1-based), at
+    ``placement`` (4×4 homogeneous transform in that joint's frame)."""
 
     name: str
     joint: int
     placement: FloatArray
 
-    def __post_init__(self) -> None:
-        name_text(self.name, "frame name")
-        object.__setattr__(self, "joint", whole_number(self.joint, f"frame {self.name!r} joint index"))
-        object.__setattr__(self, "placement", homogeneous(self.placement, f"frame {self.name!r} placement"))
+    def __init__(self, name: str, joint: int, placement: ArrayLike) -> None:
+        object.__setattr__(self, "name", name)
+        name_text(name, "frame name")
+        object.__setattr__(self, "joint", whole_number(joint, f"frame {name!r} joint index"))
+        object.__setattr__(self, "placement", homogeneous(placement, f"frame {name!r} placement"))
 
 
 def homogeneous(x: ArrayLike | None, name: str = "transform") -> FloatArray:

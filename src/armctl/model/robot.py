@@ -11,7 +11,7 @@ import hashlib
 import math
 import os
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -87,7 +87,7 @@ def _check_scale(joints: tuple[Joint, ...], gravity: FloatArray) -> None:
                 )
 
 
-@dataclass(frozen=True, eq=False)  # numpy fields: compare by identity
+@dataclass(frozen=True, eq=False, init=False)  # numpy fields: compare by identity
 class RobotModel:
     """A serial manipulator: joints (each with its link, motor, friction, limits), named frames, gravity.
 
@@ -98,13 +98,30 @@ class RobotModel:
     """
 
     joints: tuple[Joint, ...]
-    name: str = "robot"
-    gravity: FloatArray = field(default_factory=lambda: np.array([0.0, 0.0, -9.81]))
-    frames: tuple[Frame, ...] = ()
-    tool_frame: str | None = None
-    source: str | None = None
+    name: str
+    gravity: FloatArray
+    frames: tuple[Frame, ...]
+    tool_frame: str | None
+    source: str | None
 
-    def __post_init__(self) -> None:
+    def __init__(
+        self,
+        joints: Sequence[Joint],
+        name: str = "robot",
+        gravity: ArrayLike = (0.0, 0.0, -9.81),
+        frames: Sequence[Frame] = (),
+        tool_frame: str | None = None,
+        source: str | os.PathLike[str] | None = None,
+    ) -> None:
+        """joints: the chain from the base; name: the model's; gravity: g [m/s²] in world axes; frames: the named
+        frames besides the joints'; tool_frame: the frame a method given ``frame=None`` uses; source: the
+        description file (its meshes' folder for :meth:`to_mjcf`)."""
+        values = (("joints", joints), ("name", name), ("gravity", gravity), ("frames", frames))
+        for key, value in (*values, ("tool_frame", tool_frame), ("source", source)):
+            object.__setattr__(self, key, value)
+        self._check()
+
+    def _check(self) -> None:
         joints = instances(self.joints, Joint, "joints", "armctl.model.Joint")
         frames = instances(self.frames, Frame, "frames", "armctl.model.Frame")
         if not joints:
@@ -162,7 +179,7 @@ class RobotModel:
     @classmethod
     def from_urdf(
         cls,
-        path: str,
+        path: str | os.PathLike[str],
         tool_frame: str | None = None,
         lock: Sequence[str] | Mapping[str, float] = (),
         gravity: ArrayLike = (0, 0, -9.81),
@@ -409,17 +426,17 @@ class RobotModel:
         >= 0; ``coulomb_negative`` and ``static`` may be None: the Coulomb level, see
         :class:`~armctl.model.parts.JointFriction`)."""
 
-        def per_joint(x: ArrayLike | None, what: str, optional: bool = False) -> list[float | None]:
-            if x is None and optional:
-                return [None] * self.n
-            name = f"with_friction(): {what}"
-            return nonnegative_vector(x, self.n, name).tolist()  # type: ignore[no-any-return]
+        def per_joint(x: ArrayLike | None, what: str) -> list[float]:
+            return nonnegative_vector(x, self.n, f"with_friction(): {what}").tolist()
+
+        def optional(x: ArrayLike | None, what: str) -> list[float | None]:
+            return [None] * self.n if x is None else list(per_joint(x, what))
 
         cols = zip(
             per_joint(viscous, "viscous"),
             per_joint(coulomb, "coulomb"),
-            per_joint(coulomb_negative, "coulomb_negative", True),
-            per_joint(static, "static", True),
+            optional(coulomb_negative, "coulomb_negative"),
+            optional(static, "static"),
             per_joint(stribeck_velocity, "stribeck_velocity"),
             strict=True,
         )

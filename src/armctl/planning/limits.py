@@ -47,7 +47,7 @@ class Bounds:
         """How much of the range each value uses: |v − mid| / half-range (1 at a bound, > 1 outside).
         For symmetric bounds ±L this is |v|/L. values: (..., n)."""
         mid, half = 0.5 * (self.upper + self.lower), 0.5 * (self.upper - self.lower)
-        return np.abs(values - mid) / half  # type: ignore[no-any-return]
+        return np.abs(values - mid) / half
 
 
 @dataclass(frozen=True)

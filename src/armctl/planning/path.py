@@ -175,7 +175,7 @@ class SplinePath(Path):
         return np.unique(np.concatenate(points))
 
     def _derivatives(self, s: FloatArray, order: int) -> FloatArray:
-        return self._splines[order](s)  # type: ignore[no-any-return]
+        return self._splines[order](s)
 
     def at(self, s: float) -> tuple[FloatArray, FloatArray, FloatArray]:
         # the cubic piece q = c₀d³ + c₁d² + c₂d + c₃, d = s − s_k, evaluated directly (no scipy call)
@@ -217,7 +217,7 @@ class LinePath(Path):
 
     def _derivatives(self, s: FloatArray, order: int) -> FloatArray:
         if order == 0:
-            return self.start + s[:, None] * self.delta  # type: ignore[no-any-return]
+            return self.start + s[:, None] * self.delta
         if order == 1:
             return np.repeat(self.delta[None, :], s.shape[0], axis=0)
         return np.zeros((s.shape[0], self.n))

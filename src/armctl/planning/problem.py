@@ -285,6 +285,7 @@ def build_problem(
             raise NonFiniteError(
                 f"the dynamics gave non-finite path coefficients {name}(s); check the model", value=arr
             )
+    coef_a, coef_b, coef_c, coef_w = arrays
     return TimeScalingProblem(
         dyn,
         path,
@@ -293,7 +294,10 @@ def build_problem(
         readonly(q),
         readonly(dq),
         readonly(ddq),
-        *map(readonly, arrays),
+        readonly(coef_a),
+        readonly(coef_b),
+        readonly(coef_c),
+        readonly(coef_w),
         readonly(g),
         readonly(velocity_bound(path, s, limits)),
         readonly(gravity),

@@ -56,14 +56,14 @@ def _first_root(d: FloatArray, e: FloatArray, c0: FloatArray) -> FloatArray:
     den = e + root
     with np.errstate(divide="ignore", invalid="ignore"):
         z = np.where((disc >= 0) & (den > 0), -2.0 * c0 / den, np.inf)
-    return z  # type: ignore[no-any-return]
+    return z
 
 
 def _speed_root(v: FloatArray, lower: FloatArray, upper: FloatArray, power: int) -> FloatArray:
     """Largest z with lower ≤ v z^power ≤ upper (bounds straddling 0)."""
     with np.errstate(divide="ignore"):
         lim = np.where(v > 0, upper / v, np.where(v < 0, lower / v, np.inf))
-    return lim if power == 1 else np.sqrt(lim)  # type: ignore[no-any-return]
+    return lim if power == 1 else np.sqrt(lim)
 
 
 def uniform_time_scaling(

@@ -12,74 +12,90 @@ from armctl._checks import FLOAT, FloatArray, readonly, real_array
 from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
 
 
-@dataclass(frozen=True, eq=False)  # numpy fields: compare by identity
+@dataclass(frozen=True, eq=False, init=False)  # numpy fields: compare by identity
 class Reference:
-    """Desired joint positions ``q`` [rad or m], velocities ``qd`` and accelerations ``qdd`` (each (n,),
-    read-only). ``qd`` and ``qdd`` default to zeros (a set-point). Each must hold real finite numbers (masked
-    arrays are refused: NumPy would pass on the data under the mask), q at least one."""
+    """Desired joint positions ``q`` [rad or m], velocities ``qd`` [rad/s or m/s] and accelerations ``qdd``
+    [rad/s² or m/s²] at one instant (each (n,), read-only copies). Each must hold real finite numbers (masked
+    arrays are refused: NumPy would pass on the data under the mask), q at least one.
+
+    Parameters
+    ----------
+    q : array_like, shape (n,)
+        Joint positions (a scalar: one joint).
+    qd, qdd : array_like, shape (n,), optional
+        Velocities and accelerations; None (the default) gives zeros, a set-point.
+
+    Raises
+    ------
+    ShapeError
+        q is not a vector of at least one entry, or qd / qdd has another shape.
+    InvalidParameterError, NonFiniteError
+        An entry is not a real number, or is NaN or inf.
+    """
 
     q: FloatArray
-    qd: FloatArray | None = None
-    qdd: FloatArray | None = None
+    qd: FloatArray
+    qdd: FloatArray
 
-    def __post_init__(self) -> None:
-        q, qd, qdd = self.q, self.qd, self.qdd
+    def __init__(self, q: ArrayLike, qd: ArrayLike | None = None, qdd: ArrayLike | None = None) -> None:
         # the usual case, built every control period by a reference generator: three float64 vectors of one
         # length with a finite sum (a sum that overflows goes the slow way, which checks entry by entry)
         if (
-            q.__class__ is qd.__class__ is qdd.__class__ is np.ndarray
+            type(q) is np.ndarray
+            and type(qd) is np.ndarray
+            and type(qdd) is np.ndarray
             and q.dtype is qd.dtype is qdd.dtype is FLOAT
             and q.ndim == 1
             and q.shape == qd.shape == qdd.shape
             and q.shape[0]
         ):
-            q, qd, qdd = q.copy(), qd.copy(), qdd.copy()
-            if math.isfinite(sum(q.tolist()) + sum(qd.tolist()) + sum(qdd.tolist())):
-                q.setflags(write=False)  # (cheaper than through .flags)
-                qd.setflags(write=False)
-                qdd.setflags(write=False)
-                object.__setattr__(self, "q", q)
-                object.__setattr__(self, "qd", qd)
-                object.__setattr__(self, "qdd", qdd)
+            pos, vel, acc = q.copy(), qd.copy(), qdd.copy()
+            if math.isfinite(sum(pos.tolist()) + sum(vel.tolist()) + sum(acc.tolist())):
+                pos.setflags(write=False)  # (cheaper than through .flags)
+                vel.setflags(write=False)
+                acc.setflags(write=False)
+                object.__setattr__(self, "q", pos)
+                object.__setattr__(self, "qd", vel)
+                object.__setattr__(self, "qdd", acc)
                 return
-        self._checked()
+        self._checked(q, qd, qdd)
 
-    def _checked(self) -> None:
-        """Convert and check the three fields entry by entry, naming what is wrong."""
-        if self.q is None:
+    def _checked(self, raw_q: ArrayLike, raw_qd: ArrayLike | None, raw_qdd: ArrayLike | None) -> None:
+        """Convert and check the three arguments entry by entry, naming what is wrong."""
+        if raw_q is None:
             raise InvalidParameterError(
                 "Reference q must hold real numbers (q is required: the joint positions), got None", value=None
             )
-        raw_q = self.q
-        if raw_q.__class__ is np.ndarray and raw_q.dtype is FLOAT and raw_q.ndim <= 1:  # the usual case
+        if type(raw_q) is np.ndarray and raw_q.dtype is FLOAT and raw_q.ndim <= 1:  # the usual case
             q: FloatArray | None = raw_q.reshape(-1)
         else:
             q = np.array(real_array(raw_q, "Reference q")).reshape(-1) if np.ndim(raw_q) <= 1 else None
         if q is None:
-            raise ShapeError(f"Reference q must be a vector, got shape {np.shape(self.q)}", value=self.q)
+            raise ShapeError(f"Reference q must be a vector, got shape {np.shape(raw_q)}", value=raw_q)
         if not q.shape[0]:
-            raise ShapeError(f"Reference q must hold at least one joint position, got {self.q!r}", value=self.q)
-        for name in ("q", "qd", "qdd"):
-            raw = getattr(self, name)
+            raise ShapeError(f"Reference q must hold at least one joint position, got {raw_q!r}", value=raw_q)
+        for name, raw in (("q", raw_q), ("qd", raw_qd), ("qdd", raw_qdd)):
             if raw is None:
                 a = np.zeros_like(q)
-            elif raw.__class__ is np.ndarray and raw.dtype is FLOAT:  # the usual case: one copy, no conversion
+            elif type(raw) is np.ndarray and raw.dtype is FLOAT:  # the usual case: one copy, no conversion
                 a = raw.copy()
             else:
                 a = np.array(real_array(raw, f"Reference {name}"))
+            given = a.shape
             if a.ndim == 0:  # a scalar: one joint
                 a = a.reshape(1)
             if a.shape != q.shape:
-                raise ShapeError(f"Reference {name} must have shape {q.shape} like q, got {np.shape(raw)}", value=raw)
+                raise ShapeError(f"Reference {name} must have shape {q.shape} like q, got {given}", value=raw)
             if not np.isfinite(a).all():
                 raise NonFiniteError(f"Reference {name} holds NaN or inf: {a}", value=raw)
             object.__setattr__(self, name, readonly(a))
 
     @property
     def n(self) -> int:
+        """The number of joints."""
         return int(self.q.shape[0])
 
     @classmethod
     def hold(cls, q: ArrayLike) -> Reference:
         """A set-point: q with zero velocity and acceleration (q checked as :class:`Reference` checks it)."""
-        return cls(q)  # type: ignore[arg-type]
+        return cls(q)

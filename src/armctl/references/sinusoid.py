@@ -12,28 +12,47 @@ from armctl._checks import FloatArray, readonly, scalar
 from armctl.references._rows import row
 from armctl.references.reference import Reference
 
-_PER_JOINT = ("amplitude", "frequency", "phase")
 
-
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, init=False)
 class Sinusoid:
-    """q_d = center + amplitude · sin(2π·frequency·t + phase), per joint (amplitude [rad], frequency [Hz])."""
+    """q_d = center + amplitude · sin(2π·frequency·t + phase), per joint.
 
-    center: ArrayLike
-    amplitude: ArrayLike
-    frequency: ArrayLike
-    phase: ArrayLike = 0.0
+    Parameters
+    ----------
+    center : array_like, shape (n,)
+        The mean joint positions [rad or m] (a scalar: one joint).
+    amplitude : array_like, shape (n,) or scalar
+        [rad or m]; a scalar applies to every joint.
+    frequency : array_like, shape (n,) or scalar
+        [Hz]; a scalar applies to every joint.
+    phase : array_like, shape (n,) or scalar, optional
+        [rad] (default 0).
 
+    Raises
+    ------
+    ShapeError
+        center is not a vector, or another argument has neither one entry nor n.
+    InvalidParameterError, NonFiniteError
+        A value is not a real number, or is NaN or inf.
+    """
+
+    center: FloatArray
+    amplitude: FloatArray
+    frequency: FloatArray
+    phase: FloatArray
     _w: FloatArray = field(init=False, repr=False)
     _aw: FloatArray = field(init=False, repr=False)
     _maww: FloatArray = field(init=False, repr=False)
 
-    def __post_init__(self) -> None:
+    def __init__(self, center: ArrayLike, amplitude: ArrayLike, frequency: ArrayLike, phase: ArrayLike = 0.0) -> None:
         # read-only copies: the factors below are formed from them once, so the fields must not change later
-        c = readonly(np.array(row(self.center, "center")))
-        a, f, phase = (readonly(np.array(row(getattr(self, k), k, c.size, broadcast=True))) for k in _PER_JOINT)
-        for name, value in zip(("center", *_PER_JOINT), (c, a, f, phase), strict=True):
-            object.__setattr__(self, name, value)
+        c = readonly(np.array(row(center, "center")))
+        a, f, ph = (
+            readonly(np.array(row(value, name, c.size, broadcast=True)))
+            for name, value in (("amplitude", amplitude), ("frequency", frequency), ("phase", phase))
+        )
+        for name, arr in (("center", c), ("amplitude", a), ("frequency", f), ("phase", ph)):
+            object.__setattr__(self, name, arr)
         # the per-call factors, formed once: ω = 2π f, a ω and −a ω² (a call is then eight vector operations)
         w = 2 * math.pi * f
         object.__setattr__(self, "_w", w)

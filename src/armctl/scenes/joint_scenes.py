@@ -15,7 +15,7 @@ def pendulum() -> Scene:
     move = Quintic([0.0], [1.2], 1.5, t0=0.2)
     back = Quintic([1.2], [0.0], 1.5, t0=2.2)
 
-    def reference(t: float):  # type: ignore[no-untyped-def]
+    def reference(t: float):
         return move(t) if t < 2.2 else back(t)
 
     return Scene(

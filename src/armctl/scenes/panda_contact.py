@@ -6,7 +6,7 @@ controllers' model knows."""
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -38,6 +38,8 @@ class PressAndSlide(Controller):
     which keeps pushing its pose target 1 cm below the table: the force is whatever its stiffness gives.
     ``kp``, ``kd``: the pose task's gains (see :class:`FramePoseTask`; ``kd=None``: its default). ``force`` ≥ 0,
     ``slide_start`` ≥ 0 and ``slide_time`` > 0 must be finite."""
+
+    dynamics: Dynamics  # given to __init__, never None
 
     def __init__(
         self,
@@ -94,7 +96,7 @@ class PressAndSlide(Controller):
             self.force_task.set_target(0.0)
 
     def compute(self, t: float, q: np.ndarray, qd: np.ndarray, ref: Reference) -> np.ndarray:
-        if self.touched is None and self.dynamics.frame_pose(q)[2, 3] <= self.z_table:  # type: ignore[union-attr]
+        if self.touched is None and self.dynamics.frame_pose(q)[2, 3] <= self.z_table:
             self.touched = t
             if not self.closed_form:
                 self.contact.active = True
@@ -149,9 +151,9 @@ class ContactScene(Scene):
             out.update({"force_rms_error": float("nan"), "contact_lost": False, "error_unit": "m"})
             return out
         dyn = self.dynamics("exact")
-        probe = self.controller(method, gains)
+        probe = cast(PressAndSlide, self.controller(method, gains))
         x = np.array([dyn.frame_pose(q)[:3, 3] for q in res.q])
-        want = np.array([probe.target(float(t))[0][:3, 3] for t in res.t])  # type: ignore[attr-defined]
+        want = np.array([probe.target(float(t))[0][:3, 3] for t in res.t])
         err = np.linalg.norm((x - want)[:, :2], axis=1)  # in the table plane: the normal is force-controlled
         fn = -res.contact_force[:, 0, 2] if res.contact_force.size else np.zeros(len(res.t))
         touch = np.flatnonzero(fn > 0)

@@ -35,7 +35,7 @@ def panda_with_friction() -> RobotModel:
 
 
 @cache
-def _trajectory(margin: float):  # type: ignore[no-untyped-def]
+def _trajectory(margin: float):
     from armctl.planning import time_optimal
 
     return time_optimal(

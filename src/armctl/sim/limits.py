@@ -92,7 +92,8 @@ class LimitReport:
         n = len(effort)
         if not len(tau):
             zero = np.zeros(n)
-            return cls(joint_names, effort, velocity, lower, upper, *([zero] * 6), clipped=clipped, samples=0)
+            z = zero  # every figure of a run without samples
+            return cls(joint_names, effort, velocity, lower, upper, z, z, z, z, z, z, clipped=clipped, samples=0)
         with np.errstate(invalid="ignore", divide="ignore"):  # |x| / inf = 0; inf / inf does not occur (finite x)
             abs_tau, abs_qd = np.abs(tau), np.abs(qd)
             beyond = np.maximum(np.maximum(lower - q, q - upper), 0.0)
@@ -145,12 +146,12 @@ class LimitReport:
     def overrun_texts(self) -> list[str]:
         """One line per limit overrun: which joint, how far and on what share of the samples."""
         out = []
-        for j in np.flatnonzero(self.velocity_over > 0):
+        for j in np.flatnonzero(self.velocity_over > 0).tolist():
             out.append(
                 f"{self._name(j)} over its velocity limit ({self.velocity[j]:.3g}) on {self.velocity_over[j]:.1%} "
                 f"of samples, peak {self.velocity_peak[j]:.0%} of it"
             )
-        for j in np.flatnonzero(self.position_over > 0):
+        for j in np.flatnonzero(self.position_over > 0).tolist():
             out.append(
                 f"{self._name(j)} outside its position range [{self.lower[j]:.3g}, {self.upper[j]:.3g}] on "
                 f"{self.position_over[j]:.1%} of samples, by up to {self.position_overrun[j]:.3g}"

@@ -156,7 +156,7 @@ class ClosedLoop:
         if s.fixed_reference is not None:
             ref = s.fixed_reference
         else:
-            ref = setup.check_reference(s.reference_fn(t), s.n, t)  # type: ignore[misc]
+            ref = setup.check_reference(s.reference_fn(t), s.n, t)  # type: ignore[misc]  # set when no fixed one
         rec.references[k] = ref
         try:
             tau = s.call(t, qm, vm, ref)
@@ -185,7 +185,7 @@ class ClosedLoop:
         if self._clip and (max(tl) > low or -min(tl) > low):
             if any(abs(x) > lim for x, lim in zip(tl, self._limits, strict=True)):
                 self.clipped.append(k)
-                return np.clip(tau, -s.effort_limit, s.effort_limit)  # type: ignore[no-any-return]
+                return np.clip(tau, -s.effort_limit, s.effort_limit)
         return tau
 
     def integrate(self, k: int, t: float, tau: FloatArray) -> None:
@@ -204,9 +204,9 @@ class ClosedLoop:
                     rec.qdd[k] = a0
         else:
             for i in range(s.substeps):
-                q, qd, a0, dwf, dwe = advance(pl, s.step, t + i * h, q, qd, tau, h, begun=i == 0)
-                if i == 0 and a0 is not None:
-                    rec.qdd[k] = a0
+                q, qd, a_sub, dwf, dwe = advance(pl, s.step, t + i * h, q, qd, tau, h, begun=i == 0)
+                if i == 0 and a_sub is not None:
+                    rec.qdd[k] = a_sub
                 self._work_friction += dwf
                 self._work_external += dwe
         self.q, self.qd = q, qd

@@ -130,12 +130,13 @@ class SimResult:
     def energy(self) -> FloatArray:
         """E = T + U of the plant at every sample [J] (computed from q, q̇ when first asked for; NaN if the run
         was made with ``energy=False``)."""
-        if self._energy is None:
+        e = self._energy
+        if e is None:
             e = self._energy_of(self.q, self.qd) if self._energy_of is not None else np.full(len(self.t), np.nan)
             e.flags.writeable = False
             object.__setattr__(self, "_energy", e)
             object.__setattr__(self, "_energy_of", None)
-        return self._energy  # type: ignore[return-value]
+        return e
 
     @property
     def n(self) -> int:
@@ -150,14 +151,14 @@ class SimResult:
     @property
     def work(self) -> FloatArray:
         """Total work since t = 0 [J]: actuator + friction + external."""
-        return self.work_actuator + self.work_friction + self.work_external  # type: ignore[no-any-return]
+        return self.work_actuator + self.work_friction + self.work_external
 
     def energy_balance(self) -> FloatArray:
         """E(t) − E(0) − W(t) [J]: zero for the exact solution; its size measures the integration error."""
         energy = self.energy
         if not len(energy):  # a run stopped before its first sample
             return np.zeros(0)
-        return energy - energy[0] - self.work  # type: ignore[no-any-return]
+        return energy - energy[0] - self.work
 
     @property
     def error(self) -> FloatArray:
@@ -171,7 +172,7 @@ class SimResult:
             )
         e = self.reference.q - self.q
         e.flags.writeable = False
-        return e  # type: ignore[no-any-return]
+        return e
 
     @property
     def joint_names(self) -> tuple[str, ...]:
@@ -307,7 +308,10 @@ class SimResult:
                 kw["tau"],
                 kw["q"],
                 kw["qd"],
-                *(extra[f"limit_{k}"] for k in ("effort", "velocity", "lower", "upper")),
+                extra["limit_effort"],
+                extra["limit_velocity"],
+                extra["limit_lower"],
+                extra["limit_upper"],
                 joint_names=tuple(meta["limits"]["joint_names"]),
                 clipped=bool(meta["limits"]["clipped"]),
             )

@@ -128,7 +128,7 @@ class ErrorReport:
         """The exception: the original where it pickled, else an ArmctlError that carries it as text."""
         if self.pickled is not None:
             try:
-                return pickle.loads(self.pickled)  # type: ignore[no-any-return]
+                return pickle.loads(self.pickled)
             except Exception:
                 pass
         return ArmctlError(

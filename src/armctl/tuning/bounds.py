@@ -236,7 +236,11 @@ def model_bounds(
     else:
         details = _certified(dynamics, lo, hi, found, tolerance, max_boxes, seed)
     return ModelBounds(
-        *(details[name].value for name in QUANTITIES),
+        details["lambda_min"].value,
+        details["lambda_max"].value,
+        details["k_g"].value,
+        details["k_c"].value,
+        details["k_m"].value,
         joint_ranges=readonly(np.column_stack([lo, hi])),
         method=method,
         model=dynamics.model.name,

@@ -14,9 +14,9 @@ import math
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
-from armctl._checks import FloatArray, scalar, vector
+from armctl._checks import scalar, vector
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError
 
@@ -91,6 +91,6 @@ def lqr_gains(position_weight: float, velocity_weight: float = 0.0, effort_weigh
     return kp, kd
 
 
-def closed_loop_poles(kp: float, kd: float) -> FloatArray:
-    """Roots of s² + K_d s + K_p."""
+def closed_loop_poles(kp: float, kd: float) -> NDArray[np.inexact[Any]]:
+    """Roots of s² + K_d s + K_p (real, or a complex pair)."""
     return np.roots([1.0, scalar(kd, "kd"), scalar(kp, "kp")])

@@ -33,6 +33,8 @@ class ClosedFormOSC(Controller):
     in the dynamically consistent null space. ``last_log``: the trace of Λ (an upper bound of its largest
     eigenvalue)."""
 
+    dynamics: Dynamics  # given to __init__, never None
+
     def __init__(self, dynamics: Dynamics, task: MotionTask, posture: PostureTask | None = None) -> None:
         super().__init__(dynamics)
         if not isinstance(task, MotionTask) or isinstance(task, PostureTask):
@@ -55,7 +57,7 @@ class ClosedFormOSC(Controller):
         try:
             minv_jt = np.linalg.solve(M, J.T)
         except np.linalg.LinAlgError:
-            raise self.dynamics.kernel.nonfinite_error(q) from None  # type: ignore[union-attr]  (names M)
+            raise self.dynamics.kernel.nonfinite_error(q) from None  # names M
         lam_inv = J @ minv_jt
         try:
             lam = np.linalg.inv(lam_inv)

@@ -82,6 +82,8 @@ class OperationalSpaceQP(Controller):
     limits.
     """
 
+    dynamics: Dynamics  # given to __init__, never None
+
     def __init__(
         self,
         dynamics: Dynamics,
@@ -180,7 +182,7 @@ class OperationalSpaceQP(Controller):
         self.check_reference(ref)
         q, qd = vector(q, self.n, "q"), vector(qd, self.n, "qd")
         self.compute(scalar(t, "t"), q, qd, ref)
-        return self.last_solution  # type: ignore[return-value]
+        return self.last_solution  # type: ignore[return-value]  # compute() just set it
 
     def _qdd_step(self, lay: Layout, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         """One level without contact forces: the QP on q̈ alone (see reduced)."""
@@ -195,7 +197,7 @@ class OperationalSpaceQP(Controller):
             self.last_log = {"qp_iterations": 0, "qp_fallbacks": 0}
             return tau
         self.last_log = {"qp_iterations": sol.iterations, "qp_fallbacks": sol.fallbacks}
-        if self._tau_up is not None:
+        if self._tau_up is not None and self._tau_lo is not None:
             np.minimum(tau, self._tau_up, out=tau)
             np.maximum(tau, self._tau_lo, out=tau)
         return tau

@@ -82,7 +82,7 @@ class QddQP:
         self.builder = builder
         eps = builder.regularization
         tasks = tuple(tk for tk in builder.tasks if tk.variable in lay.variables)
-        self.plan = LevelPlan(tasks, _QddLayout(n), extra_rows=2 * n, extra_weight=eps)  # type: ignore[arg-type]
+        self.plan = LevelPlan(tasks, _QddLayout(n), extra_rows=2 * n, extra_weight=eps)  # type: ignore[arg-type]  # _QddLayout: the layout's fields LevelPlan reads
         m = self.m = self.plan.m
         self.rows = self.plan.template.copy()  # [J | b] of the tasks; √ε-weighted [I | 0]; [M | −h']
         self.rows[m : m + n, :n] = np.eye(n)
@@ -102,13 +102,13 @@ class QddQP:
         self.no_active = np.zeros(self.C_template.shape[0], dtype=np.int8)
         self.no_active.flags.writeable = False
         # the torque bounds, all torque limits together
-        torque = [lim.bounds(None) for lim in lay.limits if lim.variable == "tau"]  # type: ignore[arg-type]
+        torque = [lim.bounds(None) for lim in lay.limits if lim.variable == "tau"]  # type: ignore[arg-type]  # constant: no state read
         self.tau_check = (
             (np.max([b[0] for b in torque], axis=0), np.min([b[1] for b in torque], axis=0)) if torque else None
         )
         self.qdd_limits = [k for k, lim in enumerate(lay.limits) if lim.variable != "tau"]
         self.constant = (
-            [lim.bounds(None) for lim in lay.limits]  # type: ignore[arg-type]
+            [lim.bounds(None) for lim in lay.limits]  # type: ignore[arg-type]  # constant limits read no state
             if lay.constant_bounds is not None
             else None
         )

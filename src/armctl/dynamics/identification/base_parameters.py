@@ -21,6 +21,7 @@ r of them; β is the least-squares solution of W_b β = W_d.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 import scipy.linalg
@@ -168,7 +169,7 @@ def find_base_parameters(
     wb, wd = w[:, list(independent)], w[:, list(dependent)]
     beta = np.linalg.lstsq(wb, wd, rcond=None)[0] if dependent else np.zeros((rank, 0))
     beta[np.abs(beta) < _BETA_ZERO * max(1.0, float(np.abs(beta).max(initial=0.0)))] = 0.0
-    return BaseParameters(independent, dependent, beta, dynamics.model.parameter_names(), tol)
+    return BaseParameters(independent, dependent, cast(FloatArray, beta), dynamics.model.parameter_names(), tol)
 
 
 def _first_independent(w: FloatArray, rank: int, tol: float) -> tuple[int, ...] | None:

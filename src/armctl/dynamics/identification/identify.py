@@ -133,7 +133,8 @@ class IdentificationResult:
         for a, name in zip(arrays, ("q", "qd", "qdd"), strict=True):
             if not np.isfinite(a).all():
                 raise NonFiniteError(f"{name} holds NaN or inf", value=a)
-        w = problem_regressor(self.dynamics, self.base, *arrays, self.problem.offsets)
+        samples_q, samples_qd, samples_qdd = arrays
+        w = problem_regressor(self.dynamics, self.base, samples_q, samples_qd, samples_qdd, self.problem.offsets)
         return w @ theta
 
     def validate(self, data: IdentificationData, consistent: bool = False) -> ValidationResult:

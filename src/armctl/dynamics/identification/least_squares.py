@@ -17,6 +17,7 @@ minimum-norm answer.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 
@@ -150,7 +151,7 @@ def solve_least_squares(
         cond = float(np.linalg.cond(w))
     noise_std = np.sqrt((r**2).sum(axis=0) / max(s_count - p / n, 1.0))
     return LeastSquaresEstimate(
-        theta,
+        cast(FloatArray, theta),
         np.sqrt(np.clip(np.diag(cov), 0.0, None)),
         cov,
         noise_std,

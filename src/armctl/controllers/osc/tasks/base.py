@@ -38,7 +38,7 @@ class Task(ABC):
     def __init__(self, dim: int, name: str, weight: ArrayLike = 1.0, priority: int = 0) -> None:
         self.dim = int(dim)
         self.name = str(name)
-        self.weight = weight  # type: ignore[assignment]  (checked by the property)
+        self.weight = weight  # checked by the property
         self.priority = whole_number(priority, f"{name}: priority")
 
     @property
@@ -80,6 +80,11 @@ class MotionTask(Task):
     # the hot path uses the law's matrices built from the gains in _gains_changed
     kp = Gain("K_p (dim×dim); may be reassigned between control periods (checked again).", size=_dim, label=_label)
     kd = Gain("K_d (dim×dim); may be reassigned between control periods (checked again).", size=_dim, label=_label)
+    # what the Gain descriptors keep: the compact forms and the matrices
+    _kp: FloatArray
+    _kd: FloatArray
+    _kp_matrix: FloatArray
+    _kd_matrix: FloatArray
 
     def __init__(
         self,
@@ -93,7 +98,7 @@ class MotionTask(Task):
         super().__init__(dim, name, weight, priority)
         self.kp = kp
         if kd is None:  # critical damping: K_d = 2 K_p^½ (the symmetric square root; 2√k_p for a scalar)
-            lam, vec = np.linalg.eigh(self.kp)
+            lam, vec = np.linalg.eigh(self._kp_matrix)
             kd = 2.0 * (vec * np.sqrt(lam)) @ vec.T
         self.kd = kd
 

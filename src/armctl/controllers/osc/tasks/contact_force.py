@@ -78,7 +78,7 @@ class ContactForceTask(Task):
             self._fn: Callable[[float], ArrayLike] | None = force
         else:
             self._fn = None
-            self._force = self._value(force)  # type: ignore[arg-type]
+            self._force = self._value(force)
 
     def target(self, t: float) -> FloatArray:
         """The desired force at time t: (3,) or (1,) with ``normal_only``."""

@@ -16,4 +16,4 @@ from armctl._checks import FloatArray
 
 def rotation_error(rot_ref: FloatArray, rot: FloatArray) -> FloatArray:
     """log(R_ref Rᵀ) [rad], (3,)."""
-    return pin.log3(rot_ref.dot(rot.T))  # type: ignore[no-any-return]
+    return pin.log3(rot_ref.dot(rot.T))
