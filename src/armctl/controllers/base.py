@@ -22,8 +22,21 @@ from armctl.references import Reference
 
 
 class Controller(ABC):
-    """Base class. ``dynamics``: the controller's own model (it may be reduced or wrong on purpose), or
-    None for a model-free controller, in which case ``n`` must be given."""
+    """Base class of the controllers: ``tau = controller(t, q, qd, ref)`` checks its inputs, then calls
+    :meth:`compute`, the control law.
+
+    Parameters
+    ----------
+    dynamics : Dynamics, optional
+        The controller's own model (it may be reduced or wrong on purpose), or None for a model-free controller.
+    n : int, optional
+        The number of joints, required without ``dynamics``.
+
+    Raises
+    ------
+    InvalidParameterError
+        ``dynamics`` is not a Dynamics, or neither it nor ``n`` is given.
+    """
 
     def __init__(self, dynamics: Dynamics | None = None, n: int | None = None) -> None:
         if dynamics is not None and not isinstance(dynamics, Dynamics):
@@ -104,7 +117,20 @@ class Controller(ABC):
         return vector(q, self.n, "q"), vector(qd, self.n, "qd")
 
     def check_reference(self, ref: Reference) -> None:
-        """Raise unless ``ref`` is a :class:`~armctl.Reference` with as many joints as the controller."""
+        """Check a reference against this controller.
+
+        Parameters
+        ----------
+        ref : Reference
+            The reference.
+
+        Raises
+        ------
+        InvalidParameterError
+            ``ref`` is not a :class:`~armctl.Reference`.
+        ShapeError
+            It has another number of joints than the controller.
+        """
         if not isinstance(ref, Reference):
             raise InvalidParameterError(f"ref must be an armctl.Reference, got {type(ref).__name__}", value=ref)
         if ref.q.shape != self._shape:
@@ -112,8 +138,25 @@ class Controller(ABC):
 
     @abstractmethod
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
-        """The control law, on checked inputs. In :func:`armctl.simulate`, q and q̇ are read-only views of the
-        run's record: work on new arrays (e = q − ref.q) or on a copy."""
+        """The control law, on checked inputs.
+
+        In :func:`armctl.simulate`, q and q̇ are read-only views of the run's record: work on new arrays
+        (e = q − ref.q) or on a copy.
+
+        Parameters
+        ----------
+        t : float
+            Time [s].
+        q, qd : ndarray, shape (n,)
+            Measured joint positions and velocities [rad, rad/s or m, m/s], float64, finite.
+        ref : Reference
+            The reference at t.
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            The joint torques τ [N·m or N].
+        """
 
     def reset(self) -> None:
         """Forget any internal state (integrators, estimates) before a new run."""

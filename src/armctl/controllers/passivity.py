@@ -56,11 +56,23 @@ class PassivityBased(SlidingGains, Controller):
     it does not cancel the dynamics into a double integrator, which keeps it robust to model error at the
     same gains. The model terms come from two inverse-dynamics evaluations (``Dynamics.passivity_torque``).
 
-    lam: Λ [1/s]; kd: K_D [N·m·s/rad] (scalar, vector or matrix).
-
     ``last_log`` (recorded by :func:`armctl.simulate` into ``res.logs``) holds the terms of τ = model − damping
     [N·m]: ``"model"`` M q̈_r + C q̇_r + g + F_v q̇_r + F_c sgn(q̇), ``"damping"`` K_D s, and the sliding variable
     ``"s"`` [rad/s]. The logged arrays are those the law computed, not copies: read them before the next call.
+
+    Parameters
+    ----------
+    dynamics : Dynamics
+        The controller's model.
+    lam : array_like
+        Λ [1/s]: a scalar, an (n,) diagonal or an n×n symmetric positive definite matrix.
+    kd : array_like
+        K_D [N·m·s/rad], likewise.
+
+    Raises
+    ------
+    InvalidParameterError, ShapeError, NonFiniteError
+        A gain that is not symmetric positive definite, of the wrong size, or not finite.
     """
 
     dynamics: Dynamics  # given to __init__, never None

@@ -134,7 +134,12 @@ class Dynamics(RegressorMethods):
         self._propagates = self._local.kernel.nan_propagates
 
     def new_kernel(self) -> Kernel:
-        """A new kernel (workspace) of this object's backend: what :attr:`kernel` gives each thread."""
+        """A new kernel (workspace) of this object's backend: what :attr:`kernel` gives each thread.
+
+        Returns
+        -------
+        Kernel
+        """
         raise NotImplementedError(f"{type(self).__name__} has no kernel: make Dynamics objects by armctl.Dynamics")
 
     @property
@@ -204,8 +209,18 @@ class Dynamics(RegressorMethods):
         )
 
     def check_mass_matrix(self, q: ArrayLike) -> None:
-        """Raise :class:`~armctl.errors.InvalidParameterError` if M(q) is not positive definite (naming the
-        joint of least inertia and what to give it)."""
+        """Check that M(q) is positive definite.
+
+        Parameters
+        ----------
+        q : array_like, shape (n,)
+            Joint positions [rad or m].
+
+        Raises
+        ------
+        InvalidParameterError
+            M(q) is not positive definite (naming the joint of least inertia and what to give it).
+        """
         qv = self._vector(q, "q")
         k = self._local.kernel
         try:
@@ -221,6 +236,11 @@ class Dynamics(RegressorMethods):
         ----------
         q : (n,) array_like
             Joint positions [rad or m].
+
+        Returns
+        -------
+        ndarray, shape (n, n)
+            M(q) [kg·m² or kg].
         """
         k = self._local.kernel
         if type(q) is np.ndarray and q.dtype == FLOAT and q.ndim == 1 and math.isfinite(sum(q.tolist())):
@@ -238,6 +258,11 @@ class Dynamics(RegressorMethods):
         ----------
         q, qd : (n,) array_like
             Joint positions [rad or m] and velocities [rad/s or m/s].
+
+        Returns
+        -------
+        ndarray, shape (n, n)
+            C(q, q̇) [kg·m²/s or kg/s].
         """
         return self._evaluate(self._local.kernel.coriolis, ("q", "qd"), q, qd)
 
@@ -248,6 +273,11 @@ class Dynamics(RegressorMethods):
         ----------
         q : (n,) array_like
             Joint positions [rad or m].
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            g(q) [N·m or N].
         """
         k = self._local.kernel
         if type(q) is np.ndarray and q.dtype == FLOAT and q.ndim == 1 and math.isfinite(sum(q.tolist())):
@@ -265,6 +295,11 @@ class Dynamics(RegressorMethods):
         ----------
         qd : (n,) array_like
             Joint velocities [rad/s or m/s].
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            τ_f [N·m or N].
         """
         return self._evaluate(self.friction.torque, ("qd",), qd)
 
@@ -280,6 +315,11 @@ class Dynamics(RegressorMethods):
         wrench : (6,) array_like, optional
             h_e = [f; μ] at the tool frame in world-aligned axes [N, N·m]: the wrench the arm exerts on the
             environment.
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            τ [N·m or N].
         """
         k = self._local.kernel
         if wrench is None and self._propagates and float_vectors(q, qd, qdd):
@@ -315,6 +355,11 @@ class Dynamics(RegressorMethods):
             Joint torques [N·m or N].
         wrench : (6,) array_like, optional
             h_e at the tool frame (see :meth:`inverse_dynamics`).
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            q̈ [rad/s² or m/s²].
         """
         k = self._local.kernel
         if not self.friction.any and wrench is None:
@@ -340,6 +385,11 @@ class Dynamics(RegressorMethods):
         frame : str, optional
             A frame of the model (default: the tool frame).
 
+        Returns
+        -------
+        ndarray, shape (6, n)
+            J, rows [linear; angular]: J q̇ = [v [m/s]; ω [rad/s]] of the frame.
+
         Raises
         ------
         UnknownNameError
@@ -358,6 +408,11 @@ class Dynamics(RegressorMethods):
             Joint positions [rad or m].
         frame : str, optional
             A frame of the model (default: the tool frame).
+
+        Returns
+        -------
+        ndarray, shape (4, 4)
+            The homogeneous pose [m].
         """
         if frame is not None:
             self.model.frame(frame)
@@ -370,6 +425,11 @@ class Dynamics(RegressorMethods):
         ----------
         q, qd : (n,) array_like
             Joint positions [rad or m] and velocities [rad/s or m/s].
+
+        Returns
+        -------
+        float
+            T [J].
         """
         k = self._local.kernel
         with np.errstate(over="ignore", invalid="ignore"):  # an overflow is named below
@@ -384,11 +444,22 @@ class Dynamics(RegressorMethods):
         ----------
         q : (n,) array_like
             Joint positions [rad or m].
+
+        Returns
+        -------
+        float
+            U [J].
         """
         return float(self._local.kernel.potential(self._vector(q, "q")))
 
     def parameters(self) -> FloatArray:
-        """π of the model these dynamics evaluate (see :meth:`RobotModel.parameters`)."""
+        """π of the model these dynamics evaluate (see :meth:`RobotModel.parameters`).
+
+        Returns
+        -------
+        ndarray, shape (13 n,)
+            π.
+        """
         return self._params
 
     def operational_space_model(
@@ -399,10 +470,30 @@ class Dynamics(RegressorMethods):
         rows: str | Sequence[int | str] = "pose",
         singular_tolerance: float = 1e-6,
     ) -> OperationalSpaceModel:
-        """Λ ẍ + μ + p = F of ``frame`` (default: the tool frame) at (q, q̇): ``.Lambda`` = (J M⁻¹ Jᵀ)⁻¹,
-        ``.mu``, ``.p``, ``.Jbar`` = M⁻¹ Jᵀ Λ, along ``rows`` ("pose", "position", or axes such as "xz"); a
-        :class:`~armctl.errors.SingularConfigurationError` where J's σ_min/σ_max < ``singular_tolerance``.
-        See :func:`armctl.dynamics.operational_space.operational_space_model`."""
+        """The operational-space model Λ ẍ + μ + p = F of ``frame`` at (q, q̇) (see
+        :func:`armctl.dynamics.operational_space.operational_space_model`).
+
+        Parameters
+        ----------
+        q, qd : array_like, shape (n,)
+            Joint positions and velocities [rad, rad/s or m, m/s].
+        frame : str, optional
+            The frame (None: the tool frame).
+        rows : str or sequence of int or str, optional
+            The task rows: ``"pose"`` (6), ``"position"`` (3), or axes such as ``"xz"``.
+        singular_tolerance : float, optional
+            The smallest σ_min/σ_max of J accepted.
+
+        Returns
+        -------
+        OperationalSpaceModel
+            ``.Lambda`` = (J M⁻¹ Jᵀ)⁻¹ [kg or kg·m²], ``.mu``, ``.p`` [N, N·m], ``.Jbar`` = M⁻¹ Jᵀ Λ.
+
+        Raises
+        ------
+        SingularConfigurationError
+            J's σ_min/σ_max < ``singular_tolerance``.
+        """
         from armctl.dynamics.operational_space import operational_space_model
 
         return operational_space_model(self, q, qd, frame, rows, singular_tolerance)
@@ -414,8 +505,26 @@ class Dynamics(RegressorMethods):
         rows: str | Sequence[int | str] = "pose",
         torque_scale: ArrayLike | str | None = None,
     ) -> DynamicManipulability:
-        """The dynamic manipulability ellipsoid of ``frame`` at q (Yoshikawa): ``.axes``, ``.lengths``,
-        ``.measure``. See :func:`armctl.dynamics.operational_space.dynamic_manipulability`."""
+        """The dynamic manipulability ellipsoid of ``frame`` at q (Yoshikawa; see
+        :func:`armctl.dynamics.operational_space.dynamic_manipulability`).
+
+        Parameters
+        ----------
+        q : array_like, shape (n,)
+            Joint positions [rad or m].
+        frame : str, optional
+            The frame (None: the tool frame).
+        rows : str or sequence of int or str, optional
+            The task rows, as for :meth:`operational_space_model`.
+        torque_scale : array_like or str, optional
+            None: unit-norm torques (as Siciliano); ``"limits"``: normalised by the joints' effort limits; or
+            positive scales (n,) [N·m].
+
+        Returns
+        -------
+        DynamicManipulability
+            ``.axes``, ``.lengths``, ``.measure``.
+        """
         from armctl.dynamics.operational_space import dynamic_manipulability
 
         return dynamic_manipulability(self, q, frame, rows, torque_scale)

@@ -69,6 +69,11 @@ class RegressorMethods:
         ----------
         q, qd, qdd : (n,) array_like
             Joint positions, velocities and accelerations [rad, rad/s, rad/s²; m, m/s, m/s² for prismatic].
+
+        Returns
+        -------
+        ndarray, shape (n, 13 n)
+            Y.
         """
         k = self._local.kernel
         if self._propagates and float_vectors(q, qd, qdd):
@@ -82,8 +87,20 @@ class RegressorMethods:
 
     def base_parameters(self, samples: int | None = None, seed: int = 0) -> Any:
         """The base (identifiable) parameters of this model: a minimal set θ = K π with Y π = Y_b θ, found
-        numerically (pivoted QR of the regressor stacked at random states); see
-        :func:`armctl.dynamics.identification.find_base_parameters` for the options and the result."""
+        numerically (pivoted QR of the regressor stacked at random states; see
+        :func:`armctl.dynamics.identification.find_base_parameters`).
+
+        Parameters
+        ----------
+        samples : int, optional
+            The number of random states (default max(30, 4n)).
+        seed : int, optional
+            Their seed.
+
+        Returns
+        -------
+        BaseParameters
+        """
         from armctl.dynamics.identification import find_base_parameters
 
         return find_base_parameters(self, samples=samples, seed=seed)  # type: ignore[arg-type]  # self: a Dynamics
@@ -96,6 +113,11 @@ class RegressorMethods:
         ----------
         qd : (n,) array_like
             Joint velocities [rad/s or m/s].
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            δ [N·m or N].
         """
         return self.friction.coulomb_asymmetry(self._vector(qd, "qd"))
 
@@ -108,6 +130,11 @@ class RegressorMethods:
         ----------
         qd : (n,) array_like
             Joint velocities [rad/s or m/s].
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            κ(q̇).
         """
         return self.friction.coulomb_column(self._vector(qd, "qd"))
 
@@ -133,6 +160,11 @@ class RegressorMethods:
             Joint positions [rad or m] and velocities [rad/s or m/s].
         qd_r, qdd_r : (n,) array_like
             Reference velocity q̇_r and acceleration q̈_r [rad/s, rad/s²].
+
+        Returns
+        -------
+        ndarray, shape (n, 13 n)
+            Y(q, q̇, q̇_r, q̈_r).
         """
         k = self._local.kernel
 
@@ -157,6 +189,11 @@ class RegressorMethods:
         ----------
         q, qd, qd_r, qdd_r : (n,) array_like
             As for :meth:`passivity_regressor`.
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            [N·m or N].
         """
         k = self._local.kernel
 

@@ -97,5 +97,15 @@ class Reference:
 
     @classmethod
     def hold(cls, q: ArrayLike) -> Reference:
-        """A set-point: q with zero velocity and acceleration (q checked as :class:`Reference` checks it)."""
+        """A set-point: ``q`` with zero velocity and acceleration.
+
+        Parameters
+        ----------
+        q : array_like, shape (n,)
+            Joint positions [rad or m], checked as :class:`Reference` checks them.
+
+        Returns
+        -------
+        Reference
+        """
         return cls(q)

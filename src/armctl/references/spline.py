@@ -18,14 +18,28 @@ BC_TYPES = ("clamped", "natural", "not-a-knot", "periodic")
 
 
 class WaypointSpline:
-    """A C² cubic spline through ``waypoints`` (k × n) at strictly increasing ``times`` (k,), with clamped
-    (zero) end velocities by default; holds the end points outside [times[0], times[-1]]."""
+    """A C² cubic spline through timed waypoints, with clamped (zero) end velocities by default; holds
+    the end points outside [times[0], times[-1]].
+
+    Parameters
+    ----------
+    times : array_like, shape (k,)
+        [s], strictly increasing, k ≥ 2.
+    waypoints : array_like, shape (k, n)
+        Joint positions [rad or m], finite.
+    bc_type : str or tuple, optional
+        The end conditions: one of :data:`BC_TYPES`, or scipy ``CubicSpline``'s explicit ``((order, value), ...)``.
+
+    Raises
+    ------
+    ShapeError, NonFiniteError, InvalidParameterError, UnknownNameError
+        Waypoints of the wrong shape or not finite, times not increasing, end conditions that do not fit.
+    """
 
     def __init__(
         self, times: Sequence[float] | ArrayLike, waypoints: ArrayLike, bc_type: str | tuple[Any, Any] = "clamped"
     ) -> None:
-        """times: (k,) [s], strictly increasing, k >= 2; waypoints: (k, n) joint positions; bc_type: the end
-        conditions, one of :data:`BC_TYPES` (or scipy ``CubicSpline``'s explicit ``((order, value), ...)``)."""
+        """See the class."""
         from scipy.interpolate import CubicSpline
 
         t = row(times, "times")

@@ -10,7 +10,12 @@ from armctl.scenes.base import Scene
 def pendulum() -> Scene:
     """The geared single joint swinging through a minimum-jerk move and back. The plant has viscous and
     Coulomb friction with stiction; the exact model knows the friction (kinetic part), the reduced one
-    drops rotor and friction — what a controller tuned on the link alone believes."""
+    drops rotor and friction — what a controller tuned on the link alone believes.
+
+    Returns
+    -------
+    Scene
+    """
     plant = models.pendulum().with_friction(viscous=0.05, coulomb=0.3, static=0.45)
     move = Quintic([0.0], [1.2], 1.5, t0=0.2)
     back = Quintic([1.2], [0.0], 1.5, t0=2.2)
@@ -32,7 +37,17 @@ def pendulum() -> Scene:
 def planar_2r(payload: float = 10.0) -> Scene:
     """Siciliano's two-link arm tracking sinusoids while carrying a ``payload`` [kg] at the tool. The exact
     model (pd_gravity, computed_torque, passivity) knows it; the reduced model, the nominal arm without it, is
-    what computed_torque_reduced uses and what adaptive starts from and learns the payload."""
+    what computed_torque_reduced uses and what adaptive starts from and learns the payload.
+
+    Parameters
+    ----------
+    payload : float, optional
+        [kg].
+
+    Returns
+    -------
+    Scene
+    """
     nominal = models.planar_2r()
     plant = nominal.with_payload(payload)
     ref = Sinusoid([0.3, -0.4], [0.4, 0.5], [0.5, 0.7])

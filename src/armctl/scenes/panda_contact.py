@@ -36,8 +36,28 @@ class PressAndSlide(Controller):
     and ramps the normal force to ``force`` [N] in 0.2 s; then slide ``slide`` [m] along x (quintic profile
     of ``slide_time`` s from ``slide_start`` s). ``closed_form=True`` uses :class:`ClosedFormOSC` instead,
     which keeps pushing its pose target 1 cm below the table: the force is whatever its stiffness gives.
-    ``kp``, ``kd``: the pose task's gains (see :class:`FramePoseTask`; ``kd=None``: its default). ``force`` ≥ 0,
-    ``slide_start`` ≥ 0 and ``slide_time`` > 0 must be finite."""
+
+    Parameters
+    ----------
+    dyn : Dynamics
+        The controller's model.
+    z_table : float
+        The table's height [m].
+    mu : float
+        The friction coefficient of the sliding contact.
+    force : float, optional
+        The normal force to reach [N], finite, ≥ 0.
+    slide : float, optional
+        How far to slide along x [m].
+    slide_start : float, optional
+        When the slide starts [s], finite, ≥ 0.
+    slide_time : float, optional
+        How long it takes [s], finite, > 0.
+    closed_form : bool, optional
+        Use :class:`ClosedFormOSC` instead of the QP.
+    kp, kd : array_like, optional
+        The pose task's gains (see :class:`FramePoseTask`; ``kd=None``: its default).
+    """
 
     dynamics: Dynamics  # given to __init__, never None
 
@@ -75,7 +95,18 @@ class PressAndSlide(Controller):
             )
 
     def target(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Tool pose, twist and acceleration targets at time t [s]."""
+        """Tool pose, twist and acceleration targets.
+
+        Parameters
+        ----------
+        t : float
+            The time [s].
+
+        Returns
+        -------
+        tuple of ndarray
+            (pose (4, 4), twist (6,), acceleration (6,)).
+        """
         pose, twist, acc = self.p0.copy(), np.zeros(6), np.zeros(6)
         z_end = self.z_table - 0.01
         pose[2, 3] = max(self.p0[2, 3] - 0.02 * t, z_end)
@@ -116,16 +147,35 @@ def panda_contact_model() -> Any:
 
 class ContactScene(Scene):
     """A scene whose error is the tool's position error [m] against the controller's target, with the normal
-    force error after settling [N] and contact loss reported."""
+    force error after settling [N] and contact loss reported. Its parameters are :class:`Scene`'s.
+
+    Parameters
+    ----------
+    name, description, plant, exact, reduced, reference, duration, methods : optional
+        As for :class:`Scene`.
+    control_dt, dt, integrator, q0, sim_options, builders, backend : optional
+        As for :class:`Scene`.
+    """
 
     z_table: float = 0.0
     mu: float = 0.3
     timing_samples = 100  # a QP step costs ten times a joint-space law's
 
     def controller(self, method: str, gains: dict[str, Any] | None = None) -> Controller:
-        """The :class:`PressAndSlide` controller; ``gains``: the pose task's ``kp`` and ``kd`` (default: the
-        preset, ``controllers/panda_contact.<method>.toml``; a missing key: the task's default); other keys are
-        refused."""
+        """The :class:`PressAndSlide` controller of a method.
+
+        Parameters
+        ----------
+        method : {"osc_qp", "osc_closed_form"}
+            The method.
+        gains : dict, optional
+            The pose task's ``kp`` and ``kd`` (default: the preset, ``controllers/panda_contact.<method>.toml``; a
+            missing key: the task's default); other keys are refused.
+
+        Returns
+        -------
+        PressAndSlide
+        """
         if method not in self.methods:
             raise UnknownNameError("method", method, self.methods)
         g = check_gains(method, self.gains(method) if gains is None else gains, (), ("kp", "kd"))
@@ -146,6 +196,26 @@ class ContactScene(Scene):
         timing_samples: int | None = None,
         timing_rounds: int = 5,
     ) -> dict[str, Any]:
+        """The tool's position error [m] (RMS, max) against the controller's target, the normal force error after
+        settling [N], whether contact was lost, and :meth:`Scene.metrics`' other measures.
+
+        Parameters
+        ----------
+        res : SimResult
+            A run of this scene.
+        method : str
+            The method that ran.
+        gains : dict, optional
+            Its gains (default: the preset), to rebuild the controller for timing.
+        timing_samples : int, optional
+            Recorded states replayed to time the controller (default :attr:`timing_samples`).
+        timing_rounds : int, optional
+            Timed passes (0: not timed, NaN).
+
+        Returns
+        -------
+        dict of str
+        """
         out = super().metrics(res, method, gains, timing_samples, timing_rounds)
         if not len(res.t):  # a run without samples: nothing to measure
             out.update({"force_rms_error": float("nan"), "contact_lost": False, "error_unit": "m"})
@@ -173,6 +243,14 @@ class ContactScene(Scene):
 
 
 def panda_contact() -> Scene:
+    """The Panda with joint friction pressing 10 N on a table (a Kelvin–Voigt plane, surface friction μ = 0.3)
+    just below its ready pose, and sliding 10 cm along it: the methods ``osc_qp`` and ``osc_closed_form``
+    (:class:`PressAndSlide`), integrated at 0.2 ms.
+
+    Returns
+    -------
+    ContactScene
+    """
     from armctl.sim import KelvinVoigt, Plane
 
     model = panda_contact_model()

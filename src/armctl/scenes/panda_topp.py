@@ -51,7 +51,17 @@ def _trajectory(margin: float):
 def panda_topp(margin: float = 0.1) -> Scene:
     """Time-optimal (TOPP-RA) path through six waypoints with velocity and torque limits, planned on the exact
     model with ``margin`` of the torque range left for feedback. The plant sticks (breakaway above Coulomb);
-    the exact model knows the kinetic friction, the reduced one none."""
+    the exact model knows the kinetic friction, the reduced one none.
+
+    Parameters
+    ----------
+    margin : float, optional
+        The share of the torque range left for feedback, in [0, 1).
+
+    Returns
+    -------
+    Scene
+    """
     plant = panda_with_friction()
     traj = _trajectory(margin)
     return Scene(

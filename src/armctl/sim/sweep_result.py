@@ -92,7 +92,12 @@ class SweepResult(list[Any]):
         return not any(isinstance(o, CaseFailure) for o in self)
 
     def describe(self) -> str:
-        """One line: the counts, and the first failures."""
+        """One line: the counts, and the first failures.
+
+        Returns
+        -------
+        str
+        """
         c = self.counts
         text = f"{len(self)} cases: {c['ok']} ok, {len(self) - c['ok']} failed"
         if len(self) > c["ok"]:
