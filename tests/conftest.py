@@ -1,5 +1,5 @@
 """Fixtures shared by every test: one BLAS thread, a compiled-code cache, and the built-in arms by name (the
-helpers that build them, once per session, are in :mod:`tests.helpers.arms`)."""
+helpers that build them, once per test run, are in :mod:`tests.helpers.arms`)."""
 
 from __future__ import annotations
 

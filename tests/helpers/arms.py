@@ -1,4 +1,4 @@
-"""The built-in arms and their Dynamics, built once per test session (they are immutable)."""
+"""The built-in arms and their Dynamics, built once per test run (they are immutable)."""
 
 from __future__ import annotations
 

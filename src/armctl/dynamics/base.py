@@ -170,6 +170,15 @@ class Dynamics(RegressorMethods):
             return x
         return vector(x, self.n, name)
 
+    def _of_q(self, fn: Callable[[FloatArray], Any], q: Any) -> Any:
+        """``fn(q)`` (a kernel primitive of q alone, which refuses a wrong length) on a checked q."""
+        if type(q) is np.ndarray and q.dtype == FLOAT and q.ndim == 1 and math.isfinite(sum(q.tolist())):
+            try:
+                return fn(q)
+            except ValueError:  # a wrong length: vector() names it
+                pass
+        return fn(vector(q, self.n, "q"))
+
     def _evaluate(self, fn: Callable[..., Any], names: tuple[str, ...], *args: Any) -> Any:
         """``fn(*args)`` (a kernel primitive) on checked inputs, its result checked: a non-finite result from
         finite inputs is an overflow (named) or a mass matrix that is not positive definite (named).
@@ -242,13 +251,7 @@ class Dynamics(RegressorMethods):
         ndarray, shape (n, n)
             M(q) [kg·m² or kg].
         """
-        k = self._local.kernel
-        if type(q) is np.ndarray and q.dtype == FLOAT and q.ndim == 1 and math.isfinite(sum(q.tolist())):
-            try:  # the kernel refuses a wrong length: then vector() names it
-                return k.mass(q)
-            except ValueError:
-                pass
-        return k.mass(vector(q, self.n, "q"))
+        return self._of_q(self._local.kernel.mass, q)
 
     def coriolis_matrix(self, q: ArrayLike, qd: ArrayLike) -> FloatArray:
         """C(q, q̇) (n×n) from the Christoffel symbols, c_ij = Σ_k ½(∂M_ij/∂q_k + ∂M_ik/∂q_j − ∂M_jk/∂q_i) q̇_k,
@@ -279,13 +282,7 @@ class Dynamics(RegressorMethods):
         ndarray, shape (n,)
             g(q) [N·m or N].
         """
-        k = self._local.kernel
-        if type(q) is np.ndarray and q.dtype == FLOAT and q.ndim == 1 and math.isfinite(sum(q.tolist())):
-            try:  # the kernel refuses a wrong length: then vector() names it
-                return k.gravity(q)
-            except ValueError:
-                pass
-        return k.gravity(vector(q, self.n, "q"))
+        return self._of_q(self._local.kernel.gravity, q)
 
     def friction_torque(self, qd: ArrayLike) -> FloatArray:
         """τ_f = F_v q̇ + F_c⁺ (q̇ > 0) or − F_c⁻ (q̇ < 0) [N·m or N]; zero Coulomb part at rest (the simulator

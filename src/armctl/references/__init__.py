@@ -12,6 +12,7 @@ Time-optimal references along geometric paths come from :mod:`armctl.planning`. 
 from armctl.references.quintic import Quintic
 from armctl.references.reference import Reference
 from armctl.references.sinusoid import Sinusoid
-from armctl.references.spline import BC_TYPES, WaypointSpline
+from armctl.references.spline import BC_TYPES as BC_TYPES  # the end conditions WaypointSpline names
+from armctl.references.spline import WaypointSpline
 
-__all__ = ["BC_TYPES", "Quintic", "Reference", "Sinusoid", "WaypointSpline"]
+__all__ = ["Quintic", "Reference", "Sinusoid", "WaypointSpline"]

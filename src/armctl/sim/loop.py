@@ -16,6 +16,7 @@ exception.
 from __future__ import annotations
 
 import math
+import operator
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -78,7 +79,7 @@ class ClosedLoop:
         limit = s.effort_limit
         self._clip = s.saturate and bool(np.isfinite(limit).any())
         self._limits = limit.tolist()
-        self._lowest_limit = min(self._limits) if self._limits else math.inf
+        self._lowest_limit = min(self._limits, default=math.inf)  # |τ| below it needs no clipping
         rec = s.recorder
         # read-only views of the recorded rows: the controller is given these (it cannot change the record)
         self._views = [a.view() for a in (rec.q, rec.qd, rec.q_measured, rec.qd_measured)]
@@ -88,22 +89,23 @@ class ClosedLoop:
     def run(self) -> None:
         """Run every sample; afterwards ``rows``, ``divergence``, ``failure`` and ``clipped`` say what happened."""
         s = self.s
+        check, measure, control, integrate = self.check, self.measure, self.control, self.integrate
         with np.errstate(all="ignore"):
             for k in range(s.periods + 1):
                 t = k * s.control_dt
                 try:
-                    why = self.check(t)
+                    why = check(t)
                     if why is not None:
                         self._stop(k, t, why, self.q, self.qd)
                         return
-                    qm, vm = self.measure(k)
-                    tau = self.control(k, t, qm, vm)
+                    qm, vm = measure(k)
+                    tau = control(k, t, qm, vm)
                     if tau is None:
                         return
                     if k == s.periods:  # the last sample: its state and torque, no step after it
                         self._last_sample(k, t, tau)
                         return
-                    self.integrate(k, t, tau)
+                    integrate(k, t, tau)
                 except (NotPositiveDefinite, np.linalg.LinAlgError) as exc:  # the latter: the Lagrange backend's
                     rec = s.recorder
                     why = f"{exc} during the control period from t = {t:g} s"
@@ -182,10 +184,9 @@ class ClosedLoop:
             return None
         rec.tau[k] = tau  # the applied torque is τ too, but for the clipped rows (see applied_torques)
         low = self._lowest_limit
-        if self._clip and (max(tl) > low or -min(tl) > low):
-            if any(abs(x) > lim for x, lim in zip(tl, self._limits, strict=True)):
-                self.clipped.append(k)
-                return np.clip(tau, -s.effort_limit, s.effort_limit)
+        if self._clip and (max(tl) > low or -min(tl) > low) and any(map(operator.gt, map(abs, tl), self._limits)):
+            self.clipped.append(k)
+            return np.clip(tau, -s.effort_limit, s.effort_limit)
         return tau
 
     def integrate(self, k: int, t: float, tau: FloatArray) -> None:
