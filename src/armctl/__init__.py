@@ -7,11 +7,11 @@ The spine is the Lagrange model M(q)q̈ + C(q,q̇)q̇ + g(q) = τ − F_v q̇ �
 import importlib
 from typing import Any
 
-from armctl import controllers, errors, models, planning
+from armctl import controllers, errors, models, planning, references
 from armctl.dynamics import Dynamics
 from armctl.errors import ArmctlError
 from armctl.model import RobotModel
-from armctl.reference import Reference
+from armctl.references import Reference
 from armctl.sim import SimResult, simulate
 
 __version__ = "0.1.0"
@@ -26,6 +26,7 @@ __all__ = [
     "errors",
     "models",
     "planning",
+    "references",
     "scenes",
     "simulate",
     "tuning",

@@ -16,11 +16,12 @@ from numpy.typing import ArrayLike, NDArray
 from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
 
 FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
 #: the dtype of a native float array (compare with ``==``: an unpickled array's dtype is an equal, distinct object)
 FLOAT = np.dtype(np.float64)
 
 
-def real_array(x: ArrayLike, name: str) -> FloatArray:
+def real_array(x: object, name: str) -> FloatArray:
     """``x`` as a float array; raise if it holds anything but real numbers (complex values are refused rather
     than cut to their real part, strings and None rather than passed on to fail somewhere else, booleans rather
     than taken as 0 and 1, dates and durations (``datetime64``, ``timedelta64``) rather than taken as counts of
@@ -108,7 +109,7 @@ def _shown(x: Any, limit: int = 200) -> str:
     return text if len(text) <= limit else f"{text[:limit]}… ({len(text)} characters)"
 
 
-def vector(x: ArrayLike, n: int, name: str) -> FloatArray:
+def vector(x: object, n: int, name: str) -> FloatArray:
     """Return ``x`` as a float vector of length ``n``; raise if its shape is wrong or it is not finite."""
     a = real_array(x, name)
     if a.shape != (n,):
@@ -118,7 +119,7 @@ def vector(x: ArrayLike, n: int, name: str) -> FloatArray:
     return a
 
 
-def matrix(x: ArrayLike, shape: tuple[int, int], name: str) -> FloatArray:
+def matrix(x: object, shape: tuple[int, ...], name: str) -> FloatArray:
     a = real_array(x, name)
     if a.shape != shape:
         raise ShapeError(f"{name} must have shape {shape}, got shape {a.shape}", value=x)
@@ -188,7 +189,7 @@ def whole_number(x: Any, name: str, minimum: int = 0) -> int:
     return int(x)
 
 
-def per_joint(x: ArrayLike, n: int, name: str) -> FloatArray:
+def per_joint(x: object, n: int, name: str) -> FloatArray:
     """A scalar (for every entry) or an (n,) vector of real numbers, as an (n,) float array; NaN and inf are the
     caller's to check (a limit may be infinite)."""
     a = real_array(x, name)
@@ -199,7 +200,7 @@ def per_joint(x: ArrayLike, n: int, name: str) -> FloatArray:
     return a
 
 
-def nonnegative_vector(x: ArrayLike, n: int, name: str) -> FloatArray:
+def nonnegative_vector(x: object, n: int, name: str) -> FloatArray:
     """A scalar (for every entry) or an (n,) vector, finite and ≥ 0 — weights, standard deviations, …"""
     a = per_joint(x, n, name)
     if not np.isfinite(a).all():
@@ -209,7 +210,7 @@ def nonnegative_vector(x: ArrayLike, n: int, name: str) -> FloatArray:
     return a
 
 
-def gain_matrix(k: ArrayLike, n: int, name: str) -> FloatArray:
+def gain_matrix(k: object, n: int, name: str) -> FloatArray:
     """A gain given as a scalar, a vector (diagonal) or an n×n matrix, returned as a symmetric positive
     definite n×n matrix; raise if it is not one."""
     a = real_array(k, name)
@@ -258,7 +259,7 @@ class Gain:
             None
             if value is None and self.optional
             else readonly(np.array(gain_matrix(value, self.size(obj), self.label(obj, self.name))))
-        )  # type: ignore[arg-type]
+        )
         setattr(obj, self.full, full)
         setattr(obj, self.compact, None if full is None else compact_gain(full))
         changed = getattr(obj, "_gains_changed", None)

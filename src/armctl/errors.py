@@ -11,7 +11,15 @@ from typing import Any
 
 
 class ArmctlError(Exception):
-    """Root of every error raised by armctl."""
+    """Root of every error raised by armctl.
+
+    Parameters
+    ----------
+    message : str
+        What is wrong and how to fix it.
+    value : object, optional
+        The offending value, kept as ``.value``.
+    """
 
     def __init__(self, message: str, *, value: Any = None) -> None:
         super().__init__(message)

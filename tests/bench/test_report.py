@@ -13,7 +13,7 @@ import pytest
 
 from armctl.bench.report import write_report
 from armctl.bench.suite import outcome, run_scene_method
-from tests.browser import grey, keep_screenshot, needs_chromium, open_page
+from tests.helpers.browser import grey, keep_screenshot, needs_chromium, open_page
 
 
 def _row(**kw: Any) -> dict[str, Any]:

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from armctl.cli import main
-from tests.browser import chromium, keep_screenshot, open_page
+from tests.helpers.browser import chromium, keep_screenshot, open_page
 
 
 def _finite(x: object) -> bool:

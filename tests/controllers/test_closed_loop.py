@@ -17,7 +17,7 @@ from armctl.model.parts import transform
 from armctl.references import Sinusoid
 from armctl.sim import simulate
 from armctl.tuning import SampledDataAnalysis
-from tests.conftest import dynamics, model
+from tests.helpers.arms import dynamics, model
 
 PANDA_Q0 = np.array([0.0, -0.5, 0.0, -2.0, 0.0, 1.6, 0.8])
 

@@ -15,7 +15,7 @@ import pinocchio as pin
 import pytest
 
 import armctl
-from tests.conftest import dynamics, model
+from tests.helpers.arms import dynamics, model
 
 G = 9.81
 
@@ -120,7 +120,7 @@ def test_planar_2r_closed_form(backend: str, coupling: bool) -> None:
 
 def test_puma560_published_gravity_load() -> None:
     """Corke's toolbox prints gravload(qn) = [0 31.6399 6.0351 0 0.0283 0] for the standard Puma 560."""
-    from armctl.model.library import PUMA_QN
+    from armctl.models import PUMA_QN
 
     for backend in ("pinocchio", "lagrange"):
         g = dynamics("puma560", backend).gravity_torque(PUMA_QN)

@@ -19,8 +19,8 @@ import armctl
 from armctl.controllers import Adaptive, ComputedTorque, PassivityBased, PDGravity
 from armctl.dynamics import compiled
 from armctl.errors import BackendError, InvalidParameterError
-from tests.conftest import MODEL_NAMES, model
-from tests.dynamics.test_recursive import skewed_rpr
+from tests.dynamics.helpers import skewed_rpr
+from tests.helpers.arms import MODEL_NAMES, model
 
 NAMES = (*MODEL_NAMES, "skewed_rpr")
 

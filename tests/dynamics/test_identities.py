@@ -13,7 +13,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import armctl
-from tests.conftest import dynamics
+from tests.helpers.arms import dynamics
 
 CASES = [
     ("planar_2r", "pinocchio"),

@@ -5,14 +5,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tests.conftest import dynamics
+from tests.helpers.arms import dynamics
 
 pytestmark = pytest.mark.mujoco
 
 
 @pytest.mark.parametrize("backend", ["pinocchio", "lagrange"])
 def test_panda_forward_dynamics_matches_mujoco(backend: str) -> None:
-    from tests.mujoco_models import mujoco_forward, panda_mujoco
+    from tests.helpers.mujoco_models import mujoco_forward, panda_mujoco
 
     m, d = panda_mujoco()
     dyn = dynamics("panda", backend)

@@ -16,7 +16,7 @@ import armctl
 from armctl.dynamics.operational_space import frame_drift, task_rows
 from armctl.errors import InvalidParameterError, SingularConfigurationError
 from armctl.model import Joint, Link
-from tests.conftest import dynamics, model
+from tests.helpers.arms import dynamics, model
 
 # Λ of the Puma 560 at qn = (0, π/4, π, 0, π/4, 0) from Peter Corke's Robotics Toolbox for Python,
 # tests/test_DHRobot.py, TestDHRobot.test_inertia_x (`puma.inertia_x(puma.qn, representation=None)`, the

@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 
 import armctl
 from armctl.errors import InvalidParameterError, ModelLoadError, OptionalDependencyError, UnknownNameError
-from tests.mjcf_arms import SLIDE_AND_STACKED, SPATIAL_ARM, SPATIAL_JOINTS
+from tests.helpers.mjcf_arms import SLIDE_AND_STACKED, SPATIAL_ARM, SPATIAL_JOINTS
 
 pytestmark = pytest.mark.mujoco
 

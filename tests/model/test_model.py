@@ -20,7 +20,7 @@ from armctl.errors import (
 )
 from armctl.model import DHLink, Joint, JointFriction, Link, Motor
 from armctl.model.consistency import is_physical, project_physical, projection
-from tests.conftest import dynamics, model
+from tests.helpers.arms import dynamics, model
 
 
 def test_builtin_sizes_and_tool_frames(model_name: str) -> None:

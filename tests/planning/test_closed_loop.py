@@ -19,7 +19,7 @@ import numpy as np
 from armctl.controllers import ComputedTorque
 from armctl.planning import time_optimal
 from armctl.sim import simulate
-from tests.planning._common import panda
+from tests.planning.helpers import panda
 
 WAYPOINTS = np.array(
     [

@@ -7,7 +7,7 @@ import pytest
 
 from armctl.errors import ArmctlError, InvalidParameterError, NonFiniteError, ShapeError
 from armctl.planning import LinePath, SplinePath
-from tests.planning._common import PANDA_WAYPOINTS
+from tests.planning.helpers import PANDA_WAYPOINTS
 
 
 def test_spline_passes_through_waypoints_at_chord_length_knots() -> None:

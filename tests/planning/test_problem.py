@@ -9,8 +9,8 @@ import pytest
 import armctl
 from armctl.planning import SplinePath, build_problem, joint_limits
 from armctl.planning._batch import friction_torques, rigid_torques
-from tests.conftest import dynamics
-from tests.planning._common import PANDA_WAYPOINTS, PENDULUM_GRAVITY, PENDULUM_INERTIA, panda
+from tests.helpers.arms import dynamics
+from tests.planning.helpers import PANDA_WAYPOINTS, PENDULUM_GRAVITY, PENDULUM_INERTIA, panda
 
 
 def _torque_rows(problem):

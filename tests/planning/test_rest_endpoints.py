@@ -22,7 +22,7 @@ from armctl.planning import (
     joint_limits,
     time_optimal,
 )
-from tests.planning._common import PENDULUM_INERTIA
+from tests.planning.helpers import PENDULUM_INERTIA
 
 MODEL = armctl.models.pendulum()
 

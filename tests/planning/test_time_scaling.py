@@ -12,7 +12,7 @@ import pytest
 import armctl
 from armctl.errors import InfeasibleError
 from armctl.planning import LinePath, PolynomialTiming, SplinePath, Trajectory, uniform_time_scaling
-from tests.planning._common import PANDA_WAYPOINTS, PENDULUM_GRAVITY, PENDULUM_INERTIA, panda
+from tests.planning.helpers import PANDA_WAYPOINTS, PENDULUM_GRAVITY, PENDULUM_INERTIA, panda
 
 VISCOUS = 0.05  # the library pendulum's viscous friction [N·m·s/rad]
 

@@ -72,7 +72,7 @@ def test_a_stage_at_rest_is_refused() -> None:
 
 def test_scalar_evaluation_equals_the_vectorised_one() -> None:
     from armctl.planning import LinePath, SplinePath, Trajectory
-    from tests.planning._common import PANDA_WAYPOINTS
+    from tests.planning.helpers import PANDA_WAYPOINTS
 
     grid = GridTiming(np.linspace(0, 1, 11), np.r_[0.0, np.linspace(0.5, 2.0, 9), 0.0])
     for timing in (grid, PolynomialTiming(2.0), ScaledTiming(grid, 0.7)):

@@ -25,7 +25,7 @@ from armctl.planning import (
     time_optimal,
     uniform_time_scaling,
 )
-from tests.planning._common import PANDA_WAYPOINTS, PENDULUM_GRAVITY, PENDULUM_INERTIA, flat_pendulum, panda
+from tests.planning.helpers import PANDA_WAYPOINTS, PENDULUM_GRAVITY, PENDULUM_INERTIA, flat_pendulum, panda
 
 START = np.array([0.0, 0.0, 0.0, -1.5, 0.0, 1.5, 0.0])  # within the Panda's joint ranges, as is END
 END = START + np.array([1.0, -0.5, 0.3, 0.2, 1.0, 0.5, -0.7])

@@ -12,12 +12,12 @@ import pytest
 
 import armctl
 from armctl.errors import ArmctlError, InvalidParameterError
-from armctl.reference import Reference
+from armctl.references import Reference
 from armctl.sim.compiled import compiled_step
 from armctl.sim.contact import Plane
 from armctl.sim.integrators import rk4, semi_implicit_euler
 from armctl.sim.normal_force import KelvinVoigt
-from tests.dynamics.test_recursive import skewed_rpr
+from tests.dynamics.helpers import skewed_rpr
 from tests.sim.helpers import ComputedTorque
 
 

@@ -1,6 +1,6 @@
 """Simulated trajectories against MuJoCo (an engine nobody here wrote): the Panda loaded from the same URDF
 (meshes stripped, fingers fixed, no damping, armature, limits or contact), the same open-loop torque profile
-held over each 1 ms period, both integrating with RK4 at 1 ms ."""
+held over each 1 ms period, both integrating with RK4 at 1 ms."""
 
 from __future__ import annotations
 
@@ -32,7 +32,7 @@ class Profile:
 
 @pytest.mark.parametrize("q0", [[0.0, -0.4, 0.0, -2.0, 0.0, 1.6, 0.8], [0.5, 0.3, -0.4, -1.2, 0.7, 2.2, -0.3]])
 def test_panda_open_loop_trajectory_matches_mujoco_rk4(q0: list[float]) -> None:
-    from tests.mujoco_models import panda_mujoco
+    from tests.helpers.mujoco_models import panda_mujoco
 
     q0 = np.array(q0)
     qd0 = np.linspace(-0.3, 0.3, 7)

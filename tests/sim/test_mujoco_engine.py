@@ -20,7 +20,7 @@ from armctl.model import Frame, Joint, JointFriction, Link, Motor
 from armctl.model.parts import transform
 from armctl.references import Sinusoid
 from armctl.sim import ForceSensor, MujocoPlant, simulate
-from tests.mjcf_arms import SPATIAL_ARM
+from tests.helpers.mjcf_arms import SPATIAL_ARM
 from tests.sim.helpers import ComputedTorque, ForceControl, OpenLoop, PDGravity
 
 pytestmark = pytest.mark.mujoco

@@ -20,7 +20,7 @@ from armctl.references import Quintic
 from armctl.sim import simulate
 from armctl.sim.playback import frame_samples, playback
 from armctl.sim.visuals import parts
-from tests.browser import grey, keep_screenshot, needs_chromium, open_page
+from tests.helpers.browser import grey, keep_screenshot, needs_chromium, open_page
 
 pytest.importorskip("meshcat")
 

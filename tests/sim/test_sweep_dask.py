@@ -9,7 +9,7 @@ import pytest
 
 from armctl.errors import SweepWarning
 from armctl.sim import CaseFailure, sweep
-from tests.sim.test_sweep_failures import _cases, _job
+from tests.sim.helpers import failing_cases, failing_job
 
 
 @pytest.mark.slow
@@ -17,7 +17,7 @@ def test_killed_worker_and_raising_run_on_dask_are_recorded(tmp_path: Path) -> N
     import dask
     import distributed  # in the test extra: missing, the test fails rather than skips
 
-    cs = _cases(tmp_path / "starts.log", {1: "raise", 3: "sigkill"}, n=5)
+    cs = failing_cases(tmp_path / "starts.log", {1: "raise", 3: "sigkill"}, n=5)
     with (
         # one retry, as the sweep's own pool gives; one task per worker at a time, so that a case queued on the
         # worker that dies is not counted as a suspect of its death
@@ -26,13 +26,13 @@ def test_killed_worker_and_raising_run_on_dask_are_recorded(tmp_path: Path) -> N
         distributed.Client(cl) as client,
     ):
         with pytest.warns(SweepWarning, match="1 raised, 1 worker died"):
-            out = sweep(cs, run=_job, executor=client.get_executor(), progress=False)
+            out = sweep(cs, run=failing_job, executor=client.get_executor(), progress=False)
         # Dask's workers receive cases through cloudpickle, so a lambda is not refused there
         lam = sweep([{"x": 2}], run=lambda x: x + 1, executor=client.get_executor(), progress=False)
     assert [out[i] for i in (0, 2, 4)] == [0, 4, 16] and lam == [3]
     raised, killed = out[1], out[3]
     assert isinstance(raised, CaseFailure) and raised.kind == "raised" and raised.case is cs[1]
     assert (raised.error_type, raised.message) == ("ValueError", "x = 1 is not allowed")
-    assert "in _job" in raised.traceback  # the worker's traceback
+    assert "in failing_job" in raised.traceback  # the worker's traceback
     assert isinstance(killed, CaseFailure) and killed.kind == "worker_died" and killed.case is cs[3]
     assert killed.error_type == "distributed.scheduler.KilledWorker" and "workers died" in killed.message

@@ -24,7 +24,7 @@ from armctl.model import Joint, Link, RobotModel
 from armctl.tuning import model_bounds
 from armctl.tuning.bounds import joint_box
 from armctl.tuning.trig_poly import TrigPoly, derivative_weights, grid_nodes
-from tests.conftest import dynamics, model
+from tests.helpers.arms import dynamics, model
 
 # --------------------------------------------------------------------------------------------- brute force
 

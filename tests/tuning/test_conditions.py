@@ -26,7 +26,7 @@ from armctl.tuning import (
     sampled_data_condition,
 )
 from armctl.tuning.inertia_estimate import impulse_l1_norms
-from tests.conftest import dynamics, model
+from tests.helpers.arms import dynamics, model
 
 
 def _bounds(name: str) -> armctl.tuning.ModelBounds:

@@ -10,7 +10,7 @@ import pytest
 import armctl
 from armctl.errors import InvalidParameterError
 from armctl.tuning import closed_loop_poles, linearize, lqr_gains, pd_from_bandwidth
-from tests.conftest import dynamics
+from tests.helpers.arms import dynamics
 
 
 def test_pendulum_linearisation_is_the_textbook_one() -> None:

@@ -3,9 +3,16 @@ ArmctlError naming it."""
 
 from __future__ import annotations
 
+import json
 import math
+import os
+import shutil
+import subprocess
+import sys
 import tempfile
+import zipfile
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -14,6 +21,11 @@ from hypothesis import strategies as st
 
 from armctl.errors import ArmctlError, InvalidParameterError, ModelLoadError
 from armctl.tuning.presets import load_preset, write_preset
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
 
 AWKWARD = [
     "line1\nline2",
@@ -154,39 +166,96 @@ def test_value_toml_cannot_hold_raises_and_leaves_the_file(
     assert load_preset("s", "m", tmp_path)["how"] == "before"
 
 
-def test_presets_folder_search_order(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    """$ARMCTL_PRESETS, else the source checkout's controllers/, else the installed copy (a non-editable
-    install has no checkout); with none, the checkout's path is named in the error."""
-    from armctl.tuning import presets
+REPO = Path(__file__).resolve().parents[2]
 
-    checkout, installed = tmp_path / "repo" / "controllers", tmp_path / "prefix" / "share" / "armctl" / "controllers"
-    user = tmp_path / "home" / ".local" / "share" / "armctl" / "controllers"
-    monkeypatch.setattr(presets, "_candidates", lambda: (checkout, installed, user))
+
+def _read_toml(path: Path) -> dict[str, Any]:
+    with path.open("rb") as f:
+        return tomllib.load(f)
+
+
+def test_presets_folder_is_the_package_data_or_armctl_presets(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    """The presets shipped with armctl (in a source checkout: the repository's controllers/, through the link
+    armctl/_presets) unless $ARMCTL_PRESETS names another folder; each shipped file loads as it reads."""
+    from armctl.tuning.presets import presets_dir
+
     monkeypatch.delenv("ARMCTL_PRESETS", raising=False)
-    assert presets.presets_dir() == checkout  # none exists
-    with pytest.raises(ModelLoadError, match=r"no preset s\.m\.toml in .*repo.*ARMCTL_PRESETS"):
-        load_preset("s", "m")
-    write_preset("s", "m", {"kp": 3.0}, "user", "test", user)
-    assert presets.presets_dir() == user and load_preset("s", "m")["how"] == "user"
-    write_preset("s", "m", {"kp": 2.0}, "installed", "test", installed)
-    assert presets.presets_dir() == installed and load_preset("s", "m")["how"] == "installed"
-    write_preset("s", "m", {"kp": 1.0}, "checkout", "test", checkout)
-    assert presets.presets_dir() == checkout and load_preset("s", "m")["how"] == "checkout"
+    assert presets_dir() == (REPO / "controllers").resolve()
+    files = sorted((REPO / "controllers").glob("*.toml"))
+    assert len(files) >= 17
+    for f in files:
+        scene, method = f.name.removesuffix(".toml").split(".")
+        assert load_preset(scene, method) == _read_toml(f)
     monkeypatch.setenv("ARMCTL_PRESETS", str(tmp_path / "mine"))
-    assert presets.presets_dir() == tmp_path / "mine"
+    assert presets_dir() == tmp_path / "mine"
+    with pytest.raises(ModelLoadError, match=r"no preset s\.m\.toml in .*mine.*ARMCTL_PRESETS"):
+        load_preset("s", "m")
 
 
-def test_the_package_ships_every_preset() -> None:
-    """pyproject's data-files put controllers/*.toml where presets_dir looks in a non-editable install."""
-    import sys
+# run in a fresh interpreter that sees only the armctl under test: the folder given first on sys.path (a target
+# dir holding a wheel's files, or the site dir of an editable install), none of the other armctl checkouts
+_PROBE = """
+import json, os, site, sys
+where = sys.argv[1]
+before = set(sys.path)
+site.addsitedir(where)  # a target dir; for an editable install, runs its .pth
+added = [p for p in sys.path if p not in before]
+others = [p for p in sys.path if p not in added and not os.path.isdir(os.path.join(p or ".", "armctl"))]
+sys.path[:] = added + others
+import armctl
+from armctl.tuning.presets import load_preset, presets_dir, write_preset
+print(json.dumps({
+    "armctl": armctl.__file__,
+    "folder": str(presets_dir()),
+    "preset": load_preset("planar_2r", "computed_torque"),
+    "written": str(write_preset("s", "m", {"kp": 1.0}, "probe", "test")) if len(sys.argv) > 2 else None,
+}))
+"""
 
-    from armctl.tuning import presets
 
-    tomllib = pytest.importorskip("tomllib") if sys.version_info >= (3, 11) else pytest.importorskip("tomli")
-    root = Path(__file__).resolve().parents[2]
-    config = tomllib.loads((root / "pyproject.toml").read_text())
-    shipped = config["tool"]["setuptools"]["data-files"]["share/armctl/controllers"]
-    files = sorted(p for pattern in shipped for p in root.glob(pattern))
-    assert files == sorted((root / "controllers").glob("*.toml")) and len(files) >= 17
-    assert presets._candidates()[1] == Path(sys.prefix) / "share" / "armctl" / "controllers"
-    assert len(presets._candidates()) == 3  # and the user base's (pip install --user)
+def _probe(where: Path, *write: str) -> dict[str, Any]:
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "ARMCTL_PRESETS")}
+    out = subprocess.run(
+        [sys.executable, "-c", _PROBE, str(where), *write], capture_output=True, text=True, env=env, cwd=where
+    )
+    assert out.returncode == 0, out.stderr
+    return json.loads(out.stdout.splitlines()[-1])  # type: ignore[no-any-return]
+
+
+def _pip(*args: str) -> None:
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    out = subprocess.run([sys.executable, "-m", "pip", "-q", *args], capture_output=True, text=True, env=env)
+    assert out.returncode == 0, out.stdout + out.stderr
+
+
+@pytest.mark.slow
+def test_presets_load_from_a_wheel_and_from_an_editable_install(tmp_path: Path) -> None:
+    """Built as a user builds it (``pip wheel . --no-deps``) and installed into a target dir, armctl reads the
+    presets from its own package data; installed editable (``pip install -e``), from the repository's
+    controllers/, where write_preset also writes. Both against the repository's TOML files read here."""
+    source = tmp_path / "source"
+    ignore = shutil.ignore_patterns("__pycache__", "*.egg-info", "build")
+    shutil.copytree(REPO / "src", source / "src", symlinks=True, ignore=ignore)
+    shutil.copytree(REPO / "controllers", source / "controllers")
+    for name in ("pyproject.toml", "README.md"):
+        shutil.copy(REPO / name, source / name)
+    expected = _read_toml(REPO / "controllers" / "planar_2r.computed_torque.toml")
+
+    _pip("wheel", str(source), "-w", str(tmp_path / "dist"), "--no-deps")
+    (wheel,) = (tmp_path / "dist").glob("armctl-*.whl")
+    with zipfile.ZipFile(wheel) as z:
+        shipped = sorted(n.removeprefix("armctl/_presets/") for n in z.namelist() if n.startswith("armctl/_presets/"))
+    assert shipped == sorted(p.name for p in (REPO / "controllers").glob("*.toml"))
+    _pip("install", "--no-deps", "--target", str(tmp_path / "wheel"), str(wheel))
+    got = _probe(tmp_path / "wheel")
+    assert Path(got["armctl"]).is_relative_to(tmp_path / "wheel")
+    assert Path(got["folder"]) == (tmp_path / "wheel" / "armctl" / "_presets").resolve()
+    assert got["preset"] == expected
+
+    _pip("install", "--no-deps", "--target", str(tmp_path / "editable"), "-e", str(source))
+    got = _probe(tmp_path / "editable", "write")
+    assert Path(got["armctl"]).is_relative_to(source / "src")
+    assert Path(got["folder"]) == (source / "controllers").resolve()
+    assert got["preset"] == expected
+    assert Path(got["written"]) == (source / "controllers" / "s.m.toml").resolve()
+    assert _read_toml(source / "controllers" / "s.m.toml")["how"] == "probe"

@@ -11,7 +11,7 @@ import pytest
 
 from armctl.errors import ArmctlError
 from armctl.tuning import SampledDataAnalysis, closed_loop_poles, linearize, sampled_pd_loop, spectral_radius
-from tests.conftest import dynamics
+from tests.helpers.arms import dynamics
 
 
 def radius(kp: float, kd: float, period: float, delay: int) -> float:

@@ -5,6 +5,7 @@ measured in the same run (interleaved rounds), each law on the Pinocchio backend
 from __future__ import annotations
 
 import itertools
+from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
@@ -44,8 +45,12 @@ def run(number: int = 200, rounds: int = 75, seed: int = 0) -> dict[str, Any]:
         }
         for name, c in controllers.items():
             clock = itertools.count(1e-3, 1e-3)  # Python floats; the adaptive law integrates between calls
+
+            def step(c: Any = c, clock: Iterator[float] = clock) -> Any:
+                return c(next(clock), q, qd, ref)
+
             r = paired_ratio(
-                lambda c=c, clock=clock: c(next(clock), q, qd, ref),
+                step,
                 lambda: pin.rnea(pm, pd, q, qd, qdd),
                 number,
                 rounds,

@@ -35,7 +35,9 @@
 
 from __future__ import annotations
 
+import functools
 import math
+import operator
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -49,7 +51,7 @@ if TYPE_CHECKING:
     from armctl.controllers.base import Controller
     from armctl.dynamics.base import Dynamics
     from armctl.model.robot import RobotModel
-    from armctl.reference import Reference
+    from armctl.references import Reference
 
 #: the joint-space scenes (computed torque is compared on them; the contact scene's controllers are
 #: operational-space ones, outside this section)
@@ -116,7 +118,7 @@ def term_shares(terms: dict[str, FloatArray]) -> dict[str, Any]:
     total = sum(rms.values())
     shares = {k: (r / total if total > 0 else 0.0) for k, r in rms.items()}
     per_joint = {k: np.sqrt((v**2).mean(axis=0)).tolist() for k, v in terms.items()}
-    required = sum(terms.values())
+    required = functools.reduce(operator.add, terms.values()) if terms else np.zeros((0, 0))
     return {
         "rms": rms,
         "shares": shares,

@@ -42,7 +42,7 @@ from armctl.bench.report import pyplot, save_figure, section_main
 
 if TYPE_CHECKING:
     from armctl.dynamics.base import Dynamics
-    from armctl.reference import Reference
+    from armctl.references import Reference
 
 INTEGRATORS: tuple[str, ...] = ("rk4", "semi-implicit-euler", "implicit-euler")
 #: the chart's series: name → (integrator, compile)
@@ -78,7 +78,7 @@ class Scenario:
 
     def controller(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         """The open-loop torque profile as a controller: τ(t_k) regardless of the state."""
-        return self.torques[round(t / self.control_dt)]  # type: ignore[no-any-return]
+        return self.torques[round(t / self.control_dt)]
 
 
 def scenario(control_dt: float = CONTROL_DT, duration: float = DURATION) -> Scenario:
@@ -166,7 +166,7 @@ def run_case(
 
 def _hold(sc: Scenario) -> Reference:
     """A constant Reference (the open-loop controller ignores it)."""
-    from armctl.reference import Reference
+    from armctl.references import Reference
 
     return Reference(sc.q0)
 

@@ -225,7 +225,7 @@ def _wrong(ctrl: OperationalSpaceQP, seq: States, taus: list[np.ndarray], ref: a
     for (t, q, qd), tau in zip(seq, taus, strict=True):
         p = ctrl.build(t, q, qd, ref).problem(0)
         sol = qpsolvers.solve_problem(p.to_qpsolvers(), "quadprog")
-        wrong += not sol.found or float(np.abs(tau - sol.x[p.variables["tau"]]).max()) > 1e-4
+        wrong += not sol.found or sol.x is None or float(np.abs(tau - sol.x[p.variables["tau"]]).max()) > 1e-4
     return wrong
 
 

@@ -18,7 +18,17 @@ def failure_note(r: dict[str, Any], brief: bool = True) -> str | None:
 def outcome(r: dict[str, Any]) -> str:
     """A scene row's outcome in words: how it failed or diverged, else what it did beyond the plant's limits
     (the share of samples saturated, over the velocity limit, outside the position range) and whether a
-    contact was lost; "ok" for a run within every limit."""
+    contact was lost; "ok" for a run within every limit.
+
+    Parameters
+    ----------
+    r : dict
+        A row of :func:`scene_matrix`.
+
+    Returns
+    -------
+    str
+    """
     failure = failure_note(r, brief=False)
     if failure:
         return failure
@@ -38,7 +48,19 @@ def outcome(r: dict[str, Any]) -> str:
 
 def scene_title(name: str, rows: list[dict[str, Any]]) -> str:
     """A scene's arm and task, from its rows (``plant``, ``joints``, ``description``): e.g. "panda (7 joints):
-    Panda tracking a time-optimal path …"; the name alone if no row has them (a scene that failed)."""
+    Panda tracking a time-optimal path …"; the name alone if no row has them (a scene that failed).
+
+    Parameters
+    ----------
+    name : str
+        The scene.
+    rows : list of dict
+        Rows of :func:`scene_matrix`.
+
+    Returns
+    -------
+    str
+    """
     for r in rows:
         if r["scene"] == name and r.get("description"):
             joints = f"{r['joints']} joint{'s' if r['joints'] != 1 else ''}"

@@ -17,7 +17,19 @@ def pareto_front(points: list[tuple[float, float]], spans: list[tuple[float, flo
     ``spans``: an interval (lo, hi) around each x — the quartiles of a noisy timing. Then x is compared by
     the intervals: j is faster than i only if hi_j < lo_i, and overlapping intervals are a tie, so timing noise
     alone cannot move a point on or off the front. j beats i if it is faster and no less accurate, or tied and
-    more accurate. Without spans this is the usual strict Pareto order."""
+    more accurate. Without spans this is the usual strict Pareto order.
+
+    Parameters
+    ----------
+    points : list of tuple of float
+        (x, y) each: compute time [s], error.
+    spans : list of tuple of float, optional
+        An interval (lo, hi) around each x.
+
+    Returns
+    -------
+    list of int
+    """
     spans = (
         [(x, x) for x, _ in points]
         if spans is None
@@ -45,7 +57,15 @@ def plot_pareto(rows: list[dict[str, Any]], path: Path) -> None:
     """Tracking error against compute time per step, log-log, one panel per scene (two columns): the
     quartiles of the timing as horizontal bars, the Pareto front (:func:`pareto_front` on those quartiles)
     marked, and every method that diverged or failed listed in its panel (a cross at the top where its time is
-    known); a legend explains the markers."""
+    known); a legend explains the markers.
+
+    Parameters
+    ----------
+    rows : list of dict
+        The rows of :func:`scene_matrix`.
+    path : pathlib.Path
+        The chart (PNG) to write.
+    """
     from matplotlib.lines import Line2D
 
     from armctl.bench.report import plain_log_ticks, pyplot
@@ -61,7 +81,7 @@ def plot_pareto(rows: list[dict[str, Any]], path: Path) -> None:
         mine = [r for r in rows if r["scene"] == name and failure_note(r) is None]
         pts = [(r["compute_s"] * 1e6, r["rms_error"]) for r in mine]
         spans = [tuple(1e6 * v for v in r.get("compute_s_iqr", (r["compute_s"],) * 2)) for r in mine]
-        front = set(pareto_front(pts, spans))  # type: ignore[arg-type]
+        front = set(pareto_front(pts, spans))
         placed: list[tuple[float, float]] = []
         for i, (r, (x, y), (lo, hi)) in enumerate(zip(mine, pts, spans, strict=True)):
             color = "#d62828" if i in front else "#577590"

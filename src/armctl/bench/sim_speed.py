@@ -30,7 +30,7 @@ import numpy as np
 
 import armctl
 from armctl.controllers import ComputedTorque, PDGravity
-from armctl.reference import Reference
+from armctl.references import Reference
 from armctl.sim import simulate, sweep
 
 TARGETS = {"real_time_factor": 30.0, "ratio_to_mujoco": 2.0, "sweep_speedup": 1.7}

@@ -133,7 +133,22 @@ def scene_matrix(
 ) -> list[dict[str, Any]]:
     """Every method on every scene (:func:`run_scene_method`), timed afterwards (:func:`time_controllers`);
     with ``playback_dir``, each scene's :func:`showcase` run is also written there as
-    ``playback_<scene>.html``."""
+    ``playback_<scene>.html``.
+
+    Parameters
+    ----------
+    executor : concurrent.futures.Executor or "serial", optional
+        Where the runs go (see :func:`armctl.sim.sweep`).
+    rounds : int, optional
+        Timing rounds of each controller.
+    playback_dir : pathlib.Path, optional
+        Where the playbacks go (None: none written).
+
+    Returns
+    -------
+    list of dict
+        One row per scene and method.
+    """
     from armctl.errors import ArmctlError
     from armctl.scenes import SCENES, scene
     from armctl.sim import sweep
@@ -239,7 +254,22 @@ def run_suite(
     quick: bool = False, out: Path = Path("bench-out"), executor: Executor | str | None = None
 ) -> dict[str, Any]:
     """Run every section in turn (its results printed as it finishes), then write ``figures.json``, the charts,
-    the scenes' playbacks and ``report.html`` into ``out``."""
+    the scenes' playbacks and ``report.html`` into ``out``.
+
+    Parameters
+    ----------
+    quick : bool, optional
+        Short runs and fewer repetitions (a smoke test of the whole bench).
+    out : pathlib.Path, optional
+        The folder (created if missing).
+    executor : concurrent.futures.Executor or "serial", optional
+        Where the scene runs go (see :func:`armctl.sim.sweep`; None: a process pool).
+
+    Returns
+    -------
+    dict of str
+        The figures (also written as ``figures.json``).
+    """
     from armctl.bench import controller_speed, dynamics_speed, osc_speed, stability
     from armctl.bench.progress import sections
     from armctl.bench.report import write_report
@@ -373,7 +403,17 @@ def section_summary(key: str, data: Any) -> str:
 
 
 def summary(figures: dict[str, Any]) -> str:
-    """Every section's text, in order (the report keeps it, below its tables)."""
+    """Every section's text, in order (the report keeps it, below its tables).
+
+    Parameters
+    ----------
+    figures : dict
+        The figures of :func:`run_suite`.
+
+    Returns
+    -------
+    str
+    """
     parts = [section_summary(key, figures[key]) for key in SECTION_TITLES if key in figures]
     parts.append(f"total {figures.get('total_seconds', 0.0):.1f} s")
     return "\n\n".join(parts)

@@ -38,7 +38,7 @@ def waypoints(model: Any, count: int = 6, seed: int = 0) -> np.ndarray:
             check_range(model, SplinePath(w))
         except InfeasibleError:
             continue
-        return w  # type: ignore[no-any-return]
+        return w
     raise RuntimeError(f"no {count} random waypoints from seeds {seed}…{seed + 99} give a path within the ranges")
 
 
@@ -50,6 +50,7 @@ def cases(grid: int = 100) -> tuple[Callable[[], float], Callable[[], float]]:
     import toppra.constraint as tc
 
     import armctl
+    from armctl.dynamics.pinocchio_backend import PinocchioDynamics
     from armctl.planning import SplinePath, time_optimal
 
     model = armctl.models.panda()
@@ -59,6 +60,7 @@ def cases(grid: int = 100) -> tuple[Callable[[], float], Callable[[], float]]:
     n = model.n
     vlim = np.stack([-model.velocity_limit, model.velocity_limit], axis=1)
     tlim = np.stack([-model.effort_limit, model.effort_limit], axis=1)
+    assert isinstance(dyn, PinocchioDynamics)  # the default backend
     pm, pd = dyn.pin_model, dyn.pin_data
     grid_s = np.linspace(0.0, 1.0, grid + 1)
 

@@ -15,7 +15,7 @@ from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError, ShapeError
 from armctl.model import RobotModel
 from armctl.model.consistency import project_physical, projection
-from armctl.reference import Reference
+from armctl.references import Reference
 
 
 class Adaptive(SlidingGains, Controller):
@@ -51,24 +51,58 @@ class Adaptive(SlidingGains, Controller):
       regressor W_f = F[Y(q, q̇, q̈̂)] and filtered commanded torque τ_f = F[τ] (bandwidth
       ``filter_bandwidth`` [rad/s]; q̈̂ by differencing q̇; the commanded torque is taken as applied).
 
-    lam: Λ [1/s]; kd: K_D; gamma: Γ (scalar, 13n vector or matrix); theta0: initial θ̂ (None: the controller
-    model's own π). Each step replaces ``theta`` (θ̂) by a new array (the controller never changes it in
+    Each step replaces ``theta`` (θ̂) by a new array (the controller never changes it in
     place), so ``last_log["theta"]`` is that same array, not a copy: change ``theta`` by assigning a new array,
     not in place, or the last log changes with it. ``last_log["s"]`` holds s. A diagonal Γ·dt is formed once per
     control-period length (anew when dt changes by more than 1e-9 relative).
 
-    plant: the true arm (a :class:`~armctl.Dynamics` or :class:`~armctl.RobotModel`, as many joints), for
-    simulation studies only: each step then also logs ``last_log["V"]``, the Lyapunov function
-    V = ½ sᵀM(q)s + ½ θ̃ᵀΓ⁻¹θ̃ with the plant's M and θ̃ = θ̂ − π_plant (θ̂ after this step's update), so a run's
-    ``res.logs["V"]`` is V(t). The law never uses it (a real controller knows neither M nor π); it costs one
-    mass-matrix evaluation a step (and with a full Γ two triangular solves).
+    Parameters
+    ----------
+    dynamics : Dynamics
+        The controller's model (its regressor Y and initial π).
+    lam : array_like
+        Λ [1/s]: a scalar, an (n,) diagonal or an n×n symmetric positive definite matrix.
+    kd : array_like
+        K_D [N·m·s/rad], likewise.
+    gamma : array_like
+        Γ: a scalar, a (13 n,) diagonal or a 13n × 13n symmetric positive definite matrix.
+    theta0 : array_like, shape (13 n,), optional
+        The initial θ̂ (None: the controller model's own π).
+    projection : bool, optional
+        Project θ̂ onto the physically consistent set after each update (see above).
+    sigma : float, optional
+        σ of the σ-modification, ≥ 0.
+    dead_zone : float, optional
+        δ [rad/s]: θ̂ is held while ‖s‖ < δ.
+    composite : float, optional
+        κ of the composite term, ≥ 0.
+    filter_bandwidth : float, optional
+        The bandwidth of the composite term's filter [rad/s], > 0.
+    radius : float, optional
+        R of the ball ‖θ̂ − θ₀‖ ≤ R, with ``projection=True`` only.
+    plant : Dynamics or RobotModel, optional
+        The true arm (as many joints), for simulation studies only: each step then also logs ``last_log["V"]``,
+        the Lyapunov function V = ½ sᵀM(q)s + ½ θ̃ᵀΓ⁻¹θ̃ with the plant's M and θ̃ = θ̂ − π_plant (θ̂ after this
+        step's update), so a run's ``res.logs["V"]`` is V(t). The law never uses it (a real controller knows
+        neither M nor π); it costs one mass-matrix evaluation a step (and with a full Γ two triangular solves).
+
+    Raises
+    ------
+    InvalidParameterError, ShapeError, NonFiniteError
+        A gain that is not symmetric positive definite, a θ₀ of the wrong size, a negative σ, δ or κ, a radius
+        without projection, a plant of another size.
     """
 
+    dynamics: Dynamics  # given to __init__, never None
+
     _outside = False  # whether the last projection changed θ̂ (see _project); reset() clears it
-    _plant: Dynamics | None = None  # (a class default too: objects pickled before plant existed)
+    _plant: Dynamics | None
     _gamma_factor: Any = None
 
     gamma = Gain("Γ (13n×13n).", size=lambda owner: 13 * owner.n)
+    _gamma: FloatArray  # Γ in the compact form the Gain keeps (its diagonal if diagonal)
+    _gamma_matrix: FloatArray
+    _gamma_dt: FloatArray  # Γ·dt for the control period _dt (a diagonal Γ)
 
     def __init__(
         self,
@@ -103,11 +137,6 @@ class Adaptive(SlidingGains, Controller):
         self.plant = plant
         self.reset()
 
-    def __setstate__(self, state: dict[str, Any]) -> None:
-        if "projection" in state:  # pickled when projection was a plain attribute
-            state["_projection"] = bool(state.pop("projection"))
-        self.__dict__.update(state)
-
     @property
     def projection(self) -> bool:
         """Project θ̂ onto the physically consistent set after each update (may be switched between calls)."""
@@ -138,7 +167,27 @@ class Adaptive(SlidingGains, Controller):
         self._plant = value
 
     def lyapunov(self, q: ArrayLike, s: ArrayLike, theta: ArrayLike | None = None) -> float:
-        """V = ½ sᵀM(q)s + ½ θ̃ᵀΓ⁻¹θ̃ with :attr:`plant`'s M and θ̃ = θ − π_plant (θ: default the current θ̂)."""
+        """V = ½ sᵀM(q)s + ½ θ̃ᵀΓ⁻¹θ̃ with :attr:`plant`'s M and θ̃ = θ − π_plant.
+
+        Parameters
+        ----------
+        q : array_like, shape (n,)
+            Joint positions [rad or m].
+        s : array_like, shape (n,)
+            The sliding variable s = q̇ − q̇_r [rad/s].
+        theta : array_like, shape (13 n,), optional
+            θ (default: the current θ̂).
+
+        Returns
+        -------
+        float
+            V [J].
+
+        Raises
+        ------
+        InvalidParameterError
+            No plant was given.
+        """
         if self._plant is None:
             raise InvalidParameterError("V needs the true arm: set plant= (a Dynamics or RobotModel)", value=None)
         q, s = vector(q, self.n, "q"), vector(s, self.n, "s")
@@ -154,7 +203,7 @@ class Adaptive(SlidingGains, Controller):
 
     def _gains_changed(self) -> None:
         super()._gains_changed()
-        self._dt, self._gamma_dt = 0.0, None  # Γ·dt formed anew at the next update
+        self._dt = 0.0  # Γ·dt formed anew at the next update (no update has dt = 0)
         self._gamma_factor = None  # and Γ's Cholesky factor, for V
 
     def reset(self) -> None:
@@ -238,4 +287,4 @@ class Adaptive(SlidingGains, Controller):
         a = self.composite * dt
         gw = self._gamma[:, None] * w_f.T if self._gamma.ndim == 1 else self._gamma.dot(w_f.T)  # Γ W_fᵀ
         inner = np.eye(w_f.shape[0]) + a * w_f.dot(gw)
-        return b - a * gw.dot(np.linalg.solve(inner, w_f.dot(b)))  # type: ignore[no-any-return]
+        return b - a * gw.dot(np.linalg.solve(inner, w_f.dot(b)))

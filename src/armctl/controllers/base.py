@@ -18,12 +18,25 @@ from numpy.typing import ArrayLike
 from armctl._checks import FLOAT, FloatArray, all_finite, scalar, vector, whole_number
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
-from armctl.reference import Reference
+from armctl.references import Reference
 
 
 class Controller(ABC):
-    """Base class. ``dynamics``: the controller's own model (it may be reduced or wrong on purpose), or
-    None for a model-free controller, in which case ``n`` must be given."""
+    """Base class of the controllers: ``tau = controller(t, q, qd, ref)`` checks its inputs, then calls
+    :meth:`compute`, the control law.
+
+    Parameters
+    ----------
+    dynamics : Dynamics, optional
+        The controller's own model (it may be reduced or wrong on purpose), or None for a model-free controller.
+    n : int, optional
+        The number of joints, required without ``dynamics``.
+
+    Raises
+    ------
+    InvalidParameterError
+        ``dynamics`` is not a Dynamics, or neither it nor ``n`` is given.
+    """
 
     def __init__(self, dynamics: Dynamics | None = None, n: int | None = None) -> None:
         if dynamics is not None and not isinstance(dynamics, Dynamics):
@@ -72,7 +85,7 @@ class Controller(ABC):
             q, qd = self._checked(t, q, qd)
         elif self._checks_result:  # NaN or inf in q or q̇ reaches τ: one check, of τ
             try:
-                tau = self.compute(t, q, qd, ref)  # type: ignore[arg-type]
+                tau = self.compute(t, q, qd, ref)
             except (RuntimeWarning, FloatingPointError):  # NumPy's warnings made errors: name the input
                 self._checked(t, q, qd)
                 raise  # the inputs were finite: the law's own
@@ -80,9 +93,9 @@ class Controller(ABC):
                 return tau
             self._checked(t, q, qd)  # NonFiniteError if an input is the cause
             self._nonfinite_torque(tau, q, qd)
-        elif not (all_finite(q) and all_finite(qd) and math.isfinite(t)):  # type: ignore[arg-type]
+        elif not (all_finite(q) and all_finite(qd) and math.isfinite(t)):
             q, qd = self._checked(t, q, qd)
-        tau = self.compute(t, q, qd, ref)  # type: ignore[arg-type]
+        tau = self.compute(t, q, qd, ref)
         try:
             if all_finite(tau):
                 return tau
@@ -104,7 +117,20 @@ class Controller(ABC):
         return vector(q, self.n, "q"), vector(qd, self.n, "qd")
 
     def check_reference(self, ref: Reference) -> None:
-        """Raise unless ``ref`` is a :class:`~armctl.Reference` with as many joints as the controller."""
+        """Check a reference against this controller.
+
+        Parameters
+        ----------
+        ref : Reference
+            The reference.
+
+        Raises
+        ------
+        InvalidParameterError
+            ``ref`` is not a :class:`~armctl.Reference`.
+        ShapeError
+            It has another number of joints than the controller.
+        """
         if not isinstance(ref, Reference):
             raise InvalidParameterError(f"ref must be an armctl.Reference, got {type(ref).__name__}", value=ref)
         if ref.q.shape != self._shape:
@@ -112,8 +138,25 @@ class Controller(ABC):
 
     @abstractmethod
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
-        """The control law, on checked inputs. In :func:`armctl.simulate`, q and q̇ are read-only views of the
-        run's record: work on new arrays (e = q − ref.q) or on a copy."""
+        """The control law, on checked inputs.
+
+        In :func:`armctl.simulate`, q and q̇ are read-only views of the run's record: work on new arrays
+        (e = q − ref.q) or on a copy.
+
+        Parameters
+        ----------
+        t : float
+            Time [s].
+        q, qd : ndarray, shape (n,)
+            Measured joint positions and velocities [rad, rad/s or m, m/s], float64, finite.
+        ref : Reference
+            The reference at t.
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            The joint torques τ [N·m or N].
+        """
 
     def reset(self) -> None:
         """Forget any internal state (integrators, estimates) before a new run."""

@@ -10,7 +10,7 @@ from armctl.controllers.base import Controller
 from armctl.controllers.integral import PIDGains
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError
-from armctl.reference import Reference
+from armctl.references import Reference
 
 
 class ComputedTorque(PIDGains, Controller):
@@ -20,18 +20,35 @@ class ComputedTorque(PIDGains, Controller):
     wrong one (payload, parameter error) the mismatch enters as a disturbance M̂⁻¹(Δ) and the error no longer
     vanishes. The integral is accumulated at the control rate (rectangle rule over the time between calls).
 
-    kp [1/s²], kd [1/s], ki [1/s³] (scalar, vector or matrix; ki may be None). friction: compensate the model's
-    friction at the measured velocity, τ_f(q̇) (True, the default), at the reference velocity, τ_f(q̇_d)
-    (``"reference"``: a feedforward that pushes a stuck joint the way it should move — the feedback alone,
-    scaled by M, needs large errors to break stiction on light joints — and does not chatter at rest), or not
-    at all (False).
-
     ``last_log`` (recorded by :func:`armctl.simulate` into ``res.logs``) holds the terms of the commanded
     acceleration v [rad/s²], which add up to it: ``"feedforward"`` q̈_d and ``"feedback"`` K_p e + K_d ė, and
     with an integral ``"integral"`` K_i ∫e dt; with friction compensation also ``"friction"`` τ_f [N·m], added
     to M v + C q̇ + g. (The torque of the feedback alone, M(q)·feedback, would cost a second evaluation of the
     model.) The logged arrays are those the law computed, not copies: read them before the next call.
+
+    Parameters
+    ----------
+    dynamics : Dynamics
+        The controller's model (M, C, g and τ_f).
+    kp : array_like
+        K_p [1/s²]: a scalar, an (n,) diagonal or an n×n symmetric positive definite matrix.
+    kd : array_like
+        K_d [1/s], likewise.
+    ki : array_like, optional
+        K_i [1/s³], likewise, or None (no integral term).
+    friction : bool or "reference", optional
+        Compensate the model's friction at the measured velocity, τ_f(q̇) (True, the default), at the reference
+        velocity, τ_f(q̇_d) (``"reference"``: a feedforward that pushes a stuck joint the way it should move — the
+        feedback alone, scaled by M, needs large errors to break stiction on light joints — and does not chatter
+        at rest), or not at all (False).
+
+    Raises
+    ------
+    InvalidParameterError, ShapeError, NonFiniteError
+        A gain that is not symmetric positive definite, of the wrong size, or not finite; another ``friction``.
     """
+
+    dynamics: Dynamics  # given to __init__, never None
 
     def __init__(
         self, dynamics: Dynamics, kp: ArrayLike, kd: ArrayLike, ki: ArrayLike | None = None, friction: bool | str = True
@@ -65,7 +82,7 @@ class ComputedTorque(PIDGains, Controller):
             )
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
-        kernel = self.dynamics.kernel  # type: ignore[union-attr]
+        kernel = self.dynamics.kernel
         both = self._command.dot(np.concatenate((ref.qdd, ref.q, ref.qd, q, qd)))
         n = self.n
         v = both[:n]  # q̈_d + K_d ė + K_p e

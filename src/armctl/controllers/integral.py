@@ -39,6 +39,13 @@ class PIDGains:
     kp = Gain("K_p (n×n).")
     kd = Gain("K_d (n×n).")
     ki = Gain("K_i (n×n), or None: no integral term.", optional=True)
+    # what the Gain descriptors keep: the compact forms and the matrices
+    _kp: FloatArray
+    _kd: FloatArray
+    _ki: FloatArray | None
+    _kp_matrix: FloatArray
+    _kd_matrix: FloatArray
+    _ki_matrix: FloatArray | None
 
     def _set_gains(self, kp: ArrayLike, kd: ArrayLike, ki: ArrayLike | None) -> None:
         self._integral = ErrorIntegral(self.n)
@@ -54,7 +61,7 @@ class PIDGains:
         self._feedback = np.hstack((kp, kd, -kp, -kd))
         # without an integral the law keeps no state, and a NaN/inf in q_j or q̇_j reaches τ through K_p e or
         # K_d ė (K ≻ 0: a positive diagonal entry multiplies it; in computed torque through v_j and M_jj > 0)
-        self._checks_result = self._ki is None and self._own_law()  # type: ignore[attr-defined]
+        self._checks_result = self._ki is None and self._own_law()  # type: ignore[attr-defined]  # Controller's, the other base
 
     def reset(self) -> None:
         super().reset()  # type: ignore[misc]  # the Controller's, next in the MRO

@@ -8,7 +8,7 @@ from numpy.typing import ArrayLike
 from armctl._checks import FloatArray, Gain
 from armctl.controllers.base import Controller
 from armctl.dynamics.base import Dynamics
-from armctl.reference import Reference
+from armctl.references import Reference
 
 
 def sliding_map(lam: FloatArray, kd: FloatArray) -> FloatArray:
@@ -37,10 +37,15 @@ class SlidingGains:
 
     lam = Gain("Λ (n×n); may be reassigned between calls (checked again).")
     kd = Gain("K_D (n×n); may be reassigned between calls (checked again).")
+    # what the Gain descriptors keep: the compact forms and the matrices
+    _lam: FloatArray
+    _kd: FloatArray
+    _lam_matrix: FloatArray
+    _kd_matrix: FloatArray
 
     def _gains_changed(self) -> None:
         if hasattr(self, "_kd"):  # Λ and K_D both set
-            self._sliding = sliding_map(self._lam_matrix, self._kd_matrix)  # type: ignore[attr-defined]
+            self._sliding = sliding_map(self._lam_matrix, self._kd_matrix)
 
 
 class PassivityBased(SlidingGains, Controller):
@@ -51,12 +56,26 @@ class PassivityBased(SlidingGains, Controller):
     it does not cancel the dynamics into a double integrator, which keeps it robust to model error at the
     same gains. The model terms come from two inverse-dynamics evaluations (``Dynamics.passivity_torque``).
 
-    lam: Λ [1/s]; kd: K_D [N·m·s/rad] (scalar, vector or matrix).
-
     ``last_log`` (recorded by :func:`armctl.simulate` into ``res.logs``) holds the terms of τ = model − damping
     [N·m]: ``"model"`` M q̈_r + C q̇_r + g + F_v q̇_r + F_c sgn(q̇), ``"damping"`` K_D s, and the sliding variable
     ``"s"`` [rad/s]. The logged arrays are those the law computed, not copies: read them before the next call.
+
+    Parameters
+    ----------
+    dynamics : Dynamics
+        The controller's model.
+    lam : array_like
+        Λ [1/s]: a scalar, an (n,) diagonal or an n×n symmetric positive definite matrix.
+    kd : array_like
+        K_D [N·m·s/rad], likewise.
+
+    Raises
+    ------
+    InvalidParameterError, ShapeError, NonFiniteError
+        A gain that is not symmetric positive definite, of the wrong size, or not finite.
     """
+
+    dynamics: Dynamics  # given to __init__, never None
 
     def __init__(self, dynamics: Dynamics, lam: ArrayLike, kd: ArrayLike) -> None:
         super().__init__(dynamics)
@@ -66,7 +85,7 @@ class PassivityBased(SlidingGains, Controller):
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         qd_r, qdd_r, s, kd_s, a, w = sliding(q, qd, ref, self._sliding)
-        model = self.dynamics.kernel.passivity_torque(q, qd, qd_r, qdd_r, a, w)  # type: ignore[union-attr]
+        model = self.dynamics.kernel.passivity_torque(q, qd, qd_r, qdd_r, a, w)
         self.last_log = {"model": model, "damping": kd_s, "s": s}
         return model - kd_s
 

@@ -11,7 +11,7 @@ from armctl._checks import FloatArray, apply_gain, boolean
 from armctl.controllers.base import Controller
 from armctl.controllers.integral import PIDGains
 from armctl.dynamics.base import Dynamics
-from armctl.reference import Reference
+from armctl.references import Reference
 
 
 class PDGravity(PIDGains, Controller):
@@ -24,16 +24,35 @@ class PDGravity(PIDGains, Controller):
     stiction (breakaway above the Coulomb level) it produces the stick–slip "hunting" limit cycle: the integral
     winds up while the joint sticks, the joint breaks away, overshoots, and sticks again on the other side.
 
-    kp: proportional gain [N·m/rad]; kd: derivative gain [N·m·s/rad]; ki: integral gain [N·m/(rad·s)] or None
-    (each a scalar, vector or matrix). The integral is accumulated at the control rate. On
-    ``armctl.Dynamics(model, compile=True)`` the law g + K_p e + K_d ė runs as one call of the generated code.
-
     ``last_log`` (recorded by :func:`armctl.simulate` into ``res.logs``) holds the terms of τ [N·m], which add
     up to it: ``"feedback"`` K_p e + K_d ė, ``"gravity"`` g(q), and where used ``"integral"`` K_i ∫e dt and
     ``"friction"`` τ_f(q̇). The fused law of ``compile=True`` computes τ in one call and logs only the
     integral and friction terms (splitting it would cost a second evaluation). The logged arrays are those the
     law computed, not copies: read them before the next call.
+
+    The integral is accumulated at the control rate. On ``armctl.Dynamics(model, compile=True)`` the law
+    g + K_p e + K_d ė runs as one call of the generated code.
+
+    Parameters
+    ----------
+    dynamics : Dynamics
+        The controller's model (its g and, with ``friction``, its τ_f).
+    kp : array_like
+        Proportional gain K_p [N·m/rad]: a scalar, an (n,) diagonal or an n×n symmetric positive definite matrix.
+    kd : array_like
+        Derivative gain K_d [N·m·s/rad], likewise.
+    ki : array_like, optional
+        Integral gain K_i [N·m/(rad·s)], likewise, or None (no integral term).
+    friction : bool, optional
+        Add the model's friction τ_f(q̇) at the measured velocity.
+
+    Raises
+    ------
+    InvalidParameterError, ShapeError, NonFiniteError
+        A gain that is not symmetric positive definite, of the wrong size, or not finite.
     """
+
+    dynamics: Dynamics  # given to __init__, never None
 
     def __init__(
         self, dynamics: Dynamics, kp: ArrayLike, kd: ArrayLike, ki: ArrayLike | None = None, friction: bool = False
@@ -76,7 +95,7 @@ class PDGravity(PIDGains, Controller):
         return state
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
-        kernel = self.dynamics.kernel  # type: ignore[union-attr]
+        kernel = self.dynamics.kernel
         if kernel is not self._law_for:
             self._law, self._law_for = kernel.pd_gravity_law(self._feedback), kernel
         law = self._law

@@ -8,7 +8,7 @@ from armctl._checks import FloatArray, apply_gain
 from armctl.controllers.base import Controller
 from armctl.controllers.integral import PIDGains
 from armctl.dynamics.base import Dynamics
-from armctl.reference import Reference
+from armctl.references import Reference
 
 
 class PDDesiredGravity(PIDGains, Controller):
@@ -22,8 +22,22 @@ class PDDesiredGravity(PIDGains, Controller):
     Unlike :class:`~armctl.controllers.PDGravity` the gravity term is constant along a set-point, so it can be
     computed once, off line.
 
-    kp: proportional gain [N·m/rad]; kd: derivative gain [N·m·s/rad] (each a scalar, vector or s.p.d. matrix).
+    Parameters
+    ----------
+    dynamics : Dynamics
+        The controller's model (its g).
+    kp : array_like
+        Proportional gain K_p [N·m/rad]: a scalar, an (n,) diagonal or an n×n symmetric positive definite matrix.
+    kd : array_like
+        Derivative gain K_d [N·m·s/rad], likewise.
+
+    Raises
+    ------
+    InvalidParameterError, ShapeError, NonFiniteError
+        A gain that is not symmetric positive definite, of the wrong size, or not finite.
     """
+
+    dynamics: Dynamics  # given to __init__, never None
 
     def __init__(self, dynamics: Dynamics, kp: ArrayLike, kd: ArrayLike) -> None:
         super().__init__(dynamics)

@@ -22,7 +22,7 @@ from __future__ import annotations
 import math
 import threading
 from collections.abc import Callable, Sequence
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -134,7 +134,12 @@ class Dynamics(RegressorMethods):
         self._propagates = self._local.kernel.nan_propagates
 
     def new_kernel(self) -> Kernel:
-        """A new kernel (workspace) of this object's backend: what :attr:`kernel` gives each thread."""
+        """A new kernel (workspace) of this object's backend: what :attr:`kernel` gives each thread.
+
+        Returns
+        -------
+        Kernel
+        """
         raise NotImplementedError(f"{type(self).__name__} has no kernel: make Dynamics objects by armctl.Dynamics")
 
     @property
@@ -213,8 +218,18 @@ class Dynamics(RegressorMethods):
         )
 
     def check_mass_matrix(self, q: ArrayLike) -> None:
-        """Raise :class:`~armctl.errors.InvalidParameterError` if M(q) is not positive definite (naming the
-        joint of least inertia and what to give it)."""
+        """Check that M(q) is positive definite.
+
+        Parameters
+        ----------
+        q : array_like, shape (n,)
+            Joint positions [rad or m].
+
+        Raises
+        ------
+        InvalidParameterError
+            M(q) is not positive definite (naming the joint of least inertia and what to give it).
+        """
         qv = self._vector(q, "q")
         k = self._local.kernel
         try:
@@ -230,6 +245,11 @@ class Dynamics(RegressorMethods):
         ----------
         q : (n,) array_like
             Joint positions [rad or m].
+
+        Returns
+        -------
+        ndarray, shape (n, n)
+            M(q) [kg·m² or kg].
         """
         return self._of_q(self._local.kernel.mass, q)
 
@@ -241,8 +261,13 @@ class Dynamics(RegressorMethods):
         ----------
         q, qd : (n,) array_like
             Joint positions [rad or m] and velocities [rad/s or m/s].
+
+        Returns
+        -------
+        ndarray, shape (n, n)
+            C(q, q̇) [kg·m²/s or kg/s].
         """
-        return self._evaluate(self._local.kernel.coriolis, ("q", "qd"), q, qd)  # type: ignore[no-any-return]
+        return self._evaluate(self._local.kernel.coriolis, ("q", "qd"), q, qd)
 
     def gravity_torque(self, q: ArrayLike) -> FloatArray:
         """g(q) = ∂U/∂q [N·m or N].
@@ -251,6 +276,11 @@ class Dynamics(RegressorMethods):
         ----------
         q : (n,) array_like
             Joint positions [rad or m].
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            g(q) [N·m or N].
         """
         return self._of_q(self._local.kernel.gravity, q)
 
@@ -262,8 +292,13 @@ class Dynamics(RegressorMethods):
         ----------
         qd : (n,) array_like
             Joint velocities [rad/s or m/s].
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            τ_f [N·m or N].
         """
-        return self._evaluate(self.friction.torque, ("qd",), qd)  # type: ignore[no-any-return]
+        return self._evaluate(self.friction.torque, ("qd",), qd)
 
     def inverse_dynamics(
         self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, wrench: ArrayLike | None = None
@@ -277,6 +312,11 @@ class Dynamics(RegressorMethods):
         wrench : (6,) array_like, optional
             h_e = [f; μ] at the tool frame in world-aligned axes [N, N·m]: the wrench the arm exerts on the
             environment.
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            τ [N·m or N].
         """
         k = self._local.kernel
         if wrench is None and self._propagates and float_vectors(q, qd, qdd):
@@ -286,7 +326,7 @@ class Dynamics(RegressorMethods):
                 tau = None
             if tau is not None:
                 if self.friction.any:
-                    tau += self.friction.torque(qd)
+                    tau += self.friction.torque(cast(FloatArray, qd))  # (float_vectors checked it)
                 if math.isfinite(sum(tau.tolist())):
                     return tau
         tau = self._evaluate(k.inverse_dynamics, ("q", "qd", "qdd"), q, qd, qdd)
@@ -296,7 +336,7 @@ class Dynamics(RegressorMethods):
                 tau = tau + k.jacobian(qv, None).T @ h
             if not np.isfinite(tau).all():
                 raise self._overflow(tau, ("wrench",), (h,), qv)
-        return tau  # type: ignore[no-any-return]
+        return tau
 
     def forward_dynamics(
         self, q: ArrayLike, qd: ArrayLike, tau: ArrayLike, wrench: ArrayLike | None = None
@@ -312,10 +352,15 @@ class Dynamics(RegressorMethods):
             Joint torques [N·m or N].
         wrench : (6,) array_like, optional
             h_e at the tool frame (see :meth:`inverse_dynamics`).
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            q̈ [rad/s² or m/s²].
         """
         k = self._local.kernel
         if not self.friction.any and wrench is None:
-            return self._evaluate(k.aba, ("q", "qd", "tau"), q, qd, tau)  # type: ignore[no-any-return]
+            return self._evaluate(k.aba, ("q", "qd", "tau"), q, qd, tau)
         q, qd, tau = (self._vector(x, nm) for x, nm in ((q, "q"), (qd, "qd"), (tau, "tau")))
         with np.errstate(over="ignore", invalid="ignore"):
             net = tau - self.friction.torque(qd) if self.friction.any else tau
@@ -325,7 +370,7 @@ class Dynamics(RegressorMethods):
         if not np.isfinite(net).all():  # τ − τ_f − Jᵀh beyond the range of floats: name the largest input
             names, args = (("tau", "qd", "wrench"), (tau, qd, h)) if wrench is not None else (("tau", "qd"), (tau, qd))
             raise self._overflow(net, names, args, q)
-        return self._evaluate(k.aba, ("q", "qd", "tau"), q, qd, net)  # type: ignore[no-any-return]
+        return self._evaluate(k.aba, ("q", "qd", "tau"), q, qd, net)
 
     def jacobian(self, q: ArrayLike, frame: str | None = None) -> FloatArray:
         """Geometric Jacobian (6×n) of ``frame`` at its origin, world-aligned axes, rows [linear; angular].
@@ -336,6 +381,11 @@ class Dynamics(RegressorMethods):
             Joint positions [rad or m].
         frame : str, optional
             A frame of the model (default: the tool frame).
+
+        Returns
+        -------
+        ndarray, shape (6, n)
+            J, rows [linear; angular]: J q̇ = [v [m/s]; ω [rad/s]] of the frame.
 
         Raises
         ------
@@ -355,6 +405,11 @@ class Dynamics(RegressorMethods):
             Joint positions [rad or m].
         frame : str, optional
             A frame of the model (default: the tool frame).
+
+        Returns
+        -------
+        ndarray, shape (4, 4)
+            The homogeneous pose [m].
         """
         if frame is not None:
             self.model.frame(frame)
@@ -367,6 +422,11 @@ class Dynamics(RegressorMethods):
         ----------
         q, qd : (n,) array_like
             Joint positions [rad or m] and velocities [rad/s or m/s].
+
+        Returns
+        -------
+        float
+            T [J].
         """
         k = self._local.kernel
         with np.errstate(over="ignore", invalid="ignore"):  # an overflow is named below
@@ -381,11 +441,22 @@ class Dynamics(RegressorMethods):
         ----------
         q : (n,) array_like
             Joint positions [rad or m].
+
+        Returns
+        -------
+        float
+            U [J].
         """
         return float(self._local.kernel.potential(self._vector(q, "q")))
 
     def parameters(self) -> FloatArray:
-        """π of the model these dynamics evaluate (see :meth:`RobotModel.parameters`)."""
+        """π of the model these dynamics evaluate (see :meth:`RobotModel.parameters`).
+
+        Returns
+        -------
+        ndarray, shape (13 n,)
+            π.
+        """
         return self._params
 
     def operational_space_model(
@@ -396,10 +467,30 @@ class Dynamics(RegressorMethods):
         rows: str | Sequence[int | str] = "pose",
         singular_tolerance: float = 1e-6,
     ) -> OperationalSpaceModel:
-        """Λ ẍ + μ + p = F of ``frame`` (default: the tool frame) at (q, q̇): ``.Lambda`` = (J M⁻¹ Jᵀ)⁻¹,
-        ``.mu``, ``.p``, ``.Jbar`` = M⁻¹ Jᵀ Λ, along ``rows`` ("pose", "position", or axes such as "xz"); a
-        :class:`~armctl.errors.SingularConfigurationError` where J's σ_min/σ_max < ``singular_tolerance``.
-        See :func:`armctl.dynamics.operational_space.operational_space_model`."""
+        """The operational-space model Λ ẍ + μ + p = F of ``frame`` at (q, q̇) (see
+        :func:`armctl.dynamics.operational_space.operational_space_model`).
+
+        Parameters
+        ----------
+        q, qd : array_like, shape (n,)
+            Joint positions and velocities [rad, rad/s or m, m/s].
+        frame : str, optional
+            The frame (None: the tool frame).
+        rows : str or sequence of int or str, optional
+            The task rows: ``"pose"`` (6), ``"position"`` (3), or axes such as ``"xz"``.
+        singular_tolerance : float, optional
+            The smallest σ_min/σ_max of J accepted.
+
+        Returns
+        -------
+        OperationalSpaceModel
+            ``.Lambda`` = (J M⁻¹ Jᵀ)⁻¹ [kg or kg·m²], ``.mu``, ``.p`` [N, N·m], ``.Jbar`` = M⁻¹ Jᵀ Λ.
+
+        Raises
+        ------
+        SingularConfigurationError
+            J's σ_min/σ_max < ``singular_tolerance``.
+        """
         from armctl.dynamics.operational_space import operational_space_model
 
         return operational_space_model(self, q, qd, frame, rows, singular_tolerance)
@@ -411,8 +502,26 @@ class Dynamics(RegressorMethods):
         rows: str | Sequence[int | str] = "pose",
         torque_scale: ArrayLike | str | None = None,
     ) -> DynamicManipulability:
-        """The dynamic manipulability ellipsoid of ``frame`` at q (Yoshikawa): ``.axes``, ``.lengths``,
-        ``.measure``. See :func:`armctl.dynamics.operational_space.dynamic_manipulability`."""
+        """The dynamic manipulability ellipsoid of ``frame`` at q (Yoshikawa; see
+        :func:`armctl.dynamics.operational_space.dynamic_manipulability`).
+
+        Parameters
+        ----------
+        q : array_like, shape (n,)
+            Joint positions [rad or m].
+        frame : str, optional
+            The frame (None: the tool frame).
+        rows : str or sequence of int or str, optional
+            The task rows, as for :meth:`operational_space_model`.
+        torque_scale : array_like or str, optional
+            None: unit-norm torques (as Siciliano); ``"limits"``: normalised by the joints' effort limits; or
+            positive scales (n,) [N·m].
+
+        Returns
+        -------
+        DynamicManipulability
+            ``.axes``, ``.lengths``, ``.measure``.
+        """
         from armctl.dynamics.operational_space import dynamic_manipulability
 
         return dynamic_manipulability(self, q, frame, rows, torque_scale)

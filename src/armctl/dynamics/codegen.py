@@ -65,7 +65,7 @@ def cache_root(cache_dir: str | os.PathLike[str] | None = None) -> Path:
 
 def cache_key(names: list[str], tag: str) -> str:
     """The full key (SHA-256, 64 hex digits) of the library of the functions ``names`` with cache ``tag``."""
-    return hashlib.sha256(f"{tag}|{cs.__version__}|{CFLAGS}|{names}|{_LAYOUT}".encode()).hexdigest()
+    return hashlib.sha256(f"{tag}|{cs.CasadiMeta.version()}|{CFLAGS}|{names}|{_LAYOUT}".encode()).hexdigest()
 
 
 def library_path(names: list[str], tag: str, cache_dir: str | os.PathLike[str] | None = None) -> Path:
@@ -223,6 +223,7 @@ def build(functions: list[cs.Function], lib: Path, key: str) -> dict[str, cs.Fun
         if proc.returncode != 0:
             raise BackendError(f"compiling generated code failed ({cc}): {proc.stderr[-2000:]}", value=str(src))
         names = [f.name() for f in functions]
+        reason: str | None
         try:
             data = tmp_lib.read_bytes()
         except OSError:

@@ -36,6 +36,7 @@ import numpy as np
 
 from armctl._checks import FloatArray
 from armctl.dynamics import codegen, recursive
+from armctl.dynamics.casadi_buffer import buffer_of, view
 from armctl.dynamics.pinocchio_backend import PinocchioDynamics, PinocchioKernel
 from armctl.model.robot import PARAMS_PER_JOINT, RobotModel
 
@@ -121,11 +122,11 @@ def _bind(fn: cs.Function, n: int, out: FloatArray, consts: tuple[FloatArray, ..
     copied): each call copies its inputs into arrays bound to one CasADi buffer once and for all, as are
     ``out`` and the constant inputs ``consts``. An input of another length raises ValueError (a copy
     alone would broadcast a length-1 array)."""
-    buf, run = fn.buffer()
+    buf, run = buffer_of(fn)
     ins = [np.zeros(n) for _ in range(fn.n_in() - len(consts))]
     for k, arr in enumerate((*ins, *consts)):
-        buf.set_arg(k, memoryview(arr))
-    buf.set_res(0, memoryview(out.reshape(-1)))  # out is contiguous: a view
+        buf.set_arg(k, view(arr))
+    buf.set_res(0, view(out.reshape(-1)))  # out is contiguous: a view
     if len(ins) == 1:  # g: the one-input call unrolled
         (b0,) = ins
 
@@ -147,7 +148,7 @@ def _bind(fn: cs.Function, n: int, out: FloatArray, consts: tuple[FloatArray, ..
         run()
         return out
 
-    call.bound = (buf, ins, consts)  # type: ignore[attr-defined]
+    call.bound = (buf, ins, consts)  # type: ignore[attr-defined]  # kept alive with the function
     return call
 
 
@@ -174,7 +175,7 @@ class CompiledKernel(PinocchioKernel):
         self, q: FloatArray, qd: FloatArray, qdd: FloatArray, friction: tuple[FloatArray, FloatArray] | None = None
     ) -> FloatArray:
         v, w = friction if friction is not None else (self.zeros, self.zeros)
-        return self._y_call(q, qd, qdd, v, w).T.copy(order="K")  # type: ignore[no-any-return]
+        return self._y_call(q, qd, qdd, v, w).T.copy(order="K")
 
     def passivity_regressor(
         self,
@@ -187,7 +188,7 @@ class CompiledKernel(PinocchioKernel):
         copy: bool = True,
     ) -> FloatArray:
         out = self._yp_call(q, a, w, qdd_r, qd_r, qd).T
-        return out.copy(order="K") if copy else out  # type: ignore[no-any-return]
+        return out.copy(order="K") if copy else out
 
     def passivity_torque(
         self, q: FloatArray, qd: FloatArray, qd_r: FloatArray, qdd_r: FloatArray, a: FloatArray, w: FloatArray
@@ -205,11 +206,11 @@ class CompiledKernel(PinocchioKernel):
         if F.shape != (n, 4 * n):
             raise ValueError(f"feedback matrix has shape {F.shape}, not {(n, 4 * n)}")
         flat = F.ravel(order="K")  # F's own memory, column by column (a view)
-        buf, run = self._pd_function.buffer()
+        buf, run = buffer_of(self._pd_function)
         x, out = np.zeros(4 * n), np.zeros(n)
         for k, arr in enumerate((x, self._zero, flat)):
-            buf.set_arg(k, memoryview(arr))
-        buf.set_res(0, memoryview(out))
+            buf.set_arg(k, view(arr))
+        buf.set_res(0, view(out))
         concatenate = np.concatenate
 
         def law(q: FloatArray, qd: FloatArray, q_d: FloatArray, qd_d: FloatArray) -> FloatArray:
@@ -219,8 +220,8 @@ class CompiledKernel(PinocchioKernel):
 
         # CasADi keeps no reference to what its buffer reads: these do. ``feedback``: F itself, which the
         # controller overwrites in place (F[...] = new gains, the layout kept) when its gains change
-        law.bound = (buf, x, flat, self._zero, out)  # type: ignore[attr-defined]
-        law.feedback = F  # type: ignore[attr-defined]
+        law.bound = (buf, x, flat, self._zero, out)  # type: ignore[attr-defined]  # kept alive with the law
+        law.feedback = F  # type: ignore[attr-defined]  # the F the controller overwrites in place
         return law
 
 

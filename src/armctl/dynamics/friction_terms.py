@@ -55,11 +55,11 @@ class FrictionTerms:
         (the Slotine–Li law takes it at q̇_r)."""
         v = qd if viscous_at is None else viscous_at
         if not self.has_coulomb:
-            return self.viscous * v  # type: ignore[no-any-return]
+            return self.viscous * v
         sign = np.sign(qd)
         if self.has_asymmetry:
-            return self._map.dot(np.concatenate((v, sign, np.abs(sign))))  # type: ignore[no-any-return]
-        return self._map.dot(np.concatenate((v, sign)))  # type: ignore[no-any-return]
+            return self._map.dot(np.concatenate((v, sign, np.abs(sign))))
+        return self._map.dot(np.concatenate((v, sign)))
 
     def coulomb_column(self, qd: FloatArray, out: FloatArray | None = None) -> FloatArray:
         """κ(q̇) = sgn q̇ (1 + ρ sgn q̇), into ``out`` if given."""
@@ -70,4 +70,4 @@ class FrictionTerms:
 
     def coulomb_asymmetry(self, qd: FloatArray) -> FloatArray:
         """δ |sgn q̇|: the asymmetric part of the Coulomb torque (0 at rest)."""
-        return self.coulomb_offset * np.abs(np.sign(qd))  # type: ignore[no-any-return]
+        return self.coulomb_offset * np.abs(np.sign(qd))

@@ -23,6 +23,7 @@ from __future__ import annotations
 import math
 from abc import ABC, abstractmethod
 from collections.abc import Callable
+from typing import cast
 
 import numpy as np
 
@@ -79,7 +80,7 @@ class Kernel(ABC):
 
     def solve_aba(self, q: FloatArray, qd: FloatArray, tau: FloatArray) -> FloatArray:
         """q̈ by a linear solve with M(q): the forward dynamics of a backend without a better algorithm."""
-        return np.linalg.solve(self.mass(q), tau - self.rnea(q, qd, self.zeros))  # type: ignore[no-any-return]
+        return cast(FloatArray, np.linalg.solve(self.mass(q), tau - self.rnea(q, qd, self.zeros)))
 
     @abstractmethod
     def jacobian(self, q: FloatArray, frame: str | None = None) -> FloatArray:

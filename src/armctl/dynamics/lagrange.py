@@ -30,11 +30,12 @@ from numpy.typing import ArrayLike
 from armctl._checks import FloatArray, boolean, check_cache_dir
 from armctl.dynamics import codegen
 from armctl.dynamics.base import Dynamics
+from armctl.dynamics.casadi_buffer import buffer_of, view
 from armctl.dynamics.kernel import Kernel
 from armctl.model.robot import PARAMS_PER_JOINT, RobotModel
 
 
-def _skew(v: cs.SX) -> cs.SX:
+def _skew(v: cs.SX | cs.DM) -> cs.SX | cs.DM:
     return cs.vertcat(cs.horzcat(0, -v[2], v[1]), cs.horzcat(v[2], 0, -v[0]), cs.horzcat(-v[1], v[0], 0))
 
 
@@ -136,11 +137,11 @@ class _Evaluator:
 
     def __init__(self, fn: cs.Function, fixed: dict[int, FloatArray] | None = None) -> None:
         self.fn = fn
-        self._buf, self._eval = fn.buffer()
+        self._buf, self._eval = buffer_of(fn)
         self._shape = (fn.size1_out(0), fn.size2_out(0))
         self._fixed = {i: np.ascontiguousarray(a, dtype=float) for i, a in (fixed or {}).items()}
         for i, a in self._fixed.items():  # kept alive by self._fixed: the buffer holds a pointer to it
-            self._buf.set_arg(i, memoryview(a))
+            self._buf.set_arg(i, view(a))
         self._free = [i for i in range(fn.n_in()) if i not in self._fixed]
         self._sizes = [fn.numel_in(i) for i in self._free]
 
@@ -149,9 +150,9 @@ class _Evaluator:
         for i, a, size in zip(self._free, held, self._sizes, strict=True):
             if a.size != size:  # the buffer would read past a short array and ignore the tail of a long one
                 raise ValueError(f"argument {i} of {self.fn.name()} has {a.size} entries, not {size}")
-            self._buf.set_arg(i, memoryview(a))
+            self._buf.set_arg(i, view(a))
         out = np.empty(self._shape, order="F")
-        self._buf.set_res(0, memoryview(out.reshape(-1, order="A")))
+        self._buf.set_res(0, view(out.reshape(-1, order="A")))
         self._eval()
         return out
 

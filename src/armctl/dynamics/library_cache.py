@@ -157,7 +157,7 @@ def clean_stale(folder: Path, now: float | None = None) -> list[Path]:
     nobody holds (``armctl_<key>-<random>.build``), and the unlocked ``tmp*`` folders of builds that took no
     lock. Best effort: what cannot be removed (a read-only folder) stays. Returns the folders removed."""
     now = time.time() if now is None else now
-    removed = []
+    removed: list[Path] = []
     try:
         entries = list(os.scandir(folder))
     except OSError:

@@ -29,7 +29,7 @@ from __future__ import annotations
 import weakref
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -104,12 +104,12 @@ class OperationalSpaceModel:
     def acceleration(self, force: ArrayLike) -> FloatArray:
         """ẍ = Λ⁻¹ (F − μ − p): the frame's acceleration under the task force F [N; N·m] alone (τ = Jᵀ F)."""
         f = vector(force, len(self.rows), "force")
-        return np.linalg.solve(self.Lambda, f - self.mu - self.p)  # type: ignore[no-any-return]
+        return cast(FloatArray, np.linalg.solve(self.Lambda, f - self.mu - self.p))
 
     def task_force(self, tau: ArrayLike) -> FloatArray:
         """J̄ᵀ τ: the force that the joint torque τ [N·m] is worth at the frame (Λ ẍ + μ + p = J̄ᵀ τ)."""
         t = vector(tau, self.Jbar.shape[0], "tau")
-        return self.Jbar.T @ t  # type: ignore[no-any-return]
+        return self.Jbar.T @ t
 
 
 @dataclass(frozen=True)

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import os
 from functools import partial
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import pinocchio as pin
@@ -76,14 +76,14 @@ class PinocchioKernel(Kernel):
         if fid == 0:
             return np.zeros((6, self.n))
         jac = pin.computeFrameJacobian(self.pin_model, self.pin_data, q, fid, pin.LOCAL_WORLD_ALIGNED)
-        return jac.reshape(6, self.n)  # type: ignore[no-any-return]  # eigenpy squeezes a 6×1 result to (6,)
+        return jac.reshape(6, self.n)  # eigenpy squeezes a 6×1 result to (6,)
 
     def frame_pose(self, q: FloatArray, frame: str | None = None) -> FloatArray:
         fid = self.frame_id(frame)
         if fid == 0:
             return np.eye(4)
         pin.framesForwardKinematics(self.pin_model, self.pin_data, q)
-        return self.pin_data.oMf[fid].homogeneous.copy()  # type: ignore[no-any-return]
+        return self.pin_data.oMf[fid].homogeneous.copy()
 
     # ------------------------------------------------------------------------------------ regressors
     def _init_regressor_workspace(self) -> None:
@@ -174,7 +174,7 @@ def _world_aba(pm: Any, pd: Any) -> Any:
     aba, world = pin.aba, _WORLD
 
     def forward(q: FloatArray, qd: FloatArray, tau: FloatArray) -> FloatArray:
-        return aba(pm, pd, q, qd, tau, world)  # type: ignore[no-any-return]
+        return aba(pm, pd, q, qd, tau, world)
 
     return forward
 
@@ -215,4 +215,4 @@ class PinocchioDynamics(Dynamics):
     @property
     def pin_data(self) -> Any:
         """This thread's kernel's ``pin.Data`` workspace (its contents after a call are unspecified)."""
-        return self.kernel.pin_data  # type: ignore[attr-defined]
+        return cast(PinocchioKernel, self.kernel).pin_data

@@ -96,7 +96,7 @@ def inverse_dynamics(
         w, wd, acc = kin[i]
         f = m * acc + cs.cross(wd, h) + cs.cross(w, cs.cross(w, h))
         mu = inertia @ wd + cs.cross(w, inertia @ w) + cs.cross(h, acc)
-        if f_next is not None:
+        if f_next is not None and mu_next is not None:
             r, t = tf[i + 1]
             rf = r @ f_next
             f = f + rf

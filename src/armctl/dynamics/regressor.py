@@ -69,26 +69,41 @@ class RegressorMethods:
         ----------
         q, qd, qdd : (n,) array_like
             Joint positions, velocities and accelerations [rad, rad/s, rad/s²; m, m/s, m/s² for prismatic].
+
+        Returns
+        -------
+        ndarray, shape (n, 13 n)
+            Y.
         """
         k = self._local.kernel
         if self._propagates and float_vectors(q, qd, qdd):
             try:  # the kernel refuses a wrong length: then the careful path names it
-                y = k.regressor(q, qd, qdd, (qd, qd))  # type: ignore[arg-type]
+                y = k.regressor(q, qd, qdd, (qd, qd))
                 if _row_finite(y):
                     return y
             except ValueError:
                 pass
-        return self._evaluate(  # type: ignore[no-any-return]
-            lambda a, b, c: k.regressor(a, b, c, (b, b)), ("q", "qd", "qdd"), q, qd, qdd
-        )
+        return self._evaluate(lambda a, b, c: k.regressor(a, b, c, (b, b)), ("q", "qd", "qdd"), q, qd, qdd)
 
     def base_parameters(self, samples: int | None = None, seed: int = 0) -> Any:
         """The base (identifiable) parameters of this model: a minimal set θ = K π with Y π = Y_b θ, found
-        numerically (pivoted QR of the regressor stacked at random states); see
-        :func:`armctl.dynamics.identification.find_base_parameters` for the options and the result."""
+        numerically (pivoted QR of the regressor stacked at random states; see
+        :func:`armctl.dynamics.identification.find_base_parameters`).
+
+        Parameters
+        ----------
+        samples : int, optional
+            The number of random states (default max(30, 4n)).
+        seed : int, optional
+            Their seed.
+
+        Returns
+        -------
+        BaseParameters
+        """
         from armctl.dynamics.identification import find_base_parameters
 
-        return find_base_parameters(self, samples=samples, seed=seed)  # type: ignore[arg-type]
+        return find_base_parameters(self, samples=samples, seed=seed)  # type: ignore[arg-type]  # self: a Dynamics
 
     def coulomb_offset(self, qd: ArrayLike) -> FloatArray:
         """The asymmetric part of the Coulomb friction torque: δ = ½(F_c⁺ − F_c⁻) for every moving joint, 0 at
@@ -98,6 +113,11 @@ class RegressorMethods:
         ----------
         qd : (n,) array_like
             Joint velocities [rad/s or m/s].
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            δ [N·m or N].
         """
         return self.friction.coulomb_asymmetry(self._vector(qd, "qd"))
 
@@ -110,6 +130,11 @@ class RegressorMethods:
         ----------
         qd : (n,) array_like
             Joint velocities [rad/s or m/s].
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            κ(q̇).
         """
         return self.friction.coulomb_column(self._vector(qd, "qd"))
 
@@ -135,6 +160,11 @@ class RegressorMethods:
             Joint positions [rad or m] and velocities [rad/s or m/s].
         qd_r, qdd_r : (n,) array_like
             Reference velocity q̇_r and acceleration q̈_r [rad/s, rad/s²].
+
+        Returns
+        -------
+        ndarray, shape (n, 13 n)
+            Y(q, q̇, q̇_r, q̈_r).
         """
         k = self._local.kernel
 
@@ -142,14 +172,14 @@ class RegressorMethods:
             return k.passivity_regressor(q, qd, qd_r, qdd_r, *k.polarisation(qd, qd_r))
 
         # q̇ − q̇_r would broadcast: their lengths are compared here, the kernel checks the others
-        if self._propagates and float_vectors(q, qd, qd_r, qdd_r) and len(qd) == len(qd_r) == self.n:  # type: ignore[arg-type]
+        if self._propagates and float_vectors(q, qd, qd_r, qdd_r) and len(qd) == len(qd_r) == self.n:  # type: ignore[arg-type]  # vectors
             try:
-                y = primitive(q, qd, qd_r, qdd_r)  # type: ignore[arg-type]
+                y = primitive(q, qd, qd_r, qdd_r)  # type: ignore[arg-type]  # float_vectors checked them
             except ValueError:
                 y = None
             if y is not None and _row_finite(y):
                 return y
-        return self._evaluate(primitive, _PASSIVITY_NAMES, q, qd, qd_r, qdd_r)  # type: ignore[no-any-return]
+        return self._evaluate(primitive, _PASSIVITY_NAMES, q, qd, qd_r, qdd_r)
 
     def passivity_torque(self, q: ArrayLike, qd: ArrayLike, qd_r: ArrayLike, qdd_r: ArrayLike) -> FloatArray:
         """M q̈_r + C(q, q̇) q̇_r + g + F_v q̇_r + τ_c(q̇) (= passivity_regressor(...) @ π) [N·m or N], from two
@@ -159,10 +189,15 @@ class RegressorMethods:
         ----------
         q, qd, qd_r, qdd_r : (n,) array_like
             As for :meth:`passivity_regressor`.
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            [N·m or N].
         """
         k = self._local.kernel
 
         def primitive(q: FloatArray, qd: FloatArray, qd_r: FloatArray, qdd_r: FloatArray) -> FloatArray:
             return k.passivity_torque(q, qd, qd_r, qdd_r, *k.polarisation(qd, qd_r))
 
-        return self._evaluate(primitive, _PASSIVITY_NAMES, q, qd, qd_r, qdd_r)  # type: ignore[no-any-return]
+        return self._evaluate(primitive, _PASSIVITY_NAMES, q, qd, qd_r, qdd_r)

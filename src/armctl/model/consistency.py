@@ -75,7 +75,7 @@ def pseudo_inertia(link10: ArrayLike) -> FloatArray:
     p = _floats(link10, "link parameters")
     if p.shape[-1:] != (10,):
         raise ShapeError(f"link parameters must have 10 entries in the last axis, got shape {p.shape}", value=link10)
-    return p.dot(_TO_J).reshape((*p.shape[:-1], 4, 4))  # type: ignore[no-any-return]
+    return p.dot(_TO_J).reshape((*p.shape[:-1], 4, 4))
 
 
 def from_pseudo_inertia(j: ArrayLike) -> FloatArray:
@@ -84,7 +84,7 @@ def from_pseudo_inertia(j: ArrayLike) -> FloatArray:
     a = _floats(j, "pseudo-inertias")
     if a.shape[-2:] != (4, 4):
         raise ShapeError(f"pseudo-inertias must be 4×4 in the last two axes, got shape {a.shape}", value=j)
-    return a.reshape((*a.shape[:-2], 16)).dot(_FROM_J)  # type: ignore[no-any-return]
+    return a.reshape((*a.shape[:-2], 16)).dot(_FROM_J)
 
 
 def is_physical(pi: ArrayLike, tol: float = 1e-9) -> bool:

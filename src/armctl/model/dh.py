@@ -35,12 +35,33 @@ _X = np.array([1.0, 0.0, 0.0])
 class DHLink:
     """One row of a DH table and the body it moves.
 
-    d, a [m], alpha, offset [rad]: the DH parameters (for a prismatic joint ``offset`` is θ and ``d`` the
-    offset of the joint variable). mass [kg], com [m] and inertia [kg·m²] (about the centre of mass) are in
-    the DH link frame {i}, as in Corke's toolbox. motor, friction, limits as in :mod:`armctl.model.parts`; a
-    motor's explicit spin ``axis`` is in the DH frame {i−1} of the link the rotor rides on (the base frame {0}
-    for the first joint). Joint i's axis there is z in the standard convention (``Motor(axis=(0, 0, 1))`` spins
-    about the joint axis, as ``axis=None`` does) and Rx(α)z in the modified one (z of {i−1} is joint i − 1's).
+    Parameters
+    ----------
+    d, a : float, optional
+        The DH offsets [m] (for a prismatic joint ``d`` is the offset of the joint variable).
+    alpha, offset : float, optional
+        The DH twist and joint-angle offset [rad] (for a prismatic joint ``offset`` is θ).
+    kind : {"revolute", "prismatic"}, optional
+        How the joint moves.
+    mass : float, optional
+        [kg].
+    com : array_like, shape (3,), optional
+        The centre of mass [m] in the DH link frame {i}, as in Corke's toolbox.
+    inertia : array_like, optional
+        The inertia about the centre of mass [kg·m²] in frame {i} (as for :class:`~armctl.model.parts.Link`).
+    motor : Motor, optional
+        As in :mod:`armctl.model.parts`; a motor's explicit spin ``axis`` is in the DH frame {i−1} of the link the
+        rotor rides on (the base frame {0} for the first joint). Joint i's axis there is z in the standard
+        convention (``Motor(axis=(0, 0, 1))`` spins about the joint axis, as ``axis=None`` does) and Rx(α)z in the
+        modified one (z of {i−1} is joint i − 1's).
+    friction : JointFriction, optional
+        The joint's friction.
+    limits : JointLimits, optional
+        The joint's limits.
+    name : str, optional
+        The joint's name (None: ``joint<i>``, 1-based).
+    physical : bool, optional
+        As for :class:`~armctl.model.parts.Link`.
     """
 
     d: float = 0.0

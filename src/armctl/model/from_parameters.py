@@ -78,16 +78,36 @@ def model_from_parameters(
     physical: bool = True,
     name: str | None = None,
 ) -> RobotModel:
-    """``model`` with its inertial, rotor and friction parameters replaced by π (13 n,), laid out as
-    :meth:`RobotModel.parameters` returns them; kinematics, limits and frames unchanged.
+    """A model with its inertial, rotor and friction parameters replaced by π; kinematics, limits and frames
+    unchanged. ``model_from_parameters(m, m.parameters())`` rebuilds ``m``'s dynamics exactly.
 
-    coulomb_offset: (n,) asymmetry δ = ½(F_c⁺ − F_c⁻) [N·m] (default: the model's own ratio δ/F̄_c of the two
-    levels applied to π's Coulomb entry F̄_c, as the regressor's Coulomb column carries it, so that
-    ``Dynamics(model).regressor(x) @ pi`` is the new model's inverse dynamics); both levels must stay ≥ 0.
-    physical: require every link inertia to satisfy the triangle inequality (False accepts, like the
-    published Puma 560, positive semi-definite tensors that do not). Static friction is kept where it
-    stays above the new Coulomb levels and dropped otherwise; the Stribeck velocity is kept.
-    ``model_from_parameters(m, m.parameters())`` rebuilds ``m``'s dynamics exactly.
+    Static friction is kept where it stays above the new Coulomb levels and dropped otherwise; the Stribeck velocity
+    is kept.
+
+    Parameters
+    ----------
+    model : RobotModel
+        The model.
+    pi : array_like, shape (13 n,)
+        Laid out as :meth:`RobotModel.parameters` returns them.
+    coulomb_offset : array_like, shape (n,), optional
+        The asymmetry δ = ½(F_c⁺ − F_c⁻) [N·m] (default: the model's own ratio δ/F̄_c of the two levels applied to
+        π's Coulomb entry F̄_c, as the regressor's Coulomb column carries it, so that
+        ``Dynamics(model).regressor(x) @ pi`` is the new model's inverse dynamics); both levels must stay ≥ 0.
+    physical : bool, optional
+        Require every link inertia to satisfy the triangle inequality (False accepts, like the published Puma 560,
+        positive semi-definite tensors that do not).
+    name : str, optional
+        The new model's name.
+
+    Returns
+    -------
+    RobotModel
+
+    Raises
+    ------
+    InvalidParameterError, ShapeError
+        π of the wrong size or not that of physical bodies; Coulomb levels that would be negative.
     """
     n = model.n
     physical = boolean(physical, "physical")

@@ -1,4 +1,4 @@
-"""Built-in arms, each with the model it needs and no more.
+"""Built-in arms, each with the model it needs and no more (reached as :mod:`armctl.models`).
 
 ==================  ==========================================================================================
 ``pendulum()``      one link in a vertical plane driven through a gear by a motor: rotor inertia, gear ratio,
@@ -41,7 +41,12 @@ def _rod(mass: float, length: float) -> Link:
 def pendulum() -> RobotModel:
     """A 0.5 m, 2 kg rod hanging from a horizontal axis (world −y), driven through a 50:1 gear by a motor
     with rotor inertia 5·10⁻⁵ kg·m² (reflected: 0.125 kg·m²), viscous friction 0.05 N·m·s/rad.
-    q = 0 hangs straight down; the gravity torque is m g ℓ sin q."""
+    q = 0 hangs straight down; the gravity torque is m g ℓ sin q.
+
+    Returns
+    -------
+    RobotModel
+    """
     length, mass = 0.5, 2.0
     i = mass * length**2 / 12.0
     link = Link(mass, (0.0, 0.0, -length / 2), np.diag([i, i, 0.0]))
@@ -61,7 +66,12 @@ def pendulum() -> RobotModel:
 
 def planar_2r() -> RobotModel:
     """Siciliano's two-link arm (§7.3.2): link 1 is augmented with motor 2 (5 kg at the elbow, rotor
-    inertia 0.01 kg·m² about its spin axis); each motor has k_r = 100, I_m = 0.01 kg·m²."""
+    inertia 0.01 kg·m² about its spin axis); each motor has k_r = 100, I_m = 0.01 kg·m².
+
+    Returns
+    -------
+    RobotModel
+    """
     a, m_l, i_l, m_m, i_m, k_r = 1.0, 50.0, 10.0, 5.0, 0.01, 100.0
 
     def link() -> Link:  # centre of mass at ℓ = a/2, I_l about the plane normal, a slender body otherwise
@@ -81,7 +91,12 @@ def planar_2r() -> RobotModel:
 
 
 def planar_3r() -> RobotModel:
-    """Three uniform rods (0.5, 0.4, 0.3 m; 4, 3, 2 kg) in a vertical plane, no motors, no friction."""
+    """Three uniform rods (0.5, 0.4, 0.3 m; 4, 3, 2 kg) in a vertical plane, no motors, no friction.
+
+    Returns
+    -------
+    RobotModel
+    """
     lengths, masses = (0.5, 0.4, 0.3), (4.0, 3.0, 2.0)
     joints = []
     offset = 0.0
@@ -133,18 +148,26 @@ PUMA_QN = (0.0, math.pi / 4, -math.pi, 0.0, math.pi / 4, 0.0)
 
 def puma560(physical: bool = False) -> RobotModel:
     """Corke's standard Puma 560: standard DH, link masses/COMs/inertias, motors (J_m, G) and motor-side
-    viscous B and asymmetric Coulomb T_c, referred to the joint side as the toolbox does:
-    reflected inertia G²J_m, F_v = G²B, F_c⁺ = |G|·T_c⁺, F_c⁻ = |G|·|T_c⁻|. Joint 1's link has no mass
-    (the toolbox gives only its inertia about the vertical axis, I_yy = 0.35 kg·m² in link frame 1).
+    viscous B and asymmetric Coulomb T_c, referred to the joint side as the toolbox does: reflected inertia G²J_m,
+    F_v = G²B, F_c⁺ = |G|·T_c⁺, F_c⁻ = |G|·|T_c⁻|. Joint 1's link has no mass (the toolbox gives only its inertia
+    about the vertical axis, I_yy = 0.35 kg·m² in link frame 1). Named poses: :data:`PUMA_QZ`, :data:`PUMA_QR`,
+    :data:`PUMA_QN`.
 
-    As published, two inertia tensors are not those of a rigid body: link 1's (0, 0.35, 0) and link 3's
-    (0.066, 0.086, 0.0125), whose principal moments violate the triangle inequality. By default the
-    published numbers are kept (links marked ``physical=False``), so results compare with the toolbox's.
-    ``physical=True`` makes the smallest change that fixes them: link 1 I_xx = I_zz = 0.175 (no torque
-    depends on them, link 1 only turns about y1) and link 3 I_zz = 0.020 (from 0.0125).
-    Named poses: :data:`PUMA_QZ`, :data:`PUMA_QR`, :data:`PUMA_QN`."""
+    Parameters
+    ----------
+    physical : bool, optional
+        As published, two inertia tensors are not those of a rigid body: link 1's (0, 0.35, 0) and link 3's
+        (0.066, 0.086, 0.0125), whose principal moments violate the triangle inequality. False (the default) keeps
+        the published numbers (links marked ``physical=False``), so results compare with the toolbox's; True makes
+        the smallest change that fixes them: link 1 I_xx = I_zz = 0.175 (no torque depends on them, link 1 only
+        turns about y1) and link 3 I_zz = 0.020 (from 0.0125).
+
+    Returns
+    -------
+    RobotModel
+    """
     physical = boolean(physical, "puma560(): physical")
-    rows = []
+    rows: list[DHLink] = []
     for d, a, alpha, m, r, inert, jm, g, b, tc, qlim in _PUMA:
         ixx, iyy, izz, ixy, iyz, ixz = inert
         k = len(rows)
@@ -192,7 +215,22 @@ def _robots_dir() -> Path:
 
 
 def robot_description(relative: str) -> Path:
-    """Path of a file in the example-robot-data package, e.g. ``'panda_description/urdf/panda.urdf'``."""
+    """Path of a file shipped by the example-robot-data package.
+
+    Parameters
+    ----------
+    relative : str
+        Its path in the package's ``robots`` folder, e.g. ``'panda_description/urdf/panda.urdf'``.
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    ModelLoadError
+        The package or the file is not there.
+    """
     path = _robots_dir() / relative
     if not path.is_file():
         raise ModelLoadError(f"{relative!r} is not in example-robot-data ({_robots_dir()})", value=relative)
@@ -204,7 +242,12 @@ def panda() -> RobotModel:
     ``panda_hand_tcp``; URDF effort/velocity/position limits; no motors and no friction.
 
     The URDF's ``damping="0.003"`` is a simulator hint, not an identified friction, so it is dropped; add a
-    friction model with :meth:`RobotModel.with_friction` where a scene needs one."""
+    friction model with :meth:`RobotModel.with_friction` where a scene needs one.
+
+    Returns
+    -------
+    RobotModel
+    """
     path = robot_description("panda_description/urdf/panda.urdf")
     model = RobotModel.from_urdf(path, lock=("panda_finger_joint1", "panda_finger_joint2"), name="panda")
     tool = "panda_hand_tcp" if "panda_hand_tcp" in model.frame_names else "panda_hand"
@@ -214,6 +257,11 @@ def panda() -> RobotModel:
 
 
 def ur5() -> RobotModel:
-    """Universal Robots UR5 (URDF of example-robot-data): 6 joints, tool frame ``tool0``."""
+    """Universal Robots UR5 (URDF of example-robot-data): 6 joints, tool frame ``tool0``.
+
+    Returns
+    -------
+    RobotModel
+    """
     path = robot_description("ur_description/urdf/ur5_robot.urdf")
     return RobotModel.from_urdf(path, tool_frame="tool0", name="ur5")

@@ -38,8 +38,25 @@ __all__ = ["MjcfChain", "compile_mjcf", "model_from_mjcf", "read_chain"]
 
 
 def compile_mjcf(source: Any, what: str = "RobotModel.from_mjcf") -> tuple[Any, str | None]:
-    """(mjModel, path or None) of an MJCF file path, an MJCF text (starting with ``<``), a ``mujoco.MjSpec`` or a
-    ``mujoco.MjModel``; :class:`~armctl.errors.ModelLoadError` with MuJoCo's words if it does not compile."""
+    """Compile an MJCF description with MuJoCo.
+
+    Parameters
+    ----------
+    source : str, path-like, mujoco.MjSpec or mujoco.MjModel
+        A file path, an MJCF text (starting with ``<``), a spec or a compiled model.
+    what : str, optional
+        The caller's name, for the error messages.
+
+    Returns
+    -------
+    tuple of (mujoco.MjModel, str or None)
+        The compiled model and the file path (None for a text, a spec or a model).
+
+    Raises
+    ------
+    ModelLoadError
+        The description does not compile (MuJoCo's words), or mujoco is not installed.
+    """
     mj = require_mujoco(what)
     if isinstance(source, mj.MjModel):
         return source, None
@@ -72,7 +89,29 @@ def compile_mjcf(source: Any, what: str = "RobotModel.from_mjcf") -> tuple[Any, 
 def model_from_mjcf(
     source: Any, tool_frame: str | None = None, base: str | None = None, name: str | None = None
 ) -> RobotModel:
-    """The arm of an MJCF description (see the module for what is read and how)."""
+    """The arm of an MJCF description (see the module for what is read and how); the function behind
+    :meth:`RobotModel.from_mjcf <armctl.model.RobotModel.from_mjcf>`.
+
+    Parameters
+    ----------
+    source : str, path-like, mujoco.MjSpec or mujoco.MjModel
+        A file path, an MJCF text, a spec or a compiled model.
+    tool_frame : str, optional
+        The frame a method given ``frame=None`` uses (None: the last joint's).
+    base : str, optional
+        The body the chain starts from (None: the one subtree of the world with joints).
+    name : str, optional
+        The model's name (None: the MJCF's).
+
+    Returns
+    -------
+    RobotModel
+
+    Raises
+    ------
+    ModelLoadError
+        What a RobotModel cannot hold, named.
+    """
     m, path = compile_mjcf(source)
     chain = read_chain(m, base, path or "the MJCF model")
     return RobotModel(

@@ -22,8 +22,22 @@ _KINDS = {"hinge": "revolute", "slide": "prismatic"}
 class MjcfChain:
     """A serial chain read from a compiled ``mjModel``: the parts of its RobotModel, and where they are in MuJoCo.
 
-    joint_ids: MuJoCo joint id of each armctl joint, in chain order. body_joint: MuJoCo body id → the 1-based armctl
-    joint whose link it belongs to (0: fixed to the world), for every body of the chain."""
+    Attributes
+    ----------
+    joints : tuple of Joint
+        The chain's joints, from the base.
+    frames : tuple of Frame
+        The named bodies and sites as frames.
+    gravity : ndarray, shape (3,)
+        g [m/s²] in world axes.
+    name : str
+        The model's name.
+    joint_ids : tuple of int
+        The MuJoCo joint id of each armctl joint, in chain order.
+    body_joint : dict of int to int
+        MuJoCo body id → the 1-based armctl joint whose link it belongs to (0: fixed to the world), for every body
+        of the chain.
+    """
 
     joints: tuple[Joint, ...]
     frames: tuple[Frame, ...]
@@ -96,9 +110,26 @@ def _effort(m: Any, mj: Any, j: int) -> float:
 
 
 def read_chain(m: Any, base: str | None = None, source: str = "the MJCF model") -> MjcfChain:
-    """The serial chain of a compiled ``mjModel`` from the body ``base`` (None: the one subtree of the world with
-    joints) to its last joint; :class:`~armctl.errors.ModelLoadError` if there is none, if it branches, or for a
-    joint armctl cannot model."""
+    """The serial chain of a compiled ``mjModel``, from the body ``base`` to its last joint.
+
+    Parameters
+    ----------
+    m : mujoco.MjModel
+        The compiled model.
+    base : str, optional
+        The body the chain starts from (None: the one subtree of the world with joints).
+    source : str, optional
+        What the model was read from, for the error messages.
+
+    Returns
+    -------
+    MjcfChain
+
+    Raises
+    ------
+    ModelLoadError
+        No chain, a chain that branches, or a joint armctl cannot model.
+    """
     mj = require_mujoco("reading an MJCF model")
     parent = m.body_parentid
     moving = np.zeros(m.nbody, dtype=bool)  # the body's subtree has joints (MuJoCo numbers parents first)
@@ -196,7 +227,7 @@ class _ChainReader:
 
     def sites(self, b: int, i: int, pose: FloatArray) -> None:
         m = self.m
-        for s in np.flatnonzero(m.site_bodyid == b):
+        for s in np.flatnonzero(m.site_bodyid == b).tolist():
             self.frame(_name(m, "site", s), i, pose @ _pose(m.site_pos[s], m.site_quat[s]), "site")
 
     def body(self, b: int, i: int, parent_pose: FloatArray) -> None:

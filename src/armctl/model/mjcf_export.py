@@ -183,9 +183,9 @@ def _simple_geoms(model: RobotModel, bodies: list[ET.Element], covered: set[int]
         if i in covered:
             continue
         if np.linalg.norm(end) > radius:
-            ET.SubElement(bodies[i], "geom", type="capsule", fromto=_num([0, 0, 0, *end]), size=repr(radius), **contact)
+            ET.SubElement(bodies[i], "geom", contact, type="capsule", fromto=_num([0, 0, 0, *end]), size=repr(radius))
         else:
-            ET.SubElement(bodies[i], "geom", type="sphere", size=repr(radius), **contact)
+            ET.SubElement(bodies[i], "geom", contact, type="sphere", size=repr(radius))
 
 
 def _mesh_geoms(
@@ -211,7 +211,8 @@ def _mesh_geoms(
     except ET.ParseError as exc:
         raise InvalidParameterError(f"cannot read the URDF {str(path)!r}: {exc}", value=str(path)) from exc
     asset = ET.Element("asset")
-    covered, missing = set(), []
+    covered: set[int] = set()
+    missing: list[str] = []
     for link in links:
         try:
             frame = model.frame(link.get("name", ""))
@@ -244,7 +245,7 @@ def _urdf_shapes(
 ) -> list[tuple[FloatArray, dict[str, str], tuple[Path, FloatArray] | None]]:
     """(pose on the link, geom attributes, (mesh file, scale) or None) of a URDF link's ``kind`` elements, or []
     if one of them cannot be read."""
-    out = []
+    out: list[tuple[FloatArray, dict[str, str], tuple[Path, FloatArray] | None]] = []
     for el in link.findall(kind):
         origin = el.find("origin")
         pose = np.eye(4)

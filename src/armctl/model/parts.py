@@ -16,7 +16,7 @@ Conventions (the textbook's, see ``shared/references``):
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -107,27 +107,45 @@ def inertia_tensor(x: ArrayLike, name: str = "inertia", triangle: bool = True) -
     return readonly(a)
 
 
-@dataclass(frozen=True, eq=False)  # numpy fields: compare by identity
+@dataclass(frozen=True, eq=False, init=False)  # numpy fields: compare by identity
 class Link:
     """An (augmented) link body.
 
-    mass: [kg] ≥ 0. com: centre of mass in the joint frame [m]. inertia: tensor about the centre of mass,
-    joint-frame axes [kg·m²] (3×3, 3 principal moments, or six values in URDF order Ixx, Ixy, Ixz, Iyy, Iyz,
-    Izz — not π's order Ixx, Ixy, Iyy, Ixz, Iyz, Izz, which is Pinocchio's and about the joint frame).
-    physical: False accepts an inertia tensor that violates the triangle inequality (published data sets
-    such as Corke's Puma 560 have some); it must still be positive semi-definite.
+    Parameters
+    ----------
+    mass : float
+        [kg], ≥ 0.
+    com : array_like, shape (3,), optional
+        The centre of mass in the joint frame [m] (default the origin).
+    inertia : array_like, optional
+        The inertia tensor about the centre of mass, in joint-frame axes [kg·m²]: 3×3, 3 principal moments, or six
+        values in URDF order Ixx, Ixy, Ixz, Iyy, Iyz, Izz — not π's order Ixx, Ixy, Iyy, Ixz, Iyz, Izz, which is
+        Pinocchio's and about the joint frame (default zero).
+    physical : bool, optional
+        False accepts an inertia tensor that violates the triangle inequality (published data sets such as Corke's
+        Puma 560 have some); it must still be positive semi-definite.
+
+    Raises
+    ------
+    InvalidParameterError, ShapeError, NonFiniteError
+        A negative mass, a tensor that is not symmetric positive semi-definite (or not a rigid body's, with
+        ``physical``), a mass and centre of mass whose parameters overflow.
     """
 
     mass: float
-    com: FloatArray = field(default_factory=lambda: np.zeros(3))
-    inertia: FloatArray = field(default_factory=lambda: np.zeros((3, 3)))
-    physical: bool = True
+    com: FloatArray
+    inertia: FloatArray
+    physical: bool
 
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "mass", scalar(self.mass, "link mass [kg]", nonnegative=True))
-        object.__setattr__(self, "com", vec3(self.com, "link com"))
-        object.__setattr__(self, "physical", boolean(self.physical, "link physical"))
-        object.__setattr__(self, "inertia", inertia_tensor(self.inertia, "link inertia", self.physical))
+    def __init__(
+        self, mass: float, com: ArrayLike | None = None, inertia: ArrayLike | None = None, physical: bool = True
+    ) -> None:
+        object.__setattr__(self, "mass", scalar(mass, "link mass [kg]", nonnegative=True))
+        object.__setattr__(self, "com", vec3(np.zeros(3) if com is None else com, "link com"))
+        object.__setattr__(self, "physical", boolean(physical, "link physical"))
+        object.__setattr__(
+            self, "inertia", inertia_tensor(np.zeros((3, 3)) if inertia is None else inertia, "link inertia", physical)
+        )
         with np.errstate(over="ignore", invalid="ignore"):
             first, second = self.mass * self.com, self.inertia_about_origin()
         if not (np.isfinite(first).all() and np.isfinite(second).all()):  # the parameters π are made of these
@@ -139,16 +157,45 @@ class Link:
             )
 
     def inertia_about_origin(self) -> FloatArray:
-        """Inertia tensor about the joint-frame origin (parallel-axis theorem)."""
+        """Inertia tensor about the joint-frame origin (parallel-axis theorem).
+
+        Returns
+        -------
+        ndarray, shape (3, 3)
+            I + m(|c|²1 − c cᵀ) [kg·m²].
+        """
         c = self.com
         return self.inertia + self.mass * (float(c @ c) * np.eye(3) - np.outer(c, c))
 
     def transformed(self, rotation: FloatArray, translation: FloatArray) -> Link:
-        """This body expressed in a frame where a point x of the old frame is ``rotation @ x + translation``."""
+        """This body expressed in a frame where a point x of the old frame is ``rotation @ x + translation``.
+
+        Parameters
+        ----------
+        rotation : ndarray, shape (3, 3)
+            The rotation from the old frame's axes to the new.
+        translation : ndarray, shape (3,)
+            The old frame's origin in the new frame [m].
+
+        Returns
+        -------
+        Link
+        """
         return Link(self.mass, rotation @ self.com + translation, rotation @ self.inertia @ rotation.T, self.physical)
 
     def combined(self, other: Link) -> Link:
-        """The rigid union of two bodies given in the same frame."""
+        """The rigid union of two bodies given in the same frame.
+
+        Parameters
+        ----------
+        other : Link
+            The other body.
+
+        Returns
+        -------
+        Link
+            Mass m₁ + m₂, the mass-weighted centre, the inertia about it (parallel-axis theorem).
+        """
         m = self.mass + other.mass
         physical = self.physical and other.physical
         if m == 0.0:
@@ -161,27 +208,41 @@ class Link:
         return Link(m, c, i, physical)
 
 
-@dataclass(frozen=True, eq=False)  # numpy fields: compare by identity
+@dataclass(frozen=True, eq=False, init=False)  # numpy fields: compare by identity
 class Motor:
     """A motor driving a joint through a rigid gear.
 
-    inertia: rotor moment of inertia about its spin axis, I_m [kg·m²]. gear_ratio: k_r (rotor angle / joint
-    angle), sign included. axis: spin axis in the frame of the link the rotor rides on (None: the joint axis).
-    gyroscopic: whether the rotor's coupling with the link it rides on is part of the model (the Lagrange
-    backend's ``rotor_coupling``); False: only the reflected inertia k_r² I_m, an *armature* (what
-    :func:`~armctl.model.from_parameters.model_from_parameters` gives a joint that had no motor).
+    Parameters
+    ----------
+    inertia : float, optional
+        The rotor's moment of inertia about its spin axis, I_m [kg·m²], ≥ 0.
+    gear_ratio : float, optional
+        k_r (rotor angle / joint angle), sign included, non-zero.
+    axis : array_like, shape (3,), optional
+        The spin axis in the frame of the link the rotor rides on (None: the joint axis).
+    gyroscopic : bool, optional
+        Whether the rotor's coupling with the link it rides on is part of the model (the Lagrange backend's
+        ``rotor_coupling``); False: only the reflected inertia k_r² I_m, an *armature* (what
+        :func:`~armctl.model.from_parameters.model_from_parameters` gives a joint that had no motor).
+
+    Raises
+    ------
+    InvalidParameterError
+        A negative inertia, a zero gear ratio or axis, a reflected inertia k_r² I_m that overflows.
     """
 
-    inertia: float = 0.0
-    gear_ratio: float = 1.0
-    axis: FloatArray | None = None
-    gyroscopic: bool = True
+    inertia: float
+    gear_ratio: float
+    axis: FloatArray | None
+    gyroscopic: bool
 
-    def __post_init__(self) -> None:
-        i = scalar(self.inertia, "rotor inertia [kg·m²]", nonnegative=True)
-        k = scalar(self.gear_ratio, "gear ratio")
+    def __init__(
+        self, inertia: float = 0.0, gear_ratio: float = 1.0, axis: ArrayLike | None = None, gyroscopic: bool = True
+    ) -> None:
+        i = scalar(inertia, "rotor inertia [kg·m²]", nonnegative=True)
+        k = scalar(gear_ratio, "gear ratio")
         if k == 0:
-            raise InvalidParameterError(f"gear ratio must be non-zero, got {self.gear_ratio!r}", value=self.gear_ratio)
+            raise InvalidParameterError(f"gear ratio must be non-zero, got {gear_ratio!r}", value=gear_ratio)
         if not np.isfinite(k * k * i):  # the reflected inertia k_r² I_m, a parameter of π
             raise InvalidParameterError(
                 f"rotor inertia {i:g} kg·m² and gear ratio {k:g} overflow the reflected inertia k_r² I_m: give "
@@ -190,12 +251,13 @@ class Motor:
             )
         object.__setattr__(self, "inertia", i)
         object.__setattr__(self, "gear_ratio", k)
-        object.__setattr__(self, "gyroscopic", boolean(self.gyroscopic, "gyroscopic"))
-        if self.axis is not None:
-            a = vec3(self.axis, "motor axis")
+        object.__setattr__(self, "gyroscopic", boolean(gyroscopic, "gyroscopic"))
+        object.__setattr__(self, "axis", None)
+        if axis is not None:
+            a = vec3(axis, "motor axis")
             nrm = float(np.linalg.norm(a))
             if nrm < 1e-12:
-                raise InvalidParameterError("motor axis must be non-zero", value=self.axis)
+                raise InvalidParameterError("motor axis must be non-zero", value=axis)
             object.__setattr__(self, "axis", readonly(a / nrm))
 
     @property
@@ -206,10 +268,27 @@ class Motor:
 
 @dataclass(frozen=True, eq=False)  # numpy fields: compare by identity
 class JointFriction:
-    """Joint-side friction. viscous: F_v [N·m·s/rad]. coulomb: F_c⁺, the Coulomb level for q̇ > 0 [N·m].
-    coulomb_negative: F_c⁻ for q̇ < 0 (a magnitude; None: same as coulomb). static: breakaway (stiction)
-    level [N·m] used by the simulator's stick–slip model (None: the Coulomb level). stribeck_velocity: v_s
-    [rad/s] of the Stribeck curve (0: none)."""
+    """Joint-side friction.
+
+    Parameters
+    ----------
+    viscous : float, optional
+        F_v [N·m·s/rad], ≥ 0.
+    coulomb : float, optional
+        F_c⁺, the Coulomb level for q̇ > 0 [N·m], ≥ 0.
+    coulomb_negative : float, optional
+        F_c⁻ for q̇ < 0, a magnitude (None: the same as ``coulomb``).
+    static : float, optional
+        The breakaway (stiction) level [N·m] of the simulator's stick–slip model, ≥ the Coulomb levels (None: the
+        Coulomb level).
+    stribeck_velocity : float, optional
+        v_s [rad/s] of the Stribeck curve (0: none).
+
+    Raises
+    ------
+    InvalidParameterError
+        A negative or non-numeric value, a static level below the Coulomb levels.
+    """
 
     viscous: float = 0.0
     coulomb: float = 0.0
@@ -252,7 +331,22 @@ class JointFriction:
 
 @dataclass(frozen=True, eq=False)  # numpy fields: compare by identity
 class JointLimits:
-    """lower, upper: position [rad or m]; velocity [rad/s]; effort: torque magnitude [N·m] (inf: none)."""
+    """The limits of a joint (inf: none).
+
+    Parameters
+    ----------
+    lower, upper : float, optional
+        Position limits [rad or m], lower ≤ upper.
+    velocity : float, optional
+        Speed limit [rad/s or m/s], > 0.
+    effort : float, optional
+        Torque (force) magnitude limit [N·m or N], > 0.
+
+    Raises
+    ------
+    InvalidParameterError
+        lower > upper, a velocity or effort limit ≤ 0, a value that is not a number.
+    """
 
     lower: float = -math.inf
     upper: float = math.inf
@@ -270,14 +364,40 @@ class JointLimits:
 
 
 JOINT_KINDS = ("revolute", "prismatic")
+# a joint's defaults: no friction, no limits (immutable, so one object serves every joint)
+_NO_FRICTION = JointFriction()
+_NO_LIMITS = JointLimits()
 
 
-@dataclass(frozen=True, eq=False)  # numpy fields: compare by identity
+@dataclass(frozen=True, eq=False, init=False)  # numpy fields: compare by identity
 class Joint:
     """One joint of a serial chain and the link it moves.
 
-    placement: 4×4 homogeneous transform of this joint's frame (at q = 0) in the previous joint's frame
-    (the world for the first joint). axis: unit axis of motion in the joint frame.
+    Parameters
+    ----------
+    name : str
+        The joint's name (also the name of its frame).
+    kind : {"revolute", "prismatic"}
+        How it moves.
+    axis : array_like, shape (3,)
+        The unit axis of motion in the joint frame.
+    placement : array_like, shape (4, 4)
+        The homogeneous transform of this joint's frame (at q = 0) in the previous joint's frame (the world for the
+        first joint).
+    link : Link
+        The body it moves.
+    motor : Motor, optional
+        Its motor (None: none).
+    friction : JointFriction, optional
+        Its friction (default none).
+    limits : JointLimits, optional
+        Its limits (default none).
+
+    Raises
+    ------
+    InvalidParameterError, ShapeError
+        A kind that is not one of the two, an axis that is not a unit vector, a placement that is not a rigid
+        transform, parts of the wrong type.
     """
 
     name: str
@@ -285,11 +405,27 @@ class Joint:
     axis: FloatArray
     placement: FloatArray
     link: Link
-    motor: Motor | None = None
-    friction: JointFriction = field(default_factory=JointFriction)
-    limits: JointLimits = field(default_factory=JointLimits)
+    motor: Motor | None
+    friction: JointFriction
+    limits: JointLimits
 
-    def __post_init__(self) -> None:
+    def __init__(
+        self,
+        name: str,
+        kind: str,
+        axis: ArrayLike,
+        placement: ArrayLike,
+        link: Link,
+        motor: Motor | None = None,
+        friction: JointFriction = _NO_FRICTION,
+        limits: JointLimits = _NO_LIMITS,
+    ) -> None:
+        values = (("name", name), ("kind", kind), ("axis", axis), ("placement", placement), ("link", link))
+        for key, value in (*values, ("motor", motor), ("friction", friction), ("limits", limits)):
+            object.__setattr__(self, key, value)
+        self._check()
+
+    def _check(self) -> None:
         name_text(self.name, "joint name")
         if not isinstance(self.kind, str) or self.kind not in JOINT_KINDS:
             raise InvalidParameterError(
@@ -314,18 +450,34 @@ class Joint:
         return readonly(self.placement[:3, :3] @ self.axis)
 
 
-@dataclass(frozen=True, eq=False)  # numpy fields: compare by identity
+@dataclass(frozen=True, eq=False, init=False)  # numpy fields: compare by identity
 class Frame:
-    """A named frame rigidly attached to joint ``joint`` (0: the world, i: the i-th joint, 1-based)."""
+    """A named frame rigidly attached to a joint.
+
+    Parameters
+    ----------
+    name : str
+        The frame's name.
+    joint : int
+        The joint it moves with: 0 the world, i the i-th joint (1-based).
+    placement : array_like, shape (4, 4)
+        Its homogeneous transform in that joint's frame.
+
+    Raises
+    ------
+    InvalidParameterError, ShapeError
+        An empty name, a negative joint index, a placement that is not a rigid transform.
+    """
 
     name: str
     joint: int
     placement: FloatArray
 
-    def __post_init__(self) -> None:
-        name_text(self.name, "frame name")
-        object.__setattr__(self, "joint", whole_number(self.joint, f"frame {self.name!r} joint index"))
-        object.__setattr__(self, "placement", homogeneous(self.placement, f"frame {self.name!r} placement"))
+    def __init__(self, name: str, joint: int, placement: ArrayLike) -> None:
+        object.__setattr__(self, "name", name)
+        name_text(name, "frame name")
+        object.__setattr__(self, "joint", whole_number(joint, f"frame {name!r} joint index"))
+        object.__setattr__(self, "placement", homogeneous(placement, f"frame {name!r} placement"))
 
 
 def homogeneous(x: ArrayLike | None, name: str = "transform") -> FloatArray:

@@ -17,7 +17,7 @@ if TYPE_CHECKING:
 
     from armctl.model.robot import RobotModel
 
-_AXES = {(1.0, 0.0, 0.0): "X", (0.0, 1.0, 0.0): "Y", (0.0, 0.0, 1.0): "Z"}
+_AXES: dict[tuple[float, ...], str] = {(1.0, 0.0, 0.0): "X", (0.0, 1.0, 0.0): "Y", (0.0, 0.0, 1.0): "Z"}
 
 
 def _joint_model(j: Joint) -> pinocchio.JointModel:
@@ -142,8 +142,10 @@ def joints_from_pinocchio(pm: pinocchio.Model, source: str, physical: bool = Tru
                 value=source,
             )
     frames = [f for f in frames if f.name != "world"]
-    seen: set[str] = set()
-    unique = [f for f in frames if not (f.name in seen or seen.add(f.name))]
+    unique: list[Frame] = []  # the first frame of each name
+    for f in frames:
+        if all(u.name != f.name for u in unique):
+            unique.append(f)
     return joints, unique
 
 

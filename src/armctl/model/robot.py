@@ -11,7 +11,7 @@ import hashlib
 import math
 import os
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -87,24 +87,63 @@ def _check_scale(joints: tuple[Joint, ...], gravity: FloatArray) -> None:
                 )
 
 
-@dataclass(frozen=True, eq=False)  # numpy fields: compare by identity
+@dataclass(frozen=True, eq=False, init=False)  # numpy fields: compare by identity
 class RobotModel:
     """A serial manipulator: joints (each with its link, motor, friction, limits), named frames, gravity.
 
     Build one with :meth:`from_dh`, :meth:`from_urdf`, :meth:`from_mjcf`, one of :mod:`armctl.models`, or directly
-    from :class:`~armctl.model.parts.Joint` objects. Every joint frame is also a named frame (the joint's name);
-    ``tool_frame`` names the frame used when a method is given ``frame=None``. ``source``: the description file the
-    model was read from (URDF or MJCF; None for a model built in code), where :meth:`to_mjcf` finds its meshes.
+    from :class:`~armctl.model.parts.Joint` objects. Immutable: the variants (:meth:`with_payload`,
+    :meth:`with_friction`, :meth:`perturbed`, :meth:`reduced`, ...) are new models. Every joint frame is also a
+    named frame (the joint's name).
+
+    Parameters
+    ----------
+    joints : sequence of Joint
+        The chain from the base (at least one; unique names).
+    name : str, optional
+        The model's name.
+    gravity : array_like, shape (3,), optional
+        g [m/s²] in world axes (default (0, 0, −9.81)).
+    frames : sequence of Frame, optional
+        Named frames besides the joints' (unique names; ``"world"`` and ``"universe"`` are reserved).
+    tool_frame : str, optional
+        The frame a method given ``frame=None`` uses (None: the last joint's).
+    source : str or path-like, optional
+        The description file the model was read from (URDF or MJCF; None for a model built in code), where
+        :meth:`to_mjcf` finds its meshes.
+
+    Raises
+    ------
+    InvalidParameterError
+        No joints, names repeated or reserved, a frame on a joint that does not exist, parameters whose dynamics
+        overflow.
+    UnknownNameError
+        ``tool_frame`` names no frame.
     """
 
     joints: tuple[Joint, ...]
-    name: str = "robot"
-    gravity: FloatArray = field(default_factory=lambda: np.array([0.0, 0.0, -9.81]))
-    frames: tuple[Frame, ...] = ()
-    tool_frame: str | None = None
-    source: str | None = None
+    name: str
+    gravity: FloatArray
+    frames: tuple[Frame, ...]
+    tool_frame: str | None
+    source: str | None
 
-    def __post_init__(self) -> None:
+    def __init__(
+        self,
+        joints: Sequence[Joint],
+        name: str = "robot",
+        gravity: ArrayLike = (0.0, 0.0, -9.81),
+        frames: Sequence[Frame] = (),
+        tool_frame: str | None = None,
+        source: str | os.PathLike[str] | None = None,
+    ) -> None:
+        """See the class."""
+        values = (("joints", joints), ("name", name), ("gravity", gravity), ("frames", frames))
+        for key, value in (*values, ("tool_frame", tool_frame), ("source", source)):
+            object.__setattr__(self, key, value)
+        self._check()
+
+    def _check(self) -> None:
         joints = instances(self.joints, Joint, "joints", "armctl.model.Joint")
         frames = instances(self.frames, Frame, "frames", "armctl.model.Frame")
         if not joints:
@@ -154,7 +193,28 @@ class RobotModel:
         name: str = "dh_robot",
         base: ArrayLike | None = None,
     ) -> RobotModel:
-        """A model from a Denavit–Hartenberg table of :class:`~armctl.model.dh.DHLink` (see there)."""
+        """A model from a Denavit–Hartenberg table.
+
+        Parameters
+        ----------
+        links : sequence of DHLink
+            One row per joint, from the base (see :class:`~armctl.model.dh.DHLink` for the parameters and units).
+        convention : {"standard", "modified"}, optional
+            Standard (distal) or modified (proximal, Craig's) DH.
+        gravity : array_like, shape (3,), optional
+            g [m/s²] in world axes.
+        tool : array_like, shape (4, 4), optional
+            The placement of the frame ``"tool"`` (the model's tool frame) in the last DH link frame (None: the
+            identity).
+        name : str, optional
+            The model's name.
+        base : array_like, shape (4, 4), optional
+            The DH base frame {0} in the world (None: the identity).
+
+        Returns
+        -------
+        RobotModel
+        """
         from armctl.model.dh import model_from_dh
 
         return model_from_dh(links, convention=convention, gravity=gravity, tool=tool, name=name, base=base)
@@ -162,25 +222,47 @@ class RobotModel:
     @classmethod
     def from_urdf(
         cls,
-        path: str,
+        path: str | os.PathLike[str],
         tool_frame: str | None = None,
         lock: Sequence[str] | Mapping[str, float] = (),
         gravity: ArrayLike = (0, 0, -9.81),
         name: str | None = None,
         physical: bool = True,
     ) -> RobotModel:
-        """A model from a URDF file through Pinocchio's parser. ``lock``: joints held fixed (a name, names, or a
-        mapping name → position; checked as in :meth:`reduced`). URDF ``<dynamics damping friction>`` become
-        viscous and Coulomb friction. Every link and fixed joint becomes a named frame, those fixed to the
-        world included (the base link, and with the first joint locked its link and the locked joint's frame);
-        a root link called ``"world"`` is the model's own ``"world"`` frame (a ``"world"`` frame elsewhere raises
-        :class:`~armctl.errors.ModelLoadError`). ``physical``: False accepts link inertias that violate the
-        triangle inequality, as published data sets have some (see :class:`~armctl.model.parts.Link`).
+        """A model from a URDF file through Pinocchio's parser.
 
-        The file is checked before Pinocchio reads it (:mod:`armctl.model.urdf_checks`): a number it cannot read
-        (an ``<inertial>`` that would leave its link massless), duplicate or missing names, a link called
-        ``universe``, and a ``<mimic>`` joint not given in ``lock`` (a model's joints are independent) raise
-        :class:`~armctl.errors.ModelLoadError` naming the link or joint."""
+        URDF ``<dynamics damping friction>`` become viscous and Coulomb friction. Every link and fixed joint becomes a
+        named frame, those fixed to the world included (the base link, and with the first joint locked its link and the
+        locked joint's frame); a root link called ``"world"`` is the model's own ``"world"`` frame. The file is checked
+        before Pinocchio reads it (:mod:`armctl.model.urdf_checks`).
+
+        Parameters
+        ----------
+        path : str or path-like
+            The URDF file.
+        tool_frame : str, optional
+            The frame a method given ``frame=None`` uses (None: the last joint's).
+        lock : str, sequence of str or mapping str → float, optional
+            Joints held fixed: names (locked at 0) or name → position [rad or m], checked as in :meth:`reduced`.
+        gravity : array_like, shape (3,), optional
+            g [m/s²] in world axes.
+        name : str, optional
+            The model's name (None: the URDF's robot name).
+        physical : bool, optional
+            False accepts link inertias that violate the triangle inequality, as published data sets have some (see
+            :class:`~armctl.model.parts.Link`).
+
+        Returns
+        -------
+        RobotModel
+
+        Raises
+        ------
+        ModelLoadError
+            A number Pinocchio cannot read (an ``<inertial>`` that would leave its link massless), duplicate or missing
+            names, a link called ``universe``, a ``<mimic>`` joint not given in ``lock`` (a model's joints are
+            independent), or a ``"world"`` frame other than the root link; each naming the link or joint.
+        """
         from armctl.model.urdf import model_from_urdf
 
         return model_from_urdf(path, tool_frame=tool_frame, lock=lock, gravity=gravity, name=name, physical=physical)
@@ -189,23 +271,56 @@ class RobotModel:
     def from_mjcf(
         cls, path_or_xml: Any, tool_frame: str | None = None, base: str | None = None, name: str | None = None
     ) -> RobotModel:
-        """A model from an MJCF (MuJoCo) description: a file path, an XML text, a ``mujoco.MjSpec`` or a compiled
-        ``mujoco.MjModel`` (needs ``pip install "armctl[mujoco]"``). The serial chain of hinge and slide joints
-        from the body ``base`` (None: the one subtree of the world with joints); inertias as MuJoCo compiles them,
-        ``damping`` / ``frictionloss`` / ``armature`` as viscous friction / Coulomb friction / reflected rotor
-        inertia, ranges, actuator force ranges as effort limits, named bodies and sites as frames, gravity (see
-        :mod:`armctl.model.mjcf`). Raises :class:`~armctl.errors.ModelLoadError` for what a RobotModel cannot
-        hold (free or ball joints, branches with joints, joint springs), naming it."""
+        """A model from an MJCF (MuJoCo) description (needs ``pip install "armctl[mujoco]"``).
+
+        The serial chain of hinge and slide joints from the body ``base``; inertias as MuJoCo compiles them,
+        ``damping`` / ``frictionloss`` / ``armature`` as viscous friction / Coulomb friction / reflected rotor inertia,
+        ranges, actuator force ranges as effort limits, named bodies and sites as frames, gravity (see
+        :mod:`armctl.model.mjcf`).
+
+        Parameters
+        ----------
+        path_or_xml : str, path-like, mujoco.MjSpec or mujoco.MjModel
+            A file path, an XML text, a spec or a compiled model.
+        tool_frame : str, optional
+            The frame a method given ``frame=None`` uses (None: the last joint's).
+        base : str, optional
+            The body the chain starts from (None: the one subtree of the world with joints).
+        name : str, optional
+            The model's name (None: the MJCF's).
+
+        Returns
+        -------
+        RobotModel
+
+        Raises
+        ------
+        ModelLoadError
+            What a RobotModel cannot hold (free or ball joints, branches with joints, joint springs), named.
+        """
         from armctl.model.mjcf import model_from_mjcf
 
         return model_from_mjcf(path_or_xml, tool_frame=tool_frame, base=base, name=name)
 
     def to_mjcf(self, meshes: Any = None, contacts: bool = True) -> str:
-        """This arm as an MJCF text MuJoCo compiles to the same dynamics (see :mod:`armctl.model.mjcf_export`):
-        one body per joint, explicit inertias, armature k_r²I_m, damping F_v, frictionloss F_c, ranges, a torque
-        motor per joint with a finite effort limit, the frames as sites. ``meshes``: the URDF whose collision
-        meshes to attach (None: :attr:`source` if it is a URDF; False: simple shapes, a capsule per link).
-        ``contacts``: the arm's geoms collide with the rest of a scene (never with each other)."""
+        """This arm as an MJCF text that MuJoCo compiles to the same dynamics (see :mod:`armctl.model.mjcf_export`).
+
+        One body per joint, explicit inertias, armature k_r²I_m, damping F_v, frictionloss F_c, ranges, a torque motor
+        per joint with a finite effort limit, the frames as sites.
+
+        Parameters
+        ----------
+        meshes : path-like, None or False, optional
+            The URDF whose collision meshes to attach (None: :attr:`source` if it is a URDF; False: simple shapes, a
+            capsule per link).
+        contacts : bool, optional
+            The arm's geoms collide with the rest of a scene (never with each other).
+
+        Returns
+        -------
+        str
+            The MJCF XML.
+        """
         from armctl.model.mjcf_export import model_to_mjcf
 
         return model_to_mjcf(self, meshes=meshes, contacts=contacts)
@@ -235,7 +350,22 @@ class RobotModel:
         return ("world", *self.joint_names, *(f.name for f in self.frames))
 
     def frame(self, name: str | None = None) -> Frame:
-        """The frame called ``name`` (None: the tool frame, or the last joint frame if there is none)."""
+        """The frame called ``name``.
+
+        Parameters
+        ----------
+        name : str, optional
+            A name of :attr:`frame_names` (None: the tool frame, or the last joint frame if there is none).
+
+        Returns
+        -------
+        Frame
+
+        Raises
+        ------
+        UnknownNameError
+            No frame has that name (the error lists them).
+        """
         if name is None:
             name = self.tool_frame or self.joints[-1].name
         if name == "world":
@@ -249,7 +379,22 @@ class RobotModel:
         raise UnknownNameError("frame", name, self.frame_names)
 
     def joint_index(self, name: str) -> int:
-        """0-based index of the joint called ``name``."""
+        """0-based index of the joint called ``name``.
+
+        Parameters
+        ----------
+        name : str
+            A joint name.
+
+        Returns
+        -------
+        int
+
+        Raises
+        ------
+        UnknownNameError
+            No joint has that name.
+        """
         try:
             return self.joint_names.index(name)
         except ValueError:
@@ -295,6 +440,11 @@ class RobotModel:
         friction. For an asymmetric Coulomb friction F_c is the mean (F_c⁺ + F_c⁻)/2, and the regressor's
         Coulomb column carries the ratio of the two levels, so Y π = τ still holds (see
         ``Dynamics.regressor`` and ``Dynamics.coulomb_column``).
+
+        Returns
+        -------
+        ndarray, shape (13 n,)
+            π.
         """
         out = np.empty(PARAMS_PER_JOINT * self.n)
         for i, j in enumerate(self.joints):
@@ -317,22 +467,38 @@ class RobotModel:
         return readonly(out)
 
     def parameter_names(self) -> tuple[str, ...]:
-        """Names of the entries of :meth:`parameters`, e.g. ``'m[2]'`` for the mass of the third joint's link."""
+        """Names of the entries of :meth:`parameters`, e.g. ``'m[2]'`` for the mass of the third joint's link.
+
+        Returns
+        -------
+        tuple of str
+            13 n names.
+        """
         return tuple(f"{p}[{i}]" for i in range(self.n) for p in PARAMETER_NAMES)
 
     def fingerprint(self, inertial: bool = True, tool: bool = True) -> str:
         """A short hash keying caches of code generated from this model (the ``"lagrange"`` backend's
         compiled CasADi library uses ``fingerprint(inertial=False)``).
 
-        Covered: gravity; every joint's kind, axis and placement; for joints with a gyroscopic motor, its gear
-        ratio and spin axis (an armature changes no code: it is in π); the tool frame (name, joint,
-        placement). ``inertial=True`` adds the link masses, centres of mass, inertia tensors and rotor
-        inertias; ``tool=False`` leaves the tool frame out (for code of joint-space terms only: the compiled
-        dynamics and simulator step). Not covered: friction, joint limits, joint names and the frames other than
-        the tool frame.
-        So equal fingerprints do *not* mean equal dynamics (models that differ only in friction share one);
-        they mean the same generated code, whose π input carries the inertial and friction parameters at run
-        time: every payload, perturbed or friction variant of an arm shares ``fingerprint(inertial=False)``."""
+        Covered: gravity; every joint's kind, axis and placement; for joints with a gyroscopic motor, its gear ratio and
+        spin axis (an armature changes no code: it is in π); the tool frame (name, joint, placement). Not covered:
+        friction, joint limits, joint names and the frames other than the tool frame. So equal fingerprints do *not*
+        mean equal dynamics (models that differ only in friction share one); they mean the same generated code, whose
+        π input carries the inertial and friction parameters at run time: every payload, perturbed or friction variant
+        of an arm shares ``fingerprint(inertial=False)``.
+
+        Parameters
+        ----------
+        inertial : bool, optional
+            Also cover the link masses, centres of mass, inertia tensors and rotor inertias.
+        tool : bool, optional
+            Cover the tool frame (False: for code of joint-space terms only, the compiled dynamics and simulator step).
+
+        Returns
+        -------
+        str
+            Hexadecimal digits.
+        """
         h = hashlib.sha256()
         h.update(self.gravity.tobytes())
         for j in self.joints:
@@ -356,7 +522,12 @@ class RobotModel:
         return h.hexdigest()[:16]
 
     def to_pinocchio(self) -> pinocchio.Model:
-        """A new ``pinocchio.Model`` of this arm (rotors as armature k_r²I_m; friction is not copied)."""
+        """A new ``pinocchio.Model`` of this arm (rotors as armature k_r²I_m; friction is not copied).
+
+        Returns
+        -------
+        pinocchio.Model
+        """
         from armctl.model.pinocchio_io import build_pinocchio
 
         return build_pinocchio(self)
@@ -369,10 +540,31 @@ class RobotModel:
         inertia: ArrayLike = (0.0, 0.0, 0.0),
         frame: str | None = None,
     ) -> RobotModel:
-        """This arm carrying a rigid payload: ``mass`` [kg], centre of mass ``com`` and ``inertia`` about it,
-        both in the axes of ``frame`` (default: the tool frame). ``inertia``: a 3×3 tensor, 3 principal moments
-        or 6 values in URDF order (Ixx, Ixy, Ixz, Iyy, Iyz, Izz) — not π's order (Ixx, Ixy, Iyy, Ixz, Iyz, Izz,
-        Pinocchio's, and about the joint frame, not the centre of mass)."""
+        """This arm carrying a rigid payload.
+
+        Parameters
+        ----------
+        mass : float
+            [kg], ≥ 0.
+        com : array_like, shape (3,), optional
+            The payload's centre of mass [m] in the axes and from the origin of ``frame``.
+        inertia : array_like, optional
+            Its inertia about its centre of mass [kg·m²] in the axes of ``frame``: a 3×3 tensor, 3 principal moments
+            or 6 values in URDF order (Ixx, Ixy, Ixz, Iyy, Iyz, Izz) — not π's order (Ixx, Ixy, Iyy, Ixz, Iyz, Izz,
+            Pinocchio's, and about the joint frame, not the centre of mass).
+        frame : str, optional
+            The frame it is attached to (None: the tool frame); not a frame fixed to the world.
+
+        Returns
+        -------
+        RobotModel
+            A new model named ``"<name>+payload"``.
+
+        Raises
+        ------
+        InvalidParameterError, ShapeError, NonFiniteError
+            A value out of range, of the wrong shape, or not finite; a frame fixed to the world.
+        """
         f = self.frame(frame)
         if f.joint == 0:
             raise InvalidParameterError(
@@ -390,9 +582,27 @@ class RobotModel:
     def with_parameters(
         self, pi: ArrayLike, coulomb_offset: ArrayLike | None = None, physical: bool = True
     ) -> RobotModel:
-        """This arm's kinematics with the dynamic parameters π (13 a joint, the layout of :meth:`parameters`);
-        ``coulomb_offset``: ½(F_c⁺ − F_c⁻) per joint (default: this model's); ``physical`` as for :class:`Link`.
-        Raises :class:`~armctl.errors.InvalidParameterError` if π is not that of physical bodies."""
+        """This arm's kinematics with the dynamic parameters π.
+
+        Parameters
+        ----------
+        pi : array_like, shape (13 n,)
+            The layout of :meth:`parameters` (per joint: m, m·c [kg·m], the inertia about the joint frame [kg·m²], the
+            reflected rotor inertia, F_v, F_c).
+        coulomb_offset : array_like, shape (n,), optional
+            ½(F_c⁺ − F_c⁻) per joint [N·m] (default: this model's).
+        physical : bool, optional
+            As for :class:`~armctl.model.parts.Link`.
+
+        Returns
+        -------
+        RobotModel
+
+        Raises
+        ------
+        InvalidParameterError
+            π is not that of physical bodies.
+        """
         from armctl.model.from_parameters import model_from_parameters
 
         return model_from_parameters(self, pi, coulomb_offset=coulomb_offset, physical=physical)
@@ -405,21 +615,44 @@ class RobotModel:
         static: ArrayLike | None = None,
         stribeck_velocity: ArrayLike = 0.0,
     ) -> RobotModel:
-        """This arm with the given joint friction (each a scalar for all joints or an (n,) vector, finite and
-        >= 0; ``coulomb_negative`` and ``static`` may be None: the Coulomb level, see
-        :class:`~armctl.model.parts.JointFriction`)."""
+        """This arm with the given joint friction (see :class:`~armctl.model.parts.JointFriction`).
 
-        def per_joint(x: ArrayLike | None, what: str, optional: bool = False) -> list[float | None]:
-            if x is None and optional:
-                return [None] * self.n
-            name = f"with_friction(): {what}"
-            return nonnegative_vector(x, self.n, name).tolist()  # type: ignore[no-any-return]
+        Each argument is a scalar for all joints or an (n,) vector, finite and ≥ 0.
+
+        Parameters
+        ----------
+        viscous : array_like, optional
+            F_v [N·m·s/rad].
+        coulomb : array_like, optional
+            F_c⁺, the Coulomb level for q̇ > 0 [N·m].
+        coulomb_negative : array_like, optional
+            F_c⁻ for q̇ < 0 (None: the Coulomb level).
+        static : array_like, optional
+            The breakaway (stiction) level [N·m] (None: the Coulomb level).
+        stribeck_velocity : array_like, optional
+            v_s [rad/s] of the Stribeck curve (0: none).
+
+        Returns
+        -------
+        RobotModel
+
+        Raises
+        ------
+        InvalidParameterError, ShapeError, NonFiniteError
+            A negative, non-finite or wrongly shaped value; a static level below the Coulomb levels.
+        """
+
+        def per_joint(x: ArrayLike | None, what: str) -> list[float]:
+            return nonnegative_vector(x, self.n, f"with_friction(): {what}").tolist()
+
+        def optional(x: ArrayLike | None, what: str) -> list[float | None]:
+            return [None] * self.n if x is None else list(per_joint(x, what))
 
         cols = zip(
             per_joint(viscous, "viscous"),
             per_joint(coulomb, "coulomb"),
-            per_joint(coulomb_negative, "coulomb_negative", True),
-            per_joint(static, "static", True),
+            optional(coulomb_negative, "coulomb_negative"),
+            optional(static, "static"),
             per_joint(stribeck_velocity, "stribeck_velocity"),
             strict=True,
         )
@@ -438,10 +671,22 @@ class RobotModel:
     ) -> RobotModel:
         """A deliberately wrong copy of this arm, for model-error studies.
 
-        mass, inertia, friction, rotor: factors on every link mass, every inertia tensor about the centre of
-        mass, every friction coefficient and every rotor inertia. com_offset: a shift [m] of every centre of
-        mass along a random direction. noise: relative standard deviation of an extra random factor per
-        link (seeded by ``seed``), clipped to stay physical.
+        Parameters
+        ----------
+        mass, inertia, friction, rotor : float, optional
+            Factors on every link mass, every inertia tensor about the centre of mass, every friction coefficient and
+            every rotor inertia.
+        com_offset : float, optional
+            A shift [m] of every centre of mass along a random direction.
+        noise : float, optional
+            Relative standard deviation of an extra random factor per link, clipped to stay physical.
+        seed : int, optional
+            Seeds the random direction and factors.
+
+        Returns
+        -------
+        RobotModel
+            A new model named ``"<name>~perturbed"``.
         """
         factor = "a factor, 1 leaves it unchanged"
         for nm, v, hint in (
@@ -482,19 +727,38 @@ class RobotModel:
     def reduced(
         self, rotors: bool = True, friction: bool = True, lock: Sequence[str] | Mapping[str, float] = ()
     ) -> RobotModel:
-        """A simpler model of this arm: ``rotors=False`` drops the motors, ``friction=False`` the friction,
-        ``lock`` holds joints fixed (names locked at 0, or a mapping name → position), merging their links
-        into the previous one. With ``lock``, the locked joints' frames and every other frame stay (attached
-        to the joint that now carries them, the world for links merged into it), a motor's explicit spin
-        axis is re-expressed in the link its rotor now rides on, the locked joints' motors and friction are
-        dropped (they no longer move), and a default tool frame (``tool_frame=None``: the last joint's) is
-        kept by name if that joint is locked. Links merged into the world (locking the first joints) no longer
-        move and are no longer in the model: the dynamics are the full arm's held at the lock, but
-        ``potential_energy`` differs from the full arm's by their constant potential energy. Raises
-        :class:`~armctl.errors.UnknownNameError` for an unknown
-        joint, :class:`~armctl.errors.NonFiniteError` for a non-finite lock position and
-        :class:`~armctl.errors.InvalidParameterError` for a lock position that is not a number or locking every
-        joint."""
+        """A simpler model of this arm.
+
+        With ``lock``, the locked joints' frames and every other frame stay (attached to the joint that now carries
+        them, the world for links merged into it), a motor's explicit spin axis is re-expressed in the link its rotor
+        now rides on, the locked joints' motors and friction are dropped (they no longer move), and a default tool frame
+        (``tool_frame=None``: the last joint's) is kept by name if that joint is locked. Links merged into the world
+        (locking the first joints) no longer move and are no longer in the model: the dynamics are the full arm's held
+        at the lock, but ``potential_energy`` differs from the full arm's by their constant potential energy.
+
+        Parameters
+        ----------
+        rotors : bool, optional
+            False drops the motors.
+        friction : bool, optional
+            False drops the friction.
+        lock : sequence of str or mapping str → float, optional
+            Joints held fixed (names locked at 0, or name → position [rad or m]), their links merged into the previous
+            one.
+
+        Returns
+        -------
+        RobotModel
+
+        Raises
+        ------
+        UnknownNameError
+            An unknown joint.
+        NonFiniteError
+            A non-finite lock position.
+        InvalidParameterError
+            A lock position that is not a number, or locking every joint.
+        """
         from armctl.model.pinocchio_io import lock_joints, lock_positions
 
         rotors, friction = boolean(rotors, "reduced(): rotors"), boolean(friction, "reduced(): friction")

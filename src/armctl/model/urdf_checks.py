@@ -128,11 +128,11 @@ def check_urdf(path: str) -> dict[str, str]:
             problems.append(f"{owner}: type {kind!r} is not one of {', '.join(JOINT_TYPES)}")
         for end in ("parent", "child"):
             element = joint.find(end)
-            link = None if element is None else element.get("link")
-            if link is None:
+            linked = None if element is None else element.get("link")
+            if linked is None:
                 problems.append(f'{owner}: no <{end} link="..."/>')
-            elif link not in known:
-                problems.append(f"{owner}: its {end} link {link!r} is not a link of the file")
+            elif linked not in known:
+                problems.append(f"{owner}: its {end} link {linked!r} is not a link of the file")
         for tag, (single, triple) in _JOINT_NUMBERS.items():
             for element in joint.findall(tag):
                 problems += _numbers(owner, element, single, triple)

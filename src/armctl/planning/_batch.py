@@ -38,4 +38,4 @@ def friction_torques(dyn: Dynamics, qd: FloatArray, direction: FloatArray | None
     sign = np.sign(qd)
     if direction is not None:
         sign = np.where(qd == 0.0, np.sign(direction), sign)
-    return fv * qd + np.where(sign > 0, fc_pos, np.where(sign < 0, -fc_neg, 0.0))  # type: ignore[no-any-return]
+    return fv * qd + np.where(sign > 0, fc_pos, np.where(sign < 0, -fc_neg, 0.0))

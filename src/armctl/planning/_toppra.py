@@ -24,7 +24,7 @@ from armctl._checks import FloatArray
 from armctl.planning.path import Path
 
 
-class PathAdapter(AbstractGeometricPath):  # type: ignore[misc]
+class PathAdapter(AbstractGeometricPath):
     """An armctl :class:`Path` seen as a toppra geometric path on [0, 1]."""
 
     def __init__(self, path: Path) -> None:
@@ -49,7 +49,7 @@ class PathAdapter(AbstractGeometricPath):  # type: ignore[misc]
         return None
 
 
-class RowsConstraint(LinearConstraint):  # type: ignore[misc]
+class RowsConstraint(LinearConstraint):
     """Precomputed rows a u + b x + c ≤ g (F = I) and 0 ≤ x ≤ x_max, valid on one grid only."""
 
     def __init__(

@@ -31,7 +31,22 @@ from armctl.planning.path import LinePath
 
 
 def bang_bang_duration(distance: float, v_max: float, a_max: float) -> float:
-    """Minimum time [s] to move ``distance`` from rest to rest with |v| ≤ v_max and |a| ≤ a_max."""
+    """Minimum time to move a distance from rest to rest under velocity and acceleration limits.
+
+    Parameters
+    ----------
+    distance : float
+        [rad or m], ≥ 0.
+    v_max : float
+        |v| ≤ v_max [rad/s], > 0.
+    a_max : float
+        |a| ≤ a_max [rad/s²], > 0.
+
+    Returns
+    -------
+    float
+        The time [s]: triangular (2√(d/a)) or trapezoidal (d/v + v/a) profile.
+    """
     d = abs(scalar(distance, "distance"))
     v, a = scalar(v_max, "v_max", positive=True), scalar(a_max, "a_max", positive=True)
     if v * v >= a * d:
@@ -40,9 +55,20 @@ def bang_bang_duration(distance: float, v_max: float, a_max: float) -> float:
 
 
 def line_min_time(start: ArrayLike, end: ArrayLike, vel_limit: ArrayLike, acc_limit: ArrayLike) -> float:
-    """Minimum rest-to-rest time [s] along the straight line from ``start`` to ``end`` (distinct, finite (n,)
-    vectors, checked as :class:`LinePath` checks them) with symmetric joint limits > 0 (scalars or (n,)
-    vectors)."""
+    """Minimum rest-to-rest time along the straight joint-space line between two poses.
+
+    Parameters
+    ----------
+    start, end : array_like, shape (n,)
+        Distinct finite poses [rad], checked as :class:`LinePath` checks them.
+    vel_limit, acc_limit : array_like
+        Symmetric joint limits > 0 [rad/s, rad/s²]: scalars or (n,) vectors.
+
+    Returns
+    -------
+    float
+        [s].
+    """
     line = LinePath(start, end)
     delta = np.abs(line.delta)
     moving = delta > 0
@@ -80,9 +106,30 @@ def grid_convergence(
     repeat: int = 3,
     position_limit: str | None = "model",
 ) -> ConvergenceStudy:
-    """Solve the straight-line move on each grid (velocity and acceleration limits only) and compare with
-    :func:`line_min_time`; the compute time is the least of ``repeat`` calls (after one warm-up call, which
-    pays for importing toppra). position_limit: as in :func:`~armctl.planning.time_optimal`."""
+    """Solve the straight-line move on each grid and compare with :func:`line_min_time`.
+
+    Velocity and acceleration limits only; the compute time is the least of ``repeat`` calls (after one warm-up
+    call, which pays for importing toppra).
+
+    Parameters
+    ----------
+    dyn : Dynamics
+        The arm.
+    start, end : array_like, shape (n,)
+        The line's ends [rad].
+    vel_limit, acc_limit : array_like
+        Symmetric joint limits > 0 [rad/s, rad/s²].
+    grids : sequence of int, optional
+        The stage counts.
+    repeat : int, optional
+        Timed calls per grid.
+    position_limit : str or None, optional
+        As in :func:`~armctl.planning.time_optimal`.
+
+    Returns
+    -------
+    ConvergenceStudy
+    """
     from armctl.planning.topp import time_optimal
 
     sizes = [whole_number(n, f"grids[{i}]", 2) for i, n in enumerate(np.ravel(np.asarray(grids, dtype=object)))]
@@ -118,7 +165,17 @@ def grid_convergence(
 
 
 def plot_convergence(study: ConvergenceStudy) -> Any:
-    """A matplotlib Figure: relative duration error and compute time against the grid size (log-log)."""
+    """A matplotlib Figure: relative duration error and compute time against the grid size (log-log).
+
+    Parameters
+    ----------
+    study : ConvergenceStudy
+        From :func:`grid_convergence`.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     from matplotlib.figure import Figure
 
     fig = Figure(figsize=(9.0, 3.6), layout="constrained")

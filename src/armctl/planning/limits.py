@@ -28,7 +28,15 @@ UNITS = {"velocity": "rad/s", "acceleration": "rad/s²", "torque": "N·m"}
 
 @dataclass(frozen=True)
 class Bounds:
-    """lower ≤ value ≤ upper per joint, (n,) each, read-only. ``kind``: one of :data:`KINDS`."""
+    """lower ≤ value ≤ upper per joint.
+
+    Parameters
+    ----------
+    kind : str
+        One of :data:`KINDS` (``"velocity"`` [rad/s], ``"acceleration"`` [rad/s²], ``"torque"`` [N·m]).
+    lower, upper : ndarray, shape (n,)
+        The bounds, lower < upper (read-only).
+    """
 
     kind: str
     lower: FloatArray
@@ -39,23 +47,49 @@ class Bounds:
         return UNITS[self.kind]
 
     def scaled(self, factor: float) -> Bounds:
-        """The bounds shrunk (factor < 1) about their midpoint: mid ± factor · half-range."""
+        """The bounds shrunk (factor < 1) about their midpoint: mid ± factor · half-range.
+
+        Parameters
+        ----------
+        factor : float
+            The scale, > 0.
+
+        Returns
+        -------
+        Bounds
+        """
         mid, half = 0.5 * (self.upper + self.lower), 0.5 * (self.upper - self.lower)
         return Bounds(self.kind, readonly(mid - factor * half), readonly(mid + factor * half))
 
     def utilisation(self, values: FloatArray) -> FloatArray:
         """How much of the range each value uses: |v − mid| / half-range (1 at a bound, > 1 outside).
-        For symmetric bounds ±L this is |v|/L. values: (..., n)."""
+
+        For symmetric bounds ±L this is |v|/L.
+
+        Parameters
+        ----------
+        values : ndarray, shape (..., n)
+            Values in the bounds' unit.
+
+        Returns
+        -------
+        ndarray, shape (..., n)
+        """
         mid, half = 0.5 * (self.upper + self.lower), 0.5 * (self.upper - self.lower)
-        return np.abs(values - mid) / half  # type: ignore[no-any-return]
+        return np.abs(values - mid) / half
 
 
 @dataclass(frozen=True)
 class JointLimits:
     """The limits a time scaling respects; each is a :class:`Bounds` or None (not imposed).
 
-    torque_margin m ∈ [0, 1): the torque bounds actually planned with are the given ones shrunk by m about
-    their midpoint (``planned_torque``); velocity and acceleration are planned as given.
+    Parameters
+    ----------
+    velocity, acceleration, torque : Bounds or None
+        The joint velocity [rad/s], acceleration [rad/s²] and torque [N·m] bounds.
+    torque_margin : float, optional
+        m ∈ [0, 1): the torque bounds actually planned with are the given ones shrunk by m about their midpoint
+        (``planned_torque``); velocity and acceleration are planned as given.
     """
 
     velocity: Bounds | None
@@ -70,7 +104,12 @@ class JointLimits:
         return self.torque.scaled(1.0 - self.torque_margin)
 
     def planned(self) -> dict[str, Bounds]:
-        """The bounds planned with, by kind (only those imposed)."""
+        """The bounds planned with, by kind (only those imposed).
+
+        Returns
+        -------
+        dict of str to Bounds
+        """
         out = {"velocity": self.velocity, "acceleration": self.acceleration, "torque": self.planned_torque}
         return {k: v for k, v in out.items() if v is not None}
 
@@ -142,7 +181,27 @@ def joint_limits(
     torque_limit: Any = None,
     torque_margin: float = 0.0,
 ) -> JointLimits:
-    """All limits of a time-scaling problem, checked; at least one must be imposed."""
+    """All limits of a time-scaling problem, checked; at least one must be imposed.
+
+    Parameters
+    ----------
+    model : RobotModel
+        The arm (its limits for ``"model"``, its joint count).
+    vel_limit, acc_limit, torque_limit : optional
+        [rad/s], [rad/s²], [N·m]: None (not imposed), ``"model"`` (the model's velocity / effort limits; not for
+        acceleration), a scalar, an (n,) vector (symmetric) or (n, 2) bounds.
+    torque_margin : float, optional
+        Plan with the torque bounds shrunk by this fraction, in [0, 1).
+
+    Returns
+    -------
+    JointLimits
+
+    Raises
+    ------
+    InvalidParameterError, ShapeError, NonFiniteError
+        No limit imposed, bounds that are not numbers, of the wrong shape, or with lower ≥ upper.
+    """
     m = scalar(torque_margin, "torque_margin")  # "0.1", True and NaN are refused, not converted
     if not 0.0 <= m < 1.0:
         raise InvalidParameterError(

@@ -44,14 +44,37 @@ class Path(ABC):
         return readonly(np.array([0.0, 1.0]))
 
     def piece(self, s: float) -> int:
-        """k such that s lies in the piece [s_k, s_{k+1}] between waypoints k and k + 1 (the last one at s = 1)."""
+        """The piece the parameter lies in.
+
+        Parameters
+        ----------
+        s : float
+            The path parameter, in [0, 1].
+
+        Returns
+        -------
+        int
+            k such that s lies in the piece [s_k, s_{k+1}] between waypoints k and k + 1 (the last one at s = 1).
+        """
         bp = self.breakpoints
         return int(np.clip(np.searchsorted(bp, s, side="right") - 1, 0, len(bp) - 2))
 
     def range_points(self, per_piece: int = 400) -> FloatArray:
-        """Parameters s at which the path reaches its extreme joint positions, for range checks: here the
-        breakpoints and ``per_piece`` evenly spaced samples of every piece between them (subclasses that
-        know their pieces return the exact extrema)."""
+        """Parameters s at which the path reaches its extreme joint positions, for range checks.
+
+        Here the breakpoints and ``per_piece`` evenly spaced samples of every piece between them (subclasses that know
+        their pieces return the exact extrema).
+
+        Parameters
+        ----------
+        per_piece : int, optional
+            Samples per piece.
+
+        Returns
+        -------
+        ndarray
+            Parameters in [0, 1], increasing.
+        """
         knots = self.breakpoints
         frac = np.linspace(0.0, 1.0, per_piece + 1)
         return np.unique(np.concatenate(((knots[:-1, None] + np.diff(knots)[:, None] * frac).ravel(), knots)))
@@ -70,12 +93,39 @@ class Path(ABC):
         return out[0] if ss.ndim == 0 else out
 
     def derivatives(self, s: ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """(q, q', q'') at the parameters s (m,), each (m, n)."""
+        """(q, q', q'') at many parameters.
+
+        Parameters
+        ----------
+        s : array_like, shape (m,)
+            Parameters in [0, 1].
+
+        Returns
+        -------
+        tuple of ndarray
+            (q, q', q''), each (m, n).
+
+        Raises
+        ------
+        InvalidParameterError, NonFiniteError
+            A parameter outside [0, 1] or not finite.
+        """
         ss = self._params(s).reshape(-1)
         return self._derivatives(ss, 0), self._derivatives(ss, 1), self._derivatives(ss, 2)
 
     def at(self, s: float) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """(q, q', q'') at one parameter s ∈ [0, 1], each (n,) — :meth:`derivatives` for a control loop's rate."""
+        """(q, q', q'') at one parameter — :meth:`derivatives` for a control loop's rate.
+
+        Parameters
+        ----------
+        s : float
+            The parameter, in [0, 1].
+
+        Returns
+        -------
+        tuple of ndarray
+            (q, q', q''), each (n,).
+        """
         if s.__class__ is not float:
             s = scalar(s, "path parameter s")
         q, dq, ddq = self.derivatives(np.array([s]))
@@ -101,15 +151,26 @@ class Path(ABC):
 class SplinePath(Path):
     """Cubic spline through joint waypoints.
 
-    waypoints: (m, n) joint positions [rad], m ≥ 2, consecutive ones distinct. knots: ``"chord"`` (default)
-    puts waypoint k at s_k = L_k / L with L_k the cumulative joint-space distance Σ|q_{i+1} − q_i| up to it;
-    ``"uniform"`` at k/(m−1); or an explicit increasing (m,) array from 0 to 1. bc_type: end conditions of
-    :class:`scipy.interpolate.CubicSpline`: ``"not-a-knot"`` (default; two waypoints give a straight line),
-    ``"natural"`` (q'' = 0 at the ends) or ``"clamped"`` (q' = 0 at the ends — avoid for time scaling: where
-    q' = 0 the path velocity ṡ is unbounded by joint velocity limits).
+    Parameters
+    ----------
+    waypoints : array_like, shape (m, n)
+        Joint positions [rad], m ≥ 2, consecutive ones distinct.
+    knots : {"chord", "uniform"} or array_like, optional
+        ``"chord"`` (default) puts waypoint k at s_k = L_k / L with L_k the cumulative joint-space distance
+        Σ|q_{i+1} − q_i| up to it; ``"uniform"`` at k/(m−1); or an explicit increasing (m,) array from 0 to 1.
+    bc_type : {"not-a-knot", "natural", "clamped"}, optional
+        End conditions of :class:`scipy.interpolate.CubicSpline`: ``"not-a-knot"`` (default; two waypoints give a
+        straight line), ``"natural"`` (q'' = 0 at the ends) or ``"clamped"`` (q' = 0 at the ends — avoid for time
+        scaling: where q' = 0 the path velocity ṡ is unbounded by joint velocity limits).
+
+    Raises
+    ------
+    ShapeError, NonFiniteError, InvalidParameterError
+        Waypoints of the wrong shape, not finite or repeated; knots that are not increasing from 0 to 1.
     """
 
     def __init__(self, waypoints: ArrayLike, knots: str | ArrayLike = "chord", bc_type: str = "not-a-knot") -> None:
+        """See the class."""
         from scipy.interpolate import CubicSpline
 
         w = np.array(real_array(waypoints, "waypoints"))
@@ -159,7 +220,18 @@ class SplinePath(Path):
 
     def range_points(self, per_piece: int = 400) -> FloatArray:
         """The breakpoints and, in every piece, the roots of each joint's q'(s) (a quadratic there): where the
-        cubic pieces reach their extreme positions, exactly (``per_piece`` is not needed)."""
+        cubic pieces reach their extreme positions, exactly.
+
+        Parameters
+        ----------
+        per_piece : int, optional
+            Not needed here (kept for the signature of :meth:`Path.range_points`).
+
+        Returns
+        -------
+        ndarray
+            Parameters in [0, 1], increasing.
+        """
         c = self._splines[0].c  # (4, pieces, n): q = c0 t³ + c1 t² + c2 t + c3, t = s − s_k
         a, b, d = 3.0 * c[0], 2.0 * c[1], c[2]  # q' = a t² + b t + d
         width = np.diff(self._knots)[:, None]
@@ -175,10 +247,22 @@ class SplinePath(Path):
         return np.unique(np.concatenate(points))
 
     def _derivatives(self, s: FloatArray, order: int) -> FloatArray:
-        return self._splines[order](s)  # type: ignore[no-any-return]
+        return self._splines[order](s)
 
     def at(self, s: float) -> tuple[FloatArray, FloatArray, FloatArray]:
         # the cubic piece q = c₀d³ + c₁d² + c₂d + c₃, d = s − s_k, evaluated directly (no scipy call)
+        """(q, q', q'') at one parameter — :meth:`derivatives` for a control loop's rate.
+
+        Parameters
+        ----------
+        s : float
+            The parameter, in [0, 1].
+
+        Returns
+        -------
+        tuple of ndarray
+            (q, q', q''), each (n,).
+        """
         if s.__class__ is not float:
             s = scalar(s, "path parameter s")
         if not 0.0 <= s <= 1.0:
@@ -191,7 +275,18 @@ class SplinePath(Path):
 
 
 class LinePath(Path):
-    """The straight line q(s) = q₀ + s (q₁ − q₀) in joint space; q' = q₁ − q₀, q'' = 0."""
+    """The straight line q(s) = q₀ + s (q₁ − q₀) in joint space; q' = q₁ − q₀, q'' = 0.
+
+    Parameters
+    ----------
+    start, end : array_like, shape (n,)
+        q₀ and q₁ [rad], finite and distinct.
+
+    Raises
+    ------
+    ShapeError, NonFiniteError, InvalidParameterError
+        Vectors of different lengths, not finite, or equal.
+    """
 
     def __init__(self, start: ArrayLike, end: ArrayLike) -> None:
         a, b = real_array(start, "start"), real_array(end, "end")
@@ -217,12 +312,24 @@ class LinePath(Path):
 
     def _derivatives(self, s: FloatArray, order: int) -> FloatArray:
         if order == 0:
-            return self.start + s[:, None] * self.delta  # type: ignore[no-any-return]
+            return self.start + s[:, None] * self.delta
         if order == 1:
             return np.repeat(self.delta[None, :], s.shape[0], axis=0)
         return np.zeros((s.shape[0], self.n))
 
     def at(self, s: float) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """(q, q', q'') at one parameter — :meth:`derivatives` for a control loop's rate.
+
+        Parameters
+        ----------
+        s : float
+            The parameter, in [0, 1].
+
+        Returns
+        -------
+        tuple of ndarray
+            (q, q', q''), each (n,).
+        """
         if s.__class__ is not float:
             s = scalar(s, "path parameter s")
         if not 0.0 <= s <= 1.0:

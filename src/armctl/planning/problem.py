@@ -48,8 +48,17 @@ DISCRETIZATIONS = ("interpolation", "collocation")
 
 @dataclass(frozen=True)
 class RowLabel:
-    """What a constraint row bounds: ``kind`` "torque" or "acceleration", ``joint`` index, ``side``
-    "upper" or "lower"."""
+    """What a constraint row bounds.
+
+    Attributes
+    ----------
+    kind : str
+        ``"torque"`` or ``"acceleration"``.
+    joint : int
+        The joint index.
+    side : str
+        ``"upper"`` or ``"lower"``.
+    """
 
     kind: str
     joint: int
@@ -60,12 +69,38 @@ class RowLabel:
 class TimeScalingProblem:
     """The discretised problem: rows a u + b x + c + w √x ≤ g at gridpoints ``s`` (N+1,), 0 ≤ x ≤ ``x_max``.
 
-    Arrays are read-only: a, b, c, w (N+1, m); g (m,); q, dq, ddq (N+1, n) the path and its derivatives;
-    gravity (N+1, n) g(q(s)) [N·m]; coulomb (N+1, n, 2) the Coulomb torque on the (lower, upper) side [N·m].
-    ``labels[r]`` names row r. ``discretization``: "interpolation" (each stage also imposes its rows at
-    s_{i+1} with x_{i+1} = x_i + 2Δ_i u_i, TOPP-RA's more accurate scheme) or "collocation" (at s_i only: the
-    stage's constant u can exceed a limit by its end by an amount proportional to the stage width, so the dense
-    check needs far finer grids — on the Panda test path 1600 stages still leave 3.9 % against 0.0005 %)."""
+    Attributes
+    ----------
+    dyn : Dynamics
+        The arm.
+    path : Path
+        The path.
+    limits : JointLimits
+        The limits.
+    s : ndarray, shape (N+1,)
+        The gridpoints.
+    q, dq, ddq : ndarray, shape (N+1, n)
+        The path and its derivatives at the gridpoints.
+    a, b, c, w : ndarray, shape (N+1, m)
+        The rows' coefficients.
+    g : ndarray, shape (m,)
+        The rows' bounds.
+    x_max : ndarray, shape (N+1,)
+        The bound on x = ṡ² at each gridpoint.
+    gravity : ndarray, shape (N+1, n)
+        g(q(s)) [N·m].
+    coulomb : ndarray, shape (N+1, n, 2)
+        The Coulomb torque on the (lower, upper) side [N·m].
+    labels : tuple of RowLabel
+        ``labels[r]`` names row r.
+    discretization : str
+        ``"interpolation"`` (each stage also imposes its rows at s_{i+1} with x_{i+1} = x_i + 2Δ_i u_i, TOPP-RA's
+        more accurate scheme) or ``"collocation"`` (at s_i only: the stage's constant u can exceed a limit by its
+        end by an amount proportional to the stage width, so the dense check needs far finer grids — on the Panda
+        test path 1600 stages still leave 3.9 % against 0.0005 %).
+
+    Arrays are read-only.
+    """
 
     dyn: Dynamics
     path: Path
@@ -95,14 +130,27 @@ class TimeScalingProblem:
         return bool(self.w.any())
 
     def linearized(self, x0: ArrayLike | None, keep: float | None = None) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """(a, b, c) of the rows with w √x replaced by a line α + β x ≥ √x (4αβ ≥ 1), or dropped (x0=None).
+        """(a, b, c) of the rows with w √x replaced by a line α + β x ≥ √x (4αβ ≥ 1), or dropped.
 
-        The line is the tangent at x₀ (N+1,) > 0, α = √x₀/2, β = 1/(2√x₀), exact at x₀ — unless ``keep``
-        (a fraction) is given and the intercept w α would take more than that fraction of the row's slack at
-        rest, g − c: then α = keep (g − c)/w and β = 1/(4α), a steeper line that still over-estimates √x
-        everywhere and leaves slow motion feasible where the tangent's intercept would not (the fallback of
-        :func:`~armctl.planning.topp.solve_problem`). Where the path must pass a pose it could not hold at
-        rest, carried by its momentum, the steep line forbids the speed it needs: the tangent comes first."""
+        The line is the tangent at x₀ > 0, α = √x₀/2, β = 1/(2√x₀), exact at x₀ — unless ``keep`` is given and the
+        intercept w α would take more than that fraction of the row's slack at rest, g − c: then α = keep (g − c)/w and
+        β = 1/(4α), a steeper line that still over-estimates √x everywhere and leaves slow motion feasible where the
+        tangent's intercept would not (the fallback of :func:`~armctl.planning.topp.solve_problem`). Where the path must
+        pass a pose it could not hold at rest, carried by its momentum, the steep line forbids the speed it needs: the
+        tangent comes first.
+
+        Parameters
+        ----------
+        x0 : array_like, shape (N+1,), or None
+            Where the tangents touch (None: drop the w √x term).
+        keep : float, optional
+            The largest fraction of the slack at rest the intercept may take.
+
+        Returns
+        -------
+        tuple of ndarray
+            (a, b, c), each (N+1, m).
+        """
         if x0 is None or not self.has_viscous:
             return self.a, self.b, self.c
         alpha = 0.5 * np.sqrt(np.asarray(x0, dtype=float))[:, None] * np.ones_like(self.w)
@@ -237,7 +285,30 @@ def stationary_point(path: Path, s: FloatArray, per_stage: int = 8) -> float | N
 def build_problem(
     dyn: Dynamics, path: Path, limits: JointLimits, grid: int | ArrayLike = 100, discretization: str = "interpolation"
 ) -> TimeScalingProblem:
-    """The :class:`TimeScalingProblem` of ``path`` under ``limits`` on ``grid`` (see the module docstring)."""
+    """The :class:`TimeScalingProblem` of a path under limits (see the module docstring).
+
+    Parameters
+    ----------
+    dyn : Dynamics
+        The arm.
+    path : Path
+        The path.
+    limits : JointLimits
+        The limits.
+    grid : int or array_like, optional
+        The number N of stages (evenly spaced in s), or the gridpoints (increasing from 0 to 1).
+    discretization : {"interpolation", "collocation"}, optional
+        See :class:`TimeScalingProblem`.
+
+    Returns
+    -------
+    TimeScalingProblem
+
+    Raises
+    ------
+    InvalidParameterError, NonFiniteError
+        A bad grid or discretization; path coefficients that are not finite.
+    """
     if discretization not in DISCRETIZATIONS:
         raise InvalidParameterError(
             f"discretization must be one of {DISCRETIZATIONS}, got {discretization!r}", value=discretization
@@ -285,6 +356,7 @@ def build_problem(
             raise NonFiniteError(
                 f"the dynamics gave non-finite path coefficients {name}(s); check the model", value=arr
             )
+    coef_a, coef_b, coef_c, coef_w = arrays
     return TimeScalingProblem(
         dyn,
         path,
@@ -293,7 +365,10 @@ def build_problem(
         readonly(q),
         readonly(dq),
         readonly(ddq),
-        *map(readonly, arrays),
+        readonly(coef_a),
+        readonly(coef_b),
+        readonly(coef_c),
+        readonly(coef_w),
         readonly(g),
         readonly(velocity_bound(path, s, limits)),
         readonly(gravity),

@@ -34,9 +34,21 @@ from armctl.planning.verify import check_trajectory
 
 @dataclass(frozen=True)
 class UniformScaling:
-    """Result of :func:`uniform_time_scaling`: the ``factor`` r (new duration = r × old), the scaled
-    ``trajectory`` (with its dense ``check``), and what binds: limit ``kind``, ``joint`` and the time ``t`` [s]
-    of the original trajectory."""
+    """Result of :func:`uniform_time_scaling`.
+
+    Attributes
+    ----------
+    factor : float
+        r (new duration = r × old).
+    trajectory : Trajectory
+        The scaled trajectory, with its dense ``check``.
+    kind : str
+        The limit that binds.
+    joint : int
+        The joint where it binds.
+    t : float
+        The time [s] of the original trajectory where it binds.
+    """
 
     factor: float
     trajectory: Trajectory
@@ -56,14 +68,14 @@ def _first_root(d: FloatArray, e: FloatArray, c0: FloatArray) -> FloatArray:
     den = e + root
     with np.errstate(divide="ignore", invalid="ignore"):
         z = np.where((disc >= 0) & (den > 0), -2.0 * c0 / den, np.inf)
-    return z  # type: ignore[no-any-return]
+    return z
 
 
 def _speed_root(v: FloatArray, lower: FloatArray, upper: FloatArray, power: int) -> FloatArray:
     """Largest z with lower ≤ v z^power ≤ upper (bounds straddling 0)."""
     with np.errstate(divide="ignore"):
         lim = np.where(v > 0, upper / v, np.where(v < 0, lower / v, np.inf))
-    return lim if power == 1 else np.sqrt(lim)  # type: ignore[no-any-return]
+    return lim if power == 1 else np.sqrt(lim)
 
 
 def uniform_time_scaling(
@@ -76,13 +88,35 @@ def uniform_time_scaling(
     torque_margin: float = 0.0,
     samples: int = 1001,
 ) -> UniformScaling:
-    """The smallest uniform scale factor r that makes ``trajectory`` respect the limits (at ``samples`` evenly
-    spaced times), and the scaled trajectory, whose ``check`` looks 10 times more densely (between those samples
-    the limits may be exceeded a little, and the check says by how much). Limits as in
-    :func:`~armctl.planning.time_optimal`.
+    """The smallest uniform scale factor r that makes a trajectory respect the limits, and the scaled
+    trajectory.
 
-    Raises :class:`~armctl.errors.InfeasibleError` if gravity and Coulomb friction alone exceed a torque bound
-    somewhere along the path (no slowing down helps).
+    The factor is found at ``samples`` evenly spaced times; the scaled trajectory's ``check`` looks 10 times more
+    densely (between those samples the limits may be exceeded a little, and the check says by how much).
+
+    Parameters
+    ----------
+    dyn : Dynamics
+        The arm.
+    trajectory : Trajectory
+        The trajectory to scale.
+    vel_limit, acc_limit, torque_limit : optional
+        [rad/s], [rad/s²], [N·m]: None (not imposed), ``"model"`` (the model's velocity / effort limits; not for
+        acceleration), a scalar, an (n,) vector (symmetric) or (n, 2) bounds.
+    torque_margin : float, optional
+        Plan with the torque bounds shrunk by this fraction, in [0, 1).
+    samples : int, optional
+        How many evenly spaced times set the factor.
+
+    Returns
+    -------
+    UniformScaling
+
+    Raises
+    ------
+    InfeasibleError
+        Gravity and Coulomb friction alone exceed a torque bound somewhere along the path (no slowing down
+        helps).
     """
     if not isinstance(dyn, Dynamics):
         raise InvalidParameterError(f"dyn must be an armctl.Dynamics, got {type(dyn).__name__}", value=dyn)

@@ -22,12 +22,40 @@ class Timing(ABC):
         """T [s]."""
 
     @abstractmethod
-    def _evaluate(self, t: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """(s, ṡ, s̈) at times t (m,) inside [0, T]."""
+    def evaluate_inside(self, t: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """(s, ṡ, s̈) at times inside [0, T], not checked (:meth:`evaluate` checks t and handles the times
+        outside).
+
+        Parameters
+        ----------
+        t : ndarray, shape (m,)
+            Times [s], each finite and inside [0, T].
+
+        Returns
+        -------
+        tuple of ndarray
+            (s, ṡ [1/s], s̈ [1/s²]), each (m,).
+        """
 
     def evaluate(self, t: ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """(s, ṡ, s̈) at times t [s] (a scalar or an (m,) vector; arrays of the same shape come back). Inside
-        [0, T] the values in motion (at T, the limit from the left); outside, rest at the nearest end."""
+        """(s, ṡ, s̈) at times t. Inside [0, T] the values in motion (at T, the limit from the left); outside,
+        rest at the nearest end.
+
+        Parameters
+        ----------
+        t : array_like
+            A time [s] or an (m,) vector of times.
+
+        Returns
+        -------
+        tuple of ndarray
+            (s, ṡ [1/s], s̈ [1/s²]), arrays of t's shape.
+
+        Raises
+        ------
+        ShapeError, NonFiniteError
+            t is not a scalar or a vector, or not finite.
+        """
         tt = real_array(t, "t")
         if tt.ndim > 1:
             raise ShapeError(f"t must be a scalar or a vector, got shape {tt.shape}", value=t)
@@ -38,20 +66,43 @@ class Timing(ABC):
         s = np.where(flat > self.duration, 1.0, 0.0)
         sd, sdd = np.zeros_like(flat), np.zeros_like(flat)
         if inside.any():
-            s[inside], sd[inside], sdd[inside] = self._evaluate(flat[inside])
+            s[inside], sd[inside], sdd[inside] = self.evaluate_inside(flat[inside])
         shape = tt.shape
         return s.reshape(shape), sd.reshape(shape), sdd.reshape(shape)
 
     def at(self, t: float) -> tuple[float, float, float]:
-        """(s, ṡ, s̈) at one time t [s] (as :meth:`evaluate`, for a control loop's rate)."""
+        """(s, ṡ, s̈) at one time (as :meth:`evaluate`, for a control loop's rate).
+
+        Parameters
+        ----------
+        t : float
+            The time [s], finite.
+
+        Returns
+        -------
+        tuple of float
+            (s, ṡ [1/s], s̈ [1/s²]).
+        """
         if t.__class__ is not float or t - t != 0.0:  # t - t: NaN for NaN and ±inf
             t = scalar(t, "t")  # a real finite scalar, or raise naming t
         if t < 0.0 or t > self.duration:
             return (0.0 if t < 0.0 else 1.0), 0.0, 0.0
-        return self._at(t)
+        return self.at_inside(t)
 
-    def _at(self, t: float) -> tuple[float, float, float]:
-        s, sd, sdd = self._evaluate(np.array([t]))
+    def at_inside(self, t: float) -> tuple[float, float, float]:
+        """(s, ṡ, s̈) at one time inside [0, T], not checked (:meth:`at` checks t).
+
+        Parameters
+        ----------
+        t : float
+            The time [s], a finite float inside [0, T].
+
+        Returns
+        -------
+        tuple of float
+            (s, ṡ [1/s], s̈ [1/s²]).
+        """
+        s, sd, sdd = self.evaluate_inside(np.array([t]))
         return float(s[0]), float(sd[0]), float(sdd[0])
 
 
@@ -62,7 +113,22 @@ class GridTiming(Timing):
         s(t) = s_i + ṡ_i τ + ½ u_i τ²,   ṡ(t) = ṡ_i + u_i τ,   τ = t − t_i.
 
     This is exactly the discrete model TOPP-RA optimises, so the constraints it imposed at the gridpoints hold
-    at the gridpoints of the trajectory."""
+    at the gridpoints of the trajectory.
+
+    Parameters
+    ----------
+    s : array_like, shape (N+1,)
+        The gridpoints, increasing from 0 to 1.
+    x : array_like, shape (N+1,)
+        ṡ² at the gridpoints [1/s²], ≥ 0, with no stage at rest at both ends.
+
+    Raises
+    ------
+    ShapeError, NonFiniteError, InvalidParameterError
+        Arrays of different or too short lengths, not finite, or x < 0.
+    SolverError
+        A stage where the path would stop for ever (ṡ = 0 at both its ends).
+    """
 
     def __init__(self, s: ArrayLike, x: ArrayLike) -> None:
         ss, xx = np.array(s, dtype=float), np.array(x, dtype=float)
@@ -92,7 +158,7 @@ class GridTiming(Timing):
     def duration(self) -> float:
         return float(self.t[-1])
 
-    def _evaluate(self, t: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+    def evaluate_inside(self, t: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         i = np.clip(np.searchsorted(self.t, t, side="right") - 1, 0, self.u.shape[0] - 1)
         tau = np.clip(t - self.t[i], 0.0, self.t[i + 1] - self.t[i])
         u = self.u[i]
@@ -100,7 +166,7 @@ class GridTiming(Timing):
         sd = np.maximum(self.sd[i] + u * tau, 0.0)
         return s, sd, u
 
-    def _at(self, t: float) -> tuple[float, float, float]:
+    def at_inside(self, t: float) -> tuple[float, float, float]:
         ts, ss, sds, us = self._lists
         i = min(max(bisect_right(ts, t) - 1, 0), len(us) - 1)
         tau = min(max(t - ts[i], 0.0), ts[i + 1] - ts[i])
@@ -110,7 +176,13 @@ class GridTiming(Timing):
 
 
 class PolynomialTiming(Timing):
-    """The quintic rest-to-rest law s = 10σ³ − 15σ⁴ + 6σ⁵, σ = t/T (zero ṡ and s̈ at both ends)."""
+    """The quintic rest-to-rest law s = 10σ³ − 15σ⁴ + 6σ⁵, σ = t/T (zero ṡ and s̈ at both ends).
+
+    Parameters
+    ----------
+    duration : float
+        T [s], > 0.
+    """
 
     def __init__(self, duration: float) -> None:
         self._duration = scalar(duration, "duration", positive=True)
@@ -119,7 +191,7 @@ class PolynomialTiming(Timing):
     def duration(self) -> float:
         return self._duration
 
-    def _evaluate(self, t: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+    def evaluate_inside(self, t: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         T = self._duration
         r = t / T
         s = r**3 * (10.0 - 15.0 * r + 6.0 * r**2)
@@ -127,7 +199,7 @@ class PolynomialTiming(Timing):
         sdd = 60.0 * r * (1.0 - r) * (1.0 - 2.0 * r) / T**2
         return s, sd, sdd
 
-    def _at(self, t: float) -> tuple[float, float, float]:
+    def at_inside(self, t: float) -> tuple[float, float, float]:
         T = self._duration
         r = t / T
         return (
@@ -138,8 +210,15 @@ class PolynomialTiming(Timing):
 
 
 class ScaledTiming(Timing):
-    """``base`` slowed down uniformly by ``factor`` r > 0 (r < 1 speeds it up): s_r(t) = s(t/r), so
-    ṡ_r = ṡ/r and s̈_r = s̈/r², and the duration is r T."""
+    """A timing slowed down uniformly: s_r(t) = s(t/r), so ṡ_r = ṡ/r and s̈_r = s̈/r², and the duration is r T.
+
+    Parameters
+    ----------
+    base : Timing
+        The timing to scale.
+    factor : float
+        r > 0 (r < 1 speeds it up).
+    """
 
     def __init__(self, base: Timing, factor: float) -> None:
         if not isinstance(base, Timing):
@@ -151,12 +230,12 @@ class ScaledTiming(Timing):
     def duration(self) -> float:
         return self.factor * self.base.duration
 
-    def _evaluate(self, t: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+    def evaluate_inside(self, t: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         r = self.factor
-        s, sd, sdd = self.base._evaluate(np.minimum(t / r, self.base.duration))
+        s, sd, sdd = self.base.evaluate_inside(np.minimum(t / r, self.base.duration))
         return s, sd / r, sdd / r**2
 
-    def _at(self, t: float) -> tuple[float, float, float]:
+    def at_inside(self, t: float) -> tuple[float, float, float]:
         r = self.factor
-        s, sd, sdd = self.base._at(min(t / r, self.base.duration))
+        s, sd, sdd = self.base.at_inside(min(t / r, self.base.duration))
         return s, sd / r, sdd / (r * r)

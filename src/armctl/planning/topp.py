@@ -55,20 +55,36 @@ VISCOUS_KEEP = 0.5
 
 
 def solve_problem(problem: TimeScalingProblem, viscous_passes: int = 2) -> Trajectory:
-    """Solve ``problem`` with TOPP-RA (rest to rest) → :class:`Trajectory` with a
-    :class:`~armctl.planning.timing.GridTiming` (not yet verified densely).
-
-    Raises :class:`~armctl.errors.InfeasibleError` first of all if the arm cannot be held at rest at the start
-    or end pose within the torque bounds (:func:`~armctl.planning.infeasibility.rest_overload`): the
-    trajectory rests there before 0 and after T, which toppra, free to brake at the last gridpoint, ignores.
+    """Solve a time-scaling problem with TOPP-RA (rest to rest).
 
     With viscous friction, a first pass drops it (optimistic, never returned); each of the ``viscous_passes``
-    further passes replaces F_v q' √x by a line over it, in two solves: the tangent at the previous pass's x,
-    and a steeper line that leaves slow motion more torque (see
-    :meth:`~armctl.planning.problem.TimeScalingProblem.linearized`; each wins on some paths: the tangent where
-    the path must carry its speed through a pose it cannot hold, the steep line elsewhere by a few %). Every
-    solve is conservative; the fastest is returned and seeds the next pass (a pass that finds no timing leaves
-    the earlier ones standing).
+    further passes replaces F_v q' √x by a line over it, in two solves: the tangent at the previous pass's x, and a
+    steeper line that leaves slow motion more torque (see
+    :meth:`~armctl.planning.problem.TimeScalingProblem.linearized`; each wins on some paths: the tangent where the
+    path must carry its speed through a pose it cannot hold, the steep line elsewhere by a few %). Every solve is
+    conservative; the fastest is returned and seeds the next pass (a pass that finds no timing leaves the earlier
+    ones standing).
+
+    Parameters
+    ----------
+    problem : TimeScalingProblem
+        From :func:`~armctl.planning.problem.build_problem`.
+    viscous_passes : int, optional
+        The passes over the viscous term.
+
+    Returns
+    -------
+    Trajectory
+        With a :class:`~armctl.planning.timing.GridTiming` (not yet verified densely).
+
+    Raises
+    ------
+    InfeasibleError
+        First of all if the arm cannot be held at rest at the start or end pose within the torque bounds
+        (:func:`~armctl.planning.infeasibility.rest_overload`): the trajectory rests there before 0 and after T,
+        which toppra, free to brake at the last gridpoint, ignores; or if no timing meets the limits.
+    SolverError
+        A numerical failure.
     """
     from armctl.planning._toppra import run_toppra
 
@@ -111,10 +127,24 @@ def solve_problem(problem: TimeScalingProblem, viscous_passes: int = 2) -> Traje
 
 
 def check_range(model: RobotModel, path: Path) -> None:
-    """Raise :class:`~armctl.errors.InfeasibleError` if ``path`` leaves the joint ranges of ``model`` (its
-    finite lower/upper limits) anywhere, checked at the path's :meth:`~armctl.planning.Path.range_points`
-    (a spline's exact extrema; other paths densely sampled); the error names the joint, the worst point (a
-    waypoint outside first, else where the path overshoots between two) and the range."""
+    """Check that a path stays within the model's joint ranges (its finite lower/upper limits).
+
+    Checked at the path's :meth:`~armctl.planning.Path.range_points` (a spline's exact extrema; other paths densely
+    sampled).
+
+    Parameters
+    ----------
+    model : RobotModel
+        The arm.
+    path : Path
+        The path.
+
+    Raises
+    ------
+    InfeasibleError
+        The path leaves a range: the error names the joint, the worst point (a waypoint outside first, else where
+        the path overshoots between two) and the range.
+    """
     lo, hi = model.lower, model.upper
     if not (np.isfinite(lo).any() or np.isfinite(hi).any()):
         return
@@ -251,33 +281,61 @@ def time_optimal(
     discretization: str = "interpolation",
     position_limit: str | None = "model",
 ) -> Trajectory:
-    """The time-optimal rest-to-rest trajectory along ``waypoints`` within the given limits.
+    """The time-optimal rest-to-rest trajectory along waypoints within the given limits.
 
-    dyn: the arm's :class:`~armctl.Dynamics` (torques are τ = ``dyn.inverse_dynamics``, friction included).
-    waypoints: (m, n) joint waypoints [rad] (through which a cubic :class:`SplinePath` is laid), or any
-    :class:`~armctl.planning.Path`.
-    vel_limit [rad/s], acc_limit [rad/s²], torque_limit [N·m]: None (not imposed), ``"model"`` (the model's
-    velocity / effort limits; not for acceleration), a scalar, an (n,) vector (symmetric) or (n, 2) bounds.
-    grid: the number N of stages (evenly spaced in s), or the gridpoints (increasing from 0 to 1).
-    torque_margin: plan with the torque bounds shrunk by this fraction (0.1 → 90 % of the range), to leave
-    room for feedback.
-    tol: largest normalised violation accepted by the dense check (0.01: 1 % of a limit). refine: when it is
-    exceeded, double the grid (up to ``max_grid`` stages) and solve again; if it is still exceeded, raise
-    :class:`~armctl.errors.SolverError` (pass ``tol=float("inf")`` to accept any result and read
-    ``traj.check`` yourself). oversample: dense-check samples per stage (≥ 10 recommended).
-    viscous_passes, discretization: see :func:`solve_problem` and :func:`~armctl.planning.problem.build_problem`.
-    position_limit: ``"model"`` (default): the path must stay within the model's joint ranges — a timing cannot
-    change the path, so one that leaves them (a waypoint outside, or the spline overshooting between two
-    inside) raises :class:`~armctl.errors.InfeasibleError` naming the joint and where; None: not checked.
+    The path speed is bounded by ṡ² ≤ 1e8 (:data:`~armctl.planning.problem.X_CAP`, toppra's own bound), so a move so
+    short, or limits so loose, that its optimum would be faster than that gets the slower timing (a 1 nrad move at
+    1 rad/s takes 2e-4 s).
 
-    Returns a :class:`~armctl.planning.Trajectory` with ``check`` (the dense verification) and ``info``
-    (grid, passes, the history of refinements, compute time). The path speed is bounded by ṡ² ≤ 1e8
-    (:data:`~armctl.planning.problem.X_CAP`, toppra's own bound), so a move so short, or limits so loose, that
-    its optimum would be faster than that gets the slower timing (a 1 nrad move at 1 rad/s takes 2e-4 s).
-    Raises :class:`~armctl.errors.InfeasibleError` if no timing meets the limits, naming the constraint and
-    where it binds (in particular when the arm cannot be held at rest at the start or end pose: gravity and the
-    Coulomb friction of the adjoining motion beyond the planned torque bound); :class:`~armctl.errors.SolverError`
-    on a numerical failure; another :class:`~armctl.errors.ArmctlError` on bad input.
+    Parameters
+    ----------
+    dyn : Dynamics
+        The arm (torques are τ = ``dyn.inverse_dynamics``, friction included).
+    waypoints : array_like, shape (m, n), or Path
+        Joint waypoints [rad] (through which a cubic :class:`SplinePath` is laid), or any
+        :class:`~armctl.planning.Path`.
+    vel_limit, acc_limit, torque_limit : optional
+        [rad/s], [rad/s²], [N·m]: None (not imposed), ``"model"`` (the model's velocity / effort limits; not for
+        acceleration), a scalar, an (n,) vector (symmetric) or (n, 2) bounds.
+    grid : int or array_like, optional
+        The number N of stages (evenly spaced in s), or the gridpoints (increasing from 0 to 1).
+    torque_margin : float, optional
+        Plan with the torque bounds shrunk by this fraction (0.1 → 90 % of the range), to leave room for feedback.
+    tol : float, optional
+        The largest normalised violation accepted by the dense check (0.01: 1 % of a limit).
+    refine : bool, optional
+        When ``tol`` is exceeded, double the grid (up to ``max_grid`` stages) and solve again; if it is still
+        exceeded, raise :class:`~armctl.errors.SolverError` (pass ``tol=float("inf")`` to accept any result and read
+        ``traj.check`` yourself).
+    max_grid : int, optional
+        The largest grid refinement tries.
+    oversample : int, optional
+        Dense-check samples per stage (≥ 10 recommended).
+    viscous_passes : int, optional
+        See :func:`solve_problem`.
+    discretization : {"interpolation", "collocation"}, optional
+        See :func:`~armctl.planning.problem.build_problem`.
+    position_limit : {"model"} or None, optional
+        ``"model"`` (default): the path must stay within the model's joint ranges — a timing cannot change the
+        path, so one that leaves them (a waypoint outside, or the spline overshooting between two inside) raises
+        :class:`~armctl.errors.InfeasibleError` naming the joint and where; None: not checked.
+
+    Returns
+    -------
+    Trajectory
+        With ``check`` (the dense verification) and ``info`` (grid, passes, the history of refinements, compute
+        time).
+
+    Raises
+    ------
+    InfeasibleError
+        No timing meets the limits, naming the constraint and where it binds (in particular when the arm cannot be
+        held at rest at the start or end pose: gravity and the Coulomb friction of the adjoining motion beyond the
+        planned torque bound).
+    SolverError
+        A numerical failure, or the dense check still exceeds ``tol`` at ``max_grid``.
+    ArmctlError
+        Bad input, named.
     """
     t0 = time.perf_counter()
     if not isinstance(dyn, Dynamics):

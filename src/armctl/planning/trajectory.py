@@ -15,7 +15,7 @@ from armctl._checks import FloatArray, readonly, real_array, scalar, whole_numbe
 from armctl.errors import InvalidParameterError
 from armctl.planning.path import Path
 from armctl.planning.timing import Timing
-from armctl.reference import Reference
+from armctl.references import Reference
 
 if TYPE_CHECKING:
     from armctl.planning.verify import LimitCheck
@@ -23,7 +23,19 @@ if TYPE_CHECKING:
 
 @dataclass(frozen=True, eq=False)
 class Samples:
-    """A trajectory sampled at times ``t`` (m,) [s]: path parameter s, ṡ, s̈ (m,) and q, q̇, q̈ (m, n)."""
+    """A trajectory sampled at m times.
+
+    Attributes
+    ----------
+    t : ndarray, shape (m,)
+        The times [s].
+    s, sd, sdd : ndarray, shape (m,)
+        The path parameter s, ṡ [1/s] and s̈ [1/s²].
+    q, qd, qdd : ndarray, shape (m, n)
+        Joint positions, velocities and accelerations.
+    dq, ddq : ndarray, shape (m, n)
+        The path's derivatives q'(s), q''(s).
+    """
 
     t: FloatArray
     s: FloatArray
@@ -40,12 +52,20 @@ class Samples:
 
 
 class Trajectory:
-    """``path`` traversed with ``timing``. ``traj(t)`` is the :class:`~armctl.Reference` at time t [s] (at rest
-    at the start before 0 and at the end after ``duration``); ``traj.sample(...)`` evaluates many times at once.
+    """A path traversed with a timing. ``traj(t)`` is the :class:`~armctl.Reference` at time t [s] (at rest at
+    the start before 0 and at the end after ``duration``); ``traj.sample(...)`` evaluates many times at once.
 
-    check: the dense verification of the limits (:class:`~armctl.planning.verify.LimitCheck`) when the
-    trajectory comes from :func:`~armctl.planning.time_optimal` or :func:`~armctl.planning.uniform_time_scaling`;
-    info: how it was computed (grid, passes, solve time, …).
+    Parameters
+    ----------
+    path : Path
+        The geometric path q(s).
+    timing : Timing
+        The timing law s(t).
+    check : LimitCheck, optional
+        The dense verification of the limits, when the trajectory comes from :func:`~armctl.planning.time_optimal`
+        or :func:`~armctl.planning.uniform_time_scaling`.
+    info : dict, optional
+        How it was computed (grid, passes, solve time, …).
     """
 
     def __init__(
@@ -80,8 +100,26 @@ class Trajectory:
         return Reference(q, dq * sd, dq * sdd + ddq * (sd * sd))
 
     def sample(self, t: ArrayLike | None = None, *, dt: float | None = None, num: int | None = None) -> Samples:
-        """The trajectory at times ``t`` (a vector [s]), or on [0, T] every ``dt`` [s] (T included), or at
-        ``num`` evenly spaced times from 0 to T; give exactly one."""
+        """The trajectory at many times; give exactly one of the three.
+
+        Parameters
+        ----------
+        t : array_like, shape (m,), optional
+            The times [s].
+        dt : float, optional
+            Every ``dt`` [s] on [0, T], T included.
+        num : int, optional
+            ``num`` evenly spaced times from 0 to T.
+
+        Returns
+        -------
+        Samples
+
+        Raises
+        ------
+        InvalidParameterError
+            None or more than one of them given, or a bad value.
+        """
         if sum(x is not None for x in (t, dt, num)) != 1:
             raise InvalidParameterError("give exactly one of t, dt or num", value=(t, dt, num))
         T = self.duration

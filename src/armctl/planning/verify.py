@@ -31,9 +31,28 @@ from armctl.planning.trajectory import Samples, Trajectory
 
 @dataclass(frozen=True)
 class LimitReport:
-    """The worst sample for one limit: ``ratio`` = utilisation there (≤ 1: within), at ``joint``, time ``t``
-    [s] and path parameter ``s``; ``value`` and the ``bound`` on its side, in ``unit``. ``rest``: "start" or
-    "end" when the worst sample is the rest state at that pose (before t = 0 / after T), else None."""
+    """The worst sample for one limit.
+
+    Attributes
+    ----------
+    kind : str
+        The limit (``"velocity"``, ``"acceleration"``, ``"torque"``).
+    ratio : float
+        The utilisation there (≤ 1: within).
+    joint : int
+        The joint (0-based).
+    t : float
+        The time [s].
+    s : float
+        The path parameter.
+    value, bound : float
+        The value and the bound on its side, in ``unit``.
+    unit : str
+        The unit of the value.
+    rest : str or None
+        ``"start"`` or ``"end"`` when the worst sample is the rest state at that pose (before t = 0 / after T),
+        else None.
+    """
 
     kind: str
     ratio: float
@@ -65,7 +84,15 @@ class LimitReport:
 
 @dataclass(frozen=True)
 class LimitCheck:
-    """The verification of one trajectory: ``reports`` by limit kind, over ``samples`` samples."""
+    """The verification of one trajectory.
+
+    Attributes
+    ----------
+    samples : int
+        How many samples were checked.
+    reports : dict of str to LimitReport
+        The worst sample of each limit, by kind.
+    """
 
     samples: int
     reports: dict[str, LimitReport]
@@ -76,11 +103,27 @@ class LimitCheck:
         return max((r.excess for r in self.reports.values()), default=0.0)
 
     def worst(self) -> LimitReport | None:
-        """The report with the largest utilisation."""
+        """The report with the largest utilisation.
+
+        Returns
+        -------
+        LimitReport or None
+            None when nothing was checked.
+        """
         return max(self.reports.values(), key=lambda r: r.ratio, default=None)
 
     def ok(self, tol: float = 0.0) -> bool:
-        """Whether every limit holds within the normalised tolerance ``tol``."""
+        """Whether every limit holds within a tolerance.
+
+        Parameters
+        ----------
+        tol : float, optional
+            The normalised tolerance (0.01: 1 % of a limit).
+
+        Returns
+        -------
+        bool
+        """
         return self.worst_excess <= tol
 
     def __str__(self) -> str:
@@ -139,9 +182,27 @@ def _report(kind: str, bounds: Bounds, values: FloatArray, smp: Samples, moving:
 def check_trajectory(
     dyn: Dynamics, traj: Trajectory, limits: JointLimits, oversample: int = 10, samples: Samples | None = None
 ) -> LimitCheck:
-    """Check ``traj`` densely against the planned ``limits`` (torque bounds with their margin applied) and
-    report the worst utilisation of each. ``samples``: use these instead of :func:`sample_times`. The rest
-    states at both ends (:func:`rest_samples`) are always checked too."""
+    """Check a trajectory densely against the planned limits and report the worst utilisation of each.
+
+    The rest states at both ends (:func:`rest_samples`) are always checked too.
+
+    Parameters
+    ----------
+    dyn : Dynamics
+        The arm (its inverse dynamics give the torques).
+    traj : Trajectory
+        The trajectory.
+    limits : JointLimits
+        The limits (the torque bounds with their margin applied).
+    oversample : int, optional
+        Samples per stage of a grid timing.
+    samples : Samples, optional
+        Use these instead of :func:`sample_times`.
+
+    Returns
+    -------
+    LimitCheck
+    """
     if not isinstance(dyn, Dynamics):
         raise InvalidParameterError(f"dyn must be an armctl.Dynamics, got {type(dyn).__name__}", value=dyn)
     if not isinstance(traj, Trajectory):

@@ -20,6 +20,22 @@ SCENES: dict[str, Callable[[], Scene]] = {
 
 
 def scene(name: str) -> Scene:
+    """A standard scene by name.
+
+    Parameters
+    ----------
+    name : str
+        One of :data:`SCENES`.
+
+    Returns
+    -------
+    Scene
+
+    Raises
+    ------
+    UnknownNameError
+        Another name (the error lists them).
+    """
     if name not in SCENES:
         raise UnknownNameError("scene", name, tuple(SCENES))
     return SCENES[name]()

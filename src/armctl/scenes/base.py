@@ -30,7 +30,7 @@ from armctl.controllers import Adaptive, ComputedTorque, Controller, PassivityBa
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError, UnknownNameError
 from armctl.model.robot import RobotModel
-from armctl.reference import Reference
+from armctl.references import Reference
 from armctl.tuning.presets import load_preset
 
 JOINT_METHODS = ("pd_gravity", "computed_torque", "computed_torque_reduced", "passivity", "adaptive")
@@ -99,12 +99,43 @@ def diverged_errors(metrics: dict[str, Any]) -> dict[str, Any]:
 
 @dataclass
 class Scene:
-    """A standard closed-loop setup: the true ``plant``, the controller-side models (``exact``: the plant's
-    own; ``reduced``: with less in it, for the methods that are given a reduced or wrong model), the
-    ``reference`` (t → :class:`~armctl.Reference`), ``duration`` [s], rates and integrator, the start ``q0``
-    and other :func:`~armctl.sim.simulate` options (``sim_options``: environment, friction, …), and the
-    ``methods`` it runs. :meth:`controller` builds a method's controller (gains from the presets unless given),
-    :meth:`run` simulates it, :meth:`metrics` measures a run."""
+    """A standard closed-loop setup: a true plant, the models its controllers are given, a reference, and
+    the methods it runs. :meth:`controller` builds a method's controller (gains from the presets unless given),
+    :meth:`run` simulates it, :meth:`metrics` measures a run.
+
+    Parameters
+    ----------
+    name : str
+        The scene's name (its presets are ``controllers/<name>.<method>.toml``).
+    description : str
+        What the scene shows.
+    plant : RobotModel
+        The true arm.
+    exact : RobotModel
+        The controller-side model that is the plant's own.
+    reduced : RobotModel
+        The controller-side model with less in it, for the methods that are given a reduced or wrong model.
+    reference : callable
+        t → :class:`~armctl.Reference`.
+    duration : float
+        [s].
+    methods : tuple of str, optional
+        The methods it runs.
+    control_dt : float, optional
+        The control period [s].
+    dt : float, optional
+        The integration step [s] (None: the control period).
+    integrator : str, optional
+        The integration scheme (see :func:`armctl.sim.simulate`).
+    q0 : array_like, optional
+        The start (None: the reference at 0).
+    sim_options : dict, optional
+        Other :func:`~armctl.sim.simulate` options (environment, friction, …).
+    builders : dict, optional
+        Method name → function (scene, gains) → Controller, for methods that are not built in.
+    backend : str, optional
+        The backend of the scene's Dynamics.
+    """
 
     name: str
     description: str
@@ -124,7 +155,22 @@ class Scene:
     timing_samples: ClassVar[int] = 200  # recorded states :meth:`metrics` replays to time a controller
 
     def dynamics(self, which: str = "exact") -> Dynamics:
-        """Dynamics of the ``plant``, ``exact`` or ``reduced`` model (pickles by rebuilding)."""
+        """Dynamics of one of the scene's models (pickles by rebuilding).
+
+        Parameters
+        ----------
+        which : {"plant", "exact", "reduced"}, optional
+            The model.
+
+        Returns
+        -------
+        Dynamics
+
+        Raises
+        ------
+        UnknownNameError
+            Another name.
+        """
         if not isinstance(which, str) or which not in MODELS:
             raise UnknownNameError("scene model", which, MODELS)
         return Dynamics(
@@ -132,11 +178,47 @@ class Scene:
         )
 
     def gains(self, method: str) -> dict[str, Any]:
+        """A method's preset gains.
+
+        Parameters
+        ----------
+        method : str
+            The method.
+
+        Returns
+        -------
+        dict of str
+            Gain name → value (see :mod:`armctl.tuning.presets`).
+
+        Raises
+        ------
+        ModelLoadError
+            No preset for the method.
+        """
         return dict(load_preset(self.name, method)["gains"])
 
     def controller(self, method: str, gains: dict[str, Any] | None = None) -> Controller:
-        """The controller of ``method`` with ``gains`` (default: the preset). The keys of each built-in method
-        are in :data:`GAIN_KEYS`; an unknown key or a missing required one is an error, not ignored."""
+        """The controller of a method (the keys of each built-in method's gains are in :data:`GAIN_KEYS`; an unknown
+        key or a missing required one is an error, not ignored).
+
+        Parameters
+        ----------
+        method : str
+            One of :attr:`methods`.
+        gains : dict, optional
+            Gain name → value (default: the preset).
+
+        Returns
+        -------
+        Controller
+
+        Raises
+        ------
+        UnknownNameError
+            An unknown method or gain.
+        InvalidParameterError
+            A required gain missing, or a value out of range.
+        """
         if method not in self.methods:
             raise UnknownNameError("method", method, self.methods)
         if method in self.builders:  # a custom builder checks its own gains
@@ -161,9 +243,27 @@ class Scene:
         raise UnknownNameError("method", method, self.methods)  # pragma: no cover
 
     def run(self, method: str, gains: dict[str, Any] | None = None, **overrides: Any) -> Any:
-        """Simulate ``method`` on this scene; ``overrides`` (``duration`` and any option of
-        :func:`armctl.sim.simulate`) go to :func:`armctl.sim.simulate` and win over the scene's settings. The
-        plant, controller and reference are the scene's (build another scene to change them)."""
+        """Simulate a method on this scene. The plant, controller and reference are the scene's (build another scene
+        to change them).
+
+        Parameters
+        ----------
+        method : str
+            One of :attr:`methods`.
+        gains : dict, optional
+            Gain name → value (default: the preset).
+        **overrides
+            ``duration`` and any option of :func:`armctl.sim.simulate`: they win over the scene's settings.
+
+        Returns
+        -------
+        SimResult
+
+        Raises
+        ------
+        UnknownNameError
+            An unknown method, or an override that is not an option of simulate.
+        """
         from armctl.sim import simulate
 
         valid = tuple(
@@ -194,13 +294,29 @@ class Scene:
         """Tracking error (RMS, max) [rad], torque RMS [N·m], the share of samples beyond the plant's limits
         (``limit_violation_share``: any of ``torque_violation_share``, the command beyond the effort limits;
         ``velocity_violation_share``, a joint more than :data:`VELOCITY_TOLERANCE` beyond its velocity limit;
-        ``position_violation_share``, a joint outside its position range), divergence, and the controller's
-        compute time per step [s] (``compute_s``, see :meth:`compute_time` on :meth:`replay_window` of
-        ``timing_samples`` states, default :attr:`timing_samples`, in ``timing_rounds`` rounds; 0 rounds: not
-        timed, NaN). A run without samples gives NaN for every measure (compute time and limit-violation
-        shares included). A run that diverged has no tracking error (NaN): the error of its samples before
-        the divergence, which can look better than a stable method's, is kept apart as
-        ``rms_error_until_divergence`` and ``max_error_until_divergence``."""
+        ``position_violation_share``, a joint outside its position range), divergence, and the controller's compute
+        time per step [s] (``compute_s``, see :meth:`compute_time` on :meth:`replay_window`). A run without samples
+        gives NaN for every measure (compute time and limit-violation shares included). A run that diverged has no
+        tracking error (NaN): the error of its samples before the divergence, which can look better than a stable
+        method's, is kept apart as ``rms_error_until_divergence`` and ``max_error_until_divergence``.
+
+        Parameters
+        ----------
+        res : SimResult
+            A run of this scene.
+        method : str
+            The method that ran.
+        gains : dict, optional
+            Its gains (default: the preset), to rebuild the controller for timing.
+        timing_samples : int, optional
+            Recorded states replayed to time the controller (default :attr:`timing_samples`).
+        timing_rounds : int, optional
+            Timed passes (0: not timed, NaN).
+
+        Returns
+        -------
+        dict of str
+        """
         timing_samples = whole_number(
             self.timing_samples if timing_samples is None else timing_samples, "timing_samples", 1
         )
@@ -225,7 +341,17 @@ class Scene:
         return diverged_errors(out)
 
     def limit_violations(self, res: Any) -> dict[str, float]:
-        """Shares of a run's samples beyond the plant's limits (see :meth:`metrics`); NaN without samples."""
+        """Shares of a run's samples beyond the plant's limits (see :meth:`metrics`); NaN without samples.
+
+        Parameters
+        ----------
+        res : SimResult
+            A run of this scene.
+
+        Returns
+        -------
+        dict of str to float
+        """
         keys = ("torque", "velocity", "position")
         if not len(res.t):
             return {f"{k}_violation_share": float("nan") for k in ("limit", *keys)}
@@ -242,8 +368,20 @@ class Scene:
         }
 
     def replay_window(self, res: Any, samples: int = 200) -> dict[str, Any]:
-        """A contiguous window of ``samples`` recorded states from the middle of a run, as the controller
-        measured them (t, q, q̇ and the references), for :meth:`compute_time`."""
+        """A contiguous window of recorded states from the middle of a run, as the controller measured them (t, q,
+        q̇ and the references), for :meth:`compute_time`.
+
+        Parameters
+        ----------
+        res : SimResult
+            A run of this scene.
+        samples : int, optional
+            The window's length.
+
+        Returns
+        -------
+        dict of str
+        """
         samples = whole_number(samples, "timing_samples", 1)
         count = min(samples, len(res.t))
         first = (len(res.t) - count) // 2
@@ -259,9 +397,26 @@ class Scene:
     def compute_time(
         self, method: str, window: dict[str, Any], gains: dict[str, Any] | None = None, rounds: int = 5
     ) -> float:
-        """Seconds per control step of ``method``'s controller replaying ``window`` (as a loop would see the
-        states: warm starts stay warm), so the simulator's own cost is not counted: the median over
-        ``rounds`` passes after a warm-up pass, the controller reset before each. NaN for an empty window."""
+        """Seconds per control step of a method's controller replaying a window of states (as a loop would see them:
+        warm starts stay warm), so the simulator's own cost is not counted: the median over ``rounds`` passes after a
+        warm-up pass, the controller reset before each.
+
+        Parameters
+        ----------
+        method : str
+            The method.
+        window : dict
+            From :meth:`replay_window`.
+        gains : dict, optional
+            Its gains (default: the preset).
+        rounds : int, optional
+            Timed passes.
+
+        Returns
+        -------
+        float
+            [s]; NaN for an empty window.
+        """
         rounds = whole_number(rounds, "timing_rounds", 1)
         if not len(window["t"]):
             return float("nan")

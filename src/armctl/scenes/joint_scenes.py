@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from armctl.model import library
+from armctl import models
 from armctl.references import Quintic, Sinusoid
 from armctl.scenes.base import Scene
 
@@ -10,12 +10,17 @@ from armctl.scenes.base import Scene
 def pendulum() -> Scene:
     """The geared single joint swinging through a minimum-jerk move and back. The plant has viscous and
     Coulomb friction with stiction; the exact model knows the friction (kinetic part), the reduced one
-    drops rotor and friction — what a controller tuned on the link alone believes."""
-    plant = library.pendulum().with_friction(viscous=0.05, coulomb=0.3, static=0.45)
+    drops rotor and friction — what a controller tuned on the link alone believes.
+
+    Returns
+    -------
+    Scene
+    """
+    plant = models.pendulum().with_friction(viscous=0.05, coulomb=0.3, static=0.45)
     move = Quintic([0.0], [1.2], 1.5, t0=0.2)
     back = Quintic([1.2], [0.0], 1.5, t0=2.2)
 
-    def reference(t: float):  # type: ignore[no-untyped-def]
+    def reference(t: float):
         return move(t) if t < 2.2 else back(t)
 
     return Scene(
@@ -32,8 +37,18 @@ def pendulum() -> Scene:
 def planar_2r(payload: float = 10.0) -> Scene:
     """Siciliano's two-link arm tracking sinusoids while carrying a ``payload`` [kg] at the tool. The exact
     model (pd_gravity, computed_torque, passivity) knows it; the reduced model, the nominal arm without it, is
-    what computed_torque_reduced uses and what adaptive starts from and learns the payload."""
-    nominal = library.planar_2r()
+    what computed_torque_reduced uses and what adaptive starts from and learns the payload.
+
+    Parameters
+    ----------
+    payload : float, optional
+        [kg].
+
+    Returns
+    -------
+    Scene
+    """
+    nominal = models.planar_2r()
     plant = nominal.with_payload(payload)
     ref = Sinusoid([0.3, -0.4], [0.4, 0.5], [0.5, 0.7])
     return Scene(

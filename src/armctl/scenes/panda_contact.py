@@ -6,11 +6,12 @@ controllers' model knows."""
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from numpy.typing import ArrayLike
 
+from armctl import models
 from armctl._checks import boolean, scalar
 from armctl.controllers.base import Controller
 from armctl.controllers.osc import (
@@ -23,8 +24,7 @@ from armctl.controllers.osc import (
 )
 from armctl.dynamics.base import Dynamics
 from armctl.errors import UnknownNameError
-from armctl.model import library
-from armctl.reference import Reference
+from armctl.references import Reference
 from armctl.scenes.base import Scene, check_gains, diverged_errors
 
 Q_HOME = np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])  # the Panda's "ready" posture
@@ -36,8 +36,30 @@ class PressAndSlide(Controller):
     and ramps the normal force to ``force`` [N] in 0.2 s; then slide ``slide`` [m] along x (quintic profile
     of ``slide_time`` s from ``slide_start`` s). ``closed_form=True`` uses :class:`ClosedFormOSC` instead,
     which keeps pushing its pose target 1 cm below the table: the force is whatever its stiffness gives.
-    ``kp``, ``kd``: the pose task's gains (see :class:`FramePoseTask`; ``kd=None``: its default). ``force`` ≥ 0,
-    ``slide_start`` ≥ 0 and ``slide_time`` > 0 must be finite."""
+
+    Parameters
+    ----------
+    dyn : Dynamics
+        The controller's model.
+    z_table : float
+        The table's height [m].
+    mu : float
+        The friction coefficient of the sliding contact.
+    force : float, optional
+        The normal force to reach [N], finite, ≥ 0.
+    slide : float, optional
+        How far to slide along x [m].
+    slide_start : float, optional
+        When the slide starts [s], finite, ≥ 0.
+    slide_time : float, optional
+        How long it takes [s], finite, > 0.
+    closed_form : bool, optional
+        Use :class:`ClosedFormOSC` instead of the QP.
+    kp, kd : array_like, optional
+        The pose task's gains (see :class:`FramePoseTask`; ``kd=None``: its default).
+    """
+
+    dynamics: Dynamics  # given to __init__, never None
 
     def __init__(
         self,
@@ -73,7 +95,18 @@ class PressAndSlide(Controller):
             )
 
     def target(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Tool pose, twist and acceleration targets at time t [s]."""
+        """Tool pose, twist and acceleration targets.
+
+        Parameters
+        ----------
+        t : float
+            The time [s].
+
+        Returns
+        -------
+        tuple of ndarray
+            (pose (4, 4), twist (6,), acceleration (6,)).
+        """
         pose, twist, acc = self.p0.copy(), np.zeros(6), np.zeros(6)
         z_end = self.z_table - 0.01
         pose[2, 3] = max(self.p0[2, 3] - 0.02 * t, z_end)
@@ -94,7 +127,7 @@ class PressAndSlide(Controller):
             self.force_task.set_target(0.0)
 
     def compute(self, t: float, q: np.ndarray, qd: np.ndarray, ref: Reference) -> np.ndarray:
-        if self.touched is None and self.dynamics.frame_pose(q)[2, 3] <= self.z_table:  # type: ignore[union-attr]
+        if self.touched is None and self.dynamics.frame_pose(q)[2, 3] <= self.z_table:
             self.touched = t
             if not self.closed_form:
                 self.contact.active = True
@@ -107,23 +140,42 @@ class PressAndSlide(Controller):
 
 
 def panda_contact_model() -> Any:
-    return library.panda().with_friction(
+    return models.panda().with_friction(
         viscous=[0.5, 0.5, 0.5, 0.5, 0.2, 0.2, 0.2], coulomb=[0.8, 0.8, 0.8, 0.8, 0.3, 0.3, 0.3]
     )
 
 
 class ContactScene(Scene):
     """A scene whose error is the tool's position error [m] against the controller's target, with the normal
-    force error after settling [N] and contact loss reported."""
+    force error after settling [N] and contact loss reported. Its parameters are :class:`Scene`'s.
+
+    Parameters
+    ----------
+    name, description, plant, exact, reduced, reference, duration, methods : optional
+        As for :class:`Scene`.
+    control_dt, dt, integrator, q0, sim_options, builders, backend : optional
+        As for :class:`Scene`.
+    """
 
     z_table: float = 0.0
     mu: float = 0.3
     timing_samples = 100  # a QP step costs ten times a joint-space law's
 
     def controller(self, method: str, gains: dict[str, Any] | None = None) -> Controller:
-        """The :class:`PressAndSlide` controller; ``gains``: the pose task's ``kp`` and ``kd`` (default: the
-        preset, ``controllers/panda_contact.<method>.toml``; a missing key: the task's default); other keys are
-        refused."""
+        """The :class:`PressAndSlide` controller of a method.
+
+        Parameters
+        ----------
+        method : {"osc_qp", "osc_closed_form"}
+            The method.
+        gains : dict, optional
+            The pose task's ``kp`` and ``kd`` (default: the preset, ``controllers/panda_contact.<method>.toml``; a
+            missing key: the task's default); other keys are refused.
+
+        Returns
+        -------
+        PressAndSlide
+        """
         if method not in self.methods:
             raise UnknownNameError("method", method, self.methods)
         g = check_gains(method, self.gains(method) if gains is None else gains, (), ("kp", "kd"))
@@ -144,14 +196,34 @@ class ContactScene(Scene):
         timing_samples: int | None = None,
         timing_rounds: int = 5,
     ) -> dict[str, Any]:
+        """The tool's position error [m] (RMS, max) against the controller's target, the normal force error after
+        settling [N], whether contact was lost, and :meth:`Scene.metrics`' other measures.
+
+        Parameters
+        ----------
+        res : SimResult
+            A run of this scene.
+        method : str
+            The method that ran.
+        gains : dict, optional
+            Its gains (default: the preset), to rebuild the controller for timing.
+        timing_samples : int, optional
+            Recorded states replayed to time the controller (default :attr:`timing_samples`).
+        timing_rounds : int, optional
+            Timed passes (0: not timed, NaN).
+
+        Returns
+        -------
+        dict of str
+        """
         out = super().metrics(res, method, gains, timing_samples, timing_rounds)
         if not len(res.t):  # a run without samples: nothing to measure
             out.update({"force_rms_error": float("nan"), "contact_lost": False, "error_unit": "m"})
             return out
         dyn = self.dynamics("exact")
-        probe = self.controller(method, gains)
+        probe = cast(PressAndSlide, self.controller(method, gains))
         x = np.array([dyn.frame_pose(q)[:3, 3] for q in res.q])
-        want = np.array([probe.target(float(t))[0][:3, 3] for t in res.t])  # type: ignore[attr-defined]
+        want = np.array([probe.target(float(t))[0][:3, 3] for t in res.t])
         err = np.linalg.norm((x - want)[:, :2], axis=1)  # in the table plane: the normal is force-controlled
         fn = -res.contact_force[:, 0, 2] if res.contact_force.size else np.zeros(len(res.t))
         touch = np.flatnonzero(fn > 0)
@@ -171,6 +243,14 @@ class ContactScene(Scene):
 
 
 def panda_contact() -> Scene:
+    """The Panda with joint friction pressing 10 N on a table (a Kelvin–Voigt plane, surface friction μ = 0.3)
+    just below its ready pose, and sliding 10 cm along it: the methods ``osc_qp`` and ``osc_closed_form``
+    (:class:`PressAndSlide`), integrated at 0.2 ms.
+
+    Returns
+    -------
+    ContactScene
+    """
     from armctl.sim import KelvinVoigt, Plane
 
     model = panda_contact_model()

@@ -7,8 +7,8 @@ from functools import cache
 
 import numpy as np
 
+from armctl import models
 from armctl.dynamics.base import Dynamics
-from armctl.model import library
 from armctl.model.robot import RobotModel
 from armctl.scenes.base import Scene
 
@@ -27,7 +27,7 @@ WAYPOINTS = np.array(
 def panda_with_friction() -> RobotModel:
     """The Panda with illustrative joint friction of a plausible magnitude for its geared joints (viscous
     0.1–0.3 N·m·s/rad, Coulomb 0.1–0.5 N·m, breakaway 30 % above Coulomb) — not identified values."""
-    return library.panda().with_friction(
+    return models.panda().with_friction(
         viscous=[0.3, 0.3, 0.3, 0.3, 0.1, 0.1, 0.1],
         coulomb=[0.5, 0.5, 0.5, 0.5, 0.2, 0.2, 0.1],
         static=[0.65, 0.65, 0.65, 0.65, 0.26, 0.26, 0.13],
@@ -35,7 +35,7 @@ def panda_with_friction() -> RobotModel:
 
 
 @cache
-def _trajectory(margin: float):  # type: ignore[no-untyped-def]
+def _trajectory(margin: float):
     from armctl.planning import time_optimal
 
     return time_optimal(
@@ -51,7 +51,17 @@ def _trajectory(margin: float):  # type: ignore[no-untyped-def]
 def panda_topp(margin: float = 0.1) -> Scene:
     """Time-optimal (TOPP-RA) path through six waypoints with velocity and torque limits, planned on the exact
     model with ``margin`` of the torque range left for feedback. The plant sticks (breakaway above Coulomb);
-    the exact model knows the kinetic friction, the reduced one none."""
+    the exact model knows the kinetic friction, the reduced one none.
+
+    Parameters
+    ----------
+    margin : float, optional
+        The share of the torque range left for feedback, in [0, 1).
+
+    Returns
+    -------
+    Scene
+    """
     plant = panda_with_friction()
     traj = _trajectory(margin)
     return Scene(
@@ -59,7 +69,7 @@ def panda_topp(margin: float = 0.1) -> Scene:
         "Panda tracking a time-optimal path with stick–slip joint friction",
         plant=plant,
         exact=plant,
-        reduced=library.panda(),
+        reduced=models.panda(),
         reference=traj,
         duration=float(np.ceil(traj.duration * 1000) / 1000) + 0.2,
         q0=WAYPOINTS[0],

@@ -150,7 +150,7 @@ def check_friction_slope(
     if not planes:
         return []
     slope = sum(env.friction * fn.sum(axis=1) / env.slip_velocity for _, env, _, _, fn in planes)
-    order = np.argsort(-slope)[: min(FRICTION_SAMPLES, int((slope > 0).sum()))]  # type: ignore[union-attr]
+    order = np.argsort(-slope)[: min(FRICTION_SAMPLES, int((slope > 0).sum()))]
     worst: dict[str, Any] | None = None
     for k in order.tolist():
         q, qd = res.q[k], res.qd[k]

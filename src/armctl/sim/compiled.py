@@ -25,6 +25,7 @@ import numpy as np
 from armctl._checks import FloatArray
 from armctl.dynamics import recursive
 from armctl.dynamics.base import Dynamics
+from armctl.dynamics.casadi_buffer import buffer_of, view
 from armctl.errors import InvalidParameterError
 from armctl.model.robot import RobotModel
 from armctl.sim.integrators import rk4, semi_implicit_euler
@@ -58,7 +59,8 @@ def step_function(model: RobotModel, scheme: str) -> cs.Function:
     h = cs.SX.sym("h")
     fd = recursive.functions(model)["qdd"]
     scheme_step = rk4 if scheme == "rk4" else semi_implicit_euler
-    q1, v1, a1 = scheme_step(lambda t, q_, v_, tau_: fd(q_, v_, tau_), 0.0, q, v, tau, h)  # type: ignore[arg-type]
+    # the scheme's formulas applied to CasADi symbols (its signature says arrays)
+    q1, v1, a1 = scheme_step(lambda t, q_, v_, tau_: fd(q_, v_, tau_), 0.0, q, v, tau, h)  # type: ignore[arg-type, return-value]
     return cs.Function(f"step_{scheme}", [q, v, tau, h], [q1, v1, a1])
 
 
@@ -122,11 +124,11 @@ def compiled_step(model: RobotModel, scheme: str, cache_dir: str | os.PathLike[s
     tau_in, h_in, acc = np.zeros(n), np.zeros(1), np.zeros(n)
     evals = []
     for i in (0, 1):  # buffer i reads state i and writes state 1 − i
-        buf, run = ext.buffer()
+        buf, run = buffer_of(ext)
         for k, a in enumerate((states[i][0], states[i][1], tau_in, h_in)):
-            buf.set_arg(k, memoryview(a))
+            buf.set_arg(k, view(a))
         for k, a in enumerate((states[1 - i][0], states[1 - i][1], acc)):
-            buf.set_res(k, memoryview(a))
+            buf.set_res(k, view(a))
         evals.append((buf, run))  # the buffer kept alive with its function
     turn = [0]
 

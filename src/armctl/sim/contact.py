@@ -17,6 +17,7 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Literal, overload
 
 import numpy as np
 import pinocchio as pin
@@ -108,6 +109,14 @@ class Environment(ABC):
         """The evaluator of this environment's points for ``dyn`` (build once, call at every step)."""
         return PointKinematics(dyn, self.points)
 
+    @overload
+    def joint_torque(
+        self, kin: PointKinematics, q: FloatArray, qd: FloatArray, stiffness: Literal[False] = False
+    ) -> tuple[FloatArray, None, None]: ...
+    @overload
+    def joint_torque(
+        self, kin: PointKinematics, q: FloatArray, qd: FloatArray, stiffness: Literal[True]
+    ) -> tuple[FloatArray, FloatArray, FloatArray]: ...
     def joint_torque(
         self, kin: PointKinematics, q: FloatArray, qd: FloatArray, stiffness: bool = False
     ) -> tuple[FloatArray, FloatArray | None, FloatArray | None]:
@@ -124,8 +133,8 @@ class Environment(ABC):
                 continue
             tau += jp.T @ force
             if stiffness:
-                kj += jp.T @ dfdp @ jp  # type: ignore[operator]
-                dj += jp.T @ dfdv @ jp  # type: ignore[operator]
+                kj += jp.T @ dfdp @ jp
+                dj += jp.T @ dfdv @ jp
         return tau, kj, dj
 
     def forces(self, kin: PointKinematics, q: FloatArray, qd: FloatArray) -> tuple[FloatArray, FloatArray]:

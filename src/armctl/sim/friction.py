@@ -101,7 +101,7 @@ class FrictionModel(ABC):
     def _stribeck_slope(self, qd: FloatArray) -> FloatArray:
         """d/dq̇ exp(−(q̇/v_s)²) = −2 x exp(−x²) / v_s, x = q̇/v_s."""
         x, g = self._stribeck_shape(qd)
-        return -2.0 * x * g / self.stribeck_velocity  # type: ignore[no-any-return]
+        return -2.0 * x * g / self.stribeck_velocity
 
 
 class StickSlip(FrictionModel):

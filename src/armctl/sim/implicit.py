@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.linalg import lapack
 
-from armctl._checks import FloatArray
+from armctl._checks import BoolArray, FloatArray
 from armctl.sim.plant import Plant
 from armctl.sim.stick_slip import NotPositiveDefinite, constrained_accel
 
@@ -133,7 +133,7 @@ def _symplectic_conservative(
 
 
 def _newton_update(
-    jac: FloatArray, res: FloatArray, stuck: np.ndarray | None, x: FloatArray, scheme: str
+    jac: FloatArray, res: FloatArray, stuck: BoolArray | None, x: FloatArray, scheme: str
 ) -> tuple[FloatArray, bool]:
     """One Newton step x − J⁻¹r of the implicit schemes, stuck joints held (their rows and columns replaced by
     the identity, residual zero); returns the new x and whether the step was below the tolerance. ``jac`` and

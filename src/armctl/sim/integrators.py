@@ -146,7 +146,7 @@ def fast_step(name: str, plant: Plant) -> Callable[..., tuple[FloatArray, FloatA
         c3.dot(rows, out=out)
         return q1, v1, a1
 
-    step_h = [0.0, np.zeros(plant.n)]  # h and h as an (n,) array: a product with an array costs less than
+    step_h: list[Any] = [0.0, np.zeros(plant.n)]  # h and h as an (n,) array: a product with an array costs less than
     # one with a Python float, and the in-place additions allocate nothing
 
     def euler_step(
@@ -174,7 +174,7 @@ def make_step(name: str, plant: Plant) -> Step:
             fwd = plant.forward
 
             def f(t: float, q: FloatArray, v: FloatArray, tau: FloatArray) -> FloatArray:
-                return fwd(q, v, tau)  # type: ignore[no-any-return]
+                return fwd(q, v, tau)
 
             return lambda t, q, v, tau, h: (*rk4(f, t, q, v, tau, h), 0.0, 0.0)
         return lambda t, q, v, tau, h: rk4_work(plant.accel_work, t, q, v, tau, h)

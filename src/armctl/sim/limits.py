@@ -47,11 +47,32 @@ _PER_JOINT = (
 
 @dataclass(frozen=True, eq=False)
 class LimitReport:
-    """Per joint (arrays of length n, read-only; see the module for the definitions): the plant's limits
-    (``effort`` [N·m], ``velocity`` [rad/s], ``lower``/``upper`` [rad]), ``saturated`` (share of samples),
-    ``torque_peak`` and ``velocity_peak`` (peak over limit), ``velocity_over`` (share of samples),
-    ``position_overrun`` [rad] and ``position_over`` (share of samples). ``joint_names``: the plant's;
-    ``clipped``: whether the run clipped the command at the limits (``saturate=True``); ``samples``: N."""
+    """How close each joint of a run came to the plant's limits (arrays of length n, read-only; see the module for
+    the definitions).
+
+    Attributes
+    ----------
+    joint_names : tuple of str
+        The plant's.
+    effort, velocity : ndarray, shape (n,)
+        The plant's effort [N·m] and velocity [rad/s] limits.
+    lower, upper : ndarray, shape (n,)
+        Its position limits [rad].
+    saturated : ndarray, shape (n,)
+        The share of samples at the effort limit.
+    torque_peak, velocity_peak : ndarray, shape (n,)
+        The peak over the limit.
+    velocity_over : ndarray, shape (n,)
+        The share of samples over the velocity limit.
+    position_overrun : ndarray, shape (n,)
+        How far outside the position range [rad].
+    position_over : ndarray, shape (n,)
+        The share of samples outside it.
+    clipped : bool
+        Whether the run clipped the command at the limits (``saturate=True``).
+    samples : int
+        N.
+    """
 
     joint_names: tuple[str, ...]
     effort: FloatArray
@@ -87,12 +108,30 @@ class LimitReport:
         joint_names: tuple[str, ...],
         clipped: bool = True,
     ) -> LimitReport:
-        """The report of a run that commanded ``tau`` and moved through ``q``, ``qd`` (each (N, n)) on a plant
-        with these limits (each (n,))."""
+        """The report of a run that commanded ``tau`` and moved through ``q``, ``qd``.
+
+        Parameters
+        ----------
+        tau : ndarray, shape (N, n)
+            The commanded torques [N·m].
+        q, qd : ndarray, shape (N, n)
+            The positions [rad] and velocities [rad/s].
+        effort, velocity, lower, upper : ndarray, shape (n,)
+            The plant's limits.
+        joint_names : tuple of str
+            The plant's.
+        clipped : bool, optional
+            Whether the run clipped the command at the limits.
+
+        Returns
+        -------
+        LimitReport
+        """
         n = len(effort)
         if not len(tau):
             zero = np.zeros(n)
-            return cls(joint_names, effort, velocity, lower, upper, *([zero] * 6), clipped=clipped, samples=0)
+            z = zero  # every figure of a run without samples
+            return cls(joint_names, effort, velocity, lower, upper, z, z, z, z, z, z, clipped=clipped, samples=0)
         with np.errstate(invalid="ignore", divide="ignore"):  # |x| / inf = 0; inf / inf does not occur (finite x)
             abs_tau, abs_qd = np.abs(tau), np.abs(qd)
             beyond = np.maximum(np.maximum(lower - q, q - upper), 0.0)
@@ -121,7 +160,17 @@ class LimitReport:
         return self.joint_names[j] if j < len(self.joint_names) else f"joint {j}"
 
     def saturated_joints(self, share: float = SATURATION_SHARE) -> list[int]:
-        """Indices of the joints whose torque is at its limit on more than ``share`` of the samples."""
+        """Indices of the joints whose torque is at its limit on more than a share of the samples.
+
+        Parameters
+        ----------
+        share : float, optional
+            In [0, 1].
+
+        Returns
+        -------
+        list of int
+        """
         return [int(j) for j in np.flatnonzero(self.saturated > share)]
 
     @property
@@ -135,7 +184,12 @@ class LimitReport:
         return bool((self.velocity_over > 0).any() or (self.position_over > 0).any())
 
     def saturation_text(self) -> str:
-        """ "" or, for a saturated run, which joints and on what share of the samples."""
+        """ "" or, for a saturated run, which joints and on what share of the samples.
+
+        Returns
+        -------
+        str
+        """
         joints = self.saturated_joints()
         if not joints:
             return ""
@@ -143,14 +197,19 @@ class LimitReport:
         return f"torque at its limit on most samples: {each}"
 
     def overrun_texts(self) -> list[str]:
-        """One line per limit overrun: which joint, how far and on what share of the samples."""
+        """One line per limit overrun: which joint, how far and on what share of the samples.
+
+        Returns
+        -------
+        list of str
+        """
         out = []
-        for j in np.flatnonzero(self.velocity_over > 0):
+        for j in np.flatnonzero(self.velocity_over > 0).tolist():
             out.append(
                 f"{self._name(j)} over its velocity limit ({self.velocity[j]:.3g}) on {self.velocity_over[j]:.1%} "
                 f"of samples, peak {self.velocity_peak[j]:.0%} of it"
             )
-        for j in np.flatnonzero(self.position_over > 0):
+        for j in np.flatnonzero(self.position_over > 0).tolist():
             out.append(
                 f"{self._name(j)} outside its position range [{self.lower[j]:.3g}, {self.upper[j]:.3g}] on "
                 f"{self.position_over[j]:.1%} of samples, by up to {self.position_overrun[j]:.3g}"
@@ -158,7 +217,12 @@ class LimitReport:
         return out
 
     def as_dict(self) -> dict[str, object]:
-        """Plain lists and numbers (for JSON)."""
+        """Plain lists and numbers (for JSON).
+
+        Returns
+        -------
+        dict of str
+        """
         out: dict[str, object] = {name: getattr(self, name).tolist() for name in _PER_JOINT}
         out.update(joint_names=list(self.joint_names), clipped=self.clipped, samples=self.samples)
         return out

@@ -25,7 +25,7 @@ import numpy as np
 
 from armctl._checks import FLOAT, FloatArray, real_array
 from armctl.errors import InvalidParameterError, ShapeError
-from armctl.reference import Reference
+from armctl.references import Reference
 from armctl.sim import setup
 from armctl.sim.integrators import Step
 from armctl.sim.plant import Plant
@@ -158,7 +158,7 @@ class ClosedLoop:
         if s.fixed_reference is not None:
             ref = s.fixed_reference
         else:
-            ref = setup.check_reference(s.reference_fn(t), s.n, t)  # type: ignore[misc]
+            ref = setup.check_reference(s.reference_fn(t), s.n, t)  # type: ignore[misc]  # set when no fixed one
         rec.references[k] = ref
         try:
             tau = s.call(t, qm, vm, ref)
@@ -186,7 +186,7 @@ class ClosedLoop:
         low = self._lowest_limit
         if self._clip and (max(tl) > low or -min(tl) > low) and any(map(operator.gt, map(abs, tl), self._limits)):
             self.clipped.append(k)
-            return np.clip(tau, -s.effort_limit, s.effort_limit)  # type: ignore[no-any-return]
+            return np.clip(tau, -s.effort_limit, s.effort_limit)
         return tau
 
     def integrate(self, k: int, t: float, tau: FloatArray) -> None:
@@ -205,9 +205,9 @@ class ClosedLoop:
                     rec.qdd[k] = a0
         else:
             for i in range(s.substeps):
-                q, qd, a0, dwf, dwe = advance(pl, s.step, t + i * h, q, qd, tau, h, begun=i == 0)
-                if i == 0 and a0 is not None:
-                    rec.qdd[k] = a0
+                q, qd, a_sub, dwf, dwe = advance(pl, s.step, t + i * h, q, qd, tau, h, begun=i == 0)
+                if i == 0 and a_sub is not None:
+                    rec.qdd[k] = a_sub
                 self._work_friction += dwf
                 self._work_external += dwe
         self.q, self.qd = q, qd

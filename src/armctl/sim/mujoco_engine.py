@@ -110,7 +110,7 @@ def simulate_mujoco(
     n, model = dyn.n, dyn.model
     cdt, h, n_periods, m_sub = setup.periods(duration, control_dt, dt)
     fixed_ref, ref_fn = setup.reference_source(reference, n)
-    ref0 = fixed_ref if fixed_ref is not None else ref_fn(0.0)  # type: ignore[misc]
+    ref0 = fixed_ref if fixed_ref is not None else ref_fn(0.0)  # type: ignore[misc]  # one of the two is set
     call = setup.controller_call(controller, n)
     sig_q = nonnegative_vector(noise_q, n, "noise_q (a standard deviation)")
     sig_qd = nonnegative_vector(noise_qd, n, "noise_qd (a standard deviation)")
@@ -200,7 +200,7 @@ def simulate_mujoco(
                 rec.qd_measured[k] = v + draws[k, 1] * sig_qd if draws is not None else v
                 j = k - lag if k >= lag else 0
                 qm, vm = QMR[j], QDMR[j]
-            ref = fixed_ref if fixed_ref is not None else setup.check_reference(ref_fn(t), n, t)  # type: ignore[misc]
+            ref = fixed_ref if fixed_ref is not None else setup.check_reference(ref_fn(t), n, t)  # type: ignore[misc]  # one is set
             try:
                 tau = call(t, qm, vm, ref)
             except ValueError as exc:

@@ -37,13 +37,26 @@ if TYPE_CHECKING:
 
 
 class MujocoPlant:
-    """A MuJoCo scene holding an arm, and the armctl model of that arm.
+    """A MuJoCo scene holding an arm, and the armctl model of that arm: the model gives the plant's effort limits
+    (saturation), tool frame (wrench, disturbances) and energies; MuJoCo integrates the scene.
 
-    scene: an MJCF file path or text whose arm is the serial chain below the body ``base`` (None: the one subtree
-    of the world with joints), in a scene of its own (floors, tables, objects, mesh contacts). model: the armctl
-    model of that arm (None: :meth:`~armctl.RobotModel.from_mjcf` of the scene, with ``tool_frame``); its joints
-    must be the chain's, by name and in order. It gives the plant's effort limits (saturation), tool frame
-    (wrench, disturbances) and energies; MuJoCo integrates the scene.
+    Parameters
+    ----------
+    scene : str or path-like
+        An MJCF file path or text whose arm is the serial chain below the body ``base``, in a scene of its own
+        (floors, tables, objects, mesh contacts).
+    model : RobotModel, optional
+        The armctl model of that arm (None: :meth:`~armctl.RobotModel.from_mjcf` of the scene, with
+        ``tool_frame``); its joints must be the chain's, by name and in order.
+    base : str, optional
+        The body the arm starts from (None: the one subtree of the world with joints).
+    tool_frame : str, optional
+        The tool frame of the model read from the scene.
+
+    Raises
+    ------
+    ModelLoadError
+        The scene does not compile, or its chain and ``model`` differ.
     """
 
     def __init__(
@@ -73,15 +86,30 @@ class MujocoPlant:
 
     @classmethod
     def from_model(cls, model: RobotModel) -> MujocoPlant:
-        """The plant armctl's own simulator integrates for ``model``, in MuJoCo: ``model.to_mjcf`` with simple
-        shapes, no contacts and no joint-limit stops."""
+        """The plant armctl's own simulator integrates for a model, in MuJoCo: ``model.to_mjcf`` with simple shapes,
+        no contacts and no joint-limit stops.
+
+        Parameters
+        ----------
+        model : RobotModel
+            The arm.
+
+        Returns
+        -------
+        MujocoPlant
+        """
         self = cls.__new__(cls)
         self.scene, self.base, self.limits, self.model = model.to_mjcf(meshes=False, contacts=False), None, False, model
         self._check(self.compile()[1])
         return self
 
     def compile(self) -> tuple[Any, MjcfChain]:
-        """A fresh ``mjModel`` of the scene (each run sets its own step and integrator) and its arm."""
+        """A fresh ``mjModel`` of the scene (each run sets its own step and integrator) and its arm.
+
+        Returns
+        -------
+        tuple of (mujoco.MjModel, MjcfChain)
+        """
         m, _ = compile_mjcf(self.scene, "simulate(..., engine='mujoco')")
         if not self.limits:  # the plant of armctl's own simulator: no limit stops, no contacts
             m.jnt_limited[:] = 0

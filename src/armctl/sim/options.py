@@ -90,7 +90,7 @@ GROUPS: dict[str, type] = {"sensing": Sensing, "forces": Forces, "stop": StopRul
 def grouped(groups: dict[str, Any], keywords: dict[str, Any]) -> tuple[Sensing, Forces, StopRules]:
     """The three groups from ``groups`` (name → an object of its class or None) and the flat ``keywords`` that
     were given (field name → value); a field given both ways is refused by name."""
-    out = []
+    out: list[Any] = []
     for name, cls in GROUPS.items():
         given = groups.get(name)
         if given is not None and not isinstance(given, cls):

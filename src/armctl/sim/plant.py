@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from armctl._checks import FloatArray, real_array
+from armctl._checks import BoolArray, FloatArray, real_array
 from armctl.dynamics.base import Dynamics
 from armctl.errors import NonFiniteError, ShapeError
 from armctl.sim.contact import Environment
@@ -68,7 +68,7 @@ class Plant:
         self._stickslip = isinstance(f, StickSlip)
         self._fv = f.viscous if f is not None else self._zeros
         self._set_direction(self.direction)
-        self.stuck: FloatArray | None = None
+        self.stuck: BoolArray | None = None
         self.all_stuck = False
         self.hold = np.zeros(n)
         self.stats = {"stick_events": 0, "breakaway_events": 0, "implicit_unconverged": 0}
@@ -76,7 +76,7 @@ class Plant:
     # ---------------------------------------------------------------------------------- forces
     def disturbance_wrench(self, t: float) -> FloatArray:
         """h_d(t) (6,), checked."""
-        h = self.disturbance(t)  # type: ignore[misc]
+        h = self.disturbance(t)  # type: ignore[misc]  # called only when there is one
         if h.__class__ is not np.ndarray or h.dtype != np.float64:  # text, dicts, complex: named errors
             h = real_array(h, f"disturbance(t) at t = {t:g} s")
         if h.shape != (6,):
@@ -103,8 +103,8 @@ class Plant:
         for env, kin in zip(self.environments, self.kinematics, strict=True):
             te, ke, de = env.joint_torque(kin, q, qd, stiffness=True)
             tau += te
-            kj += ke  # type: ignore[operator]
-            dj += de  # type: ignore[operator]
+            kj += ke
+            dj += de
         if self.disturbance is not None:
             tau -= self.kernel.jacobian(q, None).T @ self.disturbance_wrench(t)
         return tau, kj, dj
@@ -122,7 +122,7 @@ class Plant:
         self._direction_key = key
         self.direction = direction
         if self._stickslip:
-            f: StickSlip = self.friction  # type: ignore[assignment]
+            f: StickSlip = self.friction  # type: ignore[assignment]  # _stickslip: it is a StickSlip
             self._level = f.level(direction)
             self._hump = f.hump(direction) if f.has_stribeck else None
 
@@ -131,16 +131,16 @@ class Plant:
         if self._stickslip:
             tau = self._fv * qd + self._level
             if self._hump is not None:
-                tau += self._hump * np.exp(-((qd / self.friction.stribeck_velocity) ** 2))  # type: ignore[union-attr]
-            return tau  # type: ignore[no-any-return]
-        return self.friction.torque(qd, self.direction)  # type: ignore[union-attr]
+                tau += self._hump * np.exp(-((qd / self.friction.stribeck_velocity) ** 2))  # type: ignore[union-attr]  # _stickslip
+            return tau
+        return self.friction.torque(qd, self.direction)  # type: ignore[union-attr]  # called with friction only
 
     def friction_slope(self, qd: FloatArray) -> FloatArray:
         """∂τ_f/∂q̇ (diagonal) for the current sliding directions."""
-        return self.friction.slope(qd, self.direction)  # type: ignore[union-attr]
+        return self.friction.slope(qd, self.direction)  # type: ignore[union-attr]  # called with friction only
 
     # ------------------------------------------------------------------------------ stick–slip
-    def begin(self, t: float, q: FloatArray, qd: FloatArray, tau: FloatArray, held: FloatArray | None = None) -> None:
+    def begin(self, t: float, q: FloatArray, qd: FloatArray, tau: FloatArray, held: BoolArray | None = None) -> None:
         """Decide which joints stick for the step starting at (t, q, q̇) under τ (see
         :mod:`armctl.sim.stick_slip`); ``held``: joints kept stuck whatever their holding torque."""
         sticky = self.sticky
@@ -213,7 +213,7 @@ class Plant:
 
     def _solve(self, q: FloatArray, qd: FloatArray, net: FloatArray) -> FloatArray:
         if self.stuck is None:
-            return self.forward(q, qd, net)  # type: ignore[no-any-return]
+            return self.forward(q, qd, net)
         if self.all_stuck:
             return np.zeros(self.n)
         return constrained_accel(self.mass(q), net - self.rnea(q, qd, self.zeros), self.stuck)

@@ -210,16 +210,39 @@ def playback(
     environment: Environment | list[Environment] | tuple[Environment, ...] | None = None,
     title: str | None = None,
 ) -> Path:
-    """Write ``res`` as a standalone HTML page (``path``; ``.html`` added if missing) that plays the arm's
-    motion in 3D, with play/pause and a time slider; returns the path.
+    """Write a run as a standalone HTML page that plays the arm's motion in 3D, with play/pause and a time slider.
 
-    model: the arm (default: ``res.plant``, the model the run simulated; needed for a result read from a file).
-    fps: frames a second of run time (at most :data:`MAX_FRAMES` in all). meshes: "visual" (the
-    example-robot-data meshes of a model that has them, else simple shapes), "collision" (that description's
-    collision meshes: a far smaller page) or "shapes" (simple shapes). environment: contact environments to
-    draw (their planes), e.g. the run's own. title: the page's heading (default: the plant's name, the status
-    and the duration). Raises a BackendError if meshcat is not installed, an InvalidParameterError for a result
-    without samples or without a model to draw, and a ShapeError if ``model`` has another number of joints.
+    Parameters
+    ----------
+    res : SimResult
+        The run.
+    path : str or path-like
+        The page (``.html`` added if missing).
+    model : RobotModel, optional
+        The arm (default: ``res.plant``, the model the run simulated; needed for a result read from a file).
+    fps : float, optional
+        Frames a second of run time (at most :data:`MAX_FRAMES` in all).
+    meshes : {"visual", "collision", "shapes"}, optional
+        ``"visual"``: the example-robot-data meshes of a model that has them, else simple shapes;
+        ``"collision"``: that description's collision meshes (a far smaller page); ``"shapes"``: simple shapes.
+    environment : Environment or sequence of Environment, optional
+        Contact environments to draw (their planes), e.g. the run's own.
+    title : str, optional
+        The page's heading (default: the plant's name, the status and the duration).
+
+    Returns
+    -------
+    pathlib.Path
+        The page written.
+
+    Raises
+    ------
+    BackendError
+        meshcat is not installed.
+    InvalidParameterError
+        A result without samples or without a model to draw.
+    ShapeError
+        ``model`` has another number of joints.
     """
     _meshcat()
     model = res.plant if model is None else model

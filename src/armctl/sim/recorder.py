@@ -4,14 +4,14 @@ from __future__ import annotations
 
 import warnings
 from functools import partial
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
 from armctl._checks import FloatArray
 from armctl.dynamics.base import Dynamics
 from armctl.errors import SimulationWarning
-from armctl.reference import Reference
+from armctl.references import Reference
 from armctl.sim.contact import Environment, ForceSensor
 from armctl.sim.limits import LimitReport, check_limits
 from armctl.sim.plant import Plant
@@ -133,7 +133,7 @@ class Recorder:
                 stacklevel=3,
             )
         d = divergence
-        t = np.arange(rows) * self.control_dt
+        t = cast(FloatArray, np.arange(rows) * self.control_dt)
         model = dyn.model
         limits = LimitReport.of_run(
             self.tau[r],
@@ -148,6 +148,7 @@ class Recorder:
         )
         check_limits(limits, stacklevel=4)
         refs = self.references[:rows]
+        given = [x for x in refs if x is not None]  # all of them, or the run had no reference recorded
         return SimResult(
             t=t,
             q=q,
@@ -173,7 +174,7 @@ class Recorder:
             diverged_qd=None if d is None else d[3],
             logs=logs,
             info=info,
-            reference=SampledReference.of(t, refs, model.n) if all(x is not None for x in refs) else None,  # type: ignore[arg-type]
+            reference=SampledReference.of(t, given, model.n) if len(given) == len(refs) else None,
             limits=limits,
             contact_position=self.contact_position[r],
             plant=model,

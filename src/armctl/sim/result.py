@@ -50,33 +50,64 @@ _ARRAYS = (
 
 @dataclass(frozen=True, eq=False)
 class SimResult:
-    """The record of one run of :func:`armctl.simulate`.
+    """The record of one run of :func:`armctl.simulate`: N samples, one per control period, of an arm of n
+    joints. Arrays are read-only.
 
-    t (N,) [s]; q, qd, qdd (N, n): the plant's true state and acceleration; tau (N, n): the controller's
-    command, tau_applied: after saturation (held over [t_k, t_k+1)); tau_friction: joint friction torque (for
-    stuck joints the holding torque); tau_ext (N, n): joint torque of contact and disturbance wrenches;
-    wrench (N, 6): the total wrench h_e the arm exerts on its surroundings (contacts and disturbance),
-    [f; moment about the tool-frame origin] in world axes; contact_force (N, P, 3): force each contact point
-    exerts on its environment; sensor (N, S, 6): force-sensor readings; q_measured, qd_measured (N, n): the
-    measurements taken at each sample, noise included (with a delay of d periods the controller at sample k
-    was given row max(k − d, 0)); stuck (N, n): joints held by stiction; energy (N,): E = T + U of the
-    plant (computed when first read); work_actuator, work_friction, work_external (N,): work done since t = 0
-    by the applied torque, by friction (≤ 0) and by the external wrenches, so that
-    energy − energy[0] ≈ work_actuator + work_friction + work_external (see :meth:`energy_balance`).
-
-    diverged: the run stopped early; diverged_at: the time [s] it was detected, divergence: why, diverged_q /
-    diverged_qd: the offending state. logs: the controller's ``last_log`` entries stacked over the samples
-    (numbers and arrays only: a key whose entries are None, dicts or of varying shape is left out with a
-    :class:`~armctl.errors.SimulationWarning` naming it).
-    info: settings and counters (integrator, steps, sub-steps, stick events, wall time, …); ``unstable_contacts``:
-    the contact points the integrator cannot integrate stably at this step (see :mod:`armctl.sim.stability`).
-
-    The run's context: reference, the :class:`~armctl.sim.sampled_reference.SampledReference` the controller
-    was given at every sample (``reference.q``, ``.qd``, ``.qdd`` over t), with :attr:`error` = reference.q − q;
-    limits, a :class:`~armctl.sim.limits.LimitReport` of how close each joint came to the plant's torque,
-    velocity and position limits, summed up by :attr:`status`; contact_position (N, P, 3): where each contact
-    point was [m, world]; plant: the true arm's :class:`~armctl.RobotModel` (its joint names label the plots,
-    its geometry the :meth:`playback`; not saved by :meth:`save`).
+    Attributes
+    ----------
+    t : ndarray, shape (N,)
+        Sample times [s].
+    q, qd, qdd : ndarray, shape (N, n)
+        The plant's true state and acceleration [rad, rad/s, rad/s² or m, m/s, m/s²].
+    tau : ndarray, shape (N, n)
+        The controller's command [N·m or N].
+    tau_applied : ndarray, shape (N, n)
+        The command after saturation, held over [t_k, t_k+1).
+    tau_friction : ndarray, shape (N, n)
+        Joint friction torque (for stuck joints the holding torque).
+    tau_ext : ndarray, shape (N, n)
+        Joint torque of contact and disturbance wrenches.
+    wrench : ndarray, shape (N, 6)
+        The total wrench h_e the arm exerts on its surroundings (contacts and disturbance), [f; moment about the
+        tool-frame origin] in world axes [N, N·m].
+    contact_force : ndarray, shape (N, P, 3)
+        The force each contact point exerts on its environment [N].
+    sensor : ndarray, shape (N, S, 6)
+        Force-sensor readings.
+    q_measured, qd_measured : ndarray, shape (N, n)
+        The measurements taken at each sample, noise included (with a delay of d periods the controller at sample
+        k was given row max(k − d, 0)).
+    stuck : ndarray, shape (N, n)
+        Joints held by stiction.
+    work_actuator, work_friction, work_external : ndarray, shape (N,)
+        Work done since t = 0 [J] by the applied torque, by friction (≤ 0) and by the external wrenches, so that
+        energy − energy[0] ≈ work_actuator + work_friction + work_external (see :meth:`energy_balance`).
+    diverged : bool
+        The run stopped early.
+    diverged_at : float or None
+        The time [s] the divergence was detected.
+    divergence : str
+        Why.
+    diverged_q, diverged_qd : ndarray or None
+        The offending state.
+    logs : dict of str to ndarray
+        The controller's ``last_log`` entries stacked over the samples (numbers and arrays only: a key whose
+        entries are None, dicts or of varying shape is left out with a
+        :class:`~armctl.errors.SimulationWarning` naming it).
+    info : dict
+        Settings and counters (integrator, steps, sub-steps, stick events, wall time, …); ``unstable_contacts``:
+        the contact points the integrator cannot integrate stably at this step (see :mod:`armctl.sim.stability`).
+    reference : SampledReference or None
+        The reference the controller was given at every sample (``reference.q``, ``.qd``, ``.qdd`` over t), with
+        :attr:`error` = reference.q − q.
+    limits : LimitReport or None
+        How close each joint came to the plant's torque, velocity and position limits, summed up by
+        :attr:`status`.
+    contact_position : ndarray, shape (N, P, 3)
+        Where each contact point was [m, world axes].
+    plant : RobotModel or None
+        The true arm (its joint names label the plots, its geometry the :meth:`playback`; not saved by
+        :meth:`save`).
     """
 
     t: FloatArray
@@ -130,12 +161,13 @@ class SimResult:
     def energy(self) -> FloatArray:
         """E = T + U of the plant at every sample [J] (computed from q, q̇ when first asked for; NaN if the run
         was made with ``energy=False``)."""
-        if self._energy is None:
+        e = self._energy
+        if e is None:
             e = self._energy_of(self.q, self.qd) if self._energy_of is not None else np.full(len(self.t), np.nan)
             e.flags.writeable = False
             object.__setattr__(self, "_energy", e)
             object.__setattr__(self, "_energy_of", None)
-        return self._energy  # type: ignore[return-value]
+        return e
 
     @property
     def n(self) -> int:
@@ -150,14 +182,20 @@ class SimResult:
     @property
     def work(self) -> FloatArray:
         """Total work since t = 0 [J]: actuator + friction + external."""
-        return self.work_actuator + self.work_friction + self.work_external  # type: ignore[no-any-return]
+        return self.work_actuator + self.work_friction + self.work_external
 
     def energy_balance(self) -> FloatArray:
-        """E(t) − E(0) − W(t) [J]: zero for the exact solution; its size measures the integration error."""
+        """E(t) − E(0) − W(t) [J]: zero for the exact solution; its size measures the integration error.
+
+        Returns
+        -------
+        ndarray, shape (N,)
+            [J].
+        """
         energy = self.energy
         if not len(energy):  # a run stopped before its first sample
             return np.zeros(0)
-        return energy - energy[0] - self.work  # type: ignore[no-any-return]
+        return energy - energy[0] - self.work
 
     @property
     def error(self) -> FloatArray:
@@ -171,7 +209,7 @@ class SimResult:
             )
         e = self.reference.q - self.q
         e.flags.writeable = False
-        return e  # type: ignore[no-any-return]
+        return e
 
     @property
     def joint_names(self) -> tuple[str, ...]:
@@ -220,9 +258,24 @@ class SimResult:
 
     # ------------------------------------------------------------------------------ files
     def save(self, path: str | Path) -> Path:
-        """Write the result to ``path`` (an ``.npz`` file; the suffix is added if missing). Raises an
-        InvalidParameterError naming the log key if a log holds Python objects (npz stores them only by
-        pickling, which :meth:`load` refuses), and naming the path if it cannot be written."""
+        """Write the result to an ``.npz`` file.
+
+        Parameters
+        ----------
+        path : str or path-like
+            The file (the suffix ``.npz`` is added if missing).
+
+        Returns
+        -------
+        pathlib.Path
+            The file written.
+
+        Raises
+        ------
+        InvalidParameterError
+            A log holds Python objects (npz stores them only by pickling, which :meth:`load` refuses; the key is
+            named), or the path cannot be written.
+        """
         path = Path(path)
         if path.suffix != ".npz":
             path = path.with_name(path.name + ".npz")
@@ -266,8 +319,22 @@ class SimResult:
 
     @classmethod
     def load(cls, path: str | Path) -> SimResult:
-        """Read a result written by :meth:`save`. Raises an InvalidParameterError naming ``path`` if it is
-        missing, unreadable or not a complete saved SimResult."""
+        """Read a result written by :meth:`save`.
+
+        Parameters
+        ----------
+        path : str or path-like
+            The ``.npz`` file.
+
+        Returns
+        -------
+        SimResult
+
+        Raises
+        ------
+        InvalidParameterError
+            The file is missing, unreadable or not a complete saved SimResult (named).
+        """
         path = Path(path)
 
         def bad(why: str) -> InvalidParameterError:
@@ -307,7 +374,10 @@ class SimResult:
                 kw["tau"],
                 kw["q"],
                 kw["qd"],
-                *(extra[f"limit_{k}"] for k in ("effort", "velocity", "lower", "upper")),
+                extra["limit_effort"],
+                extra["limit_velocity"],
+                extra["limit_lower"],
+                extra["limit_upper"],
                 joint_names=tuple(meta["limits"]["joint_names"]),
                 clipped=bool(meta["limits"]["clipped"]),
             )
@@ -323,27 +393,69 @@ class SimResult:
     # ------------------------------------------------------------------------------ plots
     def plot(self, quantities: tuple[str, ...] | str = ("q", "qd", "error", "tau_applied"), joints: Any = None) -> Any:
         """A matplotlib Figure with one panel per quantity, the reference overlaid and the joints named (see
-        :func:`armctl.sim.plot.plot_joints`)."""
+        :func:`armctl.sim.plot.plot_joints`).
+
+        Parameters
+        ----------
+        quantities : str or tuple of str, optional
+            Per-joint arrays of the result: ``"q"``, ``"qd"``, ``"qdd"``, ``"tau"``, ``"tau_applied"``,
+            ``"tau_friction"``, ``"tau_ext"``, ``"q_measured"``, ``"qd_measured"``, and ``"error"`` (q_d − q); at
+            least one.
+        joints : int or sequence of int, optional
+            The joints to draw, 0-based indices 0 … n − 1 (None: all).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+
+        Raises
+        ------
+        InvalidParameterError, UnknownNameError
+            No quantity, an unknown one, or joint indices out of range.
+        """
         from armctl.sim.plot import plot_joints
 
         return plot_joints(self, quantities, joints)
 
     def plot_energy(self) -> Any:
-        """A matplotlib Figure of the energy balance (see :func:`armctl.sim.plot.plot_energy`)."""
+        """A matplotlib Figure of the energy balance (see :func:`armctl.sim.plot.plot_energy`).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+        """
         from armctl.sim.plot import plot_energy
 
         return plot_energy(self)
 
     def playback(self, path: str | Path, model: RobotModel | None = None, **options: Any) -> Path:
-        """Write the run as a standalone HTML page that plays the arm's motion in 3D (see
-        :func:`armctl.sim.playback.playback` for ``options``: fps, meshes, environment, title); returns its
-        path."""
+        """Write the run as a standalone HTML page that plays the arm's motion in 3D.
+
+        Parameters
+        ----------
+        path : str or path-like
+            The page to write.
+        model : RobotModel, optional
+            The arm to draw (None: :attr:`plant`).
+        **options
+            Passed to :func:`armctl.sim.playback.playback`: ``fps``, ``meshes``, ``environment``, ``title``.
+
+        Returns
+        -------
+        pathlib.Path
+            The page written.
+        """
         from armctl.sim.playback import playback
 
         return playback(self, path, model, **options)
 
     def plot_wrench(self) -> Any:
-        """A matplotlib Figure of the contact wrench and forces (see :func:`armctl.sim.plot.plot_wrench`)."""
+        """A matplotlib Figure of the contact wrench and forces (see :func:`armctl.sim.plot.plot_wrench`).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+        """
         from armctl.sim.plot import plot_wrench
 
         return plot_wrench(self)

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from armctl._checks import FloatArray
-from armctl.reference import Reference
+from armctl.references import Reference
 
 
 @dataclass(frozen=True, eq=False)

@@ -7,7 +7,7 @@ import math
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -17,7 +17,7 @@ from armctl.controllers.base import Controller
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError, ShapeError, SimulationWarning, UnknownNameError
 from armctl.model.robot import RobotModel
-from armctl.reference import Reference
+from armctl.references import Reference
 from armctl.sim.contact import Environment, ForceSensor
 from armctl.sim.friction import FrictionModel, make_friction
 from armctl.sim.integrators import INTEGRATORS
@@ -136,7 +136,7 @@ def controller_call(controller: Any, n: int) -> Callable[..., Any]:
         raise ShapeError(f"controller is for {cn} joints, the plant has {n}", value=controller)
     if isinstance(controller, Controller) and type(controller).__call__ is Controller.__call__:
         return controller.compute
-    return controller  # type: ignore[no-any-return]
+    return controller
 
 
 def initial_state(
@@ -183,7 +183,7 @@ def warn_outside_limits(model: RobotModel, q: FloatArray) -> None:
 def seed_value(seed: Any) -> int:
     """``seed`` for numpy's default_rng: a whole number >= 0, or for None a fresh one from the operating
     system's entropy (recorded in the result, so that a noisy run can be repeated)."""
-    return int(np.random.SeedSequence().entropy) if seed is None else whole_number(seed, "seed")
+    return int(cast(int, np.random.SeedSequence().entropy)) if seed is None else whole_number(seed, "seed")
 
 
 def delay_periods(delay: Any) -> int:

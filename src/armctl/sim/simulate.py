@@ -25,7 +25,7 @@ from armctl._checks import FloatArray, boolean, nonnegative_vector
 from armctl.dynamics.base import Dynamics
 from armctl.errors import SimulationWarning
 from armctl.model.robot import RobotModel
-from armctl.reference import Reference
+from armctl.references import Reference
 from armctl.sim import setup
 from armctl.sim.after_run import after_run
 from armctl.sim.contact import Environment, ForceSensor
@@ -189,7 +189,7 @@ def simulate(
     cdt, h, n_periods, m = setup.periods(duration, control_dt, dt, n=n)
     scheme = setup.integrator_name(integrator)
     fixed_ref, ref_fn = setup.reference_source(reference, n)
-    ref0 = fixed_ref if fixed_ref is not None else ref_fn(0.0)  # type: ignore[misc]
+    ref0 = fixed_ref if fixed_ref is not None else ref_fn(0.0)  # type: ignore[misc]  # one of the two is set
     call = setup.controller_call(controller, n)
     sig_q = nonnegative_vector(sense.noise_q, n, "noise_q (a standard deviation)")
     sig_qd = nonnegative_vector(sense.noise_qd, n, "noise_qd (a standard deviation)")
@@ -216,7 +216,7 @@ def simulate(
         from armctl.sim.compiled import check_plant, compiled_step
 
         check_plant(dyn, scheme, pl)
-        fast = compiled_step(dyn.model, scheme)
+        fast: Callable[..., tuple[FloatArray, FloatArray, FloatArray]] | None = compiled_step(dyn.model, scheme)
     else:
         fast = fast_step(scheme, pl)
     samples = n_periods + 1
@@ -248,8 +248,9 @@ def simulate(
         max_velocity=vmax,
         max_position=qmax,
     )
-    if reset and callable(getattr(controller, "reset", None)):
-        controller.reset()  # type: ignore[union-attr]
+    reset_controller = getattr(controller, "reset", None)
+    if reset and callable(reset_controller):
+        reset_controller()
     loop = ClosedLoop(settings, q, v)
     t0 = time.perf_counter()
     loop.run()
@@ -292,7 +293,7 @@ def simulate(
 def _attach(exc: BaseException, res: SimResult, t: float) -> None:
     """Hand the samples simulated before ``exc`` (raised at t [s]) on with it, as ``exc.result``."""
     try:
-        exc.result = res  # type: ignore[attr-defined]
+        exc.result = res  # type: ignore[attr-defined]  # the samples travel with the exception
     except AttributeError:  # an exception type that takes no attributes: nothing to attach
         return
     note = f"simulate: raised at t = {t:g} s; the {len(res.t)} samples before it are in this exception's .result"

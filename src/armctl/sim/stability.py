@@ -169,9 +169,9 @@ def contact_stability(
     out = []
     minv = None
     for e, env in enumerate(environments):
-        if not checkable(env):
+        if not isinstance(env, Plane) or not checkable(env):
             continue
-        law = env.law  # type: ignore[attr-defined]
+        law = env.law
         damping = law.damping if isinstance(law, KelvinVoigt) else 0.0  # Hunt–Crossley's vanishes at first touch
         if minv is None:
             minv = np.linalg.inv(dyn.mass_matrix(q))

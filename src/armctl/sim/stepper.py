@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from armctl._checks import FloatArray
+from armctl._checks import BoolArray, FloatArray
 from armctl.sim.integrators import Step
 from armctl.sim.plant import Plant
 
@@ -29,7 +29,7 @@ def advance(
     a_first: FloatArray | None = None
     at_start = True
     remaining = h
-    held: FloatArray | None = None
+    held: BoolArray | None = None
     budget = 4 * plant.n + 8
     for attempt in range(budget + 1):
         if not begun:

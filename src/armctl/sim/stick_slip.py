@@ -23,7 +23,7 @@ import math
 import numpy as np
 from scipy.linalg import lapack
 
-from armctl._checks import FloatArray
+from armctl._checks import BoolArray, FloatArray
 from armctl.sim.friction import StickSlip
 
 
@@ -31,7 +31,7 @@ class NotPositiveDefinite(ArithmeticError):
     """The (reduced) mass matrix could not be factored: the state has left the physical range."""
 
 
-def constrained_accel(mass: FloatArray, rhs: FloatArray, stuck: FloatArray | None) -> FloatArray:
+def constrained_accel(mass: FloatArray, rhs: FloatArray, stuck: BoolArray | None) -> FloatArray:
     """q̈ with q̈_S = 0 for the boolean mask ``stuck``: M_FF q̈_F = rhs_F (a Cholesky solve of the free
     joints' block, taken out of M: a third of the cost of blanking the stuck rows and columns in place)."""
     if stuck is None:
@@ -47,17 +47,17 @@ def constrained_accel(mass: FloatArray, rhs: FloatArray, stuck: FloatArray | Non
             info = int(free[info - 1]) + 1
     if info != 0:
         raise NotPositiveDefinite(f"mass matrix not positive definite (LAPACK info {info})")
-    return a  # type: ignore[no-any-return]
+    return a
 
 
 def solve_sticking(
     friction: StickSlip,
     mass: FloatArray,
     rhs: FloatArray,
-    candidates: FloatArray,
+    candidates: BoolArray,
     direction: FloatArray,
-    held: FloatArray | None = None,
-) -> tuple[FloatArray, FloatArray, FloatArray]:
+    held: BoolArray | None = None,
+) -> tuple[BoolArray, FloatArray, FloatArray]:
     """(stuck, direction, λ) for the joints ``candidates`` at rest.
 
     mass: M(q); rhs: r (every torque but the friction of the candidates); direction: sliding direction of

@@ -22,7 +22,7 @@ import traceback
 import warnings
 from collections.abc import Callable, Iterable, Mapping
 from concurrent.futures import BrokenExecutor, Executor, Future, ProcessPoolExecutor, ThreadPoolExecutor, as_completed
-from typing import Any, Literal, TextIO
+from typing import Any, Literal, TextIO, cast
 
 import numpy as np
 
@@ -30,7 +30,7 @@ from armctl.errors import InvalidParameterError, RunTimeoutError, SweepWarning, 
 from armctl.sim import sweep_checks as checks
 from armctl.sim.sweep_pool import WorkerPool, run_one, run_pickled
 from armctl.sim.sweep_progress import Progress
-from armctl.sim.sweep_result import CaseFailure, ErrorReport, SweepResult, type_name
+from armctl.sim.sweep_result import CaseFailure, ErrorReport, FailureKind, SweepResult, type_name
 
 ON_ERROR = ("record", "raise")
 
@@ -98,7 +98,9 @@ def sweep(
         With ``on_error="raise"``, the first failure.
     """
     if run is None:
-        from armctl.sim.simulate import simulate as run
+        from armctl.sim.simulate import simulate
+
+        run = simulate
     for name, fn in (("run", run), ("summary", summary)):
         if fn is not None and not callable(fn):
             raise InvalidParameterError(f"{name} must be a function, got {fn!r}", value=fn)
@@ -124,7 +126,7 @@ def sweep(
         blobs = checks.pickled(case_list, run, summary, checks.other_pickler())
 
     out = SweepResult([None] * len(case_list))
-    bar = Progress(len(case_list), None if progress is True else progress) if progress else None  # type: ignore[arg-type]
+    bar = Progress(len(case_list), None if progress is True else progress) if progress else None
 
     def record(i: int, outcome: Any) -> None:
         out[i] = outcome
@@ -143,11 +145,13 @@ def sweep(
             for i, c in enumerate(case_list):
                 record(i, _call_here(i, c, run, summary))
         elif executor is None:
-            _own_pool(list(enumerate(blobs)), {}, case_list, workers, timeout, record)  # type: ignore[arg-type]
+            assert blobs is not None  # pickled above for the sweep's own pool
+            _own_pool(list(enumerate(blobs)), {}, case_list, workers, timeout, record)
         else:
-            broken = _through(executor, case_list, blobs, run, summary, record)  # type: ignore[arg-type]
+            broken = _through(cast(Executor, executor), case_list, blobs, run, summary, record)
             if broken:  # a ProcessPoolExecutor broke: the cases it left run on a pool of ours
-                tasks = [(i, blobs[i]) for i in sorted(broken)]  # type: ignore[index]
+                assert blobs is not None  # a ProcessPoolExecutor's cases were pickled above
+                tasks = [(i, blobs[i]) for i in sorted(broken)]
                 _own_pool(tasks, broken, case_list, workers, None, record)
     finally:
         if bar:
@@ -159,9 +163,11 @@ def sweep(
     return out
 
 
-def _failure(i: int, case: Mapping[str, Any], exc: BaseException, kind: str = "raised", tries: int = 1) -> CaseFailure:
+def _failure(
+    i: int, case: Mapping[str, Any], exc: BaseException, kind: FailureKind = "raised", tries: int = 1
+) -> CaseFailure:
     text = "".join(traceback.format_exception(type(exc), exc, exc.__traceback__))
-    return CaseFailure(i, case, kind, type_name(type(exc)), str(exc), text, tries, exc)  # type: ignore[arg-type]
+    return CaseFailure(i, case, kind, type_name(type(exc)), str(exc), text, tries, exc)
 
 
 def _from_report(i: int, case: Mapping[str, Any], report: ErrorReport) -> CaseFailure:

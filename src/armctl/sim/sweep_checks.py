@@ -84,7 +84,7 @@ def other_pickler() -> Callable[[Any], bytes]:
         import cloudpickle
     except ImportError:
         return pickle.dumps
-    return cloudpickle.dumps  # type: ignore[no-any-return]
+    return cloudpickle.dumps
 
 
 def pickled(

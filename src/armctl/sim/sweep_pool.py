@@ -66,7 +66,7 @@ def _worker_main(conn: Connection, parent: int, stack_file: str | None) -> None:
     the next one waits here while this one runs and the pipe never fills. On ``STACK_SIGNAL`` the running
     case's Python stack is written to ``stack_file`` (by faulthandler, also while inside compiled code)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle: it stops the workers
-    if stack_file is not None:
+    if stack_file is not None and STACK_SIGNAL is not None:
         faulthandler.register(STACK_SIGNAL, file=open(stack_file, "w"), all_threads=False)
     cases: queue.SimpleQueue[tuple[int, bytes] | None] = queue.SimpleQueue()
     threading.Thread(target=_receive, args=(conn, parent, cases), daemon=True).start()
@@ -107,9 +107,10 @@ class _Worker:
 
     def stack(self) -> str:
         """The Python stack of the worker's running case, as faulthandler writes it ("" if not available)."""
-        if self.stack_file is None or STACK_SIGNAL is None or not self.process.is_alive():
+        pid = self.process.pid
+        if self.stack_file is None or STACK_SIGNAL is None or pid is None or not self.process.is_alive():
             return ""
-        os.kill(self.process.pid, STACK_SIGNAL)  # type: ignore[arg-type]
+        os.kill(pid, STACK_SIGNAL)
         deadline = time.monotonic() + STACK_WAIT
         text, before = "", None
         while time.monotonic() < deadline and (not text or text != before):

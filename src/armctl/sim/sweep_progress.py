@@ -52,7 +52,7 @@ class Progress:
                 total=total,
                 desc="sweep",
                 unit=" runs",
-                file=_Lines(stream),  # type: ignore[arg-type]
+                file=_Lines(stream),
                 leave=True,
                 mininterval=LOG_INTERVAL,
                 miniters=1,

@@ -92,7 +92,12 @@ class SweepResult(list[Any]):
         return not any(isinstance(o, CaseFailure) for o in self)
 
     def describe(self) -> str:
-        """One line: the counts, and the first failures."""
+        """One line: the counts, and the first failures.
+
+        Returns
+        -------
+        str
+        """
         c = self.counts
         text = f"{len(self)} cases: {c['ok']} ok, {len(self) - c['ok']} failed"
         if len(self) > c["ok"]:
@@ -128,7 +133,7 @@ class ErrorReport:
         """The exception: the original where it pickled, else an ArmctlError that carries it as text."""
         if self.pickled is not None:
             try:
-                return pickle.loads(self.pickled)  # type: ignore[no-any-return]
+                return pickle.loads(self.pickled)
             except Exception:
                 pass
         return ArmctlError(

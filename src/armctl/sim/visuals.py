@@ -75,7 +75,7 @@ def _description_parts(model: RobotModel, name: str, meshes: str) -> list[Part] 
     import pinocchio as pin
     from pinocchio.visualize.meshcat_visualizer import DaeMeshGeometry
 
-    from armctl.model.library import robot_description
+    from armctl.models import robot_description
 
     relative, locked = DESCRIPTIONS[name]
     path = str(robot_description(relative))
@@ -97,11 +97,12 @@ def _description_parts(model: RobotModel, name: str, meshes: str) -> list[Part] 
         suffix = obj.meshPath.rsplit(".", 1)[-1].lower() if obj.meshPath else ""
         placement = obj.placement.homogeneous
         primitive = _primitive(obj.geometry)
+        shape: Any
         if primitive is not None:
             shape, turn = primitive
             placement = placement @ turn
         elif suffix == "dae":
-            shape: Any = DaeMeshGeometry(obj.meshPath)
+            shape = DaeMeshGeometry(obj.meshPath)
         elif suffix == "stl":
             shape = mg.StlMeshGeometry.from_file(obj.meshPath)
         elif suffix == "obj":
@@ -116,7 +117,7 @@ def _description_parts(model: RobotModel, name: str, meshes: str) -> list[Part] 
                 placement,
                 shape,
                 colour,
-                scale=tuple(float(s) for s in obj.meshScale),  # type: ignore[arg-type]
+                scale=(float(obj.meshScale[0]), float(obj.meshScale[1]), float(obj.meshScale[2])),
             )
         )
     return out

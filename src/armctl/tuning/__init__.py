@@ -1,9 +1,14 @@
 """Tuning on python-control: linear models of the error dynamics, gains, sampled-data margins; bounds on the
 dynamic model over the joint ranges (:func:`model_bounds`) and the textbook stability conditions they give
-(:mod:`armctl.tuning.conditions`); and :func:`sweep` (the simulator's, :func:`armctl.sim.sweep`, here too) to
-run many closed loops for a gain study."""
+(:mod:`armctl.tuning.conditions`); and the tuned presets the scenes read (:mod:`armctl.tuning.presets`).
 
-from armctl.sim.sweep import sweep
+Many closed loops for a gain study run through :func:`armctl.sim.sweep` (``armctl.tuning.sweep`` is a deprecated
+alias of it).
+"""
+
+import warnings
+from typing import Any
+
 from armctl.tuning.bounds import Bound, ModelBounds, model_bounds
 from armctl.tuning.conditions import (
     computed_torque_condition,
@@ -33,5 +38,17 @@ __all__ = [
     "sampled_data_condition",
     "sampled_pd_loop",
     "spectral_radius",
-    "sweep",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    if name == "sweep":  # deprecated alias: one public home, armctl.sim.sweep
+        warnings.warn(
+            "armctl.tuning.sweep is deprecated and will be removed in the next release: use armctl.sim.sweep",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        from armctl.sim.sweep import sweep
+
+        return sweep
+    raise AttributeError(f"module 'armctl.tuning' has no attribute {name!r}")

@@ -107,8 +107,8 @@ class RevoluteModel:
             q = anchor.copy()
             q[act] = c
             m0, dm = stencil_derivatives(dyn.mass_matrix, q, act, 2)
-            e_abs = 0.5 * r @ b_abs @ r + self.slack_m
-            e_rel = 0.5 * r @ b_rel @ r
+            e_abs = float(0.5 * r @ b_abs @ r) + self.slack_m
+            e_rel = float(0.5 * r @ b_rel @ r)
             value = float(np.linalg.eigvalsh(m0)[0 if sense < 0 else -1])
             if d > MAX_VERTEX_DIMENSION:  # Weyl: the linear part moves eigenvalues by at most Σ r_j ‖∂_jM‖
                 spread = float(np.sum(r * np.linalg.norm(dm, 2, axis=(1, 2))))

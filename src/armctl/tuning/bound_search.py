@@ -145,7 +145,7 @@ def _refine(
     res = minimize(f, q0, jac=grad, method="L-BFGS-B", bounds=list(zip(lo, hi, strict=True)), options={"maxiter": 40})
     q = np.clip(res.x, lo, hi)
     q[fixed] = lo[fixed]
-    return q  # type: ignore[no-any-return]
+    return q
 
 
 def search_extremes(

@@ -50,10 +50,25 @@ _LABELS = {"lambda_min": "λ_m", "lambda_max": "λ_M", "k_g": "k_g", "k_c": "k_C
 class Bound:
     """One constant over the ranges.
 
-    ``value``: the bound the conditions use — certified if :attr:`certified`, else the sampled estimate.
-    ``estimate``: the most extreme value found at a point, ``attained_at`` (n,) that point [rad].
-    ``side``: ``"lower"`` (λ_m) or ``"upper"`` (the others). ``boxes``: boxes the certificate evaluated (0 for
-    an estimate); ``converged``: the certificate reached the tolerance asked for within its budget."""
+    Attributes
+    ----------
+    name : str
+        Which constant (``"lambda_min"``, ``"lambda_max"``, ``"k_g"``, ``"k_c"``, ``"k_m"``).
+    value : float
+        The bound the conditions use — certified if :attr:`certified`, else the sampled estimate.
+    estimate : float
+        The most extreme value found at a point.
+    attained_at : ndarray, shape (n,)
+        That point [rad or m].
+    certified : bool
+        ``value`` is a certified bound.
+    side : str
+        ``"lower"`` (λ_m) or ``"upper"`` (the others).
+    boxes : int
+        Boxes the certificate evaluated (0 for an estimate).
+    converged : bool
+        The certificate reached the tolerance asked for within its budget.
+    """
 
     name: str
     value: float
@@ -81,9 +96,27 @@ class Bound:
 
 @dataclass(frozen=True)
 class ModelBounds:
-    """λ_m, λ_M [kg·m²], k_g [N·m/rad], k_C [kg·m²], k_M [kg·m²/rad] of an arm over ``joint_ranges`` (n×2,
-    [rad or m]); ``details`` holds each one's :class:`Bound` (estimate, where it is attained, certified or not);
-    ``method``: ``"sampled"`` or ``"certified"``."""
+    """The constants of the textbook stability conditions of an arm over its joint ranges.
+
+    Attributes
+    ----------
+    lambda_min, lambda_max : float
+        λ_m, λ_M [kg·m²]: bounds on the eigenvalues of M(q).
+    k_g : float
+        [N·m/rad]: a bound on ‖∂g/∂q‖.
+    k_c : float
+        k_C [kg·m²]: ‖C(q, q̇)‖ ≤ k_C ‖q̇‖.
+    k_m : float
+        k_M [kg·m²/rad]: a Lipschitz constant of M(q).
+    joint_ranges : ndarray, shape (n, 2)
+        The ranges [rad or m].
+    method : str
+        ``"sampled"`` or ``"certified"``.
+    model : str
+        The arm's name.
+    details : dict of str to Bound
+        Each constant's :class:`Bound` (estimate, where it is attained, certified or not).
+    """
 
     lambda_min: float
     lambda_max: float
@@ -101,13 +134,33 @@ class ModelBounds:
         return all(b.certified for b in self.details.values())
 
     def where(self, name: str) -> FloatArray:
-        """The configuration at which the estimate of ``name`` ("lambda_min", …) is attained."""
+        """The configuration at which the estimate of a constant is attained.
+
+        Parameters
+        ----------
+        name : str
+            ``"lambda_min"``, ``"lambda_max"``, ``"k_g"``, ``"k_c"`` or ``"k_m"``.
+
+        Returns
+        -------
+        ndarray, shape (n,)
+
+        Raises
+        ------
+        InvalidParameterError
+            Another name.
+        """
         if name not in self.details:
             raise InvalidParameterError(f"no constant {name!r}; the constants are {QUANTITIES}", value=name)
         return self.details[name].attained_at
 
     def summary(self) -> str:
-        """A table: each constant, its bound, the extreme met and where, certified or estimated."""
+        """A table: each constant, its bound, the extreme met and where, certified or estimated.
+
+        Returns
+        -------
+        str
+        """
         lines = [f"{self.model}: bounds over the joint ranges ({self.method})"]
         for name in QUANTITIES:
             b = self.details[name]
@@ -236,7 +289,11 @@ def model_bounds(
     else:
         details = _certified(dynamics, lo, hi, found, tolerance, max_boxes, seed)
     return ModelBounds(
-        *(details[name].value for name in QUANTITIES),
+        details["lambda_min"].value,
+        details["lambda_max"].value,
+        details["k_g"].value,
+        details["k_c"].value,
+        details["k_m"].value,
         joint_ranges=readonly(np.column_stack([lo, hi])),
         method=method,
         model=dynamics.model.name,

@@ -82,4 +82,4 @@ def spectral_norms(coef: np.ndarray) -> FloatArray:
     """Spectral norms of a stack of (complex) matrices, via the largest eigenvalue of A Aᴴ."""
     a = coef.reshape(len(coef), coef.shape[1], -1)
     gram = a @ np.conj(a.transpose(0, 2, 1))
-    return np.sqrt(np.maximum(np.linalg.eigvalsh(gram)[:, -1], 0.0))  # type: ignore[no-any-return]
+    return np.sqrt(np.maximum(np.linalg.eigvalsh(gram)[:, -1], 0.0))

@@ -151,6 +151,19 @@ def sampled_data_condition(
     multiplier of (kp, kd). This is the classic frozen-inertia argument, not a proof for an inertia that varies
     along the motion; it does show how the nominal critical gain shrinks on the arm's lightest direction.
 
+    Parameters
+    ----------
+    bounds : ModelBounds
+        :func:`~armctl.tuning.model_bounds` of the arm (λ_m, λ_M).
+    kp, kd : float
+        The gains, in the units above.
+    period : float
+        The control period [s], > 0.
+    delay : int, optional
+        Periods of measurement delay.
+    inertia_estimate : array_like, optional
+        M̂ for computed torque (see above); None for a model-free PD.
+
     Returns
     -------
     Verdict

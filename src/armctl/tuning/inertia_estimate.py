@@ -64,8 +64,19 @@ def impulse_l1_norms(kp: float, kd: float) -> tuple[float, float]:
 
 
 def robust_inertia_estimate(bounds: ModelBounds) -> tuple[float, float]:
-    """(c, α): the constant estimate M̂ = c I with the smallest worst-case ‖I − M⁻¹M̂‖ over the ranges,
-    c = 2 λ_m λ_M / (λ_m + λ_M) [kg·m²], and that α = (λ_M − λ_m) / (λ_M + λ_m) (Siciliano et al. §8.5.3)."""
+    """The constant estimate M̂ = c I with the smallest worst-case ‖I − M⁻¹M̂‖ over the ranges
+    (Siciliano et al. §8.5.3).
+
+    Parameters
+    ----------
+    bounds : ModelBounds
+        :func:`~armctl.tuning.model_bounds` of the arm.
+
+    Returns
+    -------
+    tuple of float
+        (c, α): c = 2 λ_m λ_M / (λ_m + λ_M) [kg·m²] and α = (λ_M − λ_m) / (λ_M + λ_m).
+    """
     lm, lM = bounds.lambda_min, bounds.lambda_max
     return 2 * lm * lM / (lm + lM), (lM - lm) / (lM + lm)
 
@@ -128,6 +139,12 @@ def computed_torque_condition(
         a = sup ‖q̈_d‖ of the reference [rad/s²] (0 for a set-point).
     bias_error
         δ = sup ‖M⁻¹ (n̂ − n)‖ [rad/s²] if the velocity and gravity terms are wrong too (0: exact).
+    dynamics : Dynamics, optional
+        The arm, to sample α for a matrix estimate.
+    samples : int, optional
+        How many configurations of the ranges that sample takes.
+    seed : int, optional
+        Its random seed.
 
     Returns
     -------

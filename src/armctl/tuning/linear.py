@@ -14,20 +14,33 @@ import math
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
-from armctl._checks import FloatArray, scalar, vector
+from armctl._checks import scalar, vector
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError
 
 
 def linearize(dyn: Dynamics, q0: ArrayLike, step: float = 1e-6) -> Any:
-    """``control.StateSpace`` of the arm about q₀ at rest: state x = (δq, δq̇), input δτ, output δq,
+    """The arm linearised about q₀ at rest, as a ``control.StateSpace``: state x = (δq, δq̇), input δτ, output δq,
 
         A = [[0, I], [−M⁻¹ ∂g/∂q, −M⁻¹ F_v]],   B = [0; M⁻¹],   C = [I, 0],   D = 0
 
-    (M at q₀, F_v the joints' viscous friction; Coulomb friction has no linearisation at rest), ∂g/∂q by central
-    differences of ``step`` [rad]."""
+    (M at q₀, F_v the joints' viscous friction; Coulomb friction has no linearisation at rest).
+
+    Parameters
+    ----------
+    dyn : Dynamics
+        The arm.
+    q0 : array_like, shape (n,)
+        The pose [rad or m].
+    step : float, optional
+        The central-difference step of ∂g/∂q [rad].
+
+    Returns
+    -------
+    control.StateSpace
+    """
     import control
 
     q0 = vector(q0, dyn.n, "q0")
@@ -52,8 +65,20 @@ def linearize(dyn: Dynamics, q0: ArrayLike, step: float = 1e-6) -> Any:
 
 
 def pd_from_bandwidth(omega_n: float, zeta: float = 1.0) -> tuple[float, float]:
-    """(K_p, K_d) = (ω_n², 2ζω_n) [1/s², 1/s]: poles of s² + K_d s + K_p at natural frequency ω_n [rad/s]
-    and damping ratio ζ."""
+    """(K_p, K_d) = (ω_n², 2ζω_n): poles of s² + K_d s + K_p at natural frequency ω_n and damping ratio ζ.
+
+    Parameters
+    ----------
+    omega_n : float
+        ω_n [rad/s], > 0.
+    zeta : float, optional
+        ζ, > 0.
+
+    Returns
+    -------
+    tuple of float
+        (K_p [1/s²], K_d [1/s]).
+    """
     w = scalar(omega_n, "omega_n", positive=True)
     z = scalar(zeta, "zeta", positive=True)
     kp, kd = w * w, 2 * z * w
@@ -75,7 +100,27 @@ def lqr_gains(position_weight: float, velocity_weight: float = 0.0, effort_weigh
         K_p = √(q_p / r),   K_d = √(q_v / r + 2 K_p)
 
     — exact at any scale of the weights, where a general Riccati solver loses the answer (python-control's
-    ``lqr`` returns K = 0 for r = 1e-16 and q_p = 1; the tests compare the two where both hold)."""
+    ``lqr`` returns K = 0 for r = 1e-16 and q_p = 1; the tests compare the two where both hold).
+
+    Parameters
+    ----------
+    position_weight : float
+        q_p, > 0.
+    velocity_weight : float, optional
+        q_v, ≥ 0.
+    effort_weight : float, optional
+        r, > 0.
+
+    Returns
+    -------
+    tuple of float
+        (K_p [1/s²], K_d [1/s]).
+
+    Raises
+    ------
+    InvalidParameterError
+        A weight out of range, or ratios of the weights beyond floating point.
+    """
     qp = scalar(position_weight, "position_weight", positive=True)
     qv = scalar(velocity_weight, "velocity_weight", nonnegative=True)
     r = scalar(effort_weight, "effort_weight", positive=True)
@@ -91,6 +136,19 @@ def lqr_gains(position_weight: float, velocity_weight: float = 0.0, effort_weigh
     return kp, kd
 
 
-def closed_loop_poles(kp: float, kd: float) -> FloatArray:
-    """Roots of s² + K_d s + K_p."""
+def closed_loop_poles(kp: float, kd: float) -> NDArray[np.inexact[Any]]:
+    """Roots of s² + K_d s + K_p (real, or a complex pair).
+
+    Parameters
+    ----------
+    kp : float
+        K_p [1/s²].
+    kd : float
+        K_d [1/s].
+
+    Returns
+    -------
+    ndarray, shape (2,)
+        The poles [1/s].
+    """
     return np.roots([1.0, scalar(kd, "kd"), scalar(kp, "kp")])

@@ -10,10 +10,11 @@ A preset records the gains and how they were found::
     kp = 400.0
     kd = 40.0
 
-Gains are scalars or lists (a diagonal). The folder is ``$ARMCTL_PRESETS`` if set, else ``controllers/`` at the
-root of the source checkout armctl runs from (an editable install), else ``<prefix>/share/armctl/controllers``
-(or the user base's, after ``pip install --user``), where a non-editable install puts the presets shipped with
-it.
+Gains are scalars or lists (a diagonal). The folder is ``$ARMCTL_PRESETS`` if set, else the presets shipped
+with armctl, the package data folder ``armctl/_presets``, found through :mod:`importlib.resources` wherever armctl
+is imported from. In the source repository that folder is a link to the top-level ``controllers/`` (so a source
+checkout, an editable install and the tuning examples that rewrite the presets all use those files); a wheel
+carries a copy of them.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ import os
 import re
 import sys
 from collections.abc import Mapping
+from importlib import resources
 from pathlib import Path
 from typing import Any
 
@@ -34,26 +36,18 @@ else:  # pragma: no cover
 
 
 def presets_dir() -> Path:
-    """Where presets are read and, by default, written (see the module)."""
+    """Where presets are read and, by default, written.
+
+    Returns
+    -------
+    Path
+        ``$ARMCTL_PRESETS`` if that environment variable is set, else the folder of presets shipped with armctl
+        (``armctl/_presets``, resolved: in a source checkout, the repository's ``controllers/``).
+    """
     env = os.environ.get("ARMCTL_PRESETS")
     if env:
         return Path(env)
-    for folder in _candidates():
-        if folder.is_dir():
-            return folder
-    return _candidates()[0]  # none exists: the checkout's, named in the error that follows
-
-
-def _candidates() -> tuple[Path, ...]:
-    """The source checkout's controllers/, then the installed copy's (``pip install``, then ``--user``)."""
-    import site
-
-    share = Path("share") / "armctl" / "controllers"
-    return (
-        Path(__file__).resolve().parents[3] / "controllers",
-        Path(sys.prefix) / share,
-        Path(site.getuserbase()) / share,
-    )
+    return Path(str(resources.files("armctl") / "_presets")).resolve()
 
 
 def preset_path(scene: str, method: str, folder: Path | None = None) -> Path:

@@ -34,8 +34,25 @@ def _delay(delay: Any) -> int:
 
 
 def sampled_pd_loop(kp: float, kd: float, period: float, delay: int = 1) -> Any:
-    """The discrete loop transfer function L(z) (a ``control.TransferFunction`` with dt = period) of a PD
-    (kp [1/s²], kd [1/s]) on a ZOH double integrator with ``delay`` periods of measurement delay."""
+    """The discrete loop transfer function L(z) of a PD on a zero-order-hold double integrator with a
+    measurement delay.
+
+    Parameters
+    ----------
+    kp : float
+        K_p [1/s²].
+    kd : float
+        K_d [1/s].
+    period : float
+        The control period T [s], > 0.
+    delay : int, optional
+        Periods of measurement delay, ≥ 0.
+
+    Returns
+    -------
+    control.TransferFunction
+        L(z), with dt = period.
+    """
     import control
 
     kp = scalar(kp, "kp")
@@ -51,9 +68,25 @@ def sampled_pd_loop(kp: float, kd: float, period: float, delay: int = 1) -> Any:
 
 
 def spectral_radius(kp: float, kd: float, period: float, delay: int = 1) -> float:
-    """Spectral radius of the closed loop x_{k+1} = A x_k − B K x_{k−d} (state augmented with d past states):
-    below 1 means stable. The same loop as :func:`sampled_pd_loop`, evaluated directly with NumPy (cheap
-    enough for bisections and maps)."""
+    """Spectral radius of the closed loop x_{k+1} = A x_k − B K x_{k−d} (state augmented with d past
+    states): below 1 means stable. The same loop as :func:`sampled_pd_loop`, evaluated directly with NumPy (cheap
+    enough for bisections and maps).
+
+    Parameters
+    ----------
+    kp : float
+        K_p [1/s²].
+    kd : float
+        K_d [1/s].
+    period : float
+        The control period T [s], > 0.
+    delay : int, optional
+        Periods of measurement delay, ≥ 0.
+
+    Returns
+    -------
+    float
+    """
     kp = scalar(kp, "kp")
     kd = scalar(kd, "kd")
     t = scalar(period, "period", positive=True)
@@ -168,14 +201,20 @@ def _phase_margin(kp: float, kd: float, period: float, delay: int) -> tuple[floa
 class SampledDataAnalysis:
     """Margins of the sampled PD loop (see the module docstring) at gains (K_p, K_d), i.e. multiplier k = 1.
 
-    * ``critical_multiplier``: the factor k* on both gains at the stability boundary. For a stable loop it is
-      the gain margin: the loop stays stable when both gains are scaled by up to k* > 1 (inf if by any factor).
-      For an unstable loop it is < 1: the gains must be scaled below k* to stabilise the loop; 0 when scaling
-      them down does not stabilise it (K_d/K_p too small for the delay and the hold). ``critical_multiplier > 1``
-      exactly when :attr:`stable`; :meth:`summary` says which.
-    * ``phase_margin_deg`` [deg] and ``crossover_rad_s`` [rad/s]: the smallest phase margin and the gain crossover
-      frequency it is measured at; nan for an unstable loop (a phase margin is a margin of a stable loop).
-    * ``spectral_radius``: of the closed loop at multiplier 1; below 1 exactly when :attr:`stable`.
+    Attributes
+    ----------
+    critical_multiplier : float
+        The factor k* on both gains at the stability boundary. For a stable loop it is the gain margin: the loop
+        stays stable when both gains are scaled by up to k* > 1 (inf if by any factor). For an unstable loop it is
+        < 1: the gains must be scaled below k* to stabilise the loop; 0 when scaling them down does not stabilise it
+        (K_d/K_p too small for the delay and the hold). ``critical_multiplier > 1`` exactly when :attr:`stable`;
+        :meth:`summary` says which.
+    phase_margin_deg : float
+        The smallest phase margin [deg]; nan for an unstable loop (a phase margin is a margin of a stable loop).
+    crossover_rad_s : float
+        The gain crossover frequency it is measured at [rad/s]; nan for an unstable loop.
+    spectral_radius : float
+        Of the closed loop at multiplier 1; below 1 exactly when :attr:`stable`.
     """
 
     critical_multiplier: float
@@ -189,7 +228,12 @@ class SampledDataAnalysis:
         return self.spectral_radius < 1.0
 
     def summary(self) -> str:
-        """One line for logs and tuning records, saying "unstable" for an unstable loop."""
+        """One line for logs and tuning records, saying "unstable" for an unstable loop.
+
+        Returns
+        -------
+        str
+        """
         gap = self.spectral_radius - 1.0
         radius = f"1 {'+' if gap > 0 else '-'} {abs(gap):.2g}" if 0 < abs(gap) < 1e-4 else f"{self.spectral_radius:.6g}"
         if self.stable:
@@ -208,8 +252,23 @@ class SampledDataAnalysis:
 
     @classmethod
     def of(cls, kp: float, kd: float, period: float, delay: int = 1) -> SampledDataAnalysis:
-        """Analyse the loop with gains kp > 0 [1/s²], kd >= 0 [1/s] at ``period`` [s] with ``delay`` periods of
-        measurement delay."""
+        """Analyse the loop at gains (K_p, K_d).
+
+        Parameters
+        ----------
+        kp : float
+            K_p [1/s²].
+        kd : float
+            K_d [1/s].
+        period : float
+            The control period T [s], > 0.
+        delay : int, optional
+            Periods of measurement delay, ≥ 0.
+
+        Returns
+        -------
+        SampledDataAnalysis
+        """
         import control
 
         kp = scalar(kp, "kp", positive=True)

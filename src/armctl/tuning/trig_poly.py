@@ -30,7 +30,7 @@ from armctl._checks import FloatArray
 def grid_nodes(degree: int) -> FloatArray:
     """The N = 2D + 1 sample angles 2πm/N of a degree-D trigonometric polynomial in one angle."""
     n = 2 * degree + 1
-    return 2 * np.pi * np.arange(n) / n  # type: ignore[no-any-return]
+    return 2 * np.pi * np.arange(n) / n
 
 
 def derivative_weights(degree: int) -> FloatArray:
@@ -38,7 +38,7 @@ def derivative_weights(degree: int) -> FloatArray:
     n = 2 * degree + 1
     k = np.fft.fftfreq(n, 1.0 / n)
     t = grid_nodes(degree)
-    return np.real(np.array([np.sum(1j * k * np.exp(-1j * k * tm)) for tm in t]) / n)  # type: ignore[no-any-return]
+    return np.real(np.array([np.sum(1j * k * np.exp(-1j * k * tm)) for tm in t]) / n)
 
 
 def depends_on(fn: Callable[[FloatArray], FloatArray], n: int, rng: np.random.Generator) -> list[int]:
@@ -89,7 +89,7 @@ class TrigPoly:
         self.scale = float(np.abs(samples).max()) if samples.size else 0.0
 
     def _phases(self, qs: FloatArray) -> FloatArray:
-        return np.exp(1j * (np.atleast_2d(qs)[:, self.active] @ self.freqs.T))  # type: ignore[no-any-return]
+        return np.exp(1j * (np.atleast_2d(qs)[:, self.active] @ self.freqs.T))
 
     def evaluate(self, qs: FloatArray, orders: tuple[int, ...] = ()) -> FloatArray:
         """f (``orders`` empty) or the derivative ∂^|orders| f / ∂q_{orders[0]} ∂q_{orders[1]} … at the points
@@ -100,7 +100,7 @@ class TrigPoly:
                 return np.zeros((len(np.atleast_2d(qs)), *self.shape))
             weight = weight * (1j * self.freqs[:, self.active.index(j)])
         flat = self.coef.reshape(len(self.coef), -1) * weight[:, None]
-        return np.real(self._phases(qs) @ flat).reshape((-1, *self.shape))  # type: ignore[no-any-return]
+        return np.real(self._phases(qs) @ flat).reshape((-1, *self.shape))
 
     def residual(self, fn: Callable[[FloatArray], FloatArray], points: FloatArray) -> float:
         """max |fit − fn| over ``points``: round-off if ``fn`` is such a polynomial."""
@@ -112,11 +112,11 @@ class TrigPoly:
         terms), each coefficient measured by ``norm`` (an upper bound of the norm used)."""
         k = np.abs(self.freqs).astype(float)
         sizes = norm(self.coef)
-        return np.einsum("kj,kl,k->jl", k, k, sizes)  # type: ignore[no-any-return]
+        return np.einsum("kj,kl,k->jl", k, k, sizes)
 
     def slopes(self, norm: Callable[[np.ndarray], FloatArray]) -> FloatArray:
         """L (d,) with sup_q ‖∂f/∂q_j‖ ≤ L_j over the active angles."""
-        return np.abs(self.freqs).astype(float).T @ norm(self.coef)  # type: ignore[no-any-return]
+        return np.abs(self.freqs).astype(float).T @ norm(self.coef)
 
 
 def stencil_derivatives(

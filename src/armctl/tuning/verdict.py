@@ -16,11 +16,28 @@ from armctl.tuning.bounds import ModelBounds
 class Verdict:
     """The outcome of one stability condition.
 
-    ``holds``: the condition is met. ``margin``: how far inside it (> 0) or outside (< 0), in ``unit``;
-    ``factor``: the same as a ratio (> 1 inside; e.g. λ_min(K_p)/k_g). ``condition``: the inequality with the
-    numbers put in. ``certified``: every model constant it rests on is a certified bound (else estimates
-    from a sample: the condition may fail somewhere the sample missed). ``source``: where the condition is
-    proved. ``details``: the other figures (named in each function's docstring)."""
+    Attributes
+    ----------
+    name : str
+        The condition's name.
+    holds : bool
+        The condition is met.
+    margin : float
+        How far inside it (> 0) or outside (< 0), in ``unit``.
+    factor : float
+        The same as a ratio (> 1 inside; e.g. λ_min(K_p)/k_g).
+    unit : str
+        The unit of ``margin``.
+    condition : str
+        The inequality with the numbers put in.
+    certified : bool
+        Every model constant it rests on is a certified bound (else estimates from a sample: the condition may
+        fail somewhere the sample missed).
+    source : str
+        Where the condition is proved.
+    details : dict
+        The other figures (named in each function's docstring).
+    """
 
     name: str
     holds: bool
@@ -33,6 +50,13 @@ class Verdict:
     details: dict[str, Any] = field(default_factory=dict)
 
     def summary(self) -> str:
+        """One line: the condition, whether it holds, its margin and on what it rests (certified bounds or sampled
+        estimates).
+
+        Returns
+        -------
+        str
+        """
         state = "holds" if self.holds else "fails"
         basis = "certified bounds" if self.certified else "sampled estimates of the bounds"
         unit = f" {self.unit}" if self.unit else ""

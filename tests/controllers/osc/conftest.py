@@ -1,26 +1,15 @@
-"""Fixtures of the operational-space QP tests: the Panda and its Dynamics, shared by the tests."""
+"""Fixtures of the operational-space QP tests: the Panda's Dynamics and a seeded generator (the helpers that
+build them are in :mod:`tests.controllers.osc.helpers`)."""
 
 from __future__ import annotations
-
-from functools import cache
 
 import numpy as np
 import pytest
 
 import armctl
+from tests.controllers.osc.helpers import Q_HOME, panda_dynamics
 
-#: The Panda's usual "ready" posture.
-Q_HOME = np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])
-
-
-@cache
-def panda_dynamics(backend: str = "pinocchio", friction: bool = False) -> armctl.Dynamics:
-    model = armctl.models.panda()
-    if friction:
-        model = model.with_friction(
-            viscous=[0.5, 0.5, 0.5, 0.5, 0.2, 0.2, 0.2], coulomb=[0.8, 0.8, 0.8, 0.8, 0.3, 0.3, 0.3]
-        )
-    return armctl.Dynamics(model, backend=backend)
+__all__ = ["Q_HOME", "panda", "panda_dynamics", "rng"]  # Q_HOME, panda_dynamics: also importable from here
 
 
 @pytest.fixture

@@ -13,8 +13,7 @@ from scipy.spatial.transform import Rotation
 import armctl
 from armctl.controllers.osc import ClosedFormOSC, FramePoseTask, OperationalSpaceQP, PostureTask, TorqueLimit
 from armctl.errors import SingularityWarning
-
-from .conftest import Q_HOME
+from tests.controllers.osc.helpers import Q_HOME
 
 #: A pose-singular configuration of the Panda (σ_min of the 6×7 tool Jacobian ≈ 2e-7), found by minimising
 #: σ_min over q₄; the singular task direction moves the tool in the x–z plane and turns it about y.

@@ -21,8 +21,7 @@ from armctl.controllers.osc import (
 )
 from armctl.errors import SimulationWarning
 from armctl.scenes.panda_contact import PressAndSlide
-
-from .conftest import Q_HOME, panda_dynamics
+from tests.controllers.osc.helpers import Q_HOME, panda_dynamics
 
 Q_SINGULAR = np.array([0.0, 0.3, 0.0, -0.46700102, 0.0, 1.571, 0.785])  # σ_min(J) ≈ 2e-7, see test_osc_closed_form
 

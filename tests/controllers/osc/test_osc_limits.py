@@ -21,8 +21,7 @@ from armctl.controllers.osc import (
     PostureTask,
     TorqueLimit,
 )
-
-from .conftest import Q_HOME
+from tests.controllers.osc.helpers import Q_HOME
 
 DT = 1e-3
 

@@ -17,8 +17,7 @@ from armctl.controllers.osc import (
     PostureTask,
     TorqueLimit,
 )
-
-from .conftest import Q_HOME
+from tests.controllers.osc.helpers import Q_HOME
 
 KP, KD = 100.0, 20.0
 

@@ -21,8 +21,7 @@ from armctl.controllers.osc import (
     QPProblem,
     TorqueLimit,
 )
-
-from .conftest import Q_HOME, panda_dynamics
+from tests.controllers.osc.helpers import Q_HOME, panda_dynamics
 
 
 def _state(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:

@@ -15,8 +15,7 @@ from armctl import sim
 from armctl.controllers.osc import FramePoseTask, OperationalSpaceQP, PostureTask, ProxQPSolver, QPFailure, SolverChain
 from armctl.controllers.osc import diagnose as diagnose_module
 from armctl.errors import InvalidParameterError, SolverWarning
-
-from .conftest import Q_HOME, panda_dynamics
+from tests.controllers.osc.helpers import Q_HOME, panda_dynamics
 
 
 def _reach(direction: tuple[float, float, float], distance: float, kp: float) -> tuple[FramePoseTask, np.ndarray]:

@@ -14,8 +14,7 @@ import armctl
 from armctl.controllers.osc import FrameOrientationTask, FramePoseTask, FramePositionTask, PostureTask
 from armctl.controllers.osc.state import ModelEvaluator
 from armctl.controllers.osc.tasks.rotation import rotation_error
-
-from .conftest import Q_HOME, panda_dynamics
+from tests.controllers.osc.helpers import Q_HOME, panda_dynamics
 
 
 @settings(max_examples=60, deadline=None)

@@ -31,11 +31,11 @@ from armctl.controllers.osc.contact import Contact
 from armctl.controllers.osc.layout import UPPER_REGULARIZATION_FACTOR, Layout
 from armctl.controllers.osc.levels import LevelPlan, LevelRows
 from armctl.controllers.osc.limits.base import Limit
-from armctl.controllers.osc.problem import QPProblem
+from armctl.controllers.osc.problem import Arrays, QPProblem
 from armctl.controllers.osc.state import ModelState
 from armctl.controllers.osc.tasks.base import Task
 from armctl.model.robot import RobotModel
-from armctl.reference import Reference
+from armctl.references import Reference
 
 
 def level_cost(lev: LevelRows, reg_matrix: FloatArray) -> tuple[FloatArray, FloatArray]:
@@ -112,7 +112,7 @@ class StepQP:
             names,
         )
 
-    def arrays(self, k: int = 0, frozen: tuple[FloatArray, FloatArray] | None = None) -> tuple[FloatArray, ...]:
+    def arrays(self, k: int = 0, frozen: tuple[FloatArray, FloatArray] | None = None) -> Arrays:
         """(H, g, A, b, C, l, u) of level ``k`` without slacks (the hot path of :meth:`problem`)."""
         lay = self.layout
         H, g = level_cost(self.levels[k], lay.reg_matrix if k == len(self.levels) - 1 else lay.reg_matrix_upper)

@@ -131,7 +131,8 @@ class SolverChain:
                     attempts.append((STAGES[0], str(err)))
                     continue
                 if kkt_ok(arrays, sol.x, sol.y, sol.z):
-                    self._active[key] = sol.active
+                    if sol.active is not None:
+                        self._active[key] = sol.active
                     self.counts[STAGES[0]] += 1
                     sol.stage = STAGES[0]
                     return sol

@@ -38,7 +38,7 @@ from armctl.controllers.osc.tasks.posture import PostureTask
 from armctl.dynamics.base import Dynamics
 from armctl.dynamics.operational_space import operational_space_terms
 from armctl.errors import InvalidParameterError, SingularityWarning
-from armctl.reference import Reference
+from armctl.references import Reference
 
 #: the largest condition number of Λ used undamped (see the module)
 CONDITION_LIMIT = 1e12
@@ -49,6 +49,8 @@ class ClosedFormOSC(Controller):
     in the dynamically consistent null space; ``condition_limit`` κ ≥ 1: the largest condition number of Λ used
     as it is, beyond which Λ is damped (see the module). ``last_log``: the trace of Λ (an upper bound of its
     largest eigenvalue) and the damping δ² of the step."""
+
+    dynamics: Dynamics  # given to __init__, never None
 
     def __init__(
         self,
@@ -82,19 +84,20 @@ class ClosedFormOSC(Controller):
         """(Λ, J̄, μ, p, δ²) of the task at ``state`` (see the module): undamped (δ² = 0) unless cond Λ exceeds
         ``condition_limit``. Raises the kernel's named error if M is not positive definite."""
         q, mass = state.q, state.mass
-        kernel = self.dynamics.kernel  # type: ignore[union-attr]
+        kernel = self.dynamics.kernel
         gravity = kernel.gravity(q)
         coriolis = state.bias - gravity  # C q̇
+        lam = None
         try:
             terms = operational_space_terms(mass, jacobian, drift, coriolis, gravity)
         except np.linalg.LinAlgError:  # M not positive definite, or J M⁻¹ Jᵀ singular outright
-            terms, lam = None, None
+            pass
         else:
             lam, _, info = lapack.dsyev(terms[0], compute_v=0)  # Λ's eigenvalues, ascending: 1 / J M⁻¹ Jᵀ's
             if info:
                 lam = None
-        if lam is not None and np.isfinite(lam).all() and 0.0 < lam[-1] <= self.condition_limit * lam[0]:
-            return (*terms, 0.0)  # type: ignore[misc]
+            elif np.isfinite(lam).all() and 0.0 < lam[-1] <= self.condition_limit * lam[0]:
+                return (*terms, 0.0)
         if lam is not None and np.isfinite(lam).all() and lam[0] > 0.0:
             damping = 1.0 / (self.condition_limit * lam[0]) - 1.0 / lam[-1]  # μ_max/κ − μ_min
         else:

@@ -61,7 +61,7 @@ from armctl.controllers.osc.state import ModelEvaluator
 from armctl.controllers.osc.tasks.base import Task
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError, SolverWarning
-from armctl.reference import Reference
+from armctl.references import Reference
 
 #: the limits whose bounds read only q and q̇ of a step's state (the generated path gives them no more)
 _PLAIN_LIMITS = (TorqueLimit, JointPositionLimit, JointVelocityLimit, AccelerationLimit)
@@ -93,6 +93,8 @@ class OperationalSpaceQP(Controller):
     every level. slacks: task rows as constraints with slack variables. dt: control period [s] for the default
     limits.
     """
+
+    dynamics: Dynamics  # given to __init__, never None
 
     def __init__(
         self,
@@ -194,7 +196,7 @@ class OperationalSpaceQP(Controller):
         self.check_reference(ref)
         q, qd = vector(q, self.n, "q"), vector(qd, self.n, "qd")
         self.compute(scalar(t, "t"), q, qd, ref)
-        return self.last_solution  # type: ignore[return-value]
+        return self.last_solution  # type: ignore[return-value]  # compute() just set it
 
     def _qdd_qp(self, lay: Layout) -> QddQP:
         """The q̈-only QP of layout ``lay`` (made on first use), with its data from generated code on
@@ -225,7 +227,7 @@ class OperationalSpaceQP(Controller):
             self.last_log = {"qp_iterations": 0, "qp_fallbacks": 0}
             return tau
         self.last_log = {"qp_iterations": sol.iterations, "qp_fallbacks": sol.fallbacks}
-        if self._tau_up is not None:
+        if self._tau_up is not None and self._tau_lo is not None:
             np.minimum(tau, self._tau_up, out=tau)
             np.maximum(tau, self._tau_lo, out=tau)
         return tau

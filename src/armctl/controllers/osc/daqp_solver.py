@@ -75,9 +75,10 @@ class DaqpSolver:
         if me:
             rows: FloatArray = np.concatenate((A, C))
             upper, lower = np.concatenate((b, u)), np.concatenate((b, l))
-            sense = np.empty(me + l.shape[0], dtype=np.intc)
-            sense[:me] = _EQUALITY
-            sense[me:] = 0 if active is None else _SENSE[active]
+            both = np.empty(me + l.shape[0], dtype=np.intc)
+            both[:me] = _EQUALITY
+            both[me:] = 0 if active is None else _SENSE[active]
+            sense: np.ndarray | None = both
         else:
             rows, upper, lower = C, u, l
             sense = None if active is None else _SENSE[active]
@@ -85,7 +86,7 @@ class DaqpSolver:
         try:
             x, _, flag, info = self._solve(*data, sense, primal_tol=self.primal_tol, iter_limit=self.iter_limit)
         except ValueError:  # DAQP takes writable arrays only: read-only ones (a layout's constant rows) copied
-            data = tuple(np.array(a) for a in data)  # type: ignore[assignment]
+            data = (np.array(H), np.array(g), np.array(rows), np.array(upper), np.array(lower))
             x, _, flag, info = self._solve(*data, sense, primal_tol=self.primal_tol, iter_limit=self.iter_limit)
         if flag != 1:
             raise SolverError(f"daqp: {EXIT_FLAGS.get(flag, 'exit flag')} ({flag})", value=flag)

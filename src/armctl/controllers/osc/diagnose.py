@@ -63,7 +63,7 @@ def conflicting_rows(p: QPProblem, tol: float = 1e-6) -> dict[str, float] | None
     x, y, z = qp.results.x, qp.results.y, qp.results.z
     out: dict[str, float] = {}
     s = x[nx:]
-    for k, i in enumerate(rel):
+    for k, i in enumerate(rel.tolist()):
         amount = s[k] + s[mr + k]
         if amount > tol or abs(y[i]) > 1e-3:
             out[p.eq_names[i]] = float(amount) if amount > tol else 0.0

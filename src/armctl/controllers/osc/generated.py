@@ -25,20 +25,22 @@ from __future__ import annotations
 
 import hashlib
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, cast
 
 import casadi as cs
 import numpy as np
 
 from armctl._checks import FloatArray
-from armctl.controllers.osc.tasks.base import Task
+from armctl.controllers.osc.tasks.base import MotionTask, Task
 from armctl.controllers.osc.tasks.frame_orientation import FrameOrientationTask
 from armctl.controllers.osc.tasks.frame_pose import FramePoseTask
 from armctl.controllers.osc.tasks.frame_position import FramePositionTask
+from armctl.controllers.osc.tasks.frame_task import FrameTask
 from armctl.controllers.osc.tasks.posture import PostureTask
 from armctl.controllers.osc.tasks.rotation import rotation_error_sx
 from armctl.dynamics import codegen
 from armctl.dynamics.base import Dynamics
+from armctl.dynamics.casadi_buffer import buffer_of, view
 from armctl.dynamics.recursive import cholesky_solve, inverse_dynamics, joint_transforms, mass_matrix
 from armctl.dynamics.symbolic_frames import frame_kinematics
 from armctl.model.robot import RobotModel
@@ -94,7 +96,7 @@ def qp_function(model: RobotModel, tasks: Sequence[Task], friction: bool) -> cs.
             rhs.append(qdd_ref + gain_d @ (qd_ref - qd) + gain_p @ (q_ref - q))
         else:
             kind, shape = _FRAME_TASKS[type(tk)]
-            frame = tk.frame  # type: ignore[attr-defined]
+            frame = cast(FrameTask, tk).frame  # the built-in tasks here: posture or a frame task
             if frame not in frames:
                 frames[frame] = frame_kinematics(model, q, qd, frame, tf)
             p, rot, jac, drift = frames[frame]
@@ -138,7 +140,7 @@ def _tag(model: RobotModel, tasks: Sequence[Task], friction: bool) -> str:
         if type(tk) is PostureTask:
             parts.append("posture")
         else:
-            f = model.frame(tk.frame)  # type: ignore[attr-defined]
+            f = model.frame(cast(FrameTask, tk).frame)
             where = hashlib.sha256(f.placement.tobytes()).hexdigest()[:12]
             parts.append(f"{_FRAME_TASKS[type(tk)][0]}:{f.name}:{f.joint}:{where}")
     return "|".join(parts)
@@ -170,11 +172,11 @@ class GeneratedQddData:
         self.H, self.M = np.zeros((n, n)), np.zeros((n, n))  # symmetric: column by column is row by row
         rows_t = np.zeros((n + 1, m))  # CasADi writes a matrix column by column: [J | b]ᵀ row by row
         self.rows = rows_t.T
-        buf, self._run = fn.buffer()
+        buf, self._run = buffer_of(fn)
         for k, arr in enumerate((self.inp, self.par)):
-            buf.set_arg(k, memoryview(arr))
-        for k, arr in enumerate((self.qdd0, self.tau0, self.H, self.g, self.c, self.M, self.hf, rows_t)):
-            buf.set_res(k, memoryview(arr.reshape(-1)))
+            buf.set_arg(k, view(arr))
+        for k, res in enumerate((self.qdd0, self.tau0, self.H, self.g, self.c, self.M, self.hf, rows_t)):
+            buf.set_res(k, view(res.reshape(-1)))
         self._bound = (buf, rows_t)  # the buffer reads and writes these: keep them alive
         self._revisions: list[int] | None = None
         self._pieces: list[FloatArray] = []
@@ -187,7 +189,8 @@ class GeneratedQddData:
         """The gains, weights and ε into the parameter buffer (in place: the buffer reads it)."""
         parts = []
         for tk in self.tasks:
-            parts += [np.ravel(tk.kp), np.ravel(tk.kd), tk.sqrt_weight]  # type: ignore[attr-defined]
+            motion = cast(MotionTask, tk)  # every task here is a motion task
+            parts += [np.ravel(motion.kp), np.ravel(motion.kd), motion.sqrt_weight]
         parts.append(np.array([self.regularization]))
         np.concatenate(parts, out=self.par)
 
@@ -204,7 +207,7 @@ class GeneratedQddData:
                 r = tk.reference(ref)
                 pieces += [r.q, r.qd, r.qdd]
             else:
-                value, vel, acc = tk.target.at(t)  # type: ignore[attr-defined]
+                value, vel, acc = cast(FrameTask, tk).target.at(t)
                 pieces += [value.reshape(-1), vel, acc]
         if self.friction is not None:
             pieces.append(self.friction.torque(qd))

@@ -19,13 +19,15 @@ nothing is diagnosed there: :meth:`OSCSolution.diagnose` looks for conflicting r
 
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 
 from armctl._checks import FloatArray
 from armctl.controllers.osc import diagnose as _diagnose
 from armctl.controllers.osc.build import StepQP
 from armctl.controllers.osc.chain import QPFailure, SolverChain
-from armctl.controllers.osc.problem import QPProblem
+from armctl.controllers.osc.problem import Arrays, QPProblem
 from armctl.controllers.osc.solve import QPSolution
 from armctl.errors import SolverError
 
@@ -115,11 +117,11 @@ def solve_cascade(step: StepQP, chain: SolverChain, rank_tol: float = 1e-9) -> O
         frozen_rows.append(frozen)
         if step.slacks:
             p = step.problem(k, frozen)
-            arrays = (p.H, p.g, p.A, p.b, p.C, p.l, p.u)
+            arrays: Arrays = (p.H, p.g, p.A, p.b, p.C, p.l, p.u)
         else:
             arrays = step.arrays(k, frozen)
         try:
-            sol = chain.solve(arrays, k, lambda k=k, fr=frozen: step.problem(k, fr))
+            sol = chain.solve(arrays, k, partial(step.problem, k, frozen))
         except QPFailure as err:
             if x is None:
                 raise

@@ -67,7 +67,7 @@ class Layout:
         # bounds that do not depend on the state (e.g. torque limits) are concatenated once
         self.constant_bounds: tuple[FloatArray, FloatArray] | None = None
         if all(lim.constant for lim in limits):
-            bounds = [lim.bounds(None) for lim in limits]  # type: ignore[arg-type]
+            bounds = [lim.bounds(None) for lim in limits]  # type: ignore[arg-type]  # constant: no state read
             self.constant_bounds = (
                 np.concatenate([bd[0] for bd in bounds] + [self.cone_l]),
                 np.concatenate([bd[1] for bd in bounds] + [self.cone_u]),

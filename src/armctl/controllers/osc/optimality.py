@@ -210,7 +210,7 @@ class ActiveSets:
                     if info == 0:
                         np.negative(x0, out=x0)
                         self._factor = (c, x0)
-        return self._factor  # type: ignore[return-value]
+        return self._factor  # type: ignore[return-value]  # set above when it was None
 
     def solve(self, active: np.ndarray) -> tuple[FloatArray, FloatArray, FloatArray] | None:
         """:func:`solve_on_active_set`, by the Schur complement where there are no equality rows."""

@@ -41,7 +41,7 @@ from armctl.controllers.osc.problem import Arrays
 from armctl.controllers.osc.scale import MAX_TASK_RHS, refuse_scale
 from armctl.controllers.osc.solve import QPSolution
 from armctl.controllers.osc.state import ModelState
-from armctl.reference import Reference
+from armctl.references import Reference
 
 if TYPE_CHECKING:
     from armctl.controllers.osc.generated import GeneratedQddData
@@ -92,7 +92,7 @@ class QddQP:
         self.builder = builder
         eps = builder.regularization
         tasks = tuple(tk for tk in builder.tasks if tk.variable in lay.variables)
-        self.plan = LevelPlan(tasks, _QddLayout(n), extra_rows=2 * n, extra_weight=eps)  # type: ignore[arg-type]
+        self.plan = LevelPlan(tasks, _QddLayout(n), extra_rows=2 * n, extra_weight=eps)  # type: ignore[arg-type]  # _QddLayout: the layout's fields LevelPlan reads
         m = self.m = self.plan.m
         self.rows = self.plan.template.copy()  # [J | b] of the tasks; √ε-weighted [I | 0]; [M | −h']
         self.rows[m : m + n, :n] = np.eye(n)
@@ -112,7 +112,7 @@ class QddQP:
         self.no_active = np.zeros(self.C_template.shape[0], dtype=np.int8)
         self.no_active.flags.writeable = False
         # the torque bounds, all torque limits together
-        torque = [lim.bounds(None) for lim in lay.limits if lim.variable == "tau"]  # type: ignore[arg-type]
+        torque = [lim.bounds(None) for lim in lay.limits if lim.variable == "tau"]  # type: ignore[arg-type]  # constant: no state read
         self.tau_check = (
             (np.max([b[0] for b in torque], axis=0).tolist(), np.min([b[1] for b in torque], axis=0).tolist())
             if torque
@@ -121,7 +121,7 @@ class QddQP:
         self.qdd_limits = [k for k, lim in enumerate(lay.limits) if lim.variable != "tau"]
         self.torque_only = len(lay.limits) == 1 and not self.qdd_limits
         self.constant = (
-            [lim.bounds(None) for lim in lay.limits]  # type: ignore[arg-type]
+            [lim.bounds(None) for lim in lay.limits]  # type: ignore[arg-type]  # constant limits read no state
             if lay.constant_bounds is not None
             else None
         )
@@ -182,6 +182,7 @@ class QddQP:
         if self.constant is not None:
             bounds = self.constant
         else:  # the built-in limits read q and q̇ only (see controller: the generated path takes no others)
+            # no evaluator: the built-in limits read no frame
             state = ModelState(None, q, qd, gen.M, gen.hf, None)  # type: ignore[arg-type]
             bounds = [lim.bounds(state) for lim in self.layout.limits]
         x, tau = gen.qdd0, gen.tau0

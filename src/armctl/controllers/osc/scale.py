@@ -20,7 +20,7 @@ from armctl.controllers.osc.levels import LevelRows
 from armctl.controllers.osc.state import ModelState
 from armctl.controllers.osc.tasks.base import MotionTask, Task
 from armctl.errors import InvalidParameterError
-from armctl.reference import Reference
+from armctl.references import Reference
 
 #: the largest weighted norm of a level's desired task accelerations (or forces), ‖W^{1/2} b‖, accepted
 MAX_TASK_RHS = 1e9

@@ -18,7 +18,7 @@ Two evaluators:
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -154,7 +154,7 @@ class ModelEvaluator:
                 z6 = np.zeros(6)
                 return FrameKinematics(np.zeros(3), np.eye(3), np.zeros((6, self.n)), z6, z6.copy())
             pin, pm, pd = self._pin, self._pm, self._pd
-            views = self._pose_views.get(fid, False)
+            views: tuple[FloatArray, FloatArray] | Literal[False] | None = self._pose_views.get(fid, False)
             if views is False:
                 views = self._pose_views[fid] = self._placement_views(fid)
             if views is None:

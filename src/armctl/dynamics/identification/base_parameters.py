@@ -21,6 +21,7 @@ r of them; β is the least-squares solution of W_b β = W_d.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 import scipy.linalg
@@ -54,9 +55,18 @@ def identification_regressor(dynamics: Dynamics, q: FloatArray, qd: FloatArray, 
 class BaseParameters:
     """The base parameters of an arm: which columns of Y are independent and how the others lump in.
 
-    independent: indices b into π of the r independent columns (θ_k is π_b[k] plus its lumped terms).
-    dependent: indices d of the other 13n − r columns. beta: (r, 13n − r) with Y[:, d] = Y[:, b] β.
-    names: (13n,) names of π's entries (``'m[2]'``, …). tol: the relative rank tolerance used.
+    Attributes
+    ----------
+    independent : tuple of int
+        Indices b into π of the r independent columns (θ_k is π_b[k] plus its lumped terms).
+    dependent : tuple of int
+        Indices d of the other 13n − r columns.
+    beta : ndarray, shape (r, 13n − r)
+        Y[:, d] = Y[:, b] β.
+    names : tuple of str
+        The (13n,) names of π's entries (``'m[2]'``, …).
+    tol : float
+        The relative rank tolerance used.
     """
 
     independent: tuple[int, ...]
@@ -95,18 +105,48 @@ class BaseParameters:
         return readonly(out)
 
     def project(self, pi: FloatArray) -> FloatArray:
-        """θ = K π: the base parameters of a full parameter vector π (13n,)."""
+        """θ = K π: the base parameters of a full parameter vector.
+
+        Parameters
+        ----------
+        pi : ndarray, shape (13 n,)
+            π, in the layout of :meth:`RobotModel.parameters <armctl.model.RobotModel.parameters>`.
+
+        Returns
+        -------
+        ndarray, shape (r,)
+        """
         p = np.asarray(pi, dtype=float)
         if p.shape != (self.n_full,):
             raise InvalidParameterError(f"π must have shape ({self.n_full},), got {p.shape}", value=pi)
         return self.map @ p
 
     def columns(self, y: FloatArray) -> FloatArray:
-        """Y_b: the independent columns of a regressor Y (… × 13n)."""
+        """Y_b: the independent columns of a regressor.
+
+        Parameters
+        ----------
+        y : ndarray, shape (..., 13 n)
+            A regressor Y.
+
+        Returns
+        -------
+        ndarray, shape (..., r)
+        """
         return np.asarray(y)[..., list(self.independent)]
 
     def base_names(self, digits: int = 4) -> tuple[str, ...]:
-        """A readable name for each base parameter, e.g. ``'Izz[1] + 0.1866 m[2] + Im_reflected[1]'``."""
+        """A readable name for each base parameter, e.g. ``'Izz[1] + 0.1866 m[2] + Im_reflected[1]'``.
+
+        Parameters
+        ----------
+        digits : int, optional
+            Significant digits of the lumping coefficients.
+
+        Returns
+        -------
+        tuple of str
+        """
         out = []
         for row, k in enumerate(self.independent):
             terms = [self.names[k]]
@@ -135,12 +175,31 @@ def random_states(dynamics: Dynamics, samples: int, rng: np.random.Generator) ->
 def find_base_parameters(
     dynamics: Dynamics, samples: int | None = None, seed: int = 0, tol: float = 1e-8
 ) -> BaseParameters:
-    """The base parameters of ``dynamics``' arm, by pivoted QR of the regressor stacked at random states.
+    """The base parameters of an arm, by pivoted QR of the regressor stacked at random states.
 
-    samples: number of random states S (default max(30, 4n)); the stacked W is (S n × 13n). seed: of the
-    random states (a whole number ≥ 0). tol: relative rank tolerance on |R_kk| / |R_00|, in [1e-14, 1e-3]
-    (see :data:`TOL_RANGE`; the default 1e-8 sits in the middle of the gap). The result depends only on the
-    kinematics (and on which columns exist), not on the inertial values of the model.
+    The result depends only on the kinematics (and on which columns exist), not on the inertial values of the
+    model.
+
+    Parameters
+    ----------
+    dynamics : Dynamics
+        The arm.
+    samples : int, optional
+        The number of random states S (default max(30, 4n)); the stacked W is (S n × 13n).
+    seed : int, optional
+        The seed of the random states (a whole number ≥ 0).
+    tol : float, optional
+        The relative rank tolerance on |R_kk| / |R_00|, in [1e-14, 1e-3] (see :data:`TOL_RANGE`; the default 1e-8
+        sits in the middle of the gap).
+
+    Returns
+    -------
+    BaseParameters
+
+    Raises
+    ------
+    InvalidParameterError
+        A bad number of samples, seed or tolerance.
     """
     n, p = dynamics.n, PARAMS_PER_JOINT * dynamics.n
     s = whole_number(samples, "samples", minimum=1) if samples is not None else max(30, 4 * n)
@@ -168,7 +227,7 @@ def find_base_parameters(
     wb, wd = w[:, list(independent)], w[:, list(dependent)]
     beta = np.linalg.lstsq(wb, wd, rcond=None)[0] if dependent else np.zeros((rank, 0))
     beta[np.abs(beta) < _BETA_ZERO * max(1.0, float(np.abs(beta).max(initial=0.0)))] = 0.0
-    return BaseParameters(independent, dependent, beta, dynamics.model.parameter_names(), tol)
+    return BaseParameters(independent, dependent, cast(FloatArray, beta), dynamics.model.parameter_names(), tol)
 
 
 def _first_independent(w: FloatArray, rank: int, tol: float) -> tuple[int, ...] | None:

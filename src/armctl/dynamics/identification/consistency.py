@@ -51,17 +51,30 @@ RSS_FLOOR = 1e-12
 class ConsistentEstimate:
     """A physically consistent estimate.
 
-    pi: (13 n,) full parameter vector (π's layout). coulomb_offset: (n,) δ [N·m] (zeros if the problem has
-    none). theta: (p,) the problem's unknowns it implies ([K π; δ]). model: the RobotModel with these
-    parameters (every link physical). residual_rms: (n,) RMS of y − W θ per joint [N·m]. cost_ratio: its
-    weighted residual sum of squares over that of the unconstrained least squares, each plus a round-off floor
-    of 10⁻¹² of the weighted ‖y‖² (a relative RMS residual of 10⁻⁶): ≥ 1, near 1 when the constraints cost
-    nothing, and 1 rather than a ratio of round-off on noise-free data. converged: the solver met its
-    tolerance, or used up its budget with the fit stalled (50 more evaluations change the weighted residual
-    sum of squares by less than 10⁻⁵ relative: what still moves is the prior's choice in directions the data
-    do not see). message: why it stopped, in words that agree with ``converged``: the solver's own message
-    when it met its tolerance (or did not, with the budget spent and the fit still moving), else that the fit
-    had settled when the budget ran out.
+    Attributes
+    ----------
+    pi : ndarray, shape (13 n,)
+        The full parameter vector (π's layout).
+    coulomb_offset : ndarray, shape (n,)
+        δ [N·m] (zeros if the problem has none).
+    theta : ndarray, shape (p,)
+        The problem's unknowns it implies ([K π; δ]).
+    model : RobotModel
+        The model with these parameters (every link physical).
+    residual_rms : ndarray, shape (n,)
+        RMS of y − W θ per joint [N·m].
+    cost_ratio : float
+        Its weighted residual sum of squares over that of the unconstrained least squares, each plus a round-off
+        floor of 10⁻¹² of the weighted ‖y‖² (a relative RMS residual of 10⁻⁶): ≥ 1, near 1 when the constraints
+        cost nothing, and 1 rather than a ratio of round-off on noise-free data.
+    converged : bool
+        The solver met its tolerance, or used up its budget with the fit stalled (50 more evaluations change the
+        weighted residual sum of squares by less than 10⁻⁵ relative: what still moves is the prior's choice in
+        directions the data do not see).
+    message : str
+        Why it stopped, in words that agree with ``converged``: the solver's own message when it met its tolerance
+        (or did not, with the budget spent and the fit still moving), else that the fit had settled when the
+        budget ran out.
     """
 
     pi: FloatArray
@@ -98,14 +111,34 @@ def consistent_estimate(
     prior_weight: float = 1e-6,
     max_evaluations: int = 300,
 ) -> ConsistentEstimate:
-    """The physically consistent estimate of ``model``'s π from ``problem`` (see the module).
+    """The physically consistent estimate of a model's π from a problem (see the module).
 
-    estimate: a least-squares estimate of the same problem, whose per-joint noise levels weight the rows
-    (None or OLS: unweighted). prior: π_0 (default ``model.parameters()``; it need not be physical).
-    prior_weight: λ relative to the mean squared column norm of the compressed data matrix
-    (dimensionless, in [1e-12, 1]: the prior only fills in what the data cannot see; heavier, it fights the
-    data and the solver stalls). max_evaluations: of each of the two solver runs
-    (LM, then trust region; ≥ 1; 50 more may be spent to tell a stalled run from one still descending).
+    Parameters
+    ----------
+    problem : IdentificationProblem
+        W θ = y.
+    model : RobotModel
+        The model identified (its kinematics; its parameters as the default prior).
+    estimate : LeastSquaresEstimate, optional
+        A least-squares estimate of the same problem, whose per-joint noise levels weight the rows (None or OLS:
+        unweighted).
+    prior : array_like, shape (13 n,), optional
+        π_0 (default ``model.parameters()``; it need not be physical).
+    prior_weight : float, optional
+        λ relative to the mean squared column norm of the compressed data matrix (dimensionless, in [1e-12, 1]:
+        the prior only fills in what the data cannot see; heavier, it fights the data and the solver stalls).
+    max_evaluations : int, optional
+        Of each of the two solver runs (LM, then trust region; ≥ 1; 50 more may be spent to tell a stalled run
+        from one still descending).
+
+    Returns
+    -------
+    ConsistentEstimate
+
+    Raises
+    ------
+    InvalidParameterError, ShapeError
+        A bad weight, budget or prior.
     """
     n, k = problem.n, PARAMS_PER_JOINT
     if model.n != n or problem.base.n_full != k * n:

@@ -42,10 +42,25 @@ TRANSIENT_LEFT = 1e-3
 
 
 def settling_samples(sos: ArrayLike, left: float = TRANSIENT_LEFT) -> int:
-    """Samples after which the start-up transient of a filter (second-order sections, as from
-    ``scipy.signal.butter(..., output="sos")``) has decayed to ``left`` of its start: ⌈ln(left) / ln r⌉, r < 1
-    the largest magnitude of its poles (each section's roots of a₀z² + a₁z + a₂). Raises
-    :class:`~armctl.errors.InvalidParameterError` for a filter that is not stable (r ≥ 1)."""
+    """Samples after which the start-up transient of a filter has decayed to ``left`` of its start:
+    ⌈ln(left) / ln r⌉, r < 1 the largest magnitude of its poles (each section's roots of a₀z² + a₁z + a₂).
+
+    Parameters
+    ----------
+    sos : array_like, shape (sections, 6)
+        Second-order sections, as from ``scipy.signal.butter(..., output="sos")``.
+    left : float, optional
+        The fraction left, in (0, 1).
+
+    Returns
+    -------
+    int
+
+    Raises
+    ------
+    InvalidParameterError
+        A filter that is not stable (r ≥ 1).
+    """
     a = np.asarray(sos, dtype=float)[:, 3:6]
     r = max(float(np.abs(np.roots(row)).max()) if row[1:].any() else 0.0 for row in a / a[:, :1])
     if r >= 1.0:
@@ -73,14 +88,25 @@ def _warn_transient(trim: int, sos: FloatArray, stacklevel: int) -> None:
 
 @dataclass(frozen=True)
 class IdentificationData:
-    """Samples of the motion and the torques, each (S, n) except ``t`` (S,) [s]; read-only; and how to
-    reduce them before estimation.
+    """Samples of the motion and the torques, read-only, and how to reduce them before estimation.
 
-    q [rad], qd [rad/s], qdd [rad/s²], tau [N·m]. sos: second-order sections of the zero-phase low-pass
-    applied to τ and to the regressor's columns, (sections, 6) as from ``scipy.signal.butter(..., output="sos")``
-    (None: none, e.g. exact simulated samples). decimate: keep every k-th sample after filtering (a whole
-    number ≥ 1). trim: samples dropped at each end after filtering (a whole number ≥ 0). Build one from a
-    raw log with :func:`prepare_data`, or directly when q̇ and q̈ are known.
+    Build one from a raw log with :func:`prepare_data`, or directly when q̇ and q̈ are known.
+
+    Parameters
+    ----------
+    t : ndarray, shape (S,)
+        Sample times [s].
+    q, qd, qdd : ndarray, shape (S, n)
+        Joint positions [rad], velocities [rad/s], accelerations [rad/s²].
+    tau : ndarray, shape (S, n)
+        Joint torques [N·m].
+    sos : ndarray, shape (sections, 6), optional
+        Second-order sections of the zero-phase low-pass applied to τ and to the regressor's columns, as from
+        ``scipy.signal.butter(..., output="sos")`` (None: none, e.g. exact simulated samples).
+    decimate : int, optional
+        Keep every k-th sample after filtering (a whole number ≥ 1).
+    trim : int, optional
+        Samples dropped at each end after filtering (a whole number ≥ 0).
     """
 
     t: FloatArray
@@ -148,7 +174,17 @@ class IdentificationData:
         return range(self.trim, self.samples - self.trim, self.decimate)
 
     def reduce(self, x: ArrayLike) -> FloatArray:
-        """Filter (zero-phase, along the first axis) and decimate an array with one row per sample."""
+        """Filter (zero-phase, along the first axis) and decimate an array with one row per sample.
+
+        Parameters
+        ----------
+        x : array_like, shape (S, ...)
+            One row per sample.
+
+        Returns
+        -------
+        ndarray
+        """
         a = real_array(x, "x")
         if a.ndim < 1 or a.shape[0] != self.samples:
             raise ShapeError(f"expected {self.samples} rows, got shape {a.shape}", value=a.shape)
@@ -191,17 +227,33 @@ def prepare_data(
     decimate: int | None = None,
     trim: int | None = None,
 ) -> IdentificationData:
-    """A log of joint positions and torques made ready for identification: q filtered and differentiated
-    now; the filter, trimming and decimation recorded, to be applied to τ and to the regressor alike when
-    the problem is built (parallel filtering, see the module).
+    """A log of joint positions and torques made ready for identification: q filtered and differentiated now;
+    the filter, trimming and decimation recorded, to be applied to τ and to the regressor alike when the problem is
+    built (parallel filtering, see the module).
 
-    t: (S,) uniformly spaced sample times [s]. q: (S, n) joint positions [rad] (noisy encoders are fine).
-    tau: (S, n) joint torques [N·m] (raw; noise is fine). cutoff: low-pass corner f_c [Hz], above the
-    motion's bandwidth (for a Fourier excitation, several times ``trajectory.bandwidth``) and below the
-    noise. order: of the Butterworth filter (run twice: gain |H(f)|², no phase). decimate: keep every k-th
-    sample (default: the largest k with f_s/k ≥ 4 f_c). trim: samples dropped at each end (default: the
-    longer of three periods of the cutoff frequency, ⌈3 f_s / f_c⌉, and the filter's start-up transient,
-    :func:`settling_samples`, which grows with the order; a shorter one warns).
+    Parameters
+    ----------
+    t : array_like, shape (S,)
+        Uniformly spaced sample times [s].
+    q : array_like, shape (S, n)
+        Joint positions [rad] (noisy encoders are fine).
+    tau : array_like, shape (S, n)
+        Joint torques [N·m] (raw; noise is fine).
+    cutoff : float
+        The low-pass corner f_c [Hz], above the motion's bandwidth (for a Fourier excitation, several times
+        ``trajectory.bandwidth``) and below the noise.
+    order : int, optional
+        Of the Butterworth filter (run twice: gain |H(f)|², no phase).
+    decimate : int, optional
+        Keep every k-th sample (default: the largest k with f_s/k ≥ 4 f_c).
+    trim : int, optional
+        Samples dropped at each end (default: the longer of three periods of the cutoff frequency, ⌈3 f_s / f_c⌉,
+        and the filter's start-up transient, :func:`settling_samples`, which grows with the order; a shorter one
+        warns).
+
+    Returns
+    -------
+    IdentificationData
     """
     tt = real_array(t, "t").reshape(-1)
     qq, tq = real_array(q, "q"), real_array(tau, "tau")

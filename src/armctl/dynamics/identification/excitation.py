@@ -19,15 +19,21 @@ from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray, per_joint, readonly, real_array, scalar, whole_number
 from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
-from armctl.reference import Reference
+from armctl.references import Reference
 
 
 @dataclass(frozen=True)
 class FourierExcitation:
     """A periodic joint trajectory, a finite Fourier series per joint.
 
-    q0: (n,) offsets [rad]. a, b: (n, N) coefficients of the velocity's cosine and sine terms [rad/s].
-    period: T_f = 2π/ω_f [s], > 0 and large enough that N ω_f is finite.
+    Parameters
+    ----------
+    q0 : ndarray, shape (n,)
+        Offsets [rad].
+    a, b : ndarray, shape (n, N)
+        Coefficients of the velocity's cosine and sine terms [rad/s].
+    period : float
+        T_f = 2π/ω_f [s], > 0 and large enough that N ω_f is finite.
     """
 
     q0: FloatArray
@@ -77,7 +83,18 @@ class FourierExcitation:
         return self.harmonics / self.period
 
     def evaluate(self, t: ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """(q, q̇, q̈) at times ``t`` [s]: each (len(t), n), or (n,) for a scalar t."""
+        """(q, q̇, q̈) at times t.
+
+        Parameters
+        ----------
+        t : array_like
+            A time or times [s].
+
+        Returns
+        -------
+        tuple of ndarray
+            Each (len(t), n), or (n,) for a scalar t [rad, rad/s, rad/s²].
+        """
         tt = real_array(t, "t")
         if not np.isfinite(tt).all():
             raise NonFiniteError(f"t holds NaN or inf: {t!r:.80}", value=t)
@@ -99,15 +116,35 @@ class FourierExcitation:
         return Reference(q, qd, qdd)
 
     def extremes(self, samples_per_period: int = 2000) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-        """(min q, max q, max |q̇|, max |q̈|) per joint over one period, on a grid of ``samples_per_period``
-        (≥ 1) points."""
+        """(min q, max q, max |q̇|, max |q̈|) per joint over one period.
+
+        Parameters
+        ----------
+        samples_per_period : int, optional
+            Grid points (≥ 1).
+
+        Returns
+        -------
+        tuple of ndarray
+            Four (n,) arrays [rad, rad, rad/s, rad/s²].
+        """
         samples = whole_number(samples_per_period, "samples_per_period", minimum=1)
         t = np.linspace(0.0, self.period, samples, endpoint=False)
         q, qd, qdd = self.evaluate(t)
         return q.min(axis=0), q.max(axis=0), np.abs(qd).max(axis=0), np.abs(qdd).max(axis=0)
 
     def scaled(self, factor: ArrayLike) -> FourierExcitation:
-        """The same trajectory with each joint's motion about q0 scaled by ``factor`` (scalar or (n,))."""
+        """The same trajectory with each joint's motion about q0 scaled.
+
+        Parameters
+        ----------
+        factor : array_like
+            A scalar or (n,) factors.
+
+        Returns
+        -------
+        FourierExcitation
+        """
         f = per_joint(factor, self.n, "factor")
         if not np.isfinite(f).all():
             raise NonFiniteError(f"factor holds NaN or inf: {factor!r}", value=factor)
@@ -117,8 +154,25 @@ class FourierExcitation:
     def within(
         self, lower: ArrayLike, upper: ArrayLike, velocity: ArrayLike, acceleration: ArrayLike, tol: float = 1e-9
     ) -> bool:
-        """True if the trajectory stays within the position, velocity [rad/s] and acceleration [rad/s²]
-        limits (checked on a dense grid). Each limit is a scalar or an (n,) vector (±inf: none); tol ≥ 0."""
+        """Whether the trajectory stays within limits (checked on a dense grid).
+
+        Each limit is a scalar or an (n,) vector (±inf: none).
+
+        Parameters
+        ----------
+        lower, upper : array_like
+            Position limits [rad].
+        velocity : array_like
+            |q̇| limit [rad/s].
+        acceleration : array_like
+            |q̈| limit [rad/s²].
+        tol : float, optional
+            Slack allowed, ≥ 0.
+
+        Returns
+        -------
+        bool
+        """
         lo, hi, vel, acc = (
             per_joint(x, self.n, name)
             for x, name in ((lower, "lower"), (upper, "upper"), (velocity, "velocity"), (acceleration, "acceleration"))

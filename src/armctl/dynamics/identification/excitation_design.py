@@ -34,9 +34,18 @@ from armctl.errors import IdentifiabilityError, InvalidParameterError, ShapeErro
 class ExcitationDesign:
     """Result of :func:`optimize_excitation`.
 
-    trajectory: the optimised excitation. condition_number: cond(W_b) of the result, on the ``samples``
-    states used by the optimiser. initial_condition_number: that of the best random start. evaluations:
-    number of objective evaluations. message: the optimiser's.
+    Attributes
+    ----------
+    trajectory : FourierExcitation
+        The optimised excitation.
+    condition_number : float
+        cond(W_b) of the result, on the ``samples`` states used by the optimiser.
+    initial_condition_number : float
+        That of the best random start.
+    evaluations : int
+        The number of objective evaluations.
+    message : str
+        The optimiser's.
     """
 
     trajectory: FourierExcitation
@@ -98,14 +107,42 @@ def optimize_excitation(
 ) -> ExcitationDesign:
     """An excitation trajectory within the joint limits with a small cond(W_b).
 
-    acceleration_limit: q̈_max [rad/s²] (scalar or (n,)); a model carries none. velocity_limit: q̇_max
-    [rad/s] (default: the model's; if given, the smaller of the two). period: T_f [s]. harmonics: N.
-    position_margin: kept from each position limit [rad]. samples: states S per period in the objective.
-    grid: constraint points per period. starts: random starts (the best one is optimised). maxiter: SLSQP
-    iterations (0: the best random start). seed: of the random starts.
+    Parameters
+    ----------
+    dynamics : Dynamics
+        The arm.
+    base : BaseParameters, optional
+        Its base parameters (default: found numerically).
+    acceleration_limit : array_like
+        q̈_max [rad/s²] (scalar or (n,)); a model carries none.
+    velocity_limit : array_like, optional
+        q̇_max [rad/s] (default: the model's; if given, the smaller of the two).
+    period : float, optional
+        T_f [s].
+    harmonics : int, optional
+        N.
+    position_margin : float, optional
+        Kept from each position limit [rad].
+    samples : int, optional
+        States S per period in the objective.
+    grid : int, optional
+        Constraint points per period.
+    starts : int, optional
+        Random starts (the best one is optimised).
+    maxiter : int, optional
+        SLSQP iterations (0: the best random start).
+    seed : int, optional
+        Seed of the random starts.
 
-    Raises IdentifiabilityError if even the best design leaves cond(W_b) infinite (limits or a period that
-    leave almost no motion, too few samples).
+    Returns
+    -------
+    ExcitationDesign
+
+    Raises
+    ------
+    IdentifiabilityError
+        Even the best design leaves cond(W_b) infinite (limits or a period that leave almost no motion, too few
+        samples).
     """
     model = dynamics.model
     n = dynamics.n

@@ -32,11 +32,15 @@ if TYPE_CHECKING:
 
 @dataclass(frozen=True)
 class ValidationResult:
-    """Torques predicted by an identified model against measured ones, per joint.
+    """Torques predicted by an identified model against measured ones, per joint (``rms_error``,
+    ``rms_torque``, ``relative_error`` = rms_error / rms_torque and ``max_error``, each (n,) [N·m], are derived).
 
-    t: (S,) [s]. predicted, measured: (S, n) [N·m]. rms_error: RMS of their difference (n,) [N·m].
-    rms_torque: RMS of the measured torque (n,). relative_error: rms_error / rms_torque (n,).
-    max_error: largest |difference| (n,).
+    Attributes
+    ----------
+    t : ndarray, shape (S,)
+        [s].
+    predicted, measured : ndarray, shape (S, n)
+        [N·m].
     """
 
     t: FloatArray
@@ -85,10 +89,18 @@ class ValidationResult:
 class IdentificationResult:
     """What :func:`identify` found.
 
-    model: the model identification started from (kinematics, and the prior for what data cannot see).
-    dynamics: its Dynamics (evaluates the regressor). problem: W θ = y. estimate: the (weighted) least-squares
-    estimate of the base parameters and Coulomb offsets. consistent: the physically consistent estimate (a
-    full π and a RobotModel), or None if not asked for.
+    Attributes
+    ----------
+    model : RobotModel
+        The model identification started from (kinematics, and the prior for what data cannot see).
+    dynamics : Dynamics
+        Its Dynamics (evaluates the regressor).
+    problem : IdentificationProblem
+        W θ = y.
+    estimate : LeastSquaresEstimate
+        The (weighted) least-squares estimate of the base parameters and Coulomb offsets.
+    consistent : ConsistentEstimate or None
+        The physically consistent estimate (a full π and a RobotModel), or None if not asked for.
     """
 
     model: RobotModel
@@ -121,8 +133,20 @@ class IdentificationResult:
         return self.consistent.theta
 
     def predict(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, consistent: bool = False) -> FloatArray:
-        """Torques (S, n) [N·m] the estimate predicts at samples (S, n) of q, q̇, q̈ (``consistent``: of the
-        consistent estimate instead of the least-squares one)."""
+        """Torques the estimate predicts at samples of q, q̇, q̈.
+
+        Parameters
+        ----------
+        q, qd, qdd : array_like, shape (S, n)
+            [rad, rad/s, rad/s²].
+        consistent : bool, optional
+            Use the consistent estimate instead of the least-squares one.
+
+        Returns
+        -------
+        ndarray, shape (S, n)
+            [N·m].
+        """
         theta = self._theta(consistent)
         arrays = [np.atleast_2d(real_array(a, name)) for a, name in ((q, "q"), (qd, "qd"), (qdd, "qdd"))]
         if any(a.ndim != 2 or a.shape != arrays[0].shape or a.shape[1] != self.problem.n for a in arrays):
@@ -133,11 +157,24 @@ class IdentificationResult:
         for a, name in zip(arrays, ("q", "qd", "qdd"), strict=True):
             if not np.isfinite(a).all():
                 raise NonFiniteError(f"{name} holds NaN or inf", value=a)
-        w = problem_regressor(self.dynamics, self.base, *arrays, self.problem.offsets)
+        samples_q, samples_qd, samples_qdd = arrays
+        w = problem_regressor(self.dynamics, self.base, samples_q, samples_qd, samples_qdd, self.problem.offsets)
         return w @ theta
 
     def validate(self, data: IdentificationData, consistent: bool = False) -> ValidationResult:
-        """Predicted against measured torques on (fresh) data, processed like the identification data."""
+        """Predicted against measured torques on (fresh) data, processed like the identification data.
+
+        Parameters
+        ----------
+        data : IdentificationData
+            The validation experiment.
+        consistent : bool, optional
+            Use the consistent estimate.
+
+        Returns
+        -------
+        ValidationResult
+        """
         if not isinstance(data, IdentificationData):
             raise InvalidParameterError(
                 f"data must be an IdentificationData (see prepare_data), got {type(data).__name__}", value=data
@@ -148,13 +185,35 @@ class IdentificationResult:
         return ValidationResult(data.t[list(data.kept)], predicted, problem.torque.reshape(-1, problem.n))
 
     def report(self, validation: ValidationResult | None = None) -> str:
-        """A plain-text report: condition number, estimates ± σ, residuals per joint, validation errors."""
+        """A plain-text report: condition number, estimates ± σ, residuals per joint, validation errors.
+
+        Parameters
+        ----------
+        validation : ValidationResult, optional
+            Validation errors to include.
+
+        Returns
+        -------
+        str
+        """
         from armctl.dynamics.identification.report import format_report
 
         return format_report(self, validation)
 
     def plot(self, validation: ValidationResult, **kwargs: Any) -> Figure:
-        """The validation plot (see :func:`~armctl.dynamics.identification.report.validation_plot`)."""
+        """The validation plot (see :func:`~armctl.dynamics.identification.report.validation_plot`).
+
+        Parameters
+        ----------
+        validation : ValidationResult
+            From :meth:`validate`.
+        **kwargs
+            Passed to :func:`~armctl.dynamics.identification.report.validation_plot`.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+        """
         from armctl.dynamics.identification.report import validation_plot
 
         return validation_plot(validation, joint_names=self.model.joint_names, **kwargs)
@@ -172,14 +231,36 @@ def identify(
     prior_weight: float = 1e-6,
     rtol: float = 1e-7,
 ) -> IdentificationResult:
-    """Identify the dynamic parameters of ``model``'s arm from measured data.
+    """Identify the dynamic parameters of an arm from measured data.
 
-    model: a RobotModel (or a Dynamics of one): its kinematics are trusted; its inertial and friction
-    parameters serve only as the prior of the consistent estimate. data: one experiment or several.
-    weighted: WLS (per-joint noise levels) instead of OLS. consistent: also compute the physically consistent
-    full π. offsets: estimate the Coulomb asymmetry ½(F_c⁺ − F_c⁻) of each joint. base: base parameters
-    (default: found numerically). prior, prior_weight: see :func:`consistent_estimate`. rtol: excitation
-    threshold (raises IdentifiabilityError with the unidentifiable directions below it).
+    Parameters
+    ----------
+    model : RobotModel or Dynamics
+        Its kinematics are trusted; its inertial and friction parameters serve only as the prior of the
+        consistent estimate.
+    data : IdentificationData or sequence of IdentificationData
+        One experiment or several.
+    weighted : bool, optional
+        WLS (per-joint noise levels) instead of OLS.
+    consistent : bool, optional
+        Also compute the physically consistent full π.
+    offsets : bool, optional
+        Estimate the Coulomb asymmetry ½(F_c⁺ − F_c⁻) of each joint.
+    base : BaseParameters, optional
+        Base parameters (default: found numerically).
+    prior, prior_weight : optional
+        See :func:`consistent_estimate`.
+    rtol : float, optional
+        The excitation threshold.
+
+    Returns
+    -------
+    IdentificationResult
+
+    Raises
+    ------
+    IdentifiabilityError
+        The data do not excite some directions (named) above ``rtol``.
     """
     weighted, consistent = boolean(weighted, "weighted"), boolean(consistent, "consistent")
     offsets = boolean(offsets, "offsets")

@@ -17,6 +17,7 @@ minimum-norm answer.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 
@@ -29,10 +30,24 @@ from armctl.errors import IdentifiabilityError, InvalidParameterError
 class LeastSquaresEstimate:
     """An estimate of the unknowns of an :class:`IdentificationProblem`.
 
-    theta: (p,) estimates (base parameters, then Coulomb offsets if any) in SI units. std: (p,) their
-    standard deviations. covariance: (p, p). noise_std: (n,) σ̂_j, the residual torque std per joint [N·m].
-    residual_rms: (n,) RMS of y − W θ̂ per joint [N·m]. condition_number: cond of the (weighted) W.
-    weighted: WLS or OLS. names: (p,) names of the unknowns.
+    Attributes
+    ----------
+    theta : ndarray, shape (p,)
+        Estimates (base parameters, then Coulomb offsets if any) in SI units.
+    std : ndarray, shape (p,)
+        Their standard deviations.
+    covariance : ndarray, shape (p, p)
+        Their covariance.
+    noise_std : ndarray, shape (n,)
+        σ̂_j, the residual torque std per joint [N·m].
+    residual_rms : ndarray, shape (n,)
+        RMS of y − W θ̂ per joint [N·m].
+    condition_number : float
+        cond of the (weighted) W.
+    weighted : bool
+        WLS or OLS.
+    names : tuple of str
+        The (p,) names of the unknowns.
     """
 
     theta: FloatArray
@@ -111,8 +126,26 @@ def excitation_rtol(rtol: float) -> float:
 def solve_least_squares(
     problem: IdentificationProblem, weighted: bool = True, rtol: float = 1e-7
 ) -> LeastSquaresEstimate:
-    """OLS (``weighted=False``) or WLS estimate of the problem's unknowns (see the module). rtol: relative
-    singular-value threshold of the excitation check, in (0, 1)."""
+    """OLS or WLS estimate of the problem's unknowns (see the module).
+
+    Parameters
+    ----------
+    problem : IdentificationProblem
+        W θ = y.
+    weighted : bool, optional
+        WLS (True) or OLS.
+    rtol : float, optional
+        Relative singular-value threshold of the excitation check, in (0, 1).
+
+    Returns
+    -------
+    LeastSquaresEstimate
+
+    Raises
+    ------
+    IdentifiabilityError
+        Directions of θ the data do not excite, named.
+    """
     if not isinstance(problem, IdentificationProblem):
         raise InvalidParameterError(
             f"problem must be an IdentificationProblem (see build_problem), got {type(problem).__name__}", value=problem
@@ -150,7 +183,7 @@ def solve_least_squares(
         cond = float(np.linalg.cond(w))
     noise_std = np.sqrt((r**2).sum(axis=0) / max(s_count - p / n, 1.0))
     return LeastSquaresEstimate(
-        theta,
+        cast(FloatArray, theta),
         np.sqrt(np.clip(np.diag(cov), 0.0, None)),
         cov,
         noise_std,

@@ -32,8 +32,23 @@ from armctl.errors import IdentifiabilityError, InvalidParameterError, NonFinite
 
 @dataclass(frozen=True)
 class IdentificationProblem:
-    """W θ = y (see the module). regressor: W (S n × p); torque: y (S n,); base: the base parameters;
-    offsets: whether the last n unknowns are Coulomb offsets; names: (p,) names of the unknowns."""
+    """W θ = y (see the module).
+
+    Attributes
+    ----------
+    regressor : ndarray, shape (S n, p)
+        W.
+    torque : ndarray, shape (S n,)
+        y.
+    base : BaseParameters
+        The base parameters.
+    n : int
+        The number of joints.
+    offsets : bool
+        Whether the last n unknowns are Coulomb offsets.
+    names : tuple of str
+        The (p,) names of the unknowns.
+    """
 
     regressor: FloatArray
     torque: FloatArray
@@ -77,7 +92,17 @@ class IdentificationProblem:
         return self.regressor.shape[1]
 
     def joint_rows(self, i: int) -> slice:
-        """The rows of joint i (0-based) in W and y."""
+        """The rows of joint i in W and y.
+
+        Parameters
+        ----------
+        i : int
+            The joint, 0-based.
+
+        Returns
+        -------
+        slice
+        """
         return slice(i, None, self.n)
 
 
@@ -118,11 +143,25 @@ def build_problem(
     base: BaseParameters | None = None,
     offsets: bool = True,
 ) -> IdentificationProblem:
-    """Stack the regressor of ``dynamics``' arm over ``data`` (one experiment or several).
+    """Stack the regressor of an arm over data (one experiment or several).
 
     The regressor is evaluated at every sample, then it and τ are filtered and decimated alike
-    (``IdentificationData.reduce``). base: the base parameters (default: found with
-    :func:`find_base_parameters`). offsets: add the Coulomb asymmetry of each joint as an unknown.
+    (``IdentificationData.reduce``).
+
+    Parameters
+    ----------
+    dynamics : Dynamics
+        The arm.
+    data : IdentificationData or sequence of IdentificationData
+        The experiments.
+    base : BaseParameters, optional
+        The base parameters (default: found with :func:`find_base_parameters`).
+    offsets : bool, optional
+        Add the Coulomb asymmetry of each joint as an unknown.
+
+    Returns
+    -------
+    IdentificationProblem
     """
     offsets = boolean(offsets, "offsets")
     experiments = (

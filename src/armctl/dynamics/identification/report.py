@@ -24,9 +24,23 @@ def _joint_table(names: Sequence[str], columns: dict[str, np.ndarray]) -> list[s
 
 
 def format_report(result: IdentificationResult, validation: ValidationResult | None = None, max_name: int = 60) -> str:
-    """A plain-text report of an identification: the data and their conditioning, each estimated base
-    parameter ± its standard deviation (σ and σ/|θ| in %), the residual torque per joint, the physically
-    consistent estimate and, if given, the validation errors."""
+    """A plain-text report of an identification: the data and their conditioning, each estimated base parameter ±
+    its standard deviation (σ and σ/|θ| in %), the residual torque per joint, the physically consistent estimate and,
+    if given, the validation errors.
+
+    Parameters
+    ----------
+    result : IdentificationResult
+        What :func:`identify` found.
+    validation : ValidationResult, optional
+        Validation errors to include.
+    max_name : int, optional
+        Base parameter names longer than this are cut.
+
+    Returns
+    -------
+    str
+    """
     est, prob = result.estimate, result.problem
     names = result.model.joint_names
     lines = [
@@ -93,8 +107,21 @@ def validation_plot(
     title: str = "Identified model: predicted vs measured torque",
 ) -> Figure:
     """A figure with one row per joint: measured and predicted torque [N·m] against time [s], and their
-    difference. joint_names: one per joint (default "joint 1", …). Returns the matplotlib Figure (not shown,
-    not saved)."""
+    difference (not shown, not saved).
+
+    Parameters
+    ----------
+    validation : ValidationResult
+        The torques.
+    joint_names : sequence of str, optional
+        One per joint (default "joint 1", …).
+    title : str, optional
+        The figure's title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     from matplotlib.figure import Figure
 
     from armctl.dynamics.identification.identify import ValidationResult

@@ -22,7 +22,7 @@ from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray, Gain, nonnegative_vector, whole_number
 from armctl.controllers.osc.state import ModelState
-from armctl.reference import Reference
+from armctl.references import Reference
 
 
 class Task(ABC):
@@ -39,7 +39,7 @@ class Task(ABC):
         #: counts the changes of this task's weight (and a motion task's gains): what a controller derives from
         #: them (stacked weights, generated code's parameters) is refreshed when it changes
         self.revision = 0
-        self.weight = weight  # type: ignore[assignment]  (checked by the property)
+        self.weight = weight  # checked by the property
         self.priority = whole_number(priority, f"{name}: priority")
 
     @property
@@ -81,6 +81,11 @@ class MotionTask(Task):
     # the hot path uses the law's matrices built from the gains in _gains_changed
     kp = Gain("K_p (dim×dim); may be reassigned between control periods (checked again).", size=_dim, label=_label)
     kd = Gain("K_d (dim×dim); may be reassigned between control periods (checked again).", size=_dim, label=_label)
+    # what the Gain descriptors keep: the compact forms and the matrices
+    _kp: FloatArray
+    _kd: FloatArray
+    _kp_matrix: FloatArray
+    _kd_matrix: FloatArray
 
     def __init__(
         self,
@@ -94,7 +99,7 @@ class MotionTask(Task):
         super().__init__(dim, name, weight, priority)
         self.kp = kp
         if kd is None:  # critical damping: K_d = 2 K_p^½ (the symmetric square root; 2√k_p for a scalar)
-            lam, vec = np.linalg.eigh(self.kp)
+            lam, vec = np.linalg.eigh(self._kp_matrix)
             kd = 2.0 * (vec * np.sqrt(lam)) @ vec.T
         self.kd = kd
 

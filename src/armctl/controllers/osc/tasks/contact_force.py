@@ -21,7 +21,7 @@ from armctl.controllers.osc.contact import Contact
 from armctl.controllers.osc.state import ModelState
 from armctl.controllers.osc.tasks.base import Task
 from armctl.errors import InvalidParameterError, UnknownNameError
-from armctl.reference import Reference
+from armctl.references import Reference
 
 Force = ArrayLike | float | Callable[[float], ArrayLike]
 
@@ -78,7 +78,7 @@ class ContactForceTask(Task):
             self._fn: Callable[[float], ArrayLike] | None = force
         else:
             self._fn = None
-            self._force = self._value(force)  # type: ignore[arg-type]
+            self._force = self._value(force)
 
     def target(self, t: float) -> FloatArray:
         """The desired force at time t: (3,) or (1,) with ``normal_only``."""

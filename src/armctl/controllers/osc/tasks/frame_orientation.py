@@ -15,7 +15,7 @@ from armctl._checks import FloatArray
 from armctl.controllers.osc.state import ModelState
 from armctl.controllers.osc.tasks.frame_task import FrameTask
 from armctl.controllers.osc.tasks.rotation import rotation_error
-from armctl.reference import Reference
+from armctl.references import Reference
 
 
 class FrameOrientationTask(FrameTask):

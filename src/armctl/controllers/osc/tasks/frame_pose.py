@@ -12,7 +12,7 @@ from armctl._checks import FloatArray
 from armctl.controllers.osc.state import ModelState
 from armctl.controllers.osc.tasks.frame_task import FrameTask
 from armctl.controllers.osc.tasks.rotation import rotation_error
-from armctl.reference import Reference
+from armctl.references import Reference
 
 
 class FramePoseTask(FrameTask):
@@ -58,7 +58,7 @@ class FramePoseTask(FrameTask):
         """(J, ẍ* − J̇q̇): :meth:`kinematics` and the PD law in one product (see ``_gains_changed``); a
         subclass that overrides :meth:`kinematics` gets the generic form on its own kinematics."""
         if type(self).kinematics is not FramePoseTask.kinematics:
-            return super().residual(state, t, ref)  # type: ignore[return-value]
+            return super().residual(state, t, ref)  # type: ignore[return-value]  # a frame task has a Jacobian
         pose, twist, acc = self.target.at(t)
         fk = state.frame(self.frame)
         x = np.concatenate(

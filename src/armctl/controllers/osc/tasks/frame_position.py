@@ -10,7 +10,7 @@ from numpy.typing import ArrayLike
 from armctl._checks import FloatArray
 from armctl.controllers.osc.state import ModelState
 from armctl.controllers.osc.tasks.frame_task import FrameTask
-from armctl.reference import Reference
+from armctl.references import Reference
 
 
 class FramePositionTask(FrameTask):

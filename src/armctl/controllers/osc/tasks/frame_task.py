@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 from numpy.typing import ArrayLike
 
 from armctl.controllers.osc.tasks.base import MotionTask
@@ -33,5 +35,5 @@ class FrameTask(MotionTask):
         """Target from ``fn(t) -> (value, velocity, acceleration)`` in the task's terms (see ``set_target``)."""
         self.target.follow(fn)
 
-    def check(self, evaluator: object, n: int, contacts: dict[str, int]) -> None:
-        evaluator.check_frame(self.frame)  # type: ignore[attr-defined]
+    def check(self, evaluator: Any, n: int, contacts: dict[str, int]) -> None:
+        evaluator.check_frame(self.frame)

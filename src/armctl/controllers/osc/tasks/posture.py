@@ -15,7 +15,7 @@ from armctl._checks import FloatArray, vector, whole_number
 from armctl.controllers.osc.state import ModelState
 from armctl.controllers.osc.tasks.base import MotionTask
 from armctl.errors import ShapeError
-from armctl.reference import Reference
+from armctl.references import Reference
 
 
 class PostureTask(MotionTask):
@@ -56,7 +56,7 @@ class PostureTask(MotionTask):
         self, state: ModelState, t: float, ref: Reference
     ) -> tuple[None, None, FloatArray, FloatArray, FloatArray]:
         r = self._fixed or ref
-        return None, None, r.q - state.q, r.qd - state.qd, r.qdd  # type: ignore[return-value]
+        return None, None, r.q - state.q, r.qd - state.qd, r.qdd
 
     def _gains_changed(self) -> None:
         super()._gains_changed()
@@ -69,6 +69,6 @@ class PostureTask(MotionTask):
         """(None, ẍ*): :meth:`kinematics` and the PD law in one product (see ``_gains_changed``); a subclass
         that overrides :meth:`kinematics` gets the generic form on its own kinematics."""
         if type(self).kinematics is not PostureTask.kinematics:
-            return super().residual(state, t, ref)  # type: ignore[return-value]
+            return super().residual(state, t, ref)  # type: ignore[return-value]  # no Jacobian: None
         r = self._fixed or ref
         return None, self._posture_law.dot(np.concatenate((r.qdd, r.qd, state.qd, r.q, state.q)))

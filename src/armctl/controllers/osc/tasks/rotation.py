@@ -19,7 +19,7 @@ from armctl._checks import FloatArray
 
 def rotation_error(rot_ref: FloatArray, rot: FloatArray) -> FloatArray:
     """log(R_ref Rᵀ) [rad], (3,)."""
-    return pin.log3(rot_ref.dot(rot.T))  # type: ignore[no-any-return]
+    return pin.log3(rot_ref.dot(rot.T))
 
 
 def rotation_error_sx(rot_ref: Any, rot: Any) -> Any:
@@ -50,7 +50,7 @@ def rotation_error_sx(rot_ref: Any, rot: Any) -> Any:
     for i0 in range(3):  # the axis from column i0 of the symmetric part (Pinocchio's compute_theta_axis)
         i1, i2 = (i0 + 1) % 3, (i0 + 2) % 3
         s = cs.sqrt(val[i0] + eps + eps * eps) * cs.if_else(r[i2, i1] >= r[i1, i2], 1.0, -1.0)
-        axis = [None, None, None]
+        axis: list[Any] = [None, None, None]
         axis[i0] = s / 2.0
         axis[i1] = 1.0 / (2.0 * s) * (r[i1, i0] + r[i0, i1])
         axis[i2] = 1.0 / (2.0 * s) * (r[i2, i0] + r[i0, i2])

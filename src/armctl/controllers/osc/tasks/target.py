@@ -84,7 +84,7 @@ class TargetHolder:
         if len(shape) == 1:
             val = vector(value, shape[0], f"{self.owner}: target")
         else:
-            val = matrix(value, shape, f"{self.owner}: target")  # type: ignore[arg-type]
+            val = matrix(value, shape, f"{self.owner}: target")
             why = rotation_defect(val.ravel().tolist(), shape)
             if why is not None:
                 kind = "pose" if shape == (4, 4) else "rotation"
