@@ -27,9 +27,9 @@ from armctl.model.robot import RobotModel
 from armctl.reference import Reference
 from armctl.sim import setup
 from armctl.sim.after_run import after_run
+from armctl.sim.compiled import choose_step
 from armctl.sim.contact import Environment, ForceSensor
 from armctl.sim.friction import FrictionModel
-from armctl.sim.integrators import fast_step, make_step
 from armctl.sim.plant import Plant
 from armctl.sim.recorder import Recorder
 from armctl.sim.result import SimResult
@@ -65,7 +65,7 @@ def simulate(
     max_position: float = math.inf,
     reset: bool = True,
     energy: bool = True,
-    compile: bool = False,
+    compile: bool | str = "auto",
     engine: str = "native",
 ) -> SimResult:
     """Simulate ``controller`` driving ``plant`` along ``reference`` for ``duration`` seconds.
@@ -90,10 +90,10 @@ def simulate(
     [rad/s], max_position [rad]: a state beyond them, or non-finite, stops the run as diverged (as does a
     non-finite torque from the controller or a mass matrix that is no longer positive definite). energy:
     provide ``res.energy``, E = T + U at every sample, computed from the recorded states when first read
-    (False: NaN). compile: integrate with C code generated for this plant (:mod:`armctl.sim.compiled`: built
-    on first use, about 2 s for 7 joints, then cached on disk; an RK4 step about five times cheaper) — for
-    ``"rk4"`` or ``"euler"`` on a plant without friction, contact or disturbance (else
-    :class:`~armctl.errors.InvalidParameterError`). engine: ``"native"`` (armctl's integrators) or ``"mujoco"``
+    (False: NaN). compile: ``"auto"`` integrates with C code generated for this plant wherever it can be built
+    (:mod:`armctl.sim.compiled`: a few seconds on first use, logged once, then cached on disk; without a C
+    compiler the Python step, with a warning), True insists on it (an error if it cannot be had), False uses the
+    Python step; ``res.info["compiled"]`` says which ran. engine: ``"native"`` (armctl's integrators) or ``"mujoco"``
     (MuJoCo integrates the plant, a :class:`~armctl.sim.mujoco_plant.MujocoPlant` scene or the model's MJCF; see
     :mod:`armctl.sim.mujoco_engine` for what it takes and records).
 
@@ -139,16 +139,9 @@ def simulate(
     dyn.check_mass_matrix(q)  # a plant whose M is singular from the start is a model to fix, not a run that diverged
     sc = setup.scene(dyn, friction, environment, sensors, disturbance)
 
-    pl = Plant(dyn, sc.friction, sc.environments, sc.disturbance)
     unstable = _check_contacts(dyn, sc.environments, q, scheme, h)
-    step = make_step(scheme, pl)
-    if boolean(compile, "compile"):
-        from armctl.sim.compiled import check_plant, compiled_step
-
-        check_plant(dyn, scheme, pl)
-        fast = compiled_step(dyn.model, scheme)
-    else:
-        fast = fast_step(scheme, pl)
+    chosen = choose_step(dyn, scheme, Plant(dyn, sc.friction, sc.environments, sc.disturbance), compile)
+    pl, step, fast = chosen.plant, chosen.step, chosen.fast
     simple = pl.simple
     implicit = scheme in ("implicit-euler", "semi-implicit-euler")  # these give no q̈ at the step start
     samples = n_periods + 1
@@ -284,7 +277,7 @@ def simulate(
         "friction": sc.friction.name if pl.friction else "none",
         "saturate": bool(saturate),
         "delay": lag,
-        "compiled": bool(compile),
+        "compiled": chosen.compiled,
         "seed": seed,
         "wall_time": wall,
         "real_time_factor": (rows - 1) * cdt / wall if wall > 0 and rows > 1 else math.nan,

@@ -1,0 +1,433 @@
+"""The simulated plant as CasADi expressions, for the generated integration step (:mod:`armctl.sim.compiled_plant`).
+
+The same terms as :class:`~armctl.sim.plant.Plant`, written once as symbols and generated as C:
+
+* rigid-body dynamics: Newton–Euler bias C(q, q̇) q̇ + g(q) and the composite-rigid-body M(q) of
+  :mod:`armctl.dynamics.recursive` (the model the ``"pinocchio"`` backend expresses);
+* joint friction τ_f(q̇) of :mod:`armctl.sim.friction` — the stick–slip model's kinetic curve for given sliding
+  directions d (F_v q̇ + F_c(d) + (F_s − F_c)(d) exp(−(q̇/v_s)²)), or the smooth tanh curve — and its slope;
+* contact: every point of every :class:`~armctl.sim.contact.Plane`, its position p(q) = p_j(q) + R_j(q) r on
+  joint j's frame, J_p = ∂p/∂q, the normal law (Kelvin–Voigt or Hunt–Crossley) and the regularised Coulomb force
+  along the plane, τ_c = Σ J_pᵀ F_p, with K = Σ J_pᵀ(∂F/∂p)J_p and D = Σ J_pᵀ(∂F/∂ṗ)J_p for the implicit schemes;
+* the disturbance: −J_tool(q)ᵀ h_d, with h_d an input (sampled in Python, see :mod:`armctl.sim.plant`).
+
+Sticking is a mask s (1: stuck) applied to the Cholesky solve of M q̈ = r: rows and columns of the stuck joints
+are replaced by those of the identity and their right-hand side by 0, so that q̈_F = M_FF⁻¹ r_F and q̈_S = 0
+*exactly* (every product that couples them is a product with an exact zero).
+
+What is a number of the model (inertias, geometry of the chain) is built into the code; what a user varies
+between runs — friction levels, contact stiffness, damping and friction, the planes, the points' offsets — is
+the input ``par`` (:meth:`PlantLayout.parameters`), so that such variants share one library.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from dataclasses import dataclass
+from typing import Any
+
+import casadi as cs
+import numpy as np
+
+from armctl._checks import FloatArray
+from armctl.dynamics import recursive
+from armctl.model.robot import RobotModel
+from armctl.sim.contact import Plane
+from armctl.sim.friction import SmoothFriction, StickSlip
+from armctl.sim.normal_force import HuntCrossley, KelvinVoigt
+from armctl.sim.plant import Plant
+
+#: parameters of a contact point in ``par``: normal (3), plane point (3), point in its joint frame (3),
+#: stiffness, damping or dissipation, exponent, μ, slip velocity
+POINT_PARAMS = 14
+#: friction parameters per joint in ``par``: F_v, F_c⁺, F_c⁻, hump⁺, hump⁻, v_s, F_s⁺, F_s⁻, capable
+FRICTION_PARAMS = 9
+
+
+@dataclass(frozen=True)
+class PlantLayout:
+    """What the generated code of a plant is made of (its structure: one library each) and where each number
+    sits in its parameter vector ``par``.
+
+    Attributes
+    ----------
+    n : int
+        Joints.
+    friction : str
+        ``"none"``, ``"stick-slip"`` or ``"smooth"``.
+    stribeck : bool
+        The friction curve has a Stribeck term.
+    sticky : bool
+        Some joint can stick (a stick–slip model with a breakaway level).
+    points : tuple of (int, str)
+        Every contact point: the 1-based joint it rides on (0: the world) and its normal law (``"kv"``, ``"hc"``).
+    disturbance_joint : int or None
+        The tool frame's joint when the plant has a disturbance.
+    """
+
+    n: int
+    friction: str
+    stribeck: bool
+    sticky: bool
+    points: tuple[tuple[int, str], ...]
+    disturbance_joint: int | None
+
+    @property
+    def has_friction(self) -> bool:
+        return self.friction != "none"
+
+    @property
+    def has_external(self) -> bool:
+        return bool(self.points) or self.disturbance_joint is not None
+
+    @property
+    def friction_offset(self) -> int:
+        return 0
+
+    @property
+    def points_offset(self) -> int:
+        return FRICTION_PARAMS * self.n + 1 if self.has_friction else 0
+
+    @property
+    def tool_offset(self) -> int:
+        return self.points_offset + POINT_PARAMS * len(self.points)
+
+    @property
+    def size(self) -> int:
+        """Entries of ``par`` (at least one)."""
+        return max(self.tool_offset + (3 if self.disturbance_joint is not None else 0), 1)
+
+    def tag(self) -> str:
+        """The structure as text, for the library's cache key."""
+        text = f"{self.n}|{self.friction}|{self.stribeck}|{self.sticky}|{self.points}|{self.disturbance_joint}"
+        return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+    def parameters(self, plant: Plant) -> FloatArray:
+        """``par`` of ``plant`` (which must have this layout, see :func:`layout_of`)."""
+        par = np.zeros(self.size)
+        f = plant.friction
+        n = self.n
+        if f is not None:
+            capable = f.capable if isinstance(f, StickSlip) else np.zeros(n, bool)
+            cols = (f.viscous, f.coulomb_pos, f.coulomb_neg, f.hump_pos, f.hump_neg, f.stribeck_velocity)
+            cols += (f.breakaway_pos, f.breakaway_neg, capable.astype(float))
+            for k, col in enumerate(cols):
+                par[k * n : (k + 1) * n] = col
+            par[FRICTION_PARAMS * n] = f.velocity if isinstance(f, SmoothFriction) else 1.0
+        at = self.points_offset
+        model = plant.dyn.model
+        for env in plant.environments:
+            law = env.law  # type: ignore[attr-defined]
+            if isinstance(law, KelvinVoigt):
+                coeff = (law.stiffness, law.damping, 1.0)
+            else:
+                coeff = (law.stiffness, law.dissipation, law.exponent)
+            for point in env.points:
+                par[at : at + 3] = env.normal  # type: ignore[attr-defined]
+                par[at + 3 : at + 6] = env.point  # type: ignore[attr-defined]
+                par[at + 6 : at + 9] = _in_joint_frame(model, point.frame, point.offset)
+                par[at + 9 : at + 12] = coeff
+                par[at + 12] = env.friction  # type: ignore[attr-defined]
+                par[at + 13] = env.slip_velocity  # type: ignore[attr-defined]
+                at += POINT_PARAMS
+        if self.disturbance_joint is not None:
+            par[at : at + 3] = _in_joint_frame(model, None, np.zeros(3))
+        return par
+
+
+def _in_joint_frame(model: RobotModel, frame: str | None, offset: FloatArray) -> FloatArray:
+    """A point at ``offset`` in ``frame``, in the frame of the joint that frame rides on."""
+    placement = model.frame(frame).placement
+    return placement[:3, :3] @ offset + placement[:3, 3]  # type: ignore[no-any-return]
+
+
+def layout_of(plant: Plant) -> PlantLayout | str:
+    """The layout of ``plant``'s generated code, or why it has none (a friction model or an environment that
+    is not one of the library's own, the rotors' gyroscopic coupling of a ``"lagrange"`` plant)."""
+    dyn = plant.dyn
+    model = dyn.model
+    if getattr(dyn, "rotor_coupling", False) and any(j.motor is not None and j.motor.gyroscopic for j in model.joints):
+        return (
+            "the generated step integrates the model the 'pinocchio' backend expresses, without the rotors' "
+            "gyroscopic coupling this 'lagrange' plant has (rotor_coupling=False or the 'pinocchio' backend "
+            "have a generated step)"
+        )
+    f = plant.friction
+    if f is None:
+        kind, stribeck = "none", False
+    elif type(f) is StickSlip:
+        kind, stribeck = "stick-slip", f.has_stribeck
+    elif type(f) is SmoothFriction:
+        kind, stribeck = "smooth", f.has_stribeck
+    else:
+        return f"the friction model {type(f).__name__} has no generated code (StickSlip and SmoothFriction do)"
+    points = []
+    for env in plant.environments:
+        if type(env) is not Plane:
+            return f"the environment {type(env).__name__} has no generated code (Plane has)"
+        law = env.law
+        if type(law) not in (KelvinVoigt, HuntCrossley):
+            return (
+                f"the normal-force law {type(law).__name__} has no generated code (KelvinVoigt and HuntCrossley have)"
+            )
+        kind_law = "kv" if type(law) is KelvinVoigt else "hc"
+        points += [(model.frame(p.frame).joint, kind_law) for p in env.points]
+    dist = model.frame(None).joint if plant.disturbance is not None else None
+    return PlantLayout(model.n, kind, stribeck, plant.sticky is not None, tuple(points), dist)
+
+
+# --------------------------------------------------------------------------------------------- expressions
+class PlantExpressions:
+    """Builds the expressions of one plant's terms for symbolic inputs (see the module)."""
+
+    def __init__(self, model: RobotModel, layout: PlantLayout) -> None:
+        self.model = model
+        self.layout = layout
+        self.n = model.n
+
+    # ------------------------------------------------------------------------------------ kinematics
+    def poses(self, q: cs.SX) -> tuple[list[tuple[Any, Any]], list[tuple[cs.SX, cs.SX]]]:
+        """(world poses (R_0j, p_0j) of the joint frames j = 0…n, joint transforms)."""
+        tf = recursive.joint_transforms(self.model, q)
+        out: list[tuple[Any, Any]] = [(cs.DM.eye(3), cs.DM.zeros(3))]
+        for r, t in tf:
+            rot, pos = out[-1]
+            out.append((rot @ r, pos + rot @ t))
+        return out, tf
+
+    # ------------------------------------------------------------------------------------ friction
+    def friction(self, v: cs.SX, direction: cs.SX, par: cs.SX) -> cs.SX:
+        """τ_f(q̇) for the sliding directions d (see :meth:`Plant.kinetic_friction`)."""
+        n = self.n
+        fv, cp, cn, hp, hn, vs = (par[k * n : (k + 1) * n] for k in range(6))
+        if self.layout.friction == "stick-slip":
+            level = cs.if_else(direction > 0, cp, 0) - cs.if_else(direction < 0, cn, 0)
+            tau = fv * v + level
+            if self.layout.stribeck:
+                hump = cs.if_else(direction > 0, hp, 0) - cs.if_else(direction < 0, hn, 0)
+                tau = tau + hump * cs.exp(-((v / vs) ** 2))
+            return tau
+        vt = par[FRICTION_PARAMS * n]
+        return fv * v + cs.tanh(v / vt) * self._smooth_levels(v, par)
+
+    def _smooth_levels(self, v: cs.SX, par: cs.SX) -> cs.SX:
+        n = self.n
+        cp, cn, hp, hn, vs = (par[k * n : (k + 1) * n] for k in range(1, 6))
+        pos = v > 0
+        level = cs.if_else(pos, cp, cn)
+        if self.layout.stribeck:
+            x = cs.fmin(cs.fmax(v / vs, -40.0), 40.0)
+            level = level + cs.if_else(pos, hp, hn) * cs.exp(-(x * x))
+        return level
+
+    def friction_slope(self, v: cs.SX, direction: cs.SX, par: cs.SX) -> cs.SX:
+        """∂τ_f/∂q̇ (diagonal) (see :meth:`FrictionModel.slope`)."""
+        n = self.n
+        fv, _, _, hp, hn, vs = (par[k * n : (k + 1) * n] for k in range(6))
+        x = cs.fmin(cs.fmax(v / vs, -40.0), 40.0)
+        shape_slope = -2.0 * x * cs.exp(-(x * x)) / vs
+        if self.layout.friction == "stick-slip":
+            d = fv
+            if self.layout.stribeck:
+                hump = cs.if_else(direction > 0, hp, 0) - cs.if_else(direction < 0, hn, 0)
+                d = d + hump * shape_slope
+            return d
+        vt = par[FRICTION_PARAMS * n]
+        th = cs.tanh(v / vt)
+        d = fv + (1.0 - th**2) / vt * self._smooth_levels(v, par)
+        if self.layout.stribeck:
+            d = d + th * cs.if_else(v > 0, hp, hn) * shape_slope
+        return d
+
+    # ------------------------------------------------------------------------------------- contact
+    def points(self, q: cs.SX, par: cs.SX) -> list[tuple[cs.SX, cs.SX]]:
+        """(p, J_p) of every contact point."""
+        qs = cs.SX.sym("qs", self.n)  # J_p = ∂p/∂q on a symbol, then at q (which may be an expression)
+        poses, _ = self.poses(qs)
+        out = []
+        at = self.layout.points_offset
+        for joint, _ in self.layout.points:
+            rot, pos = poses[joint]
+            p = pos + rot @ par[at + 6 : at + 9]
+            p, jac = cs.substitute([p, cs.jacobian(p, qs)], [qs], [q])
+            out.append((p, jac))
+            at += POINT_PARAMS
+        return out
+
+    def contact(
+        self, q: cs.SX, v: cs.SX, par: cs.SX, stiffness: bool = False
+    ) -> tuple[cs.SX, cs.SX | None, cs.SX | None]:
+        """(τ_c, K, D) of every point (see :meth:`Environment.joint_torque`); K, D only with ``stiffness``."""
+        n = self.n
+        tau = cs.SX.zeros(n)
+        kj = cs.SX.zeros(n, n) if stiffness else None
+        dj = cs.SX.zeros(n, n) if stiffness else None
+        at = self.layout.points_offset
+        for (_, law), (p, jp) in zip(self.layout.points, self.points(q, par), strict=True):
+            nrm, pt = par[at : at + 3], par[at + 3 : at + 6]
+            k, c, expo, mu, vslip = (par[at + i] for i in range(9, 14))
+            at += POINT_PARAMS
+            vp = jp @ v
+            depth = cs.dot(nrm, pt - p)
+            vn = cs.dot(nrm, vp)
+            rate = -vn
+            if law == "kv":
+                raw = k * depth + c * rate
+                active = cs.logic_and(depth > 0, raw > 0)
+                fn = cs.if_else(active, raw, 0)
+                dfn_depth, dfn_rate = cs.if_else(active, k, 0), cs.if_else(active, c, 0)
+            else:
+                dpos = cs.fmax(depth, 0)
+                dp = dpos**expo
+                damp = 1.0 + c * rate
+                active = cs.logic_and(depth > 0, damp > 0)
+                fn = cs.if_else(active, k * dp * damp, 0)
+                dfn_depth = cs.if_else(active, k * (expo * dpos ** (expo - 1.0)) * damp, 0)
+                dfn_rate = cs.if_else(active, k * dp * c, 0)
+            vt = vp - vn * nrm
+            speed = cs.sqrt(cs.dot(vt, vt))
+            dirn = nrm - (mu / cs.fmax(speed, vslip)) * vt
+            tau = tau + jp.T @ (fn * dirn)
+            if stiffness:
+                dfdp = -dfn_depth * (dirn @ nrm.T)
+                proj = cs.SX.eye(3) - nrm @ nrm.T
+                tang = vt / speed
+                slow = (mu * fn / vslip) * proj
+                fast = (mu * fn / speed) * (proj - tang @ tang.T)
+                dfdv = -dfn_rate * (dirn @ nrm.T) - cs.if_else(speed <= vslip, slow, fast)
+                kj = kj + jp.T @ dfdp @ jp
+                dj = dj + jp.T @ dfdv @ jp
+        return tau, kj, dj
+
+    def disturbance(self, q: cs.SX, hd: cs.SX, par: cs.SX) -> cs.SX:
+        """−J_tool(q)ᵀ h_d: the joint torque the disturbance wrench h_d (what the arm exerts) adds to τ."""
+        joint = self.layout.disturbance_joint
+        qs = cs.SX.sym("qs", self.n)
+        poses, _ = self.poses(qs)
+        rot, pos = poses[joint]  # type: ignore[index]
+        at = self.layout.tool_offset
+        p = pos + rot @ par[at : at + 3]
+        jl = cs.jacobian(p, qs)
+        cols = []
+        for i, j in enumerate(self.model.joints):
+            if i < joint and j.kind == "revolute":  # type: ignore[operator]
+                cols.append(poses[i + 1][0] @ cs.DM(j.axis))
+            else:
+                cols.append(cs.SX.zeros(3))
+        ja = cs.horzcat(*cols)
+        return cs.substitute(-(jl.T @ hd[:3] + ja.T @ hd[3:]), qs, q)
+
+    def external(self, q: cs.SX, v: cs.SX, hd: cs.SX, par: cs.SX) -> cs.SX:
+        """τ_e: contact torque plus disturbance torque (0 without either)."""
+        tau = cs.SX.zeros(self.n)
+        if self.layout.points:
+            tau = tau + self.contact(q, v, par)[0]
+        if self.layout.disturbance_joint is not None:
+            tau = tau + self.disturbance(q, hd, par)
+        return tau
+
+
+def masked_cholesky_solve(mass: cs.SX, rhs: cs.SX, stuck: cs.SX) -> tuple[cs.SX, cs.SX]:
+    """(x, smallest pivot): x_F = M_FF⁻¹ r_F and x_S = 0 for the stuck joints (s_i = 1), by a Cholesky solve of
+    M with the stuck rows and columns replaced by the identity's and their right-hand side by 0 (see the module).
+    The smallest pivot before its square root is ≤ 0 where M_FF is not positive definite."""
+    n = mass.shape[0]
+    keep = 1 - stuck
+    masked = cs.SX(n, n)
+    for i in range(n):
+        for j in range(n):
+            masked[i, j] = keep[i] * mass[i, j] + stuck[i] if i == j else keep[i] * keep[j] * mass[i, j]
+    b = keep * rhs
+    low: list[list[Any]] = [[None] * n for _ in range(n)]
+    pivots = []
+    for i in range(n):
+        for k in range(i + 1):
+            s = masked[i, k]
+            for p in range(k):
+                s = s - low[i][p] * low[k][p]
+            if i == k:
+                pivots.append(s)
+                low[i][k] = cs.sqrt(s)
+            else:
+                low[i][k] = s / low[k][k]
+    y: list[Any] = [None] * n
+    for i in range(n):
+        s = b[i]
+        for p in range(i):
+            s = s - low[i][p] * y[p]
+        y[i] = s / low[i][i]
+    x: list[Any] = [None] * n
+    for i in reversed(range(n)):
+        s = y[i]
+        for p in range(i + 1, n):
+            s = s - low[p][i] * x[p]
+        x[i] = s / low[i][i]
+    return cs.vertcat(*x), cs.mmin(cs.vertcat(*pivots))
+
+
+# ------------------------------------------------------------------------------------------------- kernels
+#: the kernels of each family: explicit schemes ("rk4", "euler") and implicit ones
+KERNELS = {
+    "explicit": ("pk_rhs", "pk_terms", "pk_mass", "pk_friction"),
+    "implicit": ("pk_rhs", "pk_terms", "pk_mass", "pk_friction", "pk_bias", "pk_implicit", "pk_symplectic"),
+}
+
+
+def kernels(model: RobotModel, layout: PlantLayout, family: str) -> list[cs.Function]:
+    """The generated kernels of ``family`` (see :data:`KERNELS`), called by the step's C driver.
+
+    * ``pk_rhs(q, q̇, τ, d, s, h_d, par) → (q̈, τ_f, τ_e, smallest pivot)``: the accelerations with the stuck joints
+      held, and the friction and external torques they used;
+    * ``pk_terms(q, q̇, τ, d, h_d, par) → (M, r)``: the mass matrix and r = τ − τ_f − C q̇ − g + τ_e, for the stick
+      solve;
+    * ``pk_mass(q) → M``; ``pk_friction(q̇, d, par) → τ_f``; ``pk_bias(q, q̇) → (C q̇ + g, g)``;
+    * ``pk_implicit(q, q̇₁, h, d, h_d, par) → (−τ_f + τ_e(q + h q̇₁, q̇₁), h diag(∂τ_f/∂q̇) − h(D + hK), τ_f, τ_e)``:
+      backward Euler's velocity-dependent force and its Jacobian;
+    * ``pk_symplectic(q, v̄, h, d, h_d, par) → (C(q, v̄)ᵀv̄ − τ_f + τ_e, h diag(∂τ_f/∂q̇) − hD, τ_f, τ_e, K)``:
+      the same for symplectic Euler (C(q, v̄)ᵀv̄ = ∂T/∂q at v̄).
+    """
+    n = model.n
+    ex = PlantExpressions(model, layout)
+    q, v, tau, d, s = (cs.SX.sym(x, n) for x in ("q", "qd", "tau", "dir", "stuck"))
+    hd = cs.SX.sym("hd", 6)
+    par = cs.SX.sym("par", layout.size)
+    h = cs.SX.sym("h")
+    _, tf = ex.poses(q)
+    mass = recursive.mass_matrix(model, q, transforms=tf)
+    zeros = cs.SX.zeros(n)
+
+    def bias(vel: cs.SX) -> cs.SX:
+        return recursive.inverse_dynamics(model, q, vel, zeros, transforms=tf)
+
+    fric = ex.friction(v, d, par) if layout.has_friction else zeros
+    ext = ex.external(q, v, hd, par)
+    made: dict[str, cs.Function] = {}
+
+    def add(name: str, inputs: list[cs.SX], outputs: list[cs.SX]) -> None:
+        made[name] = cs.Function(name, inputs, [cs.densify(o) for o in outputs])
+
+    acc, pivot = masked_cholesky_solve(mass, tau - fric + ext - bias(v), s)
+    add("pk_rhs", [q, v, tau, d, s, hd, par], [acc, fric, ext, pivot])
+    add("pk_terms", [q, v, tau, d, hd, par], [mass, tau - fric + ext - bias(v)])
+    add("pk_mass", [q], [mass])
+    add("pk_friction", [v, d, par], [fric])
+    if family == "implicit":
+        add("pk_bias", [q, v], [bias(v), bias(zeros)])
+        slope = ex.friction_slope(v, d, par) if layout.has_friction else zeros
+        # backward Euler: the external force at (q + h q̇₁, q̇₁)
+        q1 = q + h * v
+        ext1 = ex.external(q1, v, hd, par)
+        jac = h * cs.diag(slope)
+        if layout.points:
+            _, kj, dj = ex.contact(q1, v, par, stiffness=True)
+            jac = jac - h * (dj + h * kj)  # type: ignore[operator]
+        add("pk_implicit", [q, v, h, d, hd, par], [-fric + ext1, jac, fric, ext1])
+        # symplectic Euler: ∂T/∂q at v̄ (C(q, v̄)ᵀ v̄ for the Christoffel C)
+        dtdq = cs.gradient(0.5 * cs.dot(v, mass @ v), q)
+        jac_s = h * cs.diag(slope)
+        kj0 = cs.SX.zeros(n, n)
+        if layout.points:
+            _, kj0, dj0 = ex.contact(q, v, par, stiffness=True)
+            jac_s = jac_s - h * dj0  # type: ignore[operator]
+        add("pk_symplectic", [q, v, h, d, hd, par], [dtdq - fric + ext, jac_s, fric, ext, kj0])
+    return [made[name] for name in KERNELS[family]]
