@@ -15,6 +15,8 @@ import pytest
 from armctl.errors import RunTimeoutError, SweepWarning, WorkerDiedError
 from armctl.sim import CaseFailure, sweep
 
+pytestmark = pytest.mark.one_step  # sweeps and the step functions themselves: not a choice of step
+
 
 def _job(x: int, log: str, mode: str = "ok") -> int:
     """x², after noting the start in ``log``; or fail the way ``mode`` says."""
