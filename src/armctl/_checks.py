@@ -1,6 +1,6 @@
 """Input checks shared by the whole package (private).
 
-They are written for the hot path: a 7-vector is checked in well under a microsecond.
+Each raises an :class:`~armctl.errors.ArmctlError` subclass naming the value and what is expected.
 """
 
 from __future__ import annotations
@@ -235,7 +235,7 @@ class Gain:
     """A gain attribute of a controller or task: assigned a scalar, a vector (diagonal) or a matrix, checked by
     :func:`gain_matrix` (``size(owner)`` rows, errors named ``label(owner, name)``), read back as the matrix (a
     read-only copy: change a gain by assigning it, e.g. ``ctrl.kp = 2 * ctrl.kp``). Its
-    cheap form (:func:`compact_gain`) is kept in ``owner._<name>`` for the hot path, and the owner's
+    cheap form (:func:`compact_gain`) is kept in ``owner._<name>`` for the control law, and the owner's
     ``_gains_changed()``, if any, runs after every assignment, so a gain reassigned between calls takes effect.
     ``optional``: None is allowed (no such term)."""
 

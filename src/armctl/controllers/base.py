@@ -39,12 +39,12 @@ class Controller(ABC):
 
     #: the ``compute`` of a built-in law without state between calls whose τ is NaN or inf whenever an entry of
     #: q or q̇ is (set by those classes). While ``type(self).compute`` is that function (not overridden by a
-    #: subclass), ``_checks_result`` may be set: then only τ is checked for finiteness on the hot path (one
-    #: check instead of two), and the inputs only when τ is not finite (to name the culprit). Otherwise (users'
+    #: subclass), ``_checks_result`` may be set: then only τ is checked for finiteness (one check instead of
+    #: two), and the inputs only when τ is not finite (to name the culprit). Otherwise (users'
     #: controllers, subclasses, laws with state) the inputs are checked before ``compute`` and τ after it. Either
     #: way a non-finite τ from a finite state raises a NonFiniteError naming both. (An inf input then
     #: meets zeros in the law's matrix product, so NumPy may print an "invalid value" RuntimeWarning before the
-    #: NonFiniteError that names the input; silencing it would cost an errstate context at every step.)
+    #: NonFiniteError that names the input.)
     _result_checked_compute: Any = None
     _checks_result: bool = False
 

@@ -165,6 +165,15 @@ class Dynamics(RegressorMethods):
             return x
         return vector(x, self.n, name)
 
+    def _of_q(self, fn: Callable[[FloatArray], Any], q: Any) -> Any:
+        """``fn(q)`` (a kernel primitive of q alone, which refuses a wrong length) on a checked q."""
+        if type(q) is np.ndarray and q.dtype == FLOAT and q.ndim == 1 and math.isfinite(sum(q.tolist())):
+            try:
+                return fn(q)
+            except ValueError:  # a wrong length: vector() names it
+                pass
+        return fn(vector(q, self.n, "q"))
+
     def _evaluate(self, fn: Callable[..., Any], names: tuple[str, ...], *args: Any) -> Any:
         """``fn(*args)`` (a kernel primitive) on checked inputs, its result checked: a non-finite result from
         finite inputs is an overflow (named) or a mass matrix that is not positive definite (named).
@@ -185,11 +194,12 @@ class Dynamics(RegressorMethods):
             raise self._local.kernel.nonfinite_error(args[0], None) from None
         if np.isfinite(out).all():
             return out
-        raise self._overflow(out, names, args)
+        raise self._overflow(out, names, args, args[0])
 
-    def _overflow(self, out: Any, names: tuple[str, ...], args: tuple[FloatArray, ...]) -> Exception:
-        """The error for a non-finite result from finite inputs ``args``."""
-        error = self._local.kernel.nonfinite_error(args[0], out)
+    def _overflow(self, out: Any, names: tuple[str, ...], args: tuple[FloatArray, ...], q: FloatArray) -> Exception:
+        """The error for a non-finite result ``out`` at configuration q from finite inputs ``args``: a mass matrix
+        that is not positive definite at q, or the largest input named."""
+        error = self._local.kernel.nonfinite_error(q, out)
         if not isinstance(error, NonFiniteError):  # a mass matrix that is not positive definite
             return error
         big = max(range(len(args)), key=lambda i: float(np.abs(args[i]).max(initial=0.0)))
@@ -221,13 +231,7 @@ class Dynamics(RegressorMethods):
         q : (n,) array_like
             Joint positions [rad or m].
         """
-        k = self._local.kernel
-        if type(q) is np.ndarray and q.dtype == FLOAT and q.ndim == 1 and math.isfinite(sum(q.tolist())):
-            try:  # the kernel refuses a wrong length: then vector() names it
-                return k.mass(q)
-            except ValueError:
-                pass
-        return k.mass(vector(q, self.n, "q"))
+        return self._of_q(self._local.kernel.mass, q)
 
     def coriolis_matrix(self, q: ArrayLike, qd: ArrayLike) -> FloatArray:
         """C(q, q̇) (n×n) from the Christoffel symbols, c_ij = Σ_k ½(∂M_ij/∂q_k + ∂M_ik/∂q_j − ∂M_jk/∂q_i) q̇_k,
@@ -248,13 +252,7 @@ class Dynamics(RegressorMethods):
         q : (n,) array_like
             Joint positions [rad or m].
         """
-        k = self._local.kernel
-        if type(q) is np.ndarray and q.dtype == FLOAT and q.ndim == 1 and math.isfinite(sum(q.tolist())):
-            try:  # the kernel refuses a wrong length: then vector() names it
-                return k.gravity(q)
-            except ValueError:
-                pass
-        return k.gravity(vector(q, self.n, "q"))
+        return self._of_q(self._local.kernel.gravity, q)
 
     def friction_torque(self, qd: ArrayLike) -> FloatArray:
         """τ_f = F_v q̇ + F_c⁺ (q̇ > 0) or − F_c⁻ (q̇ < 0) [N·m or N]; zero Coulomb part at rest (the simulator
@@ -293,10 +291,11 @@ class Dynamics(RegressorMethods):
                     return tau
         tau = self._evaluate(k.inverse_dynamics, ("q", "qd", "qdd"), q, qd, qdd)
         if wrench is not None:
-            qv = self._vector(q, "q")
-            tau += k.jacobian(qv, None).T @ vector(wrench, 6, "wrench")
+            qv, h = self._vector(q, "q"), vector(wrench, 6, "wrench")
+            with np.errstate(over="ignore", invalid="ignore"):
+                tau = tau + k.jacobian(qv, None).T @ h
             if not np.isfinite(tau).all():
-                raise self._overflow(tau, ("wrench",), (vector(wrench, 6, "wrench"),))
+                raise self._overflow(tau, ("wrench",), (h,), qv)
         return tau  # type: ignore[no-any-return]
 
     def forward_dynamics(
@@ -318,9 +317,14 @@ class Dynamics(RegressorMethods):
         if not self.friction.any and wrench is None:
             return self._evaluate(k.aba, ("q", "qd", "tau"), q, qd, tau)  # type: ignore[no-any-return]
         q, qd, tau = (self._vector(x, nm) for x, nm in ((q, "q"), (qd, "qd"), (tau, "tau")))
-        net = tau - self.friction.torque(qd) if self.friction.any else tau
-        if wrench is not None:
-            net = net - k.jacobian(q, None).T @ vector(wrench, 6, "wrench")
+        with np.errstate(over="ignore", invalid="ignore"):
+            net = tau - self.friction.torque(qd) if self.friction.any else tau
+            if wrench is not None:
+                h = vector(wrench, 6, "wrench")
+                net = net - k.jacobian(q, None).T @ h
+        if not np.isfinite(net).all():  # τ − τ_f − Jᵀh beyond the range of floats: name the largest input
+            names, args = (("tau", "qd", "wrench"), (tau, qd, h)) if wrench is not None else (("tau", "qd"), (tau, qd))
+            raise self._overflow(net, names, args, q)
         return self._evaluate(k.aba, ("q", "qd", "tau"), q, qd, net)  # type: ignore[no-any-return]
 
     def jacobian(self, q: ArrayLike, frame: str | None = None) -> FloatArray:
@@ -364,7 +368,9 @@ class Dynamics(RegressorMethods):
         q, qd : (n,) array_like
             Joint positions [rad or m] and velocities [rad/s or m/s].
         """
-        return float(self._evaluate(lambda a, b: np.array(self._local.kernel.kinetic(a, b)), ("q", "qd"), q, qd))
+        k = self._local.kernel
+        with np.errstate(over="ignore", invalid="ignore"):  # an overflow is named below
+            return float(self._evaluate(lambda a, b: np.array(k.kinetic(a, b)), ("q", "qd"), q, qd))
 
     def potential_energy(self, q: ArrayLike) -> float:
         """U = −Σ m_i g₀ᵀ p_Ci [J] over the model's moving links, zero with every centre of mass at the world

@@ -4,8 +4,8 @@ the composite-rigid-body mass matrix, and forward dynamics from them — for cod
 They express the model the ``"pinocchio"`` backend expresses (rotors as reflected inertia k_r²I_m on the
 diagonal of M, no gyroscopic coupling, no friction), joint by joint in each link's own frame, as the textbook
 writes them (Siciliano et al., §7.5 and §7.6; see ``shared/references``). With every constant folded in (a
-joint axis along z zeroes two thirds of its products), the generated C code evaluates q̈ for a 7-joint arm
-in about a microsecond and a half; :mod:`armctl.sim.compiled` builds the simulator's integration step from it.
+joint axis along z zeroes two thirds of its products), the generated C code is short;
+:mod:`armctl.sim.compiled` builds the simulator's integration step from it.
 
 Link frames: frame i is joint i's frame after its motion, its origin on the joint axis; R_i is the rotation
 taking frame-i coordinates to frame i−1 and t_i the origin of frame i in frame i−1. Link i's inertial

@@ -16,6 +16,7 @@ from armctl.sim.integrators import INTEGRATORS
 from armctl.sim.limits import LimitReport
 from armctl.sim.mujoco_plant import MujocoPlant
 from armctl.sim.normal_force import HuntCrossley, KelvinVoigt, NormalForce
+from armctl.sim.options import Forces, Sensing, StopRules
 from armctl.sim.playback import playback
 from armctl.sim.result import SimResult
 from armctl.sim.simulate import simulate
@@ -28,6 +29,7 @@ __all__ = [
     "ContactPoint",
     "Environment",
     "ForceSensor",
+    "Forces",
     "FrictionModel",
     "HuntCrossley",
     "KelvinVoigt",
@@ -35,9 +37,11 @@ __all__ = [
     "MujocoPlant",
     "NormalForce",
     "Plane",
+    "Sensing",
     "SimResult",
     "SmoothFriction",
     "StickSlip",
+    "StopRules",
     "SweepResult",
     "playback",
     "simulate",

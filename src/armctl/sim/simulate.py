@@ -16,13 +16,14 @@ import math
 import time
 import warnings
 from collections.abc import Callable, Sequence
+from dataclasses import fields
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, boolean, nonnegative_vector, real_array
+from armctl._checks import FloatArray, boolean, nonnegative_vector
 from armctl.dynamics.base import Dynamics
-from armctl.errors import InvalidParameterError, ShapeError, SimulationWarning
+from armctl.errors import SimulationWarning
 from armctl.model.robot import RobotModel
 from armctl.reference import Reference
 from armctl.sim import setup
@@ -30,15 +31,12 @@ from armctl.sim.after_run import after_run
 from armctl.sim.compiled import choose_step
 from armctl.sim.contact import Environment, ForceSensor
 from armctl.sim.friction import FrictionModel
+from armctl.sim.loop import ClosedLoop, LoopSettings
+from armctl.sim.options import Forces, Sensing, StopRules, grouped
 from armctl.sim.plant import Plant
 from armctl.sim.recorder import Recorder
 from armctl.sim.result import SimResult
 from armctl.sim.stability import contact_stability
-from armctl.sim.stepper import advance
-from armctl.sim.stick_slip import NotPositiveDefinite
-
-_GT = float.__gt__
-_FLOAT = np.dtype(float)
 
 
 def simulate(
@@ -52,66 +50,141 @@ def simulate(
     dt: float | None = None,
     integrator: str = "rk4",
     *,
-    friction: str | FrictionModel = "stick-slip",
-    environment: Environment | Sequence[Environment] | None = None,
-    sensors: ForceSensor | Sequence[ForceSensor] = (),
-    disturbance: Callable[[float], ArrayLike] | None = None,
+    sensing: Sensing | None = None,
+    forces: Forces | None = None,
+    stop: StopRules | None = None,
     saturate: bool = True,
-    noise_q: ArrayLike = 0.0,
-    noise_qd: ArrayLike = 0.0,
-    seed: int | None = None,
-    delay: int = 0,
-    max_velocity: float = 1e3,
-    max_position: float = math.inf,
     reset: bool = True,
     energy: bool = True,
     compile: bool | str = "auto",
     engine: str = "native",
+    friction: str | FrictionModel | None = None,
+    environment: Environment | Sequence[Environment] | None = None,
+    disturbance: Callable[[float], ArrayLike] | None = None,
+    sensors: ForceSensor | Sequence[ForceSensor] | None = None,
+    noise_q: ArrayLike | None = None,
+    noise_qd: ArrayLike | None = None,
+    seed: int | None = None,
+    delay: int | None = None,
+    max_velocity: float | None = None,
+    max_position: float | None = None,
 ) -> SimResult:
     """Simulate ``controller`` driving ``plant`` along ``reference`` for ``duration`` seconds.
 
-    plant: the true arm, a Dynamics or a RobotModel (its friction, payload, … are the truth; it may differ
-    from the controller's own model). controller: ``tau = controller(t, q, qd, ref)``; its ``reset()`` is
-    called first (``reset=True``), its ``end_run()`` (if it has one) after the last step, and its ``last_log``
-    dict recorded after every call. reference: a Reference
-    or a callable t → Reference. duration [s]: a whole number of control periods. q0, qd0: initial state
-    (None: the reference at t = 0). control_dt: controller period Δt_c [s]. dt: integration step [s]; Δt_c
-    must be a whole multiple of it (None: Δt_c). integrator: "rk4", "semi-implicit-euler"
-    (symplectic: no energy drift), "implicit-euler" (stiff contact and damping) or "euler" (the cheapest);
-    see :mod:`armctl.sim.integrators`.
+    Parameters
+    ----------
+    plant : Dynamics or RobotModel
+        The true arm: its friction, payload, … are the truth (it may differ from the controller's own model).
+    controller : callable
+        ``tau = controller(t, q, qd, ref)`` [N·m]; its ``reset()`` is called first (``reset=True``), its
+        ``end_run()`` (if it has one) after the last step, and its ``last_log`` dict recorded after every call.
+    reference : Reference or callable
+        A :class:`~armctl.Reference`, or t [s] → Reference.
+    duration : float
+        Length of the run [s], a whole number of control periods.
+    q0, qd0 : (n,) array_like, optional
+        Initial state [rad, rad/s] (None: the reference at t = 0).
+    control_dt : float
+        Controller period Δt_c [s].
+    dt : float, optional
+        Integration step [s]; Δt_c must be a whole multiple of it (None: Δt_c).
+    integrator : {"rk4", "semi-implicit-euler", "implicit-euler", "euler"}
+        The scheme (:mod:`armctl.sim.integrators`): ``"rk4"`` (the default), ``"semi-implicit-euler"``
+        (symplectic: no energy drift), ``"implicit-euler"`` (stiff contact and damping), ``"euler"`` (the cheapest).
+    sensing : Sensing, optional
+        What the controller measures: noise, its seed, delay, force sensors (:class:`~armctl.sim.options.Sensing`;
+        its fields may be given as keywords instead).
+    forces : Forces, optional
+        Friction model, contact environments, disturbance (:class:`~armctl.sim.options.Forces`; its fields may be
+        given as keywords instead).
+    stop : StopRules, optional
+        ``max_velocity`` [rad/s], ``max_position`` [rad] (:class:`~armctl.sim.options.StopRules`; its fields may be
+        given as keywords instead).
+    saturate : bool
+        Clip τ at the plant model's effort limits.
+    reset : bool
+        Call ``controller.reset()`` first.
+    energy : bool
+        Provide ``res.energy``, E = T + U at every sample, computed from the recorded states when first read
+        (False: NaN).
+    compile : {"auto", True, False}
+        ``"auto"``: integrate with C code generated for this plant wherever it can be built (:mod:`armctl.sim.compiled`:
+        a few seconds on first use, logged once, then cached on disk; without a C compiler, the Python step and a
+        warning); True: the generated step or an error saying why there is none; False: the Python step.
+        ``res.info["compiled"]`` says which ran.
+    engine : {"native", "mujoco"}
+        ``"mujoco"``: MuJoCo integrates the plant, a :class:`~armctl.sim.mujoco_plant.MujocoPlant` scene or the
+        model's MJCF (see :mod:`armctl.sim.mujoco_engine` for what it takes and records).
+    friction, environment, disturbance : optional
+        The fields of ``forces``, as keywords (defaults: ``"stick-slip"``, none, none).
+    sensors, noise_q, noise_qd, seed, delay : optional
+        The fields of ``sensing``, as keywords (defaults: none, 0 rad, 0 rad/s, a fresh seed, 0 periods).
+    max_velocity, max_position : float, optional
+        The fields of ``stop``, as keywords (defaults: 1e3 rad/s, inf).
 
-    friction: "stick-slip" (exact sticking), "smooth" (tanh) or a FrictionModel, applied to the plant
-    model's joint friction. environment: contact environment(s); sensors: force sensor(s) recorded in
-    ``res.sensor``; disturbance: t → h_d (6,), a wrench at the tool frame with the sign of Dynamics' ``wrench``
-    (what the arm exerts: a push F on the arm is −F). saturate: clip τ at the model's effort limits.
-    noise_q [rad], noise_qd [rad/s]: standard deviations (scalar or per joint) of Gaussian measurement noise,
-    drawn from ``seed`` (None: a fresh seed, kept in ``res.info["seed"]`` to repeat the run). delay: the
-    controller sees the measurement of ``delay`` periods earlier (the first one before that). max_velocity
-    [rad/s], max_position [rad]: a state beyond them, or non-finite, stops the run as diverged (as does a
-    non-finite torque from the controller or a mass matrix that is no longer positive definite). energy:
-    provide ``res.energy``, E = T + U at every sample, computed from the recorded states when first read
-    (False: NaN). compile: ``"auto"`` integrates with C code generated for this plant wherever it can be built
-    (:mod:`armctl.sim.compiled`: a few seconds on first use, logged once, then cached on disk; without a C
-    compiler the Python step, with a warning), True insists on it (an error if it cannot be had), False uses the
-    Python step; ``res.info["compiled"]`` says which ran. engine: ``"native"`` (armctl's integrators) or ``"mujoco"``
-    (MuJoCo integrates the plant, a :class:`~armctl.sim.mujoco_plant.MujocoPlant` scene or the model's MJCF; see
-    :mod:`armctl.sim.mujoco_engine` for what it takes and records).
+    Returns
+    -------
+    SimResult
+        The samples at t_k = k·Δt_c. A run that diverges (a non-finite or out-of-bounds state, a non-finite torque,
+        a mass matrix no longer positive definite) returns the samples before it with ``diverged=True``,
+        ``diverged_at``, ``divergence`` and the offending state: it does not raise.
 
-    Returns a :class:`~armctl.sim.result.SimResult`; a run that diverges returns the samples before it with
-    ``diverged=True``, ``diverged_at``, ``divergence`` and the offending state — it does not raise. A contact
-    the integrator cannot integrate stably at this step (:mod:`armctl.sim.stability`) is reported before the
-    run by a :class:`~armctl.errors.SimulationWarning` and kept in ``res.info["unstable_contacts"]``: the run
-    still happens (the failure is a result to show), but past the first impact it is not the arm's motion.
-    After a run with contact, what that check cannot see is checked on the record (:mod:`armctl.sim.after_run`):
-    energy the arm gained that no force supplied (``res.info["energy_gain"]``), positive work by the passive
-    environments (``res.info["environment_work"]``) and a plane's friction too stiff below its slip velocity
-    for the step (``res.info["unstable_friction"]``), each with a warning.
+    Raises
+    ------
+    ArmctlError
+        A bad argument, named.
+    Exception
+        Whatever the controller, the reference or the disturbance raised during the run, unchanged, carrying the
+        samples simulated before it as ``exc.result`` (a :class:`SimResult`): nothing simulated is lost.
+
+    Notes
+    -----
+    A contact the integrator cannot integrate stably at this step (:mod:`armctl.sim.stability`) is reported before
+    the run by a :class:`~armctl.errors.SimulationWarning` and kept in ``res.info["unstable_contacts"]``: the run
+    still happens, but past the first impact it is not the arm's motion. After a run with contact, what that check
+    cannot see is checked on the record (:mod:`armctl.sim.after_run`): energy the arm gained that no force
+    supplied (``res.info["energy_gain"]``), positive work by the passive environments
+    (``res.info["environment_work"]``) and a plane's friction too stiff below its slip velocity for the step
+    (``res.info["unstable_friction"]``), each with a warning.
     """
-    if engine != "native":  # MuJoCo integrates the plant: armctl.sim.mujoco_engine
-        args = dict(locals())
+    given = {
+        name: value
+        for name, value in (
+            ("friction", friction),
+            ("environment", environment),
+            ("disturbance", disturbance),
+            ("sensors", sensors),
+            ("noise_q", noise_q),
+            ("noise_qd", noise_qd),
+            ("seed", seed),
+            ("delay", delay),
+            ("max_velocity", max_velocity),
+            ("max_position", max_position),
+        )
+        if value is not None
+    }
+    sense, force, rules = grouped({"sensing": sensing, "forces": forces, "stop": stop}, given)
+    if engine != "native":  # another engine integrates the plant (armctl.sim.mujoco_engine)
         from armctl.sim.mujoco_engine import run_engine
 
-        return run_engine(**args)
+        options = {f.name: getattr(group, f.name) for group in (sense, force, rules) for f in fields(group)}
+        return run_engine(
+            engine,
+            plant=plant,
+            controller=controller,
+            reference=reference,
+            duration=duration,
+            q0=q0,
+            qd0=qd0,
+            control_dt=control_dt,
+            dt=dt,
+            integrator=integrator,
+            saturate=saturate,
+            reset=reset,
+            energy=energy,
+            compile=compile,
+            **options,
+        )
     dyn = setup.plant_dynamics(plant)
     n = dyn.n
     cdt, h, n_periods, m = setup.periods(duration, control_dt, dt, n=n)
@@ -119,11 +192,9 @@ def simulate(
     fixed_ref, ref_fn = setup.reference_source(reference, n)
     ref0 = fixed_ref if fixed_ref is not None else ref_fn(0.0)  # type: ignore[misc]
     call = setup.controller_call(controller, n)
-    sig_q, sig_qd = (
-        nonnegative_vector(noise_q, n, "noise_q (a standard deviation)"),
-        nonnegative_vector(noise_qd, n, "noise_qd (a standard deviation)"),
-    )
-    lag = setup.delay_periods(delay)
+    sig_q = nonnegative_vector(sense.noise_q, n, "noise_q (a standard deviation)")
+    sig_qd = nonnegative_vector(sense.noise_qd, n, "noise_qd (a standard deviation)")
+    lag = setup.delay_periods(sense.delay)
     if lag >= n_periods > 0:
         warnings.warn(
             f"delay = {lag} control periods is not shorter than the run ({n_periods} periods): the "
@@ -132,139 +203,56 @@ def simulate(
             stacklevel=2,
         )
     saturate, reset, energy = (boolean(saturate, "saturate"), boolean(reset, "reset"), boolean(energy, "energy"))
-    vmax, qmax = setup.bound(max_velocity, "max_velocity"), setup.bound(max_position, "max_position")
+    vmax, qmax = setup.bound(rules.max_velocity, "max_velocity"), setup.bound(rules.max_position, "max_position")
     q, v = setup.initial_state(q0, qd0, ref0, n, qmax, vmax)
     setup.warn_outside_limits(dyn.model, q)
-    seed = setup.seed_value(seed)
+    seed_used = setup.seed_value(sense.seed)
     dyn.check_mass_matrix(q)  # a plant whose M is singular from the start is a model to fix, not a run that diverged
-    sc = setup.scene(dyn, friction, environment, sensors, disturbance)
+    sc = setup.scene(dyn, force.friction, force.environment, sense.sensors, force.disturbance)
 
     unstable = _check_contacts(dyn, sc.environments, q, scheme, h)
     chosen = choose_step(dyn, scheme, Plant(dyn, sc.friction, sc.environments, sc.disturbance), compile)
     pl, step, fast = chosen.plant, chosen.step, chosen.fast
-    simple = pl.simple
-    implicit = scheme in ("implicit-euler", "semi-implicit-euler")  # these give no q̈ at the step start
     samples = n_periods + 1
     noisy = bool(sig_q.any() or sig_qd.any())
     rec = Recorder(n, samples, cdt, sc.environments, sc.sensors, measured=noisy or lag > 0)
-    rng = np.random.default_rng(seed)
     # sample k's noise is the k-th block of 2n draws (q's, then q̇'s): a longer run with the same seed sees the
     # same noise over the common samples
-    draws = rng.standard_normal((samples, 2, n)) if noisy else None
-    nq = draws[:, 0] * sig_q if draws is not None else None
-    nv = draws[:, 1] * sig_qd if draws is not None else None
-    limit = dyn.model.effort_limit
-    clip = saturate and bool(np.isfinite(limit).any())
-    lim_list = limit.tolist()
-    lim_min = min(lim_list)  # |τ| below every limit needs no clipping: the cheap test first
+    draws = np.random.default_rng(seed_used).standard_normal((samples, 2, n)) if noisy else None
+    settings = LoopSettings(
+        n=n,
+        control_dt=cdt,
+        dt=h,
+        periods=n_periods,
+        substeps=m,
+        implicit=scheme in ("implicit-euler", "semi-implicit-euler"),
+        controller=controller,
+        call=call,
+        fixed_reference=fixed_ref,
+        reference_fn=ref_fn,
+        plant=pl,
+        step=step,
+        fast=fast,
+        recorder=rec,
+        noise_q=draws[:, 0] * sig_q if draws is not None else None,
+        noise_qd=draws[:, 1] * sig_qd if draws is not None else None,
+        delay=lag,
+        effort_limit=dyn.model.effort_limit,
+        saturate=saturate,
+        max_velocity=vmax,
+        max_position=qmax,
+    )
     if reset and callable(getattr(controller, "reset", None)):
         controller.reset()  # type: ignore[union-attr]
-    has_log = hasattr(controller, "last_log")
-
-    Q, QD, QDD, TAU, TAUA = rec.q, rec.qd, rec.qdd, rec.tau, rec.tau_applied
-    QM, QDM, WF, WE = rec.q_measured, rec.qd_measured, rec.work_friction, rec.work_external
-    REFS = rec.references  # the reference given at each sample, for res.reference
-    # read-only views of the recorded rows: the controller is given these (it cannot change the record)
-    QR, QDR, QMR, QDMR = Q.view(), QD.view(), QM.view(), QDM.view()
-    for view in (QR, QDR, QMR, QDMR):
-        view.flags.writeable = False
-    shape = (n,)
-    wf = we = 0.0
-    clipped: list[int] = []  # rows where saturation clipped τ
-    divergence = None
-    rows = samples
+    loop = ClosedLoop(settings, q, v)
     t0 = time.perf_counter()
-    with np.errstate(all="ignore"):
-        for k in range(samples):
-            t = k * cdt
-            ql, vl = q.tolist(), v.tolist()
-            if not math.isfinite(sum(ql) + sum(vl)):
-                divergence, rows = (t, "the state is not finite", q, v), k
-                break
-            if max(vl) > vmax or -min(vl) > vmax:
-                divergence, rows = (t, f"a joint velocity is beyond max_velocity = {vmax:g}", q, v), k
-                break
-            if qmax < math.inf and (max(ql) > qmax or -min(ql) > qmax):
-                divergence, rows = (t, f"a joint position is beyond max_position = {qmax:g}", q, v), k
-                break
-            Q[k] = q
-            QD[k] = v
-            if not simple:
-                WF[k] = wf
-                WE[k] = we
-            qm, vm = QR[k], QDR[k]  # read-only views of the rows: the controller cannot change the state
-            if rec.measured:
-                if noisy:
-                    QM[k] = q + nq[k]  # type: ignore[index]
-                    QDM[k] = v + nv[k]  # type: ignore[index]
-                else:
-                    QM[k] = q
-                    QDM[k] = v
-                j = k - lag if k >= lag else 0
-                qm, vm = QMR[j], QDMR[j]
-            ref = fixed_ref if fixed_ref is not None else setup.check_reference(ref_fn(t), n, t)  # type: ignore[misc]
-            REFS[k] = ref
-            try:
-                tau = call(t, qm, vm, ref)
-            except ValueError as exc:
-                if "read-only" not in str(exc):
-                    raise
-                raise InvalidParameterError(
-                    f"the controller wrote into a read-only array at t = {t:g} s ({exc}); "
-                    "the q and q̇ it is given are read-only views of the run's record: "
-                    "work on a copy (q = q.copy()) or on new arrays (e = q - ref.q)",
-                    value=t,
-                ) from exc
-            if tau.__class__ is not np.ndarray or tau.dtype is not _FLOAT:  # complex or text: named errors
-                tau = real_array(tau, f"the controller's torque at t = {t:g} s")
-            if has_log and controller.last_log:  # type: ignore[union-attr]
-                rec.log_controller(k, controller.last_log)  # type: ignore[union-attr]
-            if tau.shape != shape:
-                raise ShapeError(
-                    f"the controller returned a torque of shape {tau.shape} at t = {t}; expected ({n},)", value=tau
-                )
-            tl = tau.tolist()
-            if not math.isfinite(sum(tl)):
-                divergence, rows = (t, f"the controller returned a non-finite torque {tau}", q, v), k
-                break
-            tau_a = tau
-            if clip and (max(tl) > lim_min or -min(tl) > lim_min) and any(map(_GT, map(abs, tl), lim_list)):
-                tau_a = np.clip(tau, -limit, limit)
-                clipped.append(k)
-            TAU[k] = tau  # the applied torque is τ too, but for the clipped rows: written after the loop
-            try:
-                if not simple:
-                    pl.begin(t, q, v, tau_a)
-                    rec.record_plant(k, pl, t, q, v)
-                if implicit or k == n_periods:
-                    QDD[k] = pl.accel(t, q, v, tau_a)
-                if k == n_periods:
-                    break
-                if fast is not None:  # no friction, contact or disturbance: straight to ABA
-                    for s in range(m):
-                        q, v, a0 = fast(q, v, tau_a, h)
-                        if s == 0:
-                            QDD[k] = a0
-                    continue
-                for s in range(m):
-                    q, v, a0, dwf, dwe = advance(pl, step, t + s * h, q, v, tau_a, h, begun=s == 0)
-                    if s == 0 and a0 is not None:
-                        QDD[k] = a0
-                    wf += dwf
-                    we += dwe
-            except (NotPositiveDefinite, np.linalg.LinAlgError) as exc:  # (the latter: the Lagrange backend's)
-                divergence, rows = (
-                    (t + cdt, f"{exc} during the control period from t = {t:g} s", Q[k].copy(), QD[k].copy()),
-                    k + 1,
-                )
-                break
+    loop.run()
+    wall = time.perf_counter() - t0
     end_run = getattr(controller, "end_run", None)
     if callable(end_run):
         end_run()  # the controller's account of the run (e.g. the OSC's solver fallbacks), once
-    TAUA[:] = TAU
-    if clipped:
-        TAUA[clipped] = np.clip(TAU[clipped], -limit, limit)
-    wall = time.perf_counter() - t0
+    loop.applied_torques()
+    rows = loop.rows
     info = {
         "plant": dyn.model.name,
         "n": n,
@@ -278,18 +266,32 @@ def simulate(
         "saturate": bool(saturate),
         "delay": lag,
         "compiled": chosen.compiled,
-        "seed": seed,
+        "seed": seed_used,
         "wall_time": wall,
         "real_time_factor": (rows - 1) * cdt / wall if wall > 0 and rows > 1 else math.nan,
         **pl.stats,
     }
     if unstable:
         info["unstable_contacts"] = unstable
-    if divergence is not None:
-        divergence = (divergence[0], divergence[1], np.array(divergence[2]), np.array(divergence[3]))
-    res = rec.result(rows, dyn, energy, info, divergence)
+    if loop.failure is not None:
+        info["failure"] = f"{type(loop.failure).__name__}: {loop.failure}"
+    res = rec.result(rows, dyn, energy, info, loop.divergence)
+    if loop.failure is not None:
+        _attach(loop.failure, res, rows * cdt)
+        raise loop.failure
     after_run(res, dyn, sc.environments, scheme, h, sc.disturbance is not None)
     return res
+
+
+def _attach(exc: BaseException, res: SimResult, t: float) -> None:
+    """Hand the samples simulated before ``exc`` (raised at t [s]) on with it, as ``exc.result``."""
+    try:
+        exc.result = res  # type: ignore[attr-defined]
+    except AttributeError:  # an exception type that takes no attributes: nothing to attach
+        return
+    note = f"simulate: raised at t = {t:g} s; the {len(res.t)} samples before it are in this exception's .result"
+    if hasattr(exc, "add_note"):
+        exc.add_note(note)
 
 
 def _check_contacts(

@@ -8,9 +8,9 @@ Cases sent to worker processes are pickled, so everything in them must pickle: D
 do (a Dynamics is rebuilt from its model in the worker), controllers do if their class is importable, and
 references must be Reference objects or module-level callables, not lambdas. A case that does not pickle is
 refused before anything starts, naming the case and the key. ``summary`` runs in the worker on each result,
-so that only what is needed travels back. With a thread pool, cases must not share a Dynamics object (its
-workspace is not thread-safe): give each its own, or pass the plant as a RobotModel (``simulate`` then builds
-one per run).
+so that only what is needed travels back. With a thread pool, cases may share a Dynamics object (each thread
+evaluates on a workspace of its own), but not a controller: a controller holds the state of its run (integrals,
+estimates, logs), so give each case its own.
 """
 
 from __future__ import annotations

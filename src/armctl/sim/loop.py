@@ -1,0 +1,227 @@
+"""`ClosedLoop`: one run of :func:`armctl.sim.simulate`, sample by sample.
+
+At each control instant t_k = k·Δt_c the loop
+
+1. *checks* the plant's state (finite, within the stop rules),
+2. *measures* it (noise, delay) and records it,
+3. *controls*: calls the controller on the measurement and the reference, checks τ_k and saturates it,
+4. *integrates* the plant over [t_k, t_k + Δt_c) under the held τ_k with m sub-steps of the integrator.
+
+The loop stops early when the state or the torque is not finite, the state leaves the stop rules, or the plant's
+mass matrix stops being positive definite (``divergence``); an exception from the controller, the reference or
+the plant stops it too (``failure``), and :func:`~armctl.sim.simulate` hands the samples before it on with the
+exception.
+"""
+
+from __future__ import annotations
+
+import math
+import operator
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from armctl._checks import FLOAT, FloatArray, real_array
+from armctl.errors import InvalidParameterError, ShapeError
+from armctl.reference import Reference
+from armctl.sim import setup
+from armctl.sim.integrators import Step
+from armctl.sim.plant import Plant
+from armctl.sim.recorder import Recorder
+from armctl.sim.stepper import advance
+from armctl.sim.stick_slip import NotPositiveDefinite
+
+#: (time [s], why, q, q̇): where and why a run stopped as diverged
+Divergence = tuple[float, str, FloatArray, FloatArray]
+
+
+@dataclass
+class LoopSettings:
+    """The checked settings of one run (made by :func:`armctl.sim.simulate`)."""
+
+    n: int
+    control_dt: float
+    dt: float
+    periods: int
+    substeps: int
+    implicit: bool  # the scheme gives no q̈ at the step start (recorded with an extra evaluation)
+    controller: Any
+    call: Callable[..., Any]  # how the controller is called: controller(t, q, q̇, ref) or its compute
+    fixed_reference: Reference | None
+    reference_fn: Callable[[float], Reference] | None
+    plant: Plant
+    step: Step
+    fast: Callable[..., tuple[FloatArray, FloatArray, FloatArray]] | None  # a plant without forces: (q, q̇, τ, h)
+    recorder: Recorder
+    noise_q: FloatArray | None  # (samples, n) noise added to the measurements, or None
+    noise_qd: FloatArray | None
+    delay: int
+    effort_limit: FloatArray
+    saturate: bool
+    max_velocity: float
+    max_position: float
+
+
+class ClosedLoop:
+    """The loop of one run from the state (q, q̇) at t = 0 (see the module)."""
+
+    def __init__(self, settings: LoopSettings, q: FloatArray, qd: FloatArray) -> None:
+        self.s = s = settings
+        self.q, self.qd = q, qd
+        self.rows = s.periods + 1  # samples recorded
+        self.divergence: Divergence | None = None
+        self.failure: BaseException | None = None
+        self.clipped: list[int] = []  # rows where saturation clipped τ
+        self._work_friction = self._work_external = 0.0
+        self._has_log = hasattr(s.controller, "last_log")
+        limit = s.effort_limit
+        self._clip = s.saturate and bool(np.isfinite(limit).any())
+        self._limits = limit.tolist()
+        self._lowest_limit = min(self._limits, default=math.inf)  # |τ| below it needs no clipping
+        rec = s.recorder
+        # read-only views of the recorded rows: the controller is given these (it cannot change the record)
+        self._views = [a.view() for a in (rec.q, rec.qd, rec.q_measured, rec.qd_measured)]
+        for view in self._views:
+            view.flags.writeable = False
+
+    def run(self) -> None:
+        """Run every sample; afterwards ``rows``, ``divergence``, ``failure`` and ``clipped`` say what happened."""
+        s = self.s
+        check, measure, control, integrate = self.check, self.measure, self.control, self.integrate
+        with np.errstate(all="ignore"):
+            for k in range(s.periods + 1):
+                t = k * s.control_dt
+                try:
+                    why = check(t)
+                    if why is not None:
+                        self._stop(k, t, why, self.q, self.qd)
+                        return
+                    qm, vm = measure(k)
+                    tau = control(k, t, qm, vm)
+                    if tau is None:
+                        return
+                    if k == s.periods:  # the last sample: its state and torque, no step after it
+                        self._last_sample(k, t, tau)
+                        return
+                    integrate(k, t, tau)
+                except (NotPositiveDefinite, np.linalg.LinAlgError) as exc:  # the latter: the Lagrange backend's
+                    rec = s.recorder
+                    why = f"{exc} during the control period from t = {t:g} s"
+                    self._stop(k + 1, t + s.control_dt, why, rec.q[k].copy(), rec.qd[k].copy())
+                    return
+                except BaseException as exc:  # the controller's, the reference's or the plant's: the run so far is kept
+                    self.failure, self.rows = exc, k
+                    return
+
+    def _stop(self, rows: int, t: float, why: str, q: FloatArray, qd: FloatArray) -> None:
+        self.divergence, self.rows = (t, why, np.array(q), np.array(qd)), rows
+
+    # ----------------------------------------------------------------------------------- the four steps
+    def check(self, t: float) -> str | None:
+        """Why the state at t stops the run (None: it does not)."""
+        ql, vl = self.q.tolist(), self.qd.tolist()
+        if not math.isfinite(sum(ql) + sum(vl)):
+            return "the state is not finite"
+        s = self.s
+        if max(vl) > s.max_velocity or -min(vl) > s.max_velocity:
+            return f"a joint velocity is beyond max_velocity = {s.max_velocity:g}"
+        if s.max_position < math.inf and (max(ql) > s.max_position or -min(ql) > s.max_position):
+            return f"a joint position is beyond max_position = {s.max_position:g}"
+        return None
+
+    def measure(self, k: int) -> tuple[FloatArray, FloatArray]:
+        """Record the state of sample k; the (read-only) measurement the controller is given."""
+        s, rec = self.s, self.s.recorder
+        rec.q[k] = self.q
+        rec.qd[k] = self.qd
+        if not s.plant.simple:
+            rec.work_friction[k] = self._work_friction
+            rec.work_external[k] = self._work_external
+        q_view, qd_view, qm_view, qdm_view = self._views
+        if not rec.measured:
+            return q_view[k], qd_view[k]
+        if s.noise_q is not None and s.noise_qd is not None:
+            rec.q_measured[k] = self.q + s.noise_q[k]
+            rec.qd_measured[k] = self.qd + s.noise_qd[k]
+        else:
+            rec.q_measured[k] = self.q
+            rec.qd_measured[k] = self.qd
+        j = k - s.delay if k >= s.delay else 0
+        return qm_view[j], qdm_view[j]
+
+    def control(self, k: int, t: float, qm: FloatArray, vm: FloatArray) -> FloatArray | None:
+        """τ_k from the controller, checked and recorded; the applied (saturated) torque, or None if τ_k is not
+        finite (the run stops as diverged)."""
+        s, rec = self.s, self.s.recorder
+        if s.fixed_reference is not None:
+            ref = s.fixed_reference
+        else:
+            ref = setup.check_reference(s.reference_fn(t), s.n, t)  # type: ignore[misc]
+        rec.references[k] = ref
+        try:
+            tau = s.call(t, qm, vm, ref)
+        except ValueError as exc:
+            if "read-only" not in str(exc):
+                raise
+            raise InvalidParameterError(
+                f"the controller wrote into a read-only array at t = {t:g} s ({exc}); the q and q̇ it is given are "
+                "read-only views of the run's record: work on a copy (q = q.copy()) or on new arrays (e = q - ref.q)",
+                value=t,
+            ) from exc
+        if type(tau) is not np.ndarray or tau.dtype != FLOAT:  # complex or text: named errors
+            tau = real_array(tau, f"the controller's torque at t = {t:g} s")
+        if self._has_log and s.controller.last_log:
+            rec.log_controller(k, s.controller.last_log)
+        if tau.shape != (s.n,):
+            raise ShapeError(
+                f"the controller returned a torque of shape {tau.shape} at t = {t}; expected ({s.n},)", value=tau
+            )
+        tl = tau.tolist()
+        if not math.isfinite(sum(tl)):
+            self._stop(k, t, f"the controller returned a non-finite torque {tau}", self.q, self.qd)
+            return None
+        rec.tau[k] = tau  # the applied torque is τ too, but for the clipped rows (see applied_torques)
+        low = self._lowest_limit
+        if self._clip and (max(tl) > low or -min(tl) > low) and any(map(operator.gt, map(abs, tl), self._limits)):
+            self.clipped.append(k)
+            return np.clip(tau, -s.effort_limit, s.effort_limit)  # type: ignore[no-any-return]
+        return tau
+
+    def integrate(self, k: int, t: float, tau: FloatArray) -> None:
+        """Integrate the plant over [t, t + Δt_c) under the held τ (sub-steps of the integrator)."""
+        s, rec, pl = self.s, self.s.recorder, self.s.plant
+        q, qd, h = self.q, self.qd, s.dt
+        if not pl.simple:
+            pl.begin(t, q, qd, tau)
+            rec.record_plant(k, pl, t, q, qd)
+        if s.implicit:
+            rec.qdd[k] = pl.accel(t, q, qd, tau)
+        if s.fast is not None:  # no friction, contact or disturbance
+            for i in range(s.substeps):
+                q, qd, a0 = s.fast(q, qd, tau, h)
+                if i == 0:
+                    rec.qdd[k] = a0
+        else:
+            for i in range(s.substeps):
+                q, qd, a0, dwf, dwe = advance(pl, s.step, t + i * h, q, qd, tau, h, begun=i == 0)
+                if i == 0 and a0 is not None:
+                    rec.qdd[k] = a0
+                self._work_friction += dwf
+                self._work_external += dwe
+        self.q, self.qd = q, qd
+
+    def _last_sample(self, k: int, t: float, tau: FloatArray) -> None:
+        rec, pl = self.s.recorder, self.s.plant
+        if not pl.simple:
+            pl.begin(t, self.q, self.qd, tau)
+            rec.record_plant(k, pl, t, self.q, self.qd)
+        rec.qdd[k] = pl.accel(t, self.q, self.qd, tau)
+
+    def applied_torques(self) -> None:
+        """Write the applied (saturated) torques of the run into the recorder."""
+        rec, limit = self.s.recorder, self.s.effort_limit
+        rec.tau_applied[:] = rec.tau
+        if self.clipped:
+            rec.tau_applied[self.clipped] = np.clip(rec.tau[self.clipped], -limit, limit)
