@@ -195,3 +195,31 @@ def test_sinusoid_keeps_copies_and_old_pickles_load() -> None:
     old.__setstate__(old_state)
     assert np.array_equal(old(0.2).qdd, after.qdd)
     assert np.array_equal(pickle.loads(pickle.dumps(ref_fn))(0.2).qd, after.qd)
+
+
+@pytest.mark.parametrize("kind", sorted(REFERENCES))
+def test_unpickled_references_take_the_fast_path(kind: str, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A reference sent to a sweep's worker is unpickled there: its arrays' float64 dtype is then a distinct
+    (equal) object. Its references must still be built on the fast path, not checked entry by entry (the slow
+    path, Reference._checked): counted over 200 calls, and the values are the original's."""
+    import pickle
+
+    calls = []
+    checked = Reference._checked
+
+    def counting(self: Reference) -> None:
+        calls.append(1)
+        checked(self)
+
+    original = REFERENCES[kind]()
+    copy = pickle.loads(pickle.dumps(original))
+    monkeypatch.setattr(Reference, "_checked", counting)
+    for t in np.linspace(0.0, 2.5, 200):
+        got, want = copy(float(t)), original(float(t))
+        np.testing.assert_array_equal(got.q, want.q)
+        np.testing.assert_array_equal(got.qdd, want.qdd)
+    again = pickle.loads(pickle.dumps(original(1.0)))
+    Reference(again.q, again.qd, again.qdd)  # a Reference from an unpickled one's arrays
+    assert calls == []
+    Reference([1.0, 2.0])  # (the slow path is what a list takes: the count sees it)
+    assert calls == [1]

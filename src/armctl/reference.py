@@ -28,7 +28,9 @@ class Reference:
         # length with a finite sum (a sum that overflows goes the slow way, which checks entry by entry)
         if (
             q.__class__ is qd.__class__ is qdd.__class__ is np.ndarray
-            and q.dtype is qd.dtype is qdd.dtype is FLOAT
+            and q.dtype == FLOAT
+            and qd.dtype == FLOAT
+            and qdd.dtype == FLOAT
             and q.ndim == 1
             and q.shape == qd.shape == qdd.shape
             and q.shape[0]
@@ -51,7 +53,7 @@ class Reference:
                 "Reference q must hold real numbers (q is required: the joint positions), got None", value=None
             )
         raw_q = self.q
-        if raw_q.__class__ is np.ndarray and raw_q.dtype is FLOAT and raw_q.ndim <= 1:  # the usual case
+        if raw_q.__class__ is np.ndarray and raw_q.dtype == FLOAT and raw_q.ndim <= 1:  # the usual case
             q: FloatArray | None = raw_q.reshape(-1)
         else:
             q = np.array(real_array(raw_q, "Reference q")).reshape(-1) if np.ndim(raw_q) <= 1 else None
@@ -63,7 +65,7 @@ class Reference:
             raw = getattr(self, name)
             if raw is None:
                 a = np.zeros_like(q)
-            elif raw.__class__ is np.ndarray and raw.dtype is FLOAT:  # the usual case: one copy, no conversion
+            elif raw.__class__ is np.ndarray and raw.dtype == FLOAT:  # the usual case: one copy, no conversion
                 a = raw.copy()
             else:
                 a = np.array(real_array(raw, f"Reference {name}"))

@@ -198,3 +198,34 @@ def test_posture_residual_is_the_textbook_law(panda: armctl.Dynamics) -> None:
         rtol=1e-12,
         atol=1e-12,
     )
+
+
+class _Line:
+    """A straight-line position target of its own arrays (picklable: a sweep sends it to its workers)."""
+
+    def __init__(self) -> None:
+        self.p0, self.v = np.array([0.4, 0.0, 0.5]), np.array([0.0, 0.1, 0.0])
+
+    def __call__(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return self.p0 + t * self.v, self.v, 0.0 * self.v
+
+
+def test_an_unpickled_trajectory_takes_the_fast_path(monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """After unpickling, the trajectory's arrays have an equal but distinct float64 dtype: the target must still
+    take the fast path (no entry-by-entry check, counted: the target module's ``vector`` and ``matrix``) and give
+    the original's values."""
+    import pickle
+
+    from armctl.controllers.osc.tasks import target as target_module
+
+    calls = []
+    for name in ("vector", "matrix"):
+        slow = getattr(target_module, name)
+        monkeypatch.setattr(target_module, name, lambda *a, _slow=slow, **k: calls.append(1) or _slow(*a, **k))
+    original, copy = FramePositionTask(kp=100.0), FramePositionTask(kp=100.0)
+    original.set_trajectory(_Line())
+    copy.set_trajectory(pickle.loads(pickle.dumps(_Line())))
+    for t in np.linspace(0.0, 1.0, 50):
+        for got, want in zip(copy.target.at(float(t)), original.target.at(float(t)), strict=True):
+            np.testing.assert_array_equal(got, want)
+    assert calls == []
