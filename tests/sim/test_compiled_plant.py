@@ -198,3 +198,24 @@ def test_the_disturbance_is_sampled_at_the_start_middle_and_end_of_each_step() -
     halves = np.array(sorted(seen[True])) / 5e-4
     np.testing.assert_allclose(halves, np.round(halves), atol=1e-9)
     assert {round(x) for x in halves} == set(range(21))  # 0, 0.5 ms, …, 10 ms
+
+
+def test_variants_of_a_plant_share_its_library(fresh_cache) -> None:  # type: ignore[no-untyped-def]
+    """A payload, other friction levels or another table are inputs of the generated code, not part of it: the
+    variants of a plant run on one library, each with its own dynamics (as the Python step has them)."""
+    base = armctl.models.planar_2r().with_friction(viscous=5.0, coulomb=20.0, static=30.0)
+    variants = [
+        base,
+        base.with_payload(8.0, (0.1, 0.0, 0.0), np.diag([0.01, 0.02, 0.02])),
+        armctl.models.planar_2r().with_friction(viscous=2.0, coulomb=50.0, static=60.0),
+    ]
+    finals = []
+    for model in variants:
+        kw = {"q0": [0.3, -0.2], "qd0": [1.0, -2.0]}
+        generated = simulate(model, zero_torque, armctl.Reference.hold([0.3, -0.2]), 0.3, **kw)
+        python = simulate(model, zero_torque, armctl.Reference.hold([0.3, -0.2]), 0.3, compile=False, **kw)
+        assert generated.info["compiled"]
+        assert np.abs(generated.q - python.q).max() <= 1e-9
+        finals.append(generated.q[-1])
+    assert len(list(fresh_cache.rglob("*.so"))) == 1
+    assert np.abs(finals[0] - finals[1]).max() > 1e-3 and np.abs(finals[0] - finals[2]).max() > 1e-3

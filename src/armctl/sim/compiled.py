@@ -7,19 +7,18 @@
 * ``compile=True``: the generated step, or an error saying why there is none;
 * ``compile=False``: the Python step (:mod:`armctl.sim.integrators`, :mod:`armctl.sim.stepper`).
 
-A library is built on first use (a few seconds; one line is logged with the time it took) and cached on disk
-(:mod:`armctl.dynamics.codegen`: keyed by the model's full fingerprint, so a payload or a perturbed variant builds
-its own; then milliseconds to load). Two kinds of generated step:
+A library is built on first use (a second or two; one line is logged with the time it took) and cached on disk
+(:mod:`armctl.dynamics.codegen`); it depends on the arm's chain (joint axes and placements) and on the plant's
+structure (friction model, contact laws and the links their points ride on, a disturbance, the family of schemes),
+not on numbers: payload, perturbed or friction variants of a plant share it (:mod:`armctl.sim.compiled_plant`).
 
-* a plant with no friction, contact or disturbance, integrated by ``"rk4"`` or ``"euler"``: the scheme's step
-  generated whole from the recursive algorithms of :mod:`armctl.dynamics.recursive` (:func:`compiled_step`);
-* every other plant the library describes — stick–slip or smooth joint friction, planes with Kelvin–Voigt or
-  Hunt–Crossley contact and Coulomb sliding, a disturbance, each scheme: :mod:`armctl.sim.compiled_plant`.
+It integrates the model the ``"pinocchio"`` backend expresses (rotors as reflected inertia, no gyroscopic
+coupling); runs agree with the Python step's to rounding (tests/sim/test_compiled_plant.py, and every simulator
+test on both steps). A mass matrix that is not positive definite gives a non-finite state or a divergence, as in
+the Python step.
 
-Both integrate the model the ``"pinocchio"`` backend expresses (rotors as reflected inertia, no gyroscopic
-coupling); their runs agree with the Python step's to rounding (tests/sim/test_compiled.py,
-tests/sim/test_compiled_plant.py). A mass matrix that is not positive definite gives a non-finite state or a
-divergence, as in the Python step.
+:func:`compiled_step` is the RK4 or Euler step of a rigid arm generated whole, the arm's numbers built in: a
+function (q, q̇, τ, h) → (q₁, q̇₁, q̈) for use outside ``simulate``.
 """
 
 from __future__ import annotations
@@ -45,8 +44,7 @@ from armctl.sim.generated_plant import PlantLayout, layout_of
 from armctl.sim.integrators import fast_step, make_step, rk4, semi_implicit_euler
 from armctl.sim.plant import Plant
 
-#: the integrators with a compiled step for a plant without friction, contact or disturbance (the others go
-#: through :mod:`armctl.sim.compiled_plant`)
+#: the integrators of :func:`compiled_step` (and whose step of a plant without forces is ``simulate``'s fast path)
 SCHEMES = ("rk4", "euler")
 #: bumped when the generated code changes, so that stale cached libraries are not loaded
 _CODE_VERSION = 2
@@ -151,13 +149,6 @@ def _generated(
 ) -> StepChoice:
     """The generated step (built, loaded or found in this process)."""
     model = dyn.model
-    if plant.simple and scheme in SCHEMES:
-        tag = _step_tag(model, scheme)
-        names = [f"step_{scheme}"]
-        ext = _library(
-            names, tag, cache_dir, lambda: _library_function(model, scheme, cache_dir), model, "the frictionless plant"
-        )
-        return StepChoice(plant, make_step(scheme, plant), _bind_step(ext, model.n), True)
     family = compiled_plant.FAMILY[scheme]
     tag = compiled_plant.library_tag(model, layout, family)[0]
     what = ", ".join(
@@ -178,7 +169,8 @@ def _generated(
         f"the plant ({what or 'rigid'}, {scheme})",
     )
     cp = compiled_plant.CompiledPlant(plant, scheme, layout, fns)
-    return StepChoice(cp, cp.step, None, True)
+    fast = cp.fast if plant.simple and scheme in SCHEMES else None
+    return StepChoice(cp, cp.step, fast, True)
 
 
 def _library(

@@ -7,10 +7,10 @@ schemes of :mod:`armctl.sim.integrators` and :mod:`armctl.sim.implicit`. A step 
 with the Python step's to rounding, and a stuck joint stays exactly where it is (q̈_S = 0 exactly, see
 :func:`~armctl.sim.generated_plant.masked_cholesky_solve`).
 
-One library per model, plant structure (:class:`~armctl.sim.generated_plant.PlantLayout`) and family of schemes
-(explicit: ``"rk4"``, ``"euler"``; implicit: ``"semi-implicit-euler"``, ``"implicit-euler"``), built on first use
-and cached on disk (:mod:`armctl.dynamics.codegen`); friction levels, contact coefficients, planes and point offsets
-are inputs of the code, so variants of a plant share its library.
+One library per arm (the geometry of its chain), plant structure (:class:`~armctl.sim.generated_plant.PlantLayout`)
+and family of schemes (explicit: ``"rk4"``, ``"euler"``; implicit: ``"semi-implicit-euler"``, ``"implicit-euler"``),
+built on first use and cached on disk (:mod:`armctl.dynamics.codegen`); inertial parameters, friction levels, contact
+coefficients, planes and point offsets are inputs of the code, so the variants of a plant share its library.
 
 The disturbance h_d(t) stays a Python callable: it is evaluated at the start, middle and end of every step and
 passed in (see :meth:`Plant.sample_disturbance <armctl.sim.plant.Plant.sample_disturbance>`).
@@ -35,7 +35,7 @@ from armctl.sim.plant import Plant
 from armctl.sim.stick_slip import NotPositiveDefinite
 
 #: bumped when the generated code changes, so that stale cached libraries are not loaded
-CODE_VERSION = 1
+CODE_VERSION = 3
 #: the scheme codes of the C driver, and the family of kernels each needs
 SCHEMES = {"rk4": 0, "euler": 1, "semi-implicit-euler": 2, "implicit-euler": 3}
 FAMILY = {"rk4": "explicit", "euler": "explicit", "semi-implicit-euler": "implicit", "implicit-euler": "implicit"}
@@ -58,7 +58,7 @@ def _shapes(layout: PlantLayout) -> list[cs.Function]:
         return [cs.SX.sym(f"{name}{k}", s) for k, s in enumerate(sizes)]
 
     spec = {
-        "advance": ([n, n, n, 18, layout.size, 3, ns], [n, n, n, 4, ns]),
+        "advance": ([n, n, n, 18, layout.size, 3, ns], [n, n, n, 5, ns]),
         "begin": ([n, n, n, 18, layout.size, ns], [ns, 4]),
         "accel": ([n, n, n, 18, layout.size, ns], [n, 4]),
     }
@@ -81,7 +81,7 @@ def library_tag(model: RobotModel, layout: PlantLayout, family: str) -> tuple[st
     }
     source = "".join(f"#define {k} {v}\n" for k, v in defines.items()) + _driver_source()
     digest = hashlib.sha256(source.encode()).hexdigest()[:16]
-    tag = f"sim-plant|{model.fingerprint(inertial=True, tool=False)}|{layout.tag()}|{family}|{digest}|v{CODE_VERSION}"
+    tag = f"sim-plant|{model.fingerprint(inertial=False, tool=False)}|{layout.tag()}|{family}|{digest}|v{CODE_VERSION}"
     return tag, source
 
 
@@ -137,7 +137,10 @@ class CompiledPlant:
         self._w_times: tuple[float | None, float | None] = (None, None)  # times of the samples at start and end
         self.tau = np.zeros(n)
         self.opt = np.array([0.0, 0.0, float(SCHEMES[scheme])])
-        self.out = np.zeros(4)
+        self.out = np.zeros(5)  # the step's: W_f, W_e, q̈ valid, status, the next period needs no stick solve
+        self._info = np.zeros(4)  # begin's and accel's: any stuck, all stuck, -, status
+        self._free = False  # the state the last step left needs no stick solve (see begin)
+        self._stuck: FloatArray | None = None  # the stuck joints at the last begin
         self.a0 = np.zeros(n)
         # two (q, q̇) pairs take turns: a step reads pair i and writes pair 1 − i, which the next step finds in place
         self._pairs = [np.zeros((2, n)), np.zeros((2, n))]
@@ -161,7 +164,7 @@ class CompiledPlant:
                 _bound(
                     functions["begin"],
                     [qi, vi, self.tau, self.samples, self.par, self.state],
-                    [self.state, self.out],
+                    [self.state, self._info],
                     self._buffers,
                 )
             )
@@ -171,16 +174,15 @@ class CompiledPlant:
         self._accel = _bound(
             functions["accel"],
             [self._acc_in[0], self._acc_in[1], self._acc_in[2], self._acc_samples, self.par, self.state],
-            [self._acc, self.out],
+            [self._acc, self._info],
             self._buffers,
         )
 
     # ------------------------------------------------------------------------------------------- state
     @property
     def stuck(self) -> FloatArray | None:
-        """The stuck joints (boolean mask) of the current step, or None."""
-        n = self.n
-        return self.state[n : 2 * n] != 0.0 if self.state[4 * n + 1] else None
+        """The stuck joints (boolean mask) of the current period's start, or None (see :meth:`begin`)."""
+        return self._stuck
 
     @property
     def all_stuck(self) -> bool:
@@ -213,14 +215,19 @@ class CompiledPlant:
             self._pairs[i][...] = np.array((q, v))  # first: q or v may be a view of these very rows
         return i
 
-    def _check(self, what: str) -> None:
-        status = int(self.out[3])
+    def _check(self, status: float, what: str) -> None:
         if status:
-            raise NotPositiveDefinite(f"{_STATUS.get(status, 'failure')} ({what} of the generated step)")
+            raise NotPositiveDefinite(f"{_STATUS.get(int(status), 'failure')} ({what} of the generated step)")
 
     def begin(self, t: float, q: FloatArray, v: FloatArray, tau: FloatArray, held: Any = None) -> None:
         """Decide which joints stick at (t, q, q̇) under τ (:meth:`Plant.begin <armctl.sim.plant.Plant.begin>`)
-        and the friction torque there (:meth:`friction_torque`); the next :meth:`step` starts from it."""
+        and the friction torque there (:meth:`friction_torque`); the next :meth:`step` starts from it. (Where the
+        last step left this state with no joint that can stick at rest, there is nothing to solve: the step did it.)"""
+        i = self._turn
+        qi, vi = self._rows[i]
+        if self._free and q is qi and v is vi:
+            self._stuck = None
+            return
         i = self._load(q, v)
         self.tau[...] = tau
         self._tau_set = tau
@@ -229,7 +236,10 @@ class CompiledPlant:
             self._w_times = (t, None)
             self._sampled = None
         self._begin[i]()
-        self._check("stick solve")
+        info = self._info.tolist()
+        self._check(info[3], "stick solve")
+        n = self.n
+        self._stuck = self.state[n : 2 * n] != 0.0 if info[0] else None
 
     def step(
         self, t: float, q: FloatArray, v: FloatArray, tau: FloatArray, h: float
@@ -248,10 +258,29 @@ class CompiledPlant:
         self._advance[i]()
         out = self.out.tolist()
         if out[3]:
-            self._check("step")
+            self._free = False
+            self._check(out[3], "step")
+        self._free = bool(out[4])
         self._turn = j = i ^ 1
         q1, v1 = self._rows[j]
         return q1, v1, self.a0 if out[2] else None, out[0], out[1]
+
+    def fast(
+        self, q: FloatArray, v: FloatArray, tau: FloatArray, h: float
+    ) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """:meth:`step` of a plant without friction, contact or disturbance (whose step has no work to book and no
+        time to know): (q₁, q̇₁, q̈ at the start), the signature of :func:`armctl.sim.integrators.fast_step`'s."""
+        i = self._load(q, v)
+        self.tau[...] = tau
+        opt = self.opt
+        if h != opt[1]:
+            opt[1] = h
+        self._advance[i]()
+        if self.out[3]:
+            self._check(self.out[3], "step")
+        self._turn = j = i ^ 1
+        q1, v1 = self._rows[j]
+        return q1, v1, self.a0
 
     def sample_disturbance(self, t: float, h: float) -> None:
         """h_d at the start, middle and end of the step [t, t + h] (:meth:`Plant.sample_disturbance
@@ -284,14 +313,14 @@ class CompiledPlant:
         if self.disturbance is not None:
             self._acc_samples[:6] = self.python.disturbance_wrench(t)
         self._accel()
-        self._check("accelerations")
+        self._check(self._info[3], "accelerations")
         return self._acc.copy()
 
     def friction_torque(self, qd: FloatArray) -> FloatArray:
         """τ_f at the state of the last :meth:`begin` (``qd`` is that state's q̇): the model's torque for the
-        sliding joints, the holding torque for the stuck ones."""
+        sliding joints, the holding torque for the stuck ones (a view, valid until the next step)."""
         n = self.n
-        return self.state[3 * n : 4 * n].copy()
+        return self.state[3 * n : 4 * n]
 
     # ------------------------------------------------------------------------------ recording (Python)
     def external(self, t: float, q: FloatArray, qd: FloatArray) -> FloatArray:

@@ -2,8 +2,8 @@
 
 The same terms as :class:`~armctl.sim.plant.Plant`, written once as symbols and generated as C:
 
-* rigid-body dynamics: Newton–Euler bias C(q, q̇) q̇ + g(q) and the composite-rigid-body M(q) of
-  :mod:`armctl.dynamics.recursive` (the model the ``"pinocchio"`` backend expresses);
+* rigid-body dynamics: the Newton–Euler recursion of :mod:`armctl.dynamics.recursive` for the bias
+  C(q, q̇) q̇ + g(q) and M(q) (the model the ``"pinocchio"`` backend expresses);
 * joint friction τ_f(q̇) of :mod:`armctl.sim.friction` — the stick–slip model's kinetic curve for given sliding
   directions d (F_v q̇ + F_c(d) + (F_s − F_c)(d) exp(−(q̇/v_s)²)), or the smooth tanh curve — and its slope;
 * contact: every point of every :class:`~armctl.sim.contact.Plane`, its position p(q) = p_j(q) + R_j(q) r on
@@ -15,9 +15,11 @@ Sticking is a mask s (1: stuck) applied to the Cholesky solve of M q̈ = r: rows
 are replaced by those of the identity and their right-hand side by 0, so that q̈_F = M_FF⁻¹ r_F and q̈_S = 0
 *exactly* (every product that couples them is a product with an exact zero).
 
-What is a number of the model (inertias, geometry of the chain) is built into the code; what a user varies
-between runs — friction levels, contact stiffness, damping and friction, the planes, the points' offsets — is
-the input ``par`` (:meth:`PlantLayout.parameters`), so that such variants share one library.
+What is the geometry of the chain (joint axes and placements, gravity) is built into the code; what a user varies
+between runs — the inertial parameters π (a payload, a perturbed model), friction levels, contact stiffness,
+damping and friction, the planes, the points' offsets — is the input ``par`` (:meth:`PlantLayout.parameters`), so
+that such variants share one library (the inertial parameters as symbols cost nothing measurable: the inertia
+tensors of real links are full anyway). M(q) is ∂τ/∂q̈ of the Newton–Euler recursion.
 """
 
 from __future__ import annotations
@@ -31,7 +33,7 @@ import numpy as np
 
 from armctl._checks import FloatArray
 from armctl.dynamics import recursive
-from armctl.model.robot import RobotModel
+from armctl.model.robot import PARAMS_PER_JOINT, RobotModel
 from armctl.sim.contact import Plane
 from armctl.sim.friction import SmoothFriction, StickSlip
 from armctl.sim.normal_force import HuntCrossley, KelvinVoigt
@@ -82,11 +84,11 @@ class PlantLayout:
 
     @property
     def friction_offset(self) -> int:
-        return 0
+        return PARAMS_PER_JOINT * self.n  # after π
 
     @property
     def points_offset(self) -> int:
-        return FRICTION_PARAMS * self.n + 1 if self.has_friction else 0
+        return self.friction_offset + (FRICTION_PARAMS * self.n + 1 if self.has_friction else 0)
 
     @property
     def tool_offset(self) -> int:
@@ -98,24 +100,28 @@ class PlantLayout:
         return max(self.tool_offset + (3 if self.disturbance_joint is not None else 0), 1)
 
     def tag(self) -> str:
-        """The structure as text, for the library's cache key."""
+        """The structure as a hash, for the library's cache key."""
         text = f"{self.n}|{self.friction}|{self.stribeck}|{self.sticky}|{self.points}|{self.disturbance_joint}"
         return hashlib.sha256(text.encode()).hexdigest()[:16]
 
     def parameters(self, plant: Plant) -> FloatArray:
-        """``par`` of ``plant`` (which must have this layout, see :func:`layout_of`)."""
+        """``par`` of ``plant`` (which must have this layout, see :func:`layout_of`): the model's inertial
+        parameters π (:meth:`armctl.RobotModel.parameters`), the friction model's, the contact points' and the
+        tool's."""
         par = np.zeros(self.size)
+        model = plant.dyn.model
+        par[: self.friction_offset] = model.parameters()
         f = plant.friction
         n = self.n
         if f is not None:
             capable = f.capable if isinstance(f, StickSlip) else np.zeros(n, bool)
             cols = (f.viscous, f.coulomb_pos, f.coulomb_neg, f.hump_pos, f.hump_neg, f.stribeck_velocity)
             cols += (f.breakaway_pos, f.breakaway_neg, capable.astype(float))
+            at = self.friction_offset
             for k, col in enumerate(cols):
-                par[k * n : (k + 1) * n] = col
-            par[FRICTION_PARAMS * n] = f.velocity if isinstance(f, SmoothFriction) else 1.0
+                par[at + k * n : at + (k + 1) * n] = col
+            par[at + FRICTION_PARAMS * n] = f.velocity if isinstance(f, SmoothFriction) else 1.0
         at = self.points_offset
-        model = plant.dyn.model
         for env in plant.environments:
             law = env.law  # type: ignore[attr-defined]
             if isinstance(law, KelvinVoigt):
@@ -198,8 +204,8 @@ class PlantExpressions:
     # ------------------------------------------------------------------------------------ friction
     def friction(self, v: cs.SX, direction: cs.SX, par: cs.SX) -> cs.SX:
         """τ_f(q̇) for the sliding directions d (see :meth:`Plant.kinetic_friction`)."""
-        n = self.n
-        fv, cp, cn, hp, hn, vs = (par[k * n : (k + 1) * n] for k in range(6))
+        n, at = self.n, self.layout.friction_offset
+        fv, cp, cn, hp, hn, vs = (par[at + k * n : at + (k + 1) * n] for k in range(6))
         if self.layout.friction == "stick-slip":
             level = cs.if_else(direction > 0, cp, 0) - cs.if_else(direction < 0, cn, 0)
             tau = fv * v + level
@@ -207,12 +213,12 @@ class PlantExpressions:
                 hump = cs.if_else(direction > 0, hp, 0) - cs.if_else(direction < 0, hn, 0)
                 tau = tau + hump * cs.exp(-((v / vs) ** 2))
             return tau
-        vt = par[FRICTION_PARAMS * n]
+        vt = par[at + FRICTION_PARAMS * n]
         return fv * v + cs.tanh(v / vt) * self._smooth_levels(v, par)
 
     def _smooth_levels(self, v: cs.SX, par: cs.SX) -> cs.SX:
-        n = self.n
-        cp, cn, hp, hn, vs = (par[k * n : (k + 1) * n] for k in range(1, 6))
+        n, at = self.n, self.layout.friction_offset
+        cp, cn, hp, hn, vs = (par[at + k * n : at + (k + 1) * n] for k in range(1, 6))
         pos = v > 0
         level = cs.if_else(pos, cp, cn)
         if self.layout.stribeck:
@@ -222,8 +228,8 @@ class PlantExpressions:
 
     def friction_slope(self, v: cs.SX, direction: cs.SX, par: cs.SX) -> cs.SX:
         """∂τ_f/∂q̇ (diagonal) (see :meth:`FrictionModel.slope`)."""
-        n = self.n
-        fv, _, _, hp, hn, vs = (par[k * n : (k + 1) * n] for k in range(6))
+        n, at = self.n, self.layout.friction_offset
+        fv, _, _, hp, hn, vs = (par[at + k * n : at + (k + 1) * n] for k in range(6))
         x = cs.fmin(cs.fmax(v / vs, -40.0), 40.0)
         shape_slope = -2.0 * x * cs.exp(-(x * x)) / vs
         if self.layout.friction == "stick-slip":
@@ -232,7 +238,7 @@ class PlantExpressions:
                 hump = cs.if_else(direction > 0, hp, 0) - cs.if_else(direction < 0, hn, 0)
                 d = d + hump * shape_slope
             return d
-        vt = par[FRICTION_PARAMS * n]
+        vt = par[at + FRICTION_PARAMS * n]
         th = cs.tanh(v / vt)
         d = fv + (1.0 - th**2) / vt * self._smooth_levels(v, par)
         if self.layout.stribeck:
@@ -380,7 +386,7 @@ def kernels(model: RobotModel, layout: PlantLayout, family: str) -> list[cs.Func
       held, and the friction and external torques they used;
     * ``pk_terms(q, q̇, τ, d, h_d, par) → (M, r)``: the mass matrix and r = τ − τ_f − C q̇ − g + τ_e, for the stick
       solve;
-    * ``pk_mass(q) → M``; ``pk_friction(q̇, d, par) → τ_f``; ``pk_bias(q, q̇) → (C q̇ + g, g)``;
+    * ``pk_mass(q, par) → M``; ``pk_friction(q̇, d, par) → τ_f``; ``pk_bias(q, q̇, par) → (C q̇ + g, g)``;
     * ``pk_implicit(q, q̇₁, h, d, h_d, par) → (−τ_f + τ_e(q + h q̇₁, q̇₁), h diag(∂τ_f/∂q̇) − h(D + hK), τ_f, τ_e)``:
       backward Euler's velocity-dependent force and its Jacobian;
     * ``pk_symplectic(q, v̄, h, d, h_d, par) → (C(q, v̄)ᵀv̄ − τ_f + τ_e, h diag(∂τ_f/∂q̇) − hD, τ_f, τ_e, K)``:
@@ -393,11 +399,17 @@ def kernels(model: RobotModel, layout: PlantLayout, family: str) -> list[cs.Func
     par = cs.SX.sym("par", layout.size)
     h = cs.SX.sym("h")
     _, tf = ex.poses(q)
-    mass = recursive.mass_matrix(model, q, transforms=tf)
+    pi = par[: layout.friction_offset]
     zeros = cs.SX.zeros(n)
 
+    def rnea(vel: cs.SX, acc: cs.SX, gravity: bool = True) -> cs.SX:
+        return recursive.inverse_dynamics(model, q, vel, acc, gravity=gravity, transforms=tf, params=pi)
+
     def bias(vel: cs.SX) -> cs.SX:
-        return recursive.inverse_dynamics(model, q, vel, zeros, transforms=tf)
+        return rnea(vel, zeros)
+
+    acc_sym = cs.SX.sym("qdd", n)
+    mass = cs.jacobian(rnea(zeros, acc_sym, gravity=False), acc_sym)  # M = ∂τ/∂q̈ (τ is linear in q̈)
 
     fric = ex.friction(v, d, par) if layout.has_friction else zeros
     ext = ex.external(q, v, hd, par)
@@ -409,10 +421,10 @@ def kernels(model: RobotModel, layout: PlantLayout, family: str) -> list[cs.Func
     acc, pivot = masked_cholesky_solve(mass, tau - fric + ext - bias(v), s)
     add("pk_rhs", [q, v, tau, d, s, hd, par], [acc, fric, ext, pivot])
     add("pk_terms", [q, v, tau, d, hd, par], [mass, tau - fric + ext - bias(v)])
-    add("pk_mass", [q], [mass])
+    add("pk_mass", [q, par], [mass])
     add("pk_friction", [v, d, par], [fric])
     if family == "implicit":
-        add("pk_bias", [q, v], [bias(v), bias(zeros)])
+        add("pk_bias", [q, v, par], [bias(v), bias(zeros)])
         slope = ex.friction_slope(v, d, par) if layout.has_friction else zeros
         # backward Euler: the external force at (q + h q̇₁, q̇₁)
         q1 = q + h * v
@@ -422,8 +434,8 @@ def kernels(model: RobotModel, layout: PlantLayout, family: str) -> list[cs.Func
             _, kj, dj = ex.contact(q1, v, par, stiffness=True)
             jac = jac - h * (dj + h * kj)  # type: ignore[operator]
         add("pk_implicit", [q, v, h, d, hd, par], [-fric + ext1, jac, fric, ext1])
-        # symplectic Euler: ∂T/∂q at v̄ (C(q, v̄)ᵀ v̄ for the Christoffel C)
-        dtdq = cs.gradient(0.5 * cs.dot(v, mass @ v), q)
+        # symplectic Euler: ∂T/∂q at v̄ (C(q, v̄)ᵀ v̄ for the Christoffel C), T = ½ v̄ᵀ M v̄ with M v̄ by Newton–Euler
+        dtdq = cs.gradient(0.5 * cs.dot(v, rnea(zeros, v, gravity=False)), q)
         jac_s = h * cs.diag(slope)
         kj0 = cs.SX.zeros(n, n)
         if layout.points:

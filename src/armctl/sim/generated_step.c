@@ -13,11 +13,12 @@
  * Python original. Matrices from the kernels are dense, column-major.
  *
  * Exposed (CasADi external functions, dense column vectors):
- *   advance(q, v, tau, W, par, opt, S) -> (q1, v1, a0, out, S)   one integration step of length h = opt[1]
+ *   advance(q, v, tau, W, par, opt, S) -> (q1, v1, a0, out5, S)  one integration step of length h = opt[1]
  *   begin(q, v, tau, W, par, S) -> (S, out)                       the stick solve at the start of a period
  *   accel(q, v, tau, W, par, S) -> (a, out)                       q̈ for the current stick state
  * W: the disturbance h_d at the start, middle and end of the step (18), S: the stick state (see S_* below),
- * opt = [unused, h, scheme], out = [W_friction, W_external, a0 valid, status].
+ * opt = [unused, h, scheme], out = [W_friction, W_external, a0 valid, status(, no joint that can stick at rest at
+ * the end: S's friction torque is the next period's)].
  */
 #include <math.h>
 #include <string.h>
@@ -44,14 +45,15 @@
 #define EULER 1
 #define SEMI_IMPLICIT 2
 #define IMPLICIT 3
-/* friction parameters in par (generated_plant.FRICTION_PARAMS) */
-#define P_CP (1 * N)
-#define P_CN (2 * N)
-#define P_HP (3 * N)
-#define P_HN (4 * N)
-#define P_BP (6 * N)
-#define P_BN (7 * N)
-#define P_CAP (8 * N)
+/* friction parameters in par, after the 13 inertial parameters per joint (generated_plant.PlantLayout) */
+#define P_FR (13 * N)
+#define P_CP (P_FR + 1 * N)
+#define P_CN (P_FR + 2 * N)
+#define P_HP (P_FR + 3 * N)
+#define P_HN (P_FR + 4 * N)
+#define P_BP (P_FR + 6 * N)
+#define P_BN (P_FR + 7 * N)
+#define P_CAP (P_FR + 8 * N)
 #define NEWTON_TOL 1e-11
 #define NEWTON_MAX_ITER 25
 
@@ -219,11 +221,11 @@ static int armctl_rhs(const double* q, const double* v, const double* tau, const
   return OK;
 }
 
-static double armctl_kinetic(const double* q, const double* v) {
+static double armctl_kinetic(const double* q, const double* v, const double* par) {
   double M[N * N], Mv[N];
-  const double* in[1] = {q};
+  const double* in[2] = {q, par};
   double* out[1] = {M};
-  CALL(pk_mass, 1, in, 1, out);
+  CALL(pk_mass, 2, in, 1, out);
   armctl_matvec(M, v, Mv);
   return 0.5 * armctl_dot(v, Mv);
 }
@@ -363,14 +365,14 @@ static int armctl_scheme_step(int scheme, double off, double hs, double h, const
   double M[N * N], bias[N], grav[N], base[N];
   const int* stuck = m->any ? m->stuck : 0;
   {
-    const double* in[1] = {q};
+    const double* in[2] = {q, par};
     double* out[1] = {M};
-    CALL(pk_mass, 1, in, 1, out);
+    CALL(pk_mass, 2, in, 1, out);
   }
   {
-    const double* in[2] = {q, v};
+    const double* in[3] = {q, v, par};
     double* out[2] = {bias, grav};
-    CALL(pk_bias, 2, in, 2, out);
+    CALL(pk_bias, 3, in, 2, out);
   }
   (void)a0;
   if (scheme == IMPLICIT) { /* implicit.implicit_euler */
@@ -467,9 +469,9 @@ static int armctl_scheme_step(int scheme, double off, double hs, double h, const
     for (i = 0; i < N; ++i) q1[i] = q[i] + hs * vb[i];
     armctl_matvec(M, vb, Mvb);
     {
-      const double* in[1] = {q1};
+      const double* in[2] = {q1, par};
       double* out[1] = {M};
-      CALL(pk_mass, 1, in, 1, out);
+      CALL(pk_mass, 2, in, 1, out);
     }
     if (armctl_masked_solve(M, Mvb, stuck, v1) != OK) return NOT_POSITIVE_DEFINITE;
 #if ARMCTL_FRICTION
@@ -528,10 +530,10 @@ static int armctl_advance(int scheme, double h, int begun, const double* q_in, c
     if (!any_cross || attempt == budget) {
       if (at_start) { memcpy(a_first, an, sizeof an); *a_first_valid = an_valid; }
       if (any_cross) { /* too many events in one step: stop the crossing joints where they are */
-        double before = armctl_kinetic(qn, vn);
+        double before = armctl_kinetic(qn, vn, par);
         S[S_EVENT_OVERFLOW] += 1.0;
         for (i = 0; i < N; ++i) if (cross[i]) vn[i] = 0.0;
-        dwf += armctl_kinetic(qn, vn) - before;
+        dwf += armctl_kinetic(qn, vn, par) - before;
       }
       memcpy(q, qn, sizeof q);
       memcpy(v, vn, sizeof v);
@@ -566,9 +568,9 @@ static int armctl_advance(int scheme, double h, int begun, const double* q_in, c
       double before;
       for (i = 0; i < N; ++i) zero[i] = m.dir[i] != 0.0 && m.dir[i] * vn[i] <= 0.0;
       zero[kmin] = 1;
-      before = armctl_kinetic(qn, vn);
+      before = armctl_kinetic(qn, vn, par);
       for (i = 0; i < N; ++i) if (zero[i]) { vn[i] = 0.0; S[S_STICK_EVENTS] += 1.0; }
-      wf += armctl_kinetic(qn, vn) - before;
+      wf += armctl_kinetic(qn, vn, par) - before;
     }
     off += s * remaining;
     remaining -= s * remaining;
@@ -602,6 +604,32 @@ CASADI_SYMBOL_EXPORT int advance(const casadi_real** arg, casadi_real** res, cas
   if (st != OK) {
     memcpy(q1, q, sizeof q);
     memcpy(v1, v, sizeof v);
+  }
+  { /* the next period's stick state needs no solve if no joint that can stick is at rest: then its friction torque
+     * (Plant.friction_torque) is the model's at the sliding directions sgn(q̇₁), computed here (see out[4]) */
+    int i, free = st == OK;
+#if ARMCTL_STICKY
+    for (i = 0; i < N; ++i) if (arg[4][P_CAP + i] != 0.0 && v1[i] == 0.0) free = 0;
+#endif
+    if (free) { /* what Plant.begin makes of that state: directions sgn(q̇₁), nothing stuck, nothing held */
+#if ARMCTL_STICKY
+      for (i = 0; i < N; ++i) {
+        S[S_DIR + i] = arg[4][P_CAP + i] != 0.0 ? (v1[i] > 0 ? 1.0 : v1[i] < 0 ? -1.0 : 0.0) : 0.0;
+        S[S_STUCK + i] = S[S_HOLD + i] = 0.0;
+      }
+      S[S_ANY] = S[S_ALL] = 0.0;
+#endif
+#if ARMCTL_FRICTION
+      {
+        double f[N];
+        const double* in[3] = {v1, S + S_DIR, arg[4]};
+        double* out[1] = {f};
+        CALL(pk_friction, 3, in, 1, out);
+        for (i = 0; i < N; ++i) S[S_TAUF + i] = f[i];
+      }
+#endif
+    }
+    res[3][4] = free;
   }
   memcpy(res[0], q1, sizeof q1);
   memcpy(res[1], v1, sizeof v1);
@@ -640,7 +668,9 @@ CASADI_SYMBOL_EXPORT int begin(const casadi_real** arg, casadi_real** res, casad
 #endif
   S[S_BEGUN] = 1.0;
   memcpy(res[0], S, sizeof S);
-  res[1][0] = res[1][1] = res[1][2] = 0.0;
+  res[1][0] = m.any;
+  res[1][1] = m.all;
+  res[1][2] = 0.0;
   res[1][3] = st;
   return 0;
 }
