@@ -29,20 +29,20 @@ import time
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import casadi as cs
 import numpy as np
 
 from armctl._checks import FloatArray
-from armctl.dynamics import codegen, recursive
 from armctl.dynamics.base import Dynamics
 from armctl.errors import BackendError, InvalidParameterError, SimulationWarning
 from armctl.model.robot import RobotModel
-from armctl.sim import compiled_plant
-from armctl.sim.generated_plant import PlantLayout, layout_of
 from armctl.sim.integrators import fast_step, make_step, rk4, semi_implicit_euler
 from armctl.sim.plant import Plant
+from armctl.sim.plant_layout import PlantLayout, layout_of
+
+if TYPE_CHECKING:  # CasADi is imported on first use: ``import armctl`` stays light
+    import casadi as cs
 
 #: the integrators of :func:`compiled_step` (and whose step of a plant without forces is ``simulate``'s fast path)
 SCHEMES = ("rk4", "euler")
@@ -122,6 +122,8 @@ def choose_step(
         if mode is True:
             raise InvalidParameterError(f"compile=True: {found}; use compile=False", value=found)
         return python(found)
+    from armctl.dynamics import codegen
+
     try:
         return _generated(dyn, scheme, plant, found, cache_dir)
     except BackendError as e:
@@ -148,6 +150,8 @@ def _generated(
     dyn: Dynamics, scheme: str, plant: Plant, layout: PlantLayout, cache_dir: str | os.PathLike[str] | None
 ) -> StepChoice:
     """The generated step (built, loaded or found in this process)."""
+    from armctl.sim import compiled_plant
+
     model = dyn.model
     family = compiled_plant.FAMILY[scheme]
     tag = compiled_plant.library_tag(model, layout, family)[0]
@@ -182,6 +186,8 @@ def _library(
     what: str,
 ) -> Any:
     """``load()``'s library, timed and logged when it has to be built."""
+    from armctl.dynamics import codegen
+
     key = str(codegen.library_path(names, tag, cache_dir))
     found = _ready.get(key)
     if found is not None:
@@ -218,6 +224,10 @@ def step_function(model: RobotModel, scheme: str) -> cs.Function:
     ``model``: the simulator's own formulas (:func:`armctl.sim.integrators.rk4`,
     :func:`~armctl.sim.integrators.semi_implicit_euler`) applied to symbols, with q̈ = qdd(q, q̇, τ) of
     :func:`armctl.dynamics.recursive.forward_dynamics`."""
+    import casadi as cs
+
+    from armctl.dynamics import recursive
+
     _check_scheme(scheme)
     n = model.n
     q, v, tau = (cs.SX.sym(s, n) for s in ("q", "qd", "tau"))
@@ -230,6 +240,8 @@ def step_function(model: RobotModel, scheme: str) -> cs.Function:
 
 def _library_function(model: RobotModel, scheme: str, cache_dir: str | os.PathLike[str] | None) -> cs.Function:
     """The compiled step function, built only if its library is not cached yet."""
+    from armctl.dynamics import codegen
+
     _check_scheme(scheme)
     name = f"step_{scheme}"
     return codegen.cached([name], _step_tag(model, scheme), lambda: [step_function(model, scheme)], cache_dir)[name]
