@@ -30,8 +30,9 @@ import numpy as np
 from armctl._checks import FloatArray
 from armctl.dynamics import codegen
 from armctl.model.robot import RobotModel
-from armctl.sim.generated_plant import PlantLayout, kernels
+from armctl.sim.generated_plant import kernels
 from armctl.sim.plant import Plant
+from armctl.sim.plant_layout import PlantLayout
 from armctl.sim.stick_slip import NotPositiveDefinite
 
 #: bumped when the generated code changes, so that stale cached libraries are not loaded
