@@ -1,13 +1,13 @@
-"""`CompiledPlant`: a plant with friction, contact or a disturbance whose integration step runs as generated C.
+"""`CompiledPlant`: a plant (friction, contact, a disturbance, or none) whose integration step runs as generated C.
 
 The plant's terms are generated with CasADi (:mod:`armctl.sim.generated_plant`) and wrapped in a C driver
-(``generated_step.c``, appended to the generated code) that is a transcription of the Python step: the stick solve
-of :meth:`Plant.begin <armctl.sim.plant.Plant.begin>`, the events of :func:`armctl.sim.stepper.advance` and the
-schemes of :mod:`armctl.sim.integrators` and :mod:`armctl.sim.implicit`. A step is one call into C; the runs agree
-with the Python step's to rounding, and a stuck joint stays exactly where it is (q̈_S = 0 exactly, see
-:func:`~armctl.sim.generated_plant.masked_cholesky_solve`).
+(``step_core.c``, ``step_schemes.c``, ``step_events.c``, appended to the generated code) that transcribes the
+Python step: the stick solve of :meth:`Plant.begin <armctl.sim.plant.Plant.begin>`, the events of
+:func:`armctl.sim.stepper.advance` and the schemes of :mod:`armctl.sim.integrators` and :mod:`armctl.sim.implicit`.
+A step is one call into C; the runs agree with the Python step's to rounding, and a stuck joint stays exactly
+where it is (q̈_S = 0 exactly, see :func:`~armctl.sim.generated_plant.masked_cholesky_solve`).
 
-One library per arm (the geometry of its chain), plant structure (:class:`~armctl.sim.generated_plant.PlantLayout`)
+One library per arm (the geometry of its chain), plant structure (:class:`~armctl.sim.plant_layout.PlantLayout`)
 and family of schemes (explicit: ``"rk4"``, ``"euler"``; implicit: ``"semi-implicit-euler"``, ``"implicit-euler"``),
 built on first use and cached on disk (:mod:`armctl.dynamics.codegen`); inertial parameters, friction levels, contact
 coefficients, planes and point offsets are inputs of the code, so the variants of a plant share its library.
@@ -40,14 +40,19 @@ CODE_VERSION = 3
 #: the scheme codes of the C driver, and the family of kernels each needs
 SCHEMES = {"rk4": 0, "euler": 1, "semi-implicit-euler": 2, "implicit-euler": 3}
 FAMILY = {"rk4": "explicit", "euler": "explicit", "semi-implicit-euler": "implicit", "implicit-euler": "implicit"}
-#: the functions of the C driver (see ``generated_step.c``)
+#: the functions of the C driver (see ``step_events.c``)
 DRIVER = ("advance", "begin", "accel")
 _STATUS = {1: "mass matrix not positive definite", 2: "singular Newton matrix"}
 
 
+#: the C driver's files, in the order they are appended to the generated code
+DRIVER_FILES = ("step_core.c", "step_schemes.c", "step_events.c")
+
+
 @cache
 def _driver_source() -> str:
-    return resources.files("armctl.sim").joinpath("generated_step.c").read_text()
+    files = resources.files("armctl.sim")
+    return "\n".join(files.joinpath(name).read_text() for name in DRIVER_FILES)
 
 
 def _shapes(layout: PlantLayout) -> list[cs.Function]:
