@@ -107,13 +107,6 @@ def library(
     )
 
 
-def is_cached(
-    model: RobotModel, layout: PlantLayout, family: str, cache_dir: str | os.PathLike[str] | None = None
-) -> bool:
-    """Whether the library is cached (using it would not compile)."""
-    return codegen.is_cached(list(DRIVER), library_tag(model, layout, family)[0], cache_dir)
-
-
 class CompiledPlant:
     """The plant ``plant`` integrated by generated code with the scheme ``scheme``: what ``simulate`` and the
     recorder use of a :class:`~armctl.sim.plant.Plant` (``begin``, ``accel``, ``friction_torque``, ``stuck``,
