@@ -108,7 +108,8 @@ def choose_step(
     Warns
     -----
     SimulationWarning
-        ``compile="auto"`` and no C compiler (or a failing build): the Python step is used (once per process).
+        ``compile="auto"`` and no C compiler, or a build that fails for another reason: the Python step is used
+        (one warning per process and cause).
     """
     mode = compile_option(compile)
 
@@ -126,10 +127,10 @@ def choose_step(
 
     try:
         return _generated(dyn, scheme, plant, found, cache_dir)
-    except BackendError as e:
+    except Exception as e:  # "auto" falls back on any failure to build: the run still happens, and says why
         if mode is True:
             raise
-        reason = str(e)
+        reason = str(e) if isinstance(e, BackendError) else f"{type(e).__name__}: {e}"
         if codegen.compiler() is None:
             asked = os.environ.get("CC")
             where = f"$CC = {asked!r} is not a program on the PATH" if asked else "no cc or gcc on the PATH"
