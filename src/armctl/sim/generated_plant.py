@@ -2,8 +2,8 @@
 
 The same terms as :class:`~armctl.sim.plant.Plant`, written once as symbols and generated as C:
 
-* rigid-body dynamics: the Newton–Euler recursion of :mod:`armctl.dynamics.recursive` for the bias
-  C(q, q̇) q̇ + g(q) and M(q) (the model the ``"pinocchio"`` backend expresses);
+* rigid-body dynamics: the recursions of :mod:`armctl.dynamics.recursive`, Newton–Euler for the bias
+  C(q, q̇) q̇ + g(q) and composite rigid body for M(q) (the model the ``"pinocchio"`` backend expresses);
 * joint friction τ_f(q̇) of :mod:`armctl.sim.friction` — the stick–slip model's kinetic curve for given sliding
   directions d (F_v q̇ + F_c(d) + (F_s − F_c)(d) exp(−(q̇/v_s)²)), or the smooth tanh curve — and its slope;
 * contact: every point of every :class:`~armctl.sim.contact.Plane`, its position p(q) = p_j(q) + R_j(q) r on
@@ -19,8 +19,7 @@ What is the geometry of the chain (joint axes and placements, gravity) is built 
 between runs — the inertial parameters π (a payload, a perturbed model), friction levels, contact stiffness,
 damping and friction, the planes, the points' offsets — is the input ``par``
 (:class:`~armctl.sim.plant_layout.PlantLayout`), so that such variants share one library (the inertial parameters as
-symbols cost nothing measurable: the inertia tensors of real links are full anyway). M(q) is ∂τ/∂q̈ of the
-Newton–Euler recursion.
+symbols cost little: the inertia tensors of real links are full anyway).
 """
 
 from __future__ import annotations
@@ -197,6 +196,7 @@ def masked_cholesky_solve(mass: cs.SX, rhs: cs.SX, stuck: cs.SX) -> tuple[cs.SX,
             masked[i, j] = keep[i] * mass[i, j] + stuck[i] if i == j else keep[i] * keep[j] * mass[i, j]
     b = keep * rhs
     low: list[list[Any]] = [[None] * n for _ in range(n)]
+    inv: list[Any] = [None] * n  # 1 / L_kk: one division a row, products elsewhere (divisions cost ~10 products)
     pivots = []
     for i in range(n):
         for k in range(i + 1):
@@ -205,21 +205,21 @@ def masked_cholesky_solve(mass: cs.SX, rhs: cs.SX, stuck: cs.SX) -> tuple[cs.SX,
                 s = s - low[i][p] * low[k][p]
             if i == k:
                 pivots.append(s)
-                low[i][k] = cs.sqrt(s)
+                inv[i] = 1.0 / cs.sqrt(s)
             else:
-                low[i][k] = s / low[k][k]
+                low[i][k] = s * inv[k]
     y: list[Any] = [None] * n
     for i in range(n):
         s = b[i]
         for p in range(i):
             s = s - low[i][p] * y[p]
-        y[i] = s / low[i][i]
+        y[i] = s * inv[i]
     x: list[Any] = [None] * n
     for i in reversed(range(n)):
         s = y[i]
         for p in range(i + 1, n):
             s = s - low[p][i] * x[p]
-        x[i] = s / low[i][i]
+        x[i] = s * inv[i]
     return cs.vertcat(*x), cs.mmin(cs.vertcat(*pivots))
 
 
@@ -260,8 +260,7 @@ def kernels(model: RobotModel, layout: PlantLayout, family: str) -> list[cs.Func
     def bias(vel: cs.SX) -> cs.SX:
         return rnea(vel, zeros)
 
-    acc_sym = cs.SX.sym("qdd", n)
-    mass = cs.jacobian(rnea(zeros, acc_sym, gravity=False), acc_sym)  # M = ∂τ/∂q̈ (τ is linear in q̈)
+    mass = recursive.mass_matrix(model, q, transforms=tf, params=pi)
 
     fric = ex.friction(v, d, par) if layout.has_friction else zeros
     ext = ex.external(q, v, hd, par)
