@@ -25,6 +25,8 @@ def advance(
     ``begun``: :meth:`Plant.begin` was already called for this state. A plant with a disturbance samples it
     for the step (:meth:`Plant.sample_disturbance`)."""
     if plant.disturbance is None:
+        if plant.sticky is None:  # no events to find (or the step finds them itself: the generated step)
+            return step(t, q, v, tau, h)
         return _advance(plant, step, t, q, v, tau, h, begun)
     plant.sample_disturbance(t, h)
     try:
