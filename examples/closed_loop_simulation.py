@@ -1,4 +1,8 @@
-"""A closed-loop simulation script: the Panda carrying a 1.5 kg payload its controller does not know,
+"""
+Closed-loop simulation: a payload the controller does not know
+==============================================================
+
+A closed-loop simulation script: the Panda carrying a 1.5 kg payload its controller does not know,
 tracking a minimum-jerk move against joint friction with stiction, with computed torque and with the
 passivity-based law at the same bandwidth. Saves the result (npz), a chart and a 3D playback (an HTML page; it
 needs the meshcat package: pip install armctl[view]).

@@ -1,4 +1,8 @@
-"""Contact with the operational-space QP: the Panda approaches a table, presses with 10 N and slides 10 cm
+"""
+Pressing and sliding on a table with the operational-space QP
+=============================================================
+
+Contact with the operational-space QP: the Panda approaches a table, presses with 10 N and slides 10 cm
 against surface friction (μ = 0.3, compliant table), with the QP regulating the normal force through a
 sliding contact — and Khatib's closed-form controller doing the same motion by pose stiffness alone.
 
@@ -7,6 +11,7 @@ Run: python examples/contact_qp.py
 
 from __future__ import annotations
 
+import matplotlib.pyplot as plt
 import numpy as np
 
 from armctl.scenes import scene
@@ -14,6 +19,7 @@ from armctl.scenes import scene
 
 def main() -> None:
     sc = scene("panda_contact")
+    _, ax = plt.subplots(figsize=(8, 3.5), layout="constrained")
     for method in sc.methods:
         res = sc.run(method)
         m = sc.metrics(res, method)
@@ -28,6 +34,10 @@ def main() -> None:
             f"{m['rms_error'] * 1e3:.2f} mm; contact lost: {m['contact_lost']}; peak torque "
             f"{np.max(np.abs(res.tau_applied) / sc.plant.effort_limit):.0%} of the limit"
         )
+        ax.plot(res.t, fn, label=method.replace("_", " "))
+    ax.axhline(10.0, color="k", lw=0.8, ls="--", label="10 N wanted")
+    ax.set(xlabel="t [s]", ylabel="normal force on the table [N]", title="Panda pressing and sliding on a table")
+    ax.legend()
 
 
 if __name__ == "__main__":

@@ -1,4 +1,8 @@
-"""A controller written in user code, simulated unchanged by armctl.
+"""
+Writing your own controller
+===========================
+
+A controller written in user code, simulated unchanged by armctl.
 
 Subclass ``armctl.controllers.Controller`` and implement ``compute(t, q, qd, ref) -> tau``. The same object
 runs in ``armctl.sim.simulate`` or in your own 1 kHz loop. This one is a PD with gravity and a model-based
@@ -41,6 +45,7 @@ def main() -> None:
         f"diverged: {res.diverged}; RMS tracking error {np.sqrt((err**2).mean()):.2e} rad, "
         f"max {np.abs(err).max():.2e} rad; peak feedback torque {np.abs(res.logs['feedback']).max():.1f} N·m"
     )
+    res.plot(("q", "error", "tau_applied"))  # a matplotlib Figure: the reference overlaid, the joints named
 
 
 if __name__ == "__main__":

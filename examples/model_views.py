@@ -1,10 +1,17 @@
-"""Views of the dynamic model: bounds over the joint ranges, the stability conditions they give, the
+"""
+Model views: bounds, stability conditions, the operational space
+================================================================
+
+Views of the dynamic model: bounds over the joint ranges, the stability conditions they give, the
 operational-space model and the dynamic manipulability ellipsoid.
 
-Run: python examples/model_views.py   (writes model_views.png in the current directory)
+Run: python examples/model_views.py [--out DIR]   (writes model_views.png there; default: the current directory)
 """
 
 from __future__ import annotations
+
+import argparse
+from pathlib import Path
 
 import numpy as np
 
@@ -21,6 +28,10 @@ from armctl.tuning import (
 
 
 def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--out", type=Path, default=Path("."))
+    args = parser.parse_args()
+    args.out.mkdir(parents=True, exist_ok=True)
     dyn = armctl.Dynamics(armctl.models.planar_2r())
 
     # 1. λ_m, λ_M, k_g, k_C, k_M over the joint ranges: certified for this all-revolute arm, each bound
@@ -49,8 +60,8 @@ def main() -> None:
         ell = dyn.dynamic_manipulability(qi, rows="xz")
         print(f"q = {np.round(qi, 2)}: semi-axes {np.round(ell.lengths, 5)} m/s² per N·m, measure {ell.measure:.3g}")
     ax = plot_dynamic_manipulability(dyn, path)
-    ax.figure.savefig("model_views.png", dpi=90)
-    print("wrote model_views.png")
+    ax.figure.savefig(args.out / "model_views.png", dpi=90)
+    print("wrote", args.out / "model_views.png")
 
 
 if __name__ == "__main__":

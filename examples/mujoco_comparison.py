@@ -1,4 +1,8 @@
-"""armctl and MuJoCo side by side: an MJCF arm read into armctl, the same closed loop on both simulators, joint
+"""
+armctl and MuJoCo side by side
+==============================
+
+armctl and MuJoCo side by side: an MJCF arm read into armctl, the same closed loop on both simulators, joint
 friction held below breakaway, and the Panda pressing its collision meshes on a table of a MuJoCo scene.
 
 Needs MuJoCo: pip install "armctl[mujoco]".

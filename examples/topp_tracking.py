@@ -1,4 +1,8 @@
-"""Plan the fastest timing of a path through six Panda waypoints within velocity and torque limits
+"""
+Time-optimal planning, then tracking
+====================================
+
+Plan the fastest timing of a path through six Panda waypoints within velocity and torque limits
 (TOPP-RA with the arm's own dynamics and friction, 10 % of the torque range left for feedback), compare it
 with the classic uniform time scaling, then track it in closed loop against joint friction with stiction.
 
@@ -45,6 +49,7 @@ def main() -> None:
         f"closed loop: diverged {res.diverged}; max tracking error {err.max() * 1e3:.2f} mrad; peak torque "
         f"{usage.max():.0%} of the limit ({model.joint_names[int(usage.argmax())]})"
     )
+    res.plot(("qd", "error", "tau_applied"))  # a matplotlib Figure: the reference overlaid, the joints named
 
 
 if __name__ == "__main__":

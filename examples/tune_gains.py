@@ -1,4 +1,8 @@
-"""Tune every joint-space controller of every scene and write the presets to controllers/.
+"""
+Tuning the controllers and writing the presets
+==============================================
+
+Tune every joint-space controller of every scene and write the presets to controllers/.
 
 How: one closed-loop bandwidth ω_n per scene, chosen well inside the sampled-data stability limit that
 python-control computes for a 1 kHz loop with one period of measurement delay; then
@@ -6,11 +10,11 @@ python-control computes for a 1 kHz loop with one period of measurement delay; t
 * computed torque: K_p = ω_n², K_d = 2ω_n (critically damped error dynamics), checked by the gain margin;
   on planar_2r the LQR gains of the double-integrator error dynamics instead (weights recorded);
 * PD + gravity: K_p = ω_n² M̄, K_d = 2ω_n M̄ (M̄ = diag M at the start of the reference), the same double
-  pole for a single joint; on a coupled arm the off-diagonal inertia moves the poles (an audit found
+  pole for a single joint; on a coupled arm the off-diagonal inertia moves the poles (measured:
   6.3–23.7 rad/s on planar_2r against ω_n = 10, 10.4–232 on the Panda against 20, both at q_ref(0); all
   stable when sampled);
 * passivity-based and adaptive: Λ = ω_n, K_D = ω_n M̄ (ṡ = −(K_D/M) s has its pole at ω_n for a single
-  joint, spread by the coupling likewise); Γ for the adaptive law in proportion to |π_i| + 0.01, so that
+  joint, spread by the coupling likewise); Γ for the adaptive law in proportion to abs(π_i) + 0.01, so that
   parameters move in proportion to their size, scaled by 0.1/(0.01 max M̄) — a scale, not a rate: how fast a
   parameter moves at a given error depends on the regressor (measured at 0.01 rad/s: a median 56 %/s on the
   pendulum, 0.14 %/s on planar_2r);

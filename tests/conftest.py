@@ -1,4 +1,4 @@
-"""Shared fixtures: built-in models and Dynamics objects, built once per session (they are immutable)."""
+"""Shared fixtures: built-in models and Dynamics objects, built once per test run (they are immutable)."""
 
 from __future__ import annotations
 

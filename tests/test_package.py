@@ -1,4 +1,4 @@
-"""The package's public face: every subpackage DESIGN.md lists is reachable from ``import armctl`` alone, and
+"""The package's public face: every subpackage of the documented layout is reachable from ``import armctl`` alone, and
 the heavy ones load only when first used."""
 
 from __future__ import annotations
@@ -41,4 +41,4 @@ def test_unknown_attribute_is_an_attribute_error() -> None:
 def test_sweep_is_where_the_design_puts_it_too() -> None:
     from armctl.sim import sweep
 
-    assert armctl.tuning.sweep is sweep  # DESIGN.md's layout: tuning/ (python-control, sweeps)
+    assert armctl.tuning.sweep is sweep  # the documented layout: tuning/ (python-control, sweeps)

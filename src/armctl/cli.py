@@ -1,4 +1,4 @@
-"""``armctl`` command line: ``armctl bench`` (the main job) and ``armctl demo``."""
+"""``armctl`` command line: ``armctl bench`` (the main job) and ``armctl demo``; ``armctl --version``."""
 
 from __future__ import annotations
 
@@ -54,9 +54,20 @@ def _bench(args: argparse.Namespace) -> int:
     return 0
 
 
+def _version() -> str:
+    """The installed armctl's version (``armctl.__version__``)."""
+    from armctl import __version__
+
+    return __version__
+
+
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="armctl", description=(__doc__ or "").replace("``", ""))
-    sub = parser.add_subparsers(dest="command", required=True)
+    """Run the command line with ``argv`` (default: ``sys.argv[1:]``); returns the exit status."""
+    parser = argparse.ArgumentParser(
+        prog="armctl", description="armctl: model-based control and planning of robot manipulators."
+    )
+    parser.add_argument("--version", action="version", version=f"armctl {_version()}")
+    sub = parser.add_subparsers(dest="command", title="commands")
     b = sub.add_parser("bench", help="run the benchmark suite and write figures.json, charts and report.html")
     b.add_argument(
         "--quick", action="store_true", help="a short run (1–2 minutes on 2 cores): coarser grids, fewer repetitions"
@@ -70,6 +81,9 @@ def main(argv: list[str] | None = None) -> int:
     d.add_argument("--backend", default="pinocchio", choices=["pinocchio", "lagrange"])
     d.set_defaults(func=_demo)
     args = parser.parse_args(argv)
+    if args.command is None:  # a bare ``armctl``: what it can do
+        parser.print_help()
+        return 0
     if args.command == "bench":  # before the (long) run: a bad --out would only fail at its end
         problem = _output_folder(args.out)
         if problem is not None:

@@ -132,3 +132,8 @@ class SweepWarning(UserWarning):
 class SolverWarning(UserWarning):
     """A solver needed help during a run (a fallback, a lower priority level kept from the level above) but the
     run went on; the warning says what happened and how often, once per run."""
+
+
+class SingularityWarning(UserWarning):
+    """A controller met (near) singular configurations during a run and went on with a damped inverse there;
+    the warning says on how many steps and how much damping, once per run."""

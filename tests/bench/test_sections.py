@@ -1,4 +1,4 @@
-"""The benchmark sections ``integrators``, ``backends`` and ``fidelity`` (issue 7), each run once in quick mode:
+"""The benchmark sections ``integrators``, ``backends`` and ``fidelity``, each run once in quick mode:
 finite numbers, the orderings theory predicts, and a written chart."""
 
 from __future__ import annotations

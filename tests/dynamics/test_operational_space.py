@@ -206,3 +206,24 @@ def test_plot_along_a_path() -> None:
     plt.close(ax.figure)
     with pytest.raises(InvalidParameterError, match="two position rows"):
         plot_dynamic_manipulability(dyn, path, rows="pose")
+
+
+def test_the_damped_terms_are_the_inverse_of_the_shifted_task_space_inverse_inertia() -> None:
+    """operational_space_terms with damping δ²: Λ = (J M⁻¹ Jᵀ + δ² I)⁻¹ (numpy), J̄ = M⁻¹ Jᵀ Λ, J J̄ = I − δ² Λ,
+    μ and p from them; δ² = 0 gives the exact terms."""
+    from armctl.dynamics.operational_space import operational_space_terms
+
+    dyn = dynamics("panda")
+    rng = np.random.default_rng(2)
+    q, qd = rng.uniform(-1.0, 1.0, 7), rng.normal(size=7)
+    mass, jac = dyn.mass_matrix(q), dyn.jacobian(q)
+    drift, cq, g = frame_drift(dyn, q, qd), dyn.coriolis_matrix(q, qd) @ qd, dyn.gravity_torque(q)
+    lam_inv = jac @ np.linalg.solve(mass, jac.T)
+    for damping in (0.0, 1e-3, 0.5):
+        lam, jbar, mu, p = operational_space_terms(mass, jac, drift, cq, g, damping)
+        ref = np.linalg.inv(lam_inv + damping * np.eye(6))
+        np.testing.assert_allclose(lam, ref, rtol=1e-9, atol=1e-12 * np.abs(ref).max())
+        np.testing.assert_allclose(jbar, np.linalg.solve(mass, jac.T) @ ref, rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(jac @ jbar, np.eye(6) - damping * ref, atol=1e-9)
+        np.testing.assert_allclose(mu, jbar.T @ cq - ref @ drift, rtol=1e-9, atol=1e-9)
+        np.testing.assert_allclose(p, jbar.T @ g, rtol=1e-9, atol=1e-9)

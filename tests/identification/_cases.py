@@ -1,4 +1,4 @@
-"""Shared cases for the identification tests (issue 8), each built once per session.
+"""Shared cases for the identification tests, each built once per test run.
 
 Simulated measurements: the *true* arm's inverse dynamics (Pinocchio RNEA plus the model's joint friction,
 through ``Dynamics.inverse_dynamics``) along the excitation trajectory, sampled at 500 Hz, with Gaussian

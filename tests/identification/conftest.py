@@ -1,4 +1,4 @@
-"""Session fixtures: the identified Puma 560 and Panda (see ``_cases``)."""
+"""Fixtures built once per test run: the identified Puma 560 and Panda (see ``_cases``)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Issue 8: computed torque with the identified model tracks better than with the nominal perturbed model it
+"""Computed torque with the identified model tracks better than with the nominal perturbed model it
 started from.
 
 The plant is the true Puma 560 (published parameters, asymmetric Coulomb friction with stick–slip in the

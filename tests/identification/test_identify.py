@@ -1,4 +1,4 @@
-"""Issue 8: identify the Puma 560 and the Panda from simulated data with joint friction and measurement noise.
+"""Identify the Puma 560 and the Panda from simulated data with joint friction and measurement noise.
 
 Reference: the true arm's inverse dynamics (Pinocchio RNEA + friction) on a fresh validation trajectory, not
 the regressor under test; the consistent estimate is evaluated through ``Dynamics(identified_model)``, a path
@@ -26,7 +26,7 @@ def _relative_rms(pred: np.ndarray, ref: np.ndarray) -> np.ndarray:
 
 
 def _limits(c: Case) -> np.ndarray:
-    """2% of the torque RMS per joint, 5% on the wrist (issue 8)."""
+    """2% of the torque RMS per joint, 5% on the wrist."""
     lim = np.full(c.truth.n, 0.02)
     lim[list(c.wrist)] = 0.05
     return lim

@@ -41,7 +41,7 @@ def _pendulum(coulomb: float = 0.0) -> armctl.Dynamics:
 
 
 def test_end_pose_the_arm_cannot_hold_is_refused() -> None:
-    # the reviewer's case: toppra "throws" the rod to 1.2 rad, braking on the last stage, but it cannot rest there
+    # the case: toppra "throws" the rod to 1.2 rad, braking on the last stage, but it cannot rest there
     need = _holding_torque(1.2)
     assert 4.5 < need < 4.6  # 2 · 9.81 · 0.25 · sin 1.2 = 4.572 N·m
     with pytest.raises(

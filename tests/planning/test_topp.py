@@ -218,7 +218,7 @@ def test_collocation_converges_to_first_order_and_its_failure_says_so() -> None:
 
 
 def test_reference_at_the_ends_and_consistent_derivatives() -> None:
-    # called with the keywords DESIGN.md names: time_optimal(dyn, waypoints, vel_limit=..., ...)
+    # called with the documented keywords: time_optimal(dyn, waypoints, vel_limit=..., ...)
     traj = time_optimal(dyn=panda(), waypoints=PANDA_WAYPOINTS, vel_limit="model", torque_limit="model")
     start, end = traj(0.0), traj(traj.duration)
     np.testing.assert_allclose(start.q, PANDA_WAYPOINTS[0], atol=1e-12)

@@ -1,6 +1,6 @@
 """Contact: static force against Jᵀh_e = τ − g, stiffness over four decades with the implicit scheme, a
 Hunt–Crossley bounce against an independent ODE solution, Coulomb friction along a wall, several contact
-points with a force sensor, and an external-wrench disturbance (issue 3)."""
+points with a force sensor, and an external-wrench disturbance."""
 
 from __future__ import annotations
 

@@ -1,5 +1,4 @@
-"""Divergence stops the run and is reported with time and state, never raised and never a NaN trajectory
-(issue 3)."""
+"""Divergence stops the run and is reported with time and state, never raised and never a NaN trajectory."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 """Energy: conservation in free motion, and the energy balance E(t) − E(0) = ∫q̇ᵀ(τ − τ_f − Jᵀh_e)dt with
-friction and contact, closing to the integrator's order (issue 3).
+friction and contact, closing to the integrator's order.
 
 Energies are functions of the recorded state (the free-motion tests evaluate them here with the Dynamics' own
 kinetic_energy and potential_energy, and check the result's energy against them), not something the

@@ -1,4 +1,4 @@
-"""Bad input raises an ArmctlError subclass that names the value (issue 3)."""
+"""Bad input raises an ArmctlError subclass that names the value."""
 
 from __future__ import annotations
 

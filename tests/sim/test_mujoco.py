@@ -1,6 +1,6 @@
 """Simulated trajectories against MuJoCo (an engine nobody here wrote): the Panda loaded from the same URDF
 (meshes stripped, fingers fixed, no damping, armature, limits or contact), the same open-loop torque profile
-held over each 1 ms period, both integrating with RK4 at 1 ms (issue 3)."""
+held over each 1 ms period, both integrating with RK4 at 1 ms ."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 """Zero-order hold, sub-steps, measurement delay and noise, saturation, references and controller logs,
-checked against the exact discretisation of a sliding mass written out here (issue 3)."""
+checked against the exact discretisation of a sliding mass written out here."""
 
 from __future__ import annotations
 

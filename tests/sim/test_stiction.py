@@ -1,5 +1,5 @@
 """Stick–slip friction: exact sticking (no creep, no chatter), breakaway at the predicted torque, and the
-multi-joint constraint solve checked against arms whose stuck joints are locked in the model (issue 3)."""
+multi-joint constraint solve checked against arms whose stuck joints are locked in the model."""
 
 from __future__ import annotations
 

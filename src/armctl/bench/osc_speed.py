@@ -1,5 +1,6 @@
 """Cost of one operational-space QP control step on the Panda, against one raw RNEA and against a bare proxsuite
-solve of the same QPs, on two sets of states.
+solve of the same QPs, on two sets of states, with the controller on ``Dynamics(panda)`` (Pinocchio's terms, the
+QP rows in NumPy) and on ``Dynamics(panda, compile=True)`` (the QP's data from generated code).
 
 Run: ``python -m armctl.bench.osc_speed [--quick]``.
 
@@ -13,8 +14,8 @@ q̈ alone). Two sets of states, each run through one controller in turn, as a lo
 * ``random``: states near the ready pose, q = ready + N(0, 0.1 rad), q̇ = N(0, 0.3 rad/s), the pose target the
   ready pose's tool pose (each step's QP unrelated to the previous one).
 
-Measured per set, as CPU time of this process in interleaved rounds (ratios taken round by round, then their
-median and quartiles):
+Measured per set and dynamics, as CPU time of this process in interleaved rounds (ratios taken round by round,
+then their median and quartiles):
 
 * ``step``: ``controller(t, q, q̇, ref)`` — input checks, model terms, QP build, solve, optimality check, τ;
 * ``rnea``: one raw ``pinocchio.rnea`` at the same states;
@@ -24,8 +25,9 @@ median and quartiles):
 
 and, on one pass: the QPs solved by each stage of the solver chain (``stages``; fallbacks are "cold",
 "defaults", "second") and the steps whose τ differs from quadprog's cold optimum by more than 1e-4 N·m
-(``wrong``, if quadprog is installed). On the circle also the closed-form OSC baseline and proxsuite's
-one-shot cold ``dense.solve``, for reference.
+(``wrong``, if quadprog is installed). On the circle with Pinocchio's terms also the closed-form OSC baseline
+and proxsuite's one-shot cold ``dense.solve``, for reference. The figures of ``compile=True`` are under
+``"compiled"``.
 """
 
 from __future__ import annotations
@@ -43,8 +45,9 @@ import numpy as np
 import armctl
 from armctl.bench.timing import interleaved_samples
 from armctl.controllers.osc import ClosedFormOSC, FramePoseTask, OperationalSpaceQP, PostureTask, TorqueLimit
+from armctl.errors import BackendError
 
-#: what the checks of this benchmark ask: the step within 15 RNEA on both sets of states
+#: what the checks of this benchmark ask: the step on ``compile=True`` within 15 RNEA on both sets of states
 TARGETS = {"ratio_rnea": 15.0}
 
 Q_HOME = np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])
@@ -88,14 +91,20 @@ def _controller(dyn: armctl.Dynamics, pose: FramePoseTask) -> OperationalSpaceQP
     return OperationalSpaceQP(dyn, [pose, PostureTask(dyn.n, kp=100.0, weight=1e-3)], limits=[TorqueLimit()])
 
 
+def circle_controller(dyn: armctl.Dynamics, count: int, dt: float = 1e-3) -> tuple[OperationalSpaceQP, FramePoseTask]:
+    """The controller following the circle (sampled at ``count`` control instants) on ``dyn``, and its pose
+    task."""
+    pose0 = dyn.frame_pose(Q_HOME)
+    pose = FramePoseTask(kp=400.0)
+    pose.set_trajectory(_Sampled(_circle(pose0[:3, 3], pose0[:3, :3]), dt, count))
+    return _controller(dyn, pose), pose
+
+
 def states(count: int, dt: float = 1e-3) -> tuple[States, Any, Any]:
     """``count`` (t, q, q̇) along the circle, from the controller acting on its own model (semi-implicit
     Euler), and the QP and closed-form controllers to time."""
     dyn = armctl.Dynamics(armctl.models.panda())
-    pose0 = dyn.frame_pose(Q_HOME)
-    pose = FramePoseTask(kp=400.0)
-    pose.set_trajectory(_Sampled(_circle(pose0[:3, 3], pose0[:3, :3]), dt, count))
-    ctrl = _controller(dyn, pose)
+    ctrl, pose = circle_controller(dyn, count, dt)
     closed = ClosedFormOSC(dyn, pose, PostureTask(dyn.n, kp=100.0, weight=1e-3))
     ref = armctl.Reference(Q_HOME)
     q, qd = Q_HOME.copy(), np.zeros(dyn.n)
@@ -110,10 +119,10 @@ def states(count: int, dt: float = 1e-3) -> tuple[States, Any, Any]:
     return seq, ctrl, closed
 
 
-def random_states(count: int, seed: int = 0) -> tuple[States, OperationalSpaceQP]:
-    """``count`` states near the ready pose (q = ready + N(0, 0.1), q̇ = N(0, 0.3)) and the controller, whose
-    pose target is the ready pose's tool pose."""
-    dyn = armctl.Dynamics(armctl.models.panda())
+def random_states(count: int, seed: int = 0, dyn: armctl.Dynamics | None = None) -> tuple[States, OperationalSpaceQP]:
+    """``count`` states near the ready pose (q = ready + N(0, 0.1), q̇ = N(0, 0.3)) and the controller on ``dyn``
+    (default: the Panda's Pinocchio dynamics), whose pose target is the ready pose's tool pose."""
+    dyn = dyn if dyn is not None else armctl.Dynamics(armctl.models.panda())
     pose = FramePoseTask(kp=400.0)
     pose.set_target(dyn.frame_pose(Q_HOME))
     rng = np.random.default_rng(seed)
@@ -244,7 +253,7 @@ def run(count: int = 400, rounds: int = 15, quick: bool = False) -> dict[str, An
     circle = measure(seq, ctrl, rounds, {"closed_form": closed_form, "cold_solve": cold_solve})
     rseq, rctrl = random_states(count)
     random = measure(rseq, rctrl, rounds)
-    return {
+    out = {
         "model": "panda",
         "qp_size": {"variables": 14, "equalities": 7, "inequalities": 7},
         "states": count,
@@ -252,17 +261,34 @@ def run(count: int = 400, rounds: int = 15, quick: bool = False) -> dict[str, An
         "circle": circle,
         "random": random,
     }
+    try:
+        compiled_dyn = armctl.Dynamics(armctl.models.panda(), compile=True)
+    except BackendError as e:  # no C compiler
+        out["compiled_unavailable"] = str(e)
+        return out
+    out["compiled"] = {
+        "circle": measure(seq, circle_controller(compiled_dyn, count)[0], rounds),
+        "random": measure(rseq, random_states(count, dyn=compiled_dyn)[1], rounds),
+    }
+    return out
 
 
 def checks(fig: dict[str, Any]) -> dict[str, bool]:
-    """This benchmark's checks against :data:`TARGETS`, by name: the step within 15 RNEA on each set of states,
-    and no step's τ off quadprog's optimum."""
+    """This benchmark's checks against :data:`TARGETS`, by name: the step on ``compile=True`` within 15 RNEA on
+    each set of states, and no step's τ off quadprog's optimum, on either dynamics."""
     out = {}
+    limit = TARGETS["ratio_rnea"]
     for name in ("circle", "random"):
-        out[f"{name}: step / RNEA <= {TARGETS['ratio_rnea']:g}"] = fig[name]["ratio_rnea"] <= TARGETS["ratio_rnea"]
-        if fig[name]["wrong"] is not None:
-            out[f"{name}: every torque the optimum"] = fig[name]["wrong"] == 0
+        f = fig.get("compiled", {}).get(name)  # None: compile=True could not be measured (no C compiler)
+        out[f"{name} (compile=True): step / RNEA <= {limit:g}"] = f is not None and f["ratio_rnea"] <= limit
+        for label, g in ((name, fig[name]), (f"{name} (compile=True)", f)):
+            if g is not None and g["wrong"] is not None:
+                out[f"{label}: every torque the optimum"] = g["wrong"] == 0
     return out
+
+
+#: the sets of states and their titles
+SETS = (("circle", "along a 10 cm circle"), ("random", "random states near the ready pose"))
 
 
 def report(fig: dict[str, Any]) -> str:
@@ -273,8 +299,9 @@ def report(fig: dict[str, Any]) -> str:
         f"{s['equalities']} equalities, {s['inequalities']} inequalities; solved on q̈ alone); {fig['states']} "
         f"states per set, {fig['rounds']} rounds; ratios: median of per-round ratios [quartiles]"
     ]
-    for name, title in (("circle", "along a 10 cm circle"), ("random", "random states near the ready pose")):
-        f = fig[name]
+    sets = [(fig[name], title) for name, title in SETS]
+    sets += [(fig["compiled"][name], f"{title}, compile=True") for name, title in SETS if "compiled" in fig]
+    for f, title in sets:
         stages = ", ".join(f"{k} {v}" for k, v in sorted(f["stages"].items()))
         wrong = "" if f["wrong"] is None else f"; τ off quadprog's optimum by > 1e-4 N·m: {f['wrong']}"
         lines += [
@@ -292,6 +319,8 @@ def report(fig: dict[str, Any]) -> str:
                 f"    closed-form OSC baseline  {f['closed_form_s'] * us:8.1f} µs",
                 f"    proxsuite dense.solve     {f['cold_solve_s'] * us:8.1f} µs   (one-shot, cold)",
             ]
+    if "compiled_unavailable" in fig:
+        lines.append(f"  compile=True unavailable: {fig['compiled_unavailable']}")
     return "\n".join(lines)
 
 

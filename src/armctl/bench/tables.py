@@ -192,8 +192,10 @@ def osc_speed(fig: dict[str, Any]) -> list[Table]:
         f"{s['inequalities']} inequalities; solved on q̈ alone)",
         ["states", "step [µs]", "against one RNEA", "against the bare solve", "optimality check [µs]", "fallbacks"],
     )
-    for name, label in (("circle", "along a 10 cm circle"), ("random", "random near the ready pose")):
-        f = fig[name]
+    names = (("circle", "along a 10 cm circle"), ("random", "random near the ready pose"))
+    sets = [(fig[name], label) for name, label in names]
+    sets += [(fig["compiled"][name], f"{label}, compile=True") for name, label in names if "compiled" in fig]
+    for f, label in sets:
         t.rows.append(
             [
                 text(label),

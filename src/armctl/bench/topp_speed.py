@@ -5,8 +5,9 @@ would write with toppra alone: a ``SplineInterpolator`` through the same waypoin
 ``JointVelocityConstraint`` and a ``SecondOrderConstraint.joint_torque_constraint`` whose inverse dynamics is a
 raw ``pinocchio.rnea`` callback, ``TOPPRA(..., solver_wrapper="seidel")`` and ``compute_trajectory(0, 0)``.
 armctl's call does more — it builds the constraints from its Dynamics (friction terms included), checks its
-inputs, verifies the result on 10 samples per stage with the full inverse dynamics — and the target is a ratio
-≤ 1.2. Rounds alternate between the two so that a noisy shared machine slows both alike; medians are reported.
+inputs, verifies the result on 10 samples per stage with the full inverse dynamics (:data:`TARGET` on the ratio is
+the benchmark's own check). Rounds alternate between the two so that a noisy shared machine slows both alike;
+medians are reported.
 
 Run: ``python -m armctl.bench.topp_speed [--rounds R] [--number K] [--chart PATH]``; with ``--chart`` it also
 writes the grid-convergence chart (duration error against the analytic bang-bang duration, and compute time,

@@ -1,6 +1,6 @@
 """Controllers: ``tau = controller(t, q, qd, ref)``.
 
-==========================  =================================================================================
+===========================  ================================================================================
 :class:`PDGravity`           set-point PD with gravity compensation (Takegaki–Arimoto)
 :class:`PDDesiredGravity`    set-point PD with gravity compensated at the set-point, g(q_d)
 :class:`ComputedTorque`      inverse dynamics + PD (+ integral)
@@ -10,7 +10,7 @@
 :class:`OperationalSpaceQP`  operational-space control as a QP (proxsuite): tasks, priorities, limits, contacts;
                              see :mod:`armctl.controllers.osc`
 :class:`ClosedFormOSC`       Khatib's closed-form operational-space control (the QP's baseline)
-==========================  =================================================================================
+===========================  ================================================================================
 
 Write your own by subclassing :class:`Controller` and implementing ``compute(t, q, qd, ref)``.
 """

@@ -2,7 +2,7 @@
 
 TOPP-RA's backward pass computes the controllable sets K_i, the path velocities² at s_i from which the end
 can be reached at rest; it fails at the first stage i (from the end) where K_i is empty, or at the start when
-0 ∉ K_0. toppra then returns None with a log line (issue #26). Here the stage's own problem is re-solved as
+0 ∉ K_0. toppra then returns None with a log line (toppra issue #26). Here the stage's own problem is re-solved as
 the least-violation linear program
 
     min t   s.t.  (a_r u + b_r x + c_r − g_r) / h_r ≤ t  for every row r at s_i (and s_{i+1}),
@@ -232,7 +232,7 @@ def diagnose(
         first = int(np.flatnonzero(~np.isfinite(x))[0]) if x is not None and not np.isfinite(x).all() else 0
         return SolverError(
             f"toppra's forward pass failed at s = {problem.s[first]:.4g} although the path is "
-            "controllable (a numerical failure, toppra issue #226); try another grid size",
+            "controllable (a numerical failure of the solver); try another grid size",
             value=first,
             problem=problem,
         )
@@ -268,8 +268,7 @@ def diagnose(
     if t <= 1e-9:
         return SolverError(
             f"toppra reported the path uncontrollable at s = {problem.s[i]:.4g} (code {code}), but "
-            "every limit can be met there: a numerical failure of the solver (toppra issues #14, "
-            "#17); try another grid size",
+            "every limit can be met there: a numerical failure of the solver; try another grid size",
             value=i,
             problem=problem,
         )

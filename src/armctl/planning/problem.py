@@ -248,7 +248,7 @@ def build_problem(
     if still is not None:
         raise InvalidParameterError(
             f"the path is stationary (q'(s) = 0) at s = {still:.4g}: there the path "
-            "velocity is unbounded and the scaling ill-posed (toppra issue #104); remove "
+            "velocity is unbounded and the scaling ill-posed; remove "
             "the stop from the path or split the path there",
             value=still,
         )

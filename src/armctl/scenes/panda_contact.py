@@ -1,7 +1,7 @@
 """``panda_contact``: the Panda approaches a table, presses on it with 10 N and slides 10 cm along it against
 surface friction — operational-space control as a QP with a sliding contact and normal-force regulation,
 against Khatib's closed-form controller, which can only press through its pose stiffness. The joints have
-viscous and Coulomb friction (issue 5 asks for the contact scene checked with joint friction), which both
+viscous and Coulomb friction (the contact scene checked with joint friction), which both
 controllers' model knows."""
 
 from __future__ import annotations

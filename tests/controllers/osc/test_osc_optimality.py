@@ -178,19 +178,17 @@ class _Failing(ProxQPSolver):
     ],
 )
 def test_each_fallback_gives_the_optimum_and_is_counted_and_summarised(
-    modes: tuple[str, ...], wrong: bool, stage: str, fallbacks: int, monkeypatch: pytest.MonkeyPatch
+    modes: tuple[str, ...], wrong: bool, stage: str, fallbacks: int
 ) -> None:
     """The primary solver made to fail (or to return a wrong point it calls solved) in the first stages: the
     chain goes on to the next stage, τ is still quadprog's cold optimum, ``last_log["qp_fallbacks"]`` counts
     the fallbacks of the step, and :meth:`end_run` warns once with how many QPs each fallback solved. States
-    whose optimum binds a torque limit, and the chain's first stage switched off past the unconstrained
-    minimum, so that every QP reaches the solvers."""
-    from armctl.controllers.osc import chain
-
-    monkeypatch.setattr(chain, "PDAS_STEPS", 0)
+    whose optimum binds a torque limit, and the chain's first stage (DAQP) switched off, so that every QP past
+    the unconstrained minimum reaches the solvers."""
     dyn = panda_dynamics()
     solver = _Failing(modes, wrong)
     ctrl = _controller(dyn, solver=solver)
+    ctrl.chain.first = None
     ref = armctl.Reference(Q_HOME)
     checked = 0
     for q, qd in _random_states(20, seed=7):
@@ -216,8 +214,9 @@ def test_each_fallback_gives_the_optimum_and_is_counted_and_summarised(
 
 def test_a_proposal_is_only_a_starting_point() -> None:
     """A primary solver whose every answer is wrong — 1 rad/s² off the optimum, with a multiplier on every
-    bound — and called solved: τ is still the optimum, because what is accepted is the exact solution on an
-    active set that passed the check, never the proposal itself."""
+    bound — and called solved (the chain's first stage switched off, so that every QP past the unconstrained
+    minimum reaches it): τ is still the optimum, because what is accepted is the exact solution on an active set
+    that passed the check, never the proposal itself."""
 
     class Wrong(ProxQPSolver):
         def solve_raw(self, arrays, slot=0, mode="warm"):  # type: ignore[no-untyped-def]
@@ -228,6 +227,7 @@ def test_a_proposal_is_only_a_starting_point() -> None:
 
     dyn = panda_dynamics()
     ctrl = _controller(dyn, solver=Wrong())
+    ctrl.chain.first = None
     ref = armctl.Reference(Q_HOME)
     for q, qd in _random_states(20, seed=11):
         tau = ctrl(0.0, q, qd, ref)
@@ -235,15 +235,13 @@ def test_a_proposal_is_only_a_starting_point() -> None:
         np.testing.assert_allclose(tau, _cold_optimum(p)[p.variables["tau"]], atol=1e-4)
 
 
-def test_a_qp_no_stage_solves_raises_with_what_each_stage_did(monkeypatch: pytest.MonkeyPatch) -> None:
-    """Every stage failing on a feasible QP whose optimum binds a torque limit (the first stage switched off
-    past the unconstrained minimum): SolverError saying so and listing the stages' outcomes (the elastic
-    diagnosis finds the QP feasible), never a torque."""
-    from armctl.controllers.osc import chain
-
-    monkeypatch.setattr(chain, "PDAS_STEPS", 0)
+def test_a_qp_no_stage_solves_raises_with_what_each_stage_did() -> None:
+    """Every stage failing on a feasible QP whose optimum binds a torque limit (the first stage switched off):
+    SolverError saying so and listing the stages' outcomes (the elastic diagnosis finds the QP feasible), never a
+    torque."""
     dyn = panda_dynamics()
     ctrl = _controller(dyn, solver=_Failing(("warm", "cold", "defaults")), fallback_solver=None)
+    ctrl.chain.first = None
     ref = armctl.Reference(Q_HOME)
     for q, qd in _random_states(20, seed=7):
         p = ctrl.build(0.0, q, qd, ref).problem(0)

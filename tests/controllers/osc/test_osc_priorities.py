@@ -120,9 +120,9 @@ def test_tight_torque_limits_lower_priority_gives_way_first(panda: armctl.Dynami
 
 
 def test_a_level_whose_solve_fails_still_outranks_the_levels_below(panda: armctl.Dynamics) -> None:
-    """Level 1 fails (a solver made to fail there, in every mode, and no second solver): the controller keeps
-    level 0's solution for it, and level 2 may not move level 1's residual away from what that solution gives
-    it."""
+    """Level 1 fails (a solver made to fail there, in every mode, no first stage and no second solver): the
+    controller keeps level 0's solution for it, and level 2 may not move level 1's residual away from what that
+    solution gives it."""
     from armctl.controllers.osc.solve import ProxQPSolver
     from armctl.errors import SolverError
 
@@ -143,6 +143,7 @@ def test_a_level_whose_solve_fails_still_outranks_the_levels_below(panda: armctl
         fallback_solver=None,
         slacks=True,
     )
+    ctrl.chain.first = None
     sol = ctrl.solve(0.0, q, qd, armctl.Reference(q))
     assert sol.level_status[0] == "solved" and sol.level_status[1].startswith("kept level 0")
     assert sol.level_status[2] == "solved"

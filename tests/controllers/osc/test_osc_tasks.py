@@ -200,6 +200,68 @@ def test_posture_residual_is_the_textbook_law(panda: armctl.Dynamics) -> None:
     )
 
 
+@settings(max_examples=100, deadline=None)
+@given(
+    st.integers(0, 10_000),
+    st.sampled_from([0.0, 1e-12, 1e-7, 3e-6, 1e-3, 0.3, 2.0, 3.1, np.pi - 1e-5, np.pi - 1e-7, np.pi]),
+    st.booleans(),
+)
+def test_the_generated_codes_rotation_error_is_pinocchios(seed: int, angle: float, rounded: bool) -> None:
+    """rotation_error_sx (CasADi, for generated code) against rotation_error (Pinocchio's log3) on the branches
+    of the log: zero, the series below ε^(1/3), the formula, and within ε^(1/3) of a half-turn; with targets
+    rounded to four decimals (not quite rotations, as the target check allows). At a half-turn exactly the axis's
+    sign is arbitrary (both logs are the rotation): there the two may differ by it."""
+    import casadi as cs
+
+    from armctl.controllers.osc.tasks.rotation import rotation_error_sx
+
+    a, b = cs.SX.sym("a", 3, 3), cs.SX.sym("b", 3, 3)
+    log = cs.Function("log", [a, b], [rotation_error_sx(a, b)])
+    rng = np.random.default_rng(seed)
+    axis = rng.normal(size=3)
+    axis /= np.linalg.norm(axis)
+    rot = Rotation.random(random_state=seed).as_matrix()
+    rot_ref = Rotation.from_rotvec(angle * axis).as_matrix() @ rot
+    if rounded:
+        rot_ref = np.round(rot_ref, 4)
+    got, want = np.array(log(rot_ref, rot)).ravel(), rotation_error(rot_ref, rot)
+    if angle == np.pi and np.abs(got + want).max() < 1e-9:
+        return
+    np.testing.assert_allclose(got, want, atol=1e-9)
+
+
+def test_a_weight_changed_between_steps_takes_effect_for_its_own_controller_only() -> None:
+    """A task's weight or gain counts its own changes (``revision``): changed between steps, it changes its
+    controller's τ to that of a fresh controller with the new weight, and leaves another controller's alone."""
+    from armctl.controllers.osc import OperationalSpaceQP
+
+    dyn = panda_dynamics()
+
+    def tasks() -> list[object]:
+        pose = FramePoseTask(kp=400.0)
+        target = dyn.frame_pose(Q_HOME)
+        target[:3, 3] += [0.05, 0.0, 0.0]
+        pose.set_target(target)
+        return [pose, PostureTask(7, kp=100.0, weight=1e-3)]
+
+    mine, theirs = tasks(), tasks()
+    ctrl, other = OperationalSpaceQP(dyn, mine), OperationalSpaceQP(dyn, theirs)
+    ref = armctl.Reference(Q_HOME - 0.1)
+    q, qd = Q_HOME + 0.05, np.full(7, 0.1)
+    before, other_before = ctrl(0.0, q, qd, ref), other(0.0, q, qd, ref)
+    revision = mine[1].revision
+    mine[1].weight = 0.5
+    mine[0].kd = 10.0
+    assert mine[1].revision == revision + 1 and theirs[1].revision == revision
+    fresh = tasks()
+    fresh[1].weight = 0.5
+    fresh[0].kd = 10.0
+    after = ctrl(0.0, q, qd, ref)
+    np.testing.assert_allclose(after, OperationalSpaceQP(dyn, fresh)(0.0, q, qd, ref), atol=1e-9)
+    assert np.abs(after - before).max() > 1e-2
+    np.testing.assert_array_equal(other(0.0, q, qd, ref), other_before)
+
+
 class _Line:
     """A straight-line position target of its own arrays (picklable: a sweep sends it to its workers)."""
 

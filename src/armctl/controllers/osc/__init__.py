@@ -1,13 +1,14 @@
-"""Operational-space control as a QP (proxsuite, warm-started), with contacts, limits and strict priorities.
+"""Operational-space control as a QP (DAQP, then proxsuite), with contacts, limits and strict priorities.
 
     from armctl.controllers.osc import OperationalSpaceQP, FramePoseTask, PostureTask
 
-Parts, one concept a file: ``state`` (model terms of one step), ``tasks/`` (error + Jacobian), ``limits/``
-(bounds on q̈ or τ), ``contact`` (force variables, contact rows, friction cones), ``build`` (the QP),
-``problem`` (the inspectable QP), ``reduced`` (the same QP on q̈ alone), ``scale`` (out-of-scale task rows
-refused), ``solve`` (proxsuite / qpsolvers), ``active_set`` (a dual active-set solver), ``optimality`` (the KKT
-check), ``chain`` (verified optimum, with fallbacks), ``diagnose`` (conflicting rows), ``hierarchy`` (cascaded
-priorities), ``controller`` (the controller), ``closed_form`` (Khatib's baseline).
+Parts, one concept a file: ``state`` (model terms of one step), ``tasks/`` (error + Jacobian), ``limits/`` (bounds
+on q̈ or τ), ``contact`` (force variables, contact rows, friction cones), ``build`` (the QP), ``problem`` (the
+inspectable QP), ``reduced`` (the same QP on q̈ alone), ``generated`` (its data as generated code on
+``compile=True``), ``scale`` (out-of-scale task rows refused), ``solve`` (proxsuite / qpsolvers), ``daqp_solver``
+(DAQP from an active set, the chain's first stage), ``active_set`` (a dual active-set solver in NumPy),
+``optimality`` (the KKT check), ``chain`` (verified optimum, with fallbacks), ``diagnose`` (conflicting rows),
+``hierarchy`` (cascaded priorities), ``controller`` (the controller), ``closed_form`` (Khatib's baseline).
 """
 
 from armctl.controllers.osc.active_set import DualActiveSetSolver
@@ -16,6 +17,7 @@ from armctl.controllers.osc.chain import QPFailure, SolverChain
 from armctl.controllers.osc.closed_form import ClosedFormOSC
 from armctl.controllers.osc.contact import Contact
 from armctl.controllers.osc.controller import OperationalSpaceQP, default_limits
+from armctl.controllers.osc.daqp_solver import DaqpSolver
 from armctl.controllers.osc.diagnose import conflicting_rows
 from armctl.controllers.osc.hierarchy import OSCSolution
 from armctl.controllers.osc.limits import AccelerationLimit, JointPositionLimit, JointVelocityLimit, Limit, TorqueLimit
@@ -36,6 +38,7 @@ __all__ = [
     "ClosedFormOSC",
     "Contact",
     "ContactForceTask",
+    "DaqpSolver",
     "DualActiveSetSolver",
     "FrameOrientationTask",
     "FramePoseTask",

@@ -1,24 +1,27 @@
 """`SolverChain`: one QP of a control step, solved until a verified optimum is found.
 
-Stages, in order, each ending in the same check (:mod:`~armctl.controllers.osc.optimality`): the active set the
-candidate points at is solved exactly and accepted only if every row holds and every multiplier has its sign —
-i.e. the KKT conditions, the duality gap included, hold to the stated tolerances.
+Stages, in order, each ending in a check of the candidate against the QP's optimality conditions
+(:mod:`~armctl.controllers.osc.optimality`): every row holds, every multiplier has its sign, the stationarity
+residual and the duality gap vanish — the KKT conditions, to the stated tolerances.
 
-1. ``"active set"`` — the active set of the slot's last verified optimum (consecutive control steps rarely
-   change which limits bind), solved exactly by one direct solve; if the check refuses it, up to
-   :data:`PDAS_STEPS` steps of the primal-dual active-set method from it (drop the rows whose multiplier has
-   the wrong sign, take the rows the point violates), each solved exactly and checked. Skipped on a slot's
-   first QP.
+1. ``"active set"`` — DAQP (:class:`~armctl.controllers.osc.daqp_solver.DaqpSolver`, a dual active-set method
+   in C) started from the active set of the slot's last verified optimum (consecutive control steps rarely
+   change which limits bind), or from a given one, and if that fails, from no active row; its answer, the
+   exact solution on its final active set, is checked by :func:`~armctl.controllers.osc.optimality.kkt_ok` to
+   :data:`~armctl.controllers.osc.optimality.PRIMAL_TOL` and :data:`~armctl.controllers.osc.optimality.DUAL_TOL`.
 2. ``"warm"`` — the primary solver (ProxQP), warm-started from the slot's previous solution.
 3. ``"cold"`` — the primary solver from scratch (a warm start from an unrelated state can stop at a point
    that is not the optimum, or report a feasible QP infeasible).
 4. ``"defaults"`` — the primary solver from scratch with its default settings.
 5. ``"second"`` — a second solver (by default :class:`~armctl.controllers.osc.active_set.DualActiveSetSolver`,
-   an active-set method).
+   an active-set method in NumPy).
 
-Stages 3–5 are fallbacks: each one taken is counted (``counts``, and per step ``QPSolution.fallbacks``). If no
-stage gives a verified optimum, :class:`QPFailure` is raised with what each stage did; the controller decides
-what that means (a diagnosis for level 0, the level above's solution kept for a lower level).
+A candidate of stages 2–5 is a proposal: the active set it points at is solved exactly and accepted if it
+passes the check (or, failing that, the candidate itself if its KKT residuals are within the solvers' own
+tolerance, :data:`~armctl.controllers.osc.optimality.KKT_TOL`). Stages 3–5 are fallbacks: each one taken is
+counted (``counts``, and per step ``QPSolution.fallbacks``). If no stage gives a verified optimum,
+:class:`QPFailure` is raised with what each stage did; the controller decides what that means (a diagnosis for
+level 0, the level above's solution kept for a lower level).
 """
 
 from __future__ import annotations
@@ -31,7 +34,8 @@ import numpy as np
 
 from armctl._checks import FloatArray
 from armctl.controllers.osc.active_set import DualActiveSetSolver
-from armctl.controllers.osc.optimality import ActiveSets, active_set_of, residuals
+from armctl.controllers.osc.daqp_solver import DaqpSolver
+from armctl.controllers.osc.optimality import ActiveSets, active_set_of, kkt_ok, residuals
 from armctl.controllers.osc.problem import Arrays, QPProblem
 from armctl.controllers.osc.solve import QPSolution
 from armctl.errors import InfeasibleError, SolverError
@@ -39,8 +43,6 @@ from armctl.errors import InfeasibleError, SolverError
 #: the stages in order (module docstring); those after "warm" are fallbacks
 STAGES = ("active set", "warm", "cold", "defaults", "second")
 FALLBACKS = ("cold", "defaults", "second")
-#: the most active sets the first stage tries
-PDAS_STEPS = 4
 
 
 class QPFailure(SolverError):
@@ -56,11 +58,13 @@ class SolverChain:
     """The stages of the module docstring around a ``primary`` solver (an object with ``solve_raw(arrays,
     slot, mode)``, or a user's object with ``solve(problem, slot)`` and ``reset()``) and a ``second`` one (an
     object with ``solve_raw``; "active-set": :class:`~armctl.controllers.osc.active_set.DualActiveSetSolver`;
-    None: no fifth stage)."""
+    None: no fifth stage). ``first``: the solver of the first stage (an object with ``solve_from(arrays,
+    active)``, by default :class:`~armctl.controllers.osc.daqp_solver.DaqpSolver`; None: no first stage)."""
 
-    def __init__(self, primary: Any, second: Any = "active-set") -> None:
+    def __init__(self, primary: Any, second: Any = "active-set", first: Any = "daqp") -> None:
         self.primary = primary
         self.second = DualActiveSetSolver() if isinstance(second, str) and second == "active-set" else second
+        self.first = DaqpSolver() if isinstance(first, str) and first == "daqp" else first
         self._raw = callable(getattr(primary, "solve_raw", None))
         #: the last verified optimum's active set, per (slot, n, equalities, inequalities)
         self._active: dict[tuple[int, int, int, int], np.ndarray] = {}
@@ -68,13 +72,14 @@ class SolverChain:
         self.counts: Counter[str] = Counter()
 
     def __reduce__(self) -> tuple[Any, ...]:
-        return (SolverChain, (self.primary, self.second))  # starts cold, as after reset()
+        return (SolverChain, (self.primary, self.second, self.first))  # starts cold, as after reset()
 
     def reset(self) -> None:
         """Forget the warm starts and the counts."""
         self.primary.reset()
-        if self.second is not None:
-            self.second.reset()
+        for solver in (self.second, self.first):
+            if solver is not None:
+                solver.reset()
         self._active.clear()
         self.counts.clear()
 
@@ -116,21 +121,22 @@ class SolverChain:
         and the unconstrained minimum, if the caller has them, see :class:`ActiveSets`). Raises
         :class:`QPFailure`."""
         key = self.key(arrays, slot)
-        active = self._active.get(key) if start is None else start
-        seen: list[bytes] = []
-        sets = ActiveSets(arrays, unconstrained)
-        while active is not None and len(seen) < PDAS_STEPS:
-            seen.append(active.tobytes())
-            sol = sets.solve(active)
-            if sol is None:
-                break
-            following = sets.following(sol[0], sol[2], active)
-            if following is None:
-                self._active[key] = active
-                self.counts["active set"] += 1
-                return QPSolution(sol[0], "solved", 0, "active set", sol[1], sol[2], "active set", 0, active)
-            active = None if following.tobytes() in seen else following
         attempts: list[tuple[str, str]] = []
+        if self.first is not None:
+            begin = self._active.get(key) if start is None else start
+            for active in (begin, None) if begin is not None else (None,):  # a misleading start: from none
+                try:
+                    sol = self.first.solve_from(arrays, active)
+                except (SolverError, InfeasibleError) as err:
+                    attempts.append((STAGES[0], str(err)))
+                    continue
+                if kkt_ok(arrays, sol.x, sol.y, sol.z):
+                    self._active[key] = sol.active
+                    self.counts[STAGES[0]] += 1
+                    sol.stage = STAGES[0]
+                    return sol
+                attempts.append((STAGES[0], f"{self.first.name}: not the optimum"))
+        sets = ActiveSets(arrays, unconstrained)
         fallbacks = 0
         for stage in STAGES[1:]:
             solver = self.second if stage == "second" else self.primary

@@ -18,12 +18,15 @@ Contacts are switched with ``contact.active``. The QP of a period can be looked 
 solving it: :meth:`OperationalSpaceQP.build` returns the :class:`~armctl.controllers.osc.build.StepQP`,
 ``.problem(k)`` the :class:`~armctl.controllers.osc.problem.QPProblem` (H, g, A, b, C, l, u) of level k.
 
-Every QP is solved by a :class:`~armctl.controllers.osc.chain.SolverChain`: τ comes only from a solution
-verified against the QP's optimality conditions (:mod:`~armctl.controllers.osc.optimality`), re-solved
-(cold start, the solver's default settings, a second solver) when the first answer fails the check. With one
-priority level and no active contact the QP is solved on q̈ alone (:mod:`~armctl.controllers.osc.reduced`:
-the same optimum). Each step's fallbacks are in ``last_log["qp_fallbacks"]``; :meth:`end_run` (which
-:func:`armctl.sim.simulate` calls) warns once with what happened during the run and how often.
+Every QP is solved by a :class:`~armctl.controllers.osc.chain.SolverChain`: τ comes only from a solution verified
+against the QP's optimality conditions (:mod:`~armctl.controllers.osc.optimality`). Its first stage is DAQP (a dual
+active-set solver in C) started from the last step's active set; a QP whose answer fails the check goes on to the
+primary solver (ProxQP: warm start, cold start, default settings) and a second solver. With one priority level and
+no active contact the QP is solved on q̈ alone (:mod:`~armctl.controllers.osc.reduced`: the same optimum), and on
+``Dynamics(model, compile=True)`` its data come from one call of generated C code
+(:mod:`~armctl.controllers.osc.generated`) when its tasks and limits are built-in ones. Each step's fallbacks are
+in ``last_log["qp_fallbacks"]``; :meth:`end_run` (which :func:`armctl.sim.simulate` calls) warns once with what
+happened during the run and how often.
 """
 
 from __future__ import annotations
@@ -43,8 +46,14 @@ from armctl.controllers.osc.contact import Contact
 from armctl.controllers.osc.diagnose import raise_unsolved
 from armctl.controllers.osc.hierarchy import OSCSolution, solve_cascade
 from armctl.controllers.osc.layout import Layout
-from armctl.controllers.osc.limits import JointPositionLimit, JointVelocityLimit, Limit, TorqueLimit
-from armctl.controllers.osc.optimality import accept, residuals
+from armctl.controllers.osc.limits import (
+    AccelerationLimit,
+    JointPositionLimit,
+    JointVelocityLimit,
+    Limit,
+    TorqueLimit,
+)
+from armctl.controllers.osc.optimality import verified
 from armctl.controllers.osc.reduced import QddQP, QddStep
 from armctl.controllers.osc.scale import check_level_scale
 from armctl.controllers.osc.solve import make_second_solver, make_solver
@@ -53,6 +62,9 @@ from armctl.controllers.osc.tasks.base import Task
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError, SolverWarning
 from armctl.reference import Reference
+
+#: the limits whose bounds read only q and q̇ of a step's state (the generated path gives them no more)
+_PLAIN_LIMITS = (TorqueLimit, JointPositionLimit, JointVelocityLimit, AccelerationLimit)
 
 
 def default_limits(dt: float = 1e-3) -> list[Limit]:
@@ -136,6 +148,8 @@ class OperationalSpaceQP(Controller):
             and callable(getattr(self.solver, "solve_raw", None))
         )
         self._qdd: dict[Layout, QddQP] = {}
+        if self._qdd_path and not self.contacts:  # made now: on compile=True its code is built or loaded here
+            self._qdd_qp(self.builder.layout())
         self._pending: tuple[QddQP, QddStep] | None = None
         self._last_solution: OSCSolution | None = None
         self._steps = 0
@@ -182,12 +196,28 @@ class OperationalSpaceQP(Controller):
         self.compute(scalar(t, "t"), q, qd, ref)
         return self.last_solution  # type: ignore[return-value]
 
-    def _qdd_step(self, lay: Layout, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
-        """One level without contact forces: the QP on q̈ alone (see reduced)."""
+    def _qdd_qp(self, lay: Layout) -> QddQP:
+        """The q̈-only QP of layout ``lay`` (made on first use), with its data from generated code on
+        ``Dynamics(model, compile=True)`` when the tasks and limits are built-in ones (see generated)."""
         qp = self._qdd.get(lay)
         if qp is None:
-            qp = self._qdd[lay] = QddQP(self.builder, lay)
-        result = qp.step(self.evaluator.evaluate(q, qd), t, ref, self.chain)
+            qp = QddQP(self.builder, lay)
+            if getattr(self.dynamics, "compiled", False) and all(type(lim) in _PLAIN_LIMITS for lim in lay.limits):
+                from armctl.controllers.osc.generated import GeneratedQddData, supported  # CasADi: on compile=True
+
+                if supported(qp.plan.tasks):
+                    qp.generated = GeneratedQddData(self.dynamics, qp.plan.tasks, self.builder.regularization)
+            self._qdd[lay] = qp
+        return qp
+
+    def _qdd_step(self, lay: Layout, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
+        """One level without contact forces: the QP on q̈ alone (see reduced)."""
+        qp = self._qdd.get(lay) or self._qdd_qp(lay)
+        gen = qp.generated
+        if gen is not None:
+            result = qp.step_generated(gen, q, qd, t, ref, self.chain, self.evaluator.evaluate)
+        else:
+            result = qp.step(self.evaluator.evaluate(q, qd), t, ref, self.chain)
         self._pending = (qp, result)
         sol = result.solution
         tau = result.tau.copy()
@@ -244,12 +274,7 @@ class OperationalSpaceQP(Controller):
             if qs is None:
                 continue
             p = sol.problem(k)
-            arrays = (p.H, p.g, p.A, p.b, p.C, p.l, p.u)
-            x = qs.x[: p.nx]
-            if qs.active is None or qs.z is None:
-                if not residuals(arrays, x, qs.y, qs.z).ok():
-                    return False
-            elif not accept(arrays, x, qs.z, qs.active):
+            if not verified((p.H, p.g, p.A, p.b, p.C, p.l, p.u), qs.x[: p.nx], qs.y, qs.z):
                 return False
         return True
 

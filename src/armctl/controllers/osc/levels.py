@@ -72,17 +72,19 @@ class LevelPlan:
             r += tk.dim
         self.m = m
         self.nx = nx
-        self.version = -1
+        self._revisions: list[int] | None = None  # the tasks' revisions the scale was made from
         self._scale = np.zeros(self.template.shape)
 
     def scale(self) -> FloatArray:
-        """The square-root weights of the rows, as LevelRows.scale (rows × (nx+1), last column negated)."""
-        if self.version != Task.weights_version:
+        """The square-root weights of the rows, as LevelRows.scale (rows × (nx+1), last column negated); made
+        again when a task's weight has changed (its ``revision``)."""
+        revisions = [tk.revision for tk in self.tasks]
+        if revisions != self._revisions:
             scale = np.zeros(self.template.shape)
             if self.tasks:
                 scale[: self.m] = np.concatenate([tk.sqrt_weight for tk in self.tasks])[:, None]
             scale[self.m :] = np.sqrt(self.extra[1])
             scale[:, self.nx] *= -1.0
             self._scale = scale
-            self.version = Task.weights_version
+            self._revisions = revisions
         return self._scale

@@ -33,6 +33,7 @@ duality gap all within :data:`KKT_TOL` (1e-6, the solvers' own tolerance; the la
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -89,6 +90,56 @@ def residuals(arrays: Arrays, x: FloatArray, y: FloatArray | None, z: FloatArray
     return Residuals(primal, float(np.abs(r).max()), gap, 1.0 + float(np.abs(g).max()))
 
 
+def kkt_ok(
+    arrays: Arrays,
+    x: FloatArray,
+    y: FloatArray | None,
+    z: FloatArray | None,
+    primal_tol: float = PRIMAL_TOL,
+    dual_tol: float = DUAL_TOL,
+) -> bool:
+    """``residuals(arrays, x, y, z).ok(primal_tol, dual_tol)`` — the same three conditions (primal residual,
+    stationarity residual and duality gap within tolerance), with the row tests on Python floats, which is
+    cheaper on the few rows of a control step's QP. The stated default tolerances are those of an exact solve
+    on an active set: :data:`PRIMAL_TOL` and :data:`DUAL_TOL` (relative to 1 + ‖g‖∞)."""
+    H, g, A, b, C, l, u = arrays  # noqa: E741
+    if not math.isfinite(sum(x.tolist())):
+        return False
+    gl = g.tolist()
+    bound = dual_tol * (1.0 + max(max(gl), -min(gl))) if gl else dual_tol
+    r = H.dot(x)
+    r += g
+    if b.shape[0]:
+        if y is not None:
+            r += y.dot(A)  # Aᵀy
+        e = A.dot(x)
+        e -= b
+        el = e.tolist()
+        if not (max(el) <= primal_tol and min(el) >= -primal_tol):
+            return False
+    gap = 0.0
+    if l.shape[0]:
+        if z is not None:
+            r += z.dot(C)  # Cᵀz
+        zl = z.tolist() if z is not None else [0.0] * l.shape[0]
+        for si, zi, li, ui in zip(C.dot(x).tolist(), zl, l.tolist(), u.tolist(), strict=True):
+            if not li - primal_tol <= si <= ui + primal_tol:
+                return False
+            if zi > 0.0:
+                gap += zi * abs(ui - si)
+            elif zi < 0.0:
+                gap -= zi * abs(si - li)
+    rl = r.tolist()
+    return math.isfinite(sum(rl)) and max(rl) <= bound and min(rl) >= -bound and gap <= bound
+
+
+def verified(arrays: Arrays, x: FloatArray, y: FloatArray | None, z: FloatArray | None) -> bool:
+    """Whether (x, y, z) passes the check a control step accepts a solution on: :func:`kkt_ok` at the tolerances
+    of an exact solve (:data:`PRIMAL_TOL`, :data:`DUAL_TOL`), or, for a solver's own point, :func:`residuals`
+    within :data:`KKT_TOL`."""
+    return kkt_ok(arrays, x, y, z) or residuals(arrays, x, y, z).ok()
+
+
 def solve_on_active_set(arrays: Arrays, active: np.ndarray) -> tuple[FloatArray, FloatArray, FloatArray] | None:
     """(x, y, z) of the QP with the rows ``active`` as equalities (``active``: int8 per row of C, +1 at its
     upper bound, −1 at its lower, 0 free), by one direct solve of the KKT system (LU; if active rows depend on
@@ -129,12 +180,6 @@ def accept(arrays: Arrays, x: FloatArray, z: FloatArray, active: np.ndarray) -> 
     every row within its bounds to :data:`PRIMAL_TOL` and every active row's multiplier of the right sign to
     :data:`DUAL_TOL` · (1 + ‖g‖∞)."""
     return ActiveSets(arrays).following(x, z, active) is None
-
-
-def next_active_set(arrays: Arrays, x: FloatArray, z: FloatArray, active: np.ndarray) -> np.ndarray | None:
-    """None if (x, z) from :func:`solve_on_active_set` with ``active`` passes :func:`accept`; else the active set
-    of a primal-dual active-set step (see :meth:`ActiveSets.following`)."""
-    return ActiveSets(arrays).following(x, z, active)
 
 
 class ActiveSets:

@@ -16,14 +16,16 @@ rows, and inequality rows that are the public problem's one for one (their multi
 regularisation enters as 2n rows below the task rows, √ε [I | 0] and √ε [M | −h'], so that one Gram product
 of the stacked rows gives H and g.
 
-Each step first tries the unconstrained minimum when the last verified optimum had no active row (consecutive
-steps rarely change which limits bind): q̈ = −H⁻¹g by a Cholesky solve, τ = M q̈ + h', accepted if every
-torque and q̈ bound holds (exactly, so that τ needs no clipping) — the optimality check of
-:mod:`~armctl.controllers.osc.optimality` for an empty active set, with no multiplier and so no gap.
-Otherwise the whole QP goes to the controller's :class:`~armctl.controllers.osc.chain.SolverChain`.
+Each step first tries the unconstrained minimum (on most steps no limit binds): q̈ = −H⁻¹g by a Cholesky
+solve, τ = M q̈ + h', accepted if every torque and q̈ bound holds (exactly, so that τ needs no clipping) — the
+optimality check of :mod:`~armctl.controllers.osc.optimality` for an empty active set, with no multiplier and so
+no gap. Otherwise the whole QP goes to the controller's :class:`~armctl.controllers.osc.chain.SolverChain`.
 """
 
 from __future__ import annotations
+
+from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.linalg import lapack
@@ -34,12 +36,15 @@ from armctl.controllers.osc.chain import QPFailure, SolverChain
 from armctl.controllers.osc.diagnose import raise_unsolved
 from armctl.controllers.osc.layout import Layout
 from armctl.controllers.osc.levels import LevelPlan, LevelRows
-from armctl.controllers.osc.optimality import accept, residuals
+from armctl.controllers.osc.optimality import verified
 from armctl.controllers.osc.problem import Arrays
 from armctl.controllers.osc.scale import MAX_TASK_RHS, refuse_scale
 from armctl.controllers.osc.solve import QPSolution
 from armctl.controllers.osc.state import ModelState
 from armctl.reference import Reference
+
+if TYPE_CHECKING:
+    from armctl.controllers.osc.generated import GeneratedQddData
 
 _MAX_RHS2 = MAX_TASK_RHS**2
 
@@ -57,7 +62,7 @@ class QddStep:
     limit), q̈, τ, and the QP ``arrays`` with the chain's ``solution`` (both None for the unconstrained
     minimum)."""
 
-    __slots__ = ("arrays", "bounds", "qdd", "solution", "tau")
+    __slots__ = ("arrays", "bounds", "generated", "qdd", "solution", "tau")
 
     def __init__(
         self,
@@ -66,8 +71,11 @@ class QddStep:
         tau: FloatArray,
         arrays: Arrays | None = None,
         solution: QPSolution | None = None,
+        generated: GeneratedQddData | None = None,
     ) -> None:
         self.bounds, self.qdd, self.tau, self.arrays, self.solution = bounds, qdd, tau, arrays, solution
+        #: the generated code whose outputs hold this step's rows (None: they are in the workspace already)
+        self.generated = generated
 
 
 class QddQP:
@@ -75,8 +83,10 @@ class QddQP:
     contacts, and maps its solution back to the public problem. Holds its stacked rows as a workspace: the
     rows of one step are valid until the next (:meth:`public` copies what it keeps)."""
 
-    def __init__(self, builder: QPBuilder, lay: Layout) -> None:
+    def __init__(self, builder: QPBuilder, lay: Layout, generated: GeneratedQddData | None = None) -> None:
         n = builder.n
+        #: the QP's data from generated code (:mod:`~armctl.controllers.osc.generated`), or None: from NumPy
+        self.generated = generated
         self.n = n
         self.layout = lay
         self.builder = builder
@@ -104,9 +114,12 @@ class QddQP:
         # the torque bounds, all torque limits together
         torque = [lim.bounds(None) for lim in lay.limits if lim.variable == "tau"]  # type: ignore[arg-type]
         self.tau_check = (
-            (np.max([b[0] for b in torque], axis=0), np.min([b[1] for b in torque], axis=0)) if torque else None
+            (np.max([b[0] for b in torque], axis=0).tolist(), np.min([b[1] for b in torque], axis=0).tolist())
+            if torque
+            else None
         )
         self.qdd_limits = [k for k, lim in enumerate(lay.limits) if lim.variable != "tau"]
+        self.torque_only = len(lay.limits) == 1 and not self.qdd_limits
         self.constant = (
             [lim.bounds(None) for lim in lay.limits]  # type: ignore[arg-type]
             if lay.constant_bounds is not None
@@ -138,59 +151,99 @@ class QddQP:
             refuse_scale(plan.tasks, list(plan.slices.values()), rows, n, state, t, ref)
         H, g = G[:n, :n], G[n, :n]
         bounds = self.constant if self.constant is not None else [lim.bounds(state) for lim in self.layout.limits]
-        active = chain.last_active(self.key)
-        start = unconstrained = None
-        if active is None or not active.any():
-            factor, x, info = lapack.dposv(H, g)
-            if info == 0:
-                np.negative(x, out=x)
-                tau = mass.dot(x)
-                tau += hf
-                if self._holds(x, tau, bounds):
-                    chain.record(self.key, self.no_active)
-                    return QddStep(bounds, x, tau)
-                start, unconstrained = self._violated(x, tau, bounds), (factor, x)
+        unconstrained = None
+        factor, x, info = lapack.dposv(H, g)
+        if info == 0:
+            np.negative(x, out=x)
+            tau = mass.dot(x)
+            tau += hf
+            if self._holds(x, tau, bounds):
+                chain.record(self.key, self.no_active)
+                return QddStep(bounds, x, tau)
+            unconstrained = (factor, x)
+        return self._solve(H, g, mass, hf, bounds, chain, unconstrained, None)
+
+    def step_generated(
+        self,
+        gen: GeneratedQddData,
+        q: FloatArray,
+        qd: FloatArray,
+        t: float,
+        ref: Reference,
+        chain: SolverChain,
+        evaluate: Callable[[FloatArray, FloatArray], ModelState],
+    ) -> QddStep:
+        """:meth:`step` with the QP's data from the generated code ``gen`` (this QP's ``generated``);
+        ``evaluate(q, qd)`` gives the :class:`ModelState` of the NumPy path, which takes over when the rows are out
+        of scale (to name the task, see :mod:`~armctl.controllers.osc.scale`)."""
+        gen.run(q, qd, t, ref)
+        if not gen.c[0] <= _MAX_RHS2:  # ‖W^{1/2} b‖² + ε‖h'‖² (NaN too)
+            return self.step(evaluate(q, qd), t, ref, chain)
+        if self.constant is not None:
+            bounds = self.constant
+        else:  # the built-in limits read q and q̇ only (see controller: the generated path takes no others)
+            state = ModelState(None, q, qd, gen.M, gen.hf, None)  # type: ignore[arg-type]
+            bounds = [lim.bounds(state) for lim in self.layout.limits]
+        x, tau = gen.qdd0, gen.tau0
+        if self._holds(x, tau, bounds):
+            chain.record(self.key, self.no_active)
+            return QddStep(bounds, x.copy(), tau.copy(), generated=gen)
+        return self._solve(gen.H, gen.g, gen.M, gen.hf, bounds, chain, None, gen)
+
+    def _solve(
+        self,
+        H: FloatArray,
+        g: FloatArray,
+        mass: FloatArray,
+        hf: FloatArray,
+        bounds: list[tuple[FloatArray, FloatArray]],
+        chain: SolverChain,
+        unconstrained: tuple[FloatArray, FloatArray] | None,
+        generated: GeneratedQddData | None,
+    ) -> QddStep:
+        """The verified optimum from the solver chain (past the unconstrained minimum)."""
         arrays = self.arrays(H, g, mass, hf, bounds)
         try:
-            sol = chain.solve(arrays, 0, start=start, unconstrained=unconstrained)
+            sol = chain.solve(arrays, 0, unconstrained=unconstrained)
         except QPFailure as err:
+            if generated is not None:
+                self._fill_rows(generated)
             raise_unsolved(self.public_step(bounds).problem(0), err.attempts)
         tau = mass.dot(sol.x)
         tau += hf
-        return QddStep(bounds, sol.x, tau, arrays, sol)
+        return QddStep(bounds, sol.x, tau, arrays, sol, generated)
+
+    def _fill_rows(self, gen: GeneratedQddData) -> None:
+        """The workspace's rows from the generated code's outputs (as :meth:`step` would have left them)."""
+        n, m, mr = self.n, self.m, self.mass_rows
+        self.rows[:m] = gen.rows
+        self.rows[mr, :n] = gen.M
+        np.negative(gen.hf, out=self.rows[mr, n])
 
     def verify(self, result: QddStep) -> bool:
         """The optimality check of ``result``, run again (what a step pays for it): the bounds for the
-        unconstrained minimum, :func:`~armctl.controllers.osc.optimality.accept` for an active set."""
+        unconstrained minimum, :func:`~armctl.controllers.osc.optimality.verified` for a solution of the chain."""
         if result.solution is None or result.arrays is None:
             return self._holds(result.qdd, result.tau, result.bounds)
         sol = result.solution
-        if sol.active is None or sol.z is None:  # a solver's own point, accepted on its KKT residuals
-            return residuals(result.arrays, sol.x, sol.y, sol.z).ok()
-        return accept(result.arrays, sol.x, sol.z, sol.active)
+        return verified(result.arrays, sol.x, sol.y, sol.z)
 
     def _holds(self, x: FloatArray, tau: FloatArray, bounds: list[tuple[FloatArray, FloatArray]]) -> bool:
-        """Every torque and q̈ bound holds at (q̈, τ)."""
+        """Every torque and q̈ bound holds at (q̈, τ) (False for NaN); on Python floats, cheaper than NumPy's
+        calls on a few entries."""
         check = self.tau_check
-        if check is not None and not ((tau >= check[0]).all() and (tau <= check[1]).all()):
-            return False
-        for k in self.qdd_limits:
-            lo, up = bounds[k]
-            if not ((x >= lo).all() and (x <= up).all()):
-                return False
+        if check is not None:
+            for v, lo, up in zip(tau.tolist(), *check, strict=True):
+                if not lo <= v <= up:
+                    return False
+        if self.qdd_limits:
+            xs = x.tolist()
+            for k in self.qdd_limits:
+                lo, up = bounds[k]
+                for v, a, b in zip(xs, lo.tolist(), up.tolist(), strict=True):
+                    if not a <= v <= b:
+                        return False
         return True
-
-    def _violated(self, x: FloatArray, tau: FloatArray, bounds: list[tuple[FloatArray, FloatArray]]) -> np.ndarray:
-        """The rows (q̈, τ) violates, at the bound each violates (+1 upper, −1 lower): where the first stage of
-        the chain starts from after the unconstrained minimum."""
-        rows = np.zeros(self.C_template.shape[0], dtype=np.int8)
-        n = self.n
-        for k, (lo, up) in enumerate(bounds):
-            v = tau if self.layout.limits[k].variable == "tau" else x
-            blk = rows[k * n : (k + 1) * n]
-            blk[v > up] = 1
-            blk[v < lo] = -1
-        return rows
 
     def arrays(
         self,
@@ -201,6 +254,9 @@ class QddQP:
         bounds: list[tuple[FloatArray, FloatArray]],
     ) -> Arrays:
         """The QP (H, g, A, b, C, l, u) on q̈ (its rows those of the public problem, torque rows shifted by h')."""
+        if self.torque_only:  # one torque limit: C = M, bounds shifted by h'
+            lo, up = bounds[0]
+            return (np.array(H), g.copy(), *self.no_rows, mass.copy(), lo - hf, up - hf)
         C = self.C_template.copy()
         lo = np.concatenate([b[0] for b in bounds]) if bounds else np.zeros(0)
         up = np.concatenate([b[1] for b in bounds]) if bounds else np.zeros(0)
@@ -209,11 +265,13 @@ class QddQP:
             lo[r] -= hf
             up[r] -= hf
         A, b = self.no_rows
-        return (np.ascontiguousarray(H), g.copy(), A, b, C, lo, up)
+        return (np.array(H), g.copy(), A, b, C, lo, up)
 
     def public(self, result: QddStep) -> tuple[StepQP, QPSolution]:
         """The public :class:`StepQP` of the last step (x = [q̈; τ]) and its solution mapped onto it: x = [q̈; τ],
         the multipliers y = ε τ + Σ z_τ of the equation of motion and z (the same rows)."""
+        if result.generated is not None:
+            self._fill_rows(result.generated)
         step = self.public_step(result.bounds)
         sol = result.solution
         z = np.zeros(self.C_template.shape[0]) if sol is None or sol.z is None else sol.z

@@ -30,14 +30,15 @@ class Task(ABC):
     name). ``weight`` w ≥ 0: scalar or (dim,). ``priority``: integer level, 0 the most important."""
 
     variable: str = "qdd"
-    #: bumped whenever any task's weight changes (builders cache the stacked weights)
-    weights_version: int = 0
     #: True if the task's Jacobian is always the identity on its block (``residual`` then returns None for it)
     identity_jacobian: bool = False
 
     def __init__(self, dim: int, name: str, weight: ArrayLike = 1.0, priority: int = 0) -> None:
         self.dim = int(dim)
         self.name = str(name)
+        #: counts the changes of this task's weight (and a motion task's gains): what a controller derives from
+        #: them (stacked weights, generated code's parameters) is refreshed when it changes
+        self.revision = 0
         self.weight = weight  # type: ignore[assignment]  (checked by the property)
         self.priority = whole_number(priority, f"{name}: priority")
 
@@ -50,7 +51,7 @@ class Task(ABC):
     def weight(self, value: ArrayLike) -> None:
         self._weight = nonnegative_vector(value, self.dim, f"{self.name}: weight")
         self.sqrt_weight = np.sqrt(self._weight)
-        Task.weights_version += 1
+        self.revision += 1
 
     def check(self, evaluator: Any, n: int, contacts: dict[str, int]) -> None:
         """Validate against the controller's model (frames, sizes); raise an ArmctlError if it does not fit."""
@@ -105,6 +106,7 @@ class MotionTask(Task):
         drift None: zero."""
 
     def _gains_changed(self) -> None:
+        self.revision += 1
         if hasattr(self, "_kd"):  # both gains set
             # ẍ* = [I, K_d, K_p]·[ẍ_ref; ė; e] and ẍ* − J̇q̇ = [I, K_d, K_p, −I]·[ẍ_ref; ė; e; J̇q̇]: one
             # concatenation and one product each (the term by term form takes five array operations)

@@ -42,6 +42,10 @@ class PostureTask(MotionTask):
         """Fix the target (q [rad], q̇, q̈); ``None`` goes back to following the controller's ``ref``."""
         self._fixed = None if q is None else Reference(vector(q, self.dim, f"{self.name}: q"), qd, qdd)
 
+    def reference(self, ref: Reference) -> Reference:
+        """The joint target at this step: the fixed one (:meth:`set_target`) or else the controller's ``ref``."""
+        return self._fixed or ref
+
     def check(self, evaluator: object, n: int, contacts: dict[str, int]) -> None:
         if self.dim != n:
             raise ShapeError(

@@ -1,0 +1,212 @@
+"""`GeneratedQddData`: the data of the q̈-only QP of one priority level (:mod:`~armctl.controllers.osc.reduced`)
+from one call of generated C code, on ``Dynamics(model, compile=True)``.
+
+At (q, q̇), the tasks' targets and the friction torque τ_f(q̇), one call of code generated with CasADi from the
+model (its numbers built in) evaluates what the NumPy path builds from Pinocchio's terms and the tasks' rows:
+
+* M(q) (composite rigid bodies) and h' = C q̇ + g + τ_f (Newton–Euler at q̈ = 0), from
+  :mod:`armctl.dynamics.recursive`; per frame its position, rotation, J and J̇ q̇, from
+  :mod:`armctl.dynamics.symbolic_frames`;
+* each task's rows J_i and b_i = ẍ*_i − J̇_i q̇ (its PD law on its error; the rotation error by
+  :func:`~armctl.controllers.osc.tasks.rotation.rotation_error_sx`);
+* the QP on q̈ with W_i the tasks' weights and ε the regularisation:
+  H = Σ J_iᵀ W_i J_i + ε I + ε Mᵀ M,   g = −Σ J_iᵀ W_i b_i + ε Mᵀ h',   c = Σ ‖W_i^½ b_i‖² + ε ‖h'‖²,
+  and its unconstrained minimum q̈₀ = −H⁻¹ g (a Cholesky factorisation written out) with τ₀ = M q̈₀ + h'.
+
+The gains, weights and ε are an input of the code, refreshed when a task's ``revision`` changes: they may be
+changed between steps without generating code again. The tasks it takes are :class:`FramePoseTask`,
+:class:`FramePositionTask`, :class:`FrameOrientationTask` and :class:`PostureTask` themselves (a subclass may
+have kinematics of its own: :func:`supported` is False for it and the controller keeps the NumPy path). The
+library is compiled once and cached on disk (:mod:`armctl.dynamics.codegen`), keyed by the model, the tasks'
+kinds and frames and whether the model has friction.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from collections.abc import Sequence
+from typing import Any
+
+import casadi as cs
+import numpy as np
+
+from armctl._checks import FloatArray
+from armctl.controllers.osc.tasks.base import Task
+from armctl.controllers.osc.tasks.frame_orientation import FrameOrientationTask
+from armctl.controllers.osc.tasks.frame_pose import FramePoseTask
+from armctl.controllers.osc.tasks.frame_position import FramePositionTask
+from armctl.controllers.osc.tasks.posture import PostureTask
+from armctl.controllers.osc.tasks.rotation import rotation_error_sx
+from armctl.dynamics import codegen
+from armctl.dynamics.base import Dynamics
+from armctl.dynamics.recursive import cholesky_solve, inverse_dynamics, joint_transforms, mass_matrix
+from armctl.dynamics.symbolic_frames import frame_kinematics
+from armctl.model.robot import RobotModel
+from armctl.reference import Reference
+
+#: bumped when the generated code changes, so that stale cached libraries are not loaded
+_CODE_VERSION = 1
+_NAME = "osc_qdd_qp"
+#: the frame tasks the code takes: their kind and the shape of their target value
+_FRAME_TASKS: dict[type, tuple[str, tuple[int, ...]]] = {
+    FramePoseTask: ("pose", (4, 4)),
+    FramePositionTask: ("position", (3,)),
+    FrameOrientationTask: ("orientation", (3, 3)),
+}
+
+
+def supported(tasks: Sequence[Task]) -> bool:
+    """Whether the generated code takes these tasks (see the module): built-in motion tasks, not subclasses."""
+    return bool(tasks) and all(type(tk) in _FRAME_TASKS or type(tk) is PostureTask for tk in tasks)
+
+
+def _gram(a: cs.SX) -> cs.SX:
+    """aᵀ a, each entry of the symmetric result computed once."""
+    n = a.shape[1]
+    cols = [a[:, j] for j in range(n)]
+    out = cs.SX(n, n)
+    for i in range(n):
+        for j in range(i, n):
+            out[i, j] = out[j, i] = cs.dot(cols[i], cols[j])
+    return out
+
+
+def qp_function(model: RobotModel, tasks: Sequence[Task], friction: bool) -> cs.Function:
+    """The CasADi function of the module: ``f(inputs, params) -> (q̈₀, τ₀, H, g, c, M, h', [J | b])`` with
+    ``inputs`` = [q; q̇; per task its target (a frame task: value row by row, velocity, acceleration; a posture
+    task: q_ref, q̇_ref, q̈_ref); τ_f if ``friction``] and ``params`` = [per task K_p, K_d (row by row), W^½; ε];
+    [J | b] the unweighted task rows, stacked in the tasks' order."""
+    n = model.n
+    q, qd = cs.SX.sym("q", n), cs.SX.sym("qd", n)
+    inputs, params = [q, qd], []
+    tf = joint_transforms(model, q)
+    frames: dict[str | None, tuple[cs.SX, cs.SX, cs.SX, cs.SX]] = {}
+    jacs, rhs, weights = [], [], []
+    for k, tk in enumerate(tasks):
+        d = tk.dim
+        kp, kd, w = cs.SX.sym(f"kp{k}", d * d), cs.SX.sym(f"kd{k}", d * d), cs.SX.sym(f"w{k}", d)
+        params += [kp, kd, w]
+        gain_p, gain_d = cs.reshape(kp, d, d).T, cs.reshape(kd, d, d).T  # row by row in
+        if type(tk) is PostureTask:
+            q_ref, qd_ref, qdd_ref = (cs.SX.sym(f"{s}{k}", n) for s in ("q_ref", "qd_ref", "qdd_ref"))
+            inputs += [q_ref, qd_ref, qdd_ref]
+            jacs.append(cs.SX.eye(n))
+            rhs.append(qdd_ref + gain_d @ (qd_ref - qd) + gain_p @ (q_ref - q))
+        else:
+            kind, shape = _FRAME_TASKS[type(tk)]
+            frame = tk.frame  # type: ignore[attr-defined]
+            if frame not in frames:
+                frames[frame] = frame_kinematics(model, q, qd, frame, tf)
+            p, rot, jac, drift = frames[frame]
+            value = cs.SX.sym(f"target{k}", int(np.prod(shape)))
+            vel, acc = cs.SX.sym(f"vel{k}", d), cs.SX.sym(f"acc{k}", d)
+            inputs += [value, vel, acc]
+            rows = {"pose": slice(0, 6), "position": slice(0, 3), "orientation": slice(3, 6)}[kind]
+            if kind == "pose":
+                pose = cs.reshape(value, 4, 4).T
+                err = cs.vertcat(pose[:3, 3] - p, rotation_error_sx(pose[:3, :3], rot))
+            elif kind == "position":
+                err = value - p
+            else:
+                err = rotation_error_sx(cs.reshape(value, 3, 3).T, rot)
+            j = jac[rows, :]
+            jacs.append(j)
+            rhs.append(acc + gain_d @ (vel - j @ qd) + gain_p @ err - drift[rows])
+        weights.append(w)
+    tau_f = cs.SX.sym("tau_f", n) if friction else cs.SX.zeros(n)
+    if friction:
+        inputs.append(tau_f)
+    eps = cs.SX.sym("eps")
+    params.append(eps)
+    mass = mass_matrix(model, q, tf)
+    hf = inverse_dynamics(model, q, qd, cs.SX.zeros(n), transforms=tf) + tau_f
+    jall, ball, wall = cs.vertcat(*jacs), cs.vertcat(*rhs), cs.vertcat(*weights)
+    weighted = jall * cs.repmat(wall, 1, n)  # W^½ J
+    t = wall * ball  # W^½ b
+    hess = _gram(weighted) + eps * (cs.SX.eye(n) + _gram(mass))
+    grad = -(weighted.T @ t) + eps * (mass @ hf)  # M symmetric: Mᵀh' = M h'
+    c = cs.dot(t, t) + eps * cs.dot(hf, hf)
+    qdd0 = -cholesky_solve(hess, grad)
+    tau0 = mass @ qdd0 + hf
+    outputs = [qdd0, tau0, hess, grad, c, mass, hf, cs.horzcat(jall, ball)]
+    return cs.Function(_NAME, [cs.vertcat(*inputs), cs.vertcat(*params)], [cs.densify(o) for o in outputs])
+
+
+def _tag(model: RobotModel, tasks: Sequence[Task], friction: bool) -> str:
+    parts = [f"osc-qdd|{model.fingerprint(inertial=True, tool=False)}|v{_CODE_VERSION}|friction={friction}"]
+    for tk in tasks:
+        if type(tk) is PostureTask:
+            parts.append("posture")
+        else:
+            f = model.frame(tk.frame)  # type: ignore[attr-defined]
+            where = hashlib.sha256(f.placement.tobytes()).hexdigest()[:12]
+            parts.append(f"{_FRAME_TASKS[type(tk)][0]}:{f.name}:{f.joint}:{where}")
+    return "|".join(parts)
+
+
+class GeneratedQddData:
+    """The generated function of the module for ``tasks`` on ``dynamics`` (its model, its friction, its cache
+    folder), bound to buffers of its own. After :meth:`run`, the outputs are arrays that the next run
+    overwrites: ``qdd0``, ``tau0`` (n,), ``H`` (n×n), ``g`` (n,), ``c`` (1,), ``M`` (n×n), ``hf`` (n,) and
+    ``rows`` (m × (n+1)), as in the module. Builds or loads the library (the first time for a model and tasks:
+    seconds; then milliseconds). Not thread-safe."""
+
+    def __init__(self, dynamics: Dynamics, tasks: Sequence[Task], regularization: float) -> None:
+        model = dynamics.model
+        self.dynamics = dynamics
+        self.n = n = model.n
+        self.tasks = tuple(tasks)
+        self.friction = dynamics.friction if model.has_friction else None
+        self.regularization = float(regularization)
+        cache_dir = dynamics.options.get("cache_dir")
+        tag = _tag(model, self.tasks, self.friction is not None)
+        fn = codegen.cached(
+            [_NAME], tag, lambda: [qp_function(model, self.tasks, self.friction is not None)], cache_dir
+        )[_NAME]
+        m = sum(tk.dim for tk in self.tasks)
+        self.inp = np.zeros(fn.size1_in(0))
+        self.par = np.zeros(fn.size1_in(1))
+        self.qdd0, self.tau0, self.g, self.hf, self.c = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(1)
+        self.H, self.M = np.zeros((n, n)), np.zeros((n, n))  # symmetric: column by column is row by row
+        rows_t = np.zeros((n + 1, m))  # CasADi writes a matrix column by column: [J | b]ᵀ row by row
+        self.rows = rows_t.T
+        buf, self._run = fn.buffer()
+        for k, arr in enumerate((self.inp, self.par)):
+            buf.set_arg(k, memoryview(arr))
+        for k, arr in enumerate((self.qdd0, self.tau0, self.H, self.g, self.c, self.M, self.hf, rows_t)):
+            buf.set_res(k, memoryview(arr.reshape(-1)))
+        self._bound = (buf, rows_t)  # the buffer reads and writes these: keep them alive
+        self._revisions: list[int] | None = None
+        self._pieces: list[FloatArray] = []
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        # rebuilt (the library loads from the cache): the buffers are this process's
+        return (GeneratedQddData, (self.dynamics, self.tasks, self.regularization))
+
+    def _params(self) -> None:
+        """The gains, weights and ε into the parameter buffer (in place: the buffer reads it)."""
+        parts = []
+        for tk in self.tasks:
+            parts += [np.ravel(tk.kp), np.ravel(tk.kd), tk.sqrt_weight]  # type: ignore[attr-defined]
+        parts.append(np.array([self.regularization]))
+        np.concatenate(parts, out=self.par)
+
+    def run(self, q: FloatArray, qd: FloatArray, t: float, ref: Reference) -> None:
+        """Evaluate the outputs at (q, q̇) with the tasks' targets at t (a trajectory's output checked as the
+        NumPy path checks it) and the posture tasks' references."""
+        revisions = [tk.revision for tk in self.tasks]
+        if revisions != self._revisions:
+            self._params()
+            self._revisions = revisions
+        pieces = [q, qd]
+        for tk in self.tasks:
+            if type(tk) is PostureTask:
+                r = tk.reference(ref)
+                pieces += [r.q, r.qd, r.qdd]
+            else:
+                value, vel, acc = tk.target.at(t)  # type: ignore[attr-defined]
+                pieces += [value.reshape(-1), vel, acc]
+        if self.friction is not None:
+            pieces.append(self.friction.torque(qd))
+        np.concatenate(pieces, out=self.inp)
+        self._run()
