@@ -72,7 +72,7 @@ def _sim_fig(scale: float) -> dict[str, Any]:
     return {
         "panda": {
             "duration_s": 1.0,
-            "modes": {"default": {**ratio, "ratio_to_mujoco": scale * t["panda_ratio"]}},
+            "modes": {"default": {**ratio, "ratio_to_mujoco": scale * t["panda_ratio"], "loop_ratio_to_mujoco": 0.9}},
             "semi_implicit_over_rk4": scale * t["semi_implicit_over_rk4"],
         },
         "chains": {
