@@ -11,7 +11,7 @@ from typing import Any
 
 import pytest
 
-from armctl.bench import controller_speed, dynamics_speed, osc_speed
+from armctl.bench import controller_speed, dynamics_speed, osc_speed, sim_speed
 
 
 def _speed(ratio: float) -> dict[str, Any]:
@@ -65,6 +65,58 @@ def test_osc_target() -> None:
     ]
 
 
+def _sim_fig(scale: float) -> dict[str, Any]:
+    """Figures of :mod:`armctl.bench.sim_speed` at its targets (scale 1), or beyond them (scale > 1)."""
+    t = sim_speed.TARGETS
+    ratio = {"us_per_step": 10.0, "rms_error_rad": 0.1, "compiled": True}
+    return {
+        "panda": {
+            "duration_s": 1.0,
+            "modes": {"default": {**ratio, "ratio_to_mujoco": scale * t["panda_ratio"], "loop_ratio_to_mujoco": 0.9}},
+            "semi_implicit_over_rk4": scale * t["semi_implicit_over_rk4"],
+        },
+        "chains": {
+            str(n): {
+                "us_per_step": 10.0,
+                "mujoco_us_per_step": 5.0,
+                "ratio_to_mujoco": (scale if n == 20 else 1.0) * t["chain_ratio"],
+                "stick_events": 3,
+                "breakaway_events": 2,
+            }
+            for n in (2, 20)
+        },
+        "contact": {
+            "dt": 2e-4,
+            "steps": 100,
+            "us_per_step": 5.0,
+            "mujoco_us_per_step": 5.0,
+            "ratio_to_mujoco": scale * t["contact_plant_ratio"],
+            "python_ratio_to_mujoco": 20.0,
+        },
+        "sweep": {
+            "runs": 4,
+            "duration_s": 1.0,
+            "workers": 2,
+            "serial_s": 2.0,
+            "pool_s": 1.0,
+            "dask_s": 1.0,
+            "pool_speedup": t["pool_speedup"] / scale,
+            "dask_speedup": t["dask_speedup"] / scale,
+            "ceiling": {"ceiling": 1.8},
+            "load_average_1min": [0.5, 0.6],
+        },
+    }
+
+
+def test_sim_speed_targets() -> None:
+    assert sim_speed.beyond_targets(_sim_fig(1.0)) == []
+    beyond = sim_speed.beyond_targets(_sim_fig(1.1))
+    assert len(beyond) == 6 and "chain N = 20 / MuJoCo <= 2.0" in beyond and "chain N = 2 / MuJoCo <= 2.0" not in beyond
+    for scale in (1.0, 1.1):
+        text = sim_speed.report(_sim_fig(scale))
+        assert "target" not in text.lower()
+
+
 live = pytest.mark.skipif(
     os.environ.get("ARMCTL_SPEED_TARGETS") != "1", reason="speed targets: set ARMCTL_SPEED_TARGETS=1 on a quiet machine"
 )
@@ -92,3 +144,9 @@ def test_dynamics_calls_meet_their_targets() -> None:
 @pytest.mark.slow
 def test_osc_step_meets_its_target() -> None:
     _live(lambda: osc_speed.run(quick=True), osc_speed.beyond_targets)
+
+
+@live
+@pytest.mark.slow
+def test_the_closed_loop_meets_its_targets() -> None:
+    _live(lambda: sim_speed.run(quick=True), sim_speed.beyond_targets)

@@ -201,3 +201,31 @@ def test_a_reference_of_three_empty_arrays_is_refused() -> None:
     the ShapeError an empty q alone gets, not a reference of n = 0."""
     with pytest.raises(ShapeError, match="at least one joint position"):
         armctl.Reference(np.zeros(0), np.zeros(0), np.zeros(0))
+
+
+@pytest.mark.parametrize("kind", sorted(REFERENCES))
+def test_unpickled_references_take_the_fast_path(kind: str, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A reference sent to a sweep's worker is unpickled there: its arrays' float64 dtype is then a distinct
+    (equal) object. Its references must still be built on the fast path, not checked entry by entry (the slow
+    path, Reference._checked): counted over 200 calls, and the values are the original's."""
+    import pickle
+
+    calls = []
+    checked = Reference._checked
+
+    def counting(self: Reference, *args: Any) -> None:
+        calls.append(1)
+        checked(self, *args)
+
+    original = REFERENCES[kind]()
+    copy = pickle.loads(pickle.dumps(original))
+    monkeypatch.setattr(Reference, "_checked", counting)
+    for t in np.linspace(0.0, 2.5, 200):
+        got, want = copy(float(t)), original(float(t))
+        np.testing.assert_array_equal(got.q, want.q)
+        np.testing.assert_array_equal(got.qdd, want.qdd)
+    again = pickle.loads(pickle.dumps(original(1.0)))
+    Reference(again.q, again.qd, again.qdd)  # a Reference from an unpickled one's arrays
+    assert calls == []
+    Reference([1.0, 2.0])  # (the slow path is what a list takes: the count sees it)
+    assert calls == [1]

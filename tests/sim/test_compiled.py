@@ -1,5 +1,5 @@
-"""``simulate(..., compile=True)``: the integration step as C code generated from the recursive algorithms of
-:mod:`armctl.dynamics.recursive`.
+"""``simulate(..., compile=True)`` on a plant without friction, contact or disturbance: the integration step as C
+code generated from the recursive algorithms of :mod:`armctl.dynamics.recursive`; and what has no generated step.
 
 References: the textbook RK4 of :func:`armctl.sim.integrators.rk4` (and the Euler formulas) on Pinocchio's q̈
 for the compiled step; the uncompiled simulator for whole runs.
@@ -14,11 +14,13 @@ import armctl
 from armctl.errors import ArmctlError, InvalidParameterError
 from armctl.references import Reference
 from armctl.sim.compiled import compiled_step
-from armctl.sim.contact import Plane
+from armctl.sim.contact import ContactPoint, Environment
+from armctl.sim.friction import FrictionModel
 from armctl.sim.integrators import rk4, semi_implicit_euler
-from armctl.sim.normal_force import KelvinVoigt
 from tests.dynamics.helpers import skewed_rpr
 from tests.sim.helpers import ComputedTorque
+
+pytestmark = pytest.mark.one_step  # each test names the step it runs
 
 
 def _textbook(
@@ -113,42 +115,53 @@ def test_simulate_compiled_reports_divergence_as_the_uncompiled_run_does() -> No
     assert "max_velocity" in runs[1].divergence
 
 
-@pytest.mark.parametrize("case", ["friction", "contact", "disturbance", "implicit", "rotor_coupling"])
-def test_compile_refuses_what_it_cannot_integrate(case: str) -> None:
-    """Friction, contact, a disturbance, the implicit schemes and the rotors' gyroscopic coupling are not in the
-    generated step: asking for it with them is an error naming the cause and the way out."""
-    model = armctl.models.planar_2r()
-    rigid = model.reduced(friction=False)
+class _OwnFriction(FrictionModel):
+    """A user's friction model: no generated code for it."""
+
+    def torque(self, qd: np.ndarray, direction: np.ndarray) -> np.ndarray:
+        return self.viscous * qd
+
+    def slope(self, qd: np.ndarray, direction: np.ndarray) -> np.ndarray:
+        return self.viscous.copy()
+
+
+class _OwnEnvironment(Environment):
+    """A user's environment (a spring pulling the tool towards the origin): no generated code for it."""
+
+    points = (ContactPoint(),)
+
+    def force(self, p: np.ndarray, v: np.ndarray, derivatives: bool) -> tuple:
+        return -10.0 * p, -10.0 * np.eye(3), np.zeros((3, 3))
+
+
+@pytest.mark.parametrize("case", ["rotor_coupling", "own_friction", "own_environment"])
+def test_compile_true_refuses_a_plant_without_generated_code(case: str) -> None:
+    """The rotors' gyroscopic coupling, a friction model or an environment of the user's own have no generated
+    step: compile=True is an error naming the cause and the way out, compile='auto' runs the Python step."""
+    rigid = armctl.models.planar_2r().reduced(friction=False)
     plant: armctl.RobotModel | armctl.Dynamics = rigid
-    kw: dict = {"compile": True}
-    if case == "friction":
-        plant = rigid.with_friction(viscous=1.0, coulomb=2.0)
-    elif case == "contact":
-        kw["environment"] = Plane(KelvinVoigt(1e4, 10.0), normal=(-1.0, 0.0, 0.0), point=(5.0, 0.0, 0.0))
-    elif case == "disturbance":
-        kw["disturbance"] = lambda t: np.zeros(6)
-    elif case == "implicit":
-        kw["integrator"] = "semi-implicit-euler"
-    else:
+    kw: dict = {}
+    if case == "rotor_coupling":
         plant = armctl.Dynamics(rigid, backend="lagrange")  # rotor_coupling=True by default
+    elif case == "own_friction":
+        plant = rigid.with_friction(viscous=1.0)
+        kw["friction"] = _OwnFriction(plant)
+    else:
+        kw["environment"] = _OwnEnvironment()
     ctrl = ComputedTorque(armctl.Dynamics(rigid), 100.0, 20.0)
     with pytest.raises(InvalidParameterError) as err:
-        armctl.sim.simulate(plant, ctrl, Reference(np.zeros(2)), 0.01, **kw)
+        armctl.sim.simulate(plant, ctrl, Reference(np.zeros(2)), 0.01, compile=True, **kw)
     expect = {
-        "friction": "has joint friction:",
-        "contact": "has contact:",
-        "disturbance": "has a disturbance:",
-        "implicit": "'semi-implicit-euler'",
         "rotor_coupling": "rotor_coupling=False",
+        "own_friction": "_OwnFriction has no generated code",
+        "own_environment": "_OwnEnvironment has no generated code",
     }[case]
     assert expect in str(err.value) and "compile=False" in str(err.value)
-    assert case != "friction" or "model.reduced(friction=False)" in str(err.value)
-    # without compile=True the same run goes ahead
-    del kw["compile"]
     assert armctl.sim.simulate(plant, ctrl, Reference(np.zeros(2)), 0.01, **kw).info["compiled"] is False
 
 
-def test_compile_flag_is_a_boolean() -> None:
+@pytest.mark.parametrize("value", ["yes", 1, None])
+def test_compile_is_true_false_or_auto(value: object) -> None:
     model = armctl.models.planar_2r().reduced(friction=False)
-    with pytest.raises(ArmctlError, match="compile"):
-        armctl.sim.simulate(model, lambda t, q, qd, r: np.zeros(2), Reference(np.zeros(2)), 0.01, compile="yes")
+    with pytest.raises(ArmctlError, match="compile must be True"):
+        armctl.sim.simulate(model, lambda t, q, qd, r: np.zeros(2), Reference(np.zeros(2)), 0.01, compile=value)

@@ -52,6 +52,7 @@ def _free_run(name: str, integrator: str, duration: float = 10.0) -> tuple[armct
     return res, float(kinetic.max())
 
 
+@pytest.mark.steps_may_differ("a 10 s free swing of the Panda tumbles: rounding differences grow")
 @pytest.mark.parametrize("name", ["planar_2r", "panda"])
 def test_rk4_conserves_energy_in_free_motion(name: str) -> None:
     res, t_max = _free_run(name, "rk4")
@@ -63,6 +64,7 @@ def test_rk4_conserves_energy_in_free_motion(name: str) -> None:
     assert t_max > 1.0  # the arm did move
 
 
+@pytest.mark.steps_may_differ("a 10 s free swing of the Panda tumbles: rounding differences grow")
 @pytest.mark.parametrize("name", ["planar_2r", "panda"])
 def test_semi_implicit_euler_energy_stays_bounded(name: str) -> None:
     res, t_max = _free_run(name, "semi-implicit-euler")
@@ -122,6 +124,9 @@ def test_energy_balance_closes_to_fourth_order_with_rk4() -> None:
     assert errors[0] / errors[1] > 10.0, errors
 
 
+@pytest.mark.steps_may_differ(
+    "the wall's friction below its slip velocity is stiff for RK4 at 1 ms: rounding differences grow"
+)
 def test_energy_balance_with_tangential_contact_friction() -> None:
     """Coulomb friction along the wall (regularised: stiff below its slip velocity) still closes."""
     errors = []

@@ -4,10 +4,13 @@ textbook RK4 of :func:`armctl.sim.integrators.rk4`, written as four stage evalua
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 import armctl
 from armctl.sim.integrators import fast_step, rk4
 from armctl.sim.plant import Plant
+
+pytestmark = pytest.mark.one_step  # sweeps and the step functions themselves: not a choice of step
 
 
 def test_fast_rk4_is_rk4_step_after_step_and_keeps_its_results() -> None:

@@ -100,6 +100,7 @@ def test_rk4_limit_of_a_damped_contact_from_its_stability_function(zeta: float) 
     assert found.linear_dt == pytest.approx(lo, rel=1e-6)
 
 
+@pytest.mark.steps_may_differ("a contact unstable for the scheme, on purpose")
 @pytest.mark.parametrize("zeta", [0.0, 0.05])
 def test_one_sided_contact_gaining_energy_below_the_linear_limit_is_reported(zeta: float) -> None:
     # a 2 kg slider at rest on a wall's surface, pushed into it with 10 N: the exact motion keeps the force

@@ -15,6 +15,8 @@ from armctl.errors import ArmctlError, InvalidParameterError, SweepWarning, Unkn
 from armctl.sim import CaseFailure, SimResult, SweepResult, sweep
 from tests.sim.helpers import PDGravity
 
+pytestmark = pytest.mark.one_step  # sweeps and the step functions themselves: not a choice of step
+
 MODEL = armctl.models.planar_2r()
 
 

@@ -15,6 +15,8 @@ from armctl.errors import InvalidParameterError
 from armctl.sim import sweep
 from tests.sim.helpers import PDGravity
 
+pytestmark = pytest.mark.one_step  # sweeps and the step functions themselves: not a choice of step
+
 MODEL = armctl.models.planar_2r()
 
 

@@ -11,6 +11,8 @@ from armctl.errors import SweepWarning
 from armctl.sim import CaseFailure, sweep
 from tests.sim.helpers import failing_cases, failing_job
 
+pytestmark = pytest.mark.one_step  # sweeps and the step functions themselves: not a choice of step
+
 
 @pytest.mark.slow
 def test_killed_worker_and_raising_run_on_dask_are_recorded(tmp_path: Path) -> None:

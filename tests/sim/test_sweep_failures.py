@@ -14,6 +14,8 @@ from armctl.errors import RunTimeoutError, SweepWarning, WorkerDiedError
 from armctl.sim import CaseFailure, sweep
 from tests.sim.helpers import failing_cases, failing_job
 
+pytestmark = pytest.mark.one_step  # sweeps and the step functions themselves: not a choice of step
+
 
 def _starts(log: Path) -> list[int]:
     """How often each case started, by its x."""

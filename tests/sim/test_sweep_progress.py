@@ -11,6 +11,8 @@ import pytest
 from armctl.errors import SweepWarning
 from armctl.sim import sweep
 
+pytestmark = pytest.mark.one_step  # sweeps and the step functions themselves: not a choice of step
+
 
 def _square(x: int) -> int:
     if x == 3:

@@ -90,11 +90,17 @@ def compiled(
 
 
 def cached(
-    names: list[str], tag: str, make: Callable[[], list[cs.Function]], cache_dir: str | os.PathLike[str] | None = None
+    names: list[str],
+    tag: str,
+    make: Callable[[], list[cs.Function]],
+    cache_dir: str | os.PathLike[str] | None = None,
+    source: str = "",
 ) -> dict[str, cs.Function]:
     """The compiled functions ``names`` by name, from the library of ``tag``; ``make()`` (the symbolic
     functions, in the order of ``names``) is called only if the library is not cached yet, so that loading does
-    not pay for building the symbolic model (0.2 s for 7 joints).
+    not pay for building the symbolic model (0.2 s for 7 joints). ``source``: C code appended to the generated
+    code (it may call the generated functions, and define functions of ``names`` that ``make`` does not make,
+    with CasADi's external-function interface); ``tag`` must change when it does.
 
     Raises
     ------
@@ -112,7 +118,7 @@ def cached(
     with _mutex:
         found = _loaded.get(lib)
         if found is None:
-            found = _load_or_build(names, cache_key(names, tag), lib, make)
+            found = _load_or_build(names, cache_key(names, tag), lib, make, source)
             _loaded[lib] = found
             while len(_loaded) > _KEEP:
                 _loaded.popitem(last=False)
@@ -122,7 +128,7 @@ def cached(
 
 
 def _load_or_build(
-    names: list[str], key: str, lib: Path, make: Callable[[], list[cs.Function]]
+    names: list[str], key: str, lib: Path, make: Callable[[], list[cs.Function]], source: str = ""
 ) -> dict[str, cs.Function]:
     """The functions from ``lib`` if it passes its checks, else from a fresh build (under the build lock)."""
     folder = lib.parent
@@ -154,7 +160,7 @@ def _load_or_build(
                 stacklevel=4,
             )
         library_cache.clean_stale(folder)
-        return build(make(), lib, key)
+        return build(make(), lib, key, source, names)
 
 
 def _open(path: Path, names: list[str], key: str) -> tuple[dict[str, cs.Function] | None, str | None]:
@@ -179,21 +185,35 @@ def _loader_error(message: str, path: str) -> str:
     return message.strip().splitlines()[-1][:300]
 
 
+def compiler() -> str | None:
+    """The C compiler that builds generated code: ``$CC`` if it is set (None if it is not found), else ``cc`` or
+    ``gcc`` on the PATH (None if neither is)."""
+    cc = os.environ.get("CC")
+    if cc:
+        return shutil.which(cc)
+    return shutil.which("cc") or shutil.which("gcc")
+
+
 def _compiler() -> str:
-    cc = shutil.which(os.environ.get("CC", "cc")) or shutil.which("gcc")
+    cc = compiler()
     if cc is None:
+        asked = os.environ.get("CC")
         raise BackendError(
-            "compiling generated code needs a C compiler (cc or gcc on PATH, or $CC): install "
+            (f"$CC = {asked!r} is not a program on the PATH: " if asked else "")
+            + "compiling generated code needs a C compiler (cc or gcc on PATH, or $CC): install "
             "one, or do without compiled code (compile=False)",
-            value=None,
+            value=asked,
         )
     return cc
 
 
-def build(functions: list[cs.Function], lib: Path, key: str) -> dict[str, cs.Function]:
-    """Generate C code for ``functions`` (and the key function of ``key``), compile it into a temporary
-    folder beside ``lib``, load it from there and check its key, then publish it as ``lib`` (renamed: never
-    seen half-written) with its record. Returns the loaded functions by name. The caller holds the build lock.
+def build(
+    functions: list[cs.Function], lib: Path, key: str, source: str = "", names: list[str] | None = None
+) -> dict[str, cs.Function]:
+    """Generate C code for ``functions`` (and the key function of ``key``), append ``source``, compile it into a
+    temporary folder beside ``lib``, load the functions ``names`` (default: those of ``functions``) from there
+    and check its key, then publish it as ``lib`` (renamed: never seen half-written) with its record. Returns
+    the loaded functions by name. The caller holds the build lock.
 
     Raises
     ------
@@ -216,13 +236,16 @@ def build(functions: list[cs.Function], lib: Path, key: str) -> dict[str, cs.Fun
             src = Path(gen.generate(str(tmp) + os.sep))
         except RuntimeError as e:
             raise BackendError(f"cannot write generated code into {str(tmp)!r}: {e}", value=str(folder)) from None
+        if source:
+            with open(src, "a") as out:
+                out.write("\n" + source)
         tmp_lib = tmp / f"{stem}.so"
         proc = subprocess.run(
             [cc, *CFLAGS, str(src), "-o", str(tmp_lib), "-lm"], capture_output=True, text=True, check=False
         )
         if proc.returncode != 0:
             raise BackendError(f"compiling generated code failed ({cc}): {proc.stderr[-2000:]}", value=str(src))
-        names = [f.name() for f in functions]
+        names = names if names is not None else [f.name() for f in functions]
         reason: str | None
         try:
             data = tmp_lib.read_bytes()

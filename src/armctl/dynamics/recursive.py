@@ -106,8 +106,10 @@ def inverse_dynamics(
     return cs.vertcat(*tau)
 
 
-def mass_matrix(model: RobotModel, q: cs.SX, transforms: list[tuple[cs.SX, cs.SX]] | None = None) -> cs.SX:
-    """M(q) by the composite-rigid-body recursion.
+def mass_matrix(
+    model: RobotModel, q: cs.SX, transforms: list[tuple[cs.SX, cs.SX]] | None = None, params: Any = None
+) -> cs.SX:
+    """M(q) by the composite-rigid-body recursion, with the inertial parameters ``params`` (see :func:`links`).
 
     The composite body of links i…n, in frame i: (m, h, I) of link i plus those of composite i+1 carried over
     R_{i+1}, t_{i+1} (h ← R h + m t, I ← R I Rᵀ − [t]ₓ[R h]ₓ − [R h]ₓ[t]ₓ − m [t]ₓ²). A unit acceleration of
@@ -115,7 +117,7 @@ def mass_matrix(model: RobotModel, q: cs.SX, transforms: list[tuple[cs.SX, cs.SX
     or (m z, h × z) (prismatic); M_ii = zᵀμ (or zᵀf) + k_r²I_m, and M_ki, k < i, is joint k's projection of
     (f, μ) carried down the chain (f ← R f, μ ← R μ + t × R f).
     """
-    consts = links(model)
+    consts = links(model, params)
     tf = transforms if transforms is not None else joint_transforms(model, q)
     n = model.n
     kinds = [j.kind for j in model.joints]

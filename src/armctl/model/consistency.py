@@ -24,7 +24,7 @@ def _floats(x: ArrayLike, name: str) -> FloatArray:
     """``x`` as a float array: a float64 array as it is (the adaptive law's estimate, every control period),
     anything else through the real-number check (text, None, complex and booleans refused)."""
     a = np.asarray(x)
-    return a if a.dtype is FLOAT else real_values(x, name)
+    return a if a.dtype == FLOAT else real_values(x, name)
 
 
 def _pseudo_inertia_by_definition(p: FloatArray) -> FloatArray:

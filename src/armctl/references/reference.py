@@ -44,7 +44,9 @@ class Reference:
             type(q) is np.ndarray
             and type(qd) is np.ndarray
             and type(qdd) is np.ndarray
-            and q.dtype is qd.dtype is qdd.dtype is FLOAT
+            and q.dtype == FLOAT
+            and qd.dtype == FLOAT
+            and qdd.dtype == FLOAT
             and q.ndim == 1
             and q.shape == qd.shape == qdd.shape
             and q.shape[0]
@@ -66,7 +68,7 @@ class Reference:
             raise InvalidParameterError(
                 "Reference q must hold real numbers (q is required: the joint positions), got None", value=None
             )
-        if type(raw_q) is np.ndarray and raw_q.dtype is FLOAT and raw_q.ndim <= 1:  # the usual case
+        if type(raw_q) is np.ndarray and raw_q.dtype == FLOAT and raw_q.ndim <= 1:  # the usual case
             q: FloatArray | None = raw_q.reshape(-1)
         else:
             q = np.array(real_array(raw_q, "Reference q")).reshape(-1) if np.ndim(raw_q) <= 1 else None
@@ -77,7 +79,7 @@ class Reference:
         for name, raw in (("q", raw_q), ("qd", raw_qd), ("qdd", raw_qdd)):
             if raw is None:
                 a = np.zeros_like(q)
-            elif type(raw) is np.ndarray and raw.dtype is FLOAT:  # the usual case: one copy, no conversion
+            elif type(raw) is np.ndarray and raw.dtype == FLOAT:  # the usual case: one copy, no conversion
                 a = raw.copy()
             else:
                 a = np.array(real_array(raw, f"Reference {name}"))

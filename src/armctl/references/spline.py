@@ -72,6 +72,7 @@ class WaypointSpline:
             t = scalar(t, "t")  # a real finite scalar, or raise naming t
         tc = min(max(t, self.times[0]), self.times[-1])
         q = self._s(tc)
-        if t != tc:
-            return Reference(q)
+        if t != tc:  # held: zero velocity and acceleration (as arrays: the Reference's fast path)
+            zero = np.zeros(q.shape)
+            return Reference(q, zero, zero)
         return Reference(q, self._s(tc, 1), self._s(tc, 2))

@@ -3,7 +3,9 @@
 The plant is the truth (friction with real stiction, contact environments, disturbances, payload); the
 controller runs at its own rate with a zero-order hold. Modules: ``simulate`` (the loop; ``setup`` checks
 its arguments, ``recorder`` keeps the samples), ``plant`` (the equations of motion), ``integrators`` and
-``implicit`` (the schemes), ``stepper`` (a step with stick–slip events), ``friction`` and ``stick_slip``,
+``implicit`` (the schemes), ``stepper`` (a step with stick–slip events), ``compiled`` (the choice of the generated
+step: ``compiled_plant``, ``generated_plant``, ``plant_layout``, the C driver
+``step_*.c``), ``friction`` and ``stick_slip``,
 ``contact`` and ``normal_force``, ``result`` (:class:`SimResult`, with ``sampled_reference`` and ``limits``),
 ``plot``, ``playback`` (a run in 3D as a standalone HTML page; ``visuals``: the arm's shapes), ``sweep`` (many
 runs through an Executor; ``sweep_result``: one outcome per case, ``sweep_pool``: its own process pool,

@@ -1,50 +1,223 @@
-"""The simulator's integration step as compiled C code: ``simulate(..., compile=True)``.
+"""The simulator's integration step as generated C code, and the choice between it and the Python step.
 
-For a plant with no friction, contact or disturbance, one step of ``"rk4"`` or ``"euler"`` (see
-:mod:`armctl.sim.integrators` for the formulas) is generated with CasADi from the recursive algorithms of
-:mod:`armctl.dynamics.recursive` — the model's numbers built in — compiled with the system's C compiler and
-cached on disk (:mod:`armctl.dynamics.codegen`: keyed by the model's full fingerprint, so a payload or a
-perturbed variant builds its own library; about 2 s for the Panda, then milliseconds to load). A step is then
-one call into C, through CasADi's zero-copy buffers: on the Panda an RK4 step costs 5.3 µs, against 24–31 µs
-for the one that calls Pinocchio's ABA four times from Python (``python -m armctl.bench.sim_speed`` times the
-whole closed loop).
+:func:`choose_step` is where ``simulate``'s ``compile`` option is decided:
+
+* ``compile="auto"`` (the default): the generated step whenever this plant has one and it can be built (or is
+  cached); without a C compiler the Python step, with one warning (per process) that says how to get one;
+* ``compile=True``: the generated step, or an error saying why there is none;
+* ``compile=False``: the Python step (:mod:`armctl.sim.integrators`, :mod:`armctl.sim.stepper`).
+
+A library is built on first use (a second or two; one line is logged with the time it took) and cached on disk
+(:mod:`armctl.dynamics.codegen`); it depends on the arm's chain (joint axes and placements) and on the plant's
+structure (friction model, contact laws and the links their points ride on, a disturbance, the family of schemes),
+not on numbers: payload, perturbed or friction variants of a plant share it (:mod:`armctl.sim.compiled_plant`).
 
 It integrates the model the ``"pinocchio"`` backend expresses (rotors as reflected inertia, no gyroscopic
-coupling); its q̈ agrees with Pinocchio's ABA to rounding (tests/sim/test_compiled.py). A mass matrix that is
-not positive definite gives a non-finite state, which ``simulate`` reports as a divergence.
+coupling); runs agree with the Python step's to rounding (tests/sim/test_compiled_plant.py, and every simulator
+test on both steps). A mass matrix that is not positive definite gives a non-finite state or a divergence, as in
+the Python step.
+
+:func:`compiled_step` is the RK4 or Euler step of a rigid arm generated whole, the arm's numbers built in: a
+function (q, q̇, τ, h) → (q₁, q̇₁, q̈) for use outside ``simulate``.
 """
 
 from __future__ import annotations
 
+import logging
 import os
+import time
+import warnings
 from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
-import casadi as cs
 import numpy as np
 
 from armctl._checks import FloatArray
-from armctl.dynamics import recursive
 from armctl.dynamics.base import Dynamics
 from armctl.dynamics.casadi_buffer import buffer_of, view
-from armctl.errors import InvalidParameterError
+from armctl.errors import BackendError, InvalidParameterError, SimulationWarning
 from armctl.model.robot import RobotModel
-from armctl.sim.integrators import rk4, semi_implicit_euler
+from armctl.sim.integrators import fast_step, make_step, rk4, semi_implicit_euler
 from armctl.sim.plant import Plant
+from armctl.sim.plant_layout import PlantLayout, layout_of
 
-#: the integrators with a compiled step
+if TYPE_CHECKING:  # CasADi is imported on first use: ``import armctl`` stays light
+    import casadi as cs
+
+#: the integrators of :func:`compiled_step` (and whose step of a plant without forces is ``simulate``'s fast path)
 SCHEMES = ("rk4", "euler")
 #: bumped when the generated code changes, so that stale cached libraries are not loaded
 _CODE_VERSION = 2
+#: the values of ``compile``
+COMPILE_OPTIONS = (True, False, "auto")
 
 Step = Callable[[FloatArray, FloatArray, FloatArray, float], tuple[FloatArray, FloatArray, FloatArray]]
+
+_log = logging.getLogger(__name__)
+#: the fallbacks already warned about in this process (one warning each)
+_warned: set[str] = set()
+#: libraries this process has loaded, by path
+_ready: dict[str, Any] = {}
+
+HOW_TO_GET_A_COMPILER = (
+    "install a C compiler (Debian/Ubuntu: sudo apt install gcc; Fedora: sudo dnf install gcc; macOS: "
+    "xcode-select --install; conda: conda install -c conda-forge c-compiler) or point $CC at one; "
+    "compile=False chooses the Python step without this warning"
+)
+
+
+@dataclass(frozen=True)
+class StepChoice:
+    """What integrates a run: the plant, the step :func:`armctl.sim.stepper.advance` calls, the hot path for
+    plants without friction, contact or disturbance (or None), and whether it is generated code (``reason``: why
+    not, if not)."""
+
+    plant: Any
+    step: Any
+    fast: Step | None
+    compiled: bool
+    reason: str = ""
+
+
+def compile_option(compile: Any) -> bool | str:
+    """``compile`` checked: True, False or ``"auto"``."""
+    if compile is True or compile is False or (isinstance(compile, str) and compile == "auto"):
+        return compile
+    if isinstance(compile, np.bool_):
+        return bool(compile)
+    raise InvalidParameterError(
+        f"compile must be True (the generated step, or an error), False (the Python step) or 'auto' (the generated "
+        f"step where it can be built), got {compile!r}",
+        value=compile,
+    )
+
+
+def choose_step(
+    dyn: Dynamics, scheme: str, plant: Plant, compile: Any = "auto", cache_dir: str | os.PathLike[str] | None = None
+) -> StepChoice:
+    """The step that integrates ``plant`` with ``scheme`` under ``compile`` (see the module).
+
+    Raises
+    ------
+    InvalidParameterError
+        ``compile`` is not True, False or ``"auto"``; or it is True and the plant has no generated step (the
+        rotors' gyroscopic coupling, a friction model or environment of the user's own).
+    BackendError
+        ``compile=True`` and the library cannot be built (no C compiler, a failing one, an unwritable cache).
+
+    Warns
+    -----
+    SimulationWarning
+        ``compile="auto"`` and no C compiler, or a build that fails for another reason: the Python step is used
+        (one warning per process and cause).
+    """
+    mode = compile_option(compile)
+
+    def python(reason: str) -> StepChoice:
+        return StepChoice(plant, make_step(scheme, plant), fast_step(scheme, plant), False, reason)
+
+    if mode is False:
+        return python("compile=False")
+    found = layout_of(plant)
+    if isinstance(found, str):
+        if mode is True:
+            raise InvalidParameterError(f"compile=True: {found}; use compile=False", value=found)
+        return python(found)
+    from armctl.dynamics import codegen
+
+    try:
+        return _generated(dyn, scheme, plant, found, cache_dir)
+    except Exception as e:  # "auto" falls back on any failure to build: the run still happens, and says why
+        if mode is True:
+            raise
+        reason = str(e) if isinstance(e, BackendError) else f"{type(e).__name__}: {e}"
+        if codegen.compiler() is None:
+            asked = os.environ.get("CC")
+            where = f"$CC = {asked!r} is not a program on the PATH" if asked else "no cc or gcc on the PATH"
+            key = "no compiler"
+            text = (
+                f"no C compiler was found ({where}): simulating with the Python step, several times slower than "
+                f"generated code. To get it, {HOW_TO_GET_A_COMPILER}"
+            )
+        else:
+            key, text = reason, f"the generated step could not be built ({reason}); simulating with the Python step"
+        if key not in _warned:
+            _warned.add(key)
+            warnings.warn(text, SimulationWarning, stacklevel=3)
+        return python(reason)
+
+
+def _generated(
+    dyn: Dynamics, scheme: str, plant: Plant, layout: PlantLayout, cache_dir: str | os.PathLike[str] | None
+) -> StepChoice:
+    """The generated step (built, loaded or found in this process)."""
+    from armctl.sim import compiled_plant
+
+    model = dyn.model
+    family = compiled_plant.FAMILY[scheme]
+    tag = compiled_plant.library_tag(model, layout, family)[0]
+    what = ", ".join(
+        w
+        for w, present in (
+            (layout.friction + " friction", layout.has_friction),
+            ("contact", bool(layout.points)),
+            ("a disturbance", layout.disturbance_joint is not None),
+        )
+        if present
+    )
+    fns = _library(
+        list(compiled_plant.DRIVER),
+        tag,
+        cache_dir,
+        lambda: compiled_plant.library(model, layout, family, cache_dir),
+        model,
+        f"the plant ({what or 'rigid'}, {scheme})",
+    )
+    cp = compiled_plant.CompiledPlant(plant, scheme, layout, fns)
+    fast = cp.fast if plant.simple and scheme in SCHEMES else None
+    return StepChoice(cp, cp.step, fast, True)
+
+
+def _library(
+    names: list[str],
+    tag: str,
+    cache_dir: str | os.PathLike[str] | None,
+    load: Callable[[], Any],
+    model: RobotModel,
+    what: str,
+) -> Any:
+    """``load()``'s library, timed and logged when it has to be built."""
+    from armctl.dynamics import codegen
+
+    key = str(codegen.library_path(names, tag, cache_dir))
+    found = _ready.get(key)
+    if found is not None:
+        return found
+    built = not codegen.is_cached(names, tag, cache_dir)
+    t0 = time.perf_counter()
+    found = load()
+    if built:
+        _log.warning(
+            "armctl: generated and compiled the integration step of %s for %r in %.1f s (cached in %s: later runs "
+            "load it)",
+            what,
+            model.name,
+            time.perf_counter() - t0,
+            codegen.cache_root(cache_dir),
+        )
+    _ready[key] = found
+    return found
+
+
+def _step_tag(model: RobotModel, scheme: str) -> str:
+    return f"sim-step|{model.fingerprint(inertial=True, tool=False)}|v{_CODE_VERSION}"
 
 
 def _check_scheme(scheme: str) -> None:
     if scheme not in SCHEMES:
         raise InvalidParameterError(
-            f"compile=True has a compiled step for the integrators {SCHEMES}, not "
-            f"{scheme!r}: use one of them or compile=False",
-            value=scheme,
+            f"the frictionless compiled step is for the integrators {SCHEMES}, not {scheme!r}", value=scheme
         )
 
 
@@ -53,6 +226,10 @@ def step_function(model: RobotModel, scheme: str) -> cs.Function:
     ``model``: the simulator's own formulas (:func:`armctl.sim.integrators.rk4`,
     :func:`~armctl.sim.integrators.semi_implicit_euler`) applied to symbols, with q̈ = qdd(q, q̇, τ) of
     :func:`armctl.dynamics.recursive.forward_dynamics`."""
+    import casadi as cs
+
+    from armctl.dynamics import recursive
+
     _check_scheme(scheme)
     n = model.n
     q, v, tau = (cs.SX.sym(s, n) for s in ("q", "qd", "tau"))
@@ -64,50 +241,13 @@ def step_function(model: RobotModel, scheme: str) -> cs.Function:
     return cs.Function(f"step_{scheme}", [q, v, tau, h], [q1, v1, a1])
 
 
-def check_plant(dyn: Dynamics, scheme: str, plant: Plant) -> None:
-    """Raise :class:`~armctl.errors.InvalidParameterError` if ``compile=True`` cannot integrate this plant."""
-    _check_scheme(scheme)
-    if not plant.simple:
-        has = [
-            what
-            for what, present in (
-                ("joint friction", plant.friction is not None),
-                ("contact", bool(plant.environments)),
-                ("a disturbance", plant.disturbance is not None),
-            )
-            if present
-        ]
-        raise InvalidParameterError(
-            f"compile=True integrates only a plant without friction, contact or "
-            f"disturbance (its step is pure rigid-body dynamics), and this one has "
-            f"{' and '.join(has)}: simulate a friction-free model "
-            f"(model.reduced(friction=False)) without environment or disturbance, or use "
-            f"compile=False",
-            value=has,
-        )
-    if getattr(dyn, "rotor_coupling", False) and any(
-        j.motor is not None and j.motor.gyroscopic for j in dyn.model.joints
-    ):
-        raise InvalidParameterError(
-            "compile=True integrates the model the 'pinocchio' backend expresses, "
-            "without the rotors' gyroscopic coupling this 'lagrange' plant has: use "
-            "rotor_coupling=False, the 'pinocchio' backend, or compile=False",
-            value=dyn.backend,
-        )
-
-
 def _library_function(model: RobotModel, scheme: str, cache_dir: str | os.PathLike[str] | None) -> cs.Function:
     """The compiled step function, built only if its library is not cached yet."""
-    from armctl.dynamics.codegen import cached
+    from armctl.dynamics import codegen
 
     _check_scheme(scheme)
     name = f"step_{scheme}"
-    return cached(
-        [name],
-        f"sim-step|{model.fingerprint(inertial=True, tool=False)}|v{_CODE_VERSION}",
-        lambda: [step_function(model, scheme)],
-        cache_dir,
-    )[name]
+    return codegen.cached([name], _step_tag(model, scheme), lambda: [step_function(model, scheme)], cache_dir)[name]
 
 
 def compiled_step(model: RobotModel, scheme: str, cache_dir: str | os.PathLike[str] | None = None) -> Step:
@@ -117,8 +257,12 @@ def compiled_step(model: RobotModel, scheme: str, cache_dir: str | os.PathLike[s
     Like :func:`armctl.sim.integrators.fast_step`'s, it works in two buffers that take turns: a step writes
     (q₁, q̇₁) into the one it did not read from and returns them as arrays that the next step finds in place
     (no copy in) and the step after next overwrites; q̈ is valid until the next step. Not thread-safe."""
-    ext = _library_function(model, scheme, cache_dir)
-    n = model.n
+    return _bind_step(_library_function(model, scheme, cache_dir), model.n)
+
+
+def _bind_step(ext: cs.Function, n: int) -> Step:
+    """The compiled step function ``ext`` as a Python function on two alternating buffers (see
+    :func:`compiled_step`)."""
     states = [np.zeros((2, n)), np.zeros((2, n))]
     rows = [(s[0], s[1]) for s in states]
     tau_in, h_in, acc = np.zeros(n), np.zeros(1), np.zeros(n)

@@ -30,6 +30,7 @@ from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError, ShapeError, SimulationWarning, UnknownNameError
 from armctl.model.robot import RobotModel
 from armctl.sim import setup
+from armctl.sim.compiled import compile_option
 from armctl.sim.contact import ForceSensor
 from armctl.sim.mujoco_plant import MujocoPlant, Readout, available_integrators, integrator_code
 from armctl.sim.recorder import Recorder
@@ -86,7 +87,7 @@ def simulate_mujoco(
     max_position: float = math.inf,
     reset: bool = True,
     energy: bool = True,
-    compile: bool = False,
+    compile: bool | str = "auto",
 ) -> SimResult:
     """The run of :func:`armctl.simulate` with ``engine="mujoco"`` (see the module and ``simulate``).
 
@@ -94,14 +95,14 @@ def simulate_mujoco(
     :meth:`MujocoPlant.from_model`). integrator: one of MuJoCo's, ``"rk4"``, ``"euler"``, ``"implicit"``,
     ``"implicitfast"`` or ``"discrete"`` (:data:`~armctl.sim.mujoco_plant.MUJOCO_INTEGRATORS`). Joint friction is
     the plant's ``frictionloss`` and ``damping`` (``friction`` must stay at its default); contact is the scene's
-    (``environment`` must be None); ``compile`` must be False. ``sensors`` read the contacts of the links at and
+    (``environment`` must be None); ``compile`` must not be True. ``sensors`` read the contacts of the links at and
     beyond their joint, as in the native engine."""
     mj = require_mujoco("simulate(..., engine='mujoco')")
     if friction != "stick-slip":
         _refuse("friction", friction, "the joint friction is MuJoCo's frictionloss and damping of the plant")
     if environment is not None and environment != ():
         _refuse("environment", environment, "contact is the MuJoCo scene's: put the geometry in its MJCF (MujocoPlant)")
-    if boolean(compile, "compile"):
+    if compile_option(compile) is True:
         _refuse("compile", compile, "MuJoCo integrates the plant")
     names = available_integrators()
     if integrator not in names:

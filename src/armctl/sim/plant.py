@@ -6,7 +6,9 @@ and an external-wrench disturbance:
 τ: the applied (held, saturated) torque; τ_f: the friction model's torque, or for stuck joints the holding
 torque of the stick–slip constraint; h_p: contact forces on the environment; h_d(t): the disturbance wrench at
 the tool frame, with the sign of ``Dynamics``' ``wrench`` (what the arm exerts on the environment: a push of F
-on the arm is h_d = −F).
+on the arm is h_d = −F). Within an integration step [t, t + h], h_d is evaluated at its start, middle and end and
+follows the parabola through these three values (:meth:`Plant.sample_disturbance`): exactly the disturbance at
+RK4's stages, and the same numbers for the Python and the generated step.
 
 The plant also gives the powers the integrators accumulate into work: p_f = −q̇ᵀτ_f (≤ 0) and
 p_e = −q̇ᵀ(Σ J_pᵀh_p + J_toolᵀh_d).
@@ -72,6 +74,31 @@ class Plant:
         self.all_stuck = False
         self.hold = np.zeros(n)
         self.stats = {"stick_events": 0, "breakaway_events": 0, "implicit_unconverged": 0}
+        self._window: tuple[float, float, FloatArray] | None = None  # the step's disturbance samples
+
+    # ---------------------------------------------------------------------------------- disturbance
+    def sample_disturbance(self, t: float, h: float) -> None:
+        """Evaluate h_d at t, t + h/2 and t + h: until :meth:`end_step`, the disturbance at a time t + θh of the
+        step is the parabola through them, h_d(θ) = (1 − θ)(1 − 2θ) h₀ + 4θ(1 − θ) h_½ + θ(2θ − 1) h₁."""
+        d = self.disturbance_wrench
+        self._window = (t, h, np.array((d(t), d(t + 0.5 * h), d(t + h))))
+
+    def end_step(self) -> None:
+        """Back to evaluating h_d at the time asked (outside a step: at the samples, for the record)."""
+        self._window = None
+
+    def disturbance_at(self, t: float) -> FloatArray:
+        """h_d at t: within a step, on the parabola through its samples (see :meth:`sample_disturbance`)."""
+        w = self._window
+        if w is None:
+            return self.disturbance_wrench(t)
+        t0, h0, samples = w
+        theta = (t - t0) / h0
+        for node in (0.0, 0.5, 1.0):  # the stages of a whole step: their sample exactly
+            if abs(theta - node) < 1e-9:
+                theta = node
+        l0, l1, l2 = (1.0 - theta) * (1.0 - 2.0 * theta), 4.0 * theta * (1.0 - theta), theta * (2.0 * theta - 1.0)
+        return l0 * samples[0] + l1 * samples[1] + l2 * samples[2]
 
     # ---------------------------------------------------------------------------------- forces
     def disturbance_wrench(self, t: float) -> FloatArray:
@@ -93,7 +120,7 @@ class Plant:
         for env, kin in zip(self.environments, self.kinematics, strict=True):
             tau += env.joint_torque(kin, q, qd)[0]
         if self.disturbance is not None:
-            tau -= self.kernel.jacobian(q, None).T @ self.disturbance_wrench(t)
+            tau -= self.kernel.jacobian(q, None).T @ self.disturbance_at(t)
         return tau
 
     def external_stiffness(self, t: float, q: FloatArray, qd: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
@@ -106,7 +133,7 @@ class Plant:
             kj += ke
             dj += de
         if self.disturbance is not None:
-            tau -= self.kernel.jacobian(q, None).T @ self.disturbance_wrench(t)
+            tau -= self.kernel.jacobian(q, None).T @ self.disturbance_at(t)
         return tau, kj, dj
 
     def friction_torque(self, qd: FloatArray) -> FloatArray:

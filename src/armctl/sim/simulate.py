@@ -28,9 +28,9 @@ from armctl.model.robot import RobotModel
 from armctl.references import Reference
 from armctl.sim import setup
 from armctl.sim.after_run import after_run
+from armctl.sim.compiled import choose_step
 from armctl.sim.contact import Environment, ForceSensor
 from armctl.sim.friction import FrictionModel
-from armctl.sim.integrators import fast_step, make_step
 from armctl.sim.loop import ClosedLoop, LoopSettings
 from armctl.sim.options import Forces, Sensing, StopRules, grouped
 from armctl.sim.plant import Plant
@@ -56,7 +56,7 @@ def simulate(
     saturate: bool = True,
     reset: bool = True,
     energy: bool = True,
-    compile: bool = False,
+    compile: bool | str = "auto",
     engine: str = "native",
     friction: str | FrictionModel | None = None,
     environment: Environment | Sequence[Environment] | None = None,
@@ -107,10 +107,11 @@ def simulate(
     energy : bool
         Provide ``res.energy``, E = T + U at every sample, computed from the recorded states when first read
         (False: NaN).
-    compile : bool
-        Integrate with C code generated for this plant (:mod:`armctl.sim.compiled`: built on first use, then cached
-        on disk), for ``"rk4"`` or ``"euler"`` on a plant without friction, contact or disturbance (else
-        :class:`~armctl.errors.InvalidParameterError`).
+    compile : {"auto", True, False}
+        ``"auto"``: integrate with C code generated for this plant wherever it can be built (:mod:`armctl.sim.compiled`:
+        a few seconds on first use, logged once, then cached on disk; without a C compiler, the Python step and a
+        warning); True: the generated step or an error saying why there is none; False: the Python step.
+        ``res.info["compiled"]`` says which ran.
     engine : {"native", "mujoco"}
         ``"mujoco"``: MuJoCo integrates the plant, a :class:`~armctl.sim.mujoco_plant.MujocoPlant` scene or the
         model's MJCF (see :mod:`armctl.sim.mujoco_engine` for what it takes and records).
@@ -209,16 +210,9 @@ def simulate(
     dyn.check_mass_matrix(q)  # a plant whose M is singular from the start is a model to fix, not a run that diverged
     sc = setup.scene(dyn, force.friction, force.environment, sense.sensors, force.disturbance)
 
-    pl = Plant(dyn, sc.friction, sc.environments, sc.disturbance)
     unstable = _check_contacts(dyn, sc.environments, q, scheme, h)
-    step = make_step(scheme, pl)
-    if boolean(compile, "compile"):
-        from armctl.sim.compiled import check_plant, compiled_step
-
-        check_plant(dyn, scheme, pl)
-        fast: Callable[..., tuple[FloatArray, FloatArray, FloatArray]] | None = compiled_step(dyn.model, scheme)
-    else:
-        fast = fast_step(scheme, pl)
+    chosen = choose_step(dyn, scheme, Plant(dyn, sc.friction, sc.environments, sc.disturbance), compile)
+    pl, step, fast = chosen.plant, chosen.step, chosen.fast
     samples = n_periods + 1
     noisy = bool(sig_q.any() or sig_qd.any())
     rec = Recorder(n, samples, cdt, sc.environments, sc.sensors, measured=noisy or lag > 0)
@@ -272,7 +266,7 @@ def simulate(
         "friction": sc.friction.name if pl.friction else "none",
         "saturate": bool(saturate),
         "delay": lag,
-        "compiled": bool(compile),
+        "compiled": chosen.compiled,
         "seed": seed_used,
         "wall_time": wall,
         "real_time_factor": (rows - 1) * cdt / wall if wall > 0 and rows > 1 else math.nan,

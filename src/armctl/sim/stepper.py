@@ -22,7 +22,22 @@ def advance(
     plant: Plant, step: Step, t: float, q: FloatArray, v: FloatArray, tau: FloatArray, h: float, begun: bool = False
 ) -> tuple[FloatArray, FloatArray, FloatArray | None, float, float]:
     """Integrate from (t, q, q̇) over h under τ; returns (q₁, q̇₁, a at the start or None, W_f, W_e).
-    ``begun``: :meth:`Plant.begin` was already called for this state."""
+    ``begun``: :meth:`Plant.begin` was already called for this state. A plant with a disturbance samples it
+    for the step (:meth:`Plant.sample_disturbance`)."""
+    if plant.disturbance is None:
+        if plant.sticky is None:  # no events to find (or the step finds them itself: the generated step)
+            return step(t, q, v, tau, h)
+        return _advance(plant, step, t, q, v, tau, h, begun)
+    plant.sample_disturbance(t, h)
+    try:
+        return _advance(plant, step, t, q, v, tau, h, begun)
+    finally:
+        plant.end_step()
+
+
+def _advance(
+    plant: Plant, step: Step, t: float, q: FloatArray, v: FloatArray, tau: FloatArray, h: float, begun: bool
+) -> tuple[FloatArray, FloatArray, FloatArray | None, float, float]:
     if plant.sticky is None:
         return step(t, q, v, tau, h)
     wf = we = 0.0

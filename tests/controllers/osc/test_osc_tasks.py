@@ -259,3 +259,34 @@ def test_a_weight_changed_between_steps_takes_effect_for_its_own_controller_only
     np.testing.assert_allclose(after, OperationalSpaceQP(dyn, fresh)(0.0, q, qd, ref), atol=1e-9)
     assert np.abs(after - before).max() > 1e-2
     np.testing.assert_array_equal(other(0.0, q, qd, ref), other_before)
+
+
+class _Line:
+    """A straight-line position target of its own arrays (picklable: a sweep sends it to its workers)."""
+
+    def __init__(self) -> None:
+        self.p0, self.v = np.array([0.4, 0.0, 0.5]), np.array([0.0, 0.1, 0.0])
+
+    def __call__(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return self.p0 + t * self.v, self.v, 0.0 * self.v
+
+
+def test_an_unpickled_trajectory_takes_the_fast_path(monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """After unpickling, the trajectory's arrays have an equal but distinct float64 dtype: the target must still
+    take the fast path (no entry-by-entry check, counted: the target module's ``vector`` and ``matrix``) and give
+    the original's values."""
+    import pickle
+
+    from armctl.controllers.osc.tasks import target as target_module
+
+    calls = []
+    for name in ("vector", "matrix"):
+        slow = getattr(target_module, name)
+        monkeypatch.setattr(target_module, name, lambda *a, _slow=slow, **k: calls.append(1) or _slow(*a, **k))
+    original, copy = FramePositionTask(kp=100.0), FramePositionTask(kp=100.0)
+    original.set_trajectory(_Line())
+    copy.set_trajectory(pickle.loads(pickle.dumps(_Line())))
+    for t in np.linspace(0.0, 1.0, 50):
+        for got, want in zip(copy.target.at(float(t)), original.target.at(float(t)), strict=True):
+            np.testing.assert_array_equal(got, want)
+    assert calls == []

@@ -68,9 +68,9 @@ class TargetHolder:
         shape = self.value_shape
         try:  # fast path: float arrays of the right shapes, all finite (one sum, NaN/inf propagate into it)
             if (
-                value.dtype is FLOAT
-                and velocity.dtype is FLOAT
-                and acceleration.dtype is FLOAT
+                value.dtype == FLOAT
+                and velocity.dtype == FLOAT
+                and acceleration.dtype == FLOAT
                 and value.shape == shape
                 and velocity.shape == acceleration.shape == (self.rate,)
             ):
