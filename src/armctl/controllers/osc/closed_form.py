@@ -21,7 +21,7 @@ from armctl.dynamics.operational_space import operational_space_terms
 from armctl.errors import InvalidParameterError, SingularityWarning
 from armctl.references import Reference
 
-#: the largest condition number of Λ used undamped (see the module)
+#: the largest condition number of Λ used undamped (see ClosedFormOSC)
 CONDITION_LIMIT = 1e12
 
 

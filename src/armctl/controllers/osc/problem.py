@@ -10,7 +10,7 @@ import numpy as np
 
 from armctl._checks import FloatArray
 
-#: a QP as the arrays (H, g, A, b, C, l, u) of the module's formulation
+#: a QP as the arrays (H, g, A, b, C, l, u) of QPProblem's formulation
 Arrays = tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]
 
 
