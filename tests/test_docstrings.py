@@ -28,7 +28,6 @@ DEPRECATED_MODULES = {"armctl.reference"}
 #: modules whose docstrings are not in numpydoc form yet: their parameters are documented in prose, and the
 #: tests of their names are expected to fail until they are converted
 PROSE_MODULES = (
-    "armctl.controllers.osc",
     "armctl.sim.contact",
     "armctl.sim.friction",
     "armctl.sim.normal_force",

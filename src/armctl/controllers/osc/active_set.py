@@ -1,22 +1,11 @@
 """A dense dual active-set QP solver (Goldfarb & Idnani, "A numerically stable dual method for solving strictly
 convex quadratic programs", Math. Programming 27, 1983): the method of quadprog and of TSID's eiquadprog, here
-in NumPy for the small QPs of one control step. It is the controller's second solver: an algorithm unlike
-ProxQP's proximal augmented Lagrangian, with nothing to install.
+in NumPy for the small QPs of one control step, where it is the controller's second solver. The method is
+described with :class:`DualActiveSetSolver`, its factorisation with :func:`dual_active_set`.
 
 For min ½ xᵀH x + gᵀx s.t. A x = b, l ≤ C x ≤ u with H positive definite, every finite bound is written as a
-row nᵀx ≥ h (a lower bound as C_i x ≥ l_i, an upper one as −C_i x ≥ −u_i). Starting from the unconstrained
-minimum x = −H⁻¹g (dually feasible with no active rows), each iteration takes the most violated row p and
-moves along
-
-    z = H⁻¹(I − N N*) n_p  (primal),   r = N* n_p  (dual),   N* = (Nᵀ H⁻¹ N)⁻¹ Nᵀ H⁻¹
-
-(N: the active rows' normals as columns) until row p holds (full step, p joins the active set) or an active
-row's multiplier reaches zero (partial step, that row leaves); the equalities join first and never leave.
-Every iterate stays dually feasible and the dual objective grows, so the method ends in finitely many steps: at
-the optimum, or with a row that no step can satisfy — then the QP has no feasible point.
-
-In NumPy each iteration costs tens of µs, a QP of a 7-joint arm a few hundred: which is why it comes last in
-the controller's chain of solvers.
+row nᵀx ≥ h (a lower bound as C_i x ≥ l_i, an upper one as −C_i x ≥ −u_i). In NumPy each iteration costs tens of
+µs, a QP of a 7-joint arm a few hundred: which is why it comes last in the controller's chain of solvers.
 """
 
 from __future__ import annotations
@@ -159,7 +148,26 @@ def dual_active_set(
 
 
 class DualActiveSetSolver:
-    """:func:`dual_active_set` behind the solver interface of the controller's chain (``solve_raw``)."""
+    """A dense dual active-set QP solver in NumPy (Goldfarb & Idnani, "A numerically stable dual method for
+    solving strictly convex quadratic programs", Math. Programming 27, 1983; the method of quadprog and of TSID's
+    eiquadprog), behind the solver interface of the controller's chain: its second solver, an algorithm unlike
+    ProxQP's proximal augmented Lagrangian, with nothing to install.
+
+    Notes
+    -----
+    For min ½ xᵀH x + gᵀx s.t. A x = b, l ≤ C x ≤ u with H positive definite, every finite bound is written as a
+    row nᵀx ≥ h (a lower bound as C_i x ≥ l_i, an upper one as −C_i x ≥ −u_i). Starting from the unconstrained
+    minimum x = −H⁻¹g (dually feasible with no active rows), each iteration takes the most violated row p and
+    moves along::
+
+        z = H⁻¹(I − N N*) n_p  (primal),   r = N* n_p  (dual),   N* = (Nᵀ H⁻¹ N)⁻¹ Nᵀ H⁻¹
+
+    (N: the active rows' normals as columns) until row p holds (full step, p joins the active set) or an active
+    row's multiplier reaches zero (partial step, that row leaves); the equalities join first and never leave.
+    Every iterate stays dually feasible and the dual objective grows, so the method ends in finitely many steps:
+    at the optimum, or with a row that no step can satisfy — then the QP has no feasible point. Each iteration
+    costs tens of µs in NumPy, which is why it comes last in the chain.
+    """
 
     name = "dual active set"
 
@@ -167,5 +175,28 @@ class DualActiveSetSolver:
         """Nothing to forget: every solve starts from the unconstrained minimum."""
 
     def solve_raw(self, arrays: Arrays, slot: int = 0, mode: str = "warm") -> QPSolution:
+        """The optimum of a QP, from the unconstrained minimum (the solver interface of the controller's chain).
+
+        Parameters
+        ----------
+        arrays : tuple of ndarray
+            The QP (H, g, A, b, C, l, u), H positive definite.
+        slot : int, optional
+            Not used: every solve starts afresh.
+        mode : str, optional
+            Not used, likewise.
+
+        Returns
+        -------
+        QPSolution
+            x and its multipliers y, z (H x + g + Aᵀy + Cᵀz = 0, z > 0 at an upper bound, < 0 at a lower one).
+
+        Raises
+        ------
+        InfeasibleError
+            No point meets the QP's rows.
+        SolverError
+            H is not positive definite, or the iterations run out (10 (n + rows) + 50).
+        """
         x, y, z, iterations = dual_active_set(arrays)
         return QPSolution(x, "solved", iterations, self.name, y, z)

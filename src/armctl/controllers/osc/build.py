@@ -1,23 +1,5 @@
-"""`QPBuilder`: turns the model terms of one control step, the tasks, limits and contacts into QPs.
-
-Decision variables x = [q̈ (n); τ (n); f_c (3) per active contact]. Rows, every one named:
-
-* equation of motion (n rows):  M q̈ − τ − Σ_c J_cᵀ f_c = −(C q̇ + g + τ_f)          ``dynamics[joint]``
-* contact kinematics (3 rows per active contact), see :class:`~armctl.controllers.osc.contact.Contact`
-* limits l ≤ x_b ≤ u (one row per joint and limit) and the contacts' friction-cone rows.
-
-Each priority level k gets the cost  ½ Σ_{tasks i of level k} ‖W_i^{1/2} (J_i x_i − b_i)‖² + ½ ε_k ‖x‖²,
-i.e.  H_k = T_kᵀ T_k + ε_k I,  g_k = −T_kᵀ t_k  with T_k, t_k the weighted task rows stacked. ε (``regularization``)
-makes the last level's H positive definite and picks, among equally good solutions, the smallest; levels above
-it get ε·1e-4 only, because there a regularisation would trade the level's own accuracy for a smaller x (a bias
-of order ε‖x‖²) that the levels below resolve anyway. The solver resolves that choice only to its tolerance:
-along directions no task sees the cost's curvature is ε, so with ProxQP's default ``eps_abs = 1e-6`` the
-redundant (null-space) part of q̈ is not the smallest but whatever the warm start leaves (12 % of ‖q̈‖ off on the
-Panda with a position task alone). Give the redundancy a task (a posture task, as the examples do) or tighten
-``eps_abs`` (``ProxQPSolver(eps_abs=1e-9)`` finds the minimum-norm q̈).
-
-With ``slacks=True`` the task rows become constraints with slack variables s: T_k x − s = t_k and the cost
-½‖s‖² + ½ε‖x‖² — the same optimum, with s reporting how far each task is from being met.
+"""`QPBuilder`: turns the model terms of one control step, the tasks, limits and contacts into QPs
+(:class:`StepQP`); the variables, rows and costs are described with :class:`QPBuilder`.
 """
 
 from __future__ import annotations
@@ -48,8 +30,24 @@ def level_cost(lev: LevelRows, reg_matrix: FloatArray) -> tuple[FloatArray, Floa
 
 
 class StepQP:
-    """Everything one control step solves: the constraints and, per priority level, the task rows.
-    :meth:`problem` returns the QP of a level (with rows freezing the levels above, if given)."""
+    """Everything one control step solves: the constraints and, per priority level, the task rows (made by
+    :meth:`QPBuilder.build`); :meth:`problem` gives the QP of a level.
+
+    Parameters
+    ----------
+    layout : Layout
+        The variable blocks and the constant rows for the contacts active at this step.
+    A, b : ndarray
+        The equality rows A x = b: the equation of motion [N·m] and the contacts' rows.
+    l, u : ndarray
+        The bounds l ≤ C x ≤ u of the limits and friction cones (C is the layout's).
+    levels : list of LevelRows
+        The stacked task rows of each priority level, in order.
+    regularization : ndarray, shape (nx,)
+        ε per variable, the last level's regularisation (the levels above get ε·1e-4).
+    slacks : bool
+        Whether task rows become constraints with slack variables.
+    """
 
     def __init__(
         self,
@@ -70,11 +68,26 @@ class StepQP:
 
     @property
     def variables(self) -> dict[str, slice]:
+        """The variable blocks of x, name ("qdd", "tau", a contact's name) → slice."""
         return self.layout.variables
 
     def problem(self, k: int = 0, frozen: tuple[FloatArray, FloatArray] | None = None) -> QPProblem:
-        """QP of level ``k``; ``frozen`` = (F, φ) adds the equality rows F x = φ that keep the optimum of the
-        levels above."""
+        """The QP of one level, named row by row.
+
+        Parameters
+        ----------
+        k : int, optional
+            The level's index in priority order (0: the most important).
+        frozen : (ndarray, ndarray), optional
+            (F, φ): the equality rows F x = φ (named ``priority[i]``) that keep the optimum of the levels above;
+            None: none.
+
+        Returns
+        -------
+        QPProblem
+            H, g, A, b, C, l, u and the names of the variables and rows; with slacks, x gains the block
+            ``"slack"`` and A the rows T x − s = t.
+        """
         lay, lev = self.layout, self.levels[k]
         eq_names = lay.eq_names
         if frozen is not None and frozen[0].shape[0]:
@@ -113,7 +126,20 @@ class StepQP:
         )
 
     def arrays(self, k: int = 0, frozen: tuple[FloatArray, FloatArray] | None = None) -> Arrays:
-        """(H, g, A, b, C, l, u) of level ``k`` without slacks (the hot path of :meth:`problem`)."""
+        """The arrays of :meth:`problem` without the names, for a step without slacks.
+
+        Parameters
+        ----------
+        k : int, optional
+            The level's index in priority order.
+        frozen : (ndarray, ndarray), optional
+            (F, φ): the equality rows F x = φ that keep the optimum of the levels above; None: none.
+
+        Returns
+        -------
+        tuple of ndarray
+            (H, g, A, b, C, l, u) of the QP of level ``k``.
+        """
         lay = self.layout
         H, g = level_cost(self.levels[k], lay.reg_matrix if k == len(self.levels) - 1 else lay.reg_matrix_upper)
         A, b = self.A, self.b
@@ -125,7 +151,45 @@ class StepQP:
 
 class QPBuilder:
     """Builds a :class:`StepQP` per control step for fixed tasks, limits and contacts (contacts may be switched
-    on and off: one :class:`Layout` is kept per set of active contacts)."""
+    on and off: one layout is kept per set of active contacts). :class:`~armctl.controllers.OperationalSpaceQP`
+    makes one from its arguments, checked.
+
+    Parameters
+    ----------
+    model : RobotModel
+        The arm (its number of joints and joint names).
+    tasks : sequence of Task
+        The tasks; their priorities give the levels.
+    limits : sequence of Limit
+        The limits, already bound to ``model``.
+    contacts : sequence of Contact
+        The declared contacts, active or not.
+    regularization : float, optional
+        ε > 0 of the last level's ½ε‖x‖² (see Notes).
+    slacks : bool, optional
+        Task rows as constraints with slack variables (see Notes).
+
+    Notes
+    -----
+    Decision variables x = [q̈ (n); τ (n); f_c (3) per active contact]. Rows, every one named:
+
+    * equation of motion (n rows):  M q̈ − τ − Σ_c J_cᵀ f_c = −(C q̇ + g + τ_f)          ``dynamics[joint]``
+    * contact kinematics (3 rows per active contact), see :class:`~armctl.controllers.osc.Contact`
+    * limits l ≤ x_b ≤ u (one row per joint and limit) and the contacts' friction-cone rows.
+
+    Each priority level k gets the cost  ½ Σ_{tasks i of level k} ‖W_i^{1/2} (J_i x_i − b_i)‖² + ½ ε_k ‖x‖²,
+    i.e.  H_k = T_kᵀ T_k + ε_k I,  g_k = −T_kᵀ t_k  with T_k, t_k the weighted task rows stacked. ε (``regularization``)
+    makes the last level's H positive definite and picks, among equally good solutions, the smallest; levels above
+    it get ε·1e-4 only, because there a regularisation would trade the level's own accuracy for a smaller x (a bias
+    of order ε‖x‖²) that the levels below resolve anyway. The solver resolves that choice only to its tolerance:
+    along directions no task sees the cost's curvature is ε, so with ProxQP's default ``eps_abs = 1e-6`` the
+    redundant (null-space) part of q̈ is not the smallest but whatever the warm start leaves (12 % of ‖q̈‖ off on the
+    Panda with a position task alone). Give the redundancy a task (a posture task, as the examples do) or tighten
+    ``eps_abs`` (``ProxQPSolver(eps_abs=1e-9)`` finds the minimum-norm q̈).
+
+    With ``slacks=True`` the task rows become constraints with slack variables s: T_k x − s = t_k and the cost
+    ½‖s‖² + ½ε‖x‖² — the same optimum, with s reporting how far each task is from being met.
+    """
 
     def __init__(
         self,
@@ -150,7 +214,13 @@ class QPBuilder:
         self._level_plans: dict[Layout, list[LevelPlan]] = {}
 
     def layout(self) -> Layout:
-        """The layout for the contacts active now."""
+        """The layout for the contacts active now (made on first use).
+
+        Returns
+        -------
+        Layout
+            The variable blocks, the constant rows C, the rows' names and the constant bounds.
+        """
         if not self.contacts:
             lay = self._layouts.get(())
             if lay is not None:
@@ -164,13 +234,44 @@ class QPBuilder:
         return lay
 
     def build(self, state: ModelState, t: float, ref: Reference) -> StepQP:
+        """The QPs of one control step.
+
+        Parameters
+        ----------
+        state : ModelState
+            The model terms at the measured (q, q̇).
+        t : float
+            Time [s].
+        ref : Reference
+            The controller's joint reference at t.
+
+        Returns
+        -------
+        StepQP
+            The constraints and each level's task rows.
+        """
         lay = self.layout()
         A, b, lo, up = self.constraints(lay, state)
         levels = [self.level(plan, state, t, ref) for plan in self.plans(lay)]
         return StepQP(lay, A, b, lo, up, levels, lay.regularization, self.slacks)
 
     def constraints(self, lay: Layout, state: ModelState) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-        """(A, b, l, u) of layout ``lay`` at ``state``: equation of motion, contact rows, bounds."""
+        """The constraints of one step: equation of motion, contact rows, bounds.
+
+        Parameters
+        ----------
+        lay : Layout
+            The layout of the active contacts (:meth:`layout`).
+        state : ModelState
+            The model terms at the measured (q, q̇).
+
+        Returns
+        -------
+        A, b : ndarray
+            The equality rows A x = b.
+        l, u : ndarray
+            The bounds l ≤ C x ≤ u (C: the layout's).
+        """
         n = self.n
         if not lay.contacts:  # A = [M, −I], b = −(h + τ_f): the common case in as few array operations
             A = np.concatenate((state.mass, lay.A_rest), axis=1)
@@ -204,7 +305,18 @@ class QPBuilder:
         return A, b, lo, up
 
     def plans(self, lay: Layout) -> list[LevelPlan]:
-        """The level plans of layout ``lay``, in priority order (made on first use)."""
+        """What stays fixed of each level's task rows for one layout (made on first use).
+
+        Parameters
+        ----------
+        lay : Layout
+            The layout of the active contacts.
+
+        Returns
+        -------
+        list of LevelPlan
+            One per priority level, in order (tasks on an inactive contact's force left out).
+        """
         plans = self._level_plans.get(lay)
         if plans is None:
             plans = self._level_plans[lay] = [
@@ -215,7 +327,24 @@ class QPBuilder:
 
     @staticmethod
     def level(plan: LevelPlan, state: ModelState, t: float, ref: Reference) -> LevelRows:
-        """The task rows of one level at ``state``."""
+        """The task rows of one level at this step.
+
+        Parameters
+        ----------
+        plan : LevelPlan
+            The level's plan (:meth:`plans`).
+        state : ModelState
+            The model terms at the measured (q, q̇).
+        t : float
+            Time [s].
+        ref : Reference
+            The controller's joint reference at t.
+
+        Returns
+        -------
+        LevelRows
+            The stacked rows [J | b] of the level's tasks and their weights.
+        """
         jr = plan.template.copy()
         nx = plan.nx
         for tk, rows, cols in plan.entries:

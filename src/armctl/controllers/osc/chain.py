@@ -1,27 +1,5 @@
-"""`SolverChain`: one QP of a control step, solved until a verified optimum is found.
-
-Stages, in order, each ending in a check of the candidate against the QP's optimality conditions
-(:mod:`~armctl.controllers.osc.optimality`): every row holds, every multiplier has its sign, the stationarity
-residual and the duality gap vanish — the KKT conditions, to the stated tolerances.
-
-1. ``"active set"`` — DAQP (:class:`~armctl.controllers.osc.daqp_solver.DaqpSolver`, a dual active-set method
-   in C) started from the active set of the slot's last verified optimum (consecutive control steps rarely
-   change which limits bind), or from a given one, and if that fails, from no active row; its answer, the
-   exact solution on its final active set, is checked by :func:`~armctl.controllers.osc.optimality.kkt_ok` to
-   :data:`~armctl.controllers.osc.optimality.PRIMAL_TOL` and :data:`~armctl.controllers.osc.optimality.DUAL_TOL`.
-2. ``"warm"`` — the primary solver (ProxQP), warm-started from the slot's previous solution.
-3. ``"cold"`` — the primary solver from scratch (a warm start from an unrelated state can stop at a point
-   that is not the optimum, or report a feasible QP infeasible).
-4. ``"defaults"`` — the primary solver from scratch with its default settings.
-5. ``"second"`` — a second solver (by default :class:`~armctl.controllers.osc.active_set.DualActiveSetSolver`,
-   an active-set method in NumPy).
-
-A candidate of stages 2–5 is a proposal: the active set it points at is solved exactly and accepted if it
-passes the check (or, failing that, the candidate itself if its KKT residuals are within the solvers' own
-tolerance, :data:`~armctl.controllers.osc.optimality.KKT_TOL`). Stages 3–5 are fallbacks: each one taken is
-counted (``counts``, and per step ``QPSolution.fallbacks``). If no stage gives a verified optimum,
-:class:`QPFailure` is raised with what each stage did; the controller decides what that means (a diagnosis for
-level 0, the level above's solution kept for a lower level).
+"""`SolverChain`: one QP of a control step, solved until a verified optimum is found (its stages are described
+with the class).
 """
 
 from __future__ import annotations
@@ -40,13 +18,19 @@ from armctl.controllers.osc.problem import Arrays, QPProblem
 from armctl.controllers.osc.solve import QPSolution
 from armctl.errors import InfeasibleError, SolverError
 
-#: the stages in order (module docstring); those after "warm" are fallbacks
+#: the stages in order (see SolverChain); those after "warm" are fallbacks
 STAGES = ("active set", "warm", "cold", "defaults", "second")
 FALLBACKS = ("cold", "defaults", "second")
 
 
 class QPFailure(SolverError):
-    """No stage of the chain found a verified optimum; ``attempts`` holds (stage, what happened) pairs."""
+    """No stage of the solver chain found a verified optimum.
+
+    Parameters
+    ----------
+    attempts : list of (str, str)
+        (stage, what happened) for each stage tried, in order; kept as ``attempts``.
+    """
 
     def __init__(self, attempts: list[tuple[str, str]]) -> None:
         shown = "; ".join(f"{stage}: {what}" for stage, what in attempts)
@@ -55,11 +39,54 @@ class QPFailure(SolverError):
 
 
 class SolverChain:
-    """The stages of the module docstring around a ``primary`` solver (an object with ``solve_raw(arrays,
-    slot, mode)``, or a user's object with ``solve(problem, slot)`` and ``reset()``) and a ``second`` one (an
-    object with ``solve_raw``; "active-set": :class:`~armctl.controllers.osc.active_set.DualActiveSetSolver`;
-    None: no fifth stage). ``first``: the solver of the first stage (an object with ``solve_from(arrays,
-    active)``, by default :class:`~armctl.controllers.osc.daqp_solver.DaqpSolver`; None: no first stage)."""
+    """The QPs of a controller's steps, each solved until a verified optimum is found: stages of solvers, each
+    answer checked against the QP's optimality conditions (see Notes).
+
+    Parameters
+    ----------
+    primary : object
+        The primary solver: an object with ``solve_raw(arrays, slot, mode)`` and ``reset()`` (as
+        :class:`~armctl.controllers.osc.ProxQPSolver`), or a user's object with ``solve(problem, slot)`` and
+        ``reset()``.
+    second : object, str or None, optional
+        The fifth stage's solver, an object with ``solve_raw`` and ``reset()``; ``"active-set"`` (the default):
+        :class:`~armctl.controllers.osc.DualActiveSetSolver`; None: no fifth stage.
+    first : object, str or None, optional
+        The first stage's solver, an object with ``solve_from(arrays, active)`` and ``reset()``; ``"daqp"`` (the
+        default): :class:`~armctl.controllers.osc.DaqpSolver`; None: no first stage.
+
+    Attributes
+    ----------
+    counts : collections.Counter
+        Verified optima by the stage that found them, and ``"failed"`` for QPs no stage solved, since
+        :meth:`reset` (or a controller's ``end_run``, which clears them).
+
+    Notes
+    -----
+    Stages, in order, each ending in a check of the candidate against the QP's optimality conditions
+    (:mod:`~armctl.controllers.osc.optimality`): every row holds, every multiplier has its sign, the stationarity
+    residual and the duality gap vanish — the KKT conditions, to the stated tolerances.
+
+    1. ``"active set"`` — DAQP (:class:`~armctl.controllers.osc.DaqpSolver`, a dual active-set method in C)
+       started from the active set of the slot's last verified optimum (consecutive control steps rarely change
+       which limits bind), or from a given one, and if that fails, from no active row; its answer, the exact
+       solution on its final active set, is checked by :func:`~armctl.controllers.osc.optimality.kkt_ok` to
+       :data:`~armctl.controllers.osc.optimality.PRIMAL_TOL` (1e-8 in each row's units) and
+       :data:`~armctl.controllers.osc.optimality.DUAL_TOL` (1e-8, relative to 1 + ‖g‖∞).
+    2. ``"warm"`` — the primary solver (ProxQP), warm-started from the slot's previous solution.
+    3. ``"cold"`` — the primary solver from scratch (a warm start from an unrelated state can stop at a point
+       that is not the optimum, or report a feasible QP infeasible).
+    4. ``"defaults"`` — the primary solver from scratch with its default settings.
+    5. ``"second"`` — a second solver (by default :class:`~armctl.controllers.osc.DualActiveSetSolver`, an
+       active-set method in NumPy).
+
+    A candidate of stages 2–5 is a proposal: the active set it points at is solved exactly and accepted if it
+    passes the check (or, failing that, the candidate itself if its KKT residuals are within the solvers' own
+    tolerance, :data:`~armctl.controllers.osc.optimality.KKT_TOL`, 1e-6). Stages 3–5 are fallbacks: each one taken is
+    counted (``counts``, and per step ``QPSolution.fallbacks``). If no stage gives a verified optimum,
+    :class:`QPFailure` is raised with what each stage did; the controller decides what that means (a diagnosis for
+    level 0, the level above's solution kept for a lower level).
+    """
 
     def __init__(self, primary: Any, second: Any = "active-set", first: Any = "daqp") -> None:
         self.primary = primary
@@ -68,7 +95,7 @@ class SolverChain:
         self._raw = callable(getattr(primary, "solve_raw", None))
         #: the last verified optimum's active set, per (slot, n, equalities, inequalities)
         self._active: dict[tuple[int, int, int, int], np.ndarray] = {}
-        #: verified optima by the stage that found them, and QPs no stage solved ("failed"), since reset()
+        # verified optima by the stage that found them, and QPs no stage solved ("failed"), since reset()
         self.counts: Counter[str] = Counter()
 
     def __reduce__(self) -> tuple[Any, ...]:
@@ -94,16 +121,49 @@ class SolverChain:
 
     @staticmethod
     def key(arrays: Arrays, slot: int) -> tuple[int, int, int, int]:
-        """What the warm starts and active sets are kept by: (slot, variables, equalities, inequalities)."""
+        """What the warm starts and active sets are kept by.
+
+        Parameters
+        ----------
+        arrays : tuple of ndarray
+            The QP (H, g, A, b, C, l, u).
+        slot : int
+            Its slot (one per priority level).
+
+        Returns
+        -------
+        tuple of int
+            (slot, number of variables, of equality rows, of inequality rows).
+        """
         return (slot, arrays[1].shape[0], arrays[3].shape[0], arrays[5].shape[0])
 
     def last_active(self, key: tuple[int, int, int, int]) -> np.ndarray | None:
-        """The active set of the last verified optimum of ``key`` (None before the first)."""
+        """The active set of the last verified optimum of a kind of QP.
+
+        Parameters
+        ----------
+        key : tuple of int
+            The QP's :meth:`key`.
+
+        Returns
+        -------
+        ndarray of int8, or None
+            Per inequality row: +1 at its upper bound, −1 at its lower one, 0 free; None before the first optimum
+            (or after a QP of that key failed).
+        """
         return self._active.get(key)
 
     def record(self, key: tuple[int, int, int, int], active: np.ndarray) -> None:
-        """A verified optimum with active set ``active`` found by a caller's own first stage (counted as
-        "active set")."""
+        """Record a verified optimum found by a caller's own first stage (counted as ``"active set"``): the next
+        solve of the same key starts from its active set.
+
+        Parameters
+        ----------
+        key : tuple of int
+            The QP's :meth:`key`.
+        active : ndarray of int8
+            Its active set: per inequality row +1 at its upper bound, −1 at its lower one, 0 free.
+        """
         self._active[key] = active
         self.counts["active set"] += 1
 
@@ -115,11 +175,34 @@ class SolverChain:
         start: np.ndarray | None = None,
         unconstrained: tuple[FloatArray, FloatArray] | None = None,
     ) -> QPSolution:
-        """The verified optimum of the QP ``arrays`` = (H, g, A, b, C, l, u) (``slot``: one per priority level,
-        for warm starts; ``problem()``: the named problem, for a user's solver that takes one; ``start``: the
-        active set to start the first stage from, instead of the last one; ``unconstrained``: H's Cholesky factor
-        and the unconstrained minimum, if the caller has them, see :class:`ActiveSets`). Raises
-        :class:`QPFailure`."""
+        """The verified optimum of a QP, from the first stage that finds one.
+
+        Parameters
+        ----------
+        arrays : tuple of ndarray
+            The QP (H, g, A, b, C, l, u): min ½ xᵀH x + gᵀx s.t. A x = b, l ≤ C x ≤ u, H positive definite.
+        slot : int, optional
+            One per priority level: the warm starts and active sets are kept per slot.
+        problem : callable, optional
+            ``problem()`` gives the named :class:`~armctl.controllers.osc.QPProblem`, for a user's primary solver
+            that takes one (without it, such a solver's stages fail).
+        start : ndarray of int8, optional
+            The active set to start the first stage from, instead of the last optimum's.
+        unconstrained : (ndarray, ndarray), optional
+            H's upper Cholesky factor (LAPACK's ``dposv``) and the unconstrained minimum −H⁻¹g, if the caller has
+            them (without equality rows): the exact solves on active sets then start from them.
+
+        Returns
+        -------
+        QPSolution
+            x, the multipliers y, z (H x + g + Aᵀy + Cᵀz = 0), the active set, the ``stage`` that found it and the
+            ``fallbacks`` taken.
+
+        Raises
+        ------
+        QPFailure
+            No stage found a verified optimum; ``attempts`` says what each did.
+        """
         key = self.key(arrays, slot)
         attempts: list[tuple[str, str]] = []
         if self.first is not None:

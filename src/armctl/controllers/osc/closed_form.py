@@ -1,25 +1,6 @@
 """`ClosedFormOSC`: Khatib's operational-space controller in closed form, the baseline the QP is compared with.
 
-With the task (J, J̇q̇, desired task acceleration ẍ*) of one :class:`MotionTask`, a posture acceleration q̈₀
-(PD on the joint reference, or zero), and the operational-space terms of
-:func:`armctl.dynamics.operational_space.operational_space_terms` at the measured state,
-
-    Λ = (J M⁻¹ Jᵀ)⁻¹,   J̄ = M⁻¹ Jᵀ Λ,   μ = J̄ᵀ C q̇ − Λ J̇ q̇,   p = J̄ᵀ g
-    F = Λ ẍ* + μ + p                        the task force
-    τ = Jᵀ F + Nᵀ (M q̈₀ + C q̇ + g) + τ_f,   N = I − J̄ J   (the dynamically consistent null space)
-      = Jᵀ Λ (ẍ* − J̇ q̇ − J q̈₀) + M q̈₀ + C q̇ + g + τ_f
-
-so that, with an exact model, J q̈ + J̇ q̇ = ẍ* and the posture acts only in the null space. No limits: near a
-singularity Λ grows without bound and so does τ — which is what this baseline is here to show.
-
-At (or next to) a singular configuration Λ does not exist (or its condition number is beyond what floats
-resolve): where cond Λ exceeds ``condition_limit`` κ, the controller uses the damped inverse
-Λ = (J M⁻¹ Jᵀ + δ² I)⁻¹ with δ² = μ_max/κ − μ_min (μ the eigenvalues of J M⁻¹ Jᵀ; an upper bound of
-μ_max/κ where J M⁻¹ Jᵀ is singular outright), so that cond(J M⁻¹ Jᵀ + δ² I) ≤ κ: τ stays finite, and the task
-is no longer met along the lost direction. δ² is in ``last_log["damping"]`` (0 on a regular step), and
-:meth:`ClosedFormOSC.end_run` warns once per run (:class:`~armctl.errors.SingularityWarning`) with the steps
-that needed it. The default κ = 1e12 is reached when the task Jacobian's σ_min/σ_max is near 1e-6 (the
-tolerance of :meth:`armctl.Dynamics.operational_space_model`): the torque spike near a singularity is kept.
+The law, and the damped inverse it takes at or next to a singular configuration, are described with the class.
 """
 
 from __future__ import annotations
@@ -40,15 +21,61 @@ from armctl.dynamics.operational_space import operational_space_terms
 from armctl.errors import InvalidParameterError, SingularityWarning
 from armctl.references import Reference
 
-#: the largest condition number of Λ used undamped (see the module)
+#: the largest condition number of Λ used undamped (see ClosedFormOSC)
 CONDITION_LIMIT = 1e12
 
 
 class ClosedFormOSC(Controller):
-    """Closed-form operational-space control of ``task`` (a frame task), with an optional ``posture`` task
-    in the dynamically consistent null space; ``condition_limit`` κ ≥ 1: the largest condition number of Λ used
-    as it is, beyond which Λ is damped (see the module). ``last_log``: the trace of Λ (an upper bound of its
-    largest eigenvalue) and the damping δ² of the step."""
+    """Closed-form operational-space control (Khatib) of one frame task, with an optional posture task in the
+    dynamically consistent null space. No limits: near a singularity Λ grows without bound and so does τ — which
+    is what this baseline is here to show.
+
+    Parameters
+    ----------
+    dynamics : Dynamics
+        The controller's model: M(q), C(q, q̇) q̇, g(q), τ_f(q̇) and the frame's kinematics.
+    task : MotionTask
+        The operational-space task: a frame task (:class:`~armctl.controllers.osc.FramePositionTask`,
+        :class:`~armctl.controllers.osc.FrameOrientationTask`, :class:`~armctl.controllers.osc.FramePoseTask`, or
+        a motion task of your own), not a posture task. Its gains K_p [1/s²] and K_d [1/s] make ẍ*.
+    posture : PostureTask, optional
+        Gives the posture acceleration q̈₀ (its PD law on the joint reference); None: q̈₀ = 0.
+    condition_limit : float, optional
+        κ ≥ 1: the largest condition number of Λ used as it is, beyond which Λ is damped (see Notes).
+
+    Raises
+    ------
+    InvalidParameterError
+        ``task`` is not a frame motion task, ``posture`` not a PostureTask, ``condition_limit`` below 1.
+    UnknownNameError
+        The task's frame is not one of the model's.
+    ShapeError
+        The posture task is sized for another number of joints.
+
+    Notes
+    -----
+    With the task (J, J̇q̇, desired task acceleration ẍ*), the posture acceleration q̈₀ and the operational-space
+    terms of :func:`armctl.dynamics.operational_space.operational_space_terms` at the measured state::
+
+        Λ = (J M⁻¹ Jᵀ)⁻¹,   J̄ = M⁻¹ Jᵀ Λ,   μ = J̄ᵀ C q̇ − Λ J̇ q̇,   p = J̄ᵀ g
+        F = Λ ẍ* + μ + p                        the task force
+        τ = Jᵀ F + Nᵀ (M q̈₀ + C q̇ + g) + τ_f,   N = I − J̄ J   (the dynamically consistent null space)
+          = Jᵀ Λ (ẍ* − J̇ q̇ − J q̈₀) + M q̈₀ + C q̇ + g + τ_f
+
+    so that, with an exact model, J q̈ + J̇ q̇ = ẍ* and the posture acts only in the null space.
+
+    At (or next to) a singular configuration Λ does not exist (or its condition number is beyond what floats
+    resolve): where cond Λ exceeds ``condition_limit`` κ, the controller uses the damped inverse
+    Λ = (J M⁻¹ Jᵀ + δ² I)⁻¹ with δ² = μ_max/κ − μ_min (μ the eigenvalues of J M⁻¹ Jᵀ; where J M⁻¹ Jᵀ is singular
+    outright, ‖J‖²_F / (λ_min(M) κ), an upper bound of μ_max/κ), so that cond(J M⁻¹ Jᵀ + δ² I) is at most
+    κ + 1 (κ + 1 − κ μ_min/μ_max with the first form): τ stays finite, and the task is no longer met along
+    the lost direction. The default κ = 1e12 is reached when the task Jacobian's σ_min/σ_max is near 1e-6 (the
+    tolerance of :meth:`armctl.Dynamics.operational_space_model`): the torque spike near a singularity is kept.
+
+    ``last_log`` holds ``"lambda_trace"``, the trace of Λ (an upper bound of its largest eigenvalue), and
+    ``"damping"``, the step's δ² (0 on a regular step); :meth:`end_run` warns once per run
+    (:class:`~armctl.errors.SingularityWarning`) with the steps that needed the damping.
+    """
 
     dynamics: Dynamics  # given to __init__, never None
 
@@ -81,8 +108,38 @@ class ClosedFormOSC(Controller):
     def operational_space_terms(
         self, state: ModelState, jacobian: FloatArray, drift: FloatArray
     ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, float]:
-        """(Λ, J̄, μ, p, δ²) of the task at ``state`` (see the module): undamped (δ² = 0) unless cond Λ exceeds
-        ``condition_limit``. Raises the kernel's named error if M is not positive definite."""
+        """The operational-space terms of the task at ``state``, undamped unless cond Λ exceeds
+        ``condition_limit`` (see the class's Notes).
+
+        Parameters
+        ----------
+        state : ModelState
+            The model terms at the measured (q, q̇): M, C q̇ + g.
+        jacobian : ndarray, shape (m, n)
+            The task Jacobian J.
+        drift : ndarray, shape (m,)
+            J̇ q̇ [the task's units per s²].
+
+        Returns
+        -------
+        lam : ndarray, shape (m, m)
+            Λ, the task-space inertia (damped if need be) [kg for position rows, kg·m² for rotation rows].
+        jbar : ndarray, shape (n, m)
+            J̄ = M⁻¹ Jᵀ Λ, the dynamically consistent inverse of J.
+        mu : ndarray, shape (m,)
+            μ = J̄ᵀ C q̇ − Λ J̇ q̇, the task-space Coriolis and centrifugal force [N or N·m].
+        p : ndarray, shape (m,)
+            p = J̄ᵀ g, the task-space gravity force [N or N·m].
+        damping : float
+            δ² ≥ 0 [the units of J M⁻¹ Jᵀ], 0 if Λ was used undamped.
+
+        Raises
+        ------
+        InvalidParameterError
+            M is not positive definite at q (the error names the joint that moves the least inertia).
+        NonFiniteError
+            The terms are not finite although M is positive definite.
+        """
         q, mass = state.q, state.mass
         kernel = self.dynamics.kernel
         gravity = kernel.gravity(q)
@@ -134,8 +191,13 @@ class ClosedFormOSC(Controller):
         return tau
 
     def run_summary(self) -> str | None:
-        """The steps since :meth:`reset` (or the last :meth:`end_run`) on which Λ was damped, in words; None if
-        none was."""
+        """The steps since :meth:`reset` (or the last :meth:`end_run`) on which Λ was damped, in words.
+
+        Returns
+        -------
+        str or None
+            How many steps, the largest δ² and what it means; None if Λ was never damped.
+        """
         if not self._damped:
             return None
         return (
@@ -146,9 +208,19 @@ class ClosedFormOSC(Controller):
         )
 
     def end_run(self) -> str | None:
-        """End of a run: warn once (:class:`~armctl.errors.SingularityWarning`) with :meth:`run_summary` if Λ was
-        damped, and start counting afresh; returns the summary. :func:`armctl.sim.simulate` calls it after the
-        last step; call it after a loop of your own."""
+        """End of a run: warn once with :meth:`run_summary` if Λ was damped, and start counting afresh.
+        :func:`armctl.sim.simulate` calls it after the last step; call it after a loop of your own.
+
+        Returns
+        -------
+        str or None
+            The summary (None if Λ was never damped).
+
+        Warns
+        -----
+        SingularityWarning
+            With the summary, if it is not None.
+        """
         msg = self.run_summary()
         if msg is not None:
             warnings.warn(msg, SingularityWarning, stacklevel=2)

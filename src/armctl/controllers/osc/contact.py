@@ -1,19 +1,5 @@
-"""`Contact`: a declared point contact, its force variables, its kinematic rows and its friction cone.
-
-The force f (3,) [N], world axes, is the force the environment exerts on the robot at the origin of ``frame``
-(f = −h_e for the wrench h_e the arm exerts, see ``armctl.Dynamics.inverse_dynamics``); it enters the equation
-of motion as  M q̈ + C q̇ + g + τ_f − J_cᵀ f = τ,  with J_c the linear rows of the frame Jacobian.
-
-``normal`` n (unit, world axes) points from the surface towards the robot. Two modes:
-
-* ``"fixed"`` — the point stays put:  J_c q̈ + J̇_c q̇ = −k_d v_c  (3 rows; k_d damps any residual velocity),
-  and f lies in the friction cone, linearised as an inscribed pyramid of ``facets`` faces:
-  nᵀf ≥ f_min,  (d_iᵀ − μ cos(π/facets) nᵀ) f ≤ 0 for the facet directions d_i in the tangent plane.
-* ``"sliding"`` — the point slides on the surface:  nᵀ(J_c q̈ + J̇_c q̇) = −k_d nᵀv_c  (1 row), the tangential
-  force is Coulomb's kinetic friction against the sliding direction ŝ = v_t / √(‖v_t‖² + v_ε²),
-  f_t = −μ (nᵀf) ŝ (2 rows, on the cone's boundary, so no pyramid is imposed), and nᵀf ≥ f_min.
-
-An inactive contact (``active = False``) adds no variables and no rows: switch it on when the point touches.
+"""`Contact`: a declared point contact, its force variables, its kinematic rows and its friction cone (the
+equations are given with the class).
 """
 
 from __future__ import annotations
@@ -31,10 +17,57 @@ MODES = ("fixed", "sliding")
 
 
 class Contact:
-    """Point contact of ``frame``'s origin (default: the tool frame) with a surface of normal ``normal``,
-    friction coefficient ``mu``, mode "fixed" or "sliding" (see the module). ``kd`` [1/s] damps the contact
-    point's velocity along the constrained directions; ``min_force`` f_min [N] ≥ 0 keeps it pressed;
-    ``slip_velocity`` v_ε [m/s] smooths the sliding direction near rest."""
+    """A declared point contact of a frame's origin with a surface: three force variables f in the QP, its
+    kinematic rows and its friction cone. An inactive contact (``active = False``) adds no variables and no rows:
+    switch it on when the point touches.
+
+    Parameters
+    ----------
+    frame : str, optional
+        The frame whose origin touches (a name of the model's ``frame_names``); None (the default): the tool frame.
+    normal : array_like, shape (3,), optional
+        The surface normal n (world axes), pointing from the surface towards the robot; normalised here.
+    mu : float, optional
+        The friction coefficient μ ≥ 0.
+    mode : {"fixed", "sliding"}, optional
+        ``"fixed"``: the point stays put, f in the friction cone; ``"sliding"``: the point slides on the surface
+        with Coulomb's kinetic friction (see Notes).
+    facets : int, optional
+        The number of faces (≥ 3) of the pyramid inscribed in the friction cone (fixed mode).
+    kd : float, optional
+        k_d ≥ 0 [1/s]: damps the contact point's velocity along the constrained directions.
+    min_force : float, optional
+        f_min ≥ 0 [N]: the smallest normal force, which keeps the contact pressed.
+    slip_velocity : float, optional
+        v_ε > 0 [m/s]: smooths the sliding direction near rest.
+    name : str, optional
+        The contact's name, unique in a controller; None (the default): ``"contact[FRAME]"``.
+    active : bool, optional
+        Whether the contact is on; may be switched between control periods.
+
+    Raises
+    ------
+    UnknownNameError
+        ``mode`` is not "fixed" or "sliding"; (when given to a controller) the model has no such frame.
+    InvalidParameterError, ShapeError, NonFiniteError
+        A zero or malformed normal, ``facets`` below 3, ``mu``, ``kd`` or ``min_force`` negative,
+        ``slip_velocity`` not > 0, ``active`` not a bool.
+
+    Notes
+    -----
+    The force f (3,) [N], world axes, is the force the environment exerts on the robot at the origin of
+    ``frame`` (f = −h_e for the wrench h_e the arm exerts, see ``armctl.Dynamics.inverse_dynamics``); it enters
+    the equation of motion as  M q̈ + C q̇ + g + τ_f − J_cᵀ f = τ,  with J_c the linear rows of the frame
+    Jacobian. The two modes:
+
+    * ``"fixed"`` — the point stays put:  J_c q̈ + J̇_c q̇ = −k_d v_c  (3 rows; k_d damps any residual
+      velocity), and f lies in the friction cone, linearised as an inscribed pyramid of ``facets`` faces:
+      nᵀf ≥ f_min,  (d_iᵀ − μ cos(π/facets) nᵀ) f ≤ 0 for the facet directions d_i in the tangent plane.
+    * ``"sliding"`` — the point slides on the surface:  nᵀ(J_c q̈ + J̇_c q̇) = −k_d nᵀv_c  (1 row), the
+      tangential force is Coulomb's kinetic friction against the sliding direction
+      ŝ = v_t / √(‖v_t‖² + v_ε²), f_t = −μ (nᵀf) ŝ (2 rows, on the cone's boundary, so no pyramid is
+      imposed), and nᵀf ≥ f_min.
+    """
 
     dim = 3
 
@@ -96,7 +129,22 @@ class Contact:
             ]
 
     def equality_rows(self, state: ModelState) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """(G_q (3×n) on q̈, G_f (3×3) on f, rhs (3,)) of the rows G_q q̈ + G_f f = rhs."""
+        """The contact's equality rows G_q q̈ + G_f f = rhs at this step (see the class's Notes).
+
+        Parameters
+        ----------
+        state : ModelState
+            The model terms at the measured (q, q̇), with the frame's kinematics.
+
+        Returns
+        -------
+        G_q : ndarray, shape (3, n)
+            The rows' coefficients of q̈.
+        G_f : ndarray, shape (3, 3)
+            Their coefficients of f (zero in fixed mode).
+        rhs : ndarray, shape (3,)
+            Their right-hand side [m/s² for the kinematic rows, N for the friction rows].
+        """
         fk = state.frame(self.frame)
         jv, drift, vel = fk.jacobian[:3], fk.drift[:3], fk.velocity[:3]
         n = state.q.shape[0]
@@ -114,7 +162,18 @@ class Contact:
         return gq, gf, rhs
 
     def cone_rows(self) -> tuple[FloatArray, FloatArray, FloatArray, list[str]]:
-        """(C_f (m×3), l, u, names) of the rows l ≤ C_f f ≤ u (constant)."""
+        """The contact's inequality rows l ≤ C_f f ≤ u (constant): the unilateral row and, in fixed mode, the
+        friction pyramid's ``facets`` rows.
+
+        Returns
+        -------
+        C_f : ndarray, shape (m, 3)
+            The rows on f (m = 1 + facets in fixed mode, 1 when sliding).
+        l, u : ndarray, shape (m,)
+            Their bounds [N]; ±inf: no bound.
+        names : list of str
+            The rows' names, ``unilateral[NAME]`` and ``friction_cone[NAME,i]``.
+        """
         return self._cone, self._cone_l, self._cone_u, self._cone_names
 
     def __repr__(self) -> str:

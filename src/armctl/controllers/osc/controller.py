@@ -1,32 +1,7 @@
 """`OperationalSpaceQP`: operational-space control as one QP (or a cascade of QPs) per control period.
 
-Every period, at the measured (q, q̇):
-
-    min over x = [q̈, τ, f]   Σ_levels-in-order  ½ Σ_i ‖W_i^{1/2}(J_i x_i − b_i)‖²
-    s.t.  M q̈ + C q̇ + g + τ_f − Σ_c J_cᵀ f_c = τ       (the controller's own model)
-          contact kinematics, friction cones, torque / position (viability) / velocity limits
-
-and τ goes to the arm. Task targets:
-
-* frame tasks (:class:`FramePositionTask`, :class:`FrameOrientationTask`, :class:`FramePoseTask`) take a
-  constant target through ``task.set_target(...)`` or a trajectory through ``task.set_trajectory(fn)``,
-  ``fn(t) -> (value, velocity, acceleration)``; either may be changed between periods;
-* :class:`PostureTask` follows the joint reference ``ref`` handed to the controller (unless fixed);
-* :class:`ContactForceTask` takes a force vector or a callable of t.
-
-Contacts are switched with ``contact.active``. The QP of a period can be looked at before (or instead of)
-solving it: :meth:`OperationalSpaceQP.build` returns the :class:`~armctl.controllers.osc.build.StepQP`,
-``.problem(k)`` the :class:`~armctl.controllers.osc.problem.QPProblem` (H, g, A, b, C, l, u) of level k.
-
-Every QP is solved by a :class:`~armctl.controllers.osc.chain.SolverChain`: τ comes only from a solution verified
-against the QP's optimality conditions (:mod:`~armctl.controllers.osc.optimality`). Its first stage is DAQP (a dual
-active-set solver in C) started from the last step's active set; a QP whose answer fails the check goes on to the
-primary solver (ProxQP: warm start, cold start, default settings) and a second solver. With one priority level and
-no active contact the QP is solved on q̈ alone (:mod:`~armctl.controllers.osc.reduced`: the same optimum), and on
-``Dynamics(model, compile=True)`` its data come from one call of generated C code
-(:mod:`~armctl.controllers.osc.generated`) when its tasks and limits are built-in ones. Each step's fallbacks are
-in ``last_log["qp_fallbacks"]``; :meth:`end_run` (which :func:`armctl.sim.simulate` calls) warns once with what
-happened during the run and how often.
+The QP, the task targets, the solver chain and the q̈-only path are described with the class
+(:class:`OperationalSpaceQP`, its Notes); :func:`default_limits` gives the usual limits.
 """
 
 from __future__ import annotations
@@ -68,7 +43,24 @@ _PLAIN_LIMITS = (TorqueLimit, JointPositionLimit, JointVelocityLimit, Accelerati
 
 
 def default_limits(dt: float = 1e-3) -> list[Limit]:
-    """Torque limits, joint position limits (viability) and joint velocity limits, for control period dt [s]."""
+    """The limits an :class:`OperationalSpaceQP` takes by default: torque, joint position (viability) and joint
+    velocity limits, each at the model's own limits (applied when the controller binds them to its model).
+
+    Parameters
+    ----------
+    dt : float, optional
+        The control period Δt [s] that the position and velocity limits look one step ahead by.
+
+    Returns
+    -------
+    list of Limit
+        ``[TorqueLimit(), JointPositionLimit(dt), JointVelocityLimit(dt)]``.
+
+    Raises
+    ------
+    InvalidParameterError, NonFiniteError
+        ``dt`` is not a positive, finite number.
+    """
     return [TorqueLimit(), JointPositionLimit(dt), JointVelocityLimit(dt)]
 
 
@@ -80,18 +72,95 @@ def _unique(items: Sequence[Any], kind: str) -> None:
 
 
 class OperationalSpaceQP(Controller):
-    """Operational-space QP controller.
+    """Operational-space control as a QP: every control period, the torques of the joint accelerations that
+    best serve the tasks, level by level in priority order, within the limits and the contacts' rows.
 
-    dynamics: the controller's model (pinocchio backend: one-pass model terms; any backend works).
-    tasks: :class:`~armctl.controllers.osc.tasks.Task` objects; ``task.priority`` (0 first) orders levels
-    strictly, ``task.weight`` trades tasks off inside a level. limits: :class:`~armctl.controllers.osc.limits.Limit`
-    objects (default :func:`default_limits` with ``dt``). contacts: :class:`Contact` objects. solver:
-    "proxsuite" (dense ProxQP, warm-started), "qpsolvers:NAME", or an object with ``solve``/``reset`` (and
-    ``solve_raw``, see :mod:`~armctl.controllers.osc.solve`). fallback_solver: the last stage of the solver
-    chain — "active-set" (:class:`~armctl.controllers.osc.active_set.DualActiveSetSolver`), "qpsolvers:NAME",
-    an object with ``solve_raw`` and ``reset``, or None (no second solver). regularization: ε of ½ε‖x‖² in
-    every level. slacks: task rows as constraints with slack variables. dt: control period [s] for the default
-    limits.
+    Parameters
+    ----------
+    dynamics : Dynamics
+        The controller's model: M(q), C(q, q̇) q̇ + g(q), τ_f(q̇) and the frames' kinematics. Any backend works
+        (Pinocchio evaluates a step's terms in one pass); on ``Dynamics(model, compile=True)`` the QP of one
+        level without contacts takes its data from generated code (see Notes).
+    tasks : sequence of Task
+        At least one :class:`~armctl.controllers.osc.Task` (or a single one), with unique names.
+        ``task.priority`` (0 first) orders the levels strictly; ``task.weight`` trades tasks off inside a level.
+    limits : sequence of Limit, optional
+        :class:`~armctl.controllers.osc.Limit` objects, bound to the model here; None (the default) gives
+        :func:`default_limits` with ``dt``, an empty sequence no limit.
+    contacts : sequence of Contact, optional
+        Declared point contacts (:class:`~armctl.controllers.osc.Contact`, unique names), switched on and off
+        between periods with ``contact.active``.
+    solver : str or object, optional
+        The primary solver of the chain: ``"proxsuite"`` (dense ProxQP, warm-started; the default),
+        ``"qpsolvers:NAME"`` (a solver of qpsolvers), or an object with ``solve(problem, slot)`` and ``reset()``
+        (and ``solve_raw(arrays, slot, mode)``, which the controller then calls on the QP's arrays, as on
+        :class:`~armctl.controllers.osc.ProxQPSolver`).
+    regularization : float, optional
+        ε > 0 of the cost term ½ε‖x‖² of the last (lowest-priority) level [the cost's units per unit of x²]; the
+        levels above it get ε·1e-4 (see :class:`~armctl.controllers.osc.QPBuilder`).
+    slacks : bool, optional
+        Task rows as equality constraints with slack variables (the same optimum; the slacks, in
+        ``last_solution.slacks``, say how far each task is from being met). The q̈-only path is then not used.
+    dt : float, optional
+        Control period Δt [s] of the default limits; used only when ``limits`` is None.
+    fallback_solver : str, object or None, optional
+        The last stage of the chain: ``"active-set"``
+        (:class:`~armctl.controllers.osc.DualActiveSetSolver`, the default), ``"qpsolvers:NAME"``, an object with
+        ``solve_raw(arrays, slot, mode)`` and ``reset()``, or None (no second solver).
+
+    Raises
+    ------
+    InvalidParameterError
+        ``dynamics`` is not a Dynamics; no task; tasks, limits or contacts that are not of their class; repeated
+        task or contact names; ``regularization`` or ``dt`` not > 0; a limit whose bounds leave no range.
+    UnknownNameError
+        A task's or contact's frame that the model does not have; a
+        :class:`~armctl.controllers.osc.ContactForceTask` on a contact that is not in ``contacts``; an unknown
+        ``solver`` or ``fallback_solver``.
+    ShapeError, NonFiniteError
+        A posture task or a limit sized for another number of joints; a limit that is NaN.
+
+    See Also
+    --------
+    ClosedFormOSC : Khatib's closed-form law, the baseline without limits.
+
+    Notes
+    -----
+    Every period, at the measured (q, q̇)::
+
+        min over x = [q̈, τ, f]   Σ_levels-in-order  ½ Σ_i ‖W_i^{1/2}(J_i x_i − b_i)‖²
+        s.t.  M q̈ + C q̇ + g + τ_f − Σ_c J_cᵀ f_c = τ       (the controller's own model)
+              contact kinematics, friction cones, torque / position (viability) / velocity limits
+
+    and τ goes to the arm. Task targets:
+
+    * frame tasks (:class:`~armctl.controllers.osc.FramePositionTask`,
+      :class:`~armctl.controllers.osc.FrameOrientationTask`, :class:`~armctl.controllers.osc.FramePoseTask`)
+      take a constant target through ``task.set_target(...)`` or a trajectory through
+      ``task.set_trajectory(fn)``, ``fn(t) -> (value, velocity, acceleration)``; either may be changed between
+      periods;
+    * :class:`~armctl.controllers.osc.PostureTask` follows the joint reference ``ref`` handed to the controller
+      (unless fixed);
+    * :class:`~armctl.controllers.osc.ContactForceTask` takes a force vector or a callable of t.
+
+    Contacts are switched with ``contact.active``. The QP of a period can be looked at before (or instead of)
+    solving it: :meth:`build` returns the :class:`~armctl.controllers.osc.StepQP`, ``.problem(k)`` the
+    :class:`~armctl.controllers.osc.QPProblem` (H, g, A, b, C, l, u) of level k.
+
+    Every QP is solved by a :class:`~armctl.controllers.osc.SolverChain`: τ comes only from a solution verified
+    against the QP's optimality conditions (the KKT conditions). Its first stage is DAQP (a dual active-set solver
+    in C) started from the last step's active set; a QP whose answer fails the check goes on to the primary
+    solver (ProxQP: warm start, cold start, default settings) and a second solver. With one priority level, no
+    slacks and no active contact the QP is solved on q̈ alone (τ = M q̈ + C q̇ + g + τ_f substituted: the same
+    optimum), and on ``Dynamics(model, compile=True)`` its data come from one call of generated C code when its
+    tasks (:class:`~armctl.controllers.osc.FramePositionTask`, :class:`~armctl.controllers.osc.FrameOrientationTask`,
+    :class:`~armctl.controllers.osc.FramePoseTask`, :class:`~armctl.controllers.osc.PostureTask`, not
+    subclasses) and limits are built-in ones. Each step's fallbacks are in ``last_log["qp_fallbacks"]``;
+    :meth:`end_run` (which :func:`armctl.sim.simulate` calls) warns once with what happened during the run and
+    how often.
+
+    ``last_log`` holds ``"qp_iterations"`` and ``"qp_fallbacks"`` (summed over the levels), ``"force[NAME]"``
+    [N] per active contact, and with more than one level ``"level_status"``.
     """
 
     dynamics: Dynamics  # given to __init__, never None
@@ -181,18 +250,67 @@ class OperationalSpaceQP(Controller):
 
     @property
     def fallback_counts(self) -> dict[str, int]:
-        """QPs solved since :meth:`reset` by each stage of the solver chain ("active set", "warm", and the
-        fallbacks "cold", "defaults", "second"); "failed" counts QPs none solved."""
+        """QPs solved since :meth:`reset` (or the last :meth:`end_run`) by each stage of the solver chain
+        ("active set", "warm", and the fallbacks "cold", "defaults", "second"); "failed" counts QPs none solved."""
         return dict(self.chain.counts)
 
     def build(self, t: float, q: Any, qd: Any, ref: Reference) -> StepQP:
-        """The QPs of one control period at (q, q̇), not solved (``.problem(k)`` for level k)."""
+        """The QPs of one control period at (q, q̇), built but not solved.
+
+        Parameters
+        ----------
+        t : float
+            Time [s].
+        q, qd : array_like, shape (n,)
+            Joint positions [rad] and velocities [rad/s] (m, m/s for a prismatic joint).
+        ref : Reference
+            The joint reference at t (what a :class:`~armctl.controllers.osc.PostureTask` follows).
+
+        Returns
+        -------
+        StepQP
+            The constraints and each level's task rows; ``.problem(k)`` is the
+            :class:`~armctl.controllers.osc.QPProblem` of level k (without the rows that freeze the levels above,
+            which depend on their solutions).
+
+        Raises
+        ------
+        InvalidParameterError, ShapeError, NonFiniteError
+            ``ref`` is not a Reference of n joints; q, q̇ or t is of the wrong size or not finite; a frame task has
+            no target.
+        """
         self.check_reference(ref)
         q, qd = vector(q, self.n, "q"), vector(qd, self.n, "qd")
         return self.builder.build(self.evaluator.evaluate(q, qd), scalar(t, "t"), ref)
 
     def solve(self, t: float, q: Any, qd: Any, ref: Reference) -> OSCSolution:
-        """Build and solve one control period; raises InfeasibleError naming the conflicting rows."""
+        """Build and solve one control period, as a call of the controller does.
+
+        Parameters
+        ----------
+        t : float
+            Time [s].
+        q, qd : array_like, shape (n,)
+            Joint positions [rad] and velocities [rad/s] (m, m/s for a prismatic joint).
+        ref : Reference
+            The joint reference at t.
+
+        Returns
+        -------
+        OSCSolution
+            The step's solution: x, q̈ [rad/s²], τ [N·m], contact forces [N], each task's residual and each
+            level's QP (also ``last_solution`` afterwards).
+
+        Raises
+        ------
+        InfeasibleError
+            Level 0's QP has no feasible point: the error names the conflicting rows and by how much to relax them.
+        SolverError
+            No solver found a verified optimum of a feasible level-0 QP.
+        InvalidParameterError, ShapeError, NonFiniteError
+            Inputs as in :meth:`build`; a level whose weighted task targets ‖W^{1/2} b‖ exceed 1e9 (a target or gain
+            out of scale).
+        """
         self.check_reference(ref)
         q, qd = vector(q, self.n, "q"), vector(qd, self.n, "qd")
         self.compute(scalar(t, "t"), q, qd, ref)
@@ -233,8 +351,29 @@ class OperationalSpaceQP(Controller):
         return tau
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
-        """τ of the verified optimum (clipped onto the torque limits, which it meets to the optimality check's
-        tolerance)."""
+        """τ of the verified optimum, clipped onto the torque limits (which it meets to the optimality check's
+        tolerance).
+
+        Parameters
+        ----------
+        t : float
+            Time [s].
+        q, qd : ndarray, shape (n,)
+            Measured joint positions [rad] and velocities [rad/s], float64, finite (checked by ``__call__``).
+        ref : Reference
+            The joint reference at t.
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            The joint torques τ [N·m] (N for a prismatic joint).
+
+        Raises
+        ------
+        InfeasibleError, SolverError, InvalidParameterError
+            As in :meth:`solve`. A lower priority level without a verified optimum raises nothing: it keeps the
+            level above's solution, and ``last_log["level_status"]`` says so.
+        """
         self._steps += 1
         self._pending = self._last_solution = None
         if self._qdd_path:
@@ -264,8 +403,19 @@ class OperationalSpaceQP(Controller):
         return tau
 
     def verify_last_step(self) -> bool:
-        """Run the optimality check of the last step's solution again (every level): True if it passes, as it
-        did when the step accepted it. For tests and for timing what the check costs; a step never needs it."""
+        """Run the optimality check of the last step's solution again, on every level. For tests and for timing
+        what the check costs; a step never needs it.
+
+        Returns
+        -------
+        bool
+            True if it passes, as it did when the step accepted the solution.
+
+        Raises
+        ------
+        InvalidParameterError
+            There is no last step (before the first call, or after :meth:`reset`).
+        """
         pending = self._pending
         if pending is not None:
             return pending[0].verify(pending[1])
@@ -281,9 +431,14 @@ class OperationalSpaceQP(Controller):
         return True
 
     def run_summary(self) -> str | None:
-        """What the solver chain had to do since :meth:`reset` (fallbacks by stage, lower levels kept from
-        the level above), in words; None if every QP was verified at the first try of a stage before the
-        fallbacks."""
+        """What the solver chain had to do since :meth:`reset` (or the last :meth:`end_run`), in words.
+
+        Returns
+        -------
+        str or None
+            The fallbacks by stage and the lower levels that kept the level above's solution; None if every QP
+            was verified by a stage before the fallbacks.
+        """
         counts = self.chain.counts
         parts = []
         taken = {stage: counts[stage] for stage in ("cold", "defaults", "second") if counts[stage]}
@@ -305,9 +460,19 @@ class OperationalSpaceQP(Controller):
         return f"OperationalSpaceQP over {self._steps} control steps: " + "; ".join(parts)
 
     def end_run(self) -> str | None:
-        """End of a run: warn once (:class:`~armctl.errors.SolverWarning`) with :meth:`run_summary` if there is
-        anything to report, and start counting afresh; returns the summary. :func:`armctl.sim.simulate` calls
-        it after the last step; call it after a loop of your own."""
+        """End of a run: warn once with :meth:`run_summary` if there is anything to report, and start counting
+        afresh. :func:`armctl.sim.simulate` calls it after the last step; call it after a loop of your own.
+
+        Returns
+        -------
+        str or None
+            The summary (None if there was nothing to report).
+
+        Warns
+        -----
+        SolverWarning
+            With the summary, if it is not None.
+        """
         msg = self.run_summary()
         if msg is not None:
             warnings.warn(msg, SolverWarning, stacklevel=2)

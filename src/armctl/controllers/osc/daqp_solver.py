@@ -1,14 +1,5 @@
-"""`DaqpSolver`: DAQP, a dual active-set QP solver in C (Arnström, Bemporad & Axehill, "A dual active-set solver
-for embedded quadratic programming using recursive LDLᵀ updates", IEEE Trans. Automatic Control 67(8), 2022),
-started from a given active set: the first stage of the controller's solver chain.
-
-For min ½ xᵀH x + gᵀx s.t. A x = b, l ≤ C x ≤ u (H positive definite) DAQP works on the dual: from the active
-set it is given (the rows taken at a bound, the equalities always), it adds the most violated row or drops a
-row whose multiplier has the wrong sign, each step an exact solve on the new active set by an update of an
-LDLᵀ factorisation, until every row holds and every multiplier has its sign. From the active set of the last
-control step's optimum (consecutive steps rarely change which limits bind) it usually ends in one step; from
-scratch, a QP of a 7-joint arm takes a few. Its answer is the exact solution on its final active set — which
-the controller still checks (:func:`~armctl.controllers.osc.optimality.kkt_ok`) before using it.
+"""`DaqpSolver`: DAQP, a dual active-set QP solver in C, started from a given active set: the first stage of the
+controller's solver chain (the method is described with the class).
 """
 
 from __future__ import annotations
@@ -44,10 +35,28 @@ EXIT_FLAGS = {
 
 
 class DaqpSolver:
-    """DAQP (module docstring) on the arrays (H, g, A, b, C, l, u) of a QP, started from an active set.
-    ``primal_tol``: the largest row violation DAQP accepts [the row's units] (below the controller's check's
-    :data:`~armctl.controllers.osc.optimality.PRIMAL_TOL`, so that what DAQP calls optimal passes it);
-    ``iter_limit``: its iterations at most."""
+    """DAQP (Arnström, Bemporad & Axehill, "A dual active-set solver for embedded quadratic programming using
+    recursive LDLᵀ updates", IEEE Trans. Automatic Control 67(8), 2022) on the arrays (H, g, A, b, C, l, u) of a
+    QP, started from an active set.
+
+    Parameters
+    ----------
+    primal_tol : float, optional
+        The largest row violation DAQP accepts [the row's units]; below the controller's check's tolerance
+        (1e-8), so that what DAQP calls optimal passes it.
+    iter_limit : int, optional
+        Its iterations at most.
+
+    Notes
+    -----
+    For min ½ xᵀH x + gᵀx s.t. A x = b, l ≤ C x ≤ u (H positive definite) DAQP works on the dual: from the active
+    set it is given (the rows taken at a bound, the equalities always), it adds the most violated row or drops a
+    row whose multiplier has the wrong sign, each step an exact solve on the new active set by an update of an
+    LDLᵀ factorisation, until every row holds and every multiplier has its sign. From the active set of the last
+    control step's optimum (consecutive steps rarely change which limits bind) it usually ends in one step; from
+    scratch, a QP of a 7-joint arm takes a few. Its answer is the exact solution on its final active set — which
+    the controller still checks (:func:`~armctl.controllers.osc.optimality.kkt_ok`) before using it.
+    """
 
     name = "daqp"
 
@@ -65,11 +74,31 @@ class DaqpSolver:
         """Nothing to forget: the active set to start from is given at each solve."""
 
     def solve_from(self, arrays: Arrays, active: np.ndarray | None) -> QPSolution:
-        """The optimum of the QP ``arrays`` from the active set ``active`` (int8 per row of C: +1 at its upper
-        bound, −1 at its lower, 0 free; None: none), with its multipliers y, z (H x + g + Aᵀy + Cᵀz = 0, z > 0 at
-        an upper bound) and its final active set. Raises SolverError with DAQP's exit flag if it finds no optimum.
+        """The optimum of a QP, from a given active set.
+
         A start can mislead it (rows that depend on each other, a row taken at an infinite bound): what it returns
-        is to be checked (:func:`~armctl.controllers.osc.optimality.kkt_ok`), as the chain does."""
+        is to be checked (:func:`~armctl.controllers.osc.optimality.kkt_ok`), as the chain does.
+
+        Parameters
+        ----------
+        arrays : tuple of ndarray
+            The QP (H, g, A, b, C, l, u), H positive definite.
+        active : ndarray of int8, shape (mi,), or None
+            The active set to start from: per row of C, +1 at its upper bound, −1 at its lower one, 0 free;
+            None: no active row.
+
+        Returns
+        -------
+        QPSolution
+            x, its multipliers y, z (H x + g + Aᵀy + Cᵀz = 0, z > 0 at an upper bound) and its final active set
+            (``active``).
+
+        Raises
+        ------
+        SolverError
+            DAQP finds no optimum (the error gives its exit flag: infeasible, cycling, iteration limit, ...), or
+            calls a non-finite point optimal.
+        """
         H, g, A, b, C, l, u = arrays  # noqa: E741
         me = b.shape[0]
         if me:
@@ -97,6 +126,25 @@ class DaqpSolver:
         return QPSolution(x, "solved", info["iterations"], self.name, lam[:me], z, active=np.sign(z).astype(np.int8))
 
     def solve_raw(self, arrays: Arrays, slot: int = 0, mode: str = "warm") -> QPSolution:
-        """The optimum of the QP ``arrays`` from no active row (the solver interface of the controller's chain;
-        ``slot`` and ``mode`` do not matter: DAQP keeps nothing between solves)."""
+        """The optimum of a QP from no active row (the solver interface of the controller's chain).
+
+        Parameters
+        ----------
+        arrays : tuple of ndarray
+            The QP (H, g, A, b, C, l, u), H positive definite.
+        slot : int, optional
+            Not used: DAQP keeps nothing between solves.
+        mode : str, optional
+            Not used, likewise.
+
+        Returns
+        -------
+        QPSolution
+            As :meth:`solve_from`.
+
+        Raises
+        ------
+        SolverError
+            As :meth:`solve_from`.
+        """
         return self.solve_from(arrays, None)

@@ -1,14 +1,5 @@
-"""Diagnosis of a QP that could not be solved: which rows conflict, and by how much.
-
-The elastic program relaxes every constraint except the equation of motion (physics, which τ can always
-meet on its own) by non-negative slacks and minimises their sum:
-
-    min  Σ (p + q + s_l + s_u) + ½ ε (‖x‖² + ‖s‖²)
-    s.t. A_dyn x = b_dyn,   A_rest x + p − q = b_rest,   l − s_l ≤ C x ≤ u + s_u,   p, q, s_l, s_u ≥ 0
-
-It always has a solution. If the slacks are zero the QP was feasible (the failure was numerical: SolverError).
-Otherwise the conflicting rows are those that must be relaxed (slack > 0, with the amount) and those that
-bind the conflict (a non-zero multiplier in the elastic program: they are tight and pay for the slack).
+"""Diagnosis of a QP that could not be solved: which rows conflict, and by how much (the elastic program is
+described with :func:`conflicting_rows`).
 """
 
 from __future__ import annotations
@@ -25,9 +16,35 @@ _BIG = 1e20
 
 
 def conflicting_rows(p: QPProblem, tol: float = 1e-6) -> dict[str, float] | None:
-    """Rows of ``p`` that conflict, name → how much the row must be relaxed (0 for a row that binds the
-    conflict without being relaxed itself). Empty if ``p`` is feasible; None if the elastic program could not
-    be solved either (no diagnosis)."""
+    """The rows of a QP that conflict, and by how much: the diagnosis of a QP without a feasible point.
+
+    Parameters
+    ----------
+    p : QPProblem
+        The QP (its equation-of-motion rows are those named ``dynamics[...]``).
+    tol : float, optional
+        A slack above ``tol`` [the row's units] counts as a relaxation.
+
+    Returns
+    -------
+    dict of str to float, or None
+        Row name → how much the row must be relaxed [the row's units] (0 for a row that binds the conflict
+        without being relaxed itself); empty if ``p`` is feasible; None if the elastic program could not be
+        solved either (no diagnosis).
+
+    Notes
+    -----
+    The elastic program relaxes every constraint except the equation of motion (physics, which τ can always
+    meet on its own) by non-negative slacks and minimises their sum::
+
+        min  Σ (p + q + s_l + s_u) + ½ ε (‖x‖² + ‖s‖²)
+        s.t. A_dyn x = b_dyn,   A_rest x + p − q = b_rest,   l − s_l ≤ C x ≤ u + s_u,   p, q, s_l, s_u ≥ 0
+
+    It always has a solution. If the slacks are zero the QP was feasible (the failure was numerical: SolverError).
+    Otherwise the conflicting rows are those that must be relaxed (slack > 0, with the amount) and those that
+    bind the conflict (a multiplier above 1e-3 in magnitude in the elastic program: they are tight and pay for
+    the slack).
+    """
     from proxsuite import proxqp
 
     nx, me, mi = p.nx, p.b.shape[0], p.l.shape[0]

@@ -33,11 +33,44 @@ from armctl.errors import SolverError
 
 
 class OSCSolution:
-    """Result of one control step: the variables ``x`` and their blocks (``qdd`` [rad/s²], ``tau`` [N·m],
-    ``forces`` per active contact [N]), each task's unweighted residual J x − b (``residuals``), the slack of
-    every task when slacks are on (``slacks``, else None), the solver's result per level (``solutions``; None
-    for a level that kept the one above, see ``level_status``) and :meth:`problem` to look at the QP of a
-    level."""
+    """The result of one control step of :class:`~armctl.controllers.OperationalSpaceQP` (made by the controller:
+    ``ctrl.last_solution``, or :meth:`~armctl.controllers.OperationalSpaceQP.solve`).
+
+    Parameters
+    ----------
+    step : StepQP
+        The QPs of the step.
+    x : ndarray, shape (nx,)
+        The solution's variables (without slacks).
+    solutions : tuple of QPSolution or None
+        The solver chain's result per level; None for a level that kept the one above.
+    level_status : tuple of str
+        Per level, ``"solved"`` or why it kept the level above's solution.
+    slacks : dict of str to ndarray, or None
+        Each task's slack with slacks on, else None.
+    frozen : list of (ndarray, ndarray) or None
+        Per level, the rows (F, φ) that kept the levels above (None for level 0).
+
+    Attributes
+    ----------
+    qdd : ndarray, shape (n,)
+        q̈ [rad/s²] (a view of ``x``).
+    tau : ndarray, shape (n,)
+        τ [N·m] (a view of ``x``), before the controller clips its output onto the torque limits.
+    forces : dict of str to ndarray
+        Each active contact's force f (3,) [N], world axes, exerted by the environment on the robot.
+    iterations : int
+        Solver iterations summed over the levels.
+
+    Notes
+    -----
+    Strict priorities by cascaded QPs: level 0 is solved first, and every later level k under the extra
+    equality rows T_j x = T_j x_{k−1} for every level j < k (T_j the weighted task rows of level j, x_{k−1} the
+    solution of the level above), compressed to an orthonormal basis of their span. A lower level for which no
+    stage of the solver chain finds a verified optimum (it can only be numerical: x_{k−1} is feasible for it)
+    keeps x_{k−1}, and the levels below it are solved with its residual frozen at that value; its status is
+    reported in ``level_status``, and :meth:`diagnose` looks for conflicting rows when asked.
+    """
 
     __slots__ = ("_frozen", "forces", "iterations", "level_status", "qdd", "slacks", "solutions", "step", "tau", "x")
 
@@ -57,7 +90,7 @@ class OSCSolution:
         self.tau = x[v["tau"]]
         self.forces = {c.name: x[v[c.name]] for c in step.layout.contacts} if step.layout.contacts else {}
         self.solutions = solutions
-        #: solver iterations summed over the levels
+        # solver iterations summed over the levels
         self.iterations = 0
         for s in solutions:
             if s is not None:
@@ -75,7 +108,18 @@ class OSCSolution:
         return out
 
     def problem(self, level: int = 0) -> QPProblem:
-        """The QP that was solved for ``level`` (with its rows freezing the levels above)."""
+        """The QP that was solved for one level.
+
+        Parameters
+        ----------
+        level : int, optional
+            The level's index in priority order.
+
+        Returns
+        -------
+        QPProblem
+            Its QP, with the rows that kept the levels above (``priority[i]``).
+        """
         return self.step.problem(level, self._frozen[level])
 
     @property
@@ -84,9 +128,20 @@ class OSCSolution:
         return sum(s.fallbacks for s in self.solutions if s is not None)
 
     def diagnose(self, level: int = 0) -> dict[str, float] | None:
-        """The rows of ``level``'s QP that conflict (:func:`~armctl.controllers.osc.diagnose.conflicting_rows`:
-        name → how much to relax it; empty if the QP is feasible, None if the diagnosis itself failed). An
-        elastic program of a few ms: run it when a level was kept (see ``level_status``), not in a loop."""
+        """The rows of one level's QP that conflict, by :func:`~armctl.controllers.osc.conflicting_rows`. An
+        elastic program of a few ms: run it when a level was kept (see ``level_status``), not in a loop.
+
+        Parameters
+        ----------
+        level : int, optional
+            The level's index in priority order.
+
+        Returns
+        -------
+        dict of str to float, or None
+            Row name → how much to relax it (0 for a row that binds the conflict without being relaxed); empty
+            if the QP is feasible; None if the diagnosis itself failed.
+        """
         return _diagnose.conflicting_rows(self.problem(level))
 
 

@@ -1,12 +1,5 @@
-"""`QPProblem`: one quadratic program, inspectable before it is solved.
-
-    minimise   ½ xᵀ H x + gᵀ x
-    subject to A x = b,   l ≤ C x ≤ u
-
-with x = [q̈ (n); τ (n); f_1 (3); …; f_k (3); s (m, only with slacks)] — the blocks are named in
-``variables`` — and every row of A and C named in ``eq_names`` / ``ineq_names`` (e.g. ``dynamics[panda_joint4]``,
-``torque_limit[panda_joint4]``). Infinite entries of l, u mean "no bound".
-"""
+"""`QPProblem`: one quadratic program, inspectable before it is solved (its formulation is given with the
+class)."""
 
 from __future__ import annotations
 
@@ -17,13 +10,47 @@ import numpy as np
 
 from armctl._checks import FloatArray
 
-#: a QP as the arrays (H, g, A, b, C, l, u) of the module's formulation
+#: a QP as the arrays (H, g, A, b, C, l, u) of QPProblem's formulation
 Arrays = tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]
 
 
 @dataclass(frozen=True)
 class QPProblem:
-    """The QP of one priority level at one control step (arrays are read-only)."""
+    """The QP of one priority level at one control step, named row by row (its arrays are read-only)::
+
+        minimise   ½ xᵀ H x + gᵀ x
+        subject to A x = b,   l ≤ C x ≤ u
+
+    with x = [q̈ (n); τ (n); f_1 (3); …; f_k (3); s (m, only with slacks)].
+
+    Attributes
+    ----------
+    H : ndarray, shape (nx, nx)
+        The cost's Hessian (symmetric positive definite).
+    g : ndarray, shape (nx,)
+        The cost's gradient at x = 0.
+    A : ndarray, shape (me, nx)
+        The equality rows: the equation of motion [N·m], the contacts' rows, the rows that keep the levels above.
+    b : ndarray, shape (me,)
+        Their right-hand side.
+    C : ndarray, shape (mi, nx)
+        The inequality rows: limits and friction cones.
+    l, u : ndarray, shape (mi,)
+        Their bounds [rad/s², N·m or N, by row]; ±inf: no bound.
+    variables : dict of str to slice
+        The blocks of x: ``"qdd"`` [rad/s²], ``"tau"`` [N·m], each active contact's name (its force [N]), and
+        ``"slack"`` with slacks.
+    eq_names : tuple of str
+        The name of each row of A, e.g. ``dynamics[panda_joint4]``, ``priority[0]``.
+    ineq_names : tuple of str
+        The name of each row of C, e.g. ``torque_limit[panda_joint4]``.
+    level : int
+        The priority level.
+    tasks : tuple of str
+        The names of the level's tasks.
+    info : dict
+        Anything more a caller wants to attach.
+    """
 
     H: FloatArray
     g: FloatArray
@@ -49,14 +76,58 @@ class QPProblem:
         return int(self.H.shape[0])
 
     def block(self, x: FloatArray, name: str) -> FloatArray:
-        """The part of a solution ``x`` that is the variable block ``name`` ("qdd", "tau", a contact name)."""
+        """The part of a solution that is one variable block.
+
+        Parameters
+        ----------
+        x : ndarray, shape (nx,)
+            A point of the problem.
+        name : str
+            The block: ``"qdd"``, ``"tau"``, a contact's name or ``"slack"`` (see ``variables``).
+
+        Returns
+        -------
+        ndarray
+            A view of ``x``'s entries of that block.
+
+        Raises
+        ------
+        KeyError
+            The problem has no block of that name.
+        """
         return x[self.variables[name]]
 
     def objective(self, x: FloatArray) -> float:
+        """The cost at a point.
+
+        Parameters
+        ----------
+        x : ndarray, shape (nx,)
+            A point of the problem.
+
+        Returns
+        -------
+        float
+            ½ xᵀ H x + gᵀ x.
+        """
         return float(0.5 * x @ self.H @ x + self.g @ x)
 
     def violations(self, x: FloatArray, tol: float = 1e-6) -> dict[str, float]:
-        """Rows that ``x`` violates by more than ``tol`` (absolute), name → violation."""
+        """The rows that a point violates.
+
+        Parameters
+        ----------
+        x : ndarray, shape (nx,)
+            A point of the problem.
+        tol : float, optional
+            The violation tolerated [the row's units: N·m, rad/s², N].
+
+        Returns
+        -------
+        dict of str to float
+            Row name → violation (|A_i x − b_i|, or how far C_i x is outside [l_i, u_i]), for every row violated by
+            more than ``tol``; empty if none is.
+        """
         out: dict[str, float] = {}
         r = self.A @ x - self.b
         for i in np.flatnonzero(np.abs(r) > tol):
@@ -68,8 +139,14 @@ class QPProblem:
         return out
 
     def to_qpsolvers(self) -> Any:
-        """This problem as a ``qpsolvers.Problem`` (P, q, G, h, A, b): each finite bound of l ≤ C x ≤ u becomes
-        one row of G x ≤ h."""
+        """This problem in qpsolvers' form, to solve it with any solver of qpsolvers.
+
+        Returns
+        -------
+        qpsolvers.Problem
+            (P, q, G, h, A, b) = (H, g, G, h, A, b): each finite bound of l ≤ C x ≤ u becomes one row of G x ≤ h;
+            None in place of empty G, h, A, b.
+        """
         import qpsolvers
 
         up = np.isfinite(self.u)

@@ -29,9 +29,32 @@ MODES = ("warm", "cold", "defaults")
 
 @dataclass(slots=True)
 class QPSolution:
-    """x (the primal solution), the solver's ``status`` string, ``iterations`` and the ``solver`` name; the
-    multipliers ``y`` (of A x = b) and ``z`` (of l ≤ C x ≤ u) where the solver gives them, in the convention
-    H x + g + Aᵀy + Cᵀz = 0 (z > 0 at an upper bound, < 0 at a lower one)."""
+    """A solver's solution of one QP, min ½ xᵀH x + gᵀx s.t. A x = b, l ≤ C x ≤ u.
+
+    Attributes
+    ----------
+    x : ndarray, shape (nx,)
+        The primal solution.
+    status : str
+        The solver's status (``"solved"``).
+    iterations : int
+        The solver's iterations (−1 where the solver does not say).
+    solver : str
+        The solver's name.
+    y : ndarray, shape (me,), or None
+        The multipliers of A x = b, where the solver gives them.
+    z : ndarray, shape (mi,), or None
+        The multipliers of l ≤ C x ≤ u, where the solver gives them: in the convention H x + g + Aᵀy + Cᵀz = 0,
+        z > 0 at an upper bound, < 0 at a lower one.
+    stage : str
+        How the controller's solver chain got it: ``"active set"``, ``"warm"``, ``"cold"``, ``"defaults"`` or
+        ``"second"`` (see :class:`~armctl.controllers.osc.SolverChain`); empty from a solver called directly.
+    fallbacks : int
+        The fallback stages the chain took for it.
+    active : ndarray of int8, shape (mi,), or None
+        The active set of a verified optimum: per inequality row +1 at its upper bound, −1 at its lower one, 0
+        free.
+    """
 
     x: FloatArray
     status: str
@@ -39,21 +62,44 @@ class QPSolution:
     solver: str
     y: FloatArray | None = None
     z: FloatArray | None = None
-    #: how the controller's chain of solvers got it ("active set", "warm", "cold", "defaults", "second"; see
-    #: :mod:`~armctl.controllers.osc.chain`), and the fallbacks it took
+    # how the controller's chain of solvers got it ("active set", "warm", "cold", "defaults", "second"; see
+    # :mod:`~armctl.controllers.osc.chain`), and the fallbacks it took
     stage: str = ""
     fallbacks: int = 0
-    #: the active set of a verified optimum (int8 per inequality row: +1 upper bound, −1 lower, 0 free)
+    # the active set of a verified optimum (int8 per inequality row: +1 upper bound, −1 lower, 0 free)
     active: np.ndarray | None = None
 
 
 class ProxQPSolver:
-    """proxsuite.proxqp.dense, one QP object per (slot, problem shape) so that each priority level is
-    warm-started from its own previous solution. ``eps_abs``: absolute tolerance of the residuals (primal in
-    N·m and rad/s², dual in the cost's units); ``rho``: ProxQP's proximal parameter (small values converge
-    faster on the degenerate QPs met near singular configurations). ProxQP stops only once its duality gap is
-    within ``eps_abs`` too (``check_duality_gap``): its residuals alone can be small at a point that is not the
-    optimum, with multipliers on bounds that are not active."""
+    """Dense ProxQP (proxsuite), with one QP object per (slot, problem shape), so that each priority level is
+    warm-started from its own previous solution.
+
+    Parameters
+    ----------
+    eps_abs : float, optional
+        Absolute tolerance > 0 of the residuals (primal in each row's units, N·m and rad/s²; dual in the cost's
+        units) and of the duality gap.
+    max_iter : int, optional
+        Iterations at most.
+    rho : float, optional
+        ProxQP's proximal parameter > 0 (small values converge faster on the degenerate QPs met near singular
+        configurations).
+
+    Raises
+    ------
+    InvalidParameterError, NonFiniteError
+        ``eps_abs`` or ``rho`` not a positive number.
+
+    Notes
+    -----
+    ProxQP stops only once its duality gap is within ``eps_abs`` too (``check_duality_gap``): its residuals alone
+    can be small at a point that is not the optimum, with multipliers on bounds that are not active.
+
+    Inside a control step the controller calls :meth:`solve_raw` on the arrays of a QP: a failure raises
+    SolverError with ProxQP's status, and whether the solution is the optimum is checked by the controller's
+    :class:`~armctl.controllers.osc.SolverChain`. :meth:`solve`, for a user's own call on a
+    :class:`~armctl.controllers.osc.QPProblem`, diagnoses a failure instead. Never a ``None``.
+    """
 
     name = "proxsuite"
 
@@ -78,8 +124,27 @@ class ProxQPSolver:
         self._cl.clear()
 
     def solve(self, p: QPProblem, slot: int = 0) -> QPSolution:
-        """Solve ``p``, warm-started from the last solution of the same slot and shape; a failure is diagnosed
-        (InfeasibleError naming the conflicting rows, or SolverError)."""
+        """Solve a named problem, warm-started from the last solution of the same slot and shape.
+
+        Parameters
+        ----------
+        p : QPProblem
+            The problem.
+        slot : int, optional
+            Its slot (one per priority level).
+
+        Returns
+        -------
+        QPSolution
+            The solution, with its multipliers y, z (not checked against the optimality conditions).
+
+        Raises
+        ------
+        InfeasibleError
+            ``p`` has no feasible point: the error names the conflicting rows and by how much to relax them.
+        SolverError
+            ProxQP failed on a feasible problem (or the diagnosis failed too).
+        """
         try:
             return self.solve_raw((p.H, p.g, p.A, p.b, p.C, p.l, p.u), slot)
         except SolverError as err:
@@ -106,10 +171,29 @@ class ProxQPSolver:
         return qp
 
     def solve_raw(self, arrays: Arrays, slot: int = 0, mode: str = "warm") -> QPSolution:
-        """Solve the QP (H, g, A, b, C, l, u). ``mode``: "warm" (from the slot's previous solution), "cold"
-        (from scratch, this solver's settings; the slot warm-starts from it afterwards) or "defaults" (from
-        scratch with proxsuite's default settings but ``eps_abs`` and ``max_iter``; kept apart). Raises
-        SolverError with ProxQP's status if it does not report SOLVED."""
+        """Solve a QP given as its arrays (the solver interface of the controller's chain).
+
+        Parameters
+        ----------
+        arrays : tuple of ndarray
+            The QP (H, g, A, b, C, l, u).
+        slot : int, optional
+            Its slot (one per priority level): the warm starts are kept per slot and problem shape.
+        mode : {"warm", "cold", "defaults"}, optional
+            ``"warm"``: from the slot's previous solution; ``"cold"``: from scratch with this solver's settings
+            (the slot warm-starts from it afterwards); ``"defaults"``: from scratch with proxsuite's default
+            settings but ``eps_abs`` and ``max_iter`` (kept apart from the slot's warm start).
+
+        Returns
+        -------
+        QPSolution
+            x and the multipliers y, z (H x + g + Aᵀy + Cᵀz = 0), not checked against the optimality conditions.
+
+        Raises
+        ------
+        SolverError
+            ProxQP does not report SOLVED (the error carries its status).
+        """
         H, g, A, b, C, l, u = arrays  # noqa: E741
         key = (slot, H.shape[0], b.shape[0], l.shape[0])
         qp = self._qps.get(key) if mode == "warm" else None
@@ -138,8 +222,21 @@ class ProxQPSolver:
 
 
 class QpsolversSolver:
-    """Any solver of qpsolvers (``solver`` in ``qpsolvers.available_solvers``), warm-started with the previous
-    primal solution where the solver takes one."""
+    """Any solver of qpsolvers, warm-started with the previous primal solution of the same slot where the solver
+    takes one.
+
+    Parameters
+    ----------
+    solver : str, optional
+        A name of ``qpsolvers.available_solvers`` (the default: ``"proxqp"``).
+    **options
+        The solver's own settings, handed to ``qpsolvers.solve_problem`` (not in the ``"defaults"`` mode).
+
+    Raises
+    ------
+    UnknownNameError
+        ``solver`` is not installed (the error lists those that are).
+    """
 
     def __init__(self, solver: str = "proxqp", **options: Any) -> None:
         import qpsolvers
@@ -153,19 +250,61 @@ class QpsolversSolver:
         self._x: dict[tuple[int, int], FloatArray] = {}
 
     def reset(self) -> None:
+        """Forget the previous solutions (no warm start at the next solve)."""
         self._x.clear()
 
     def solve(self, p: QPProblem, slot: int = 0) -> QPSolution:
-        """Solve ``p`` (warm-started where the solver takes an initial point); a failure is diagnosed."""
+        """Solve a named problem, warm-started where the solver takes an initial point.
+
+        Parameters
+        ----------
+        p : QPProblem
+            The problem.
+        slot : int, optional
+            Its slot (one per priority level).
+
+        Returns
+        -------
+        QPSolution
+            The solution, with its multipliers y, z where the solver gives them (not checked against the
+            optimality conditions).
+
+        Raises
+        ------
+        InfeasibleError
+            ``p`` has no feasible point: the error names the conflicting rows and by how much to relax them.
+        SolverError
+            The solver failed on a feasible problem (or the diagnosis failed too).
+        """
         try:
             return self.solve_raw((p.H, p.g, p.A, p.b, p.C, p.l, p.u), slot)
         except SolverError as err:
             raise_failure(p, self.name, str(err.value), err.result)
 
     def solve_raw(self, arrays: Arrays, slot: int = 0, mode: str = "warm") -> QPSolution:
-        """Solve the QP (H, g, A, b, C, l, u); ``mode`` "warm" starts from the slot's previous solution, "cold"
-        from none, "defaults" from none and without this object's options. Raises SolverError if the solver
-        finds no solution."""
+        """Solve a QP given as its arrays (the solver interface of the controller's chain).
+
+        Parameters
+        ----------
+        arrays : tuple of ndarray
+            The QP (H, g, A, b, C, l, u); each finite bound of l ≤ C x ≤ u becomes a row of G x ≤ h.
+        slot : int, optional
+            Its slot (one per priority level): the warm starts are kept per slot and number of variables.
+        mode : {"warm", "cold", "defaults"}, optional
+            ``"warm"``: from the slot's previous solution; ``"cold"``: from none; ``"defaults"``: from none and
+            without this object's options.
+
+        Returns
+        -------
+        QPSolution
+            x and the multipliers y, z (H x + g + Aᵀy + Cᵀz = 0; zeros where the solver gives none), not checked
+            against the optimality conditions; ``iterations`` is −1.
+
+        Raises
+        ------
+        SolverError
+            The solver finds no solution, or a non-finite one.
+        """
         H, g, A, b, C, l, u = arrays  # noqa: E741
         key = (slot, H.shape[0])
         up, lo = np.isfinite(u), np.isfinite(l)

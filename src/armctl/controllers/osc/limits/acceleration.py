@@ -13,7 +13,21 @@ from armctl.model.robot import RobotModel
 
 
 class AccelerationLimit(Limit):
-    """lower ≤ q̈ ≤ upper [rad/s²]; ``upper`` scalar or (n,) (> 0), ``lower`` default −upper."""
+    """Constant bounds on the joint accelerations, lower ≤ q̈ ≤ upper.
+
+    Parameters
+    ----------
+    upper : array_like
+        The upper bound [rad/s²] (m/s² for a prismatic joint): a scalar or (n,); inf for no bound.
+    lower : array_like, optional
+        The lower bound, likewise; None (the default): −upper.
+
+    Raises
+    ------
+    InvalidParameterError, ShapeError, NonFiniteError
+        When the controller binds the limit to its model: a lower bound above the upper one (so, without
+        ``lower``, a negative ``upper``), a vector of another size, or NaN.
+    """
 
     constant = True
     kind = "acceleration_limit"

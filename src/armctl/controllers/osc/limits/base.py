@@ -34,22 +34,58 @@ def per_joint(
 
 
 class Limit(ABC):
-    """Bounds on the variable block ``variable`` ("qdd" or "tau"); ``kind`` names its rows, e.g.
-    ``torque_limit[panda_joint1]``."""
+    """Bounds l ≤ x_b ≤ u on one block of the QP's variables (q̈ or τ), one row per joint. Subclasses implement
+    :meth:`bounds` (and :meth:`bind` to take defaults from the model).
+
+    Attributes
+    ----------
+    variable : str
+        The block: ``"qdd"`` (q̈ [rad/s²]) or ``"tau"`` (τ [N·m]).
+    kind : str
+        Names its rows, e.g. ``torque_limit[panda_joint1]``.
+    constant : bool
+        True if :meth:`bounds` does not depend on the state (it is then evaluated once).
+
+    Notes
+    -----
+    The rows of C are the identity on the block, so C is constant and only l, u change from step to step.
+    """
 
     variable: str = "qdd"
     kind: str = "limit"
-    #: True if :meth:`bounds` does not depend on the state (it is then evaluated once)
+    # True if :meth:`bounds` does not depend on the state (it is then evaluated once)
     constant: bool = False
 
     def bind(self, model: RobotModel) -> None:
-        """Take defaults from ``model`` and check sizes (called once by the controller)."""
+        """Take defaults from the model and check the sizes; the controller calls it once, when it is made.
+
+        Parameters
+        ----------
+        model : RobotModel
+            The controller's model (its number of joints, joint names and limits).
+
+        Raises
+        ------
+        ShapeError, InvalidParameterError, NonFiniteError
+            A setting of the wrong size, out of its range, or NaN.
+        """
         self.n = model.n
         self.row_names = [f"{self.kind}[{j}]" for j in model.joint_names]
 
     @abstractmethod
     def bounds(self, state: ModelState) -> tuple[FloatArray, FloatArray]:
-        """(l, u), each (n,), at the current state."""
+        """The bounds at the current state.
+
+        Parameters
+        ----------
+        state : ModelState
+            The model terms at the measured (q, q̇) (not read by a ``constant`` limit, which may be given None).
+
+        Returns
+        -------
+        l, u : ndarray, shape (n,)
+            The lower and upper bounds on the block [rad/s² or N·m]; ±inf: no bound.
+        """
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}()"

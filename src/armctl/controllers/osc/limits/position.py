@@ -1,27 +1,5 @@
 """`JointPositionLimit`: joint position limits as acceleration bounds that keep every joint stoppable
-(viability, after Del Prete, "Joint position and velocity bounds in discrete-time acceleration/torque
-control of robot manipulators", IEEE RA-L 2018).
-
-With the control period Δt, the next state under a constant q̈ is q⁺ = q + Δt q̇ + ½Δt² q̈, q̇⁺ = q̇ + Δt q̈.
-Two bounds on q̈ for the upper limit q_max (the lower one is symmetric):
-
-* position:  q⁺ ≤ q_max  ⇔  q̈ ≤ 2 (q_max − q − Δt q̇) / Δt²
-* viability: from q⁺ the joint can still stop before q_max braking at a = (1 − ρ) a_max,
-  (q̇⁺)² ≤ 2 a (q_max − q⁺); solving the quadratic in q̈ gives
-      q̈ ≤ [−(2Δt q̇ + a Δt²) + Δt √(a² Δt² + 8 a (q_max − q) − 4 a Δt q̇)] / (2Δt²)
-  (a negative discriminant means the joint can no longer stop in time: the bound is then −a_max).
-
-Each bound is clamped to ≥ −a_max (the strongest braking asked for) so that a joint that has strayed
-outside the viable set brakes at a_max instead of making the QP infeasible.
-
-What the bounds guarantee: for the discrete model, which holds q̈ over the period, a joint that starts inside
-the viable set stays there and never passes its limit, exactly. A real arm (or the simulator) holds the torque
-instead, and as q and q̇ change within the period M(q)⁻¹(τ − h) drifts from the q̈ the QP chose: braking
-exactly at the viability boundary, the arm brakes a little less than planned (on the Panda at full stretch,
-1–2 % less) and drifts outside the viable set. Hence the reserve ρ (``reserve``, default 0.1): the plan
-brakes at (1 − ρ) a_max, and a joint that drifted out of the plan's viable set is asked for up to a_max, which
-brings it back as long as the drift of a held torque stays below ρ a_max. With ρ = 0 (the plan at a_max, no
-reserve) the Panda overshot a limit by up to 1.7 mrad when driven towards a target out of reach.
+(viability, after Del Prete, IEEE RA-L 2018); the bounds and what they guarantee are described with the class.
 """
 
 from __future__ import annotations
@@ -37,12 +15,63 @@ from armctl.model.robot import RobotModel
 
 
 class JointPositionLimit(Limit):
-    """q_min + margin ≤ q ≤ q_max − margin [rad], enforced through q̈ bounds (see the module); ``dt`` the
-    control period [s], ``max_deceleration`` a_max [rad/s²] the braking the joints can count on, ``reserve`` ρ
-    the fraction of it the plan keeps for corrections (the plan brakes at (1 − ρ) a_max). The settings
-    are taken when the limit is bound to a model (by the controller) and kept as read-only arrays: to change
-    them, make a new limit. Near the point where a joint can only just stop (discriminant ≈ 0) the bound is
-    accurate to ~1e-4 rad/s² (the affine form rounds q_max and q before they cancel)."""
+    """Joint position limits q_min + margin ≤ q ≤ q_max − margin, enforced through q̈ bounds that keep every
+    joint able to stop before its limit (viability, after Del Prete, "Joint position and velocity bounds in
+    discrete-time acceleration/torque control of robot manipulators", IEEE RA-L 2018).
+
+    The settings are taken when the limit is bound to a model (by the controller) and kept as read-only arrays:
+    to change them, make a new limit.
+
+    Parameters
+    ----------
+    dt : float, optional
+        The control period Δt [s].
+    max_deceleration : array_like, optional
+        a_max > 0 [rad/s²], finite: the braking the joints can count on (scalar or (n,)).
+    margin : float, optional
+        ≥ 0 [rad] (m for a prismatic joint), kept from each limit.
+    lower, upper : array_like, optional
+        q_min, q_max [rad]: scalars or (n,); None (the default): the model's joint limits.
+    reserve : float, optional
+        ρ in [0, 1): the fraction of a_max the plan keeps for corrections (the plan brakes at (1 − ρ) a_max).
+
+    Raises
+    ------
+    InvalidParameterError, NonFiniteError
+        ``dt`` not > 0, ``margin`` negative, ``reserve`` outside [0, 1). When the controller binds the limit to
+        its model: a ``max_deceleration`` that is not > 0 or not finite, limits that are NaN, or limits (with the
+        margin) that leave no range.
+    ShapeError
+        Likewise, a vector of another size than the model's joints.
+
+    Notes
+    -----
+    With the control period Δt, the next state under a constant q̈ is q⁺ = q + Δt q̇ + ½Δt² q̈, q̇⁺ = q̇ + Δt q̈.
+    Two bounds on q̈ for the upper limit q_max (the lower one is symmetric):
+
+    * position:  q⁺ ≤ q_max  ⇔  q̈ ≤ 2 (q_max − q − Δt q̇) / Δt²
+    * viability: from q⁺ the joint can still stop before q_max braking at a = (1 − ρ) a_max,
+      (q̇⁺)² ≤ 2 a (q_max − q⁺); solving the quadratic in q̈ gives::
+
+          q̈ ≤ [−(2Δt q̇ + a Δt²) + Δt √(a² Δt² + 8 a (q_max − q) − 4 a Δt q̇)] / (2Δt²)
+
+      (a negative discriminant means the joint can no longer stop in time: the bound is then −a_max).
+
+    Each bound is clamped to ≥ −a_max (the strongest braking asked for) so that a joint that has strayed
+    outside the viable set brakes at a_max instead of making the QP infeasible.
+
+    What the bounds guarantee: for the discrete model, which holds q̈ over the period, a joint that starts inside
+    the viable set stays there and never passes its limit, exactly. A real arm (or the simulator) holds the torque
+    instead, and as q and q̇ change within the period M(q)⁻¹(τ − h) drifts from the q̈ the QP chose: braking
+    exactly at the viability boundary, the arm brakes a little less than planned (on the Panda at full stretch,
+    1–2 % less) and drifts outside the viable set. Hence the reserve ρ (``reserve``, default 0.1): the plan
+    brakes at (1 − ρ) a_max, and a joint that drifted out of the plan's viable set is asked for up to a_max, which
+    brings it back as long as the drift of a held torque stays below ρ a_max. With ρ = 0 (the plan at a_max, no
+    reserve) the Panda overshot a limit by up to 1.7 mrad when driven towards a target out of reach.
+
+    Near the point where a joint can only just stop (discriminant ≈ 0) the bound is accurate to ~1e-4 rad/s²
+    (the affine form rounds q_max and q before they cancel).
+    """
 
     kind = "position_limit"
 

@@ -11,8 +11,24 @@ from armctl.model.robot import RobotModel
 
 
 class TorqueLimit(Limit):
-    """−s τ_max ≤ τ ≤ s τ_max [N·m]; ``limit`` τ_max (scalar or (n,), default the model's effort limits),
-    ``scale`` s > 0 (e.g. 0.3 to show saturation)."""
+    """Symmetric torque bounds, −s τ_max ≤ τ ≤ s τ_max.
+
+    Parameters
+    ----------
+    limit : array_like, optional
+        τ_max > 0 [N·m] (N for a prismatic joint): a scalar or (n,); inf for no bound. None (the default): the
+        model's effort limits.
+    scale : float, optional
+        s > 0, e.g. 0.3 to show saturation.
+
+    Raises
+    ------
+    InvalidParameterError, NonFiniteError
+        ``scale`` not a positive number. When the controller binds the limit to its model: a ``limit`` that is
+        not > 0 or NaN.
+    ShapeError
+        Likewise, a ``limit`` of another size than the model's joints.
+    """
 
     variable = "tau"
     constant = True

@@ -1,16 +1,4 @@
-"""`JointVelocityLimit`: joint velocities stay within ±q̇_max one control period ahead.
-
-    (−q̇_max − q̇)/Δt ≤ q̈ ≤ (q̇_max − q̇)/Δt
-
-each bound clamped to ±a_max (so that a joint already too fast is asked to brake at a_max, not at an
-impossible (q̇_max − q̇)/Δt, which would make the QP infeasible against the torque limits).
-
-What the bound guarantees: for the discrete model, which holds q̈ over the period, q̇ one period ahead,
-q̇ + Δt q̈, is within ±q̇_max exactly (a joint inside its limits stays inside). A real arm (or the simulator)
-holds the torque instead, and M(q)⁻¹(τ − h) drifts within the period from the q̈ the QP chose, so q̇ can end the
-period beyond the limit by Δt times that drift: on the Panda riding its velocity limits, by at most 0.06 % in
-the closed-loop tests (which allow 0.1 %).
-"""
+"""`JointVelocityLimit`: joint velocities stay within ±q̇_max one control period ahead."""
 
 from __future__ import annotations
 
@@ -24,8 +12,42 @@ from armctl.model.robot import RobotModel
 
 
 class JointVelocityLimit(Limit):
-    """|q̇_i| ≤ q̇_max,i [rad/s] (default: the model's velocity limits), with control period ``dt`` [s] and
-    braking acceleration ``max_deceleration`` a_max [rad/s²] (scalar or (n,))."""
+    """Joint velocity limits |q̇_i| ≤ q̇_max,i, enforced one control period ahead through bounds on q̈.
+
+    Parameters
+    ----------
+    dt : float, optional
+        The control period Δt [s].
+    limit : array_like, optional
+        q̇_max > 0 [rad/s] (m/s for a prismatic joint): a scalar or (n,); inf for no limit. None (the default):
+        the model's velocity limits.
+    max_deceleration : array_like, optional
+        a_max > 0 [rad/s²], finite: the braking asked of a joint that is already too fast (scalar or (n,)).
+
+    Raises
+    ------
+    InvalidParameterError, NonFiniteError
+        ``dt`` not a positive number. When the controller binds the limit to its model: a ``limit`` or
+        ``max_deceleration`` that is not > 0, or NaN (or inf for ``max_deceleration``).
+    ShapeError
+        Likewise, a vector of another size than the model's joints.
+
+    Notes
+    -----
+    ::
+
+        (−q̇_max − q̇)/Δt ≤ q̈ ≤ (q̇_max − q̇)/Δt
+
+    with the upper bound raised to at least −a_max and the lower one lowered to at most a_max (so that a joint
+    already too fast is asked to brake at a_max, not at an impossible (q̇_max − q̇)/Δt, which would make the QP
+    infeasible against the torque limits).
+
+    What the bound guarantees: for the discrete model, which holds q̈ over the period, q̇ one period ahead,
+    q̇ + Δt q̈, is within ±q̇_max exactly (a joint inside its limits stays inside). A real arm (or the simulator)
+    holds the torque instead, and M(q)⁻¹(τ − h) drifts within the period from the q̈ the QP chose, so q̇ can end
+    the period beyond the limit by Δt times that drift: on the Panda riding its velocity limits, by at most
+    0.06 % in the closed-loop tests (which allow 0.1 %).
+    """
 
     kind = "velocity_limit"
 

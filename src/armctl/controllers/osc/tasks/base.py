@@ -1,15 +1,5 @@
-"""Task base classes: a task is a least-squares objective on one block of the QP's variables.
-
-A task of dimension m contributes the residual r = J x_b − b on a block x_b of the decision variables
-(q̈, or a contact's force f) and the cost ½ Σ_i w_i r_i² to its priority level. Weights w_i ≥ 0 (a scalar or
-one per row) trade tasks off inside a level; ``priority`` (0 = most important) orders levels strictly.
-
-A :class:`MotionTask` is defined by its error e, its Jacobian J and the drift J̇ q̇ (the pink / TSID way); the
-base class turns them into the desired task acceleration of a PD law and the residual on q̈:
-
-    ẍ* = ẍ_ref + K_d (ẋ_ref − J q̇) + K_p e,      r = J q̈ + J̇ q̇ − ẋ*
-
-so that a zero residual gives the error dynamics ë + K_d ė + K_p e = 0.
+"""Task base classes: a task is a least-squares objective on one block of the QP's variables (:class:`Task`); a
+:class:`MotionTask` is one on q̈, defined by its error, Jacobian and drift and turned into a PD law.
 """
 
 from __future__ import annotations
@@ -26,18 +16,55 @@ from armctl.references import Reference
 
 
 class Task(ABC):
-    """A least-squares objective of dimension ``dim`` on the variable block ``variable`` ("qdd" or a contact
-    name). ``weight`` w ≥ 0: scalar or (dim,). ``priority``: integer level, 0 the most important."""
+    """A least-squares objective of the operational-space QP on one block of its variables.
+
+    Subclasses implement :meth:`residual` (and :meth:`check` if they must fit the controller's model).
+
+    Parameters
+    ----------
+    dim : int
+        m, the number of rows of the residual.
+    name : str
+        The task's name, unique in a controller: the key of its residual in ``OSCSolution.residuals`` and of its
+        slack.
+    weight : array_like, optional
+        The rows' weights w_i ≥ 0 (a scalar, or one per row, (dim,)): the trade-off against the other tasks of
+        its level; a weight of 0 leaves its row free. May be reassigned between control periods.
+    priority : int, optional
+        Its level, a whole number ≥ 0; 0 is the most important, and the levels are strict (see
+        :class:`~armctl.controllers.OperationalSpaceQP`).
+
+    Attributes
+    ----------
+    variable : str
+        The block x_b of the variables the task is on: ``"qdd"`` (q̈) or a contact's name (its force).
+    identity_jacobian : bool
+        True if the Jacobian is always the identity on its block (:meth:`residual` then gives None for it).
+    revision : int
+        Counts the changes of the weight (and a motion task's gains), so that what a controller derives from them
+        is refreshed.
+
+    Raises
+    ------
+    InvalidParameterError, ShapeError, NonFiniteError
+        A weight that is negative, of the wrong size or not finite; a priority that is not a whole number ≥ 0.
+
+    Notes
+    -----
+    A task of dimension m contributes the residual r = J x_b − b on its block x_b of the decision variables
+    (q̈, or a contact's force f) and the cost ½ Σ_i w_i r_i² to its priority level. Weights trade tasks off inside
+    a level; ``priority`` (0 = most important) orders levels strictly.
+    """
 
     variable: str = "qdd"
-    #: True if the task's Jacobian is always the identity on its block (``residual`` then returns None for it)
+    # True if the task's Jacobian is always the identity on its block (``residual`` then returns None for it)
     identity_jacobian: bool = False
 
     def __init__(self, dim: int, name: str, weight: ArrayLike = 1.0, priority: int = 0) -> None:
         self.dim = int(dim)
         self.name = str(name)
-        #: counts the changes of this task's weight (and a motion task's gains): what a controller derives from
-        #: them (stacked weights, generated code's parameters) is refreshed when it changes
+        # counts the changes of this task's weight (and a motion task's gains): what a controller derives from
+        # them (stacked weights, generated code's parameters) is refreshed when it changes
         self.revision = 0
         self.weight = weight  # checked by the property
         self.priority = whole_number(priority, f"{name}: priority")
@@ -54,12 +81,45 @@ class Task(ABC):
         self.revision += 1
 
     def check(self, evaluator: Any, n: int, contacts: dict[str, int]) -> None:
-        """Validate against the controller's model (frames, sizes); raise an ArmctlError if it does not fit."""
+        """Check that the task fits the controller's model (its frames, its size); the base class accepts any.
+
+        Parameters
+        ----------
+        evaluator : ModelEvaluator
+            The controller's evaluator of the model terms (``evaluator.check_frame(name)`` checks a frame).
+        n : int
+            The model's number of joints.
+        contacts : dict of str to int
+            The controller's contacts, name → number of force variables.
+
+        Raises
+        ------
+        ArmctlError
+            A subclass of it (UnknownNameError, ShapeError, ...) if the task does not fit.
+        """
         return None
 
     @abstractmethod
     def residual(self, state: ModelState, t: float, ref: Reference) -> tuple[FloatArray | None, FloatArray]:
-        """(J, b) of the residual r = J x_b − b; J None means the identity."""
+        """The rows of the residual r = J x_b − b at this step.
+
+        Parameters
+        ----------
+        state : ModelState
+            The model terms at the measured (q, q̇).
+        t : float
+            Time [s].
+        ref : Reference
+            The controller's joint reference at t.
+
+        Returns
+        -------
+        J : ndarray, shape (dim, size of the block), or None
+            The Jacobian on the block; None means the identity.
+        b : ndarray, shape (dim,)
+            The target of J x_b [the block's units: rad/s² for q̈ rows of a posture task, m/s² or rad/s² for a
+            frame's, N for a force].
+        """
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self.name!r}, dim={self.dim}, priority={self.priority})"
@@ -74,9 +134,40 @@ def _label(task: Task, gain: str) -> str:
 
 
 class MotionTask(Task):
-    """A task on q̈ with PD gains ``kp`` [1/s²] and ``kd`` [1/s] (each a scalar, a (dim,) vector or a
-    dim×dim matrix, symmetric positive definite; ``kd=None``: critical damping K_d = 2 K_p^½, 2√k_p for
-    a scalar or each entry of a vector)."""
+    """A task on q̈ defined by its error e, its Jacobian J and the drift J̇ q̇ (the pink / TSID way); the class
+    turns them into the desired task acceleration of a PD law. Subclasses implement :meth:`kinematics`.
+
+    Parameters
+    ----------
+    dim : int
+        m, the number of rows.
+    name : str
+        The task's name, unique in a controller.
+    kp : array_like
+        K_p [1/s²]: a scalar, a (dim,) diagonal or a dim×dim symmetric positive definite matrix. May be
+        reassigned between control periods (checked again).
+    kd : array_like, optional
+        K_d [1/s], likewise; None (the default): critical damping K_d = 2 K_p^½ (the symmetric square root; 2√k_p
+        for a scalar or each entry of a vector).
+    weight : array_like, optional
+        The rows' weights w_i ≥ 0 (scalar or (dim,)).
+    priority : int, optional
+        Its level, 0 the most important.
+
+    Raises
+    ------
+    InvalidParameterError, ShapeError, NonFiniteError
+        A gain that is not symmetric positive definite, of the wrong size or not finite; a weight or priority as
+        in :class:`Task`.
+
+    Notes
+    -----
+    The desired task acceleration and the residual on q̈::
+
+        ẍ* = ẍ_ref + K_d (ẋ_ref − J q̇) + K_p e,      r = J q̈ + J̇ q̇ − ẍ*
+
+    so that a zero residual gives the error dynamics ë + K_d ė + K_p e = 0.
+    """
 
     # the hot path uses the law's matrices built from the gains in _gains_changed
     kp = Gain("K_p (dim×dim); may be reassigned between control periods (checked again).", size=_dim, label=_label)
@@ -107,8 +198,30 @@ class MotionTask(Task):
     def kinematics(
         self, state: ModelState, t: float, ref: Reference
     ) -> tuple[FloatArray | None, FloatArray | None, FloatArray, FloatArray, FloatArray]:
-        """(J, drift J̇q̇, error e, velocity error ė, feed-forward acceleration ẍ_ref); J None: the identity,
-        drift None: zero."""
+        """The task's kinematics at this step.
+
+        Parameters
+        ----------
+        state : ModelState
+            The model terms at the measured (q, q̇).
+        t : float
+            Time [s].
+        ref : Reference
+            The controller's joint reference at t.
+
+        Returns
+        -------
+        J : ndarray, shape (dim, n), or None
+            The task Jacobian; None means the identity (dim = n).
+        drift : ndarray, shape (dim,), or None
+            J̇ q̇ [m/s² or rad/s² per row]; None means zero.
+        e : ndarray, shape (dim,)
+            The error [m or rad].
+        ed : ndarray, shape (dim,)
+            The velocity error ė [m/s or rad/s].
+        acc : ndarray, shape (dim,)
+            The feed-forward acceleration ẍ_ref [m/s² or rad/s²].
+        """
 
     def _gains_changed(self) -> None:
         self.revision += 1
@@ -122,17 +235,68 @@ class MotionTask(Task):
     def desired_acceleration(
         self, state: ModelState, t: float, ref: Reference
     ) -> tuple[FloatArray | None, FloatArray, FloatArray]:
-        """(J, J̇q̇, ẍ*) with ẍ* = ẍ_ref + K_d ė + K_p e."""
+        """The desired task acceleration ẍ* = ẍ_ref + K_d ė + K_p e at this step.
+
+        Parameters
+        ----------
+        state : ModelState
+            The model terms at the measured (q, q̇).
+        t : float
+            Time [s].
+        ref : Reference
+            The controller's joint reference at t.
+
+        Returns
+        -------
+        J : ndarray, shape (dim, n), or None
+            The task Jacobian; None means the identity.
+        drift : ndarray, shape (dim,)
+            J̇ q̇ [m/s² or rad/s²] (zeros where the task has none).
+        xdd : ndarray, shape (dim,)
+            ẍ* [m/s² or rad/s²].
+        """
         jac, drift, e, ed, acc = self.kinematics(state, t, ref)
         return (jac, np.zeros(self.dim) if drift is None else drift, self._law.dot(np.concatenate((acc, ed, e))))
 
     def residual(self, state: ModelState, t: float, ref: Reference) -> tuple[FloatArray | None, FloatArray]:
-        """(J, ẍ* − J̇q̇)."""
+        """The rows of the residual r = J q̈ − (ẍ* − J̇ q̇) at this step.
+
+        Parameters
+        ----------
+        state : ModelState
+            The model terms at the measured (q, q̇).
+        t : float
+            Time [s].
+        ref : Reference
+            The controller's joint reference at t.
+
+        Returns
+        -------
+        J : ndarray, shape (dim, n), or None
+            The task Jacobian; None means the identity.
+        b : ndarray, shape (dim,)
+            ẍ* − J̇ q̇ [m/s² or rad/s²].
+        """
         jac, drift, e, ed, acc = self.kinematics(state, t, ref)
         if drift is None:
             return jac, self._law.dot(np.concatenate((acc, ed, e)))
         return jac, self._law_drift.dot(np.concatenate((acc, ed, e, drift)))
 
     def error(self, state: ModelState, t: float, ref: Reference) -> FloatArray:
-        """The task error e at this state (for logs and tests)."""
+        """The task error e at this state (for logs and tests).
+
+        Parameters
+        ----------
+        state : ModelState
+            The model terms at the measured (q, q̇).
+        t : float
+            Time [s].
+        ref : Reference
+            The controller's joint reference at t.
+
+        Returns
+        -------
+        ndarray, shape (dim,)
+            e [m or rad].
+        """
         return self.kinematics(state, t, ref)[2]

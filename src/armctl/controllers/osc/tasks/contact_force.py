@@ -1,13 +1,4 @@
-"""`ContactForceTask`: regulate the force of a declared contact.
-
-    r = f − f_ref                (3 rows, world axes), or
-    r = nᵀf − f_n,ref            (1 row, ``normal_only``: the default for a sliding contact, whose tangential
-                                  force Coulomb's law already fixes)
-
-f is the force of the environment on the robot (see :class:`~armctl.controllers.osc.contact.Contact`): to
-press on a table with 10 N, ask for f_ref = (0, 0, 10), or f_n,ref = 10. A weight of 0 on a row leaves that
-component free.
-"""
+"""`ContactForceTask`: regulate the force of a declared contact."""
 
 from __future__ import annotations
 
@@ -27,14 +18,48 @@ Force = ArrayLike | float | Callable[[float], ArrayLike]
 
 
 class ContactForceTask(Task):
-    """Force of ``contact`` [N] towards ``force``: a (3,) vector (world axes), or with ``normal_only`` the
-    normal force f_n [N] (a scalar; a (3,) vector is projected on the normal); either may be a callable of
-    t [s]. ``normal_only`` None: True for a sliding contact, False for a fixed one.
+    """The force of a declared contact follows a target.
 
     The force is the one the environment exerts on the robot, so pressing means a positive normal component
-    (the contact's normal points from the surface towards the robot): to press on a table with 10 N, ask
-    for 10 (or (0, 0, 10)), not −10. A target with a negative normal component (a pull, which a contact
-    cannot give) is refused with :class:`~armctl.errors.InvalidParameterError`."""
+    (the contact's normal points from the surface towards the robot): to press on a table with 10 N, ask for 10
+    (or (0, 0, 10)), not −10.
+
+    Parameters
+    ----------
+    contact : Contact
+        The contact whose force the task is on (it must be one of the controller's contacts).
+    force : array_like, float or callable, optional
+        The target [N]: a (3,) vector (world axes), or with ``normal_only`` the normal force f_n,ref (a scalar; a
+        (3,) vector is projected on the normal); or a callable of t [s] returning one. Default: zero.
+    weight : array_like, optional
+        The rows' weights w_i ≥ 0 (scalar, or (3,) without ``normal_only``); a weight of 0 leaves that component
+        free. Light by default (1e-3): a force target gives way to the motion tasks of its level.
+    priority : int, optional
+        Its level, 0 the most important.
+    name : str, optional
+        The task's name; None (the default): ``"force[CONTACT]"``.
+    normal_only : bool, optional
+        Regulate only the normal component nᵀf (1 row) instead of f (3 rows). None (the default): True for a
+        sliding contact (whose tangential force Coulomb's law already fixes), False for a fixed one.
+
+    Raises
+    ------
+    InvalidParameterError
+        ``contact`` is not a Contact; a target with a negative normal component (a pull, which a contact cannot
+        give); a negative weight.
+    ShapeError, NonFiniteError
+        A target or weight of the wrong size or not finite.
+
+    Notes
+    -----
+    ::
+
+        r = f − f_ref                (3 rows, world axes), or
+        r = nᵀf − f_n,ref            (1 row, normal_only)
+
+    f is the force of the environment on the robot (see :class:`~armctl.controllers.osc.Contact`). A target
+    given as a callable is checked at every step it is read.
+    """
 
     def __init__(
         self,
@@ -73,7 +98,18 @@ class ContactForceTask(Task):
         return a
 
     def set_target(self, force: Force) -> None:
-        """Desired contact force [N] (see the class): a value, or a callable of t [s] returning one."""
+        """Set the desired contact force.
+
+        Parameters
+        ----------
+        force : array_like, float or callable
+            The target [N] (see the class): a value, or a callable of t [s] returning one (checked when read).
+
+        Raises
+        ------
+        InvalidParameterError, ShapeError, NonFiniteError
+            A value with a negative normal component (a pull), of the wrong size or not finite.
+        """
         if callable(force):
             self._fn: Callable[[float], ArrayLike] | None = force
         else:
@@ -81,12 +117,62 @@ class ContactForceTask(Task):
             self._force = self._value(force)
 
     def target(self, t: float) -> FloatArray:
-        """The desired force at time t: (3,) or (1,) with ``normal_only``."""
+        """The desired force at time t.
+
+        Parameters
+        ----------
+        t : float
+            Time [s].
+
+        Returns
+        -------
+        ndarray, shape (3,) or (1,)
+            f_ref [N] (world axes), or f_n,ref with ``normal_only``.
+
+        Raises
+        ------
+        InvalidParameterError, ShapeError, NonFiniteError
+            The callable's value is a pull, of the wrong size or not finite.
+        """
         return self._value(self._fn(t)) if self._fn is not None else self._force
 
     def check(self, evaluator: object, n: int, contacts: dict[str, int]) -> None:
+        """Check that the task's contact is one of the controller's.
+
+        Parameters
+        ----------
+        evaluator : ModelEvaluator
+            The controller's evaluator of the model terms (not used).
+        n : int
+            The model's number of joints (not used).
+        contacts : dict of str to int
+            The controller's contacts, name → number of force variables.
+
+        Raises
+        ------
+        UnknownNameError
+            The contact is not among them (the error lists them).
+        """
         if self.contact.name not in contacts:
             raise UnknownNameError("contact", self.contact.name, list(contacts))
 
     def residual(self, state: ModelState, t: float, ref: Reference) -> tuple[FloatArray | None, FloatArray]:
+        """The rows of the residual on the contact's force at this step.
+
+        Parameters
+        ----------
+        state : ModelState
+            The model terms at the measured (q, q̇) (not used).
+        t : float
+            Time [s].
+        ref : Reference
+            The controller's joint reference (not used).
+
+        Returns
+        -------
+        J : ndarray, shape (1, 3), or None
+            nᵀ with ``normal_only``, else None (the identity on f).
+        b : ndarray, shape (1,) or (3,)
+            The target force [N].
+        """
         return (self._jac if self.normal_only else None), self.target(t)

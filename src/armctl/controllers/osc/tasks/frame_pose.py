@@ -1,7 +1,4 @@
-"""`FramePoseTask`: position and orientation of a frame together (6 rows, [linear; angular]).
-
-e = [p_ref − p;  log(R_ref Rᵀ)],   ė = V_ref − J q̇,   J = the 6×n frame Jacobian,   drift = J̇ q̇
-"""
+"""`FramePoseTask`: position and orientation of a frame together (6 rows, [linear; angular])."""
 
 from __future__ import annotations
 
@@ -16,9 +13,37 @@ from armctl.references import Reference
 
 
 class FramePoseTask(FrameTask):
-    """Pose of ``frame`` (default: the tool frame). Gains ``kp`` [1/s²], ``kd`` [1/s] (scalar, (6,) or 6×6;
-    rows [linear; angular]). Target: :meth:`set_target` (4×4 pose in the world, twist [v; ω] (6,),
-    acceleration [a; ω̇] (6,), world axes) or :meth:`set_trajectory`."""
+    """Position and orientation of a frame together (6 rows, [linear; angular]): a constant target
+    (:meth:`set_target`) or a trajectory (:meth:`set_trajectory`).
+
+    Parameters
+    ----------
+    frame : str, optional
+        A name of the model's ``frame_names`` (its joints' frames and the frames it declares); None (the default):
+        the tool frame (the last joint's frame on a model without one).
+    kp : array_like, optional
+        K_p [1/s²]: a scalar, a (6,) diagonal or a 6×6 symmetric positive definite matrix (rows [linear; angular]).
+    kd : array_like, optional
+        K_d [1/s], likewise; None (the default): critical damping, 2 K_p^½.
+    weight : array_like, optional
+        The rows' weights w_i ≥ 0 (scalar or (6,)).
+    priority : int, optional
+        Its level, 0 the most important.
+    name : str, optional
+        The task's name; None (the default): ``"pose[FRAME]"`` (``"pose[tool]"`` for the tool frame).
+
+    Raises
+    ------
+    InvalidParameterError, ShapeError, NonFiniteError
+        A gain that is not symmetric positive definite, of the wrong size or not finite; a negative weight.
+
+    Notes
+    -----
+    With p, R the frame's position and rotation and J the 6×n frame Jacobian (world axes, rows [linear;
+    angular])::
+
+        e = [p_ref − p;  log(R_ref Rᵀ)],   ė = V_ref − J q̇,   J = the 6×n frame Jacobian,   drift = J̇ q̇
+    """
 
     def __init__(
         self,
@@ -34,6 +59,27 @@ class FramePoseTask(FrameTask):
     def set_target(
         self, pose: ArrayLike, twist: ArrayLike | None = None, acceleration: ArrayLike | None = None
     ) -> None:
+        """Set a constant target (world axes); it replaces a trajectory.
+
+        Parameters
+        ----------
+        pose : array_like, shape (4, 4)
+            The homogeneous pose of the frame in the world: rotation R_ref (orthonormal to 1e-4, determinant +1)
+            and position p_ref [m]; last row [0, 0, 0, 1].
+        twist : array_like, shape (6,), optional
+            V_ref = [v; ω]: the velocity of the frame origin [m/s] and the angular velocity [rad/s]; None (the
+            default): zero.
+        acceleration : array_like, shape (6,), optional
+            [a; ω̇] [m/s²; rad/s²], the feed-forward; None (the default): zero.
+
+        Raises
+        ------
+        InvalidParameterError
+            ``pose`` is not one (its rotation not orthonormal or a reflection, its last row not [0, 0, 0, 1]); an
+            entry is not a real number.
+        ShapeError, NonFiniteError
+            An array of the wrong shape or not finite.
+        """
         self.target.set(pose, twist, acceleration)
 
     def kinematics(
@@ -55,8 +101,31 @@ class FramePoseTask(FrameTask):
             self._pose_law = np.hstack((eye, kd, -kd, kp[:, :3], -kp[:, :3], kp[:, 3:], -eye))
 
     def residual(self, state: ModelState, t: float, ref: Reference) -> tuple[FloatArray, FloatArray]:
-        """(J, ẍ* − J̇q̇): :meth:`kinematics` and the PD law in one product (see ``_gains_changed``); a
-        subclass that overrides :meth:`kinematics` gets the generic form on its own kinematics."""
+        """The rows of the residual r = J q̈ − (ẍ* − J̇ q̇): :meth:`kinematics` and the PD law in one product. A
+        subclass that overrides :meth:`kinematics` gets the generic form on its own kinematics.
+
+        Parameters
+        ----------
+        state : ModelState
+            The model terms at the measured (q, q̇).
+        t : float
+            Time [s].
+        ref : Reference
+            The controller's joint reference at t (not used).
+
+        Returns
+        -------
+        J : ndarray, shape (6, n)
+            The frame Jacobian, rows [linear; angular] (world axes).
+        b : ndarray, shape (6,)
+            ẍ* − J̇ q̇ [m/s²; rad/s²].
+
+        Raises
+        ------
+        InvalidParameterError, ShapeError, NonFiniteError
+            The task has no target, or its trajectory returns one that is not a pose, of the wrong shape or not
+            finite.
+        """
         if type(self).kinematics is not FramePoseTask.kinematics:
             return super().residual(state, t, ref)  # type: ignore[return-value]  # a frame task has a Jacobian
         pose, twist, acc = self.target.at(t)

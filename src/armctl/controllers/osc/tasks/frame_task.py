@@ -32,8 +32,38 @@ class FrameTask(MotionTask):
         self.target = TargetHolder(name, target_shape, dim)
 
     def set_trajectory(self, fn: Trajectory) -> None:
-        """Target from ``fn(t) -> (value, velocity, acceleration)`` in the task's terms (see ``set_target``)."""
+        """Follow a trajectory: the target at time t is ``fn(t)``, checked at every step as ``set_target``'s
+        arguments are. Replaces a constant target; ``set_target`` replaces the trajectory.
+
+        Parameters
+        ----------
+        fn : callable
+            ``fn(t) -> (value, velocity, acceleration)`` with t [s], in the terms of the task's ``set_target``;
+            velocity and acceleration may be None (zero).
+
+        Raises
+        ------
+        InvalidParameterError
+            ``fn`` is not callable. (A value it returns that is not a valid target raises at the step that
+            reads it.)
+        """
         self.target.follow(fn)
 
     def check(self, evaluator: Any, n: int, contacts: dict[str, int]) -> None:
+        """Check that the model has the task's frame.
+
+        Parameters
+        ----------
+        evaluator : ModelEvaluator
+            The controller's evaluator of the model terms.
+        n : int
+            The model's number of joints.
+        contacts : dict of str to int
+            The controller's contacts, name → number of force variables.
+
+        Raises
+        ------
+        UnknownNameError
+            The model has no frame of that name (the error lists the valid ones).
+        """
         evaluator.check_frame(self.frame)

@@ -1,10 +1,4 @@
-"""`PostureTask`: the joints follow a joint-space reference (by default the controller's ``ref``).
-
-    e = q_ref − q,   ė = q̇_ref − q̇,   J = I,   drift = 0,   feed-forward q̈_ref
-
-As the lowest-priority (or lightly weighted) task it resolves the redundancy of an arm with more joints than
-task rows.
-"""
+"""`PostureTask`: the joints follow a joint-space reference (by default the controller's ``ref``)."""
 
 from __future__ import annotations
 
@@ -19,8 +13,40 @@ from armctl.references import Reference
 
 
 class PostureTask(MotionTask):
-    """Joint posture of an n-joint arm; gains ``kp`` [1/s²], ``kd`` [1/s] (scalar, (n,) or n×n). The target
-    is the controller's joint reference ``ref`` unless :meth:`set_target` fixes one."""
+    """The joints of an n-joint arm follow a joint-space target: the controller's joint reference ``ref``, unless
+    :meth:`set_target` fixes one.
+
+    Parameters
+    ----------
+    n : int
+        The number of joints (the model's: checked when the task is given to a controller).
+    kp : array_like, optional
+        K_p [1/s²]: a scalar, an (n,) diagonal or an n×n symmetric positive definite matrix.
+    kd : array_like, optional
+        K_d [1/s], likewise; None (the default): critical damping, 2 K_p^½.
+    weight : array_like, optional
+        The rows' weights w_i ≥ 0 (scalar or (n,)); light by default (1e-2), so that in a level shared with frame
+        tasks it only takes up what they leave free.
+    priority : int, optional
+        Its level, 0 the most important.
+    name : str, optional
+        The task's name.
+
+    Raises
+    ------
+    InvalidParameterError, ShapeError, NonFiniteError
+        ``n`` not a whole number ≥ 1; a gain that is not symmetric positive definite, of the wrong size or not
+        finite; a negative weight.
+
+    Notes
+    -----
+    ::
+
+        e = q_ref − q,   ė = q̇_ref − q̇,   J = I,   drift = 0,   feed-forward q̈_ref
+
+    As the lowest-priority (or lightly weighted) task it resolves the redundancy of an arm with more joints than
+    task rows.
+    """
 
     identity_jacobian = True
 
@@ -39,14 +65,57 @@ class PostureTask(MotionTask):
         self._fixed: Reference | None = None
 
     def set_target(self, q: ArrayLike | None, qd: ArrayLike | None = None, qdd: ArrayLike | None = None) -> None:
-        """Fix the target (q [rad], q̇, q̈); ``None`` goes back to following the controller's ``ref``."""
+        """Fix the target, or go back to following the controller's ``ref``.
+
+        Parameters
+        ----------
+        q : array_like, shape (n,), or None
+            q_ref [rad] (m for a prismatic joint); None: follow the controller's ``ref`` again (``qd`` and ``qdd``
+            are then ignored).
+        qd : array_like, shape (n,), optional
+            q̇_ref [rad/s]; None (the default): zero.
+        qdd : array_like, shape (n,), optional
+            q̈_ref [rad/s²], the feed-forward; None (the default): zero.
+
+        Raises
+        ------
+        ShapeError, NonFiniteError, InvalidParameterError
+            A vector of the wrong size, not finite, or not of real numbers.
+        """
         self._fixed = None if q is None else Reference(vector(q, self.dim, f"{self.name}: q"), qd, qdd)
 
     def reference(self, ref: Reference) -> Reference:
-        """The joint target at this step: the fixed one (:meth:`set_target`) or else the controller's ``ref``."""
+        """The joint target at this step.
+
+        Parameters
+        ----------
+        ref : Reference
+            The controller's joint reference.
+
+        Returns
+        -------
+        Reference
+            The fixed target (:meth:`set_target`), or else ``ref``.
+        """
         return self._fixed or ref
 
     def check(self, evaluator: object, n: int, contacts: dict[str, int]) -> None:
+        """Check that the task has as many joints as the model.
+
+        Parameters
+        ----------
+        evaluator : ModelEvaluator
+            The controller's evaluator of the model terms (not used).
+        n : int
+            The model's number of joints.
+        contacts : dict of str to int
+            The controller's contacts (not used).
+
+        Raises
+        ------
+        ShapeError
+            The task's n is not the model's.
+        """
         if self.dim != n:
             raise ShapeError(
                 f"{self.name}: a posture task of {self.dim} joints on a model of {n} joints", value=self.dim
@@ -66,8 +135,25 @@ class PostureTask(MotionTask):
             self._posture_law = np.hstack((eye, kd, -kd, kp, -kp))
 
     def residual(self, state: ModelState, t: float, ref: Reference) -> tuple[None, FloatArray]:
-        """(None, ẍ*): :meth:`kinematics` and the PD law in one product (see ``_gains_changed``); a subclass
-        that overrides :meth:`kinematics` gets the generic form on its own kinematics."""
+        """The rows of the residual r = q̈ − ẍ* (J = I, no drift): :meth:`kinematics` and the PD law in one
+        product. A subclass that overrides :meth:`kinematics` gets the generic form on its own kinematics.
+
+        Parameters
+        ----------
+        state : ModelState
+            The model terms at the measured (q, q̇).
+        t : float
+            Time [s].
+        ref : Reference
+            The controller's joint reference at t.
+
+        Returns
+        -------
+        J : None
+            The identity.
+        b : ndarray, shape (n,)
+            ẍ* = q̈_ref + K_d (q̇_ref − q̇) + K_p (q_ref − q) [rad/s²].
+        """
         if type(self).kinematics is not PostureTask.kinematics:
             return super().residual(state, t, ref)  # type: ignore[return-value]  # no Jacobian: None
         r = self._fixed or ref
