@@ -44,7 +44,7 @@ from armctl.dynamics.casadi_buffer import buffer_of, view
 from armctl.dynamics.recursive import cholesky_solve, inverse_dynamics, joint_transforms, mass_matrix
 from armctl.dynamics.symbolic_frames import frame_kinematics
 from armctl.model.robot import RobotModel
-from armctl.reference import Reference
+from armctl.references import Reference
 
 #: bumped when the generated code changes, so that stale cached libraries are not loaded
 _CODE_VERSION = 1
