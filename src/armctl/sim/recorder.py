@@ -13,6 +13,7 @@ from armctl.dynamics.base import Dynamics
 from armctl.errors import SimulationWarning
 from armctl.references import Reference
 from armctl.sim.contact import Environment, ForceSensor
+from armctl.sim.controller_log import ControllerLog
 from armctl.sim.limits import LimitReport, check_limits
 from armctl.sim.plant import Plant
 from armctl.sim.result import SimResult
@@ -51,8 +52,7 @@ class Recorder:
         self.q_measured = z((samples, n)) if measured else self.q
         self.qd_measured = z((samples, n)) if measured else self.qd
         self.work_friction, self.work_external = z(samples), z(samples)
-        self.logs: dict[str, list[Any]] = {}
-        self.log_rows: dict[str, list[int]] = {}
+        self.log = ControllerLog(samples)
 
     def record_plant(self, k: int, plant: Plant, t: float, q: FloatArray, qd: FloatArray) -> None:
         """Friction, external torques, contact forces, wrench and sensors at sample k (non-simple plants)."""
@@ -88,9 +88,8 @@ class Recorder:
         self.wrench[k, 3:] = m
 
     def log_controller(self, k: int, log: dict[str, Any]) -> None:
-        for key, val in log.items():
-            self.logs.setdefault(key, []).append(np.array(val, copy=True))
-            self.log_rows.setdefault(key, []).append(k)
+        """Record the controller's ``last_log`` entries at sample k."""
+        self.log.add(k, log)
 
     def result(
         self,
@@ -106,24 +105,7 @@ class Recorder:
         # work of a torque held over [t_k, t_k+1) is exactly τ_kᵀ(q_k+1 − q_k)
         dw = np.einsum("ij,ij->i", self.tau_applied[: max(rows - 1, 0)], np.diff(q, axis=0))
         work_act = np.concatenate(([0.0], np.cumsum(dw)))[:rows]
-        logs: dict[str, Any] = {}
-        skipped: list[str] = []
-        for key, vals in self.logs.items():
-            idx = [i for i in self.log_rows[key] if i < rows]
-            if not idx:  # logged only after the last recorded sample
-                continue
-            try:
-                stacked = np.stack(vals[: len(idx)])
-            except ValueError:  # entries of different shapes
-                skipped.append(f"{key!r} (entries of different shapes)")
-                continue
-            if stacked.dtype.kind == "O":  # None, dicts, …: npz cannot store them without pickle
-                bad = next((v for v in vals[: len(idx)] if v.dtype.kind == "O"), stacked)
-                skipped.append(f"{key!r} (not numbers: {type(bad.item() if bad.ndim == 0 else bad).__name__})")
-                continue
-            logs[key] = stacked
-            if idx != list(range(len(idx))):
-                logs[f"{key}:sample"] = np.array(idx)
+        logs, skipped = self.log.stacked(rows)
         if skipped:
             warnings.warn(
                 f"controller log entries not recorded: {', '.join(skipped)}; only numbers and arrays of "

@@ -1,0 +1,86 @@
+"""`ControllerLog`: the controller's ``last_log`` entries of a run, sample by sample, stacked into
+``SimResult.logs`` at the end.
+
+An entry that is a float64 array (or a float) of one shape throughout is written into a (samples, *shape) array
+made at its first sample; any other entry (integers, booleans, changing shapes, objects) is kept as a copy per
+sample and stacked at the end, where what cannot be stacked into numbers is left out with a warning.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from armctl._checks import FLOAT, FloatArray
+
+
+class ControllerLog:
+    """The logged entries of a run of ``samples`` samples (see the module)."""
+
+    def __init__(self, samples: int) -> None:
+        self.samples = samples
+        self._arrays: dict[str, FloatArray] = {}  # key → (samples, *shape) rows
+        self._logged: dict[str, np.ndarray] = {}  # key → which rows hold an entry
+        self._copies: dict[str, list[Any]] = {}  # key → the entries kept one by one
+        self._copy_rows: dict[str, list[int]] = {}
+
+    def add(self, k: int, log: dict[str, Any]) -> None:
+        """Record the entries of ``log`` at sample k."""
+        for key, val in log.items():
+            rows = self._arrays.get(key)
+            if rows is not None:
+                if (type(val) is np.ndarray and val.dtype == FLOAT and val.shape == rows.shape[1:]) or (
+                    type(val) is float and rows.ndim == 1
+                ):
+                    rows[k] = val
+                    self._logged[key][k] = True
+                    continue
+                self._keep_copies(key)  # another shape or kind from now on: kept one by one
+            elif key not in self._copies and ((type(val) is np.ndarray and val.dtype == FLOAT) or type(val) is float):
+                rows = self._arrays[key] = np.empty((self.samples, *np.shape(val)))
+                self._logged[key] = np.zeros(self.samples, dtype=bool)
+                rows[k] = val
+                self._logged[key][k] = True
+                continue
+            self._copies.setdefault(key, []).append(np.array(val, copy=True))
+            self._copy_rows.setdefault(key, []).append(k)
+
+    def _keep_copies(self, key: str) -> None:
+        """Move ``key``'s rows so far into copies (its entries change shape or kind)."""
+        rows, logged = self._arrays.pop(key), self._logged.pop(key)
+        idx = np.flatnonzero(logged).tolist()
+        self._copies[key] = [rows[i].copy() for i in idx]
+        self._copy_rows[key] = idx
+
+    def stacked(self, rows: int) -> tuple[dict[str, np.ndarray], list[str]]:
+        """(logs, skipped) of the first ``rows`` samples: each key's entries stacked (with ``key:sample``, the
+        samples it was logged at, where it was not logged at every one), and what could not be stacked."""
+        logs: dict[str, np.ndarray] = {}
+        skipped: list[str] = []
+        for key, arr in self._arrays.items():
+            idx = np.flatnonzero(self._logged[key][:rows])
+            if not len(idx):  # logged only after the last recorded sample
+                continue
+            if len(idx) == idx[-1] + 1:  # at every sample from the first
+                logs[key] = arr[: len(idx)].copy()
+            else:
+                logs[key] = arr[idx]
+                logs[f"{key}:sample"] = idx
+        for key, vals in self._copies.items():
+            idx_list = [i for i in self._copy_rows[key] if i < rows]
+            if not idx_list:
+                continue
+            try:
+                stacked = np.stack(vals[: len(idx_list)])
+            except ValueError:  # entries of different shapes
+                skipped.append(f"{key!r} (entries of different shapes)")
+                continue
+            if stacked.dtype.kind == "O":  # None, dicts, …: npz cannot store them without pickle
+                bad = next((v for v in vals[: len(idx_list)] if v.dtype.kind == "O"), stacked)
+                skipped.append(f"{key!r} (not numbers: {type(bad.item() if bad.ndim == 0 else bad).__name__})")
+                continue
+            logs[key] = stacked
+            if idx_list != list(range(len(idx_list))):
+                logs[f"{key}:sample"] = np.array(idx_list)
+        return logs, skipped
