@@ -6,6 +6,7 @@ Each raises an :class:`~armctl.errors.ArmctlError` subclass naming the value and
 from __future__ import annotations
 
 import datetime
+import functools
 import math
 import os
 from typing import Any
@@ -295,12 +296,21 @@ def check_cache_dir(cache_dir: object, compile: bool) -> None:
 def all_finite(a: FloatArray) -> bool:
     """True if every entry of the float array ``a`` is finite.
 
-    The sum of the entries is finite exactly when no entry is NaN or inf, unless finite entries add up beyond
-    the range of floats: then False, and callers take their careful path (``np.isfinite``). A vector is summed
-    as Python floats, which avoids NumPy's per-call overhead on the short vectors of a control step."""
+    A vector's entries are summed as Python floats: the sum is finite exactly when no entry is NaN or inf, unless
+    finite entries add up beyond the range of floats (then False, and callers take their careful path,
+    ``np.isfinite``). A matrix's entries are multiplied by zeros and summed: 0 when every entry is finite, NaN
+    otherwise."""
     if a.ndim == 1:
         return math.isfinite(sum(a.tolist()))
-    return math.isfinite(a.sum())
+    flat = a.ravel(order="K")  # a view of a contiguous array in either order
+    return math.isfinite(flat.dot(_zeros(flat.size)))  # 0 when every entry is finite, NaN otherwise; no overflow
+
+
+@functools.lru_cache(maxsize=32)
+def _zeros(size: int) -> FloatArray:
+    z = np.zeros(size)
+    z.flags.writeable = False
+    return z
 
 
 def float_vectors(a: Any, b: Any, c: Any, d: Any = None) -> bool:

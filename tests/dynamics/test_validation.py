@@ -312,3 +312,68 @@ def test_large_but_representable_results_are_returned() -> None:
     y = dyn.regressor(q, qd, np.zeros(7))
     assert np.isfinite(y).all() and np.abs(y).max() > 1e200
     assert np.isfinite(dyn.kinetic_energy(q, qd))
+
+
+# ------------------------------------------------------------------------- found by reading the boundary again
+def test_kinetic_energy_names_a_nan_in_the_first_joints_position() -> None:
+    """M(q) does not depend on q₁, so a NaN there did not reach T: the kinetic energy came back finite."""
+    for options in ({}, {"compile": True}):
+        dyn = armctl.Dynamics(armctl.models.planar_2r(), **options)
+        with pytest.raises(NonFiniteError, match=r"^q holds NaN or inf"):
+            dyn.kinetic_energy(np.array([np.nan, 0.3]), np.ones(2))
+
+
+def _revolute_then_prismatic() -> armctl.RobotModel:
+    from armctl.model.dh import DHLink
+
+    links = [DHLink(a=0.3, alpha=np.pi / 2, mass=1.0, com=(-0.15, 0, 0)), DHLink(kind="prismatic", mass=1.0)]
+    return armctl.RobotModel.from_dh(links)
+
+
+def test_a_prismatic_position_too_large_for_floats_is_named() -> None:
+    """A prismatic joint 1e200 m out made M and U overflow; the mass matrix came back with inf in it."""
+    model = _revolute_then_prismatic()
+    dyn = armctl.Dynamics(model)
+    q = np.array([0.3, 1e200])
+    with np.errstate(over="ignore", invalid="ignore"):
+        assert not np.isfinite(dyn.kernel.mass(q)).all()  # the premise
+    for method in ("mass_matrix", "check_mass_matrix"):
+        with pytest.raises(NonFiniteError, match=r"overflowed .*q\[1\] = 1e\+200 is too large"):
+            getattr(dyn, method)(q)
+
+
+def test_the_compiled_regressors_name_an_overflow_anywhere_in_y() -> None:
+    """The generated code folds constant zeros out of the first joint's row, so an overflow in a later row did
+    not show there: Y came back with inf in it."""
+    from armctl.model.dh import DHLink
+
+    model = armctl.RobotModel.from_dh(
+        [DHLink(alpha=np.pi / 2, mass=1.0, com=(0, 0.1, 0)), DHLink(a=0.3, mass=1.0, com=(-0.15, 0, 0))]
+    )
+    z = np.zeros(2)
+    for options in ({}, {"compile": True}):
+        dyn = armctl.Dynamics(model, **options)
+        with np.errstate(over="ignore", invalid="ignore"), pytest.raises(NonFiniteError, match=r"overflowed"):
+            dyn.regressor(z, np.array([1e160, 0.0]), z)
+        with np.errstate(over="ignore", invalid="ignore"), pytest.raises(NonFiniteError, match=r"overflowed"):
+            dyn.passivity_regressor(z, np.array([1e160, 0.0]), z, z)
+
+
+def test_dynamics_of_something_else_than_a_model_is_named() -> None:
+    for backend in ("pinocchio", "lagrange"):
+        with pytest.raises(InvalidParameterError, match=r"Dynamics needs a RobotModel, got str"):
+            armctl.Dynamics("panda", backend=backend)  # type: ignore[arg-type]
+    assert armctl.Dynamics(armctl.models.pendulum(), compile=np.True_).options["compile"] is True
+
+
+def test_a_dynamics_no_one_refers_to_is_freed_without_the_cycle_collector() -> None:
+    import gc
+    import weakref
+
+    gc.disable()
+    try:
+        for options in ({}, {"compile": True}):
+            ref = weakref.ref(armctl.Dynamics(armctl.models.planar_2r(), **options))
+            assert ref() is None
+    finally:
+        gc.enable()

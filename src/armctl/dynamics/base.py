@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING, Any, cast
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FLOAT, FloatArray, all_finite, float_vectors, vector
+from armctl._checks import FLOAT, FloatArray, all_finite, boolean, float_vectors, vector
 from armctl.dynamics.friction_terms import FrictionTerms
 from armctl.dynamics.kernel import Kernel
 from armctl.dynamics.regressor import RegressorMethods
@@ -60,7 +60,7 @@ def backend_names() -> tuple[str, ...]:
 
 
 def _pinocchio(options: dict[str, Any]) -> type[Dynamics]:
-    if options.get("compile", False) is True:
+    if boolean(options.get("compile", False), "compile"):
         from armctl.dynamics.compiled import CompiledDynamics
 
         return CompiledDynamics
@@ -105,6 +105,8 @@ class Dynamics(RegressorMethods):
     option_names: tuple[str, ...] = ()
 
     def __new__(cls, model: RobotModel | None = None, backend: str = "pinocchio", **options: Any) -> Dynamics:
+        if not isinstance(model, RobotModel):  # before a backend reads it
+            raise InvalidParameterError(f"Dynamics needs a RobotModel, got {type(model).__name__}", value=model)
         if cls is Dynamics:
             resolve = _BACKENDS.get(backend) if isinstance(backend, str) else None
             if resolve is None:
@@ -128,10 +130,22 @@ class Dynamics(RegressorMethods):
         self._shape = (self.n,)
         self.friction = FrictionTerms(model)
         self._params = model.parameters()
-        self._local = _PerThread(self)  # this thread's kernel is made now: a backend that cannot be built fails here
+        # this thread's kernel is made now (a backend that cannot be built fails here); the factory holds the
+        # model's parts, not this object, so that a Dynamics no one refers to is freed at once
+        self._local = _PerThread(self.kernel_factory())
         #: NaN or inf in an input always reaches the result (the kernel's nan_propagates): checking the result of
         #: a call suffices on the path that takes native float64 vectors as they are (see _evaluate)
         self._propagates = self._local.kernel.nan_propagates
+
+    def kernel_factory(self) -> Callable[[], Kernel]:
+        """What makes a new kernel (workspace) of this object's backend, without referring to this object.
+
+        Returns
+        -------
+        callable
+            () → :class:`~armctl.dynamics.kernel.Kernel`: what :attr:`kernel` calls once in each thread.
+        """
+        raise NotImplementedError(f"{type(self).__name__} has no kernel: make Dynamics objects by armctl.Dynamics")
 
     def new_kernel(self) -> Kernel:
         """A new kernel (workspace) of this object's backend: what :attr:`kernel` gives each thread.
@@ -140,7 +154,7 @@ class Dynamics(RegressorMethods):
         -------
         Kernel
         """
-        raise NotImplementedError(f"{type(self).__name__} has no kernel: make Dynamics objects by armctl.Dynamics")
+        return self.kernel_factory()()
 
     @property
     def kernel(self) -> Kernel:
@@ -171,13 +185,18 @@ class Dynamics(RegressorMethods):
         return vector(x, self.n, name)
 
     def _of_q(self, fn: Callable[[FloatArray], Any], q: Any) -> Any:
-        """``fn(q)`` (a kernel primitive of q alone, which refuses a wrong length) on a checked q."""
-        if type(q) is np.ndarray and q.dtype == FLOAT and q.ndim == 1 and math.isfinite(sum(q.tolist())):
-            try:
-                return fn(q)
-            except ValueError:  # a wrong length: vector() names it
-                pass
-        return fn(vector(q, self.n, "q"))
+        """``fn(q)`` (a kernel primitive of q alone, which refuses a wrong length) on a checked q, its result
+        checked (a prismatic joint's huge position can overflow it)."""
+        if not (type(q) is np.ndarray and q.dtype == FLOAT and q.ndim == 1 and math.isfinite(sum(q.tolist()))):
+            q = vector(q, self.n, "q")
+        try:
+            out = fn(q)
+        except ValueError:  # a wrong length: vector() names it
+            q = vector(q, self.n, "q")
+            out = fn(q)
+        if not all_finite(np.asarray(out)) and not np.isfinite(out).all():
+            raise self._overflow(np.asarray(out), ("q",), (q,), q)
+        return out
 
     def _evaluate(self, fn: Callable[..., Any], names: tuple[str, ...], *args: Any) -> Any:
         """``fn(*args)`` (a kernel primitive) on checked inputs, its result checked: a non-finite result from
@@ -231,11 +250,11 @@ class Dynamics(RegressorMethods):
             M(q) is not positive definite (naming the joint of least inertia and what to give it).
         """
         qv = self._vector(q, "q")
-        k = self._local.kernel
+        mass = self.mass_matrix(qv)  # finite, or a named overflow
         try:
-            np.linalg.cholesky(k.mass(qv))
+            np.linalg.cholesky(mass)
         except np.linalg.LinAlgError:
-            raise k.nonfinite_error(qv, None) from None
+            raise self._local.kernel.nonfinite_error(qv, None) from None
 
     # ------------------------------------------------------------------------------- public API
     def mass_matrix(self, q: ArrayLike) -> FloatArray:
@@ -428,9 +447,12 @@ class Dynamics(RegressorMethods):
         float
             T [J].
         """
-        k = self._local.kernel
+        q, qd = self._vector(q, "q"), self._vector(qd, "qd")  # checked: M(q) does not read every entry of q
         with np.errstate(over="ignore", invalid="ignore"):  # an overflow is named below
-            return float(self._evaluate(lambda a, b: np.array(k.kinetic(a, b)), ("q", "qd"), q, qd))
+            energy = self._local.kernel.kinetic(q, qd)
+        if not math.isfinite(energy):
+            raise self._overflow(np.array(energy), ("q", "qd"), (q, qd), q)
+        return energy
 
     def potential_energy(self, q: ArrayLike) -> float:
         """U = −Σ m_i g₀ᵀ p_Ci [J] over the model's moving links, zero with every centre of mass at the world
@@ -447,7 +469,7 @@ class Dynamics(RegressorMethods):
         float
             U [J].
         """
-        return float(self._local.kernel.potential(self._vector(q, "q")))
+        return float(self._of_q(self._local.kernel.potential, q))
 
     def parameters(self) -> FloatArray:
         """π of the model these dynamics evaluate (see :meth:`RobotModel.parameters`).
@@ -528,10 +550,10 @@ class Dynamics(RegressorMethods):
 
 
 class _PerThread(threading.local):
-    """Each thread's kernel of one :class:`Dynamics` (made on the thread's first use)."""
+    """Each thread's kernel of one :class:`Dynamics`, made by ``factory`` on the thread's first use."""
 
-    def __init__(self, dynamics: Dynamics) -> None:
-        self.kernel = dynamics.new_kernel()
+    def __init__(self, factory: Callable[[], Kernel]) -> None:
+        self.kernel = factory()
 
 
 def _same_shape(args: tuple[Any, ...], shape: tuple[int]) -> bool:

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable
+from functools import partial
 from typing import Any
 
 import casadi as cs
@@ -244,8 +245,8 @@ class CompiledDynamics(PinocchioDynamics):
         self._functions = library(model, cache_dir)
         super().__init__(model, backend, compile=compile, cache_dir=cache_dir, **options)
 
-    def new_kernel(self) -> CompiledKernel:
-        return CompiledKernel(self.model, self.pin_model, self._functions)
+    def kernel_factory(self) -> Callable[[], CompiledKernel]:
+        return partial(CompiledKernel, self.model, self.pin_model, self._functions)
 
     @property
     def options(self) -> dict[str, Any]:

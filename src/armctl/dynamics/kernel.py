@@ -13,9 +13,10 @@ unless a method says otherwise. Nothing is checked: a wrong length may raise ``V
 lengths) or give garbage, a NaN gives NaN. A kernel owns a workspace and is not thread-safe; ``dyn.kernel``
 gives each thread its own.
 
-``nan_propagates`` says whether NaN or inf in any entry of any input always reaches every result (true of
-Pinocchio's numerical algorithms, where NaN·0 = NaN, and of the generated code, which carries each input into
-each output); then checking a result is enough to know the inputs were finite.
+``nan_propagates`` says whether NaN or inf in any entry of any input reaches the results of ``rnea``, ``aba``,
+``coriolis`` and the regressors (true of Pinocchio's numerical algorithms, where NaN·0 = NaN, and of the generated
+code, which carries each input into each output); then checking those results is enough to know the inputs were
+finite. (Not ``mass``: M(q) does not depend on the first joint's position.)
 """
 
 from __future__ import annotations
@@ -166,6 +167,8 @@ class Kernel(ABC):
         """The error for a result that is not finite (or could not be computed) from finite inputs: a mass
         matrix that is not positive definite at q is named as such, with the joint of least inertia."""
         m = self.mass(q)
+        if not np.isfinite(m).all():  # the configuration itself is beyond floats (a prismatic joint's position)
+            return NonFiniteError(f"the mass matrix is not finite at q = {q}", value=q)
         try:
             np.linalg.cholesky(m)
         except np.linalg.LinAlgError:

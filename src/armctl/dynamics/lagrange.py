@@ -20,7 +20,8 @@ system's C compiler (``compile=True``), cached on disk by the model's fingerprin
 from __future__ import annotations
 
 import time
-from functools import cached_property
+from collections.abc import Callable
+from functools import cached_property, partial
 from typing import Any
 
 import casadi as cs
@@ -267,8 +268,8 @@ class LagrangeDynamics(Dynamics):
         self.functions: dict[str, cs.Function] = {f.name(): f for f in fns}
         super().__init__(model, backend, **options)
 
-    def new_kernel(self) -> LagrangeKernel:
-        return LagrangeKernel(self.model, self.functions, self._sym)
+    def kernel_factory(self) -> Callable[[], LagrangeKernel]:
+        return partial(LagrangeKernel, self.model, self.functions, self._sym)
 
     @staticmethod
     def is_compiled_cached(model: RobotModel, rotor_coupling: bool = True, cache_dir: str | None = None) -> bool:

@@ -7,6 +7,7 @@ with the previous link, k_r I_m q̇_i z_mᵀω_{i−1}, is not expressed (the ``
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from functools import partial
 from typing import Any, cast
 
@@ -40,7 +41,7 @@ class PinocchioKernel(Kernel):
         The model and this kernel's workspace, whose contents after a call are unspecified.
     """
 
-    nan_propagates = True  # checked entry by entry in tests/dynamics/test_input_checks.py
+    nan_propagates = True  # checked entry by entry in tests/dynamics/test_validation.py
 
     def __init__(self, model: RobotModel, pin_model: Any) -> None:
         super().__init__(model)
@@ -209,8 +210,8 @@ class PinocchioDynamics(Dynamics):
         self.pin_model = model.to_pinocchio()
         super().__init__(model, backend, **options)
 
-    def new_kernel(self) -> PinocchioKernel:
-        return PinocchioKernel(self.model, self.pin_model)
+    def kernel_factory(self) -> Callable[[], PinocchioKernel]:
+        return partial(PinocchioKernel, self.model, self.pin_model)
 
     @property
     def pin_data(self) -> Any:

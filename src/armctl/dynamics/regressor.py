@@ -7,37 +7,17 @@ They check their inputs and evaluate on the kernel (:class:`~armctl.dynamics.ker
 
 from __future__ import annotations
 
-import functools
-import math
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
-import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, float_vectors
+from armctl._checks import FloatArray, all_finite, float_vectors
 
 if TYPE_CHECKING:
     from armctl.dynamics.friction_terms import FrictionTerms
 
 _PASSIVITY_NAMES = ("q", "qd", "qd_r", "qdd_r")
-
-
-def _row_finite(y: FloatArray) -> bool:
-    """True if the first row of the regressor ``y`` is finite. In a serial chain the first joint's torque
-    carries every link's spatial force, and so every input and every product of inputs: a NaN or inf input, or
-    products beyond the range of floats, make some entry of the first row NaN or inf (0·inf is NaN). Checked
-    entry by entry for every input in tests/dynamics/test_input_checks.py. (The row's dot product with zeros is
-    0 when every entry is finite and NaN otherwise, and cannot overflow.)"""
-    row = y[0]
-    return math.isfinite(row.dot(_zeros(len(row))))
-
-
-@functools.lru_cache(maxsize=16)
-def _zeros(n: int) -> FloatArray:
-    z = np.zeros(n)
-    z.flags.writeable = False
-    return z
 
 
 class RegressorMethods:
@@ -79,7 +59,7 @@ class RegressorMethods:
         if self._propagates and float_vectors(q, qd, qdd):
             try:  # the kernel refuses a wrong length: then the careful path names it
                 y = k.regressor(q, qd, qdd, (qd, qd))
-                if _row_finite(y):
+                if all_finite(y):
                     return y
             except ValueError:
                 pass
@@ -177,7 +157,7 @@ class RegressorMethods:
                 y = primitive(q, qd, qd_r, qdd_r)  # type: ignore[arg-type]  # float_vectors checked them
             except ValueError:
                 y = None
-            if y is not None and _row_finite(y):
+            if y is not None and all_finite(y):
                 return y
         return self._evaluate(primitive, _PASSIVITY_NAMES, q, qd, qd_r, qdd_r)
 
