@@ -25,14 +25,6 @@ import armctl  # noqa: E402
 #: old import paths kept for one release (they re-export documented names)
 DEPRECATED_MODULES = {"armctl.reference"}
 
-#: modules whose docstrings are not in numpydoc form yet: their parameters are documented in prose, and the
-#: tests of their names are expected to fail until they are converted
-PROSE_MODULES = (
-    "armctl.sim.contact",
-    "armctl.sim.friction",
-    "armctl.sim.normal_force",
-)
-
 
 def _public_modules() -> Iterator[Any]:
     yield armctl
@@ -178,21 +170,7 @@ def test_the_check_finds_what_is_missing() -> None:
     ]
 
 
-@pytest.mark.parametrize(
-    ("qual", "fn", "owners"),
-    [
-        pytest.param(
-            q,
-            f,
-            o,
-            id=q,
-            marks=[pytest.mark.xfail(reason="docstring in prose, not numpydoc")]
-            if any(getattr(o[0], "__module__", "").startswith(m) for m in PROSE_MODULES)
-            else [],
-        )
-        for q, f, o in CASES
-    ],
-)
+@pytest.mark.parametrize(("qual", "fn", "owners"), [pytest.param(q, f, o, id=q) for q, f, o in CASES])
 def test_every_parameter_is_documented(qual: str, fn: Callable[..., Any], owners: list[Any]) -> None:
     problems = _problems(fn, owners)
     assert not problems, f"{qual}: {'; '.join(problems)}"

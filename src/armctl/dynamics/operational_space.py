@@ -203,13 +203,14 @@ def operational_space_terms(
     damping: float = 0.0,
 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
     """(Λ, J̄, μ, p) from the joint-space terms at one state: M (n×n), the task Jacobian J (m×n, full row rank),
-    J̇ q̇ (m,), C q̇ (n,) and g (n,). Unchecked (a controller that has these terms already calls this on its hot
-    path); raises ``numpy.linalg.LinAlgError`` if M is not positive definite, or J M⁻¹ Jᵀ is singular.
+    J̇ q̇ (m,), C q̇ (n,) and g (n,). Unchecked (for a controller that has these terms already and calls it at
+    every step); raises ``numpy.linalg.LinAlgError`` if M is not positive definite, or J M⁻¹ Jᵀ is singular.
 
     ``damping`` δ² ≥ 0 [the units of J M⁻¹ Jᵀ] gives the damped inverse Λ = (J M⁻¹ Jᵀ + δ² I)⁻¹ (still
     J̄ = M⁻¹ Jᵀ Λ, μ and p from it), bounded by 1/δ² where J loses rank; then J J̄ = I − δ² Λ instead of I, and
     the task's equation holds only along the directions whose eigenvalue of J M⁻¹ Jᵀ is large against δ²."""
-    # LAPACK directly: NumPy's linalg wrappers cost several µs a call on matrices this small
+    # LAPACK directly: one Cholesky factor M = L Lᵀ gives both J M⁻¹ Jᵀ and M⁻¹ Jᵀ by triangular solves (which
+    # NumPy's linalg does not offer), and the info codes say which of M and J M⁻¹ Jᵀ failed
     chol, info = lapack.dpotrf(mass, lower=1, clean=1)  # M = L Lᵀ
     if info:
         raise np.linalg.LinAlgError("the mass matrix is not positive definite")

@@ -72,7 +72,7 @@ class WaypointSpline:
             t = scalar(t, "t")  # a real finite scalar, or raise naming t
         tc = min(max(t, self.times[0]), self.times[-1])
         q = self._s(tc)
-        if t != tc:  # held: zero velocity and acceleration (as arrays: the Reference's fast path)
+        if t != tc:  # held: zero velocity and acceleration (float arrays, which the Reference checks as a whole)
             zero = np.zeros(q.shape)
             return Reference(q, zero, zero)
         return Reference(q, self._s(tc, 1), self._s(tc, 2))

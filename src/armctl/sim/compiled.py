@@ -45,7 +45,8 @@ from armctl.sim.plant_layout import PlantLayout, layout_of
 if TYPE_CHECKING:  # CasADi is imported on first use: ``import armctl`` stays light
     import casadi as cs
 
-#: the integrators of :func:`compiled_step` (and whose step of a plant without forces is ``simulate``'s fast path)
+#: the integrators of :func:`compiled_step` (for a plant without friction, contact or disturbance, ``simulate``
+#: calls their step of the rigid dynamics alone, :attr:`StepChoice.fast`)
 SCHEMES = ("rk4", "euler")
 #: bumped when the generated code changes, so that stale cached libraries are not loaded
 _CODE_VERSION = 2
@@ -69,9 +70,9 @@ HOW_TO_GET_A_COMPILER = (
 
 @dataclass(frozen=True)
 class StepChoice:
-    """What integrates a run: the plant, the step :func:`armctl.sim.stepper.advance` calls, the hot path for
-    plants without friction, contact or disturbance (or None), and whether it is generated code (``reason``: why
-    not, if not)."""
+    """What integrates a run: the plant, the step :func:`armctl.sim.stepper.advance` calls, the step of the
+    rigid dynamics alone that the loop calls for a plant without friction, contact or disturbance (or None), and
+    whether it is generated code (``reason``: why not, if not)."""
 
     plant: Any
     step: Any

@@ -1,15 +1,8 @@
 """Contact environments: they turn the pose and velocity of points on the arm into forces.
 
-A contact point is a point rigidly attached to a frame of the plant model. An environment computes, for every
-point, the force F the environment exerts on the arm; the force the arm exerts on the environment is h = −F,
-and the joint torque of the contact enters the dynamics as
-
-    M q̈ + C q̇ + g = τ − τ_f − Σ_p J_p(q)ᵀ h_p,        J_p = J_lin − [r_p]× J_ang
-
-with J_p the Jacobian of the point's velocity (r_p: the point's offset from its frame origin, world axes). For
-the implicit integrator an environment also gives the joint-space stiffness and damping
-K = Σ J_pᵀ (∂F/∂p) J_p and D = Σ J_pᵀ (∂F/∂ṗ) J_p (geometric stiffness J̇-terms neglected: they only slow
-Newton's convergence, not what it converges to).
+:class:`ContactPoint` (a point rigidly attached to a frame of the arm), :class:`Environment` (what the arm touches;
+the equations of the contact torque are given with it), :class:`Plane` (a compliant half-space, the built-in
+environment) and :class:`ForceSensor` (what a six-axis sensor on the arm reads).
 """
 
 from __future__ import annotations
@@ -33,8 +26,25 @@ from armctl.sim.normal_force import NormalForce
 
 @dataclass(frozen=True, eq=False)
 class ContactPoint:
-    """A point at ``offset`` [m] (in the axes of ``frame``) from the origin of ``frame`` (None: the tool
-    frame)."""
+    """A point rigidly attached to a frame of the plant model, where an :class:`Environment` can push on the arm.
+
+    Parameters
+    ----------
+    frame : str, optional
+        The frame the point rides on (a name of the model's ``frame_names``); None (the default): the tool frame,
+        or the last joint's frame if the model has none. Checked against the model when the environment is
+        given to ``simulate``.
+    offset : array_like, shape (3,), optional
+        The point's position [m] from the frame's origin, in the frame's own axes; zero by default. Stored as a
+        read-only copy.
+
+    Raises
+    ------
+    InvalidParameterError
+        ``offset`` is not a finite 3-vector of real numbers.
+    ShapeError
+        ``offset`` is a ragged sequence.
+    """
 
     frame: str | None = None
     offset: FloatArray = field(default_factory=lambda: np.zeros(3))
@@ -96,17 +106,67 @@ class PointKinematics:
 
 
 class Environment(ABC):
-    """Something the arm touches. ``points``: the contact points it acts on."""
+    """Something the arm touches: it turns the position and velocity of contact points on the arm into forces.
+
+    A subclass sets :attr:`points` and implements :meth:`force`; the joint torques, the forces on the
+    environment and the derivatives of the implicit integrators follow from it. :class:`Plane` is the built-in
+    environment; the generated simulation step (``simulate(compile=...)``) covers it with the built-in normal
+    laws, and a plant with an environment of another class (a subclass included) runs on the Python step.
+
+    Attributes
+    ----------
+    points : tuple of ContactPoint
+        The contact points on the arm it acts on.
+
+    Notes
+    -----
+    For every point p the environment gives the force F_p [N] it exerts on the arm; the force the arm exerts on
+    the environment is h_p = −F_p, and the joint torque of the contacts enters the dynamics as::
+
+        M q̈ + C q̇ + g = τ − τ_f − Σ_p J_p(q)ᵀ h_p,        J_p = J_lin − [r_p]× J_ang
+
+    with J_p (3×n) the Jacobian of the point's velocity, J_lin and J_ang the rows of its frame's Jacobian in
+    world axes, and r_p the point's offset from its frame's origin, in world axes. For the implicit integrators
+    an environment also gives the joint-space stiffness and damping::
+
+        K = Σ_p J_pᵀ (∂F_p/∂p) J_p,        D = Σ_p J_pᵀ (∂F_p/∂ṗ) J_p
+
+    without the terms in the derivatives of J_p (geometric stiffness): Newton's method then converges more
+    slowly, to the same step.
+    """
 
     points: tuple[ContactPoint, ...] = ()
 
     def check(self, model: RobotModel) -> None:
-        """Raise :class:`~armctl.errors.UnknownNameError` if a point names a frame the model does not have."""
+        """Check the contact points against the plant's model (``simulate`` calls it once, before the run).
+
+        Parameters
+        ----------
+        model : RobotModel
+            The plant's model.
+
+        Raises
+        ------
+        UnknownNameError
+            A point names a frame the model does not have (the error lists the model's frames).
+        """
         for p in self.points:
             model.frame(p.frame)
 
     def kinematics(self, dyn: Dynamics) -> PointKinematics:
-        """The evaluator of this environment's points for ``dyn`` (build once, call at every step)."""
+        """The evaluator of this environment's points on the plant: built once, called at every step.
+
+        Parameters
+        ----------
+        dyn : Dynamics
+            The plant's dynamics (its frames' poses and Jacobians).
+
+        Returns
+        -------
+        PointKinematics
+            A callable ``q -> [(p, J_p)]``: every point's position p (3,) [m] and velocity Jacobian
+            J_p (3, n), in world axes.
+        """
         return PointKinematics(dyn, self.points)
 
     @overload
@@ -120,9 +180,29 @@ class Environment(ABC):
     def joint_torque(
         self, kin: PointKinematics, q: FloatArray, qd: FloatArray, stiffness: bool = False
     ) -> tuple[FloatArray, FloatArray | None, FloatArray | None]:
-        """(τ_c, K, D): τ_c = Σ J_pᵀ F_p, the joint torque of the forces on the arm (it is *added* to τ), and,
-        if ``stiffness``, K = Σ J_pᵀ (∂F/∂p) J_p (∂τ_c/∂q without the J-derivative terms, see the module) and
-        D = ∂τ_c/∂q̇ (n×n). ``kin``: :meth:`kinematics` of the plant."""
+        """The joint torque of the contact forces, and its derivatives for the implicit integrators.
+
+        Parameters
+        ----------
+        kin : PointKinematics
+            :meth:`kinematics` of the plant.
+        q : ndarray, shape (n,)
+            Joint positions [rad] (m for a prismatic joint).
+        qd : ndarray, shape (n,)
+            Joint velocities [rad/s].
+        stiffness : bool, optional
+            Whether to compute K and D as well.
+
+        Returns
+        -------
+        tau : ndarray, shape (n,)
+            τ_c = Σ_p J_pᵀ F_p [N·m], the joint torque of the forces on the arm; it is *added* to τ.
+        K : ndarray, shape (n, n), or None
+            With ``stiffness``: Σ_p J_pᵀ (∂F_p/∂p) J_p [N·m/rad], ∂τ_c/∂q without the terms in the derivatives of
+            J_p (see Notes of :class:`Environment`); else None.
+        D : ndarray, shape (n, n), or None
+            With ``stiffness``: ∂τ_c/∂q̇ = Σ_p J_pᵀ (∂F_p/∂ṗ) J_p [N·m·s/rad]; else None.
+        """
         n = kin.dyn.n
         tau = np.zeros(n)
         kj = np.zeros((n, n)) if stiffness else None
@@ -138,7 +218,24 @@ class Environment(ABC):
         return tau, kj, dj
 
     def forces(self, kin: PointKinematics, q: FloatArray, qd: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """(h, p): the force each point exerts *on the environment* h_p = −F_p [N] and its position [m], (P, 3)."""
+        """The force each contact point exerts on the environment, and where it is (what force sensors read).
+
+        Parameters
+        ----------
+        kin : PointKinematics
+            :meth:`kinematics` of the plant.
+        q : ndarray, shape (n,)
+            Joint positions [rad] (m for a prismatic joint).
+        qd : ndarray, shape (n,)
+            Joint velocities [rad/s].
+
+        Returns
+        -------
+        h : ndarray, shape (P, 3)
+            h_p = −F_p [N], world axes, for each of the P points (zero for a point out of contact).
+        p : ndarray, shape (P, 3)
+            The points' positions [m], world axes.
+        """
         hs, ps = np.zeros((len(self.points), 3)), np.zeros((len(self.points), 3))
         for i, (p, jp) in enumerate(kin(q)):
             force, _, _ = self.force(p, jp @ qd, False)
@@ -151,22 +248,84 @@ class Environment(ABC):
     def force(
         self, p: FloatArray, v: FloatArray, derivatives: bool
     ) -> tuple[FloatArray | None, FloatArray | None, FloatArray | None]:
-        """(F, ∂F/∂p, ∂F/∂v): the force on the arm [N] at a point at p [m] moving at v [m/s], or
-        (None, None, None) without contact."""
+        """The force the environment exerts on the arm at one point.
+
+        Parameters
+        ----------
+        p : ndarray, shape (3,)
+            The point's position [m], world axes.
+        v : ndarray, shape (3,)
+            Its velocity ṗ [m/s], world axes.
+        derivatives : bool
+            Whether to compute ∂F/∂p and ∂F/∂v as well.
+
+        Returns
+        -------
+        F : ndarray, shape (3,), or None
+            The force on the arm [N], world axes; None without contact.
+        dF_dp : ndarray, shape (3, 3), or None
+            ∂F/∂p [N/m] with ``derivatives`` (and contact), else None.
+        dF_dv : ndarray, shape (3, 3), or None
+            ∂F/∂v [N·s/m] with ``derivatives`` (and contact), else None.
+        """
 
 
 class Plane(Environment):
-    """A compliant half-space (a floor, a wall): everything on the side opposite ``normal`` is inside.
+    """A compliant half-space (a floor, a wall): everything on the side of the surface opposite ``normal`` is
+    inside, and a contact point inside is pushed out along the normal, with Coulomb friction along the surface.
 
-    normal: unit outward normal (pointing into free space, towards the arm). point: a point of the surface
-    [m]. law: the normal-force law (:class:`~armctl.sim.normal_force.KelvinVoigt` or
-    :class:`~armctl.sim.normal_force.HuntCrossley`). friction: Coulomb coefficient μ of the tangential force
-    F_t = −μ f_n v_t / max(|v_t|, v_slip), i.e. Coulomb friction above the slip velocity ``slip_velocity``
-    [m/s] and a stiff viscous law below it (it does not hold a point exactly still: that is the joints' job).
-    points: the contact points of the arm it acts on (default: the tool frame origin).
+    Parameters
+    ----------
+    law : NormalForce
+        The normal-force law f_n(δ, δ̇): :class:`KelvinVoigt` or :class:`HuntCrossley`.
+    normal : array_like, shape (3,), optional
+        The outward normal n (world axes), pointing into free space, towards the arm; normalised here. Default:
+        +z, a floor.
+    point : array_like, shape (3,), optional
+        A point of the surface [m], world axes. Default: the origin.
+    friction : float, optional
+        The Coulomb coefficient μ ≥ 0 of the tangential force; 0 (the default): a frictionless surface.
+    slip_velocity : float, optional
+        v_slip > 0 [m/s]: the tangential speed below which the friction becomes viscous (see Notes).
+    points : ContactPoint or sequence of ContactPoint, optional
+        The contact points of the arm the plane acts on; None (the default): the tool frame's origin.
 
-    Penetration δ = nᵀ(point − p) > 0 and its rate δ̇ = −nᵀṗ give f_n(δ, δ̇); the force on the arm is
-    F = f_n n + F_t.
+    Attributes
+    ----------
+    law : NormalForce
+        As given.
+    normal : ndarray, shape (3,)
+        The unit outward normal n (read-only).
+    point : ndarray, shape (3,)
+        As given (read-only) [m].
+    friction : float
+        The Coulomb coefficient μ.
+    slip_velocity : float
+        The slip velocity v_slip [m/s].
+    points : tuple of ContactPoint
+        The points it acts on.
+
+    Raises
+    ------
+    InvalidParameterError
+        ``law`` is not a :class:`NormalForce`; ``normal`` is not a finite non-zero 3-vector; ``point`` is not a
+        finite 3-vector; ``friction`` < 0 or ``slip_velocity`` ≤ 0; ``points`` is empty or holds anything but
+        ContactPoint objects.
+    NonFiniteError
+        ``friction`` or ``slip_velocity`` is NaN or infinite.
+    ShapeError
+        ``normal`` or ``point`` is a ragged sequence.
+
+    Notes
+    -----
+    A point at p moving at ṗ has the penetration δ = nᵀ(point − p) and its rate δ̇ = −nᵀṗ; it touches while
+    δ > 0 and f_n(δ, δ̇) > 0. The force on the arm is then::
+
+        F = f_n n + F_t,        F_t = −μ f_n v_t / max(‖v_t‖, v_slip),        v_t = ṗ − (nᵀṗ) n
+
+    that is Coulomb friction μ f_n against the sliding direction above the slip velocity, and a stiff viscous
+    law (μ f_n / v_slip) v_t below it: it slows a point down but does not hold it exactly still (sticking is the
+    joints' friction's job, see :class:`StickSlip`).
     """
 
     def __init__(
@@ -212,7 +371,18 @@ class Plane(Environment):
         self._tangent_projector = np.eye(3) - self._nn
 
     def depth(self, p: ArrayLike) -> float:
-        """Penetration δ [m] of a point at p (negative: outside)."""
+        """The penetration of a point: how far it is inside the half-space.
+
+        Parameters
+        ----------
+        p : array_like, shape (3,)
+            The point's position [m], world axes.
+
+        Returns
+        -------
+        float
+            δ = nᵀ(point − p) [m]; negative outside.
+        """
         return float(self.normal @ (self.point - np.asarray(p, dtype=float)))
 
     def force(
@@ -256,10 +426,28 @@ class Plane(Environment):
 
 @dataclass(frozen=True, eq=False)
 class ForceSensor:
-    """A six-axis force/torque sensor at ``frame`` (None: the tool frame). It reads the wrench the contact
-    points attached at or beyond its joint exert on the environment, [f; μ] with the moment about the
-    sensor's origin, in the sensor's own axes (``world_axes=False``) or world axes. External disturbances
-    are not contacts and are not read."""
+    """A six-axis force/torque sensor on the arm: it reads the wrench that the contact points at or beyond its
+    joint exert on the environment (``simulate(sensors=...)`` records it in ``SimResult.sensor``).
+
+    Parameters
+    ----------
+    frame : str, optional
+        The frame the sensor is mounted at (a name of the model's ``frame_names``); None (the default): the tool
+        frame. Checked against the model by ``simulate``.
+    world_axes : bool, optional
+        False (the default): the reading in the sensor's own axes (those of ``frame``); True: in world axes.
+
+    Raises
+    ------
+    InvalidParameterError
+        ``world_axes`` is not True or False.
+
+    Notes
+    -----
+    The reading is [f; m] (6,): the sum f [N] of the forces h_p = −F_p of the contact points riding on the
+    sensor's joint or on a joint after it, and their moment m = Σ_p (p − o) × h_p [N·m] about the sensor's
+    origin o. External disturbances (``simulate(disturbance=...)``) are not contacts and are not read.
+    """
 
     frame: str | None = None
     world_axes: bool = False
@@ -270,8 +458,33 @@ class ForceSensor:
     def reading(
         self, dyn: Dynamics, q: FloatArray, forces: FloatArray, positions: FloatArray, joints: FloatArray
     ) -> FloatArray:
-        """The (6,) reading from the contact forces on the environment (P, 3), their positions (P, 3) and the
-        1-based joint index each point rides on (P,)."""
+        """The sensor's reading at one state (the simulator calls it at every sample).
+
+        Parameters
+        ----------
+        dyn : Dynamics
+            The plant's dynamics (the sensor frame's pose).
+        q : ndarray, shape (n,)
+            Joint positions [rad] (m for a prismatic joint).
+        forces : ndarray, shape (P, 3)
+            The force h_p [N] each contact point exerts on the environment, world axes
+            (:meth:`Environment.forces`).
+        positions : ndarray, shape (P, 3)
+            The points' positions [m], world axes.
+        joints : ndarray, shape (P,)
+            The 1-based index of the joint each point rides on (0: the world).
+
+        Returns
+        -------
+        ndarray, shape (6,)
+            [f; m]: force [N] and moment about the sensor's origin [N·m], in the sensor's axes or world axes
+            (``world_axes``).
+
+        Raises
+        ------
+        UnknownNameError
+            The model has no frame ``frame``.
+        """
         mount = dyn.model.frame(self.frame).joint
         pose = dyn.frame_pose(q, self.frame)
         sel = joints >= mount

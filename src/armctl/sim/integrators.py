@@ -115,12 +115,13 @@ def _rk4_coefficients(h: float) -> tuple[FloatArray, ...]:
 
 def fast_step(name: str, plant: Plant) -> Callable[..., tuple[FloatArray, FloatArray, FloatArray]] | None:
     """For a plant with no friction, contact or disturbance, an RK4 or Euler step (q, q̇, τ, h) → (q₁, q̇₁, a₁)
-    that calls the backend's forward dynamics directly (the simulator's hot path); else None."""
+    that calls the backend's forward dynamics directly, with no events to look for and no external forces to
+    add; else None."""
     if not plant.simple or name not in ("rk4", "euler"):
         return None
     fwd = plant.forward
     # RK4 as linear combinations of the rows [q, q̇, a₁, a₂, a₃, a₄] of one array: each stage's (q, q̇) is one
-    # small matrix product of the rows computed so far, instead of four vector operations (which dominated).
+    # small matrix product of the rows computed so far, instead of four vector operations.
     # Two such arrays take turns: a step writes its (q₁, q̇₁) straight into the first two rows of the other,
     # and returns views of them, which the next step finds in place (no copy in); the views stay valid
     # until the step after next overwrites them, which is all the simulator needs (it stores q and q̇ at once)
@@ -129,7 +130,7 @@ def fast_step(name: str, plant: Plant) -> Callable[..., tuple[FloatArray, FloatA
     turn = [0]
 
     def rk4_step(q: FloatArray, v: FloatArray, tau: FloatArray, h: float) -> tuple[FloatArray, FloatArray, FloatArray]:
-        c0, c1, c2, c3 = _rk4_coefficients(h)  # ``.dot``: a third of the cost of ``@`` on these small arrays
+        c0, c1, c2, c3 = _rk4_coefficients(h)
         rows, rows3, rows4, rows5, row_q, row_v, rows2 = views[turn[0]]
         if row_q is not q or row_v is not v:  # not the last step's result: copy the state in, as a new pair
             rows2[...] = np.array((q, v))  # first (q or v may be a view of these very rows, in either order),

@@ -71,7 +71,7 @@ class LimitReport:
     clipped : bool
         Whether the run clipped the command at the limits (``saturate=True``).
     samples : int
-        N.
+        The number N of samples the shares are taken over.
     """
 
     joint_names: tuple[str, ...]

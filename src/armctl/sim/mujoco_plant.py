@@ -221,7 +221,7 @@ class Readout:
             np.add.at(rec.contact_force[k], links - 1, hs)
             f += hs.sum(axis=0)
             r = ps - tool
-            mom += moments.sum(axis=0)  # r × h, written out (np.cross costs tens of µs on short arrays)
+            mom += moments.sum(axis=0)  # r × h of every contact at once, its components written out
             mom += (r[:, [1, 2, 0]] * hs[:, [2, 0, 1]] - r[:, [2, 0, 1]] * hs[:, [1, 2, 0]]).sum(axis=0)
         for i, sensor in enumerate(rec.sensors):
             rec.sensor[k, i] = sensor.reading(dyn, q, hs, ps, links)

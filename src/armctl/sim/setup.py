@@ -124,8 +124,8 @@ def check_reference(ref: Any, n: int, t: float) -> Reference:
 
 
 def controller_call(controller: Any, n: int) -> Callable[..., Any]:
-    """The fastest correct way to call ``controller``: a :class:`Controller`'s ``compute`` (the simulator's
-    state and references are already checked), else the callable itself."""
+    """How the simulator calls ``controller``: a :class:`Controller`'s ``compute`` (the simulator's state and
+    references are already checked, so the controller's own checks of them are skipped), else the callable itself."""
     if not callable(controller):
         raise InvalidParameterError(
             f"controller must be callable as controller(t, q, qd, ref) -> tau, got {type(controller).__name__}",

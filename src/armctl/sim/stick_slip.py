@@ -33,7 +33,7 @@ class NotPositiveDefinite(ArithmeticError):
 
 def constrained_accel(mass: FloatArray, rhs: FloatArray, stuck: BoolArray | None) -> FloatArray:
     """q̈ with q̈_S = 0 for the boolean mask ``stuck``: M_FF q̈_F = rhs_F (a Cholesky solve of the free
-    joints' block, taken out of M: a third of the cost of blanking the stuck rows and columns in place)."""
+    joints' block, taken out of M, so that the stuck joints do not enter the factorisation)."""
     if stuck is None:
         a, info = lapack.dposv(mass, rhs)[1:]
     else:

@@ -4,8 +4,8 @@ in NumPy for the small QPs of one control step, where it is the controller's sec
 described with :class:`DualActiveSetSolver`, its factorisation with :func:`dual_active_set`.
 
 For min ½ xᵀH x + gᵀx s.t. A x = b, l ≤ C x ≤ u with H positive definite, every finite bound is written as a
-row nᵀx ≥ h (a lower bound as C_i x ≥ l_i, an upper one as −C_i x ≥ −u_i). In NumPy each iteration costs tens of
-µs, a QP of a 7-joint arm a few hundred: which is why it comes last in the controller's chain of solvers.
+row nᵀx ≥ h (a lower bound as C_i x ≥ l_i, an upper one as −C_i x ≥ −u_i). Written in NumPy, it is slower than
+the compiled solvers (DAQP, ProxQP): which is why it comes last in the controller's chain of solvers.
 """
 
 from __future__ import annotations
@@ -165,8 +165,8 @@ class DualActiveSetSolver:
     (N: the active rows' normals as columns) until row p holds (full step, p joins the active set) or an active
     row's multiplier reaches zero (partial step, that row leaves); the equalities join first and never leave.
     Every iterate stays dually feasible and the dual objective grows, so the method ends in finitely many steps:
-    at the optimum, or with a row that no step can satisfy — then the QP has no feasible point. Each iteration
-    costs tens of µs in NumPy, which is why it comes last in the chain.
+    at the optimum, or with a row that no step can satisfy — then the QP has no feasible point. Written in NumPy,
+    it is slower than the compiled solvers, which is why it comes last in the chain.
     """
 
     name = "dual active set"

@@ -95,14 +95,15 @@ class ModelEvaluator:
             self._pm = dynamics.pin_model
             self._pd = self._pm.createData()  # own workspace: the Dynamics object's data stays untouched
             self._lwa = pinocchio.LOCAL_WORLD_ALIGNED
-            # M and h as views of the workspace, which computeAllTerms rewrites in place (fetching them costs
-            # ~0.6 µs each a call); kept only if they really are views, as for the frame placements below
+            # M and h as views of the workspace, which computeAllTerms rewrites in place, so that a step reads
+            # them without fetching them from Pinocchio again; kept only if they really are views, as for the
+            # frame placements below
             pd = self._pd
             shared = np.shares_memory(pd.M, pd.M) and np.shares_memory(pd.nle, pd.nle)
             self._mass_bias: tuple[FloatArray, FloatArray] | None = (pd.M, pd.nle) if shared else None
         # per frame index: (translation, rotation) as views of the frame's placement in the workspace, which
         # every evaluate() rewrites in place; only kept if they really are views (checked when first made),
-        # else None and the placement is read afresh each time (fetching it costs ~1.7 µs a call)
+        # else None and the placement is read afresh from Pinocchio each time
         self._pose_views: dict[int, tuple[FloatArray, FloatArray] | None] = {}
 
     def __reduce__(self) -> tuple[Any, ...]:

@@ -169,7 +169,7 @@ class MotionTask(Task):
     so that a zero residual gives the error dynamics ë + K_d ė + K_p e = 0.
     """
 
-    # the hot path uses the law's matrices built from the gains in _gains_changed
+    # assigning a gain rebuilds the law's matrices [I, K_d, K_p] (_gains_changed), which every step then uses
     kp = Gain("K_p (dim×dim); may be reassigned between control periods (checked again).", size=_dim, label=_label)
     kd = Gain("K_d (dim×dim); may be reassigned between control periods (checked again).", size=_dim, label=_label)
     # what the Gain descriptors keep: the compact forms and the matrices

@@ -66,7 +66,7 @@ class TargetHolder:
 
     def _check(self, value: Any, velocity: Any, acceleration: Any) -> tuple[FloatArray, FloatArray, FloatArray]:
         shape = self.value_shape
-        try:  # fast path: float arrays of the right shapes, all finite (one sum, NaN/inf propagate into it)
+        try:  # float arrays of the right shapes, all finite (one sum: NaN/inf propagate into it), are taken as given
             if (
                 value.dtype == FLOAT
                 and velocity.dtype == FLOAT
