@@ -53,7 +53,7 @@ class RegressorMethods:
         Returns
         -------
         ndarray, shape (n, 13 n)
-            Y.
+            The regressor Y.
         """
         k = self._local.kernel
         if self._propagates and float_vectors(q, qd, qdd):

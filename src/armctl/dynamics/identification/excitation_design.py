@@ -120,7 +120,7 @@ def optimize_excitation(
     period : float, optional
         T_f [s].
     harmonics : int, optional
-        N.
+        The number N of harmonics of each joint's Fourier series.
     position_margin : float, optional
         Kept from each position limit [rad].
     samples : int, optional

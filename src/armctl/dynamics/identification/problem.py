@@ -37,9 +37,9 @@ class IdentificationProblem:
     Attributes
     ----------
     regressor : ndarray, shape (S n, p)
-        W.
+        The stacked regressor W.
     torque : ndarray, shape (S n,)
-        y.
+        The stacked torques y [N·m].
     base : BaseParameters
         The base parameters.
     n : int
