@@ -279,8 +279,7 @@ def compact_gain(k: FloatArray) -> FloatArray:
 
 
 def apply_gain(k: FloatArray, x: FloatArray) -> FloatArray:
-    """K x for a gain from :func:`compact_gain` (elementwise for a diagonal; ``.dot`` costs a quarter of
-    ``@`` on small matrices)."""
+    """K x for a gain from :func:`compact_gain` (elementwise for a diagonal, else a matrix product)."""
     return k * x if k.ndim == 1 else k.dot(x)
 
 

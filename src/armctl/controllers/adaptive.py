@@ -240,7 +240,7 @@ class Adaptive(SlidingGains, Controller):
                 if abs(dt - self._dt) > 1e-9 * dt:
                     self._dt, self._gamma_dt = dt, self._gamma * dt
                 self.theta = self.theta - self._gamma_dt * grad
-            else:  # a full Γ: rebuilding Γ dt for a jittery measured dt would cost a 13n×13n product
+            else:  # a full Γ: Γ (g dt), not (Γ dt) g, which a jittery measured dt would form anew each step
                 step = self._gamma.dot(grad)
                 step *= dt
                 self.theta = self.theta - step

@@ -64,7 +64,7 @@ def unwritable(folder: Path, err: OSError) -> BackendError:
 def check(lib: Path, key: str) -> str | None:
     """Why the library ``lib`` cannot be trusted as the build of ``key`` (a full SHA-256 in hex), or None if
     its record names ``key`` and matches the file's size and SHA-256; :data:`MISSING` if there is no library.
-    Reads the file once: the SHA-256 of a 1 MB library costs about half a millisecond."""
+    Reads the file once (a library is checked once per process)."""
     try:
         data = lib.read_bytes()
     except FileNotFoundError:

@@ -39,7 +39,7 @@ class Reference:
 
     def __init__(self, q: ArrayLike, qd: ArrayLike | None = None, qdd: ArrayLike | None = None) -> None:
         # the usual case, built every control period by a reference generator: three float64 vectors of one
-        # length with a finite sum (a sum that overflows goes the slow way, which checks entry by entry)
+        # length with a finite sum (a sum that overflows goes to _checked, which checks entry by entry)
         if (
             type(q) is np.ndarray
             and type(qd) is np.ndarray
@@ -53,7 +53,7 @@ class Reference:
         ):
             pos, vel, acc = q.copy(), qd.copy(), qdd.copy()
             if math.isfinite(sum(pos.tolist()) + sum(vel.tolist()) + sum(acc.tolist())):
-                pos.setflags(write=False)  # (cheaper than through .flags)
+                pos.setflags(write=False)
                 vel.setflags(write=False)
                 acc.setflags(write=False)
                 object.__setattr__(self, "q", pos)

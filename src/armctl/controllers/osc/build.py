@@ -23,7 +23,7 @@ from armctl.references import Reference
 def level_cost(lev: LevelRows, reg_matrix: FloatArray) -> tuple[FloatArray, FloatArray]:
     """(H, g) of a level's cost without slacks: H = TᵀT + ε I (``reg_matrix``), g = −Tᵀt."""
     Tn = lev.Tn
-    G = Tn.T.dot(Tn)  # [TᵀT, −Tᵀt; −tᵀT, tᵀt] (``.dot``: cheaper than ``@`` on small arrays)
+    G = Tn.T.dot(Tn)  # [TᵀT, −Tᵀt; −tᵀT, tᵀt]
     nx = lev.nx
     # g: G's last row, a contiguous view (G is symmetric: NumPy computes AᵀA so)
     return G[:nx, :nx] + reg_matrix, G[nx, :nx]

@@ -28,7 +28,7 @@ class LevelRows:
 
     @property
     def Tn(self) -> FloatArray:
-        """[T | −t] (an elementwise product of equal shapes: cheaper than broadcasting a column of weights)."""
+        """[T | −t] (an elementwise product with a weight matrix of the same shape)."""
         if self._Tn is None:
             self._Tn = self.scale * self.jr
         return self._Tn

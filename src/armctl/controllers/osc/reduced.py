@@ -230,8 +230,7 @@ class QddQP:
         return verified(result.arrays, sol.x, sol.y, sol.z)
 
     def _holds(self, x: FloatArray, tau: FloatArray, bounds: list[tuple[FloatArray, FloatArray]]) -> bool:
-        """Every torque and q̈ bound holds at (q̈, τ) (False for NaN); on Python floats, cheaper than NumPy's
-        calls on a few entries."""
+        """Every torque and q̈ bound holds at (q̈, τ) (False for NaN); compared as Python floats."""
         check = self.tau_check
         if check is not None:
             for v, lo, up in zip(tau.tolist(), *check, strict=True):

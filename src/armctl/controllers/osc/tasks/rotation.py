@@ -3,8 +3,8 @@
     θ = arccos((tr E − 1)/2),   log E = θ / (2 sin θ) · (E₃₂ − E₂₃, E₁₃ − E₃₁, E₂₁ − E₁₂)
 
 computed by Pinocchio's ``log3`` (which handles θ near 0 by a series and θ near π, where the formula above
-loses accuracy, from the symmetric part of E). Measured cheaper than the formula on Python floats, and it
-returns an array, which the tasks' stacked vectors take without a conversion.
+loses accuracy, from the symmetric part of E); it returns an array, which the tasks' stacked vectors take without
+a conversion.
 """
 
 from __future__ import annotations
