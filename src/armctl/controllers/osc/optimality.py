@@ -100,8 +100,8 @@ def kkt_ok(
 ) -> bool:
     """``residuals(arrays, x, y, z).ok(primal_tol, dual_tol)`` — the same three conditions (primal residual,
     stationarity residual and duality gap within tolerance), with the row tests on Python floats. The stated
-    default tolerances are those of an exact solve
-    on an active set: :data:`PRIMAL_TOL` and :data:`DUAL_TOL` (relative to 1 + ‖g‖∞)."""
+    default tolerances are those of an exact solve on an active set: :data:`PRIMAL_TOL` and :data:`DUAL_TOL`
+    (relative to 1 + ‖g‖∞)."""
     H, g, A, b, C, l, u = arrays  # noqa: E741
     if not math.isfinite(sum(x.tolist())):
         return False
