@@ -87,6 +87,7 @@ class ClosedLoop:
         self._controller = s.controller
         self._call = s.call
         self._fixed_reference = s.fixed_reference
+        self._reference_fn = s.reference_fn
         self._shape = (s.n,)
         self._has_log = hasattr(s.controller, "last_log")
         self._external = not pl.simple and pl.has_external
@@ -217,8 +218,9 @@ class ClosedLoop:
         rec = self._rec
         ref = self._fixed_reference
         if ref is None:
-            s = self.s
-            ref = setup.check_reference(s.reference_fn(t), s.n, t)  # type: ignore[misc]  # set when no fixed one
+            ref = self._reference_fn(t)  # type: ignore[misc]  # set when there is no fixed one
+            if not isinstance(ref, Reference) or ref.q.shape != self._shape:
+                setup.check_reference(ref, self.s.n, t)  # (raises, naming what is wrong)
         rec.references[k] = ref
         try:
             tau = self._call(t, qm, vm, ref)
