@@ -43,11 +43,13 @@ SCHEMES = {"rk4": 0, "euler": 1, "semi-implicit-euler": 2, "implicit-euler": 3}
 FAMILY = {"rk4": "explicit", "euler": "explicit", "semi-implicit-euler": "implicit", "implicit-euler": "implicit"}
 #: the functions of the C driver (see ``step_events.c`` and ``step_period.c``)
 DRIVER = ("advance", "begin", "accel", "period")
-_STATUS = {1: "mass matrix not positive definite", 2: "singular Newton matrix", 3: "a row outside the record"}
+_STATUS = {1: "mass matrix not positive definite", 2: "singular Newton matrix"}
+#: the period's status for a row outside the record it is bound to (``step_period.c``)
+BAD_ROW = 3
 #: where a period failed (``step_period.c``'s PERIOD_*), as the messages of begin, accel and step name it
 _WHERE = {0: "stick solve", 1: "accelerations", 2: "step"}
 #: entries of the period's ``opt`` and ``out`` (see ``step_period.c``)
-PERIOD_OPT, PERIOD_OUT = 8, 3
+PERIOD_OPT, PERIOD_OUT = 9, 3
 
 #: the C driver's files, in the order they are appended to the generated code
 DRIVER_FILES = ("step_core.c", "step_schemes.c", "step_events.c", "step_period.c")
@@ -72,7 +74,7 @@ def _shapes(layout: PlantLayout) -> list[cs.Function]:
         "begin": ([n, n, n, 18, layout.size, ns], [ns, 4]),
         "accel": ([n, n, n, 18, layout.size, ns], [n, 4]),
         # the record's outputs are declared as one row (bound to the whole arrays, see step_period.c)
-        "period": ([n, 18, layout.size, PERIOD_OPT, ns], [n, n, n, n, n, 1, 1, PERIOD_OUT, ns]),
+        "period": ([n, n, 18, layout.size, PERIOD_OPT, ns], [n, n, n, n, n, 1, 1, PERIOD_OUT, ns]),
     }
     out = []
     for name, (ins, outs) in spec.items():
@@ -109,7 +111,11 @@ def library(
     """
     tag, source = library_tag(model, layout, family)
     return codegen.cached(
-        list(DRIVER), tag, lambda: [*kernels(model, layout, family), *_shapes(layout)], cache_dir, source=source
+        list(DRIVER),
+        tag,
+        lambda: [*kernels(model, layout, family), *_shapes(layout)],
+        cache_dir,
+        source=source,
     )
 
 
@@ -184,7 +190,7 @@ class CompiledPlant:
         )
         self._period_fn = functions["period"]
         self._run_period: Any = None  # the period bound to a record (see bind_record)
-        self._period_tau = np.zeros(n)
+        self._period_tau = np.zeros(n)  # the torque of a period whose commanded torque was clipped
         self._period_opt = np.zeros(PERIOD_OPT)
         self._period_out = np.zeros(PERIOD_OUT)
         self._period_samples = np.zeros(18)
@@ -338,6 +344,7 @@ class CompiledPlant:
     # ---------------------------------------------------------------------------- control periods
     def bind_record(
         self,
+        tau: FloatArray,
         q: FloatArray,
         qd: FloatArray,
         qdd: FloatArray,
@@ -351,68 +358,91 @@ class CompiledPlant:
         max_velocity: float,
         max_position: float,
     ) -> None:
-        """Make :meth:`period` integrate on the rows of a run's record: (samples, n) arrays of q, q̇, q̈, the friction
-        torque and the stuck joints (1.0: stuck), and (samples,) arrays of the friction and external work, all
-        C-contiguous float64 (the generated code writes into them by row). ``substeps`` steps of ``dt`` [s] a
-        period; ``accel_at_start``: q̈ at the period's start by an evaluation (the implicit schemes, whose step
-        gives none); the state left is checked against ``max_velocity`` and ``max_position``
-        (:meth:`armctl.sim.loop.ClosedLoop.check`)."""
+        """Make :meth:`period` integrate on the rows of a run's record: (samples, n) arrays of the commanded torques
+        (read), q, q̇, q̈, the friction torque and the stuck joints (1.0: stuck), and (samples,) arrays of the
+        friction and external work, all C-contiguous float64 (the generated code reads and writes them by row).
+        ``substeps`` steps of ``dt`` [s] a period; ``accel_at_start``: q̈ at the period's start by an evaluation
+        (the implicit schemes, whose step gives none); the state left is checked against ``max_velocity`` and
+        ``max_position`` (:meth:`armctl.sim.loop.ClosedLoop.check`)."""
         rows = len(q)
         record = (q, qd, qdd, tau_friction, stuck, work_friction, work_external)
-        for a in record:
+        for a in (tau, *record):
             if a.dtype != np.float64 or not a.flags.c_contiguous or len(a) != rows or a.size != rows * a[0].size:
                 raise ValueError("the record's arrays must be C-contiguous float64 arrays of the same samples")
         self._substeps, self._period_h = substeps, dt
         self._period_samples = np.zeros(18 * max(substeps, 1))
         opt = self._period_opt
-        opt[:] = (0.0, dt, self.opt[2], substeps, rows, float(accel_at_start), max_velocity, max_position)
-        self._record = record  # kept alive with the binding
+        opt[:] = (0.0, dt, self.opt[2], substeps, rows, float(accel_at_start), max_velocity, max_position, 0.0)
+        self._record = (tau, *record)  # kept alive with the binding
         self._run_period = _bound(
             self._period_fn,
-            [self._period_tau, self._period_samples, self.par, opt, self.state],
+            [tau, self._period_tau, self._period_samples, self.par, opt, self.state],
             [*record, self._period_out, self.state],
             self._buffers,
         )
         self._free = False
 
-    def period(self, k: int, t: float, tau: FloatArray) -> float:
-        """Integrate the control period [t, t + Δt_c) from the state of sample k under the held τ, on the record
-        bound by :meth:`bind_record`: the stick solve at t and its records at row k (q̈, friction torque, stuck
-        joints), the sub-steps with their events, the state and the work at row k + 1. Returns why that state
-        stops the run: 0 (it does not), 1 (not finite), 2 (beyond max_velocity), 3 (beyond max_position).
+    def period(self, k: int, t: float, clipped: FloatArray | None = None) -> float:
+        """Integrate the control period [t, t + Δt_c) from the state of sample k under the held torque, on the
+        record bound by :meth:`bind_record`: the stick solve at t and its records at row k (q̈, friction torque,
+        stuck joints), the sub-steps with their events, the state and the work at row k + 1. The torque is the
+        commanded one, row k of the record, or ``clipped`` where the run clipped it at the effort limits. Returns
+        why that state stops the run: 0 (it does not), 1 (not finite), 2 (beyond max_velocity), 3 (beyond
+        max_position).
 
         Raises
         ------
         NotPositiveDefinite
             The mass matrix (or the Newton matrix of an implicit scheme) failed its factorisation.
         """
-        self._period_tau[...] = tau
-        self._period_opt[0] = k
+        opt = self._period_opt
+        opt[0] = k
         if self.disturbance is not None:
             self._disturbance_samples(t, self._substeps)
-        self._run_period()
+        if clipped is None:
+            self._run_period()
+        else:
+            self._run_clipped(clipped)
         out = self._period_out.tolist()
         if out[0]:
-            self._check(out[0], _WHERE.get(int(out[1]), "step"))
+            self._failed(out)
         return out[2]
 
-    def last_sample(self, k: int, t: float, tau: FloatArray) -> None:
+    def last_sample(self, k: int, t: float, clipped: FloatArray | None = None) -> None:
         """The records of the run's last sample k (no step after it): the stick solve at t, the friction torque,
         the stuck joints and q̈ at row k (see :meth:`period`)."""
         opt = self._period_opt
         m = opt[3]
         opt[3] = 0.0
         try:
-            self._period_tau[...] = tau
             opt[0] = k
             if self.disturbance is not None:
                 self._disturbance_samples(t, 0)
-            self._run_period()
+            if clipped is None:
+                self._run_period()
+            else:
+                self._run_clipped(clipped)
         finally:
             opt[3] = m
         out = self._period_out.tolist()
         if out[0]:
-            self._check(out[0], _WHERE.get(int(out[1]), "step"))
+            self._failed(out)
+
+    def _failed(self, out: list[float]) -> None:
+        """Raise what the period's ``out`` says went wrong."""
+        if out[0] == BAD_ROW:
+            k, rows = self._period_opt[[0, 4]].tolist()
+            raise IndexError(f"sample {k:.0f} is outside the record bound to the generated step ({rows:.0f} rows)")
+        self._check(out[0], _WHERE.get(int(out[1]), "step"))
+
+    def _run_clipped(self, clipped: FloatArray) -> None:
+        """The bound period under the torque ``clipped`` instead of the record's."""
+        self._period_tau[...] = clipped
+        self._period_opt[8] = 1.0
+        try:
+            self._run_period()
+        finally:
+            self._period_opt[8] = 0.0
 
     def _disturbance_samples(self, t: float, substeps: int) -> None:
         """h_d at the start, middle and end of every sub-step of the period from t (at t only: ``substeps`` = 0),

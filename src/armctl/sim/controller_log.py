@@ -32,24 +32,33 @@ class ControllerLog:
         slots = self._slots
         for key, val in log.items():
             slot = slots.get(key)
-            if slot is not None:
-                rows, logged, shape = slot
-                kind = type(val)
-                if (kind is np.ndarray and val.shape == shape and val.dtype == FLOAT) or (kind is float and not shape):
-                    rows[k] = val
-                    logged[k] = True
-                    continue
-                self._keep_copies(key)  # another shape or kind from now on: kept one by one
-            elif key not in self._copies and ((type(val) is np.ndarray and val.dtype == FLOAT) or type(val) is float):
-                shape = np.shape(val)
-                rows = self._arrays[key] = np.empty((self.samples, *shape))
-                logged = self._logged[key] = np.zeros(self.samples, dtype=bool)
-                slots[key] = (rows, logged, shape)
+            if slot is not None and type(val) is np.ndarray and val.shape == slot[2] and val.dtype == FLOAT:
+                slot[0][k] = val  # (the usual entry: an array of the key's shape)
+                slot[1][k] = True
+            else:
+                self._add_other(k, key, val)
+
+    def _add_other(self, k: int, key: str, val: Any) -> None:
+        """:meth:`add` of an entry that is not a float64 array of its key's rows: a float of a key of floats, a
+        key's first entry, or one kept as a copy."""
+        slot = self._slots.get(key)
+        if slot is not None:
+            rows, logged, shape = slot
+            if type(val) is float and not shape:
                 rows[k] = val
                 logged[k] = True
-                continue
-            self._copies.setdefault(key, []).append(np.array(val, copy=True))
-            self._copy_rows.setdefault(key, []).append(k)
+                return
+            self._keep_copies(key)  # another shape or kind from now on: kept one by one
+        elif key not in self._copies and ((type(val) is np.ndarray and val.dtype == FLOAT) or type(val) is float):
+            shape = np.shape(val)
+            rows = self._arrays[key] = np.empty((self.samples, *shape))
+            logged = self._logged[key] = np.zeros(self.samples, dtype=bool)
+            self._slots[key] = (rows, logged, shape)
+            rows[k] = val
+            logged[k] = True
+            return
+        self._copies.setdefault(key, []).append(np.array(val, copy=True))
+        self._copy_rows.setdefault(key, []).append(k)
 
     def _keep_copies(self, key: str) -> None:
         """Move ``key``'s rows so far into copies (its entries change shape or kind)."""

@@ -90,6 +90,8 @@ class ClosedLoop:
         self._reference_fn = s.reference_fn
         self._shape = (s.n,)
         self._has_log = hasattr(s.controller, "last_log")
+        self._log_add = rec.log.add
+        self._references, self._taus = rec.references, rec.tau
         self._external = not pl.simple and pl.has_external
         limit = s.effort_limit
         self._clip = s.saturate and bool(np.isfinite(limit).any())
@@ -101,14 +103,16 @@ class ClosedLoop:
             view.flags.writeable = False
         self._q_view, self._qd_view, self._qm_view, self._qdm_view = self._views
         self._noisy = s.noise_q is not None and s.noise_qd is not None
-        #: the plant's whole control period in one call, or None (the Python loop of integrate)
-        self._period: Callable[[int, float, FloatArray], float] | None = None
+        #: the plant's whole control period in one call (k, t, the clipped torque or None), or None (the Python
+        #: loop of integrate)
+        self._period: Callable[[int, float, FloatArray | None], float] | None = None
         #: why the state the last period left stops the run (0: it does not), as that call checked it; None: checked
         #: here
         self._state_code: float | None = None
         bind = getattr(pl, "bind_record", None)
         if bind is not None:
             bind(
+                rec.tau,
                 rec.q,
                 rec.qd,
                 rec.qdd,
@@ -215,13 +219,12 @@ class ClosedLoop:
     def control(self, k: int, t: float, qm: FloatArray, vm: FloatArray) -> FloatArray | None:
         """τ_k from the controller, checked and recorded; the applied (saturated) torque, or None if τ_k is not
         finite (the run stops as diverged)."""
-        rec = self._rec
         ref = self._fixed_reference
         if ref is None:
             ref = self._reference_fn(t)  # type: ignore[misc]  # set when there is no fixed one
             if not isinstance(ref, Reference) or ref.q.shape != self._shape:
                 setup.check_reference(ref, self.s.n, t)  # (raises, naming what is wrong)
-        rec.references[k] = ref
+        self._references[k] = ref
         try:
             tau = self._call(t, qm, vm, ref)
         except ValueError as exc:
@@ -237,7 +240,7 @@ class ClosedLoop:
         if self._has_log:
             log = self._controller.last_log
             if log:
-                rec.log.add(k, log)
+                self._log_add(k, log)
         if tau.shape != self._shape:
             raise ShapeError(
                 f"the controller returned a torque of shape {tau.shape} at t = {t}; expected {self._shape}", value=tau
@@ -246,7 +249,7 @@ class ClosedLoop:
         if not math.isfinite(sum(tl)):
             self._stop(k, t, f"the controller returned a non-finite torque {tau}", *self._state(k))
             return None
-        rec.tau[k] = tau  # the applied torque is τ too, but for the clipped rows (see applied_torques)
+        self._taus[k] = tau  # the applied torque is τ too, but for the clipped rows (see applied_torques)
         low = self._lowest_limit
         if self._clip and (max(tl) > low or -min(tl) > low) and any(map(operator.gt, map(abs, tl), self._limits)):
             self.clipped.append(k)
@@ -260,7 +263,9 @@ class ClosedLoop:
             if self._external:
                 rec = self._rec
                 rec.record_external(k, self._plant, t, rec.q[k], rec.qd[k])
-            self._state_code = period(k, t, tau)
+            clipped = self.clipped
+            # the torque is the record's τ_k (control wrote it), unless saturation clipped it
+            self._state_code = period(k, t, tau if clipped and clipped[-1] == k else None)
             return
         s, rec, pl = self.s, self._rec, self._plant
         q, qd, h = self.q, self.qd, s.dt
@@ -291,7 +296,8 @@ class ClosedLoop:
         if self._external:
             rec.record_external(k, pl, t, q, qd)
         if self._period is not None:
-            pl.last_sample(k, t, tau)
+            clipped = self.clipped
+            pl.last_sample(k, t, tau if clipped and clipped[-1] == k else None)
             return
         if not pl.simple:
             pl.begin(t, q, qd, tau)
@@ -301,6 +307,9 @@ class ClosedLoop:
     def applied_torques(self) -> None:
         """Write the applied (saturated) torques of the run into the recorder."""
         rec, limit = self.s.recorder, self.s.effort_limit
+        if not self.clipped:  # the commanded torques (the record is complete: nothing writes into it any more)
+            rec.tau_applied = rec.tau
+            return
         rec.tau_applied[:] = rec.tau
         if self.clipped:
             rec.tau_applied[self.clipped] = np.clip(rec.tau[self.clipped], -limit, limit)

@@ -4,16 +4,19 @@
  * (Recorder.record_friction), q̈ at t_k, the m sub-steps with their events (stepper.advance), the friction and external
  * work accumulated over them — and the state check of the sample t_k + Δt_c it leaves (ClosedLoop.check).
  *
- *   period(tau, W, par, opt, S) -> (Q, V, A, F, STUCK, WF, WE, out, S)
+ *   period(TAU, applied, W, par, opt, S) -> (Q, V, A, F, STUCK, WF, WE, out, S)
  *
- * The outputs Q … WE are bound to the whole arrays of the run's record (rows of N, or of 1 for the work), larger
- * than the one row they are declared as (CasADi's buffers take any buffer at least that large): the function reads
+ * TAU and the outputs Q … WE are bound to the whole arrays of the run's record (rows of N, or of 1 for the work),
+ * larger than the one row they are declared as (CasADi's buffers take any buffer at least that large): the function
+ * takes the torque held over the period from row k of TAU (the commanded torques; from ``applied`` instead where the
+ * run clipped it), reads
  * the state of sample k (row k of Q and V, the work so far from WF[k] and WE[k]) and writes row k of A, F and STUCK
- * and row k + 1 of Q, V, WF and WE. W holds the disturbance's samples of every sub-step, 18 each (start, middle,
+ * (STUCK only where a joint is stuck: the record starts as zeros) and row k + 1 of Q, V, WF and WE. W holds the disturbance's samples of every sub-step, 18 each (start, middle,
  * end of sub-step i at W + 18 i; only its start for the last sample).
  *
  * opt = [k, h, scheme, m, rows, q̈ by an evaluation at t_k (1) or from the first sub-step (0), max_velocity,
- *        max_position]; m = 0: the last sample (no step after it: the stick solve, its records and q̈ only).
+ *        max_position, the torque from ``applied`` (1) or from TAU (0)]; m = 0: the last sample (no step after it:
+ *        the stick solve, its records and q̈ only).
  * out = [status, where it failed (PERIOD_BEGIN, PERIOD_ACCEL, PERIOD_STEP), why the state it left stops the run
  *        (STATE_OK, STATE_NOT_FINITE, STATE_VELOCITY, STATE_POSITION)].
  * A row outside the record (k < 0, or k + 1 ≥ rows with m > 0, k ≥ rows) writes nothing: status BAD_ROW.
@@ -46,7 +49,7 @@ static int armctl_state_check(const double* q, const double* v, double max_veloc
 }
 
 CASADI_SYMBOL_EXPORT int period(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  const double *tau = arg[0], *W = arg[1], *par = arg[2], *opt = arg[3];
+  const double *W = arg[2], *par = arg[3], *opt = arg[4], *tau;
   double *Q = res[0], *V = res[1], *A = res[2], *F = res[3], *STUCK = res[4], *WF = res[5], *WE = res[6];
   double *out = res[7];
   double S[NS], q[N], v[N], hd[6];
@@ -60,7 +63,8 @@ CASADI_SYMBOL_EXPORT int period(const casadi_real** arg, casadi_real** res, casa
     out[0] = BAD_ROW;
     return 0;
   }
-  memcpy(S, arg[4], sizeof S);
+  tau = opt[8] != 0.0 ? arg[1] : arg[0] + k * N;
+  memcpy(S, arg[5], sizeof S);
   memcpy(q, Q + k * N, sizeof q);
   memcpy(v, V + k * N, sizeof v);
   /* Plant.begin at t_k, and what Recorder.record_friction records of it (as the function begin) */
@@ -85,10 +89,9 @@ CASADI_SYMBOL_EXPORT int period(const casadi_real** arg, casadi_real** res, casa
 #else
   for (j = 0; j < N; ++j) S[S_TAUF + j] = 0.0;
 #endif
-  for (j = 0; j < N; ++j) {
-    F[k * N + j] = S[S_TAUF + j];
-    STUCK[k * N + j] = md.stuck[j];
-  }
+  for (j = 0; j < N; ++j) F[k * N + j] = S[S_TAUF + j];
+  if (md.any) /* (else the row stays as the record starts it: zeros) */
+    for (j = 0; j < N; ++j) STUCK[k * N + j] = md.stuck[j];
   if (opt[5] != 0.0 || m == 0) { /* q̈ at t_k by an evaluation (the implicit schemes' and the last sample's) */
     double a[N], f[N], e[N];
     st = md.all ? OK : armctl_rhs(q, v, tau, hd, par, &md, a, f, e);
