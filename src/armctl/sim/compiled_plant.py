@@ -51,6 +51,9 @@ _WHERE = {0: "stick solve", 1: "accelerations", 2: "step"}
 #: entries of the period's ``opt`` and ``out`` (see ``step_period.c``)
 PERIOD_OPT, PERIOD_OUT = 9, 3
 
+#: the compiler's flags for the plant's library (its step runs in the simulator's loop: a slower build, faster code)
+FLAGS = codegen.CFLAGS_FAST
+
 #: the C driver's files, in the order they are appended to the generated code
 DRIVER_FILES = ("step_core.c", "step_schemes.c", "step_events.c", "step_period.c")
 
@@ -116,6 +119,7 @@ def library(
         lambda: [*kernels(model, layout, family), *_shapes(layout)],
         cache_dir,
         source=source,
+        flags=FLAGS,
     )
 
 
