@@ -109,6 +109,7 @@ class ClosedLoop:
         #: why the state the last period left stops the run (0: it does not), as that call checked it; None: checked
         #: here
         self._state_code: float | None = None
+        self._last: Any = None  # the plant's last sample in one call, with _period
         bind = getattr(pl, "bind_record", None)
         if bind is not None:
             bind(
@@ -126,7 +127,9 @@ class ClosedLoop:
                 s.max_velocity,
                 s.max_position,
             )
-            self._period = pl.period
+            whole: Any = pl  # (a plant with bind_record: CompiledPlant)
+            self._period = whole.period
+            self._last = whole.last_sample
             rec.q[0] = q
             rec.qd[0] = qd
 
@@ -297,7 +300,7 @@ class ClosedLoop:
             rec.record_external(k, pl, t, q, qd)
         if self._period is not None:
             clipped = self.clipped
-            pl.last_sample(k, t, tau if clipped and clipped[-1] == k else None)
+            self._last(k, t, tau if clipped and clipped[-1] == k else None)
             return
         if not pl.simple:
             pl.begin(t, q, qd, tau)

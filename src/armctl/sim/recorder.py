@@ -165,6 +165,9 @@ class Recorder:
             plant=model,
             _energy=None if energy else np.full(rows, np.nan),
             _energy_of=partial(energies, dyn) if energy else None,
+            # the whole record is the result's (nothing writes into it after the run); a shorter run's rows are
+            # copied, so that the result does not keep the rest
+            _copy=rows < self.samples,
         )
 
 

@@ -37,8 +37,8 @@ class SampledReference:
             rows = len(references)
             return cls._holding(t, *(np.tile(a, (rows, 1)) for a in (first.q, first.qd, first.qdd)))
         # one concatenation of the rows (about 25 times cheaper than np.array of a list of arrays)
-        rows = ([r.q for r in references], [r.qd for r in references], [r.qdd for r in references])
-        return cls._holding(t, *(np.concatenate(x).reshape(-1, n) for x in rows))
+        parts = ([r.q for r in references], [r.qd for r in references], [r.qdd for r in references])
+        return cls._holding(t, *(np.concatenate(x).reshape(-1, n) for x in parts))
 
     @classmethod
     def _holding(cls, t: FloatArray, q: FloatArray, qd: FloatArray, qdd: FloatArray) -> SampledReference:
