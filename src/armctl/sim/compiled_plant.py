@@ -32,6 +32,7 @@ from armctl.dynamics import codegen
 from armctl.dynamics.casadi_buffer import buffer_of, view
 from armctl.model.robot import RobotModel
 from armctl.sim.generated_plant import kernels
+from armctl.sim.period import FAILED
 from armctl.sim.plant import Plant
 from armctl.sim.plant_layout import PlantLayout
 from armctl.sim.stick_slip import NotPositiveDefinite
@@ -194,7 +195,8 @@ class CompiledPlant:
         )
         self._period_fn = functions["period"]
         self._run_period: Any = None  # the period bound to a record (see bind_record)
-        self._period_tau = np.zeros(n)  # the torque of a period whose commanded torque was clipped
+        self._limit = np.zeros(n)  # the effort limits of the bound run
+        self._failure: list[float] = [0.0, 0.0, 0.0]  # the out of the last period that failed
         self._period_opt = np.zeros(PERIOD_OPT)
         self._period_out = np.zeros(PERIOD_OUT)
         self._period_samples = np.zeros(18)
@@ -356,65 +358,60 @@ class CompiledPlant:
         stuck: FloatArray,
         work_friction: FloatArray,
         work_external: FloatArray,
+        effort_limit: FloatArray,
+        saturate: bool,
         substeps: int,
         dt: float,
         accel_at_start: bool,
         max_velocity: float,
         max_position: float,
     ) -> None:
-        """Make :meth:`period` integrate on the rows of a run's record: (samples, n) arrays of the commanded torques
-        (read), q, q̇, q̈, the friction torque and the stuck joints (1.0: stuck), and (samples,) arrays of the
-        friction and external work, all C-contiguous float64 (the generated code reads and writes them by row).
-        ``substeps`` steps of ``dt`` [s] a period; ``accel_at_start``: q̈ at the period's start by an evaluation
-        (the implicit schemes, whose step gives none); the state left is checked against ``max_velocity`` and
-        ``max_position`` (:meth:`armctl.sim.loop.ClosedLoop.check`)."""
+        """Make :meth:`period` integrate on the rows of a run's record: (samples, n) arrays of the controller's
+        torques (read), q, q̇, q̈, the friction torque and the stuck joints (1.0: stuck), and (samples,) arrays of
+        the friction and external work, all C-contiguous float64 (the generated code reads and writes them by row).
+        A torque beyond ``effort_limit`` is clipped where ``saturate``; ``substeps`` steps of ``dt`` [s] a period;
+        ``accel_at_start``: q̈ at the period's start by an evaluation (the implicit schemes, whose step gives none);
+        the state left is checked against ``max_velocity`` and ``max_position``
+        (:meth:`armctl.sim.loop.ClosedLoop.check`)."""
         rows = len(q)
-        record = (q, qd, qdd, tau_friction, stuck, work_friction, work_external)
-        for a in (tau, *record):
+        record = (tau, q, qd, qdd, tau_friction, stuck, work_friction, work_external)
+        for a in record:
             if a.dtype != np.float64 or not a.flags.c_contiguous or len(a) != rows or a.size != rows * a[0].size:
                 raise ValueError("the record's arrays must be C-contiguous float64 arrays of the same samples")
         self._substeps, self._period_h = substeps, dt
         self._period_samples = np.zeros(18 * max(substeps, 1))
+        self._limit[...] = effort_limit
         opt = self._period_opt
-        opt[:] = (0.0, dt, self.opt[2], substeps, rows, float(accel_at_start), max_velocity, max_position, 0.0)
-        self._record = (tau, *record)  # kept alive with the binding
+        opt[:] = (0.0, dt, self.opt[2], substeps, rows, float(accel_at_start), max_velocity, max_position, saturate)
+        self._record = record  # kept alive with the binding
         self._run_period = _bound(
             self._period_fn,
-            [tau, self._period_tau, self._period_samples, self.par, opt, self.state],
-            [*record, self._period_out, self.state],
+            [tau, self._limit, self._period_samples, self.par, opt, self.state],
+            [*record[1:], self._period_out, self.state],
             self._buffers,
         )
         self._free = False
 
-    def period(self, k: int, t: float, clipped: FloatArray | None = None) -> float:
-        """Integrate the control period [t, t + Δt_c) from the state of sample k under the held torque, on the
-        record bound by :meth:`bind_record`: the stick solve at t and its records at row k (q̈, friction torque,
-        stuck joints), the sub-steps with their events, the state and the work at row k + 1. The torque is the
-        commanded one, row k of the record, or ``clipped`` where the run clipped it at the effort limits. Returns
-        why that state stops the run: 0 (it does not), 1 (not finite), 2 (beyond max_velocity), 3 (beyond
-        max_position).
-
-        Raises
-        ------
-        NotPositiveDefinite
-            The mass matrix (or the Newton matrix of an implicit scheme) failed its factorisation.
-        """
-        opt = self._period_opt
-        opt[0] = k
+    def period(self, k: int, t: float) -> float:
+        """Integrate the control period [t, t + Δt_c) from the state of sample k on the record bound by
+        :meth:`bind_record`: the checks of the controller's torque τ_k (row k) and its saturation, the stick solve
+        at t and its records at row k (q̈, friction torque, stuck joints), the sub-steps with their events, the
+        state and the work at row k + 1. Returns the code of :mod:`armctl.sim.period`: why that state stops the
+        run, plus CLIPPED where τ_k was clipped, or TORQUE_NOT_FINITE (nothing else done), or FAILED (see
+        :meth:`raise_failure`)."""
+        self._period_opt[0] = k
         if self.disturbance is not None:
             self._disturbance_samples(t, self._substeps)
-        if clipped is None:
-            self._run_period()
-        else:
-            self._run_clipped(clipped)
+        self._run_period()
         out = self._period_out.tolist()
         if out[0]:
-            self._failed(out)
+            self._failure = out
+            return out[2] + FAILED
         return out[2]
 
-    def last_sample(self, k: int, t: float, clipped: FloatArray | None = None) -> None:
-        """The records of the run's last sample k (no step after it): the stick solve at t, the friction torque,
-        the stuck joints and q̈ at row k (see :meth:`period`)."""
+    def last_sample(self, k: int, t: float) -> float:
+        """The run's last sample k (no step after it): the checks of τ_k and its saturation, the stick solve at t,
+        the friction torque, the stuck joints and q̈ at row k; the code of :meth:`period` (no state's)."""
         opt = self._period_opt
         m = opt[3]
         opt[3] = 0.0
@@ -422,31 +419,30 @@ class CompiledPlant:
             opt[0] = k
             if self.disturbance is not None:
                 self._disturbance_samples(t, 0)
-            if clipped is None:
-                self._run_period()
-            else:
-                self._run_clipped(clipped)
+            self._run_period()
         finally:
             opt[3] = m
         out = self._period_out.tolist()
         if out[0]:
-            self._failed(out)
+            self._failure = out
+            return out[2] + FAILED
+        return out[2]
 
-    def _failed(self, out: list[float]) -> None:
-        """Raise what the period's ``out`` says went wrong."""
+    def raise_failure(self) -> None:
+        """Raise why the last :meth:`period` failed.
+
+        Raises
+        ------
+        NotPositiveDefinite
+            The mass matrix (or the Newton matrix of an implicit scheme) failed its factorisation.
+        IndexError
+            A row outside the bound record (a bug of the caller).
+        """
+        out = self._failure
         if out[0] == BAD_ROW:
             k, rows = self._period_opt[[0, 4]].tolist()
             raise IndexError(f"sample {k:.0f} is outside the record bound to the generated step ({rows:.0f} rows)")
         self._check(out[0], _WHERE.get(int(out[1]), "step"))
-
-    def _run_clipped(self, clipped: FloatArray) -> None:
-        """The bound period under the torque ``clipped`` instead of the record's."""
-        self._period_tau[...] = clipped
-        self._period_opt[8] = 1.0
-        try:
-            self._run_period()
-        finally:
-            self._period_opt[8] = 0.0
 
     def _disturbance_samples(self, t: float, substeps: int) -> None:
         """h_d at the start, middle and end of every sub-step of the period from t (at t only: ``substeps`` = 0),

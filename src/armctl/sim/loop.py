@@ -19,15 +19,17 @@ import math
 import operator
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
 from armctl._checks import FLOAT, FloatArray, real_array
 from armctl.errors import InvalidParameterError, ShapeError
 from armctl.references import Reference
+from armctl.sim import period as codes
 from armctl.sim import setup
 from armctl.sim.integrators import Step
+from armctl.sim.period import WholePeriods
 from armctl.sim.plant import Plant
 from armctl.sim.recorder import Recorder
 from armctl.sim.stepper import advance
@@ -103,16 +105,16 @@ class ClosedLoop:
             view.flags.writeable = False
         self._q_view, self._qd_view, self._qm_view, self._qdm_view = self._views
         self._noisy = s.noise_q is not None and s.noise_qd is not None
-        #: the plant's whole control period in one call (k, t, the clipped torque or None), or None (the Python
-        #: loop of integrate)
-        self._period: Callable[[int, float, FloatArray | None], float] | None = None
+        #: the plant's whole control period in one call (:mod:`armctl.sim.period`), or None (the Python of
+        #: control's checks of τ and integrate)
+        self._whole: WholePeriods | None = None
+        self._period: Callable[[int, float], float] | None = None
         #: why the state the last period left stops the run (0: it does not), as that call checked it; None: checked
         #: here
         self._state_code: float | None = None
-        self._last: Any = None  # the plant's last sample in one call, with _period
-        bind = getattr(pl, "bind_record", None)
-        if bind is not None:
-            bind(
+        if hasattr(pl, "bind_record"):
+            self._whole = whole = cast(WholePeriods, pl)
+            whole.bind_record(
                 rec.tau,
                 rec.q,
                 rec.qd,
@@ -121,15 +123,15 @@ class ClosedLoop:
                 rec.stuck,
                 rec.work_friction,
                 rec.work_external,
+                limit,
+                self._clip,
                 s.substeps,
                 s.dt,
                 s.implicit,
                 s.max_velocity,
                 s.max_position,
             )
-            whole: Any = pl  # (a plant with bind_record: CompiledPlant)
             self._period = whole.period
-            self._last = whole.last_sample
             rec.q[0] = q
             rec.qd[0] = qd
 
@@ -153,7 +155,8 @@ class ClosedLoop:
                     if k == last:  # the last sample: its state and torque, no step after it
                         self._last_sample(k, t, tau)
                         return
-                    integrate(k, t, tau)
+                    if integrate(k, t, tau):
+                        return
                 except (NotPositiveDefinite, np.linalg.LinAlgError) as exc:  # the latter: the Lagrange backend's
                     rec = s.recorder
                     why = f"{exc} during the control period from t = {t:g} s"
@@ -248,6 +251,9 @@ class ClosedLoop:
             raise ShapeError(
                 f"the controller returned a torque of shape {tau.shape} at t = {t}; expected {self._shape}", value=tau
             )
+        if self._period is not None:  # the period checks and saturates τ_k, read from the record (see integrate)
+            self._taus[k] = tau
+            return tau
         tl = tau.tolist()
         if not math.isfinite(sum(tl)):
             self._stop(k, t, f"the controller returned a non-finite torque {tau}", *self._state(k))
@@ -259,17 +265,18 @@ class ClosedLoop:
             return np.clip(tau, -self.s.effort_limit, self.s.effort_limit)
         return tau
 
-    def integrate(self, k: int, t: float, tau: FloatArray) -> None:
-        """Integrate the plant over [t, t + Δt_c) under the held τ (sub-steps of the integrator)."""
+    def integrate(self, k: int, t: float, tau: FloatArray) -> bool:
+        """Integrate the plant over [t, t + Δt_c) under the held τ (sub-steps of the integrator). True: the run
+        stopped (a plant's whole period found τ not finite)."""
         period = self._period
         if period is not None:
             if self._external:
                 rec = self._rec
                 rec.record_external(k, self._plant, t, rec.q[k], rec.qd[k])
-            clipped = self.clipped
-            # the torque is the record's τ_k (control wrote it), unless saturation clipped it
-            self._state_code = period(k, t, tau if clipped and clipped[-1] == k else None)
-            return
+            code = self._state_code = period(k, t)
+            if code > codes.STATE_MASK:
+                return self._period_events(k, t, tau, int(code))
+            return False
         s, rec, pl = self.s, self._rec, self._plant
         q, qd, h = self.q, self.qd, s.dt
         if not pl.simple:
@@ -292,15 +299,31 @@ class ClosedLoop:
                 self._work_friction += dwf
                 self._work_external += dwe
         self.q, self.qd = q, qd
+        return False
+
+    def _period_events(self, k: int, t: float, tau: FloatArray, code: int) -> bool:
+        """What a whole period's ``code`` says besides the state's (:mod:`armctl.sim.period`), as control and
+        integrate do it in Python: a τ_k that is not finite stops the run at sample k (True), a clipped one is
+        recorded; a failure is raised."""
+        if code & codes.TORQUE_NOT_FINITE:
+            self._stop(k, t, f"the controller returned a non-finite torque {tau}", *self._state(k))
+            return True
+        if code & codes.CLIPPED:
+            self.clipped.append(k)
+        if code & codes.FAILED:
+            self._whole.raise_failure()  # type: ignore[union-attr]  # a code of the whole period's
+        self._state_code = code & codes.STATE_MASK
+        return False
 
     def _last_sample(self, k: int, t: float, tau: FloatArray) -> None:
         rec, pl = self._rec, self._plant
         q, qd = self._state(k)
         if self._external:
             rec.record_external(k, pl, t, q, qd)
-        if self._period is not None:
-            clipped = self.clipped
-            self._last(k, t, tau if clipped and clipped[-1] == k else None)
+        if self._whole is not None:
+            code = self._whole.last_sample(k, t)
+            if code:
+                self._period_events(k, t, tau, int(code))
             return
         if not pl.simple:
             pl.begin(t, q, qd, tau)

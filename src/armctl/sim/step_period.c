@@ -1,24 +1,27 @@
 /* One control period of the simulator's loop in one call (see step_core.c for the definitions; appended after
- * step_events.c): what ClosedLoop.integrate does with a plant for the period [t_k, t_k + Δt_c) under the held τ_k —
- * the stick solve at t_k (Plant.begin), the friction torque and the stuck joints recorded there
- * (Recorder.record_friction), q̈ at t_k, the m sub-steps with their events (stepper.advance), the friction and external
- * work accumulated over them — and the state check of the sample t_k + Δt_c it leaves (ClosedLoop.check).
+ * step_events.c): what ClosedLoop does with a plant for the period [t_k, t_k + Δt_c) under the held τ_k — the checks
+ * of the controller's torque τ_k and its saturation (ClosedLoop.control), the stick solve at t_k (Plant.begin), the
+ * friction torque and the stuck joints recorded there (Recorder.record_friction), q̈ at t_k, the m sub-steps with
+ * their events (stepper.advance), the friction and external work accumulated over them — and the state check of
+ * the sample t_k + Δt_c it leaves (ClosedLoop.check).
  *
- *   period(TAU, applied, W, par, opt, S) -> (Q, V, A, F, STUCK, WF, WE, out, S)
+ *   period(TAU, limit, W, par, opt, S) -> (Q, V, A, F, STUCK, WF, WE, out, S)
  *
  * TAU and the outputs Q … WE are bound to the whole arrays of the run's record (rows of N, or of 1 for the work),
- * larger than the one row they are declared as (CasADi's buffers take any buffer at least that large): the function
- * takes the torque held over the period from row k of TAU (the commanded torques; from ``applied`` instead where the
- * run clipped it), reads
- * the state of sample k (row k of Q and V, the work so far from WF[k] and WE[k]) and writes row k of A, F and STUCK
- * (STUCK only where a joint is stuck: the record starts as zeros) and row k + 1 of Q, V, WF and WE. W holds the disturbance's samples of every sub-step, 18 each (start, middle,
- * end of sub-step i at W + 18 i; only its start for the last sample).
+ * larger than the one row they are declared as (CasADi's buffers take any buffer at least that large). The function
+ * reads the controller's torque τ_k from row k of TAU: if it is not finite it does nothing else (TORQUE_NOT_FINITE);
+ * where saturation is on (opt[8]) and some |τ_k,i| exceeds limit_i, the torque held is τ_k clipped to ±limit
+ * (CLIPPED). It reads the state of sample k (row k of Q and V, the work so far from WF[k] and WE[k]) and writes row
+ * k of A, F and STUCK (STUCK only where a joint is stuck: the record starts as zeros) and row k + 1 of Q, V, WF and
+ * WE. W holds the disturbance's samples of every sub-step, 18 each (start, middle, end of sub-step i at W + 18 i;
+ * only its start for the last sample).
  *
  * opt = [k, h, scheme, m, rows, q̈ by an evaluation at t_k (1) or from the first sub-step (0), max_velocity,
- *        max_position, the torque from ``applied`` (1) or from TAU (0)]; m = 0: the last sample (no step after it:
- *        the stick solve, its records and q̈ only).
- * out = [status, where it failed (PERIOD_BEGIN, PERIOD_ACCEL, PERIOD_STEP), why the state it left stops the run
- *        (STATE_OK, STATE_NOT_FINITE, STATE_VELOCITY, STATE_POSITION)].
+ *        max_position, saturate (1) or not (0)]; m = 0: the last sample (no step after it: the torque's checks, the
+ *        stick solve, its records and q̈ only).
+ * out = [status, where it failed (PERIOD_BEGIN, PERIOD_ACCEL, PERIOD_STEP), code]: code = why the state it left stops
+ *        the run (STATE_OK, STATE_NOT_FINITE, STATE_VELOCITY, STATE_POSITION), plus CLIPPED if τ_k was clipped (also
+ *        when the period then failed), or TORQUE_NOT_FINITE alone (the codes of armctl/sim/period.py).
  * A row outside the record (k < 0, or k + 1 ≥ rows with m > 0, k ≥ rows) writes nothing: status BAD_ROW.
  */
 #define BAD_ROW 3
@@ -29,6 +32,8 @@
 #define STATE_NOT_FINITE 1
 #define STATE_VELOCITY 2
 #define STATE_POSITION 3
+#define CLIPPED 4
+#define TORQUE_NOT_FINITE 8
 
 /* ClosedLoop.check on (q, v): the same tests in the same order, the sums taken left to right as Python's sum. */
 static int armctl_state_check(const double* q, const double* v, double max_velocity, double max_position) {
@@ -49,12 +54,12 @@ static int armctl_state_check(const double* q, const double* v, double max_veloc
 }
 
 CASADI_SYMBOL_EXPORT int period(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  const double *W = arg[2], *par = arg[3], *opt = arg[4], *tau;
+  const double *limit = arg[1], *W = arg[2], *par = arg[3], *opt = arg[4];
   double *Q = res[0], *V = res[1], *A = res[2], *F = res[3], *STUCK = res[4], *WF = res[5], *WE = res[6];
   double *out = res[7];
-  double S[NS], q[N], v[N], hd[6];
+  double S[NS], q[N], v[N], tau[N], hd[6], sum = 0.0;
   long k = (long)opt[0], m = (long)opt[3], rows = (long)opt[4], i;
-  int scheme = (int)opt[2], st, j;
+  int scheme = (int)opt[2], st, j, clipped = 0;
   double h = opt[1];
   armctl_mode md;
   (void)iw; (void)w; (void)mem;
@@ -63,7 +68,20 @@ CASADI_SYMBOL_EXPORT int period(const casadi_real** arg, casadi_real** res, casa
     out[0] = BAD_ROW;
     return 0;
   }
-  tau = opt[8] != 0.0 ? arg[1] : arg[0] + k * N;
+  /* ClosedLoop.control: τ_k finite (its sum, taken left to right as Python's), clipped where beyond the limits */
+  memcpy(tau, arg[0] + k * N, sizeof tau);
+  for (j = 0; j < N; ++j) sum += tau[j];
+  if (!isfinite(sum)) {
+    out[2] = TORQUE_NOT_FINITE;
+    return 0;
+  }
+  if (opt[8] != 0.0) {
+    for (j = 0; j < N; ++j) if (fabs(tau[j]) > limit[j]) clipped = 1;
+    if (clipped) { /* as np.clip(τ, −limit, limit) */
+      for (j = 0; j < N; ++j) tau[j] = tau[j] < -limit[j] ? -limit[j] : tau[j] > limit[j] ? limit[j] : tau[j];
+      out[2] = CLIPPED;
+    }
+  }
   memcpy(S, arg[5], sizeof S);
   memcpy(q, Q + k * N, sizeof q);
   memcpy(v, V + k * N, sizeof v);
@@ -129,7 +147,7 @@ CASADI_SYMBOL_EXPORT int period(const casadi_real** arg, casadi_real** res, casa
 #else
     (void)wf; (void)we;
 #endif
-    out[2] = armctl_state_check(q, v, opt[6], opt[7]);
+    out[2] += armctl_state_check(q, v, opt[6], opt[7]);
   }
   S[S_BEGUN] = 0.0;
   memcpy(res[8], S, sizeof S);
