@@ -5,12 +5,17 @@ The plant's terms are generated with CasADi (:mod:`armctl.sim.generated_plant`) 
 Python step: the stick solve of :meth:`Plant.begin <armctl.sim.plant.Plant.begin>`, the events of
 :func:`armctl.sim.stepper.advance` and the schemes of :mod:`armctl.sim.integrators` and :mod:`armctl.sim.implicit`.
 A step is one call into C; the runs agree with the Python step's to rounding, and a stuck joint stays exactly
-where it is (q̈_S = 0 exactly, see :func:`~armctl.sim.generated_plant.masked_cholesky_solve`).
+where it is (q̈_S = 0 exactly, see :func:`~armctl.sim.generated_plant.masked_cholesky_solve`). Within ``simulate``,
+a whole control period is one call (:meth:`CompiledPlant.period`, ``step_period.c``, the protocol of
+:mod:`armctl.sim.period`): the checks and saturation of the controller's torque, the stick solve and what is recorded
+of it, the sub-steps with their events and work, and the check of the state they leave, read from and written into
+the run's record by row.
 
 One library per arm (the geometry of its chain), plant structure (:class:`~armctl.sim.plant_layout.PlantLayout`)
 and family of schemes (explicit: ``"rk4"``, ``"euler"``; implicit: ``"semi-implicit-euler"``, ``"implicit-euler"``),
-built on first use and cached on disk (:mod:`armctl.dynamics.codegen`); inertial parameters, friction levels, contact
-coefficients, planes and point offsets are inputs of the code, so the variants of a plant share its library.
+built on first use and cached on disk (:mod:`armctl.dynamics.codegen`, compiled with :data:`FLAGS`); inertial
+parameters, friction levels, contact coefficients, planes and point offsets are inputs of the code, so the variants of
+a plant share its library.
 
 The disturbance h_d(t) stays a Python callable: it is evaluated at the start, middle and end of every step and
 passed in (see :meth:`Plant.sample_disturbance <armctl.sim.plant.Plant.sample_disturbance>`).
@@ -131,7 +136,8 @@ class CompiledPlant:
 
     ``sticky`` is None: the events happen inside :meth:`step`, so :func:`armctl.sim.stepper.advance` calls it as
     a plain step. :meth:`begin` (the stick solve at a state) is kept for the next :meth:`step` from that state,
-    as the Python plant's is. Not thread-safe: one object per run.
+    as the Python plant's is. :meth:`bind_record`, :meth:`period` and :meth:`last_sample` integrate whole control
+    periods on a run's record (:mod:`armctl.sim.period`). Not thread-safe: one object per run.
     """
 
     def __init__(self, plant: Plant, scheme: str, layout: PlantLayout, functions: dict[str, cs.Function]) -> None:

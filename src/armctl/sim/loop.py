@@ -69,10 +69,12 @@ class LoopSettings:
 class ClosedLoop:
     """The loop of one run from the state (q, q̇) at t = 0 (see the module).
 
-    On a plant that integrates a whole control period in one call (the generated step's
-    :meth:`~armctl.sim.compiled_plant.CompiledPlant.period`), that call does what :meth:`integrate` does in Python
-    — the stick solve at the period's start and its records, the sub-steps, the work — on the rows of the record,
-    and checks the state it leaves as :meth:`check` does: the state of sample k then lives in row k of the record.
+    On a plant that integrates a whole control period in one call (:mod:`armctl.sim.period`: the generated step's
+    :meth:`~armctl.sim.compiled_plant.CompiledPlant.period`), that call does on the rows of the record what
+    :meth:`control` does with τ_k after recording it (the finiteness check, the saturation) and what
+    :meth:`integrate` does in Python (the stick solve at the period's start and its records, the sub-steps, the
+    work), and checks the state it leaves as :meth:`check` does: the state of sample k then lives in row k of the
+    record.
     """
 
     def __init__(self, settings: LoopSettings, q: FloatArray, qd: FloatArray) -> None:
