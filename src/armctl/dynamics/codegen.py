@@ -30,6 +30,9 @@ from armctl.dynamics import library_cache
 from armctl.errors import BackendError, CacheWarning, InvalidParameterError
 
 CFLAGS = ("-O1", "-fPIC", "-shared")
+#: the flags of a library whose code runs in a hot loop (the simulator's step): a slower build for faster code
+CFLAGS_FAST = ("-O3", "-fPIC", "-shared")
+Flags = tuple[str, ...]
 #: bumped when what a library holds besides the user's functions changes (the key function)
 _LAYOUT = 2
 #: libraries loaded by this process, by path, most recently used last (at most _KEEP)
@@ -63,21 +66,27 @@ def cache_root(cache_dir: str | os.PathLike[str] | None = None) -> Path:
     return Path(env) if env else Path.home() / ".cache" / "armctl"
 
 
-def cache_key(names: list[str], tag: str) -> str:
-    """The full key (SHA-256, 64 hex digits) of the library of the functions ``names`` with cache ``tag``."""
-    return hashlib.sha256(f"{tag}|{cs.CasadiMeta.version()}|{CFLAGS}|{names}|{_LAYOUT}".encode()).hexdigest()
+def cache_key(names: list[str], tag: str, flags: Flags | None = None) -> str:
+    """The full key (SHA-256, 64 hex digits) of the library of the functions ``names`` with cache ``tag``, compiled
+    with ``flags`` (default :data:`CFLAGS`)."""
+    cflags = flags or CFLAGS
+    return hashlib.sha256(f"{tag}|{cs.CasadiMeta.version()}|{cflags}|{names}|{_LAYOUT}".encode()).hexdigest()
 
 
-def library_path(names: list[str], tag: str, cache_dir: str | os.PathLike[str] | None = None) -> Path:
+def library_path(
+    names: list[str], tag: str, cache_dir: str | os.PathLike[str] | None = None, flags: Flags | None = None
+) -> Path:
     """Where the compiled library of the functions ``names`` with cache ``tag`` lives (it may not exist yet): an
     absolute path (CasADi looks for a relative one in its own folders first)."""
-    return cache_root(cache_dir).absolute() / "casadi" / f"armctl_{cache_key(names, tag)[:20]}.so"
+    return cache_root(cache_dir).absolute() / "casadi" / f"armctl_{cache_key(names, tag, flags)[:20]}.so"
 
 
-def is_cached(names: list[str], tag: str, cache_dir: str | os.PathLike[str] | None = None) -> bool:
+def is_cached(
+    names: list[str], tag: str, cache_dir: str | os.PathLike[str] | None = None, flags: Flags | None = None
+) -> bool:
     """Whether the library of ``names`` and ``tag`` is cached and passes its checksum (loading it would not
     compile)."""
-    return library_cache.check(library_path(names, tag, cache_dir), cache_key(names, tag)) is None
+    return library_cache.check(library_path(names, tag, cache_dir, flags), cache_key(names, tag, flags)) is None
 
 
 def compiled(
@@ -95,12 +104,14 @@ def cached(
     make: Callable[[], list[cs.Function]],
     cache_dir: str | os.PathLike[str] | None = None,
     source: str = "",
+    flags: Flags | None = None,
 ) -> dict[str, cs.Function]:
     """The compiled functions ``names`` by name, from the library of ``tag``; ``make()`` (the symbolic
     functions, in the order of ``names``) is called only if the library is not cached yet, so that loading does
     not pay for building the symbolic model (0.2 s for 7 joints). ``source``: C code appended to the generated
     code (it may call the generated functions, and define functions of ``names`` that ``make`` does not make,
-    with CasADi's external-function interface); ``tag`` must change when it does.
+    with CasADi's external-function interface); ``tag`` must change when it does. ``flags``: the compiler's
+    (default :data:`CFLAGS`; part of the library's key).
 
     Raises
     ------
@@ -114,11 +125,11 @@ def cached(
         The cached library failed its checks (truncated, altered, foreign) and was rebuilt.
     """
     names = list(names)
-    lib = library_path(names, tag, cache_dir)
+    lib = library_path(names, tag, cache_dir, flags)
     with _mutex:
         found = _loaded.get(lib)
         if found is None:
-            found = _load_or_build(names, cache_key(names, tag), lib, make, source)
+            found = _load_or_build(names, cache_key(names, tag, flags), lib, make, source, flags)
             _loaded[lib] = found
             while len(_loaded) > _KEEP:
                 _loaded.popitem(last=False)
@@ -128,7 +139,12 @@ def cached(
 
 
 def _load_or_build(
-    names: list[str], key: str, lib: Path, make: Callable[[], list[cs.Function]], source: str = ""
+    names: list[str],
+    key: str,
+    lib: Path,
+    make: Callable[[], list[cs.Function]],
+    source: str = "",
+    flags: Flags | None = None,
 ) -> dict[str, cs.Function]:
     """The functions from ``lib`` if it passes its checks, else from a fresh build (under the build lock)."""
     folder = lib.parent
@@ -160,7 +176,7 @@ def _load_or_build(
                 stacklevel=4,
             )
         library_cache.clean_stale(folder)
-        return build(make(), lib, key, source, names)
+        return build(make(), lib, key, source, names, flags)
 
 
 def _open(path: Path, names: list[str], key: str) -> tuple[dict[str, cs.Function] | None, str | None]:
@@ -208,12 +224,17 @@ def _compiler() -> str:
 
 
 def build(
-    functions: list[cs.Function], lib: Path, key: str, source: str = "", names: list[str] | None = None
+    functions: list[cs.Function],
+    lib: Path,
+    key: str,
+    source: str = "",
+    names: list[str] | None = None,
+    flags: Flags | None = None,
 ) -> dict[str, cs.Function]:
-    """Generate C code for ``functions`` (and the key function of ``key``), append ``source``, compile it into a
-    temporary folder beside ``lib``, load the functions ``names`` (default: those of ``functions``) from there
-    and check its key, then publish it as ``lib`` (renamed: never seen half-written) with its record. Returns
-    the loaded functions by name. The caller holds the build lock.
+    """Generate C code for ``functions`` (and the key function of ``key``), append ``source``, compile it (with
+    ``flags``, default :data:`CFLAGS`) into a temporary folder beside ``lib``, load the functions ``names``
+    (default: those of ``functions``) from there and check its key, then publish it as ``lib`` (renamed: never
+    seen half-written) with its record. Returns the loaded functions by name. The caller holds the build lock.
 
     Raises
     ------
@@ -241,7 +262,7 @@ def build(
                 out.write("\n" + source)
         tmp_lib = tmp / f"{stem}.so"
         proc = subprocess.run(
-            [cc, *CFLAGS, str(src), "-o", str(tmp_lib), "-lm"], capture_output=True, text=True, check=False
+            [cc, *(flags or CFLAGS), str(src), "-o", str(tmp_lib), "-lm"], capture_output=True, text=True, check=False
         )
         if proc.returncode != 0:
             raise BackendError(f"compiling generated code failed ({cc}): {proc.stderr[-2000:]}", value=str(src))

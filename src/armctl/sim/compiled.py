@@ -174,6 +174,7 @@ def _generated(
         lambda: compiled_plant.library(model, layout, family, cache_dir),
         model,
         f"the plant ({what or 'rigid'}, {scheme})",
+        compiled_plant.FLAGS,
     )
     cp = compiled_plant.CompiledPlant(plant, scheme, layout, fns)
     fast = cp.fast if plant.simple and scheme in SCHEMES else None
@@ -187,15 +188,16 @@ def _library(
     load: Callable[[], Any],
     model: RobotModel,
     what: str,
+    flags: tuple[str, ...] | None = None,
 ) -> Any:
-    """``load()``'s library, timed and logged when it has to be built."""
+    """``load()``'s library (compiled with ``flags``), timed and logged when it has to be built."""
     from armctl.dynamics import codegen
 
-    key = str(codegen.library_path(names, tag, cache_dir))
+    key = str(codegen.library_path(names, tag, cache_dir, flags))
     found = _ready.get(key)
     if found is not None:
         return found
-    built = not codegen.is_cached(names, tag, cache_dir)
+    built = not codegen.is_cached(names, tag, cache_dir, flags)
     t0 = time.perf_counter()
     found = load()
     if built:

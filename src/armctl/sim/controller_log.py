@@ -22,33 +22,48 @@ class ControllerLog:
         self.samples = samples
         self._arrays: dict[str, FloatArray] = {}  # key → (samples, *shape) rows
         self._logged: dict[str, np.ndarray] = {}  # key → which rows hold an entry
+        #: key → (its rows, its logged mask, the shape of an entry): what :meth:`add` needs, in one lookup
+        self._slots: dict[str, tuple[FloatArray, np.ndarray, tuple[int, ...]]] = {}
         self._copies: dict[str, list[Any]] = {}  # key → the entries kept one by one
         self._copy_rows: dict[str, list[int]] = {}
 
     def add(self, k: int, log: dict[str, Any]) -> None:
         """Record the entries of ``log`` at sample k."""
+        slots = self._slots
         for key, val in log.items():
-            rows = self._arrays.get(key)
-            if rows is not None:
-                if (type(val) is np.ndarray and val.dtype == FLOAT and val.shape == rows.shape[1:]) or (
-                    type(val) is float and rows.ndim == 1
-                ):
-                    rows[k] = val
-                    self._logged[key][k] = True
-                    continue
-                self._keep_copies(key)  # another shape or kind from now on: kept one by one
-            elif key not in self._copies and ((type(val) is np.ndarray and val.dtype == FLOAT) or type(val) is float):
-                rows = self._arrays[key] = np.empty((self.samples, *np.shape(val)))
-                self._logged[key] = np.zeros(self.samples, dtype=bool)
+            slot = slots.get(key)
+            if slot is not None and type(val) is np.ndarray and val.shape == slot[2] and val.dtype == FLOAT:
+                slot[0][k] = val  # (the usual entry: an array of the key's shape)
+                slot[1][k] = True
+            else:
+                self._add_other(k, key, val)
+
+    def _add_other(self, k: int, key: str, val: Any) -> None:
+        """:meth:`add` of an entry that is not a float64 array of its key's rows: a float of a key of floats, a
+        key's first entry, or one kept as a copy."""
+        slot = self._slots.get(key)
+        if slot is not None:
+            rows, logged, shape = slot
+            if type(val) is float and not shape:
                 rows[k] = val
-                self._logged[key][k] = True
-                continue
-            self._copies.setdefault(key, []).append(np.array(val, copy=True))
-            self._copy_rows.setdefault(key, []).append(k)
+                logged[k] = True
+                return
+            self._keep_copies(key)  # another shape or kind from now on: kept one by one
+        elif key not in self._copies and ((type(val) is np.ndarray and val.dtype == FLOAT) or type(val) is float):
+            shape = np.shape(val)
+            rows = self._arrays[key] = np.empty((self.samples, *shape))
+            logged = self._logged[key] = np.zeros(self.samples, dtype=bool)
+            self._slots[key] = (rows, logged, shape)
+            rows[k] = val
+            logged[k] = True
+            return
+        self._copies.setdefault(key, []).append(np.array(val, copy=True))
+        self._copy_rows.setdefault(key, []).append(k)
 
     def _keep_copies(self, key: str) -> None:
         """Move ``key``'s rows so far into copies (its entries change shape or kind)."""
         rows, logged = self._arrays.pop(key), self._logged.pop(key)
+        del self._slots[key]
         idx = np.flatnonzero(logged).tolist()
         self._copies[key] = [rows[i].copy() for i in idx]
         self._copy_rows[key] = idx

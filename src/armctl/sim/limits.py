@@ -132,23 +132,29 @@ class LimitReport:
             zero = np.zeros(n)
             z = zero  # every figure of a run without samples
             return cls(joint_names, effort, velocity, lower, upper, z, z, z, z, z, z, clipped=clipped, samples=0)
+        samples = len(tau)
+        # per joint along the rows of (n, N) copies, by extremes and counts: NumPy's reductions then run along
+        # contiguous samples, with no (N, n) temporaries (the same numbers as |τ| > F, max |τ|, … over the samples)
+        tau_t, q_t, qd_t = (np.ascontiguousarray(a.T) for a in (tau, q, qd))
+        effort_c, lower_c, upper_c = (np.asarray(a, dtype=float)[:, None] for a in (effort, lower, upper))
+        fast = np.asarray(velocity * (1.0 + VELOCITY_TOLERANCE), dtype=float)[:, None]
         with np.errstate(invalid="ignore", divide="ignore"):  # |x| / inf = 0; inf / inf does not occur (finite x)
-            abs_tau, abs_qd = np.abs(tau), np.abs(qd)
-            beyond = np.maximum(np.maximum(lower - q, q - upper), 0.0)
+            q_low, q_high = q_t.min(axis=1), q_t.max(axis=1)
             return cls(
                 joint_names,
                 effort,
                 velocity,
                 lower,
                 upper,
-                saturated=(abs_tau > effort).mean(axis=0),
-                torque_peak=abs_tau.max(axis=0) / effort,
-                velocity_peak=abs_qd.max(axis=0) / velocity,
-                velocity_over=(abs_qd > velocity * (1.0 + VELOCITY_TOLERANCE)).mean(axis=0),
-                position_overrun=beyond.max(axis=0),
-                position_over=(beyond > 0.0).mean(axis=0),
+                saturated=np.count_nonzero((tau_t > effort_c) | (tau_t < -effort_c), axis=1) / samples,
+                torque_peak=np.maximum(tau_t.max(axis=1), -tau_t.min(axis=1)) / effort,
+                velocity_peak=np.maximum(qd_t.max(axis=1), -qd_t.min(axis=1)) / velocity,
+                velocity_over=np.count_nonzero((qd_t > fast) | (qd_t < -fast), axis=1) / samples,
+                # max over the samples of max(lower − q, q − upper, 0)
+                position_overrun=np.maximum(np.maximum(lower - q_low, q_high - upper), 0.0),
+                position_over=np.count_nonzero((q_t < lower_c) | (q_t > upper_c), axis=1) / samples,
                 clipped=clipped,
-                samples=len(tau),
+                samples=samples,
             )
 
     # ------------------------------------------------------------------------------------------ verdicts

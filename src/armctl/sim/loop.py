@@ -19,15 +19,17 @@ import math
 import operator
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
 from armctl._checks import FLOAT, FloatArray, real_array
 from armctl.errors import InvalidParameterError, ShapeError
 from armctl.references import Reference
+from armctl.sim import period as codes
 from armctl.sim import setup
 from armctl.sim.integrators import Step
+from armctl.sim.period import WholePeriods
 from armctl.sim.plant import Plant
 from armctl.sim.recorder import Recorder
 from armctl.sim.stepper import advance
@@ -65,7 +67,15 @@ class LoopSettings:
 
 
 class ClosedLoop:
-    """The loop of one run from the state (q, q̇) at t = 0 (see the module)."""
+    """The loop of one run from the state (q, q̇) at t = 0 (see the module).
+
+    On a plant that integrates a whole control period in one call (:mod:`armctl.sim.period`: the generated step's
+    :meth:`~armctl.sim.compiled_plant.CompiledPlant.period`), that call does on the rows of the record what
+    :meth:`control` does with τ_k after recording it (the finiteness check, the saturation) and what
+    :meth:`integrate` does in Python (the stick solve at the period's start and its records, the sub-steps, the
+    work), and checks the state it leaves as :meth:`check` does: the state of sample k then lives in row k of the
+    record.
+    """
 
     def __init__(self, settings: LoopSettings, q: FloatArray, qd: FloatArray) -> None:
         self.s = s = settings
@@ -75,41 +85,84 @@ class ClosedLoop:
         self.failure: BaseException | None = None
         self.clipped: list[int] = []  # rows where saturation clipped τ
         self._work_friction = self._work_external = 0.0
+        # what every period uses, bound once
+        self._rec = rec = s.recorder
+        self._plant = pl = s.plant
+        self._controller = s.controller
+        self._call = s.call
+        self._fixed_reference = s.fixed_reference
+        self._reference_fn = s.reference_fn
+        self._shape = (s.n,)
         self._has_log = hasattr(s.controller, "last_log")
+        self._log_add = rec.log.add
+        self._references, self._taus = rec.references, rec.tau
+        self._external = not pl.simple and pl.has_external
         limit = s.effort_limit
         self._clip = s.saturate and bool(np.isfinite(limit).any())
         self._limits = limit.tolist()
         self._lowest_limit = min(self._limits, default=math.inf)  # |τ| below it needs no clipping
-        rec = s.recorder
         # read-only views of the recorded rows: the controller is given these (it cannot change the record)
         self._views = [a.view() for a in (rec.q, rec.qd, rec.q_measured, rec.qd_measured)]
         for view in self._views:
             view.flags.writeable = False
+        self._q_view, self._qd_view, self._qm_view, self._qdm_view = self._views
+        self._noisy = s.noise_q is not None and s.noise_qd is not None
+        #: the plant's whole control period in one call (:mod:`armctl.sim.period`), or None (the Python of
+        #: control's checks of τ and integrate)
+        self._whole: WholePeriods | None = None
+        self._period: Callable[[int, float], float] | None = None
+        #: why the state the last period left stops the run (0: it does not), as that call checked it; None: checked
+        #: here
+        self._state_code: float | None = None
+        if hasattr(pl, "bind_record"):
+            self._whole = whole = cast(WholePeriods, pl)
+            whole.bind_record(
+                rec.tau,
+                rec.q,
+                rec.qd,
+                rec.qdd,
+                rec.tau_friction,
+                rec.stuck,
+                rec.work_friction,
+                rec.work_external,
+                limit,
+                self._clip,
+                s.substeps,
+                s.dt,
+                s.implicit,
+                s.max_velocity,
+                s.max_position,
+            )
+            self._period = whole.period
+            rec.q[0] = q
+            rec.qd[0] = qd
 
     def run(self) -> None:
         """Run every sample; afterwards ``rows``, ``divergence``, ``failure`` and ``clipped`` say what happened."""
         s = self.s
         check, measure, control, integrate = self.check, self.measure, self.control, self.integrate
+        last, cdt = s.periods, s.control_dt
         with np.errstate(all="ignore"):
-            for k in range(s.periods + 1):
-                t = k * s.control_dt
+            for k in range(last + 1):
+                t = k * cdt
                 try:
                     why = check(t)
                     if why is not None:
-                        self._stop(k, t, why, self.q, self.qd)
+                        self._stop(k, t, why, *self._state(k))
                         return
                     qm, vm = measure(k)
                     tau = control(k, t, qm, vm)
                     if tau is None:
                         return
-                    if k == s.periods:  # the last sample: its state and torque, no step after it
+                    if k == last:  # the last sample: its state and torque, no step after it
                         self._last_sample(k, t, tau)
                         return
-                    integrate(k, t, tau)
+                    if integrate(k, t, tau):
+                        return
                 except (NotPositiveDefinite, np.linalg.LinAlgError) as exc:  # the latter: the Lagrange backend's
                     rec = s.recorder
                     why = f"{exc} during the control period from t = {t:g} s"
-                    self._stop(k + 1, t + s.control_dt, why, rec.q[k].copy(), rec.qd[k].copy())
+                    self._stop(k + 1, t + cdt, why, rec.q[k].copy(), rec.qd[k].copy())
                     return
                 except BaseException as exc:  # the controller's, the reference's or the plant's: the run so far is kept
                     self.failure, self.rows = exc, k
@@ -118,50 +171,70 @@ class ClosedLoop:
     def _stop(self, rows: int, t: float, why: str, q: FloatArray, qd: FloatArray) -> None:
         self.divergence, self.rows = (t, why, np.array(q), np.array(qd)), rows
 
+    def _state(self, k: int) -> tuple[FloatArray, FloatArray]:
+        """The state of sample k (the current one)."""
+        if self._period is not None:
+            return self._rec.q[k], self._rec.qd[k]
+        return self.q, self.qd
+
     # ----------------------------------------------------------------------------------- the four steps
     def check(self, t: float) -> str | None:
         """Why the state at t stops the run (None: it does not)."""
+        code = self._state_code
+        if code is not None:  # the period that reached this state checked it
+            if not code:
+                return None
+            return self._why(int(code))
         ql, vl = self.q.tolist(), self.qd.tolist()
         if not math.isfinite(sum(ql) + sum(vl)):
-            return "the state is not finite"
+            return self._why(1)
         s = self.s
         if max(vl) > s.max_velocity or -min(vl) > s.max_velocity:
-            return f"a joint velocity is beyond max_velocity = {s.max_velocity:g}"
+            return self._why(2)
         if s.max_position < math.inf and (max(ql) > s.max_position or -min(ql) > s.max_position):
-            return f"a joint position is beyond max_position = {s.max_position:g}"
+            return self._why(3)
         return None
+
+    def _why(self, code: int) -> str:
+        """The reason of :meth:`check`: 1 not finite, 2 a velocity beyond the bound, 3 a position beyond it."""
+        if code == 1:
+            return "the state is not finite"
+        if code == 2:
+            return f"a joint velocity is beyond max_velocity = {self.s.max_velocity:g}"
+        return f"a joint position is beyond max_position = {self.s.max_position:g}"
 
     def measure(self, k: int) -> tuple[FloatArray, FloatArray]:
         """Record the state of sample k; the (read-only) measurement the controller is given."""
-        s, rec = self.s, self.s.recorder
-        rec.q[k] = self.q
-        rec.qd[k] = self.qd
-        if not s.plant.simple:
-            rec.work_friction[k] = self._work_friction
-            rec.work_external[k] = self._work_external
-        q_view, qd_view, qm_view, qdm_view = self._views
+        rec = self._rec
+        if self._period is None:  # (else the period recorded it)
+            rec.q[k] = self.q
+            rec.qd[k] = self.qd
+            if not self._plant.simple:
+                rec.work_friction[k] = self._work_friction
+                rec.work_external[k] = self._work_external
         if not rec.measured:
-            return q_view[k], qd_view[k]
-        if s.noise_q is not None and s.noise_qd is not None:
-            rec.q_measured[k] = self.q + s.noise_q[k]
-            rec.qd_measured[k] = self.qd + s.noise_qd[k]
+            return self._q_view[k], self._qd_view[k]
+        s = self.s
+        if self._noisy:
+            rec.q_measured[k] = rec.q[k] + s.noise_q[k]  # type: ignore[index]  # _noisy: both are set
+            rec.qd_measured[k] = rec.qd[k] + s.noise_qd[k]  # type: ignore[index]
         else:
-            rec.q_measured[k] = self.q
-            rec.qd_measured[k] = self.qd
+            rec.q_measured[k] = rec.q[k]
+            rec.qd_measured[k] = rec.qd[k]
         j = k - s.delay if k >= s.delay else 0
-        return qm_view[j], qdm_view[j]
+        return self._qm_view[j], self._qdm_view[j]
 
     def control(self, k: int, t: float, qm: FloatArray, vm: FloatArray) -> FloatArray | None:
         """τ_k from the controller, checked and recorded; the applied (saturated) torque, or None if τ_k is not
         finite (the run stops as diverged)."""
-        s, rec = self.s, self.s.recorder
-        if s.fixed_reference is not None:
-            ref = s.fixed_reference
-        else:
-            ref = setup.check_reference(s.reference_fn(t), s.n, t)  # type: ignore[misc]  # set when no fixed one
-        rec.references[k] = ref
+        ref = self._fixed_reference
+        if ref is None:
+            ref = self._reference_fn(t)  # type: ignore[misc]  # set when there is no fixed one
+            if not isinstance(ref, Reference) or ref.q.shape != self._shape:
+                setup.check_reference(ref, self.s.n, t)  # (raises, naming what is wrong)
+        self._references[k] = ref
         try:
-            tau = s.call(t, qm, vm, ref)
+            tau = self._call(t, qm, vm, ref)
         except ValueError as exc:
             if "read-only" not in str(exc):
                 raise
@@ -172,30 +245,47 @@ class ClosedLoop:
             ) from exc
         if type(tau) is not np.ndarray or tau.dtype != FLOAT:  # complex or text: named errors
             tau = real_array(tau, f"the controller's torque at t = {t:g} s")
-        if self._has_log and s.controller.last_log:
-            rec.log_controller(k, s.controller.last_log)
-        if tau.shape != (s.n,):
+        if self._has_log:
+            log = self._controller.last_log
+            if log:
+                self._log_add(k, log)
+        if tau.shape != self._shape:
             raise ShapeError(
-                f"the controller returned a torque of shape {tau.shape} at t = {t}; expected ({s.n},)", value=tau
+                f"the controller returned a torque of shape {tau.shape} at t = {t}; expected {self._shape}", value=tau
             )
+        if self._period is not None:  # the period checks and saturates τ_k, read from the record (see integrate)
+            self._taus[k] = tau
+            return tau
         tl = tau.tolist()
         if not math.isfinite(sum(tl)):
-            self._stop(k, t, f"the controller returned a non-finite torque {tau}", self.q, self.qd)
+            self._stop(k, t, f"the controller returned a non-finite torque {tau}", *self._state(k))
             return None
-        rec.tau[k] = tau  # the applied torque is τ too, but for the clipped rows (see applied_torques)
+        self._taus[k] = tau  # the applied torque is τ too, but for the clipped rows (see applied_torques)
         low = self._lowest_limit
         if self._clip and (max(tl) > low or -min(tl) > low) and any(map(operator.gt, map(abs, tl), self._limits)):
             self.clipped.append(k)
-            return np.clip(tau, -s.effort_limit, s.effort_limit)
+            return np.clip(tau, -self.s.effort_limit, self.s.effort_limit)
         return tau
 
-    def integrate(self, k: int, t: float, tau: FloatArray) -> None:
-        """Integrate the plant over [t, t + Δt_c) under the held τ (sub-steps of the integrator)."""
-        s, rec, pl = self.s, self.s.recorder, self.s.plant
+    def integrate(self, k: int, t: float, tau: FloatArray) -> bool:
+        """Integrate the plant over [t, t + Δt_c) under the held τ (sub-steps of the integrator). True: the run
+        stopped (a plant's whole period found τ not finite)."""
+        period = self._period
+        if period is not None:
+            if self._external:
+                rec = self._rec
+                rec.record_external(k, self._plant, t, rec.q[k], rec.qd[k])
+            code = self._state_code = period(k, t)
+            if code > codes.STATE_MASK:
+                return self._period_events(k, t, tau, int(code))
+            return False
+        s, rec, pl = self.s, self._rec, self._plant
         q, qd, h = self.q, self.qd, s.dt
         if not pl.simple:
+            if pl.has_external:
+                rec.record_external(k, pl, t, q, qd)
             pl.begin(t, q, qd, tau)
-            rec.record_plant(k, pl, t, q, qd)
+            rec.record_friction(k, pl, qd)
         if s.implicit:
             rec.qdd[k] = pl.accel(t, q, qd, tau)
         if s.fast is not None:  # no friction, contact or disturbance
@@ -211,17 +301,43 @@ class ClosedLoop:
                 self._work_friction += dwf
                 self._work_external += dwe
         self.q, self.qd = q, qd
+        return False
+
+    def _period_events(self, k: int, t: float, tau: FloatArray, code: int) -> bool:
+        """What a whole period's ``code`` says besides the state's (:mod:`armctl.sim.period`), as control and
+        integrate do it in Python: a τ_k that is not finite stops the run at sample k (True), a clipped one is
+        recorded; a failure is raised."""
+        if code & codes.TORQUE_NOT_FINITE:
+            self._stop(k, t, f"the controller returned a non-finite torque {tau}", *self._state(k))
+            return True
+        if code & codes.CLIPPED:
+            self.clipped.append(k)
+        if code & codes.FAILED:
+            self._whole.raise_failure()  # type: ignore[union-attr]  # a code of the whole period's
+        self._state_code = code & codes.STATE_MASK
+        return False
 
     def _last_sample(self, k: int, t: float, tau: FloatArray) -> None:
-        rec, pl = self.s.recorder, self.s.plant
+        rec, pl = self._rec, self._plant
+        q, qd = self._state(k)
+        if self._external:
+            rec.record_external(k, pl, t, q, qd)
+        if self._whole is not None:
+            code = self._whole.last_sample(k, t)
+            if code:
+                self._period_events(k, t, tau, int(code))
+            return
         if not pl.simple:
-            pl.begin(t, self.q, self.qd, tau)
-            rec.record_plant(k, pl, t, self.q, self.qd)
-        rec.qdd[k] = pl.accel(t, self.q, self.qd, tau)
+            pl.begin(t, q, qd, tau)
+            rec.record_friction(k, pl, qd)
+        rec.qdd[k] = pl.accel(t, q, qd, tau)
 
     def applied_torques(self) -> None:
         """Write the applied (saturated) torques of the run into the recorder."""
         rec, limit = self.s.recorder, self.s.effort_limit
+        if not self.clipped:  # the commanded torques (the record is complete: nothing writes into it any more)
+            rec.tau_applied = rec.tau
+            return
         rec.tau_applied[:] = rec.tau
         if self.clipped:
             rec.tau_applied[self.clipped] = np.clip(rec.tau[self.clipped], -limit, limit)

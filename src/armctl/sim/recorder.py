@@ -38,7 +38,7 @@ class Recorder:
         self.q, self.qd, self.qdd = z((samples, n)), z((samples, n)), z((samples, n))
         self.tau, self.tau_applied = z((samples, n)), z((samples, n))
         self.tau_friction, self.tau_ext = z((samples, n)), z((samples, n))
-        self.stuck = z((samples, n), dtype=bool)
+        self.stuck = z((samples, n))  # 1.0: the joint is stuck (a boolean mask in the result)
         self.points = [(env, i) for env in environments for i in range(len(env.points))]
         self.wrench = z((samples, 6))
         self.contact_force = z((samples, len(self.points), 3))
@@ -54,14 +54,17 @@ class Recorder:
         self.work_friction, self.work_external = z(samples), z(samples)
         self.log = ControllerLog(samples)
 
-    def record_plant(self, k: int, plant: Plant, t: float, q: FloatArray, qd: FloatArray) -> None:
-        """Friction, external torques, contact forces, wrench and sensors at sample k (non-simple plants)."""
-        dyn = plant.dyn
+    def record_friction(self, k: int, plant: Plant, qd: FloatArray) -> None:
+        """The friction torque and the stuck joints at sample k, after the plant's stick solve there
+        (:meth:`Plant.begin <armctl.sim.plant.Plant.begin>`)."""
         self.tau_friction[k] = plant.friction_torque(qd)
         if plant.stuck is not None:
             self.stuck[k] = plant.stuck
-        if not plant.has_external:
-            return
+
+    def record_external(self, k: int, plant: Plant, t: float, q: FloatArray, qd: FloatArray) -> None:
+        """External torques, contact forces, wrench and sensors at sample k (plants with contact or a
+        disturbance)."""
+        dyn = plant.dyn
         self.tau_ext[k] = -plant.external(t, q, qd)
         tool = dyn.frame_pose(q, None)[:3, 3]
         f, m = np.zeros(3), np.zeros(3)
@@ -145,7 +148,7 @@ class Recorder:
             sensor=self.sensor[r],
             q_measured=self.q_measured[r],
             qd_measured=self.qd_measured[r],
-            stuck=self.stuck[r],
+            stuck=self.stuck[r] != 0.0,
             work_actuator=work_act,
             work_friction=self.work_friction[r],
             work_external=self.work_external[r],
@@ -162,6 +165,9 @@ class Recorder:
             plant=model,
             _energy=None if energy else np.full(rows, np.nan),
             _energy_of=partial(energies, dyn) if energy else None,
+            # the whole record is the result's (nothing writes into it after the run); a shorter run's rows are
+            # copied, so that the result does not keep the rest
+            _copy=rows < self.samples,
         )
 
 

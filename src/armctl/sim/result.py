@@ -13,7 +13,7 @@ from __future__ import annotations
 import json
 import zipfile
 from collections.abc import Callable
-from dataclasses import dataclass, field, fields
+from dataclasses import InitVar, dataclass, field, fields
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -141,17 +141,20 @@ class SimResult:
     #: the energies, or None with ``_energy_of(q, qd)`` to compute them when first asked for
     _energy: FloatArray | None = field(default=None, repr=False)
     _energy_of: Callable[[FloatArray, FloatArray], FloatArray] | None = field(default=None, repr=False)
+    #: False: the arrays given are the result's own, nothing else writes into them (the simulator's record):
+    #: made read-only, not copied
+    _copy: InitVar[bool] = True
 
-    def __post_init__(self) -> None:
+    def __post_init__(self, _copy: bool) -> None:
         for name in (*_ARRAYS, "diverged_q", "diverged_qd", "_energy", "contact_position"):
             a = getattr(self, name)
             if a is not None:
-                a = np.array(a, copy=True)
+                a = np.array(a, copy=True) if _copy else np.asarray(a)
                 a.flags.writeable = False
                 object.__setattr__(self, name, a)
         logs = {}
         for k, v in self.logs.items():
-            a = np.array(v, copy=True)
+            a = np.array(v, copy=True) if _copy else np.asarray(v)
             a.flags.writeable = False
             logs[k] = a
         object.__setattr__(self, "logs", logs)

@@ -35,12 +35,20 @@ class SampledReference:
         first = references[0]
         if all(r is first for r in references):  # a fixed reference
             rows = len(references)
-            return cls(t, np.tile(first.q, (rows, 1)), np.tile(first.qd, (rows, 1)), np.tile(first.qdd, (rows, 1)))
+            return cls._holding(t, *(np.tile(a, (rows, 1)) for a in (first.q, first.qd, first.qdd)))
         # one concatenation of the references' vectors, reshaped into the (N, n) rows
-        return cls(
-            t,
-            *(np.concatenate([getattr(r, name) for r in references]).reshape(-1, n) for name in ("q", "qd", "qdd")),
-        )
+        parts = ([r.q for r in references], [r.qd for r in references], [r.qdd for r in references])
+        return cls._holding(t, *(np.concatenate(x).reshape(-1, n) for x in parts))
+
+    @classmethod
+    def _holding(cls, t: FloatArray, q: FloatArray, qd: FloatArray, qdd: FloatArray) -> SampledReference:
+        """A SampledReference of ``t`` (copied) and of the new float64 arrays q, q̇, q̈ of :meth:`of` themselves
+        (made read-only, not copied again)."""
+        out = cls.__new__(cls)
+        for name, a in (("t", np.array(t, dtype=float)), ("q", q), ("qd", qd), ("qdd", qdd)):
+            a.flags.writeable = False
+            object.__setattr__(out, name, a)
+        return out
 
     def __len__(self) -> int:
         return len(self.t)

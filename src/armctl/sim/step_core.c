@@ -1,7 +1,8 @@
 /* The simulator's integration step with stick–slip events, in C around the generated kernels of
  * armctl/sim/generated_plant.py: this file (definitions, small linear algebra, the stick state, q̈), then
- * step_schemes.c (the integrators) and step_events.c (stick solve, events, the functions CasADi loads), appended
- * in that order to the generated code after these definitions (written by armctl/sim/compiled_plant.py):
+ * step_schemes.c (the integrators), step_events.c (stick solve, events, the functions CasADi loads) and
+ * step_period.c (a control period in one call), appended in that order to the generated code after these
+ * definitions (written by armctl/sim/compiled_plant.py):
  *
  *   ARMCTL_N         joints                         ARMCTL_NPAR      entries of par
  *   ARMCTL_STICKY    1: some joint can stick        ARMCTL_FRICTION  1: the plant has joint friction
@@ -17,6 +18,7 @@
  *   advance(q, v, tau, W, par, opt, S) -> (q1, v1, a0, out5, S)  one integration step of length h = opt[1]
  *   begin(q, v, tau, W, par, S) -> (S, out)                       the stick solve at the start of a period
  *   accel(q, v, tau, W, par, S) -> (a, out)                       q̈ for the current stick state
+ *   period(...)                                                    a whole control period (see step_period.c)
  * W: the disturbance h_d at the start, middle and end of the step (18), S: the stick state (see S_* below),
  * opt = [unused, h, scheme], out = [W_friction, W_external, a0 valid, status(, no joint that can stick at rest at
  * the end: S's friction torque is the next period's)].

@@ -1,0 +1,157 @@
+/* One control period of the simulator's loop in one call (see step_core.c for the definitions; appended after
+ * step_events.c): what ClosedLoop does with a plant for the period [t_k, t_k + Δt_c) under the held τ_k — the checks
+ * of the controller's torque τ_k and its saturation (ClosedLoop.control), the stick solve at t_k (Plant.begin), the
+ * friction torque and the stuck joints recorded there (Recorder.record_friction), q̈ at t_k, the m sub-steps with
+ * their events (stepper.advance), the friction and external work accumulated over them — and the state check of
+ * the sample t_k + Δt_c it leaves (ClosedLoop.check).
+ *
+ *   period(TAU, limit, W, par, opt, S) -> (Q, V, A, F, STUCK, WF, WE, out, S)
+ *
+ * TAU and the outputs Q … WE are bound to the whole arrays of the run's record (rows of N, or of 1 for the work),
+ * larger than the one row they are declared as (CasADi's buffers take any buffer at least that large). The function
+ * reads the controller's torque τ_k from row k of TAU: if it is not finite it does nothing else (TORQUE_NOT_FINITE);
+ * where saturation is on (opt[8]) and some |τ_k,i| exceeds limit_i, the torque held is τ_k clipped to ±limit
+ * (CLIPPED). It reads the state of sample k (row k of Q and V, the work so far from WF[k] and WE[k]) and writes row
+ * k of A, F and STUCK (STUCK only where a joint is stuck: the record starts as zeros) and row k + 1 of Q, V, WF and
+ * WE. W holds the disturbance's samples of every sub-step, 18 each (start, middle, end of sub-step i at W + 18 i;
+ * only its start for the last sample).
+ *
+ * opt = [k, h, scheme, m, rows, q̈ by an evaluation at t_k (1) or from the first sub-step (0), max_velocity,
+ *        max_position, saturate (1) or not (0)]; m = 0: the last sample (no step after it: the torque's checks, the
+ *        stick solve, its records and q̈ only).
+ * out = [status, where it failed (PERIOD_BEGIN, PERIOD_ACCEL, PERIOD_STEP), code]: code = why the state it left stops
+ *        the run (STATE_OK, STATE_NOT_FINITE, STATE_VELOCITY, STATE_POSITION), plus CLIPPED if τ_k was clipped (also
+ *        when the period then failed), or TORQUE_NOT_FINITE alone (the codes of armctl/sim/period.py).
+ * A row outside the record (k < 0, or k + 1 ≥ rows with m > 0, k ≥ rows) writes nothing: status BAD_ROW.
+ */
+#define BAD_ROW 3
+#define PERIOD_BEGIN 0
+#define PERIOD_ACCEL 1
+#define PERIOD_STEP 2
+#define STATE_OK 0
+#define STATE_NOT_FINITE 1
+#define STATE_VELOCITY 2
+#define STATE_POSITION 3
+#define CLIPPED 4
+#define TORQUE_NOT_FINITE 8
+
+/* ClosedLoop.check on (q, v): the same tests in the same order, the sums taken left to right as Python's sum. */
+static int armctl_state_check(const double* q, const double* v, double max_velocity, double max_position) {
+  double sq = 0.0, sv = 0.0, vmax = -INFINITY, vmin = INFINITY, qmax = -INFINITY, qmin = INFINITY;
+  int i;
+  for (i = 0; i < N; ++i) {
+    sq += q[i];
+    sv += v[i];
+    if (v[i] > vmax) vmax = v[i];
+    if (v[i] < vmin) vmin = v[i];
+    if (q[i] > qmax) qmax = q[i];
+    if (q[i] < qmin) qmin = q[i];
+  }
+  if (!isfinite(sq + sv)) return STATE_NOT_FINITE;
+  if (vmax > max_velocity || -vmin > max_velocity) return STATE_VELOCITY;
+  if (max_position < INFINITY && (qmax > max_position || -qmin > max_position)) return STATE_POSITION;
+  return STATE_OK;
+}
+
+CASADI_SYMBOL_EXPORT int period(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  const double *limit = arg[1], *W = arg[2], *par = arg[3], *opt = arg[4];
+  double *Q = res[0], *V = res[1], *A = res[2], *F = res[3], *STUCK = res[4], *WF = res[5], *WE = res[6];
+  double *out = res[7];
+  double S[NS], q[N], v[N], tau[N], hd[6], sum = 0.0;
+  long k = (long)opt[0], m = (long)opt[3], rows = (long)opt[4], i;
+  int scheme = (int)opt[2], st, j, clipped = 0;
+  double h = opt[1];
+  armctl_mode md;
+  (void)iw; (void)w; (void)mem;
+  out[0] = out[1] = out[2] = 0.0;
+  if (k < 0 || k >= rows || (m > 0 && k + 1 >= rows)) {
+    out[0] = BAD_ROW;
+    return 0;
+  }
+  /* ClosedLoop.control: τ_k finite (its sum, taken left to right as Python's), clipped where beyond the limits */
+  memcpy(tau, arg[0] + k * N, sizeof tau);
+  for (j = 0; j < N; ++j) sum += tau[j];
+  if (!isfinite(sum)) {
+    out[2] = TORQUE_NOT_FINITE;
+    return 0;
+  }
+  if (opt[8] != 0.0) {
+    for (j = 0; j < N; ++j) if (fabs(tau[j]) > limit[j]) clipped = 1;
+    if (clipped) { /* as np.clip(τ, −limit, limit) */
+      for (j = 0; j < N; ++j) tau[j] = tau[j] < -limit[j] ? -limit[j] : tau[j] > limit[j] ? limit[j] : tau[j];
+      out[2] = CLIPPED;
+    }
+  }
+  memcpy(S, arg[5], sizeof S);
+  memcpy(q, Q + k * N, sizeof q);
+  memcpy(v, V + k * N, sizeof v);
+  /* Plant.begin at t_k, and what Recorder.record_friction records of it (as the function begin) */
+  armctl_mode_read(S, &md);
+  armctl_interp(W, 0.0, hd);
+  st = armctl_begin(q, v, tau, hd, par, &md, 0, S);
+  armctl_mode_write(&md, S);
+  if (st != OK) {
+    out[0] = st;
+    out[1] = PERIOD_BEGIN;
+    memcpy(res[8], S, sizeof S);
+    return 0;
+  }
+#if ARMCTL_FRICTION
+  {
+    double f[N];
+    const double* in[3] = {v, md.dir, par};
+    double* fo[1] = {f};
+    CALL(pk_friction, 3, in, 1, fo);
+    for (j = 0; j < N; ++j) S[S_TAUF + j] = f[j] + md.hold[j];
+  }
+#else
+  for (j = 0; j < N; ++j) S[S_TAUF + j] = 0.0;
+#endif
+  for (j = 0; j < N; ++j) F[k * N + j] = S[S_TAUF + j];
+  if (md.any) /* (else the row stays as the record starts it: zeros) */
+    for (j = 0; j < N; ++j) STUCK[k * N + j] = md.stuck[j];
+  if (opt[5] != 0.0 || m == 0) { /* q̈ at t_k by an evaluation (the implicit schemes' and the last sample's) */
+    double a[N], f[N], e[N];
+    st = md.all ? OK : armctl_rhs(q, v, tau, hd, par, &md, a, f, e);
+    if (st != OK) {
+      out[0] = st;
+      out[1] = PERIOD_ACCEL;
+      memcpy(res[8], S, sizeof S);
+      return 0;
+    }
+    if (md.all) memset(a, 0, sizeof a);
+    memcpy(A + k * N, a, sizeof a);
+  }
+  if (m > 0) {
+    double q1[N], v1[N], a0[N], wf = WF[k], we = WE[k], dwf, dwe;
+    int valid;
+    for (i = 0; i < m; ++i) {
+      st = armctl_advance(scheme, h, i == 0, q, v, tau, W + 18 * i, par, S, q1, v1, a0, &valid, &dwf, &dwe);
+      if (st != OK) {
+        out[0] = st;
+        out[1] = PERIOD_STEP;
+        memcpy(res[8], S, sizeof S);
+        return 0;
+      }
+      if (i == 0 && valid) memcpy(A + k * N, a0, sizeof a0);
+      wf += dwf;
+      we += dwe;
+      memcpy(q, q1, sizeof q);
+      memcpy(v, v1, sizeof v);
+    }
+    memcpy(Q + (k + 1) * N, q, sizeof q);
+    memcpy(V + (k + 1) * N, v, sizeof v);
+#if ARMCTL_FRICTION || ARMCTL_EXTERNAL
+    WF[k + 1] = wf;
+    WE[k + 1] = we;
+#else
+    (void)wf; (void)we;
+#endif
+    out[2] += armctl_state_check(q, v, opt[6], opt[7]);
+  }
+  S[S_BEGUN] = 0.0;
+  memcpy(res[8], S, sizeof S);
+  return 0;
+}
+
+ARMCTL_SHAPE(period)
