@@ -208,3 +208,23 @@ def test_missing_mujoco_is_a_clear_error(monkeypatch: pytest.MonkeyPatch) -> Non
     with pytest.raises(OptionalDependencyError, match=re.escape("needs MuJoCo, which is not installed")) as info:
         simulate(model, OpenLoop(lambda t: np.zeros(2)), armctl.Reference.hold([0.0, 0.0]), 0.1, engine="mujoco")
     assert 'pip install "armctl[mujoco]"' in str(info.value) and isinstance(info.value, ImportError)
+
+
+def test_a_controller_that_raises_keeps_the_samples_up_to_it() -> None:
+    """On MuJoCo's plant too: the exception propagates with the samples simulated up to it."""
+    pytest.importorskip("mujoco")
+    model = armctl.models.planar_2r()
+    dyn = armctl.Dynamics(model)
+    law = PDGravity(dyn, 50.0, 10.0)
+
+    def breaks(t, q, qd, ref):  # type: ignore[no-untyped-def]
+        if t >= 0.05:
+            raise ZeroDivisionError("the law divided by zero")
+        return law.compute(t, q, qd, ref)
+
+    ref = armctl.Reference.hold([0.5, -0.3])
+    with pytest.raises(ZeroDivisionError) as info:
+        simulate(dyn, breaks, ref, 0.1, engine="mujoco")
+    part = info.value.result  # type: ignore[attr-defined]
+    assert len(part.t) == 51 and np.isnan(part.tau[50]).all() and np.isfinite(part.tau[:50]).all()
+    np.testing.assert_array_equal(part.reference.q[:50], np.tile([0.5, -0.3], (50, 1)))

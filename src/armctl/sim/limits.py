@@ -146,8 +146,10 @@ class LimitReport:
                 velocity,
                 lower,
                 upper,
-                saturated=np.count_nonzero((tau_t > effort_c) | (tau_t < -effort_c), axis=1) / samples,
-                torque_peak=np.maximum(tau_t.max(axis=1), -tau_t.min(axis=1)) / effort,
+                # over the samples with a torque (a run stopped by an exception has none at its last sample: NaN)
+                saturated=np.count_nonzero((tau_t > effort_c) | (tau_t < -effort_c), axis=1)
+                / max(np.count_nonzero(~np.isnan(tau_t[0])), 1),
+                torque_peak=np.fmax(np.fmax.reduce(tau_t, axis=1), -np.fmin.reduce(tau_t, axis=1)) / effort,
                 velocity_peak=np.maximum(qd_t.max(axis=1), -qd_t.min(axis=1)) / velocity,
                 velocity_over=np.count_nonzero((qd_t > fast) | (qd_t < -fast), axis=1) / samples,
                 # max over the samples of max(lower − q, q − upper, 0)

@@ -83,6 +83,7 @@ class ClosedLoop:
         self.rows = s.periods + 1  # samples recorded
         self.divergence: Divergence | None = None
         self.failure: BaseException | None = None
+        self.failed_at = math.nan  # the time [s] of the sample at which ``failure`` was raised
         self.clipped: list[int] = []  # rows where saturation clipped τ
         self._work_friction = self._work_external = 0.0
         # what every period uses, bound once
@@ -93,7 +94,6 @@ class ClosedLoop:
         self._fixed_reference = s.fixed_reference
         self._reference_fn = s.reference_fn
         self._shape = (s.n,)
-        self._has_log = hasattr(s.controller, "last_log")
         self._log_add = rec.log.add
         self._references, self._taus = rec.references, rec.tau
         self._external = not pl.simple and pl.has_external
@@ -114,6 +114,8 @@ class ClosedLoop:
         #: why the state the last period left stops the run (0: it does not), as that call checked it; None: checked
         #: here
         self._state_code: float | None = None
+        if not pl.simple:  # the friction torque of a sample the run stops at before its stick solve: NaN
+            rec.tau_friction.fill(math.nan)
         if hasattr(pl, "bind_record"):
             self._whole = whole = cast(WholePeriods, pl)
             whole.bind_record(
@@ -154,19 +156,31 @@ class ClosedLoop:
                     tau = control(k, t, qm, vm)
                     if tau is None:
                         return
+                except BaseException as exc:  # the controller's or the reference's: the run so far is kept
+                    self._fail(exc, k, t)
+                    return
+                try:
                     if k == last:  # the last sample: its state and torque, no step after it
                         self._last_sample(k, t, tau)
                         return
                     if integrate(k, t, tau):
                         return
                 except (NotPositiveDefinite, np.linalg.LinAlgError) as exc:  # the latter: the Lagrange backend's
-                    rec = s.recorder
-                    why = f"{exc} during the control period from t = {t:g} s"
-                    self._stop(k + 1, t + cdt, why, rec.q[k].copy(), rec.qd[k].copy())
+                    q, qd = self._state(k)
+                    if k == last:
+                        self._stop(k + 1, t, f"{exc} at t = {t:g} s", q.copy(), qd.copy())
+                    else:
+                        why = f"{exc} during the control period from t = {t:g} s"
+                        self._stop(k + 1, t + cdt, why, q.copy(), qd.copy())
                     return
-                except BaseException as exc:  # the controller's, the reference's or the plant's: the run so far is kept
-                    self.failure, self.rows = exc, k
+                except BaseException as exc:  # the plant's (a disturbance's, say): the run so far is kept
+                    self._fail(exc, k, t)
                     return
+
+    def _fail(self, exc: BaseException, k: int, t: float) -> None:
+        """Stop at sample k (time t [s]) on ``exc``, keeping sample k: its state is recorded, and what the loop did
+        not compute there stays NaN (τ_k if the controller gave none, q̈_k, the friction torque)."""
+        self.failure, self.failed_at, self.rows = exc, t, k + 1
 
     def _stop(self, rows: int, t: float, why: str, q: FloatArray, qd: FloatArray) -> None:
         self.divergence, self.rows = (t, why, np.array(q), np.array(qd)), rows
@@ -186,8 +200,8 @@ class ClosedLoop:
                 return None
             return self._why(int(code))
         ql, vl = self.q.tolist(), self.qd.tolist()
-        if not math.isfinite(sum(ql) + sum(vl)):
-            return self._why(1)
+        if not math.isfinite(sum(ql) + sum(vl)) and not (np.isfinite(self.q).all() and np.isfinite(self.qd).all()):
+            return self._why(1)  # (the sum of finite entries can overflow: the entries decide)
         s = self.s
         if max(vl) > s.max_velocity or -min(vl) > s.max_velocity:
             return self._why(2)
@@ -245,10 +259,9 @@ class ClosedLoop:
             ) from exc
         if type(tau) is not np.ndarray or tau.dtype != FLOAT:  # complex or text: named errors
             tau = real_array(tau, f"the controller's torque at t = {t:g} s")
-        if self._has_log:
-            log = self._controller.last_log
-            if log:
-                self._log_add(k, log)
+        log = getattr(self._controller, "last_log", None)  # (read every step: a controller may set it later)
+        if log:
+            self._log_add(k, log)
         if tau.shape != self._shape:
             raise ShapeError(
                 f"the controller returned a torque of shape {tau.shape} at t = {t}; expected {self._shape}", value=tau
@@ -257,7 +270,7 @@ class ClosedLoop:
             self._taus[k] = tau
             return tau
         tl = tau.tolist()
-        if not math.isfinite(sum(tl)):
+        if not math.isfinite(sum(tl)) and not np.isfinite(tau).all():  # (a sum of finite entries can overflow)
             self._stop(k, t, f"the controller returned a non-finite torque {tau}", *self._state(k))
             return None
         self._taus[k] = tau  # the applied torque is τ too, but for the clipped rows (see applied_torques)

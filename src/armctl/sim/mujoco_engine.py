@@ -35,6 +35,7 @@ from armctl.sim.contact import ForceSensor
 from armctl.sim.mujoco_plant import MujocoPlant, Readout, available_integrators, integrator_code
 from armctl.sim.recorder import Recorder
 from armctl.sim.result import SimResult
+from armctl.sim.run_failure import attach, end_run
 
 ENGINES = ("native", "mujoco")
 
@@ -166,7 +167,6 @@ def simulate_mujoco(
     clip = saturate and bool(np.isfinite(limit).any())
     if reset and callable(getattr(controller, "reset", None)):
         controller.reset()
-    has_log = hasattr(controller, "last_log")
     Q, QD, QDD, TAU = rec.q, rec.qd, rec.qdd, rec.tau
     views = [a.view() for a in (Q, QD, rec.q_measured, rec.qd_measured)]
     for a in views:
@@ -175,86 +175,96 @@ def simulate_mujoco(
     wf = we = 0.0
     clipped: list[int] = []
     divergence, rows = None, samples
+    failure: BaseException | None = None
+    failed_at = math.nan
     qfrc = d.qfrc_applied
 
     t0 = time.perf_counter()
     with np.errstate(all="ignore"):
-        for k in range(samples):
-            t = k * cdt
-            q, v = d.qpos[qadr], d.qvel[vadr]
-            ql, vl = q.tolist(), v.tolist()
-            if not math.isfinite(sum(ql) + sum(vl)):
-                divergence, rows = (t, "the state is not finite", q, v), k
-                break
-            if max(vl) > vmax or -min(vl) > vmax:
-                divergence, rows = (t, f"a joint velocity is beyond max_velocity = {vmax:g}", q, v), k
-                break
-            if qmax < math.inf and (max(ql) > qmax or -min(ql) > qmax):
-                divergence, rows = (t, f"a joint position is beyond max_position = {qmax:g}", q, v), k
-                break
-            Q[k], QD[k] = q, v
-            if not simple:
-                rec.work_friction[k], rec.work_external[k] = wf, we
-            qm, vm = QR[k], QDR[k]
-            if rec.measured:
-                rec.q_measured[k] = q + draws[k, 0] * sig_q if draws is not None else q
-                rec.qd_measured[k] = v + draws[k, 1] * sig_qd if draws is not None else v
-                j = k - lag if k >= lag else 0
-                qm, vm = QMR[j], QDMR[j]
-            ref = fixed_ref if fixed_ref is not None else setup.check_reference(ref_fn(t), n, t)  # type: ignore[misc]  # one is set
-            try:
-                tau = call(t, qm, vm, ref)
-            except ValueError as exc:
-                if "read-only" not in str(exc):
-                    raise
-                raise InvalidParameterError(
-                    f"the controller wrote into a read-only array at t = {t:g} s ({exc}); the q and q̇ it is given are "
-                    "read-only views of the run's record: work on a copy (q = q.copy()) or on new arrays",
-                    value=t,
-                ) from exc
-            if not isinstance(tau, np.ndarray) or tau.dtype != np.float64:
-                tau = real_array(tau, f"the controller's torque at t = {t:g} s")
-            if has_log and controller.last_log:
-                rec.log_controller(k, controller.last_log)
-            if tau.shape != (n,):
-                raise ShapeError(
-                    f"the controller returned a torque of shape {tau.shape} at t = {t}; expected ({n},)", value=tau
-                )
-            if not np.isfinite(tau).all():
-                divergence, rows = (t, f"the controller returned a non-finite torque {tau}", q, v), k
-                break
-            tau_a = tau
-            if clip and np.any(np.abs(tau) > limit):
-                tau_a = np.clip(tau, -limit, limit)
-                clipped.append(k)
-            TAU[k] = tau
-            for s in range(m_sub):
-                hd = None
-                if disturbance is not None:
-                    hd = vector(real_array(disturbance(t + s * h), "disturbance(t)"), 6, "disturbance(t) (a wrench)")
-                    qfrc[vadr] = tau_a - dyn.jacobian(d.qpos[qadr] if s else q).T @ hd
-                else:
-                    qfrc[vadr] = tau_a
-                forward(m, d)
-                if s == 0:
-                    QDD[k] = d.qacc[vadr]
-                if not simple:
-                    tf, te = ro.torques(d)
-                    if s == 0:
-                        ro.record(rec, d, dyn, k, q, tf, te, hd)
-                if k == n_periods:
+        try:
+            for k in range(samples):
+                t = k * cdt
+                q, v = d.qpos[qadr], d.qvel[vadr]
+                ql, vl = q.tolist(), v.tolist()
+                if not math.isfinite(sum(ql) + sum(vl)) and not (np.isfinite(q).all() and np.isfinite(v).all()):
+                    divergence, rows = (t, "the state is not finite", q, v), k
                     break
-                before = d.qpos[qadr] if not simple else None
-                if own_step is not None:
-                    own_step()
-                else:
-                    mj.mj_step(m, d)  # (an integrator without its own entry point: one more forward dynamics)
-                if before is not None:
-                    dq = d.qpos[qadr] - before
-                    wf -= float(tf @ dq)
-                    we -= float(te @ dq)
-                    if hd is not None:  # −J_toolᵀ h_d is in qfrc_applied, not in te
-                        we += float((qfrc[vadr] - tau_a) @ dq)
+                if max(vl) > vmax or -min(vl) > vmax:
+                    divergence, rows = (t, f"a joint velocity is beyond max_velocity = {vmax:g}", q, v), k
+                    break
+                if qmax < math.inf and (max(ql) > qmax or -min(ql) > qmax):
+                    divergence, rows = (t, f"a joint position is beyond max_position = {qmax:g}", q, v), k
+                    break
+                Q[k], QD[k] = q, v
+                if not simple:
+                    rec.work_friction[k], rec.work_external[k] = wf, we
+                qm, vm = QR[k], QDR[k]
+                if rec.measured:
+                    rec.q_measured[k] = q + draws[k, 0] * sig_q if draws is not None else q
+                    rec.qd_measured[k] = v + draws[k, 1] * sig_qd if draws is not None else v
+                    j = k - lag if k >= lag else 0
+                    qm, vm = QMR[j], QDMR[j]
+                ref = fixed_ref if fixed_ref is not None else setup.check_reference(ref_fn(t), n, t)  # type: ignore[misc]  # one is set
+                rec.references[k] = ref
+                try:
+                    tau = call(t, qm, vm, ref)
+                except ValueError as exc:
+                    if "read-only" not in str(exc):
+                        raise
+                    raise InvalidParameterError(
+                        f"the controller wrote into a read-only array at t = {t:g} s ({exc}); the q and q̇ it is "
+                        "given are read-only views of the run's record: work on a copy (q = q.copy()) or on new arrays",
+                        value=t,
+                    ) from exc
+                if not isinstance(tau, np.ndarray) or tau.dtype != np.float64:
+                    tau = real_array(tau, f"the controller's torque at t = {t:g} s")
+                log = getattr(controller, "last_log", None)  # (read every step: a controller may set it later)
+                if log:
+                    rec.log_controller(k, log)
+                if tau.shape != (n,):
+                    raise ShapeError(
+                        f"the controller returned a torque of shape {tau.shape} at t = {t}; expected ({n},)", value=tau
+                    )
+                if not np.isfinite(tau).all():
+                    divergence, rows = (t, f"the controller returned a non-finite torque {tau}", q, v), k
+                    break
+                tau_a = tau
+                if clip and np.any(np.abs(tau) > limit):
+                    tau_a = np.clip(tau, -limit, limit)
+                    clipped.append(k)
+                TAU[k] = tau
+                for s in range(m_sub):
+                    hd = None
+                    if disturbance is not None:
+                        hd = vector(
+                            real_array(disturbance(t + s * h), "disturbance(t)"), 6, "disturbance(t) (a wrench)"
+                        )
+                        qfrc[vadr] = tau_a - dyn.jacobian(d.qpos[qadr] if s else q).T @ hd
+                    else:
+                        qfrc[vadr] = tau_a
+                    forward(m, d)
+                    if s == 0:
+                        QDD[k] = d.qacc[vadr]
+                    if not simple:
+                        tf, te = ro.torques(d)
+                        if s == 0:
+                            ro.record(rec, d, dyn, k, q, tf, te, hd)
+                    if k == n_periods:
+                        break
+                    before = d.qpos[qadr] if not simple else None
+                    if own_step is not None:
+                        own_step()
+                    else:
+                        mj.mj_step(m, d)  # (an integrator without its own entry point: one more forward dynamics)
+                    if before is not None:
+                        dq = d.qpos[qadr] - before
+                        wf -= float(tf @ dq)
+                        we -= float(te @ dq)
+                        if hd is not None:  # −J_toolᵀ h_d is in qfrc_applied, not in te
+                            we += float((qfrc[vadr] - tau_a) @ dq)
+        except BaseException as exc:  # the controller's, the reference's or the disturbance's: the run so far is kept
+            failure, failed_at, rows = exc, t, k + 1  # (sample k's state is recorded; what was not computed is NaN)
+
     rec.tau_applied[:] = rec.tau
     if clipped:
         rec.tau_applied[clipped] = np.clip(rec.tau[clipped], -limit, limit)
@@ -281,4 +291,13 @@ def simulate_mujoco(
     }
     if divergence is not None:
         divergence = (divergence[0], divergence[1], np.array(divergence[2]), np.array(divergence[3]))
-    return rec.result(rows, dyn, energy, info, divergence)
+    raised = end_run(controller, failure)
+    if raised is not failure:  # end_run raised after a run that did not
+        failed_at = (rows - 1) * cdt
+    if raised is not None:
+        info["failure"] = f"{type(raised).__name__}: {raised}"
+    res = rec.result(rows, dyn, energy, info, divergence)
+    if raised is not None:
+        attach(raised, res, failed_at)
+        raise raised
+    return res

@@ -35,8 +35,9 @@ class Recorder:
         self.samples = samples
         self.control_dt = control_dt
         z = np.zeros
-        self.q, self.qd, self.qdd = z((samples, n)), z((samples, n)), z((samples, n))
-        self.tau, self.tau_applied = z((samples, n)), z((samples, n))
+        # τ and q̈ of a sample the run stops at before computing them stay NaN (see ClosedLoop)
+        self.q, self.qd, self.qdd = z((samples, n)), z((samples, n)), np.full((samples, n), np.nan)
+        self.tau, self.tau_applied = np.full((samples, n), np.nan), z((samples, n))
         self.tau_friction, self.tau_ext = z((samples, n)), z((samples, n))
         self.stuck = z((samples, n))  # 1.0: the joint is stuck (a boolean mask in the result)
         self.points = [(env, i) for env in environments for i in range(len(env.points))]
@@ -133,7 +134,8 @@ class Recorder:
         )
         check_limits(limits, stacklevel=4)
         refs = self.references[:rows]
-        given = [x for x in refs if x is not None]  # all of them, or the run had no reference recorded
+        # all of them, or the run had no reference recorded, or the reference of its last sample failed
+        given = sum(x is not None for x in refs)
         return SimResult(
             t=t,
             q=q,
@@ -159,7 +161,7 @@ class Recorder:
             diverged_qd=None if d is None else d[3],
             logs=logs,
             info=info,
-            reference=SampledReference.of(t, given, model.n) if len(given) == len(refs) else None,
+            reference=SampledReference.of(t, refs, model.n) if given else None,
             limits=limits,
             contact_position=self.contact_position[r],
             plant=model,

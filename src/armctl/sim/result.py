@@ -225,10 +225,14 @@ class SimResult:
 
     @property
     def status(self) -> str:
-        """``"diverged"`` (the run stopped early), ``"saturated"`` (some joint's torque sat at its limit on most
+        """``"failed"`` (the run stopped on an exception: the result travelled with it as ``exc.result``,
+        ``info["failure"]`` says which), ``"diverged"`` (the run stopped early), ``"saturated"`` (some joint's torque
+        sat at its limit on most
         samples, see :data:`armctl.sim.limits.SATURATION_SHARE`), ``"over limits"`` (a joint went beyond its
         velocity limit or outside its position range), or ``"ok"``; the first that applies. Details in
         :attr:`limits`."""
+        if "failure" in self.info:
+            return "failed"
         if self.diverged:
             return "diverged"
         if self.limits is not None and self.limits.is_saturated:
@@ -241,16 +245,19 @@ class SimResult:
         head = f"SimResult({self.info.get('plant', '?')}, n = {self.n}, {len(self.t)} samples over {self.duration:g} s"
         head += f", {self.info.get('integrator', '?')}"
         lines = [head + f"): {self.status}"]
+        if "failure" in self.info:
+            lines.append(f"  stopped at t = {self.duration:g} s by {self.info['failure']}")
         if self.diverged:
             lines.append(f"  diverged at t = {self.diverged_at:g} s ({self.divergence})")
-        if self.reference is not None and len(self.t):
-            e = np.abs(self.error)
+        e = np.abs(self.error) if self.reference is not None else np.zeros((0, 0))
+        e = e[~np.isnan(e).any(axis=1)]  # (a sample without a reference: NaN)
+        if e.size:
             lines.append(
                 f"  tracking error: RMS {float(np.sqrt((e**2).mean())):.3g}, max {float(e.max()):.3g} "
                 f"({self.joint_names[int(e.max(axis=0).argmax())]}) [rad or m]"
             )
         if len(self.t):
-            peak = np.abs(self.tau_applied).max(axis=0)
+            peak = np.fmax.reduce(np.abs(self.tau_applied), axis=0)  # (NaN: a sample without a torque)
             lines.append(f"  peak |τ applied| {float(peak.max()):.3g} N·m ({self.joint_names[int(peak.argmax())]})")
         if self.limits is not None:
             for text in filter(None, (self.limits.saturation_text(), *self.limits.overrun_texts())):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -27,17 +28,19 @@ class SampledReference:
             object.__setattr__(self, name, a)
 
     @classmethod
-    def of(cls, t: FloatArray, references: list[Reference], n: int) -> SampledReference:
-        """Stack the References given at the times ``t`` (n joints; no references: empty arrays)."""
+    def of(cls, t: FloatArray, references: Sequence[Reference | None], n: int) -> SampledReference:
+        """Stack the References given at the times ``t`` (n joints; no references: empty arrays; None, a sample
+        whose reference was not given: NaN)."""
         if not references:
             empty = np.zeros((0, n))
             return cls(np.asarray(t, dtype=float), empty, empty, empty)
         first = references[0]
-        if all(r is first for r in references):  # a fixed reference
+        if first is not None and all(r is first for r in references):  # a fixed reference
             rows = len(references)
             return cls._holding(t, *(np.tile(a, (rows, 1)) for a in (first.q, first.qd, first.qdd)))
         # one concatenation of the references' vectors, reshaped into the (N, n) rows
-        parts = ([r.q for r in references], [r.qd for r in references], [r.qdd for r in references])
+        nan = np.full(n, np.nan)
+        parts = ([nan if r is None else getattr(r, name) for r in references] for name in ("q", "qd", "qdd"))
         return cls._holding(t, *(np.concatenate(x).reshape(-1, n) for x in parts))
 
     @classmethod

@@ -36,6 +36,7 @@ from armctl.sim.options import Forces, Sensing, StopRules, grouped
 from armctl.sim.plant import Plant
 from armctl.sim.recorder import Recorder
 from armctl.sim.result import SimResult
+from armctl.sim.run_failure import attach, end_run
 from armctl.sim.stability import contact_stability
 
 
@@ -134,8 +135,10 @@ def simulate(
     ArmctlError
         A bad argument, named.
     Exception
-        Whatever the controller, the reference or the disturbance raised during the run, unchanged, carrying the
-        samples simulated before it as ``exc.result`` (a :class:`SimResult`): nothing simulated is lost.
+        Whatever the controller, the reference, the disturbance or the controller's ``end_run`` raised during the
+        run, unchanged, carrying the samples simulated up to it as ``exc.result`` (a :class:`SimResult`; the last
+        sample's state is the one the exception was raised at, with NaN for the torque, acceleration or reference
+        not computed there): nothing simulated is lost.
 
     Notes
     -----
@@ -249,9 +252,9 @@ def simulate(
     t0 = time.perf_counter()
     loop.run()
     wall = time.perf_counter() - t0
-    end_run = getattr(controller, "end_run", None)
-    if callable(end_run):
-        end_run()  # the controller's account of the run (e.g. the OSC's solver fallbacks), once
+    failure = end_run(controller, loop.failure)
+    if failure is not loop.failure:  # end_run raised after a run that did not
+        loop.failure, loop.failed_at = failure, (loop.rows - 1) * cdt
     loop.applied_torques()
     rows = loop.rows
     info = {
@@ -278,21 +281,10 @@ def simulate(
         info["failure"] = f"{type(loop.failure).__name__}: {loop.failure}"
     res = rec.result(rows, dyn, energy, info, loop.divergence)
     if loop.failure is not None:
-        _attach(loop.failure, res, rows * cdt)
+        attach(loop.failure, res, loop.failed_at)
         raise loop.failure
     after_run(res, dyn, sc.environments, scheme, h, sc.disturbance is not None)
     return res
-
-
-def _attach(exc: BaseException, res: SimResult, t: float) -> None:
-    """Hand the samples simulated before ``exc`` (raised at t [s]) on with it, as ``exc.result``."""
-    try:
-        exc.result = res  # type: ignore[attr-defined]  # the samples travel with the exception
-    except AttributeError:  # an exception type that takes no attributes: nothing to attach
-        return
-    note = f"simulate: raised at t = {t:g} s; the {len(res.t)} samples before it are in this exception's .result"
-    if hasattr(exc, "add_note"):
-        exc.add_note(note)
 
 
 def _check_contacts(

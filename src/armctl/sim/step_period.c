@@ -35,19 +35,18 @@
 #define CLIPPED 4
 #define TORQUE_NOT_FINITE 8
 
-/* ClosedLoop.check on (q, v): the same tests in the same order, the sums taken left to right as Python's sum. */
+/* ClosedLoop.check on (q, v): the same tests in the same order (finite: every entry; a sum could overflow). */
 static int armctl_state_check(const double* q, const double* v, double max_velocity, double max_position) {
-  double sq = 0.0, sv = 0.0, vmax = -INFINITY, vmin = INFINITY, qmax = -INFINITY, qmin = INFINITY;
-  int i;
+  double vmax = -INFINITY, vmin = INFINITY, qmax = -INFINITY, qmin = INFINITY;
+  int i, finite = 1;
   for (i = 0; i < N; ++i) {
-    sq += q[i];
-    sv += v[i];
+    if (!isfinite(q[i]) || !isfinite(v[i])) finite = 0;
     if (v[i] > vmax) vmax = v[i];
     if (v[i] < vmin) vmin = v[i];
     if (q[i] > qmax) qmax = q[i];
     if (q[i] < qmin) qmin = q[i];
   }
-  if (!isfinite(sq + sv)) return STATE_NOT_FINITE;
+  if (!finite) return STATE_NOT_FINITE;
   if (vmax > max_velocity || -vmin > max_velocity) return STATE_VELOCITY;
   if (max_position < INFINITY && (qmax > max_position || -qmin > max_position)) return STATE_POSITION;
   return STATE_OK;
@@ -57,9 +56,9 @@ CASADI_SYMBOL_EXPORT int period(const casadi_real** arg, casadi_real** res, casa
   const double *limit = arg[1], *W = arg[2], *par = arg[3], *opt = arg[4];
   double *Q = res[0], *V = res[1], *A = res[2], *F = res[3], *STUCK = res[4], *WF = res[5], *WE = res[6];
   double *out = res[7];
-  double S[NS], q[N], v[N], tau[N], hd[6], sum = 0.0;
+  double S[NS], q[N], v[N], tau[N], hd[6];
   long k = (long)opt[0], m = (long)opt[3], rows = (long)opt[4], i;
-  int scheme = (int)opt[2], st, j, clipped = 0;
+  int scheme = (int)opt[2], st, j, clipped = 0, finite = 1;
   double h = opt[1];
   armctl_mode md;
   (void)iw; (void)w; (void)mem;
@@ -68,10 +67,10 @@ CASADI_SYMBOL_EXPORT int period(const casadi_real** arg, casadi_real** res, casa
     out[0] = BAD_ROW;
     return 0;
   }
-  /* ClosedLoop.control: τ_k finite (its sum, taken left to right as Python's), clipped where beyond the limits */
+  /* ClosedLoop.control: τ_k finite (every entry), clipped where beyond the limits */
   memcpy(tau, arg[0] + k * N, sizeof tau);
-  for (j = 0; j < N; ++j) sum += tau[j];
-  if (!isfinite(sum)) {
+  for (j = 0; j < N; ++j) if (!isfinite(tau[j])) finite = 0;
+  if (!finite) {
     out[2] = TORQUE_NOT_FINITE;
     return 0;
   }
