@@ -106,7 +106,8 @@ class ClosedLoop:
         for view in self._views:
             view.flags.writeable = False
         self._q_view, self._qd_view, self._qm_view, self._qdm_view = self._views
-        self._noisy = s.noise_q is not None and s.noise_qd is not None
+        #: the (samples, n) noise of q and q̇ measured, or None
+        self._noise = (s.noise_q, s.noise_qd) if s.noise_q is not None and s.noise_qd is not None else None
         #: the plant's whole control period in one call (:mod:`armctl.sim.period`), or None (the Python of
         #: control's checks of τ and integrate)
         self._whole: WholePeriods | None = None
@@ -229,9 +230,10 @@ class ClosedLoop:
         if not rec.measured:
             return self._q_view[k], self._qd_view[k]
         s = self.s
-        if self._noisy:
-            rec.q_measured[k] = rec.q[k] + s.noise_q[k]  # type: ignore[index]  # _noisy: both are set
-            rec.qd_measured[k] = rec.qd[k] + s.noise_qd[k]  # type: ignore[index]
+        noise = self._noise
+        if noise is not None:
+            rec.q_measured[k] = rec.q[k] + noise[0][k]
+            rec.qd_measured[k] = rec.qd[k] + noise[1][k]
         else:
             rec.q_measured[k] = rec.q[k]
             rec.qd_measured[k] = rec.qd[k]
