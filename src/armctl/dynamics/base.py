@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING, Any, cast
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FLOAT, FloatArray, all_finite, boolean, float_vectors, vector
+from armctl._checks import FLOAT, FloatArray, all_finite, boolean, vector
 from armctl.dynamics.friction_terms import FrictionTerms
 from armctl.dynamics.kernel import Kernel
 from armctl.dynamics.regressor import RegressorMethods
@@ -136,6 +136,9 @@ class Dynamics(RegressorMethods):
         #: NaN or inf in an input always reaches the result (the kernel's nan_propagates): checking the result of
         #: a call suffices on the path that takes native float64 vectors as they are (see _evaluate)
         self._propagates = self._local.kernel.nan_propagates
+        #: every joint revolute: M(q), g(q) and U(q) depend on q through sines and cosines alone, so they are finite
+        #: for every finite q and their results need no check (a prismatic position can make them overflow)
+        self._trigonometric = all(j.kind != "prismatic" for j in model.joints)
 
     def kernel_factory(self) -> Callable[[], Kernel]:
         """What makes a new kernel (workspace) of this object's backend, without referring to this object.
@@ -186,8 +189,14 @@ class Dynamics(RegressorMethods):
 
     def _of_q(self, fn: Callable[[FloatArray], Any], q: Any) -> Any:
         """``fn(q)`` (a kernel primitive of q alone, which refuses a wrong length) on a checked q, its result
-        checked (a prismatic joint's huge position can overflow it)."""
-        if not (type(q) is np.ndarray and q.dtype == FLOAT and q.ndim == 1 and math.isfinite(sum(q.tolist()))):
+        checked where it can overflow (a prismatic joint's huge position)."""
+        if type(q) is np.ndarray and q.dtype is FLOAT and q.ndim == 1 and math.isfinite(sum(q.tolist())):
+            if self._trigonometric:
+                try:
+                    return fn(q)
+                except ValueError:  # a wrong length: vector() names it
+                    q = vector(q, self.n, "q")
+        else:
             q = vector(q, self.n, "q")
         try:
             out = fn(q)
@@ -270,6 +279,12 @@ class Dynamics(RegressorMethods):
         ndarray, shape (n, n)
             M(q) [kg·m² or kg].
         """
+        try:  # the usual call, inlined (M is finite, see _trigonometric): a native float64 vector of finite
+            # entries (the sum of a matrix's or a scalar's tolist() raises TypeError), of the length the kernel takes
+            if self._trigonometric and q.dtype is FLOAT and math.isfinite(sum(q.tolist())):  # type: ignore[union-attr]
+                return self._local.kernel.mass(q)
+        except (AttributeError, TypeError, ValueError):  # not an array; a matrix; a wrong length: _of_q names it
+            pass
         return self._of_q(self._local.kernel.mass, q)
 
     def coriolis_matrix(self, q: ArrayLike, qd: ArrayLike) -> FloatArray:
@@ -301,6 +316,12 @@ class Dynamics(RegressorMethods):
         ndarray, shape (n,)
             g(q) [N·m or N].
         """
+        try:  # the usual call, inlined (g is finite, see _trigonometric): a native float64 vector of finite
+            # entries (the sum of a matrix's or a scalar's tolist() raises TypeError), of the length the kernel takes
+            if self._trigonometric and q.dtype is FLOAT and math.isfinite(sum(q.tolist())):  # type: ignore[union-attr]
+                return self._local.kernel.gravity(q)
+        except (AttributeError, TypeError, ValueError):  # not an array; a matrix; a wrong length: _of_q names it
+            pass
         return self._of_q(self._local.kernel.gravity, q)
 
     def friction_torque(self, qd: ArrayLike) -> FloatArray:
@@ -338,15 +359,21 @@ class Dynamics(RegressorMethods):
             τ [N·m or N].
         """
         k = self._local.kernel
-        if wrench is None and self._propagates and float_vectors(q, qd, qdd):
+        if (
+            wrench is None
+            and self._propagates
+            and type(q) is type(qd) is type(qdd) is np.ndarray
+            and q.dtype is qd.dtype is qdd.dtype is FLOAT
+            and q.ndim == qd.ndim == qdd.ndim == 1
+        ):  # (float_vectors inlined)
             try:  # rnea refuses a wrong length: then the careful path names it
                 tau = k.rnea(q, qd, qdd)
             except ValueError:
                 tau = None
             if tau is not None:
                 if self.friction.any:
-                    tau += self.friction.torque(cast(FloatArray, qd))  # (float_vectors checked it)
-                if math.isfinite(sum(tau.tolist())):
+                    tau += self.friction.torque(cast(FloatArray, qd))  # (checked above: float vectors)
+                if math.isfinite(sum(tau.tolist())):  # (every entry: an overflow can show in any one)
                     return tau
         tau = self._evaluate(k.inverse_dynamics, ("q", "qd", "qdd"), q, qd, qdd)
         if wrench is not None:
