@@ -142,6 +142,11 @@ class SolverWarning(UserWarning):
     run went on; the warning says what happened and how often, once per run."""
 
 
+class PerformanceWarning(UserWarning):
+    """Generated code could not be used (no C compiler, a build that failed): a slower path gives the same results;
+    the warning says why and how to get a compiler, once per process and cause."""
+
+
 class SingularityWarning(UserWarning):
     """A controller met (near) singular configurations during a run and went on with a damped inverse there;
     the warning says on how many steps and how much damping, once per run."""

@@ -5,13 +5,12 @@ from __future__ import annotations
 import math
 
 from armctl.bench import osc_speed
+from armctl.dynamics import codegen
 
 
 def test_osc_speed_figures_checks_and_report() -> None:
     fig = osc_speed.run(count=40, rounds=3)
-    for f, name in [(fig[k], k) for k in ("circle", "random")] + [
-        (fig["compiled"][k], k) for k in ("circle", "random")
-    ]:
+    for f, name in [(fig[k], k) for k in ("circle", "random")] + [(fig["numpy"][k], k) for k in ("circle", "random")]:
         for key in ("step_s", "rnea_s", "bare_solve_s", "check_s", "ratio_rnea", "ratio_bare", "check_share"):
             assert math.isfinite(f[key]) and f[key] > 0, (name, key)
         assert f["step_s"] > f["rnea_s"] and f["ratio_rnea"] > 1  # a step holds model terms, QP and check
@@ -21,16 +20,17 @@ def test_osc_speed_figures_checks_and_report() -> None:
         assert f["wrong"] == 0  # every torque quadprog's optimum of the same QP (quadprog: the test extra)
     assert "closed_form_s" in fig["circle"] and "closed_form_s" not in fig["random"]
     verdicts = osc_speed.checks(fig)
+    assert fig["generated"] == (codegen.compiler() is not None)  # the default takes generated code where it can
     assert set(verdicts) == {
-        "circle (compile=True): step / RNEA <= 15",
-        "random (compile=True): step / RNEA <= 15",
+        "circle: step / RNEA <= 15",
+        "random: step / RNEA <= 15",
         "circle: every torque the optimum",
         "random: every torque the optimum",
-        "circle (compile=True): every torque the optimum",
-        "random (compile=True): every torque the optimum",
+        "circle (compile=False): every torque the optimum",
+        "random (compile=False): every torque the optimum",
     }
     assert all(ok for name, ok in verdicts.items() if name.endswith("every torque the optimum"))
     text = osc_speed.report(fig)
-    assert "x RNEA" in text and "x bare solve" in text and "optimality check" in text and "compile=True" in text
+    assert "x RNEA" in text and "x bare solve" in text and "optimality check" in text and "compile=False" in text
     assert "target" not in text.lower()  # the benchmark's own checks are not printed
     assert "missed" not in text.lower()

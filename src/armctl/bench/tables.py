@@ -194,7 +194,7 @@ def osc_speed(fig: dict[str, Any]) -> list[Table]:
     )
     names = (("circle", "along a 10 cm circle"), ("random", "random near the ready pose"))
     sets = [(fig[name], label) for name, label in names]
-    sets += [(fig["compiled"][name], f"{label}, compile=True") for name, label in names if "compiled" in fig]
+    sets += [(fig["numpy"][name], f"{label}, compile=False") for name, label in names if "numpy" in fig]
     for f, label in sets:
         t.rows.append(
             [

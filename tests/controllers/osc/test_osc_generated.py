@@ -1,5 +1,6 @@
-"""The q̈-only QP's data from generated code (``Dynamics(model, compile=True)``) against the QP the NumPy builder
-shows on Pinocchio's terms, and the controller on it against an independent solver (quadprog)."""
+"""The q̈-only QP's data from generated code (``OperationalSpaceQP(..., compile="auto")``, the default, or
+``compile=True``) against the QP the NumPy builder shows on Pinocchio's terms (``compile=False``), and the
+controller on it against an independent solver (quadprog)."""
 
 from __future__ import annotations
 
@@ -115,7 +116,7 @@ def test_on_compiled_dynamics_the_torque_is_the_cold_optimum_of_an_independent_s
     torque limits and states that do not; and the same τ as the controller on Pinocchio's terms."""
     dyn, plain = _dynamics(), _dynamics(compile=False)
     ctrl = OperationalSpaceQP(dyn, _pose_and_posture(dyn), limits=[TorqueLimit()])
-    numpy_path = OperationalSpaceQP(plain, _pose_and_posture(plain), limits=[TorqueLimit()])
+    numpy_path = OperationalSpaceQP(plain, _pose_and_posture(plain), limits=[TorqueLimit()], compile=False)
     assert ctrl._qdd_qp(ctrl.builder.layout()).generated is not None
     assert numpy_path._qdd_qp(numpy_path.builder.layout()).generated is None
     ref = armctl.Reference(Q_HOME)
@@ -137,7 +138,7 @@ def test_the_last_solution_of_a_generated_step_is_the_public_problems() -> None:
     controller on Pinocchio's terms, and the optimality check passes again."""
     dyn, plain = _dynamics(), _dynamics(compile=False)
     ctrl = OperationalSpaceQP(dyn, _three_frames(dyn))
-    other = OperationalSpaceQP(plain, _three_frames(plain))
+    other = OperationalSpaceQP(plain, _three_frames(plain), compile=False)
     ref = armctl.Reference(Q_HOME)
     for t, q, qd in _states(10, seed=4):
         ctrl(t, q, qd, ref)
@@ -159,7 +160,7 @@ def test_gains_and_weights_changed_between_steps_take_effect_in_the_generated_co
     dyn, plain = _dynamics(), _dynamics(compile=False)
     tasks, others = _pose_and_posture(dyn), _pose_and_posture(plain)
     ctrl = OperationalSpaceQP(dyn, tasks, limits=[TorqueLimit(scale=2.0)])
-    other = OperationalSpaceQP(plain, others, limits=[TorqueLimit(scale=2.0)])
+    other = OperationalSpaceQP(plain, others, limits=[TorqueLimit(scale=2.0)], compile=False)
     ref = armctl.Reference(Q_HOME)
     t, q, qd = _states(1, seed=2)[0]
     before = ctrl(t, q, qd, ref)
@@ -176,7 +177,7 @@ def test_limits_that_read_the_state_hold_on_the_generated_path() -> None:
     Pinocchio's terms, from states near the limits."""
     dyn, plain = _dynamics(), _dynamics(compile=False)
     ctrl = OperationalSpaceQP(dyn, _pose_and_posture(dyn))
-    other = OperationalSpaceQP(plain, _pose_and_posture(plain))
+    other = OperationalSpaceQP(plain, _pose_and_posture(plain), compile=False)
     assert ctrl._qdd_qp(ctrl.builder.layout()).generated is not None
     upper = dyn.model.upper
     ref = armctl.Reference(Q_HOME)
@@ -189,7 +190,8 @@ def test_limits_that_read_the_state_hold_on_the_generated_path() -> None:
 
 def test_what_the_code_does_not_take_stays_on_the_numpy_path() -> None:
     """A task subclass (its kinematics may be its own) or a limit of a user's (its bounds may read more than q and
-    q̇) keeps the controller on Pinocchio's terms; so does a model without ``compile=True``."""
+    q̇) keeps the controller on Pinocchio's terms; so does ``compile=False``, and ``"auto"`` on a backend whose
+    model the generated code is not (the Lagrange backend's rotor coupling)."""
 
     class MyPose(FramePoseTask):
         pass
@@ -213,6 +215,45 @@ def test_what_the_code_does_not_take_stays_on_the_numpy_path() -> None:
         assert np.isfinite(ctrl(0.0, Q_HOME, np.zeros(7), armctl.Reference(Q_HOME))).all()
     ctrl = OperationalSpaceQP(dyn, _pose_and_posture(dyn), limits=[JointPositionLimit(), JointVelocityLimit()])
     assert ctrl._qdd_qp(ctrl.builder.layout()).generated is not None
+    ctrl = OperationalSpaceQP(dyn, _pose_and_posture(dyn), compile=False)
+    assert ctrl._qdd_qp(ctrl.builder.layout()).generated is None
+    lagrange = armctl.Dynamics(armctl.models.planar_2r(), backend="lagrange")
+    posture = [PostureTask(2, kp=50.0)]
+    assert OperationalSpaceQP(lagrange, posture)._qdd_qp(ctrl.builder.layout()).generated is None
+
+
+def test_the_default_takes_generated_code_on_pinocchios_dynamics() -> None:
+    """``compile="auto"``: a controller on ``Dynamics(model)`` (not compiled) takes its QP data from generated
+    code, with the τ of the NumPy path."""
+    plain = _dynamics(compile=False)
+    ctrl = OperationalSpaceQP(plain, _pose_and_posture(plain), limits=[TorqueLimit()])
+    other = OperationalSpaceQP(plain, _pose_and_posture(plain), limits=[TorqueLimit()], compile=False)
+    assert ctrl._qdd_qp(ctrl.builder.layout()).generated is not None
+    ref = armctl.Reference(Q_HOME)
+    for t, q, qd in _states(20, seed=6):
+        np.testing.assert_allclose(ctrl(t, q, qd, ref), other(t, q, qd, ref), atol=1e-6)
+
+
+def test_without_a_compiler_auto_warns_once_and_true_raises(monkeypatch, tmp_path) -> None:  # type: ignore[no-untyped-def]
+    """No C compiler (``CC`` a missing program, an empty cache): ``"auto"`` takes the NumPy path with one
+    PerformanceWarning naming the fix; ``compile=True`` raises BackendError; ``compile="yes"`` is refused."""
+    from armctl.controllers.osc import controller as osc_controller
+    from armctl.errors import BackendError, PerformanceWarning
+
+    monkeypatch.setenv("CC", "no-such-compiler-armctl")
+    monkeypatch.setenv("ARMCTL_CACHE", str(tmp_path))
+    monkeypatch.setattr(osc_controller, "_warned", set())
+    dyn = armctl.Dynamics(armctl.models.planar_2r())
+    with pytest.warns(PerformanceWarning, match="no C compiler") as caught:
+        first = OperationalSpaceQP(dyn, [PostureTask(2, kp=50.0)])
+        OperationalSpaceQP(dyn, [PostureTask(2, kp=60.0)])
+    assert len(caught) == 1
+    assert first._qdd_qp(first.builder.layout()).generated is None
+    assert np.isfinite(first(0.0, np.zeros(2), np.zeros(2), armctl.Reference([0.1, 0.2]))).all()
+    with pytest.raises(BackendError):
+        OperationalSpaceQP(dyn, [PostureTask(2, kp=50.0)], compile=True)
+    with pytest.raises(InvalidParameterError, match="compile must be True"):
+        OperationalSpaceQP(dyn, [PostureTask(2, kp=50.0)], compile="yes")
 
 
 def test_out_of_scale_rows_on_the_generated_path_are_refused_by_name() -> None:
@@ -254,7 +295,7 @@ def test_a_closed_loop_run_on_the_generated_path_is_the_numpy_paths_run() -> Non
         target[:3, 3] = 0.78 * np.array([-0.91, 0.15, 0.38]) / np.linalg.norm([-0.91, 0.15, 0.38])
         pose = FramePoseTask(kp=100.0)
         pose.set_target(target)
-        ctrl = OperationalSpaceQP(d, [pose, PostureTask(7, kp=100.0, weight=1e-3)])
+        ctrl = OperationalSpaceQP(d, [pose, PostureTask(7, kp=100.0, weight=1e-3)], compile=d is dyn)
         runs.append(sim.simulate(plain, ctrl, armctl.Reference(Q_HOME), 1.0, q0=Q_HOME))
         if d is dyn:
             assert ctrl._qdd_qp(ctrl.builder.layout()).generated is not None

@@ -35,7 +35,7 @@ from armctl.controllers.osc.solve import make_second_solver, make_solver
 from armctl.controllers.osc.state import ModelEvaluator
 from armctl.controllers.osc.tasks.base import Task
 from armctl.dynamics.base import Dynamics
-from armctl.errors import InvalidParameterError, SolverWarning
+from armctl.errors import BackendError, InvalidParameterError, PerformanceWarning, SolverWarning
 from armctl.references import Reference
 
 #: the limits whose bounds read only q and q̇ of a step's state (the generated path gives them no more)
@@ -64,6 +64,30 @@ def default_limits(dt: float = 1e-3) -> list[Limit]:
     return [TorqueLimit(), JointPositionLimit(dt), JointVelocityLimit(dt)]
 
 
+#: the causes warned about once by _warn_no_generated_code
+_warned: set[str] = set()
+
+
+def _warn_no_generated_code(exc: Exception) -> None:
+    """Warn once per process and cause that the OSC's generated QP data could not be built."""
+    from armctl.dynamics import codegen
+
+    reason = str(exc) if isinstance(exc, BackendError) else f"{type(exc).__name__}: {exc}"
+    if codegen.compiler() is None:
+        key = "no compiler"
+        text = (
+            "no C compiler was found: the operational-space QP takes its data from Pinocchio and NumPy, about twice "
+            "as slow as generated code. Install a C compiler (Debian/Ubuntu: sudo apt install gcc; macOS: "
+            "xcode-select --install; conda: conda install -c conda-forge c-compiler) or point $CC at one; "
+            "compile=False chooses the NumPy path without this warning"
+        )
+    else:
+        key, text = reason, f"the operational-space QP's generated data could not be built ({reason}); using NumPy"
+    if key not in _warned:
+        _warned.add(key)
+        warnings.warn(text, PerformanceWarning, stacklevel=4)
+
+
 def _unique(items: Sequence[Any], kind: str) -> None:
     names = [it.name for it in items]
     dup = sorted({nm for nm in names if names.count(nm) > 1})
@@ -79,8 +103,8 @@ class OperationalSpaceQP(Controller):
     ----------
     dynamics : Dynamics
         The controller's model: M(q), C(q, q̇) q̇ + g(q), τ_f(q̇) and the frames' kinematics. Any backend works
-        (Pinocchio evaluates a step's terms in one pass); on ``Dynamics(model, compile=True)`` the QP of one
-        level without contacts takes its data from generated code (see Notes).
+        (Pinocchio evaluates a step's terms in one pass); the QP of one level without contacts takes its data
+        from generated code (see ``compile`` and Notes).
     tasks : sequence of Task
         At least one :class:`~armctl.controllers.osc.Task` (or a single one), with unique names.
         ``task.priority`` (0 first) orders the levels strictly; ``task.weight`` trades tasks off inside a level.
@@ -107,12 +131,21 @@ class OperationalSpaceQP(Controller):
         The last stage of the chain: ``"active-set"``
         (:class:`~armctl.controllers.osc.DualActiveSetSolver`, the default), ``"qpsolvers:NAME"``, an object with
         ``solve_raw(arrays, slot, mode)`` and ``reset()``, or None (no second solver).
+    compile : bool or "auto", optional
+        Where the data of the q̈-only QP come from (see Notes): ``"auto"`` (the default) from generated C code
+        on a Pinocchio-backed ``dynamics`` whenever it can be built (the first time for a model and tasks it is
+        compiled, about a second, and cached on disk; without a C compiler the NumPy path is used, with one
+        :class:`~armctl.errors.PerformanceWarning`); ``True`` from generated code on any backend, a failed build
+        raising :class:`~armctl.errors.BackendError`; ``False`` from Pinocchio's terms and NumPy.
 
     Raises
     ------
     InvalidParameterError
         ``dynamics`` is not a Dynamics; no task; tasks, limits or contacts that are not of their class; repeated
-        task or contact names; ``regularization`` or ``dt`` not > 0; a limit whose bounds leave no range.
+        task or contact names; ``regularization`` or ``dt`` not > 0; a limit whose bounds leave no range;
+        ``compile`` not True, False or ``"auto"``.
+    BackendError
+        ``compile=True`` and the generated code cannot be built (no C compiler, a failing one).
     UnknownNameError
         A task's or contact's frame that the model does not have; a
         :class:`~armctl.controllers.osc.ContactForceTask` on a contact that is not in ``contacts``; an unknown
@@ -152,7 +185,7 @@ class OperationalSpaceQP(Controller):
     in C) started from the last step's active set; a QP whose answer fails the check goes on to the primary
     solver (ProxQP: warm start, cold start, default settings) and a second solver. With one priority level, no
     slacks and no active contact the QP is solved on q̈ alone (τ = M q̈ + C q̇ + g + τ_f substituted: the same
-    optimum), and on ``Dynamics(model, compile=True)`` its data come from one call of generated C code when its
+    optimum), and (``compile``) its data come from one call of generated C code when its
     tasks (:class:`~armctl.controllers.osc.FramePositionTask`, :class:`~armctl.controllers.osc.FrameOrientationTask`,
     :class:`~armctl.controllers.osc.FramePoseTask`, :class:`~armctl.controllers.osc.PostureTask`, not
     subclasses) and limits are built-in ones. Each step's fallbacks are in ``last_log["qp_fallbacks"]``;
@@ -176,12 +209,20 @@ class OperationalSpaceQP(Controller):
         slacks: bool = False,
         dt: float = 1e-3,
         fallback_solver: str | Any = "active-set",
+        compile: bool | str = "auto",
     ) -> None:
         if not isinstance(dynamics, Dynamics):
             raise InvalidParameterError(
                 f"dynamics must be an armctl.Dynamics, got {type(dynamics).__name__}", value=dynamics
             )
         super().__init__(dynamics)
+        if not (compile is True or compile is False or (isinstance(compile, str) and compile == "auto")):
+            raise InvalidParameterError(
+                f"compile must be True (generated QP data, or an error), False (NumPy) or 'auto' (generated where "
+                f"it can be built), got {compile!r}",
+                value=compile,
+            )
+        self.compile = compile
         tasks = instances(tasks, Task, "tasks", "Task", single=True)
         if not tasks:
             raise InvalidParameterError("OperationalSpaceQP needs at least one task", value=tasks)
@@ -219,13 +260,21 @@ class OperationalSpaceQP(Controller):
             and callable(getattr(self.solver, "solve_raw", None))
         )
         self._qdd: dict[Layout, QddQP] = {}
-        if self._qdd_path and not self.contacts:  # made now: on compile=True its code is built or loaded here
+        if self._qdd_path and not self.contacts:  # made now: its generated code is built or loaded here
             self._qdd_qp(self.builder.layout())
         self._pending: tuple[QddQP, QddStep] | None = None
         self._last_solution: OSCSolution | None = None
         self._steps = 0
         self._kept: Counter[int] = Counter()
         self._kept_reason: dict[int, str] = {}
+
+    @property
+    def uses_generated_code(self) -> bool:
+        """Whether the q̈-only QP of the current layout (the tasks and contacts as they are) takes its data from
+        generated code (see ``compile``)."""
+        if not self._qdd_path or any(c.active for c in self.contacts):
+            return False
+        return self._qdd_qp(self.builder.layout()).generated is not None
 
     @property
     def last_solution(self) -> OSCSolution | None:
@@ -317,18 +366,38 @@ class OperationalSpaceQP(Controller):
         return self.last_solution  # type: ignore[return-value]  # compute() just set it
 
     def _qdd_qp(self, lay: Layout) -> QddQP:
-        """The q̈-only QP of layout ``lay`` (made on first use), with its data from generated code on
-        ``Dynamics(model, compile=True)`` when the tasks and limits are built-in ones (see generated)."""
+        """The q̈-only QP of layout ``lay`` (made on first use), with its data from generated code where
+        ``compile`` asks for it and the tasks and limits are built-in ones (see generated)."""
         qp = self._qdd.get(lay)
         if qp is None:
             qp = QddQP(self.builder, lay)
-            if getattr(self.dynamics, "compiled", False) and all(type(lim) in _PLAIN_LIMITS for lim in lay.limits):
-                from armctl.controllers.osc.generated import GeneratedQddData, supported  # CasADi: on compile=True
-
-                if supported(qp.plan.tasks):
-                    qp.generated = GeneratedQddData(self.dynamics, qp.plan.tasks, self.builder.regularization)
+            qp.generated = self._generated_data(qp, lay)
             self._qdd[lay] = qp
         return qp
+
+    def _generated_data(self, qp: QddQP, lay: Layout) -> Any:
+        """The generated data of ``qp`` (a GeneratedQddData), or None: the NumPy path (``compile=False``, tasks or
+        limits of the user's own, a backend whose model the generated code is not, a build that fails on
+        ``"auto"``)."""
+        mode = self.compile
+        if mode is False or not all(type(lim) in _PLAIN_LIMITS for lim in lay.limits):
+            return None
+        from armctl.dynamics.pinocchio_backend import PinocchioDynamics
+
+        # "auto" where the generated terms are the dynamics' own (Pinocchio's, rotors without gyroscopic coupling)
+        if mode == "auto" and not isinstance(self.dynamics, PinocchioDynamics):
+            return None
+        from armctl.controllers.osc.generated import GeneratedQddData, supported  # CasADi, imported on use
+
+        if not supported(qp.plan.tasks):
+            return None
+        try:
+            return GeneratedQddData(self.dynamics, qp.plan.tasks, self.builder.regularization)
+        except Exception as exc:  # "auto": the NumPy path, and why (once per process and cause)
+            if mode is True:
+                raise
+            _warn_no_generated_code(exc)
+            return None
 
     def _qdd_step(self, lay: Layout, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         """One level without contact forces: the QP on q̈ alone (see reduced)."""

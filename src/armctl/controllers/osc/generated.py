@@ -1,5 +1,5 @@
 """`GeneratedQddData`: the data of the q̈-only QP of one priority level (:mod:`~armctl.controllers.osc.reduced`)
-from one call of generated C code, on ``Dynamics(model, compile=True)``.
+from one call of generated C code (``OperationalSpaceQP(..., compile=...)``).
 
 At (q, q̇), the tasks' targets and the friction torque τ_f(q̇), one call of code generated with CasADi from the
 model (its numbers built in) evaluates what the NumPy path builds from Pinocchio's terms and the tasks' rows:
@@ -24,6 +24,8 @@ kinds and frames and whether the model has friction.
 from __future__ import annotations
 
 import hashlib
+import logging
+import time
 from collections.abc import Sequence
 from typing import Any, cast
 
@@ -49,6 +51,7 @@ from armctl.references import Reference
 #: bumped when the generated code changes, so that stale cached libraries are not loaded
 _CODE_VERSION = 1
 _NAME = "osc_qdd_qp"
+_log = logging.getLogger(__name__)
 #: the frame tasks the code takes: their kind and the shape of their target value
 _FRAME_TASKS: dict[type, tuple[str, tuple[int, ...]]] = {
     FramePoseTask: ("pose", (4, 4)),
@@ -162,9 +165,20 @@ class GeneratedQddData:
         self.regularization = float(regularization)
         cache_dir = dynamics.options.get("cache_dir")
         tag = _tag(model, self.tasks, self.friction is not None)
+        built = not codegen.is_cached([_NAME], tag, cache_dir)
+        t0 = time.perf_counter()
         fn = codegen.cached(
             [_NAME], tag, lambda: [qp_function(model, self.tasks, self.friction is not None)], cache_dir
         )[_NAME]
+        if built:
+            _log.warning(
+                "armctl: generated and compiled the operational-space QP's data for %r (%s) in %.1f s (cached in %s: "
+                "later controllers load it)",
+                model.name,
+                ", ".join(type(tk).__name__ for tk in self.tasks),
+                time.perf_counter() - t0,
+                codegen.cache_root(cache_dir),
+            )
         m = sum(tk.dim for tk in self.tasks)
         self.inp = np.zeros(fn.size1_in(0))
         self.par = np.zeros(fn.size1_in(1))
