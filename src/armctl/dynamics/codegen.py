@@ -210,6 +210,13 @@ def compiler() -> str | None:
     return shutil.which("cc") or shutil.which("gcc")
 
 
+#: how to get a C compiler, for the messages of what falls back without one
+INSTALL_A_COMPILER = (
+    "install a C compiler (Debian/Ubuntu: sudo apt install gcc; Fedora: sudo dnf install gcc; macOS: "
+    "xcode-select --install; conda: conda install -c conda-forge c-compiler) or point $CC at one"
+)
+
+
 def _compiler() -> str:
     cc = compiler()
     if cc is None:

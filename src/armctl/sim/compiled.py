@@ -34,6 +34,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from armctl._checks import FloatArray
+from armctl.dynamics import codegen
 from armctl.dynamics.base import Dynamics
 from armctl.dynamics.casadi_buffer import buffer_of, view
 from armctl.errors import BackendError, InvalidParameterError, SimulationWarning
@@ -61,11 +62,7 @@ _warned: set[str] = set()
 #: libraries this process has loaded, by path
 _ready: dict[str, Any] = {}
 
-HOW_TO_GET_A_COMPILER = (
-    "install a C compiler (Debian/Ubuntu: sudo apt install gcc; Fedora: sudo dnf install gcc; macOS: "
-    "xcode-select --install; conda: conda install -c conda-forge c-compiler) or point $CC at one; "
-    "compile=False chooses the Python step without this warning"
-)
+HOW_TO_GET_A_COMPILER = f"{codegen.INSTALL_A_COMPILER}; compile=False chooses the Python step without this warning"
 
 
 @dataclass(frozen=True)

@@ -77,9 +77,8 @@ def _warn_no_generated_code(exc: Exception) -> None:
         key = "no compiler"
         text = (
             "no C compiler was found: the operational-space QP takes its data from Pinocchio and NumPy, about twice "
-            "as slow as generated code. Install a C compiler (Debian/Ubuntu: sudo apt install gcc; macOS: "
-            "xcode-select --install; conda: conda install -c conda-forge c-compiler) or point $CC at one; "
-            "compile=False chooses the NumPy path without this warning"
+            f"as slow as generated code. To get it, {codegen.INSTALL_A_COMPILER}; compile=False chooses the NumPy "
+            "path without this warning"
         )
     else:
         key, text = reason, f"the operational-space QP's generated data could not be built ({reason}); using NumPy"
