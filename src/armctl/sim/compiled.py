@@ -34,7 +34,6 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from armctl._checks import FloatArray
-from armctl.dynamics import codegen
 from armctl.dynamics.base import Dynamics
 from armctl.dynamics.casadi_buffer import buffer_of, view
 from armctl.errors import BackendError, InvalidParameterError, SimulationWarning
@@ -61,8 +60,6 @@ _log = logging.getLogger(__name__)
 _warned: set[str] = set()
 #: libraries this process has loaded, by path
 _ready: dict[str, Any] = {}
-
-HOW_TO_GET_A_COMPILER = f"{codegen.INSTALL_A_COMPILER}; compile=False chooses the Python step without this warning"
 
 
 @dataclass(frozen=True)
@@ -136,7 +133,8 @@ def choose_step(
             key = "no compiler"
             text = (
                 f"no C compiler was found ({where}): simulating with the Python step, several times slower than "
-                f"generated code. To get it, {HOW_TO_GET_A_COMPILER}"
+                f"generated code. To get it, {codegen.INSTALL_A_COMPILER}; compile=False chooses the Python step "
+                "without this warning"
             )
         else:
             key, text = reason, f"the generated step could not be built ({reason}); simulating with the Python step"
