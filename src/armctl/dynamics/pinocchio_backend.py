@@ -41,7 +41,7 @@ class PinocchioKernel(Kernel):
         The model and this kernel's workspace, whose contents after a call are unspecified.
     """
 
-    nan_propagates = True  # checked entry by entry in tests/dynamics/test_validation.py
+    nan_propagates = True  # relied on, and checked entry by entry through the API, in tests/dynamics/test_validation.py
 
     def __init__(self, model: RobotModel, pin_model: Any) -> None:
         super().__init__(model)
