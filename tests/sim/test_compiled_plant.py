@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 import armctl
+from armctl.dynamics import codegen
 from armctl.errors import BackendError, SimulationWarning
 from armctl.sim import ContactPoint, HuntCrossley, KelvinVoigt, Plane, SmoothFriction, simulate
 from armctl.sim import compiled as compiled_module
@@ -139,7 +140,7 @@ def fresh_cache(tmp_path, monkeypatch: pytest.MonkeyPatch):  # type: ignore[no-u
     """An empty cache, and a process that has loaded no library and warned about nothing yet."""
     monkeypatch.setenv("ARMCTL_CACHE", str(tmp_path))
     monkeypatch.setattr(compiled_module, "_ready", {})
-    monkeypatch.setattr(compiled_module, "_warned", set())
+    monkeypatch.setattr(codegen, "warned", set())
     return tmp_path
 
 

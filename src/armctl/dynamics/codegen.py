@@ -217,6 +217,35 @@ INSTALL_A_COMPILER = (
 )
 
 
+#: the causes :func:`warn_fallback` has warned about in this process
+warned: set[tuple[type[Warning], str]] = set()
+
+
+def warn_fallback(
+    exc: Exception, failed: str, instead: str, slower: str, option: str, category: type[Warning], stacklevel: int
+) -> str:
+    """Warn (``category``, once per process and cause) that generated code could not be used because of ``exc``:
+    ``failed`` names what was not built, ``instead`` what runs in its place, ``slower`` how much slower that is,
+    ``option`` the setting that chooses it without the warning. Returns ``exc`` in words."""
+    reason = str(exc) if isinstance(exc, BackendError) else f"{type(exc).__name__}: {exc}"
+    if compiler() is None:
+        asked = os.environ.get("CC")
+        where = f"$CC = {asked!r} is not a program on the PATH" if asked else "no cc or gcc on the PATH"
+        key, text = (
+            "no compiler",
+            (
+                f"no C compiler was found ({where}): {instead}, {slower} than generated code. To get it, "
+                f"{INSTALL_A_COMPILER}; {option} without this warning"
+            ),
+        )
+    else:
+        key, text = f"{failed}: {reason}", f"{failed} could not be built ({reason}); {instead}"
+    if (category, key) not in warned:
+        warned.add((category, key))
+        warnings.warn(text, category, stacklevel=stacklevel + 1)
+    return reason
+
+
 def _compiler() -> str:
     cc = compiler()
     if cc is None:

@@ -26,7 +26,6 @@ from __future__ import annotations
 import logging
 import os
 import time
-import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -36,7 +35,7 @@ import numpy as np
 from armctl._checks import FloatArray
 from armctl.dynamics.base import Dynamics
 from armctl.dynamics.casadi_buffer import buffer_of, view
-from armctl.errors import BackendError, InvalidParameterError, SimulationWarning
+from armctl.errors import InvalidParameterError, SimulationWarning
 from armctl.model.robot import RobotModel
 from armctl.sim.integrators import fast_step, make_step, rk4, semi_implicit_euler
 from armctl.sim.plant import Plant
@@ -56,8 +55,6 @@ COMPILE_OPTIONS = (True, False, "auto")
 Step = Callable[[FloatArray, FloatArray, FloatArray, float], tuple[FloatArray, FloatArray, FloatArray]]
 
 _log = logging.getLogger(__name__)
-#: the fallbacks already warned about in this process (one warning each)
-_warned: set[str] = set()
 #: libraries this process has loaded, by path
 _ready: dict[str, Any] = {}
 
@@ -126,21 +123,15 @@ def choose_step(
     except Exception as e:  # "auto" falls back on any failure to build: the run still happens, and says why
         if mode is True:
             raise
-        reason = str(e) if isinstance(e, BackendError) else f"{type(e).__name__}: {e}"
-        if codegen.compiler() is None:
-            asked = os.environ.get("CC")
-            where = f"$CC = {asked!r} is not a program on the PATH" if asked else "no cc or gcc on the PATH"
-            key = "no compiler"
-            text = (
-                f"no C compiler was found ({where}): simulating with the Python step, several times slower than "
-                f"generated code. To get it, {codegen.INSTALL_A_COMPILER}; compile=False chooses the Python step "
-                "without this warning"
-            )
-        else:
-            key, text = reason, f"the generated step could not be built ({reason}); simulating with the Python step"
-        if key not in _warned:
-            _warned.add(key)
-            warnings.warn(text, SimulationWarning, stacklevel=3)
+        reason = codegen.warn_fallback(
+            e,
+            "the generated step",
+            "simulating with the Python step",
+            "several times slower",
+            "compile=False chooses the Python step",
+            SimulationWarning,
+            stacklevel=3,
+        )
         return python(reason)
 
 

@@ -35,7 +35,7 @@ from armctl.controllers.osc.solve import make_second_solver, make_solver
 from armctl.controllers.osc.state import ModelEvaluator
 from armctl.controllers.osc.tasks.base import Task
 from armctl.dynamics.base import Dynamics
-from armctl.errors import BackendError, InvalidParameterError, PerformanceWarning, SolverWarning
+from armctl.errors import InvalidParameterError, PerformanceWarning, SolverWarning
 from armctl.references import Reference
 
 #: the limits whose bounds read only q and q̇ of a step's state (the generated path gives them no more)
@@ -62,29 +62,6 @@ def default_limits(dt: float = 1e-3) -> list[Limit]:
         ``dt`` is not a positive, finite number.
     """
     return [TorqueLimit(), JointPositionLimit(dt), JointVelocityLimit(dt)]
-
-
-#: the causes warned about once by _warn_no_generated_code
-_warned: set[str] = set()
-
-
-def _warn_no_generated_code(exc: Exception) -> None:
-    """Warn once per process and cause that the OSC's generated QP data could not be built."""
-    from armctl.dynamics import codegen
-
-    reason = str(exc) if isinstance(exc, BackendError) else f"{type(exc).__name__}: {exc}"
-    if codegen.compiler() is None:
-        key = "no compiler"
-        text = (
-            "no C compiler was found: the operational-space QP takes its data from Pinocchio and NumPy, about twice "
-            f"as slow as generated code. To get it, {codegen.INSTALL_A_COMPILER}; compile=False chooses the NumPy "
-            "path without this warning"
-        )
-    else:
-        key, text = reason, f"the operational-space QP's generated data could not be built ({reason}); using NumPy"
-    if key not in _warned:
-        _warned.add(key)
-        warnings.warn(text, PerformanceWarning, stacklevel=4)
 
 
 def _unique(items: Sequence[Any], kind: str) -> None:
@@ -395,7 +372,17 @@ class OperationalSpaceQP(Controller):
         except Exception as exc:  # "auto": the NumPy path, and why (once per process and cause)
             if mode is True:
                 raise
-            _warn_no_generated_code(exc)
+            from armctl.dynamics import codegen
+
+            codegen.warn_fallback(
+                exc,
+                "the operational-space QP's generated data",
+                "the QP takes its data from Pinocchio and NumPy",
+                "about twice as slow",
+                "compile=False chooses the NumPy path",
+                PerformanceWarning,
+                stacklevel=4,
+            )
             return None
 
     def _qdd_step(self, lay: Layout, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
