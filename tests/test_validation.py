@@ -62,7 +62,7 @@ NOT_NUMBERS: dict[str, Any] = {
     ids=["real_array", "vector", "per_joint", "nonnegative_vector", "gain_matrix"],
 )
 def test_arrays_of_non_numbers_are_refused(check: Callable[[Any], Any], value: Any) -> None:
-    """Each of these used to be taken: NumPy converts a date to its count of days, a boolean to 1.0."""
+    """None of these is a number, though NumPy converts a date to its count of days and a boolean to 1.0."""
     with pytest.raises(InvalidParameterError, match=r"^x must (hold real numbers|be real numbers|be a real number)"):
         check(value)
 
@@ -76,7 +76,7 @@ def test_dates_get_a_message_that_says_how_to_convert_them() -> None:
 
 @pytest.mark.parametrize("value", [np.ma.masked, np.ma.masked_array(2.0, mask=True)])
 def test_a_masked_scalar_is_refused_by_name(value: Any) -> None:
-    """float(np.ma.masked) is NaN (with a warning): the error used to blame a non-finite value."""
+    """float(np.ma.masked) is NaN (with a warning): the error names the mask, not a non-finite value."""
     with pytest.raises(InvalidParameterError, match=r"^kp is masked: give a number"):
         scalar(value, "kp")
 
@@ -100,7 +100,7 @@ def test_numbers_still_pass() -> None:
 @pytest.mark.parametrize("backend", ["pinocchio", "lagrange"])
 @pytest.mark.parametrize("dates", [DATES, DURATIONS], ids=["datetime64", "timedelta64"])
 def test_every_dynamics_method_refuses_dates(backend: str, dates: np.ndarray) -> None:
-    """Every Dynamics method used to take a datetime64 array as numbers (days since 1970)."""
+    """No Dynamics method takes a datetime64 array as numbers (days since 1970)."""
     dyn = armctl.Dynamics(armctl.models.planar_2r(), backend=backend)
     z = np.zeros(2)
     calls = {

@@ -1,8 +1,8 @@
 """The shipped adaptive presets keep the Lyapunov argument: V = ½ sᵀM s + ½ θ̃ᵀΓ⁻¹θ̃ does not increase under the
 textbook conditions (the plant is what the regressor can express: its friction viscous only; no noise, no
-delay). The planar_2r preset used to switch on the projection onto the physically consistent set, which is
-nearest in the pseudo-inertia's norm rather than in Γ⁻¹'s: V rose from 212 to 1.5e3 over the scene, in half of
-its steps. The law's own V (no projection, the presets now) only falls, up to the sampled-data error of a
+delay). The projection onto the physically consistent set is nearest in the pseudo-inertia's norm rather than
+in Γ⁻¹'s: switched on in the planar_2r scene, V rises from 212 to 1.5e3, in half of its steps. The law's own V
+(no projection, as the presets have it) only falls, up to the sampled-data error of a
 torque held over each control period, which shrinks as the square of the period."""
 
 from __future__ import annotations

@@ -8,8 +8,8 @@
   give the float result. Time must be finite, never runs an integral backwards, and a controller keeps no
   reference to the caller's arrays.
 * A masked array is not read through its mask: a masked entry is refused by name by the dynamics' regressors
-  and by every controller (before, the hidden value was used, and with ``ki=`` or ``Adaptive`` a bare TypeError
-  came from the controller's base class)."""
+  and by every controller (never its hidden value; with ``ki=`` or ``Adaptive`` too, not a bare TypeError from
+  the controller's base class)."""
 
 from __future__ import annotations
 

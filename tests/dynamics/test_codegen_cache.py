@@ -177,7 +177,7 @@ def test_every_user_of_the_cache_heals_a_truncated_library(tmp_path: Path, user:
     cache = _built_cache(tmp_path, user)
     (lib,) = _libraries(cache)
     _damage(lib, "truncated")
-    if user == "lagrange":  # no longer says yes to a library that cannot be loaded
+    if user == "lagrange":  # does not say yes to a library that cannot be loaded
         from armctl.dynamics.lagrange import LagrangeDynamics
 
         assert not LagrangeDynamics.is_compiled_cached(_model(), rotor_coupling=False, cache_dir=str(cache))

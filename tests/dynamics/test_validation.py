@@ -4,11 +4,11 @@
   Every entry of every input, made NaN, +inf or −inf, must still raise a NonFiniteError naming that input,
   whatever the model terms depend on (M(q) does not depend on q₁, for instance); wrong shapes must raise a
   ShapeError; lists and integer arrays must give the same result as float arrays.
-* A masked array is not read through its mask: a masked entry is refused by name (before, the regressors and
-  the inverse dynamics used the hidden value).
+* A masked array is not read through its mask: a masked entry is refused by name (the regressors and the
+  inverse dynamics included: they never use the hidden value).
 * Finite inputs too large for floats are named: the error says which input overflowed, on every method whose
-  result can overflow (before, kinetic energy, the Coriolis matrix, both regressors and the passivity torque
-  came back NaN or inf with no error, and a huge wrench was blamed on τ)."""
+  result can overflow (kinetic energy, the Coriolis matrix, both regressors and the passivity torque included,
+  never NaN or inf with no error; a huge wrench is named, not τ)."""
 
 from __future__ import annotations
 

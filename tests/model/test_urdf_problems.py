@@ -1,8 +1,8 @@
 """URDF problems are named, and published data loads.
 
 urdfdom (Pinocchio's URDF parser) reports what it cannot read on stderr only: an ``<inertial>`` it cannot parse
-left its link massless, a link called ``universe`` was dropped from the frames, a ``<mimic>`` joint loaded as an
-independent joint, and duplicate names gave only "does not contain a valid URDF model". Each now raises a
+leaves its link massless, a link called ``universe`` is dropped from the frames, a ``<mimic>`` joint loads as an
+independent joint, and duplicate names give only "does not contain a valid URDF model". Each raises a
 ModelLoadError naming the link or joint. ``physical=False`` loads a published chain whose inertias violate the
 triangle inequality (KDL's Motoman SIA10 test chain), checked against KDL's own published values.
 """
@@ -59,17 +59,17 @@ def test_the_well_formed_arm_loads(tmp_path: pathlib.Path) -> None:
 @pytest.mark.parametrize(
     ("changes", "match"),
     [
-        # used to load with the link massless (urdfdom: "Could not parse inertial element", on stderr)
+        # urdfdom alone loads the link massless ("Could not parse inertial element", on stderr)
         ({"mass": '<mass value="heavy"/>'}, r"link 'upper_arm': <mass value='heavy'> is not a finite number"),
         ({"mass": '<mass value="nan"/>'}, r"link 'upper_arm': <mass value='nan'> is not a finite number"),
         ({"mass": '<mass value=" 2.0 "/>'}, r"link 'upper_arm': <mass value=' 2.0 '> is not a finite number"),
         ({"mass": ""}, r"link 'upper_arm': its <inertial> has no <mass value=\"...\"/>"),
         ({"ixx": "nan"}, r"link 'upper_arm': <inertia ixx='nan'> is not a finite number"),
         ({"ixx": "1_000"}, r"link 'upper_arm': <inertia ixx='1_000'> is not a finite number"),
-        # used to be dropped from the frames
+        # urdfdom alone drops it from the frames
         ({"root": "universe"}, r"link 'universe': 'universe' is Pinocchio's name for its world frame"),
         ({"fore": "universe"}, r"link 'universe': 'universe' is Pinocchio's name for its world frame"),
-        # used to give only "does not contain a valid URDF model"
+        # urdfdom alone says only "does not contain a valid URDF model"
         ({"elbow": "shoulder"}, r"joint name 'shoulder' is used by 2 joints: joint names must be unique"),
         ({"fore": "upper_arm"}, r"link name 'upper_arm' is used by 2 links: link names must be unique"),
         ({"origin": "0 0 abc"}, r"joint 'elbow': <origin xyz='0 0 abc'> is not three finite numbers"),
@@ -102,7 +102,7 @@ def test_xml_that_is_not_well_formed_is_named(tmp_path: pathlib.Path) -> None:
 
 
 def test_a_mimic_joint_is_refused_unless_locked(tmp_path: pathlib.Path) -> None:
-    """A <mimic> joint used to load as an independent joint: q_elbow free while the file says
+    """A <mimic> joint would load as an independent joint: q_elbow free while the file says
     q_elbow = 2 q_shoulder. Refused by name; locked, it is held fixed and the model loads."""
     path = _write(tmp_path, mimic='<mimic joint="shoulder" multiplier="2" offset="0"/>')
     with pytest.raises(

@@ -1,9 +1,9 @@
 """Bad input to the model's parts and variants raises a named armctl error when the part or variant is made.
 
 * Not a raw TypeError, nor an AttributeError inside Dynamics later; text, booleans and None are not numbers.
-* Model parameters that overflow are refused by name: a DH link of 1e308 kg used to build, and its π then held
-  inf (m·c and the inertia about the joint origin overflow); a payload of 1e308 kg gave a model whose weight is
-  inf; a rotor of 1e200 kg·m² behind a 1e60 gear a reflected inertia of inf."""
+* Model parameters that overflow are refused by name: a DH link of 1e308 kg, whose π would hold inf (m·c and the
+  inertia about the joint origin overflow); a payload of 1e308 kg, whose weight is inf; a rotor of 1e200 kg·m²
+  behind a 1e60 gear, whose reflected inertia is inf."""
 
 from __future__ import annotations
 
@@ -41,7 +41,7 @@ def _joint(**kwargs: Any) -> Joint:
 # ------------------------------------------------------------------------------------------- friction (1)
 @pytest.mark.parametrize("arg", ["viscous", "coulomb", "stribeck_velocity"])
 def test_with_friction_refuses_none(arg: str) -> None:
-    """viscous=None used to give joints viscous=None (NaN in parameters(), a TypeError in friction_torque and
+    """viscous=None would give joints viscous=None (NaN in parameters(), a TypeError in friction_torque and
     friction silently dropped by inverse_dynamics); coulomb=None a TypeError inside Dynamics.__init__."""
     with pytest.raises(InvalidParameterError, match=rf"with_friction\(\): {arg} must hold real numbers, got None"):
         _2r().with_friction(**{arg: None})
@@ -390,7 +390,7 @@ def _ur5() -> pathlib.Path:
 
 
 def test_urdf_lock_takes_one_name() -> None:
-    """lock="shoulder_pan_joint" used to be iterated letter by letter ("unknown joint 's'")."""
+    """lock="shoulder_pan_joint" is one name, not letters to iterate ("unknown joint 's'")."""
     m = armctl.RobotModel.from_urdf(_ur5(), lock="shoulder_pan_joint")
     assert m.joint_names == ("shoulder_lift_joint", "elbow_joint", "wrist_1_joint", "wrist_2_joint", "wrist_3_joint")
     assert "shoulder_pan_joint" in m.frame_names
@@ -456,7 +456,7 @@ def test_urdf_errors_name_the_joint_and_link(tmp_path: pathlib.Path, values: dic
 # ------------------------------------------------------------------------------------- rotor_coupling (4)
 @pytest.mark.parametrize("value", ["False", 0, 1, None, [True]])
 def test_rotor_coupling_must_be_a_real_boolean(value: object) -> None:
-    """rotor_coupling="False" used to turn the coupling on (bool("False") is True)."""
+    """rotor_coupling="False" must not turn the coupling on (bool("False") is True)."""
     m = armctl.models.pendulum()
     shown = re.escape(repr(value))
     with pytest.raises(InvalidParameterError, match=f"rotor_coupling must be True or False, got {shown}"):
@@ -472,7 +472,7 @@ def test_rotor_coupling_takes_numpy_booleans() -> None:
 
 @pytest.mark.parametrize("value", ["False", 0, None])
 def test_compile_must_be_a_real_boolean(value: object) -> None:
-    """compile="False" used to compile (bool("False") is True); refused before the symbolic build."""
+    """compile="False" must not compile (bool("False") is True); refused before the symbolic build."""
     with pytest.raises(InvalidParameterError, match=f"compile must be True or False, got {re.escape(repr(value))}"):
         armctl.Dynamics(armctl.models.pendulum(), backend="lagrange", compile=value)
 

@@ -36,7 +36,7 @@ WAYPOINTS = [[0.0, 0.0], [0.4, -0.3]]
     ],
 )
 def test_limits_that_are_not_numbers_are_refused(dyn: armctl.Dynamics, kwargs: dict[str, Any], match: str) -> None:
-    """vel_limit=True used to plan at 1 rad/s; ["2.0"] * n and torque_margin="0.1" were parsed."""
+    """vel_limit=True is not 1 rad/s; ["2.0"] * n and torque_margin="0.1" are text, not numbers."""
     kwargs = {"vel_limit": 1.0, **kwargs}
     with pytest.raises(InvalidParameterError, match=match):
         time_optimal(dyn, WAYPOINTS, **kwargs)

@@ -1,6 +1,6 @@
 """Bad input to the planners, the paths, check_trajectory, time_optimal and the timing laws raises an ArmctlError
-subclass that names the value (and derives from the matching builtin); it used to be a raw ValueError,
-IndexError, AttributeError, or no error at all."""
+subclass that names the value (and derives from the matching builtin): not a raw ValueError, IndexError or
+AttributeError, and never no error at all."""
 
 from __future__ import annotations
 
@@ -165,8 +165,8 @@ def test_a_path_leaving_the_joint_ranges_is_refused() -> None:
     ],
 )
 def test_bounds_that_forbid_the_direction_of_the_path_are_named(limits: dict, waypoints: list, kind: str) -> None:
-    # the pendulum moving down with q̇ ∈ [0, 1], or up from rest with q̈ ∈ [−1, 0]: no timing moves it (it used to
-    # raise a SolverError about a "degenerate" zero-speed stage)
+    # the pendulum moving down with q̇ ∈ [0, 1], or up from rest with q̈ ∈ [−1, 0]: no timing moves it (named as
+    # such, not as a SolverError about a "degenerate" zero-speed stage)
     dyn = armctl.Dynamics(armctl.models.pendulum())
     with pytest.raises(InfeasibleError, match=rf"no motion along the path at s = 0 .*joint 0 \('joint1'\) {kind} "):
         time_optimal(dyn, waypoints, **limits)
@@ -226,7 +226,7 @@ def test_torque_margin_shrinks_asymmetric_bounds_about_their_midpoint() -> None:
     ],
 )
 def test_line_min_time_rejects_bad_input(args: tuple[Any, ...], error: type[ArmctlError], match: str) -> None:
-    # a NaN in start used to give 2.0 and an inf "v_max must be > 0, got 0.0"
+    # a NaN in start must not give 2.0, nor an inf "v_max must be > 0, got 0.0"
     with pytest.raises(error, match=match):
         line_min_time(*args)
 
@@ -369,7 +369,7 @@ def test_a_grid_that_is_not_numbers_is_named(grid: object) -> None:
     ],
 )
 def test_time_optimal_names_bad_settings(kwargs: dict[str, Any], error: type[ArmctlError], match: str) -> None:
-    # tol="a" and oversample="a" used to raise a raw ValueError; oversample=2.7 ran with 2
+    # tol="a" and oversample="a": not a raw ValueError; oversample=2.7: not run with 2
     with pytest.raises(error, match=match):
         time_optimal(panda(), PANDA_WAYPOINTS, torque_limit="model", grid=20, **kwargs)
 
@@ -385,7 +385,7 @@ def test_time_optimal_settings_of_valid_input() -> None:
 def test_timing_and_sampling_name_bad_times_and_counts() -> None:
     traj = _trajectory()
     with pytest.raises(InvalidParameterError, match=r"^t must be a real number, got '0\.5'"):
-        traj.timing.at("0.5")  # type: ignore[arg-type]  # float() used to parse the text
+        traj.timing.at("0.5")  # type: ignore[arg-type]  # float() would parse the text
     with pytest.raises(NonFiniteError, match=r"^t must be finite, got inf"):
         traj.timing.at(np.float64("inf"))
     with pytest.raises(InvalidParameterError, match=r"^t must be a real number, got array\(\[0\.1, 0\.2\]\)"):

@@ -45,7 +45,7 @@ def test_a_lambda_is_refused_by_case_and_key_before_anything_starts() -> None:
         assert e.value.value is bad[key]
     assert multiprocessing.active_children() == []  # no worker was started
     # a pool the caller owns is refused the same way and still works afterwards (a pickling error inside its
-    # machinery used to leave shutdown(wait=True) hanging)
+    # machinery can leave shutdown(wait=True) hanging)
     with ProcessPoolExecutor(2) as pool:
         with pytest.raises(InvalidParameterError, match="sweep case 1: its 'controller'"):
             sweep([_case(), lambda_controller], executor=pool, progress=False)

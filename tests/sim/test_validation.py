@@ -226,7 +226,7 @@ def test_times_given_in_a_lower_precision_are_the_decimals_they_print_as(kind: s
 
 
 def test_a_huge_plane_normal_is_normalised_not_lost() -> None:
-    """The norm of (1e300, 0, 0) overflows; the plane used to get the normal (0, 0, 0) and no force at all."""
+    """The norm of (1e300, 0, 0) overflows; dividing by it would give the normal (0, 0, 0) and no force at all."""
     np.testing.assert_array_equal(Plane(KelvinVoigt(1e4), normal=(1e300, 0.0, 0.0)).normal, [1.0, 0.0, 0.0])
     np.testing.assert_allclose(Plane(KelvinVoigt(1e4), normal=(3e-300, 4e-300, 0.0)).normal, [0.6, 0.8, 0.0])
 
@@ -331,8 +331,8 @@ def test_the_memory_named_is_a_lower_bound_of_what_a_run_records() -> None:
     ],
 )
 def test_contact_coefficients_that_overflow_are_refused(make: object, match: str) -> None:
-    """Plane(KelvinVoigt(1e308)) used to build, and simulate then died in NumPy's LinAlgError (the stability
-    check's step matrix held inf)."""
+    """Plane(KelvinVoigt(1e308)) is refused when made, not left for simulate to die in NumPy's LinAlgError (the
+    stability check's step matrix would hold inf)."""
     with pytest.raises(InvalidParameterError, match=match):
         make()  # type: ignore[operator]
 

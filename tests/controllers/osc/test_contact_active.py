@@ -1,4 +1,5 @@
-"""Contact(active=...) takes True or False only: text such as "False" is truthy and used to switch it on."""
+"""Contact(active=...) takes True or False only: text such as "False" is truthy, and taking it would switch the
+contact on."""
 
 from __future__ import annotations
 

@@ -109,7 +109,7 @@ def test_at_a_singular_configuration_lambda_is_damped_to_the_condition_limit(pan
 
 def test_on_a_planar_arm_the_rows_it_cannot_move_are_damped_and_the_others_met() -> None:
     """A pose task (six rows) on the planar 3R arm, which moves its tool in the x–z plane only: J M⁻¹ Jᵀ is
-    singular outright (formerly a silent pseudo-inverse). The controller damps it and its torque still realises
+    singular outright (a pseudo-inverse would hide it). The controller damps it and its torque still realises
     the task's in-plane acceleration (x, z, turning about y) to 1e-6, from the forward dynamics."""
     dyn = armctl.Dynamics(armctl.models.planar_3r())
     q, qd = np.array([0.4, 0.9, -0.5]), np.array([0.3, -0.2, 0.1])

@@ -1,7 +1,7 @@
 """prepare_data's trim accounts for the filter order, and a trim that leaves the filter's start-up transient in
-the kept samples warns. The default trim used to be 3 f_s/f_c whatever the order: at order 20, q̈ in the kept
-samples was off by about half its range, and after an order-60 filter identify gave a torque error of tens of
-percent with no warning. Also: the consistent estimate's message agrees with its ``converged`` flag."""
+the kept samples warns. A trim of 3 f_s/f_c whatever the order is too short: at order 20, q̈ in the kept
+samples is off by about half its range, and after an order-60 filter identify gives a torque error of tens of
+percent. Also: the consistent estimate's message agrees with its ``converged`` flag."""
 
 from __future__ import annotations
 
