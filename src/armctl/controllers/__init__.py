@@ -12,12 +12,15 @@
 :class:`ClosedFormOSC`       Khatib's closed-form operational-space control (the QP's baseline)
 ===========================  ================================================================================
 
-Write your own by subclassing :class:`Controller` and implementing ``compute(t, q, qd, ref)``.
+Write your own by subclassing :class:`Controller` and implementing ``compute(t, q, qd, ref)``; a controller that
+reads a force sensor or the applied torques declares it in ``reads`` and finds them in ``self.measurement``
+(:class:`Measurement`).
 """
 
 from armctl.controllers.adaptive import Adaptive
 from armctl.controllers.base import Controller
 from armctl.controllers.computed_torque import ComputedTorque
+from armctl.controllers.measurement import Measurement
 from armctl.controllers.osc import ClosedFormOSC, OperationalSpaceQP
 from armctl.controllers.passivity import PassivityBased
 from armctl.controllers.pd import PDGravity
@@ -28,6 +31,7 @@ __all__ = [
     "ClosedFormOSC",
     "ComputedTorque",
     "Controller",
+    "Measurement",
     "OperationalSpaceQP",
     "PDDesiredGravity",
     "PDGravity",

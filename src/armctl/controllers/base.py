@@ -10,12 +10,13 @@ from __future__ import annotations
 
 import math
 from abc import ABC, abstractmethod
-from typing import Any, NoReturn
+from typing import Any, ClassVar, NoReturn
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from armctl._checks import FLOAT, FloatArray, all_finite, scalar, vector, whole_number
+from armctl.controllers.measurement import Measurement
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
 from armctl.references import Reference
@@ -49,6 +50,32 @@ class Controller(ABC):
         self.n = dynamics.n if dynamics is not None else whole_number(n, "n (the number of joints)", 1)
         self._shape = (self.n,)
         self.last_log: dict[str, Any] = {}
+        #: the measurement of the last call (:class:`~armctl.controllers.measurement.Measurement`), or None
+        self.measurement: Measurement | None = None
+
+    #: the signals this controller reads besides q and q̇ (names of
+    #: :data:`armctl.controllers.measurement.SIGNALS`): ``simulate`` feeds them through its measurement chain,
+    #: and a call without them raises. Empty: the controller reads q and q̇ only.
+    reads: ClassVar[frozenset[str]] = frozenset()
+
+    def measured(self, name: str) -> FloatArray:
+        """The signal ``name`` of the current measurement (see :mod:`armctl.controllers.measurement`).
+
+        Raises
+        ------
+        InvalidParameterError
+            The controller was called without a measurement that carries it.
+        """
+        m = self.measurement
+        value = getattr(m, name, None) if m is not None else None
+        if value is None:
+            raise InvalidParameterError(
+                f"{type(self).__name__} reads {name!r}, and it was called without it: in simulate give the signal's "
+                f"source (a ForceSensor in Sensing(sensors=...) for 'wrench'); in your own loop call "
+                f"controller(t, q, qd, ref, measurement=Measurement({name}=...))",
+                value=m,
+            )
+        return value
 
     #: the ``compute`` of a built-in law without state between calls whose τ is NaN or inf whenever an entry of
     #: q or q̇ is (set by those classes). While ``type(self).compute`` is that function (not overridden by a
@@ -65,11 +92,17 @@ class Controller(ABC):
         cls = type(self)
         return cls.compute is cls._result_checked_compute
 
-    def __call__(self, t: float, q: ArrayLike, qd: ArrayLike, ref: Reference) -> FloatArray:
+    def __call__(
+        self, t: float, q: ArrayLike, qd: ArrayLike, ref: Reference, measurement: Measurement | None = None
+    ) -> FloatArray:
         """τ [N·m] for the measured state (q [rad], q̇ [rad/s]) at time t [s] and the reference ``ref``.
 
         The inputs are checked here, once (named errors), and handed to :meth:`compute`; a non-finite τ from a
-        finite state raises :class:`~armctl.errors.NonFiniteError`."""
+        finite state raises :class:`~armctl.errors.NonFiniteError`. ``measurement`` carries the signals the
+        controller declares in :attr:`reads` (kept in :attr:`measurement` for ``compute``); a controller that
+        reads nothing ignores it."""
+        if measurement is not None or self.reads:
+            self._take_measurement(measurement)
         if type(ref) is not Reference or len(ref.q) != self.n:  # a Reference's arrays are 1-D
             self.check_reference(ref)  # raises, unless ref is a subclass of the right size
         if type(t) is not float:
@@ -102,6 +135,30 @@ class Controller(ABC):
         except (AttributeError, TypeError):  # not a float array: a user's law may return a list
             return tau
         self._nonfinite_torque(tau, q, qd)
+
+    def _take_measurement(self, measurement: Measurement | None) -> None:
+        if measurement is not None and not isinstance(measurement, Measurement):
+            raise InvalidParameterError(
+                f"measurement must be an armctl.controllers.Measurement, got {type(measurement).__name__}",
+                value=measurement,
+            )
+        missing = self.reads - (measurement.available() if measurement is not None else frozenset())
+        if missing:
+            raise InvalidParameterError(
+                f"{type(self).__name__} reads {sorted(missing)} and was called without: pass "
+                f"measurement=Measurement(...) with them (simulate does, given their sources)",
+                value=measurement,
+            )
+        if (
+            measurement is not None
+            and measurement.tau_applied is not None
+            and measurement.tau_applied.shape != self._shape
+        ):
+            raise ShapeError(
+                f"measurement.tau_applied has {measurement.tau_applied.shape[0]} joints, the controller {self.n}",
+                value=measurement.tau_applied,
+            )
+        self.measurement = measurement
 
     def _nonfinite_torque(self, tau: Any, q: Any, qd: Any) -> NoReturn:
         raise NonFiniteError(
@@ -161,3 +218,4 @@ class Controller(ABC):
     def reset(self) -> None:
         """Forget any internal state (integrators, estimates) before a new run."""
         self.last_log = {}
+        self.measurement = None
