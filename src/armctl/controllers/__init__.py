@@ -10,6 +10,8 @@
 :class:`OperationalSpaceQP`  operational-space control as a QP (proxsuite): tasks, priorities, limits, contacts;
                              see :mod:`armctl.controllers.osc`
 :class:`ClosedFormOSC`       Khatib's closed-form operational-space control (the QP's baseline)
+:class:`MomentumObserver`    the generalized-momentum observer of the external joint torques: collision
+                             detection and isolation, the contact wrench without a force sensor
 ===========================  ================================================================================
 
 Write your own by subclassing :class:`Controller` and implementing ``compute(t, q, qd, ref)``; a controller that
@@ -21,6 +23,7 @@ from armctl.controllers.adaptive import Adaptive
 from armctl.controllers.base import Controller
 from armctl.controllers.computed_torque import ComputedTorque
 from armctl.controllers.measurement import Measurement
+from armctl.controllers.momentum_observer import Collision, MomentumObserver
 from armctl.controllers.osc import ClosedFormOSC, OperationalSpaceQP
 from armctl.controllers.passivity import PassivityBased
 from armctl.controllers.pd import PDGravity
@@ -29,9 +32,11 @@ from armctl.controllers.pd_desired_gravity import PDDesiredGravity
 __all__ = [
     "Adaptive",
     "ClosedFormOSC",
+    "Collision",
     "ComputedTorque",
     "Controller",
     "Measurement",
+    "MomentumObserver",
     "OperationalSpaceQP",
     "PDDesiredGravity",
     "PDGravity",

@@ -1,0 +1,352 @@
+"""`MomentumObserver`: the external joint torques estimated from the model and the measured q, q̇ and applied τ,
+without a force sensor (De Luca and Mattone; Haddadin, De Luca and Albu-Schäffer, *Robot Collisions: A Survey on
+Detection, Isolation, and Identification*, IEEE T-RO 2017).
+
+With the generalized momentum p = M(q) q̇ and Ṁ = C + Cᵀ, the Lagrange model
+M q̈ + C q̇ + g = τ − τ_f − τ_ext (τ_ext = J(q)ᵀ h_e, the sign of :attr:`armctl.sim.SimResult.tau_ext`) reads
+
+    ṗ = τ + β(q, q̇) − τ_ext,      β = C(q, q̇)ᵀ q̇ − g(q) − τ_f(q̇),
+
+which needs no acceleration. The residual r = K_O (∫(τ + β − r) dt − p + p₀) obeys ṙ = K_O (τ_ext − r): each
+joint's entry follows its external torque through a first-order lag of time constant 1/K_O.
+
+Discrete time. Between two updates at t_{k−1} and t_k = t_{k−1} + h the drives hold τ_{k−1} (zero-order hold), so
+its integral is exactly h τ_{k−1}; β is integrated by the trapezoidal rule. The period's mean external torque is
+
+    d_k = (h τ_{k−1} + ½ h (β_k + β_{k−1}) − (p_k − p_{k−1})) / h,
+
+and the residual is the first-order lag sampled exactly under a held input (``discretization="exact"``):
+
+    r_k = γ r_{k−1} + (1 − γ) d_k,     γ = exp(−K_O h),
+
+stable for every K_O > 0 (γ ∈ (0, 1)). The textbook's forward-Euler sum (``discretization="euler"``) gives
+r_k = (1 − K_O h) r_{k−1} + K_O h d_k, whose pole 1 − K_O h leaves the unit circle when K_O h ≥ 2: that form
+needs K_O < 2/h (and K_O ≤ 1/h not to ring), which the observer checks.
+
+Collision detection and isolation: a collision is declared at the first update where |r_j| exceeds the
+threshold of some joint j; the last such joint along the chain names the link that was hit (an external torque
+at link i reaches only joints 1..i). An ``on_collision`` hook is called once, then; the detection latches until
+:meth:`MomentumObserver.reset` or :meth:`MomentumObserver.clear`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from armctl._checks import FloatArray, boolean, per_joint, readonly, scalar, vector
+from armctl.dynamics.base import Dynamics
+from armctl.errors import InvalidParameterError, NonFiniteError, SingularConfigurationError
+
+#: the discretizations of the residual's first-order lag (see the module)
+DISCRETIZATIONS = ("exact", "euler")
+
+
+@dataclass(frozen=True)
+class Collision:
+    """A detected collision: truthy, so that ``if obs.collision:`` reads as it says.
+
+    Attributes
+    ----------
+    t : float
+        The update time it was detected at [s].
+    joint : int
+        The last joint (0-based) whose residual exceeded its threshold: the collision is on the link it moves or
+        beyond.
+    link : str
+        That joint's name (the name of the link frame it moves).
+    residual : ndarray, shape (n,)
+        The residual at detection [N·m].
+    """
+
+    t: float
+    joint: int
+    link: str
+    residual: FloatArray
+
+
+class MomentumObserver:
+    """The generalized-momentum observer of the external joint torques (see the module for the equations).
+
+    Parameters
+    ----------
+    dynamics : Dynamics
+        The model the observer trusts (the controller's own: it may be wrong, and then so is the estimate).
+    gain : float or (n,) array_like
+        K_O [1/s], one per joint or one for all: the residual's bandwidth (time constant 1/K_O).
+    friction : bool, optional
+        Whether the model's joint friction τ_f(q̇) = F_v q̇ + F_c sgn q̇ is subtracted (default True); False: the
+        observer is told not to know it, and reads friction as an external torque.
+    thresholds : float or (n,) array_like, optional
+        Collision thresholds on |r_j| [N·m]; None (default): no detection.
+    period : float, optional
+        The update period h [s] if known in advance: the gain bound of the ``"euler"`` form is checked here
+        rather than at the first update.
+    discretization : {"exact", "euler"}, optional
+        The residual's update (see the module); default ``"exact"``.
+    on_collision : callable, optional
+        ``on_collision(observer, collision)``, called once at the update that detects a collision (e.g. to switch
+        a controller to gravity compensation or to a reflex).
+
+    Raises
+    ------
+    InvalidParameterError
+        A gain ≤ 0, a gain too large for ``period`` in the ``"euler"`` form (K_O h ≥ 2), a threshold < 0, an
+        unknown discretization, an ``on_collision`` that is not callable.
+
+    Examples
+    --------
+    >>> obs = MomentumObserver(dyn, gain=50.0, thresholds=5.0)             # doctest: +SKIP
+    >>> tau_ext = obs.update(t, q, qd, tau_applied)                       # doctest: +SKIP
+    >>> if obs.collision: print(obs.collision.link, obs.wrench(q))        # doctest: +SKIP
+    """
+
+    def __init__(
+        self,
+        dynamics: Dynamics,
+        gain: ArrayLike,
+        *,
+        friction: bool = True,
+        thresholds: ArrayLike | None = None,
+        period: float | None = None,
+        discretization: str = "exact",
+        on_collision: Callable[[MomentumObserver, Collision], Any] | None = None,
+    ) -> None:
+        if not isinstance(dynamics, Dynamics):
+            raise InvalidParameterError(
+                f"dynamics must be an armctl.Dynamics, got {type(dynamics).__name__}", value=dynamics
+            )
+        self.dynamics = dynamics
+        self.n = n = dynamics.n
+        k = per_joint(gain, n, "gain (K_O)")
+        if not np.isfinite(k).all() or (k <= 0).any():
+            raise InvalidParameterError(
+                f"the observer gain K_O must be finite and > 0 [1/s], got {k.tolist()}: it is the residual's "
+                f"bandwidth (time constant 1/K_O)",
+                value=gain,
+            )
+        self.gain = readonly(k)
+        if discretization not in DISCRETIZATIONS:
+            raise InvalidParameterError(
+                f"discretization must be one of {DISCRETIZATIONS}, got {discretization!r}", value=discretization
+            )
+        self.discretization = discretization
+        self.friction = boolean(friction, "friction")
+        if thresholds is None:
+            self.thresholds: FloatArray | None = None
+        else:
+            th = per_joint(thresholds, n, "thresholds")
+            if np.isnan(th).any() or (th < 0).any():
+                raise InvalidParameterError(f"collision thresholds must be >= 0 [N·m], got {th.tolist()}", value=th)
+            self.thresholds = readonly(th)
+        if on_collision is not None and not callable(on_collision):
+            raise InvalidParameterError(f"on_collision must be callable, got {on_collision!r}", value=on_collision)
+        self.on_collision = on_collision
+        self.period = None if period is None else scalar(period, "period", positive=True)
+        if self.period is not None:
+            self.check_gain(self.period)
+        self._names = [j.name for j in dynamics.model.joints]
+        self.reset()
+
+    # ------------------------------------------------------------------------------------------- state
+    def reset(self) -> None:
+        """Forget the past: the next update starts the observer (its residual zero) and clears a detection."""
+        self._t: float | None = None
+        self._p: FloatArray | None = None
+        self._beta: FloatArray | None = None
+        self._h = math.nan
+        self._gamma = np.zeros(self.n)
+        self.residual: FloatArray = np.zeros(self.n)  #: the last estimate r of τ_ext [N·m]
+        self.collision: Collision | None = None  #: the detected collision, None before one
+
+    def clear(self) -> None:
+        """Clear a detected collision (the residual and the integration go on)."""
+        self.collision = None
+
+    def check_gain(self, h: float) -> None:
+        """Raise if K_O is too large for the period ``h`` [s] in the ``"euler"`` form (K_O h ≥ 2: the residual's
+        pole 1 − K_O h leaves the unit circle); the ``"exact"`` form is stable for every K_O > 0.
+
+        Parameters
+        ----------
+        h : float
+            The update period [s].
+
+        Raises
+        ------
+        InvalidParameterError
+            The bound is violated: it names the largest gain the period allows.
+        """
+        if self.discretization == "euler" and float(self.gain.max()) * h >= 2.0:
+            raise InvalidParameterError(
+                f"observer gain K_O = {float(self.gain.max()):g} 1/s is too large for the period h = {h:g} s: the "
+                f"forward-Euler residual r_k = (1 − K_O h) r_(k−1) + K_O h d_k is unstable for K_O h >= 2; use "
+                f"K_O < {2.0 / h:g} 1/s (<= {1.0 / h:g} not to ring), or discretization='exact'",
+                value=float(self.gain.max()),
+            )
+
+    # ------------------------------------------------------------------------------------ the update
+    def momentum_terms(self, q: FloatArray, qd: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """The momentum and the rest of its rate at (q, q̇), on the kernel (unchecked).
+
+        Parameters
+        ----------
+        q, qd : ndarray, shape (n,)
+            Joint positions and velocities, float64, finite.
+
+        Returns
+        -------
+        p, beta : ndarray, shape (n,)
+            p = M(q) q̇ [N·m·s] and β = C(q, q̇)ᵀ q̇ − g(q) (− τ_f(q̇) when the observer knows the friction) [N·m].
+        """
+        k = self.dynamics.kernel
+        p = k.mass(q) @ qd
+        beta = k.coriolis(q, qd).T @ qd
+        beta -= k.gravity(q)
+        if self.friction and k.friction.any:
+            beta -= k.friction_torque(qd)
+        return p, beta
+
+    def update(self, t: float, q: ArrayLike, qd: ArrayLike, tau_applied: ArrayLike) -> FloatArray:
+        """Advance to time t and return the estimate r of the external joint torques τ_ext = J(q)ᵀ h_e [N·m].
+
+        Parameters
+        ----------
+        t : float
+            The measurement time [s], later than the previous update's.
+        q, qd : (n,) array_like
+            Measured joint positions [rad or m] and velocities [rad/s or m/s].
+        tau_applied : (n,) array_like
+            The torque the drives held since the previous update, τ_{k−1} [N·m or N] (after saturation:
+            :attr:`armctl.controllers.Measurement.tau_applied`); ignored at the first update.
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            r_k (a new array; zeros at the first update). With the sign of ``SimResult.tau_ext``: M q̈ + C q̇ + g =
+            τ − τ_f − τ_ext, so a push of the environment on the arm reads −Jᵀ(push).
+
+        Raises
+        ------
+        ShapeError, NonFiniteError
+            An input has the wrong length or is not finite.
+        InvalidParameterError
+            t is not later than the previous update's, or the step is too long for the gain (``"euler"``).
+        """
+        t = scalar(t, "t")
+        q = vector(q, self.n, "q")
+        qd = vector(qd, self.n, "qd")
+        tau = vector(tau_applied, self.n, "tau_applied")
+        return self.step(t, q, qd, tau)
+
+    def step(self, t: float, q: FloatArray, qd: FloatArray, tau: FloatArray) -> FloatArray:
+        """:meth:`update` on checked inputs: for a controller's ``compute``, whose inputs ``Controller.__call__``
+        has checked.
+
+        Parameters
+        ----------
+        t : float
+            The measurement time [s].
+        q, qd, tau : ndarray, shape (n,)
+            q, q̇ and the torque held since the previous update, float64, finite.
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            The estimate r of τ_ext [N·m] (a new array).
+        """
+        p, beta = self.momentum_terms(q, qd)
+        if self._t is None or self._p is None or self._beta is None:  # the first sample: r = 0, p₀ = p
+            self._t, self._p, self._beta = t, p, beta
+            return self.residual.copy()
+        h = t - self._t
+        if not h > 0.0:
+            raise InvalidParameterError(
+                f"observer updates must move forward in time: t = {t} after t = {self._t} (call reset() to restart)",
+                value=t,
+            )
+        if h != self._h:
+            self._step_changed(h)
+        d = h * tau
+        d += (0.5 * h) * (beta + self._beta)
+        d -= p
+        d += self._p
+        d *= 1.0 / h
+        r = self.residual
+        r -= d
+        r *= self._gamma
+        r += d  # r_k = γ r_{k−1} + (1 − γ) d_k
+        if not np.isfinite(r).all():
+            raise NonFiniteError(f"the observer's residual is not finite ({r}) at t = {t}", value=r)
+        self._t, self._p, self._beta = t, p, beta
+        if self.thresholds is not None and self.collision is None:
+            self._detect(t, r)
+        return r.copy()
+
+    def _step_changed(self, h: float) -> None:
+        self.check_gain(h)
+        self._h = h
+        if self.discretization == "exact":
+            self._gamma = np.exp(-self.gain * h)
+        else:
+            self._gamma = 1.0 - self.gain * h
+
+    def _detect(self, t: float, r: FloatArray) -> None:
+        assert self.thresholds is not None
+        above = np.flatnonzero(np.abs(r) > self.thresholds)
+        if above.size:
+            j = int(above[-1])
+            self.collision = Collision(t=t, joint=j, link=self._names[j], residual=readonly(r.copy()))
+            if self.on_collision is not None:
+                self.on_collision(self, self.collision)
+
+    # ------------------------------------------------------------------------------------- the wrench
+    def wrench(self, q: ArrayLike, frame: str | None = None, rcond: float = 1e-3) -> FloatArray:
+        """The wrench h_e = [f; m] [N, N·m] at ``frame`` that explains the residual, h_e = (J(q)ᵀ)⁺ r: what the
+        arm exerts (the sign of ``SimResult.wrench``), world-aligned axes, moment about the frame's origin.
+
+        With fewer than 6 joints the minimum-norm wrench is returned (the components J cannot feel are zero).
+
+        Parameters
+        ----------
+        q : (n,) array_like
+            The configuration of the last update [rad or m].
+        frame : str, optional
+            A frame of the model (default: the tool frame).
+        rcond : float, optional
+            Singularity threshold on σ_min / σ_max of J (over its min(6, n) largest singular values).
+
+        Returns
+        -------
+        ndarray, shape (6,)
+            h_e = [f; m] [N, N·m].
+
+        Raises
+        ------
+        SingularConfigurationError
+            J loses rank at q: a wrench along the lost direction gives no joint torque, so it cannot be estimated
+            (the error carries σ_min and that direction).
+        UnknownNameError
+            ``frame`` is not a frame of the model.
+        """
+        q = vector(q, self.n, "q")
+        rcond = scalar(rcond, "rcond", positive=True)
+        jac = self.dynamics.jacobian(q, frame)
+        u, s, vt = np.linalg.svd(jac, full_matrices=False)  # J = U S Vᵀ, U (6×m)
+        m = min(6, self.n)
+        if s[m - 1] <= rcond * s[0]:
+            raise SingularConfigurationError(
+                f"the Jacobian of {frame or 'the tool frame'} is singular at q = {q.tolist()} (σ_min/σ_max = "
+                f"{s[m - 1] / s[0]:.2e} <= {rcond:g}): the wrench along the lost direction does not reach the "
+                f"joints and cannot be estimated there; read the joint torques (obs.residual) instead",
+                value=q,
+                sigma_min=float(s[m - 1]),
+                direction=u[:, m - 1].copy(),
+            )
+        # Jᵀ h = r  →  h = U S⁻¹ Vᵀ r (the minimum-norm solution)
+        return np.asarray(u[:, :m] @ ((vt[:m] @ self.residual) / s[:m]), dtype=float)
