@@ -12,6 +12,7 @@
 :class:`ClosedFormOSC`       Khatib's closed-form operational-space control (the QP's baseline)
 :class:`MomentumObserver`    the generalized-momentum observer of the external joint torques: collision
                              detection and isolation, the contact wrench without a force sensor
+:class:`CollisionReaction`   a controller that reacts to the observer's detection (gravity compensation, reflex)
 ===========================  ================================================================================
 
 Write your own by subclassing :class:`Controller` and implementing ``compute(t, q, qd, ref)``; a controller that
@@ -21,6 +22,7 @@ reads a force sensor or the applied torques declares it in ``reads`` and finds t
 
 from armctl.controllers.adaptive import Adaptive
 from armctl.controllers.base import Controller
+from armctl.controllers.collision_reaction import CollisionReaction
 from armctl.controllers.computed_torque import ComputedTorque
 from armctl.controllers.measurement import Measurement
 from armctl.controllers.momentum_observer import Collision, MomentumObserver
@@ -33,6 +35,7 @@ __all__ = [
     "Adaptive",
     "ClosedFormOSC",
     "Collision",
+    "CollisionReaction",
     "ComputedTorque",
     "Controller",
     "Measurement",

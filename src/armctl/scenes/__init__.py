@@ -1,5 +1,5 @@
 """Standard closed-loop scenes, each modelling no more than it needs: ``pendulum``, ``planar_2r``,
-``panda_topp``, ``panda_contact``. ``scene(name)`` builds one; ``SCENES`` lists them."""
+``panda_topp``, ``panda_contact``, ``panda_collision``. ``scene(name)`` builds one; ``SCENES`` lists them."""
 
 from __future__ import annotations
 
@@ -8,6 +8,7 @@ from collections.abc import Callable
 from armctl.errors import UnknownNameError
 from armctl.scenes.base import JOINT_METHODS, Scene
 from armctl.scenes.joint_scenes import pendulum, planar_2r
+from armctl.scenes.panda_collision import CollisionScene, panda_collision
 from armctl.scenes.panda_contact import ContactScene, PressAndSlide, panda_contact
 from armctl.scenes.panda_topp import panda_topp
 
@@ -16,6 +17,7 @@ SCENES: dict[str, Callable[[], Scene]] = {
     "planar_2r": planar_2r,
     "panda_topp": panda_topp,
     "panda_contact": panda_contact,
+    "panda_collision": panda_collision,
 }
 
 
@@ -44,9 +46,11 @@ def scene(name: str) -> Scene:
 __all__ = [
     "JOINT_METHODS",
     "SCENES",
+    "CollisionScene",
     "ContactScene",
     "PressAndSlide",
     "Scene",
+    "panda_collision",
     "panda_contact",
     "panda_topp",
     "pendulum",
