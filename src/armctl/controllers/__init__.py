@@ -10,6 +10,9 @@
 :class:`OperationalSpaceQP`  operational-space control as a QP (proxsuite): tasks, priorities, limits, contacts;
                              see :mod:`armctl.controllers.osc`
 :class:`ClosedFormOSC`       Khatib's closed-form operational-space control (the QP's baseline)
+:class:`CartesianImpedance`  a frame as a mass–spring–damper about its target, null-space joint stiffness,
+                             optional inertia shaping (see :mod:`armctl.controllers.interaction`)
+:class:`JointImpedance`      every joint a spring and damper about the joint reference
 ===========================  ================================================================================
 
 Write your own by subclassing :class:`Controller` and implementing ``compute(t, q, qd, ref)``; a controller that
@@ -20,6 +23,7 @@ reads a force sensor or the applied torques declares it in ``reads`` and finds t
 from armctl.controllers.adaptive import Adaptive
 from armctl.controllers.base import Controller
 from armctl.controllers.computed_torque import ComputedTorque
+from armctl.controllers.interaction import CartesianImpedance, JointImpedance
 from armctl.controllers.measurement import Measurement
 from armctl.controllers.osc import ClosedFormOSC, OperationalSpaceQP
 from armctl.controllers.passivity import PassivityBased
@@ -28,9 +32,11 @@ from armctl.controllers.pd_desired_gravity import PDDesiredGravity
 
 __all__ = [
     "Adaptive",
+    "CartesianImpedance",
     "ClosedFormOSC",
     "ComputedTorque",
     "Controller",
+    "JointImpedance",
     "Measurement",
     "OperationalSpaceQP",
     "PDDesiredGravity",
