@@ -15,7 +15,10 @@ h is the wrench [f; m] the arm exerts on its environment (the sign of :meth:`arm
 ``wrench`` and of a :class:`~armctl.sim.ForceSensor`'s reading), in world axes at the controlled frame.
 """
 
+from armctl.controllers.interaction.admittance import Admittance
 from armctl.controllers.interaction.cartesian_impedance import CartesianImpedance
+from armctl.controllers.interaction.force_control import ForceControl
 from armctl.controllers.interaction.joint_impedance import JointImpedance
+from armctl.controllers.interaction.parallel import ParallelForcePosition
 
-__all__ = ["CartesianImpedance", "JointImpedance"]
+__all__ = ["Admittance", "CartesianImpedance", "ForceControl", "JointImpedance", "ParallelForcePosition"]
