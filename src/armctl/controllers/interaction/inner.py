@@ -29,7 +29,7 @@ from armctl.controllers.interaction.task_space import task_inertia
 from armctl.controllers.osc.state import FrameKinematics, ModelState
 from armctl.controllers.osc.tasks.rotation import rotation_error
 from armctl.dynamics.base import Dynamics
-from armctl.errors import UnknownNameError
+from armctl.errors import SingularConfigurationError, UnknownNameError
 
 #: the inner loops
 INNER = ("osc", "computed_torque")
@@ -117,7 +117,15 @@ class InnerMotion:
             lam, _ = task_inertia(state.mass, jac, q)
             tau = jac.T @ (lam @ (xdd - jac @ qdd0)) + state.mass @ qdd0 + state.bias
         else:
-            pinv = np.linalg.solve(jac @ jac.T, jac).T  # Jᵀ (J Jᵀ)⁻¹
+            try:
+                pinv = np.linalg.solve(jac @ jac.T, jac).T  # Jᵀ (J Jᵀ)⁻¹
+            except np.linalg.LinAlgError:
+                sv = np.linalg.svd(jac, compute_uv=False)
+                raise SingularConfigurationError(
+                    f"the frame Jacobian is singular at q = {q} (singular values {sv}): J⁺ does not exist",
+                    value=q,
+                    sigma_min=float(sv[-1]),
+                ) from None
             qdd = pinv @ xdd + qdd0 - pinv @ (jac @ qdd0)
             tau = state.mass @ qdd + state.bias
         if wrench is not None:
