@@ -1,0 +1,135 @@
+"""`InnerMotion`: the stiff motion loop inside admittance and force control — a frame driven to a commanded
+pose x_c by inverse dynamics, in the operational space (``"osc"``) or by resolved acceleration and computed
+torque (``"computed_torque"``), optionally compensating the measured wrench.
+
+With e = [p_c − p; log(R_c Rᵀ)] and ė = v_c − J q̇ (world axes, as the OSC tasks), the commanded frame
+acceleration and the posture acceleration are::
+
+    ẍ* = a_c + K_P e + K_D ė,        q̈₀ = K_P,n (q_n − q) − K_D,n q̇
+
+and the torque, with h the measured wrench the arm exerts (0 when not compensated)::
+
+    "osc":              τ = Jᵀ Λ (ẍ* − J̇ q̇ − J q̈₀) + M q̈₀ + C q̇ + g + τ_f + Jᵀ h
+    "computed_torque":  q̈ = J⁺ (ẍ* − J̇ q̇) + (I − J⁺ J) q̈₀,  J⁺ = Jᵀ (J Jᵀ)⁻¹,   τ = M q̈ + C q̇ + g + τ_f + Jᵀ h
+
+With an exact model both give J q̈ + J̇ q̇ = ẍ*, that is ë + K_D ė + K_P e = 0 whatever the contact (the Jᵀ h
+term cancels the wrench's effect); without the compensation the wrench displaces the frame by
+(Λ K_P)⁻¹ h at rest ("osc"). They differ in the null space: "osc" keeps the posture motion dynamically
+consistent, "computed_torque" kinematically.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from armctl._checks import FloatArray
+from armctl.controllers.interaction.gains import critical_damping, symmetric_psd
+from armctl.controllers.interaction.task_space import task_inertia
+from armctl.controllers.osc.state import FrameKinematics, ModelState
+from armctl.controllers.osc.tasks.rotation import rotation_error
+from armctl.dynamics.base import Dynamics
+from armctl.errors import SingularConfigurationError, UnknownNameError
+
+#: the inner loops
+INNER = ("osc", "computed_torque")
+
+
+class InnerMotion:
+    """The inner motion loop (see the module).
+
+    Parameters
+    ----------
+    dynamics : Dynamics
+        The controller's model.
+    kind : {"osc", "computed_torque"}
+        The law.
+    kp : array_like
+        K_P [1/s²]: scalar, (6,) or 6×6, symmetric positive definite.
+    kd : array_like, optional
+        K_D [1/s]; None: 2 K_P^½ (critical).
+    posture_kp, posture_kd : array_like, optional
+        K_P,n [1/s²] ≥ 0 and K_D,n [1/s] (None: 2 K_P,n^½) of the posture (scalar, (n,) or n×n).
+
+    Raises
+    ------
+    UnknownNameError
+        ``kind`` is neither.
+    InvalidParameterError, ShapeError
+        A gain that is not symmetric positive (semi-)definite or of the wrong size.
+    """
+
+    def __init__(
+        self,
+        dynamics: Dynamics,
+        kind: str,
+        kp: ArrayLike,
+        kd: ArrayLike | None = None,
+        posture_kp: ArrayLike = 10.0,
+        posture_kd: ArrayLike | None = None,
+    ) -> None:
+        if kind not in INNER:
+            raise UnknownNameError("inner motion loop", kind, INNER)
+        self.kind = kind
+        self.dynamics = dynamics
+        n = dynamics.n
+        self.kp = symmetric_psd(kp, (6,), "kp", "1/s²", definite=True)
+        self.kd = critical_damping(np.eye(6), self.kp) if kd is None else symmetric_psd(kd, (6,), "kd", "1/s")
+        self.posture_kp = symmetric_psd(posture_kp, (n,), "posture_kp", "1/s²")
+        self.posture_kd = (
+            critical_damping(np.eye(n), self.posture_kp)
+            if posture_kd is None
+            else symmetric_psd(posture_kd, (n,), "posture_kd", "1/s")
+        )
+
+    def torque(
+        self,
+        state: ModelState,
+        fk: FrameKinematics,
+        pose: FloatArray,
+        twist: FloatArray,
+        acceleration: FloatArray,
+        posture: FloatArray,
+        wrench: FloatArray | None = None,
+    ) -> tuple[FloatArray, FloatArray]:
+        """τ [N·m] driving the frame to the commanded ``pose`` (4×4), ``twist`` and ``acceleration`` (6,), and the
+        frame error e (6,) [m; rad].
+
+        Parameters
+        ----------
+        state : ModelState
+            The model terms at the measured (q, q̇).
+        fk : FrameKinematics
+            The frame's kinematics at that state.
+        pose, twist, acceleration : ndarray
+            x_c (4×4), v_c (6,) [m/s; rad/s] and a_c (6,) [m/s²; rad/s²], world axes.
+        posture : ndarray, shape (n,)
+            q_n [rad].
+        wrench : ndarray, shape (6,), optional
+            h [N; N·m] to compensate (world axes at the frame); None: not compensated.
+        """
+        q, qd = state.q, state.qd
+        jac = fk.jacobian
+        e = np.concatenate((pose[:3, 3] - fk.position, rotation_error(pose[:3, :3], fk.rotation)))
+        xdd = acceleration + self.kp @ e + self.kd @ (twist - fk.velocity) - fk.drift
+        qdd0 = self.posture_kp @ (posture - q) - self.posture_kd @ qd
+        if self.kind == "osc":
+            lam, _ = task_inertia(state.mass, jac, q)
+            tau = jac.T @ (lam @ (xdd - jac @ qdd0)) + state.mass @ qdd0 + state.bias
+        else:
+            try:
+                pinv = np.linalg.solve(jac @ jac.T, jac).T  # Jᵀ (J Jᵀ)⁻¹
+            except np.linalg.LinAlgError:
+                sv = np.linalg.svd(jac, compute_uv=False)
+                raise SingularConfigurationError(
+                    f"the frame Jacobian is singular at q = {q} (singular values {sv}): J⁺ does not exist",
+                    value=q,
+                    sigma_min=float(sv[-1]),
+                ) from None
+            qdd = pinv @ xdd + qdd0 - pinv @ (jac @ qdd0)
+            tau = state.mass @ qdd + state.bias
+        if wrench is not None:
+            tau += jac.T @ wrench
+        if state.friction is not None:
+            tau += state.friction
+        return tau, e

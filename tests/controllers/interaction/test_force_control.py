@@ -1,0 +1,159 @@
+"""Force control, parallel force/position control and admittance pressing on a compliant plane, fed the
+plane's force as a user's loop would read a force/torque sensor: parallel force/position control and force
+control with integral action reach the desired force exactly at rest, wherever the surface is; admittance at
+rest gives the series-spring force k_e k_d / (k_e + k_d) δ_c; the force can come from an observer object."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import pytest
+
+import armctl
+from armctl.controllers import Admittance, Controller, ForceControl, Measurement, ParallelForcePosition
+from armctl.sim import ForceSensor, KelvinVoigt, Plane
+
+Q_READY = np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])
+KE = 2e4  # [N/m] the plane's stiffness
+
+
+@pytest.fixture(scope="module")
+def panda() -> armctl.Dynamics:
+    return armctl.Dynamics(armctl.models.panda())
+
+
+class PlaneSensor(Controller):
+    """A user's loop around a force-reading controller: the wrench the arm exerts on ``plane`` at the tool,
+    computed from the measured state with the plane's own law, handed over as a Measurement (world axes)."""
+
+    def __init__(self, dyn: armctl.Dynamics, plane: Plane, inner: Controller) -> None:
+        super().__init__(dyn)
+        self.plane, self.inner = plane, inner
+
+    def reset(self) -> None:
+        super().reset()
+        self.inner.reset()
+
+    def compute(self, t: float, q: Any, qd: Any, ref: armctl.Reference) -> Any:
+        assert self.dynamics is not None
+        p = self.dynamics.frame_pose(q)[:3, 3]
+        v = self.dynamics.jacobian(q)[:3] @ qd
+        force_on_arm = self.plane.force(p, v, False)[0]
+        h = np.zeros(6) if force_on_arm is None else np.concatenate((-force_on_arm, np.zeros(3)))
+        tau = self.inner(t, q, qd, ref, measurement=Measurement(wrench=h, world_axes=True))
+        self.last_log = dict(self.inner.last_log)
+        return tau
+
+
+def press(dyn: armctl.Dynamics, ctrl: Controller, z_surface: float, duration: float) -> Any:
+    plane = Plane(KelvinVoigt(KE, 100.0), point=(0.0, 0.0, z_surface))
+    return armctl.simulate(
+        dyn.model,
+        PlaneSensor(dyn, plane, ctrl),
+        armctl.Reference(Q_READY),
+        duration,
+        q0=Q_READY,
+        dt=2e-4,
+        environment=plane,
+        sensors=ForceSensor(world_axes=True),
+    )
+
+
+@pytest.mark.parametrize("inner", ["computed_torque", "osc"])
+def test_parallel_force_position_has_no_force_error_at_rest(panda: armctl.Dynamics, inner: str) -> None:
+    pose = panda.frame_pose(Q_READY)
+    z_surface = pose[2, 3] - 0.003  # unknown to the controller: its target is 2 mm above the tool
+    target = pose.copy()
+    target[2, 3] += 0.002
+    target[0, 3] += 0.01  # and 1 cm along x
+    ctrl = ParallelForcePosition(panda, [0.0, 0.0, -10.0], 2e-4, 1e-3, inner=inner)
+    ctrl.set_target(target)
+    res = press(panda, ctrl, z_surface, 3.0)
+    assert not res.diverged
+    f = res.sensor[:, 0, :3]
+    assert f[-1, 2] == pytest.approx(-10.0, abs=1e-3)  # the simulator's reading: 10 N down, exactly
+    assert np.abs(f[-1, :2]).max() < 1e-3  # nothing along the surface
+    x_end = panda.frame_pose(res.q[-1])[:3, 3]
+    np.testing.assert_allclose(x_end[:2], target[:2, 3], atol=1e-4)  # the position target along the surface
+
+
+def test_force_control_with_integral_action_has_no_force_error_at_rest(panda: armctl.Dynamics) -> None:
+    pose = panda.frame_pose(Q_READY)
+    z_surface = pose[2, 3] - 0.002
+    ctrl = ForceControl(panda, [0.0, 0.0, -15.0], 1e-4, 1e-3, directions=[0.0, 0.0, 1.0])
+    target = pose.copy()
+    target[1, 3] += 0.02  # along y: position control
+    ctrl.set_target(target)
+    res = press(panda, ctrl, z_surface, 3.0)
+    assert not res.diverged
+    assert res.sensor[-1, 0, 2] == pytest.approx(-15.0, abs=1e-3)
+    assert panda.frame_pose(res.q[-1])[1, 3] == pytest.approx(target[1, 3], abs=1e-4)
+
+
+def test_proportional_force_control_leaves_the_predicted_error(panda: armctl.Dynamics) -> None:
+    # K_I = 0: at rest f_d − f = (f_d − k_e δ_d) / (1 + k_e K_F), δ_d the target's depth beyond the surface
+    pose = panda.frame_pose(Q_READY)
+    z_surface = pose[2, 3] - 0.002
+    kf, fd, depth = 2e-4, 10.0, 0.0002  # k_e δ_d = 4 N: an error of 1.2 N
+    ctrl = ForceControl(panda, [0.0, 0.0, -fd], kf, directions=[0.0, 0.0, 1.0])
+    target = pose.copy()
+    target[2, 3] = z_surface - depth
+    ctrl.set_target(target)
+    res = press(panda, ctrl, z_surface, 2.0)
+    normal = -res.sensor[-1, 0, 2]
+    assert fd - normal == pytest.approx((fd - KE * depth) / (1.0 + KE * kf), rel=0.01)
+
+
+def test_admittance_at_rest_gives_the_series_spring_force(panda: armctl.Dynamics) -> None:
+    pose = panda.frame_pose(Q_READY)
+    z_surface = pose[2, 3] - 0.002
+    kd, depth = 500.0, 0.01
+    ctrl = Admittance(panda, [kd, kd, kd, 50.0, 50.0, 50.0])
+    target = pose.copy()
+    target[2, 3] = z_surface - depth
+    ctrl.set_target(target)
+    res = press(panda, ctrl, z_surface, 2.0)
+    assert -res.sensor[-1, 0, 2] == pytest.approx(KE * kd / (KE + kd) * depth, rel=0.01)
+
+
+class PlaneObserver:
+    """An observer-like force source: reports the plane's force (arm side) at the tool; counts its updates."""
+
+    def __init__(self, dyn: armctl.Dynamics, plane: Plane) -> None:
+        self.dyn, self.plane, self.updates, self.q, self.qd = dyn, plane, 0, None, None
+
+    def update(self, t: float, q: Any, qd: Any, tau_applied: Any) -> Any:
+        self.updates += 1
+        self.q, self.qd = q, qd
+        return np.zeros(len(q))
+
+    def wrench(self, q: Any, frame: str | None = None) -> Any:
+        p = self.dyn.frame_pose(q)[:3, 3]
+        f = self.plane.force(p, self.dyn.jacobian(q)[:3] @ self.qd, False)[0]
+        return np.zeros(6) if f is None else np.concatenate((-f, np.zeros(3)))
+
+
+def test_an_observer_is_a_force_source(panda: armctl.Dynamics) -> None:
+    pose = panda.frame_pose(Q_READY)
+    plane = Plane(KelvinVoigt(KE, 100.0), point=(0.0, 0.0, pose[2, 3] - 0.002))
+    obs = PlaneObserver(panda, plane)
+    ctrl = ParallelForcePosition(panda, [0.0, 0.0, -10.0], 2e-4, 1e-3, force_source=obs)
+    assert ctrl.reads == {"tau_applied"}
+    ctrl.set_target(pose)
+
+    def loop(t: float, q: Any, qd: Any, ref: armctl.Reference) -> Any:
+        return ctrl(t, q, qd, ref, measurement=Measurement(tau_applied=np.zeros(7)))
+
+    res = armctl.simulate(
+        panda.model,
+        loop,
+        armctl.Reference(Q_READY),
+        3.0,
+        q0=Q_READY,
+        dt=2e-4,
+        environment=plane,
+        sensors=ForceSensor(world_axes=True),
+    )
+    assert obs.updates == len(res.t) - 1 or obs.updates == len(res.t)
+    assert res.sensor[-1, 0, 2] == pytest.approx(-10.0, abs=1e-3)

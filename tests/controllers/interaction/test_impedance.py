@@ -1,0 +1,74 @@
+"""Impedance control against closed forms: pressing on a compliant plane, the normal force at rest is
+k_e k_d / (k_e + k_d) times the commanded penetration; the default damping makes every mode of Λ ë + D ė + K e
+critically damped; joint impedance yields K⁻¹ Jᵀ h under a constant wrench."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import armctl
+from armctl.controllers import CartesianImpedance, JointImpedance
+from armctl.controllers.interaction.gains import critical_damping
+from armctl.sim import ForceSensor, KelvinVoigt, Plane
+
+Q_READY = np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])
+
+
+@pytest.fixture(scope="module")
+def panda() -> armctl.Dynamics:
+    return armctl.Dynamics(armctl.models.panda())
+
+
+@pytest.mark.parametrize(("ke", "kd"), [(5e3, 800.0), (2e4, 300.0), (1e3, 2000.0)])
+def test_pressing_on_a_plane_gives_the_series_spring_force(panda: armctl.Dynamics, ke: float, kd: float) -> None:
+    pose = panda.frame_pose(Q_READY)
+    z_surface = pose[2, 3] - 0.002  # 2 mm below the tool: it reaches the plane on the way down
+    depth = 0.01  # the target 1 cm beyond the surface
+    plane = Plane(KelvinVoigt(ke, 80.0), point=(0.0, 0.0, z_surface))
+    ctrl = CartesianImpedance(panda, [kd, kd, kd, 50.0, 50.0, 50.0], nullspace_stiffness=5.0)
+    target = pose.copy()
+    target[2, 3] = z_surface - depth
+    ctrl.set_target(target)
+    res = armctl.simulate(
+        panda.model,
+        ctrl,
+        armctl.Reference(Q_READY),
+        2.5,
+        q0=Q_READY,
+        dt=2e-4,
+        environment=plane,
+        sensors=ForceSensor(world_axes=True),
+    )
+    assert not res.diverged
+    normal = -res.sensor[-200:, 0, 2]  # the arm pushes down (−z): the normal force is −f_z
+    expected = ke * kd / (ke + kd) * depth
+    assert np.ptp(normal) < 1e-3 * expected  # at rest
+    assert normal[-1] == pytest.approx(expected, rel=0.01)
+
+
+def test_default_damping_makes_every_mode_critically_damped() -> None:
+    rng = np.random.default_rng(3)
+    a = rng.normal(size=(6, 6))
+    lam = a @ a.T + 0.5 * np.eye(6)
+    b = rng.normal(size=(6, 6))
+    k = b @ b.T * 100.0
+    d = critical_damping(lam, k)
+    # each eigenvalue s of the pencil (Λ s² + D s + K) is a double root: s = −ω for each ω² of Λ⁻¹ K
+    n = 6
+    companion = np.block([[np.zeros((n, n)), np.eye(n)], [-np.linalg.solve(lam, k), -np.linalg.solve(lam, d)]])
+    roots = np.sort_complex(np.linalg.eigvals(companion))
+    omega = np.sqrt(np.sort(np.linalg.eigvals(np.linalg.solve(lam, k)).real))
+    np.testing.assert_allclose(np.sort(roots.real), np.sort(np.repeat(-omega, 2)), rtol=1e-4)
+    assert np.abs(roots.imag).max() < 1e-3 * omega.max()
+
+
+def test_joint_impedance_yields_the_compliance_of_its_springs(panda: armctl.Dynamics) -> None:
+    model = panda.model
+    push = np.array([0.0, 0.0, -5.0, 0.0, 0.0, 0.0])  # the arm exerts 5 N down: the world pushes it up
+    k = np.array([300.0, 300.0, 300.0, 300.0, 100.0, 100.0, 100.0])
+    ctrl = JointImpedance(panda, k)
+    res = armctl.simulate(model, ctrl, armctl.Reference(Q_READY), 3.0, q0=Q_READY, disturbance=lambda t: push)
+    q_end = res.q[-1]
+    # at rest: K (q_d − q) = Jᵀ h at the final configuration
+    np.testing.assert_allclose(k * (Q_READY - q_end), panda.jacobian(q_end).T @ push, atol=2e-3)
