@@ -83,3 +83,11 @@ def test_collision_reaction_in_a_users_loop_and_bad_input() -> None:
         CollisionReaction(ct, obs, damping=-1.0)
     with pytest.raises(UnknownNameError):
         sc.controller("gravity", {"kpp": 1.0})
+
+
+def test_the_scene_times_its_controller_with_the_recorded_applied_torques() -> None:
+    sc = scene("panda_collision")
+    res, _ = run("gravity")
+    window = sc.replay_window(res, 20)
+    assert len(window["measurement"]) == 20
+    assert sc.compute_time("gravity", window, rounds=1) > 0.0

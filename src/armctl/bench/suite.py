@@ -24,7 +24,7 @@ from armctl.bench.pareto import pareto_front, plot_pareto
 
 __all__ = ["outcome", "pareto_front", "plot_pareto", "run_suite", "scene_matrix", "scene_title", "summary"]
 
-SCENE_NAMES = ("pendulum", "planar_2r", "panda_topp", "panda_contact")
+SCENE_NAMES = ("pendulum", "planar_2r", "panda_topp", "panda_contact", "panda_collision")
 
 
 #: the measures of a scene row, NaN in the row of a method that failed
@@ -225,9 +225,9 @@ def _model_sections() -> dict[str, Any]:
     engines where MuJoCo is installed."""
     from importlib.util import find_spec
 
-    from armctl.bench import backends, fidelity, integrators
+    from armctl.bench import backends, fidelity, integrators, interaction
 
-    sections = {"backends": backends, "integrators": integrators, "fidelity": fidelity}
+    sections = {"backends": backends, "integrators": integrators, "fidelity": fidelity, "interaction": interaction}
     if find_spec("mujoco") is not None:
         from armctl.bench import engines
 
@@ -244,6 +244,7 @@ SECTION_TITLES = {
     "integrators": "Integrators: cost against accuracy",
     "fidelity": "Model fidelity: the cheapest sufficient model",
     "engines": "Plant engines: armctl's and MuJoCo's integrators, cost against accuracy",
+    "interaction": "Interaction control: force tracking, stability borders, the momentum observer",
     "dynamics_speed": "Dynamics speed",
     "controller_speed": "Controller step speed",
     "osc_speed": "Operational-space QP step speed",

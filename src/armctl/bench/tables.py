@@ -250,6 +250,12 @@ def stability(maps: dict[str, Any]) -> list[Table]:
     return [t]
 
 
+def interaction(data: dict[str, Any]) -> list[Table]:
+    from armctl.bench.interaction import tables
+
+    return tables(data)
+
+
 #: the table makers of the sections that have them
 TABLES: dict[str, Callable[[Any], list[Table]]] = {
     "scenes": scenes,
@@ -259,6 +265,7 @@ TABLES: dict[str, Callable[[Any], list[Table]]] = {
     "integrators": integrators,
     "fidelity": fidelity,
     "engines": engines,
+    "interaction": interaction,
     "dynamics_speed": dynamics_speed,
     "controller_speed": controller_speed,
     "osc_speed": osc_speed,

@@ -19,6 +19,7 @@ from armctl import models
 from armctl.controllers.base import Controller
 from armctl.controllers.collision_reaction import CollisionReaction
 from armctl.controllers.computed_torque import ComputedTorque
+from armctl.controllers.measurement import Measurement
 from armctl.controllers.momentum_observer import MomentumObserver
 from armctl.errors import UnknownNameError
 from armctl.references import Quintic
@@ -94,6 +95,30 @@ class CollisionScene(Scene):
         obs = MomentumObserver(dyn, g["observer_gain"], thresholds=g["thresholds"], period=self.control_dt)
         reaction: Any = method if method != "no_reaction" else (lambda t, q, qd, ref, o: ct.compute(t, q, qd, ref))
         return CollisionReaction(ct, obs, reaction, damping=g["damping"], reflex_gain=g["reflex_gain"], log_wrench=True)
+
+    def replay_window(self, res: Any, samples: int = 200) -> dict[str, Any]:
+        """:meth:`Scene.replay_window` with each sample's measurement (the torque applied over the period before
+        it, which the observer reads).
+
+        Parameters
+        ----------
+        res : SimResult
+            A run of this scene.
+        samples : int, optional
+            The window's length.
+
+        Returns
+        -------
+        dict of str
+        """
+        window = super().replay_window(res, samples)
+        first = (len(res.t) - len(window["t"])) // 2
+        zeros = np.zeros(res.q.shape[1])
+        window["measurement"] = [
+            Measurement(tau_applied=res.tau_applied[k - 1] if k else zeros)
+            for k in range(first, first + len(window["t"]))
+        ]
+        return window
 
     def metrics(
         self,
