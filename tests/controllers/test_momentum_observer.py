@@ -214,3 +214,35 @@ def test_wrench_at_a_singular_configuration_is_refused_by_name() -> None:
     assert info.value.sigma_min < 1e-9
     with pytest.raises(UnknownNameError):
         obs.wrench(Q_READY, frame="no_such_frame")
+
+
+@pytest.mark.parametrize("compile", [False, True])
+def test_every_non_finite_entry_is_named(compile: bool) -> None:
+    """NaN or inf in any entry of q, q̇ or τ raises a NonFiniteError naming the input, on the unchecked fast path
+    too (the Panda's M(q) does not depend on q₁: the estimate must not silently ignore it)."""
+    dyn = armctl.Dynamics(model("panda"), compile=compile)
+    for name in ("q", "qd", "tau_applied"):
+        for j in range(7):
+            for bad in (np.nan, np.inf):
+                obs = MomentumObserver(dyn, 20.0, compile=compile)
+                obs.update(0.0, Q_READY, np.zeros(7), np.zeros(7))
+                args = {"q": Q_READY.copy(), "qd": np.zeros(7), "tau_applied": np.zeros(7)}
+                args[name][j] = bad
+                with pytest.raises(NonFiniteError, match=name):
+                    obs.update(1e-3, args["q"], args["qd"], args["tau_applied"])
+
+
+def test_the_generated_update_agrees_with_the_kernel_one() -> None:
+    m = model("panda").with_friction(viscous=0.4, coulomb=[1.0, 1.0, 1.0, 1.0, 0.3, 0.3, 0.3])
+    plain = MomentumObserver(armctl.Dynamics(m), 30.0, thresholds=4.0)
+    fast = MomentumObserver(armctl.Dynamics(m, compile=True), 30.0, thresholds=4.0)
+    assert fast.compiled and not plain.compiled
+    rng = np.random.default_rng(3)
+    for k in range(60):
+        q, qd, tau = rng.uniform(-1.0, 1.0, (3, 7))
+        np.testing.assert_allclose(fast.update(k * 1e-3, q, qd, tau), plain.update(k * 1e-3, q, qd, tau),
+                                   rtol=1e-10, atol=1e-9)  # fmt: skip
+    assert fast.collision is not None and plain.collision is not None
+    assert (fast.collision.t, fast.collision.joint) == (plain.collision.t, plain.collision.joint)
+    with pytest.raises(InvalidParameterError, match="exact"):
+        MomentumObserver(armctl.Dynamics(m, compile=True), 30.0, discretization="euler")

@@ -39,7 +39,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, boolean, per_joint, readonly, scalar, vector
+from armctl._checks import FLOAT, FloatArray, boolean, per_joint, readonly, scalar, vector
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError, NonFiniteError, SingularConfigurationError
 
@@ -92,12 +92,18 @@ class MomentumObserver:
     on_collision : callable, optional
         ``on_collision(observer, collision)``, called once at the update that detects a collision (e.g. to switch
         a controller to gravity compensation or to a reflex).
+    compile : bool, optional
+        Run the update as one call of generated C code (:mod:`armctl.controllers.momentum_code`; the same numbers
+        to rounding, built once per arm with the system's C compiler and cached); None (the default): when
+        ``dynamics`` is compiled (``armctl.Dynamics(model, compile=True)``). Only the ``"exact"`` form.
 
     Raises
     ------
     InvalidParameterError
         A gain ≤ 0, a gain too large for ``period`` in the ``"euler"`` form (K_O h ≥ 2), a threshold < 0, an
-        unknown discretization, an ``on_collision`` that is not callable.
+        unknown discretization, an ``on_collision`` that is not callable, ``compile=True`` with ``"euler"``.
+    BackendError
+        ``compile=True`` and no C compiler to build the code with (nor a cached build).
 
     Examples
     --------
@@ -116,6 +122,7 @@ class MomentumObserver:
         period: float | None = None,
         discretization: str = "exact",
         on_collision: Callable[[MomentumObserver, Collision], Any] | None = None,
+        compile: bool | None = None,
     ) -> None:
         if not isinstance(dynamics, Dynamics):
             raise InvalidParameterError(
@@ -151,6 +158,22 @@ class MomentumObserver:
         if self.period is not None:
             self.check_gain(self.period)
         self._names = [j.name for j in dynamics.model.joints]
+        self._shape = (self.n,)
+        self.compiled = bool(getattr(dynamics, "compiled", False)) if compile is None else boolean(compile, "compile")
+        if self.compiled and discretization != "exact":
+            raise InvalidParameterError(
+                "compile=True runs the 'exact' discretization only: drop compile or use discretization='exact'",
+                value=discretization,
+            )
+        self._code: Any = None
+        if self.compiled:
+            from armctl.controllers.momentum_code import CompiledStep
+
+            self._code = CompiledStep(dynamics.kernel, self.friction, self.thresholds)
+            self.step = self._compiled_step  # type: ignore[method-assign]  # one call fewer on the hot path
+        # whether NaN or inf in any entry of any input reaches r, so that checking r is enough: the generated code
+        # carries them (momentum_code), and a kernel whose Coriolis matrix propagates them (β holds C(q, q̇))
+        self._fast = self._code is not None or dynamics.kernel.nan_propagates
         self.reset()
 
     # ------------------------------------------------------------------------------------------- state
@@ -159,9 +182,11 @@ class MomentumObserver:
         self._t: float | None = None
         self._p: FloatArray | None = None
         self._beta: FloatArray | None = None
-        self._h = math.nan
+        self._h = -1.0  # the period the coefficients are for (none yet)
         self._gamma = np.zeros(self.n)
-        self.residual: FloatArray = np.zeros(self.n)  #: the last estimate r of τ_ext [N·m]
+        #: the last estimate r of τ_ext [N·m] (the array the last update returned)
+        self.residual: FloatArray = np.zeros(self.n)
+        self._side = 0  # the compiled code's state buffer in use
         self.collision: Collision | None = None  #: the detected collision, None before one
 
     def clear(self) -> None:
@@ -228,7 +253,8 @@ class MomentumObserver:
         Returns
         -------
         ndarray, shape (n,)
-            r_k (a new array; zeros at the first update). With the sign of ``SimResult.tau_ext``: M q̈ + C q̇ + g =
+            r_k (a new array, kept as :attr:`residual`; zeros at the first update). With the sign of
+            ``SimResult.tau_ext``: M q̈ + C q̇ + g =
             τ − τ_f − τ_ext, so a push of the environment on the arm reads −Jᵀ(push).
 
         Raises
@@ -238,11 +264,32 @@ class MomentumObserver:
         InvalidParameterError
             t is not later than the previous update's, or the step is too long for the gain (``"euler"``).
         """
-        t = scalar(t, "t")
-        q = vector(q, self.n, "q")
-        qd = vector(qd, self.n, "qd")
-        tau = vector(tau_applied, self.n, "tau_applied")
-        return self.step(t, q, qd, tau)
+        if (
+            self._fast
+            and type(q) is np.ndarray
+            and type(qd) is np.ndarray
+            and type(tau_applied) is np.ndarray
+            and q.dtype == FLOAT
+            and qd.dtype == FLOAT
+            and tau_applied.dtype == FLOAT
+            and q.shape == qd.shape == tau_applied.shape == self._shape
+            and type(t) is float
+            and math.isfinite(t)
+        ):  # float64 vectors of the right length: a non-finite entry reaches r (see _fast), checked by the step
+            try:
+                return self.step(t, q, qd, tau_applied)
+            except NonFiniteError:
+                self._checked(t, q, qd, tau_applied)  # names the input, if one is the cause
+                raise
+        return self.step(*self._checked(t, q, qd, tau_applied))
+
+    def _checked(self, t: Any, q: Any, qd: Any, tau: Any) -> tuple[float, FloatArray, FloatArray, FloatArray]:
+        return (
+            scalar(t, "t"),
+            vector(q, self.n, "q"),
+            vector(qd, self.n, "qd"),
+            vector(tau, self.n, "tau_applied"),
+        )
 
     def step(self, t: float, q: FloatArray, qd: FloatArray, tau: FloatArray) -> FloatArray:
         """:meth:`update` on checked inputs: for a controller's ``compute``, whose inputs ``Controller.__call__``
@@ -260,6 +307,8 @@ class MomentumObserver:
         ndarray, shape (n,)
             The estimate r of τ_ext [N·m] (a new array).
         """
+        if self._code is not None:  # (an instance's step is _compiled_step itself: see __init__)
+            return self._compiled_step(t, q, qd, tau)
         p, beta = self.momentum_terms(q, qd)
         if self._t is None or self._p is None or self._beta is None:  # the first sample: r = 0, p₀ = p
             self._t, self._p, self._beta = t, p, beta
@@ -270,23 +319,53 @@ class MomentumObserver:
                 f"observer updates must move forward in time: t = {t} after t = {self._t} (call reset() to restart)",
                 value=t,
             )
-        if h != self._h:
+        if abs(h - self._h) > 1e-9 * h:  # a new period (not the rounding of t_k = k·T)
             self._step_changed(h)
         d = h * tau
         d += (0.5 * h) * (beta + self._beta)
         d -= p
         d += self._p
         d *= 1.0 / h
-        r = self.residual
-        r -= d
+        r = self.residual - d
         r *= self._gamma
         r += d  # r_k = γ r_{k−1} + (1 − γ) d_k
         if not np.isfinite(r).all():
             raise NonFiniteError(f"the observer's residual is not finite ({r}) at t = {t}", value=r)
         self._t, self._p, self._beta = t, p, beta
+        self.residual = r
         if self.thresholds is not None and self.collision is None:
             self._detect(t, r)
-        return r.copy()
+        return r
+
+    def _compiled_step(self, t: float, q: FloatArray, qd: FloatArray, tau: FloatArray) -> FloatArray:
+        code = self._code
+        k = self._side
+        np.concatenate((q, qd, tau), out=code.x)
+        if self._t is None:  # r = 0 and (p, β) of the first sample: one call with γ = 1, h = 1
+            code.states[k][:] = 0.0
+            code.set_period(np.ones(self.n), 1.0)
+            code.runs[k]()
+            self._t, self._h, self._side = t, -1.0, 1 - k
+            return self.residual.copy()
+        h = t - self._t
+        if abs(h - self._h) > 1e-9 * h:  # a new period (not the rounding of t_k = k·T)
+            if not h > 0.0:
+                raise InvalidParameterError(
+                    f"observer updates must move forward in time: t = {t} after t = {self._t} (call reset() to "
+                    f"restart)",
+                    value=t,
+                )
+            self._step_changed(h)
+            code.set_period(self._gamma, h)
+        code.runs[k]()
+        r = code.residuals[1 - k].copy()
+        flags = code.flags
+        if flags[1] != 0.0:  # 0·Σr: NaN when r is not finite
+            raise NonFiniteError(f"the observer's residual is not finite ({r}) at t = {t}", value=r)
+        self._t, self._side, self.residual = t, 1 - k, r
+        if flags[0] > 0.0 and self.collision is None:  # some |r_j| above its threshold
+            self._detect(t, r)
+        return r
 
     def _step_changed(self, h: float) -> None:
         self.check_gain(h)
