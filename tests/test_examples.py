@@ -10,7 +10,11 @@ from pathlib import Path
 import pytest
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
-ARGS = {"tune_gains.py": ["--out", "{tmp}/presets"], "closed_loop_simulation.py": ["--out", "{tmp}/out"]}
+ARGS = {
+    "tune_gains.py": ["--out", "{tmp}/presets"],
+    "closed_loop_simulation.py": ["--out", "{tmp}/out"],
+    "interaction_control.py": ["--out", "{tmp}/out"],
+}
 
 
 @pytest.mark.slow

@@ -24,7 +24,7 @@ from armctl.bench.pareto import pareto_front, plot_pareto
 
 __all__ = ["outcome", "pareto_front", "plot_pareto", "run_suite", "scene_matrix", "scene_title", "summary"]
 
-SCENE_NAMES = ("pendulum", "planar_2r", "panda_topp", "panda_contact", "panda_collision")
+SCENE_NAMES = ("pendulum", "planar_2r", "panda_topp", "panda_contact", "panda_press", "panda_wipe", "panda_collision")
 
 
 #: the measures of a scene row, NaN in the row of a method that failed

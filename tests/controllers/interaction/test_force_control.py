@@ -157,3 +157,26 @@ def test_an_observer_is_a_force_source(panda: armctl.Dynamics) -> None:
     )
     assert obs.updates == len(res.t) - 1 or obs.updates == len(res.t)
     assert res.sensor[-1, 0, 2] == pytest.approx(-10.0, abs=1e-3)
+
+
+@pytest.mark.parametrize("world_axes", [False, True])
+def test_simulate_feeds_the_sensor_reading(panda: armctl.Dynamics, world_axes: bool) -> None:
+    # the sensor reads in its own (tool) axes or in world axes: the controller turns either into world axes
+    pose = panda.frame_pose(Q_READY)
+    plane = Plane(KelvinVoigt(KE, 100.0), point=(0.0, 0.0, pose[2, 3] - 0.002))
+    ctrl = ParallelForcePosition(panda, [0.0, 0.0, -10.0], 2e-4, 1e-3)
+    ctrl.set_target(pose)
+    res = armctl.simulate(
+        panda.model,
+        ctrl,
+        armctl.Reference(Q_READY),
+        3.0,
+        q0=Q_READY,
+        dt=2e-4,
+        environment=plane,
+        sensors=ForceSensor(world_axes=world_axes),
+    )
+    assert not res.diverged
+    rot = panda.frame_pose(res.q[-1])[:3, :3]
+    f_world = res.sensor[-1, 0, :3] if world_axes else rot @ res.sensor[-1, 0, :3]
+    np.testing.assert_allclose(f_world, [0.0, 0.0, -10.0], atol=1e-3)

@@ -27,19 +27,19 @@ def panda() -> armctl.Dynamics:
 def test_a_stiffness_that_is_not_symmetric_is_named(panda: armctl.Dynamics) -> None:
     k = np.diag([500.0] * 6)
     k[0, 1] = 50.0
-    with pytest.raises(InvalidParameterError, match="stiffness .* symmetric"):
+    with pytest.raises(InvalidParameterError, match=r"stiffness .* symmetric"):
         CartesianImpedance(panda, k)
 
 
 def test_a_stiffness_with_a_negative_eigenvalue_is_named(panda: armctl.Dynamics) -> None:
-    with pytest.raises(InvalidParameterError, match="positive semi-definite.*-100"):
+    with pytest.raises(InvalidParameterError, match=r"positive semi-definite.*-100"):
         CartesianImpedance(panda, [500.0, 500.0, -100.0])
     with pytest.raises(InvalidParameterError, match="stiffness"):
         JointImpedance(panda, -1.0)
 
 
 def test_negative_damping_is_named(panda: armctl.Dynamics) -> None:
-    with pytest.raises(InvalidParameterError, match="damping.*negative damping"):
+    with pytest.raises(InvalidParameterError, match=r"damping.*negative damping"):
         CartesianImpedance(panda, [500.0] * 6, damping=[10.0] * 5 + [-1.0])
     with pytest.raises(InvalidParameterError, match="damping"):
         JointImpedance(panda, 100.0, damping=-2.0)
@@ -88,7 +88,7 @@ def test_a_call_without_the_wrench_says_how_to_give_it(panda: armctl.Dynamics) -
 
 
 def test_parallel_control_needs_integral_action(panda: armctl.Dynamics) -> None:
-    with pytest.raises(InvalidParameterError, match="integral_gain.*positive definite"):
+    with pytest.raises(InvalidParameterError, match=r"integral_gain.*positive definite"):
         ParallelForcePosition(panda, [0.0, 0.0, -5.0], 1e-4, 0.0)
 
 
@@ -99,7 +99,7 @@ def test_other_bad_input_is_named(panda: armctl.Dynamics) -> None:
         ForceControl(panda, [0.0, -5.0], 1e-4)
     with pytest.raises(InvalidParameterError, match="linearly independent"):
         ForceControl(panda, [0.0, 0.0, -5.0], 1e-4, directions=[[0.0, 0.0, 1.0], [0.0, 0.0, 2.0]])
-    with pytest.raises(InvalidParameterError, match="inertia .* positive definite"):
+    with pytest.raises(InvalidParameterError, match=r"inertia .* positive definite"):
         CartesianImpedance(panda, [500.0] * 6, inertia=[1.0] * 5 + [0.0])
     with pytest.raises(InvalidParameterError, match="not a pose"):
         CartesianImpedance(panda, [500.0] * 6).set_target(2.0 * np.eye(4))
