@@ -246,3 +246,16 @@ def test_the_generated_update_agrees_with_the_kernel_one() -> None:
     assert (fast.collision.t, fast.collision.joint) == (plain.collision.t, plain.collision.joint)
     with pytest.raises(InvalidParameterError, match="exact"):
         MomentumObserver(armctl.Dynamics(m, compile=True), 30.0, discretization="euler")
+
+
+@pytest.mark.parametrize("compile", [False, True])
+def test_a_refused_sample_leaves_the_observer_as_it_was(compile: bool) -> None:
+    dyn = armctl.Dynamics(model("panda"), compile=compile)
+    rng = np.random.default_rng(5)
+    samples = [rng.uniform(-1.0, 1.0, (3, 7)) for _ in range(6)]
+    clean, hit = MomentumObserver(dyn, 20.0, compile=compile), MomentumObserver(dyn, 20.0, compile=compile)
+    for k, (q, qd, tau) in enumerate(samples):
+        if k == 3:
+            with pytest.raises(NonFiniteError):
+                hit.update(k * 1e-3 - 5e-4, q, np.full(7, np.nan), tau)
+        np.testing.assert_array_equal(hit.update(k * 1e-3, q, qd, tau), clean.update(k * 1e-3, q, qd, tau))

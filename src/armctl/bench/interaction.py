@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from armctl.bench import force_tracking, interaction_borders, observer_tradeoff
+from armctl.bench import force_tracking, interaction_borders, interaction_speed, observer_tradeoff
 
 OUTCOME_STYLE = {"stable": ("o", "tab:green"), "chatter": ("x", "tab:red"), "diverged": ("s", "black")}
 
@@ -59,6 +59,7 @@ def run(quick: bool = False) -> dict[str, Any]:
         "impedance_map": interaction_borders.impedance_map(quick),
         "observer": observer_tradeoff.run(quick),
         "collision": collision_traces(),
+        "observer_speed": interaction_speed.observer_rows(*((100, 15) if quick else (200, 41))),
     }
 
 
@@ -164,7 +165,16 @@ def tables(data: dict[str, Any]) -> list[Any]:
         delay = text("false alarm") if r["false_alarm"] else num(r["delay"], ".1f", 1e3)
         obs.rows.append([num(r["gain"], "g"), num(r["noise"]), num(r["noise_predicted"]), num(r["error"]), delay,
                          num(r["lag_delay"], ".1f", 1e3)])  # fmt: skip
-    return [force, border, obs]
+    speed = Table(
+        "Momentum observer: one update(t, q, qd, tau_applied) on the Panda against one raw RNEA in the same run",
+        ["variant", "update [µs]", "RNEA [µs]", "ratio", "ratio quartiles"],
+    )
+    for name, f in data["observer_speed"].items():
+        if isinstance(f, dict):
+            q1, q3 = f["ratio_iqr"]
+            speed.rows.append([text(name), num(f["step_s"], ".2f", 1e6), num(f["rnea_s"], ".2f", 1e6),
+                               num(f["ratio"], ".2f"), text(f"[{q1:.2f}, {q3:.2f}]")])  # fmt: skip
+    return [force, border, obs, speed]
 
 
 def summary(data: dict[str, Any]) -> str:
@@ -199,4 +209,5 @@ def summary(data: dict[str, Any]) -> str:
             f"  {method:12s} {d['contact_at']:.3f} {d['detected_at']:.3f}  {d['peak_force']:6.1f} "
             f"{d['force_after']:6.2f} {d['push_impulse']:7.3f}"
         )
+    lines.append(interaction_speed.report({"model": "panda", **data["observer_speed"]}))
     return "\n".join(lines)

@@ -1,8 +1,8 @@
 """The momentum observer's update as one call of generated C code (for ``MomentumObserver(..., compile=True)``).
 
 One CasADi function of the stacked input x = [q; q̇; τ_{k−1}] and the observer's state s = [r; p; β; γ; h] gives
-y = [r_k; p_k; β_k; e; z], with e = max_j (|r_k,j| − θ_j) the largest excess over the collision thresholds θ and
-z = 0·Σ r_k (0 when r_k is finite, NaN otherwise):
+y = [r_k; p_k; β_k] and a flag e = max_j (|r_k,j| − θ_j) + 0·Σ r_k: the largest excess over the collision
+thresholds θ, NaN when r_k is not finite (so that one comparison, ``not e <= 0``, tells both):
 
     p = M(q) q̇ = RNEA(q, 0, q̇) without gravity,      β = ∂T/∂q − g(q) − τ_f(q̇) = C(q, q̇)ᵀ q̇ − g(q) − τ_f(q̇)
     d = (h τ + ½ h (β + β_prev) − p + p_prev) / h,   r_k = γ r + (1 − γ) d
@@ -32,7 +32,7 @@ from armctl.dynamics.kernel import Kernel
 from armctl.model.robot import RobotModel
 
 #: bumped when the generated code changes
-_CODE_VERSION = 4
+_CODE_VERSION = 5
 NAME = "momentum_observer_step"
 
 
@@ -53,14 +53,14 @@ def symbolic_step(model: RobotModel) -> cs.Function:
     d = (h * tau + 0.5 * h * (beta + beta_prev) - p + p_prev) / h
     r_new = gamma * r + (1.0 - gamma) * d + c[4 * n] * cs.sum1(x)
     excess = cs.mmax(cs.fabs(r_new) - c[3 * n : 4 * n])
-    flags = cs.vertcat(excess, c[4 * n] * cs.sum1(r_new))
-    return cs.Function(NAME, [x, s, c], [cs.vertcat(r_new, p, beta), flags])
+    flag = excess + c[4 * n] * cs.sum1(r_new)
+    return cs.Function(NAME, [x, s, c], [cs.vertcat(r_new, p, beta), flag])
 
 
 class CompiledStep:
     """The generated update bound to buffers of its own, double-buffered so that nothing is copied between steps:
     call :attr:`x` ← [q; q̇; τ], then ``runs[k]()``, which reads the state ``states[k]`` = [r; p; β; γ; h] and
-    writes the new [r_k; p_k; β_k] into ``states[1 − k]``'s head and (e, z) into :attr:`flags`; the next step
+    writes the new [r_k; p_k; β_k] into ``states[1 − k]``'s head and e into :attr:`flags`; the next step
     uses k ← 1 − k. γ and h are written into both states when the period changes.
 
     Parameters
@@ -102,7 +102,7 @@ class CompiledStep:
             c[: 3 * n] = np.concatenate((ft.viscous, ft.coulomb_mean, ft.coulomb_offset))
         c[3 * n : 4 * n] = np.inf if thresholds is None else thresholds
         self.x = np.zeros(3 * n)
-        self.flags = np.zeros(2)
+        self.flags = np.zeros(1)
         self.states = (np.zeros(4 * n + 1), np.zeros(4 * n + 1))
         self.heads = tuple(st[: 3 * n] for st in self.states)
         self.residuals = tuple(st[:n] for st in self.states)
@@ -116,6 +116,8 @@ class CompiledStep:
             bufs.append(buf)
             runs.append(run)
         self.runs: tuple[Callable[[], None], ...] = tuple(runs)
+        #: per side k: (its run, the residual it writes, the input, the flag array)
+        self.sides = tuple((runs[k], self.residuals[1 - k], self.x, self.flags) for k in (0, 1))
         self._bufs = bufs  # CasADi keeps the arrays' addresses, not the arrays: they live as long as this object
 
     def set_period(self, gamma: FloatArray, h: float) -> None:

@@ -184,6 +184,7 @@ class MomentumObserver:
         self._beta: FloatArray | None = None
         self._h = -1.0  # the period the coefficients are for (none yet)
         self._gamma = np.zeros(self.n)
+        self._lag_gain = np.ones(self.n)
         #: the last estimate r of τ_ext [N·m] (the array the last update returned)
         self.residual: FloatArray = np.zeros(self.n)
         self._side = 0  # the compiled code's state buffer in use
@@ -230,8 +231,8 @@ class MomentumObserver:
             p = M(q) q̇ [N·m·s] and β = C(q, q̇)ᵀ q̇ − g(q) (− τ_f(q̇) when the observer knows the friction) [N·m].
         """
         k = self.dynamics.kernel
-        p = k.mass(q) @ qd
-        beta = k.coriolis(q, qd).T @ qd
+        p = k.mass(q).dot(qd)  # (ndarray.dot: the matmul operator costs more on the arrays Pinocchio returns)
+        beta = qd.dot(k.coriolis(q, qd))  # Cᵀ q̇
         beta -= k.gravity(q)
         if self.friction and k.friction.any:
             beta -= k.friction_torque(qd)
@@ -326,9 +327,9 @@ class MomentumObserver:
         d -= p
         d += self._p
         d *= 1.0 / h
-        r = self.residual - d
-        r *= self._gamma
-        r += d  # r_k = γ r_{k−1} + (1 − γ) d_k
+        r = self._gamma * self.residual
+        d *= self._lag_gain
+        r += d  # r_k = γ r_{k−1} + (1 − γ) d_k (not γ(r − d) + d: r − d → 0 would reach subnormal floats)
         if not np.isfinite(r).all():
             raise NonFiniteError(f"the observer's residual is not finite ({r}) at t = {t}", value=r)
         self._t, self._p, self._beta = t, p, beta
@@ -338,16 +339,18 @@ class MomentumObserver:
         return r
 
     def _compiled_step(self, t: float, q: FloatArray, qd: FloatArray, tau: FloatArray) -> FloatArray:
-        code = self._code
         k = self._side
-        np.concatenate((q, qd, tau), out=code.x)
-        if self._t is None:  # r = 0 and (p, β) of the first sample: one call with γ = 1, h = 1
+        run, out, x, flags = self._code.sides[k]
+        np.concatenate((q, qd, tau), out=x)
+        try:
+            h = t - self._t  # type: ignore[operator]  # None before the first sample
+        except TypeError:  # None: the first sample, r = 0 and (p, β) from one call with γ = 1, h = 1
+            code = self._code
             code.states[k][:] = 0.0
             code.set_period(np.ones(self.n), 1.0)
-            code.runs[k]()
+            run()
             self._t, self._h, self._side = t, -1.0, 1 - k
             return self.residual.copy()
-        h = t - self._t
         if abs(h - self._h) > 1e-9 * h:  # a new period (not the rounding of t_k = k·T)
             if not h > 0.0:
                 raise InvalidParameterError(
@@ -356,15 +359,17 @@ class MomentumObserver:
                     value=t,
                 )
             self._step_changed(h)
-            code.set_period(self._gamma, h)
-        code.runs[k]()
-        r = code.residuals[1 - k].copy()
-        flags = code.flags
-        if flags[1] != 0.0:  # 0·Σr: NaN when r is not finite
-            raise NonFiniteError(f"the observer's residual is not finite ({r}) at t = {t}", value=r)
+            self._code.set_period(self._gamma, h)
+        run()
+        r = out.copy()
+        if not flags[0] <= 0.0:  # a residual above its threshold, or NaN: a residual that is not finite
+            if not np.isfinite(r).all():  # (the state stays that of the last good sample: side k)
+                raise NonFiniteError(f"the observer's residual is not finite ({r}) at t = {t}", value=r)
+            self._t, self._side, self.residual = t, 1 - k, r
+            if self.collision is None:
+                self._detect(t, r)
+            return r
         self._t, self._side, self.residual = t, 1 - k, r
-        if flags[0] > 0.0 and self.collision is None:  # some |r_j| above its threshold
-            self._detect(t, r)
         return r
 
     def _step_changed(self, h: float) -> None:
@@ -374,6 +379,7 @@ class MomentumObserver:
             self._gamma = np.exp(-self.gain * h)
         else:
             self._gamma = 1.0 - self.gain * h
+        self._lag_gain = 1.0 - self._gamma
 
     def _detect(self, t: float, r: FloatArray) -> None:
         assert self.thresholds is not None
