@@ -14,6 +14,7 @@ ARGS = {
     "tune_gains.py": ["--out", "{tmp}/presets"],
     "closed_loop_simulation.py": ["--out", "{tmp}/out"],
     "interaction_control.py": ["--out", "{tmp}/out"],
+    "collision_detection.py": ["--out", "{tmp}/out"],
 }
 
 
