@@ -33,41 +33,18 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from armctl._checks import FLOAT, FloatArray, boolean, per_joint, readonly, scalar, vector
+from armctl.controllers.collision import Collision, explaining_wrench, isolate
 from armctl.dynamics.base import Dynamics
-from armctl.errors import InvalidParameterError, NonFiniteError, SingularConfigurationError
+from armctl.errors import InvalidParameterError, NonFiniteError
 
 #: the discretizations of the residual's first-order lag (see the module)
 DISCRETIZATIONS = ("exact", "euler")
-
-
-@dataclass(frozen=True)
-class Collision:
-    """A detected collision: truthy, so that ``if obs.collision:`` reads as it says.
-
-    Attributes
-    ----------
-    t : float
-        The update time it was detected at [s].
-    joint : int
-        The last joint (0-based) whose residual exceeded its threshold: the collision is on the link it moves or
-        beyond.
-    link : str
-        That joint's name (the name of the link frame it moves).
-    residual : ndarray, shape (n,)
-        The residual at detection [N·m].
-    """
-
-    t: float
-    joint: int
-    link: str
-    residual: FloatArray
 
 
 class MomentumObserver:
@@ -383,12 +360,9 @@ class MomentumObserver:
 
     def _detect(self, t: float, r: FloatArray) -> None:
         assert self.thresholds is not None
-        above = np.flatnonzero(np.abs(r) > self.thresholds)
-        if above.size:
-            j = int(above[-1])
-            self.collision = Collision(t=t, joint=j, link=self._names[j], residual=readonly(r.copy()))
-            if self.on_collision is not None:
-                self.on_collision(self, self.collision)
+        self.collision = isolate(t, r, self.thresholds, self._names)
+        if self.collision is not None and self.on_collision is not None:
+            self.on_collision(self, self.collision)
 
     # ------------------------------------------------------------------------------------- the wrench
     def wrench(self, q: ArrayLike, frame: str | None = None, rcond: float = 1e-3) -> FloatArray:
@@ -421,17 +395,4 @@ class MomentumObserver:
         """
         q = vector(q, self.n, "q")
         rcond = scalar(rcond, "rcond", positive=True)
-        jac = self.dynamics.jacobian(q, frame)
-        u, s, vt = np.linalg.svd(jac, full_matrices=False)  # J = U S Vᵀ, U (6×m)
-        m = min(6, self.n)
-        if s[m - 1] <= rcond * s[0]:
-            raise SingularConfigurationError(
-                f"the Jacobian of {frame or 'the tool frame'} is singular at q = {q.tolist()} (σ_min/σ_max = "
-                f"{s[m - 1] / s[0]:.2e} <= {rcond:g}): the wrench along the lost direction does not reach the "
-                f"joints and cannot be estimated there; read the joint torques (obs.residual) instead",
-                value=q,
-                sigma_min=float(s[m - 1]),
-                direction=u[:, m - 1].copy(),
-            )
-        # Jᵀ h = r  →  h = U S⁻¹ Vᵀ r (the minimum-norm solution)
-        return np.asarray(u[:, :m] @ ((vt[:m] @ self.residual) / s[:m]), dtype=float)
+        return explaining_wrench(self.dynamics.jacobian(q, frame), self.residual, rcond, frame, q)
