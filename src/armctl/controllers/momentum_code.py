@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable
+from typing import Any
 
 import casadi as cs
 import numpy as np
@@ -29,6 +30,7 @@ from armctl._checks import FloatArray
 from armctl.dynamics import codegen, recursive
 from armctl.dynamics.casadi_buffer import buffer_of, view
 from armctl.dynamics.kernel import Kernel
+from armctl.errors import InvalidParameterError, NonFiniteError
 from armctl.model.robot import RobotModel
 
 #: bumped when the generated code changes
@@ -126,3 +128,57 @@ class CompiledStep:
         for st in self.states:
             st[3 * n : 4 * n] = gamma
             st[4 * n] = h
+
+
+class CompiledUpdate:
+    """The observer's update on :class:`CompiledStep` (a base of :class:`~armctl.controllers.MomentumObserver`,
+    which sets ``_code`` and binds ``step`` to :meth:`_compiled_step` when it is compiled)."""
+
+    n: int
+    residual: FloatArray
+    collision: Any
+    _code: Any
+    _side: int
+    _t: float | None
+    _h: float
+    _gamma: FloatArray
+
+    def _step_changed(self, h: float) -> None:  # pragma: no cover - the observer's
+        raise NotImplementedError
+
+    def _detect(self, t: float, r: FloatArray) -> None:  # pragma: no cover - the observer's
+        raise NotImplementedError
+
+    def _compiled_step(self, t: float, q: FloatArray, qd: FloatArray, tau: FloatArray) -> FloatArray:
+        k = self._side
+        run, out, x, flags = self._code.sides[k]
+        np.concatenate((q, qd, tau), out=x)
+        try:
+            h = t - self._t  # type: ignore[operator]  # None before the first sample
+        except TypeError:  # None: the first sample, r = 0 and (p, β) from one call with γ = 1, h = 1
+            code = self._code
+            code.states[k][:] = 0.0
+            code.set_period(np.ones(self.n), 1.0)
+            run()
+            self._t, self._h, self._side = t, -1.0, 1 - k
+            return self.residual.copy()
+        if abs(h - self._h) > 1e-9 * h:  # a new period (not the rounding of t_k = k·T)
+            if not h > 0.0:
+                raise InvalidParameterError(
+                    f"observer updates must move forward in time: t = {t} after t = {self._t} (call reset() to "
+                    f"restart)",
+                    value=t,
+                )
+            self._step_changed(h)
+            self._code.set_period(self._gamma, h)
+        run()
+        r = out.copy()
+        if not flags[0] <= 0.0:  # a residual above its threshold, or NaN: a residual that is not finite
+            if not np.isfinite(r).all():  # (the state stays that of the last good sample: side k)
+                raise NonFiniteError(f"the observer's residual is not finite ({r}) at t = {t}", value=r)
+            self._t, self._side, self.residual = t, 1 - k, r
+            if self.collision is None:
+                self._detect(t, r)
+            return r
+        self._t, self._side, self.residual = t, 1 - k, r
+        return r

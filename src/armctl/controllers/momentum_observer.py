@@ -15,13 +15,9 @@ its integral is exactly h τ_{k−1}; β is integrated by the trapezoidal rule. 
 
     d_k = (h τ_{k−1} + ½ h (β_k + β_{k−1}) − (p_k − p_{k−1})) / h,
 
-and the residual is the first-order lag sampled exactly under a held input (``discretization="exact"``):
-
-    r_k = γ r_{k−1} + (1 − γ) d_k,     γ = exp(−K_O h),
-
-stable for every K_O > 0 (γ ∈ (0, 1)). The textbook's forward-Euler sum (``discretization="euler"``) gives
-r_k = (1 − K_O h) r_{k−1} + K_O h d_k, whose pole 1 − K_O h leaves the unit circle when K_O h ≥ 2: that form
-needs K_O < 2/h (and K_O ≤ 1/h not to ring), which the observer checks.
+and the residual is the first-order lag r_k = γ r_{k−1} + (1 − γ) d_k, sampled exactly (γ = exp(−K_O h), stable for
+every gain) or by the textbook's forward-Euler sum (γ = 1 − K_O h, unstable for K_O h ≥ 2, which the observer
+refuses): :mod:`armctl.controllers.residual_lag`.
 
 Collision detection and isolation: a collision is declared at the first update where |r_j| exceeds the
 threshold of some joint j; the last such joint along the chain names the link that was hit (an external torque
@@ -40,14 +36,13 @@ from numpy.typing import ArrayLike
 
 from armctl._checks import FLOAT, FloatArray, boolean, per_joint, readonly, scalar, vector
 from armctl.controllers.collision import Collision, explaining_wrench, isolate
+from armctl.controllers.momentum_code import CompiledUpdate
+from armctl.controllers.residual_lag import DISCRETIZATIONS, check_lag_gain, lag_pole
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError, NonFiniteError
 
-#: the discretizations of the residual's first-order lag (see the module)
-DISCRETIZATIONS = ("exact", "euler")
 
-
-class MomentumObserver:
+class MomentumObserver(CompiledUpdate):
     """The generalized-momentum observer of the external joint torques (see the module for the equations).
 
     Parameters
@@ -185,13 +180,7 @@ class MomentumObserver:
         InvalidParameterError
             The bound is violated: it names the largest gain the period allows.
         """
-        if self.discretization == "euler" and float(self.gain.max()) * h >= 2.0:
-            raise InvalidParameterError(
-                f"observer gain K_O = {float(self.gain.max()):g} 1/s is too large for the period h = {h:g} s: the "
-                f"forward-Euler residual r_k = (1 − K_O h) r_(k−1) + K_O h d_k is unstable for K_O h >= 2; use "
-                f"K_O < {2.0 / h:g} 1/s (<= {1.0 / h:g} not to ring), or discretization='exact'",
-                value=float(self.gain.max()),
-            )
+        check_lag_gain(self.gain, h, self.discretization)
 
     # ------------------------------------------------------------------------------------ the update
     def momentum_terms(self, q: FloatArray, qd: FloatArray) -> tuple[FloatArray, FloatArray]:
@@ -315,47 +304,10 @@ class MomentumObserver:
             self._detect(t, r)
         return r
 
-    def _compiled_step(self, t: float, q: FloatArray, qd: FloatArray, tau: FloatArray) -> FloatArray:
-        k = self._side
-        run, out, x, flags = self._code.sides[k]
-        np.concatenate((q, qd, tau), out=x)
-        try:
-            h = t - self._t  # type: ignore[operator]  # None before the first sample
-        except TypeError:  # None: the first sample, r = 0 and (p, β) from one call with γ = 1, h = 1
-            code = self._code
-            code.states[k][:] = 0.0
-            code.set_period(np.ones(self.n), 1.0)
-            run()
-            self._t, self._h, self._side = t, -1.0, 1 - k
-            return self.residual.copy()
-        if abs(h - self._h) > 1e-9 * h:  # a new period (not the rounding of t_k = k·T)
-            if not h > 0.0:
-                raise InvalidParameterError(
-                    f"observer updates must move forward in time: t = {t} after t = {self._t} (call reset() to "
-                    f"restart)",
-                    value=t,
-                )
-            self._step_changed(h)
-            self._code.set_period(self._gamma, h)
-        run()
-        r = out.copy()
-        if not flags[0] <= 0.0:  # a residual above its threshold, or NaN: a residual that is not finite
-            if not np.isfinite(r).all():  # (the state stays that of the last good sample: side k)
-                raise NonFiniteError(f"the observer's residual is not finite ({r}) at t = {t}", value=r)
-            self._t, self._side, self.residual = t, 1 - k, r
-            if self.collision is None:
-                self._detect(t, r)
-            return r
-        self._t, self._side, self.residual = t, 1 - k, r
-        return r
-
     def _step_changed(self, h: float) -> None:
         self.check_gain(h)
         self._h = h
-        if self.discretization == "exact":
-            self._gamma = np.exp(-self.gain * h)
-        else:
-            self._gamma = 1.0 - self.gain * h
+        self._gamma = lag_pole(self.gain, h, self.discretization)
         self._lag_gain = 1.0 - self._gamma
 
     def _detect(self, t: float, r: FloatArray) -> None:
