@@ -25,6 +25,7 @@ from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray, boolean, nonnegative_vector
 from armctl.controllers.base import Controller
+from armctl.controllers.collision import explaining_wrench
 from armctl.controllers.momentum_observer import MomentumObserver
 from armctl.errors import InvalidParameterError, SingularConfigurationError
 from armctl.references import Reference
@@ -126,7 +127,7 @@ class CollisionReaction(Controller):
         log: dict[str, Any] = {"residual": r, "collision": 1.0 if hit else 0.0}
         if self.log_wrench:
             try:
-                log["wrench_estimate"] = obs.wrench(q)
+                log["wrench_estimate"] = explaining_wrench(obs.dynamics.kernel.jacobian(q, None), r, 1e-3)
             except SingularConfigurationError:
                 log["wrench_estimate"] = self._nan6
         self.last_log = log

@@ -23,12 +23,9 @@ import os
 from collections.abc import Callable
 from typing import Any
 
-import casadi as cs
 import numpy as np
 
 from armctl._checks import FloatArray
-from armctl.dynamics import codegen, recursive
-from armctl.dynamics.casadi_buffer import buffer_of, view
 from armctl.dynamics.kernel import Kernel
 from armctl.errors import InvalidParameterError, NonFiniteError
 from armctl.model.robot import RobotModel
@@ -38,9 +35,13 @@ _CODE_VERSION = 5
 NAME = "momentum_observer_step"
 
 
-def symbolic_step(model: RobotModel) -> cs.Function:
+def symbolic_step(model: RobotModel) -> Any:
     """The CasADi function (x, s, c) → y of the module (c = [F_v; F̄_c; δ; θ; 0]: the friction's coefficients,
     the thresholds and the zero that carries non-finite inputs)."""
+    import casadi as cs  # (not imported by ``import armctl``)
+
+    from armctl.dynamics import recursive
+
     n = model.n
     x, s, c = cs.SX.sym("x", 3 * n), cs.SX.sym("s", 3 * n + n + 1), cs.SX.sym("c", 4 * n + 1)
     q, qd, tau = x[:n], x[n : 2 * n], x[2 * n :]
@@ -89,6 +90,9 @@ class CompiledStep:
         thresholds: FloatArray | None,
         cache_dir: str | os.PathLike[str] | None = None,
     ) -> None:
+        from armctl.dynamics import codegen
+        from armctl.dynamics.casadi_buffer import buffer_of, view
+
         model = kernel.model
         self.n = n = model.n
         fn = codegen.cached(
