@@ -50,6 +50,11 @@ class FrameTarget:
             self.holder = TargetHolder(self.holder.owner, self.holder.value_shape, self.holder.rate)
             self._held = False
 
+    def hold(self, pose: FloatArray) -> None:
+        """Hold ``pose`` (4×4; its position for 3 axes) until :meth:`reset`, as the first call does unset."""
+        self.holder.set(np.array(pose) if self.axes == 6 else np.array(pose[:3, 3]))
+        self._held = True
+
     def at(self, t: float, fk: FrameKinematics) -> tuple[FloatArray, FloatArray, FloatArray]:
         """(value, velocity, acceleration) at t [s]; the first call without a target holds the frame's pose."""
         if not self.holder.is_set:
