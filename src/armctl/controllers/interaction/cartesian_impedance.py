@@ -55,10 +55,9 @@ class CartesianImpedance(Controller):
         Compensate the model's joint friction τ_f(q̇) (default True).
     compile : bool or "auto", optional
         With a given ``damping`` and no ``inertia``, evaluate the law in one call of generated C code
-        (:mod:`~armctl.controllers.interaction.generated`; a target acceleration, or a singular configuration,
-        takes the NumPy path at that step): ``"auto"`` (the default) where the dynamics are Pinocchio's and a
-        C compiler builds it (else NumPy, with a :class:`~armctl.errors.PerformanceWarning` once), True (or an
-        error), False (NumPy).
+        (:mod:`~armctl.controllers.interaction.generated`; at a singular configuration the NumPy path names it):
+        ``"auto"`` (the default) where the dynamics are Pinocchio's and a C compiler builds it (else NumPy, with a
+        :class:`~armctl.errors.PerformanceWarning` once), True (or an error), False (NumPy).
 
     Raises
     ------
@@ -150,6 +149,8 @@ class CartesianImpedance(Controller):
             if a is not None:
                 readonly(a)
         self._generated = self._generated_law(compile)
+        kernel_friction = dynamics.kernel.friction
+        self._friction_terms = kernel_friction if self.friction and kernel_friction.any else None
 
     def _generated_law(self, mode: bool | str) -> Any:
         """The generated law (a GeneratedImpedance) or None: the NumPy path."""
@@ -227,14 +228,14 @@ class CartesianImpedance(Controller):
             if not target.holder.is_set:
                 target.hold(self.dynamics.kernel.frame_pose(q, self.frame))
             value, vel, acc = target.holder.at(t)
-            if not acc.any():
-                posture = self.posture if self.posture is not None else ref.q
-                tau = gen.torque(q, qd, value, vel, posture)
-                if all_finite(tau):  # NaN at a singular configuration: the NumPy path names it
-                    if self.friction and self.dynamics.kernel.friction.any:
-                        tau += self.dynamics.kernel.friction.torque(qd)
-                    self.last_log = {"error": gen.error.copy(), "force": gen.force.copy()}
-                    return tau
+            out = gen.run(q, qd, value, vel, acc, self.posture if self.posture is not None else ref.q)
+            if all_finite(out):  # NaN at a singular configuration: the NumPy path names it
+                n, m = self.n, self.axes
+                tau = out[:n]
+                if self._friction_terms is not None:
+                    tau += self._friction_terms.torque(qd)
+                self.last_log = {"error": out[n : n + m], "force": out[n + m :]}
+                return tau
         return self._numpy_law(t, q, qd, ref)
 
     def _numpy_law(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:

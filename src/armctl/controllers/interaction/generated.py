@@ -4,7 +4,7 @@ constant damping and no inertia shaping (``CartesianImpedance(..., compile=...)`
 At (q, q̇), the target (p_d, R_d, v_d) and the posture q_n, one call of code generated with CasADi from the model
 (its numbers built in) evaluates
 
-    τ = Jᵀ F + C q̇ + g  [+ Nᵀ τ_n],     F = K e + D (v_d − J q̇)
+    τ = Jᵀ F + C q̇ + g  [+ Nᵀ τ_n],     F = K e + D (v_d − J q̇) + Λ a_d
 
 with the frame's kinematics from :mod:`armctl.dynamics.symbolic_frames`, C q̇ + g by Newton–Euler at q̈ = 0 and
 M(q) by composite rigid bodies (:mod:`armctl.dynamics.recursive`), e as the OSC tasks (the rotation error by
@@ -35,7 +35,7 @@ from armctl.dynamics.symbolic_frames import frame_kinematics
 from armctl.model.robot import RobotModel
 
 #: bumped when the generated code changes, so that stale cached libraries are not loaded
-_CODE_VERSION = 2
+_CODE_VERSION = 3
 _NAME = "cartesian_impedance"
 _log = logging.getLogger(__name__)
 
@@ -74,12 +74,13 @@ def _solve(low: list[list[Any]], b: Any) -> Any:
 
 
 def sizes(n: int, axes: int) -> tuple[int, int]:
-    """(inputs, parameters): x = [q; q̇; target (12: p_d, R_d row by row; or 3); v_d; q_n], p = [K; D; K_n; D_n]."""
-    return 2 * n + (12 if axes == 6 else 3) + axes + n, 2 * axes * axes + 2 * n * n
+    """(inputs, parameters): x = [q; q̇; target (the 4×4 pose row by row, or p_d); v_d; a_d; q_n],
+    p = [K; D; K_n; D_n]."""
+    return 2 * n + (16 if axes == 6 else 3) + 2 * axes + n, 2 * axes * axes + 2 * n * n
 
 
 def impedance_function(model: RobotModel, frame: str | None, axes: int, null: bool) -> cs.Function:
-    """The CasADi function of the module: (x, p) → (τ, e, F)."""
+    """The CasADi function of the module: (x, p) → [τ; e; F]."""
     n = model.n
     nx, npar = sizes(n, axes)
     x, par = cs.SX.sym("x", nx), cs.SX.sym("p", npar)
@@ -88,28 +89,28 @@ def impedance_function(model: RobotModel, frame: str | None, axes: int, null: bo
     tf = joint_transforms(model, q)
     pos, rot, jac, _ = frame_kinematics(model, q, qd, frame, tf)
     if axes == 6:
-        p_d, r_d = x[k : k + 3], cs.reshape(x[k + 3 : k + 12], 3, 3).T  # row by row
-        e = cs.vertcat(p_d - pos, rotation_error_sx(r_d, rot))
-        k += 12
+        pose = cs.reshape(x[k : k + 16], 4, 4).T  # row by row
+        e = cs.vertcat(pose[:3, 3] - pos, rotation_error_sx(pose[:3, :3], rot))
+        k += 16
     else:
         e = x[k : k + 3] - pos
         k += 3
         jac = jac[:3, :]
-    v_d, q_n = x[k : k + axes], x[k + axes : k + axes + n]
+    v_d, a_d, q_n = x[k : k + axes], x[k + axes : k + 2 * axes], x[k + 2 * axes : k + 2 * axes + n]
     m2 = axes * axes
     stiff, damp = cs.reshape(par[:m2], axes, axes), cs.reshape(par[m2 : 2 * m2], axes, axes)
-    force = stiff @ e + damp @ (v_d - jac @ qd)
+    low_m = _cholesky(mass_matrix(model, q, tf))
+    mij = _solve(low_m, jac.T)  # M⁻¹ Jᵀ
+    low_a = _cholesky(jac @ mij)  # J M⁻¹ Jᵀ = Λ⁻¹
+    force = stiff @ e + damp @ (v_d - jac @ qd) + _solve(low_a, a_d)  # K e + D ė + Λ a_d
     tau = jac.T @ force + inverse_dynamics(model, q, qd, cs.SX.zeros(n), transforms=tf)
     if null:
         kn = cs.reshape(par[2 * m2 : 2 * m2 + n * n], n, n)
         dn = cs.reshape(par[2 * m2 + n * n :], n, n)
         tau_n = kn @ (q_n - q) - dn @ qd
-        low_m = _cholesky(mass_matrix(model, q, tf))
-        mij = _solve(low_m, jac.T)  # M⁻¹ Jᵀ
-        low_a = _cholesky(jac @ mij)  # J M⁻¹ Jᵀ
         z = _solve(low_a, mij.T @ tau_n)  # Λ J M⁻¹ τ_n
         tau = tau + tau_n - jac.T @ z
-    return cs.Function(_NAME, [x, par], [tau, e, force])
+    return cs.Function(_NAME, [x, par], [cs.vertcat(tau, e, force)])
 
 
 def _tag(model: RobotModel, frame: str | None, axes: int, null: bool) -> str:
@@ -153,13 +154,12 @@ class GeneratedImpedance:
                 codegen.cache_root(cache_dir),
             )
         nx, npar = sizes(model.n, axes)
-        self.inp, self.par, self.out = np.zeros(nx), np.zeros(npar), np.zeros(model.n)
-        self.error, self.force = np.zeros(axes), np.zeros(axes)
+        self.n = model.n
+        self.inp, self.par, self.out = np.zeros(nx), np.zeros(npar), np.zeros(model.n + 2 * axes)
         buf, self._run = buffer_of(fn)
         buf.set_arg(0, view(self.inp))
         buf.set_arg(1, view(self.par))
-        for k, res in enumerate((self.out, self.error, self.force)):
-            buf.set_res(k, view(res))
+        buf.set_res(0, view(self.out))
         self._buf = buf  # keeps the binding alive
 
     def __reduce__(self) -> tuple[Any, ...]:
@@ -174,15 +174,17 @@ class GeneratedImpedance:
             parts += [np.zeros(self.par.size - 2 * stiffness.size)]
         np.concatenate(parts, out=self.par)
 
-    def torque(
-        self, q: FloatArray, qd: FloatArray, value: FloatArray, velocity: FloatArray, posture: FloatArray
+    def run(
+        self,
+        q: FloatArray,
+        qd: FloatArray,
+        value: FloatArray,
+        velocity: FloatArray,
+        acceleration: FloatArray,
+        posture: FloatArray,
     ) -> FloatArray:
-        """τ (a new array) at (q, q̇) for the target ``value`` (4×4 or (3,)), ``velocity`` and ``posture``;
-        ``error`` and ``force`` then hold e and F (overwritten by the next call)."""
-        if self.axes == 6:
-            target = np.concatenate((value[:3, 3], value[:3, :3].ravel()))
-        else:
-            target = value
-        np.concatenate((q, qd, target, velocity, posture), out=self.inp)
+        """[τ; e; F] (a new array) at (q, q̇) for the target ``value`` (4×4 or (3,)), ``velocity``,
+        ``acceleration`` and ``posture``."""
+        np.concatenate((q, qd, value.ravel(), velocity, acceleration, posture), out=self.inp)
         self._run()
         return self.out.copy()
