@@ -257,7 +257,7 @@ class CartesianImpedance(Controller):
             if self.inertia is None or self.force is None:
                 force = spring + lam @ acc if acc.any() else spring
             else:
-                h = self.force.wrench(self, t, q, qd, self.frame, fk.position)[:m]
+                h = self.force.wrench(self, t, q, qd, self.frame)[:m]
                 force = lam @ (acc + np.linalg.solve(self.inertia, spring - h) - fk.drift[:m]) + h
                 log["wrench"] = h
             tau = jac.T @ force + state.bias

@@ -17,14 +17,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, boolean, real_array, vector
+from armctl._checks import FloatArray, boolean, readonly, real_array, vector
 from armctl.controllers.base import Controller
 from armctl.controllers.integral import ErrorIntegral
 from armctl.controllers.interaction.force_source import ForceInput
 from armctl.controllers.interaction.gains import symmetric_psd
 from armctl.controllers.interaction.inner import InnerMotion
 from armctl.controllers.interaction.task_space import FrameTarget
-from armctl.controllers.osc.state import ModelEvaluator
 from armctl.controllers.osc.tasks.target import Trajectory
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError
@@ -62,7 +61,7 @@ class ForceLoop(Controller):
     Parameters
     ----------
     dynamics, force, force_gain, integral_gain, frame, force_source, inner, kp, kd, posture, posture_kp,
-    compensate
+    compensate, compile
         As in :class:`~armctl.controllers.ForceControl`.
     directions : ndarray, shape (3, 3)
         P.
@@ -85,6 +84,7 @@ class ForceLoop(Controller):
         posture: ArrayLike | None,
         posture_kp: ArrayLike,
         compensate: bool,
+        compile: bool | str,
     ) -> None:
         super().__init__(dynamics)
         owner = type(self).__name__
@@ -93,12 +93,11 @@ class ForceLoop(Controller):
         self.force_target = force_target(force)
         self.force_gain = symmetric_psd(force_gain, (3,), "force_gain", "m/N")
         self.integral_gain = symmetric_psd(integral_gain, (3,), "integral_gain", "m/(N·s)")
-        self.directions = directions
-        self.evaluator = ModelEvaluator(dynamics)
-        self.evaluator.check_frame(frame)
+        self.directions = readonly(np.array(directions))
+        self._free = readonly(np.eye(3) - self.directions)
         self.frame = frame
         self.target = FrameTarget(owner, 6)
-        self.inner = InnerMotion(dynamics, inner, kp, kd, posture_kp)
+        self.inner = InnerMotion(dynamics, inner, kp, kd, posture_kp, frame=frame, compile=compile)
         self.posture = None if posture is None else vector(posture, self.n, "posture")
         self.compensate = boolean(compensate, "compensate")
         self._integral = ErrorIntegral(3)
@@ -135,21 +134,21 @@ class ForceLoop(Controller):
         self.force_input.reset()
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
-        state = self.evaluator.evaluate(q, qd)
-        fk = state.frame(self.frame)
-        pose, twist, acc = self.target.at(t, fk)
-        h = self.force_input.wrench(self, t, q, qd, self.frame, fk.position)
+        target = self.target
+        if not target.holder.is_set:
+            target.hold(self.dynamics.kernel.frame_pose(q, self.frame))
+        pose, twist, acc = target.holder.at(t)
+        h = self.force_input.wrench(self, t, q, qd, self.frame)
         p = self.directions
-        free = np.eye(3) - p
-        f_d = self.force_target(t)
-        e_f = p @ (f_d - h[:3])
+        e_f = p @ (self.force_target(t) - h[:3])
         x_f = p @ (self.force_gain @ e_f + self.integral_gain @ self._integral.update(t, e_f))
         cmd = pose.copy()
         cmd[:3, 3] += x_f
+        free = self._free
         twist_c, acc_c = twist.copy(), acc.copy()
         twist_c[:3] = free @ twist[:3]
         acc_c[:3] = free @ acc[:3]
         posture = self.posture if self.posture is not None else ref.q
-        tau, e = self.inner.torque(state, fk, cmd, twist_c, acc_c, posture, h if self.compensate else None)
+        tau, e = self.inner.command(q, qd, cmd, twist_c, acc_c, posture, h if self.compensate else None)
         self.last_log = {"force_error": e_f, "offset": x_f, "wrench": h, "error": e}
         return tau

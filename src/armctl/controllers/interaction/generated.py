@@ -40,7 +40,8 @@ _NAME = "cartesian_impedance"
 _log = logging.getLogger(__name__)
 
 
-def _cholesky(a: Any) -> list[list[Any]]:
+def cholesky_factor(a: Any) -> list[list[Any]]:
+    """L (lower, as nested lists of SX) with L Lᵀ = A, written out entry by entry."""
     n = a.shape[0]
     low: list[list[Any]] = [[None] * n for _ in range(n)]
     for i in range(n):
@@ -52,7 +53,7 @@ def _cholesky(a: Any) -> list[list[Any]]:
     return low
 
 
-def _solve(low: list[list[Any]], b: Any) -> Any:
+def cholesky_solve_columns(low: list[list[Any]], b: Any) -> Any:
     """x with L Lᵀ x = b (b a vector or a matrix, column by column)."""
     n = len(low)
     cols = []
@@ -99,16 +100,16 @@ def impedance_function(model: RobotModel, frame: str | None, axes: int, null: bo
     v_d, a_d, q_n = x[k : k + axes], x[k + axes : k + 2 * axes], x[k + 2 * axes : k + 2 * axes + n]
     m2 = axes * axes
     stiff, damp = cs.reshape(par[:m2], axes, axes), cs.reshape(par[m2 : 2 * m2], axes, axes)
-    low_m = _cholesky(mass_matrix(model, q, tf))
-    mij = _solve(low_m, jac.T)  # M⁻¹ Jᵀ
-    low_a = _cholesky(jac @ mij)  # J M⁻¹ Jᵀ = Λ⁻¹
-    force = stiff @ e + damp @ (v_d - jac @ qd) + _solve(low_a, a_d)  # K e + D ė + Λ a_d
+    low_m = cholesky_factor(mass_matrix(model, q, tf))
+    mij = cholesky_solve_columns(low_m, jac.T)  # M⁻¹ Jᵀ
+    low_a = cholesky_factor(jac @ mij)  # J M⁻¹ Jᵀ = Λ⁻¹
+    force = stiff @ e + damp @ (v_d - jac @ qd) + cholesky_solve_columns(low_a, a_d)  # K e + D ė + Λ a_d
     tau = jac.T @ force + inverse_dynamics(model, q, qd, cs.SX.zeros(n), transforms=tf)
     if null:
         kn = cs.reshape(par[2 * m2 : 2 * m2 + n * n], n, n)
         dn = cs.reshape(par[2 * m2 + n * n :], n, n)
         tau_n = kn @ (q_n - q) - dn @ qd
-        z = _solve(low_a, mij.T @ tau_n)  # Λ J M⁻¹ τ_n
+        z = cholesky_solve_columns(low_a, mij.T @ tau_n)  # Λ J M⁻¹ τ_n
         tau = tau + tau_n - jac.T @ z
     return cs.Function(_NAME, [x, par], [cs.vertcat(tau, e, force)])
 
