@@ -58,6 +58,9 @@ class InnerMotion:
     compile : bool or "auto", optional
         Generated code for the law: "auto" where the dynamics are Pinocchio's and a C compiler builds it (else
         NumPy, with a PerformanceWarning once), True (or an error), False (NumPy).
+    force_loop : bool, optional
+        Generate the force loop of :mod:`~armctl.controllers.interaction.force_loop` with the law (its owner
+        then calls the generated code itself; :meth:`command` takes the NumPy path).
 
     Raises
     ------
@@ -77,6 +80,7 @@ class InnerMotion:
         posture_kd: ArrayLike | None = None,
         frame: str | None = None,
         compile: bool | str = "auto",
+        force_loop: bool = False,
     ) -> None:
         if kind not in INNER:
             raise UnknownNameError("inner motion loop", kind, INNER)
@@ -98,6 +102,7 @@ class InnerMotion:
         self.evaluator.check_frame(frame)
         friction = dynamics.kernel.friction
         self._friction = friction if friction.any else None
+        self.force_loop = force_loop
         self.generated = self._generated_law(compile)
 
     def _generated_law(self, mode: bool | str) -> Any:
@@ -114,7 +119,7 @@ class InnerMotion:
         try:
             from armctl.controllers.interaction.generated_inner import GeneratedInner  # CasADi, imported on use
 
-            gen = GeneratedInner(self.dynamics, self.frame, self.kind)
+            gen = GeneratedInner(self.dynamics, self.frame, self.kind, self.force_loop)
         except Exception as exc:  # "auto": the NumPy path, and why (once per process and cause)
             if mode is True:
                 raise
@@ -130,8 +135,15 @@ class InnerMotion:
                 stacklevel=5,
             )
             return None
-        gen.set_gains(self.kp, self.kd, self.posture_kp, self.posture_kd)
+        if not self.force_loop:
+            gen.set_gains(self.kp, self.kd, self.posture_kp, self.posture_kd)
         return gen
+
+    def with_friction(self, tau: FloatArray, qd: FloatArray) -> FloatArray:
+        """τ + τ_f(q̇) (in place) if the model has friction."""
+        if self._friction is not None:
+            tau += self._friction.torque(qd)
+        return tau
 
     def command(
         self,
@@ -158,14 +170,11 @@ class InnerMotion:
             h [N; N·m] to compensate; None: not compensated.
         """
         gen = self.generated
-        if gen is not None:
+        if gen is not None and not self.force_loop:
             out = gen.run(q, qd, pose, twist, acceleration, posture, wrench)
             if all_finite(out):
                 n = self.dynamics.n
-                tau = out[:n]
-                if self._friction is not None:
-                    tau += self._friction.torque(qd)
-                return tau, out[n : n + 6]
+                return self.with_friction(out[:n], qd), out[n : n + 6]
         state = self.evaluator.evaluate(q, qd)
         return self.torque(state, state.frame(self.frame), pose, twist, acceleration, posture, wrench)
 
