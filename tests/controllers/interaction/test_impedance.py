@@ -72,3 +72,26 @@ def test_joint_impedance_yields_the_compliance_of_its_springs(panda: armctl.Dyna
     q_end = res.q[-1]
     # at rest: K (q_d − q) = Jᵀ h at the final configuration
     np.testing.assert_allclose(k * (Q_READY - q_end), panda.jacobian(q_end).T @ push, atol=2e-3)
+
+
+@pytest.mark.parametrize("null", [0.0, 10.0])
+@pytest.mark.parametrize("axes", [6, 3])
+def test_generated_law_matches_the_numpy_law(panda: armctl.Dynamics, null: float, axes: int) -> None:
+    # two implementations: generated C from the recursive algorithms and CasADi, and Pinocchio with NumPy
+    k = [800.0, 600.0, 700.0, 50.0, 40.0, 30.0][:axes]
+    d = [60.0, 50.0, 55.0, 5.0, 4.0, 3.0][:axes]
+    fast = CartesianImpedance(panda, k, d, nullspace_stiffness=null, compile=True)
+    slow = CartesianImpedance(panda, k, d, nullspace_stiffness=null, compile=False)
+    assert fast._generated is not None and slow._generated is None
+    rng = np.random.default_rng(7)
+    pose = panda.frame_pose(Q_READY)
+    target = pose if axes == 6 else pose[:3, 3]
+    twist = np.array([0.1, -0.05, 0.02, 0.3, 0.0, -0.2])[:axes]
+    for c in (fast, slow):
+        c.set_target(target, twist)
+    for _ in range(5):
+        q = Q_READY + rng.uniform(-0.4, 0.4, 7)
+        qd = rng.uniform(-1.0, 1.0, 7)
+        ref = armctl.Reference(Q_READY + rng.uniform(-0.2, 0.2, 7))
+        np.testing.assert_allclose(fast(0.0, q, qd, ref), slow(0.0, q, qd, ref), rtol=1e-9, atol=1e-9)
+        np.testing.assert_allclose(fast.last_log["force"], slow.last_log["force"], rtol=1e-9, atol=1e-9)

@@ -14,7 +14,6 @@ from armctl.controllers.interaction.force_source import ForceInput
 from armctl.controllers.interaction.gains import critical_damping, damping_ratio, symmetric_psd
 from armctl.controllers.interaction.inner import InnerMotion
 from armctl.controllers.interaction.task_space import FrameTarget
-from armctl.controllers.osc.state import ModelEvaluator
 from armctl.controllers.osc.tasks.rotation import rotation_error
 from armctl.controllers.osc.tasks.target import Trajectory
 from armctl.dynamics.base import Dynamics
@@ -51,6 +50,9 @@ class Admittance(Controller):
         K_P,n [1/s²] ≥ 0 of the posture (default 10).
     zeta : float, optional
         ζ ≥ 0 of the default damping; 1: critical.
+    compile : bool or "auto", optional
+        The inner loop as one call of generated C code: "auto" (the default) where the dynamics are Pinocchio's and
+        a C compiler builds it, True (or an error), False (NumPy).
     compensate : bool, optional
         Add Jᵀ h, the measured wrench, to the inner loop's torque (default True), so that the frame follows x_c
         whatever the contact.
@@ -101,6 +103,7 @@ class Admittance(Controller):
         posture_kp: ArrayLike = 10.0,
         zeta: float = 1.0,
         compensate: bool = True,
+        compile: bool | str = "auto",
     ) -> None:
         super().__init__(dynamics)
         owner = type(self).__name__
@@ -118,11 +121,9 @@ class Admittance(Controller):
         self._inv_inertia = np.linalg.inv(self.inertia)
         self.force_input = ForceInput(force_source, owner)
         self.reads = self.force_input.reads  # type: ignore[misc]  # per instance: what it reads depends on the source
-        self.evaluator = ModelEvaluator(dynamics)
-        self.evaluator.check_frame(frame)
         self.frame = frame
         self.target = FrameTarget(owner, 6)
-        self.inner = InnerMotion(dynamics, inner, kp, kd, posture_kp)
+        self.inner = InnerMotion(dynamics, inner, kp, kd, posture_kp, frame=frame, compile=compile)
         self.posture = None if posture is None else vector(posture, self.n, "posture")
         self.compensate = boolean(compensate, "compensate")
         self._state: tuple[FloatArray, FloatArray, FloatArray] | None = None  # p_c, R_c, v_c
@@ -161,10 +162,11 @@ class Admittance(Controller):
         self._t = None
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
-        state = self.evaluator.evaluate(q, qd)
-        fk = state.frame(self.frame)
-        pose_d, twist_d, acc_d = self.target.at(t, fk)
-        h = self.force_input.wrench(self, t, q, qd, self.frame, fk.position)
+        target = self.target
+        if not target.holder.is_set:
+            target.hold(self.dynamics.kernel.frame_pose(q, self.frame))
+        pose_d, twist_d, acc_d = target.holder.at(t)
+        h = self.force_input.wrench(self, t, q, qd, self.frame)
         if self._state is None or self._t is None or t < self._t:
             self._state = (pose_d[:3, 3].copy(), pose_d[:3, :3].copy(), twist_d.copy())
             self._t = t
@@ -184,6 +186,6 @@ class Admittance(Controller):
         cmd = np.eye(4)
         cmd[:3, :3], cmd[:3, 3] = r_c, p_c
         posture = self.posture if self.posture is not None else ref.q
-        tau, e = self.inner.torque(state, fk, cmd, v_c, a_c, posture, h if self.compensate else None)
+        tau, e = self.inner.command(q, qd, cmd, v_c, a_c, posture, h if self.compensate else None)
         self.last_log = {"wrench": h, "compliant": e_c, "error": e}
         return tau

@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, boolean, vector
+from armctl._checks import FloatArray, all_finite, boolean, readonly, vector
 from armctl.controllers.base import Controller
 from armctl.controllers.interaction.force_source import ForceInput
 from armctl.controllers.interaction.gains import critical_damping, damping_ratio, symmetric_psd
@@ -16,6 +16,7 @@ from armctl.controllers.interaction.task_space import FrameTarget, task_inertia
 from armctl.controllers.osc.state import ModelEvaluator
 from armctl.controllers.osc.tasks.target import Trajectory
 from armctl.dynamics.base import Dynamics
+from armctl.errors import InvalidParameterError, PerformanceWarning
 from armctl.references import Reference
 
 
@@ -52,6 +53,11 @@ class CartesianImpedance(Controller):
         ζ ≥ 0, the damping ratio of the default damping; 1: critical.
     friction : bool, optional
         Compensate the model's joint friction τ_f(q̇) (default True).
+    compile : bool or "auto", optional
+        With a given ``damping`` and no ``inertia``, evaluate the law in one call of generated C code
+        (:mod:`~armctl.controllers.interaction.generated`; at a singular configuration the NumPy path names it):
+        ``"auto"`` (the default) where the dynamics are Pinocchio's and a C compiler builds it (else NumPy, with a
+        :class:`~armctl.errors.PerformanceWarning` once), True (or an error), False (NumPy).
 
     Raises
     ------
@@ -62,6 +68,8 @@ class CartesianImpedance(Controller):
         A matrix of the wrong size.
     UnknownNameError
         ``frame`` is not one of the model's (the error lists them).
+    BackendError
+        ``compile=True`` and the generated code cannot be built.
 
     Notes
     -----
@@ -89,7 +97,8 @@ class CartesianImpedance(Controller):
     frequency √((k + k_e)/Λ) that a 1 kHz loop must resolve (stiff targets on stiff surfaces chatter); at a
     singular configuration Λ does not exist (:class:`~armctl.errors.SingularConfigurationError`).
 
-    ``last_log`` holds ``"error"`` e, ``"force"`` F and, with inertia shaping, ``"wrench"`` h.
+    The gains are fixed at construction (read-only arrays). ``last_log`` holds ``"error"`` e, ``"force"`` F and,
+    with inertia shaping, ``"wrench"`` h.
     """
 
     dynamics: Dynamics
@@ -108,6 +117,7 @@ class CartesianImpedance(Controller):
         force_source: Any = "sensor",
         zeta: float = 1.0,
         friction: bool = True,
+        compile: bool | str = "auto",
     ) -> None:
         super().__init__(dynamics)
         self.stiffness = symmetric_psd(stiffness, (6, 3), "stiffness", "N/m; N·m/rad")
@@ -135,6 +145,47 @@ class CartesianImpedance(Controller):
                 self.damping = critical_damping(self.inertia, self.stiffness, self.zeta)
         self.friction = boolean(friction, "friction")
         self._null = bool(np.any(self.nullspace_stiffness) or np.any(self.nullspace_damping))
+        for a in (self.stiffness, self.damping, self.nullspace_stiffness, self.nullspace_damping, self.inertia):
+            if a is not None:
+                readonly(a)
+        self._generated = self._generated_law(compile)
+        kernel_friction = dynamics.kernel.friction
+        self._friction_terms = kernel_friction if self.friction and kernel_friction.any else None
+
+    def _generated_law(self, mode: bool | str) -> Any:
+        """The generated law (a GeneratedImpedance) or None: the NumPy path."""
+        if not (mode is True or mode is False or (isinstance(mode, str) and mode == "auto")):
+            raise InvalidParameterError(
+                f"compile must be True (generated code, or an error), False (NumPy) or 'auto', got {mode!r}",
+                value=mode,
+            )
+        if mode is False or self.damping is None or self.inertia is not None:
+            return None
+        from armctl.dynamics.pinocchio_backend import PinocchioDynamics
+
+        if mode == "auto" and not isinstance(self.dynamics, PinocchioDynamics):
+            return None
+        try:
+            from armctl.controllers.interaction.generated import GeneratedImpedance  # CasADi, imported on use
+
+            gen = GeneratedImpedance(self.dynamics, self.frame, self.axes, self._null)
+        except Exception as exc:  # "auto": the NumPy path, and why (once per process and cause)
+            if mode is True:
+                raise
+            from armctl.dynamics import codegen
+
+            codegen.warn_fallback(
+                exc,
+                "the Cartesian impedance law's generated code",
+                "the law runs on Pinocchio and NumPy",
+                "several times slower",
+                "compile=False chooses the NumPy path",
+                PerformanceWarning,
+                stacklevel=4,
+            )
+            return None
+        gen.set_gains(self.stiffness, self.damping, self.nullspace_stiffness, self.nullspace_damping)
+        return gen
 
     def set_target(
         self, target: ArrayLike, velocity: ArrayLike | None = None, acceleration: ArrayLike | None = None
@@ -171,6 +222,23 @@ class CartesianImpedance(Controller):
             self.force.reset()
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
+        gen = self._generated
+        if gen is not None:
+            target = self.target
+            if not target.holder.is_set:
+                target.hold(self.dynamics.kernel.frame_pose(q, self.frame))
+            value, vel, acc = target.holder.at(t)
+            out = gen.run(q, qd, value, vel, acc, self.posture if self.posture is not None else ref.q)
+            if all_finite(out):  # NaN at a singular configuration: the NumPy path names it
+                n, m = self.n, self.axes
+                tau = out[:n]
+                if self._friction_terms is not None:
+                    tau += self._friction_terms.torque(qd)
+                self.last_log = {"error": out[n : n + m], "force": out[n + m :]}
+                return tau
+        return self._numpy_law(t, q, qd, ref)
+
+    def _numpy_law(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         state = self.evaluator.evaluate(q, qd)
         fk = state.frame(self.frame)
         value, vel, acc = self.target.at(t, fk)
@@ -189,7 +257,7 @@ class CartesianImpedance(Controller):
             if self.inertia is None or self.force is None:
                 force = spring + lam @ acc if acc.any() else spring
             else:
-                h = self.force.wrench(self, t, q, qd, self.frame, fk.position)[:m]
+                h = self.force.wrench(self, t, q, qd, self.frame)[:m]
                 force = lam @ (acc + np.linalg.solve(self.inertia, spring - h) - fk.drift[:m]) + h
                 log["wrench"] = h
             tau = jac.T @ force + state.bias

@@ -43,6 +43,9 @@ class ForceControl(ForceLoop):
         q_n (n,) [rad] of the null-space posture; None: the joint reference ``ref.q``.
     posture_kp : array_like, optional
         K_P,n [1/s²] ≥ 0 of the posture (default 10).
+    compile : bool or "auto", optional
+        The inner loop as one call of generated C code: "auto" (the default) where the dynamics are Pinocchio's and
+        a C compiler builds it, True (or an error), False (NumPy).
     compensate : bool, optional
         Add Jᵀ h, the measured wrench, to the torque (default True), so that the contact does not push the inner
         loop off its command.
@@ -93,6 +96,7 @@ class ForceControl(ForceLoop):
         posture: ArrayLike | None = None,
         posture_kp: ArrayLike = 10.0,
         compensate: bool = True,
+        compile: bool | str = "auto",
     ) -> None:
         super().__init__(
             dynamics,
@@ -108,4 +112,5 @@ class ForceControl(ForceLoop):
             posture,
             posture_kp,
             compensate,
+            compile,
         )

@@ -17,14 +17,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, boolean, real_array, vector
+from armctl._checks import FloatArray, all_finite, boolean, readonly, real_array, vector
 from armctl.controllers.base import Controller
-from armctl.controllers.integral import ErrorIntegral
 from armctl.controllers.interaction.force_source import ForceInput
 from armctl.controllers.interaction.gains import symmetric_psd
 from armctl.controllers.interaction.inner import InnerMotion
 from armctl.controllers.interaction.task_space import FrameTarget
-from armctl.controllers.osc.state import ModelEvaluator
 from armctl.controllers.osc.tasks.target import Trajectory
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError
@@ -62,7 +60,7 @@ class ForceLoop(Controller):
     Parameters
     ----------
     dynamics, force, force_gain, integral_gain, frame, force_source, inner, kp, kd, posture, posture_kp,
-    compensate
+    compensate, compile
         As in :class:`~armctl.controllers.ForceControl`.
     directions : ndarray, shape (3, 3)
         P.
@@ -85,23 +83,34 @@ class ForceLoop(Controller):
         posture: ArrayLike | None,
         posture_kp: ArrayLike,
         compensate: bool,
+        compile: bool | str,
     ) -> None:
         super().__init__(dynamics)
         owner = type(self).__name__
         self.force_input = ForceInput(force_source, owner)
         self.reads = self.force_input.reads  # type: ignore[misc]  # per instance: what it reads depends on the source
         self.force_target = force_target(force)
-        self.force_gain = symmetric_psd(force_gain, (3,), "force_gain", "m/N")
-        self.integral_gain = symmetric_psd(integral_gain, (3,), "integral_gain", "m/(N·s)")
-        self.directions = directions
-        self.evaluator = ModelEvaluator(dynamics)
-        self.evaluator.check_frame(frame)
+        self.force_gain = readonly(symmetric_psd(force_gain, (3,), "force_gain", "m/N"))
+        self.integral_gain = readonly(symmetric_psd(integral_gain, (3,), "integral_gain", "m/(N·s)"))
+        self.directions = readonly(np.array(directions))
+        self._free = readonly(np.eye(3) - self.directions)
         self.frame = frame
         self.target = FrameTarget(owner, 6)
-        self.inner = InnerMotion(dynamics, inner, kp, kd, posture_kp)
+        self.inner = InnerMotion(dynamics, inner, kp, kd, posture_kp, frame=frame, compile=compile, force_loop=True)
         self.posture = None if posture is None else vector(posture, self.n, "posture")
         self.compensate = boolean(compensate, "compensate")
-        self._integral = ErrorIntegral(3)
+        self._pkf = readonly(self.directions @ self.force_gain)
+        self._pki = readonly(self.directions @ self.integral_gain)
+        self._free6 = np.eye(6)
+        self._free6[:3, :3] = self._free
+        readonly(self._free6)
+        gen = self.inner.generated
+        if gen is not None:
+            inner_gains = (self.inner.kp, self.inner.kd, self.inner.posture_kp, self.inner.posture_kd)
+            gen.set_gains(*inner_gains, self.directions, self._pkf, self._pki, self.compensate)
+        self._integral = np.zeros(3)  # ∫ e_f dt [N·s], by the rectangle rule between calls
+        self._t: float | None = None
+        self._dt = np.zeros(1)
 
     def set_target(
         self, pose: ArrayLike, twist: ArrayLike | None = None, acceleration: ArrayLike | None = None
@@ -130,26 +139,39 @@ class ForceLoop(Controller):
 
     def reset(self) -> None:
         super().reset()
-        self._integral.reset()
+        self._integral = np.zeros(3)
+        self._t = None
         self.target.reset()
         self.force_input.reset()
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
-        state = self.evaluator.evaluate(q, qd)
-        fk = state.frame(self.frame)
-        pose, twist, acc = self.target.at(t, fk)
-        h = self.force_input.wrench(self, t, q, qd, self.frame, fk.position)
-        p = self.directions
-        free = np.eye(3) - p
+        target = self.target
+        if not target.holder.is_set:
+            target.hold(self.dynamics.kernel.frame_pose(q, self.frame))
+        pose, twist, acc = target.holder.at(t)
+        h = self.force_input.wrench(self, t, q, qd, self.frame)
         f_d = self.force_target(t)
-        e_f = p @ (f_d - h[:3])
-        x_f = p @ (self.force_gain @ e_f + self.integral_gain @ self._integral.update(t, e_f))
+        dt = t - self._t if self._t is not None and t > self._t else 0.0  # a new run's clock restarts: no step back
+        self._t = t
+        posture = self.posture if self.posture is not None else ref.q
+        gen = self.inner.generated
+        if gen is not None:
+            self._dt[0] = dt
+            out = gen.run_force((q, qd, pose.ravel(), twist, acc, posture, h, f_d, self._integral, self._dt))
+            if all_finite(out):
+                n = self.n
+                self._integral = out[n + 9 : n + 12]
+                self.last_log = {"force_error": out[n + 6 : n + 9], "offset": out[n + 12 :], "wrench": h}
+                self.last_log["error"] = out[n : n + 6]
+                return self.inner.with_friction(out[:n], qd)
+        e_f = self.directions @ (f_d - h[:3])
+        integral = self._integral + e_f * dt
+        x_f = self._pkf @ e_f + self._pki @ integral
         cmd = pose.copy()
         cmd[:3, 3] += x_f
-        twist_c, acc_c = twist.copy(), acc.copy()
-        twist_c[:3] = free @ twist[:3]
-        acc_c[:3] = free @ acc[:3]
-        posture = self.posture if self.posture is not None else ref.q
-        tau, e = self.inner.torque(state, fk, cmd, twist_c, acc_c, posture, h if self.compensate else None)
+        tau, e = self.inner.command(
+            q, qd, cmd, self._free6 @ twist, self._free6 @ acc, posture, h if self.compensate else None
+        )
+        self._integral = integral
         self.last_log = {"force_error": e_f, "offset": x_f, "wrench": h, "error": e}
         return tau

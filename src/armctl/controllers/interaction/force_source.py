@@ -38,16 +38,17 @@ def check_source(source: Any, owner: str) -> tuple[Any, frozenset[str]]:
     )
 
 
-def sensor_wrench(
-    dyn: Dynamics, q: FloatArray, h: FloatArray, m: Measurement, frame: str | None, origin: FloatArray
-) -> FloatArray:
-    """The reading ``h`` of measurement ``m`` in world axes, its moment about ``origin`` (the origin of the
-    controlled ``frame``) [N; N·m]."""
-    pose = dyn.kernel.frame_pose(q, m.frame)
+def sensor_wrench(dyn: Dynamics, q: FloatArray, h: FloatArray, m: Measurement, frame: str | None) -> FloatArray:
+    """The reading ``h`` of measurement ``m`` in world axes, its moment about the origin of the controlled
+    ``frame`` [N; N·m]."""
+    if m.world_axes and m.frame == frame:
+        return h
+    kernel = dyn.kernel
+    pose = kernel.frame_pose(q, m.frame)
     rot = pose[:3, :3]
     f, mo = (h[:3], h[3:]) if m.world_axes else (rot @ h[:3], rot @ h[3:])
     if m.frame != frame:
-        mo = mo + np.cross(pose[:3, 3] - origin, f)
+        mo = mo + np.cross(pose[:3, 3] - kernel.frame_pose(q, frame)[:3, 3], f)
     return np.concatenate((f, mo))
 
 
@@ -71,10 +72,8 @@ class ForceInput:
     def __init__(self, source: Any, owner: str) -> None:
         self.source, self.reads = check_source(source, owner)
 
-    def wrench(
-        self, ctrl: Controller, t: float, q: FloatArray, qd: FloatArray, frame: str | None, origin: FloatArray
-    ) -> FloatArray:
-        """h (6,) [N; N·m] in world axes at ``frame`` (origin ``origin`` [m]) for ``ctrl``'s measurement."""
+    def wrench(self, ctrl: Controller, t: float, q: FloatArray, qd: FloatArray, frame: str | None) -> FloatArray:
+        """h (6,) [N; N·m] in world axes at ``frame`` for ``ctrl``'s measurement."""
         if self.source == "sensor":
             h = ctrl.measured("wrench")
             m = ctrl.measurement
@@ -83,7 +82,7 @@ class ForceInput:
             dyn = ctrl.dynamics
             if dyn is None:  # pragma: no cover - the interaction controllers always have a model
                 raise InvalidParameterError("the controller has no model", value=ctrl)
-            return sensor_wrench(dyn, q, h, m, frame, origin)
+            return sensor_wrench(dyn, q, h, m, frame)
         self.source.update(t, q, qd, ctrl.measured("tau_applied"))
         return np.asarray(self.source.wrench(q, frame), dtype=float)
 

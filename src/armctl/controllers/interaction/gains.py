@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike
+from scipy.linalg import lapack
 
 from armctl._checks import FloatArray, real_array
 from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
@@ -96,8 +97,12 @@ def critical_damping(inertia: FloatArray, stiffness: FloatArray, zeta: float = 1
     ndarray, shape (m, m)
         D [N·s/m, N·m·s/rad], symmetric positive semi-definite.
     """
-    low = np.linalg.cholesky(inertia)  # Λ = L Lᵀ
-    inv = np.linalg.inv(low)
-    omega2, u = np.linalg.eigh(inv @ stiffness @ inv.T)  # L⁻¹ K L⁻ᵀ = U K₀ Uᵀ
+    low, info = lapack.dpotrf(inertia, lower=1, clean=1)  # Λ = L Lᵀ (LAPACK directly: NumPy's checks cost more)
+    if info:
+        raise InvalidParameterError(f"the inertia is not positive definite: {inertia}", value=inertia)
+    inv, _ = lapack.dtrtri(low, lower=1)
+    omega2, u, info = lapack.dsyev(inv @ stiffness @ inv.T)  # L⁻¹ K L⁻ᵀ = U K₀ Uᵀ
+    if info:  # pragma: no cover - the symmetric eigensolver does not fail on finite input
+        raise InvalidParameterError(f"no eigendecomposition of L⁻¹ K L⁻ᵀ (LAPACK info {info})", value=stiffness)
     qmat = low @ u
-    return (qmat * (2.0 * zeta * np.sqrt(np.maximum(omega2, 0.0)))) @ qmat.T
+    return np.asarray((qmat * (2.0 * zeta * np.sqrt(np.maximum(omega2, 0.0)))) @ qmat.T)

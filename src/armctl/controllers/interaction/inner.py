@@ -15,21 +15,24 @@ and the torque, with h the measured wrench the arm exerts (0 when not compensate
 With an exact model both give J q̈ + J̇ q̇ = ẍ*, that is ë + K_D ė + K_P e = 0 whatever the contact (the Jᵀ h
 term cancels the wrench's effect); without the compensation the wrench displaces the frame by
 (Λ K_P)⁻¹ h at rest ("osc"). They differ in the null space: "osc" keeps the posture motion dynamically
-consistent, "computed_torque" kinematically.
+consistent, "computed_torque" kinematically. With ``compile`` the law is one call of generated C code
+(:mod:`~armctl.controllers.interaction.generated_inner`).
 """
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray
+from armctl._checks import FloatArray, all_finite, readonly
 from armctl.controllers.interaction.gains import critical_damping, symmetric_psd
 from armctl.controllers.interaction.task_space import task_inertia
-from armctl.controllers.osc.state import FrameKinematics, ModelState
+from armctl.controllers.osc.state import FrameKinematics, ModelEvaluator, ModelState
 from armctl.controllers.osc.tasks.rotation import rotation_error
 from armctl.dynamics.base import Dynamics
-from armctl.errors import SingularConfigurationError, UnknownNameError
+from armctl.errors import InvalidParameterError, PerformanceWarning, SingularConfigurationError, UnknownNameError
 
 #: the inner loops
 INNER = ("osc", "computed_torque")
@@ -50,6 +53,14 @@ class InnerMotion:
         K_D [1/s]; None: 2 K_P^½ (critical).
     posture_kp, posture_kd : array_like, optional
         K_P,n [1/s²] ≥ 0 and K_D,n [1/s] (None: 2 K_P,n^½) of the posture (scalar, (n,) or n×n).
+    frame : str, optional
+        The controlled frame (None: the tool frame).
+    compile : bool or "auto", optional
+        Generated code for the law: "auto" where the dynamics are Pinocchio's and a C compiler builds it (else
+        NumPy, with a PerformanceWarning once), True (or an error), False (NumPy).
+    force_loop : bool, optional
+        Generate the force loop of :mod:`~armctl.controllers.interaction.force_loop` with the law (its owner
+        then calls the generated code itself; :meth:`command` takes the NumPy path).
 
     Raises
     ------
@@ -67,6 +78,9 @@ class InnerMotion:
         kd: ArrayLike | None = None,
         posture_kp: ArrayLike = 10.0,
         posture_kd: ArrayLike | None = None,
+        frame: str | None = None,
+        compile: bool | str = "auto",
+        force_loop: bool = False,
     ) -> None:
         if kind not in INNER:
             raise UnknownNameError("inner motion loop", kind, INNER)
@@ -81,6 +95,88 @@ class InnerMotion:
             if posture_kd is None
             else symmetric_psd(posture_kd, (n,), "posture_kd", "1/s")
         )
+        for a in (self.kp, self.kd, self.posture_kp, self.posture_kd):
+            readonly(a)
+        self.frame = frame
+        self.evaluator = ModelEvaluator(dynamics)
+        self.evaluator.check_frame(frame)
+        friction = dynamics.kernel.friction
+        self._friction = friction if friction.any else None
+        self.force_loop = force_loop
+        self.generated = self._generated_law(compile)
+
+    def _generated_law(self, mode: bool | str) -> Any:
+        """The generated law (a GeneratedInner) or None: the NumPy path."""
+        if not (mode is True or mode is False or (isinstance(mode, str) and mode == "auto")):
+            raise InvalidParameterError(
+                f"compile must be True (generated code, or an error), False (NumPy) or 'auto', got {mode!r}",
+                value=mode,
+            )
+        from armctl.dynamics.pinocchio_backend import PinocchioDynamics
+
+        if mode is False or (mode == "auto" and not isinstance(self.dynamics, PinocchioDynamics)):
+            return None
+        try:
+            from armctl.controllers.interaction.generated_inner import GeneratedInner  # CasADi, imported on use
+
+            gen = GeneratedInner(self.dynamics, self.frame, self.kind, self.force_loop)
+        except Exception as exc:  # "auto": the NumPy path, and why (once per process and cause)
+            if mode is True:
+                raise
+            from armctl.dynamics import codegen
+
+            codegen.warn_fallback(
+                exc,
+                "the interaction controllers' generated inner loop",
+                "it runs on Pinocchio and NumPy",
+                "several times slower",
+                "compile=False chooses the NumPy path",
+                PerformanceWarning,
+                stacklevel=5,
+            )
+            return None
+        if not self.force_loop:
+            gen.set_gains(self.kp, self.kd, self.posture_kp, self.posture_kd)
+        return gen
+
+    def with_friction(self, tau: FloatArray, qd: FloatArray) -> FloatArray:
+        """τ + τ_f(q̇) (in place) if the model has friction."""
+        if self._friction is not None:
+            tau += self._friction.torque(qd)
+        return tau
+
+    def command(
+        self,
+        q: FloatArray,
+        qd: FloatArray,
+        pose: FloatArray,
+        twist: FloatArray,
+        acceleration: FloatArray,
+        posture: FloatArray,
+        wrench: FloatArray | None = None,
+    ) -> tuple[FloatArray, FloatArray]:
+        """τ [N·m] and the frame error e (6,) [m; rad] at the measured (q, q̇) (checked finite by the caller), by
+        the generated law where there is one (the NumPy path at a singular configuration, to name it).
+
+        Parameters
+        ----------
+        q, qd : ndarray, shape (n,)
+            The measured state [rad, rad/s].
+        pose, twist, acceleration : ndarray
+            x_c (4×4), v_c (6,) and a_c (6,), world axes.
+        posture : ndarray, shape (n,)
+            q_n [rad].
+        wrench : ndarray, shape (6,), optional
+            h [N; N·m] to compensate; None: not compensated.
+        """
+        gen = self.generated
+        if gen is not None and not self.force_loop:
+            out = gen.run(q, qd, pose, twist, acceleration, posture, wrench)
+            if all_finite(out):
+                n = self.dynamics.n
+                return self.with_friction(out[:n], qd), out[n : n + 6]
+        state = self.evaluator.evaluate(q, qd)
+        return self.torque(state, state.frame(self.frame), pose, twist, acceleration, posture, wrench)
 
     def torque(
         self,

@@ -42,6 +42,9 @@ class ParallelForcePosition(ForceLoop):
         q_n (n,) [rad] of the null-space posture; None: the joint reference ``ref.q``.
     posture_kp : array_like, optional
         K_P,n [1/s²] ≥ 0 of the posture (default 10).
+    compile : bool or "auto", optional
+        The inner loop as one call of generated C code: "auto" (the default) where the dynamics are Pinocchio's and
+        a C compiler builds it, True (or an error), False (NumPy).
     compensate : bool, optional
         Add Jᵀ h, the measured wrench, to the torque (default True).
 
@@ -86,6 +89,7 @@ class ParallelForcePosition(ForceLoop):
         posture: ArrayLike | None = None,
         posture_kp: ArrayLike = 10.0,
         compensate: bool = True,
+        compile: bool | str = "auto",
     ) -> None:
         ki = symmetric_psd(integral_gain, (3,), "integral_gain", "m/(N·s)")
         if not np.linalg.eigvalsh(ki)[0] > 0.0:
@@ -108,4 +112,5 @@ class ParallelForcePosition(ForceLoop):
             posture,
             posture_kp,
             compensate,
+            compile,
         )

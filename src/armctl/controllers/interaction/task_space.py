@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike
+from scipy.linalg import lapack
 
 from armctl._checks import FloatArray
 from armctl.controllers.osc.state import FrameKinematics
@@ -50,6 +51,11 @@ class FrameTarget:
             self.holder = TargetHolder(self.holder.owner, self.holder.value_shape, self.holder.rate)
             self._held = False
 
+    def hold(self, pose: FloatArray) -> None:
+        """Hold ``pose`` (4×4; its position for 3 axes) until :meth:`reset`, as the first call does unset."""
+        self.holder.set(np.array(pose) if self.axes == 6 else np.array(pose[:3, 3]))
+        self._held = True
+
     def at(self, t: float, fk: FrameKinematics) -> tuple[FloatArray, FloatArray, FloatArray]:
         """(value, velocity, acceleration) at t [s]; the first call without a target holds the frame's pose."""
         if not self.holder.is_set:
@@ -77,18 +83,20 @@ def task_inertia(mass: FloatArray, jac: FloatArray, q: FloatArray) -> tuple[Floa
     SingularConfigurationError
         J M⁻¹ Jᵀ is singular at q (J loses rank): the impedance is not defined along the lost direction.
     """
-    jm = np.linalg.solve(mass, jac.T).T  # J M⁻¹ (M symmetric)
-    a = jm @ jac.T
-    try:
-        low = np.linalg.cholesky(a)
-        inv_low = np.linalg.inv(low)
-    except np.linalg.LinAlgError:
+    low_m, info = lapack.dpotrf(mass, lower=1)
+    if not info:
+        mij, info = lapack.dpotrs(low_m, jac.T, lower=1)  # M⁻¹ Jᵀ
+    if not info:
+        low_a, info = lapack.dpotrf(jac @ mij, lower=1)  # J M⁻¹ Jᵀ = L Lᵀ
+    if not info:
+        lam, info = lapack.dpotri(low_a, lower=1)  # its inverse, lower triangle
+    if info:
         sv = np.linalg.svd(jac, compute_uv=False)
         raise SingularConfigurationError(
             f"the task Jacobian is singular at q = {q} (singular values {sv}): Λ = (J M⁻¹ Jᵀ)⁻¹ does not exist; "
             "move away from the singularity or control fewer axes",
             value=q,
             sigma_min=float(sv[-1]),
-        ) from None
-    lam = inv_low.T @ inv_low
-    return lam, lam @ jm
+        )
+    lam = np.tril(lam) + np.tril(lam, -1).T
+    return lam, lam @ mij.T
