@@ -259,3 +259,24 @@ def test_a_refused_sample_leaves_the_observer_as_it_was(compile: bool) -> None:
             with pytest.raises(NonFiniteError):
                 hit.update(k * 1e-3 - 5e-4, q, np.full(7, np.nan), tau)
         np.testing.assert_array_equal(hit.update(k * 1e-3, q, qd, tau), clean.update(k * 1e-3, q, qd, tau))
+
+
+@settings(max_examples=20, deadline=None)
+@given(st.integers(0, 2**31 - 1))
+def test_the_generated_code_takes_c_transpose_qdot_as_the_gradient_of_kinetic_energy(seed: int) -> None:
+    """Cᵀ q̇ = ∂T/∂q (Ṁ = C + Cᵀ): the generated β against central differences of Pinocchio's kinetic energy, and
+    against the Coriolis matrix."""
+    from armctl.controllers.momentum_code import symbolic_step
+
+    dyn = dynamics("panda")
+    rng = np.random.default_rng(seed)
+    q, qd = rng.uniform(-2.0, 2.0, 7), rng.uniform(-2.0, 2.0, 7)
+    fn = symbolic_step(model("panda"))
+    state = np.concatenate((np.zeros(21), np.ones(7), [1.0]))
+    coeffs = np.concatenate((np.zeros(21), np.full(7, np.inf), [0.0]))
+    beta = np.asarray(fn(np.concatenate((q, qd, np.zeros(7))), state, coeffs)[0]).ravel()[14:21]
+    eps = 1e-6
+    grad = np.array([(dyn.kinetic_energy(q + eps * e, qd) - dyn.kinetic_energy(q - eps * e, qd)) / (2 * eps)
+                     for e in np.eye(7)])  # fmt: skip
+    np.testing.assert_allclose(beta + dyn.gravity_torque(q), grad, atol=1e-6)
+    np.testing.assert_allclose(grad, dyn.coriolis_matrix(q, qd).T @ qd, atol=1e-6)
