@@ -55,7 +55,7 @@ class MomentumObserver(CompiledUpdate):
         Whether the model's joint friction τ_f(q̇) = F_v q̇ + F_c sgn q̇ is subtracted (default True); False: the
         observer is told not to know it, and reads friction as an external torque.
     thresholds : float or (n,) array_like, optional
-        Collision thresholds on |r_j| [N·m]; None (default): no detection.
+        Collision thresholds on |r_j| [N·m], fixed at construction; None (default): no detection.
     period : float, optional
         The update period h [s] if known in advance: the gain bound of the ``"euler"`` form is checked here
         rather than at the first update.
@@ -67,7 +67,9 @@ class MomentumObserver(CompiledUpdate):
     compile : bool, optional
         Run the update as one call of generated C code (:mod:`armctl.controllers.momentum_code`; the same numbers
         to rounding, built once per arm with the system's C compiler and cached); None (the default): when
-        ``dynamics`` is compiled (``armctl.Dynamics(model, compile=True)``). Only the ``"exact"`` form.
+        ``dynamics`` is compiled (``armctl.Dynamics(model, compile=True)``). Only the ``"exact"`` form; the code
+        evaluates the model as the ``"pinocchio"`` backend does (rotors as reflected inertia, without the
+        ``"lagrange"`` backend's gyroscopic coupling).
 
     Raises
     ------
