@@ -280,3 +280,17 @@ def test_the_generated_code_takes_c_transpose_qdot_as_the_gradient_of_kinetic_en
                      for e in np.eye(7)])  # fmt: skip
     np.testing.assert_allclose(beta + dyn.gravity_torque(q), grad, atol=1e-6)
     np.testing.assert_allclose(grad, dyn.coriolis_matrix(q, qd).T @ qd, atol=1e-6)
+
+
+def test_force_control_reads_the_observer_instead_of_a_sensor() -> None:
+    """Parallel force/position control pressing 10 N on a table, its force from the observer (the applied torques,
+    no sensor): at rest the true contact force is 10 N, as with the sensor."""
+    from armctl.bench.interaction_borders import press
+    from armctl.controllers import ParallelForcePosition
+
+    dyn = dynamics("panda")
+    c = ParallelForcePosition(dyn, [0.0, 0.0, -10.0], 2e-4, 1e-3, kp=400.0, force_source=MomentumObserver(dyn, 100.0))
+    assert c.reads == {"tau_applied"}
+    res = press(c, 3e4, 2.0)
+    f = -res.contact_force[:, 0, 2]  # the simulator's truth
+    assert np.abs(f[res.t > 1.7] - 10.0).max() < 0.01
