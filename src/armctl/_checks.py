@@ -283,15 +283,6 @@ def apply_gain(k: FloatArray, x: FloatArray) -> FloatArray:
     return k * x if k.ndim == 1 else k.dot(x)
 
 
-def check_cache_dir(cache_dir: object, compile: bool) -> None:
-    """Refuse a ``cache_dir`` given without ``compile=True`` (it would be ignored: nothing is compiled)."""
-    if cache_dir is not None and not compile:
-        raise InvalidParameterError(
-            f"cache_dir={cache_dir!r} is where compile=True keeps its code: pass compile=True too, or no cache_dir",
-            value=cache_dir,
-        )
-
-
 def all_finite(a: FloatArray) -> bool:
     """True if every entry of the float array ``a`` is finite.
 

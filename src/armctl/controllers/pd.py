@@ -70,9 +70,9 @@ class PDGravity(PIDGains, Controller):
     def friction(self, value: bool) -> None:
         self._friction = boolean(value, "friction")
 
-    #: the kernel's fused law g + F·[q_d; q̇_d; q; q̇] (``Dynamics(model, compile=True)``; None for others) and
-    #: the kernel it was made for: made again at the next step on another kernel (another dynamics object,
-    #: another thread)
+    #: the fused law g + F·[q_d; q̇_d; q; q̇] in generated code (:mod:`armctl.controllers.pd_generated`, on
+    #: ``Dynamics(model, compile=True)``; None for others) and the kernel it was made for: made again at the next
+    #: step on another kernel (another dynamics object, another thread)
     _law: Any = None
     _law_for: Any = None
 
@@ -94,10 +94,17 @@ class PDGravity(PIDGains, Controller):
         state.pop("_law_for", None)
         return state
 
+    def _generated_law(self) -> Any:
+        if not self.dynamics.compiled:
+            return None
+        from armctl.controllers.pd_generated import generated_law  # CasADi, imported on use
+
+        return generated_law(self.dynamics, self._feedback)
+
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         kernel = self.dynamics.kernel
         if kernel is not self._law_for:
-            self._law, self._law_for = kernel.pd_gravity_law(self._feedback), kernel
+            self._law, self._law_for = self._generated_law(), kernel
         law = self._law
         if law is not None:
             tau = law(q, qd, ref.q, ref.qd)

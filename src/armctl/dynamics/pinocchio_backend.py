@@ -14,10 +14,10 @@ from typing import Any, cast
 import numpy as np
 import pinocchio as pin
 
-from armctl._checks import FloatArray, boolean, check_cache_dir
+from armctl._checks import FloatArray
+from armctl.codegen.policy import CompileMode, check_cache_dir, compile_mode
 from armctl.dynamics.base import Dynamics
 from armctl.dynamics.kernel import Kernel
-from armctl.errors import InvalidParameterError
 from armctl.model.robot import PARAMS_PER_JOINT, RobotModel
 
 #: ABA in the WORLD convention: the same q̈ (to rounding, checked in tests/dynamics/test_backends.py) for less
@@ -184,34 +184,63 @@ class PinocchioDynamics(Dynamics):
     """Dynamics evaluated by Pinocchio (see :class:`~armctl.dynamics.base.Dynamics` for the API).
 
     ``pin_model`` is the Pinocchio model (read it, do not change it); each thread's kernel has its own
-    ``pin.Data`` (``dyn.kernel.pin_data``)."""
+    ``pin.Data`` (``dyn.kernel.pin_data``).
+
+    Parameters
+    ----------
+    model : RobotModel
+        The arm.
+    compile : {False, True, "auto"}, optional
+        Gravity, forward dynamics, the passivity torque and the regressors as generated C code
+        (:mod:`armctl.dynamics.compiled`), under the compile policy of :mod:`armctl.codegen.policy`: True (or a
+        BackendError), False (Pinocchio's algorithms), ``"auto"`` (generated where it can be built).
+    cache_dir : str or path, optional
+        Where compiled code is kept (default ``$ARMCTL_CACHE`` or ``~/.cache/armctl``); not with compile=False.
+    """
 
     backend = "pinocchio"
     option_names = ("compile", "cache_dir")
-    #: True for :class:`~armctl.dynamics.compiled.CompiledDynamics` (``compile=True``)
-    compiled = False
 
     def __init__(
         self,
         model: RobotModel,
         backend: str | None = None,
-        compile: bool = False,
+        compile: CompileMode = False,
         cache_dir: str | os.PathLike[str] | None = None,
         **options: Any,
     ) -> None:
-        if boolean(compile, "compile") != self.compiled:
-            raise InvalidParameterError(
-                f"{type(self).__name__} is not made with compile={compile}: use "
-                f"armctl.Dynamics(model, compile={compile})",
-                value=compile,
-            )
-        check_cache_dir(cache_dir, compile)
+        self._compile = compile_mode(compile)
+        check_cache_dir(cache_dir, self._compile)
         self._cache_dir = cache_dir
         self.pin_model = model.to_pinocchio()
+        self._functions = None
+        if self._compile is not False:
+            from armctl.dynamics.compiled import generated_terms  # CasADi, imported on use
+
+            self._functions = generated_terms(model, cache_dir, self._compile)
+        #: whether the hot terms run as generated C code (``compile=True``, or ``"auto"`` where it could be built)
+        self.compiled = self._functions is not None
         super().__init__(model, backend, **options)
 
     def kernel_factory(self) -> Callable[[], PinocchioKernel]:
+        if self._functions is not None:
+            from armctl.dynamics.compiled import CompiledKernel
+
+            return partial(CompiledKernel, self.model, self.pin_model, self._functions)
         return partial(PinocchioKernel, self.model, self.pin_model)
+
+    @property
+    def options(self) -> dict[str, Any]:
+        out: dict[str, Any] = {}
+        if self._compile is not False:
+            out["compile"] = self._compile
+        if self._cache_dir is not None:
+            out["cache_dir"] = self._cache_dir
+        return out
+
+    def __repr__(self) -> str:
+        compiled = ", compile=True" if self.compiled else ""
+        return f"Dynamics({self.model.name!r}, backend={self.backend!r}{compiled}, n={self.n})"
 
     @property
     def pin_data(self) -> Any:
