@@ -12,7 +12,7 @@ import os
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import NDArray
 
 from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
 
@@ -231,41 +231,6 @@ def gain_matrix(k: object, n: int, name: str) -> FloatArray:
     if lo <= 0:
         raise InvalidParameterError(f"{name} must be positive definite; its smallest eigenvalue is {lo:g}", value=k)
     return a
-
-
-class Gain:
-    """A gain attribute of a controller or task: assigned a scalar, a vector (diagonal) or a matrix, checked by
-    :func:`gain_matrix` (``size(owner)`` rows, errors named ``label(owner, name)``), read back as the matrix (a
-    read-only copy: change a gain by assigning it, e.g. ``ctrl.kp = 2 * ctrl.kp``). Its
-    cheap form (:func:`compact_gain`) is kept in ``owner._<name>`` for the control law, and the owner's
-    ``_gains_changed()``, if any, runs after every assignment, so a gain reassigned between calls takes effect.
-    ``optional``: None is allowed (no such term)."""
-
-    def __init__(
-        self, doc: str, size: Any = lambda owner: owner.n, label: Any = lambda owner, name: name, optional: bool = False
-    ) -> None:
-        self.__doc__ = doc
-        self.size, self.label, self.optional = size, label, optional
-
-    def __set_name__(self, owner: type, name: str) -> None:
-        self.name, self.compact, self.full = name, f"_{name}", f"_{name}_matrix"
-
-    def __get__(self, obj: Any, objtype: type | None = None) -> Any:
-        return self if obj is None else getattr(obj, self.full)
-
-    def __set__(self, obj: Any, value: ArrayLike | None) -> None:
-        # a read-only copy: the law's precomputed forms follow assignments only, so the gain must not change
-        # under them (a caller's array edited in place, or ``ctrl.kp[0, 0] = …``)
-        full = (
-            None
-            if value is None and self.optional
-            else readonly(np.array(gain_matrix(value, self.size(obj), self.label(obj, self.name))))
-        )
-        setattr(obj, self.full, full)
-        setattr(obj, self.compact, None if full is None else compact_gain(full))
-        changed = getattr(obj, "_gains_changed", None)
-        if changed is not None:
-            changed()
 
 
 def readonly(a: FloatArray) -> FloatArray:

@@ -53,12 +53,14 @@ class PDGravity(PIDGains, Controller):
     """
 
     dynamics: Dynamics  # given to __init__, never None
+    # stateless without an integral; a NaN/inf in q_j or q̇_j reaches τ through K_p e or K_d ė (K ≻ 0)
+    result_check = True
 
     def __init__(
         self, dynamics: Dynamics, kp: ArrayLike, kd: ArrayLike, ki: ArrayLike | None = None, friction: bool = False
     ) -> None:
         super().__init__(dynamics)
-        self._set_gains(kp, kd, ki)
+        self._start(kp, kd, ki)
         self.friction = friction
 
     @property
@@ -76,17 +78,16 @@ class PDGravity(PIDGains, Controller):
     _law: Any = None
     _law_for: Any = None
 
-    def _gains_changed(self) -> None:
-        super()._gains_changed()
-        if hasattr(self, "_feedback"):
-            # [τ; K_p e + K_d ė] = [[F, I], [F, 0]]·[q_d; q̇_d; q; q̇; g]: the torque and its feedback term (for the
-            # log) from one product
-            n = self.n
-            self._with_gravity = np.vstack(
-                (np.hstack((self._feedback, np.eye(n))), np.hstack((self._feedback, np.zeros((n, n)))))
-            )
-            if self._law is not None:  # new gains into the law's own F, in place (binding a new law costs more)
-                self._law.feedback[...] = self._feedback
+    def _derive(self) -> None:
+        super()._derive()
+        # [τ; K_p e + K_d ė] = [[F, I], [F, 0]]·[q_d; q̇_d; q; q̇; g]: the torque and its feedback term (for the
+        # log) from one product
+        n = self.n
+        self._with_gravity = np.vstack(
+            (np.hstack((self._feedback, np.eye(n))), np.hstack((self._feedback, np.zeros((n, n)))))
+        )
+        if self._law is not None:  # new gains into the law's own F, in place (binding a new law costs more)
+            self._law.feedback[...] = self._feedback
 
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
@@ -125,5 +126,3 @@ class PDGravity(PIDGains, Controller):
             log["friction"] = friction
         self.last_log = log
         return tau
-
-    _result_checked_compute = compute  # stateless without an integral (see Controller)
