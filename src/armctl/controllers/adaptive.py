@@ -203,8 +203,8 @@ class Adaptive(SlidingGains, Controller):
             weighted = scipy.linalg.cho_solve(self._gamma_factor, err)
         return 0.5 * float(s.dot(self._plant.mass_matrix(q).dot(s)) + err.dot(weighted))
 
-    def gain_size(self, name: str) -> int:
-        return 13 * self.n if name == "gamma" else self.n
+    def _gain_spec(self, name: str) -> tuple[int, str]:
+        return (13 if name == "gamma" else 1) * self.n, name
 
     def _derive(self) -> None:
         super()._derive()

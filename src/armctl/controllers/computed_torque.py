@@ -49,8 +49,6 @@ class ComputedTorque(PIDGains, Controller):
     """
 
     dynamics: Dynamics  # given to __init__, never None
-    # stateless without an integral; a NaN/inf in q_j or q̇_j reaches τ through v_j and M_jj > 0
-    result_check = True
 
     def __init__(
         self, dynamics: Dynamics, kp: ArrayLike, kd: ArrayLike, ki: ArrayLike | None = None, friction: bool | str = True
@@ -81,6 +79,9 @@ class ComputedTorque(PIDGains, Controller):
         self._command = np.vstack(
             (np.hstack((np.eye(n), self._feedback)), np.hstack((np.zeros((n, n)), self._feedback)))
         )
+
+    #: stateless without an integral; a NaN/inf in q_j or q̇_j reaches τ through v_j and M_jj > 0
+    result_check = True
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         kernel = self.dynamics.kernel

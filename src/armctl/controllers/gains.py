@@ -37,33 +37,10 @@ class GainSet:
     #: gain name → whether it may be None (no such term)
     gain_names: ClassVar[dict[str, bool]] = {}
 
-    def gain_size(self, name: str) -> int:
-        """The number of rows of the gain ``name`` (n, the joints, unless the owner says otherwise).
-
-        Parameters
-        ----------
-        name : str
-            A name of :attr:`gain_names`.
-
-        Returns
-        -------
-        int
-        """
-        return int(self.n)  # type: ignore[attr-defined]
-
-    def gain_label(self, name: str) -> str:
-        """How errors name the gain ``name``.
-
-        Parameters
-        ----------
-        name : str
-            A name of :attr:`gain_names`.
-
-        Returns
-        -------
-        str
-        """
-        return name
+    def _gain_spec(self, name: str) -> tuple[int, str]:
+        """(rows, label): the number of rows of the gain ``name`` (n, the joints, unless the owner says otherwise)
+        and how errors name it."""
+        return int(self.n), name  # type: ignore[attr-defined]
 
     def set_gains(self, **gains: Any) -> None:
         """Check and set the gains given (name → a scalar, an (n,) diagonal or an n×n symmetric positive definite
@@ -89,7 +66,8 @@ class GainSet:
             if value is None and self.gain_names[name]:
                 checked[name] = None
             else:  # a read-only copy: the derived forms follow assignments only
-                checked[name] = readonly(np.array(gain_matrix(value, self.gain_size(name), self.gain_label(name))))
+                rows, label = self._gain_spec(name)
+                checked[name] = readonly(np.array(gain_matrix(value, rows, label)))
         for name, full in checked.items():  # all checked before any is set
             setattr(self, f"_{name}_matrix", full)
             setattr(self, f"_{name}", None if full is None else compact_gain(full))

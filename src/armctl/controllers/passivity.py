@@ -40,10 +40,7 @@ class SlidingGains(GainSet):
     gain_names: ClassVar[dict[str, bool]] = {"lam": False, "kd": False}
     lam = gain("lam", "Λ (n×n); may be reassigned between calls (checked again).")
     kd = gain("kd", "K_D (n×n); may be reassigned between calls (checked again).")
-    # what set_gains keeps: the compact forms and the matrices
-    _lam: FloatArray
-    _kd: FloatArray
-    _lam_matrix: FloatArray
+    _lam_matrix: FloatArray  # (set_gains keeps the matrices, and their compact forms in _lam, _kd)
     _kd_matrix: FloatArray
 
     def _derive(self) -> None:
@@ -78,12 +75,13 @@ class PassivityBased(SlidingGains, Controller):
     """
 
     dynamics: Dynamics  # given to __init__, never None
-    # stateless; a NaN/inf in q_j or q̇_j reaches s_j = q̃̇_j + (Λq̃)_j and τ through −K_D s (K_D ≻ 0)
-    result_check = True
 
     def __init__(self, dynamics: Dynamics, lam: ArrayLike, kd: ArrayLike) -> None:
         super().__init__(dynamics)
         self.set_gains(lam=lam, kd=kd)
+
+    #: stateless; a NaN/inf in q_j or q̇_j reaches s_j = q̃̇_j + (Λq̃)_j and τ through −K_D s (K_D ≻ 0)
+    result_check = True
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         qd_r, qdd_r, s, kd_s, a, w = sliding(q, qd, ref, self._sliding)

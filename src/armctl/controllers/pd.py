@@ -53,8 +53,6 @@ class PDGravity(PIDGains, Controller):
     """
 
     dynamics: Dynamics  # given to __init__, never None
-    # stateless without an integral; a NaN/inf in q_j or q̇_j reaches τ through K_p e or K_d ė (K ≻ 0)
-    result_check = True
 
     def __init__(
         self, dynamics: Dynamics, kp: ArrayLike, kd: ArrayLike, ki: ArrayLike | None = None, friction: bool = False
@@ -101,6 +99,9 @@ class PDGravity(PIDGains, Controller):
         from armctl.controllers.pd_generated import generated_law  # CasADi, imported on use
 
         return generated_law(self.dynamics, self._feedback)
+
+    #: stateless without an integral; a NaN/inf in q_j or q̇_j reaches τ through K_p e or K_d ė (K ≻ 0)
+    result_check = True
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         kernel = self.dynamics.kernel

@@ -166,10 +166,7 @@ class MotionTask(GainSet, Task):
     gain_names: ClassVar[dict[str, bool]] = {"kp": False, "kd": False}
     kp = gain("kp", "K_p (dim×dim); may be reassigned between control periods (checked again).")
     kd = gain("kd", "K_d (dim×dim); may be reassigned between control periods (checked again).")
-    # what set_gains keeps: the compact forms and the matrices
-    _kp: FloatArray
-    _kd: FloatArray
-    _kp_matrix: FloatArray
+    _kp_matrix: FloatArray  # (set_gains keeps the matrices, and their compact forms in _kp, _kd)
     _kd_matrix: FloatArray
 
     def __init__(
@@ -183,15 +180,12 @@ class MotionTask(GainSet, Task):
     ) -> None:
         super().__init__(dim, name, weight, priority)
         if kd is None:  # critical damping: K_d = 2 K_p^½ (the symmetric square root; 2√k_p for a scalar)
-            lam, vec = np.linalg.eigh(gain_matrix(kp, self.dim, self.gain_label("kp")))
+            lam, vec = np.linalg.eigh(gain_matrix(kp, *self._gain_spec("kp")))
             kd = 2.0 * (vec * np.sqrt(lam)) @ vec.T
         self.set_gains(kp=kp, kd=kd)
 
-    def gain_size(self, name: str) -> int:
-        return self.dim
-
-    def gain_label(self, name: str) -> str:
-        return f"{self.name}: {name}"
+    def _gain_spec(self, name: str) -> tuple[int, str]:
+        return self.dim, f"{self.name}: {name}"
 
     @abstractmethod
     def kinematics(
