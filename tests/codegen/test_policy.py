@@ -98,6 +98,8 @@ def test_auto_without_a_compiler_warns_once_and_gives_the_results_of_false(no_co
         first, second = USERS[user]("auto"), USERS[user]("auto")
     said = [str(w.message) for w in caught if issubclass(w.category, PerformanceWarning)]
     assert len(said) == 1, said
+    if user != "simulate":  # it points at the line that made the object
+        assert [w.filename for w in caught if issubclass(w.category, PerformanceWarning)] == [__file__]
     assert said[0].startswith("no C compiler was found ($CC = 'no-such-compiler-armctl' is not a program on the PATH)")
     assert "apt install gcc" in said[0] and "compile=False" in said[0]
     assert not list(no_compiler.rglob("*.so"))

@@ -17,14 +17,16 @@ from __future__ import annotations
 
 import threading
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import Literal, TypeVar
 
 import numpy as np
 
 from armctl.codegen.compiler import INSTALL_A_COMPILER, compiler, missing
 from armctl.errors import BackendError, InvalidParameterError, PerformanceWarning
 
+T = TypeVar("T")
 #: a value of ``compile``
 CompileMode = bool | Literal["auto"]
 #: the values of ``compile``
@@ -129,6 +131,39 @@ class Fallback:
         if first:
             warnings.warn(text, PerformanceWarning, stacklevel=stacklevel + 1)
         return reason
+
+    def attempt(self, make: Callable[[], T], mode: CompileMode, stacklevel: int = 2) -> T | None:
+        """``make()`` (what builds or loads the generated code) under the compile policy ``mode``.
+
+        Parameters
+        ----------
+        make : callable
+            () → the generated code; it raises if the code cannot be built.
+        mode : bool or "auto"
+            The checked value of ``compile`` (see :func:`compile_mode`).
+        stacklevel : int
+            As for :func:`warnings.warn`, counted from the caller of this method.
+
+        Returns
+        -------
+        object or None
+            What ``make`` returned; None with ``mode`` False (nothing is built), or with ``"auto"`` where it
+            raised (after :meth:`warn`).
+
+        Raises
+        ------
+        Exception
+            What ``make`` raised, with ``mode`` True.
+        """
+        if mode is False:
+            return None
+        try:
+            return make()
+        except Exception as exc:  # "auto" falls back on any failure to build: the slower path gives the same results
+            if mode is True:
+                raise
+            self.warn(exc, stacklevel + 1)
+            return None
 
     def reset(self) -> None:
         """Forget the causes warned about: the next one warns again (a test's fresh process)."""

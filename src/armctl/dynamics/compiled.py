@@ -35,7 +35,6 @@ import numpy as np
 from armctl._checks import FloatArray
 from armctl.codegen import Fallback
 from armctl.codegen import library as codegen
-from armctl.codegen.policy import CompileMode
 from armctl.dynamics import recursive
 from armctl.dynamics.casadi_buffer import buffer_of, view
 from armctl.dynamics.pinocchio_backend import PinocchioKernel
@@ -115,20 +114,6 @@ def library(model: RobotModel, cache_dir: str | os.PathLike[str] | None = None) 
         cache_dir,
         what=f"the dynamics of {model.name!r}",
     )
-
-
-def generated_terms(
-    model: RobotModel, cache_dir: str | os.PathLike[str] | None, mode: CompileMode
-) -> dict[str, cs.Function] | None:
-    """The compiled functions of ``model`` (:func:`library`) under the compile policy ``mode`` (True or
-    ``"auto"``): None where ``"auto"`` cannot build them (with :data:`FALLBACK`'s warning); ``True`` raises."""
-    try:
-        return library(model, cache_dir)
-    except Exception as exc:  # "auto" falls back on any failure to build: Pinocchio computes the same terms
-        if mode is True:
-            raise
-        FALLBACK.warn(exc, stacklevel=3)
-        return None
 
 
 def _bind(fn: cs.Function, n: int, out: FloatArray, consts: tuple[FloatArray, ...]) -> Callable[..., FloatArray]:

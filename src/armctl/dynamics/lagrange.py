@@ -270,15 +270,10 @@ class LagrangeDynamics(Dynamics):
         self.build_seconds = time.perf_counter() - t0
         self._cache_dir = cache_dir
         #: whether the functions run as generated C code (``compile=True``, or ``"auto"`` where it could be built)
-        self.compiled = False
-        if self._compile is not False:
-            try:
-                fns = codegen.compiled(fns, _cache_tag(model, self.rotor_coupling), cache_dir)
-                self.compiled = True
-            except Exception as exc:  # "auto" falls back on any failure to build: CasADi evaluates the same
-                if self._compile is True:
-                    raise
-                FALLBACK.warn(exc, stacklevel=2)
+        tag = _cache_tag(model, self.rotor_coupling)
+        built = FALLBACK.attempt(lambda: codegen.compiled(fns, tag, cache_dir), self._compile)
+        self.compiled = built is not None
+        fns = built or fns
         self.functions: dict[str, cs.Function] = {f.name(): f for f in fns}
         super().__init__(model, backend, **options)
 

@@ -215,9 +215,9 @@ class PinocchioDynamics(Dynamics):
         self.pin_model = model.to_pinocchio()
         self._functions = None
         if self._compile is not False:
-            from armctl.dynamics.compiled import generated_terms  # CasADi, imported on use
+            from armctl.dynamics import compiled  # CasADi, imported on use
 
-            self._functions = generated_terms(model, cache_dir, self._compile)
+            self._functions = compiled.FALLBACK.attempt(lambda: compiled.library(model, cache_dir), self._compile)
         #: whether the hot terms run as generated C code (``compile=True``, or ``"auto"`` where it could be built)
         self.compiled = self._functions is not None
         super().__init__(model, backend, **options)

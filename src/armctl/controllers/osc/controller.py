@@ -366,13 +366,8 @@ class OperationalSpaceQP(Controller):
 
         if not supported(qp.plan.tasks):
             return None
-        try:
-            return GeneratedQddData(self.dynamics, qp.plan.tasks, self.builder.regularization)
-        except Exception as exc:  # "auto": the NumPy path, and why (once per process and cause)
-            if mode is True:
-                raise
-            FALLBACK.warn(exc, stacklevel=4)
-            return None
+        make = lambda: GeneratedQddData(self.dynamics, qp.plan.tasks, self.builder.regularization)  # noqa: E731
+        return FALLBACK.attempt(make, mode, stacklevel=4)
 
     def _qdd_step(self, lay: Layout, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         """One level without contact forces: the QP on q̈ alone (see reduced)."""
