@@ -12,7 +12,7 @@ import pytest
     ("old", "new", "name"),
     [
         ("armctl.dynamics.codegen", "armctl.codegen.library", "cached"),
-        ("armctl.dynamics.codegen", "armctl.codegen.compiler", "compiler"),
+        ("armctl.dynamics.codegen", "armctl.codegen.toolchain", "compiler"),
         ("armctl.dynamics.library_cache", "armctl.codegen.library_cache", "clean_stale"),
     ],
 )

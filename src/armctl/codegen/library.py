@@ -30,7 +30,7 @@ from pathlib import Path
 import casadi as cs
 
 from armctl.codegen import library_cache
-from armctl.codegen.compiler import required
+from armctl.codegen.toolchain import required
 from armctl.errors import BackendError, CacheWarning, InvalidParameterError
 
 CFLAGS = ("-O1", "-fPIC", "-shared")

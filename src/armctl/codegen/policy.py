@@ -23,7 +23,7 @@ from typing import Literal, TypeVar
 
 import numpy as np
 
-from armctl.codegen.compiler import INSTALL_A_COMPILER, compiler, missing
+from armctl.codegen.toolchain import INSTALL_A_COMPILER, compiler, missing
 from armctl.errors import BackendError, InvalidParameterError, PerformanceWarning
 
 T = TypeVar("T")

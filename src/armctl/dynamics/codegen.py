@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import warnings
 
-from armctl.codegen.compiler import INSTALL_A_COMPILER, compiler  # noqa: F401  (re-exported)
 from armctl.codegen.library import (  # noqa: F401  (re-exported)
     CFLAGS,
     CFLAGS_FAST,
@@ -18,6 +17,7 @@ from armctl.codegen.library import (  # noqa: F401  (re-exported)
     is_cached,
     library_path,
 )
+from armctl.codegen.toolchain import INSTALL_A_COMPILER, compiler  # noqa: F401  (re-exported)
 
 warnings.warn(
     "armctl.dynamics.codegen moved to armctl.codegen.library (and armctl.codegen for the compile policy and the "
