@@ -37,7 +37,7 @@ from armctl.codegen import Fallback
 from armctl.codegen import library as codegen
 from armctl.dynamics import recursive
 from armctl.dynamics.casadi_buffer import buffer_of, view
-from armctl.dynamics.pinocchio_backend import PinocchioKernel
+from armctl.dynamics.pinocchio_kernel import PinocchioKernel
 from armctl.model.robot import PARAMS_PER_JOINT, RobotModel
 
 #: bumped when the generated code changes, so that stale cached libraries are not loaded
