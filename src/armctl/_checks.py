@@ -158,6 +158,19 @@ def boolean(x: Any, name: str) -> bool:
     return bool(x)
 
 
+def flag(name: str, doc: str) -> Any:
+    """A boolean option as a property: read from ``_<name>``, checked by :func:`boolean` on assignment (``doc``:
+    its docstring)."""
+
+    def get(self: Any) -> bool:
+        return bool(getattr(self, f"_{name}"))
+
+    def set_(self: Any, value: Any) -> None:
+        setattr(self, f"_{name}", boolean(value, name))
+
+    return property(get, set_, doc=doc)
+
+
 def instances(items: Any, cls: type, name: str, label: str, *, single: bool = False) -> tuple[Any, ...]:
     """``items`` as a tuple of ``cls`` objects: a sequence of them (not text), or one of them if ``single``;
     anything else raises an InvalidParameterError naming it (``label``: how the class is named to the user)."""

@@ -8,7 +8,7 @@ import numpy as np
 import scipy.linalg
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, boolean, scalar, vector
+from armctl._checks import FloatArray, flag, scalar, vector
 from armctl.controllers.base import Controller
 from armctl.controllers.gains import gain
 from armctl.controllers.passivity import SlidingGains, sliding
@@ -139,14 +139,10 @@ class Adaptive(SlidingGains, Controller):
         self.plant = plant
         self.reset()
 
-    @property
-    def projection(self) -> bool:
-        """Project θ̂ onto the physically consistent set after each update (may be switched between calls)."""
-        return self._projection
-
-    @projection.setter
-    def projection(self, value: bool) -> None:
-        self._projection = boolean(value, "projection")
+    projection = flag(
+        "projection", "Project θ̂ onto the physically consistent set after each update (may be switched between calls)."
+    )
+    _projection: bool
 
     @property
     def plant(self) -> Dynamics | None:

@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, apply_gain, boolean
+from armctl._checks import FloatArray, apply_gain, flag
 from armctl.controllers.base import Controller
 from armctl.controllers.integral import PIDGains
 from armctl.dynamics.base import Dynamics
@@ -61,14 +61,8 @@ class PDGravity(PIDGains, Controller):
         self._start(kp, kd, ki)
         self.friction = friction
 
-    @property
-    def friction(self) -> bool:
-        """Compensate the model's friction at the measured velocity."""
-        return self._friction
-
-    @friction.setter
-    def friction(self, value: bool) -> None:
-        self._friction = boolean(value, "friction")
+    friction = flag("friction", "Compensate the model's friction at the measured velocity.")
+    _friction: bool
 
     #: the fused law g + F·[q_d; q̇_d; q; q̇] in generated code (:mod:`armctl.controllers.pd_generated`, on
     #: ``Dynamics(model, compile=True)``; None for others) and the kernel it was made for: made again at the next
