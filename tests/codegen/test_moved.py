@@ -21,3 +21,13 @@ def test_the_old_path_warns_and_gives_the_same_objects(old: str, new: str, name:
     with pytest.warns(DeprecationWarning, match=f"{old} moved to {new.rsplit('.', 1)[0]}"):
         module = importlib.import_module(old)
     assert getattr(module, name) is getattr(importlib.import_module(new), name)
+
+
+def test_compiled_dynamics_is_a_deprecated_name_of_the_pinocchio_backend() -> None:
+    import armctl
+    from armctl.dynamics.pinocchio_backend import PinocchioDynamics
+
+    with pytest.warns(DeprecationWarning, match="CompiledDynamics is deprecated"):
+        from armctl.dynamics.compiled import CompiledDynamics
+    assert CompiledDynamics is PinocchioDynamics
+    assert isinstance(armctl.Dynamics(armctl.models.pendulum()), CompiledDynamics)

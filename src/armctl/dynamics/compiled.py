@@ -192,3 +192,22 @@ class CompiledKernel(PinocchioKernel):
         self, q: FloatArray, qd: FloatArray, qd_r: FloatArray, qdd_r: FloatArray, a: FloatArray, w: FloatArray
     ) -> FloatArray:
         return self.add_passivity_friction(self._ptau_call(q, a, w, qdd_r).copy(), qd, qd_r)
+
+
+def __getattr__(name: str) -> Any:
+    """``CompiledDynamics``, the class of ``Dynamics(model, compile=True)`` before it became a
+    :class:`~armctl.dynamics.pinocchio_backend.PinocchioDynamics` with ``compiled`` True: that class, with a
+    DeprecationWarning (the name goes in the next release)."""
+    if name == "CompiledDynamics":
+        import warnings
+
+        from armctl.dynamics.pinocchio_backend import PinocchioDynamics
+
+        warnings.warn(
+            "armctl.dynamics.compiled.CompiledDynamics is deprecated: compiled dynamics are PinocchioDynamics with "
+            "dyn.compiled True (make them with armctl.Dynamics(model, compile=True))",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return PinocchioDynamics
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
