@@ -66,7 +66,7 @@ def test_a_bench_run_over_its_velocity_limit_is_not_ok(tmp_path: Path) -> None:
 def _figures(tmp_path: Path) -> tuple[dict[str, Any], dict[str, Any]]:
     """A small run's figures (three sections), a chart and a scene playback, written into tmp_path."""
     import armctl
-    from armctl.bench.report import pyplot
+    from armctl.bench.charts import pyplot
     from armctl.references import Quintic
 
     model = armctl.models.planar_2r()
