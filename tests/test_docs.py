@@ -140,7 +140,7 @@ def test_the_readme_names_the_docs_build_and_keeps_its_quick_start() -> None:
     assert BUILD in readme
     lines = re.search(r"## Quick start\n\n```sh\n(.*?)```", readme, re.S).group(1).splitlines()
     assert lines == [
-        "pip install -e . && armctl bench --quick --out bench-out",
+        'pip install -e ".[view]" && armctl bench --quick --out bench-out',
         'pip install -e ".[test]" && python -m pytest -q',
     ]
     for image in re.findall(r"!\[[^]]*\]\(([^)]+)\)", readme):
