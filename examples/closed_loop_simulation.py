@@ -5,9 +5,9 @@ Closed-loop simulation: a payload the controller does not know
 A closed-loop simulation script: the Panda carrying a 1.5 kg payload its controller does not know,
 tracking a minimum-jerk move against joint friction with stiction, with computed torque and with the
 passivity-based law at the same bandwidth. Saves the result (npz), a chart and a 3D playback (an HTML page; it
-needs the meshcat package: pip install armctl[view]).
+needs the meshcat package: ``pip install "armctl[view]"``).
 
-Run: python examples/closed_loop_simulation.py [--out DIR] [--show]   (writes under DIR, default example-out/)
+Run: ``python examples/closed_loop_simulation.py [--out DIR] [--show]`` (writes under DIR, default example-out/)
 """
 
 from __future__ import annotations

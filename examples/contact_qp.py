@@ -6,7 +6,7 @@ Contact with the operational-space QP: the Panda approaches a table, presses wit
 against surface friction (μ = 0.3, compliant table), with the QP regulating the normal force through a
 sliding contact — and Khatib's closed-form controller doing the same motion by pose stiffness alone.
 
-Run: python examples/contact_qp.py [--out DIR] [--show]   (writes its figures under DIR, default example-out/)
+Run: ``python examples/contact_qp.py [--out DIR] [--show]`` (writes its figures under DIR, default example-out/)
 """
 
 from __future__ import annotations

@@ -9,7 +9,7 @@ runs in ``armctl.sim.simulate`` or in your own 1 kHz loop. This one is a PD with
 feedforward of the reference acceleration (a common industrial compromise between PD+gravity and computed
 torque): τ = M(q_d) q̈_d + g(q) + K_p e + K_d ė. It logs its feedback share each step.
 
-Run: python examples/custom_controller.py [--out DIR] [--show]   (writes its figures under DIR, default example-out/)
+Run: ``python examples/custom_controller.py [--out DIR] [--show]`` (writes its figures under DIR, default example-out/)
 """
 
 from __future__ import annotations

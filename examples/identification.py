@@ -16,7 +16,7 @@ centres of mass moved 2 cm, friction halved, rotors ×1.5, 10 % random per link)
    (``identify``);
 6. validation on a fresh trajectory: the torques each model predicts against the measured ones.
 
-Run: python examples/identification.py [--out DIR] [--show]   (writes its figures under DIR, default example-out/)
+Run: ``python examples/identification.py [--out DIR] [--show]`` (writes its figures under DIR, default example-out/)
 """
 
 from __future__ import annotations

@@ -5,7 +5,7 @@ Model views: bounds, stability conditions, the operational space
 Views of the dynamic model: bounds over the joint ranges, the stability conditions they give, the
 operational-space model and the dynamic manipulability ellipsoid.
 
-Run: python examples/model_views.py [--out DIR] [--show]   (writes its figures under DIR, default example-out/)
+Run: ``python examples/model_views.py [--out DIR] [--show]`` (writes its figures under DIR, default example-out/)
 """
 
 from __future__ import annotations

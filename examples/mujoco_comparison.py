@@ -5,9 +5,9 @@ armctl and MuJoCo side by side
 armctl and MuJoCo side by side: an MJCF arm read into armctl, the same closed loop on both simulators, joint
 friction held below breakaway, and the Panda pressing its collision meshes on a table of a MuJoCo scene.
 
-Needs MuJoCo: pip install "armctl[mujoco]".
+Needs MuJoCo: ``pip install "armctl[mujoco]"``.
 
-Run: python examples/mujoco_comparison.py [--out DIR]
+Run: ``python examples/mujoco_comparison.py [--out DIR]``
 """
 
 from __future__ import annotations

@@ -17,7 +17,7 @@ Each controller runs in closed loop at 1 kHz on the Panda's own model; the chart
 error and the posture error over time, and the script prints each task's residual J q̈ + J̇ q̇ − ẍ* at the end of
 the move (``ctrl.last_solution.residuals``) and each level's status.
 
-Run: python examples/osc_priorities.py [--out DIR] [--show]   (writes its figures under DIR, default example-out/)
+Run: ``python examples/osc_priorities.py [--out DIR] [--show]`` (writes its figures under DIR, default example-out/)
 """
 
 from __future__ import annotations

@@ -6,7 +6,7 @@ Plan the fastest timing of a path through six Panda waypoints within velocity an
 (TOPP-RA with the arm's own dynamics and friction, 10 % of the torque range left for feedback), compare it
 with the classic uniform time scaling, then track it in closed loop against joint friction with stiction.
 
-Run: python examples/topp_tracking.py [--out DIR] [--show]   (writes its figures under DIR, default example-out/)
+Run: ``python examples/topp_tracking.py [--out DIR] [--show]`` (writes its figures under DIR, default example-out/)
 """
 
 from __future__ import annotations

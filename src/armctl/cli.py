@@ -88,8 +88,8 @@ def main(argv: list[str] | None = None) -> int:
             "of each scene), stability maps, TOPP convergence, the cost against the accuracy of the dynamics "
             "backends, integrators, models and plant engines, and the speed of the dynamics, the control steps and "
             "the QP step. Writes OUT/figures.json (every number), the charts and OUT/report.html (one page that "
-            f"loads nothing from the network). A whole run takes {DURATION['full']} on 2 cores; --quick "
-            f"{DURATION['quick']}.",
+            f"loads nothing from the network). A whole run takes {DURATION['full']} on 2 cores, --quick "
+            f"{DURATION['quick']}; a first run also builds the generated C code, a few minutes more.",
             100,
         ),
         epilog=(

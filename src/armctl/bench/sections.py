@@ -30,8 +30,9 @@ SECTION_TITLES = {
     "osc_speed": "Operational-space QP step speed",
 }
 
-#: the duration of a whole run on 2 cores, as stated by ``armctl bench --help`` and the guide
-DURATION = {"quick": "2 to 4 minutes", "full": "30 to 60 minutes (more on a first run, which compiles C code)"}
+#: the duration of a run on 2 cores, as stated by ``armctl bench --help``: measured, with the generated C code
+#: already built (a first run builds it, a few minutes more)
+DURATION = {"quick": "under a minute", "full": "about 3 minutes"}
 
 #: the extras that add a part of the report: the part, the module it needs, the command that installs it
 EXTRAS = {
