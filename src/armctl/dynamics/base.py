@@ -74,7 +74,7 @@ def _lagrange(options: dict[str, Any]) -> type[Dynamics]:
 
 register_backend("pinocchio", _pinocchio)
 register_backend("lagrange", _lagrange)
-#: the registered backends' names at import
+#: The names of the dynamics backends registered at import: ``"pinocchio"`` and ``"lagrange"``.
 BACKENDS = backend_names()
 
 
