@@ -16,6 +16,7 @@ from armctl.scenes.panda_press import PressScene, panda_press
 from armctl.scenes.panda_topp import panda_topp
 from armctl.scenes.panda_wipe import WipeScene, panda_wipe
 
+#: The standard scenes by name, each a function that builds it (:func:`scene` calls it).
 SCENES: dict[str, Callable[[], Scene]] = {
     "pendulum": pendulum,
     "planar_2r": planar_2r,
