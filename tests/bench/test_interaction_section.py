@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from armctl.bench import interaction
+from armctl.bench import interaction, tables
 from tests.bench.test_sections import _finite_numbers
 
 
@@ -26,7 +26,7 @@ def test_section_writes_finite_figures_a_chart_and_tables(data: dict[str, Any], 
     assert "panda_collision" in interaction.summary(data)
     interaction.plot(data, tmp_path / "interaction.png")
     assert (tmp_path / "interaction.png").stat().st_size > 30_000
-    assert [len(t.rows) for t in interaction.tables(data)][:3] == [4, 3, 4]
+    assert [len(t.rows) for t in tables.interaction(data)][:3] == [4, 3, 4]
 
 
 @pytest.mark.slow

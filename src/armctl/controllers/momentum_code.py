@@ -10,7 +10,7 @@ thresholds θ, NaN when r_k is not finite (so that one comparison, ``not e <= 0`
 with T = ½ q̇ᵀ M(q) q̇ differentiated by reverse-mode AD (Cᵀ q̇ = ∂T/∂q since Ṁ = C + Cᵀ: the Lagrange equation
 itself), the recursions of :mod:`armctl.dynamics.recursive` with the model's numbers built in (the model the
 ``"pinocchio"`` backend expresses), and the friction coefficients an input (friction variants share a library).
-The library is built once per arm with the system's C compiler and cached on disk (:mod:`armctl.dynamics.codegen`).
+The library is built once per arm with the system's C compiler and cached on disk (:mod:`armctl.codegen.library`).
 
 Non-finite inputs: every entry of r_k carries 0·Σx (the 0 an input the compiler cannot fold), so that a NaN or inf
 anywhere in x reaches r_k even where the model does not depend on it (the Panda's M(q) does not on q₁), and checking
@@ -26,12 +26,17 @@ from typing import Any
 import numpy as np
 
 from armctl._checks import FloatArray
+from armctl.codegen.policy import Fallback
 from armctl.dynamics.kernel import Kernel
 from armctl.errors import InvalidParameterError, NonFiniteError
 from armctl.model.robot import RobotModel
 
 #: bumped when the generated code changes
 _CODE_VERSION = 5
+#: what the observer runs where the code cannot be built
+FALLBACK = Fallback(
+    "the momentum observer's generated update", "the update on the dynamics' kernel", "several times slower"
+)
 NAME = "momentum_observer_step"
 
 
@@ -90,17 +95,17 @@ class CompiledStep:
         thresholds: FloatArray | None,
         cache_dir: str | os.PathLike[str] | None = None,
     ) -> None:
-        from armctl.dynamics import codegen
+        from armctl.codegen import library
         from armctl.dynamics.casadi_buffer import buffer_of, view
 
         model = kernel.model
         self.n = n = model.n
-        fn = codegen.cached(
+        fn = library.cached(
             [NAME],
             f"momentum-observer|{model.fingerprint(inertial=True, tool=False)}|v{_CODE_VERSION}",
             lambda: [symbolic_step(model)],
             cache_dir,
-            flags=codegen.CFLAGS_FAST,  # a control loop's hot path: a slower build for faster code
+            flags=library.CFLAGS_FAST,  # a control loop's hot path: a slower build for faster code
         )[NAME]
         ft = kernel.friction
         self.coeffs = c = np.zeros(4 * n + 1)

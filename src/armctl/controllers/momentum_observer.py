@@ -35,8 +35,9 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from armctl._checks import FLOAT, FloatArray, boolean, per_joint, readonly, scalar, vector
+from armctl.codegen.policy import compile_mode
 from armctl.controllers.collision import Collision, explaining_wrench, isolate
-from armctl.controllers.momentum_code import CompiledUpdate
+from armctl.controllers.momentum_code import FALLBACK, CompiledStep, CompiledUpdate
 from armctl.controllers.residual_lag import DISCRETIZATIONS, check_lag_gain, lag_pole
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError, NonFiniteError
@@ -64,12 +65,14 @@ class MomentumObserver(CompiledUpdate):
     on_collision : callable, optional
         ``on_collision(observer, collision)``, called once at the update that detects a collision (e.g. to switch
         a controller to gravity compensation or to a reflex).
-    compile : bool, optional
+    compile : {"auto", True, False}, optional
         Run the update as one call of generated C code (:mod:`armctl.controllers.momentum_code`; the same numbers
-        to rounding, built once per arm with the system's C compiler and cached); None (the default): when
-        ``dynamics`` is compiled (``armctl.Dynamics(model, compile=True)``). Only the ``"exact"`` form; the code
-        evaluates the model as the ``"pinocchio"`` backend does (rotors as reflected inertia, without the
-        ``"lagrange"`` backend's gyroscopic coupling).
+        to rounding, built once per arm with the system's C compiler and cached), under the compile policy of
+        :mod:`armctl.codegen.policy`: ``"auto"`` (the default) where it can be built, else the update on the
+        dynamics' kernel with a :class:`~armctl.errors.PerformanceWarning`; True: the code or a
+        :class:`~armctl.errors.BackendError`; False: the kernel. The code evaluates the model as the
+        ``"pinocchio"`` backend does (rotors as reflected inertia): ``"auto"`` uses it on that backend only, and
+        with the ``"exact"`` form only.
 
     Raises
     ------
@@ -77,7 +80,7 @@ class MomentumObserver(CompiledUpdate):
         A gain ≤ 0, a gain too large for ``period`` in the ``"euler"`` form (K_O h ≥ 2), a threshold < 0, an
         unknown discretization, an ``on_collision`` that is not callable, ``compile=True`` with ``"euler"``.
     BackendError
-        ``compile=True`` and no C compiler to build the code with (nor a cached build).
+        ``compile=True`` and the code cannot be built (no C compiler, nor a cached build).
 
     Examples
     --------
@@ -96,7 +99,7 @@ class MomentumObserver(CompiledUpdate):
         period: float | None = None,
         discretization: str = "exact",
         on_collision: Callable[[MomentumObserver, Collision], Any] | None = None,
-        compile: bool | None = None,
+        compile: bool | str = "auto",
     ) -> None:
         if not isinstance(dynamics, Dynamics):
             raise InvalidParameterError(
@@ -133,17 +136,20 @@ class MomentumObserver(CompiledUpdate):
             self.check_gain(self.period)
         self._names = [j.name for j in dynamics.model.joints]
         self._shape = (self.n,)
-        self.compiled = bool(getattr(dynamics, "compiled", False)) if compile is None else boolean(compile, "compile")
-        if self.compiled and discretization != "exact":
+        mode = compile_mode(compile)
+        if mode is True and discretization != "exact":
             raise InvalidParameterError(
-                "compile=True runs the 'exact' discretization only: drop compile or use discretization='exact'",
+                "compile=True runs the 'exact' discretization only: use compile=False or discretization='exact'",
                 value=discretization,
             )
-        self._code: Any = None
-        if self.compiled:
-            from armctl.controllers.momentum_code import CompiledStep
-
-            self._code = CompiledStep(dynamics.kernel, self.friction, self.thresholds)
+        if mode == "auto" and (discretization != "exact" or dynamics.backend != "pinocchio"):
+            mode = False
+        self._code: Any = FALLBACK.attempt(
+            lambda: CompiledStep(dynamics.kernel, self.friction, self.thresholds), mode, stacklevel=2
+        )
+        #: whether the update runs as generated code
+        self.compiled = self._code is not None
+        if self._code is not None:
             self.step = self._compiled_step  # type: ignore[method-assign]  # one call fewer on the hot path
         # whether NaN or inf in any entry of any input reaches r, so that checking r is enough: the generated code
         # carries them (momentum_code), and a kernel whose Coriolis matrix propagates them (β holds C(q, q̇))
