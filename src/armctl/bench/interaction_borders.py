@@ -1,6 +1,6 @@
 """Where interaction control fails, predicted and then simulated: the Panda presses on a compliant table (a
-Kelvin–Voigt plane at the tool's height, a force/torque sensor at the tool in world axes, one control period of
-measurement delay at 1 kHz).
+Kelvin–Voigt plane at the tool's height, or just above it for force control, :data:`PRELOAD`), with a force/torque
+sensor at the tool in world axes and one control period of measurement delay at 1 kHz.
 
 * Force control (:class:`~armctl.controllers.ForceControl`, proportional, inner computed torque): the critical
   force gain K_F* against the table's stiffness k_e, predicted by the sampled-data model of
@@ -31,6 +31,10 @@ DELAY = 1
 #: the inner motion loop of force control [1/s², 1/s] and the force wanted [N]
 INNER_KP, INNER_KD, FORCE = 400.0, 40.0, 10.0
 SETTLE = 0.3
+#: the force-control runs start pressing with 9 N of the 10 wanted: a 1 N step excites the loop while the motion
+#: stays small (the model is linear about the pose; at the critical gain on a soft table a 10 N error would command
+#: a motion of decimetres, and the torque would saturate)
+PRELOAD = 9.0
 
 
 def _setup() -> tuple[armctl.RobotModel, armctl.Dynamics, float, float]:
@@ -39,12 +43,15 @@ def _setup() -> tuple[armctl.RobotModel, armctl.Dynamics, float, float]:
     return model, dyn, float(dyn.frame_pose(Q_READY)[2, 3]), normal_inertia(dyn, Q_READY)
 
 
-def press(controller: Any, stiffness: float, duration: float = 1.0, dt: float | None = None) -> Any:
-    """The Panda at its ready pose on a table of ``stiffness`` [N/m] at the tool's height, under ``controller``."""
+def press(
+    controller: Any, stiffness: float, duration: float = 1.0, dt: float | None = None, preload: float = 0.0
+) -> Any:
+    """The Panda at its ready pose on a table of ``stiffness`` [N/m] under ``controller``: the table at the tool's
+    height, or ``preload``/k_e above it (the tool starts pressing with ``preload`` newtons)."""
     from armctl.sim import ForceSensor, KelvinVoigt, Plane, Sensing, simulate
 
     model, _, z, _ = _setup()
-    table = Plane(KelvinVoigt(stiffness, 0.0), point=(0.0, 0.0, z))
+    table = Plane(KelvinVoigt(stiffness, 0.0), point=(0.0, 0.0, z + preload / stiffness))
     sensing = Sensing(sensors=ForceSensor(world_axes=True), delay=DELAY)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # saturation and energy warnings of runs that chatter: the outcome says it
@@ -85,7 +92,7 @@ def simulated_force_gain(stiffness: float, guess: float, steps: int = 7, duratio
     runs: list[tuple[float, str]] = []
 
     def stable(k: float) -> bool:
-        o = outcome(press(force_control(k), stiffness, duration))
+        o = outcome(press(force_control(k), stiffness, duration, preload=PRELOAD))
         runs.append((k, o))
         return o == "stable"
 
