@@ -51,5 +51,5 @@ def test_force_tracking_and_observer_tradeoff(data: dict[str, Any]) -> None:
     delays = [r["delay"] for r in rows if r["delay"] is not None]
     assert delays == sorted(delays, reverse=True)  # a higher gain detects sooner ...
     noise = [r["noise"] for r in rows]
-    assert noise == sorted(noise)  # ... and is noisier, in proportion to the gain
-    np.testing.assert_allclose(noise, [r["noise_predicted"] for r in rows], rtol=0.2)
+    assert noise == sorted(noise)  # ... and is noisier, as the discrete lag's closed form says
+    np.testing.assert_allclose(noise, [r["noise_predicted"] for r in rows], rtol=0.05)

@@ -7,7 +7,8 @@ the simulator's true external joint torques after the push has settled (RMS from
 delay with a threshold of 3 N·m (from the push to the first residual above it [s]), and false alarms (a detection
 before the push). The closed forms beside them: a first-order lag crosses a threshold θ on a step of height A after
 −ln(1 − θ/A)/K_O; and since r = K_O (p − ∫ … dt), white velocity noise of deviation σ reaches joint j's residual
-with the deviation K_O σ ‖M_j‖ (2/(1 + γ))^½, γ = exp(−K_O T) — in proportion to the gain (M_j: row j of M(q)).
+with the deviation (1 − γ)/T · σ ‖M_j‖ (2/(1 + γ))^½, γ = exp(−K_O T) (the lag's response to the differenced
+momentum noise; ≈ K_O σ ‖M_j‖ for K_O T ≪ 1: in proportion to the gain; M_j: row j of M(q)).
 Numbers that do not exist (no settled samples in the run, no detection) are None.
 """
 
@@ -73,7 +74,9 @@ def run(quick: bool = False) -> dict[str, Any]:
             {
                 "gain": k_o,
                 "noise": float(np.sqrt((r[before & (res.t > 0.05)] ** 2).mean())),
-                "noise_predicted": float(k_o * NOISE_QD * np.sqrt(2.0 / (1.0 + gamma) * (rows_m**2).mean())),
+                "noise_predicted": float(
+                    (1.0 - gamma) / period * NOISE_QD * np.sqrt(2.0 / (1.0 + gamma) * (rows_m**2).mean())
+                ),
                 "error": float(np.sqrt(((r - true)[settled] ** 2).mean())) if settled.any() else None,
                 "delay": first - STEP_AT if above.size and first >= STEP_AT else None,
                 "false_alarm": bool(above.size and first < STEP_AT),
@@ -98,7 +101,7 @@ def plot_axes(data: dict[str, Any], ax_delay: Any, ax_noise: Any) -> None:
     ax_delay.set_title("detection delay (red: false alarms before the push)", fontsize=10)
     ax_delay.legend(fontsize=8)
     ax_noise.loglog(k, [r["noise"] for r in rows], "o-", label="noise before the push (RMS)")
-    ax_noise.loglog(k, [r["noise_predicted"] for r in rows], "k--", label="K_O σ ‖M_j‖ (2/(1 + γ))^½")
+    ax_noise.loglog(k, [r["noise_predicted"] for r in rows], "k--", label="(1 − γ)/T σ ‖M_j‖ (2/(1 + γ))^½")
     ax_noise.loglog(k, [nan if r["error"] is None else r["error"] for r in rows], "s-",
                     label="error against the true τ_ext after 5/K_O (RMS)")  # fmt: skip
     ax_noise.axhline(data["threshold"], color="tab:red", ls=":", label="threshold")
