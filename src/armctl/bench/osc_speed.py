@@ -45,7 +45,14 @@ import numpy as np
 
 import armctl
 from armctl.bench.timing import interleaved_samples
-from armctl.controllers.osc import ClosedFormOSC, FramePoseTask, OperationalSpaceQP, PostureTask, TorqueLimit
+from armctl.controllers.osc import (
+    ClosedFormOSC,
+    FramePoseTask,
+    OperationalSpaceQP,
+    PostureTask,
+    QPArrays,
+    TorqueLimit,
+)
 
 #: what the checks of this benchmark ask: the default step within 15 RNEA on both sets of states
 TARGETS = {"ratio_rnea": 15.0}
@@ -152,6 +159,11 @@ def _cycle(seq: States) -> Callable[[], tuple[float, np.ndarray, np.ndarray]]:
     return nxt
 
 
+def _writable(qp: QPArrays) -> tuple[np.ndarray, ...]:
+    """(H, g, A, b, C, l, u) of ``qp`` as writable copies, in proxsuite's order of arguments."""
+    return tuple(np.array(a) for a in (qp.H, qp.g, qp.A, qp.b, qp.C, qp.l, qp.u))
+
+
 def measure(seq: States, ctrl: OperationalSpaceQP, rounds: int, extra: dict[str, Any] | None = None) -> dict[str, Any]:
     """The figures of one set of states (module docstring); ``extra``: more candidates to time, by name."""
     import pinocchio as pin
@@ -159,12 +171,11 @@ def measure(seq: States, ctrl: OperationalSpaceQP, rounds: int, extra: dict[str,
 
     ref = armctl.Reference(Q_HOME)
     count = len(seq)
-    qps = [tuple(np.array(a) for a in ctrl.build(t, q, qd, ref).arrays(0)) for t, q, qd in seq]
-    H, g, A, b, C, l, u = qps[0]  # noqa: E741
-    bare = proxqp.dense.QP(H.shape[0], b.shape[0], l.shape[0])
+    qps = [_writable(ctrl.build(t, q, qd, ref).arrays(0)) for t, q, qd in seq]
+    bare = proxqp.dense.QP(qps[0][0].shape[0], qps[0][3].shape[0], qps[0][5].shape[0])
     bare.settings.eps_abs = ctrl.solver.eps_abs
     bare.settings.eps_rel = 0.0
-    bare.init(H, g, A, b, C, l, u)
+    bare.init(*qps[0])
     bare.solve()
     bare.settings.initial_guess = proxqp.InitialGuess.WARM_START_WITH_PREVIOUS_RESULT
     pm = ctrl.dynamics.model.to_pinocchio()

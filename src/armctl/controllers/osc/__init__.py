@@ -21,7 +21,7 @@ from armctl.controllers.osc.daqp_solver import DaqpSolver
 from armctl.controllers.osc.diagnose import conflicting_rows
 from armctl.controllers.osc.hierarchy import OSCSolution
 from armctl.controllers.osc.limits import AccelerationLimit, JointPositionLimit, JointVelocityLimit, Limit, TorqueLimit
-from armctl.controllers.osc.problem import QPProblem
+from armctl.controllers.osc.problem import QPArrays, QPProblem
 from armctl.controllers.osc.solve import ProxQPSolver, QPSolution, QpsolversSolver
 from armctl.controllers.osc.tasks import (
     ContactForceTask,
@@ -51,6 +51,7 @@ __all__ = [
     "OperationalSpaceQP",
     "PostureTask",
     "ProxQPSolver",
+    "QPArrays",
     "QPBuilder",
     "QPFailure",
     "QPProblem",

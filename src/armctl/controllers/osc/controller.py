@@ -481,7 +481,7 @@ class OperationalSpaceQP(Controller):
             if qs is None:
                 continue
             p = sol.problem(k)
-            if not verified((p.H, p.g, p.A, p.b, p.C, p.l, p.u), qs.x[: p.nx], qs.y, qs.z):
+            if not verified(p.arrays, qs.x[: p.nx], qs.y, qs.z):
                 return False
         return True
 

@@ -27,7 +27,7 @@ from armctl._checks import FloatArray
 from armctl.controllers.osc import diagnose as _diagnose
 from armctl.controllers.osc.build import StepQP
 from armctl.controllers.osc.chain import QPFailure, SolverChain
-from armctl.controllers.osc.problem import Arrays, QPProblem
+from armctl.controllers.osc.problem import QPArrays, QPProblem
 from armctl.controllers.osc.solve import QPSolution
 from armctl.errors import SolverError
 
@@ -172,7 +172,7 @@ def solve_cascade(step: StepQP, chain: SolverChain, rank_tol: float = 1e-9) -> O
         frozen_rows.append(frozen)
         if step.slacks:
             p = step.problem(k, frozen)
-            arrays: Arrays = (p.H, p.g, p.A, p.b, p.C, p.l, p.u)
+            arrays: QPArrays = p.arrays
         else:
             arrays = step.arrays(k, frozen)
         try:

@@ -37,7 +37,7 @@ from armctl.controllers.osc.diagnose import raise_unsolved
 from armctl.controllers.osc.layout import Layout
 from armctl.controllers.osc.levels import LevelPlan, LevelRows
 from armctl.controllers.osc.optimality import verified
-from armctl.controllers.osc.problem import Arrays
+from armctl.controllers.osc.problem import QPArrays
 from armctl.controllers.osc.scale import MAX_TASK_RHS, refuse_scale
 from armctl.controllers.osc.solve import QPSolution
 from armctl.controllers.osc.state import ModelState
@@ -69,7 +69,7 @@ class QddStep:
         bounds: list[tuple[FloatArray, FloatArray]],
         qdd: FloatArray,
         tau: FloatArray,
-        arrays: Arrays | None = None,
+        arrays: QPArrays | None = None,
         solution: QPSolution | None = None,
         generated: GeneratedQddData | None = None,
     ) -> None:
@@ -252,11 +252,12 @@ class QddQP:
         mass: FloatArray,
         hf: FloatArray,
         bounds: list[tuple[FloatArray, FloatArray]],
-    ) -> Arrays:
-        """The QP (H, g, A, b, C, l, u) on q̈ (its rows those of the public problem, torque rows shifted by h')."""
+    ) -> QPArrays:
+        """The QP on q̈ (its rows those of the public problem, torque rows shifted by h')."""
+        A, b = self.no_rows
         if self.torque_only:  # one torque limit: C = M, bounds shifted by h'
             lo, up = bounds[0]
-            return (np.array(H), g.copy(), *self.no_rows, mass.copy(), lo - hf, up - hf)
+            return QPArrays(np.array(H), g.copy(), A, b, mass.copy(), lo - hf, up - hf)
         C = self.C_template.copy()
         lo = np.concatenate([b[0] for b in bounds]) if bounds else np.zeros(0)
         up = np.concatenate([b[1] for b in bounds]) if bounds else np.zeros(0)
@@ -264,8 +265,7 @@ class QddQP:
             C[r] = mass
             lo[r] -= hf
             up[r] -= hf
-        A, b = self.no_rows
-        return (np.array(H), g.copy(), A, b, C, lo, up)
+        return QPArrays(np.array(H), g.copy(), A, b, C, lo, up)
 
     def public(self, result: QddStep) -> tuple[StepQP, QPSolution]:
         """The public :class:`StepQP` of the last step (x = [q̈; τ]) and its solution mapped onto it: x = [q̈; τ],
