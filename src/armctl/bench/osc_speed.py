@@ -255,7 +255,7 @@ def run(count: int = 400, rounds: int = 15, quick: bool = False) -> dict[str, An
     seq, ctrl, closed = states(count)
     ref = armctl.Reference(Q_HOME)
     closed_next = _cycle(seq)
-    cold = [tuple(np.array(a) for a in ctrl.build(t, q, qd, ref).arrays(0)) for t, q, qd in seq]
+    cold = [_writable(ctrl.build(t, q, qd, ref).arrays(0)) for t, q, qd in seq]
     cold_index = [0]
 
     def closed_form() -> None:
