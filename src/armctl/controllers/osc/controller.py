@@ -18,6 +18,7 @@ from armctl.controllers.base import Controller
 from armctl.controllers.osc.build import QPBuilder, StepQP
 from armctl.controllers.osc.chain import QPFailure, SolverChain
 from armctl.controllers.osc.contact import Contact
+from armctl.controllers.osc.contact_qp import ContactQP, ContactStep, applies
 from armctl.controllers.osc.diagnose import raise_unsolved
 from armctl.controllers.osc.hierarchy import OSCSolution, solve_cascade
 from armctl.controllers.osc.layout import Layout
@@ -236,9 +237,12 @@ class OperationalSpaceQP(Controller):
             and callable(getattr(self.solver, "solve_raw", None))
         )
         self._qdd: dict[Layout, QddQP] = {}
+        # with active contacts: the QPs on [q̈; f] (see contact_qp)
+        self._contact_path = callable(getattr(self.solver, "solve_raw", None)) and applies(self.builder)
+        self._contact_qps: dict[Layout, ContactQP] = {}
         if self._qdd_path and not self.contacts:  # made now: its generated code is built or loaded here
             self._qdd_qp(self.builder.layout())
-        self._pending: tuple[QddQP, QddStep] | None = None
+        self._pending: tuple[QddQP, QddStep] | tuple[ContactQP, ContactStep] | None = None
         self._last_solution: OSCSolution | None = None
         self._steps = 0
         self._kept: Counter[int] = Counter()
@@ -258,9 +262,7 @@ class OperationalSpaceQP(Controller):
         pending = self._pending
         if pending is not None:
             self._pending = None
-            qp, result = pending
-            step, mapped = qp.public(result)
-            self._last_solution = OSCSolution(step, mapped.x, (mapped,), ("solved",), None, [None])
+            self._last_solution = pending[0].solution(pending[1])  # type: ignore[arg-type]  # each QP its own step
         return self._last_solution
 
     @last_solution.setter
@@ -405,6 +407,32 @@ class OperationalSpaceQP(Controller):
             np.maximum(tau, self._tau_lo, out=tau)
         return tau
 
+    def _contact_step(self, lay: Layout, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
+        """The levels with active contacts, solved on [q̈; f] (see contact_qp)."""
+        qp = self._contact_qps.get(lay)
+        if qp is None:
+            qp = self._contact_qps[lay] = ContactQP(self.builder, lay)
+        result = qp.step(self.evaluator.evaluate(q, qd), t, ref, self.chain)
+        self._pending = (qp, result)
+        tau = result.tau.clip(self._tau_lo, self._tau_up) if self._tau_up is not None else result.tau.copy()
+        iterations = fallbacks = 0
+        for s in result.solutions:
+            if s is not None:
+                iterations += s.iterations
+                fallbacks += s.fallbacks
+        log: dict[str, Any] = {"qp_iterations": iterations, "qp_fallbacks": fallbacks}
+        for name, f in qp.forces(result).items():
+            log[f"force[{name}]"] = f
+        status = result.status
+        if len(status) > 1:
+            log["level_status"] = tuple(status)
+            for k, st in enumerate(status):
+                if st != "solved":
+                    self._kept[k] += 1
+                    self._kept_reason[k] = st
+        self.last_log = log
+        return tau
+
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         """τ of the verified optimum, clipped onto the torque limits (which it meets to the optimality check's
         tolerance).
@@ -431,10 +459,13 @@ class OperationalSpaceQP(Controller):
         """
         self._steps += 1
         self._pending = self._last_solution = None
-        if self._qdd_path:
+        if self._qdd_path or self._contact_path:
             lay = self.builder.layout()
             if not lay.contacts:
-                return self._qdd_step(lay, t, q, qd, ref)
+                if self._qdd_path:
+                    return self._qdd_step(lay, t, q, qd, ref)
+            elif self._contact_path:
+                return self._contact_step(lay, t, q, qd, ref)
         state = self.evaluator.evaluate(q, qd)
         step = self.builder.build(state, t, ref)
         for lev in step.levels:
@@ -473,7 +504,7 @@ class OperationalSpaceQP(Controller):
         """
         pending = self._pending
         if pending is not None:
-            return pending[0].verify(pending[1])
+            return pending[0].verify(pending[1])  # type: ignore[arg-type]  # each QP its own step
         sol = self._last_solution
         if sol is None:
             raise InvalidParameterError("there is no last step to verify (call the controller first)")

@@ -111,6 +111,8 @@ class DaqpSolver:
         else:
             rows, upper, lower = arrays.C, arrays.u, arrays.l
             sense = None if active is None else _SENSE[active]
+        if not (H.flags.c_contiguous and rows.flags.c_contiguous):  # DAQP reads the buffers as C-ordered
+            H, rows = np.ascontiguousarray(H), np.ascontiguousarray(rows)
         data = (H, g, rows, upper, lower)
         try:
             x, _, flag, info = self._solve(*data, sense, primal_tol=self.primal_tol, iter_limit=self.iter_limit)

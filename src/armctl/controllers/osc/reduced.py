@@ -34,6 +34,7 @@ from armctl._checks import FloatArray
 from armctl.controllers.osc.build import QPBuilder, StepQP
 from armctl.controllers.osc.chain import QPFailure, SolverChain
 from armctl.controllers.osc.diagnose import raise_unsolved
+from armctl.controllers.osc.hierarchy import OSCSolution
 from armctl.controllers.osc.layout import Layout
 from armctl.controllers.osc.levels import LevelPlan, LevelRows
 from armctl.controllers.osc.optimality import verified
@@ -282,6 +283,11 @@ class QddQP:
         if sol is None:
             return step, QPSolution(x, "solved", 0, "active set", y, z, "active set", 0, np.zeros(z.shape[0], np.int8))
         return step, QPSolution(x, sol.status, sol.iterations, sol.solver, y, z, sol.stage, sol.fallbacks, sol.active)
+
+    def solution(self, result: QddStep) -> OSCSolution:
+        """The public :class:`OSCSolution` of a step (:meth:`public`)."""
+        step, mapped = self.public(result)
+        return OSCSolution(step, mapped.x, (mapped,), ("solved",), None, [None])
 
     def public_step(self, bounds: list[tuple[FloatArray, FloatArray]]) -> StepQP:
         """The public :class:`StepQP` of the rows in the workspace (those of the last step)."""

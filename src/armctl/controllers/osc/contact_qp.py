@@ -1,0 +1,301 @@
+"""`ContactQP`: the QPs of a step with active contacts, solved on y = [q̈; f] (τ eliminated).
+
+With contacts the equation of motion still gives τ outright, τ = M q̈ − Σ_c J_cᵀ f_c + h' with h' = C q̇ + g + τ_f,
+so every level's QP over x = [q̈; τ; f] that :class:`~armctl.controllers.osc.build.StepQP` shows,
+
+    min ½‖T x − t‖² + ½ε_k‖x‖²   s.t.   M q̈ − τ − Σ J_cᵀ f_c = −h',   contact rows,   l ≤ C x ≤ u,
+
+is, with x = E y + e (E = [I 0; B; 0 I], B = [M | −J_1ᵀ … −J_kᵀ], e = [0; h'; 0]), the QP over y
+
+    min ½‖T_y y − t‖² + ½ε_k(‖y‖² + ‖B y + h'‖²)
+    s.t. contact rows (on q̈ and f),   l_τ − h' ≤ B y ≤ u_τ − h',   l_q̈ ≤ q̈ ≤ u_q̈,   the cones on f
+
+whenever no task reads τ — the same optimum exactly (the same cost at every feasible point, the rows one for
+one), with n fewer variables and n fewer equality rows. Its multipliers are the public problem's: those of the
+contact rows, the limits and the cones are the same, the equation of motion's is ε_k τ + Σ z_τ (the τ block of
+the public stationarity condition). The regularisation enters as rows below the task rows, √ε_k [I | 0] and
+√ε_k [B | −h'], so that one Gram product of the stacked rows gives each level's H and g.
+
+Levels below the first keep the optimum of those above through the rows F y = F y_{k−1}, F an orthonormal basis
+of the weighted task rows of the levels above (:func:`~armctl.controllers.osc.hierarchy.extend_basis`): no task
+reads τ, so these are the public problem's ``priority[i]`` rows with zero τ columns. Every QP goes to the
+controller's :class:`~armctl.controllers.osc.chain.SolverChain`; τ comes only from its verified optimum.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from armctl._checks import FloatArray
+from armctl.controllers.osc.build import QPBuilder, StepQP
+from armctl.controllers.osc.chain import QPFailure, SolverChain
+from armctl.controllers.osc.contact import Contact
+from armctl.controllers.osc.diagnose import raise_unsolved
+from armctl.controllers.osc.hierarchy import OSCSolution, extend_basis
+from armctl.controllers.osc.layout import UPPER_REGULARIZATION_FACTOR, Layout
+from armctl.controllers.osc.levels import LevelPlan, LevelRows
+from armctl.controllers.osc.optimality import verified
+from armctl.controllers.osc.problem import QPArrays
+from armctl.controllers.osc.scale import MAX_TASK_RHS, refuse_scale
+from armctl.controllers.osc.solve import QPSolution
+from armctl.controllers.osc.state import ModelState
+from armctl.references import Reference
+
+_MAX_RHS2 = MAX_TASK_RHS**2
+
+
+class _YLayout:
+    """The variable blocks of y = [q̈; f] (what a LevelPlan reads of a layout)."""
+
+    def __init__(self, nx: int, variables: dict[str, slice]) -> None:
+        self.nx = nx
+        self.variables = variables
+
+
+def applies(builder: QPBuilder) -> bool:
+    """Whether the QPs of ``builder`` can be solved on [q̈; f]: no slacks and no task on τ."""
+    return not builder.slacks and all(tk.variable != "tau" for tk in builder.tasks)
+
+
+class ContactStep:
+    """What one step of :class:`ContactQP` leaves: q̈, τ, the forces y's blocks, per level the QP and its
+    verified solution (None for a level that kept the one above) and status, and the rows the public problem is
+    made from (B = [M | −J_cᵀ | −h'], the contact rows, the bounds, each level's task rows)."""
+
+    __slots__ = ("arrays", "b_rows", "bounds", "contact", "frozen", "rows", "solutions", "status", "tau", "y")
+
+    def __init__(self) -> None:
+        self.arrays: list[QPArrays] = []
+        self.solutions: list[QPSolution | None] = []
+        self.status: list[str] = []
+        self.frozen: list[tuple[FloatArray, FloatArray] | None] = []
+        self.rows: list[FloatArray] = []
+        self.b_rows: FloatArray
+        self.contact: tuple[FloatArray, FloatArray]
+        self.bounds: tuple[FloatArray, FloatArray]
+        self.y: FloatArray
+        self.tau: FloatArray
+
+
+class ContactQP:
+    """Builds and solves the levels of one step on y = [q̈; f] (module docstring) for a layout with contacts, and
+    maps the solution back onto the public problem (:meth:`solution`). Made once per layout."""
+
+    def __init__(self, builder: QPBuilder, lay: Layout) -> None:
+        n = self.n = builder.n
+        self.builder = builder
+        self.layout = lay
+        variables = {"qdd": slice(0, n)}
+        col = n
+        #: per contact: (contact, its columns in y, its columns in x, its equality rows)
+        self.contacts: list[tuple[Contact, slice, slice, slice]] = []
+        for k, c in enumerate(lay.contacts):
+            variables[c.name] = slice(col, col + c.dim)
+            self.contacts.append((c, variables[c.name], lay.variables[c.name], slice(3 * k, 3 * k + 3)))
+            col += c.dim
+        self.ny = ny = col
+        self.variables = variables
+        ylay = _YLayout(ny, variables)
+        eps = builder.regularization
+        plans_x = builder.plans(lay)
+        last = len(plans_x) - 1
+        self.levels: list[tuple[LevelPlan, LevelPlan, FloatArray, float]] = []
+        for k, px in enumerate(plans_x):
+            w = eps if k == last else UPPER_REGULARIZATION_FACTOR * eps
+            plan = LevelPlan(px.tasks, ylay, extra_rows=ny + n, extra_weight=w)  # type: ignore[arg-type]  # _YLayout: the fields LevelPlan reads
+            template = plan.template.copy()
+            template[plan.m : plan.m + ny, :ny] = np.eye(ny)
+            template.flags.writeable = False
+            self.levels.append((plan, px, template, w))
+        self.me = 3 * len(lay.contacts)
+        # inequality rows on y: [I | 0] per q̈ limit, B per torque limit (filled each step), the cones on f
+        blocks = []
+        self.tau_rows: list[slice] = []
+        for k, lim in enumerate(lay.limits):
+            blk = np.zeros((n, ny))
+            if lim.variable == "tau":
+                self.tau_rows.append(slice(k * n, (k + 1) * n))
+            else:
+                blk[:, :n] = np.eye(n)
+            blocks.append(blk)
+        for c, cy, _, _ in self.contacts:
+            cf = c.cone_rows()[0]
+            blk = np.zeros((cf.shape[0], ny))
+            blk[:, cy] = cf
+            blocks.append(blk)
+        self.C_template = np.vstack(blocks) if blocks else np.zeros((0, ny))
+        self.C_template.flags.writeable = False
+        self.A_template = np.zeros((self.me, ny))
+        self.A_template.flags.writeable = False
+        self.nx = lay.nx
+
+    def step(self, state: ModelState, t: float, ref: Reference, chain: SolverChain) -> ContactStep:
+        """The verified optimum of every level at ``state`` (the levels in priority order). Raises
+        InvalidParameterError for a level out of scale (:mod:`~armctl.controllers.osc.scale`); if level 0 has no
+        verified optimum, InfeasibleError naming the conflicting rows or SolverError."""
+        n, ny = self.n, self.ny
+        res = ContactStep()
+        hf = state.bias if state.friction is None else state.bias + state.friction
+        brows = np.empty((n, ny + 1))  # [B | −h']
+        brows[:, :n] = state.mass
+        np.negative(hf, out=brows[:, ny])
+        A = self.A_template.copy()
+        b = np.empty(self.me)
+        for c, cy, _, rows in self.contacts:
+            fk = state.frame(c.frame)
+            np.negative(fk.jacobian[:3].T, out=brows[:, cy])
+            gq, gf, rhs = c.equality_rows(state)
+            A[rows, :n] = gq
+            A[rows, cy] = gf
+            b[rows] = rhs
+        res.b_rows, res.contact = brows, (A, b)
+        lay = self.layout
+        if lay.constant_bounds is not None:
+            lo, up = lay.constant_bounds
+        else:
+            bounds = [lim.bounds(state) for lim in lay.limits]
+            lo = np.concatenate([bd[0] for bd in bounds] + [lay.cone_l])
+            up = np.concatenate([bd[1] for bd in bounds] + [lay.cone_u])
+        res.bounds = (lo, up)
+        if self.tau_rows:
+            C = self.C_template.copy()
+            ly, uy = lo.copy(), up.copy()
+            for r in self.tau_rows:
+                C[r] = brows[:, :ny]
+                ly[r] -= hf
+                uy[r] -= hf
+        else:
+            C, ly, uy = self.C_template, lo, up
+        F = np.zeros((0, ny))
+        y: FloatArray | None = None
+        last = len(self.levels) - 1
+        for k, (plan, _, template, _) in enumerate(self.levels):
+            rows = template.copy()
+            for tk, r, cols in plan.entries:
+                J, bb = tk.residual(state, t, ref)
+                if J is not None:
+                    rows[r, cols] = J
+                rows[r, ny] = bb
+            m = plan.m
+            rows[m + ny :] = brows
+            res.rows.append(rows)
+            tn = plan.scale() * rows
+            G = tn.T.dot(tn)
+            if not G[ny, ny] <= _MAX_RHS2:  # ‖W^{1/2} b‖² + ε_k‖h'‖² (NaN too)
+                refuse_scale(plan.tasks, list(plan.slices.values()), rows, ny, state, t, ref)
+            H = G[:ny, :ny].copy()  # contiguous (DAQP reads the buffer)
+            frozen = None if y is None else (F, F.dot(y))
+            res.frozen.append(frozen)
+            if frozen is not None and F.shape[0]:
+                arrays = QPArrays(H, G[ny, :ny], np.vstack((A, F)), np.concatenate((b, frozen[1])), C, ly, uy)
+            else:
+                arrays = QPArrays(H, G[ny, :ny], A, b, C, ly, uy)
+            res.arrays.append(arrays)
+            try:
+                sol = chain.solve(arrays, k)
+            except QPFailure as err:
+                if y is None:
+                    raise_unsolved(self.solution(res, partial=True).problem(0), err.attempts)
+                res.solutions.append(None)
+                res.status.append(
+                    f"kept level {k - 1}: no verified optimum ({err.attempts[-1][1] if err.attempts else ''})"
+                )
+                if k < last:
+                    F = extend_basis(F, tn[:m, :ny])
+                continue
+            res.solutions.append(sol)
+            res.status.append("solved")
+            y = sol.x
+            if k < last:
+                F = extend_basis(F, tn[:m, :ny])
+        assert y is not None  # level 0 raised otherwise
+        res.y = y
+        tau = brows[:, :ny].dot(y)
+        tau += hf
+        res.tau = tau
+        return res
+
+    def forces(self, res: ContactStep) -> dict[str, FloatArray]:
+        """Each active contact's force f [N] of a step (views of its y)."""
+        return {c.name: res.y[cy] for c, cy, _, _ in self.contacts}
+
+    def verify(self, res: ContactStep) -> bool:
+        """The optimality check of every level's solution of ``res``, run again (what a step pays for it)."""
+        for arrays, sol in zip(res.arrays, res.solutions, strict=True):
+            if sol is not None and not verified(arrays, sol.x, sol.y, sol.z):
+                return False
+        return True
+
+    def _embed(self, y: FloatArray, tau: FloatArray) -> FloatArray:
+        """x = [q̈; τ; f] of y = [q̈; f] and τ."""
+        n = self.n
+        x = np.empty(self.nx)
+        x[:n] = y[:n]
+        x[n : 2 * n] = tau
+        for _, cy, cx, _ in self.contacts:
+            x[cx] = y[cy]
+        return x
+
+    def _embed_rows(self, rows: FloatArray) -> FloatArray:
+        """Rows on y (with a right-hand side column or not) as rows on x (zero τ columns)."""
+        n, ny = self.n, self.ny
+        extra = rows.shape[1] - ny
+        out = np.zeros((rows.shape[0], self.nx + extra))
+        out[:, :n] = rows[:, :n]
+        for _, cy, cx, _ in self.contacts:
+            out[:, cx] = rows[:, cy]
+        if extra:
+            out[:, self.nx :] = rows[:, ny:]
+        return out
+
+    def solution(self, res: ContactStep, partial: bool = False) -> OSCSolution:
+        """The public :class:`OSCSolution` of a step: its :class:`StepQP` on x = [q̈; τ; f], x, and each level's
+        solution mapped onto it (the same z and contact-row multipliers; ε_k τ + Σ z_τ for the equation of
+        motion). ``partial``: for a step that stopped at level 0 (only the problem is read)."""
+        n, ny, lay = self.n, self.ny, self.layout
+        brows = res.b_rows
+        hf = -brows[:, ny]
+        A_y, b_y = res.contact
+        A = np.zeros((n + self.me, self.nx))
+        A[:n, :n] = brows[:, :n]
+        A[:n, n : 2 * n] = -np.eye(n)
+        for _, cy, cx, _ in self.contacts:
+            A[:n, cx] = brows[:, cy]
+        A[n:] = self._embed_rows(A_y)
+        levels = []
+        for k, (plan, px, _, _) in enumerate(self.levels):
+            if k >= len(res.rows):
+                break
+            jr = self._embed_rows(res.rows[k][: plan.m])
+            levels.append(LevelRows(px.tasks, jr, px.scale(), px.slices))
+        step = StepQP(lay, A, np.concatenate((-hf, b_y)), *res.bounds, levels, lay.regularization, False)
+        frozen = [None if f is None else (self._embed_rows(f[0]), f[1]) for f in res.frozen]
+        if partial:
+            return OSCSolution(step, np.zeros(self.nx), (None,), ("failed",), None, frozen)
+        sols: list[QPSolution | None] = []
+        B = brows[:, :ny]
+        for k, sol in enumerate(res.solutions):
+            if sol is None:
+                sols.append(None)
+                continue
+            tau = B.dot(sol.x)
+            tau += hf
+            z = sol.z if sol.z is not None else np.zeros(self.C_template.shape[0])
+            y_dyn = self.levels[k][3] * tau
+            for r in self.tau_rows:
+                y_dyn = y_dyn + z[r]
+            y_rest = sol.y if sol.y is not None else np.zeros(self.me)
+            sols.append(
+                QPSolution(
+                    self._embed(sol.x, tau),
+                    sol.status,
+                    sol.iterations,
+                    sol.solver,
+                    np.concatenate((y_dyn, y_rest)),
+                    z,
+                    sol.stage,
+                    sol.fallbacks,
+                    sol.active,
+                )
+            )
+        return OSCSolution(step, self._embed(res.y, res.tau), tuple(sols), tuple(res.status), None, frozen)
