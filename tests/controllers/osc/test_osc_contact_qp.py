@@ -195,3 +195,41 @@ def test_extend_basis_spans_the_rows_and_is_orthonormal() -> None:
         np.testing.assert_allclose(stacked - stacked @ B.T @ B, 0.0, atol=1e-12)
     dependent = np.vstack([F[:2] * 3.0, F[0] + F[1]])  # inside rows(F): nothing to add
     assert extend_basis(F, dependent).shape == F.shape
+
+
+def test_the_default_takes_generated_contact_data_with_the_numpy_paths_torque() -> None:
+    """``compile="auto"`` on Pinocchio's dynamics: the contact QPs take their data from generated code (one level
+    with a fixed contact, two levels with a sliding one and state limits), with the NumPy path's τ to 1e-9 N·m."""
+    ref = armctl.Reference(Q_HOME)
+    for make in (_fixed, _sliding):
+        ctrl = make(friction=True)
+        assert ctrl.uses_generated_code
+        dyn = ctrl.dynamics
+        numpy_ctrl = OperationalSpaceQP(dyn, ctrl.tasks, limits=ctrl.limits, contacts=ctrl.contacts, compile=False)
+        assert not numpy_ctrl.uses_generated_code
+        for q, qd in _states(8, seed=7):
+            np.testing.assert_allclose(ctrl(0.0, q, qd, ref), numpy_ctrl(0.0, q, qd, ref), atol=1e-9, rtol=0)
+
+
+def test_without_a_compiler_the_contact_path_warns_once_with_the_same_torque(monkeypatch, tmp_path) -> None:  # type: ignore[no-untyped-def]
+    """No C compiler (``CC`` a missing program, an empty cache): the contact QPs take the NumPy path with one
+    PerformanceWarning over several steps and controllers, and the torque of ``compile=False``."""
+    import warnings
+
+    from armctl.dynamics import codegen
+    from armctl.errors import PerformanceWarning
+
+    monkeypatch.setenv("CC", "no-such-compiler-armctl")
+    monkeypatch.setenv("ARMCTL_CACHE", str(tmp_path))
+    monkeypatch.setattr(codegen, "warned", set())
+    ref = armctl.Reference(Q_HOME)
+    states = _states(4, seed=8)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        ctrls = [_fixed(), _fixed()]
+        taus = [[c(0.0, q, qd, ref) for q, qd in states] for c in ctrls]
+    assert [w.category for w in caught] == [PerformanceWarning]
+    assert not ctrls[0].uses_generated_code
+    numpy_ctrl = _fixed(compile=False)
+    for (q, qd), tau in zip(states, taus[0], strict=True):
+        np.testing.assert_array_equal(tau, numpy_ctrl(0.0, q, qd, ref))

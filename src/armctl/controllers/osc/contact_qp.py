@@ -24,6 +24,9 @@ controller's :class:`~armctl.controllers.osc.chain.SolverChain`; τ comes only f
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from armctl._checks import FloatArray
@@ -40,6 +43,9 @@ from armctl.controllers.osc.scale import MAX_TASK_RHS, refuse_scale
 from armctl.controllers.osc.solve import QPSolution
 from armctl.controllers.osc.state import ModelState
 from armctl.references import Reference
+
+if TYPE_CHECKING:
+    from armctl.controllers.osc.generated_contact import GeneratedContactData
 
 _MAX_RHS2 = MAX_TASK_RHS**2
 
@@ -82,6 +88,8 @@ class ContactQP:
     maps the solution back onto the public problem (:meth:`solution`). Made once per layout."""
 
     def __init__(self, builder: QPBuilder, lay: Layout) -> None:
+        #: the QPs' data from generated code (:mod:`~armctl.controllers.osc.generated_contact`), or None: NumPy
+        self.generated: GeneratedContactData | None = None
         n = self.n = builder.n
         self.builder = builder
         self.layout = lay
@@ -149,27 +157,8 @@ class ContactQP:
             A[rows, cy] = gf
             b[rows] = rhs
         res.b_rows, res.contact = brows, (A, b)
-        lay = self.layout
-        if lay.constant_bounds is not None:
-            lo, up = lay.constant_bounds
-        else:
-            bounds = [lim.bounds(state) for lim in lay.limits]
-            lo = np.concatenate([bd[0] for bd in bounds] + [lay.cone_l])
-            up = np.concatenate([bd[1] for bd in bounds] + [lay.cone_u])
-        res.bounds = (lo, up)
-        if self.tau_rows:
-            C = self.C_template.copy()
-            ly, uy = lo.copy(), up.copy()
-            for r in self.tau_rows:
-                C[r] = brows[:, :ny]
-                ly[r] -= hf
-                uy[r] -= hf
-        else:
-            C, ly, uy = self.C_template, lo, up
-        F = np.zeros((0, ny))
-        y: FloatArray | None = None
-        last = len(self.levels) - 1
-        for k, (plan, _, template, _) in enumerate(self.levels):
+        levels = []
+        for plan, _, template, _ in self.levels:
             rows = template.copy()
             for tk, r, cols in plan.entries:
                 J, bb = tk.residual(state, t, ref)
@@ -183,13 +172,86 @@ class ContactQP:
             G = tn.T.dot(tn)
             if not G[ny, ny] <= _MAX_RHS2:  # ‖W^{1/2} b‖² + ε_k‖h'‖² (NaN too)
                 refuse_scale(plan.tasks, list(plan.slices.values()), rows, ny, state, t, ref)
-            H = G[:ny, :ny].copy()  # contiguous (DAQP reads the buffer)
+            levels.append((G[:ny, :ny].copy(), G[ny, :ny], tn[:m, :ny]))  # H contiguous (DAQP reads the buffer)
+        return self._cascade(res, hf, self._bounds(state), levels, chain)
+
+    def step_generated(
+        self,
+        gen: GeneratedContactData,
+        q: FloatArray,
+        qd: FloatArray,
+        t: float,
+        ref: Reference,
+        chain: SolverChain,
+        evaluate: Callable[[FloatArray, FloatArray], ModelState],
+    ) -> ContactStep:
+        """:meth:`step` with the QPs' data from the generated code ``gen``; ``evaluate(q, qd)`` gives the
+        :class:`ModelState` of the NumPy path, which takes over when a level's rows are out of scale (to name the
+        task, see :mod:`~armctl.controllers.osc.scale`)."""
+        gen.run(q, qd, t, ref)
+        for c in gen.c:
+            if not c[0] <= _MAX_RHS2:  # ‖W^{1/2} b‖² + ε_k‖h'‖² (NaN too)
+                return self.step(evaluate(q, qd), t, ref, chain)
+        n, ny = self.n, self.ny
+        res = ContactStep()
+        brows = gen.brows.copy()  # kept by the step (the code's outputs are overwritten by the next run)
+        hf = -brows[:, ny]
+        res.b_rows = brows
+        res.contact = (gen.contact[:, :ny].copy(), gen.contact[:, ny].copy())
+        levels = []
+        start = 0
+        for k, (plan, _, _, _) in enumerate(self.levels):
+            m = plan.m
+            rows = gen.rows[start : start + m].copy()
+            start += m
+            res.rows.append(rows)
+            levels.append((gen.H[k].copy(), gen.g[k].copy(), (plan.scale()[:m] * rows)[:, :ny]))
+        # the built-in limits read q and q̇ only (see controller: the generated path takes no others)
+        state = ModelState(None, q, qd, brows[:, :n], hf, None)  # type: ignore[arg-type]  # no evaluator: no frame read
+        return self._cascade(res, hf, self._bounds(state), levels, chain)
+
+    def _bounds(self, state: ModelState) -> tuple[FloatArray, FloatArray]:
+        """The public bounds l, u of the limits and cones at ``state``."""
+        lay = self.layout
+        if lay.constant_bounds is not None:
+            return lay.constant_bounds
+        bounds = [lim.bounds(state) for lim in lay.limits]
+        lo = np.concatenate([bd[0] for bd in bounds] + [lay.cone_l])
+        up = np.concatenate([bd[1] for bd in bounds] + [lay.cone_u])
+        return lo, up
+
+    def _cascade(
+        self,
+        res: ContactStep,
+        hf: FloatArray,
+        bounds: tuple[FloatArray, FloatArray],
+        levels: list[tuple[FloatArray, FloatArray, FloatArray]],
+        chain: SolverChain,
+    ) -> ContactStep:
+        """Solve the levels (H_k, g_k, the weighted task rows T_k) in order under the step's rows (``res``)."""
+        ny = self.ny
+        brows = res.b_rows
+        A, b = res.contact
+        res.bounds = lo, up = bounds
+        if self.tau_rows:
+            C = self.C_template.copy()
+            ly, uy = lo.copy(), up.copy()
+            for r in self.tau_rows:
+                C[r] = brows[:, :ny]
+                ly[r] -= hf
+                uy[r] -= hf
+        else:
+            C, ly, uy = self.C_template, lo, up
+        F = np.zeros((0, ny))
+        y: FloatArray | None = None
+        last = len(levels) - 1
+        for k, (H, g, T) in enumerate(levels):
             frozen = None if y is None else (F, F.dot(y))
             res.frozen.append(frozen)
             if frozen is not None and F.shape[0]:
-                arrays = QPArrays(H, G[ny, :ny], np.vstack((A, F)), np.concatenate((b, frozen[1])), C, ly, uy)
+                arrays = QPArrays(H, g, np.vstack((A, F)), np.concatenate((b, frozen[1])), C, ly, uy)
             else:
-                arrays = QPArrays(H, G[ny, :ny], A, b, C, ly, uy)
+                arrays = QPArrays(H, g, A, b, C, ly, uy)
             res.arrays.append(arrays)
             try:
                 sol = chain.solve(arrays, k)
@@ -201,13 +263,13 @@ class ContactQP:
                     f"kept level {k - 1}: no verified optimum ({err.attempts[-1][1] if err.attempts else ''})"
                 )
                 if k < last:
-                    F = extend_basis(F, tn[:m, :ny])
+                    F = extend_basis(F, T)
                 continue
             res.solutions.append(sol)
             res.status.append("solved")
             y = sol.x
             if k < last:
-                F = extend_basis(F, tn[:m, :ny])
+                F = extend_basis(F, T)
         assert y is not None  # level 0 raised otherwise
         res.y = y
         tau = brows[:, :ny].dot(y)

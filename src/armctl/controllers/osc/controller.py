@@ -165,7 +165,10 @@ class OperationalSpaceQP(Controller):
     optimum), and (``compile``) its data come from one call of generated C code when its
     tasks (:class:`~armctl.controllers.osc.FramePositionTask`, :class:`~armctl.controllers.osc.FrameOrientationTask`,
     :class:`~armctl.controllers.osc.FramePoseTask`, :class:`~armctl.controllers.osc.PostureTask`, not
-    subclasses) and limits are built-in ones. Each step's fallbacks are in ``last_log["qp_fallbacks"]``;
+    subclasses) and limits are built-in ones. With active contacts the QPs are solved on [q̈; f] (τ eliminated, every
+    level; see :mod:`~armctl.controllers.osc.contact_qp`), their data likewise from generated code when the tasks
+    are of those kinds or :class:`~armctl.controllers.osc.ContactForceTask`. Each step's fallbacks are in
+    ``last_log["qp_fallbacks"]``;
     :meth:`end_run` (which :func:`armctl.sim.simulate` calls) warns once with what happened during the run and
     how often.
 
@@ -250,11 +253,21 @@ class OperationalSpaceQP(Controller):
 
     @property
     def uses_generated_code(self) -> bool:
-        """Whether the q̈-only QP of the current layout (the tasks and contacts as they are) takes its data from
-        generated code (see ``compile``)."""
-        if not self._qdd_path or any(c.active for c in self.contacts):
-            return False
-        return self._qdd_qp(self.builder.layout()).generated is not None
+        """Whether the QP of the current layout (the tasks and contacts as they are) takes its data from generated
+        code (see ``compile``): the q̈-only QP without active contacts, the QPs on [q̈; f] with them."""
+        lay = self.builder.layout()
+        if lay.contacts:
+            return self._contact_path and self._contact_qp(lay).generated is not None
+        return self._qdd_path and self._qdd_qp(lay).generated is not None
+
+    def _contact_qp(self, lay: Layout) -> ContactQP:
+        """The QPs on [q̈; f] of layout ``lay`` (made on first use, with their generated data where ``compile``
+        asks for it)."""
+        qp = self._contact_qps.get(lay)
+        if qp is None:
+            qp = self._contact_qps[lay] = ContactQP(self.builder, lay)
+            qp.generated = self._generated_contact(qp, lay)
+        return qp
 
     @property
     def last_solution(self) -> OSCSolution | None:
@@ -387,6 +400,39 @@ class OperationalSpaceQP(Controller):
             )
             return None
 
+    def _generated_contact(self, qp: ContactQP, lay: Layout) -> Any:
+        """The generated data of the contact QPs ``qp`` (a GeneratedContactData), or None: the NumPy path, on the
+        terms of :meth:`_generated_data`."""
+        mode = self.compile
+        if mode is False or not all(type(lim) in _PLAIN_LIMITS for lim in lay.limits):
+            return None
+        from armctl.dynamics.pinocchio_backend import PinocchioDynamics
+
+        if mode == "auto" and not isinstance(self.dynamics, PinocchioDynamics):
+            return None
+        from armctl.controllers.osc.generated_contact import GeneratedContactData, supported_contact
+
+        levels = [plan.tasks for plan, _, _, _ in qp.levels]
+        if not supported_contact(levels):
+            return None
+        try:
+            return GeneratedContactData(self.dynamics, levels, lay.contacts, [w for _, _, _, w in qp.levels])
+        except Exception as exc:  # "auto": the NumPy path, and why (once per process and cause)
+            if mode is True:
+                raise
+            from armctl.dynamics import codegen
+
+            codegen.warn_fallback(
+                exc,
+                "the operational-space QP's generated data",
+                "the QP takes its data from Pinocchio and NumPy",
+                "about twice as slow",
+                "compile=False chooses the NumPy path",
+                PerformanceWarning,
+                stacklevel=5,
+            )
+            return None
+
     def _qdd_step(self, lay: Layout, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         """One level without contact forces: the QP on q̈ alone (see reduced)."""
         qp = self._qdd.get(lay) or self._qdd_qp(lay)
@@ -409,10 +455,12 @@ class OperationalSpaceQP(Controller):
 
     def _contact_step(self, lay: Layout, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         """The levels with active contacts, solved on [q̈; f] (see contact_qp)."""
-        qp = self._contact_qps.get(lay)
-        if qp is None:
-            qp = self._contact_qps[lay] = ContactQP(self.builder, lay)
-        result = qp.step(self.evaluator.evaluate(q, qd), t, ref, self.chain)
+        qp = self._contact_qps.get(lay) or self._contact_qp(lay)
+        gen = qp.generated
+        if gen is not None:
+            result = qp.step_generated(gen, q, qd, t, ref, self.chain, self.evaluator.evaluate)
+        else:
+            result = qp.step(self.evaluator.evaluate(q, qd), t, ref, self.chain)
         self._pending = (qp, result)
         tau = result.tau.clip(self._tau_lo, self._tau_up) if self._tau_up is not None else result.tau.copy()
         iterations = fallbacks = 0
