@@ -136,6 +136,8 @@ class ContactQP:
         self.A_template = np.zeros((self.me, ny))
         self.A_template.flags.writeable = False
         self.nx = lay.nx
+        #: per level: (the plan's weights it was made from, the rows of non-zero weight or None for all, weights)
+        self._kept_rows: dict[int, tuple[FloatArray, np.ndarray | None, FloatArray]] = {}
 
     def step(self, state: ModelState, t: float, ref: Reference, chain: SolverChain) -> ContactStep:
         """The verified optimum of every level at ``state`` (the levels in priority order). Raises
@@ -158,7 +160,7 @@ class ContactQP:
             b[rows] = rhs
         res.b_rows, res.contact = brows, (A, b)
         levels = []
-        for plan, _, template, _ in self.levels:
+        for k, (plan, _, template, _) in enumerate(self.levels):
             rows = template.copy()
             for tk, r, cols in plan.entries:
                 J, bb = tk.residual(state, t, ref)
@@ -172,7 +174,8 @@ class ContactQP:
             G = tn.T.dot(tn)
             if not G[ny, ny] <= _MAX_RHS2:  # ‖W^{1/2} b‖² + ε_k‖h'‖² (NaN too)
                 refuse_scale(plan.tasks, list(plan.slices.values()), rows, ny, state, t, ref)
-            levels.append((G[:ny, :ny].copy(), G[ny, :ny], tn[:m, :ny]))  # H contiguous (DAQP reads the buffer)
+            # H contiguous (DAQP reads the buffer)
+            levels.append((G[:ny, :ny].copy(), G[ny, :ny], self._weighted_rows(k, rows)))
         return self._cascade(res, hf, self._bounds(state), levels, chain)
 
     def step_generated(
@@ -205,10 +208,26 @@ class ContactQP:
             rows = gen.rows[start : start + m].copy()
             start += m
             res.rows.append(rows)
-            levels.append((gen.H[k].copy(), gen.g[k].copy(), (plan.scale()[:m] * rows)[:, :ny]))
+            levels.append((gen.H[k].copy(), gen.g[k].copy(), self._weighted_rows(k, rows)))
         # the built-in limits read q and q̇ only (see controller: the generated path takes no others)
         state = ModelState(None, q, qd, brows[:, :n], hf, None)  # type: ignore[arg-type]  # no evaluator: no frame read
         return self._cascade(res, hf, self._bounds(state), levels, chain)
+
+    def _weighted_rows(self, k: int, rows: FloatArray) -> FloatArray:
+        """T_k: level k's task rows weighted (W^½ J on y), without the rows of zero weight (a task direction
+        switched off spans nothing: :func:`~armctl.controllers.osc.hierarchy.extend_basis` then factors the rows
+        without taking them out)."""
+        plan = self.levels[k][0]
+        scale = plan.scale()
+        kept = self._kept_rows.get(k)
+        if kept is None or kept[0] is not scale:  # the weights changed (a task's revision): the rows kept anew
+            nonzero = np.flatnonzero(scale[: plan.m, 0])
+            kept = (scale, None if nonzero.size == plan.m else nonzero, scale[: plan.m, : self.ny])
+            self._kept_rows[k] = kept
+        _, live, weights = kept
+        if live is None:
+            return weights * rows[: plan.m, : self.ny]
+        return weights[live] * rows[live, : self.ny]
 
     def _bounds(self, state: ModelState) -> tuple[FloatArray, FloatArray]:
         """The public bounds l, u of the limits and cones at ``state``."""
