@@ -4,12 +4,12 @@
 
 Parts, one concept a file: ``state`` (model terms of one step), ``tasks/`` (error + Jacobian), ``limits/`` (bounds
 on q̈ or τ), ``contact`` (force variables, contact rows, friction cones), ``build`` (the QP), ``problem`` (the
-inspectable QP), ``reduced`` (the same QP on q̈ alone), ``contact_qp`` (with contacts, on [q̈; f]), ``generated``
-and ``generated_contact`` (their data as generated code, ``compile``), ``scale`` (out-of-scale task rows refused),
-``solve`` (proxsuite / qpsolvers), ``daqp_solver`` (DAQP from an active set, the chain's first stage),
-``active_set`` (a dual active-set solver in NumPy), ``optimality`` (the KKT check), ``chain`` (verified optimum,
-with fallbacks), ``diagnose`` (conflicting rows), ``hierarchy`` (cascaded priorities), ``controller`` (the
-controller), ``closed_form`` (Khatib's baseline).
+inspectable QP), ``reduced`` (the same QP on q̈ alone), ``contact_qp`` and ``contact_public`` (with contacts, on
+[q̈; f], and back), ``generated`` and ``generated_contact`` (their data as generated code, ``compile``),
+``scale`` (out-of-scale task rows refused), ``solve`` (proxsuite / qpsolvers), ``daqp_solver`` (DAQP from an
+active set, the chain's first stage), ``active_set`` (a dual active-set solver in NumPy), ``optimality`` (the KKT
+check), ``chain`` (verified optimum, with fallbacks), ``diagnose`` (conflicting rows), ``hierarchy`` (cascaded
+priorities), ``controller`` (the controller), ``closed_form`` (Khatib's baseline).
 """
 
 from armctl.controllers.osc.active_set import DualActiveSetSolver

@@ -30,17 +30,17 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from armctl._checks import FloatArray
-from armctl.controllers.osc.build import QPBuilder, StepQP
+from armctl.controllers.osc.build import QPBuilder
 from armctl.controllers.osc.chain import QPFailure, SolverChain
 from armctl.controllers.osc.contact import Contact
+from armctl.controllers.osc.contact_public import ContactStep, public_solution
 from armctl.controllers.osc.diagnose import raise_unsolved
 from armctl.controllers.osc.hierarchy import OSCSolution, extend_basis
 from armctl.controllers.osc.layout import UPPER_REGULARIZATION_FACTOR, Layout
-from armctl.controllers.osc.levels import LevelPlan, LevelRows
+from armctl.controllers.osc.levels import LevelPlan
 from armctl.controllers.osc.optimality import verified
 from armctl.controllers.osc.problem import QPArrays
 from armctl.controllers.osc.scale import MAX_TASK_RHS, refuse_scale
-from armctl.controllers.osc.solve import QPSolution
 from armctl.controllers.osc.state import ModelState
 from armctl.references import Reference
 
@@ -61,26 +61,6 @@ class _YLayout:
 def applies(builder: QPBuilder) -> bool:
     """Whether the QPs of ``builder`` can be solved on [q̈; f]: no slacks and no task on τ."""
     return not builder.slacks and all(tk.variable != "tau" for tk in builder.tasks)
-
-
-class ContactStep:
-    """What one step of :class:`ContactQP` leaves: q̈, τ, the forces y's blocks, per level the QP and its
-    verified solution (None for a level that kept the one above) and status, and the rows the public problem is
-    made from (B = [M | −J_cᵀ | −h'], the contact rows, the bounds, each level's task rows)."""
-
-    __slots__ = ("arrays", "b_rows", "bounds", "contact", "frozen", "rows", "solutions", "status", "tau", "y")
-
-    def __init__(self) -> None:
-        self.arrays: list[QPArrays] = []
-        self.solutions: list[QPSolution | None] = []
-        self.status: list[str] = []
-        self.frozen: list[tuple[FloatArray, FloatArray] | None] = []
-        self.rows: list[FloatArray] = []
-        self.b_rows: FloatArray
-        self.contact: tuple[FloatArray, FloatArray]
-        self.bounds: tuple[FloatArray, FloatArray]
-        self.y: FloatArray
-        self.tau: FloatArray
 
 
 class ContactQP:
@@ -307,76 +287,7 @@ class ContactQP:
                 return False
         return True
 
-    def _embed(self, y: FloatArray, tau: FloatArray) -> FloatArray:
-        """x = [q̈; τ; f] of y = [q̈; f] and τ."""
-        n = self.n
-        x = np.empty(self.nx)
-        x[:n] = y[:n]
-        x[n : 2 * n] = tau
-        for _, cy, cx, _ in self.contacts:
-            x[cx] = y[cy]
-        return x
-
-    def _embed_rows(self, rows: FloatArray) -> FloatArray:
-        """Rows on y (with a right-hand side column or not) as rows on x (zero τ columns)."""
-        n, ny = self.n, self.ny
-        extra = rows.shape[1] - ny
-        out = np.zeros((rows.shape[0], self.nx + extra))
-        out[:, :n] = rows[:, :n]
-        for _, cy, cx, _ in self.contacts:
-            out[:, cx] = rows[:, cy]
-        if extra:
-            out[:, self.nx :] = rows[:, ny:]
-        return out
-
     def solution(self, res: ContactStep, partial: bool = False) -> OSCSolution:
-        """The public :class:`OSCSolution` of a step: its :class:`StepQP` on x = [q̈; τ; f], x, and each level's
-        solution mapped onto it (the same z and contact-row multipliers; ε_k τ + Σ z_τ for the equation of
-        motion). ``partial``: for a step that stopped at level 0 (only the problem is read)."""
-        n, ny, lay = self.n, self.ny, self.layout
-        brows = res.b_rows
-        hf = -brows[:, ny]
-        A_y, b_y = res.contact
-        A = np.zeros((n + self.me, self.nx))
-        A[:n, :n] = brows[:, :n]
-        A[:n, n : 2 * n] = -np.eye(n)
-        for _, cy, cx, _ in self.contacts:
-            A[:n, cx] = brows[:, cy]
-        A[n:] = self._embed_rows(A_y)
-        levels = []
-        for k, (plan, px, _, _) in enumerate(self.levels):
-            if k >= len(res.rows):
-                break
-            jr = self._embed_rows(res.rows[k][: plan.m])
-            levels.append(LevelRows(px.tasks, jr, px.scale(), px.slices))
-        step = StepQP(lay, A, np.concatenate((-hf, b_y)), *res.bounds, levels, lay.regularization, False)
-        frozen = [None if f is None else (self._embed_rows(f[0]), f[1]) for f in res.frozen]
-        if partial:
-            return OSCSolution(step, np.zeros(self.nx), (None,), ("failed",), None, frozen)
-        sols: list[QPSolution | None] = []
-        B = brows[:, :ny]
-        for k, sol in enumerate(res.solutions):
-            if sol is None:
-                sols.append(None)
-                continue
-            tau = B.dot(sol.x)
-            tau += hf
-            z = sol.z if sol.z is not None else np.zeros(self.C_template.shape[0])
-            y_dyn = self.levels[k][3] * tau
-            for r in self.tau_rows:
-                y_dyn = y_dyn + z[r]
-            y_rest = sol.y if sol.y is not None else np.zeros(self.me)
-            sols.append(
-                QPSolution(
-                    self._embed(sol.x, tau),
-                    sol.status,
-                    sol.iterations,
-                    sol.solver,
-                    np.concatenate((y_dyn, y_rest)),
-                    z,
-                    sol.stage,
-                    sol.fallbacks,
-                    sol.active,
-                )
-            )
-        return OSCSolution(step, self._embed(res.y, res.tau), tuple(sols), tuple(res.status), None, frozen)
+        """The public :class:`OSCSolution` of a step (:func:`~armctl.controllers.osc.contact_public.public_solution`;
+        ``partial``: for a step that stopped at level 0, only its problem is read)."""
+        return public_solution(self, res, partial)

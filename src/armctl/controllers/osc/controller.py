@@ -18,7 +18,8 @@ from armctl.controllers.base import Controller
 from armctl.controllers.osc.build import QPBuilder, StepQP
 from armctl.controllers.osc.chain import QPFailure, SolverChain
 from armctl.controllers.osc.contact import Contact
-from armctl.controllers.osc.contact_qp import ContactQP, ContactStep, applies
+from armctl.controllers.osc.contact_public import ContactStep
+from armctl.controllers.osc.contact_qp import ContactQP, applies
 from armctl.controllers.osc.diagnose import raise_unsolved
 from armctl.controllers.osc.hierarchy import OSCSolution, solve_cascade
 from armctl.controllers.osc.layout import Layout
