@@ -38,9 +38,10 @@ from armctl.controllers.osc.diagnose import raise_unsolved
 from armctl.controllers.osc.hierarchy import OSCSolution, extend_basis
 from armctl.controllers.osc.layout import UPPER_REGULARIZATION_FACTOR, Layout
 from armctl.controllers.osc.levels import LevelPlan
-from armctl.controllers.osc.optimality import verified
+from armctl.controllers.osc.optimality import DUAL_TOL, PRIMAL_TOL, verified
 from armctl.controllers.osc.problem import QPArrays
 from armctl.controllers.osc.scale import MAX_TASK_RHS, refuse_scale
+from armctl.controllers.osc.solve import QPSolution
 from armctl.controllers.osc.state import ModelState
 from armctl.references import Reference
 
@@ -116,6 +117,8 @@ class ContactQP:
         self.A_template = np.zeros((self.me, ny))
         self.A_template.flags.writeable = False
         self.nx = lay.nx
+        self._no_active = np.zeros(self.C_template.shape[0], dtype=np.int8)
+        self._no_active.flags.writeable = False
         #: per level: (the plan's weights it was made from, the rows of non-zero weight or None for all, weights)
         self._kept_rows: dict[int, tuple[FloatArray, np.ndarray | None, FloatArray]] = {}
 
@@ -191,7 +194,7 @@ class ContactQP:
             levels.append((gen.H[k].copy(), gen.g[k].copy(), self._weighted_rows(k, rows)))
         # the built-in limits read q and q̇ only (see controller: the generated path takes no others)
         state = ModelState(None, q, qd, brows[:, :n], hf, None)  # type: ignore[arg-type]  # no evaluator: no frame read
-        return self._cascade(res, hf, self._bounds(state), levels, chain)
+        return self._cascade(res, hf, self._bounds(state), levels, chain, gen.equality)
 
     def _weighted_rows(self, k: int, rows: FloatArray) -> FloatArray:
         """T_k: level k's task rows weighted (W^½ J on y), without the rows of zero weight (a task direction
@@ -226,8 +229,11 @@ class ContactQP:
         bounds: tuple[FloatArray, FloatArray],
         levels: list[tuple[FloatArray, FloatArray, FloatArray]],
         chain: SolverChain,
+        equality: tuple[FloatArray, ...] | None = None,
     ) -> ContactStep:
-        """Solve the levels (H_k, g_k, the weighted task rows T_k) in order under the step's rows (``res``)."""
+        """Solve the levels (H_k, g_k, the weighted task rows T_k) in order under the step's rows (``res``).
+        ``equality``: for one level, the generated optimum on the contact rows alone and its residuals (see
+        generated_contact), taken if it passes :meth:`_accept_equality`."""
         ny = self.ny
         brows = res.b_rows
         A, b = res.contact
@@ -252,6 +258,14 @@ class ContactQP:
             else:
                 arrays = QPArrays(H, g, A, b, C, ly, uy)
             res.arrays.append(arrays)
+            if equality is not None and k == 0:
+                sol_eq = self._accept_equality(arrays, equality)
+                if sol_eq is not None:
+                    chain.record(chain.key(arrays, 0), self._no_active)
+                    res.solutions.append(sol_eq)
+                    res.status.append("solved")
+                    res.y = y = sol_eq.x
+                    break
             try:
                 sol = chain.solve(arrays, k)
             except QPFailure as err:
@@ -279,6 +293,24 @@ class ContactQP:
     def forces(self, res: ContactStep) -> dict[str, FloatArray]:
         """Each active contact's force f [N] of a step (views of its y)."""
         return {c.name: res.y[cy] for c, cy, _, _ in self.contacts}
+
+    def _accept_equality(self, qp: QPArrays, equality: tuple[FloatArray, ...]) -> QPSolution | None:
+        """The optimum of ``qp`` if no inequality row is active: the optimum on its equality rows alone (y*, λ)
+        with its residuals, accepted if A y* = b within :data:`~armctl.controllers.osc.optimality.PRIMAL_TOL`, the
+        stationarity residual H y* + g + Aᵀλ within :data:`~armctl.controllers.osc.optimality.DUAL_TOL` (1 + ‖g‖∞)
+        and every inequality row within its bounds exactly (so that τ needs no clipping): the KKT conditions with
+        z = 0 (no gap); None otherwise (NaN included)."""
+        y, lam, eq_res, stat = equality
+        if not float(np.abs(eq_res).max()) <= PRIMAL_TOL:
+            return None
+        if not float(np.abs(stat).max()) <= DUAL_TOL * (1.0 + float(np.abs(qp.g).max())):
+            return None
+        s = qp.C.dot(y)
+        if not ((s >= qp.l).all() and (s <= qp.u).all()):
+            return None
+        return QPSolution(
+            y.copy(), "solved", 0, "active set", lam.copy(), np.zeros(s.shape[0]), "active set", 0, self._no_active
+        )
 
     def verify(self, res: ContactStep) -> bool:
         """The optimality check of every level's solution of ``res``, run again (what a step pays for it)."""

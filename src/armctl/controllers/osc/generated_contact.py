@@ -13,7 +13,11 @@ At (q, q̇), the tasks' targets and τ_f(q̇), one call of code generated with C
 * the task rows [J | b] on y (``rows``), the motion tasks' as in :mod:`~armctl.controllers.osc.generated` and a
   contact-force task's the identity (or nᵀ) on its contact's force with its target;
 * per priority level k, with T_k its weighted task rows and ε_k its regularisation:
-  H_k = T_kᵀT_k + ε_k (I + BᵀB), g_k = −T_kᵀt_k + ε_k Bᵀh', c_k = ‖t_k‖² + ε_k‖h'‖².
+  H_k = T_kᵀT_k + ε_k (I + BᵀB), g_k = −T_kᵀt_k + ε_k Bᵀh', c_k = ‖t_k‖² + ε_k‖h'‖²;
+* with one level, the optimum on the contact rows A y = b alone (no inequality row active), y* and λ, by the Schur
+  complement of H (a Cholesky factorisation written out), and its residuals A y* − b and H y* + g + Aᵀλ: the
+  step takes it, without a solver, when they vanish to the optimality check's tolerances and every inequality
+  row holds.
 
 Gains, weights, the contacts' coefficients and ε_k are an input of the code, refreshed when a task's
 ``revision`` changes. The tasks it takes are those of :func:`~armctl.controllers.osc.generated.supported` and
@@ -39,12 +43,12 @@ from armctl.controllers.osc.tasks.contact_force import ContactForceTask
 from armctl.dynamics import codegen
 from armctl.dynamics.base import Dynamics
 from armctl.dynamics.casadi_buffer import buffer_of, view
-from armctl.dynamics.recursive import inverse_dynamics, joint_transforms, mass_matrix
+from armctl.dynamics.recursive import cholesky_solve, inverse_dynamics, joint_transforms, mass_matrix
 from armctl.dynamics.symbolic_frames import frame_kinematics
 from armctl.model.robot import RobotModel
 from armctl.references import Reference
 
-_CODE_VERSION = 1
+_CODE_VERSION = 2
 _NAME = "osc_contact_qp"
 
 
@@ -151,7 +155,20 @@ def contact_function(
         outputs.append(gram(weighted) + eps * (cs.SX.eye(ny) + bgram))
         outputs.append(-(weighted.T @ t) + eps * bth)
         outputs.append(cs.dot(t, t) + eps * cs.dot(hf, hf))
+    if len(levels) == 1 and contacts:  # the optimum on the contact rows alone (no inequality row active)
+        outputs += _equality_optimum(outputs[3], outputs[4], cs.vertcat(*crows), cs.vertcat(*crhs))
     return cs.Function(_NAME, [cs.vertcat(*inputs), cs.vertcat(*params)], [cs.densify(o) for o in outputs])
+
+
+def _equality_optimum(hess: cs.SX, grad: cs.SX, a: cs.SX, b: cs.SX) -> list[cs.SX]:
+    """(y*, λ, A y* − b, H y* + g + Aᵀλ): the optimum of ½yᵀHy + gᵀy subject to A y = b alone, by
+    the Schur complement of H (Cholesky written out): y₀ = −H⁻¹g, W = H⁻¹Aᵀ, λ = (A W)⁻¹(A y₀ − b),
+    y* = y₀ − W λ; and its residuals, which the step checks."""
+    y0 = -cholesky_solve(hess, grad)
+    w = cs.horzcat(*[cholesky_solve(hess, a[i, :].T) for i in range(a.shape[0])])
+    lam = cholesky_solve(a @ w, a @ y0 - b)
+    y = y0 - w @ lam
+    return [y, lam, a @ y - b, hess @ y + grad + a.T @ lam]
 
 
 def _tag(model: RobotModel, levels: Sequence[Sequence[Task]], contacts: Sequence[Contact], friction: bool) -> str:
@@ -177,7 +194,8 @@ class GeneratedContactData:
     """The generated function of the module for ``levels`` (the tasks per priority level, in order) and
     ``contacts`` (the active ones, in the layout's order) on ``dynamics``, bound to buffers of its own. After
     :meth:`run`, the outputs are arrays that the next run overwrites: ``brows`` (n × (ny+1)), ``contact``
-    (3k × (ny+1)), ``rows`` (m × (ny+1)) and per level ``H[k]``, ``g[k]``, ``c[k]``. Not thread-safe."""
+    (3k × (ny+1)), ``rows`` (m × (ny+1)), per level ``H[k]``, ``g[k]``, ``c[k]`` and, with one level,
+    ``equality``. Not thread-safe."""
 
     def __init__(
         self,
@@ -229,6 +247,13 @@ class GeneratedContactData:
         results: list[FloatArray] = [self._brows_t, self._contact_t, self._rows_t]
         for k in range(len(self.levels)):
             results += [self.H[k], self.g[k], self.c[k]]
+        me = 3 * len(self.contacts)
+        #: with one level: the optimum on the contact rows alone, y* (ny) and λ (3k), and its residuals A y* − b
+        #: (3k) and H y* + g + Aᵀλ (ny); None with more levels
+        self.equality: tuple[FloatArray, FloatArray, FloatArray, FloatArray] | None = None
+        if len(self.levels) == 1:
+            self.equality = (np.zeros(ny), np.zeros(me), np.zeros(me), np.zeros(ny))
+            results += list(self.equality)
         for k, res in enumerate(results):
             buf.set_res(k, view(res.reshape(-1)))
         self._bound = (buf, results)  # the buffer reads and writes these: keep them alive
