@@ -17,7 +17,9 @@ from armctl.controllers.osc.problem import QPArrays
 from armctl.controllers.osc.solve import QPSolution
 
 if TYPE_CHECKING:
+    from armctl.controllers.osc.chain import SolverChain
     from armctl.controllers.osc.contact_qp import ContactQP
+    from armctl.controllers.osc.generated_contact import GeneratedContactData
 
 
 class ContactStep:
@@ -25,7 +27,7 @@ class ContactStep:
     verified solution (None for a level that kept the one above) and status, and the rows the public problem is
     made from (B = [M | −J_cᵀ | −h'], the contact rows, the bounds, each level's task rows)."""
 
-    __slots__ = ("arrays", "b_rows", "bounds", "contact", "frozen", "rows", "solutions", "status", "tau", "y")
+    __slots__ = ("arrays", "b_rows", "bounds", "contact", "frozen", "hg", "rows", "solutions", "status", "tau", "y")
 
     def __init__(self) -> None:
         self.arrays: list[QPArrays] = []
@@ -33,11 +35,46 @@ class ContactStep:
         self.status: list[str] = []
         self.frozen: list[tuple[FloatArray, FloatArray] | None] = []
         self.rows: list[FloatArray] = []
+        #: (H, g) of level 0 for a step taken without a solver, whose arrays are made when asked for
+        self.hg: tuple[FloatArray, FloatArray] | None = None
         self.b_rows: FloatArray
         self.contact: tuple[FloatArray, FloatArray]
         self.bounds: tuple[FloatArray, FloatArray]
         self.y: FloatArray
         self.tau: FloatArray
+
+
+def taken_step(qp: ContactQP, gen: GeneratedContactData, chain: SolverChain) -> ContactStep:
+    """The step of the optimum on the contact rows alone that the generated code accepted (``gen.accepted``:
+    the check of :func:`~armctl.controllers.osc.optimality.equality_optimum_ok`, in the code): its outputs
+    copied, the QP's arrays made when asked for (:func:`step_arrays`)."""
+    ny = qp.ny
+    res = ContactStep()
+    res.b_rows = gen.brows.copy()
+    res.contact = (gen.contact[:, :ny].copy(), gen.contact[:, ny].copy())
+    res.rows.append(gen.rows.copy())
+    res.bounds = gen.bounds  # type: ignore[assignment]  # set: the code accepts only with constant bounds
+    res.hg = (gen.H[0].copy(), gen.g[0].copy())
+    res.frozen.append(None)
+    eq = gen.equality
+    assert eq is not None  # one level
+    y = eq[0].copy()
+    z = np.zeros(qp.C_template.shape[0])
+    res.solutions.append(QPSolution(y, "solved", 0, "active set", eq[1].copy(), z, "active set", 0, qp.no_active))
+    res.status.append("solved")
+    res.y = y
+    res.tau = gen.tau.copy()
+    chain.record(qp.key, qp.no_active)
+    return res
+
+
+def step_arrays(qp: ContactQP, res: ContactStep) -> list[QPArrays]:
+    """The QP of each level of a step (made now for a step taken without a solver)."""
+    if not res.arrays and res.hg is not None:
+        brows = res.b_rows
+        C, ly, uy = qp.inequalities(brows, -brows[:, qp.ny], res.bounds)
+        res.arrays.append(QPArrays(*res.hg, *res.contact, C, ly, uy))
+    return res.arrays
 
 
 def _embed(qp: ContactQP, y: FloatArray, tau: FloatArray) -> FloatArray:

@@ -33,12 +33,12 @@ from armctl._checks import FloatArray
 from armctl.controllers.osc.build import QPBuilder
 from armctl.controllers.osc.chain import QPFailure, SolverChain
 from armctl.controllers.osc.contact import Contact
-from armctl.controllers.osc.contact_public import ContactStep, public_solution
+from armctl.controllers.osc.contact_public import ContactStep, public_solution, step_arrays, taken_step
 from armctl.controllers.osc.diagnose import raise_unsolved
 from armctl.controllers.osc.hierarchy import OSCSolution, extend_basis
 from armctl.controllers.osc.layout import UPPER_REGULARIZATION_FACTOR, Layout
 from armctl.controllers.osc.levels import LevelPlan
-from armctl.controllers.osc.optimality import DUAL_TOL, PRIMAL_TOL, verified
+from armctl.controllers.osc.optimality import equality_optimum_ok, verified
 from armctl.controllers.osc.problem import QPArrays
 from armctl.controllers.osc.scale import MAX_TASK_RHS, refuse_scale
 from armctl.controllers.osc.solve import QPSolution
@@ -117,8 +117,11 @@ class ContactQP:
         self.A_template = np.zeros((self.me, ny))
         self.A_template.flags.writeable = False
         self.nx = lay.nx
-        self._no_active = np.zeros(self.C_template.shape[0], dtype=np.int8)
-        self._no_active.flags.writeable = False
+        #: the active set with no inequality row active (read-only)
+        self.no_active = np.zeros(self.C_template.shape[0], dtype=np.int8)
+        self.no_active.flags.writeable = False
+        #: :meth:`SolverChain.key <armctl.controllers.osc.SolverChain.key>` of level 0's QP
+        self.key = (0, ny, self.me, self.C_template.shape[0])
         #: per level: (the plan's weights it was made from, the rows of non-zero weight or None for all, weights)
         self._kept_rows: dict[int, tuple[FloatArray, np.ndarray | None, FloatArray]] = {}
 
@@ -175,6 +178,8 @@ class ContactQP:
         :class:`ModelState` of the NumPy path, which takes over when a level's rows are out of scale (to name the
         task, see :mod:`~armctl.controllers.osc.scale`)."""
         gen.run(q, qd, t, ref)
+        if gen.accepted[0] == 1.0:  # one level, constant bounds: the code checked its optimum on the contact rows
+            return taken_step(self, gen, chain)
         for c in gen.c:
             if not c[0] <= _MAX_RHS2:  # ‖W^{1/2} b‖² + ε_k‖h'‖² (NaN too)
                 return self.step(evaluate(q, qd), t, ref, chain)
@@ -237,16 +242,8 @@ class ContactQP:
         ny = self.ny
         brows = res.b_rows
         A, b = res.contact
-        res.bounds = lo, up = bounds
-        if self.tau_rows:
-            C = self.C_template.copy()
-            ly, uy = lo.copy(), up.copy()
-            for r in self.tau_rows:
-                C[r] = brows[:, :ny]
-                ly[r] -= hf
-                uy[r] -= hf
-        else:
-            C, ly, uy = self.C_template, lo, up
+        res.bounds = bounds
+        C, ly, uy = self.inequalities(brows, hf, bounds)
         F = np.zeros((0, ny))
         y: FloatArray | None = None
         last = len(levels) - 1
@@ -259,9 +256,19 @@ class ContactQP:
                 arrays = QPArrays(H, g, A, b, C, ly, uy)
             res.arrays.append(arrays)
             if equality is not None and k == 0:
-                sol_eq = self._accept_equality(arrays, equality)
-                if sol_eq is not None:
-                    chain.record(chain.key(arrays, 0), self._no_active)
+                if equality_optimum_ok(arrays, *equality):
+                    sol_eq = QPSolution(
+                        equality[0].copy(),
+                        "solved",
+                        0,
+                        "active set",
+                        equality[1].copy(),
+                        np.zeros(arrays.l.shape[0]),
+                        "active set",
+                        0,
+                        self.no_active,
+                    )
+                    chain.record(chain.key(arrays, 0), self.no_active)
                     res.solutions.append(sol_eq)
                     res.status.append("solved")
                     res.y = y = sol_eq.x
@@ -294,27 +301,24 @@ class ContactQP:
         """Each active contact's force f [N] of a step (views of its y)."""
         return {c.name: res.y[cy] for c, cy, _, _ in self.contacts}
 
-    def _accept_equality(self, qp: QPArrays, equality: tuple[FloatArray, ...]) -> QPSolution | None:
-        """The optimum of ``qp`` if no inequality row is active: the optimum on its equality rows alone (y*, λ)
-        with its residuals, accepted if A y* = b within :data:`~armctl.controllers.osc.optimality.PRIMAL_TOL`, the
-        stationarity residual H y* + g + Aᵀλ within :data:`~armctl.controllers.osc.optimality.DUAL_TOL` (1 + ‖g‖∞)
-        and every inequality row within its bounds exactly (so that τ needs no clipping): the KKT conditions with
-        z = 0 (no gap); None otherwise (NaN included)."""
-        y, lam, eq_res, stat = equality
-        if not float(np.abs(eq_res).max()) <= PRIMAL_TOL:
-            return None
-        if not float(np.abs(stat).max()) <= DUAL_TOL * (1.0 + float(np.abs(qp.g).max())):
-            return None
-        s = qp.C.dot(y)
-        if not ((s >= qp.l).all() and (s <= qp.u).all()):
-            return None
-        return QPSolution(
-            y.copy(), "solved", 0, "active set", lam.copy(), np.zeros(s.shape[0]), "active set", 0, self._no_active
-        )
+    def inequalities(
+        self, brows: FloatArray, hf: FloatArray, bounds: tuple[FloatArray, FloatArray]
+    ) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """(C, l, u) on y: B in each torque limit's rows, its bounds shifted by −h'."""
+        lo, up = bounds
+        if not self.tau_rows:
+            return self.C_template, lo, up
+        C = self.C_template.copy()
+        ly, uy = lo.copy(), up.copy()
+        for r in self.tau_rows:
+            C[r] = brows[:, : self.ny]
+            ly[r] -= hf
+            uy[r] -= hf
+        return C, ly, uy
 
     def verify(self, res: ContactStep) -> bool:
         """The optimality check of every level's solution of ``res``, run again (what a step pays for it)."""
-        for arrays, sol in zip(res.arrays, res.solutions, strict=True):
+        for arrays, sol in zip(step_arrays(self, res), res.solutions, strict=True):
             if sol is not None and not verified(arrays, sol.x, sol.y, sol.z):
                 return False
         return True

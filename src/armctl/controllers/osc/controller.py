@@ -417,7 +417,9 @@ class OperationalSpaceQP(Controller):
         if not supported_contact(levels):
             return None
         try:
-            return GeneratedContactData(self.dynamics, levels, lay.contacts, [w for _, _, _, w in qp.levels])
+            variables = [lim.variable for lim in lay.limits]
+            weights = [w for _, _, _, w in qp.levels]
+            return GeneratedContactData(self.dynamics, levels, lay.contacts, weights, variables, lay.constant_bounds)
         except Exception as exc:  # "auto": the NumPy path, and why (once per process and cause)
             if mode is True:
                 raise

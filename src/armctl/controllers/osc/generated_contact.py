@@ -38,12 +38,13 @@ import numpy as np
 from armctl._checks import FloatArray
 from armctl.controllers.osc.contact import Contact
 from armctl.controllers.osc.generated import _log, gram, supported, target_pieces, task_params, task_rows, task_tag
+from armctl.controllers.osc.generated_optimum import equality_optimum, verdict
 from armctl.controllers.osc.tasks.base import Task
 from armctl.controllers.osc.tasks.contact_force import ContactForceTask
 from armctl.dynamics import codegen
 from armctl.dynamics.base import Dynamics
 from armctl.dynamics.casadi_buffer import buffer_of, view
-from armctl.dynamics.recursive import cholesky_solve, inverse_dynamics, joint_transforms, mass_matrix
+from armctl.dynamics.recursive import inverse_dynamics, joint_transforms, mass_matrix
 from armctl.dynamics.symbolic_frames import frame_kinematics
 from armctl.model.robot import RobotModel
 from armctl.references import Reference
@@ -62,11 +63,18 @@ def supported_contact(levels: Sequence[Sequence[Task]]) -> bool:
 
 
 def contact_function(
-    model: RobotModel, levels: Sequence[Sequence[Task]], contacts: Sequence[Contact], friction: bool
+    model: RobotModel,
+    levels: Sequence[Sequence[Task]],
+    contacts: Sequence[Contact],
+    friction: bool,
+    limits: Sequence[str] | None = None,
 ) -> cs.Function:
     """The CasADi function of the module: ``f(inputs, params) -> (brows, contact, rows, H_0, g_0, c_0, …)`` with
-    ``inputs`` = [q; q̇; per task its target; τ_f if ``friction``] and ``params`` = [per motion task K_p, K_d, W^½;
-    per force task W^½; per contact n, t_1, t_2, μ, k_d, v_ε; per level ε_k]."""
+    ``inputs`` = [q; q̇; per task its target; τ_f if ``friction``] and ``params`` = [per contact n, t_1, t_2, μ,
+    k_d, v_ε; per motion task K_p, K_d, W^½; per force task W^½; per level ε_k]. With one level also the optimum
+    on the contact rows alone and its residuals (:mod:`~armctl.controllers.osc.generated_optimum`), and with
+    ``limits`` (the variable of each limit, ``"tau"`` or ``"qdd"``, whose bounds are constant) its verdict and
+    τ, ``params`` then ending with [per contact its cone rows (row by row); l; u]."""
     n = model.n
     q, qd = cs.SX.sym("q", n), cs.SX.sym("qd", n)
     tf = joint_transforms(model, q)
@@ -156,27 +164,38 @@ def contact_function(
         outputs.append(-(weighted.T @ t) + eps * bth)
         outputs.append(cs.dot(t, t) + eps * cs.dot(hf, hf))
     if len(levels) == 1 and contacts:  # the optimum on the contact rows alone (no inequality row active)
-        outputs += _equality_optimum(outputs[3], outputs[4], cs.vertcat(*crows), cs.vertcat(*crhs))
+        optimum = equality_optimum(outputs[3], outputs[4], cs.vertcat(*crows), cs.vertcat(*crhs))
+        outputs += optimum
+        if limits is not None:
+            y = optimum[0]
+            tau = bmat @ y + hf
+            values = [tau if var == "tau" else y[:n] for var in limits]
+            for k, c in enumerate(contacts):
+                rows_c = c.cone_rows()[0].shape[0]
+                cone = cs.SX.sym(f"cone{k}", rows_c * 3)
+                params.append(cone)
+                a, b = cols[c.name]
+                values.append(cs.reshape(cone, 3, rows_c).T @ y[a:b])  # row by row in
+            v = cs.vertcat(*values)
+            lo, up = cs.SX.sym("lower", v.shape[0]), cs.SX.sym("upper", v.shape[0])
+            params += [lo, up]
+            outputs += [verdict(optimum, outputs[4], outputs[5], v, lo, up), tau]
     return cs.Function(_NAME, [cs.vertcat(*inputs), cs.vertcat(*params)], [cs.densify(o) for o in outputs])
 
 
-def _equality_optimum(hess: cs.SX, grad: cs.SX, a: cs.SX, b: cs.SX) -> list[cs.SX]:
-    """(y*, λ, A y* − b, H y* + g + Aᵀλ): the optimum of ½yᵀHy + gᵀy subject to A y = b alone, by
-    the Schur complement of H (Cholesky written out): y₀ = −H⁻¹g, W = H⁻¹Aᵀ, λ = (A W)⁻¹(A y₀ − b),
-    y* = y₀ − W λ; and its residuals, which the step checks."""
-    y0 = -cholesky_solve(hess, grad)
-    w = cs.horzcat(*[cholesky_solve(hess, a[i, :].T) for i in range(a.shape[0])])
-    lam = cholesky_solve(a @ w, a @ y0 - b)
-    y = y0 - w @ lam
-    return [y, lam, a @ y - b, hess @ y + grad + a.T @ lam]
-
-
-def _tag(model: RobotModel, levels: Sequence[Sequence[Task]], contacts: Sequence[Contact], friction: bool) -> str:
+def _tag(
+    model: RobotModel,
+    levels: Sequence[Sequence[Task]],
+    contacts: Sequence[Contact],
+    friction: bool,
+    limits: Sequence[str] | None,
+) -> str:
     parts = [f"osc-contact|{model.fingerprint(inertial=True, tool=False)}|v{_CODE_VERSION}|friction={friction}"]
+    parts.append("limits:" + ("-" if limits is None else ",".join(limits)))
     for c in contacts:
         f = model.frame(c.frame)
         where = hashlib.sha256(f.placement.tobytes()).hexdigest()[:12]
-        parts.append(f"contact:{c.mode}:{f.name}:{f.joint}:{where}")
+        parts.append(f"contact:{c.mode}:{c.cone_rows()[0].shape[0]}:{f.name}:{f.joint}:{where}")
     names = [c.name for c in contacts]
     for k, tasks in enumerate(levels):
         parts.append(f"level{k}")
@@ -194,8 +213,9 @@ class GeneratedContactData:
     """The generated function of the module for ``levels`` (the tasks per priority level, in order) and
     ``contacts`` (the active ones, in the layout's order) on ``dynamics``, bound to buffers of its own. After
     :meth:`run`, the outputs are arrays that the next run overwrites: ``brows`` (n × (ny+1)), ``contact``
-    (3k × (ny+1)), ``rows`` (m × (ny+1)), per level ``H[k]``, ``g[k]``, ``c[k]`` and, with one level,
-    ``equality``. Not thread-safe."""
+    (3k × (ny+1)), ``rows`` (m × (ny+1)), per level ``H[k]``, ``g[k]``, ``c[k]``, with one level ``equality``, and
+    with ``bounds`` (one level, constant bounds l, u of the limits' and cones' rows, the limits' variables
+    ``limits``) ``accepted`` (1,) and ``tau`` (n,). Not thread-safe."""
 
     def __init__(
         self,
@@ -203,6 +223,8 @@ class GeneratedContactData:
         levels: Sequence[Sequence[Task]],
         contacts: Sequence[Contact],
         regularization: Sequence[float],
+        limits: Sequence[str] | None = None,
+        bounds: tuple[FloatArray, FloatArray] | None = None,
     ) -> None:
         model = dynamics.model
         self.dynamics = dynamics
@@ -211,14 +233,17 @@ class GeneratedContactData:
         self.contacts = tuple(contacts)
         self.regularization = tuple(float(e) for e in regularization)
         self.friction = dynamics.friction if model.has_friction else None
+        one = len(self.levels) == 1 and bool(self.contacts)
+        self.limits = tuple(limits) if limits is not None and bounds is not None and one else None
+        self.bounds = bounds if self.limits is not None else None
         cache_dir = dynamics.options.get("cache_dir")
-        tag = _tag(model, self.levels, self.contacts, self.friction is not None)
+        tag = _tag(model, self.levels, self.contacts, self.friction is not None, self.limits)
         built = not codegen.is_cached([_NAME], tag, cache_dir)
         t0 = time.perf_counter()
         fn = codegen.cached(
             [_NAME],
             tag,
-            lambda: [contact_function(model, self.levels, self.contacts, self.friction is not None)],
+            lambda: [contact_function(model, self.levels, self.contacts, self.friction is not None, self.limits)],
             cache_dir,
         )[_NAME]
         if built:
@@ -251,9 +276,14 @@ class GeneratedContactData:
         #: with one level: the optimum on the contact rows alone, y* (ny) and λ (3k), and its residuals A y* − b
         #: (3k) and H y* + g + Aᵀλ (ny); None with more levels
         self.equality: tuple[FloatArray, FloatArray, FloatArray, FloatArray] | None = None
-        if len(self.levels) == 1:
+        if one:
             self.equality = (np.zeros(ny), np.zeros(me), np.zeros(me), np.zeros(ny))
             results += list(self.equality)
+        #: with ``bounds``: 1.0 if the optimum on the contact rows alone is the QP's (see _verdict), and its τ
+        self.accepted = np.zeros(1)
+        self.tau = np.zeros(n)
+        if self.limits is not None:
+            results += [self.accepted, self.tau]
         for k, res in enumerate(results):
             buf.set_res(k, view(res.reshape(-1)))
         self._bound = (buf, results)  # the buffer reads and writes these: keep them alive
@@ -261,7 +291,10 @@ class GeneratedContactData:
 
     def __reduce__(self) -> tuple[Any, ...]:
         # rebuilt (the library loads from the cache): the buffers are this process's
-        return (GeneratedContactData, (self.dynamics, self.levels, self.contacts, self.regularization))
+        return (
+            GeneratedContactData,
+            (self.dynamics, self.levels, self.contacts, self.regularization, self.limits, self.bounds),
+        )
 
     def _params(self) -> None:
         """The contacts' coefficients, the gains and weights and ε_k into the parameter buffer (in place), in the
@@ -273,6 +306,9 @@ class GeneratedContactData:
             for tk in lev:
                 parts += [tk.sqrt_weight] if type(tk) is ContactForceTask else task_params([tk])
         parts.append(np.array(self.regularization))
+        if self.bounds is not None:
+            parts += [c.cone_rows()[0].ravel() for c in self.contacts]
+            parts += list(self.bounds)
         np.concatenate(parts, out=self.par)
 
     def run(self, q: FloatArray, qd: FloatArray, t: float, ref: Reference) -> None:

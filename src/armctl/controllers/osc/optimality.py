@@ -140,6 +140,19 @@ def verified(qp: QPArrays, x: FloatArray, y: FloatArray | None, z: FloatArray | 
     return kkt_ok(qp, x, y, z) or residuals(qp, x, y, z).ok()
 
 
+def equality_optimum_ok(qp: QPArrays, x: FloatArray, y: FloatArray, eq_res: FloatArray, stat: FloatArray) -> bool:
+    """Whether (x, y), the optimum on the equality rows alone (no inequality row active, z = 0) with its
+    residuals ``eq_res`` = A x − b and ``stat`` = H x + g + Aᵀy, is the optimum of ``qp``: the residuals within
+    :data:`PRIMAL_TOL` and :data:`DUAL_TOL` (1 + ‖g‖∞) and every inequality row within its bounds exactly (no
+    multiplier, no gap: the KKT conditions); False for NaN."""
+    if not float(np.abs(eq_res).max()) <= PRIMAL_TOL:
+        return False
+    if not float(np.abs(stat).max()) <= DUAL_TOL * (1.0 + float(np.abs(qp.g).max())):
+        return False
+    s = qp.C.dot(x)
+    return bool((s >= qp.l).all() and (s <= qp.u).all())
+
+
 def solve_on_active_set(qp: QPArrays, active: np.ndarray) -> tuple[FloatArray, FloatArray, FloatArray] | None:
     """(x, y, z) of the QP with the rows ``active`` as equalities (``active``: int8 per row of C, +1 at its
     upper bound, −1 at its lower, 0 free), by one direct solve of the KKT system (LU; if active rows depend on
