@@ -6,8 +6,9 @@ the same run (part of ``python -m armctl.bench.osc_speed``).
   torque limits; states near the ready pose, q = ready + N(0, 0.1 rad), q̇ = N(0, 0.3 rad/s). The QP on
   [q̈; τ; f] has 17 variables, 10 equality and 12 inequality rows (the controller solves it on [q̈; f]).
   Measured as in :mod:`~armctl.bench.osc_speed` (interleaved rounds of CPU time, per-round ratios): the step, one
-  raw RNEA at the same states, the optimality check run again, the QPs by stage, and the steps whose τ differs
-  from quadprog's optimum of the public problem by more than 1e-6 N·m.
+  raw RNEA at the same states, the optimality check run again in NumPy (``verify_last_step``; a step whose optimum
+  the generated code checked paid for its check inside that code), the QPs by stage, and the steps whose τ
+  differs from quadprog's optimum of the public problem by more than 1e-6 N·m.
 * ``scene``: the ``panda_contact`` scene's own controller (a sliding contact with a force target and the pose
   task in one level, the posture below it, torque, position and velocity limits) replaying a window of
   recorded states from the middle of a run of the scene (in contact), against one raw RNEA at those states.
