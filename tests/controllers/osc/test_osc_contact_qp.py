@@ -255,3 +255,34 @@ def test_a_binding_torque_limit_refuses_the_contact_rows_optimum_and_the_chain_f
     p = bound.build(0.0, q, qd, ref).problem(0)
     x = _quadprog_x(p)
     np.testing.assert_allclose(tau, _clipped(p, x[p.variables["tau"]]), atol=1e-6 * (1.0 + np.abs(x).max()))
+
+
+def test_two_contacts_fixed_and_sliding_on_both_paths_are_the_public_optimum() -> None:
+    """A fixed contact at the tool and a sliding one on the elbow (another frame, another normal), each with a
+    force task, in one level: the generated and NumPy paths agree to 1e-9 N·m and τ is quadprog's optimum of the
+    public problem."""
+    dyn = panda_dynamics(friction=True)
+
+    def make(compile: bool | str) -> OperationalSpaceQP:
+        pose = FramePoseTask(kp=400.0)
+        pose.set_target(dyn.frame_pose(Q_HOME))
+        tool = Contact(mu=0.3, facets=4)
+        elbow = Contact(frame="panda_link5", mode="sliding", mu=0.2, normal=(0, 1, 0), name="elbow")
+        tasks = [
+            pose,
+            PostureTask(7, kp=100.0, weight=1e-3),
+            ContactForceTask(tool, (0.0, 0.0, 10.0)),
+            ContactForceTask(elbow, 3.0, weight=1.0),
+        ]
+        return OperationalSpaceQP(dyn, tasks, limits=[TorqueLimit()], contacts=[tool, elbow], compile=compile)
+
+    ctrl, numpy_ctrl = make("auto"), make(False)
+    assert ctrl.uses_generated_code
+    ref = armctl.Reference(Q_HOME)
+    for q, qd in _states(8, seed=10):
+        tau = ctrl(0.0, q, qd, ref)
+        np.testing.assert_allclose(tau, numpy_ctrl(0.0, q, qd, ref), atol=1e-9, rtol=0)
+        p = ctrl.build(0.0, q, qd, ref).problem(0)
+        x = _quadprog_x(p)
+        np.testing.assert_allclose(tau, _clipped(p, x[p.variables["tau"]]), atol=1e-6 * (1.0 + np.abs(x).max()))
+        assert ctrl.verify_last_step()
