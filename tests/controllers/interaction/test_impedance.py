@@ -95,3 +95,21 @@ def test_generated_law_matches_the_numpy_law(panda: armctl.Dynamics, null: float
         ref = armctl.Reference(Q_READY + rng.uniform(-0.2, 0.2, 7))
         np.testing.assert_allclose(fast(0.0, q, qd, ref), slow(0.0, q, qd, ref), rtol=1e-9, atol=1e-9)
         np.testing.assert_allclose(fast.last_log["force"], slow.last_log["force"], rtol=1e-9, atol=1e-9)
+
+
+@pytest.mark.parametrize("shaped", [False, True])
+def test_the_frame_accelerates_as_its_inertia_says(panda: armctl.Dynamics, shaped: bool) -> None:
+    # at rest on its target, under a wrench h the arm exerts, the frame accelerates by −Λ⁻¹ h: Λ = Λ_d with
+    # inertia shaping, the arm's own Λ(q) without; the acceleration from the model's forward dynamics
+    from armctl.controllers import Measurement
+
+    q = Q_READY + np.array([0.1, -0.1, 0.05, 0.1, -0.05, 0.1, 0.0])
+    h = np.array([3.0, -2.0, 5.0, 0.2, -0.1, 0.3])
+    lam_d = np.diag([4.0, 4.0, 4.0, 0.05, 0.05, 0.05])
+    ctrl = CartesianImpedance(panda, [500.0] * 3 + [30.0] * 3, inertia=lam_d if shaped else None)
+    ctrl.set_target(panda.frame_pose(q))
+    tau = ctrl(0.0, q, np.zeros(7), armctl.Reference(q), measurement=Measurement(wrench=h, world_axes=True))
+    xdd = panda.jacobian(q) @ panda.forward_dynamics(q, np.zeros(7), tau, wrench=h)
+    jac = panda.jacobian(q)
+    lam = lam_d if shaped else np.linalg.inv(jac @ np.linalg.solve(panda.mass_matrix(q), jac.T))
+    np.testing.assert_allclose(xdd, -np.linalg.solve(lam, h), rtol=1e-8, atol=1e-9)
