@@ -74,12 +74,15 @@ def test_joint_impedance_yields_the_compliance_of_its_springs(panda: armctl.Dyna
     np.testing.assert_allclose(k * (Q_READY - q_end), panda.jacobian(q_end).T @ push, atol=2e-3)
 
 
+@pytest.mark.parametrize("given_damping", [True, False])
 @pytest.mark.parametrize("null", [0.0, 10.0])
 @pytest.mark.parametrize("axes", [6, 3])
-def test_generated_law_matches_the_numpy_law(panda: armctl.Dynamics, null: float, axes: int) -> None:
+def test_generated_law_matches_the_numpy_law(
+    panda: armctl.Dynamics, null: float, axes: int, given_damping: bool
+) -> None:
     # two implementations: generated C from the recursive algorithms and CasADi, and Pinocchio with NumPy
     k = [800.0, 600.0, 700.0, 50.0, 40.0, 30.0][:axes]
-    d = [60.0, 50.0, 55.0, 5.0, 4.0, 3.0][:axes]
+    d = [60.0, 50.0, 55.0, 5.0, 4.0, 3.0][:axes] if given_damping else None
     fast = CartesianImpedance(panda, k, d, nullspace_stiffness=null, compile=True)
     slow = CartesianImpedance(panda, k, d, nullspace_stiffness=null, compile=False)
     assert fast._generated is not None and slow._generated is None
@@ -87,8 +90,9 @@ def test_generated_law_matches_the_numpy_law(panda: armctl.Dynamics, null: float
     pose = panda.frame_pose(Q_READY)
     target = pose if axes == 6 else pose[:3, 3]
     twist = np.array([0.1, -0.05, 0.02, 0.3, 0.0, -0.2])[:axes]
+    accel = np.array([0.5, 0.0, -0.3, 0.0, 1.0, 0.0])[:axes]
     for c in (fast, slow):
-        c.set_target(target, twist)
+        c.set_target(target, twist, accel)
     for _ in range(5):
         q = Q_READY + rng.uniform(-0.4, 0.4, 7)
         qd = rng.uniform(-1.0, 1.0, 7)

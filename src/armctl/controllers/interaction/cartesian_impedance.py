@@ -54,8 +54,9 @@ class CartesianImpedance(Controller):
     friction : bool, optional
         Compensate the model's joint friction τ_f(q̇) (default True).
     compile : bool or "auto", optional
-        With a given ``damping`` and no ``inertia``, evaluate the law in one call of generated C code
-        (:mod:`~armctl.controllers.interaction.generated`; at a singular configuration the NumPy path names it):
+        Without ``inertia``, evaluate the law in one call of generated C code (the default damping then from the
+        Λ(q) it returns; :mod:`~armctl.controllers.interaction.generated`; at a singular configuration the NumPy
+        path names it):
         ``"auto"`` (the default) where the dynamics are Pinocchio's and a C compiler builds it (else NumPy, with a
         :class:`~armctl.errors.PerformanceWarning` once), True (or an error), False (NumPy).
 
@@ -159,7 +160,7 @@ class CartesianImpedance(Controller):
                 f"compile must be True (generated code, or an error), False (NumPy) or 'auto', got {mode!r}",
                 value=mode,
             )
-        if mode is False or self.damping is None or self.inertia is not None:
+        if mode is False or self.inertia is not None:
             return None
         from armctl.dynamics.pinocchio_backend import PinocchioDynamics
 
@@ -168,7 +169,7 @@ class CartesianImpedance(Controller):
         try:
             from armctl.controllers.interaction.generated import GeneratedImpedance  # CasADi, imported on use
 
-            gen = GeneratedImpedance(self.dynamics, self.frame, self.axes, self._null)
+            gen = GeneratedImpedance(self.dynamics, self.frame, self.axes, self._null, split=self.damping is None)
         except Exception as exc:  # "auto": the NumPy path, and why (once per process and cause)
             if mode is True:
                 raise
@@ -231,10 +232,17 @@ class CartesianImpedance(Controller):
             out = gen.run(q, qd, value, vel, acc, self.posture if self.posture is not None else ref.q)
             if all_finite(out):  # NaN at a singular configuration: the NumPy path names it
                 n, m = self.n, self.axes
-                tau = out[:n]
+                tau, force = out[:n], out[n + m : n + 2 * m]
+                if gen.split:  # the default damping, from Λ(q): τ = τ₀ + Jᵀ D ė
+                    k = n + 3 * m
+                    lam = out[k : k + m * m].reshape(m, m)
+                    jac_t = out[k + m * m :].reshape(n, m)  # J column by column: Jᵀ row by row
+                    d_edot = critical_damping(lam, self.stiffness, self.zeta) @ out[n + 2 * m : k]
+                    tau += jac_t @ d_edot
+                    force += d_edot
                 if self._friction_terms is not None:
                     tau += self._friction_terms.torque(qd)
-                self.last_log = {"error": out[n : n + m], "force": out[n + m :]}
+                self.last_log = {"error": out[n : n + m], "force": force}
                 return tau
         return self._numpy_law(t, q, qd, ref)
 
