@@ -61,6 +61,9 @@ class InnerMotion:
     force_loop : bool, optional
         Generate the force loop of :mod:`~armctl.controllers.interaction.force_loop` with the law (its owner
         then calls the generated code itself; :meth:`command` takes the NumPy path).
+    admittance : int, optional
+        Likewise, the compliant frame of :class:`~armctl.controllers.Admittance` with that many axes (3 or 6); 0:
+        none.
 
     Raises
     ------
@@ -81,6 +84,7 @@ class InnerMotion:
         frame: str | None = None,
         compile: bool | str = "auto",
         force_loop: bool = False,
+        admittance: int = 0,
     ) -> None:
         if kind not in INNER:
             raise UnknownNameError("inner motion loop", kind, INNER)
@@ -102,7 +106,7 @@ class InnerMotion:
         self.evaluator.check_frame(frame)
         friction = dynamics.kernel.friction
         self._friction = friction if friction.any else None
-        self.force_loop = force_loop
+        self.force_loop, self.admittance = force_loop, admittance
         self.generated = self._generated_law(compile)
 
     def _generated_law(self, mode: bool | str) -> Any:
@@ -119,7 +123,7 @@ class InnerMotion:
         try:
             from armctl.controllers.interaction.generated_inner import GeneratedInner  # CasADi, imported on use
 
-            gen = GeneratedInner(self.dynamics, self.frame, self.kind, self.force_loop)
+            gen = GeneratedInner(self.dynamics, self.frame, self.kind, self.force_loop, self.admittance)
         except Exception as exc:  # "auto": the NumPy path, and why (once per process and cause)
             if mode is True:
                 raise
@@ -135,7 +139,7 @@ class InnerMotion:
                 stacklevel=5,
             )
             return None
-        if not self.force_loop:
+        if not (self.force_loop or self.admittance):
             gen.set_gains(self.kp, self.kd, self.posture_kp, self.posture_kd)
         return gen
 
@@ -170,7 +174,7 @@ class InnerMotion:
             h [N; N·m] to compensate; None: not compensated.
         """
         gen = self.generated
-        if gen is not None and not self.force_loop:
+        if gen is not None and not (self.force_loop or self.admittance):
             out = gen.run(q, qd, pose, twist, acceleration, posture, wrench)
             if all_finite(out):
                 n = self.dynamics.n
