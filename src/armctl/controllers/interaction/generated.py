@@ -177,7 +177,12 @@ class GeneratedImpedance:
         self._buf = buf  # keeps the binding alive
 
     def __reduce__(self) -> tuple[Any, ...]:
-        return (GeneratedImpedance, (self.dynamics, self.frame, self.axes, self.null, self.split))
+        # rebuilt (the library loads from the cache: the buffers are this process's), with the gains
+        args = (self.dynamics, self.frame, self.axes, self.null, self.split)
+        return (GeneratedImpedance, args, {"par": self.par.copy()})
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.par[...] = state["par"]
 
     def set_gains(
         self, stiffness: FloatArray, damping: FloatArray | None, null_k: FloatArray, null_d: FloatArray

@@ -197,7 +197,12 @@ class GeneratedInner:
         self._buf = buf
 
     def __reduce__(self) -> tuple[Any, ...]:
-        return (GeneratedInner, (self.dynamics, self.frame, self.kind, self.force_loop, self.admittance))
+        # rebuilt (the library loads from the cache: the buffers are this process's), with the gains
+        args = (self.dynamics, self.frame, self.kind, self.force_loop, self.admittance)
+        return (GeneratedInner, args, {"par": self.par.copy()})
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.par[...] = state["par"]
 
     def set_gains(
         self, kp: FloatArray, kd: FloatArray, posture_kp: FloatArray, posture_kd: FloatArray, *force: Any
