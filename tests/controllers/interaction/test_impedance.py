@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import armctl
 from armctl.controllers import CartesianImpedance, JointImpedance
@@ -117,3 +119,21 @@ def test_the_frame_accelerates_as_its_inertia_says(panda: armctl.Dynamics, shape
     jac = panda.jacobian(q)
     lam = lam_d if shaped else np.linalg.inv(jac @ np.linalg.solve(panda.mass_matrix(q), jac.T))
     np.testing.assert_allclose(xdd, -np.linalg.solve(lam, h), rtol=1e-8, atol=1e-9)
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), zeta=st.floats(0.1, 2.0), m=st.sampled_from([3, 6, 7]))
+def test_default_damping_gives_every_mode_its_damping_ratio(seed: int, zeta: float, m: int) -> None:
+    # the modes from SciPy's generalized eigensolver, K v = ω² Λ v (vᵀ Λ v = 1): D is diagonal on them, 2 ζ ω
+    from scipy.linalg import eigh
+
+    rng = np.random.default_rng(seed)
+    a, b = rng.normal(size=(m, m)), rng.normal(size=(m, m))
+    lam = a @ a.T + 0.1 * np.eye(m)
+    k = b @ b.T * 10.0 ** rng.uniform(0, 3)
+    omega2, v = eigh(k, lam)
+    modal = v.T @ critical_damping(lam, k, zeta) @ v
+    expected = 2.0 * zeta * np.sqrt(np.maximum(omega2, 0.0))
+    scale = np.abs(expected).max()
+    np.testing.assert_allclose(np.diag(modal), expected, atol=1e-8 * scale)
+    np.testing.assert_allclose(modal - np.diag(np.diag(modal)), 0.0, atol=1e-8 * scale)
