@@ -9,6 +9,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray, all_finite, boolean, readonly, vector
+from armctl.codegen import Fallback, compile_mode
 from armctl.controllers.base import Controller
 from armctl.controllers.interaction.force_source import ForceInput
 from armctl.controllers.interaction.gains import critical_damping, damping_ratio, symmetric_psd
@@ -16,8 +17,10 @@ from armctl.controllers.interaction.task_space import FrameTarget, task_inertia
 from armctl.controllers.osc.state import ModelEvaluator
 from armctl.controllers.osc.tasks.target import Trajectory
 from armctl.dynamics.base import Dynamics
-from armctl.errors import InvalidParameterError, PerformanceWarning
 from armctl.references import Reference
+
+#: what ``compile="auto"`` runs where the generated law cannot be built
+FALLBACK = Fallback("the Cartesian impedance law's generated code", "the Pinocchio/NumPy law", "several times slower")
 
 
 class CartesianImpedance(Controller):
@@ -153,37 +156,23 @@ class CartesianImpedance(Controller):
         kernel_friction = dynamics.kernel.friction
         self._friction_terms = kernel_friction if self.friction and kernel_friction.any else None
 
-    def _generated_law(self, mode: bool | str) -> Any:
+    def _generated_law(self, compile: object) -> Any:
         """The generated law (a GeneratedImpedance) or None: the NumPy path."""
-        if not (mode is True or mode is False or (isinstance(mode, str) and mode == "auto")):
-            raise InvalidParameterError(
-                f"compile must be True (generated code, or an error), False (NumPy) or 'auto', got {mode!r}",
-                value=mode,
-            )
+        mode = compile_mode(compile)
         if mode is False or self.inertia is not None:
             return None
         from armctl.dynamics.pinocchio_backend import PinocchioDynamics
 
         if mode == "auto" and not isinstance(self.dynamics, PinocchioDynamics):
             return None
-        try:
+
+        def make() -> Any:
             from armctl.controllers.interaction.generated import GeneratedImpedance  # CasADi, imported on use
 
-            gen = GeneratedImpedance(self.dynamics, self.frame, self.axes, self._null, split=self.damping is None)
-        except Exception as exc:  # "auto": the NumPy path, and why (once per process and cause)
-            if mode is True:
-                raise
-            from armctl.dynamics import codegen
+            return GeneratedImpedance(self.dynamics, self.frame, self.axes, self._null, split=self.damping is None)
 
-            codegen.warn_fallback(
-                exc,
-                "the Cartesian impedance law's generated code",
-                "the law runs on Pinocchio and NumPy",
-                "several times slower",
-                "compile=False chooses the NumPy path",
-                PerformanceWarning,
-                stacklevel=4,
-            )
+        gen = FALLBACK.attempt(make, mode, stacklevel=4)
+        if gen is None:
             return None
         gen.set_gains(self.stiffness, self.damping, self.nullspace_stiffness, self.nullspace_damping)
         return gen

@@ -11,7 +11,7 @@ M(q) by composite rigid bodies (:mod:`armctl.dynamics.recursive`), e as the OSC 
 :func:`~armctl.controllers.osc.tasks.rotation.rotation_error_sx`) and, with null-space stiffness,
 Nᵀ τ_n = τ_n − Jᵀ (J M⁻¹ Jᵀ)⁻¹ J M⁻¹ τ_n by Cholesky factorisations written out. K, D, K_n and D_n are an input of
 the code. The library is compiled once per model, frame and variant and cached on disk
-(:mod:`armctl.dynamics.codegen`); a singular configuration gives NaN, which the controller answers by its NumPy
+(:mod:`armctl.codegen.library`); a singular configuration gives NaN, which the controller answers by its NumPy
 path (and its named error).
 """
 
@@ -26,8 +26,8 @@ import casadi as cs
 import numpy as np
 
 from armctl._checks import FloatArray
+from armctl.codegen import library as codegen
 from armctl.controllers.osc.tasks.rotation import rotation_error_sx
-from armctl.dynamics import codegen
 from armctl.dynamics.base import Dynamics
 from armctl.dynamics.casadi_buffer import buffer_of, view
 from armctl.dynamics.recursive import inverse_dynamics, joint_transforms, mass_matrix

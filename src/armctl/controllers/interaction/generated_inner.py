@@ -24,9 +24,9 @@ import casadi as cs
 import numpy as np
 
 from armctl._checks import FloatArray
+from armctl.codegen import library as codegen
 from armctl.controllers.interaction.generated import cholesky_factor, cholesky_solve_columns
 from armctl.controllers.osc.tasks.rotation import rotation_error_sx
-from armctl.dynamics import codegen
 from armctl.dynamics.base import Dynamics
 from armctl.dynamics.casadi_buffer import buffer_of, view
 from armctl.dynamics.recursive import inverse_dynamics, joint_transforms, mass_matrix
