@@ -20,6 +20,7 @@ WRITES = {
     "contact_qp.py": ["contact_qp.png"],
     "custom_controller.py": ["custom_controller.png"],
     "identification.py": ["identification.png"],
+    "interaction_control.py": ["interaction_press.png", "interaction_wipe.png"],
     "model_views.py": ["model_views.png"],
     "mujoco_comparison.py": ["panda_table.xml"],
     "osc_priorities.py": ["osc_priorities.png"],
