@@ -126,6 +126,7 @@ def sweep(
         blobs = checks.pickled(case_list, run, summary, checks.other_pickler())
 
     out = SweepResult([None] * len(case_list))
+    out.cases = case_list
     bar = Progress(len(case_list), None if progress is True else progress) if progress else None
 
     def record(i: int, outcome: Any) -> None:

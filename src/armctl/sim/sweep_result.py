@@ -70,8 +70,15 @@ class SweepResult(list[Any]):
     """The outcomes of a sweep in case order: each case's result, or a :class:`CaseFailure`.
 
     A plain list in every other respect (it compares equal to a list of the same items). ``failures`` lists
-    the failed cases, ``counts`` counts the outcomes by kind, ``all_ok`` is True when no case failed.
+    the failed cases, ``counts`` counts the outcomes by kind, ``all_ok`` is True when no case failed;
+    ``cases`` holds the cases themselves (set by :func:`~armctl.sim.sweep`), ``store`` the folder the outcomes
+    were written to (``sweep(..., store=PATH)``), ``to_dataframe()`` makes a table of them.
     """
+
+    #: the sweep's cases, in order (None for a list built otherwise)
+    cases: list[Mapping[str, Any]] | None = None
+    #: the folder the outcomes were written to, or None
+    store: str | None = None
 
     @property
     def failures(self) -> list[CaseFailure]:
@@ -105,6 +112,27 @@ class SweepResult(list[Any]):
             fails = self.failures
             text += "; " + "; ".join(str(f) for f in fails[:3]) + ("; …" if len(fails) > 3 else "")
         return text
+
+    def to_dataframe(self) -> Any:
+        """One row per case, indexed by the case's position (``pip install "armctl[data]"``; see
+        :mod:`armctl.sim.tables`).
+
+        Returns
+        -------
+        pandas.DataFrame
+            Columns: the case's settings (scalars as they are, other objects by their name or repr), ``outcome``
+            (``"ok"``, ``"raised"``, ``"worker_died"``, ``"timed_out"``), ``error_type`` and ``message`` of a
+            failure, and the scalar metrics of each result (the summary's numbers, or a full run's status and
+            tracking error).
+
+        Raises
+        ------
+        OptionalDependencyError
+            pandas is not installed.
+        """
+        from armctl.sim.tables import sweep_dataframe
+
+        return sweep_dataframe(self, self.cases)
 
     def __repr__(self) -> str:
         return f"SweepResult({self.describe()})"
