@@ -8,6 +8,7 @@ itself, and how it failed (it raised, its worker process died, or it ran past th
 from __future__ import annotations
 
 import builtins
+import os
 import pickle
 import traceback as tb
 from collections.abc import Mapping
@@ -79,6 +80,35 @@ class SweepResult(list[Any]):
     cases: list[Mapping[str, Any]] | None = None
     #: the folder the outcomes were written to, or None
     store: str | None = None
+    #: the cases not finished (their entries are None): only in a store loaded with ``partial=True``
+    pending: frozenset[int] = frozenset()
+
+    @classmethod
+    def load(cls, path: str | os.PathLike[str], partial: bool = False) -> SweepResult:
+        """The outcomes a sweep wrote to its store (``sweep(..., store=path)``; see :mod:`armctl.sim.sweep_store`).
+
+        Parameters
+        ----------
+        path : str or path-like
+            The store's folder.
+        partial : bool, optional
+            Accept a store whose sweep did not finish: the unfinished cases are None and listed in
+            :attr:`pending` (their rows in :meth:`to_dataframe` have the outcome ``"not_run"``).
+
+        Returns
+        -------
+        SweepResult
+            In case order; ``cases`` holds each case's settings as the store shows them (numbers and strings as
+            they were, other objects by name or repr).
+
+        Raises
+        ------
+        InvalidParameterError
+            Not a store, or (without ``partial``) a store with unfinished cases.
+        """
+        from armctl.sim.sweep_store import load
+
+        return load(path, partial)
 
     @property
     def failures(self) -> list[CaseFailure]:
@@ -132,7 +162,7 @@ class SweepResult(list[Any]):
         """
         from armctl.sim.tables import sweep_dataframe
 
-        return sweep_dataframe(self, self.cases)
+        return sweep_dataframe(self, self.cases, self.pending)
 
     def __repr__(self) -> str:
         return f"SweepResult({self.describe()})"

@@ -8,7 +8,8 @@ raise :class:`~armctl.errors.OptionalDependencyError` saying how to install them
 
 A sweep's table has one row per case: the case's settings (numbers, strings and booleans as they are; other
 objects by their ``name``, a function by its qualified name, anything else by its ``repr``), the outcome
-(``"ok"``, ``"raised"``, ``"worker_died"``, ``"timed_out"``, with the exception's type and message) and the
+(``"ok"``, ``"raised"``, ``"worker_died"``, ``"timed_out"``, with the exception's type and message; ``"not_run"``
+for a case a partially loaded store lacks) and the
 scalar metrics of what the case returned (a number, the scalar entries of a mapping or the fields of a
 dataclass, or for a full :class:`~armctl.sim.SimResult` its status and tracking error).
 """
@@ -18,7 +19,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import numbers
-from collections.abc import Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -203,8 +204,11 @@ def metrics(value: Any) -> dict[str, Any]:
     return {}
 
 
-def sweep_rows(outcomes: SweepResult, cases: Sequence[Mapping[str, Any]] | None) -> list[dict[str, Any]]:
-    """One dict per case: settings, outcome, metrics (the columns of :func:`sweep_dataframe`)."""
+def sweep_rows(
+    outcomes: SweepResult, cases: Sequence[Mapping[str, Any]] | None, pending: Collection[int] = ()
+) -> list[dict[str, Any]]:
+    """One dict per case: settings, outcome, metrics (the columns of :func:`sweep_dataframe`); the cases in
+    ``pending`` did not run (outcome ``"not_run"``)."""
     from armctl.sim.sweep_result import CaseFailure
 
     rows = []
@@ -212,7 +216,9 @@ def sweep_rows(outcomes: SweepResult, cases: Sequence[Mapping[str, Any]] | None)
         case = cases[i] if cases is not None else outcome.case if isinstance(outcome, CaseFailure) else {}
         row: dict[str, Any] = {"case": i}
         row.update({str(k): setting(v) for k, v in case.items()})
-        if isinstance(outcome, CaseFailure):
+        if i in pending:
+            row.update(outcome="not_run", error_type=None, message=None)
+        elif isinstance(outcome, CaseFailure):
             row.update(outcome=outcome.kind, error_type=outcome.error_type, message=outcome.message)
         else:
             row.update(outcome="ok", error_type=None, message=None)
@@ -222,7 +228,9 @@ def sweep_rows(outcomes: SweepResult, cases: Sequence[Mapping[str, Any]] | None)
     return rows
 
 
-def sweep_dataframe(outcomes: SweepResult, cases: Sequence[Mapping[str, Any]] | None = None) -> Any:
+def sweep_dataframe(
+    outcomes: SweepResult, cases: Sequence[Mapping[str, Any]] | None = None, pending: Collection[int] = ()
+) -> Any:
     """A sweep as a pandas DataFrame (see :meth:`SweepResult.to_dataframe
     <armctl.sim.SweepResult.to_dataframe>`)."""
     pd = require("pandas", "SweepResult.to_dataframe")
@@ -231,7 +239,7 @@ def sweep_dataframe(outcomes: SweepResult, cases: Sequence[Mapping[str, Any]] | 
             f"cases has {len(cases)} entries but the sweep {len(outcomes)} outcomes; pass the sweep's own cases",
             value=len(cases),
         )
-    frame = pd.DataFrame(sweep_rows(outcomes, cases)).set_index("case")
+    frame = pd.DataFrame(sweep_rows(outcomes, cases, pending)).set_index("case")
     for column in frame.columns:  # a column mixing strings and numbers is shown as strings (one type a column)
         kinds = {type(v) for v in frame[column] if v is not None and not (isinstance(v, float) and math.isnan(v))}
         if str in kinds and len(kinds) > 1:
