@@ -38,3 +38,28 @@ def test_killed_worker_and_raising_run_on_dask_are_recorded(tmp_path: Path) -> N
     assert "in failing_job" in raised.traceback  # the worker's traceback
     assert isinstance(killed, CaseFailure) and killed.kind == "worker_died" and killed.case is cs[3]
     assert killed.error_type == "distributed.scheduler.KilledWorker" and "workers died" in killed.message
+
+
+@pytest.mark.slow
+def test_a_case_that_shared_a_dying_worker_is_not_lost(tmp_path: Path) -> None:
+    """One worker with two threads: the killer and a slow innocent case run on it together, so that each
+    worker death counts against both, and Dask gives up on both (KilledWorker). The sweep runs each of them
+    again alone: the innocent one returns its result, and only the killer is recorded as a dead worker."""
+    import dask
+    import distributed
+
+    log = tmp_path / "starts.log"
+    cs = failing_cases(log, {0: "sigkill", 1: "slow"}, n=3)
+    with (
+        dask.config.set({"distributed.scheduler.allowed-failures": 1}),
+        distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=True, dashboard_address=None) as cl,
+        distributed.Client(cl) as client,
+    ):
+        with pytest.warns(SweepWarning, match=r"3 cases: 2 ok, 1 failed \(0 raised, 1 worker died"):
+            out = sweep(cs, run=failing_job, executor=client.get_executor(), progress=False)
+    killed = out[0]
+    assert isinstance(killed, CaseFailure) and killed.kind == "worker_died" and killed.case is cs[0]
+    assert killed.error_type == "distributed.scheduler.KilledWorker"
+    assert out[1:] == [1, 4] and out.failures == [killed]
+    starts = log.read_text().split()
+    assert starts.count("1") >= 2  # the innocent case was on the dying worker, and ran again

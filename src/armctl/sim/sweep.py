@@ -28,7 +28,7 @@ import numpy as np
 
 from armctl.errors import InvalidParameterError, RunTimeoutError, SweepWarning, WorkerDiedError
 from armctl.sim import sweep_checks as checks
-from armctl.sim.sweep_pool import WorkerPool, run_one, run_pickled
+from armctl.sim.sweep_pool import WorkerPool, run_one, run_pickled, run_pickled_again
 from armctl.sim.sweep_progress import Progress
 from armctl.sim.sweep_result import CaseFailure, ErrorReport, FailureKind, SweepResult, type_name
 from armctl.sim.sweep_store import SweepStore
@@ -65,7 +65,9 @@ def sweep(
         too). An Executor (a ``ThreadPoolExecutor``, a ``ProcessPoolExecutor``, a Dask
         ``client.get_executor()``) is used as given and not shut down. If a ``ProcessPoolExecutor`` breaks
         (a worker died), the cases it had not finished continue on a pool of the sweep's own, as their retry.
-        On Dask, a ``KilledWorker`` (the scheduler's own retries spent) is recorded as a dead worker.
+        On Dask, a case that gets a ``KilledWorker`` (the scheduler's own retries spent: each worker that ran
+        it died) runs once more alone, after the other cases, because Dask blames every case that shared a
+        dying worker: only one that kills its worker alone too is recorded as a dead worker.
     max_workers : int, optional
         Processes of the sweep's own pool (default: the number of CPUs, at most one per case).
     progress : bool or text stream
@@ -281,28 +283,63 @@ def _through(
                 broken.update(dict.fromkeys(todo[k:], 0))
                 break
             futures[fut] = i
-        for fut in as_completed(futures):
+        pool = isinstance(executor, ProcessPoolExecutor)
+        killed: list[int] = []  # Dask: cases whose workers all died under them (KilledWorker)
+        for fut in as_completed(list(futures)):
             i = futures[fut]
-            try:
-                got = fut.result()
-            except BrokenExecutor as exc:
-                if isinstance(executor, ProcessPoolExecutor):
-                    broken[i] = 1
-                else:
-                    record(i, _failure(i, cases[i], exc))
-                continue
-            except Exception as exc:  # the executor's own failure, or the run's exception from a thread
-                died = type(exc).__name__ == "KilledWorker"
-                record(i, _failure(i, cases[i], exc, "worker_died" if died else "raised"))
-                continue
-            if blobs is None:
-                record(i, got)
-            elif got[0] == "ok":
-                record(i, pickle.loads(got[1]))
-            else:
-                record(i, _from_report(i, cases[i], got[1]))
+            taken = _take(fut, i, cases[i], blobs, record, pool)
+            if taken == "broken":
+                broken[i] = 1
+            elif taken == "killed":
+                killed.append(i)
+        # A KilledWorker blames every case that was on a worker when it died, the innocent ones that shared it
+        # included: each runs again alone, after the others, and only one that kills its workers alone too is
+        # recorded as a dead worker
+        for i in sorted(killed):
+            fut = (
+                executor.submit(run_pickled_again, blobs[i])
+                if blobs is not None
+                else executor.submit(run_one, run, cases[i], summary)
+            )
+            futures[fut] = i
+            if _take(fut, i, cases[i], blobs, record, pool, alone=True) == "broken":
+                broken[i] = 1
     except BaseException:
         for fut in futures:
             fut.cancel()
         raise
     return broken
+
+
+def _take(
+    fut: Future[Any],
+    i: int,
+    case: Mapping[str, Any],
+    blobs: list[bytes] | None,
+    record: Callable[[int, Any], None],
+    pool: bool,
+    alone: bool = False,
+) -> str:
+    """Record case i's outcome from its finished future; returns "recorded", or "broken" (``pool``: a
+    ProcessPoolExecutor that broke, not recorded) or "killed" (Dask's KilledWorker, not ``alone``: not
+    recorded)."""
+    try:
+        got = fut.result()
+    except BrokenExecutor as exc:
+        if pool:
+            return "broken"
+        record(i, _failure(i, case, exc))
+        return "recorded"
+    except Exception as exc:  # the executor's own failure, or the run's exception from a thread
+        died = type(exc).__name__ == "KilledWorker"
+        if died and not alone:
+            return "killed"
+        record(i, _failure(i, case, exc, "worker_died" if died else "raised", 2 if died else 1))
+        return "recorded"
+    if blobs is None:
+        record(i, got)
+    elif got[0] == "ok":
+        record(i, pickle.loads(got[1]))
+    else:
+        record(i, _from_report(i, case, got[1]))
+    return "recorded"
