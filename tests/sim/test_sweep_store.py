@@ -4,6 +4,7 @@ cases is refused, naming the difference."""
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import signal
@@ -172,3 +173,40 @@ def test_bad_store_arguments_are_named(tmp_path: Path) -> None:
         sweep(cases, run=paced_job, store=tmp_path / "full", executor="serial")
     with pytest.raises(InvalidParameterError, match=r"is not a sweep store \(it has no manifest.json\)"):
         SweepResult.load(tmp_path / "full")
+
+
+def simulation_cases() -> list[dict[str, object]]:
+    """Cases of simulate: a model, a Dynamics, controllers holding their own Dynamics, references, arrays."""
+    import armctl
+    from armctl.controllers import Adaptive, ComputedTorque
+    from armctl.references import Quintic
+
+    model = armctl.models.planar_2r()
+    return [
+        {
+            "plant": model if kp < 1e3 else armctl.Dynamics(model),
+            "controller": ComputedTorque(armctl.Dynamics(model), kp, 2 * kp**0.5),
+            "reference": Quintic([0.0, 0.0], [0.3, -0.2], duration=0.5),
+            "duration": 0.5,
+            "q0": np.zeros(2),
+        }
+        for kp in (100.0, 1e3)
+    ] + [{"plant": model, "controller": Adaptive(armctl.Dynamics(model), 5.0, 10.0, 0.1), "duration": 0.1,
+          "reference": armctl.Reference.hold([0.1, 0.2])}]  # fmt: skip
+
+
+def test_a_case_list_has_the_same_digests_in_another_process() -> None:
+    """A study resumed from a new process builds its cases anew: their digests must be the same there (no
+    address, hash seed or cache in them), or the store would be refused."""
+    from armctl.sim.sweep_store import _manifest
+
+    code = (
+        "import json\nfrom armctl.sim.sweep_store import _manifest\n"
+        "from tests.sim.test_sweep_store import simulation_cases\n"
+        "print(json.dumps(_manifest(simulation_cases())['keys']))"
+    )
+    env = {**os.environ, "PYTHONPATH": f"{ROOT / 'src'}{os.pathsep}{ROOT}", "PYTHONHASHSEED": "123"}
+    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True, text=True, check=True)
+    here = _manifest(simulation_cases())["keys"]
+    assert json.loads(out.stdout) == here
+    assert len({d["controller"] for d in here}) == 3  # and the digests tell different controllers apart
