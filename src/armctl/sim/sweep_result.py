@@ -34,8 +34,8 @@ class CaseFailure:
     kind : {"raised", "worker_died", "timed_out"}
         ``"raised"``: ``run`` (or ``summary``) raised. ``"worker_died"``: the process running it died
         (a signal such as SIGKILL, ``os._exit``, a crash in compiled code), also on its retry; on Dask, a
-        ``KilledWorker`` also when it ran again alone. ``"timed_out"``: it ran longer than the sweep's ``timeout`` and its process was
-        stopped.
+        ``KilledWorker`` also when it ran again alone. ``"timed_out"``: it ran longer than the sweep's
+        ``timeout`` and its process was stopped.
     error_type : str
         The exception's class, e.g. ``"ValueError"`` or ``"armctl.errors.InvalidParameterError"``.
     message : str

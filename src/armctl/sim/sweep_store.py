@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 
 from armctl.errors import ArmctlError, InvalidParameterError
-from armctl.sim.sweep_result import CaseFailure, SweepResult
+from armctl.sim.sweep_result import CaseFailure, ErrorReport, SweepResult
 from armctl.sim.tables import setting
 
 FORMAT = "armctl.sweep-store/1"
@@ -92,7 +92,7 @@ def _shown(value: Any) -> Any:
     return shown if shown is None or isinstance(shown, bool | int | float | str) else str(shown)
 
 
-def _difference(path: Path, stored: dict[str, Any], given: dict[str, Any]) -> str:
+def _difference(stored: dict[str, Any], given: dict[str, Any]) -> str:
     """What differs between the stored case list and the given one, in words."""
     if stored["cases"] != given["cases"]:
         return f"it holds {stored['cases']} cases, these are {given['cases']}"
@@ -134,7 +134,7 @@ class SweepStore:
         stored = _read_manifest(root)
         if stored["digest"] != given["digest"]:
             raise InvalidParameterError(
-                f"the sweep store {str(root)!r} was made from other cases: {_difference(root, stored, given)}. "
+                f"the sweep store {str(root)!r} was made from other cases: {_difference(stored, given)}. "
                 "Pass the cases it was made from, or another store folder for these cases",
                 value=str(root),
             )
@@ -166,11 +166,7 @@ class SweepStore:
         """Store case i's outcome (once)."""
         if isinstance(outcome, CaseFailure):
             exc = outcome.exception
-            try:
-                exc_blob = pickle.dumps(exc) if exc is not None else None
-                pickle.loads(exc_blob) if exc_blob is not None else None
-            except Exception:
-                exc_blob = None
+            exc_blob = ErrorReport.of(exc).pickled if exc is not None else None  # None: it does not pickle
             fields = (outcome.kind, outcome.error_type, outcome.message, outcome.traceback, outcome.attempts)
             record: dict[str, Any] = {"index": i, "outcome": outcome.kind, "failure": fields, "exception": exc_blob}
         else:

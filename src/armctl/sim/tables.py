@@ -152,8 +152,8 @@ def _plain(x: Any) -> Any:
 
 def setting(value: Any) -> Any:
     """How a case's setting appears in a table: a scalar as it is; an object by its ``name`` (a RobotModel, a
-    scene), a function or class by its qualified name, a small array as a list; anything else by its repr (the
-    first :data:`SHOWN` characters)."""
+    scene), a function or class by its qualified name, a small array as a list, an object without a repr of its
+    own by its class's name; anything else by its repr (the first :data:`SHOWN` characters)."""
     if _is_scalar(value):
         return _plain(value)
     name = getattr(value, "name", None)
@@ -163,6 +163,8 @@ def setting(value: Any) -> Any:
         return repr(value.tolist()) if value.size <= 12 else f"ndarray{value.shape}"
     if callable(value) and hasattr(value, "__qualname__"):
         return f"{getattr(value, '__module__', '')}.{value.__qualname__}".lstrip(".")
+    if type(value).__repr__ is object.__repr__:  # "<… object at 0x…>": only its class says anything
+        return type(value).__qualname__
     text = repr(value)
     return text if len(text) <= SHOWN else text[: SHOWN - 1] + "…"
 
