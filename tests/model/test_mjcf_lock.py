@@ -43,6 +43,20 @@ HAND = """
       </body>
     </body>
   </worldbody>
+  <!-- as in MuJoCo Menagerie's Panda: the fingers coupled by an equality, driven through a tendon -->
+  <tendon>
+    <fixed name="split">
+      <joint joint="finger_left" coef="0.5"/>
+      <joint joint="finger_right" coef="0.5"/>
+    </fixed>
+  </tendon>
+  <equality>
+    <joint joint1="finger_left" joint2="finger_right" polycoef="0 1 0 0 0"/>
+  </equality>
+  <actuator>
+    <motor joint="shoulder" ctrllimited="true" ctrlrange="-30 30"/>
+    <general tendon="split" forcerange="-100 100" ctrlrange="0 255" gainprm="0.01568" biasprm="0 -100 -10"/>
+  </actuator>
 </mujoco>
 """
 
@@ -73,6 +87,7 @@ def test_fingers_held_open_equal_mujoco(mj, backend: str) -> None:  # type: igno
     lock = {"finger_left": 0.03, "finger_right": 0.015}
     model = armctl.RobotModel.from_mjcf(HAND, lock=lock)
     assert model.joint_names == ("shoulder", "elbow", "wrist") and model.joints[0].friction.viscous == 0.2
+    assert model.joints[0].limits.effort == 30.0  # the motor's, while the fingers' tendon actuator is left out
     dyn = armctl.Dynamics(model, backend=backend)
     rng = np.random.default_rng(5)
     for _ in range(5):
