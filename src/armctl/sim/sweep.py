@@ -18,19 +18,19 @@ from __future__ import annotations
 import dataclasses
 import os
 import pickle
-import traceback
 import warnings
 from collections.abc import Callable, Iterable, Mapping
-from concurrent.futures import BrokenExecutor, Executor, Future, ProcessPoolExecutor, ThreadPoolExecutor, as_completed
+from concurrent.futures import Executor, ProcessPoolExecutor, ThreadPoolExecutor
 from typing import Any, Literal, TextIO, cast
 
 import numpy as np
 
 from armctl.errors import InvalidParameterError, RunTimeoutError, SweepWarning, WorkerDiedError
 from armctl.sim import sweep_checks as checks
-from armctl.sim.sweep_pool import WorkerPool, run_one, run_pickled, run_pickled_again
+from armctl.sim.sweep_executor import failure, from_report, through
+from armctl.sim.sweep_pool import WorkerPool, run_one
 from armctl.sim.sweep_progress import Progress
-from armctl.sim.sweep_result import CaseFailure, ErrorReport, FailureKind, SweepResult, type_name
+from armctl.sim.sweep_result import CaseFailure, SweepResult
 from armctl.sim.sweep_store import SweepStore
 
 ON_ERROR = ("record", "raise")
@@ -177,7 +177,7 @@ def sweep(
             assert blobs is not None  # pickled above for the sweep's own pool
             _own_pool([(i, blobs[i]) for i in todo], {}, case_list, workers, timeout, record)
         else:
-            broken = _through(cast(Executor, executor), case_list, todo, blobs, run, summary, record)
+            broken = through(cast(Executor, executor), case_list, todo, blobs, run, summary, record)
             if broken:  # a ProcessPoolExecutor broke: the cases it left run on a pool of ours
                 assert blobs is not None  # a ProcessPoolExecutor's cases were pickled above
                 tasks = [(i, blobs[i]) for i in sorted(broken)]
@@ -212,22 +212,11 @@ def _interrupted(n: int, kept: SweepStore | None, finished: int) -> str:
     )
 
 
-def _failure(
-    i: int, case: Mapping[str, Any], exc: BaseException, kind: FailureKind = "raised", tries: int = 1
-) -> CaseFailure:
-    text = "".join(traceback.format_exception(type(exc), exc, exc.__traceback__))
-    return CaseFailure(i, case, kind, type_name(type(exc)), str(exc), text, tries, exc)
-
-
-def _from_report(i: int, case: Mapping[str, Any], report: ErrorReport) -> CaseFailure:
-    return CaseFailure(i, case, "raised", report.error_type, report.message, report.traceback, 1, report.exception())
-
-
 def _call_here(i: int, case: Mapping[str, Any], run: Callable[..., Any], summary: Callable[[Any], Any] | None) -> Any:
     try:
         return run_one(run, case, summary)
     except Exception as exc:
-        return _failure(i, case, exc)
+        return failure(i, case, exc)
 
 
 def _own_pool(
@@ -244,102 +233,12 @@ def _own_pool(
             if kind == "ok":
                 record(i, pickle.loads(outcome[1]))
             elif kind == "error":
-                record(i, _from_report(i, cases[i], outcome[1]))
+                record(i, from_report(i, cases[i], outcome[1]))
             else:
                 died = kind == "died"
                 exc = (WorkerDiedError if died else RunTimeoutError)(outcome[1], value=cases[i])
-                failure = _failure(i, cases[i], exc, "worker_died" if died else "timed_out", outcome[2])
+                lost = failure(i, cases[i], exc, "worker_died" if died else "timed_out", outcome[2])
                 if outcome[3]:
-                    text = f"{failure.traceback}\nThe run's stack when it was stopped:\n{outcome[3]}"
-                    failure = dataclasses.replace(failure, traceback=text)
-                record(i, failure)
-
-
-def _through(
-    executor: Executor,
-    cases: list[Mapping[str, Any]],
-    todo: list[int],
-    blobs: list[bytes] | None,
-    run: Callable[..., Any],
-    summary: Callable[[Any], Any] | None,
-    record: Callable[[int, Any], None],
-) -> dict[int, int]:
-    """Run every case on a given executor. Returns the cases a broken ProcessPoolExecutor left undone, with
-    the attempts they had (1 if it broke under them, 0 if it was broken before they were submitted)."""
-    futures: dict[Future[Any], int] = {}
-    broken: dict[int, int] = {}
-    try:
-        for k, i in enumerate(todo):
-            c = cases[i]
-            try:  # threads: nothing is pickled, the case's own exception comes back from the future
-                fut = (
-                    executor.submit(run_one, run, c, summary)
-                    if blobs is None
-                    else executor.submit(run_pickled, blobs[i])
-                )
-            except BrokenExecutor:
-                if not isinstance(executor, ProcessPoolExecutor):
-                    raise
-                broken.update(dict.fromkeys(todo[k:], 0))
-                break
-            futures[fut] = i
-        pool = isinstance(executor, ProcessPoolExecutor)
-        killed: list[int] = []  # Dask: cases whose workers all died under them (KilledWorker)
-        for fut in as_completed(list(futures)):
-            i = futures[fut]
-            taken = _take(fut, i, cases[i], blobs, record, pool)
-            if taken == "broken":
-                broken[i] = 1
-            elif taken == "killed":
-                killed.append(i)
-        # A KilledWorker blames every case that was on a worker when it died, the innocent ones that shared it
-        # included: each runs again alone, after the others, and only one that kills its workers alone too is
-        # recorded as a dead worker
-        for i in sorted(killed):
-            fut = (
-                executor.submit(run_pickled_again, blobs[i])
-                if blobs is not None
-                else executor.submit(run_one, run, cases[i], summary)
-            )
-            futures[fut] = i
-            if _take(fut, i, cases[i], blobs, record, pool, alone=True) == "broken":
-                broken[i] = 1
-    except BaseException:
-        for fut in futures:
-            fut.cancel()
-        raise
-    return broken
-
-
-def _take(
-    fut: Future[Any],
-    i: int,
-    case: Mapping[str, Any],
-    blobs: list[bytes] | None,
-    record: Callable[[int, Any], None],
-    pool: bool,
-    alone: bool = False,
-) -> str:
-    """Record case i's outcome from its finished future; returns "recorded", or "broken" (``pool``: a
-    ProcessPoolExecutor that broke, not recorded) or "killed" (Dask's KilledWorker, not ``alone``: not
-    recorded)."""
-    try:
-        got = fut.result()
-    except BrokenExecutor as exc:
-        if pool:
-            return "broken"
-        record(i, _failure(i, case, exc))
-        return "recorded"
-    except Exception as exc:  # the executor's own failure, or the run's exception from a thread
-        died = type(exc).__name__ == "KilledWorker"
-        if died and not alone:
-            return "killed"
-        record(i, _failure(i, case, exc, "worker_died" if died else "raised", 2 if died else 1))
-        return "recorded"
-    if blobs is None:
-        record(i, got)
-    elif got[0] == "ok":
-        record(i, pickle.loads(got[1]))
-    else:
-        record(i, _from_report(i, case, got[1]))
-    return "recorded"
+                    text = f"{lost.traceback}\nThe run's stack when it was stopped:\n{outcome[3]}"
+                    lost = dataclasses.replace(lost, traceback=text)
+                record(i, lost)
