@@ -9,9 +9,7 @@ step: ``compiled_plant``, ``generated_plant``, ``plant_layout``, the C driver
 ``contact`` and ``normal_force``, ``result`` (:class:`SimResult`, with ``sampled_reference`` and ``limits``),
 ``plot``, ``playback`` (a run in 3D as a standalone HTML page; ``visuals``: the arm's shapes), ``sweep`` (many
 runs through an Executor; ``sweep_result``: one outcome per case, ``sweep_pool``: its own process pool,
-``sweep_executor``: an Executor given to it, ``sweep_store``: outcomes kept in a folder as they finish,
-``sweep_progress``); ``tables``: results as pandas DataFrames and xarray Datasets (``armctl[data]``);
-``mujoco_engine`` and ``mujoco_plant``: the same loop on a MuJoCo plant (``engine="mujoco"``).
+``sweep_progress``); ``mujoco_engine`` and ``mujoco_plant``: the same loop on a MuJoCo plant (``engine="mujoco"``).
 """
 
 from armctl.sim.contact import ContactPoint, Environment, ForceSensor, Plane
