@@ -25,6 +25,7 @@ WRITES = {
     "model_views.py": ["model_views.png"],
     "mujoco_comparison.py": ["panda_table.xml"],
     "osc_priorities.py": ["osc_priorities.png"],
+    "sweep_study.py": ["sweep_study.parquet", "sweep_study.png", "sweep_study_store"],
     "topp_tracking.py": ["topp_tracking.png"],
 }
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+import pinocchio as pin
 import pytest
 
 import armctl
@@ -203,3 +204,40 @@ def test_generated_inner_loop_matches_the_numpy_loop(panda: armctl.Dynamics, inn
         fast, slow = (c(0.001 * k, q, qd, ref, measurement=m) for c in made)
         np.testing.assert_allclose(fast, slow, rtol=1e-9, atol=1e-9)
         np.testing.assert_allclose(made[0].last_log["error"], made[1].last_log["error"], atol=1e-12)
+
+
+def test_admittance_yields_to_a_moment_by_its_rotational_stiffness(panda: armctl.Dynamics) -> None:
+    # a constant wrench the arm exerts (a moment about z): at rest the tool has turned by −K⁻¹ m
+    push = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.5])
+    k = np.array([500.0, 500.0, 500.0, 20.0, 20.0, 10.0])
+    ctrl = Admittance(panda, k)
+    target = panda.frame_pose(Q_READY)
+    ctrl.set_target(target)
+
+    def loop(t: float, q: Any, qd: Any, ref: armctl.Reference) -> Any:
+        return ctrl(t, q, qd, ref, measurement=Measurement(wrench=push, world_axes=True))
+
+    res = armctl.simulate(panda.model, loop, armctl.Reference(Q_READY), 3.0, q0=Q_READY, disturbance=lambda t: push)
+    rot = panda.frame_pose(res.q[-1])[:3, :3]
+    turned = pin.log3(rot @ target[:3, :3].T)
+    np.testing.assert_allclose(turned, -push[3:] / k[3:], atol=1e-4)
+    np.testing.assert_allclose(panda.frame_pose(res.q[-1])[:3, 3], target[:3, 3], atol=1e-5)
+
+
+@pytest.mark.parametrize("axes", [6, 3])
+def test_generated_admittance_matches_the_numpy_admittance(panda: armctl.Dynamics, axes: int) -> None:
+    k = [500.0, 400.0, 600.0, 20.0, 30.0, 25.0][:axes]
+    made = [Admittance(panda, k, compile=c) for c in (True, False)]
+    assert made[0].inner.generated is not None and made[1].inner.generated is None
+    rng = np.random.default_rng(5)
+    target = panda.frame_pose(Q_READY)
+    for c in made:
+        c.set_target(target, [0.02, 0.0, -0.01, 0.0, 0.1, 0.0])
+    for k_step in range(6):
+        q = Q_READY + rng.uniform(-0.3, 0.3, 7)
+        qd = rng.uniform(-1.0, 1.0, 7)
+        m = Measurement(wrench=rng.normal(size=6) * 5.0, world_axes=True)
+        ref = armctl.Reference(Q_READY)
+        fast, slow = (c(0.01 * k_step, q, qd, ref, measurement=m) for c in made)
+        np.testing.assert_allclose(fast, slow, rtol=1e-8, atol=1e-8)
+        np.testing.assert_allclose(made[0].last_log["compliant"], made[1].last_log["compliant"], atol=1e-12)

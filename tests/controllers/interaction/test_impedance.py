@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import armctl
 from armctl.controllers import CartesianImpedance, JointImpedance
@@ -74,12 +76,15 @@ def test_joint_impedance_yields_the_compliance_of_its_springs(panda: armctl.Dyna
     np.testing.assert_allclose(k * (Q_READY - q_end), panda.jacobian(q_end).T @ push, atol=2e-3)
 
 
+@pytest.mark.parametrize("given_damping", [True, False])
 @pytest.mark.parametrize("null", [0.0, 10.0])
 @pytest.mark.parametrize("axes", [6, 3])
-def test_generated_law_matches_the_numpy_law(panda: armctl.Dynamics, null: float, axes: int) -> None:
+def test_generated_law_matches_the_numpy_law(
+    panda: armctl.Dynamics, null: float, axes: int, given_damping: bool
+) -> None:
     # two implementations: generated C from the recursive algorithms and CasADi, and Pinocchio with NumPy
     k = [800.0, 600.0, 700.0, 50.0, 40.0, 30.0][:axes]
-    d = [60.0, 50.0, 55.0, 5.0, 4.0, 3.0][:axes]
+    d = [60.0, 50.0, 55.0, 5.0, 4.0, 3.0][:axes] if given_damping else None
     fast = CartesianImpedance(panda, k, d, nullspace_stiffness=null, compile=True)
     slow = CartesianImpedance(panda, k, d, nullspace_stiffness=null, compile=False)
     assert fast._generated is not None and slow._generated is None
@@ -87,11 +92,48 @@ def test_generated_law_matches_the_numpy_law(panda: armctl.Dynamics, null: float
     pose = panda.frame_pose(Q_READY)
     target = pose if axes == 6 else pose[:3, 3]
     twist = np.array([0.1, -0.05, 0.02, 0.3, 0.0, -0.2])[:axes]
+    accel = np.array([0.5, 0.0, -0.3, 0.0, 1.0, 0.0])[:axes]
     for c in (fast, slow):
-        c.set_target(target, twist)
+        c.set_target(target, twist, accel)
     for _ in range(5):
         q = Q_READY + rng.uniform(-0.4, 0.4, 7)
         qd = rng.uniform(-1.0, 1.0, 7)
         ref = armctl.Reference(Q_READY + rng.uniform(-0.2, 0.2, 7))
         np.testing.assert_allclose(fast(0.0, q, qd, ref), slow(0.0, q, qd, ref), rtol=1e-9, atol=1e-9)
         np.testing.assert_allclose(fast.last_log["force"], slow.last_log["force"], rtol=1e-9, atol=1e-9)
+
+
+@pytest.mark.parametrize("shaped", [False, True])
+def test_the_frame_accelerates_as_its_inertia_says(panda: armctl.Dynamics, shaped: bool) -> None:
+    # at rest on its target, under a wrench h the arm exerts, the frame accelerates by −Λ⁻¹ h: Λ = Λ_d with
+    # inertia shaping, the arm's own Λ(q) without; the acceleration from the model's forward dynamics
+    from armctl.controllers import Measurement
+
+    q = Q_READY + np.array([0.1, -0.1, 0.05, 0.1, -0.05, 0.1, 0.0])
+    h = np.array([3.0, -2.0, 5.0, 0.2, -0.1, 0.3])
+    lam_d = np.diag([4.0, 4.0, 4.0, 0.05, 0.05, 0.05])
+    ctrl = CartesianImpedance(panda, [500.0] * 3 + [30.0] * 3, inertia=lam_d if shaped else None)
+    ctrl.set_target(panda.frame_pose(q))
+    tau = ctrl(0.0, q, np.zeros(7), armctl.Reference(q), measurement=Measurement(wrench=h, world_axes=True))
+    xdd = panda.jacobian(q) @ panda.forward_dynamics(q, np.zeros(7), tau, wrench=h)
+    jac = panda.jacobian(q)
+    lam = lam_d if shaped else np.linalg.inv(jac @ np.linalg.solve(panda.mass_matrix(q), jac.T))
+    np.testing.assert_allclose(xdd, -np.linalg.solve(lam, h), rtol=1e-8, atol=1e-9)
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), zeta=st.floats(0.1, 2.0), m=st.sampled_from([3, 6, 7]))
+def test_default_damping_gives_every_mode_its_damping_ratio(seed: int, zeta: float, m: int) -> None:
+    # the modes from SciPy's generalized eigensolver, K v = ω² Λ v (vᵀ Λ v = 1): D is diagonal on them, 2 ζ ω
+    from scipy.linalg import eigh
+
+    rng = np.random.default_rng(seed)
+    a, b = rng.normal(size=(m, m)), rng.normal(size=(m, m))
+    lam = a @ a.T + 0.1 * np.eye(m)
+    k = b @ b.T * 10.0 ** rng.uniform(0, 3)
+    omega2, v = eigh(k, lam)
+    modal = v.T @ critical_damping(lam, k, zeta) @ v
+    expected = 2.0 * zeta * np.sqrt(np.maximum(omega2, 0.0))
+    scale = np.abs(expected).max()
+    np.testing.assert_allclose(np.diag(modal), expected, atol=1e-8 * scale)
+    np.testing.assert_allclose(modal - np.diag(np.diag(modal)), 0.0, atol=1e-8 * scale)

@@ -111,3 +111,24 @@ def test_a_singular_configuration_is_named() -> None:
     q = np.array([0.3, 0.5])
     with pytest.raises(SingularConfigurationError, match="singular"):
         ctrl(0.0, q, np.zeros(2), armctl.Reference(q))
+
+
+def test_the_controllers_pickle_with_their_gains(panda: armctl.Dynamics) -> None:
+    # a sweep hands controllers to worker processes: the copy computes what the original does
+    import pickle
+
+    q = Q_READY + 0.05
+    m = Measurement(wrench=np.array([1.0, -2.0, 3.0, 0.1, 0.2, -0.1]), world_axes=True)
+    for ctrl in (
+        CartesianImpedance(panda, [800.0] * 3 + [40.0] * 3, [50.0] * 3 + [3.0] * 3, nullspace_stiffness=5.0),
+        ForceControl(panda, [0.0, 0.0, -5.0], 1e-4, 1e-3, directions=[0.0, 0.0, 1.0]),
+        ParallelForcePosition(panda, [0.0, 0.0, -5.0], 1e-4, 1e-3, inner="osc"),
+        Admittance(panda, [500.0] * 3 + [20.0] * 3),
+        JointImpedance(panda, 200.0),
+    ):
+        if hasattr(ctrl, "set_target"):
+            ctrl.set_target(panda.frame_pose(Q_READY))
+        copy = pickle.loads(pickle.dumps(ctrl))
+        ref = armctl.Reference(Q_READY)
+        expected = ctrl(0.0, q, np.full(7, 0.1), ref, measurement=m)
+        np.testing.assert_allclose(copy(0.0, q, np.full(7, 0.1), ref, measurement=m), expected, rtol=1e-12)

@@ -8,7 +8,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, boolean, vector
+from armctl._checks import FloatArray, all_finite, boolean, readonly, vector
 from armctl.controllers.base import Controller
 from armctl.controllers.interaction.force_source import ForceInput
 from armctl.controllers.interaction.gains import critical_damping, damping_ratio, symmetric_psd
@@ -118,16 +118,25 @@ class Admittance(Controller):
             if damping is None
             else symmetric_psd(damping, (m,), "damping", "N·s/m; N·m·s/rad")
         )
-        self._inv_inertia = np.linalg.inv(self.inertia)
+        self._inv_inertia: FloatArray = np.asarray(np.linalg.inv(self.inertia), dtype=float)
         self.force_input = ForceInput(force_source, owner)
-        self.reads = self.force_input.reads  # type: ignore[misc]  # per instance: what it reads depends on the source
+        self.reads = self.force_input.reads  # per instance: what it reads depends on the source
         self.frame = frame
         self.target = FrameTarget(owner, 6)
-        self.inner = InnerMotion(dynamics, inner, kp, kd, posture_kp, frame=frame, compile=compile)
+        self.inner = InnerMotion(
+            dynamics, inner, kp, kd, posture_kp, frame=frame, compile=compile, admittance=self.axes
+        )
         self.posture = None if posture is None else vector(posture, self.n, "posture")
         self.compensate = boolean(compensate, "compensate")
+        for a in (self.stiffness, self.damping, self.inertia, self._inv_inertia):
+            readonly(a)
+        gen = self.inner.generated
+        if gen is not None:
+            inner_gains = (self.inner.kp, self.inner.kd, self.inner.posture_kp, self.inner.posture_kd)
+            gen.set_gains(*inner_gains, self._inv_inertia, self.damping, self.stiffness, self.compensate)
         self._state: tuple[FloatArray, FloatArray, FloatArray] | None = None  # p_c, R_c, v_c
         self._t: float | None = None
+        self._dt = np.zeros(1)
 
     def set_target(
         self, pose: ArrayLike, twist: ArrayLike | None = None, acceleration: ArrayLike | None = None
@@ -167,25 +176,34 @@ class Admittance(Controller):
             target.hold(self.dynamics.kernel.frame_pose(q, self.frame))
         pose_d, twist_d, acc_d = target.holder.at(t)
         h = self.force_input.wrench(self, t, q, qd, self.frame)
-        if self._state is None or self._t is None or t < self._t:
+        if self._state is None or self._t is None or t < self._t:  # the start, or a new run's clock
             self._state = (pose_d[:3, 3].copy(), pose_d[:3, :3].copy(), twist_d.copy())
             self._t = t
         p_c, r_c, v_c = self._state
+        dt = t - self._t
+        self._t = t
+        posture = self.posture if self.posture is not None else ref.q
+        gen = self.inner.generated
+        if gen is not None:
+            self._dt[0] = dt
+            out = gen.run_force((q, qd, pose_d.ravel(), twist_d, acc_d, posture, h, p_c, r_c.ravel(), v_c, self._dt))
+            if all_finite(out):
+                n, m = self.n, self.axes
+                self._state = (out[n + 6 : n + 9], out[n + 9 : n + 18].reshape(3, 3).T, out[n + 18 : n + 24])
+                self.last_log = {"wrench": h, "compliant": out[n + 24 :], "error": out[n : n + 6]}
+                return self.inner.with_friction(out[:n], qd)
         m = self.axes
         e_c = np.concatenate((p_c - pose_d[:3, 3], -rotation_error(pose_d[:3, :3], r_c)))[:m]
         a_c = acc_d.copy()
         a_c[:m] += self._inv_inertia @ (-h[:m] - self.damping @ (v_c - twist_d)[:m] - self.stiffness @ e_c)
-        dt = t - self._t
-        if dt > 0.0:
-            v_c = v_c + a_c * dt
-            if m == 3:  # the orientation tracks the target's
-                v_c[3:] = twist_d[3:]
-            p_c = p_c + v_c[:3] * dt
-            r_c = pin.exp3(v_c[3:] * dt) @ r_c if m == 6 else pose_d[:3, :3]
-            self._state, self._t = (p_c, r_c, v_c), t
+        v_c = v_c + a_c * dt
+        if m == 3:  # the orientation tracks the target's
+            v_c[3:] = twist_d[3:]
+        p_c = p_c + v_c[:3] * dt
+        r_c = pin.exp3(v_c[3:] * dt) @ r_c if m == 6 else pose_d[:3, :3]
+        self._state = (p_c, r_c, v_c)
         cmd = np.eye(4)
         cmd[:3, :3], cmd[:3, 3] = r_c, p_c
-        posture = self.posture if self.posture is not None else ref.q
         tau, e = self.inner.command(q, qd, cmd, v_c, a_c, posture, h if self.compensate else None)
         self.last_log = {"wrench": h, "compliant": e_c, "error": e}
         return tau

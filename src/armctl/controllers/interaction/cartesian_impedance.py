@@ -9,6 +9,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray, all_finite, boolean, readonly, vector
+from armctl.codegen import Fallback, compile_mode
 from armctl.controllers.base import Controller
 from armctl.controllers.interaction.force_source import ForceInput
 from armctl.controllers.interaction.gains import critical_damping, damping_ratio, symmetric_psd
@@ -16,8 +17,10 @@ from armctl.controllers.interaction.task_space import FrameTarget, task_inertia
 from armctl.controllers.osc.state import ModelEvaluator
 from armctl.controllers.osc.tasks.target import Trajectory
 from armctl.dynamics.base import Dynamics
-from armctl.errors import InvalidParameterError, PerformanceWarning
 from armctl.references import Reference
+
+#: what ``compile="auto"`` runs where the generated law cannot be built
+FALLBACK = Fallback("the Cartesian impedance law's generated code", "the Pinocchio/NumPy law", "several times slower")
 
 
 class CartesianImpedance(Controller):
@@ -54,8 +57,9 @@ class CartesianImpedance(Controller):
     friction : bool, optional
         Compensate the model's joint friction τ_f(q̇) (default True).
     compile : bool or "auto", optional
-        With a given ``damping`` and no ``inertia``, evaluate the law in one call of generated C code
-        (:mod:`~armctl.controllers.interaction.generated`; at a singular configuration the NumPy path names it):
+        Without ``inertia``, evaluate the law in one call of generated C code (the default damping then from the
+        Λ(q) it returns; :mod:`~armctl.controllers.interaction.generated`; at a singular configuration the NumPy
+        path names it):
         ``"auto"`` (the default) where the dynamics are Pinocchio's and a C compiler builds it (else NumPy, with a
         :class:`~armctl.errors.PerformanceWarning` once), True (or an error), False (NumPy).
 
@@ -140,7 +144,7 @@ class CartesianImpedance(Controller):
         self.force: ForceInput | None = None
         if self.inertia is not None:
             self.force = ForceInput(force_source, type(self).__name__)
-            self.reads = self.force.reads  # type: ignore[misc]  # per instance: what it reads depends on the source
+            self.reads = self.force.reads  # per instance: what it reads depends on the source
             if self.damping is None:
                 self.damping = critical_damping(self.inertia, self.stiffness, self.zeta)
         self.friction = boolean(friction, "friction")
@@ -152,37 +156,23 @@ class CartesianImpedance(Controller):
         kernel_friction = dynamics.kernel.friction
         self._friction_terms = kernel_friction if self.friction and kernel_friction.any else None
 
-    def _generated_law(self, mode: bool | str) -> Any:
+    def _generated_law(self, compile: object) -> Any:
         """The generated law (a GeneratedImpedance) or None: the NumPy path."""
-        if not (mode is True or mode is False or (isinstance(mode, str) and mode == "auto")):
-            raise InvalidParameterError(
-                f"compile must be True (generated code, or an error), False (NumPy) or 'auto', got {mode!r}",
-                value=mode,
-            )
-        if mode is False or self.damping is None or self.inertia is not None:
+        mode = compile_mode(compile)
+        if mode is False or self.inertia is not None:
             return None
         from armctl.dynamics.pinocchio_backend import PinocchioDynamics
 
         if mode == "auto" and not isinstance(self.dynamics, PinocchioDynamics):
             return None
-        try:
+
+        def make() -> Any:
             from armctl.controllers.interaction.generated import GeneratedImpedance  # CasADi, imported on use
 
-            gen = GeneratedImpedance(self.dynamics, self.frame, self.axes, self._null)
-        except Exception as exc:  # "auto": the NumPy path, and why (once per process and cause)
-            if mode is True:
-                raise
-            from armctl.dynamics import codegen
+            return GeneratedImpedance(self.dynamics, self.frame, self.axes, self._null, split=self.damping is None)
 
-            codegen.warn_fallback(
-                exc,
-                "the Cartesian impedance law's generated code",
-                "the law runs on Pinocchio and NumPy",
-                "several times slower",
-                "compile=False chooses the NumPy path",
-                PerformanceWarning,
-                stacklevel=4,
-            )
+        gen = FALLBACK.attempt(make, mode, stacklevel=4)
+        if gen is None:
             return None
         gen.set_gains(self.stiffness, self.damping, self.nullspace_stiffness, self.nullspace_damping)
         return gen
@@ -231,10 +221,17 @@ class CartesianImpedance(Controller):
             out = gen.run(q, qd, value, vel, acc, self.posture if self.posture is not None else ref.q)
             if all_finite(out):  # NaN at a singular configuration: the NumPy path names it
                 n, m = self.n, self.axes
-                tau = out[:n]
+                tau, force = out[:n], out[n + m : n + 2 * m]
+                if gen.split:  # the default damping, from Λ(q): τ = τ₀ + Jᵀ D ė
+                    k = n + 3 * m
+                    lam = out[k : k + m * m].reshape(m, m)
+                    jac_t = out[k + m * m :].reshape(n, m)  # J column by column: Jᵀ row by row
+                    d_edot = critical_damping(lam, self.stiffness, self.zeta) @ out[n + 2 * m : k]
+                    tau += jac_t @ d_edot
+                    force += d_edot
                 if self._friction_terms is not None:
                     tau += self._friction_terms.torque(qd)
-                self.last_log = {"error": out[n : n + m], "force": out[n + m :]}
+                self.last_log = {"error": out[n : n + m], "force": force}
                 return tau
         return self._numpy_law(t, q, qd, ref)
 

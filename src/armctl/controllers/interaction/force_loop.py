@@ -11,7 +11,6 @@ into it raises the force, so x_F moves towards the force wanted; the integral ma
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -29,12 +28,25 @@ from armctl.errors import InvalidParameterError
 from armctl.references import Reference
 
 
-def force_target(force: Any) -> Callable[[float], FloatArray]:
-    """t → f_d (3,) [N] from a constant (3,) or a callable (checked at each call)."""
-    if callable(force):
-        return lambda t: vector(force(t), 3, "force(t)")
-    f = vector(force, 3, "force")
-    return lambda t: f
+class ForceTarget:
+    """t → f_d (3,) [N] from a constant (3,) or a callable (its output checked at each call); picklable when the
+    callable is.
+
+    Parameters
+    ----------
+    force : array_like or callable
+        f_d, or t [s] → f_d.
+    """
+
+    def __init__(self, force: Any) -> None:
+        self.fn = force if callable(force) else None
+        self.value = None if callable(force) else vector(force, 3, "force")
+
+    def __call__(self, t: float) -> FloatArray:
+        if self.fn is not None:
+            return vector(self.fn(t), 3, "force(t)")
+        assert self.value is not None  # set whenever fn is None
+        return self.value
 
 
 def projector(directions: ArrayLike | None) -> FloatArray:
@@ -88,8 +100,8 @@ class ForceLoop(Controller):
         super().__init__(dynamics)
         owner = type(self).__name__
         self.force_input = ForceInput(force_source, owner)
-        self.reads = self.force_input.reads  # type: ignore[misc]  # per instance: what it reads depends on the source
-        self.force_target = force_target(force)
+        self.reads = self.force_input.reads  # per instance: what it reads depends on the source
+        self.force_target = ForceTarget(force)
         self.force_gain = readonly(symmetric_psd(force_gain, (3,), "force_gain", "m/N"))
         self.integral_gain = readonly(symmetric_psd(integral_gain, (3,), "integral_gain", "m/(N·s)"))
         self.directions = readonly(np.array(directions))

@@ -11,7 +11,7 @@ M(q) by composite rigid bodies (:mod:`armctl.dynamics.recursive`), e as the OSC 
 :func:`~armctl.controllers.osc.tasks.rotation.rotation_error_sx`) and, with null-space stiffness,
 Nᵀ τ_n = τ_n − Jᵀ (J M⁻¹ Jᵀ)⁻¹ J M⁻¹ τ_n by Cholesky factorisations written out. K, D, K_n and D_n are an input of
 the code. The library is compiled once per model, frame and variant and cached on disk
-(:mod:`armctl.dynamics.codegen`); a singular configuration gives NaN, which the controller answers by its NumPy
+(:mod:`armctl.codegen.library`); a singular configuration gives NaN, which the controller answers by its NumPy
 path (and its named error).
 """
 
@@ -26,8 +26,8 @@ import casadi as cs
 import numpy as np
 
 from armctl._checks import FloatArray
+from armctl.codegen import library as codegen
 from armctl.controllers.osc.tasks.rotation import rotation_error_sx
-from armctl.dynamics import codegen
 from armctl.dynamics.base import Dynamics
 from armctl.dynamics.casadi_buffer import buffer_of, view
 from armctl.dynamics.recursive import inverse_dynamics, joint_transforms, mass_matrix
@@ -35,7 +35,7 @@ from armctl.dynamics.symbolic_frames import frame_kinematics
 from armctl.model.robot import RobotModel
 
 #: bumped when the generated code changes, so that stale cached libraries are not loaded
-_CODE_VERSION = 3
+_CODE_VERSION = 4
 _NAME = "cartesian_impedance"
 _log = logging.getLogger(__name__)
 
@@ -80,8 +80,10 @@ def sizes(n: int, axes: int) -> tuple[int, int]:
     return 2 * n + (16 if axes == 6 else 3) + 2 * axes + n, 2 * axes * axes + 2 * n * n
 
 
-def impedance_function(model: RobotModel, frame: str | None, axes: int, null: bool) -> cs.Function:
-    """The CasADi function of the module: (x, p) → [τ; e; F]."""
+def impedance_function(model: RobotModel, frame: str | None, axes: int, null: bool, split: bool = False) -> cs.Function:
+    """The CasADi function of the module: (x, p) → [τ; e; F]. ``split``: the damping term is left out (D is not
+    read) and the outputs are [τ₀; e; F₀; ė; Λ; J] (Λ and J column by column), for a damping computed from Λ
+    outside: τ = τ₀ + Jᵀ D ė, F = F₀ + D ė."""
     n = model.n
     nx, npar = sizes(n, axes)
     x, par = cs.SX.sym("x", nx), cs.SX.sym("p", npar)
@@ -103,7 +105,10 @@ def impedance_function(model: RobotModel, frame: str | None, axes: int, null: bo
     low_m = cholesky_factor(mass_matrix(model, q, tf))
     mij = cholesky_solve_columns(low_m, jac.T)  # M⁻¹ Jᵀ
     low_a = cholesky_factor(jac @ mij)  # J M⁻¹ Jᵀ = Λ⁻¹
-    force = stiff @ e + damp @ (v_d - jac @ qd) + cholesky_solve_columns(low_a, a_d)  # K e + D ė + Λ a_d
+    edot = v_d - jac @ qd
+    force = stiff @ e + cholesky_solve_columns(low_a, a_d)  # K e + Λ a_d
+    if not split:
+        force = force + damp @ edot
     tau = jac.T @ force + inverse_dynamics(model, q, qd, cs.SX.zeros(n), transforms=tf)
     if null:
         kn = cs.reshape(par[2 * m2 : 2 * m2 + n * n], n, n)
@@ -111,15 +116,18 @@ def impedance_function(model: RobotModel, frame: str | None, axes: int, null: bo
         tau_n = kn @ (q_n - q) - dn @ qd
         z = cholesky_solve_columns(low_a, mij.T @ tau_n)  # Λ J M⁻¹ τ_n
         tau = tau + tau_n - jac.T @ z
+    if split:
+        lam = cholesky_solve_columns(low_a, cs.SX.eye(axes))
+        return cs.Function(_NAME, [x, par], [cs.vertcat(tau, e, force, edot, cs.vec(lam), cs.vec(jac))])
     return cs.Function(_NAME, [x, par], [cs.vertcat(tau, e, force)])
 
 
-def _tag(model: RobotModel, frame: str | None, axes: int, null: bool) -> str:
+def _tag(model: RobotModel, frame: str | None, axes: int, null: bool, split: bool) -> str:
     f = model.frame(frame)
     where = hashlib.sha256(f.placement.tobytes()).hexdigest()[:12]
     return (
         f"impedance|{model.fingerprint(inertial=True, tool=False)}|v{_CODE_VERSION}|{f.name}:{f.joint}:{where}"
-        f"|axes={axes}|null={null}"
+        f"|axes={axes}|null={null}|split={split}"
     )
 
 
@@ -137,16 +145,20 @@ class GeneratedImpedance:
         The law's axes.
     null : bool
         With the null-space term.
+    split : bool, optional
+        Without the damping term, and with Λ, J and ė as outputs (see :func:`impedance_function`).
     """
 
-    def __init__(self, dynamics: Dynamics, frame: str | None, axes: int, null: bool) -> None:
+    def __init__(self, dynamics: Dynamics, frame: str | None, axes: int, null: bool, split: bool = False) -> None:
         model = dynamics.model
-        self.dynamics, self.frame, self.axes, self.null = dynamics, frame, axes, null
+        self.dynamics, self.frame, self.axes, self.null, self.split = dynamics, frame, axes, null, split
         cache_dir = dynamics.options.get("cache_dir")
-        tag = _tag(model, frame, axes, null)
+        tag = _tag(model, frame, axes, null, split)
         built = not codegen.is_cached([_NAME], tag, cache_dir)
         t0 = time.perf_counter()
-        fn = codegen.cached([_NAME], tag, lambda: [impedance_function(model, frame, axes, null)], cache_dir)[_NAME]
+        fn = codegen.cached([_NAME], tag, lambda: [impedance_function(model, frame, axes, null, split)], cache_dir)[
+            _NAME
+        ]
         if built:
             _log.warning(
                 "armctl: generated and compiled the Cartesian impedance law for %r in %.1f s (cached in %s)",
@@ -156,7 +168,8 @@ class GeneratedImpedance:
             )
         nx, npar = sizes(model.n, axes)
         self.n = model.n
-        self.inp, self.par, self.out = np.zeros(nx), np.zeros(npar), np.zeros(model.n + 2 * axes)
+        size = model.n + 2 * axes + ((axes + axes * axes + axes * model.n) if split else 0)
+        self.inp, self.par, self.out = np.zeros(nx), np.zeros(npar), np.zeros(size)
         buf, self._run = buffer_of(fn)
         buf.set_arg(0, view(self.inp))
         buf.set_arg(1, view(self.par))
@@ -164,11 +177,18 @@ class GeneratedImpedance:
         self._buf = buf  # keeps the binding alive
 
     def __reduce__(self) -> tuple[Any, ...]:
-        return (GeneratedImpedance, (self.dynamics, self.frame, self.axes, self.null))
+        # rebuilt (the library loads from the cache: the buffers are this process's), with the gains
+        args = (self.dynamics, self.frame, self.axes, self.null, self.split)
+        return (GeneratedImpedance, args, {"par": self.par.copy()})
 
-    def set_gains(self, stiffness: FloatArray, damping: FloatArray, null_k: FloatArray, null_d: FloatArray) -> None:
-        """K, D, K_n, D_n into the parameter buffer (column by column: they are symmetric)."""
-        parts = [stiffness.ravel(), damping.ravel()]
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.par[...] = state["par"]
+
+    def set_gains(
+        self, stiffness: FloatArray, damping: FloatArray | None, null_k: FloatArray, null_d: FloatArray
+    ) -> None:
+        """K, D (None: zero, for ``split``), K_n, D_n into the parameter buffer (column by column: symmetric)."""
+        parts = [stiffness.ravel(), np.zeros(stiffness.size) if damping is None else damping.ravel()]
         if self.null:
             parts += [null_k.ravel(), null_d.ravel()]
         else:

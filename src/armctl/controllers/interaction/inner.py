@@ -27,15 +27,20 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray, all_finite, readonly
+from armctl.codegen import Fallback, compile_mode
 from armctl.controllers.interaction.gains import critical_damping, symmetric_psd
 from armctl.controllers.interaction.task_space import task_inertia
 from armctl.controllers.osc.state import FrameKinematics, ModelEvaluator, ModelState
 from armctl.controllers.osc.tasks.rotation import rotation_error
 from armctl.dynamics.base import Dynamics
-from armctl.errors import InvalidParameterError, PerformanceWarning, SingularConfigurationError, UnknownNameError
+from armctl.errors import SingularConfigurationError, UnknownNameError
 
 #: the inner loops
 INNER = ("osc", "computed_torque")
+#: what ``compile="auto"`` runs where the generated loop cannot be built
+FALLBACK = Fallback(
+    "the interaction controllers' generated inner loop", "the Pinocchio/NumPy loop", "several times slower"
+)
 
 
 class InnerMotion:
@@ -61,6 +66,9 @@ class InnerMotion:
     force_loop : bool, optional
         Generate the force loop of :mod:`~armctl.controllers.interaction.force_loop` with the law (its owner
         then calls the generated code itself; :meth:`command` takes the NumPy path).
+    admittance : int, optional
+        Likewise, the compliant frame of :class:`~armctl.controllers.Admittance` with that many axes (3 or 6); 0:
+        none.
 
     Raises
     ------
@@ -81,6 +89,7 @@ class InnerMotion:
         frame: str | None = None,
         compile: bool | str = "auto",
         force_loop: bool = False,
+        admittance: int = 0,
     ) -> None:
         if kind not in INNER:
             raise UnknownNameError("inner motion loop", kind, INNER)
@@ -102,40 +111,26 @@ class InnerMotion:
         self.evaluator.check_frame(frame)
         friction = dynamics.kernel.friction
         self._friction = friction if friction.any else None
-        self.force_loop = force_loop
+        self.force_loop, self.admittance = force_loop, admittance
         self.generated = self._generated_law(compile)
 
-    def _generated_law(self, mode: bool | str) -> Any:
+    def _generated_law(self, compile: object) -> Any:
         """The generated law (a GeneratedInner) or None: the NumPy path."""
-        if not (mode is True or mode is False or (isinstance(mode, str) and mode == "auto")):
-            raise InvalidParameterError(
-                f"compile must be True (generated code, or an error), False (NumPy) or 'auto', got {mode!r}",
-                value=mode,
-            )
+        mode = compile_mode(compile)
         from armctl.dynamics.pinocchio_backend import PinocchioDynamics
 
         if mode is False or (mode == "auto" and not isinstance(self.dynamics, PinocchioDynamics)):
             return None
-        try:
+
+        def make() -> Any:
             from armctl.controllers.interaction.generated_inner import GeneratedInner  # CasADi, imported on use
 
-            gen = GeneratedInner(self.dynamics, self.frame, self.kind, self.force_loop)
-        except Exception as exc:  # "auto": the NumPy path, and why (once per process and cause)
-            if mode is True:
-                raise
-            from armctl.dynamics import codegen
+            return GeneratedInner(self.dynamics, self.frame, self.kind, self.force_loop, self.admittance)
 
-            codegen.warn_fallback(
-                exc,
-                "the interaction controllers' generated inner loop",
-                "it runs on Pinocchio and NumPy",
-                "several times slower",
-                "compile=False chooses the NumPy path",
-                PerformanceWarning,
-                stacklevel=5,
-            )
+        gen = FALLBACK.attempt(make, mode, stacklevel=5)
+        if gen is None:
             return None
-        if not self.force_loop:
+        if not (self.force_loop or self.admittance):
             gen.set_gains(self.kp, self.kd, self.posture_kp, self.posture_kd)
         return gen
 
@@ -170,7 +165,7 @@ class InnerMotion:
             h [N; N·m] to compensate; None: not compensated.
         """
         gen = self.generated
-        if gen is not None and not self.force_loop:
+        if gen is not None and not (self.force_loop or self.admittance):
             out = gen.run(q, qd, pose, twist, acceleration, posture, wrench)
             if all_finite(out):
                 n = self.dynamics.n
