@@ -63,6 +63,11 @@ SCOPE = (
     "Plant engines (with MuJoCo installed): the same closed loop on armctl's and on MuJoCo's integrators, the Panda "
     "without friction against a DOP853 reference, and held below breakaway with Coulomb friction, where the error "
     "is the creep (armctl's stick–slip model holds exactly; MuJoCo's frictionloss is a soft constraint).",
+    "Interaction control: the Panda at its ready pose pressing on a table at 1 kHz with one period of measurement "
+    "delay; each controller's gains fixed across the table stiffnesses; the stability borders at that pose (the "
+    "sampled-data model is linear about it); the observer's trade-off for one push at the tool with white "
+    "velocity noise; panda_collision's controller is computed torque (the scene matrix times it with the "
+    "observer and the reaction).",
 )
 
 
