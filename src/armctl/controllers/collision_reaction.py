@@ -18,7 +18,7 @@ with g from the observer's model. Each step logs ``residual`` (n,), ``collision`
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any, ClassVar
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -59,7 +59,7 @@ class CollisionReaction(Controller):
         have other numbers of joints, an unknown reaction, a negative damping or reflex gain.
     """
 
-    reads: ClassVar[frozenset[str]] = frozenset({"tau_applied"})
+    reads: frozenset[str] = frozenset({"tau_applied"})
 
     def __init__(
         self,
