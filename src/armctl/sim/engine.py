@@ -4,10 +4,12 @@ The loop is one (:mod:`armctl.sim.loop`): at each control instant t_k it checks 
 calls the controller and saturates its torque. The engine does the rest — the plant's side of a sample:
 
 * :meth:`Engine.bind` ties it to the run's record (:class:`EngineRun`), whose row 0 holds the initial state;
-* :meth:`Engine.advance_period` records what the plant does at sample k (q̈_k, the friction and external torques,
-  contact forces, the sensors' wrench, the stuck joints) and integrates the period [t_k, t_k + Δt_c) under the held
-  torque τ_k (the applied one, also in row k of ``record.tau_applied``), writing the state it reaches and the work so
-  far into row k + 1;
+* :meth:`Engine.observe` records what the plant shows at the state of sample k before the controller is called
+  (contact forces, the sensors, the wrench and external torques), so that a controller that reads a force sensor
+  (:mod:`armctl.sim.measurement_feed`) is given the reading of this sample;
+* :meth:`Engine.advance_period` records what the plant does at sample k under τ_k (q̈_k, the friction torque, the
+  stuck joints) and integrates the period [t_k, t_k + Δt_c) under the held torque τ_k (the applied one, also in row k
+  of ``record.tau_applied``), writing the state it reaches and the work so far into row k + 1;
 * :meth:`Engine.last_sample` records the plant's side of the run's last sample (no step after it).
 
 Both answer with a status: None, or why the plant cannot be advanced from that state (a mass matrix that is not
@@ -47,12 +49,15 @@ class EngineRun:
         The integration step h = Δt_c / m [s].
     accel_at_start : bool
         q̈_k by an evaluation at t_k (the implicit schemes, whose step gives none at its start).
+    sensors_read : bool
+        The controller reads the first force sensor at every sample (:meth:`Engine.observe` must record it).
     """
 
     record: Recorder
     substeps: int
     dt: float
     accel_at_start: bool
+    sensors_read: bool = False
 
 
 class Engine(Protocol):
@@ -60,6 +65,10 @@ class Engine(Protocol):
 
     def bind(self, run: EngineRun) -> None:
         """Tie the engine to ``run``'s record, starting from the state in its row 0."""
+        ...
+
+    def observe(self, k: int, t: float) -> None:
+        """Record what the plant shows at the state of sample k (time t [s]) before the controller is called."""
         ...
 
     def advance_period(self, k: int, t: float, tau: FloatArray) -> str | None:

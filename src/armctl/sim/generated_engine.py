@@ -84,12 +84,14 @@ class GeneratedEngine:
             )
         )
 
-    def advance_period(self, k: int, t: float, tau: FloatArray) -> str | None:
-        """(:meth:`Engine.advance_period <armctl.sim.engine.Engine.advance_period>`: ``tau`` is read from row k of
-        the record's applied torques.)"""
+    def observe(self, k: int, t: float) -> None:
         if self._external:
             rec = self._rec
             rec.record_external(k, self.plant, t, rec.q[k], rec.qd[k])  # type: ignore[arg-type]  # a plant's duck
+
+    def advance_period(self, k: int, t: float, tau: FloatArray) -> str | None:
+        """(:meth:`Engine.advance_period <armctl.sim.engine.Engine.advance_period>`: ``tau`` is read from row k of
+        the record's applied torques.)"""
         try:
             self.plant.period(k, t)
         except NotPositiveDefinite as exc:
@@ -97,9 +99,6 @@ class GeneratedEngine:
         return None
 
     def last_sample(self, k: int, t: float, tau: FloatArray) -> str | None:
-        if self._external:
-            rec = self._rec
-            rec.record_external(k, self.plant, t, rec.q[k], rec.qd[k])  # type: ignore[arg-type]
         try:
             self.plant.last_sample(k, t)
         except NotPositiveDefinite as exc:

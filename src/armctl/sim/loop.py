@@ -3,7 +3,9 @@
 At each control instant t_k = k·Δt_c the loop
 
 1. *checks* the state of sample k (finite, within the stop rules),
-2. *measures* it (noise, delay) and records what the controller is given,
+2. *measures* it: the engine records what the plant shows there (contact forces, sensors), the loop what the
+   controller is given — q and q̇ with noise and delay, and the signals it declares it reads
+   (:mod:`armctl.sim.measurement_feed`: a force sensor's wrench, τ_{k−1} applied, measured torques),
 3. *controls*: calls the controller on the measurement and the reference, checks τ_k and records it,
 4. *saturates* τ_k at the effort limits and records the torque applied,
 5. has its *engine* (:mod:`armctl.sim.engine`) advance the plant over [t_k, t_k + Δt_c) under the held τ_k: the
@@ -22,6 +24,7 @@ import math
 import operator
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -31,6 +34,7 @@ from armctl.errors import InvalidParameterError, ShapeError
 from armctl.references import Reference
 from armctl.sim import setup
 from armctl.sim.engine import Engine, EngineRun
+from armctl.sim.measurement_feed import MeasurementFeed
 from armctl.sim.recorder import Recorder
 
 #: (time [s], why, q, q̇): where and why a run stopped as diverged
@@ -59,6 +63,7 @@ class LoopSettings:
     saturate: bool
     max_velocity: float
     max_position: float
+    feed: MeasurementFeed | None = None  # the signals the controller reads besides q and q̇, or None
 
 
 class ClosedLoop:
@@ -75,6 +80,9 @@ class ClosedLoop:
         self._rec = rec = s.recorder
         self._controller = s.controller
         self._call = s.call
+        #: a controller that reads signals and is not a Controller gets them as the call's keyword
+        self._plain_call = s.call
+        self._by_keyword = s.feed is not None and s.call is s.controller
         self._fixed_reference = s.fixed_reference
         self._reference_fn = s.reference_fn
         self._shape = (s.n,)
@@ -94,7 +102,8 @@ class ClosedLoop:
         self._noise = (s.noise_q, s.noise_qd) if s.noise_q is not None and s.noise_qd is not None else None
         rec.q[0] = q
         rec.qd[0] = qd
-        engine.bind(EngineRun(rec, s.substeps, s.dt, s.implicit))
+        sensors_read = s.feed is not None and s.feed.wrench_chain is not None
+        engine.bind(EngineRun(rec, s.substeps, s.dt, s.implicit, sensors_read))
 
     def run(self) -> None:
         """Run every sample; afterwards ``rows``, ``divergence`` and ``failure`` say what happened."""
@@ -109,7 +118,7 @@ class ClosedLoop:
                     if why is not None:
                         self._stop(k, t, why, k)
                         return
-                    qm, vm = measure(k)
+                    qm, vm = measure(k, t)
                     tau = control(k, t, qm, vm)
                     if tau is None:
                         return
@@ -154,8 +163,10 @@ class ClosedLoop:
             return f"a joint position is beyond max_position = {s.max_position:g}"
         return None
 
-    def measure(self, k: int) -> tuple[FloatArray, FloatArray]:
-        """The (read-only) measurement of sample k the controller is given, recorded."""
+    def measure(self, k: int, t: float) -> tuple[FloatArray, FloatArray]:
+        """The (read-only) measurement of sample k (time t [s]) the controller is given, recorded; what the plant
+        shows there recorded by the engine (before the controller reads a sensor)."""
+        self.engine.observe(k, t)
         rec = self._rec
         if not rec.measured:
             return self._q_view[k], self._qd_view[k]
@@ -178,6 +189,9 @@ class ClosedLoop:
             if not isinstance(ref, Reference) or ref.q.shape != self._shape:
                 setup.check_reference(ref, self.s.n, t)  # (raises, naming what is wrong)
         self._references[k] = ref
+        feed = self.s.feed
+        if feed is not None:
+            self._give_measurement(feed, k)
         try:
             tau = self._call(t, qm, vm, ref)
         except ValueError as exc:
@@ -212,4 +226,17 @@ class ClosedLoop:
             if (max(tl) > low or -min(tl) > low) and any(map(operator.gt, map(abs, tl), self._limits)):
                 applied = np.clip(tau, -self.s.effort_limit, self.s.effort_limit)
         self._applied[k] = applied
+        feed = self.s.feed
+        if feed is not None:
+            feed.applied(applied)
         return applied
+
+    def _give_measurement(self, feed: MeasurementFeed, k: int) -> None:
+        """Hand the controller the signals it reads at sample k (:mod:`armctl.sim.measurement_feed`): as its
+        ``measurement`` (a :class:`~armctl.controllers.Controller` whose ``compute`` the loop calls), or through
+        the call's ``measurement`` keyword (another callable)."""
+        m = feed.at(self._rec.sensor[k, 0] if feed.sensor is not None else None)
+        if self._by_keyword:
+            self._call = partial(self._plain_call, measurement=m)
+        else:
+            self._controller.measurement = m

@@ -114,14 +114,29 @@ class MujocoEngine:
         self.has_friction = bool(np.any(m.dof_damping[self._vadr]) or np.any(m.dof_frictionloss[self._vadr]))
         self.simple = not (self.contact or self.has_friction or disturbance is not None or m.neq or m.ntendon)
         self._wf = self._we = 0.0
+        self._sensors_read = False
 
     def bind(self, run: EngineRun) -> None:
         self._rec = rec = run.record
         self._substeps = run.substeps
+        self._sensors_read = run.sensors_read
         rec.contact_force = np.zeros((rec.samples, self.dyn.n, 3))  # one row per link: the force it exerts
         self.d.qpos[self._qadr] = rec.q[0]
         self.d.qvel[self._vadr] = rec.qd[0]
         self._wf = self._we = 0.0
+
+    def observe(self, k: int, t: float) -> None:
+        """The sensors at the state of sample k under the forces still held (τ_{k−1}, zeros at k = 0), where the
+        controller reads them: the forward dynamics of a state's contacts depend on the torque applied, and what
+        is recorded at sample k (:meth:`advance_period`'s first forward dynamics) is under τ_k."""
+        if not self._sensors_read:
+            return
+        mj, d, rec, ro = self.mj, self.d, self._rec, self.readout
+        mj.mj_forward(self.m, d)
+        q = d.qpos[self._qadr]
+        hs, _, ps, links = ro.contacts(d)
+        for i, sensor in enumerate(rec.sensors):
+            rec.sensor[k, i] = sensor.reading(self.dyn, q, hs, ps, links)
 
     def advance_period(self, k: int, t: float, tau: FloatArray) -> str | None:
         """(:meth:`Engine.advance_period <armctl.sim.engine.Engine.advance_period>`: ``mj_forward`` then the

@@ -1,7 +1,8 @@
 """`PythonEngine`: the plant advanced by the Python step (an :class:`~armctl.sim.engine.Engine`).
 
-Over the control period [t_k, t_k + Δt_c) under the held τ_k: the external torques, contact forces and sensors at
-t_k (:meth:`Recorder.record_external <armctl.sim.recorder.Recorder.record_external>`), the stick solve at t_k
+At sample k, before the controller is called: the external torques, contact forces and sensors at t_k
+(:meth:`Recorder.record_external <armctl.sim.recorder.Recorder.record_external>`). Over the control period
+[t_k, t_k + Δt_c) under the held τ_k: the stick solve at t_k
 (:meth:`Plant.begin <armctl.sim.plant.Plant.begin>`) and the friction torque and stuck joints it gives, then m
 sub-steps of the integrator (:mod:`armctl.sim.integrators`) with their stick–slip events
 (:func:`armctl.sim.stepper.advance`) and the friction and external work; a plant without friction, contact or a
@@ -49,6 +50,11 @@ class PythonEngine:
         if not self.plant.simple:  # the friction torque of a sample the run stops at before its stick solve: NaN
             rec.tau_friction.fill(math.nan)
 
+    def observe(self, k: int, t: float) -> None:
+        pl = self.plant
+        if pl.has_external:
+            self._rec.record_external(k, pl, t, self.q, self.qd)
+
     def advance_period(self, k: int, t: float, tau: FloatArray) -> str | None:
         """(:meth:`Engine.advance_period <armctl.sim.engine.Engine.advance_period>`; ``step_period.c``'s
         ``period`` is its C transcription.)"""
@@ -92,14 +98,11 @@ class PythonEngine:
         return None
 
     def _begin(self, k: int, t: float, q: FloatArray, qd: FloatArray, tau: FloatArray) -> None:
-        """The plant's external forces at sample k, its stick solve there and what it records of them."""
+        """The plant's stick solve at sample k and what it records of it."""
         pl = self.plant
         if not pl.simple:
-            rec = self._rec
-            if pl.has_external:
-                rec.record_external(k, pl, t, q, qd)
             pl.begin(t, q, qd, tau)
-            rec.record_friction(k, pl, qd)
+            self._rec.record_friction(k, pl, qd)
 
     def info(self) -> dict[str, Any]:
         pl = self.plant

@@ -33,6 +33,7 @@ from armctl.sim.engine import Engine
 from armctl.sim.friction import FrictionModel
 from armctl.sim.generated_engine import GeneratedEngine
 from armctl.sim.loop import ClosedLoop, LoopSettings
+from armctl.sim.measurement_feed import MeasurementFeed, declared_reads
 from armctl.sim.options import Forces, Sensing, StopRules, grouped
 from armctl.sim.plant import Plant
 from armctl.sim.python_engine import PythonEngine
@@ -84,6 +85,9 @@ def simulate(
     controller : callable
         ``tau = controller(t, q, qd, ref)`` [N·m]; its ``reset()`` is called first (``reset=True``), its
         ``end_run()`` (if it has one) after the last step, and its ``last_log`` dict recorded after every call.
+        A controller that declares signals in ``reads`` (a force sensor's wrench, the applied or measured
+        torques: :mod:`armctl.controllers.measurement`) is given them at every sample, through the measurement
+        chain of ``sensing``.
     reference : Reference or callable
         A :class:`~armctl.Reference`, or t [s] → Reference.
     duration : float
@@ -172,6 +176,7 @@ def simulate(
         if value is not None
     }
     sense, force, rules = grouped({"sensing": sensing, "forces": forces, "stop": stop}, given)
+    reads = declared_reads(controller)
     if not (isinstance(engine, str) and engine in ENGINES):
         raise UnknownNameError("engine", engine, ENGINES)
     on_mujoco = engine == "mujoco"
@@ -223,6 +228,21 @@ def simulate(
     # sample k's noise is the k-th block of 2n draws (q's, then q̇'s): a longer run with the same seed sees the
     # same noise over the common samples
     draws = np.random.default_rng(seed_used).standard_normal((samples, 2, n)) if noisy else None
+    feed = (
+        MeasurementFeed(
+            reads,
+            n,
+            cdt,
+            sc.sensors,
+            nonnegative_vector(sense.noise_wrench, 6, "noise_wrench (a standard deviation)"),
+            nonnegative_vector(sense.noise_tau, n, "noise_tau (a standard deviation)"),
+            sense.cutoff,
+            lag,
+            seed_used,
+        )
+        if reads
+        else None
+    )
     settings = LoopSettings(
         n=n,
         control_dt=cdt,
@@ -242,6 +262,7 @@ def simulate(
         saturate=saturate,
         max_velocity=vmax,
         max_position=qmax,
+        feed=feed,
     )
     reset_controller = getattr(controller, "reset", None)
     if reset and callable(reset_controller):
