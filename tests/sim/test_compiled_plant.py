@@ -17,7 +17,7 @@ import pytest
 import armctl
 from armctl.dynamics import codegen
 from armctl.errors import BackendError, SimulationWarning
-from armctl.sim import ContactPoint, HuntCrossley, KelvinVoigt, Plane, SmoothFriction, simulate
+from armctl.sim import ContactPoint, Forces, HuntCrossley, KelvinVoigt, Plane, SmoothFriction, simulate
 from armctl.sim import compiled as compiled_module
 from tests.sim.helpers import OpenLoop, PDGravity, Ramp, slider, zero_torque
 
@@ -197,7 +197,13 @@ def test_the_disturbance_is_sampled_at_the_start_middle_and_end_of_each_step() -
             return np.array([-3.0 - t, 0.0, 0.0, 0.0, 0.0, 0.0])
 
         simulate(
-            slider(2.0), zero_torque, armctl.Reference.hold([0.0]), 0.01, dt=1e-3, disturbance=push, compile=compile
+            slider(2.0),
+            zero_torque,
+            armctl.Reference.hold([0.0]),
+            0.01,
+            dt=1e-3,
+            compile=compile,
+            forces=Forces(disturbance=push),
         )
         seen[compile] = times
     assert seen[False] == seen[True]

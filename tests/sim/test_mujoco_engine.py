@@ -115,7 +115,7 @@ def test_press_on_a_mujoco_floor_gives_the_static_force(mj) -> None:  # type: ig
         engine="mujoco",
         integrator="implicitfast",
         saturate=False,
-        sensors=ForceSensor("tool", world_axes=True),
+        sensing=Sensing(sensors=ForceSensor("tool", world_axes=True)),
     )
     assert res.info["contact"] and not res.diverged
     q, tau = res.q[-1], res.tau_applied[-1]

@@ -20,7 +20,7 @@ import pytest
 import armctl
 from armctl.errors import SimulationWarning
 from armctl.model.parts import JointLimits
-from armctl.sim import simulate
+from armctl.sim import Forces, simulate
 from armctl.sim.compiled import choose_step
 from armctl.sim.friction import make_friction
 from armctl.sim.generated_engine import PeriodBinding
@@ -166,8 +166,8 @@ def test_the_disturbance_is_sampled_at_the_same_instants_with_several_sub_steps(
             armctl.Reference.hold([0.0]),
             1.2,
             dt=2.5e-4,
-            disturbance=push,
             compile=compile,
+            forces=Forces(disturbance=push),
         )
         seen[compile] = times
     assert seen[False] == seen[True]

@@ -139,7 +139,7 @@ def _newton_update(
 ) -> tuple[FloatArray, bool]:
     """One Newton step x − J⁻¹r of the implicit schemes, stuck joints held (their rows and columns replaced by
     the identity, residual zero); returns the new x and whether the step was below the tolerance. ``jac`` and
-    ``res`` are modified."""
+    ``res`` are modified. (C copy: ``step_schemes.c``'s ``armctl_newton_update``.)"""
     if stuck is not None:
         jac[stuck, :] = 0.0
         jac[:, stuck] = 0.0

@@ -89,6 +89,7 @@ class ClosedLoop:
         self._log_add = rec.log.add
         self._references, self._taus, self._applied = rec.references, rec.tau, rec.tau_applied
         self._q, self._qd = rec.q, rec.qd
+        self._tau_list: list[float] = []  # τ_k as a list (control's, for saturate)
         limit = s.effort_limit
         self._clip = s.saturate and bool(np.isfinite(limit).any())
         self._limits = limit.tolist()
@@ -211,7 +212,7 @@ class ClosedLoop:
             raise ShapeError(
                 f"the controller returned a torque of shape {tau.shape} at t = {t}; expected {self._shape}", value=tau
             )
-        tl = tau.tolist()
+        self._tau_list = tl = tau.tolist()  # (saturate reads it too)
         if not math.isfinite(sum(tl)) and not np.isfinite(tau).all():  # (a sum of finite entries can overflow)
             self._stop(k, t, f"the controller returned a non-finite torque {tau}", k)
             return None
@@ -219,10 +220,11 @@ class ClosedLoop:
         return tau
 
     def saturate(self, k: int, tau: FloatArray) -> FloatArray:
-        """τ_k clipped at the effort limits where ``saturate`` (else τ_k): the torque applied, recorded."""
+        """τ_k (checked by :meth:`control`) clipped at the effort limits where ``saturate`` (else τ_k): the torque
+        applied, recorded."""
         applied = tau
         if self._clip:
-            tl, low = tau.tolist(), self._lowest_limit
+            tl, low = self._tau_list, self._lowest_limit
             if (max(tl) > low or -min(tl) > low) and any(map(operator.gt, map(abs, tl), self._limits)):
                 applied = np.clip(tau, -self.s.effort_limit, self.s.effort_limit)
         self._applied[k] = applied

@@ -9,7 +9,8 @@ sub-steps of the integrator (:mod:`armctl.sim.integrators`) with their stick–s
 disturbance takes the integrator's step of the rigid dynamics alone (:func:`armctl.sim.integrators.fast_step`).
 
 The generated C period (:mod:`armctl.sim.generated_engine`, ``step_period.c``) transcribes this module's
-:meth:`PythonEngine.advance_period`: a change here is a change there (tests/sim/test_engines.py compares them).
+:meth:`PythonEngine.advance_period`: a change here is a change there (tests/sim/test_compiled_plant.py and every
+simulator test compare them).
 """
 
 from __future__ import annotations

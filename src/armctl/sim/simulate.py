@@ -102,14 +102,11 @@ def simulate(
         The scheme (:mod:`armctl.sim.integrators`): ``"rk4"`` (the default), ``"semi-implicit-euler"``
         (symplectic: no energy drift), ``"implicit-euler"`` (stiff contact and damping), ``"euler"`` (the cheapest).
     sensing : Sensing, optional
-        What the controller measures: noise, its seed, delay, force sensors (:class:`~armctl.sim.options.Sensing`;
-        its fields may be given as keywords instead).
+        What the controller measures: noise, its seed, delay, force sensors (:class:`~armctl.sim.options.Sensing`).
     forces : Forces, optional
-        Friction model, contact environments, disturbance (:class:`~armctl.sim.options.Forces`; its fields may be
-        given as keywords instead).
+        Friction model, contact environments, disturbance (:class:`~armctl.sim.options.Forces`).
     stop : StopRules, optional
-        ``max_velocity`` [rad/s], ``max_position`` [rad] (:class:`~armctl.sim.options.StopRules`; its fields may be
-        given as keywords instead).
+        ``max_velocity`` [rad/s], ``max_position`` [rad] (:class:`~armctl.sim.options.StopRules`).
     saturate : bool
         Clip τ at the plant model's effort limits.
     reset : bool
@@ -123,14 +120,17 @@ def simulate(
         warning); True: the generated step or an error saying why there is none; False: the Python step.
         ``res.info["compiled"]`` says which ran.
     engine : {"native", "mujoco"}
-        ``"mujoco"``: MuJoCo integrates the plant, a :class:`~armctl.sim.mujoco_plant.MujocoPlant` scene or the
-        model's MJCF (see :mod:`armctl.sim.mujoco_engine` for what it takes and records).
+        What advances the plant between control instants (:mod:`armctl.sim.engine`; the loop is the same):
+        ``"native"``, armctl's step (generated or Python, see ``compile``); ``"mujoco"``, MuJoCo integrates the
+        plant, a :class:`~armctl.sim.mujoco_plant.MujocoPlant` scene or the model's MJCF (see
+        :mod:`armctl.sim.mujoco_engine` for what it takes and records).
     friction, environment, disturbance : optional
-        The fields of ``forces``, as keywords (defaults: ``"stick-slip"``, none, none).
+        Deprecated: the fields of ``forces``, as keywords (a :class:`DeprecationWarning`; they go in the next
+        release).
     sensors, noise_q, noise_qd, seed, delay : optional
-        The fields of ``sensing``, as keywords (defaults: none, 0 rad, 0 rad/s, a fresh seed, 0 periods).
+        Deprecated: the fields of ``sensing``, as keywords.
     max_velocity, max_position : float, optional
-        The fields of ``stop``, as keywords (defaults: 1e3 rad/s, inf).
+        Deprecated: the fields of ``stop``, as keywords.
 
     Returns
     -------

@@ -3,8 +3,8 @@
  * (armctl/sim/python_engine.py), the plant's side of the period [t_k, t_k + Δt_c) under the held τ_k — the stick
  * solve at t_k (Plant.begin), the friction torque and the stuck joints recorded there (Recorder.record_friction),
  * q̈ at t_k, the m sub-steps with their events (stepper.advance), the friction and external work accumulated over
- * them. A change to one is a change to the other (tests/sim/test_engines.py compares them). The controller's side
- * (the checks of the state and of τ_k, its saturation) is ClosedLoop's, in Python, for every engine.
+ * them. A change to one is a change to the other (tests/sim/test_compiled_plant.py compares them). The controller's
+ * side (the checks of the state and of τ_k, its saturation) is ClosedLoop's, in Python, for every engine.
  *
  *   period(TAU, W, par, opt, S) -> (Q, V, A, F, STUCK, WF, WE, out, S)
  *
@@ -56,17 +56,7 @@ CASADI_SYMBOL_EXPORT int period(const casadi_real** arg, casadi_real** res, casa
     memcpy(res[8], S, sizeof S);
     return 0;
   }
-#if ARMCTL_FRICTION
-  {
-    double f[N];
-    const double* in[3] = {v, md.dir, par};
-    double* fo[1] = {f};
-    CALL(pk_friction, 3, in, 1, fo);
-    for (j = 0; j < N; ++j) S[S_TAUF + j] = f[j] + md.hold[j];
-  }
-#else
-  for (j = 0; j < N; ++j) S[S_TAUF + j] = 0.0;
-#endif
+  armctl_friction_torque(v, &md, par, S);
   for (j = 0; j < N; ++j) F[k * N + j] = S[S_TAUF + j];
   if (md.any) /* (else the row stays as the record starts it: zeros) */
     for (j = 0; j < N; ++j) STUCK[k * N + j] = md.stuck[j];
