@@ -22,6 +22,7 @@ from armctl.errors import SimulationWarning
 from armctl.model.parts import JointLimits
 from armctl.sim import Forces, simulate
 from armctl.sim.compiled import choose_step
+from armctl.sim.engine import state_code
 from armctl.sim.friction import make_friction
 from armctl.sim.generated_engine import PeriodBinding
 from armctl.sim.plant import Plant
@@ -212,7 +213,9 @@ def test_one_period_writes_its_rows_of_the_record_and_nothing_else() -> None:
     record["work_friction"][k] = record["work_external"][k] = 1.5
     before = {name: a.copy() for name, a in record.items()}
     generated = _plant(dyn, True)
-    generated.bind_record(PeriodBinding(**record, substeps=m, dt=h, accel_at_start=False))
+    generated.bind_record(
+        PeriodBinding(**record, substeps=m, dt=h, accel_at_start=False, max_velocity=1e3, max_position=math.inf)
+    )
     generated.period(k, 0.002)
 
     choice = _choice(dyn, False)
@@ -252,7 +255,9 @@ def test_a_row_outside_the_record_is_an_index_error() -> None:
     record["q"][:] = [0.2, -0.1]
     record["tau"][:] = [0.5, -0.3]
     plant = _plant(dyn, True)
-    plant.bind_record(PeriodBinding(**record, substeps=1, dt=1e-3, accel_at_start=False))
+    plant.bind_record(
+        PeriodBinding(**record, substeps=1, dt=1e-3, accel_at_start=False, max_velocity=1e3, max_position=math.inf)
+    )
     untouched = {name: a.copy() for name, a in record.items()}
     with pytest.raises(IndexError, match="sample 2 is outside the record"):
         plant.period(rows - 1, 2e-3)
@@ -260,6 +265,44 @@ def test_a_row_outside_the_record_is_an_index_error() -> None:
         np.testing.assert_array_equal(a, untouched[name], err_msg=name)
     plant.last_sample(rows - 1, 2e-3)
     assert np.isfinite(record["qdd"][rows - 1]).all() and (record["qdd"][rows - 1] != 0.0).any()
+
+
+def _state_reason(q: np.ndarray, qd: np.ndarray, max_velocity: float, max_position: float) -> int:
+    """The loop's rule for the state of a sample, written out: 1 not finite (the sums of q and q̇ overflow or are
+    NaN), 2 a |q̇_i| beyond max_velocity, 3 a |q_i| beyond max_position, 0 none."""
+    if not math.isfinite(sum(q.tolist()) + sum(qd.tolist())):
+        return 1
+    if np.abs(qd).max() > max_velocity:
+        return 2
+    return 3 if np.abs(q).max() > max_position else 0
+
+
+@pytest.mark.parametrize(
+    ("v0", "tau", "reason"),
+    [
+        ([0.1, -0.2], [0.0, 0.0], 0),
+        ([1e300, 0.01], [0.0, 0.0], 1),  # centrifugal terms of 1e600: the state is not finite
+        ([2.995, 0.01], [5000.0, 0.0], 2),
+        ([0.01, 2.0], [0.0, 0.0], 3),
+    ],
+)
+def test_the_period_checks_the_state_it_leaves_by_the_loops_rule(v0: list, tau: list, reason: int) -> None:
+    """planar_2r from a state and a torque that take it beyond the bounds (max_velocity 3 rad/s, max_position
+    1 rad) or not: the code the generated period gives the row it wrote is the rule's, and the Python rule's
+    (:func:`armctl.sim.engine.state_code`, which the other engines use)."""
+    dyn = armctl.Dynamics(armctl.models.planar_2r().with_friction(viscous=0.1, coulomb=0.2, static=0.3))
+    rows = 2
+    names = ("tau", "q", "qd", "qdd", "tau_friction", "stuck")
+    record = {name: np.zeros((rows, 2)) for name in names}
+    record.update({name: np.zeros(rows) for name in ("work_friction", "work_external")})
+    record["tau"][0], record["q"][0], record["qd"][0] = tau, [0.2, 0.999], v0
+    plant = _plant(dyn, True)
+    binding = PeriodBinding(**record, substeps=2, dt=5e-4, accel_at_start=False, max_velocity=3.0, max_position=1.0)
+    plant.bind_record(binding)
+    with np.errstate(all="ignore"):
+        code = plant.period(0, 0.0)
+        q1, v1 = record["q"][1], record["qd"][1]
+        assert code == _state_reason(q1, v1, 3.0, 1.0) == state_code(q1, v1, 3.0, 1.0) == reason
 
 
 @pytest.mark.parametrize("substeps", [1, 4])

@@ -55,7 +55,7 @@ BAD_ROW = 3
 #: where a period failed (``step_period.c``'s PERIOD_*), as the messages of begin, accel and step name it
 _WHERE = {0: "stick solve", 1: "accelerations", 2: "step"}
 #: entries of the period's ``opt`` and ``out`` (see ``step_period.c``)
-PERIOD_OPT, PERIOD_OUT = 6, 2
+PERIOD_OPT, PERIOD_OUT = 8, 3
 
 #: the compiler's flags for the plant's library (its step runs in the simulator's loop: a slower build, faster code)
 FLAGS = codegen.CFLAGS_FAST
@@ -364,7 +364,7 @@ class CompiledPlant:
         self._substeps, self._period_h = b.substeps, b.dt
         self._period_samples = np.zeros(18 * max(b.substeps, 1))
         opt = self._period_opt
-        opt[:] = (0.0, b.dt, self.opt[2], b.substeps, rows, float(b.accel_at_start))
+        opt[:] = (0.0, b.dt, self.opt[2], b.substeps, rows, float(b.accel_at_start), b.max_velocity, b.max_position)
         self._record = record  # kept alive with the binding
         self._run_period = _bound(
             self._period_fn,
@@ -374,10 +374,11 @@ class CompiledPlant:
         )
         self._free = False
 
-    def period(self, k: int, t: float) -> None:
+    def period(self, k: int, t: float) -> int:
         """Integrate the control period [t, t + Δt_c) from the state of sample k on the record bound by
         :meth:`bind_record` under the torque in row k of its ``tau``: the stick solve at t and its records at row k
         (q̈, friction torque, stuck joints), the sub-steps with their events, the state and the work at row k + 1.
+        Returns why that state stops the run (:func:`armctl.sim.engine.state_code`'s code, 0: it does not).
 
         Raises
         ------
@@ -390,8 +391,10 @@ class CompiledPlant:
         if self.disturbance is not None:
             self._disturbance_samples(t, self._substeps)
         self._run_period()
-        if self._period_out[0]:
+        out = self._period_out.tolist()
+        if out[0]:
             self._raise(k)
+        return int(out[2])
 
     def last_sample(self, k: int, t: float) -> None:
         """The run's last sample k (no step after it): the stick solve at t, the friction torque, the stuck joints
@@ -411,7 +414,7 @@ class CompiledPlant:
 
     def _raise(self, k: int) -> None:
         """Raise why the last period from sample k failed (see :meth:`period`)."""
-        status, where = self._period_out.tolist()
+        status, where = self._period_out.tolist()[:2]
         if status == BAD_ROW:
             rows = self._period_opt[4]
             raise IndexError(f"sample {k} is outside the record bound to the generated step ({rows:.0f} rows)")

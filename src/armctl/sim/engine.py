@@ -9,12 +9,15 @@ calls the controller and saturates its torque. The engine does the rest — the 
   (:mod:`armctl.sim.measurement_feed`) is given the reading of this sample;
 * :meth:`Engine.advance_period` records what the plant does at sample k under τ_k (q̈_k, the friction torque, the
   stuck joints) and integrates the period [t_k, t_k + Δt_c) under the held torque τ_k (the applied one, also in row k
-  of ``record.tau_applied``), writing the state it reaches and the work so far into row k + 1;
+  of ``record.tau_applied``), writing the state it reaches and the work so far into row k + 1. It answers with the
+  status of that state: the code of :func:`state_code`, the one stop rule (0: the run goes on), which the generated
+  engine evaluates in C as the period ends; the loop turns a code into the run's reason;
 * :meth:`Engine.last_sample` records the plant's side of the run's last sample (no step after it).
 
-Both answer with a status: None, or why the plant cannot be advanced from that state (a mass matrix that is not
-positive definite): the loop stops the run there as diverged. What a user's callable raises inside the plant (a
-disturbance) passes through: the loop keeps the run up to it.
+A plant that cannot be advanced from a state (a mass matrix that is not positive definite) raises
+:class:`~armctl.sim.stick_slip.NotPositiveDefinite` (or NumPy's ``LinAlgError``): the loop stops the run there as
+diverged. What a user's callable raises inside the plant (a disturbance) passes through: the loop keeps the run up
+to it.
 
 The engines:
 
@@ -28,11 +31,32 @@ The engines:
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any, Protocol
 
+import numpy as np
+
 from armctl._checks import FloatArray
 from armctl.sim.recorder import Recorder
+
+#: the codes of :func:`state_code`: the state is fine, not finite, a velocity or a position beyond its bound
+STATE_OK, STATE_NOT_FINITE, STATE_VELOCITY, STATE_POSITION = 0, 1, 2, 3
+
+
+def state_code(q: FloatArray, qd: FloatArray, max_velocity: float, max_position: float) -> int:
+    """Why the state (q, q̇) stops a run: :data:`STATE_NOT_FINITE` (an entry is not finite),
+    :data:`STATE_VELOCITY` (some |q̇_i| > ``max_velocity``), :data:`STATE_POSITION` (some |q_i| > ``max_position``),
+    tested in this order, or :data:`STATE_OK` (0). (C copy: ``step_period.c``'s ``armctl_state_check``;
+    tests/sim/test_period.py fails when they disagree.)"""
+    ql, vl = q.tolist(), qd.tolist()
+    if not math.isfinite(sum(ql) + sum(vl)) and not (np.isfinite(q).all() and np.isfinite(qd).all()):
+        return STATE_NOT_FINITE  # (the sum of finite entries can overflow: the entries decide)
+    if max(vl) > max_velocity or -min(vl) > max_velocity:
+        return STATE_VELOCITY
+    if max_position < math.inf and (max(ql) > max_position or -min(ql) > max_position):
+        return STATE_POSITION
+    return STATE_OK
 
 
 @dataclass(frozen=True)
@@ -49,6 +73,8 @@ class EngineRun:
         The integration step h = Δt_c / m [s].
     accel_at_start : bool
         q̈_k by an evaluation at t_k (the implicit schemes, whose step gives none at its start).
+    max_velocity, max_position : float
+        The run's stop rules [rad/s, rad] (:func:`state_code`).
     sensors_read : bool
         The controller reads the first force sensor at every sample (:meth:`Engine.observe` must record it).
     """
@@ -57,6 +83,8 @@ class EngineRun:
     substeps: int
     dt: float
     accel_at_start: bool
+    max_velocity: float = math.inf
+    max_position: float = math.inf
     sensors_read: bool = False
 
 
@@ -71,15 +99,14 @@ class Engine(Protocol):
         """Record what the plant shows at the state of sample k (time t [s]) before the controller is called."""
         ...
 
-    def advance_period(self, k: int, t: float, tau: FloatArray) -> str | None:
+    def advance_period(self, k: int, t: float, tau: FloatArray) -> int:
         """Record the plant's side of sample k (time t [s]) and integrate [t, t + Δt_c) under the held ``tau``
-        (the applied torque, row k of ``record.tau_applied``); the state reached goes into row k + 1. None, or why
-        the plant cannot be advanced."""
+        (the applied torque, row k of ``record.tau_applied``); the state reached goes into row k + 1. Returns
+        :func:`state_code` of that state (0: the run goes on)."""
         ...
 
-    def last_sample(self, k: int, t: float, tau: FloatArray) -> str | None:
-        """Record the plant's side of the run's last sample k under ``tau`` (no step after it). None, or why the
-        plant cannot be evaluated there."""
+    def last_sample(self, k: int, t: float, tau: FloatArray) -> None:
+        """Record the plant's side of the run's last sample k under ``tau`` (no step after it)."""
         ...
 
     def info(self) -> dict[str, Any]:

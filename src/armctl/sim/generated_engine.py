@@ -16,7 +16,6 @@ from typing import TYPE_CHECKING, Any
 
 from armctl._checks import FloatArray
 from armctl.sim.engine import EngineRun
-from armctl.sim.stick_slip import NotPositiveDefinite
 
 if TYPE_CHECKING:
     from armctl.sim.compiled_plant import CompiledPlant
@@ -42,6 +41,8 @@ class PeriodBinding:
         The integration step h [s].
     accel_at_start : bool
         q̈ at the period's start by an evaluation (the implicit schemes, whose step gives none).
+    max_velocity, max_position : float
+        The stop rules the state a period leaves is checked against (:func:`armctl.sim.engine.state_code`).
     """
 
     tau: FloatArray
@@ -55,6 +56,8 @@ class PeriodBinding:
     substeps: int
     dt: float
     accel_at_start: bool
+    max_velocity: float
+    max_position: float
 
 
 class GeneratedEngine:
@@ -81,6 +84,8 @@ class GeneratedEngine:
                 substeps=run.substeps,
                 dt=run.dt,
                 accel_at_start=run.accel_at_start,
+                max_velocity=run.max_velocity,
+                max_position=run.max_position,
             )
         )
 
@@ -89,21 +94,13 @@ class GeneratedEngine:
             rec = self._rec
             rec.record_external(k, self.plant, t, rec.q[k], rec.qd[k])  # type: ignore[arg-type]  # a plant's duck
 
-    def advance_period(self, k: int, t: float, tau: FloatArray) -> str | None:
+    def advance_period(self, k: int, t: float, tau: FloatArray) -> int:
         """(:meth:`Engine.advance_period <armctl.sim.engine.Engine.advance_period>`: ``tau`` is read from row k of
-        the record's applied torques.)"""
-        try:
-            self.plant.period(k, t)
-        except NotPositiveDefinite as exc:
-            return str(exc)
-        return None
+        the record's applied torques; the state code is ``step_period.c``'s ``armctl_state_check``.)"""
+        return self.plant.period(k, t)
 
-    def last_sample(self, k: int, t: float, tau: FloatArray) -> str | None:
-        try:
-            self.plant.last_sample(k, t)
-        except NotPositiveDefinite as exc:
-            return str(exc)
-        return None
+    def last_sample(self, k: int, t: float, tau: FloatArray) -> None:
+        self.plant.last_sample(k, t)
 
     def info(self) -> dict[str, Any]:
         pl = self.plant

@@ -2,7 +2,8 @@
 
 At each control instant t_k = k·Δt_c the loop
 
-1. *checks* the state of sample k (finite, within the stop rules),
+1. *checks* the state of sample k (finite, within the stop rules: the engine evaluates the rule where the state
+   is, the loop stops the run),
 2. *measures* it: the engine records what the plant shows there (contact forces, sensors), the loop what the
    controller is given — q and q̇ with noise and delay, and the signals it declares it reads
    (:mod:`armctl.sim.measurement_feed`: a force sensor's wrench, τ_{k−1} applied, measured torques),
@@ -33,9 +34,10 @@ from armctl._checks import FLOAT, FloatArray, real_array
 from armctl.errors import InvalidParameterError, ShapeError
 from armctl.references import Reference
 from armctl.sim import setup
-from armctl.sim.engine import Engine, EngineRun
+from armctl.sim.engine import STATE_NOT_FINITE, STATE_VELOCITY, Engine, EngineRun, state_code
 from armctl.sim.measurement_feed import MeasurementFeed
 from armctl.sim.recorder import Recorder
+from armctl.sim.stick_slip import NotPositiveDefinite
 
 #: (time [s], why, q, q̇): where and why a run stopped as diverged
 Divergence = tuple[float, str, FloatArray, FloatArray]
@@ -104,7 +106,12 @@ class ClosedLoop:
         rec.q[0] = q
         rec.qd[0] = qd
         sensors_read = s.feed is not None and s.feed.wrench_chain is not None
-        engine.bind(EngineRun(rec, s.substeps, s.dt, s.implicit, sensors_read))
+        engine.bind(EngineRun(rec, s.substeps, s.dt, s.implicit, s.max_velocity, s.max_position, sensors_read))
+        #: why the state of the current sample stops the run (:func:`~armctl.sim.engine.state_code`; the engine
+        #: gives it for the state a period reaches)
+        self._code = state_code(q, qd, s.max_velocity, s.max_position)
+        self._observe = engine.observe
+        self._feed = s.feed
 
     def run(self) -> None:
         """Run every sample; afterwards ``rows``, ``divergence`` and ``failure`` say what happened."""
@@ -129,16 +136,17 @@ class ClosedLoop:
                     return
                 try:
                     if k == last:  # the last sample: its state and torque, no step after it
-                        why = engine.last_sample(k, t, tau)
-                        if why is not None:
-                            self._stop(k + 1, t, f"{why} at t = {t:g} s", k)
+                        engine.last_sample(k, t, tau)
                         return
-                    why = engine.advance_period(k, t, tau)
+                    self._code = engine.advance_period(k, t, tau)
+                except (NotPositiveDefinite, np.linalg.LinAlgError) as exc:  # the latter: the Lagrange backend's
+                    if k == last:
+                        self._stop(k + 1, t, f"{exc} at t = {t:g} s", k)
+                    else:
+                        self._stop(k + 1, t + cdt, f"{exc} during the control period from t = {t:g} s", k)
+                    return
                 except BaseException as exc:  # the plant's (a disturbance's, say): the run so far is kept
                     self._fail(exc, k, t)
-                    return
-                if why is not None:
-                    self._stop(k + 1, t + cdt, f"{why} during the control period from t = {t:g} s", k)
                     return
 
     def _fail(self, exc: BaseException, k: int, t: float) -> None:
@@ -152,22 +160,22 @@ class ClosedLoop:
 
     # ------------------------------------------------------------------------------------ the steps
     def check(self, k: int) -> str | None:
-        """Why the state of sample k stops the run (None: it does not)."""
-        q, qd = self._q[k], self._qd[k]
-        ql, vl = q.tolist(), qd.tolist()
-        if not math.isfinite(sum(ql) + sum(vl)) and not (np.isfinite(q).all() and np.isfinite(qd).all()):
-            return "the state is not finite"  # (the sum of finite entries can overflow: the entries decide)
+        """Why the state of sample k stops the run (None: it does not), by the stop rules
+        (:func:`armctl.sim.engine.state_code`, which the engine evaluates where the state is)."""
+        code = self._code
+        if not code:
+            return None
         s = self.s
-        if max(vl) > s.max_velocity or -min(vl) > s.max_velocity:
+        if code == STATE_NOT_FINITE:
+            return "the state is not finite"
+        if code == STATE_VELOCITY:
             return f"a joint velocity is beyond max_velocity = {s.max_velocity:g}"
-        if s.max_position < math.inf and (max(ql) > s.max_position or -min(ql) > s.max_position):
-            return f"a joint position is beyond max_position = {s.max_position:g}"
-        return None
+        return f"a joint position is beyond max_position = {s.max_position:g}"
 
     def measure(self, k: int, t: float) -> tuple[FloatArray, FloatArray]:
         """The (read-only) measurement of sample k (time t [s]) the controller is given, recorded; what the plant
         shows there recorded by the engine (before the controller reads a sensor)."""
-        self.engine.observe(k, t)
+        self._observe(k, t)
         rec = self._rec
         if not rec.measured:
             return self._q_view[k], self._qd_view[k]
@@ -190,7 +198,7 @@ class ClosedLoop:
             if not isinstance(ref, Reference) or ref.q.shape != self._shape:
                 setup.check_reference(ref, self.s.n, t)  # (raises, naming what is wrong)
         self._references[k] = ref
-        feed = self.s.feed
+        feed = self._feed
         if feed is not None:
             self._give_measurement(feed, k)
         try:
@@ -228,7 +236,7 @@ class ClosedLoop:
             if (max(tl) > low or -min(tl) > low) and any(map(operator.gt, map(abs, tl), self._limits)):
                 applied = np.clip(tau, -self.s.effort_limit, self.s.effort_limit)
         self._applied[k] = applied
-        feed = self.s.feed
+        feed = self._feed
         if feed is not None:
             feed.applied(applied)
         return applied

@@ -31,7 +31,7 @@ from armctl.errors import InvalidParameterError, UnknownNameError
 from armctl.model.robot import RobotModel
 from armctl.sim import setup
 from armctl.sim.compiled import compile_option
-from armctl.sim.engine import EngineRun
+from armctl.sim.engine import EngineRun, state_code
 from armctl.sim.mujoco_plant import MujocoPlant, Readout, available_integrators, integrator_code
 from armctl.sim.options import Forces
 
@@ -120,6 +120,7 @@ class MujocoEngine:
         self._rec = rec = run.record
         self._substeps = run.substeps
         self._sensors_read = run.sensors_read
+        self._stop = (run.max_velocity, run.max_position)
         rec.contact_force = np.zeros((rec.samples, self.dyn.n, 3))  # one row per link: the force it exerts
         self.d.qpos[self._qadr] = rec.q[0]
         self.d.qvel[self._vadr] = rec.qd[0]
@@ -138,7 +139,7 @@ class MujocoEngine:
         for i, sensor in enumerate(rec.sensors):
             rec.sensor[k, i] = sensor.reading(self.dyn, q, hs, ps, links)
 
-    def advance_period(self, k: int, t: float, tau: FloatArray) -> str | None:
+    def advance_period(self, k: int, t: float, tau: FloatArray) -> int:
         """(:meth:`Engine.advance_period <armctl.sim.engine.Engine.advance_period>`: ``mj_forward`` then the
         integrator, m times; the first forward gives what is recorded at sample k.)"""
         self._period(k, t, tau, self._substeps)
@@ -147,11 +148,10 @@ class MujocoEngine:
         rec.qd[k + 1] = d.qvel[self._vadr]
         if not self.simple:
             rec.work_friction[k + 1], rec.work_external[k + 1] = self._wf, self._we
-        return None
+        return state_code(rec.q[k + 1], rec.qd[k + 1], *self._stop)
 
-    def last_sample(self, k: int, t: float, tau: FloatArray) -> str | None:
+    def last_sample(self, k: int, t: float, tau: FloatArray) -> None:
         self._period(k, t, tau, 0)
-        return None
 
     def _period(self, k: int, t: float, tau: FloatArray, substeps: int) -> None:
         """The forward dynamics at sample k and what is recorded of them, then ``substeps`` steps (none: the

@@ -22,11 +22,10 @@ from typing import Any
 import numpy as np
 
 from armctl._checks import FloatArray
-from armctl.sim.engine import EngineRun
+from armctl.sim.engine import EngineRun, state_code
 from armctl.sim.integrators import Step
 from armctl.sim.plant import Plant
 from armctl.sim.stepper import advance
-from armctl.sim.stick_slip import NotPositiveDefinite
 
 #: a step of the rigid dynamics alone: (q, q̇, τ, h) → (q₁, q̇₁, q̈ at the start)
 FastStep = Callable[[FloatArray, FloatArray, FloatArray, float], tuple[FloatArray, FloatArray, FloatArray]]
@@ -46,6 +45,7 @@ class PythonEngine:
     def bind(self, run: EngineRun) -> None:
         self._rec = rec = run.record
         self._m, self._h, self._accel_at_start = run.substeps, run.dt, run.accel_at_start
+        self._stop = (run.max_velocity, run.max_position)
         self.q, self.qd = rec.q[0].copy(), rec.qd[0].copy()
         self._work_friction = self._work_external = 0.0
         if not self.plant.simple:  # the friction torque of a sample the run stops at before its stick solve: NaN
@@ -56,47 +56,40 @@ class PythonEngine:
         if pl.has_external:
             self._rec.record_external(k, pl, t, self.q, self.qd)
 
-    def advance_period(self, k: int, t: float, tau: FloatArray) -> str | None:
+    def advance_period(self, k: int, t: float, tau: FloatArray) -> int:
         """(:meth:`Engine.advance_period <armctl.sim.engine.Engine.advance_period>`; ``step_period.c``'s
         ``period`` is its C transcription.)"""
         rec, pl, h = self._rec, self.plant, self._h
         q, qd = self.q, self.qd
-        try:
-            self._begin(k, t, q, qd, tau)
-            if self._accel_at_start:
-                rec.qdd[k] = pl.accel(t, q, qd, tau)
-            fast = self.fast
-            if fast is not None:  # no friction, contact or disturbance
-                for i in range(self._m):
-                    q, qd, a0 = fast(q, qd, tau, h)
-                    if i == 0:
-                        rec.qdd[k] = a0
-            else:
-                step = self.step
-                for i in range(self._m):
-                    q, qd, a_sub, dwf, dwe = advance(pl, step, t + i * h, q, qd, tau, h, begun=i == 0)
-                    if i == 0 and a_sub is not None:
-                        rec.qdd[k] = a_sub
-                    self._work_friction += dwf
-                    self._work_external += dwe
-        except (NotPositiveDefinite, np.linalg.LinAlgError) as exc:  # the latter: the Lagrange backend's
-            return str(exc)
+        self._begin(k, t, q, qd, tau)
+        if self._accel_at_start:
+            rec.qdd[k] = pl.accel(t, q, qd, tau)
+        fast = self.fast
+        if fast is not None:  # no friction, contact or disturbance
+            for i in range(self._m):
+                q, qd, a0 = fast(q, qd, tau, h)
+                if i == 0:
+                    rec.qdd[k] = a0
+        else:
+            step = self.step
+            for i in range(self._m):
+                q, qd, a_sub, dwf, dwe = advance(pl, step, t + i * h, q, qd, tau, h, begun=i == 0)
+                if i == 0 and a_sub is not None:
+                    rec.qdd[k] = a_sub
+                self._work_friction += dwf
+                self._work_external += dwe
         self.q, self.qd = q, qd
         rec.q[k + 1] = q
         rec.qd[k + 1] = qd
         if not pl.simple:
             rec.work_friction[k + 1] = self._work_friction
             rec.work_external[k + 1] = self._work_external
-        return None
+        return state_code(q, qd, *self._stop)
 
-    def last_sample(self, k: int, t: float, tau: FloatArray) -> str | None:
+    def last_sample(self, k: int, t: float, tau: FloatArray) -> None:
         q, qd = self.q, self.qd
-        try:
-            self._begin(k, t, q, qd, tau)
-            self._rec.qdd[k] = self.plant.accel(t, q, qd, tau)
-        except (NotPositiveDefinite, np.linalg.LinAlgError) as exc:
-            return str(exc)
-        return None
+        self._begin(k, t, q, qd, tau)
+        self._rec.qdd[k] = self.plant.accel(t, q, qd, tau)
 
     def _begin(self, k: int, t: float, q: FloatArray, qd: FloatArray, tau: FloatArray) -> None:
         """The plant's stick solve at sample k and what it records of it."""

@@ -16,15 +16,39 @@
  * samples of every sub-step, 18 each (start, middle, end of sub-step i at W + 18 i; only its start for the last
  * sample).
  *
- * opt = [k, h, scheme, m, rows, q̈ by an evaluation at t_k (1) or from the first sub-step (0)]; m = 0: the last
- *        sample (no step after it: the stick solve, its records and q̈ only).
- * out = [status, where it failed (PERIOD_BEGIN, PERIOD_ACCEL, PERIOD_STEP)].
+ * opt = [k, h, scheme, m, rows, q̈ by an evaluation at t_k (1) or from the first sub-step (0), max_velocity,
+ *        max_position]; m = 0: the last sample (no step after it: the stick solve, its records and q̈ only).
+ * out = [status, where it failed (PERIOD_BEGIN, PERIOD_ACCEL, PERIOD_STEP), the state code of the state it left
+ *        (armctl_state_check)].
  * A row outside the record (k < 0, or k + 1 ≥ rows with m > 0, k ≥ rows) writes nothing: status BAD_ROW.
  */
 #define BAD_ROW 3
 #define PERIOD_BEGIN 0
 #define PERIOD_ACCEL 1
 #define PERIOD_STEP 2
+#define STATE_OK 0
+#define STATE_NOT_FINITE 1
+#define STATE_VELOCITY 2
+#define STATE_POSITION 3
+
+/* engine.state_code (armctl/sim/engine.py), the stop rules on the state a period leaves: the same tests in the same
+ * order (finite: every entry; a sum could overflow). A change to one is a change to the other
+ * (tests/sim/test_period.py compares them). */
+static int armctl_state_check(const double* q, const double* v, double max_velocity, double max_position) {
+  double vmax = -INFINITY, vmin = INFINITY, qmax = -INFINITY, qmin = INFINITY;
+  int i, finite = 1;
+  for (i = 0; i < N; ++i) {
+    if (!isfinite(q[i]) || !isfinite(v[i])) finite = 0;
+    if (v[i] > vmax) vmax = v[i];
+    if (v[i] < vmin) vmin = v[i];
+    if (q[i] > qmax) qmax = q[i];
+    if (q[i] < qmin) qmin = q[i];
+  }
+  if (!finite) return STATE_NOT_FINITE;
+  if (vmax > max_velocity || -vmin > max_velocity) return STATE_VELOCITY;
+  if (max_position < INFINITY && (qmax > max_position || -qmin > max_position)) return STATE_POSITION;
+  return STATE_OK;
+}
 
 CASADI_SYMBOL_EXPORT int period(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   const double *W = arg[1], *par = arg[2], *opt = arg[3];
@@ -36,7 +60,7 @@ CASADI_SYMBOL_EXPORT int period(const casadi_real** arg, casadi_real** res, casa
   double h = opt[1];
   armctl_mode md;
   (void)iw; (void)w; (void)mem;
-  out[0] = out[1] = 0.0;
+  out[0] = out[1] = out[2] = 0.0;
   if (k < 0 || k >= rows || (m > 0 && k + 1 >= rows)) {
     out[0] = BAD_ROW;
     return 0;
@@ -97,6 +121,7 @@ CASADI_SYMBOL_EXPORT int period(const casadi_real** arg, casadi_real** res, casa
 #else
     (void)wf; (void)we;
 #endif
+    out[2] = armctl_state_check(q, v, opt[6], opt[7]);
   }
   S[S_BEGUN] = 0.0;
   memcpy(res[8], S, sizeof S);
