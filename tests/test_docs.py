@@ -17,6 +17,7 @@ PUBLIC = (
     "armctl",
     "armctl.models",
     "armctl.model",
+    "armctl.codegen",
     "armctl.dynamics",
     "armctl.dynamics.identification",
     "armctl.references",

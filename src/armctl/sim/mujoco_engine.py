@@ -26,11 +26,11 @@ import numpy as np
 
 from armctl._checks import FloatArray, real_array, vector
 from armctl._mujoco import require_mujoco
+from armctl.codegen import compile_mode
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError, UnknownNameError
 from armctl.model.robot import RobotModel
 from armctl.sim import setup
-from armctl.sim.compiled import compile_option
 from armctl.sim.engine import EngineRun, state_code
 from armctl.sim.mujoco_plant import MujocoPlant, Readout, available_integrators, integrator_code
 from armctl.sim.options import Forces
@@ -67,7 +67,7 @@ def target(plant: Any, integrator: Any, forces: Forces, compile: Any) -> MujocoT
     if forces.environment is not None and forces.environment != ():
         why = "contact is the MuJoCo scene's: put the geometry in its MJCF (MujocoPlant)"
         _refuse("environment", forces.environment, why)
-    if compile_option(compile) is True:
+    if compile_mode(compile) is True:
         _refuse("compile", compile, "MuJoCo integrates the plant")
     names = available_integrators()
     if integrator not in names:
