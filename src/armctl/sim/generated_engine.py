@@ -71,16 +71,11 @@ class GeneratedEngine:
         self._rec = rec = run.record
         if not self.plant.simple:  # the friction torque of a sample the run stops at before its stick solve: NaN
             rec.tau_friction.fill(math.nan)
+        rows = ("q", "qd", "qdd", "tau_friction", "stuck", "work_friction", "work_external")
         self.plant.bind_record(
             PeriodBinding(
-                tau=rec.tau_applied,
-                q=rec.q,
-                qd=rec.qd,
-                qdd=rec.qdd,
-                tau_friction=rec.tau_friction,
-                stuck=rec.stuck,
-                work_friction=rec.work_friction,
-                work_external=rec.work_external,
+                tau=rec.tau_applied,  # the torque held
+                **{name: getattr(rec, name) for name in rows},
                 substeps=run.substeps,
                 dt=run.dt,
                 accel_at_start=run.accel_at_start,

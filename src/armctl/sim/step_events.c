@@ -249,20 +249,19 @@ CASADI_SYMBOL_EXPORT int advance(const casadi_real** arg, casadi_real** res, cas
   return 0;
 }
 
+/* begin and accel read q, v and tau where they are (inputs no output aliases); S is copied in (the state is both
+ * an input and the output of begin). */
 CASADI_SYMBOL_EXPORT int begin(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  double S[NS], q[N], v[N], tau[N], hd[6];
+  double S[NS], hd[6];
   armctl_mode m;
   int st;
   (void)iw; (void)w; (void)mem;
   memcpy(S, arg[5], sizeof S);
-  memcpy(q, arg[0], sizeof q);
-  memcpy(v, arg[1], sizeof v);
-  memcpy(tau, arg[2], sizeof tau);
   armctl_mode_read(S, &m);
   armctl_interp(arg[3], 0.0, hd);
-  st = armctl_begin(q, v, tau, hd, arg[4], &m, 0, S);
+  st = armctl_begin(arg[0], arg[1], arg[2], hd, arg[4], &m, 0, S);
   armctl_mode_write(&m, S);
-  armctl_friction_torque(v, &m, arg[4], S);
+  armctl_friction_torque(arg[1], &m, arg[4], S);
   S[S_BEGUN] = 1.0;
   memcpy(res[0], S, sizeof S);
   res[1][0] = m.any;
@@ -273,16 +272,13 @@ CASADI_SYMBOL_EXPORT int begin(const casadi_real** arg, casadi_real** res, casad
 }
 
 CASADI_SYMBOL_EXPORT int accel(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  double q[N], v[N], tau[N], a[N], f[N], e[N], hd[6];
+  double a[N], f[N], e[N], hd[6];
   armctl_mode m;
   int st;
   (void)iw; (void)w; (void)mem;
-  memcpy(q, arg[0], sizeof q);
-  memcpy(v, arg[1], sizeof v);
-  memcpy(tau, arg[2], sizeof tau);
   armctl_mode_read(arg[5], &m);
   armctl_interp(arg[3], 0.0, hd);
-  st = m.all ? OK : armctl_rhs(q, v, tau, hd, arg[4], &m, a, f, e);
+  st = m.all ? OK : armctl_rhs(arg[0], arg[1], arg[2], hd, arg[4], &m, a, f, e);
   if (m.all) memset(a, 0, sizeof a);
   memcpy(res[0], a, sizeof a);
   res[1][0] = res[1][1] = res[1][2] = 0.0;
