@@ -91,6 +91,9 @@ class EngineRun:
 class Engine(Protocol):
     """What advances the plant of a run (see the module)."""
 
+    #: whether :meth:`observe` records anything for the run it is bound to (False: the loop does not call it)
+    observes: bool
+
     def bind(self, run: EngineRun) -> None:
         """Tie the engine to ``run``'s record, starting from the state in its row 0."""
         ...

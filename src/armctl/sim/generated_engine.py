@@ -65,7 +65,7 @@ class GeneratedEngine:
 
     def __init__(self, plant: CompiledPlant) -> None:
         self.plant = plant
-        self._external = plant.has_external
+        self._external = self.observes = plant.has_external
 
     def bind(self, run: EngineRun) -> None:
         self._rec = rec = run.record

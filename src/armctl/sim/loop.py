@@ -110,7 +110,7 @@ class ClosedLoop:
         #: why the state of the current sample stops the run (:func:`~armctl.sim.engine.state_code`; the engine
         #: gives it for the state a period reaches)
         self._code = state_code(q, qd, s.max_velocity, s.max_position)
-        self._observe = engine.observe
+        self._observe = engine.observe if engine.observes else None
         self._feed = s.feed
 
     def run(self) -> None:
@@ -175,7 +175,9 @@ class ClosedLoop:
     def measure(self, k: int, t: float) -> tuple[FloatArray, FloatArray]:
         """The (read-only) measurement of sample k (time t [s]) the controller is given, recorded; what the plant
         shows there recorded by the engine (before the controller reads a sensor)."""
-        self._observe(k, t)
+        observe = self._observe
+        if observe is not None:
+            observe(k, t)
         rec = self._rec
         if not rec.measured:
             return self._q_view[k], self._qd_view[k]

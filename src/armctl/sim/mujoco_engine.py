@@ -114,12 +114,12 @@ class MujocoEngine:
         self.has_friction = bool(np.any(m.dof_damping[self._vadr]) or np.any(m.dof_frictionloss[self._vadr]))
         self.simple = not (self.contact or self.has_friction or disturbance is not None or m.neq or m.ntendon)
         self._wf = self._we = 0.0
-        self._sensors_read = False
+        self._sensors_read = self.observes = False
 
     def bind(self, run: EngineRun) -> None:
         self._rec = rec = run.record
         self._substeps = run.substeps
-        self._sensors_read = run.sensors_read
+        self._sensors_read = self.observes = run.sensors_read
         self._stop = (run.max_velocity, run.max_position)
         rec.contact_force = np.zeros((rec.samples, self.dyn.n, 3))  # one row per link: the force it exerts
         self.d.qpos[self._qadr] = rec.q[0]

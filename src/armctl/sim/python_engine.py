@@ -41,6 +41,7 @@ class PythonEngine:
         self.fast = fast
         self.q = self.qd = np.zeros(plant.n)
         self._work_friction = self._work_external = 0.0
+        self.observes = plant.has_external
 
     def bind(self, run: EngineRun) -> None:
         self._rec = rec = run.record
