@@ -45,10 +45,26 @@ STATE_OK, STATE_NOT_FINITE, STATE_VELOCITY, STATE_POSITION = 0, 1, 2, 3
 
 
 def state_code(q: FloatArray, qd: FloatArray, max_velocity: float, max_position: float) -> int:
-    """Why the state (q, q̇) stops a run: :data:`STATE_NOT_FINITE` (an entry is not finite),
-    :data:`STATE_VELOCITY` (some |q̇_i| > ``max_velocity``), :data:`STATE_POSITION` (some |q_i| > ``max_position``),
-    tested in this order, or :data:`STATE_OK` (0). (C copy: ``step_period.c``'s ``armctl_state_check``;
-    tests/sim/test_period.py fails when they disagree.)"""
+    """Why the state (q, q̇) stops a run, by the run's stop rules (:class:`~armctl.sim.options.StopRules`).
+
+    Parameters
+    ----------
+    q, qd : (n,) ndarray
+        The state [rad or m, rad/s or m/s].
+    max_velocity, max_position : float
+        The bounds on |q̇_i| and |q_i| (inf: none).
+
+    Returns
+    -------
+    int
+        :data:`STATE_NOT_FINITE` (an entry is not finite), :data:`STATE_VELOCITY` (some |q̇_i| > ``max_velocity``),
+        :data:`STATE_POSITION` (some |q_i| > ``max_position``), tested in this order, or :data:`STATE_OK` (0).
+
+    Notes
+    -----
+    C copy: ``step_period.c``'s ``armctl_state_check`` (the generated engine's); tests/sim/test_period.py fails
+    when they disagree.
+    """
     ql, vl = q.tolist(), qd.tolist()
     if not math.isfinite(sum(ql) + sum(vl)) and not (np.isfinite(q).all() and np.isfinite(qd).all()):
         return STATE_NOT_FINITE  # (the sum of finite entries can overflow: the entries decide)
