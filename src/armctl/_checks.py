@@ -6,7 +6,6 @@ Each raises an :class:`~armctl.errors.ArmctlError` subclass naming the value and
 from __future__ import annotations
 
 import datetime
-import functools
 import math
 import os
 from typing import Any
@@ -264,35 +263,26 @@ def apply_gain(k: FloatArray, x: FloatArray) -> FloatArray:
 def all_finite(a: FloatArray) -> bool:
     """True if every entry of the float array ``a`` is finite.
 
-    A vector's entries are summed as Python floats: the sum is finite exactly when no entry is NaN or inf, unless
-    finite entries add up beyond the range of floats (then False, and callers take their careful path,
-    ``np.isfinite``). A matrix's entries are multiplied by zeros and summed: 0 when every entry is finite, NaN
-    otherwise."""
-    if a.ndim == 1:
-        return math.isfinite(sum(a.tolist()))
-    flat = a.ravel(order="K")  # a view of a contiguous array in either order
-    return math.isfinite(flat.dot(_zeros(flat.size)))  # 0 when every entry is finite, NaN otherwise; no overflow
+    A small array's entries are summed as Python floats: the sum is finite exactly when no entry is NaN or inf,
+    unless finite entries add up beyond the range of floats (then False, and callers take their careful path,
+    ``np.isfinite``). Python's float arithmetic raises no floating-point warning for inf − inf, as NumPy's would.
+    A larger array is tested entry by entry (``np.isfinite``), where the sum's conversion would cost more."""
+    if a.size <= _SUMMED:
+        return math.isfinite(sum(a.ravel(order="K").tolist()))
+    return bool(np.isfinite(a).all())
 
 
-@functools.lru_cache(maxsize=32)
-def _zeros(size: int) -> FloatArray:
-    z = np.zeros(size)
-    z.flags.writeable = False
-    return z
+#: arrays up to this many entries are checked by :func:`all_finite` through a Python sum (the faster way there)
+_SUMMED = 256
 
 
-def float_vectors(a: Any, b: Any, c: Any, d: Any = None) -> bool:
-    """True if ``a``, ``b``, ``c`` (and ``d`` if given) are native float64 1-D ndarrays (finite or not; their
-    lengths are not compared)."""
-    try:
-        return (
-            type(a) is type(b) is type(c) is np.ndarray
-            and a.ndim == b.ndim == c.ndim == 1
-            and a.dtype == b.dtype == c.dtype == FLOAT
-            and (d is None or (type(d) is np.ndarray and d.ndim == 1 and d.dtype == FLOAT))
-        )
-    except AttributeError:
-        return False
+def float_vectors(*arrays: Any) -> bool:
+    """True if every one of ``arrays`` is a native float64 1-D ndarray (finite or not; their lengths are not
+    compared). None is not one: an argument left out by the caller is refused here like any other non-array."""
+    for a in arrays:
+        if type(a) is not np.ndarray or a.ndim != 1 or a.dtype != FLOAT:
+            return False
+    return True
 
 
 def memory_limit() -> float:

@@ -33,6 +33,8 @@ from armctl.model.robot import RobotModel
 from armctl.references import Reference
 from armctl.tuning.presets import load_preset
 
+#: The joint-space control laws a joint-space scene runs, by name (PD + gravity, computed torque on the exact
+#: and on a reduced model, passivity-based, adaptive).
 JOINT_METHODS = ("pd_gravity", "computed_torque", "computed_torque_reduced", "passivity", "adaptive")
 #: the gain keys of each built-in method: (required, optional)
 GAIN_KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
@@ -73,14 +75,20 @@ VELOCITY_TOLERANCE = 0.01
 
 
 def replay_times(controller: Controller, window: dict[str, Any], passes: int) -> list[float]:
-    """Seconds per step of each of ``passes`` replays of ``window`` through ``controller`` (reset first)."""
+    """Seconds per step of each of ``passes`` replays of ``window`` through ``controller`` (reset first); a window
+    with a ``"measurement"`` list (the signals a controller reads, one per step) passes each step its own."""
     out = []
+    measured = window.get("measurement")
     for _ in range(passes):
         if callable(getattr(controller, "reset", None)):
             controller.reset()
         t0 = time.perf_counter()
-        for t, q, qd, r in zip(window["t"], window["q"], window["qd"], window["ref"], strict=True):
-            controller(t, q, qd, r)
+        if measured is None:
+            for t, q, qd, r in zip(window["t"], window["q"], window["qd"], window["ref"], strict=True):
+                controller(t, q, qd, r)
+        else:
+            for t, q, qd, r, m in zip(window["t"], window["q"], window["qd"], window["ref"], measured, strict=True):
+                controller(t, q, qd, r, measurement=m)
         out.append((time.perf_counter() - t0) / len(window["t"]))
     return out
 
