@@ -18,7 +18,7 @@ from scipy.optimize import brentq
 
 import armctl
 from armctl.errors import SimulationWarning
-from armctl.sim import HuntCrossley, KelvinVoigt, Plane, simulate
+from armctl.sim import Forces, HuntCrossley, KelvinVoigt, Plane, simulate
 from tests.sim.helpers import OpenLoop, slider
 
 MASS, K, DEPTH, MU, SLIP, PUSH = 2.0, 1e4, 0.01, 0.5, 1e-3, 10.0
@@ -35,9 +35,9 @@ def _creep(dt: float, integrator: str = "rk4") -> tuple[armctl.sim.SimResult, li
             OpenLoop(lambda t: np.array([PUSH])),
             armctl.Reference.hold([0.0]),
             0.05,
-            environment=floor,
             integrator=integrator,
             dt=dt,
+            forces=Forces(environment=floor),
         )
     return res, [w for w in caught if issubclass(w.category, SimulationWarning)]
 
@@ -89,9 +89,9 @@ def test_points_sticking_together_add_their_damping(split: str) -> None:
             OpenLoop(lambda t: np.array([PUSH])),
             armctl.Reference.hold([0.0]),
             0.05,
-            environment=envs,
             dt=1e-4,
             energy=False,
+            forces=Forces(environment=envs),
         )
     (item,) = res.info["unstable_friction"]
     assert item["rate_dt"] == pytest.approx(2.0 * RATE * 1e-4, rel=1e-6) and len(item["points"]) == 2
@@ -111,8 +111,8 @@ def test_a_point_sliding_fast_is_not_judged_by_the_law_below_its_slip_velocity()
             OpenLoop(lambda t: np.array([MU * FN + 4.0])),
             armctl.Reference.hold([0.0]),
             0.5,
-            environment=floor,
             qd0=[0.2],
+            forces=Forces(environment=floor),
         )
     np.testing.assert_allclose(res.qd[:, 0], 0.2 + 4.0 / MASS * res.t, rtol=1e-12)
     assert "unstable_friction" not in res.info
@@ -139,8 +139,8 @@ def test_semi_implicit_euler_books_a_spring_wall_work_exactly() -> None:
         OpenLoop(lambda t: np.array([PUSH])),
         armctl.Reference.hold([0.0]),
         1.0,
-        environment=wall,
         integrator="semi-implicit-euler",
+        forces=Forces(environment=wall),
     )
     balance = res.energy_balance()
     stored = 0.5 * k * (2.0 * PUSH / k) ** 2  # the spring at the deepest point of the exact bounce
@@ -163,10 +163,9 @@ def _swing(
             armctl.Reference([0.0]),
             2.0,
             qd0=[3.0],
-            environment=wall,
             integrator=integrator,
-            friction="smooth",
             dt=dt,
+            forces=Forces(environment=wall, friction="smooth"),
         )
     return res, [w for w in caught if issubclass(w.category, SimulationWarning)]
 

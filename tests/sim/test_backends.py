@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import armctl
-from armctl.sim import KelvinVoigt, Plane, simulate
+from armctl.sim import Forces, KelvinVoigt, Plane, simulate
 from tests.sim.helpers import PDGravity
 
 
@@ -24,8 +24,8 @@ def test_pinocchio_and_lagrange_plants_give_the_same_run(integrator: str) -> Non
             armctl.Reference.hold([0.4, -0.2]),
             0.5,
             q0=[1.0, -0.5],
-            environment=wall,
             integrator=integrator,
+            forces=Forces(environment=wall),
         )
         for b in ("pinocchio", "lagrange")
     ]

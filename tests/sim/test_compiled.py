@@ -13,6 +13,7 @@ import pytest
 import armctl
 from armctl.errors import ArmctlError, InvalidParameterError
 from armctl.references import Reference
+from armctl.sim import StopRules
 from armctl.sim.compiled import compiled_step
 from armctl.sim.contact import ContactPoint, Environment
 from armctl.sim.friction import FrictionModel
@@ -113,7 +114,9 @@ def test_simulate_compiled_reports_divergence_as_the_uncompiled_run_does() -> No
         return np.array([1e6, -1e6])
 
     runs = [
-        armctl.sim.simulate(model, push, Reference(np.zeros(2)), 1.0, saturate=False, max_velocity=50.0, compile=c)
+        armctl.sim.simulate(
+            model, push, Reference(np.zeros(2)), 1.0, saturate=False, compile=c, stop=StopRules(max_velocity=50.0)
+        )
         for c in (False, True)
     ]
     assert all(r.diverged for r in runs)

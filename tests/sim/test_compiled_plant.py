@@ -16,7 +16,7 @@ import pytest
 
 import armctl
 from armctl.errors import BackendError, PerformanceWarning, SimulationWarning
-from armctl.sim import ContactPoint, HuntCrossley, KelvinVoigt, Plane, SmoothFriction, simulate
+from armctl.sim import ContactPoint, Forces, HuntCrossley, KelvinVoigt, Plane, SmoothFriction, simulate
 from armctl.sim import compiled as compiled_module
 from tests.sim.helpers import OpenLoop, PDGravity, Ramp, slider, zero_torque
 
@@ -75,7 +75,10 @@ PLANTS = {
     "stick-slip": _stick_slip,
     # (a smooth curve of width 0.1 rad/s: at the default 0.01 its slope is too stiff for Euler at this step)
     "smooth": lambda: {**_stick_slip(), "friction": SmoothFriction(_stick_slip()["plant"], velocity=0.1)},
+    # every contact law with every friction law
     "kelvin-voigt wall, stick-slip": lambda: _wall("kv", "stick-slip"),
+    "kelvin-voigt wall, smooth": lambda: _wall("kv", "smooth"),
+    "hunt-crossley wall, stick-slip": lambda: _wall("hc", "stick-slip"),
     "hunt-crossley wall, smooth": lambda: _wall("hc", "smooth"),
     "pushed slider": _pushed_slider,
     "rigid panda": lambda: {
@@ -90,8 +93,10 @@ PLANTS = {
 @pytest.mark.parametrize("scheme", SCHEMES)
 @pytest.mark.parametrize("name", sorted(PLANTS))
 def test_generated_and_python_steps_give_the_same_run(name: str, scheme: str) -> None:
-    """Every plant the generated step covers, with every scheme: the same joint positions within 1e-9 rad, the
-    same stick states, events and energy bookkeeping as the Python step."""
+    """Every plant the generated step covers — every friction law, contact law and the disturbance — with every
+    scheme: the same joint positions within 1e-9 rad, the same stick states, events and energy bookkeeping as the
+    Python step. (The generated step's C driver and CasADi expressions are a second source of the Python step's
+    physics: this is the test that fails when one changes without the other.)"""
     case = PLANTS[name]()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", SimulationWarning)  # (velocity limits of the free runs)
@@ -190,7 +195,13 @@ def test_the_disturbance_is_sampled_at_the_start_middle_and_end_of_each_step() -
             return np.array([-3.0 - t, 0.0, 0.0, 0.0, 0.0, 0.0])
 
         simulate(
-            slider(2.0), zero_torque, armctl.Reference.hold([0.0]), 0.01, dt=1e-3, disturbance=push, compile=compile
+            slider(2.0),
+            zero_torque,
+            armctl.Reference.hold([0.0]),
+            0.01,
+            dt=1e-3,
+            compile=compile,
+            forces=Forces(disturbance=push),
         )
         seen[compile] = times
     assert seen[False] == seen[True]

@@ -12,7 +12,7 @@ from scipy.integrate import solve_ivp
 
 import armctl
 from armctl.errors import SimulationWarning
-from armctl.sim import ContactPoint, ForceSensor, HuntCrossley, KelvinVoigt, Plane, simulate
+from armctl.sim import ContactPoint, Forces, ForceSensor, HuntCrossley, KelvinVoigt, Plane, Sensing, simulate
 from tests.sim.helpers import ForceControl, PDGravity, slider, zero_torque
 
 PANDA_Q0 = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8])  # hand pointing down
@@ -35,7 +35,9 @@ def test_planar_arm_pressing_a_wall_settles_at_the_commanded_force() -> None:
     q0 = np.array([0.6, -1.2])  # tool at x = 1.651 m, z = 0
     force = np.array([300.0, 0.0, 0.0])
     wall = Plane(KelvinVoigt(2e5, 5e3), normal=(-1.0, 0.0, 0.0), point=(1.70, 0.0, 0.0), friction=0.3)
-    res = simulate(dyn, ForceControl(dyn, force, kd=400.0), armctl.Reference.hold(q0), 3.0, environment=wall)
+    res = simulate(
+        dyn, ForceControl(dyn, force, kd=400.0), armctl.Reference.hold(q0), 3.0, forces=Forces(environment=wall)
+    )
     assert not res.diverged
     assert np.abs(res.qd[-1]).max() < 1e-4
     np.testing.assert_allclose(res.contact_force[-1, 0], force, rtol=0.01, atol=0.01 * force[0])
@@ -57,7 +59,9 @@ def test_implicit_scheme_is_stable_over_four_decades_of_contact_stiffness(stiffn
     z_floor = dyn.frame_pose(PANDA_Q0)[2, 3] - 0.01
     floor = Plane(KelvinVoigt(stiffness, 2 * 0.7 * math.sqrt(3.0 * stiffness)), point=(0.0, 0.0, z_floor))
     ctrl = ForceControl(dyn, [0.0, 0.0, -20.0], kd=5.0, kp=20.0)
-    res = simulate(dyn, ctrl, armctl.Reference.hold(PANDA_Q0), 1.5, environment=floor, integrator="implicit-euler")
+    res = simulate(
+        dyn, ctrl, armctl.Reference.hold(PANDA_Q0), 1.5, integrator="implicit-euler", forces=Forces(environment=floor)
+    )
     assert not res.diverged
     assert np.abs(res.qd[-1]).max() < 1e-3
     assert res.info["implicit_unconverged"] == 0
@@ -85,8 +89,8 @@ def test_rk4_fails_on_the_stiffest_contact_where_the_implicit_scheme_holds() -> 
             ForceControl(dyn, [0.0, 0.0, -20.0], kd=5.0, kp=20.0),
             armctl.Reference.hold(PANDA_Q0),
             1.5,
-            environment=floor,
             integrator="rk4",
+            forces=Forces(environment=floor),
         )
     assert res.info["unstable_contacts"]
     settled = not res.diverged and abs(-res.contact_force[-1, 0, 2] - 19.6) < 1.0
@@ -101,7 +105,9 @@ def test_hunt_crossley_bounce_matches_an_independent_ode_solution() -> None:
     d = law.dissipation
     assert d == pytest.approx(1.5 * 0.1 / math.sqrt(2 * g * h0))
     model = slider(mass, vertical=True)
-    res = simulate(model, zero_torque, armctl.Reference.hold([h0]), 0.25, dt=2e-5, environment=Plane(law))
+    res = simulate(
+        model, zero_torque, armctl.Reference.hold([h0]), 0.25, dt=2e-5, forces=Forces(environment=Plane(law))
+    )
 
     def rhs(t: float, x: np.ndarray) -> list[float]:
         z, v = x
@@ -131,7 +137,11 @@ def test_coulomb_friction_along_the_wall_is_mu_times_the_normal_force() -> None:
         KelvinVoigt(1e6, 2e4), normal=(0.0, 0.0, 1.0), point=(0.0, 0.0, -0.31), friction=mu, slip_velocity=1e-3
     )
     res = simulate(
-        dyn, ForceControl(dyn, [400.0, 0.0, -500.0], kd=100.0), armctl.Reference.hold(q0), 1.0, environment=floor
+        dyn,
+        ForceControl(dyn, [400.0, 0.0, -500.0], kd=100.0),
+        armctl.Reference.hold(q0),
+        1.0,
+        forces=Forces(environment=floor),
     )
     h = res.contact_force[:, 0]
     v = np.array([dyn.jacobian(q)[:3] @ qd for q, qd in zip(res.q, res.qd, strict=True)])
@@ -155,9 +165,9 @@ def test_several_contact_points_and_force_sensors() -> None:
         ForceControl(dyn, [0.0, 0.0, -30.0], kd=5.0, kp=20.0),
         armctl.Reference.hold(PANDA_Q0),
         1.0,
-        environment=floor,
-        sensors=sensors,
         integrator="implicit-euler",
+        forces=Forces(environment=floor),
+        sensing=Sensing(sensors=sensors),
     )
     assert res.contact_force.shape == (1001, 2, 3) and res.sensor.shape == (1001, 3, 6)
     q = res.q[-1]
@@ -197,8 +207,8 @@ def test_constant_disturbance_wrench_is_applied_and_logged(integrator: str) -> N
         PDGravity(dyn, kp=2e4, kd=3e3),
         armctl.Reference.hold([0.3, 0.5]),
         3.0,
-        disturbance=lambda t: hd,
         integrator=integrator,
+        forces=Forces(disturbance=lambda t: hd),
     )
     q = res.q[-1]
     jac = dyn.jacobian(q)

@@ -10,7 +10,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import armctl
-from armctl.sim import simulate
+from armctl.sim import Forces, simulate
 from tests.sim.helpers import slider, zero_torque
 
 
@@ -26,7 +26,7 @@ def test_rk4_is_fourth_order_under_a_time_dependent_push() -> None:
             armctl.Reference.hold([0.0]),
             1.0,
             dt=dt,
-            disturbance=lambda t: np.array([-a * math.sin(w * t), 0.0, 0.0, 0.0, 0.0, 0.0]),
+            forces=Forces(disturbance=lambda t: np.array([-a * math.sin(w * t), 0.0, 0.0, 0.0, 0.0, 0.0])),
         )
         exact = a / (m * w * w) * (w * res.t - np.sin(w * res.t))
         errors.append(float(np.abs(res.q[:, 0] - exact).max()))
@@ -44,7 +44,13 @@ def test_implicit_euler_takes_stiff_viscous_friction_in_its_stride() -> None:
     ).with_friction(viscous=1500.0)
     inertia = float(armctl.Dynamics(flat).mass_matrix(np.zeros(1))[0, 0])
     res = simulate(
-        flat, zero_torque, armctl.Reference.hold([0.0]), 0.02, qd0=[1.0], integrator="implicit-euler", friction="smooth"
+        flat,
+        zero_torque,
+        armctl.Reference.hold([0.0]),
+        0.02,
+        qd0=[1.0],
+        integrator="implicit-euler",
+        forces=Forces(friction="smooth"),
     )
     assert not res.diverged
     factor = 1.0 / (1.0 + 1e-3 * 1500.0 / inertia)
@@ -76,7 +82,7 @@ def test_semi_implicit_euler_with_friction_converges_to_the_exact_motion() -> No
             qd0=[2.0, -1.0],
             dt=dt,
             integrator="semi-implicit-euler",
-            friction="smooth",
+            forces=Forces(friction="smooth"),
         )
         errors.append(float(np.abs(res.q - sol.sol(res.t)[:2].T).max()))
     assert errors[0] < 2e-2

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import armctl
-from armctl.sim import simulate
+from armctl.sim import StopRules, simulate
 from tests.sim.helpers import slider
 
 MASS, PERIOD = 2.0, 1e-3
@@ -63,7 +63,7 @@ def test_a_controller_that_returns_nan_is_a_divergence() -> None:
 
 def test_position_bound() -> None:
     push = lambda t, q, qd, ref: np.array([100.0])  # noqa: E731
-    res = simulate(slider(MASS), push, armctl.Reference.hold([0.0]), 1.0, max_position=2.0)
+    res = simulate(slider(MASS), push, armctl.Reference.hold([0.0]), 1.0, stop=StopRules(max_position=2.0))
     assert res.diverged and "max_position" in res.divergence
     assert res.diverged_q[0] > 2.0 and (np.abs(res.q) <= 2.0).all()  # type: ignore[index]
     # 0.5 (F/m) t² = 2 → t = 0.283 s; detected at the first sample beyond
@@ -82,7 +82,9 @@ def test_unstable_closed_loop_on_an_arm_reports_instead_of_raising() -> None:
     def runaway(t: float, q: np.ndarray, qd: np.ndarray, ref: armctl.Reference) -> np.ndarray:
         return dyn.gravity_torque(q) + 500.0 * (q - ref.q) + 50.0 * qd
 
-    res = simulate(dyn, runaway, armctl.Reference.hold(q0 + 0.01), 3.0, q0=q0, max_velocity=50.0, saturate=False)
+    res = simulate(
+        dyn, runaway, armctl.Reference.hold(q0 + 0.01), 3.0, q0=q0, saturate=False, stop=StopRules(max_velocity=50.0)
+    )
     assert res.diverged and res.diverged_at < 3.0  # type: ignore[operator]
     assert np.abs(res.diverged_qd).max() > 50.0  # type: ignore[arg-type]
     assert np.isfinite(res.q).all() and np.abs(res.qd).max() <= 50.0

@@ -14,7 +14,7 @@ import pytest
 
 import armctl
 from armctl.errors import SimulationWarning
-from armctl.sim import HuntCrossley, KelvinVoigt, Plane, simulate
+from armctl.sim import Forces, HuntCrossley, KelvinVoigt, Plane, simulate
 from tests.sim.helpers import PDGravity, zero_torque
 
 # free motion from rest, released under gravity (the panda starts near its hanging pose, so that it swings
@@ -105,8 +105,7 @@ def _balance_scene(integrator: str, dt: float, friction: str, mu: float = 0.0) -
         q0=[1.0, -0.5],
         dt=dt,
         integrator=integrator,
-        friction=friction,
-        environment=wall,
+        forces=Forces(friction=friction, environment=wall),
     )
 
 
@@ -164,7 +163,9 @@ def test_kelvin_voigt_contact_work_is_external_work() -> None:
     model = armctl.models.pendulum().reduced(friction=False)
     floor = Plane(KelvinVoigt(2e4, 50.0), normal=(-1.0, 0.0, 0.0), point=(0.3, 0.0, 0.0))
     res = simulate(model, zero_torque, armctl.Reference.hold([0.0]), 2.0, q0=[-1.2], dt=2e-4)
-    res_c = simulate(model, zero_torque, armctl.Reference.hold([0.0]), 2.0, q0=[-1.2], dt=2e-4, environment=floor)
+    res_c = simulate(
+        model, zero_torque, armctl.Reference.hold([0.0]), 2.0, q0=[-1.2], dt=2e-4, forces=Forces(environment=floor)
+    )
     assert abs(res.energy[-1] - res.energy[0]) < 1e-9
     lost = res_c.energy[-1] - res_c.energy[0]
     assert lost < -0.1

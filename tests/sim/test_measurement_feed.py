@@ -13,7 +13,7 @@ import pytest
 import armctl
 from armctl.controllers import Controller, Measurement, PDGravity
 from armctl.errors import InvalidParameterError, SimulationWarning
-from armctl.sim import ForceSensor, KelvinVoigt, Plane, Sensing
+from armctl.sim import Forces, ForceSensor, KelvinVoigt, Plane, Sensing
 from armctl.sim.signal_chain import SignalChain
 
 Q0 = np.array([0.5, -1.4])  # the two-link arm's tool at x = 1.500, z = −0.304
@@ -107,7 +107,7 @@ def test_noise_is_reproducible_and_leaves_the_joint_noise_alone() -> None:
 def test_a_controller_that_reads_the_wrench_needs_a_sensor() -> None:
     dyn = armctl.Dynamics(armctl.models.planar_2r())
     with pytest.raises(InvalidParameterError, match=r"reads 'wrench'.*ForceSensor"):
-        armctl.simulate(dyn, Recording(dyn, 0.0), armctl.Reference.hold(Q0), 0.01, environment=_floor())
+        armctl.simulate(dyn, Recording(dyn, 0.0), armctl.Reference.hold(Q0), 0.01, forces=Forces(environment=_floor()))
 
 
 def test_a_plain_callable_gets_the_measurement_as_a_keyword() -> None:
@@ -129,7 +129,9 @@ def test_a_plain_callable_gets_the_measurement_as_a_keyword() -> None:
 
 def test_a_controller_that_reads_nothing_is_called_as_before() -> None:
     dyn = armctl.Dynamics(armctl.models.planar_2r())
-    a = armctl.simulate(dyn, PDGravity(dyn, 200.0, 20.0), armctl.Reference.hold(Q0), 0.05, environment=_floor())
+    a = armctl.simulate(
+        dyn, PDGravity(dyn, 200.0, 20.0), armctl.Reference.hold(Q0), 0.05, forces=Forces(environment=_floor())
+    )
     b = armctl.simulate(
         dyn,
         PDGravity(dyn, 200.0, 20.0),

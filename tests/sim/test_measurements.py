@@ -9,6 +9,7 @@ import armctl
 from armctl.controllers import PDGravity
 from armctl.controllers.base import Controller
 from armctl.errors import InvalidParameterError, SimulationWarning
+from armctl.sim import Sensing
 
 
 class _Subtracts(Controller):
@@ -31,9 +32,9 @@ def test_a_controller_writing_into_its_measurements_gets_a_named_error(options: 
 def test_a_noisy_run_without_a_seed_records_the_one_it_drew() -> None:
     dyn = armctl.Dynamics(armctl.models.pendulum())
     ctrl = PDGravity(dyn, 50.0, 5.0)
-    a = armctl.simulate(dyn, ctrl, armctl.Reference([0.1]), 0.05, noise_q=1e-3)
-    b = armctl.simulate(dyn, ctrl, armctl.Reference([0.1]), 0.05, noise_q=1e-3, seed=a.info["seed"])
-    c = armctl.simulate(dyn, ctrl, armctl.Reference([0.1]), 0.05, noise_q=1e-3)
+    a = armctl.simulate(dyn, ctrl, armctl.Reference([0.1]), 0.05, sensing=Sensing(noise_q=1e-3))
+    b = armctl.simulate(dyn, ctrl, armctl.Reference([0.1]), 0.05, sensing=Sensing(noise_q=1e-3, seed=a.info["seed"]))
+    c = armctl.simulate(dyn, ctrl, armctl.Reference([0.1]), 0.05, sensing=Sensing(noise_q=1e-3))
     assert isinstance(a.info["seed"], int) and a.info["seed"] != c.info["seed"]
     np.testing.assert_array_equal(a.q_measured, b.q_measured)
     assert not np.array_equal(a.q_measured, c.q_measured)
@@ -42,7 +43,7 @@ def test_a_noisy_run_without_a_seed_records_the_one_it_drew() -> None:
 def test_a_delay_as_long_as_the_run_is_warned_about() -> None:
     dyn = armctl.Dynamics(armctl.models.pendulum())
     with pytest.warns(SimulationWarning, match="sees only the first measurement"):
-        armctl.simulate(dyn, PDGravity(dyn, 50.0, 5.0), armctl.Reference([0.1]), 0.01, delay=10)
+        armctl.simulate(dyn, PDGravity(dyn, 50.0, 5.0), armctl.Reference([0.1]), 0.01, sensing=Sensing(delay=10))
 
 
 @pytest.mark.parametrize("n", [2.7, "2", True, -1, 0])

@@ -10,16 +10,18 @@ from __future__ import annotations
 import pickle
 import re
 import sys
+from typing import ClassVar
 
 import numpy as np
 import pytest
 
 import armctl
+from armctl.controllers import Measurement
 from armctl.errors import InvalidParameterError, ModelLoadError, OptionalDependencyError, UnknownNameError
 from armctl.model import Frame, Joint, JointFriction, Link, Motor
 from armctl.model.parts import transform
 from armctl.references import Sinusoid
-from armctl.sim import ForceSensor, MujocoPlant, simulate
+from armctl.sim import ForceSensor, MujocoPlant, Sensing, simulate
 from tests.helpers.mjcf_arms import SPATIAL_ARM
 from tests.sim.helpers import ComputedTorque, ForceControl, OpenLoop, PDGravity
 
@@ -113,7 +115,7 @@ def test_press_on_a_mujoco_floor_gives_the_static_force(mj) -> None:  # type: ig
         engine="mujoco",
         integrator="implicitfast",
         saturate=False,
-        sensors=ForceSensor("tool", world_axes=True),
+        sensing=Sensing(sensors=ForceSensor("tool", world_axes=True)),
     )
     assert res.info["contact"] and not res.diverged
     q, tau = res.q[-1], res.tau_applied[-1]
@@ -130,6 +132,51 @@ def test_press_on_a_mujoco_floor_gives_the_static_force(mj) -> None:  # type: ig
     assert np.abs(res.wrench[-1, :3] - h[2]).max() <= 1e-12
     assert np.abs(res.sensor[-1, 0, :3] - h[2]).max() <= 1e-12
     assert np.abs(res.tau_ext[-1] - jp.T @ h[2]).max() <= 0.02 * np.abs(jp.T @ h[2]).max()
+
+
+class _ReadingForceControl(ForceControl):
+    """:class:`ForceControl` that reads the force sensor and the applied torque, and keeps what it is given."""
+
+    reads: ClassVar[frozenset[str]] = frozenset({"wrench", "tau_applied"})
+
+    def __init__(self, dyn: armctl.Dynamics, force: list[float], kd: float) -> None:
+        super().__init__(dyn, np.array(force), kd)
+        self.seen: list[Measurement] = []
+
+    def compute(self, t, q, qd, ref):  # type: ignore[no-untyped-def]
+        assert self.measurement is not None
+        self.seen.append(self.measurement)
+        return super().compute(t, q, qd, ref)
+
+
+def test_a_controller_that_reads_the_force_sensor_is_fed_on_mujoco(mj) -> None:  # type: ignore[no-untyped-def]
+    """The press of :func:`test_press_on_a_mujoco_floor_gives_the_static_force` by a controller that reads the
+    wrench and the applied torque: the wrench it reads at rest is the commanded 20 N down (statics), the same as the
+    recorded sensor to the rounding of the held torque; the applied torque it reads at sample k is row k − 1 of the
+    record (zeros first)."""
+    plant = MujocoPlant(SPATIAL_ARM, tool_frame="tool")
+    dyn = armctl.Dynamics(plant.model)
+    q0 = [0.2, 0.7, -0.0129]
+    ctrl = _ReadingForceControl(dyn, [0.0, 0.0, -20.0], kd=2.0)
+    res = simulate(
+        plant,
+        ctrl,
+        armctl.Reference.hold(q0),
+        2.0,
+        q0=q0,
+        engine="mujoco",
+        integrator="implicitfast",
+        saturate=False,
+        sensing=Sensing(sensors=ForceSensor("tool", world_axes=True)),
+    )
+    assert len(ctrl.seen) == len(res.t) and not res.diverged
+    wrench = np.array([m.wrench for m in ctrl.seen])
+    applied = np.array([m.tau_applied for m in ctrl.seen])
+    np.testing.assert_array_equal(applied[0], np.zeros(3))
+    np.testing.assert_array_equal(applied[1:], res.tau_applied[:-1])
+    assert np.abs(wrench[0]).max() == 0.0  # 1 cm above the floor at the start
+    assert np.abs(wrench[-1, :3] - [0.0, 0.0, -20.0]).max() < 0.4
+    assert np.abs(wrench[-1] - res.sensor[-1, 0]).max() <= 1e-6 * 20.0
 
 
 def _turntable() -> armctl.RobotModel:

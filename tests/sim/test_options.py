@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import armctl
-from armctl.sim import simulate
+from armctl.sim import Forces, Sensing, simulate
 from tests.sim.helpers import ComputedTorque, OpenLoop, slider, zero_torque
 
 MASS = 2.0
@@ -50,7 +50,14 @@ def test_zero_order_hold_with_substeps_and_delay_is_the_exact_discretisation(dt:
     gain, period = 400.0, 2e-3
     ctrl = PositionP(gain)
     res = simulate(
-        slider(MASS), ctrl, armctl.Reference.hold([0.0]), 0.5, q0=[0.1], control_dt=period, dt=dt, delay=delay
+        slider(MASS),
+        ctrl,
+        armctl.Reference.hold([0.0]),
+        0.5,
+        q0=[0.1],
+        control_dt=period,
+        dt=dt,
+        sensing=Sensing(delay=delay),
     )
     expected = exact_zoh(gain, period, 250, delay, 0.1)
     np.testing.assert_allclose(res.q[:, 0], expected, atol=1e-12)
@@ -74,8 +81,10 @@ def test_reference_callable_is_sampled_at_control_instants() -> None:
 
 
 def test_measurement_noise_is_seeded_and_has_the_asked_deviation() -> None:
-    kw = {"noise_q": [2e-3], "noise_qd": 0.05, "duration": 2.0}
-    runs = [simulate(slider(MASS), zero_torque, armctl.Reference.hold([0.3]), seed=s, **kw) for s in (7, 7, 8)]
+    runs = [
+        simulate(slider(MASS), zero_torque, armctl.Reference.hold([0.3]), 2.0, sensing=Sensing([2e-3], 0.05, s))
+        for s in (7, 7, 8)
+    ]
     np.testing.assert_array_equal(runs[0].q_measured, runs[1].q_measured)
     assert not np.array_equal(runs[0].q_measured, runs[2].q_measured)
     res = runs[0]
@@ -86,8 +95,10 @@ def test_measurement_noise_is_seeded_and_has_the_asked_deviation() -> None:
 
 def test_the_same_seed_gives_the_same_noise_whatever_the_duration() -> None:
     """A longer run is the shorter one continued: over their common samples the measurements agree."""
-    kw = {"noise_q": 2e-3, "noise_qd": 0.05, "seed": 11}
-    short, long = (simulate(slider(MASS), zero_torque, armctl.Reference.hold([0.3]), d, **kw) for d in (0.5, 1.0))
+    noisy = Sensing(noise_q=2e-3, noise_qd=0.05, seed=11)
+    short, long = (
+        simulate(slider(MASS), zero_torque, armctl.Reference.hold([0.3]), d, sensing=noisy) for d in (0.5, 1.0)
+    )
     k = len(short.t)
     np.testing.assert_array_equal(long.q_measured[:k], short.q_measured)
     np.testing.assert_array_equal(long.qd_measured[:k], short.qd_measured)
@@ -149,8 +160,8 @@ def test_runs_are_deterministic() -> None:
             armctl.Reference.hold([0.4, -0.2]),
             0.5,
             q0=[1.0, -0.5],
-            environment=wall,
             integrator=integ,
+            forces=Forces(environment=wall),
         )
         for integ in ("rk4", "rk4", "implicit-euler", "implicit-euler")
     ]

@@ -1,5 +1,6 @@
-"""A whole control period in one call on the generated step (:mod:`armctl.sim.period`,
-:meth:`CompiledPlant.period <armctl.sim.compiled_plant.CompiledPlant.period>`, ``step_period.c``).
+"""A whole control period in one call on the generated step (:mod:`armctl.sim.generated_engine`,
+:meth:`CompiledPlant.period <armctl.sim.compiled_plant.CompiledPlant.period>`, ``step_period.c``), within the one
+loop that checks and saturates the controller's torque for every engine.
 
 References: the Python step (the loop's own checks of τ, its saturation and integrate: NumPy, Pinocchio, LAPACK),
 written independently of the generated C; ``np.clip`` at the effort limits; the sample times of a disturbance; exact
@@ -19,10 +20,11 @@ import pytest
 import armctl
 from armctl.errors import SimulationWarning
 from armctl.model.parts import JointLimits
-from armctl.sim import simulate
+from armctl.sim import Forces, simulate
 from armctl.sim.compiled import choose_step
+from armctl.sim.engine import state_code
 from armctl.sim.friction import make_friction
-from armctl.sim.period import CLIPPED, FAILED, STATE_MASK, TORQUE_NOT_FINITE
+from armctl.sim.generated_engine import PeriodBinding
 from armctl.sim.plant import Plant
 from armctl.sim.stepper import advance
 from tests.sim.helpers import OpenLoop, Ramp, slider, zero_torque
@@ -165,8 +167,8 @@ def test_the_disturbance_is_sampled_at_the_same_instants_with_several_sub_steps(
             armctl.Reference.hold([0.0]),
             1.2,
             dt=2.5e-4,
-            disturbance=push,
             compile=compile,
+            forces=Forces(disturbance=push),
         )
         seen[compile] = times
     assert seen[False] == seen[True]
@@ -211,9 +213,10 @@ def test_one_period_writes_its_rows_of_the_record_and_nothing_else() -> None:
     record["work_friction"][k] = record["work_external"][k] = 1.5
     before = {name: a.copy() for name, a in record.items()}
     generated = _plant(dyn, True)
-    generated.bind_record(*record.values(), model.effort_limit, True, m, h, False, 1e3, math.inf)
-    code = generated.period(k, 0.002)
-    assert code == 0.0
+    generated.bind_record(
+        PeriodBinding(**record, substeps=m, dt=h, accel_at_start=False, max_velocity=1e3, max_position=math.inf)
+    )
+    generated.period(k, 0.002)
 
     choice = _choice(dyn, False)
     python = choice.plant
@@ -240,30 +243,28 @@ def test_one_period_writes_its_rows_of_the_record_and_nothing_else() -> None:
         np.testing.assert_array_equal(a[others], before[name][others], err_msg=name)
 
 
-def test_codes_of_a_period_clipped_not_finite_and_outside_the_record() -> None:
-    """The code a period answers: CLIPPED where τ is beyond a limit (the state's code besides), TORQUE_NOT_FINITE
-    alone for a NaN in τ (nothing written), FAILED for a row outside the record (raise_failure names it)."""
+def test_a_row_outside_the_record_is_an_index_error() -> None:
+    """A period from the last row would write beyond the record: it writes nothing and raises an IndexError naming
+    the row; the last sample (no step after it) is inside."""
     model = armctl.models.planar_2r().with_friction(viscous=0.1, coulomb=0.2, static=0.3)
     dyn = armctl.Dynamics(model)
     rows = 3
-    record = [np.zeros((rows, 2)) for _ in range(6)] + [np.zeros(rows), np.zeros(rows)]
-    tau, q = record[0], record[1]
-    q[:] = [0.2, -0.1]
+    names = ("tau", "q", "qd", "qdd", "tau_friction", "stuck")
+    record = {name: np.zeros((rows, 2)) for name in names}
+    record.update({name: np.zeros(rows) for name in ("work_friction", "work_external")})
+    record["q"][:] = [0.2, -0.1]
+    record["tau"][:] = [0.5, -0.3]
     plant = _plant(dyn, True)
-    plant.bind_record(*record, np.array([1.0, 1.0]), True, 1, 1e-3, False, 1e3, math.inf)
-    tau[0] = [0.5, -3.0]
-    code = plant.period(0, 0.0)
-    assert int(code) & CLIPPED and int(code) & STATE_MASK == 0 and not int(code) & FAILED
-    tau[1] = [0.5, math.nan]
-    untouched = [a.copy() for a in record]
-    assert plant.period(1, 1e-3) == TORQUE_NOT_FINITE
-    for a, b in zip(record, untouched, strict=True):
-        np.testing.assert_array_equal(a, b)
-    code = plant.period(rows - 1, 2e-3)  # a step from the last row would write beyond the record
-    assert int(code) & FAILED
-    with pytest.raises(IndexError, match="outside the record"):
-        plant.raise_failure()
-    assert plant.last_sample(rows - 1, 2e-3) == 0.0  # (no step after the last sample: its row is inside)
+    plant.bind_record(
+        PeriodBinding(**record, substeps=1, dt=1e-3, accel_at_start=False, max_velocity=1e3, max_position=math.inf)
+    )
+    untouched = {name: a.copy() for name, a in record.items()}
+    with pytest.raises(IndexError, match="sample 2 is outside the record"):
+        plant.period(rows - 1, 2e-3)
+    for name, a in record.items():
+        np.testing.assert_array_equal(a, untouched[name], err_msg=name)
+    plant.last_sample(rows - 1, 2e-3)
+    assert np.isfinite(record["qdd"][rows - 1]).all() and (record["qdd"][rows - 1] != 0.0).any()
 
 
 def _state_reason(q: np.ndarray, qd: np.ndarray, max_velocity: float, max_position: float) -> int:
@@ -287,17 +288,21 @@ def _state_reason(q: np.ndarray, qd: np.ndarray, max_velocity: float, max_positi
 )
 def test_the_period_checks_the_state_it_leaves_by_the_loops_rule(v0: list, tau: list, reason: int) -> None:
     """planar_2r from a state and a torque that take it beyond the bounds (max_velocity 3 rad/s, max_position
-    1 rad) or not: the code's state part is what the loop's rule says of the row the period wrote."""
+    1 rad) or not: the code the generated period gives the row it wrote is the rule's, and the Python rule's
+    (:func:`armctl.sim.engine.state_code`, which the other engines use)."""
     dyn = armctl.Dynamics(armctl.models.planar_2r().with_friction(viscous=0.1, coulomb=0.2, static=0.3))
     rows = 2
-    record = [np.zeros((rows, 2)) for _ in range(6)] + [np.zeros(rows), np.zeros(rows)]
-    record[0][0], record[1][0], record[2][0] = tau, [0.2, 0.999], v0
+    names = ("tau", "q", "qd", "qdd", "tau_friction", "stuck")
+    record = {name: np.zeros((rows, 2)) for name in names}
+    record.update({name: np.zeros(rows) for name in ("work_friction", "work_external")})
+    record["tau"][0], record["q"][0], record["qd"][0] = tau, [0.2, 0.999], v0
     plant = _plant(dyn, True)
-    plant.bind_record(*record, np.full(2, math.inf), False, 2, 5e-4, False, 3.0, 1.0)
+    binding = PeriodBinding(**record, substeps=2, dt=5e-4, accel_at_start=False, max_velocity=3.0, max_position=1.0)
+    plant.bind_record(binding)
     with np.errstate(all="ignore"):
         code = plant.period(0, 0.0)
-    q1, v1 = record[1][1], record[2][1]
-    assert int(code) & STATE_MASK == _state_reason(q1, v1, 3.0, 1.0) == reason
+        q1, v1 = record["q"][1], record["qd"][1]
+        assert code == _state_reason(q1, v1, 3.0, 1.0) == state_code(q1, v1, 3.0, 1.0) == reason
 
 
 @pytest.mark.parametrize("substeps", [1, 4])

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import armctl
-from armctl.sim import KelvinVoigt, Plane, SimResult, simulate
+from armctl.sim import Forces, KelvinVoigt, Plane, Sensing, SimResult, simulate
 from tests.sim.helpers import ComputedTorque, ForceControl
 
 
@@ -18,7 +18,11 @@ from tests.sim.helpers import ComputedTorque, ForceControl
 def result() -> SimResult:
     dyn = armctl.Dynamics(armctl.models.planar_2r().with_friction(viscous=2.0, coulomb=5.0))
     return simulate(
-        dyn, ComputedTorque(dyn, 100.0, 20.0), armctl.Reference.hold([0.3, 0.2]), 0.3, noise_q=1e-4, seed=3, delay=1
+        dyn,
+        ComputedTorque(dyn, 100.0, 20.0),
+        armctl.Reference.hold([0.3, 0.2]),
+        0.3,
+        sensing=Sensing(noise_q=1e-4, seed=3, delay=1),
     )
 
 
@@ -82,7 +86,11 @@ def test_plots_are_figures(result: SimResult) -> None:
     dyn = armctl.Dynamics(armctl.models.planar_2r())
     wall = Plane(KelvinVoigt(1e5, 1e3), normal=(-1.0, 0.0, 0.0), point=(1.7, 0.0, 0.0))
     touching = simulate(
-        dyn, ForceControl(dyn, [100.0, 0.0, 0.0], kd=300.0), armctl.Reference.hold([0.6, -1.2]), 0.2, environment=wall
+        dyn,
+        ForceControl(dyn, [100.0, 0.0, 0.0], kd=300.0),
+        armctl.Reference.hold([0.6, -1.2]),
+        0.2,
+        forces=Forces(environment=wall),
     )
     for fig in (
         result.plot(),

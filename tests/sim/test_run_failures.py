@@ -148,7 +148,7 @@ def test_a_huge_finite_state_is_not_called_non_finite() -> None:
     def idle(t, q, qd, ref):  # type: ignore[no-untyped-def]
         return np.zeros(2)
 
-    res = simulate(dyn, idle, ref, 0.01, qd0=[1e308, 1e308], max_velocity=np.inf)
+    res = simulate(dyn, idle, ref, 0.01, qd0=[1e308, 1e308], stop=StopRules(max_velocity=np.inf))
     assert res.diverged and "not finite" in res.divergence
     assert len(res.t) >= 1 and res.diverged_at > 0.0  # the initial state was recorded and controlled
     np.testing.assert_array_equal(res.qd[0], [1e308, 1e308])
@@ -157,7 +157,16 @@ def test_a_huge_finite_state_is_not_called_non_finite() -> None:
 def test_the_option_groups_equal_their_keywords() -> None:
     dyn, ref = _setup()
     ctrl = PDGravity(dyn, 50.0, 10.0)
-    flat = simulate(dyn, ctrl, ref, 0.1, q0=[0, 0], noise_q=0.01, seed=4, delay=2, friction="smooth", max_velocity=50)
+    flat = simulate(
+        dyn,
+        ctrl,
+        ref,
+        0.1,
+        q0=[0, 0],
+        sensing=Sensing(noise_q=0.01, seed=4, delay=2),
+        forces=Forces(friction="smooth"),
+        stop=StopRules(max_velocity=50),
+    )
     grouped = simulate(
         dyn,
         ctrl,

@@ -14,7 +14,7 @@ import pytest
 
 import armctl
 from armctl.errors import SimulationWarning
-from armctl.sim import KelvinVoigt, Plane, simulate
+from armctl.sim import Forces, KelvinVoigt, Plane, simulate
 from armctl.sim.stability import contact_stability
 from tests.sim.helpers import OpenLoop, slider
 
@@ -65,20 +65,27 @@ def test_simulate_warns_and_records_an_unstable_contact() -> None:
     push = OpenLoop(lambda t: np.array([10.0]))
     for scheme in ("rk4", "euler", "semi-implicit-euler"):
         with pytest.warns(SimulationWarning, match=rf"'{scheme}' is unstable on this contact"):
-            res = simulate(slider(2.0), push, armctl.Reference.hold([0.0]), 0.1, environment=wall, integrator=scheme)
+            res = simulate(
+                slider(2.0), push, armctl.Reference.hold([0.0]), 0.1, integrator=scheme, forces=Forces(environment=wall)
+            )
         (entry,) = res.info["unstable_contacts"]
         assert entry["omega_dt"] == pytest.approx(math.sqrt(1e9 / 2.0) * 1e-3)
         assert "unstable on a contact" in repr(res)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         res = simulate(
-            slider(2.0), push, armctl.Reference.hold([0.0]), 0.1, environment=wall, integrator="implicit-euler"
+            slider(2.0),
+            push,
+            armctl.Reference.hold([0.0]),
+            0.1,
+            integrator="implicit-euler",
+            forces=Forces(environment=wall),
         )
         assert "unstable_contacts" not in res.info
         soft = Plane(KelvinVoigt(1e5), normal=(-1.0, 0.0, 0.0), point=(0.01, 0.0, 0.0))
         assert (
             "unstable_contacts"
-            not in simulate(slider(2.0), push, armctl.Reference.hold([0.0]), 0.1, environment=soft).info
+            not in simulate(slider(2.0), push, armctl.Reference.hold([0.0]), 0.1, forces=Forces(environment=soft)).info
         )
 
 
@@ -120,18 +127,28 @@ def test_one_sided_contact_gaining_energy_below_the_linear_limit_is_reported(zet
         (found,) = contact_stability(armctl.Dynamics(slider(mass)), [wall], np.zeros(1), scheme, 1e-3)
         assert found.radius <= 1.0 and not found.stable
         with pytest.warns(SimulationWarning, match="linearly stable, but as a one-sided contact"):
-            bad = simulate(slider(mass), run, armctl.Reference.hold([0.0]), 0.5, environment=wall, integrator=scheme)
+            bad = simulate(
+                slider(mass), run, armctl.Reference.hold([0.0]), 0.5, integrator=scheme, forces=Forces(environment=wall)
+            )
         assert np.abs(bad.contact_force).max() > 1.5 * 2.0 * push  # what the warning is about
         dt = 1e-3 / math.ceil(1e-3 / bad.info["unstable_contacts"][0]["max_dt"])  # the step it recommends
         with warnings.catch_warnings():
             warnings.simplefilter("error")
             good = simulate(
-                slider(mass), run, armctl.Reference.hold([0.0]), 0.5, environment=wall, integrator=scheme, dt=dt
+                slider(mass),
+                run,
+                armctl.Reference.hold([0.0]),
+                0.5,
+                integrator=scheme,
+                dt=dt,
+                forces=Forces(environment=wall),
             )
         assert np.abs(good.contact_force).max() <= 1.02 * 2.0 * push
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        res = simulate(slider(mass), run, armctl.Reference.hold([0.0]), 0.5, environment=wall, integrator="rk4")
+        res = simulate(
+            slider(mass), run, armctl.Reference.hold([0.0]), 0.5, integrator="rk4", forces=Forces(environment=wall)
+        )
     assert np.abs(res.contact_force).max() <= 2.0 * push * (1 + 1e-9)
 
 
@@ -162,8 +179,8 @@ def _press(law: object, integrator: str) -> tuple[armctl.sim.SimResult, list[war
             armctl.Reference([-0.5, 0.3]),
             0.5,
             q0=[0.0, 0.0],
-            environment=Plane(law, point=(0.0, 0.0, -0.3)),
             integrator=integrator,
+            forces=Forces(environment=Plane(law, point=(0.0, 0.0, -0.3))),
         )  # type: ignore[arg-type]
     # (a run thrown off the wall may also overrun a velocity limit, said in a warning of its own)
     said = [w for w in caught if issubclass(w.category, SimulationWarning)]

@@ -11,7 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import armctl
-from armctl.sim import simulate
+from armctl.sim import Forces, Sensing, simulate
 from tests.sim.helpers import OpenLoop, PDGravity, Ramp, slider, zero_torque
 
 # the pendulum's gravity torque in closed form: m g ℓ_c sin q with m = 2 kg, ℓ_c = 0.25 m
@@ -45,7 +45,9 @@ def test_noisy_controller_below_breakaway_does_not_make_it_chatter() -> None:
     """A PD fed noisy measurements commands a jittering torque that stays below the breakaway level."""
     model = pendulum(coulomb=3.0)
     ctrl = PDGravity(armctl.Dynamics(model.reduced(friction=False)), kp=5.0, kd=0.5)
-    res = simulate(model, ctrl, armctl.Reference.hold([0.35]), 5.0, q0=[0.3], noise_q=1e-3, noise_qd=1e-2, seed=1)
+    res = simulate(
+        model, ctrl, armctl.Reference.hold([0.35]), 5.0, q0=[0.3], sensing=Sensing(noise_q=1e-3, noise_qd=1e-2, seed=1)
+    )
     net = res.tau_applied[:, 0] - gravity_pendulum(0.3)
     assert np.ptp(res.tau_applied) > 1e-3 and np.abs(net).max() < 3.0
     assert (res.q == 0.3).all() and (res.qd == 0.0).all()
@@ -119,7 +121,7 @@ def test_smooth_friction_creeps_where_stick_slip_holds() -> None:
     """The documented difference: tanh friction lets a joint under a net torque below F_c creep."""
     model = pendulum(coulomb=3.0)
     held = simulate(model, zero_torque, armctl.Reference.hold([0.3]), 2.0)
-    creep = simulate(model, zero_torque, armctl.Reference.hold([0.3]), 2.0, friction="smooth")
+    creep = simulate(model, zero_torque, armctl.Reference.hold([0.3]), 2.0, forces=Forces(friction="smooth"))
     assert (held.q == 0.3).all()
     assert creep.q[-1, 0] < 0.3 - 1e-4
 
@@ -275,7 +277,7 @@ def test_an_external_push_breaks_a_stuck_joint_loose_beyond_its_friction(push: f
         zero_torque,
         armctl.Reference.hold([0.0]),
         0.5,
-        disturbance=lambda t: np.array([-push, 0.0, 0.0, 0.0, 0.0, 0.0]),
+        forces=Forces(disturbance=lambda t: np.array([-push, 0.0, 0.0, 0.0, 0.0, 0.0])),
     )
     if moves:
         np.testing.assert_allclose(res.q[:, 0], (push - coulomb) / (2.0 * mass) * res.t**2, rtol=1e-9, atol=1e-12)

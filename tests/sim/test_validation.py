@@ -28,7 +28,7 @@ from armctl.errors import (
     SimulationWarning,
     UnknownNameError,
 )
-from armctl.sim import ContactPoint, ForceSensor, HuntCrossley, KelvinVoigt, Plane, SimResult, simulate
+from armctl.sim import ContactPoint, Forces, ForceSensor, HuntCrossley, KelvinVoigt, Plane, SimResult, simulate
 from armctl.sim.friction import SmoothFriction, StickSlip
 from tests.sim.helpers import logging_run, without_samples, zero_torque
 
@@ -183,8 +183,16 @@ def test_a_controller_cannot_change_the_state_in_place(integrator: str, friction
             qd[0] = 0.0
         return -q - qd
 
-    res = simulate(plant, meddling, REF, 0.05, integrator=integrator, friction=fric, q0=[0.3, -0.2])
-    ref = simulate(plant, lambda t, q, qd, r: -q - qd, REF, 0.05, integrator=integrator, friction=fric, q0=[0.3, -0.2])
+    res = simulate(plant, meddling, REF, 0.05, integrator=integrator, q0=[0.3, -0.2], forces=Forces(friction=fric))
+    ref = simulate(
+        plant,
+        lambda t, q, qd, r: -q - qd,
+        REF,
+        0.05,
+        integrator=integrator,
+        q0=[0.3, -0.2],
+        forces=Forces(friction=fric),
+    )
     np.testing.assert_array_equal(res.q, ref.q)
     assert abs(res.q[-1] - res.q[0]).max() > 1e-4  # the arm moved: the runs are not trivially equal
 
@@ -283,7 +291,7 @@ def test_a_disturbance_that_is_not_real_numbers_is_named(returned: object) -> No
             lambda t, q, qd, r: np.zeros(2),
             armctl.Reference.hold([0.1, 0.2]),
             0.01,
-            disturbance=lambda t: returned,
+            forces=Forces(disturbance=lambda t: returned),
         )
 
 
@@ -341,7 +349,9 @@ def test_a_stiff_but_representable_contact_still_runs() -> None:
     """The bound is far above real contacts: 1e12 N/m builds and a run reports its instability, not an error."""
     m = armctl.models.pendulum()
     with pytest.warns(armctl.errors.SimulationWarning):
-        res = simulate(m, _pd(m), armctl.Reference.hold([0.1]), 0.01, environment=Plane(KelvinVoigt(1e12)))
+        res = simulate(
+            m, _pd(m), armctl.Reference.hold([0.1]), 0.01, forces=Forces(environment=Plane(KelvinVoigt(1e12)))
+        )
     assert len(res.t) >= 1
 
 

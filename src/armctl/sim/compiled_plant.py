@@ -6,10 +6,10 @@ Python step: the stick solve of :meth:`Plant.begin <armctl.sim.plant.Plant.begin
 :func:`armctl.sim.stepper.advance` and the schemes of :mod:`armctl.sim.integrators` and :mod:`armctl.sim.implicit`.
 A step is one call into C; the runs agree with the Python step's to rounding, and a stuck joint stays exactly
 where it is (q̈_S = 0 exactly, see :func:`~armctl.sim.generated_plant.masked_cholesky_solve`). Within ``simulate``,
-a whole control period is one call (:meth:`CompiledPlant.period`, ``step_period.c``, the protocol of
-:mod:`armctl.sim.period`): the checks and saturation of the controller's torque, the stick solve and what is recorded
-of it, the sub-steps with their events and work, and the check of the state they leave, read from and written into
-the run's record by row.
+a whole control period is one call (:meth:`CompiledPlant.period`, ``step_period.c``: the C transcription of
+:meth:`PythonEngine.advance_period <armctl.sim.python_engine.PythonEngine.advance_period>`): the stick solve and what
+is recorded of it, the sub-steps with their events and work, read from and written into the run's record by row
+(the engine :class:`~armctl.sim.generated_engine.GeneratedEngine`).
 
 One library per arm (the geometry of its chain), plant structure (:class:`~armctl.sim.plant_layout.PlantLayout`)
 and family of schemes (explicit: ``"rk4"``, ``"euler"``; implicit: ``"semi-implicit-euler"``, ``"implicit-euler"``),
@@ -36,14 +36,14 @@ from armctl._checks import FloatArray
 from armctl.codegen import library as codegen
 from armctl.dynamics.casadi_buffer import buffer_of, view
 from armctl.model.robot import RobotModel
+from armctl.sim.generated_engine import PeriodBinding
 from armctl.sim.generated_plant import kernels
-from armctl.sim.period import FAILED
 from armctl.sim.plant import Plant
 from armctl.sim.plant_layout import PlantLayout
 from armctl.sim.stick_slip import NotPositiveDefinite
 
 #: bumped when the generated code changes, so that stale cached libraries are not loaded
-CODE_VERSION = 6
+CODE_VERSION = 7
 #: the scheme codes of the C driver, and the family of kernels each needs
 SCHEMES = {"rk4": 0, "euler": 1, "semi-implicit-euler": 2, "implicit-euler": 3}
 FAMILY = {"rk4": "explicit", "euler": "explicit", "semi-implicit-euler": "implicit", "implicit-euler": "implicit"}
@@ -55,7 +55,7 @@ BAD_ROW = 3
 #: where a period failed (``step_period.c``'s PERIOD_*), as the messages of begin, accel and step name it
 _WHERE = {0: "stick solve", 1: "accelerations", 2: "step"}
 #: entries of the period's ``opt`` and ``out`` (see ``step_period.c``)
-PERIOD_OPT, PERIOD_OUT = 9, 3
+PERIOD_OPT, PERIOD_OUT = 8, 3
 
 #: the compiler's flags for the plant's library (its step runs in the simulator's loop: a slower build, faster code)
 FLAGS = codegen.CFLAGS_FAST
@@ -83,7 +83,7 @@ def _shapes(layout: PlantLayout) -> list[cs.Function]:
         "begin": ([n, n, n, 18, layout.size, ns], [ns, 4]),
         "accel": ([n, n, n, 18, layout.size, ns], [n, 4]),
         # the record's outputs are declared as one row (bound to the whole arrays, see step_period.c)
-        "period": ([n, n, 18, layout.size, PERIOD_OPT, ns], [n, n, n, n, n, 1, 1, PERIOD_OUT, ns]),
+        "period": ([n, 18, layout.size, PERIOD_OPT, ns], [n, n, n, n, n, 1, 1, PERIOD_OUT, ns]),
     }
     out = []
     for name, (ins, outs) in spec.items():
@@ -143,7 +143,7 @@ class CompiledPlant:
     ``sticky`` is None: the events happen inside :meth:`step`, so :func:`armctl.sim.stepper.advance` calls it as
     a plain step. :meth:`begin` (the stick solve at a state) is kept for the next :meth:`step` from that state,
     as the Python plant's is. :meth:`bind_record`, :meth:`period` and :meth:`last_sample` integrate whole control
-    periods on a run's record (:mod:`armctl.sim.period`). Not thread-safe: one object per run.
+    periods on a run's record (:mod:`armctl.sim.generated_engine`). Not thread-safe: one object per run.
     """
 
     def __init__(self, plant: Plant, scheme: str, layout: PlantLayout, functions: dict[str, cs.Function]) -> None:
@@ -207,8 +207,6 @@ class CompiledPlant:
         )
         self._period_fn = functions["period"]
         self._run_period: Any = None  # the period bound to a record (see bind_record)
-        self._limit = np.zeros(n)  # the effort limits of the bound run
-        self._failure: list[float] = [0.0, 0.0, 0.0]  # the out of the last period that failed
         self._period_opt = np.zeros(PERIOD_OPT)
         self._period_out = np.zeros(PERIOD_OUT)
         self._period_samples = np.zeros(18)
@@ -360,70 +358,53 @@ class CompiledPlant:
         return self.state[3 * n : 4 * n]
 
     # ---------------------------------------------------------------------------- control periods
-    def bind_record(
-        self,
-        tau: FloatArray,
-        q: FloatArray,
-        qd: FloatArray,
-        qdd: FloatArray,
-        tau_friction: FloatArray,
-        stuck: FloatArray,
-        work_friction: FloatArray,
-        work_external: FloatArray,
-        effort_limit: FloatArray,
-        saturate: bool,
-        substeps: int,
-        dt: float,
-        accel_at_start: bool,
-        max_velocity: float,
-        max_position: float,
-    ) -> None:
-        """Make :meth:`period` integrate on the rows of a run's record: (samples, n) arrays of the controller's
-        torques (read), q, q̇, q̈, the friction torque and the stuck joints (1.0: stuck), and (samples,) arrays of
-        the friction and external work, all C-contiguous float64 (the generated code reads and writes them by row).
-        A torque beyond ``effort_limit`` is clipped where ``saturate``; ``substeps`` steps of ``dt`` [s] a period;
-        ``accel_at_start``: q̈ at the period's start by an evaluation (the implicit schemes, whose step gives none);
-        the state left is checked against ``max_velocity`` and ``max_position``
-        (:meth:`armctl.sim.loop.ClosedLoop.check`)."""
-        rows = len(q)
-        record = (tau, q, qd, qdd, tau_friction, stuck, work_friction, work_external)
+    def bind_record(self, binding: PeriodBinding) -> None:
+        """Make :meth:`period` and :meth:`last_sample` integrate on the rows of a run's record (``binding``, see
+        :class:`~armctl.sim.generated_engine.PeriodBinding`)."""
+        b = binding
+        rows = len(b.q)
+        record = (b.tau, b.q, b.qd, b.qdd, b.tau_friction, b.stuck, b.work_friction, b.work_external)
         for a in record:
             if a.dtype != np.float64 or not a.flags.c_contiguous or len(a) != rows or a.size != rows * a[0].size:
                 raise ValueError("the record's arrays must be C-contiguous float64 arrays of the same samples")
-        self._substeps, self._period_h = substeps, dt
-        self._period_samples = np.zeros(18 * max(substeps, 1))
-        self._limit[...] = effort_limit
+        self._substeps, self._period_h = b.substeps, b.dt
+        self._period_samples = np.zeros(18 * max(b.substeps, 1))
         opt = self._period_opt
-        opt[:] = (0.0, dt, self.opt[2], substeps, rows, float(accel_at_start), max_velocity, max_position, saturate)
+        opt[:] = (0.0, b.dt, self.opt[2], b.substeps, rows, float(b.accel_at_start), b.max_velocity, b.max_position)
         self._record = record  # kept alive with the binding
         self._run_period = _bound(
             self._period_fn,
-            [tau, self._limit, self._period_samples, self.par, opt, self.state],
+            [b.tau, self._period_samples, self.par, opt, self.state],
             [*record[1:], self._period_out, self.state],
             self._buffers,
         )
         self._free = False
 
-    def period(self, k: int, t: float) -> float:
+    def period(self, k: int, t: float) -> int:
         """Integrate the control period [t, t + Δt_c) from the state of sample k on the record bound by
-        :meth:`bind_record`: the checks of the controller's torque τ_k (row k) and its saturation, the stick solve
-        at t and its records at row k (q̈, friction torque, stuck joints), the sub-steps with their events, the
-        state and the work at row k + 1. Returns the code of :mod:`armctl.sim.period`: why that state stops the
-        run, plus CLIPPED where τ_k was clipped, or TORQUE_NOT_FINITE (nothing else done), or FAILED (see
-        :meth:`raise_failure`)."""
+        :meth:`bind_record` under the torque in row k of its ``tau``: the stick solve at t and its records at row k
+        (q̈, friction torque, stuck joints), the sub-steps with their events, the state and the work at row k + 1.
+        Returns why that state stops the run (:func:`armctl.sim.engine.state_code`'s code, 0: it does not).
+
+        Raises
+        ------
+        NotPositiveDefinite
+            The mass matrix (or the Newton matrix of an implicit scheme) failed its factorisation.
+        IndexError
+            A row outside the bound record (a bug of the caller).
+        """
         self._period_opt[0] = k
         if self.disturbance is not None:
             self._disturbance_samples(t, self._substeps)
         self._run_period()
         out = self._period_out.tolist()
         if out[0]:
-            self._failure = out
-            return out[2] + FAILED
-        return out[2]
+            self._raise(k)
+        return int(out[2])
 
-    def last_sample(self, k: int, t: float) -> float:
-        """The run's last sample k (no step after it): the checks of τ_k and its saturation, the stick solve at t,
-        the friction torque, the stuck joints and q̈ at row k; the code of :meth:`period` (no state's)."""
+    def last_sample(self, k: int, t: float) -> None:
+        """The run's last sample k (no step after it): the stick solve at t, the friction torque, the stuck joints
+        and q̈ at row k (raises as :meth:`period`)."""
         opt = self._period_opt
         m = opt[3]
         opt[3] = 0.0
@@ -434,27 +415,16 @@ class CompiledPlant:
             self._run_period()
         finally:
             opt[3] = m
-        out = self._period_out.tolist()
-        if out[0]:
-            self._failure = out
-            return out[2] + FAILED
-        return out[2]
+        if self._period_out[0]:
+            self._raise(k)
 
-    def raise_failure(self) -> None:
-        """Raise why the last :meth:`period` failed.
-
-        Raises
-        ------
-        NotPositiveDefinite
-            The mass matrix (or the Newton matrix of an implicit scheme) failed its factorisation.
-        IndexError
-            A row outside the bound record (a bug of the caller).
-        """
-        out = self._failure
-        if out[0] == BAD_ROW:
-            k, rows = self._period_opt[[0, 4]].tolist()
-            raise IndexError(f"sample {k:.0f} is outside the record bound to the generated step ({rows:.0f} rows)")
-        self._check(out[0], _WHERE.get(int(out[1]), "step"))
+    def _raise(self, k: int) -> None:
+        """Raise why the last period from sample k failed (see :meth:`period`)."""
+        status, where = self._period_out.tolist()[:2]
+        if status == BAD_ROW:
+            rows = self._period_opt[4]
+            raise IndexError(f"sample {k} is outside the record bound to the generated step ({rows:.0f} rows)")
+        self._check(status, _WHERE.get(int(where), "step"))
 
     def _disturbance_samples(self, t: float, substeps: int) -> None:
         """h_d at the start, middle and end of every sub-step of the period from t (at t only: ``substeps`` = 0),

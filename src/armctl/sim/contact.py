@@ -388,6 +388,8 @@ class Plane(Environment):
     def force(
         self, p: FloatArray, v: FloatArray, derivatives: bool
     ) -> tuple[FloatArray | None, FloatArray | None, FloatArray | None]:
+        # (a second source: armctl.sim.generated_plant.PlantExpressions.contact, the generated step's;
+        # a change here is a change there: tests/sim/test_compiled_plant.py fails when they disagree)
         n = self.normal
         depth = float(n @ (self.point - p))
         if depth <= 0.0:

@@ -259,12 +259,16 @@ class StickSlip(FrictionModel):
         return np.where(direction > 0, self.hump_pos, 0.0) - np.where(direction < 0, self.hump_neg, 0.0)
 
     def torque(self, qd: FloatArray, direction: FloatArray) -> FloatArray:
+        # (a second source: armctl.sim.generated_plant.PlantExpressions.friction, the generated step's;
+        # a change here is a change there: tests/sim/test_compiled_plant.py fails when they disagree)
         tau = self.viscous * qd + self.level(direction)
         if self.has_stribeck:
             tau += self.hump(direction) * self._stribeck_shape(qd)[1]
         return tau
 
     def slope(self, qd: FloatArray, direction: FloatArray) -> FloatArray:
+        # (a second source: armctl.sim.generated_plant.PlantExpressions.friction_slope, the generated step's;
+        # a change here is a change there: tests/sim/test_compiled_plant.py fails when they disagree)
         d = self.viscous.copy()
         if self.has_stribeck:
             d += self.hump(direction) * self._stribeck_slope(qd)
@@ -330,9 +334,13 @@ class SmoothFriction(FrictionModel):
         return level
 
     def torque(self, qd: FloatArray, direction: FloatArray | None = None) -> FloatArray:
+        # (a second source: armctl.sim.generated_plant.PlantExpressions.friction, the generated step's;
+        # a change here is a change there: tests/sim/test_compiled_plant.py fails when they disagree)
         return self.viscous * qd + np.tanh(qd / self.velocity) * self._levels(qd)
 
     def slope(self, qd: FloatArray, direction: FloatArray | None = None) -> FloatArray:
+        # (a second source: armctl.sim.generated_plant.PlantExpressions.friction_slope, the generated step's;
+        # a change here is a change there: tests/sim/test_compiled_plant.py fails when they disagree)
         th = np.tanh(qd / self.velocity)
         d = self.viscous + (1.0 - th**2) / self.velocity * self._levels(qd)
         if self.has_stribeck:

@@ -54,7 +54,10 @@ class PlantExpressions:
 
     # ------------------------------------------------------------------------------------ friction
     def friction(self, v: cs.SX, direction: cs.SX, par: cs.SX) -> cs.SX:
-        """τ_f(q̇) for the sliding directions d (see :meth:`Plant.kinetic_friction`)."""
+        """τ_f(q̇) for the sliding directions d (see :meth:`Plant.kinetic_friction`). (A second source of
+        :meth:`StickSlip.torque <armctl.sim.friction.StickSlip.torque>` and :meth:`SmoothFriction.torque
+        <armctl.sim.friction.SmoothFriction.torque>`: a change there is a change here; tests/sim/test_compiled_plant.py
+        fails when they disagree.)"""
         n, at = self.n, self.layout.friction_offset
         fv, cp, cn, hp, hn, vs = (par[at + k * n : at + (k + 1) * n] for k in range(6))
         if self.layout.friction == "stick-slip":
@@ -78,7 +81,8 @@ class PlantExpressions:
         return level
 
     def friction_slope(self, v: cs.SX, direction: cs.SX, par: cs.SX) -> cs.SX:
-        """∂τ_f/∂q̇ (diagonal) (see :meth:`FrictionModel.slope`)."""
+        """∂τ_f/∂q̇ (diagonal) (see :meth:`FrictionModel.slope`; a second source of ``StickSlip.slope`` and
+        ``SmoothFriction.slope`` of :mod:`armctl.sim.friction`, as :meth:`friction` is of their torques)."""
         n, at = self.n, self.layout.friction_offset
         fv, _, _, hp, hn, vs = (par[at + k * n : at + (k + 1) * n] for k in range(6))
         x = cs.fmin(cs.fmax(v / vs, -40.0), 40.0)
@@ -113,7 +117,9 @@ class PlantExpressions:
 
     def contact(self, q: cs.SX, v: cs.SX, par: cs.SX, stiffness: bool = False) -> tuple[cs.SX, cs.SX, cs.SX]:
         """(τ_c, K, D) of every point (see :meth:`Environment.joint_torque`); K and D are zero without
-        ``stiffness``."""
+        ``stiffness``. (A second source of :meth:`Plane.force <armctl.sim.contact.Plane.force>` and of the normal
+        laws' ``force`` in :mod:`armctl.sim.normal_force`: a change there is a change here;
+        tests/sim/test_compiled_plant.py fails when they disagree.)"""
         n = self.n
         tau = cs.SX.zeros(n)
         kj = cs.SX.zeros(n, n)

@@ -18,7 +18,8 @@ NEWTON_MAX_ITER = 25
 def implicit_euler(
     plant: Plant, t: float, q: FloatArray, v: FloatArray, tau: FloatArray, h: float
 ) -> tuple[FloatArray, FloatArray, None, float, float]:
-    """One backward-Euler step (see :mod:`armctl.sim.integrators`); returns (q₁, q̇₁, None, W_f, W_e)."""
+    """One backward-Euler step (see :mod:`armctl.sim.integrators`); returns (q₁, q̇₁, None, W_f, W_e).
+    (C copy: ``step_schemes.c``'s ``armctl_scheme_step``; tests/sim/test_compiled_plant.py fails when they disagree.)"""
     n = plant.n
     if plant.all_stuck:
         return q, v, None, 0.0, 0.0
@@ -63,7 +64,8 @@ def implicit_euler(
 def symplectic_euler(
     plant: Plant, t: float, q: FloatArray, v: FloatArray, tau: FloatArray, h: float
 ) -> tuple[FloatArray, FloatArray, None, float, float]:
-    """One step of symplectic Euler in momentum form (see :mod:`armctl.sim.integrators`)."""
+    """One step of symplectic Euler in momentum form (see :mod:`armctl.sim.integrators`).
+    (C copy: ``step_schemes.c``'s ``armctl_scheme_step``; tests/sim/test_compiled_plant.py fails when they disagree.)"""
     if plant.all_stuck:
         return q, v, None, 0.0, 0.0
     kernel = plant.kernel
@@ -137,7 +139,7 @@ def _newton_update(
 ) -> tuple[FloatArray, bool]:
     """One Newton step x − J⁻¹r of the implicit schemes, stuck joints held (their rows and columns replaced by
     the identity, residual zero); returns the new x and whether the step was below the tolerance. ``jac`` and
-    ``res`` are modified."""
+    ``res`` are modified. (C copy: ``step_schemes.c``'s ``armctl_newton_update``.)"""
     if stuck is not None:
         jac[stuck, :] = 0.0
         jac[:, stuck] = 0.0

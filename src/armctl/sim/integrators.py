@@ -71,7 +71,8 @@ def rk4_work(
     g: Callable[..., tuple[FloatArray, float, float]], t: float, q: FloatArray, v: FloatArray, tau: FloatArray, h: float
 ) -> tuple[FloatArray, FloatArray, FloatArray, float, float]:
     """RK4 of q̈ with the powers (p_f, p_e) = g(...)[1:] integrated alongside (stages as in :func:`rk4`,
-    computed as products of :func:`_rk4_coefficients` with the rows [q, q̇, a₁, a₂, a₃, a₄])."""
+    computed as products of :func:`_rk4_coefficients` with the rows [q, q̇, a₁, a₂, a₃, a₄]).
+    (C copy: ``step_schemes.c``'s ``armctl_scheme_step``; tests/sim/test_compiled_plant.py fails when they disagree.)"""
     c = _rk4_coefficients(h)
     rows = np.empty((6, q.shape[0]))
     rows[0] = q
@@ -195,6 +196,7 @@ def make_step(name: str, plant: Plant) -> Step:
         def euler_work(
             t: float, q: FloatArray, v: FloatArray, tau: FloatArray, h: float
         ) -> tuple[FloatArray, FloatArray, FloatArray, float, float]:
+            # (C copy: step_schemes.c's armctl_scheme_step, the EULER case)
             # the work of the step's forces at the mean velocity (q̇ + q̇₁)/2: for a constant M the kinetic
             # energy changes by exactly h Fᵀ(q̇ + q̇₁)/2, so the balance does not drift. At the start velocity
             # it drifted by h²Fᵀq̈ a step, ∝ h ∫|F|²/m dt, and read as energy gained on a stable contact

@@ -52,10 +52,6 @@ class MeasurementFeed:
         Control periods of measurement delay.
     seed : int
         The run's seed (the chains draw from streams of their own, so q's and q̇'s noise does not change).
-    effort_limit : (n,) ndarray
-        The plant's effort limits [N·m] (the saturation of the applied torque).
-    saturate : bool
-        Whether the run clips τ at them.
 
     Raises
     ------
@@ -74,8 +70,6 @@ class MeasurementFeed:
         cutoff: float | None,
         delay: int,
         seed: int,
-        effort_limit: FloatArray,
-        saturate: bool,
     ) -> None:
         self.reads = reads
         self.sensor = sensors[0] if sensors else None
@@ -92,8 +86,6 @@ class MeasurementFeed:
             SignalChain(n, control_dt, noise_tau, delay, cutoff, seed=[seed, 2]) if "tau_measured" in reads else None
         )
         self._applied = np.zeros(n)
-        self._limit = effort_limit
-        self._clip = saturate and bool(np.isfinite(effort_limit).any())
 
     def at(self, sensor_reading: FloatArray | None) -> Measurement:
         """The measurement of the current sample, from the first sensor's reading at its state."""
@@ -111,5 +103,5 @@ class MeasurementFeed:
         )
 
     def applied(self, tau: FloatArray) -> None:
-        """Note τ_k, as the plant will hold it (saturated), for the next sample's ``tau_applied``."""
-        self._applied = np.clip(tau, -self._limit, self._limit) if self._clip else np.array(tau, dtype=float)
+        """Note τ_k as the plant holds it (saturated by the loop), for the next sample's ``tau_applied``."""
+        self._applied = np.array(tau, dtype=float)

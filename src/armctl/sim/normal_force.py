@@ -130,6 +130,8 @@ class KelvinVoigt(NormalForce):
         return self._k
 
     def force(self, depth: float, rate: float) -> tuple[float, float, float]:
+        # (a second source: armctl.sim.generated_plant.PlantExpressions.contact, the generated step's;
+        # a change here is a change there: tests/sim/test_compiled_plant.py fails when they disagree)
         f = self._k * depth + self.damping * rate
         if f <= 0.0:
             return 0.0, 0.0, 0.0
@@ -236,6 +238,8 @@ class HuntCrossley(NormalForce):
         return self._k
 
     def force(self, depth: float, rate: float) -> tuple[float, float, float]:
+        # (a second source: armctl.sim.generated_plant.PlantExpressions.contact, the generated step's;
+        # a change here is a change there: tests/sim/test_compiled_plant.py fails when they disagree)
         p = self.exponent
         dp = depth if p == 1.0 else depth**p
         damp = 1.0 + self.dissipation * rate

@@ -1,13 +1,15 @@
 """The option groups of :func:`armctl.sim.simulate`: what the controller measures (:class:`Sensing`), the forces
 the plant feels besides its own dynamics (:class:`Forces`) and when a run stops as diverged (:class:`StopRules`).
 
-Each group can be passed to ``simulate`` as one object, or its fields as keywords of ``simulate``
-(``simulate(..., noise_q=0.01)`` is ``simulate(..., sensing=Sensing(noise_q=0.01))``).
+Each group is passed to ``simulate`` as one object: ``simulate(..., sensing=Sensing(noise_q=0.01))``. Its fields
+as keywords of ``simulate`` (``simulate(..., noise_q=0.01)``) still work, with a :class:`DeprecationWarning` that
+names the group to use; they go in the next release.
 """
 
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, fields
 from typing import TYPE_CHECKING, Any
@@ -104,9 +106,12 @@ class StopRules:
 GROUPS: dict[str, type] = {"sensing": Sensing, "forces": Forces, "stop": StopRules}
 
 
-def grouped(groups: dict[str, Any], keywords: dict[str, Any]) -> tuple[Sensing, Forces, StopRules]:
+def grouped(groups: dict[str, Any], keywords: dict[str, Any], stacklevel: int = 3) -> tuple[Sensing, Forces, StopRules]:
     """The three groups from ``groups`` (name → an object of its class or None) and the flat ``keywords`` that
-    were given (field name → value); a field given both ways is refused by name."""
+    were given (field name → value, deprecated: one :class:`DeprecationWarning` naming the groups to use, pointing
+    ``stacklevel`` frames up); a field given both ways is refused by name."""
+    if keywords:
+        _warn_flat(keywords, stacklevel + 1)
     out: list[Any] = []
     for name, cls in GROUPS.items():
         given = groups.get(name)
@@ -120,3 +125,18 @@ def grouped(groups: dict[str, Any], keywords: dict[str, Any]) -> tuple[Sensing, 
             )
         out.append(given if given is not None else cls(**own))
     return out[0], out[1], out[2]
+
+
+def _warn_flat(keywords: dict[str, Any], stacklevel: int) -> None:
+    """The :class:`DeprecationWarning` of flat keywords: each group with the fields given, as the call to write."""
+    uses = []
+    for name, cls in GROUPS.items():
+        own = [f.name for f in fields(cls) if f.name in keywords]
+        if own:
+            uses.append(f"{name}={cls.__name__}({', '.join(f'{f}=...' for f in own)})")
+    warnings.warn(
+        f"simulate's keyword(s) {', '.join(keywords)} are deprecated and go in the next release: pass "
+        f"{', '.join(uses)} instead (the option groups of armctl.sim)",
+        DeprecationWarning,
+        stacklevel=stacklevel,
+    )

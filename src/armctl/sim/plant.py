@@ -88,7 +88,8 @@ class Plant:
         self._window = None
 
     def disturbance_at(self, t: float) -> FloatArray:
-        """h_d at t: within a step, on the parabola through its samples (see :meth:`sample_disturbance`)."""
+        """h_d at t: within a step, on the parabola through its samples (see :meth:`sample_disturbance`).
+        (C copy: ``step_core.c``'s ``armctl_interp``; tests/sim/test_compiled_plant.py fails when they disagree.)"""
         w = self._window
         if w is None:
             return self.disturbance_wrench(t)
@@ -169,7 +170,8 @@ class Plant:
     # ------------------------------------------------------------------------------ stick–slip
     def begin(self, t: float, q: FloatArray, qd: FloatArray, tau: FloatArray, held: BoolArray | None = None) -> None:
         """Decide which joints stick for the step starting at (t, q, q̇) under τ (see
-        :mod:`armctl.sim.stick_slip`); ``held``: joints kept stuck whatever their holding torque."""
+        :mod:`armctl.sim.stick_slip`); ``held``: joints kept stuck whatever their holding torque.
+        (C copy: ``step_events.c``'s ``armctl_begin``; tests/sim/test_compiled_plant.py fails when they disagree.)"""
         sticky = self.sticky
         if sticky is None:
             return
@@ -227,7 +229,8 @@ class Plant:
         self, t: float, q: FloatArray, qd: FloatArray, tau: FloatArray
     ) -> tuple[FloatArray, FloatArray | None, FloatArray | None]:
         """(q̈, τ_f, τ_e): :meth:`accel` with the friction torque (against the motion) and the external torque
-        (added to τ) it used, each None if the plant has none."""
+        (added to τ) it used, each None if the plant has none. (Generated: ``pk_rhs`` of
+        :func:`armctl.sim.generated_plant.kernels`, called by ``step_core.c``'s ``armctl_rhs``.)"""
         net = tau
         f = e = None
         if self.friction is not None:

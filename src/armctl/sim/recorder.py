@@ -35,9 +35,9 @@ class Recorder:
         self.samples = samples
         self.control_dt = control_dt
         z = np.zeros
-        # τ and q̈ of a sample the run stops at before computing them stay NaN (see ClosedLoop)
+        # τ, the applied τ and q̈ of a sample the run stops at before computing them stay NaN (see ClosedLoop)
         self.q, self.qd, self.qdd = z((samples, n)), z((samples, n)), np.full((samples, n), np.nan)
-        self.tau, self.tau_applied = np.full((samples, n), np.nan), z((samples, n))
+        self.tau, self.tau_applied = np.full((samples, n), np.nan), np.full((samples, n), np.nan)
         self.tau_friction, self.tau_ext = z((samples, n)), z((samples, n))
         self.stuck = z((samples, n))  # 1.0: the joint is stuck (a boolean mask in the result)
         self.points = [(env, i) for env in environments for i in range(len(env.points))]

@@ -210,13 +210,14 @@ def seq(x: Any, kind: type, name: str) -> tuple[Any, ...]:
 class Scene:
     """What the plant is made of, checked against its model."""
 
-    friction: FrictionModel
+    friction: FrictionModel | None  # None: the engine's own (MuJoCo's frictionloss and damping)
     environments: tuple[Environment, ...]
     sensors: tuple[ForceSensor, ...]
     disturbance: Callable[[float], Any] | None
 
 
 def scene(dyn: Dynamics, friction: Any, environment: Any, sensors: Any, disturbance: Any) -> Scene:
+    """The plant's forces and sensors, checked (``friction`` None: none of armctl's)."""
     envs = seq(environment, Environment, "environment")
     for env in envs:
         env.check(dyn.model)
@@ -228,4 +229,4 @@ def scene(dyn: Dynamics, friction: Any, environment: Any, sensors: Any, disturba
             f"disturbance must be a callable t -> (6,) wrench or None, got {type(disturbance).__name__}",
             value=disturbance,
         )
-    return Scene(make_friction(friction, dyn.model), envs, sens, disturbance)
+    return Scene(None if friction is None else make_friction(friction, dyn.model), envs, sens, disturbance)

@@ -16,29 +16,34 @@ import math
 import time
 import warnings
 from collections.abc import Callable, Sequence
-from dataclasses import fields
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray, boolean, nonnegative_vector
 from armctl.dynamics.base import Dynamics
-from armctl.errors import InvalidParameterError, SimulationWarning
+from armctl.errors import SimulationWarning, UnknownNameError
 from armctl.model.robot import RobotModel
 from armctl.references import Reference
 from armctl.sim import setup
 from armctl.sim.after_run import after_run
 from armctl.sim.compiled import choose_step
 from armctl.sim.contact import Environment, ForceSensor
+from armctl.sim.engine import Engine
 from armctl.sim.friction import FrictionModel
+from armctl.sim.generated_engine import GeneratedEngine
 from armctl.sim.loop import ClosedLoop, LoopSettings
 from armctl.sim.measurement_feed import MeasurementFeed, declared_reads
 from armctl.sim.options import Forces, Sensing, StopRules, grouped
 from armctl.sim.plant import Plant
+from armctl.sim.python_engine import PythonEngine
 from armctl.sim.recorder import Recorder
 from armctl.sim.result import SimResult
 from armctl.sim.run_failure import attach, end_run
 from armctl.sim.stability import contact_stability
+
+#: the engines that advance the plant (:mod:`armctl.sim.engine`): armctl's own step (generated or Python), MuJoCo
+ENGINES = ("native", "mujoco")
 
 
 def simulate(
@@ -97,14 +102,11 @@ def simulate(
         The scheme (:mod:`armctl.sim.integrators`): ``"rk4"`` (the default), ``"semi-implicit-euler"``
         (symplectic: no energy drift), ``"implicit-euler"`` (stiff contact and damping), ``"euler"`` (the cheapest).
     sensing : Sensing, optional
-        What the controller measures: noise, its seed, delay, force sensors (:class:`~armctl.sim.options.Sensing`;
-        its fields may be given as keywords instead).
+        What the controller measures: noise, its seed, delay, force sensors (:class:`~armctl.sim.options.Sensing`).
     forces : Forces, optional
-        Friction model, contact environments, disturbance (:class:`~armctl.sim.options.Forces`; its fields may be
-        given as keywords instead).
+        Friction model, contact environments, disturbance (:class:`~armctl.sim.options.Forces`).
     stop : StopRules, optional
-        ``max_velocity`` [rad/s], ``max_position`` [rad] (:class:`~armctl.sim.options.StopRules`; its fields may be
-        given as keywords instead).
+        ``max_velocity`` [rad/s], ``max_position`` [rad] (:class:`~armctl.sim.options.StopRules`).
     saturate : bool
         Clip τ at the plant model's effort limits.
     reset : bool
@@ -118,14 +120,17 @@ def simulate(
         warning); True: the generated step or an error saying why there is none; False: the Python step.
         ``res.info["compiled"]`` says which ran.
     engine : {"native", "mujoco"}
-        ``"mujoco"``: MuJoCo integrates the plant, a :class:`~armctl.sim.mujoco_plant.MujocoPlant` scene or the
-        model's MJCF (see :mod:`armctl.sim.mujoco_engine` for what it takes and records).
+        What advances the plant between control instants (:mod:`armctl.sim.engine`; the loop is the same):
+        ``"native"``, armctl's step (generated or Python, see ``compile``); ``"mujoco"``, MuJoCo integrates the
+        plant, a :class:`~armctl.sim.mujoco_plant.MujocoPlant` scene or the model's MJCF (see
+        :mod:`armctl.sim.mujoco_engine` for what it takes and records).
     friction, environment, disturbance : optional
-        The fields of ``forces``, as keywords (defaults: ``"stick-slip"``, none, none).
+        Deprecated: the fields of ``forces``, as keywords (a :class:`DeprecationWarning`; they go in the next
+        release).
     sensors, noise_q, noise_qd, seed, delay : optional
-        The fields of ``sensing``, as keywords (defaults: none, 0 rad, 0 rad/s, a fresh seed, 0 periods).
+        Deprecated: the fields of ``sensing``, as keywords.
     max_velocity, max_position : float, optional
-        The fields of ``stop``, as keywords (defaults: 1e3 rad/s, inf).
+        Deprecated: the fields of ``stop``, as keywords.
 
     Returns
     -------
@@ -172,41 +177,20 @@ def simulate(
     }
     sense, force, rules = grouped({"sensing": sensing, "forces": forces, "stop": stop}, given)
     reads = declared_reads(controller)
-    if engine != "native":  # another engine integrates the plant (armctl.sim.mujoco_engine)
-        from armctl.sim.mujoco_engine import run_engine
+    if not (isinstance(engine, str) and engine in ENGINES):
+        raise UnknownNameError("engine", engine, ENGINES)
+    on_mujoco = engine == "mujoco"
+    if on_mujoco:  # the scene and the integrator are MuJoCo's (armctl.sim.mujoco_engine)
+        from armctl.sim import mujoco_engine
 
-        if reads:
-            raise InvalidParameterError(
-                f"the controller reads {sorted(reads)}, which engine={engine!r} does not measure: use engine='native'",
-                value=engine,
-            )
-        options = {
-            f.name: getattr(group, f.name)
-            for group in (sense, force, rules)
-            for f in fields(group)
-            if f.name not in _SIGNAL_OPTIONS
-        }
-        return run_engine(
-            engine,
-            plant=plant,
-            controller=controller,
-            reference=reference,
-            duration=duration,
-            q0=q0,
-            qd0=qd0,
-            control_dt=control_dt,
-            dt=dt,
-            integrator=integrator,
-            saturate=saturate,
-            reset=reset,
-            energy=energy,
-            compile=compile,
-            **options,
-        )
-    dyn = setup.plant_dynamics(plant)
+        target = mujoco_engine.target(plant, integrator, force, compile)
+        dyn, scheme = target.dynamics, integrator
+    else:
+        dyn = setup.plant_dynamics(plant)
     n = dyn.n
     cdt, h, n_periods, m = setup.periods(duration, control_dt, dt, n=n)
-    scheme = setup.integrator_name(integrator)
+    if not on_mujoco:
+        scheme = setup.integrator_name(integrator)
     fixed_ref, ref_fn = setup.reference_source(reference, n)
     ref0 = fixed_ref if fixed_ref is not None else ref_fn(0.0)  # type: ignore[misc]  # one of the two is set
     call = setup.controller_call(controller, n)
@@ -225,12 +209,19 @@ def simulate(
     q, v = setup.initial_state(q0, qd0, ref0, n, qmax, vmax)
     setup.warn_outside_limits(dyn.model, q)
     seed_used = setup.seed_value(sense.seed)
-    dyn.check_mass_matrix(q)  # a plant whose M is singular from the start is a model to fix, not a run that diverged
-    sc = setup.scene(dyn, force.friction, force.environment, sense.sensors, force.disturbance)
-
-    unstable = _check_contacts(dyn, sc.environments, q, scheme, h)
-    chosen = choose_step(dyn, scheme, Plant(dyn, sc.friction, sc.environments, sc.disturbance), compile)
-    pl, step, fast = chosen.plant, chosen.step, chosen.fast
+    unstable: list[dict[str, float]] = []
+    if on_mujoco:
+        sc = setup.scene(dyn, None, None, sense.sensors, force.disturbance)
+        eng: Engine = mujoco_engine.MujocoEngine(target, dyn, scheme, h, sc.disturbance)
+    else:
+        dyn.check_mass_matrix(q)  # M singular from the start: a model to fix, not a run that diverged
+        sc = setup.scene(dyn, force.friction, force.environment, sense.sensors, force.disturbance)
+        unstable = warn_unstable_contacts(dyn, sc.environments, q, scheme, h)
+        chosen = choose_step(dyn, scheme, Plant(dyn, sc.friction, sc.environments, sc.disturbance), compile)
+        if chosen.compiled:
+            eng = GeneratedEngine(chosen.plant)
+        else:
+            eng = PythonEngine(chosen.plant, chosen.step, chosen.fast)
     samples = n_periods + 1
     noisy = bool(sig_q.any() or sig_qd.any())
     rec = Recorder(n, samples, cdt, sc.environments, sc.sensors, measured=noisy or lag > 0)
@@ -248,8 +239,6 @@ def simulate(
             sense.cutoff,
             lag,
             seed_used,
-            dyn.model.effort_limit,
-            saturate,
         )
         if reads
         else None
@@ -265,9 +254,6 @@ def simulate(
         call=call,
         fixed_reference=fixed_ref,
         reference_fn=ref_fn,
-        plant=pl,
-        step=step,
-        fast=fast,
         recorder=rec,
         noise_q=draws[:, 0] * sig_q if draws is not None else None,
         noise_qd=draws[:, 1] * sig_qd if draws is not None else None,
@@ -281,14 +267,13 @@ def simulate(
     reset_controller = getattr(controller, "reset", None)
     if reset and callable(reset_controller):
         reset_controller()
-    loop = ClosedLoop(settings, q, v)
+    loop = ClosedLoop(settings, eng, q, v)
     t0 = time.perf_counter()
     loop.run()
     wall = time.perf_counter() - t0
     failure = end_run(controller, loop.failure)
     if failure is not loop.failure:  # end_run raised after a run that did not
         loop.failure, loop.failed_at = failure, (loop.rows - 1) * cdt
-    loop.applied_torques()
     rows = loop.rows
     info = {
         "plant": dyn.model.name,
@@ -299,14 +284,12 @@ def simulate(
         "dt": h,
         "substeps": m,
         "periods": n_periods,
-        "friction": sc.friction.name if pl.friction else "none",
         "saturate": bool(saturate),
         "delay": lag,
-        "compiled": chosen.compiled,
         "seed": seed_used,
         "wall_time": wall,
         "real_time_factor": (rows - 1) * cdt / wall if wall > 0 and rows > 1 else math.nan,
-        **pl.stats,
+        **eng.info(),
     }
     if unstable:
         info["unstable_contacts"] = unstable
@@ -316,15 +299,12 @@ def simulate(
     if loop.failure is not None:
         attach(loop.failure, res, loop.failed_at)
         raise loop.failure
-    after_run(res, dyn, sc.environments, scheme, h, sc.disturbance is not None)
+    if not on_mujoco:
+        after_run(res, dyn, sc.environments, scheme, h, sc.disturbance is not None)
     return res
 
 
-#: Sensing's fields that only a controller's declared signals use (no other engine measures them)
-_SIGNAL_OPTIONS = frozenset({"noise_wrench", "noise_tau", "cutoff"})
-
-
-def _check_contacts(
+def warn_unstable_contacts(
     dyn: Dynamics, environments: Sequence[Environment], q0: FloatArray, scheme: str, h: float
 ) -> list[dict[str, float]]:
     """Warn (:class:`~armctl.errors.SimulationWarning`) about every contact point the integrator cannot

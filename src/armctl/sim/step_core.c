@@ -12,7 +12,9 @@
  * Plant.begin and stick_slip.solve_sticking (which joints stick), stepper.advance (events: a sliding joint
  * whose velocity reaches zero within a step), integrators.rk4_work and the Euler step with work, and
  * implicit.implicit_euler / symplectic_euler (Newton's method on the velocity). Each function below names its
- * Python original. Matrices from the kernels are dense, column-major.
+ * Python original, and each Python original names its copy here: a change to one is a change to the other
+ * (tests/sim/test_compiled_plant.py fails when the two steps disagree; bump CODE_VERSION in compiled_plant.py).
+ * Matrices from the kernels are dense, column-major.
  *
  * Exposed (CasADi external functions, dense column vectors):
  *   advance(q, v, tau, W, par, opt, S) -> (q1, v1, a0, out5, S)  one integration step of length h = opt[1]

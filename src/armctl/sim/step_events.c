@@ -180,6 +180,22 @@ static int armctl_advance(int scheme, double h, int begun, const double* q_in, c
 #endif
 }
 
+/* Plant.friction_torque: the friction model's torque for the sliding joints, the holding torque for the stuck ones,
+ * into S's friction torque (zeros without friction). */
+static void armctl_friction_torque(const double* v, const armctl_mode* m, const double* par, double* S) {
+  int i;
+#if ARMCTL_FRICTION
+  double f[N];
+  const double* in[3] = {v, m->dir, par};
+  double* out[1] = {f};
+  CALL(pk_friction, 3, in, 1, out);
+  for (i = 0; i < N; ++i) S[S_TAUF + i] = f[i] + m->hold[i];
+#else
+  (void)v; (void)m; (void)par;
+  for (i = 0; i < N; ++i) S[S_TAUF + i] = 0.0;
+#endif
+}
+
 /* ------------------------------------------------------------------------------ CasADi external functions */
 CASADI_SYMBOL_EXPORT int advance(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   double S[NS], q[N], v[N], tau[N], a0[N], q1[N], v1[N], wf = 0.0, we = 0.0;
@@ -233,30 +249,19 @@ CASADI_SYMBOL_EXPORT int advance(const casadi_real** arg, casadi_real** res, cas
   return 0;
 }
 
+/* begin and accel read q, v and tau where they are (inputs no output aliases); S is copied in (the state is both
+ * an input and the output of begin). */
 CASADI_SYMBOL_EXPORT int begin(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  double S[NS], q[N], v[N], tau[N], hd[6];
+  double S[NS], hd[6];
   armctl_mode m;
-  int st, i;
+  int st;
   (void)iw; (void)w; (void)mem;
   memcpy(S, arg[5], sizeof S);
-  memcpy(q, arg[0], sizeof q);
-  memcpy(v, arg[1], sizeof v);
-  memcpy(tau, arg[2], sizeof tau);
   armctl_mode_read(S, &m);
   armctl_interp(arg[3], 0.0, hd);
-  st = armctl_begin(q, v, tau, hd, arg[4], &m, 0, S);
+  st = armctl_begin(arg[0], arg[1], arg[2], hd, arg[4], &m, 0, S);
   armctl_mode_write(&m, S);
-#if ARMCTL_FRICTION
-  { /* Plant.friction_torque: the friction model's torque for the sliding joints, the holding torque for the stuck */
-    double f[N];
-    const double* in[3] = {v, m.dir, arg[4]};
-    double* out[1] = {f};
-    CALL(pk_friction, 3, in, 1, out);
-    for (i = 0; i < N; ++i) S[S_TAUF + i] = f[i] + m.hold[i];
-  }
-#else
-  for (i = 0; i < N; ++i) S[S_TAUF + i] = 0.0;
-#endif
+  armctl_friction_torque(arg[1], &m, arg[4], S);
   S[S_BEGUN] = 1.0;
   memcpy(res[0], S, sizeof S);
   res[1][0] = m.any;
@@ -267,16 +272,13 @@ CASADI_SYMBOL_EXPORT int begin(const casadi_real** arg, casadi_real** res, casad
 }
 
 CASADI_SYMBOL_EXPORT int accel(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  double q[N], v[N], tau[N], a[N], f[N], e[N], hd[6];
+  double a[N], f[N], e[N], hd[6];
   armctl_mode m;
   int st;
   (void)iw; (void)w; (void)mem;
-  memcpy(q, arg[0], sizeof q);
-  memcpy(v, arg[1], sizeof v);
-  memcpy(tau, arg[2], sizeof tau);
   armctl_mode_read(arg[5], &m);
   armctl_interp(arg[3], 0.0, hd);
-  st = m.all ? OK : armctl_rhs(q, v, tau, hd, arg[4], &m, a, f, e);
+  st = m.all ? OK : armctl_rhs(arg[0], arg[1], arg[2], hd, arg[4], &m, a, f, e);
   if (m.all) memset(a, 0, sizeof a);
   memcpy(res[0], a, sizeof a);
   res[1][0] = res[1][1] = res[1][2] = 0.0;

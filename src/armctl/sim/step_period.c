@@ -1,27 +1,25 @@
 /* One control period of the simulator's loop in one call (see step_core.c for the definitions; appended after
- * step_events.c): what ClosedLoop does with a plant for the period [t_k, t_k + Δt_c) under the held τ_k — the checks
- * of the controller's torque τ_k and its saturation (ClosedLoop.control), the stick solve at t_k (Plant.begin), the
- * friction torque and the stuck joints recorded there (Recorder.record_friction), q̈ at t_k, the m sub-steps with
- * their events (stepper.advance), the friction and external work accumulated over them — and the state check of
- * the sample t_k + Δt_c it leaves (ClosedLoop.check).
+ * step_events.c): the C transcription of PythonEngine.advance_period and PythonEngine.last_sample
+ * (armctl/sim/python_engine.py), the plant's side of the period [t_k, t_k + Δt_c) under the held τ_k — the stick
+ * solve at t_k (Plant.begin), the friction torque and the stuck joints recorded there (Recorder.record_friction),
+ * q̈ at t_k, the m sub-steps with their events (stepper.advance), the friction and external work accumulated over
+ * them. A change to one is a change to the other (tests/sim/test_compiled_plant.py compares them). The controller's
+ * side (the checks of the state and of τ_k, its saturation) is ClosedLoop's, in Python, for every engine.
  *
- *   period(TAU, limit, W, par, opt, S) -> (Q, V, A, F, STUCK, WF, WE, out, S)
+ *   period(TAU, W, par, opt, S) -> (Q, V, A, F, STUCK, WF, WE, out, S)
  *
  * TAU and the outputs Q … WE are bound to the whole arrays of the run's record (rows of N, or of 1 for the work),
  * larger than the one row they are declared as (CasADi's buffers take any buffer at least that large). The function
- * reads the controller's torque τ_k from row k of TAU: if it is not finite it does nothing else (TORQUE_NOT_FINITE);
- * where saturation is on (opt[8]) and some |τ_k,i| exceeds limit_i, the torque held is τ_k clipped to ±limit
- * (CLIPPED). It reads the state of sample k (row k of Q and V, the work so far from WF[k] and WE[k]) and writes row
- * k of A, F and STUCK (STUCK only where a joint is stuck: the record starts as zeros) and row k + 1 of Q, V, WF and
- * WE. W holds the disturbance's samples of every sub-step, 18 each (start, middle, end of sub-step i at W + 18 i;
- * only its start for the last sample).
+ * reads the torque held, τ_k, from row k of TAU (the record's applied torques: saturated by the loop), the state of
+ * sample k (row k of Q and V, the work so far from WF[k] and WE[k]) and writes row k of A, F and STUCK (STUCK only
+ * where a joint is stuck: the record starts as zeros) and row k + 1 of Q, V, WF and WE. W holds the disturbance's
+ * samples of every sub-step, 18 each (start, middle, end of sub-step i at W + 18 i; only its start for the last
+ * sample).
  *
  * opt = [k, h, scheme, m, rows, q̈ by an evaluation at t_k (1) or from the first sub-step (0), max_velocity,
- *        max_position, saturate (1) or not (0)]; m = 0: the last sample (no step after it: the torque's checks, the
- *        stick solve, its records and q̈ only).
- * out = [status, where it failed (PERIOD_BEGIN, PERIOD_ACCEL, PERIOD_STEP), code]: code = why the state it left stops
- *        the run (STATE_OK, STATE_NOT_FINITE, STATE_VELOCITY, STATE_POSITION), plus CLIPPED if τ_k was clipped (also
- *        when the period then failed), or TORQUE_NOT_FINITE alone (the codes of armctl/sim/period.py).
+ *        max_position]; m = 0: the last sample (no step after it: the stick solve, its records and q̈ only).
+ * out = [status, where it failed (PERIOD_BEGIN, PERIOD_ACCEL, PERIOD_STEP), the state code of the state it left
+ *        (armctl_state_check)].
  * A row outside the record (k < 0, or k + 1 ≥ rows with m > 0, k ≥ rows) writes nothing: status BAD_ROW.
  */
 #define BAD_ROW 3
@@ -32,10 +30,10 @@
 #define STATE_NOT_FINITE 1
 #define STATE_VELOCITY 2
 #define STATE_POSITION 3
-#define CLIPPED 4
-#define TORQUE_NOT_FINITE 8
 
-/* ClosedLoop.check on (q, v): the same tests in the same order (finite: every entry; a sum could overflow). */
+/* engine.state_code (armctl/sim/engine.py), the stop rules on the state a period leaves: the same tests in the same
+ * order (finite: every entry; a sum could overflow). A change to one is a change to the other
+ * (tests/sim/test_period.py compares them). */
 static int armctl_state_check(const double* q, const double* v, double max_velocity, double max_position) {
   double vmax = -INFINITY, vmin = INFINITY, qmax = -INFINITY, qmin = INFINITY;
   int i, finite = 1;
@@ -53,12 +51,12 @@ static int armctl_state_check(const double* q, const double* v, double max_veloc
 }
 
 CASADI_SYMBOL_EXPORT int period(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  const double *limit = arg[1], *W = arg[2], *par = arg[3], *opt = arg[4];
+  const double *W = arg[1], *par = arg[2], *opt = arg[3];
   double *Q = res[0], *V = res[1], *A = res[2], *F = res[3], *STUCK = res[4], *WF = res[5], *WE = res[6];
   double *out = res[7];
   double S[NS], q[N], v[N], tau[N], hd[6];
   long k = (long)opt[0], m = (long)opt[3], rows = (long)opt[4], i;
-  int scheme = (int)opt[2], st, j, clipped = 0, finite = 1;
+  int scheme = (int)opt[2], st, j;
   double h = opt[1];
   armctl_mode md;
   (void)iw; (void)w; (void)mem;
@@ -67,21 +65,8 @@ CASADI_SYMBOL_EXPORT int period(const casadi_real** arg, casadi_real** res, casa
     out[0] = BAD_ROW;
     return 0;
   }
-  /* ClosedLoop.control: τ_k finite (every entry), clipped where beyond the limits */
   memcpy(tau, arg[0] + k * N, sizeof tau);
-  for (j = 0; j < N; ++j) if (!isfinite(tau[j])) finite = 0;
-  if (!finite) {
-    out[2] = TORQUE_NOT_FINITE;
-    return 0;
-  }
-  if (opt[8] != 0.0) {
-    for (j = 0; j < N; ++j) if (fabs(tau[j]) > limit[j]) clipped = 1;
-    if (clipped) { /* as np.clip(τ, −limit, limit) */
-      for (j = 0; j < N; ++j) tau[j] = tau[j] < -limit[j] ? -limit[j] : tau[j] > limit[j] ? limit[j] : tau[j];
-      out[2] = CLIPPED;
-    }
-  }
-  memcpy(S, arg[5], sizeof S);
+  memcpy(S, arg[4], sizeof S);
   memcpy(q, Q + k * N, sizeof q);
   memcpy(v, V + k * N, sizeof v);
   /* Plant.begin at t_k, and what Recorder.record_friction records of it (as the function begin) */
@@ -95,17 +80,7 @@ CASADI_SYMBOL_EXPORT int period(const casadi_real** arg, casadi_real** res, casa
     memcpy(res[8], S, sizeof S);
     return 0;
   }
-#if ARMCTL_FRICTION
-  {
-    double f[N];
-    const double* in[3] = {v, md.dir, par};
-    double* fo[1] = {f};
-    CALL(pk_friction, 3, in, 1, fo);
-    for (j = 0; j < N; ++j) S[S_TAUF + j] = f[j] + md.hold[j];
-  }
-#else
-  for (j = 0; j < N; ++j) S[S_TAUF + j] = 0.0;
-#endif
+  armctl_friction_torque(v, &md, par, S);
   for (j = 0; j < N; ++j) F[k * N + j] = S[S_TAUF + j];
   if (md.any) /* (else the row stays as the record starts it: zeros) */
     for (j = 0; j < N; ++j) STUCK[k * N + j] = md.stuck[j];
@@ -146,7 +121,7 @@ CASADI_SYMBOL_EXPORT int period(const casadi_real** arg, casadi_real** res, casa
 #else
     (void)wf; (void)we;
 #endif
-    out[2] += armctl_state_check(q, v, opt[6], opt[7]);
+    out[2] = armctl_state_check(q, v, opt[6], opt[7]);
   }
   S[S_BEGUN] = 0.0;
   memcpy(res[8], S, sizeof S);

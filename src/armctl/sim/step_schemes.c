@@ -1,6 +1,24 @@
 /* The integration schemes of the generated step (see step_core.c): RK4 and Euler with the work of the forces,
  * backward and symplectic Euler by Newton's method. */
 
+/* implicit._newton_update: one Newton step x − J⁻¹r of the implicit schemes, the stuck joints held (their rows and
+ * columns of J replaced by the identity's, their residual zero); *converged: the step was below the tolerance. jac
+ * and res are overwritten. */
+static int armctl_newton_update(double* jac, double* res, const int* stuck, double* x, int* converged) {
+  double dx[N];
+  int i, j, st;
+  if (stuck) for (i = 0; i < N; ++i) if (stuck[i]) {
+    for (j = 0; j < N; ++j) { jac[i + N * j] = 0.0; jac[j + N * i] = 0.0; }
+    jac[i + N * i] = 1.0;
+    res[i] = 0.0;
+  }
+  for (i = 0; i < N; ++i) res[i] = -res[i];
+  if ((st = armctl_lu_solve(jac, res, dx)) != OK) return st;
+  for (i = 0; i < N; ++i) x[i] += dx[i];
+  *converged = armctl_max_abs(dx) <= NEWTON_TOL * (1.0 + armctl_max_abs(x));
+  return OK;
+}
+
 /* ----------------------------------------------------------------------------------------- the schemes */
 /* One step of length hs starting off into the step [t, t + h] (θ = off/h), for the fixed stick state m.
  * Returns a status; a0 is the accelerations at the start (a0_valid: 0 for the implicit schemes). */
@@ -87,17 +105,10 @@ static int armctl_scheme_step(int scheme, double off, double hs, double h, const
       armctl_matvec(M, dvel, Mdv);
       for (i = 0; i < N; ++i) res[i] = Mdv[i] - hs * ((base[i] - f[i]) + e[i]);
       {
-        int j, st;
-        if (stuck) for (i = 0; i < N; ++i) if (stuck[i]) {
-          for (j = 0; j < N; ++j) { jac[i + N * j] = 0.0; jac[j + N * i] = 0.0; }
-          jac[i + N * i] = 1.0;
-          res[i] = 0.0;
-        }
-        for (i = 0; i < N; ++i) res[i] = -res[i];
-        if ((st = armctl_lu_solve(jac, res, dx)) != OK) return st;
+        int st = armctl_newton_update(jac, res, stuck, x, &converged);
+        if (st != OK) return st;
+        if (converged) break;
       }
-      for (i = 0; i < N; ++i) x[i] += dx[i];
-      if (armctl_max_abs(dx) <= NEWTON_TOL * (1.0 + armctl_max_abs(x))) { converged = 1; break; }
     }
     if (!converged) S[S_UNCONVERGED] += 1.0;
     if (stuck) for (i = 0; i < N; ++i) if (stuck[i]) x[i] = 0.0;
@@ -115,7 +126,7 @@ static int armctl_scheme_step(int scheme, double off, double hs, double h, const
     }
     return OK;
   } else { /* implicit.symplectic_euler */
-    double p0[N], vb[N], fs[N], jx[N * N], f[N], e[N], K[N * N], jac[N * N], res[N], dx[N], Mvb[N], Kvb[N];
+    double p0[N], vb[N], fs[N], jx[N * N], f[N], e[N], K[N * N], jac[N * N], res[N], Mvb[N], Kvb[N];
     int it, converged = 0;
     armctl_interp(W, off / h, hd);
     for (i = 0; i < N; ++i) base[i] = tau[i] - grav[i];
@@ -143,17 +154,10 @@ static int armctl_scheme_step(int scheme, double off, double hs, double h, const
       armctl_matvec(M, vb, Mvb);
       for (i = 0; i < N; ++i) res[i] = Mvb[i] - p0[i] - hs * (base[i] + fs[i]);
       {
-        int j, st;
-        if (stuck) for (i = 0; i < N; ++i) if (stuck[i]) {
-          for (j = 0; j < N; ++j) { jac[i + N * j] = 0.0; jac[j + N * i] = 0.0; }
-          jac[i + N * i] = 1.0;
-          res[i] = 0.0;
-        }
-        for (i = 0; i < N; ++i) res[i] = -res[i];
-        if ((st = armctl_lu_solve(jac, res, dx)) != OK) return st;
+        int st = armctl_newton_update(jac, res, stuck, vb, &converged);
+        if (st != OK) return st;
+        if (converged) break;
       }
-      for (i = 0; i < N; ++i) vb[i] += dx[i];
-      if (armctl_max_abs(dx) <= NEWTON_TOL * (1.0 + armctl_max_abs(vb))) { converged = 1; break; }
     }
 #endif
     if (!converged) S[S_UNCONVERGED] += 1.0;
@@ -175,7 +179,7 @@ static int armctl_scheme_step(int scheme, double off, double hs, double h, const
 #else
     (void)Kvb;
 #endif
-    (void)jac; (void)res; (void)dx;
+    (void)jac; (void)res;
     return OK;
   }
 #endif

@@ -23,7 +23,8 @@ def advance(
 ) -> tuple[FloatArray, FloatArray, FloatArray | None, float, float]:
     """Integrate from (t, q, q̇) over h under τ; returns (q₁, q̇₁, a at the start or None, W_f, W_e).
     ``begun``: :meth:`Plant.begin` was already called for this state. A plant with a disturbance samples it
-    for the step (:meth:`Plant.sample_disturbance`)."""
+    for the step (:meth:`Plant.sample_disturbance`). (C copy: ``step_events.c``'s ``armctl_advance``;
+    tests/sim/test_compiled_plant.py fails when they disagree.)"""
     if plant.disturbance is None:
         if plant.sticky is None:  # no events to find (or the step finds them itself: the generated step)
             return step(t, q, v, tau, h)

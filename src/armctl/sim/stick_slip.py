@@ -33,7 +33,8 @@ class NotPositiveDefinite(ArithmeticError):
 
 def constrained_accel(mass: FloatArray, rhs: FloatArray, stuck: BoolArray | None) -> FloatArray:
     """q̈ with q̈_S = 0 for the boolean mask ``stuck``: M_FF q̈_F = rhs_F (a Cholesky solve of the free
-    joints' block, taken out of M, so that the stuck joints do not enter the factorisation)."""
+    joints' block, taken out of M, so that the stuck joints do not enter the factorisation).
+    (C copy: ``step_core.c``'s ``armctl_masked_solve``; tests/sim/test_compiled_plant.py fails when they disagree.)"""
     if stuck is None:
         a, info = lapack.dposv(mass, rhs)[1:]
     else:
@@ -63,6 +64,9 @@ def solve_sticking(
     mass: M(q); rhs: r (every torque but the friction of the candidates); direction: sliding direction of
     every joint (0 at rest), updated for the joints that break away; held: joints kept stuck whatever their
     λ. λ (n,) is the friction torque of each stuck joint (0 elsewhere) [N·m], with the sign it has in τ_f.
+
+    (C copy: ``step_events.c``'s ``armctl_solve_sticking``; tests/sim/test_compiled_plant.py fails when they
+    disagree.)
     """
     n = rhs.shape[0]
     stuck = candidates.copy()

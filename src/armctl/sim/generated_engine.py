@@ -1,0 +1,102 @@
+"""`GeneratedEngine`: the plant advanced by the generated C period (an :class:`~armctl.sim.engine.Engine`).
+
+The plant is a :class:`~armctl.sim.compiled_plant.CompiledPlant`; a control period is one call into C
+(:meth:`CompiledPlant.period <armctl.sim.compiled_plant.CompiledPlant.period>`, ``step_period.c``), bound once to the
+run's record (:class:`PeriodBinding`): it reads the held torque and the state of sample k from the record and writes
+what :class:`~armctl.sim.python_engine.PythonEngine` writes — q̈_k, the friction torque and stuck joints at row k, the
+state and the work at row k + 1. The external torques, contact forces and sensors of a sample are recorded in Python
+(:meth:`Recorder.record_external <armctl.sim.recorder.Recorder.record_external>`), as the Python engine records them.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from armctl._checks import FloatArray
+from armctl.sim.engine import EngineRun
+
+if TYPE_CHECKING:
+    from armctl.sim.compiled_plant import CompiledPlant
+
+
+@dataclass(frozen=True)
+class PeriodBinding:
+    """The rows the generated period reads and writes, and how it integrates a period.
+
+    The arrays are C-contiguous float64 arrays of the run's samples (the generated code reads and writes them by
+    row): (samples, n) ones of the applied torques (read), q, q̇, q̈, the friction torque and the stuck joints (1.0:
+    stuck), and (samples,) ones of the friction and external work [J].
+
+    Parameters
+    ----------
+    tau, q, qd, qdd, tau_friction, stuck : (samples, n) ndarray
+        The record's rows (see above).
+    work_friction, work_external : (samples,) ndarray
+        The record's work.
+    substeps : int
+        Integration steps m per control period.
+    dt : float
+        The integration step h [s].
+    accel_at_start : bool
+        q̈ at the period's start by an evaluation (the implicit schemes, whose step gives none).
+    max_velocity, max_position : float
+        The stop rules the state a period leaves is checked against (:func:`armctl.sim.engine.state_code`).
+    """
+
+    tau: FloatArray
+    q: FloatArray
+    qd: FloatArray
+    qdd: FloatArray
+    tau_friction: FloatArray
+    stuck: FloatArray
+    work_friction: FloatArray
+    work_external: FloatArray
+    substeps: int
+    dt: float
+    accel_at_start: bool
+    max_velocity: float
+    max_position: float
+
+
+class GeneratedEngine:
+    """``plant``'s control periods, each one call into its generated code (see the module)."""
+
+    def __init__(self, plant: CompiledPlant) -> None:
+        self.plant = plant
+        self._external = self.observes = plant.has_external
+
+    def bind(self, run: EngineRun) -> None:
+        self._rec = rec = run.record
+        if not self.plant.simple:  # the friction torque of a sample the run stops at before its stick solve: NaN
+            rec.tau_friction.fill(math.nan)
+        rows = ("q", "qd", "qdd", "tau_friction", "stuck", "work_friction", "work_external")
+        self.plant.bind_record(
+            PeriodBinding(
+                tau=rec.tau_applied,  # the torque held
+                **{name: getattr(rec, name) for name in rows},
+                substeps=run.substeps,
+                dt=run.dt,
+                accel_at_start=run.accel_at_start,
+                max_velocity=run.max_velocity,
+                max_position=run.max_position,
+            )
+        )
+
+    def observe(self, k: int, t: float) -> None:
+        if self._external:
+            rec = self._rec
+            rec.record_external(k, self.plant, t, rec.q[k], rec.qd[k])  # type: ignore[arg-type]  # a plant's duck
+
+    def advance_period(self, k: int, t: float, tau: FloatArray) -> int:
+        """(:meth:`Engine.advance_period <armctl.sim.engine.Engine.advance_period>`: ``tau`` is read from row k of
+        the record's applied torques; the state code is ``step_period.c``'s ``armctl_state_check``.)"""
+        return self.plant.period(k, t)
+
+    def last_sample(self, k: int, t: float, tau: FloatArray) -> None:
+        self.plant.last_sample(k, t)
+
+    def info(self) -> dict[str, Any]:
+        pl = self.plant
+        return {"friction": pl.friction.name if pl.friction is not None else "none", "compiled": True, **pl.stats}
