@@ -29,7 +29,7 @@ import armctl
 from armctl.controllers import PDGravity
 from armctl.errors import SimulationWarning
 from armctl.references import Quintic
-from armctl.sim import SimResult, simulate, sweep
+from armctl.sim import SimResult, StopRules, simulate, sweep
 from armctl.sim.tables import run_metrics
 
 PENDULUM = armctl.models.pendulum()
@@ -45,7 +45,7 @@ def run(kp: float, kd: float) -> SimResult:
     controller = PDGravity(armctl.Dynamics(PENDULUM), kp, kd)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", SimulationWarning)
-        return simulate(PENDULUM, controller, REFERENCE, 0.3, control_dt=2e-3, max_velocity=50.0)
+        return simulate(PENDULUM, controller, REFERENCE, 0.3, control_dt=2e-3, stop=StopRules(max_velocity=50.0))
 
 
 def press_ctrl_c_after(store: Path, runs: int, done: threading.Event) -> None:

@@ -26,7 +26,7 @@ from armctl._checks import gain_matrix, nonnegative_vector, per_joint, real_arra
 from armctl.controllers.osc import Contact, FramePositionTask
 from armctl.errors import InvalidParameterError
 from armctl.references import Quintic
-from armctl.sim import simulate
+from armctl.sim import Sensing, simulate
 from armctl.tuning.sampled import sampled_pd_loop
 
 DATES = np.array(["2020-01-01", "2020-01-02"], dtype="datetime64[D]")
@@ -165,8 +165,8 @@ def test_every_entry_point_takes_an_integral_float_as_its_integer() -> None:
         return -20.0 * (q - r.q) - 2.0 * qd
 
     args = (plant, ctrl, ref, 0.05)
-    a = simulate(*args, q0=[0.0], delay=2, seed=4, noise_q=1e-3)
-    b = simulate(*args, q0=[0.0], delay=2.0, seed=np.int64(4), noise_q=1e-3)
+    a = simulate(*args, q0=[0.0], sensing=Sensing(delay=2, seed=4, noise_q=1e-3))
+    b = simulate(*args, q0=[0.0], sensing=Sensing(delay=2.0, seed=np.int64(4), noise_q=1e-3))
     np.testing.assert_array_equal(a.q, b.q)
     assert b.info["delay"] == 2 and b.info["seed"] == 4
     lp, lf = sampled_pd_loop(100.0, 10.0, 1e-3, delay=1), sampled_pd_loop(100.0, 10.0, 1e-3, delay=1.0)
@@ -179,10 +179,18 @@ def test_every_entry_point_takes_an_integral_float_as_its_integer() -> None:
     "make",
     [
         lambda: simulate(
-            armctl.models.pendulum(), lambda t, q, qd, r: -q, armctl.Reference.hold([0.0]), 0.01, delay=True
+            armctl.models.pendulum(),
+            lambda t, q, qd, r: -q,
+            armctl.Reference.hold([0.0]),
+            0.01,
+            sensing=Sensing(delay=True),
         ),
         lambda: simulate(
-            armctl.models.pendulum(), lambda t, q, qd, r: -q, armctl.Reference.hold([0.0]), 0.01, seed=1.5
+            armctl.models.pendulum(),
+            lambda t, q, qd, r: -q,
+            armctl.Reference.hold([0.0]),
+            0.01,
+            sensing=Sensing(seed=1.5),
         ),
         lambda: sampled_pd_loop(100.0, 10.0, 1e-3, delay=0.5),
         lambda: FramePositionTask(priority=True),

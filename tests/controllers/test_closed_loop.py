@@ -15,7 +15,7 @@ from armctl.model import Joint, Link
 from armctl.model.consistency import is_physical
 from armctl.model.parts import transform
 from armctl.references import Sinusoid
-from armctl.sim import simulate
+from armctl.sim import Forces, Sensing, simulate
 from armctl.tuning import SampledDataAnalysis
 from tests.helpers.arms import dynamics, model
 
@@ -158,8 +158,8 @@ def test_sampled_computed_torque_critical_gain_with_one_period_delay() -> None:
         4.0,
         q0=q0,
         control_dt=period,
-        delay=1,
         saturate=False,
+        sensing=Sensing(delay=1),
     )
     unstable = simulate(
         dyn,
@@ -168,8 +168,8 @@ def test_sampled_computed_torque_critical_gain_with_one_period_delay() -> None:
         4.0,
         q0=q0,
         control_dt=period,
-        delay=1,
         saturate=False,
+        sensing=Sensing(delay=1),
     )
     assert not stable.diverged and np.abs(stable.q[-1] - ref.q).max() < 1e-6
     grew = unstable.diverged or np.abs(unstable.q[-1] - ref.q).max() > 0.01
@@ -214,10 +214,8 @@ def test_adaptation_drifts_under_disturbance_and_protections_bound_it() -> None:
             Adaptive(dyn, 5.0, 1000.0, 20.0, **options),
             ref,
             20.0,
-            noise_q=1e-3,
-            noise_qd=1e-2,
-            seed=1,
-            disturbance=disturbance,
+            sensing=Sensing(noise_q=1e-3, noise_qd=1e-2, seed=1),
+            forces=Forces(disturbance=disturbance),
         )
         d = np.linalg.norm(res.logs["theta"] - pi, axis=1)
         dev[name] = (d[np.searchsorted(res.t, 5.0)], d[-1])

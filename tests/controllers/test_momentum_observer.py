@@ -21,7 +21,7 @@ from armctl.errors import (
     SingularConfigurationError,
     UnknownNameError,
 )
-from armctl.sim import ContactPoint, KelvinVoigt, Plane, simulate
+from armctl.sim import ContactPoint, Forces, KelvinVoigt, Plane, simulate
 from tests.helpers.arms import dynamics, model
 
 Q_READY = np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])
@@ -47,7 +47,7 @@ def push_run(step_at: float = 0.3, force: float = 20.0, duration: float = 0.6) -
         armctl.Reference(Q_READY),
         duration,
         q0=Q_READY,
-        disturbance=lambda t: h if t >= step_at else np.zeros(6),
+        forces=Forces(disturbance=lambda t: h if t >= step_at else np.zeros(6)),
     )
 
 
@@ -155,7 +155,7 @@ def test_collision_isolation_names_the_link_that_was_hit() -> None:
     floor = Plane(KelvinVoigt(5e3, 20.0), point=point - [0, 0, 0.005], points=[ContactPoint("panda_joint4", offset)])
     speed = np.array([0.0, 0.0, 0.0, -0.3, 0.0, 0.0, 0.0])  # the elbow folds: the point on link 4 goes down
     ref = lambda t: armctl.Reference(Q_READY + speed * t, speed, np.zeros(7))  # noqa: E731
-    res = simulate(m, PDGravity(dyn, KP, KD), ref, 0.5, q0=Q_READY, environment=floor)
+    res = simulate(m, PDGravity(dyn, KP, KD), ref, 0.5, q0=Q_READY, forces=Forces(environment=floor))
     touched = np.flatnonzero(np.abs(res.contact_force[:, 0]).max(axis=1) > 0)
     assert touched.size
     calls = []

@@ -15,7 +15,7 @@ import armctl
 from armctl.controllers import Controller, PDDesiredGravity, PDGravity
 from armctl.errors import InvalidParameterError
 from armctl.references import Sinusoid
-from armctl.sim import simulate
+from armctl.sim import Sensing, simulate
 from armctl.tuning import (
     SampledDataAnalysis,
     computed_torque_condition,
@@ -162,8 +162,8 @@ def test_computed_torque_with_a_constant_inertia_in_closed_loop() -> None:
             10.0,
             control_dt=period,
             dt=1e-3,
-            delay=1,
             saturate=False,
+            sensing=Sensing(delay=1),
         )
 
     def tracking_error(res: armctl.SimResult) -> float:
@@ -240,8 +240,8 @@ def test_sampled_data_condition_in_closed_loop() -> None:
             q0=set_point + np.array([0.02, -0.02]),
             control_dt=0.01,
             dt=1e-3,
-            delay=1,
             saturate=False,
+            sensing=Sensing(delay=1),
         )
 
     assert np.abs(run(0.95 * critical).q[-1] - set_point).max() < 1e-6

@@ -185,6 +185,7 @@ def closed_loop(name: str, quick: bool, rounds: int = 5, timing_states: int = 10
     from armctl.scenes import scene
     from armctl.scenes.base import diverged_errors
     from armctl.sim import simulate
+    from armctl.sim.options import regroup
 
     sc = scene(name)
     baseline = f"full/{sc.backend}"
@@ -200,7 +201,7 @@ def closed_loop(name: str, quick: bool, rounds: int = 5, timing_states: int = 10
         ctrl = ComputedTorque(_dynamics(model, backend), gains["kp"], gains["kd"], gains.get("ki"))
         with warnings.catch_warnings():  # a limit overrun is recorded in the candidate's "status" instead
             warnings.simplefilter("ignore", SimulationWarning)
-            res = simulate(plant, ctrl, sc.reference, duration, **options)
+            res = simulate(plant, ctrl, sc.reference, duration, **regroup(options))
         want = np.array([sc.reference(float(t)).q for t in res.t])
         err = np.abs(res.q - want)
         controllers[key] = ctrl

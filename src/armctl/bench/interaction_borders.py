@@ -48,7 +48,7 @@ def press(
 ) -> Any:
     """The Panda at its ready pose on a table of ``stiffness`` [N/m] under ``controller``: the table at the tool's
     height, or ``preload``/k_e above it (the tool starts pressing with ``preload`` newtons)."""
-    from armctl.sim import ForceSensor, KelvinVoigt, Plane, Sensing, simulate
+    from armctl.sim import Forces, ForceSensor, KelvinVoigt, Plane, Sensing, simulate
 
     model, _, z, _ = _setup()
     table = Plane(KelvinVoigt(stiffness, 0.0), point=(0.0, 0.0, z + preload / stiffness))
@@ -56,7 +56,9 @@ def press(
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # saturation and energy warnings of runs that chatter: the outcome says it
         ref = armctl.Reference(Q_READY)
-        return simulate(model, controller, ref, duration, q0=Q_READY, dt=dt, environment=table, sensing=sensing)
+        return simulate(
+            model, controller, ref, duration, q0=Q_READY, dt=dt, forces=Forces(environment=table), sensing=sensing
+        )
 
 
 def outcome(res: Any) -> str:

@@ -28,7 +28,7 @@ STEP_AT, PUSH, THRESHOLD, NOISE_QD = 0.5, 20.0, 3.0, 2e-3
 def push_run(duration: float = 1.2, seed: int = 0) -> Any:
     """The recorded run (see the module)."""
     from armctl.controllers import PDGravity
-    from armctl.sim import Sensing, simulate
+    from armctl.sim import Forces, Sensing, simulate
 
     model = armctl.models.panda()
     dyn = armctl.Dynamics(model)
@@ -38,7 +38,7 @@ def push_run(duration: float = 1.2, seed: int = 0) -> Any:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         return simulate(model, PDGravity(dyn, kp, kd), armctl.Reference(Q_READY), duration, q0=Q_READY,
-                        disturbance=lambda t: h if t >= STEP_AT else np.zeros(6),
+                        forces=Forces(disturbance=lambda t: h if t >= STEP_AT else np.zeros(6)),
                         sensing=Sensing(noise_qd=NOISE_QD, seed=seed))  # fmt: skip
 
 

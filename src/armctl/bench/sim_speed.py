@@ -41,7 +41,7 @@ import armctl
 from armctl.controllers import ComputedTorque
 from armctl.model.parts import Frame, Joint, Link, transform
 from armctl.references import Reference
-from armctl.sim import simulate
+from armctl.sim import Forces, simulate
 
 #: the benchmark's own checks (its tests), not printed: the largest ratio to MuJoCo's loop of the default run on the
 #: Panda and of every chain, of the contact plant alone to MuJoCo's plant, of semi-implicit Euler to RK4; the least
@@ -69,7 +69,7 @@ PANDA_MODES: dict[str, tuple[bool, dict[str, Any]]] = {
     "euler": (True, {"integrator": "euler"}),
     "semi-implicit-euler": (True, {"integrator": "semi-implicit-euler"}),
     "semi-implicit-euler, python step": (True, {"integrator": "semi-implicit-euler", "compile": False}),
-    "smooth friction": (True, {"friction": "smooth"}),
+    "smooth friction": (True, {"forces": Forces(friction="smooth")}),
     "frictionless": (False, {}),
 }
 

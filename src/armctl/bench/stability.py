@@ -123,7 +123,7 @@ def run_cell(controller: str, k: float, f: float, period: float, duration: float
     import warnings
 
     from armctl.errors import SimulationWarning
-    from armctl.sim import simulate
+    from armctl.sim import Forces, Sensing, StopRules, simulate
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", SimulationWarning)
@@ -135,10 +135,10 @@ def run_cell(controller: str, k: float, f: float, period: float, duration: float
             q0=[SET_POINT + OFFSET],
             control_dt=period,
             dt=_step(period, dt_max),
-            delay=1,
+            sensing=Sensing(delay=1),
+            forces=Forces(friction="smooth"),
+            stop=StopRules(max_velocity=1e3),
             saturate=False,
-            friction="smooth",
-            max_velocity=1e3,
         )
     if res.diverged:
         return "unstable"

@@ -273,6 +273,7 @@ class Scene:
             An unknown method, or an override that is not an option of simulate.
         """
         from armctl.sim import simulate
+        from armctl.sim.options import regroup
 
         valid = tuple(
             p for p in inspect.signature(simulate).parameters if p not in ("plant", "controller", "reference")
@@ -289,7 +290,9 @@ class Scene:
             **overrides,
         }
         duration = options.pop("duration", self.duration)
-        return simulate(self.dynamics("plant"), self.controller(method, gains), self.reference, duration, **options)
+        return simulate(
+            self.dynamics("plant"), self.controller(method, gains), self.reference, duration, **regroup(options)
+        )
 
     def metrics(
         self,

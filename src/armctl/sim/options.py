@@ -11,8 +11,8 @@ from __future__ import annotations
 import math
 import warnings
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, fields
-from typing import TYPE_CHECKING, Any
+from dataclasses import dataclass, fields, replace
+from typing import TYPE_CHECKING, Any, cast
 
 from numpy.typing import ArrayLike
 
@@ -125,6 +125,51 @@ def grouped(groups: dict[str, Any], keywords: dict[str, Any], stacklevel: int = 
             )
         out.append(given if given is not None else cls(**own))
     return out[0], out[1], out[2]
+
+
+def regroup(options: dict[str, Any]) -> dict[str, Any]:
+    """``simulate`` keywords with the groups' fields given flat (``{"environment": plane, "delay": 1}``, as a
+    scene's ``sim_options`` holds them) moved into their groups (``forces=Forces(environment=plane)``,
+    ``sensing=Sensing(delay=1)``), merged into a group given alongside; the other keywords as they are.
+
+    Parameters
+    ----------
+    options : dict
+        Keyword → value, for :func:`armctl.sim.simulate`.
+
+    Returns
+    -------
+    dict
+        The same options without flat fields.
+
+    Raises
+    ------
+    InvalidParameterError
+        A group that is not an object of its class, or a field given both flat and in its group.
+    """
+    out = {k: v for k, v in options.items() if k not in _FIELDS}
+    for name, cls in GROUPS.items():
+        own = {f.name: options[f.name] for f in fields(cls) if f.name in options and options[f.name] is not None}
+        if not own:
+            continue
+        given = out.get(name)
+        if given is None:
+            out[name] = cls(**own)
+            continue
+        if not isinstance(given, cls):
+            raise InvalidParameterError(f"{name} must be an armctl.sim.{cls.__name__}, got {given!r}", value=given)
+        default = cls()
+        both = [k for k in own if getattr(given, k) is not getattr(default, k)]
+        if both:
+            raise InvalidParameterError(
+                f"{', '.join(both)} given both flat and in {name}={given!r}: give each option once", value=own
+            )
+        out[name] = replace(cast(Any, given), **own)
+    return out
+
+
+#: the names of the groups' fields
+_FIELDS = frozenset(f.name for cls in GROUPS.values() for f in fields(cls))
 
 
 def _warn_flat(keywords: dict[str, Any], stacklevel: int) -> None:

@@ -13,7 +13,7 @@ import pytest
 
 import armctl
 from armctl.controllers import Admittance, Controller, ForceControl, Measurement, ParallelForcePosition
-from armctl.sim import ForceSensor, KelvinVoigt, Plane
+from armctl.sim import Forces, ForceSensor, KelvinVoigt, Plane, Sensing
 
 Q_READY = np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])
 KE = 2e4  # [N/m] the plane's stiffness
@@ -56,8 +56,8 @@ def press(dyn: armctl.Dynamics, ctrl: Controller, z_surface: float, duration: fl
         duration,
         q0=Q_READY,
         dt=2e-4,
-        environment=plane,
-        sensors=ForceSensor(world_axes=True),
+        forces=Forces(environment=plane),
+        sensing=Sensing(sensors=ForceSensor(world_axes=True)),
     )
 
 
@@ -153,8 +153,8 @@ def test_an_observer_is_a_force_source(panda: armctl.Dynamics) -> None:
         3.0,
         q0=Q_READY,
         dt=2e-4,
-        environment=plane,
-        sensors=ForceSensor(world_axes=True),
+        forces=Forces(environment=plane),
+        sensing=Sensing(sensors=ForceSensor(world_axes=True)),
     )
     assert obs.updates == len(res.t) - 1 or obs.updates == len(res.t)
     assert res.sensor[-1, 0, 2] == pytest.approx(-10.0, abs=1e-3)
@@ -174,8 +174,8 @@ def test_simulate_feeds_the_sensor_reading(panda: armctl.Dynamics, world_axes: b
         3.0,
         q0=Q_READY,
         dt=2e-4,
-        environment=plane,
-        sensors=ForceSensor(world_axes=world_axes),
+        forces=Forces(environment=plane),
+        sensing=Sensing(sensors=ForceSensor(world_axes=world_axes)),
     )
     assert not res.diverged
     rot = panda.frame_pose(res.q[-1])[:3, :3]
@@ -217,7 +217,9 @@ def test_admittance_yields_to_a_moment_by_its_rotational_stiffness(panda: armctl
     def loop(t: float, q: Any, qd: Any, ref: armctl.Reference) -> Any:
         return ctrl(t, q, qd, ref, measurement=Measurement(wrench=push, world_axes=True))
 
-    res = armctl.simulate(panda.model, loop, armctl.Reference(Q_READY), 3.0, q0=Q_READY, disturbance=lambda t: push)
+    res = armctl.simulate(
+        panda.model, loop, armctl.Reference(Q_READY), 3.0, q0=Q_READY, forces=Forces(disturbance=lambda t: push)
+    )
     rot = panda.frame_pose(res.q[-1])[:3, :3]
     turned = pin.log3(rot @ target[:3, :3].T)
     np.testing.assert_allclose(turned, -push[3:] / k[3:], atol=1e-4)

@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 import armctl
 from armctl.controllers import CartesianImpedance, JointImpedance
 from armctl.controllers.interaction.gains import critical_damping
-from armctl.sim import ForceSensor, KelvinVoigt, Plane
+from armctl.sim import Forces, ForceSensor, KelvinVoigt, Plane, Sensing
 
 Q_READY = np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])
 
@@ -39,8 +39,8 @@ def test_pressing_on_a_plane_gives_the_series_spring_force(panda: armctl.Dynamic
         2.5,
         q0=Q_READY,
         dt=2e-4,
-        environment=plane,
-        sensors=ForceSensor(world_axes=True),
+        forces=Forces(environment=plane),
+        sensing=Sensing(sensors=ForceSensor(world_axes=True)),
     )
     assert not res.diverged
     normal = -res.sensor[-200:, 0, 2]  # the arm pushes down (−z): the normal force is −f_z
@@ -70,7 +70,9 @@ def test_joint_impedance_yields_the_compliance_of_its_springs(panda: armctl.Dyna
     push = np.array([0.0, 0.0, -5.0, 0.0, 0.0, 0.0])  # the arm exerts 5 N down: the world pushes it up
     k = np.array([300.0, 300.0, 300.0, 300.0, 100.0, 100.0, 100.0])
     ctrl = JointImpedance(panda, k)
-    res = armctl.simulate(model, ctrl, armctl.Reference(Q_READY), 3.0, q0=Q_READY, disturbance=lambda t: push)
+    res = armctl.simulate(
+        model, ctrl, armctl.Reference(Q_READY), 3.0, q0=Q_READY, forces=Forces(disturbance=lambda t: push)
+    )
     q_end = res.q[-1]
     # at rest: K (q_d − q) = Jᵀ h at the final configuration
     np.testing.assert_allclose(k * (Q_READY - q_end), panda.jacobian(q_end).T @ push, atol=2e-3)

@@ -22,6 +22,7 @@ from armctl.controllers.osc import (
 )
 from armctl.errors import SimulationWarning
 from armctl.scenes.panda_contact import PressAndSlide
+from armctl.sim import Forces
 from tests.controllers.osc.helpers import Q_HOME, panda_dynamics
 
 Q_SINGULAR = np.array([0.0, 0.3, 0.0, -0.46700102, 0.0, 1.571, 0.785])  # σ_min(J) ≈ 2e-7, see test_osc_closed_form
@@ -78,7 +79,9 @@ def test_press_and_slide_on_a_table_with_friction() -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("error", SimulationWarning)  # a run the simulator vouches for: at 1 ms steps the
         # friction's regularisation below its slip velocity is too stiff for RK4 (armctl.sim.after_run)
-        res = sim.simulate(dyn, scene, armctl.Reference(Q_HOME), 1.95, q0=Q_HOME, environment=plane, dt=2e-4)
+        res = sim.simulate(
+            dyn, scene, armctl.Reference(Q_HOME), 1.95, q0=Q_HOME, dt=2e-4, forces=Forces(environment=plane)
+        )
     assert not res.diverged and scene.touched is not None
     fn = -res.contact_force[:, 0, 2]  # the table's push on the arm [N]
     touch = int(np.searchsorted(res.t, scene.touched))
