@@ -232,10 +232,21 @@ class Adaptive(SlidingGains, Controller):
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         dt = 0.0 if self._t_prev is None else t - self._t_prev  # ≤ 0 for a new run without reset: no update
-        law = None if self._functions is None else self._bound_law("AdaptiveLaw")
-        if law is not None and self._gamma.ndim == 1 and not self.composite and not self._projection:
-            return self._fused(law, t, dt, q, qd, ref)
-        n = self.n
+        if self._functions is None:
+            law = None
+        else:
+            law = self._law if self._law_for is self.dynamics.kernel else self._bound_law("AdaptiveLaw")
+            if self._gamma.ndim == 1 and not self.composite and not self._projection:
+                # one call of the generated code makes the update (the dead zone included) and τ at the new θ̂
+                if dt > 0 and abs(dt - self._dt) > 1e-9 * dt:  # Γ dt formed anew (see below)
+                    self._dt, self._gamma_dt = dt, self._gamma * dt
+                law.set_step(self._gamma_dt, self.theta0, dt > 0, self.sigma, self.dead_zone)
+                r = law(q, qd, ref, self.theta)
+                if law.nu[0]:  # updated: a new array (the log keeps it without a copy)
+                    self.theta = law.new.copy()
+                self._t_prev = t
+                self._log(q, r[1])
+                return r[0]  # type: ignore[no-any-return]
         if law is None:
             qd_r, qdd_r, s, kd_s, a, w = sliding(q, qd, ref, self._sliding)
             # q, q̇ checked by Controller.__call__; Y may be the dynamics' workspace (read before the next
@@ -244,7 +255,7 @@ class Adaptive(SlidingGains, Controller):
         else:  # [τ(θ̂); s] and Yᵀs from the generated code, the update below in Python
             law.set_step(None, self.theta0, False, self.sigma, self.dead_zone)
             first = law(q, qd, ref, self.theta)
-            s = first[n:]
+            s = first[1]
         # the filters run inside the dead zone too; they start at the first call with composite on
         composite = bool(self.composite) and dt > 0 and self._qd_prev is not None
         if composite:
@@ -273,25 +284,11 @@ class Adaptive(SlidingGains, Controller):
             tau = y.dot(self.theta)
             tau -= kd_s
         else:  # τ(θ̂) of the first call while θ̂ stands, else a second call at the new θ̂
-            tau = law.torque(self.theta) if updated else first[:n]
+            tau = law.torque(self.theta) if updated else first[0]
         if self.composite:  # copies: the caller may reuse its q̇ buffer, or clip τ in place
             self._qd_prev, self._tau_prev = qd.copy(), tau.copy()  # the torque the parameters must explain
         self._log(q, s)
         return tau
-
-    def _fused(self, law: Any, t: float, dt: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
-        """The step with a diagonal Γ, no projection and no composite term: one call of the generated code,
-        which makes the update (gated by the dead zone) and τ at the new θ̂."""
-        if dt > 0:
-            self._keep_gamma_dt(dt)
-        law.set_step(self._gamma_dt, self.theta0, dt > 0, self.sigma, self.dead_zone)
-        out = law(q, qd, ref, self.theta)
-        if law.nu[0]:  # updated: a new array (the log keeps it without a copy)
-            self.theta = law.new.copy()
-        self._t_prev = t
-        n = self.n
-        self._log(q, out[n:])
-        return out[:n]
 
     def _keep_gamma_dt(self, dt: float) -> None:
         """Γ·dt (diagonal Γ) formed anew when dt changes by more than 1e-9 relative."""
@@ -299,9 +296,9 @@ class Adaptive(SlidingGains, Controller):
             self._dt, self._gamma_dt = dt, self._gamma * dt
 
     def _log(self, q: FloatArray, s: FloatArray) -> None:
-        self.last_log = {"theta": self.theta, "s": s}
+        self.last_log = log = {"theta": self.theta, "s": s}
         if self._plant is not None:
-            self.last_log["V"] = self.lyapunov(q, s)
+            log["V"] = self.lyapunov(q, s)
 
     def _project(self, theta: FloatArray) -> FloatArray:
         # an estimate that needed projecting sits on the boundary of the physical set, where the next one

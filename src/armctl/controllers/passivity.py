@@ -157,8 +157,9 @@ class PassivityBased(SlidingGains, Controller):
     result_check = True
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
-        if self._functions is not None:  # [τ; model; K_D s; s] from one call of the generated law
-            r = self._bound_law("PassivityLaw")(q, qd, ref).reshape(4, -1)
+        if self._functions is not None:  # the rows τ, model, K_D s, s from one call of the generated law
+            law = self._law if self._law_for is self.dynamics.kernel else self._bound_law("PassivityLaw")
+            r = law(q, qd, ref)
             self.last_log = {"model": r[1], "damping": r[2], "s": r[3]}
             return r[0]
         qd_r, qdd_r, s, kd_s, a, w = sliding(q, qd, ref, self._sliding)

@@ -1,7 +1,7 @@
 """The Slotine–Li laws as one call of generated C code each: :class:`~armctl.controllers.PassivityBased` and the
 step of :class:`~armctl.controllers.Adaptive` with ``compile="auto"`` (their default) or True.
 
-With x = [q_d; q̇_d; q̈_d; q; q̇] (5n), the gains Λ, K_D (n × n) and the parameters π (13n, in the order of
+With x = (q_d, q̇_d, q̈_d, q, q̇), the gains Λ, K_D (n × n) and the parameters π (13n, in the order of
 :meth:`armctl.RobotModel.parameters`) inputs of the code, so that neither a gain change nor another payload needs
 a new build:
 
@@ -41,14 +41,14 @@ from armctl.model.robot import PARAMS_PER_JOINT, RobotModel
 from armctl.references import Reference
 
 #: bumped when the generated code changes, so that stale cached libraries are not loaded
-_CODE_VERSION = 1
+_CODE_VERSION = 2
 NAMES = ("passivity", "adaptive")
 
 
-def _model_torque(model: RobotModel, x: cs.SX, lam: cs.SX, kd: cs.SX, rho: cs.SX) -> tuple[Any, ...]:
-    """(π ↦ Y π, s, K_D s) of the law's symbols (see the module)."""
+def _model_torque(model: RobotModel, x: list[cs.SX], lam: cs.SX, kd: cs.SX, rho: cs.SX) -> tuple[Any, ...]:
+    """(π ↦ Y π, s, K_D s) of the law's symbols (see the module), x = [q_d, q̇_d, q̈_d, q, q̇]."""
     n = model.n
-    q_d, qd_d, qdd_d, q, qd = (x[k * n : (k + 1) * n] for k in range(5))
+    q_d, qd_d, qdd_d, q, qd = x
     qd_r = qd_d - cs.mtimes(lam, q - q_d)
     qdd_r = qdd_d - cs.mtimes(lam, qd - qd_d)
     s = qd - qd_r
@@ -69,14 +69,14 @@ def _model_torque(model: RobotModel, x: cs.SX, lam: cs.SX, kd: cs.SX, rho: cs.SX
 def law_functions(model: RobotModel) -> list[cs.Function]:
     """The CasADi functions of :data:`NAMES` for ``model`` (see the module)."""
     n, p = model.n, PARAMS_PER_JOINT * model.n
-    x, rho = cs.SX.sym("x", 5 * n), cs.SX.sym("rho", n)
+    x, rho = [cs.SX.sym(name, n) for name in ("q_d", "qd_d", "qdd_d", "q", "qd")], cs.SX.sym("rho", n)
     lam, kd = cs.SX.sym("lam", n, n), cs.SX.sym("kd", n, n)
     pi, theta, rate, theta0 = (cs.SX.sym(name, p) for name in ("pi", "theta", "rate", "theta0"))
     scalars = cs.SX.sym("scalars", 3)  # on, σ, δ
     torque, s, kd_s = _model_torque(model, x, lam, kd, rho)
     model_pi = torque(pi)
     passivity = cs.Function(
-        "passivity", [x, lam, kd, pi, rho], [cs.densify(cs.vertcat(model_pi - kd_s, model_pi, kd_s, s))]
+        "passivity", [*x, lam, kd, pi, rho], [cs.densify(cs.vertcat(model_pi - kd_s, model_pi, kd_s, s))]
     )
     # Yᵀs: the gradient in π of sᵀ Y π (linear in π, so at any π: here the symbols, then set to zero)
     yts = cs.substitute(cs.gradient(cs.dot(s, model_pi), pi), pi, cs.SX.zeros(p))
@@ -85,7 +85,7 @@ def law_functions(model: RobotModel) -> list[cs.Function]:
     new = cs.if_else(nu, theta - rate * (yts + sigma * (theta - theta0)), theta)
     adaptive = cs.Function(
         "adaptive",
-        [x, lam, kd, theta, rate, theta0, scalars, rho],
+        [*x, lam, kd, theta, rate, theta0, scalars, rho],
         [cs.densify(cs.vertcat(torque(new) - kd_s, s)), nu, cs.densify(new), cs.densify(yts)],
     )
     return [passivity, adaptive]
@@ -110,48 +110,50 @@ def _bind(buf: Any, arrays: list[FloatArray], outs: list[FloatArray]) -> None:
 
 
 class _Law:
-    """What both laws bind: the stacked input x, the gains Λ and K_D (column by column, overwritten in place
-    by :meth:`set_gains`), ρ; each instance its own buffers (one per controller and thread)."""
+    """What both laws bind: the inputs x = (q_d, q̇_d, q̈_d, q, q̇) (each its own array), the gains Λ and K_D
+    (column by column, overwritten in place by :meth:`set_gains`), ρ; each instance its own buffers (one per
+    controller and thread)."""
 
     def __init__(self, dynamics: Dynamics, lam: FloatArray, kd: FloatArray) -> None:
         n = dynamics.n
         self.n = n
-        self.x = np.zeros(5 * n)
+        self.x = [np.zeros(n) for _ in range(5)]
         self.lam, self.kd = np.zeros(n * n), np.zeros(n * n)
         self.set_gains(lam, kd)
         self.rho = np.array(dynamics.kernel.friction.ratio, dtype=float)
-        self._concatenate = np.concatenate
 
     def set_gains(self, lam: FloatArray, kd: FloatArray) -> None:
         """Λ and K_D (n × n) into the bound arrays, column by column (CasADi's order)."""
         self.lam[...] = lam.ravel(order="F")
         self.kd[...] = kd.ravel(order="F")
 
-    def load(self, q: FloatArray, qd: FloatArray, ref: Reference) -> None:
-        self._concatenate((ref.q, ref.qd, ref.qdd, q, qd), out=self.x)
-
 
 class PassivityLaw(_Law):
     """τ = Y π − K_D s of :class:`~armctl.controllers.PassivityBased` in one call, with π the dynamics' own
-    parameters; ``law(q, q̇, ref)`` → [τ; Y π; K_D s; s] (4n, a new array)."""
+    parameters; ``law(q, q̇, ref)`` → the rows τ, Y π, K_D s, s (4 × n, a new array)."""
 
     def __init__(self, functions: dict[str, cs.Function], dynamics: Dynamics, lam: FloatArray, kd: FloatArray):
         super().__init__(dynamics, lam, kd)
         self.pi = np.array(dynamics.parameters(), dtype=float)
-        self.out = np.zeros(4 * self.n)
+        self.out = np.zeros((4, self.n))  # C order: the rows are the output's four blocks
         self.buf, self._run = buffer_of(functions["passivity"])  # CasADi keeps no reference to the arrays: we do
-        _bind(self.buf, [self.x, self.lam, self.kd, self.pi, self.rho], [self.out])
+        _bind(self.buf, [*self.x, self.lam, self.kd, self.pi, self.rho], [self.out.reshape(-1)])
 
     def __call__(self, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
-        self._concatenate((ref.q, ref.qd, ref.qdd, q, qd), out=self.x)
+        x = self.x  # (copies cost less than one concatenation)
+        x[0][...] = ref.q
+        x[1][...] = ref.qd
+        x[2][...] = ref.qdd
+        x[3][...] = q
+        x[4][...] = qd
         self._run()
         return self.out.copy()
 
 
 class AdaptiveLaw(_Law):
     """The step of :class:`~armctl.controllers.Adaptive` in one call (see the module's ``"adaptive"``):
-    ``law(q, q̇, ref, θ̂)`` → ([τ; s] (2n, a new array), ν, θ̂⁺ (the bound output: copy it to keep it), Yᵀs (bound
-    likewise)), with the inputs ``rate`` (Γ dt) and ``scalars`` ([on, σ, δ]) set by the caller; and
+    ``law(q, q̇, ref, θ̂)`` → the rows τ, s (2 × n, a new array), and ν, θ̂⁺ and Yᵀs in the bound outputs ``nu``,
+    ``new`` and ``yts`` (copy them to keep them), with the step's other inputs set by :meth:`set_step`; and
     :meth:`torque`, τ = Y θ − K_D s for a given θ (the laws' ``"passivity"`` function, after a projection or a
     composite step)."""
 
@@ -160,13 +162,13 @@ class AdaptiveLaw(_Law):
         n, p = self.n, PARAMS_PER_JOINT * self.n
         self.theta, self.rate, self.theta0 = np.zeros(p), np.zeros(p), np.zeros(p)
         self.scalars = np.zeros(3)
-        self.out, self.nu, self.new, self.yts = np.zeros(2 * n), np.zeros(1), np.zeros(p), np.zeros(p)
+        self.out, self.nu, self.new, self.yts = np.zeros((2, n)), np.zeros(1), np.zeros(p), np.zeros(p)
         self.buf, self._run = buffer_of(functions["adaptive"])
-        args = [self.x, self.lam, self.kd, self.theta, self.rate, self.theta0, self.scalars, self.rho]
-        _bind(self.buf, args, [self.out, self.nu, self.new, self.yts])
+        args = [*self.x, self.lam, self.kd, self.theta, self.rate, self.theta0, self.scalars, self.rho]
+        _bind(self.buf, args, [self.out.reshape(-1), self.nu, self.new, self.yts])
         self.pi, self.tau_out = np.zeros(p), np.zeros(4 * n)
         self.tau_buf, self._tau_run = buffer_of(functions["passivity"])
-        _bind(self.tau_buf, [self.x, self.lam, self.kd, self.pi, self.rho], [self.tau_out])
+        _bind(self.tau_buf, [*self.x, self.lam, self.kd, self.pi, self.rho], [self.tau_out])
         self._rate_of: Any = None
         self._key: Any = None
 
@@ -184,7 +186,12 @@ class AdaptiveLaw(_Law):
             self._key = key
 
     def __call__(self, q: FloatArray, qd: FloatArray, ref: Reference, theta: FloatArray) -> FloatArray:
-        self._concatenate((ref.q, ref.qd, ref.qdd, q, qd), out=self.x)
+        x = self.x  # (copies cost less than one concatenation)
+        x[0][...] = ref.q
+        x[1][...] = ref.qd
+        x[2][...] = ref.qdd
+        x[3][...] = q
+        x[4][...] = qd
         self.theta[...] = theta
         self._run()
         return self.out.copy()
