@@ -246,7 +246,7 @@ class Adaptive(SlidingGains, Controller):
                     self.theta = law.new.copy()
                 self._t_prev = t
                 self._log(q, r[1])
-                return r[0]  # type: ignore[no-any-return]
+                return r[0]
         if law is None:
             qd_r, qdd_r, s, kd_s, a, w = sliding(q, qd, ref, self._sliding)
             # q, q̇ checked by Controller.__call__; Y may be the dynamics' workspace (read before the next
