@@ -148,7 +148,7 @@ class PassivityBased(SlidingGains, Controller):
 
     dynamics: Dynamics  # given to __init__, never None
 
-    def __init__(self, dynamics: Dynamics, lam: ArrayLike, kd: ArrayLike, compile: bool | str = "auto") -> None:
+    def __init__(self, dynamics: Dynamics, lam: ArrayLike, kd: ArrayLike, *, compile: bool | str = "auto") -> None:
         super().__init__(dynamics)
         self.set_gains(lam=lam, kd=kd)
         self._start_compile(compile)
