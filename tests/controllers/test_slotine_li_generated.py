@@ -255,3 +255,19 @@ def test_without_a_compiler_auto_warns_once_and_gives_the_same_torque(no_compile
     )
     with pytest.raises(BackendError, match=r"\$CC = 'no-such-compiler-armctl' is not a program"):
         PassivityBased(dyn, 2.0, 8.0, compile=True)
+
+
+def test_each_thread_runs_the_law_on_buffers_of_its_own() -> None:
+    """A controller called from another thread binds the generated law to that thread's kernel: the same τ there
+    as here, and here again after."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    dyn = armctl.Dynamics(builtin("puma560"))
+    gen, plain = PassivityBased(dyn, 3.0, 15.0), PassivityBased(dyn, 3.0, 15.0, compile=False)
+    q, qd, ref = _state(np.random.default_rng(6), dyn.n)
+    expected = plain(0.0, q, qd, ref)
+    here = gen(0.0, q, qd, ref)
+    with ThreadPoolExecutor(1) as pool:
+        there = pool.submit(gen, 0.0, q, qd, ref).result()
+    for tau in (here, there, gen(0.0, q, qd, ref)):
+        np.testing.assert_allclose(tau, expected, rtol=1e-12, atol=1e-9)
