@@ -41,7 +41,7 @@ from armctl.model.robot import PARAMS_PER_JOINT, RobotModel
 from armctl.references import Reference
 
 #: bumped when the generated code changes, so that stale cached libraries are not loaded
-_CODE_VERSION = 2
+_CODE_VERSION = 3
 NAMES = ("passivity", "adaptive")
 
 
@@ -83,11 +83,9 @@ def law_functions(model: RobotModel) -> list[cs.Function]:
     on, sigma, delta = scalars[0], scalars[1], scalars[2]
     nu = cs.if_else(on * (cs.dot(s, s) >= delta * delta), 1.0, 0.0)
     new = cs.if_else(nu, theta - rate * (yts + sigma * (theta - theta0)), theta)
-    adaptive = cs.Function(
-        "adaptive",
-        [*x, lam, kd, theta, rate, theta0, scalars, rho],
-        [cs.densify(cs.vertcat(torque(new) - kd_s, s)), nu, cs.densify(new), cs.densify(yts)],
-    )
+    # common subexpressions merged: the kinematics of the gradient's recursion and of τ at θ̂⁺ are the same
+    outputs = cs.cse([cs.densify(cs.vertcat(torque(new) - kd_s, s)), nu, cs.densify(new), cs.densify(yts)])
+    adaptive = cs.Function("adaptive", [*x, lam, kd, theta, rate, theta0, scalars, rho], outputs)
     return [passivity, adaptive]
 
 
