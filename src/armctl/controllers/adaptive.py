@@ -86,12 +86,22 @@ class Adaptive(SlidingGains, Controller):
         the Lyapunov function V = ½ sᵀM(q)s + ½ θ̃ᵀΓ⁻¹θ̃ with the plant's M and θ̃ = θ̂ − π_plant (θ̂ after this
         step's update), so a run's ``res.logs["V"]`` is V(t). The law never uses it (a real controller knows
         neither M nor π); it costs one mass-matrix evaluation a step (and with a full Γ two triangular solves).
+    compile : bool or "auto", optional
+        Run Y θ̂ − K_D s and Yᵀs as generated C code (:mod:`armctl.controllers.slotine_li_generated`, Y never
+        formed): ``"auto"`` (default) on a ``"pinocchio"``-backed Dynamics wherever a C compiler builds it (once
+        per arm structure, then cached on disk; without a compiler the NumPy path, with one
+        :class:`~armctl.errors.PerformanceWarning`); True insists (on any backend: the generated model is the
+        ``"pinocchio"`` backend's); False keeps the NumPy path. With a diagonal Γ, no projection and no
+        composite term the whole step, update included, is one call; otherwise the update runs in Python
+        between two calls. Both paths give the same τ, θ̂ and logs; :attr:`uses_generated_code` tells which runs.
 
     Raises
     ------
     InvalidParameterError, ShapeError, NonFiniteError
         A gain that is not symmetric positive definite, a θ₀ of the wrong size, a negative σ, δ or κ, a radius
-        without projection, a plant of another size.
+        without projection, a plant of another size; ``compile`` not True, False or ``"auto"``.
+    BackendError
+        ``compile=True`` and the generated code cannot be built (no C compiler, a failing one).
     """
 
     dynamics: Dynamics  # given to __init__, never None
@@ -121,6 +131,7 @@ class Adaptive(SlidingGains, Controller):
         filter_bandwidth: float = 20.0,
         radius: float | None = None,
         plant: Dynamics | RobotModel | None = None,
+        compile: bool | str = "auto",
     ) -> None:
         super().__init__(dynamics)
         p = 13 * self.n
@@ -138,6 +149,7 @@ class Adaptive(SlidingGains, Controller):
             self.theta0 = project_physical(self.theta0)
         self.plant = plant
         self.reset()
+        self._start_compile(compile)
 
     projection = flag(
         "projection", "Project θ̂ onto the physically consistent set after each update (may be switched between calls)."
@@ -219,27 +231,45 @@ class Adaptive(SlidingGains, Controller):
         self._dt, self._gamma_dt = 0.0, self._gamma * 0.0
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
-        dyn = self.dynamics
-        assert dyn is not None
-        qd_r, qdd_r, s, kd_s, a, w = sliding(q, qd, ref, self._sliding)
-        # q, q̇ checked by Controller.__call__; Y may be the dynamics' workspace (read before the next
-        # regressor call: the composite term makes one, so it needs a copy)
-        y = dyn.kernel.passivity_regressor(q, qd, qd_r, qdd_r, a, w, copy=bool(self.composite))
         dt = 0.0 if self._t_prev is None else t - self._t_prev  # ≤ 0 for a new run without reset: no update
+        if self._functions is None:
+            law = None
+        else:
+            law = self._law if self._law_for is self.dynamics.kernel else self._bound_law("AdaptiveLaw")
+            if self._gamma.ndim == 1 and not self.composite and not self._projection:
+                # one call of the generated code makes the update (the dead zone included) and τ at the new θ̂
+                if dt > 0 and abs(dt - self._dt) > 1e-9 * dt:  # Γ dt formed anew (see below)
+                    self._dt, self._gamma_dt = dt, self._gamma * dt
+                law.set_step(self._gamma_dt, self.theta0, dt > 0, self.sigma, self.dead_zone)
+                r = law(q, qd, ref, self.theta)
+                if law.nu[0]:  # updated: a new array (the log keeps it without a copy)
+                    self.theta = law.new.copy()
+                self._t_prev = t
+                self._log(q, r[1])
+                return r[0]
+        if law is None:
+            qd_r, qdd_r, s, kd_s, a, w = sliding(q, qd, ref, self._sliding)
+            # q, q̇ checked by Controller.__call__; Y may be the dynamics' workspace (read before the next
+            # regressor call: the composite term makes one, so it needs a copy)
+            y = self.dynamics.kernel.passivity_regressor(q, qd, qd_r, qdd_r, a, w, copy=bool(self.composite))
+        else:  # [τ(θ̂); s] and Yᵀs from the generated code, the update below in Python
+            law.set_step(None, self.theta0, False, self.sigma, self.dead_zone)
+            first = law(q, qd, ref, self.theta)
+            s = first[1]
         # the filters run inside the dead zone too; they start at the first call with composite on
         composite = bool(self.composite) and dt > 0 and self._qd_prev is not None
         if composite:
             w_f, tau_f = self._filtered(q, qd, dt)
-        if dt > 0 and (self.dead_zone == 0 or float(np.linalg.norm(s)) >= self.dead_zone):
-            grad = y.T.dot(s)
+        updated = dt > 0 and (self.dead_zone == 0 or float(np.linalg.norm(s)) >= self.dead_zone)
+        if updated:
+            grad = y.T.dot(s) if law is None else law.yts
             if self.sigma:
                 grad = grad + self.sigma * (self.theta - self.theta0)
             if composite:  # the explicit part of κ W_fᵀ(W_f θ̂ − τ_f); W_fᵀW_f θ̂ follows implicitly
                 grad = grad - self.composite * w_f.T.dot(tau_f)
             # a new array, not an update in place: the log below can then keep it without a copy
             if self._gamma.ndim == 1:  # diagonal Γ: Γ dt is kept while the control period stays the same
-                if abs(dt - self._dt) > 1e-9 * dt:
-                    self._dt, self._gamma_dt = dt, self._gamma * dt
+                self._keep_gamma_dt(dt)
                 self.theta = self.theta - self._gamma_dt * grad
             else:  # a full Γ: Γ (g dt), not (Γ dt) g, which a jittery measured dt would form anew each step
                 step = self._gamma.dot(grad)
@@ -250,14 +280,25 @@ class Adaptive(SlidingGains, Controller):
             if self._projection:
                 self.theta = self._project(self.theta)
         self._t_prev = t
-        tau = y.dot(self.theta)
-        tau -= kd_s
+        if law is None:
+            tau = y.dot(self.theta)
+            tau -= kd_s
+        else:  # τ(θ̂) of the first call while θ̂ stands, else a second call at the new θ̂
+            tau = law.torque(self.theta) if updated else first[0]
         if self.composite:  # copies: the caller may reuse its q̇ buffer, or clip τ in place
             self._qd_prev, self._tau_prev = qd.copy(), tau.copy()  # the torque the parameters must explain
-        self.last_log = {"theta": self.theta, "s": s}
-        if self._plant is not None:
-            self.last_log["V"] = self.lyapunov(q, s)
+        self._log(q, s)
         return tau
+
+    def _keep_gamma_dt(self, dt: float) -> None:
+        """Γ·dt (diagonal Γ) formed anew when dt changes by more than 1e-9 relative."""
+        if abs(dt - self._dt) > 1e-9 * dt:
+            self._dt, self._gamma_dt = dt, self._gamma * dt
+
+    def _log(self, q: FloatArray, s: FloatArray) -> None:
+        self.last_log = log = {"theta": self.theta, "s": s}
+        if self._plant is not None:
+            log["V"] = self.lyapunov(q, s)
 
     def _project(self, theta: FloatArray) -> FloatArray:
         # an estimate that needed projecting sits on the boundary of the physical set, where the next one
