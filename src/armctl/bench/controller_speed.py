@@ -1,6 +1,7 @@
 """Cost of one control step through the public API on the Panda, as a ratio to one raw Pinocchio RNEA call
-measured in the same run (interleaved rounds), each law on the Pinocchio backend and again on
-``Dynamics(model, compile=True)``; and the spread of each law's per-call cost over a 20 000-step closed loop on the
+measured in the same run (interleaved rounds), each law on the Pinocchio backend (its default path: the Slotine–Li
+laws as one generated call), again on ``Dynamics(model, compile=True)``, and the Slotine–Li laws with
+``compile=False`` (their NumPy path); and the spread of each law's per-call cost over a 20 000-step closed loop on the
 Panda with the ``panda_topp`` scene's gains (p50, p99.9 and their ratio, :func:`~armctl.bench.tails.law_tail`). Run:
 ``python -m armctl.bench.controller_speed``."""
 
@@ -44,13 +45,19 @@ def run(number: int = 200, rounds: int = 75, seed: int = 0, tail_steps: int = 20
         variants["compiled"] = armctl.Dynamics(model, compile=True)
     except BackendError as e:  # no C compiler
         out["compiled_unavailable"] = str(e)
+    variants["numpy"] = dyn
     for variant, d in variants.items():
-        controllers = {
+        controllers: dict[str, Any] = {
             "PDGravity": PDGravity(d, 100.0, 20.0),
             "ComputedTorque": ComputedTorque(d, 100.0, 20.0),
             "PassivityBased": PassivityBased(d, 5.0, 20.0),
             "Adaptive": Adaptive(d, 5.0, 20.0, 0.01),
         }
+        if variant == "numpy":  # the laws that run generated code of their own by default, without it
+            controllers = {
+                "PassivityBased": PassivityBased(d, 5.0, 20.0, compile=False),
+                "Adaptive": Adaptive(d, 5.0, 20.0, 0.01, compile=False),
+            }
         for name, c in controllers.items():
             clock = itertools.count(1e-3, 1e-3)  # Python floats; the adaptive law integrates between calls
 
@@ -85,14 +92,18 @@ def run(number: int = 200, rounds: int = 75, seed: int = 0, tail_steps: int = 20
 
 def report(fig: dict[str, Any]) -> str:
     lines = [f"control step on {fig['model']}, ratio to one raw RNEA (median of per-round ratios, quartiles)"]
-    for label, figs in (("", fig), (" (compile=True)", fig.get("compiled", {}))):
+    for label, figs in (
+        ("", fig),
+        (" (compile=True)", fig.get("compiled", {})),
+        (" (law compile=False)", fig.get("numpy", {})),
+    ):
         for name in TARGETS:
             if name not in figs:
                 continue
             f = figs[name]
             q1, q3 = f["ratio_iqr"]
             lines.append(
-                f"  {name + label:30s} {f['step_s'] * 1e6:7.2f} µs  RNEA {f['rnea_s'] * 1e6:5.2f} µs  ratio "
+                f"  {name + label:36s} {f['step_s'] * 1e6:7.2f} µs  RNEA {f['rnea_s'] * 1e6:5.2f} µs  ratio "
                 f"{f['ratio']:5.2f} [{q1:.2f}, {q3:.2f}]"
             )
     if "compiled_unavailable" in fig:
