@@ -6,7 +6,8 @@ its arguments, ``recorder`` keeps the samples), ``plant`` (the equations of moti
 ``implicit`` (the schemes), ``stepper`` (a step with stick–slip events), ``compiled`` (the choice of the generated
 step: ``compiled_plant``, ``generated_plant``, ``plant_layout``, the C driver
 ``step_*.c``), ``friction`` and ``stick_slip``,
-``contact`` and ``normal_force``, ``result`` (:class:`SimResult`, with ``sampled_reference`` and ``limits``),
+``contact`` and ``normal_force``, ``result`` (:class:`SimResult`, with ``sampled_reference``, ``limits`` and
+``tracking``: what a run is judged on),
 ``plot``, ``playback`` (a run in 3D as a standalone HTML page; ``visuals``: the arm's shapes), ``sweep`` (many
 runs through an Executor; ``sweep_result``: one outcome per case, ``sweep_pool``: its own process pool,
 ``sweep_progress``); ``mujoco_engine`` and ``mujoco_plant``: the same loop on a MuJoCo plant (``engine="mujoco"``).
@@ -24,12 +25,15 @@ from armctl.sim.result import SimResult
 from armctl.sim.simulate import simulate
 from armctl.sim.sweep import sweep
 from armctl.sim.sweep_result import CaseFailure, SweepResult
+from armctl.sim.tracking import TRACKING_TOLERANCE, ErrorSummary
 
 __all__ = [
     "INTEGRATORS",
+    "TRACKING_TOLERANCE",
     "CaseFailure",
     "ContactPoint",
     "Environment",
+    "ErrorSummary",
     "ForceSensor",
     "Forces",
     "FrictionModel",

@@ -33,6 +33,7 @@ from armctl.controllers.osc.reduced import QddQP, QddStep
 from armctl.controllers.osc.scale import check_level_scale
 from armctl.controllers.osc.solve import make_second_solver, make_solver
 from armctl.controllers.osc.state import ModelEvaluator
+from armctl.controllers.osc.task_errors import frame_task_errors
 from armctl.controllers.osc.tasks.base import Task
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError, PerformanceWarning, SolverWarning
@@ -169,7 +170,9 @@ class OperationalSpaceQP(Controller):
     how often.
 
     ``last_log`` holds ``"qp_iterations"`` and ``"qp_fallbacks"`` (summed over the levels), ``"force[NAME]"``
-    [N] per active contact, and with more than one level ``"level_status"``.
+    [N] per active contact (the force on the robot), with more than one level ``"level_status"``, and each frame
+    task's ``"position_error[NAME]"`` [m] and ``"orientation_error[NAME]"`` [rad] (see
+    :mod:`~armctl.controllers.osc.task_errors`).
     """
 
     dynamics: Dynamics  # given to __init__, never None
@@ -398,8 +401,10 @@ class OperationalSpaceQP(Controller):
         tau = result.tau.copy()
         if sol is None:  # the unconstrained minimum, within every bound
             self.last_log = {"qp_iterations": 0, "qp_fallbacks": 0}
+            self.last_log.update(frame_task_errors(self.tasks, self.dynamics.kernel.frame_pose, q, t))
             return tau
         self.last_log = {"qp_iterations": sol.iterations, "qp_fallbacks": sol.fallbacks}
+        self.last_log.update(frame_task_errors(self.tasks, self.dynamics.kernel.frame_pose, q, t))
         if self._tau_up is not None and self._tau_lo is not None:
             np.minimum(tau, self._tau_up, out=tau)
             np.maximum(tau, self._tau_lo, out=tau)
@@ -448,6 +453,7 @@ class OperationalSpaceQP(Controller):
         log: dict[str, Any] = {"qp_iterations": sol.iterations, "qp_fallbacks": sol.fallbacks}
         for name, f in sol.forces.items():
             log[f"force[{name}]"] = f
+        log.update(frame_task_errors(self.tasks, self.dynamics.kernel.frame_pose, q, t))
         if len(sol.level_status) > 1:
             log["level_status"] = sol.level_status
             for k, status in enumerate(sol.level_status):
