@@ -14,7 +14,7 @@ from scipy.linalg import lapack
 from armctl._checks import FloatArray, scalar
 from armctl.controllers.base import Controller
 from armctl.controllers.osc.state import ModelEvaluator, ModelState
-from armctl.controllers.osc.task_errors import frame_task_errors
+from armctl.controllers.osc.task_errors import FrameTaskErrors
 from armctl.controllers.osc.tasks.base import MotionTask
 from armctl.controllers.osc.tasks.posture import PostureTask
 from armctl.dynamics.base import Dynamics
@@ -80,6 +80,10 @@ class ClosedFormOSC(Controller):
     """
 
     dynamics: Dynamics  # given to __init__, never None
+    #: whether each step logs the frame tasks' errors (``position_error[NAME]``, ``orientation_error[NAME]``, see
+    #: :mod:`~armctl.controllers.osc.task_errors`): a forward kinematics and a rotation logarithm per task and
+    #: step; set False on the instance where a step must cost the least
+    log_task_errors: bool = True
 
     def __init__(
         self,
@@ -103,6 +107,7 @@ class ClosedFormOSC(Controller):
         if posture is not None:
             posture.check(self.evaluator, self.n, {})
         self.task = task
+        self._task_errors = FrameTaskErrors((task,))  # what each step logs of the task
         self.posture = posture
         self._steps = 0
         self._damped: list[float] = []  # the damping of the damped steps since the run began
@@ -189,7 +194,8 @@ class ClosedFormOSC(Controller):
         if damping:
             self._damped.append(damping)
         log: dict[str, Any] = {"lambda_trace": float(lam.trace()), "damping": damping}  # trace ≥ largest eigenvalue
-        log.update(frame_task_errors((self.task,), self.dynamics.kernel.frame_pose, q, t))
+        if self.log_task_errors:
+            log.update(self._task_errors(self.dynamics.kernel.frame_pose, q, t))
         self.last_log = log
         return tau
 

@@ -47,41 +47,67 @@ def _kind(task: Task) -> tuple[bool, bool] | None:
     return None
 
 
-def frame_task_errors(
-    tasks: Sequence[Task], frame_pose: Callable[[FloatArray, str | None], FloatArray], q: FloatArray, t: float
-) -> dict[str, Any]:
-    """The position and orientation errors of the frame tasks at (t, q) (see the module).
+class FrameTaskErrors:
+    """The logger of a controller's frame tasks (see the module): built once from the tasks, called at every step.
 
     Parameters
     ----------
     tasks : sequence of Task
-        The controller's tasks; those that are not built-in frame tasks, or have no target, are skipped.
-    frame_pose : callable
-        ``frame_pose(q, frame) -> (4, 4)`` pose of a frame in the world (the controller's model).
-    q : ndarray, shape (n,)
-        The measured joint positions [rad or m].
-    t : float
-        Time [s] (a trajectory's target is read at t).
-
-    Returns
-    -------
-    dict of str to ndarray
-        ``position_error[NAME]`` (3,) [m] and ``orientation_error[NAME]`` (3,) [rad]; NaN on rows of weight 0.
+        The controller's tasks; those that are not built-in frame tasks are left out.
     """
-    out: dict[str, Any] = {}
-    for task in tasks:
-        kind = _kind(task)
-        if kind is None or not isinstance(task, FrameTask) or not task.target.is_set:
-            continue
-        value = task.target.at(t)[0]
-        pose = frame_pose(q, task.frame)
-        w = task.weight
-        rows = 0
-        if kind[0]:
-            e = (value[:3, 3] if value.shape == (4, 4) else value) - pose[:3, 3]
-            out[f"{POSITION_KEY}[{task.name}]"] = np.where(w[:3] > 0.0, e, np.nan)
-            rows = 3
-        if kind[1]:
-            e = rotation_error(value[:3, :3], pose[:3, :3])
-            out[f"{ORIENTATION_KEY}[{task.name}]"] = np.where(w[rows : rows + 3] > 0.0, e, np.nan)
-    return out
+
+    def __init__(self, tasks: Sequence[Task]) -> None:
+        self.plan: list[tuple[FrameTask, bool, bool, str, str]] = []
+        for task in tasks:
+            kind = _kind(task)
+            if kind is not None and isinstance(task, FrameTask):
+                keys = f"{POSITION_KEY}[{task.name}]", f"{ORIENTATION_KEY}[{task.name}]"
+                self.plan.append((task, *kind, *keys))
+        #: per task, the weight revision seen and its free rows (None: every row weighted)
+        self._free: dict[int, tuple[int, np.ndarray | None]] = {}
+
+    def _free_rows(self, task: FrameTask) -> np.ndarray | None:
+        seen = self._free.get(id(task))
+        if seen is None or seen[0] != task.revision:
+            zero = task.weight <= 0.0
+            seen = (task.revision, zero if zero.any() else None)
+            self._free[id(task)] = seen
+        return seen[1]
+
+    def __call__(
+        self, frame_pose: Callable[[FloatArray, str | None], FloatArray], q: FloatArray, t: float
+    ) -> dict[str, Any]:
+        """The errors at (t, q).
+
+        Parameters
+        ----------
+        frame_pose : callable
+            ``frame_pose(q, frame) -> (4, 4)`` pose of a frame in the world (the controller's model).
+        q : ndarray, shape (n,)
+            The measured joint positions [rad or m].
+        t : float
+            Time [s] (a trajectory's target is read at t).
+
+        Returns
+        -------
+        dict of str to ndarray
+            ``position_error[NAME]`` (3,) [m] and ``orientation_error[NAME]`` (3,) [rad]; NaN on rows of weight 0.
+        """
+        out: dict[str, Any] = {}
+        for task, position, orientation, key_p, key_o in self.plan:
+            if not task.target.is_set:
+                continue
+            value = task.target.at(t)[0]
+            pose = frame_pose(q, task.frame)
+            free = self._free_rows(task)
+            if position:
+                e = (value[:3, 3] if value.shape == (4, 4) else value) - pose[:3, 3]
+                if free is not None:
+                    e[free[:3]] = np.nan
+                out[key_p] = e
+            if orientation:
+                e = rotation_error(value[:3, :3], pose[:3, :3])
+                if free is not None:
+                    e[free[3:] if position else free] = np.nan
+                out[key_o] = e
+        return out
