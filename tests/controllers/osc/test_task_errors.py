@@ -68,3 +68,22 @@ def test_logging_can_be_turned_off_and_the_closed_form_logs_too() -> None:
     closed = ClosedFormOSC(dyn, pose, PostureTask(7, kp=10.0))
     closed(0.0, Q, np.zeros(7), armctl.Reference(Q))
     np.testing.assert_allclose(closed.last_log["position_error[pose[tool]]"], 0.0, atol=1e-12)
+
+
+def test_the_logger_reads_any_backend_s_frames() -> None:
+    """Without Pinocchio's workspace (the Lagrange backend) the frame poses come from the kernel's own forward
+    kinematics; the errors are the same."""
+    from armctl.controllers.osc.task_errors import FrameTaskErrors
+
+    model = armctl.models.planar_3r()
+    q = np.array([0.3, -0.7, 0.4])
+    task = FramePoseTask(kp=10.0, weight=[1, 0, 1, 0, 1, 0])  # the plane's rows
+    target = armctl.Dynamics(model).frame_pose([0.1, 0.2, -0.3])
+    task.set_target(target)
+    ref = _reference_pose(model, q, model.tool_frame)
+    for backend in ("pinocchio", "lagrange"):
+        log = FrameTaskErrors([task])(armctl.Dynamics(model, backend=backend).kernel, q, 0.0)
+        e_pos, e_rot = log["position_error[pose[tool]]"], log["orientation_error[pose[tool]]"]
+        np.testing.assert_allclose(e_pos[[0, 2]], (target[:3, 3] - ref.translation)[[0, 2]], atol=1e-12)
+        np.testing.assert_allclose(e_rot[1], pin.log3(target[:3, :3] @ ref.rotation.T)[1], atol=1e-12)
+        assert np.isnan(e_pos[1]) and np.isnan(e_rot[[0, 2]]).all()

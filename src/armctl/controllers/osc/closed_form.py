@@ -195,7 +195,7 @@ class ClosedFormOSC(Controller):
             self._damped.append(damping)
         log: dict[str, Any] = {"lambda_trace": float(lam.trace()), "damping": damping}  # trace ≥ largest eigenvalue
         if self.log_task_errors:
-            log.update(self._task_errors(self.dynamics.kernel.frame_pose, q, t))
+            log.update(self._task_errors(self.dynamics.kernel, q, t))
         self.last_log = log
         return tau
 

@@ -407,11 +407,11 @@ class OperationalSpaceQP(Controller):
         if sol is None:  # the unconstrained minimum, within every bound
             self.last_log = {"qp_iterations": 0, "qp_fallbacks": 0}
             if self.log_task_errors:
-                self.last_log.update(self._task_errors(self.dynamics.kernel.frame_pose, q, t))
+                self.last_log.update(self._task_errors(self.dynamics.kernel, q, t))
             return tau
         self.last_log = {"qp_iterations": sol.iterations, "qp_fallbacks": sol.fallbacks}
         if self.log_task_errors:
-            self.last_log.update(self._task_errors(self.dynamics.kernel.frame_pose, q, t))
+            self.last_log.update(self._task_errors(self.dynamics.kernel, q, t))
         if self._tau_up is not None and self._tau_lo is not None:
             np.minimum(tau, self._tau_up, out=tau)
             np.maximum(tau, self._tau_lo, out=tau)
@@ -461,7 +461,7 @@ class OperationalSpaceQP(Controller):
         for name, f in sol.forces.items():
             log[f"force[{name}]"] = f
         if self.log_task_errors:
-            log.update(self._task_errors(self.dynamics.kernel.frame_pose, q, t))
+            log.update(self._task_errors(self.dynamics.kernel, q, t))
         if len(sol.level_status) > 1:
             log["level_status"] = sol.level_status
             for k, status in enumerate(sol.level_status):

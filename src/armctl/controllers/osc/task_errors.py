@@ -14,10 +14,11 @@ it is logged as NaN.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
+import pinocchio as pin
 
 from armctl._checks import FloatArray
 from armctl.controllers.osc.tasks.base import Task
@@ -26,6 +27,8 @@ from armctl.controllers.osc.tasks.frame_pose import FramePoseTask
 from armctl.controllers.osc.tasks.frame_position import FramePositionTask
 from armctl.controllers.osc.tasks.frame_task import FrameTask
 from armctl.controllers.osc.tasks.rotation import rotation_error
+from armctl.dynamics.kernel import Kernel
+from armctl.dynamics.pinocchio_backend import PinocchioKernel
 
 #: the log keys' prefixes: ``position_error[NAME]`` and ``orientation_error[NAME]``
 POSITION_KEY = "position_error"
@@ -65,6 +68,10 @@ class FrameTaskErrors:
                 self.plan.append((task, *kind, *keys))
         #: per task, the weight revision seen and its free rows (None: every row weighted)
         self._free: dict[int, tuple[int, np.ndarray | None]] = {}
+        #: per task, the last target value seen and its position and rotation
+        self._targets: dict[int, tuple[FloatArray, FloatArray, FloatArray]] = {}
+        #: Pinocchio's frame ids, by frame name (None: the tool frame)
+        self._frame_ids: dict[str | None, int] = {}
 
     def _free_rows(self, task: FrameTask) -> np.ndarray | None:
         seen = self._free.get(id(task))
@@ -74,15 +81,13 @@ class FrameTaskErrors:
             self._free[id(task)] = seen
         return seen[1]
 
-    def __call__(
-        self, frame_pose: Callable[[FloatArray, str | None], FloatArray], q: FloatArray, t: float
-    ) -> dict[str, Any]:
+    def __call__(self, kernel: Kernel, q: FloatArray, t: float) -> dict[str, Any]:
         """The errors at (t, q).
 
         Parameters
         ----------
-        frame_pose : callable
-            ``frame_pose(q, frame) -> (4, 4)`` pose of a frame in the world (the controller's model).
+        kernel : Kernel
+            The controller's model (its frames' poses; with Pinocchio one forward kinematics for every task).
         q : ndarray, shape (n,)
             The measured joint positions [rad or m].
         t : float
@@ -94,20 +99,47 @@ class FrameTaskErrors:
             ``position_error[NAME]`` (3,) [m] and ``orientation_error[NAME]`` (3,) [rad]; NaN on rows of weight 0.
         """
         out: dict[str, Any] = {}
+        if not self.plan:
+            return out
+        fast = kernel if isinstance(kernel, PinocchioKernel) else None
+        if fast is not None:
+            pm, pd = fast.pin_model, fast.pin_data
+            pin.forwardKinematics(pm, pd, q)
         for task, position, orientation, key_p, key_o in self.plan:
             if not task.target.is_set:
                 continue
-            value = task.target.at(t)[0]
-            pose = frame_pose(q, task.frame)
+            p_ref, r_ref = self._target(task, t)
+            if fast is not None:
+                fid = self._frame_ids.get(task.frame)
+                if fid is None:
+                    fid = self._frame_ids[task.frame] = fast.frame_id(task.frame)
+                placement = pin.updateFramePlacement(pm, pd, fid) if fid else pin.SE3.Identity()
+                p, rot = placement.translation, placement.rotation
+            else:
+                pose = kernel.frame_pose(q, task.frame)
+                p, rot = pose[:3, 3], pose[:3, :3]
             free = self._free_rows(task)
             if position:
-                e = (value[:3, 3] if value.shape == (4, 4) else value) - pose[:3, 3]
+                e = p_ref - p
                 if free is not None:
                     e[free[:3]] = np.nan
                 out[key_p] = e
             if orientation:
-                e = rotation_error(value[:3, :3], pose[:3, :3])
+                e = rotation_error(r_ref, rot)
                 if free is not None:
                     e[free[3:] if position else free] = np.nan
                 out[key_o] = e
         return out
+
+    def _target(self, task: FrameTask, t: float) -> tuple[FloatArray, FloatArray]:
+        """(p_ref, R_ref) of a task's target at t (a constant target's split once)."""
+        value = task.target.at(t)[0]
+        seen = self._targets.get(id(task))
+        if seen is not None and seen[0] is value:
+            return seen[1], seen[2]
+        if value.shape == (4, 4):
+            split = value[:3, 3].copy(), value[:3, :3].copy()
+        else:  # a position (3,) or a rotation (3, 3): the other part is not read
+            split = value, value
+        self._targets[id(task)] = (value, *split)
+        return split
