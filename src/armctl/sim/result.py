@@ -332,7 +332,8 @@ class SimResult:
             lines.append(f"  {summary.text()}")
         tracked = self.tracked
         if tracked is not None:
-            lines.append(f"  tracked: {'yes' if tracked else 'no'} (RMS within {_tolerances()})")
+            tasks = bool(self.task_errors)
+            lines.append(f"  tracked: {'yes' if tracked else 'no'} (RMS within {_tolerances(tasks)})")
         if len(self.t):
             peak = np.fmax.reduce(np.abs(self.tau_applied), axis=0)  # (NaN: a sample without a torque)
             lines.append(f"  peak |τ applied| {float(peak.max()):.3g} N·m ({self.joint_names[int(peak.argmax())]})")
@@ -553,9 +554,9 @@ class SimResult:
         return plot_wrench(self)
 
 
-def _tolerances() -> str:
+def _tolerances(tasks: bool) -> str:
     t = TRACKING_TOLERANCE
-    return f"{t['position']:g} m, {t['orientation']:g} rad for tasks; {t['joint']:g} for joints"
+    return f"{t['position']:g} m and {t['orientation']:g} rad" if tasks else f"{t['joint']:g} rad or m"
 
 
 _dataclass_init = SimResult.__init__
