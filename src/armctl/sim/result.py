@@ -203,11 +203,19 @@ class SimResult:
 
     @property
     def task_errors(self) -> dict[str, FloatArray]:
-        """The task-space errors the controller logged, by log key: ``position_error[NAME]`` (N, 3) [m] and
-        ``orientation_error[NAME]`` (N, 3) [rad] of each frame task NAME, world axes, e = target − actual (see
-        :mod:`armctl.controllers.osc.task_errors`); NaN on rows the task leaves free and on samples without an
-        entry. Empty for a controller without frame tasks."""
-        return task_errors(self.logs)
+        """The frame tasks' errors: ``position_error[NAME]`` (N, 3) [m] and ``orientation_error[NAME]`` (N, 3)
+        [rad] of each frame task NAME whose target the controller logged (the operational-space controllers do,
+        see :mod:`armctl.controllers.osc.task_errors`), e = target − actual in world axes, the actual pose by the
+        plant's forward kinematics at :attr:`q` (computed when first asked for; :meth:`save` keeps them in the
+        file); NaN on rows the task leaves free (weight 0) and on samples without a target. Empty for a
+        controller without frame tasks."""
+        cached = self.__dict__.get("_task_error_cache")
+        if cached is None:
+            cached = task_errors(self.logs, self.plant, self.q)
+            for a in cached.values():
+                a.flags.writeable = False
+            object.__setattr__(self, "_task_error_cache", cached)
+        return dict(cached)
 
     def tracking_errors(self) -> list[ErrorSummary]:
         """The errors the run is judged on, headline first: each task error of :attr:`task_errors` when there are
@@ -218,7 +226,7 @@ class SimResult:
         list of ErrorSummary
             Name, kind, RMS and max of each error [m or rad]; empty without a reference or task errors.
         """
-        out = task_summaries(self.logs)
+        out = task_summaries(self.task_errors)
         if self.reference is not None:
             joint = joint_summary(self.error, self.joint_names, "joint reference" if out else "joints")
             if joint is not None:
@@ -377,7 +385,8 @@ class SimResult:
         if self.limits is not None:
             for name in ("effort", "velocity", "lower", "upper"):
                 arrays[f"limit_{name}"] = getattr(self.limits, name)
-        for k, v in self.logs.items():
+        logs = {**self.task_errors, **self.logs}  # the tasks' errors too (a loaded result has no plant to compute them)
+        for k, v in logs.items():
             if v.dtype.kind == "O":
                 raise InvalidParameterError(
                     f"log {k!r} holds Python objects (e.g. None or dicts), which a SimResult file cannot store; "

@@ -1,15 +1,16 @@
-"""How well a run tracked what its controller was asked: the errors a :class:`~armctl.sim.result.SimResult`
-headlines and the test behind ``SimResult.tracked``.
+"""How well a run tracked what its controller was asked: the errors a :class:`~armctl.sim.result.SimResult` headlines
+and the test behind ``SimResult.tracked``.
 
-A run whose controller logs task-space errors (the operational-space controllers log, for each frame task,
-``position_error[NAME]`` [m] and ``orientation_error[NAME]`` [rad], see :mod:`armctl.controllers.osc.task_errors`)
-is judged on them; any other run on its joint error e = q_ref − q against the reference it was given. For each
-error the size at sample k is the norm of its rows, ‖e_k‖ (rows logged as NaN, a task's free rows, left out;
-a sample whose rows are all free left out), and over the run
+A run whose controller logs its frame tasks' targets (the operational-space controllers do, see
+:mod:`armctl.controllers.osc.task_errors`) is judged on the tasks' errors, ``position_error[NAME]`` [m] and
+``orientation_error[NAME]`` [rad], computed from the recorded joint positions by the plant's forward kinematics; any
+other run on its joint error e = q_ref − q against the reference it was given. For each error the size at sample k
+is the norm of its rows, ‖e_k‖ (rows logged as NaN, a task's free rows, left out; a sample whose rows are all free
+left out), and over the run
 
     RMS = √(mean_k ‖e_k‖²),      max = max_k ‖e_k‖
 
-(for the joint error, the RMS over joints and samples and the largest entry, as before). The run tracked if it
+(for the joint error, the RMS over joints and samples and the largest entry). The run tracked if it
 finished (neither diverged nor stopped by an exception) and every headline error's RMS is within
 :data:`TRACKING_TOLERANCE` of its kind.
 """
@@ -17,10 +18,18 @@ finished (neither diverged nor stopped by an exception) and every headline error
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from armctl._checks import FloatArray
+from armctl.controllers.osc.task_errors import TARGET_KEY
+from armctl.controllers.osc.tasks.rotation import rotation_error
+from armctl.dynamics.base import Dynamics
+from armctl.errors import UnknownNameError
+
+if TYPE_CHECKING:
+    from armctl.model.robot import RobotModel
 
 #: RMS errors within which a run counts as tracked: task positions [m], task orientations [rad], joints
 #: [rad or m]
@@ -82,41 +91,100 @@ class ErrorSummary:
         return f"{self.name} {self.kind} error: RMS {self.rms:.3g}, max {self.max:.3g} [{self.unit}]"
 
 
-def task_errors(logs: dict[str, FloatArray]) -> dict[str, FloatArray]:
-    """The task errors among a run's logs, by log key (``position_error[NAME]``, ``orientation_error[NAME]``).
+def task_errors(
+    logs: dict[str, FloatArray], plant: RobotModel | None = None, q: FloatArray | None = None
+) -> dict[str, FloatArray]:
+    """The frame tasks' errors of a run, by key (``position_error[NAME]``, ``orientation_error[NAME]``): those the
+    logs hold (a result read from a file), and those computed from the logged targets and weights (see
+    :mod:`armctl.controllers.osc.task_errors`) at the recorded joint positions, by the plant's forward
+    kinematics.
 
     Parameters
     ----------
     logs : dict of str to ndarray
         ``SimResult.logs``.
+    plant : RobotModel, optional
+        The plant (None: no errors are computed, only those the logs hold).
+    q : ndarray, shape (N, n), optional
+        The recorded joint positions [rad or m].
 
     Returns
     -------
     dict of str to ndarray, shape (N, 3)
-        The errors in world axes [m or rad], NaN on free rows and on samples without an entry.
+        e = target − actual in world axes [m or rad], NaN on free rows and on samples without a target.
     """
     out = {}
     for key, value in logs.items():
         prefix = key.split("[", 1)[0]
         if prefix in TASK_ERROR_KINDS and key.endswith("]") and value.ndim == 2 and value.shape[1] == 3:
             out[key] = value
+    if plant is None or q is None:
+        return out
+    targets = [(m.groups(), key) for key in logs if (m := TARGET_KEY.match(key))]
+    kernel = Dynamics(plant).kernel if targets else None
+    for (kind, name, frame), key in targets:
+        if f"position_error[{name}]" in out or f"orientation_error[{name}]" in out:
+            continue
+        try:
+            plant.frame(frame or None)
+        except UnknownNameError:  # the controller's model has a frame the plant does not: nothing to compare
+            continue
+        out.update(_errors_of(kernel, logs, key, kind, name, frame or None, q))
     return out
 
 
-def task_summaries(logs: dict[str, FloatArray]) -> list[ErrorSummary]:
+def _rows(logs: dict[str, FloatArray], key: str) -> FloatArray:
+    """The samples a log entry was recorded at."""
+    return np.asarray(logs.get(f"{key}:sample", np.arange(len(logs[key]))), dtype=int)
+
+
+def _errors_of(
+    kernel: Any, logs: dict[str, FloatArray], key: str, kind: str, name: str, frame: str | None, q: FloatArray
+) -> dict[str, FloatArray]:
+    samples = len(q)
+    pos = np.full((samples, 3), np.nan) if kind != "orientation" else None
+    rot = np.full((samples, 3), np.nan) if kind != "position" else None
+    values = logs[key]
+    for r, k in enumerate(_rows(logs, key)):
+        if k >= samples:
+            break
+        pose = kernel.frame_pose(q[k], frame)
+        v = values[r]
+        if pos is not None:
+            pos[k] = (v[:3, 3] if kind == "pose" else v) - pose[:3, 3]
+        if rot is not None:
+            rot[k] = rotation_error(v[:3, :3], pose[:3, :3])
+    weight_key = f"task_weight[{name}]"
+    if weight_key in logs:
+        weights, rows = logs[weight_key], _rows(logs, weight_key)
+        keep = rows < samples
+        free = weights[keep] <= 0.0
+        if pos is not None:
+            pos[rows[keep]] = np.where(free[:, :3], np.nan, pos[rows[keep]])
+        if rot is not None:
+            rot[rows[keep]] = np.where(free[:, -3:], np.nan, rot[rows[keep]])
+    out = {}
+    if pos is not None:
+        out[f"position_error[{name}]"] = pos
+    if rot is not None:
+        out[f"orientation_error[{name}]"] = rot
+    return out
+
+
+def task_summaries(errors: dict[str, FloatArray]) -> list[ErrorSummary]:
     """An :class:`ErrorSummary` of every task error of a run (see :func:`task_errors`) with at least one sample.
 
     Parameters
     ----------
-    logs : dict of str to ndarray
-        ``SimResult.logs``.
+    errors : dict of str to ndarray
+        :func:`task_errors` of the run.
 
     Returns
     -------
     list of ErrorSummary
     """
     out = []
-    for key, e in task_errors(logs).items():
+    for key, e in errors.items():
         prefix, name = key.split("[", 1)
         rows = ~np.isnan(e)
         used = rows.any(axis=1)

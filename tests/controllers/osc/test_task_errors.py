@@ -1,5 +1,6 @@
-"""What the operational-space controllers log of their frame tasks: target − actual by Pinocchio's own forward
-kinematics, NaN on rows of weight 0, nothing for other tasks or with ``log_task_errors = False``."""
+"""What the operational-space controllers log of their frame tasks (targets and weights, under keys that name
+the task and its frame), and the errors a run's result derives from them: target − actual by Pinocchio's own
+forward kinematics, NaN on free rows and on samples without a target."""
 
 from __future__ import annotations
 
@@ -15,6 +16,7 @@ from armctl.controllers.osc import (
     OperationalSpaceQP,
     PostureTask,
 )
+from armctl.sim.tracking import task_errors
 
 Q = np.array([0.1, -0.6, 0.2, -2.2, 0.1, 1.8, 0.6])
 
@@ -26,7 +28,7 @@ def _reference_pose(model: armctl.RobotModel, q: np.ndarray, frame: str) -> pin.
     return pd.oMf[pm.getFrameId(frame)]
 
 
-def test_each_frame_task_logs_its_errors_against_pinocchio_s_pose() -> None:
+def test_each_frame_task_logs_its_target_and_weights() -> None:
     model = armctl.models.panda()
     dyn = armctl.Dynamics(model)
     target = dyn.frame_pose(model.named_poses["ready"])
@@ -35,55 +37,46 @@ def test_each_frame_task_logs_its_errors_against_pinocchio_s_pose() -> None:
     hand = FramePositionTask("panda_link7", kp=50.0)
     hand.set_target((0.3, 0.0, 0.6))
     wrist = FrameOrientationTask("panda_link5", kp=50.0, weight=0.5)
-    wrist.set_target(np.eye(3))
+    wrist.set_trajectory(lambda t: (pin.rpy.rpyToMatrix(0.0, 0.0, t), None, None))
     ctrl = OperationalSpaceQP(dyn, [pose, hand, wrist, PostureTask(7, kp=10.0, priority=1)])
-    ctrl(0.0, Q, np.zeros(7), armctl.Reference(Q))
+    ctrl(0.25, Q, np.zeros(7), armctl.Reference(Q))
     log = ctrl.last_log
-    tool = _reference_pose(model, Q, model.tool_frame)
-    e = log["position_error[pose[tool]]"]
-    np.testing.assert_allclose(e[:2], (target[:3, 3] - tool.translation)[:2], atol=1e-12)
-    assert np.isnan(e[2])  # weight 0: free
+    np.testing.assert_array_equal(log["pose_target[pose[tool]|]"], target)
+    np.testing.assert_array_equal(log["task_weight[pose[tool]]"], [1, 1, 0, 1, 1, 1])
+    np.testing.assert_array_equal(log["position_target[position[panda_link7]|panda_link7]"], [0.3, 0.0, 0.6])
     np.testing.assert_allclose(
-        log["orientation_error[pose[tool]]"], pin.log3(target[:3, :3] @ tool.rotation.T), atol=1e-12
+        log["orientation_target[orientation[panda_link5]|panda_link5]"], pin.rpy.rpyToMatrix(0.0, 0.0, 0.25)
     )
-    link7 = _reference_pose(model, Q, "panda_link7")
-    np.testing.assert_allclose(log["position_error[position[panda_link7]]"], (0.3, 0.0, 0.6) - link7.translation)
-    link5 = _reference_pose(model, Q, "panda_link5")
-    np.testing.assert_allclose(log["orientation_error[orientation[panda_link5]]"], pin.log3(link5.rotation.T))
     assert not any("posture" in k for k in log)
-    assert (
-        "orientation_error[position[panda_link7]]" not in log and "position_error[orientation[panda_link5]]" not in log
-    )
-
-
-def test_logging_can_be_turned_off_and_the_closed_form_logs_too() -> None:
-    model = armctl.models.panda()
-    dyn = armctl.Dynamics(model)
-    pose = FramePoseTask(kp=100.0)
-    pose.set_target(dyn.frame_pose(Q))
-    ctrl = OperationalSpaceQP(dyn, [pose])
-    ctrl.log_task_errors = False
-    ctrl(0.0, Q, np.zeros(7), armctl.Reference(Q))
-    assert not any(k.endswith("[pose[tool]]") for k in ctrl.last_log)
     closed = ClosedFormOSC(dyn, pose, PostureTask(7, kp=10.0))
     closed(0.0, Q, np.zeros(7), armctl.Reference(Q))
-    np.testing.assert_allclose(closed.last_log["position_error[pose[tool]]"], 0.0, atol=1e-12)
+    np.testing.assert_array_equal(closed.last_log["pose_target[pose[tool]|]"], target)
 
 
-def test_the_logger_reads_any_backend_s_frames() -> None:
-    """Without Pinocchio's workspace (the Lagrange backend) the frame poses come from the kernel's own forward
-    kinematics; the errors are the same."""
-    from armctl.controllers.osc.task_errors import FrameTaskErrors
-
-    model = armctl.models.planar_3r()
-    q = np.array([0.3, -0.7, 0.4])
-    task = FramePoseTask(kp=10.0, weight=[1, 0, 1, 0, 1, 0])  # the plane's rows
-    target = armctl.Dynamics(model).frame_pose([0.1, 0.2, -0.3])
-    task.set_target(target)
-    ref = _reference_pose(model, q, model.tool_frame)
-    for backend in ("pinocchio", "lagrange"):
-        log = FrameTaskErrors([task])(armctl.Dynamics(model, backend=backend).kernel, q, 0.0)
-        e_pos, e_rot = log["position_error[pose[tool]]"], log["orientation_error[pose[tool]]"]
-        np.testing.assert_allclose(e_pos[[0, 2]], (target[:3, 3] - ref.translation)[[0, 2]], atol=1e-12)
-        np.testing.assert_allclose(e_rot[1], pin.log3(target[:3, :3] @ ref.rotation.T)[1], atol=1e-12)
-        assert np.isnan(e_pos[1]) and np.isnan(e_rot[[0, 2]]).all()
+def test_the_errors_are_target_minus_pinocchio_s_pose_with_free_rows_and_missing_samples_nan() -> None:
+    model = armctl.models.panda()
+    rng = np.random.default_rng(2)
+    q = model.named_poses["ready"] + rng.normal(0.0, 0.2, (6, 7))
+    target = armctl.Dynamics(model).frame_pose(model.named_poses["ready"])
+    logs = {
+        "pose_target[press|]": np.repeat(target[None], 4, axis=0),
+        "pose_target[press|]:sample": np.array([1, 2, 3, 5]),  # no target at samples 0 and 4
+        "task_weight[press]": np.array([[1, 1, 0, 1, 1, 1]] * 3 + [[1.0] * 6]),
+        "task_weight[press]:sample": np.array([1, 2, 3, 5]),
+        "position_target[hand|panda_link7]": np.tile([0.3, 0.0, 0.6], (6, 1)),
+        "position_target[elsewhere|no_such_frame]": np.zeros((6, 3)),  # not a frame of the plant: skipped
+    }
+    errors = task_errors(logs, model, q)
+    assert set(errors) == {"position_error[press]", "orientation_error[press]", "position_error[hand]"}
+    pos, rot = errors["position_error[press]"], errors["orientation_error[press]"]
+    assert np.isnan(pos[[0, 4]]).all() and np.isnan(rot[[0, 4]]).all()
+    for k in (1, 2, 3, 5):
+        ref = _reference_pose(model, q[k], model.tool_frame)
+        want = target[:3, 3] - ref.translation
+        if k < 5:
+            want[2] = np.nan  # free while its weight is 0
+        np.testing.assert_allclose(pos[k], want, atol=1e-12)
+        np.testing.assert_allclose(rot[k], pin.log3(target[:3, :3] @ ref.rotation.T), atol=1e-12)
+    link7 = _reference_pose(model, q[3], "panda_link7")
+    np.testing.assert_allclose(errors["position_error[hand]"][3], (0.3, 0.0, 0.6) - link7.translation, atol=1e-12)
+    assert task_errors(logs) == {}  # without the plant: only errors the logs hold

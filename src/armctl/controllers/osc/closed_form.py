@@ -14,7 +14,7 @@ from scipy.linalg import lapack
 from armctl._checks import FloatArray, scalar
 from armctl.controllers.base import Controller
 from armctl.controllers.osc.state import ModelEvaluator, ModelState
-from armctl.controllers.osc.task_errors import FrameTaskErrors
+from armctl.controllers.osc.task_errors import FrameTaskLog
 from armctl.controllers.osc.tasks.base import MotionTask
 from armctl.controllers.osc.tasks.posture import PostureTask
 from armctl.dynamics.base import Dynamics
@@ -74,16 +74,13 @@ class ClosedFormOSC(Controller):
     tolerance of :meth:`armctl.Dynamics.operational_space_model`): the torque spike near a singularity is kept.
 
     ``last_log`` holds ``"lambda_trace"``, the trace of Λ (an upper bound of its largest eigenvalue), and
-    ``"damping"``, the step's δ² (0 on a regular step), and a built-in frame task's ``"position_error[NAME]"`` [m]
-    and ``"orientation_error[NAME]"`` [rad] (see :mod:`~armctl.controllers.osc.task_errors`); :meth:`end_run`
-    warns once per run (:class:`~armctl.errors.SingularityWarning`) with the steps that needed the damping.
+    ``"damping"``, the step's δ² (0 on a regular step), and a built-in frame task's target and weights, from
+    which the run's result computes the task's errors (see :mod:`~armctl.controllers.osc.task_errors`);
+    :meth:`end_run` warns once per run (:class:`~armctl.errors.SingularityWarning`) with the steps that needed
+    the damping.
     """
 
     dynamics: Dynamics  # given to __init__, never None
-    #: whether each step logs the frame tasks' errors (``position_error[NAME]``, ``orientation_error[NAME]``, see
-    #: :mod:`~armctl.controllers.osc.task_errors`): a forward kinematics and a rotation logarithm per task and
-    #: step; set False on the instance where a step must cost the least
-    log_task_errors: bool = True
 
     def __init__(
         self,
@@ -107,7 +104,7 @@ class ClosedFormOSC(Controller):
         if posture is not None:
             posture.check(self.evaluator, self.n, {})
         self.task = task
-        self._task_errors = FrameTaskErrors((task,))  # what each step logs of the task
+        self._task_log = FrameTaskLog((task,))  # what each step logs of the task
         self.posture = posture
         self._steps = 0
         self._damped: list[float] = []  # the damping of the damped steps since the run began
@@ -194,8 +191,7 @@ class ClosedFormOSC(Controller):
         if damping:
             self._damped.append(damping)
         log: dict[str, Any] = {"lambda_trace": float(lam.trace()), "damping": damping}  # trace ≥ largest eigenvalue
-        if self.log_task_errors:
-            log.update(self._task_errors(self.dynamics.kernel, q, t))
+        self._task_log(log, t)
         self.last_log = log
         return tau
 
