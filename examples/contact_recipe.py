@@ -12,7 +12,8 @@ Signs: the contact's force, its task's target and ``res.contact_force_on_robot``
 on the arm (+10 N along the table's normal when pressing); ``res.wrench``, ``res.sensor`` and
 ``res.contact_force_on_environment`` are what the arm exerts (−10 N).
 
-Run: python examples/contact_recipe.py [--out DIR] [--show]
+Run: ``python examples/contact_recipe.py [--out DIR] [--show]`` (writes its figures under DIR, default
+example-out/)
 """
 
 from __future__ import annotations
@@ -73,9 +74,11 @@ class PressOnTouch(Controller):
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[1])
-    parser.add_argument("--out", type=Path, default=Path("example-out"), help="folder for the figures")
-    parser.add_argument("--show", action="store_true", help="open the figures in a window")
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument(
+        "--out", type=Path, default=Path("example-out"), help="folder for the figures (default: example-out)"
+    )
+    parser.add_argument("--show", action="store_true", help="also show the figures in windows")
     args = parser.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
 
@@ -103,10 +106,10 @@ def main() -> None:
     ax.set(xlabel="t [s]", ylabel="normal force [N]", title="Panda pressing on a table")
     ax.legend(loc="lower right")
     paths = [args.out / "contact_recipe_normal_force.png", args.out / "contact_recipe_run.png"]
-    fig.savefig(paths[0])
-    res.plot(("contact_force", "sensor", "position_error", "orientation_error")).savefig(paths[1])
+    fig.savefig(paths[0], dpi=100)
+    res.plot(("contact_force", "sensor", "position_error", "orientation_error")).savefig(paths[1], dpi=100)
     for path in paths:
-        print(f"wrote {path}")
+        print("wrote", path)
     if args.show:
         plt.show()
 

@@ -15,13 +15,7 @@ from typing import Any
 from matplotlib.figure import Figure
 
 #: examples that take ``--out DIR`` for the files they write
-WRITES_FILES = (
-    "closed_loop_simulation.py",
-    "contact_recipe.py",
-    "model_views.py",
-    "mujoco_comparison.py",
-    "tune_gains.py",
-)
+WRITES_FILES = ("closed_loop_simulation.py", "model_views.py", "mujoco_comparison.py", "tune_gains.py")
 
 _created: list[Figure] = []
 _figure_init = Figure.__init__
