@@ -1,7 +1,9 @@
 """Sphinx configuration of armctl's documentation: ``sphinx-build -W -b html docs docs/_build/html``.
 
-Everything a page needs ships with it: the theme's assets (furo), no math renderer fetched from a CDN (the
-equations are written in Unicode), no intersphinx inventories fetched at build time. The example gallery runs
+Everything a page needs ships with it: the theme's assets (furo), MathJax for the equations (copied into the build
+by ``sphinx-mathjax-offline``, from its Python package: nothing fetched from a CDN when a page is viewed), no
+intersphinx inventories fetched at build time. Typography leaves dashes alone (``smartquotes_action``), so a
+command such as ``armctl bench --out DIR`` reads and copies as written. The example gallery runs
 ``examples/`` (sphinx-gallery); ``ARMCTL_DOCS_NO_GALLERY=1`` builds the pages without running them.
 """
 
@@ -32,7 +34,10 @@ extensions = [
     "numpydoc",
     "myst_parser",
     "sphinx_gallery.gen_gallery",
+    "sphinx-mathjax-offline",  # MathJax 3 shipped with the pages (sets mathjax_path to the copy in _static)
 ]
+# quotes and ellipses, but no dashes: "--out" stays two hyphens wherever it is written
+smartquotes_action = "qe"
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
 exclude_patterns = ["_build", "sphinxext", "**/README.md", "images/*.py", "sg_execution_times.rst"]
 templates_path = ["_templates"]
@@ -109,5 +114,34 @@ def escape_bars(app: object, what: str, name: str, obj: object, options: object,
             literal = indent
 
 
+def constant_comments(app: object, what: str, name: str, obj: object, options: object, lines: list[str]) -> None:
+    """A module constant's description: its ``#:`` comment where it is defined (autodoc finds the comment only in
+    the module it documents the name under, and otherwise shows the docstring of the value's type, such as
+    "Built-in immutable sequence."). The build fails on a public constant without one."""
+    if what != "data" or (lines and not _type_doc(obj, lines)):
+        return
+    from sphinx.pycode import ModuleAnalyzer
+
+    short = name.rsplit(".", 1)[-1]
+    for module in sorted(m for m in sys.modules if m == "armctl" or m.startswith("armctl.")):
+        if getattr(sys.modules[module], short, None) is not obj:
+            continue
+        try:
+            docs = ModuleAnalyzer.for_module(module).find_attr_docs()
+        except Exception:
+            continue
+        if ("", short) in docs:
+            lines[:] = [line for line in docs[("", short)] if line is not None]
+            return
+    raise RuntimeError(f"the public constant {name} has no #: comment where it is defined: write one there")
+
+
+def _type_doc(obj: object, lines: list[str]) -> bool:
+    """Whether ``lines`` are the docstring of ``obj``'s type (what autodoc shows for an undocumented constant)."""
+    doc = type(obj).__doc__
+    return doc is not None and " ".join(" ".join(lines).split()) == " ".join(doc.split())
+
+
 def setup(app: object) -> None:
     app.connect("autodoc-process-docstring", escape_bars, priority=600)  # type: ignore[attr-defined]
+    app.connect("autodoc-process-docstring", constant_comments, priority=400)  # type: ignore[attr-defined]

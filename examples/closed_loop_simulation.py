@@ -5,9 +5,9 @@ Closed-loop simulation: a payload the controller does not know
 A closed-loop simulation script: the Panda carrying a 1.5 kg payload its controller does not know,
 tracking a minimum-jerk move against joint friction with stiction, with computed torque and with the
 passivity-based law at the same bandwidth. Saves the result (npz), a chart and a 3D playback (an HTML page; it
-needs the meshcat package: pip install armctl[view]).
+needs the meshcat package: ``pip install "armctl[view]"``).
 
-Run: python examples/closed_loop_simulation.py [--out DIR]
+Run: ``python examples/closed_loop_simulation.py [--out DIR] [--show]`` (writes under DIR, default example-out/)
 """
 
 from __future__ import annotations
@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+import matplotlib.pyplot as plt
 import numpy as np
 
 import armctl
@@ -25,8 +26,11 @@ from armctl.sim import SimResult, simulate
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--out", type=Path, default=Path("example-out"))
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument(
+        "--out", type=Path, default=Path("example-out"), help="folder for the figures (default: example-out)"
+    )
+    parser.add_argument("--show", action="store_true", help="also show the figures in windows")
     args = parser.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
 
@@ -37,6 +41,7 @@ def main() -> None:
     reference = Quintic(q0, q0 + np.array([0.6, 0.4, -0.3, 0.5, 0.4, -0.3, 0.5]), duration=2.0, t0=0.2)
     wn = 20.0
     m_bar = np.diag(model.mass_matrix(q0))
+    figures = []
     for name, controller in (
         ("computed torque", ComputedTorque(model, wn**2, 2 * wn)),
         ("passivity-based", PassivityBased(model, wn, wn * m_bar)),
@@ -50,8 +55,11 @@ def main() -> None:
         stem = name.replace(" ", "_").replace("-", "_")
         res.save(args.out / f"{stem}.npz")
         assert np.allclose(SimResult.load(args.out / f"{stem}.npz").q, res.q)
-        res.plot().savefig(args.out / f"{stem}.png")
-        res.playback(args.out / f"{stem}.html", meshes="collision")  # the run in 3D, with a time slider
+        fig = res.plot()
+        fig.savefig(args.out / f"{stem}.png")
+        figures.append(fig)
+        page = res.playback(args.out / f"{stem}.html")  # the run in 3D: play, speed, loop, a time slider
+        print(f"  wrote {args.out / f'{stem}.npz'}, {args.out / f'{stem}.png'} and {page}")
         if name == "computed torque":
             # the payload's weight is a torque the model lacks: at rest, M̂ K_p e = Δg, so e = K_p⁻¹ M̂⁻¹ Δg
             q_end = res.q[-1]
@@ -63,6 +71,10 @@ def main() -> None:
                 "  the rest is held by stiction)"
             )
     print(f"results, charts and playbacks in {args.out}/")
+    if args.show:
+        for fig in figures:
+            plt.figure(fig)  # a Figure of the library's, handed to pyplot to show
+        plt.show()
 
 
 if __name__ == "__main__":

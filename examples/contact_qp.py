@@ -6,10 +6,13 @@ Contact with the operational-space QP: the Panda approaches a table, presses wit
 against surface friction (μ = 0.3, compliant table), with the QP regulating the normal force through a
 sliding contact — and Khatib's closed-form controller doing the same motion by pose stiffness alone.
 
-Run: python examples/contact_qp.py
+Run: ``python examples/contact_qp.py [--out DIR] [--show]`` (writes its figures under DIR, default example-out/)
 """
 
 from __future__ import annotations
+
+import argparse
+from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -18,8 +21,15 @@ from armctl.scenes import scene
 
 
 def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument(
+        "--out", type=Path, default=Path("example-out"), help="folder for the figures (default: example-out)"
+    )
+    parser.add_argument("--show", action="store_true", help="also show the figures in windows")
+    args = parser.parse_args()
+    args.out.mkdir(parents=True, exist_ok=True)
     sc = scene("panda_contact")
-    _, ax = plt.subplots(figsize=(8, 3.5), layout="constrained")
+    fig, ax = plt.subplots(figsize=(8, 3.5), layout="constrained")
     for method in sc.methods:
         res = sc.run(method)
         m = sc.metrics(res, method)
@@ -38,6 +48,11 @@ def main() -> None:
     ax.axhline(10.0, color="k", lw=0.8, ls="--", label="10 N wanted")
     ax.set(xlabel="t [s]", ylabel="normal force on the table [N]", title="Panda pressing and sliding on a table")
     ax.legend()
+    path = args.out / "contact_qp.png"
+    fig.savefig(path, dpi=100)
+    print("wrote", path)
+    if args.show:
+        plt.show()
 
 
 if __name__ == "__main__":

@@ -9,11 +9,15 @@ runs in ``armctl.sim.simulate`` or in your own 1 kHz loop. This one is a PD with
 feedforward of the reference acceleration (a common industrial compromise between PD+gravity and computed
 torque): τ = M(q_d) q̈_d + g(q) + K_p e + K_d ė. It logs its feedback share each step.
 
-Run: python examples/custom_controller.py
+Run: ``python examples/custom_controller.py [--out DIR] [--show]`` (writes its figures under DIR, default example-out/)
 """
 
 from __future__ import annotations
 
+import argparse
+from pathlib import Path
+
+import matplotlib.pyplot as plt
 import numpy as np
 
 import armctl
@@ -35,6 +39,13 @@ class FeedforwardPD(Controller):
 
 
 def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument(
+        "--out", type=Path, default=Path("example-out"), help="folder for the figures (default: example-out)"
+    )
+    parser.add_argument("--show", action="store_true", help="also show the figures in windows")
+    args = parser.parse_args()
+    args.out.mkdir(parents=True, exist_ok=True)
     model = armctl.models.planar_2r()
     plant = armctl.Dynamics(model.with_friction(viscous=5.0, coulomb=2.0))  # the truth has friction
     controller = FeedforwardPD(armctl.Dynamics(model), kp=20000.0, kd=2000.0)
@@ -45,7 +56,13 @@ def main() -> None:
         f"diverged: {res.diverged}; RMS tracking error {np.sqrt((err**2).mean()):.2e} rad, "
         f"max {np.abs(err).max():.2e} rad; peak feedback torque {np.abs(res.logs['feedback']).max():.1f} N·m"
     )
-    res.plot(("q", "error", "tau_applied"))  # a matplotlib Figure: the reference overlaid, the joints named
+    fig = res.plot(("q", "error", "tau_applied"))  # a matplotlib Figure: the reference overlaid, the joints named
+    path = args.out / "custom_controller.png"
+    fig.savefig(path, dpi=100)
+    print("wrote", path)
+    if args.show:
+        plt.figure(fig)  # a Figure of the library's, handed to pyplot to show
+        plt.show()
 
 
 if __name__ == "__main__":

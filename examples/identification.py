@@ -16,11 +16,15 @@ centres of mass moved 2 cm, friction halved, rotors ×1.5, 10 % random per link)
    (``identify``);
 6. validation on a fresh trajectory: the torques each model predicts against the measured ones.
 
-Run: python examples/identification.py
+Run: ``python examples/identification.py [--out DIR] [--show]`` (writes its figures under DIR, default example-out/)
 """
 
 from __future__ import annotations
 
+import argparse
+from pathlib import Path
+
+import matplotlib.pyplot as plt
 import numpy as np
 
 import armctl
@@ -42,6 +46,13 @@ def measure(
 
 
 def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument(
+        "--out", type=Path, default=Path("example-out"), help="folder for the figures (default: example-out)"
+    )
+    parser.add_argument("--show", action="store_true", help="also show the figures in windows")
+    args = parser.parse_args()
+    args.out.mkdir(parents=True, exist_ok=True)
     rng = np.random.default_rng(0)
     truth = armctl.models.puma560()
     nominal = truth.perturbed(mass=1.3, inertia=1.5, com_offset=0.02, friction=0.5, rotor=1.5, noise=0.1, seed=1)
@@ -77,7 +88,13 @@ def main() -> None:
     print(f"  nominal model     {np.round(100 * nominal_err, 1)} %")
     print(f"  identified model  {np.round(100 * validation.relative_error, 2)} %")
     print(result.report(validation).splitlines()[0])
-    result.plot(validation)
+    fig = result.plot(validation)  # measured and predicted torques on the fresh trajectory, per joint
+    path = args.out / "identification.png"
+    fig.savefig(path, dpi=100)
+    print("wrote", path)
+    if args.show:
+        plt.figure(fig)  # a Figure of the library's, handed to pyplot to show
+        plt.show()
 
 
 if __name__ == "__main__":

@@ -5,7 +5,7 @@ Model views: bounds, stability conditions, the operational space
 Views of the dynamic model: bounds over the joint ranges, the stability conditions they give, the
 operational-space model and the dynamic manipulability ellipsoid.
 
-Run: python examples/model_views.py [--out DIR]   (writes model_views.png there; default: the current directory)
+Run: ``python examples/model_views.py [--out DIR] [--show]`` (writes its figures under DIR, default example-out/)
 """
 
 from __future__ import annotations
@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+import matplotlib.pyplot as plt
 import numpy as np
 
 import armctl
@@ -28,8 +29,11 @@ from armctl.tuning import (
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--out", type=Path, default=Path("."))
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument(
+        "--out", type=Path, default=Path("example-out"), help="folder for the figures (default: example-out)"
+    )
+    parser.add_argument("--show", action="store_true", help="also show the figures in windows")
     args = parser.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
     dyn = armctl.Dynamics(armctl.models.planar_2r())
@@ -60,8 +64,12 @@ def main() -> None:
         ell = dyn.dynamic_manipulability(qi, rows="xz")
         print(f"q = {np.round(qi, 2)}: semi-axes {np.round(ell.lengths, 5)} m/s² per N·m, measure {ell.measure:.3g}")
     ax = plot_dynamic_manipulability(dyn, path)
-    ax.figure.savefig(args.out / "model_views.png", dpi=90)
-    print("wrote", args.out / "model_views.png")
+    path = args.out / "model_views.png"
+    ax.figure.savefig(path, dpi=100)
+    print("wrote", path)
+    if args.show:
+        plt.figure(ax.figure)  # a Figure of the library's, handed to pyplot to show
+        plt.show()
 
 
 if __name__ == "__main__":

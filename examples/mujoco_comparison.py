@@ -5,9 +5,9 @@ armctl and MuJoCo side by side
 armctl and MuJoCo side by side: an MJCF arm read into armctl, the same closed loop on both simulators, joint
 friction held below breakaway, and the Panda pressing its collision meshes on a table of a MuJoCo scene.
 
-Needs MuJoCo: pip install "armctl[mujoco]".
+Needs MuJoCo: ``pip install "armctl[mujoco]"``.
 
-Run: python examples/mujoco_comparison.py [--out DIR]
+Run: ``python examples/mujoco_comparison.py [--out DIR]``
 """
 
 from __future__ import annotations
@@ -123,14 +123,19 @@ def mesh_contact(out: Path) -> None:
     q, h = res.q[-1], res.wrench[-1]
     jac = dyn.jacobian(q)
     statics = res.tau_applied[-1] - dyn.gravity_torque(q) + res.tau_friction[-1]
-    print(f"\nThe Panda's meshes on a table of a MuJoCo scene ({out / 'panda_table.xml'}):")
+    print(f"\nThe Panda's meshes on a table of a MuJoCo scene (wrote {out / 'panda_table.xml'}):")
     print(f"  first touch at t = {res.t[touching[0]]:.3f} s; force on the table at the end {np.round(h[:3], 2)} N")
     print(f"  statics J_toolᵀ h − (τ − g + τ_f) = {np.linalg.norm(jac.T @ h - statics):.1e} N·m (zero at rest)")
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--out", type=Path, default=Path("example-out"))
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument(
+        "--out",
+        type=Path,
+        default=Path("example-out"),
+        help="folder for the MuJoCo scene it writes (default: example-out)",
+    )
     args = parser.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
     mjcf_in()

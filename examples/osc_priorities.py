@@ -17,12 +17,14 @@ Each controller runs in closed loop at 1 kHz on the Panda's own model; the chart
 error and the posture error over time, and the script prints each task's residual J q̈ + J̇ q̇ − ẍ* at the end of
 the move (``ctrl.last_solution.residuals``) and each level's status.
 
-Run: python examples/osc_priorities.py
+Run: ``python examples/osc_priorities.py [--out DIR] [--show]`` (writes its figures under DIR, default example-out/)
 """
 
 from __future__ import annotations
 
+import argparse
 from collections.abc import Callable
+from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -60,6 +62,13 @@ def controller(dyn: armctl.Dynamics, levels: bool, posture_weight: float) -> Ope
 
 
 def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument(
+        "--out", type=Path, default=Path("example-out"), help="folder for the figures (default: example-out)"
+    )
+    parser.add_argument("--show", action="store_true", help="also show the figures in windows")
+    args = parser.parse_args()
+    args.out.mkdir(parents=True, exist_ok=True)
     dyn = armctl.Dynamics(armctl.models.panda())
     start = dyn.frame_pose(Q_READY)
     target = line_target(start)
@@ -90,6 +99,11 @@ def main() -> None:
     ax_posture.set(xlabel="t [s]", ylabel="‖q − q_ready‖ [rad]", title="posture task")
     ax_pose.legend(fontsize=8)
     fig.suptitle("Panda: a 25 cm tool move against a posture task")
+    path = args.out / "osc_priorities.png"
+    fig.savefig(path, dpi=100)
+    print("wrote", path)
+    if args.show:
+        plt.show()
 
 
 if __name__ == "__main__":

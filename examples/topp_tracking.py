@@ -6,11 +6,15 @@ Plan the fastest timing of a path through six Panda waypoints within velocity an
 (TOPP-RA with the arm's own dynamics and friction, 10 % of the torque range left for feedback), compare it
 with the classic uniform time scaling, then track it in closed loop against joint friction with stiction.
 
-Run: python examples/topp_tracking.py
+Run: ``python examples/topp_tracking.py [--out DIR] [--show]`` (writes its figures under DIR, default example-out/)
 """
 
 from __future__ import annotations
 
+import argparse
+from pathlib import Path
+
+import matplotlib.pyplot as plt
 import numpy as np
 
 import armctl
@@ -21,6 +25,13 @@ from armctl.sim import simulate
 
 
 def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument(
+        "--out", type=Path, default=Path("example-out"), help="folder for the figures (default: example-out)"
+    )
+    parser.add_argument("--show", action="store_true", help="also show the figures in windows")
+    args = parser.parse_args()
+    args.out.mkdir(parents=True, exist_ok=True)
     model = panda_with_friction()
     dyn = armctl.Dynamics(model)
     traj = time_optimal(dyn, WAYPOINTS, vel_limit="model", torque_limit="model", grid=100, torque_margin=0.1)
@@ -49,7 +60,13 @@ def main() -> None:
         f"closed loop: diverged {res.diverged}; max tracking error {err.max() * 1e3:.2f} mrad; peak torque "
         f"{usage.max():.0%} of the limit ({model.joint_names[int(usage.argmax())]})"
     )
-    res.plot(("qd", "error", "tau_applied"))  # a matplotlib Figure: the reference overlaid, the joints named
+    fig = res.plot(("qd", "error", "tau_applied"))  # a matplotlib Figure: the reference overlaid, the joints named
+    path = args.out / "topp_tracking.png"
+    fig.savefig(path, dpi=100)
+    print("wrote", path)
+    if args.show:
+        plt.figure(fig)  # a Figure of the library's, handed to pyplot to show
+        plt.show()
 
 
 if __name__ == "__main__":

@@ -21,7 +21,7 @@ python-control computes for a 1 kHz loop with one period of measurement delay; t
 * panda_contact (operational-space QP and Khatib's closed form): the pose task's error dynamics, which the
   operational-space law decouples to ë = u per task coordinate, get the double pole at ω_n, checked the same way.
 
-Run: python examples/tune_gains.py [--out DIR] [--scenes NAME ...]  (default DIR: the presets folder armctl
+Run: ``python examples/tune_gains.py [--out DIR] [--scenes NAME ...]`` (default DIR: the presets folder armctl
 reads, $ARMCTL_PRESETS or the checkout's controllers/, wherever the script is run from: it rewrites the
 shipped presets)
 """

@@ -23,7 +23,7 @@ numpydoc = pytest.importorskip("numpydoc.docscrape", reason="numpydoc is in the 
 import armctl  # noqa: E402
 
 #: old import paths kept for one release (they re-export documented names)
-DEPRECATED_MODULES = {"armctl.reference"}
+DEPRECATED_MODULES = {"armctl.reference", "armctl.dynamics.codegen", "armctl.dynamics.library_cache"}
 
 
 def _public_modules() -> Iterator[Any]:

@@ -1,4 +1,6 @@
-"""Every example runs as a user would run it (a subprocess from a clean working directory)."""
+"""Every example runs as a user would run it (a subprocess from a clean working directory): it writes what it
+makes under ``--out`` (its figures, and results, playbacks or presets where it makes them), prints each path,
+and writes nothing else into the working directory."""
 
 from __future__ import annotations
 
@@ -10,17 +12,32 @@ from pathlib import Path
 import pytest
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
-ARGS = {"tune_gains.py": ["--out", "{tmp}/presets"], "closed_loop_simulation.py": ["--out", "{tmp}/out"]}
+#: what each example writes under --out (besides these, nothing)
+WRITES = {
+    "closed_loop_simulation.py": [
+        f"{stem}.{ext}" for stem in ("computed_torque", "passivity_based") for ext in ("npz", "png", "html")
+    ],
+    "contact_qp.py": ["contact_qp.png"],
+    "contact_recipe.py": ["contact_recipe_normal_force.png", "contact_recipe_run.png"],
+    "custom_controller.py": ["custom_controller.png"],
+    "identification.py": ["identification.png"],
+    "model_views.py": ["model_views.png"],
+    "mujoco_comparison.py": ["panda_table.xml"],
+    "osc_priorities.py": ["osc_priorities.png"],
+    "topp_tracking.py": ["topp_tracking.png"],
+}
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("script", sorted(p.name for p in EXAMPLES.glob("*.py")))
 def test_example_runs(script: str, tmp_path: Path) -> None:
-    args = [a.format(tmp=tmp_path) for a in ARGS.get(script, [])]
+    out = tmp_path / "out"
+    work = tmp_path / "work"
+    work.mkdir()
     env = {**os.environ, "MPLBACKEND": "Agg"}
     proc = subprocess.run(
-        [sys.executable, str(EXAMPLES / script), *args],
-        cwd=tmp_path,
+        [sys.executable, str(EXAMPLES / script), "--out", str(out)],
+        cwd=work,
         env=env,
         capture_output=True,
         text=True,
@@ -29,10 +46,26 @@ def test_example_runs(script: str, tmp_path: Path) -> None:
     )
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert proc.stdout.strip(), "an example says what it did"
+    assert not list(work.iterdir()), "an example writes only under --out"
+    if script in WRITES:
+        assert sorted(p.name for p in out.iterdir()) == sorted(WRITES[script])
+        for name in WRITES[script]:
+            assert (out / name).stat().st_size > 1000 and str(out / name) in proc.stdout, name
     if script == "tune_gains.py":
-        written = sorted(p.name for p in (tmp_path / "presets").glob("*.toml"))
+        written = sorted(p.name for p in out.glob("*.toml"))
         assert len(written) == 17 and "planar_2r.computed_torque.toml" in written
         assert "panda_contact.osc_qp.toml" in written and "panda_contact.osc_closed_form.toml" in written
+
+
+def test_every_example_takes_out_and_show_and_names_them_in_its_help() -> None:
+    for script in sorted(EXAMPLES.glob("*.py")):
+        proc = subprocess.run(
+            [sys.executable, str(script), "--help"], capture_output=True, text=True, timeout=120, check=False
+        )
+        assert proc.returncode == 0, (script.name, proc.stderr[-2000:])
+        assert "--out" in proc.stdout, script.name
+        if script.name in WRITES and any(n.endswith(".png") for n in WRITES[script.name]):
+            assert "--show" in proc.stdout, script.name
 
 
 @pytest.mark.slow

@@ -13,6 +13,7 @@ from __future__ import annotations
 import datetime
 import math
 import re
+import warnings
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -218,7 +219,7 @@ def no_bench(monkeypatch: pytest.MonkeyPatch) -> list[Path]:
 
     calls: list[Path] = []
 
-    def fake(quick: bool, out: Path) -> dict:
+    def fake(quick: bool, out: Path, **parts: object) -> dict:
         calls.append(out)
         (out / "figures.json").write_text("{}")  # (the CLI reports the written file's size)
         return {}
@@ -275,3 +276,20 @@ def test_bench_reports_the_size_of_the_file_it_wrote(
 
     assert main(["bench", "--out", str(tmp_path)]) == 0
     assert f"wrote {tmp_path / 'figures.json'} (2 bytes)" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("shape", [(3,), (7, 7), (2, 300)])
+@pytest.mark.parametrize("bad", [None, np.inf, -np.inf, np.nan, "inf-inf"])
+def test_all_finite_agrees_with_isfinite_and_warns_nothing(shape: tuple[int, ...], bad: object) -> None:
+    # a matrix holding inf was multiplied by zeros, and NumPy warned "invalid value encountered in dot"
+    from armctl._checks import all_finite
+
+    a = np.linspace(-1.0, 1.0, int(np.prod(shape))).reshape(shape)
+    if bad == "inf-inf":
+        a.flat[0], a.flat[-1] = np.inf, -np.inf
+    elif bad is not None:
+        a.flat[a.size // 2] = bad
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert all_finite(a) == bool(np.isfinite(a).all())
+        assert all_finite(np.asfortranarray(a)) == bool(np.isfinite(a).all())

@@ -1,7 +1,9 @@
 """sphinx-gallery helpers for armctl's examples: their command-line arguments and their figures.
 
-* :func:`reset_argv`: the examples that write files are given ``--out`` in the build folder, so a docs build
-  never writes into ``examples/`` (nor over the shipped presets).
+* :func:`reset_argv`: every example takes ``--out`` for the files it writes (its figures, and for some results,
+  playbacks or presets). The gallery runs each one in ``examples/`` with ``--out example-out`` (a git-ignored
+  folder there, never the shipped presets), so that its page prints the paths a user's own run prints. The
+  figures an example saves are the ones its page shows.
 * :func:`unmanaged_figures`: armctl's plotting functions return ``matplotlib.figure.Figure`` objects that pyplot
   does not manage (the library keeps no global figure state), which sphinx-gallery's matplotlib scraper cannot
   see. Every Figure created while an example runs is kept here and drawn into the example's page.
@@ -9,13 +11,9 @@
 
 from __future__ import annotations
 
-from pathlib import Path
 from typing import Any
 
 from matplotlib.figure import Figure
-
-#: examples that take ``--out DIR`` for the files they write
-WRITES_FILES = ("closed_loop_simulation.py", "model_views.py", "mujoco_comparison.py", "tune_gains.py")
 
 _created: list[Figure] = []
 _figure_init = Figure.__init__
@@ -30,11 +28,8 @@ Figure.__init__ = _record_init  # type: ignore[method-assign]
 
 
 def reset_argv(gallery_conf: dict[str, Any], script_vars: dict[str, Any]) -> list[str]:
-    """Arguments of an example run by the gallery: ``--out`` in the build folder for those that write files."""
-    name = Path(script_vars["src_file"]).name
-    if name in WRITES_FILES:
-        return ["--out", str(Path(gallery_conf["src_dir"]) / "_build" / "gallery-out" / Path(name).stem)]
-    return []
+    """Arguments of an example run by the gallery (in the examples' folder): ``--out example-out``."""
+    return ["--out", "example-out"]
 
 
 def unmanaged_figures(block: Any, block_vars: dict[str, Any], gallery_conf: dict[str, Any], **kwargs: Any) -> str:

@@ -6,13 +6,12 @@ Each raises an :class:`~armctl.errors.ArmctlError` subclass naming the value and
 from __future__ import annotations
 
 import datetime
-import functools
 import math
 import os
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import NDArray
 
 from armctl.errors import InvalidParameterError, NonFiniteError, ShapeError
 
@@ -158,6 +157,19 @@ def boolean(x: Any, name: str) -> bool:
     return bool(x)
 
 
+def flag(name: str, doc: str) -> Any:
+    """A boolean option as a property: read from ``_<name>``, checked by :func:`boolean` on assignment (``doc``:
+    its docstring)."""
+
+    def get(self: Any) -> bool:
+        return bool(getattr(self, f"_{name}"))
+
+    def set_(self: Any, value: Any) -> None:
+        setattr(self, f"_{name}", boolean(value, name))
+
+    return property(get, set_, doc=doc)
+
+
 def instances(items: Any, cls: type, name: str, label: str, *, single: bool = False) -> tuple[Any, ...]:
     """``items`` as a tuple of ``cls`` objects: a sequence of them (not text), or one of them if ``single``;
     anything else raises an InvalidParameterError naming it (``label``: how the class is named to the user)."""
@@ -233,41 +245,6 @@ def gain_matrix(k: object, n: int, name: str) -> FloatArray:
     return a
 
 
-class Gain:
-    """A gain attribute of a controller or task: assigned a scalar, a vector (diagonal) or a matrix, checked by
-    :func:`gain_matrix` (``size(owner)`` rows, errors named ``label(owner, name)``), read back as the matrix (a
-    read-only copy: change a gain by assigning it, e.g. ``ctrl.kp = 2 * ctrl.kp``). Its
-    cheap form (:func:`compact_gain`) is kept in ``owner._<name>`` for the control law, and the owner's
-    ``_gains_changed()``, if any, runs after every assignment, so a gain reassigned between calls takes effect.
-    ``optional``: None is allowed (no such term)."""
-
-    def __init__(
-        self, doc: str, size: Any = lambda owner: owner.n, label: Any = lambda owner, name: name, optional: bool = False
-    ) -> None:
-        self.__doc__ = doc
-        self.size, self.label, self.optional = size, label, optional
-
-    def __set_name__(self, owner: type, name: str) -> None:
-        self.name, self.compact, self.full = name, f"_{name}", f"_{name}_matrix"
-
-    def __get__(self, obj: Any, objtype: type | None = None) -> Any:
-        return self if obj is None else getattr(obj, self.full)
-
-    def __set__(self, obj: Any, value: ArrayLike | None) -> None:
-        # a read-only copy: the law's precomputed forms follow assignments only, so the gain must not change
-        # under them (a caller's array edited in place, or ``ctrl.kp[0, 0] = …``)
-        full = (
-            None
-            if value is None and self.optional
-            else readonly(np.array(gain_matrix(value, self.size(obj), self.label(obj, self.name))))
-        )
-        setattr(obj, self.full, full)
-        setattr(obj, self.compact, None if full is None else compact_gain(full))
-        changed = getattr(obj, "_gains_changed", None)
-        if changed is not None:
-            changed()
-
-
 def readonly(a: FloatArray) -> FloatArray:
     a.flags.writeable = False
     return a
@@ -283,33 +260,20 @@ def apply_gain(k: FloatArray, x: FloatArray) -> FloatArray:
     return k * x if k.ndim == 1 else k.dot(x)
 
 
-def check_cache_dir(cache_dir: object, compile: bool) -> None:
-    """Refuse a ``cache_dir`` given without ``compile=True`` (it would be ignored: nothing is compiled)."""
-    if cache_dir is not None and not compile:
-        raise InvalidParameterError(
-            f"cache_dir={cache_dir!r} is where compile=True keeps its code: pass compile=True too, or no cache_dir",
-            value=cache_dir,
-        )
-
-
 def all_finite(a: FloatArray) -> bool:
     """True if every entry of the float array ``a`` is finite.
 
-    A vector's entries are summed as Python floats: the sum is finite exactly when no entry is NaN or inf, unless
-    finite entries add up beyond the range of floats (then False, and callers take their careful path,
-    ``np.isfinite``). A matrix's entries are multiplied by zeros and summed: 0 when every entry is finite, NaN
-    otherwise."""
-    if a.ndim == 1:
-        return math.isfinite(sum(a.tolist()))
-    flat = a.ravel(order="K")  # a view of a contiguous array in either order
-    return math.isfinite(flat.dot(_zeros(flat.size)))  # 0 when every entry is finite, NaN otherwise; no overflow
+    A small array's entries are summed as Python floats: the sum is finite exactly when no entry is NaN or inf,
+    unless finite entries add up beyond the range of floats (then False, and callers take their careful path,
+    ``np.isfinite``). Python's float arithmetic raises no floating-point warning for inf − inf, as NumPy's would.
+    A larger array is tested entry by entry (``np.isfinite``), where the sum's conversion would cost more."""
+    if a.size <= _SUMMED:
+        return math.isfinite(sum(a.ravel(order="K").tolist()))
+    return bool(np.isfinite(a).all())
 
 
-@functools.lru_cache(maxsize=32)
-def _zeros(size: int) -> FloatArray:
-    z = np.zeros(size)
-    z.flags.writeable = False
-    return z
+#: arrays up to this many entries are checked by :func:`all_finite` through a Python sum (the faster way there)
+_SUMMED = 256
 
 
 def float_vectors(a: Any, b: Any, c: Any, d: Any = None) -> bool:

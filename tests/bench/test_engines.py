@@ -21,6 +21,8 @@ def data() -> dict[str, Any]:
     return engines.run(quick=True)
 
 
+# its run goes beyond a velocity limit on the way, as expected
+@pytest.mark.filterwarnings("ignore:the run went beyond the plant's limits:armctl.errors.SimulationWarning")
 def test_section_output(data: dict[str, Any], tmp_path: Path) -> None:
     from armctl.bench import engines
 

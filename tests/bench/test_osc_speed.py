@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import math
 
+from armctl import codegen
 from armctl.bench import osc_speed
-from armctl.dynamics import codegen
 
 
 def test_osc_speed_figures_checks_and_report() -> None:

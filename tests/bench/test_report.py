@@ -66,7 +66,7 @@ def test_a_bench_run_over_its_velocity_limit_is_not_ok(tmp_path: Path) -> None:
 def _figures(tmp_path: Path) -> tuple[dict[str, Any], dict[str, Any]]:
     """A small run's figures (three sections), a chart and a scene playback, written into tmp_path."""
     import armctl
-    from armctl.bench.report import pyplot
+    from armctl.bench.charts import pyplot
     from armctl.references import Quintic
 
     model = armctl.models.planar_2r()
@@ -139,3 +139,21 @@ def test_report_in_headless_chromium(tmp_path: Path) -> None:
     assert report.value["down"] == ["3.00e-02", "5.00e-03", "1.00e-04"]
     assert report.value["frames"] == 1
     assert grey(report.screenshot).std() > 5.0
+
+
+def test_small_costs_and_short_sections_show_their_figures() -> None:
+    """A compiled integrator costs a few 1e-4 s per simulated second and a speed section runs in a fraction of a
+    second: they read "0.000312" and "0.24 s", not "0.000" and "0 s"; a duration not measured says so."""
+    from armctl.bench.sections import duration_text
+    from armctl.bench.tables import integrators
+
+    data = {
+        "scenario": {"plant": "planar_2r", "duration": 1.0},
+        "reference": {"method": "DOP853"},
+        "integrators": {"rk4-compiled": {"cases": [{"step": 1e-3, "error": 1e-9, "cost": 3.12e-4}], "orders": []}},
+    }
+    (table,) = integrators(data)
+    assert table.rows[0][3] == ("0.000312", pytest.approx(3.12e-4))
+    assert duration_text(0.24) == "0.24 s" and duration_text(0.0) == "0 s"
+    assert duration_text(75.4) == "75 s" and duration_text(185.0) == "3 min 5 s"
+    assert duration_text(None) == "not measured" and duration_text(float("nan")) == "not measured"

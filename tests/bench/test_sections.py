@@ -13,6 +13,7 @@ import pytest
 
 import armctl
 from armctl.bench import backends, fidelity, integrators
+from armctl.errors import SimulationWarning
 
 
 def _finite_numbers(x: Any, path: str = "") -> list[str]:
@@ -324,7 +325,8 @@ def test_a_diverged_run_has_no_tracking_error_to_rank() -> None:
 
     sc = scene("pendulum")
     # gains far beyond the sampled-data border (k·T² ≫ 4), without torque limits to bound the growth
-    res = sc.run("computed_torque", gains={"kp": 1e7, "kd": 1e4}, saturate=False)
+    with pytest.warns(SimulationWarning, match="over its velocity limit"):  # on its way to diverging
+        res = sc.run("computed_torque", gains={"kp": 1e7, "kd": 1e4}, saturate=False)
     assert res.diverged
     m = sc.metrics(res, "computed_torque", gains={"kp": 1e7, "kd": 1e4}, timing_rounds=0)
     # before this was NaN, the error up to the divergence (~7e-3 rad at 0.2 s) ranked it above stable methods

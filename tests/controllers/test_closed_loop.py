@@ -139,6 +139,10 @@ def test_model_error_computed_torque_degrades_and_adaptation_recovers(tmp_path: 
     plt.close(fig)
 
 
+# its run goes beyond a velocity limit on the way, as expected
+@pytest.mark.filterwarnings("ignore:the run went beyond the plant's limits:armctl.errors.SimulationWarning")
+# its run saturates the torque, as expected
+@pytest.mark.filterwarnings("ignore:torque at its limit on most samples:armctl.errors.SimulationWarning")
 def test_sampled_computed_torque_critical_gain_with_one_period_delay() -> None:
     """Gains k·(K_p, K_d) at 100 Hz with one period of measurement delay: python-control's gain margin k* of
     the discrete error loop predicts the onset of instability of the nonlinear sampled-data simulation."""

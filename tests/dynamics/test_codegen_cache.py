@@ -214,7 +214,7 @@ def test_another_models_library_with_a_record_claiming_the_key_is_caught_by_its_
 ) -> None:
     """A foreign library copied together with its record, the record edited to name the expected key (so that
     size and SHA-256 match): the key generated into the library differs, it is rebuilt with one warning."""
-    from armctl.dynamics.library_cache import record_path
+    from armctl.codegen.library_cache import record_path
 
     cache, lib, other = _with_a_foreign_library(tmp_path)
     record = json.loads(record_path(lib).read_text())
@@ -259,7 +259,7 @@ def test_a_build_killed_midway_leaves_no_folder_behind_for_long(tmp_path: Path) 
     """A build killed while compiling left its temporary folder (generated C included) in the cache forever.
     The child is killed (SIGKILL, its compiler too) while its $CC runs; the folder is there, and once it is
     older than the stale age and no build holds its lock, the next process to use the cache removes it."""
-    from armctl.dynamics.library_cache import STALE_AFTER
+    from armctl.codegen.library_cache import STALE_AFTER
 
     cache, started = tmp_path / "cache", tmp_path / "compiler-started"
     cc = _script(tmp_path / "hanging-cc", f'touch "{started}"\nexec sleep 300\n')
@@ -285,7 +285,7 @@ def test_stale_cleaning_spares_live_and_recent_builds(tmp_path: Path) -> None:
     """Only folders both old and unlocked go: an old folder whose build lock another process holds (a build
     still compiling) and a recent unlocked one stay; an old unlocked one and an old ``tmp*`` folder (left by
     builds that took no lock) are removed; libraries, records and other files are never touched."""
-    from armctl.dynamics.library_cache import STALE_AFTER, clean_stale
+    from armctl.codegen.library_cache import STALE_AFTER, clean_stale
 
     folder = tmp_path / "casadi"
     folder.mkdir()
@@ -327,7 +327,32 @@ def test_stale_cleaning_spares_live_and_recent_builds(tmp_path: Path) -> None:
         fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
     finally:
         os.close(fd)
-    assert [p.name for p in clean_stale(folder)] == ["armctl_aaaa-x1.build"]
+    assert sorted(p.name for p in clean_stale(folder)) == ["armctl_aaaa-x1.build", "armctl_aaaa.lock"]
+    assert {p.name for p in folder.iterdir()} == {"armctl_bbbb-x2.build", "armctl_dddd.so"}
+
+
+def test_the_next_build_after_a_build_killed_midway_leaves_nothing_stale(tmp_path: Path) -> None:
+    """A build killed (SIGKILL, its compiler too) while its $CC runs leaves its temporary folder and its lock file;
+    the next build of the same library, at once (no waiting for the stale age), succeeds and leaves neither
+    behind: the folder is the dead build's (no other build of the library can run while the lock is held), and
+    the lock's owner is dead. What the library computes is checked against the uncompiled backend."""
+    cache, started = tmp_path / "cache", tmp_path / "compiler-started"
+    cc = _script(tmp_path / "hanging-cc", f'touch "{started}"\nexec sleep 300\n')
+    child = _child(cache, env={"CC": str(cc)}, start_new_session=True)
+    try:
+        deadline = time.monotonic() + 120
+        while not started.exists():
+            assert child.poll() is None and time.monotonic() < deadline, child.communicate()[1][-3000:]
+            time.sleep(0.05)
+    finally:
+        os.killpg(child.pid, signal.SIGKILL)
+        child.communicate()
+    folder = cache / "casadi"
+    assert len(_build_folders(cache)) == 1 and len(list(folder.glob("*.lock"))) == 1  # what the kill left
+    dyn = armctl.Dynamics(_model(), compile=True, cache_dir=cache)
+    np.testing.assert_allclose(dyn.gravity_torque(np.array(Q)), _reference("dynamics"), rtol=1e-12)
+    assert _build_folders(cache) == [] and list(folder.glob("*.lock")) == []
+    assert [p.suffix for p in sorted(folder.iterdir())] == [".json", ".so"]
 
 
 def _make_read_only(folder: Path) -> str:

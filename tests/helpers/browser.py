@@ -57,6 +57,8 @@ class PageReport:
     screenshots_after: list[bytes] = field(default_factory=list)
     #: the value of each expression of ``then``
     values_after: list[Any] = field(default_factory=list)
+    #: console warnings (``console.warn``, and the browser's own warnings such as deprecations), as text
+    warnings: list[str] = field(default_factory=list)
 
 
 async def _visit(ws_url: str, page: Path, expression: str, settle: float, then: Sequence[str]) -> PageReport:
@@ -76,11 +78,15 @@ async def _visit(ws_url: str, page: Path, expression: str, settle: float, then: 
                 method, params = msg.get("method"), msg.get("params", {})
                 if method == "Runtime.consoleAPICalled" and params.get("type") in ("error", "assert"):
                     report.errors.append(" ".join(str(a.get("value", a.get("description"))) for a in params["args"]))
+                elif method == "Runtime.consoleAPICalled" and params.get("type") == "warning":
+                    report.warnings.append(" ".join(str(a.get("value", a.get("description"))) for a in params["args"]))
                 elif method == "Runtime.exceptionThrown":
                     d = params["exceptionDetails"]
                     report.errors.append(d.get("exception", {}).get("description") or d.get("text", "exception"))
                 elif method == "Log.entryAdded" and params["entry"].get("level") == "error":
                     report.errors.append(params["entry"].get("text", ""))
+                elif method == "Log.entryAdded" and params["entry"].get("level") == "warning":
+                    report.warnings.append(params["entry"].get("text", ""))
                 elif method == "Network.requestWillBeSent":
                     report.requests.append(params["request"]["url"])
 

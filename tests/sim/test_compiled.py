@@ -83,6 +83,8 @@ def test_compiled_library_is_cached_per_model(tmp_path) -> None:
 
 
 @pytest.mark.parametrize("integrator", ["rk4", "euler"])
+# its run goes beyond a velocity limit on the way, as expected
+@pytest.mark.filterwarnings("ignore:the run went beyond the plant's limits:armctl.errors.SimulationWarning")
 def test_simulate_compiled_is_the_same_run(integrator: str) -> None:
     model = armctl.models.planar_3r().reduced(friction=False)
     dyn = armctl.Dynamics(model)
@@ -100,6 +102,10 @@ def test_simulate_compiled_is_the_same_run(integrator: str) -> None:
     assert np.abs(runs[1].q[-1] - ref.q).max() < 1e-2  # (the run went somewhere: it tracked the set point)
 
 
+# its run goes beyond a velocity limit on the way, as expected
+@pytest.mark.filterwarnings("ignore:the run went beyond the plant's limits:armctl.errors.SimulationWarning")
+# its run saturates the torque, as expected
+@pytest.mark.filterwarnings("ignore:torque at its limit on most samples:armctl.errors.SimulationWarning")
 def test_simulate_compiled_reports_divergence_as_the_uncompiled_run_does() -> None:
     model = armctl.models.planar_2r().reduced(friction=False)
 

@@ -15,8 +15,7 @@ import numpy as np
 import pytest
 
 import armctl
-from armctl.dynamics import codegen
-from armctl.errors import BackendError, SimulationWarning
+from armctl.errors import BackendError, PerformanceWarning, SimulationWarning
 from armctl.sim import ContactPoint, HuntCrossley, KelvinVoigt, Plane, SmoothFriction, simulate
 from armctl.sim import compiled as compiled_module
 from tests.sim.helpers import OpenLoop, PDGravity, Ramp, slider, zero_torque
@@ -141,8 +140,7 @@ def test_stiction_holds_exactly_on_the_generated_step() -> None:
 def fresh_cache(tmp_path, monkeypatch: pytest.MonkeyPatch):  # type: ignore[no-untyped-def]
     """An empty cache, and a process that has loaded no library and warned about nothing yet."""
     monkeypatch.setenv("ARMCTL_CACHE", str(tmp_path))
-    monkeypatch.setattr(compiled_module, "_ready", {})
-    monkeypatch.setattr(codegen, "warned", set())
+    compiled_module.FALLBACK.reset()
     return tmp_path
 
 
@@ -158,7 +156,7 @@ def test_without_a_compiler_the_run_takes_the_python_step_and_warns_once(fresh_c
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         runs = [_friction_run(), _friction_run()]
-    said = [str(w.message) for w in caught if issubclass(w.category, SimulationWarning)]
+    said = [str(w.message) for w in caught if issubclass(w.category, PerformanceWarning)]
     assert len(said) == 1, said
     assert said[0].startswith("no C compiler was found ($CC = '/nonexistent/cc' is not a program on the PATH)")
     assert "apt install gcc" in said[0] and "compile=False" in said[0]
@@ -172,10 +170,10 @@ def test_without_a_compiler_the_run_takes_the_python_step_and_warns_once(fresh_c
 
 def test_a_build_is_logged_once_with_its_time(fresh_cache, caplog) -> None:  # type: ignore[no-untyped-def]
     """The first run builds the library and logs one line with the time it took; later runs load it silently."""
-    with caplog.at_level(logging.INFO, logger="armctl.sim.compiled"):
+    with caplog.at_level(logging.INFO, logger="armctl.codegen"):
         first = _friction_run()
         second = _friction_run(integrator="rk4")
-    lines = [r.getMessage() for r in caplog.records if r.name == "armctl.sim.compiled"]
+    lines = [r.getMessage() for r in caplog.records if r.name == "armctl.codegen"]
     assert len(lines) == 1, lines
     assert "'pendulum'" in lines[0] and " s (cached in " in lines[0] and "\n" not in lines[0]
     assert first.info["compiled"] and second.info["compiled"]

@@ -70,6 +70,10 @@ def test_position_bound() -> None:
     assert res.diverged_at == pytest.approx(np.sqrt(2 * 2.0 * MASS / 100.0), abs=2e-3)
 
 
+# its run goes beyond a velocity limit on the way, as expected
+@pytest.mark.filterwarnings("ignore:the run went beyond the plant's limits:armctl.errors.SimulationWarning")
+# its run saturates the torque, as expected
+@pytest.mark.filterwarnings("ignore:torque at its limit on most samples:armctl.errors.SimulationWarning")
 def test_unstable_closed_loop_on_an_arm_reports_instead_of_raising() -> None:
     """Positive position feedback on the Panda: it runs away; the result says when and where."""
     dyn = armctl.Dynamics(armctl.models.panda())

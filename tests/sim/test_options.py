@@ -93,6 +93,8 @@ def test_the_same_seed_gives_the_same_noise_whatever_the_duration() -> None:
     np.testing.assert_array_equal(long.qd_measured[:k], short.qd_measured)
 
 
+# its run saturates the torque, as expected
+@pytest.mark.filterwarnings("ignore:torque at its limit on most samples:armctl.errors.SimulationWarning")
 def test_torques_saturate_at_the_effort_limits() -> None:
     model = slider(MASS, effort=5.0)
     push = OpenLoop(lambda t: np.array([12.0]))
@@ -112,6 +114,8 @@ def test_controller_logs_are_stacked_per_sample() -> None:
     np.testing.assert_allclose(err, np.linalg.norm(res.q - [0.2, 0.1], axis=1), rtol=1e-12)
 
 
+# its run saturates the torque, as expected
+@pytest.mark.filterwarnings("ignore:torque at its limit on most samples:armctl.errors.SimulationWarning")
 def test_qdd_is_the_acceleration_at_each_sample() -> None:
     """Recorded q̈ against Dynamics.forward_dynamics of the recorded state and applied torque."""
     dyn = armctl.Dynamics(armctl.models.planar_2r())

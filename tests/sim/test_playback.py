@@ -149,3 +149,73 @@ def test_playback_page_in_headless_chromium(contact_page: Path) -> None:
     assert start.std() > 5.0  # not one colour
     assert (np.abs(start - end) > 10.0).mean() > 0.001  # the slider moved the arm
     assert (np.abs(end - hidden) > 10.0).mean() > 0.005  # the arm covers a visible share of the view
+
+
+#: the GPU driver's note on reading pixels back, caused by the test's own screenshots, not by the page
+SCREENSHOT_NOTE = "GPU stall due to ReadPixels"
+
+
+def test_collision_meshes_by_default_and_mesh_files_under_their_current_type(tmp_path: Path) -> None:
+    """The default page draws the smaller collision meshes, and lowers its mesh files as "_meshfile_geometry"
+    (the deprecated "_meshfile" made the viewer warn in the console once per mesh)."""
+    model = armctl.models.ur5()
+    dyn = armctl.Dynamics(model)
+    q0 = np.array([0.0, -1.2, 1.2, -1.5, -1.5, 0.0])
+    run = simulate(dyn, lambda t, q, qd, ref: dyn.gravity_torque(q), armctl.Reference.hold(q0), 0.05, q0=q0)
+    small = playback(run, tmp_path / "small")
+    large = playback(run, tmp_path / "large", meshes="visual")
+    assert "(collision meshes)" in small.read_text() and "(visual meshes)" in large.read_text()
+    assert small.stat().st_size < 0.3 * large.stat().st_size
+    types = {g["type"] for c in _commands(small) for g in c.get("object", {}).get("geometries", [])}
+    assert "_meshfile_geometry" in types and "_meshfile" not in types
+
+
+def test_the_ground_grid_is_under_everything_the_arm_sweeps(planar_run: armctl.sim.SimResult, tmp_path: Path) -> None:
+    """The pendulum hangs below its base: the grid is put under its lowest point, not through it."""
+    from armctl.scenes import scene
+
+    sc = scene("pendulum")
+    res = sc.run("pd_gravity", duration=0.2)
+    page = playback(res, tmp_path / "pendulum")
+    grid = next(c for c in _commands(page) if c["type"] == "set_transform" and c["path"] == "/Grid")
+    height = np.array(grid["matrix"]).reshape(4, 4).T[2, 3]
+    import pinocchio as pin
+
+    pm = sc.plant.to_pinocchio()
+    pd = pm.createData()
+    lowest = 0.0
+    for q in res.q:
+        pin.forwardKinematics(pm, pd, q)
+        pin.updateFramePlacements(pm, pd)
+        lowest = min(lowest, *(float(f.translation[2]) for f in pd.oMf))
+    assert height < lowest
+
+
+@needs_chromium
+def test_playback_speed_and_loop_in_headless_chromium(planar_run: armctl.sim.SimResult, tmp_path: Path) -> None:
+    """The speed menu sets the animation's time scale; with the loop on (the default) the animation starts over
+    at its end and keeps playing, with it off it stops at the end; the page's title is left out in a frame; the
+    page logs no console warning."""
+    page = playback(planar_run, tmp_path / "planar", title="planar 2R")
+    state = "({t: window.armctlViewer.animator.time, playing: window.armctlViewer.animator.playing})"
+    set_speed = """(() => { const s = document.getElementById('armctl-speed'); s.value = '0.25';
+        s.dispatchEvent(new Event('change')); return window.armctlViewer.animator.mixer.timeScale; })()"""
+    near_end = """(() => { const a = window.armctlViewer.animator; const s = document.getElementById('armctl-speed');
+        s.value = '1'; s.dispatchEvent(new Event('change')); a.seek(0.95 * a.duration);
+        a.display_progress(0.95 * a.duration); return a.time; })()"""
+    loop_off = """(() => { document.getElementById('armctl-loop').checked = false;
+        const a = window.armctlViewer.animator; a.seek(0.9 * a.duration); return true; })()"""
+    report = open_page(page, state, settle=2.5, then=[set_speed, near_end, state, loop_off, state, state])
+    keep_screenshot(report.screenshot, "armctl-playback-loop.png")
+    assert report.errors == []
+    assert [w for w in report.warnings if SCREENSHOT_NOTE not in w] == []
+    # 1 s of animation, 2.5 s after loading: looping, so still playing, somewhere inside the run
+    assert report.value["playing"] and 0.0 <= report.value["t"] <= 1.0
+    assert report.values_after[0] == pytest.approx(0.25)
+    assert report.values_after[1] == pytest.approx(0.95, abs=0.05)
+    after_end = report.values_after[2]  # half a second later: past the end, started over
+    assert after_end["playing"] and after_end["t"] < 0.9
+    stopped = report.values_after[5]  # loop off: a second after 0.9 s the run has ended and stays ended
+    assert not stopped["playing"]
+    text = page.read_text()
+    assert "<h1>planar 2R</h1>" in text and "body.embedded #armctl-bar h1{display:none}" in text

@@ -139,6 +139,8 @@ def test_a_huge_finite_torque_is_finite() -> None:
     np.testing.assert_array_equal(res.tau_applied[50], dyn.model.effort_limit)
 
 
+# its run goes beyond a velocity limit on the way, as expected
+@pytest.mark.filterwarnings("ignore:the run went beyond the plant's limits:armctl.errors.SimulationWarning")
 def test_a_huge_finite_state_is_not_called_non_finite() -> None:
     """Unbounded stop rules: a state of huge finite entries is a state (its entries decide, not their sum)."""
     dyn, ref = _setup()

@@ -56,6 +56,10 @@ def test_effective_mass_of_the_panda_hand() -> None:
     assert not found.stable  # the existing contact test's k = 1e8 at 1 ms: beyond RK4's limit
 
 
+# the unstable contact also shows in the energy balance
+@pytest.mark.filterwarnings("ignore:the arm gained:armctl.errors.SimulationWarning")
+# the unstable contact also shows in the contact's work
+@pytest.mark.filterwarnings("ignore:the contact did:armctl.errors.SimulationWarning")
 def test_simulate_warns_and_records_an_unstable_contact() -> None:
     wall = Plane(KelvinVoigt(1e9), normal=(-1.0, 0.0, 0.0), point=(0.01, 0.0, 0.0))
     push = OpenLoop(lambda t: np.array([10.0]))
@@ -102,6 +106,8 @@ def test_rk4_limit_of_a_damped_contact_from_its_stability_function(zeta: float) 
 
 @pytest.mark.steps_may_differ("a contact unstable for the scheme, on purpose")
 @pytest.mark.parametrize("zeta", [0.0, 0.05])
+# the unstable contact also shows in the contact's work
+@pytest.mark.filterwarnings("ignore:the contact did:armctl.errors.SimulationWarning")
 def test_one_sided_contact_gaining_energy_below_the_linear_limit_is_reported(zeta: float) -> None:
     # a 2 kg slider at rest on a wall's surface, pushed into it with 10 N: the exact motion keeps the force
     # between 0 and 20 N undamped (and below that damped). At ω·dt = 1.8 the Euler variants are linearly stable

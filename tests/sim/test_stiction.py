@@ -204,6 +204,8 @@ def test_pendulum_sticks_exactly_when_gravity_is_below_breakaway(q0: float, marg
     ratio=st.floats(0.3, 1.0),
     torque=st.lists(st.floats(-10.0, 10.0), min_size=3, max_size=3),
 )
+# its run goes beyond a velocity limit on the way, as expected
+@pytest.mark.filterwarnings("ignore:the run went beyond the plant's limits:armctl.errors.SimulationWarning")
 def test_several_joints_stick_and_slip_consistently(
     q0: list[float], static: list[float], ratio: float, torque: list[float]
 ) -> None:

@@ -135,6 +135,10 @@ def test_l1_norms_of_a_critically_damped_loop() -> None:
     assert g1 > 1 / 100 and h1 > 1.5
 
 
+# its run goes beyond a velocity limit on the way, as expected
+@pytest.mark.filterwarnings("ignore:the run went beyond the plant's limits:armctl.errors.SimulationWarning")
+# its run saturates the torque, as expected
+@pytest.mark.filterwarnings("ignore:torque at its limit on most samples:armctl.errors.SimulationWarning")
 def test_computed_torque_with_a_constant_inertia_in_closed_loop() -> None:
     """Planar 2R, 200 Hz, one period of delay, K_p = 100, K_d = 20, a sinusoid with ‖q̈_d‖ ≤ a:
 
@@ -212,6 +216,10 @@ def test_sampled_data_condition_at_one_inertia_is_the_gain_margin() -> None:
     assert pd.details["critical_kp"] == pytest.approx(100.0 * j * v.factor, rel=1e-6)
 
 
+# its run goes beyond a velocity limit on the way, as expected
+@pytest.mark.filterwarnings("ignore:the run went beyond the plant's limits:armctl.errors.SimulationWarning")
+# its run saturates the torque, as expected
+@pytest.mark.filterwarnings("ignore:torque at its limit on most samples:armctl.errors.SimulationWarning")
 def test_sampled_data_condition_in_closed_loop() -> None:
     """PD + gravity on the planar 2R at 100 Hz with one period of delay, regulating at the stretched elbow
     where the inertia along the arm is λ_m: 5 % below the critical gain over [λ_m, λ_M] the arm settles, 5 %

@@ -33,7 +33,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from armctl._checks import FloatArray
-from armctl.bench.report import pyplot, save_figure, section_main
+from armctl.bench.charts import pyplot, save_figure
+from armctl.bench.standalone import section_main
 
 if TYPE_CHECKING:
     from armctl.dynamics.base import Dynamics

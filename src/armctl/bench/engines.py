@@ -35,7 +35,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from armctl._checks import FloatArray
-from armctl.bench.report import pyplot, save_figure, section_main
+from armctl.bench.charts import pyplot, save_figure
+from armctl.bench.standalone import section_main
 
 if TYPE_CHECKING:
     from armctl.dynamics.base import Dynamics
@@ -274,10 +275,10 @@ def summary(data: dict[str, Any]) -> str:
         parts = []
         if "frictionless" in d:
             cases = d["frictionless"]
-            parts.append(f"tracking {_span(cases, 'error', '.1e')} rad at {_span(cases, 'cost', '.4f')} s/s")
+            parts.append(f"tracking {_span(cases, 'error', '.1e')} rad at {_span(cases, 'cost', '.3g')} s/s")
         if "stiction" in d:
             cases = d["stiction"]
-            parts.append(f"creep {_span(cases, 'error', '.1e')} rad at {_span(cases, 'cost', '.4f')} s/s")
+            parts.append(f"creep {_span(cases, 'error', '.1e')} rad at {_span(cases, 'cost', '.3g')} s/s")
         lines.append(f"  {name:27s} " + "; ".join(parts))
     for key, c in data["checks"].items():
         figures = ", ".join(f"{k} {v:.2g}" for k, v in c.items() if k != "ok")

@@ -38,7 +38,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from armctl._checks import FloatArray
-from armctl.bench.report import pyplot, save_figure, section_main
+from armctl.bench.charts import pyplot, save_figure
+from armctl.bench.standalone import section_main
 
 if TYPE_CHECKING:
     from armctl.dynamics.base import Dynamics
@@ -238,7 +239,7 @@ def summary(data: dict[str, Any]) -> str:
         order = d["asymptotic_order"]
         lines.append(
             f"  {name:20s} h {c[0]['step'] * 1e3:g}…{c[-1]['step'] * 1e3:g} ms: error "
-            f"{c[0]['error']:.1e}…{c[-1]['error']:.1e} rad, cost {c[0]['cost']:.3f}…{c[-1]['cost']:.3f} s/s, "
+            f"{c[0]['error']:.1e}…{c[-1]['error']:.1e} rad, cost {c[0]['cost']:.3g}…{c[-1]['cost']:.3g} s/s, "
             f"order {'n/a' if order is None else f'{order:.2f}'}"
         )
     return "\n".join(lines)

@@ -68,7 +68,7 @@ def plot_pareto(rows: list[dict[str, Any]], path: Path) -> None:
     """
     from matplotlib.lines import Line2D
 
-    from armctl.bench.report import plain_log_ticks, pyplot
+    from armctl.bench.charts import plain_log_ticks, pyplot
 
     plt = pyplot()
     scenes = list(dict.fromkeys(r["scene"] for r in rows))
@@ -153,6 +153,6 @@ def plot_pareto(rows: list[dict[str, Any]], path: Path) -> None:
     ]
     fig.legend(handles=key, loc="lower center", ncol=3, fontsize=10, frameon=False)
     fig.tight_layout(rect=(0, 0.08, 1, 1))
-    from armctl.bench.report import save_figure
+    from armctl.bench.charts import save_figure
 
     save_figure(fig, path, dpi=110)

@@ -1,122 +1,35 @@
-"""``report.html``: an ``armctl bench`` run in one page — a table of contents, each section's results as
-HTML tables (sortable by clicking a header: a few lines of embedded script), its charts (SVG, and PNG for the
-stability maps) and the scenes' 3D playbacks, all referenced from the files beside it; nothing is loaded from
-the network."""
+"""``report.html``: an ``armctl bench`` run in one page — what the run left out (with the command that adds it), a
+table of contents, each section's results as HTML tables (sortable by clicking a header), its charts (SVG, and
+PNG for the stability maps), the warnings its runs raised, and the scenes' 3D playbacks, all referenced from the
+files beside it; nothing is loaded from the network.
+
+The page is assembled by the functions below, one per part; its style and its sorting script are the files of
+``report_assets/``, inlined."""
 
 from __future__ import annotations
 
 import html
-import sys
-from collections.abc import Callable
+from importlib.resources import files
 from pathlib import Path
 from typing import Any
 
+from armctl.bench.outcomes import scene_title
+from armctl.bench.sections import SCOPE, SECTION_TITLES, duration_text, section_summary
+from armctl.bench.tables import TABLES, Table
 
-def pyplot() -> Any:
-    """``matplotlib.pyplot`` on the non-interactive Agg backend, imported on first use."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    plt.rcParams.update({"font.size": 10, "axes.titlesize": 11, "axes.labelsize": 10, "legend.fontsize": 9})
-    return plt
+esc = html.escape
 
 
-def plain_log_ticks(ax: Any) -> None:
-    """Log axes of ``ax`` ticked at 1, 2, 5 × 10^k and labelled plainly ("20", "0.005", never "2×10⁰"),
-    without minor labels (over less than a decade matplotlib labels the minor ticks, which collide)."""
-    import matplotlib.ticker
-
-    for axis in (ax.xaxis, ax.yaxis):
-        if axis.get_scale() == "log":
-            axis.set_major_locator(matplotlib.ticker.LogLocator(base=10.0, subs=(1.0, 2.0, 5.0)))
-            axis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda v, _: f"{v:g}"))
-            axis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+def _asset(name: str) -> str:
+    return files("armctl.bench").joinpath("report_assets").joinpath(name).read_text(encoding="utf-8")
 
 
-def save_figure(fig: Any, path: Path, dpi: int = 110) -> None:
-    """Write ``fig`` to ``path`` and free it."""
-    fig.savefig(path, dpi=dpi)
-    pyplot().close(fig)
+def _anchor(key: str) -> str:
+    return "s-" + "".join(ch if ch.isalnum() else "-" for ch in key)
 
 
-def section_main(
-    run: Callable[..., dict[str, Any]],
-    summary: Callable[[dict[str, Any]], str],
-    plot: Callable[[dict[str, Any], Path], None],
-    chart: str,
-) -> None:
-    """Command line of a bench section: ``run`` (``--quick`` for the short version), print ``summary``, write
-    the chart ``chart`` in the working directory."""
-    data = run(quick="--quick" in sys.argv)
-    print(summary(data))
-    plot(data, Path(chart))
-
-
-#: what the run covers and what it leaves out, stated in the report (so a reader does not infer it)
-SCOPE = (
-    "Scenes × controllers: the five joint-space laws (PD+gravity, computed torque with the exact and with a "
-    "reduced model, passivity-based, adaptive) on the three joint-space scenes; the operational-space QP and "
-    "its closed-form baseline on panda_contact. Not run: the joint-space laws on panda_contact (its task is a "
-    "contact force and a tool motion, which a law tracking a joint reference does not pursue), and the "
-    "operational-space controllers on the joint-space scenes (with a posture task alone they are computed "
-    "torque through a QP).",
-    "Compute time per step: each controller replays a window of recorded states of its own run, in this "
-    "process after every simulation, in interleaved rounds; the median is charted (quartiles in figures.json).",
-    "Limits: a sample counts as beyond them if the commanded torque exceeds the effort limit, a joint speed "
-    "the velocity limit by more than 1 %, or a joint its position range (shares per kind in the summary).",
-    "Stability maps: one-joint pendulum in a horizontal plane with one period of measurement delay; no map for "
-    "the operational-space controllers (on one joint they reduce to computed torque) and no gain × model-error "
-    "map for PD+gravity (its loop gain does not depend on an inertia estimate). The adaptive law runs with its "
-    "preset's Γ; its dashed border is for θ̂ frozen.",
-    'Integrators: a frictionless, contact-free arm, on which "implicit-euler" has nothing to treat implicitly '
-    'and is the "euler" scheme (velocity form, q₁ = q + h q̇₁); the implicit schemes earn their cost on stiff '
-    "contact (tests/sim/test_contact.py).",
-    "Plant engines (with MuJoCo installed): the same closed loop on armctl's and on MuJoCo's integrators, the Panda "
-    "without friction against a DOP853 reference, and held below breakaway with Coulomb friction, where the error "
-    "is the creep (armctl's stick–slip model holds exactly; MuJoCo's frictionloss is a soft constraint).",
-)
-
-
-_STYLE = """
-body{font-family:system-ui,sans-serif;max-width:1200px;margin:2em auto;padding:0 1em;color:#222;line-height:1.45}
-h1{margin-bottom:.2em} h2{border-bottom:1px solid #ddd;padding-bottom:.2em;margin-top:2em}
-nav ol{columns:2} table{border-collapse:collapse;margin:.6em 0 .2em;font-size:14px}
-caption{text-align:left;font-weight:600;padding:.3em 0} div.wide{overflow-x:auto}
-th,td{border:1px solid #d5d9de;padding:3px 8px;text-align:right;white-space:nowrap}
-th{background:#eef1f4;cursor:pointer;user-select:none} th[aria-sort=ascending]::after{content:" ▲"}
-th[aria-sort=descending]::after{content:" ▼"} td.text{text-align:left;white-space:normal}
-tr:nth-child(even) td{background:#fafbfc} p.note{font-size:13px;color:#555;margin:.2em 0 1em}
-figure{margin:1em 0} figure img{max-width:100%;border:1px solid #ddd}
-figcaption{font-size:14px;color:#333;max-width:70em}
-iframe{width:100%;height:620px;border:1px solid #ccc} pre{background:#f6f6f6;padding:1em;overflow-x:auto;font-size:12px}
-"""
-
-#: sorting a table by a header click; numbers by their data-key, text by its words
-_SORT = """
-document.querySelectorAll("table.sortable").forEach(function(table){
-  table.querySelectorAll("th").forEach(function(th, col){
-    th.addEventListener("click", function(){
-      const up = th.getAttribute("aria-sort") !== "ascending";
-      table.querySelectorAll("th").forEach(h => h.removeAttribute("aria-sort"));
-      th.setAttribute("aria-sort", up ? "ascending" : "descending");
-      const body = table.tBodies[0], rows = Array.from(body.rows);
-      function key(r){ const c = r.cells[col], k = c.getAttribute("data-key");
-        return k === null ? null : (c.classList.contains("text") ? k : parseFloat(k)); }
-      rows.sort(function(a, b){ const x = key(a), y = key(b);
-        if (x === null) return 1; if (y === null) return -1;
-        const d = (typeof x === "number") ? x - y : String(x).localeCompare(String(y));
-        return up ? d : -d; });
-      rows.forEach(r => body.appendChild(r));
-    });
-  });
-});
-"""
-
-
-def _table(t: Any) -> str:
-    esc = html.escape
+def table(t: Table) -> str:
+    """A table of :mod:`armctl.bench.tables` as a sortable HTML table (each cell's sort key as ``data-key``)."""
     head = "".join(f"<th scope='col'>{esc(c)}</th>" for c in t.columns)
     body = []
     for row in t.rows:
@@ -133,82 +46,140 @@ def _table(t: Any) -> str:
     )
 
 
-def _anchor(key: str) -> str:
-    return "s-" + "".join(ch if ch.isalnum() else "-" for ch in key)
+def skipped(parts: list[dict[str, str]]) -> str:
+    """The box naming what the run left out, each part with its reason and the command that adds it."""
+    if not parts:
+        return ""
+    items = "".join(
+        f"<li>{esc(s['part'])}: {esc(s['reason'])}. Add with <code>{esc(s['command'])}</code></li>" for s in parts
+    )
+    return f"<div class='skipped' id='s-skipped'><strong>Not in this report</strong><ul>{items}</ul></div>"
 
 
-def write_report(out: Path, figures: dict[str, Any], charts: dict[str, Any], summary: str) -> Path:
-    """Write ``out/report.html``: a table of contents, then per section (in the order of
-    :data:`armctl.bench.suite.SECTION_TITLES`, then any other) its tables, charts and playbacks; the scope of
-    the run and the console text last. ``charts``: file name → {"section", "caption"} (a bare caption string
-    is put under the section "charts")."""
-    from armctl.bench.outcomes import scene_title
-    from armctl.bench.suite import SECTION_TITLES
-    from armctl.bench.tables import TABLES
+def raised(said: list[dict[str, Any]]) -> str:
+    """The warnings a section's runs raised, with their count, folded under a one-line summary."""
+    if not said:
+        return ""
+    total = sum(w["count"] for w in said)
+    items = "".join(f"<li>{w['count']} × <code>{esc(w['category'])}</code>: {esc(w['message'])}</li>" for w in said)
+    return (
+        f"<details class='warnings'><summary>{total} warning{'s' if total != 1 else ''} raised by this section's "
+        f"runs</summary><ul>{items}</ul></details>"
+    )
 
-    esc = html.escape
+
+def figure(name: str, caption: str) -> str:
+    """A chart written beside the page, with its caption."""
+    return (
+        f"<figure><img src='{esc(name)}' alt='{esc(caption)}' loading='lazy'>"
+        f"<figcaption>{esc(caption)}</figcaption></figure>"
+    )
+
+
+def section(key: str, title: str, figures: dict[str, Any], charts: dict[str, dict[str, str]]) -> str:
+    """One section: its run time, tables (or text), charts and warnings."""
+    parts = [f"<section id='{_anchor(key)}'><h2>{esc(title)}</h2>"]
+    seconds = figures.get("section_seconds", {}).get(key)
+    if seconds is not None:
+        parts.append(f"<p class='note'>Section run time: {esc(duration_text(seconds))}.</p>")
+    if key in figures and key in TABLES:
+        parts += [table(t) for t in TABLES[key](figures[key])]
+    elif key in figures:
+        parts.append(f"<pre>{esc(section_summary(key, figures[key]))}</pre>")
+    parts += [figure(name, c["caption"]) for name, c in charts.items() if c["section"] == key]
+    parts.append(raised(figures.get("section_warnings", {}).get(key, [])))
+    parts.append("</section>")
+    return "".join(parts)
+
+
+def playbacks(figures: dict[str, Any]) -> str:
+    """The scenes' playbacks, one a scene: its arm and task, the run shown, and the page in a frame; or, where
+    none was written, why and how to add them."""
+    rows = [r for r in figures.get("scenes", []) if r.get("playback")]
+    missing = [s for s in figures.get("skipped", []) if s["part"].startswith("3D playback")]
+    parts = ["<section id='s-playback'><h2>3D playback of the scenes</h2>"]
+    if not rows:
+        why = (
+            f"{esc(missing[0]['reason'])}; add them with <code>{esc(missing[0]['command'])}</code>"
+            if missing
+            else "no scene run wrote one"
+        )
+        parts.append(f"<p class='note'>No playback in this report: {why}.</p></section>")
+        return "".join(parts)
+    parts.append(
+        "<p class='note'>One run per scene (computed torque where the scene has it), drawn with the arm's "
+        "collision meshes: drag to turn the view, scroll to zoom, the slider to move in time, the speed menu and "
+        "the loop box to replay. Each page also opens on its own.</p>"
+    )
+    for r in rows:
+        name = r["playback"]
+        parts.append(
+            f"<h3>{esc(r['scene'])}</h3><p class='note'>{esc(scene_title(r['scene'], figures['scenes']))}. "
+            f"Shown: {esc(r['method'].replace('_', ' '))}, {esc(str(r.get('status', '')))}. "
+            f"<a href='{esc(name)}'>Open on its own page</a>.</p>"
+            f"<iframe src='{esc(name)}' title='{esc(r['scene'])} playback' loading='lazy'></iframe>"
+        )
+    parts.append("</section>")
+    return "".join(parts)
+
+
+def page(figures: dict[str, Any], charts: dict[str, Any], summary: str) -> str:
+    """The whole page (see :func:`write_report`)."""
     charts = {k: (v if isinstance(v, dict) else {"section": "charts", "caption": v}) for k, v in charts.items()}
     keys = [k for k in SECTION_TITLES if k in figures]
     keys += [k for k in figures.get("section_seconds", {}) if k not in keys]
+    keys += [c["section"] for c in charts.values() if c["section"] not in keys]
+    keys = list(dict.fromkeys(keys))
     titles = {k: SECTION_TITLES.get(k, k.replace("_", " ").capitalize()) for k in keys}
-    extra = [c["section"] for c in charts.values() if c["section"] not in titles]
-    for k in dict.fromkeys(extra):
-        keys.append(k)
-        titles[k] = k.replace("_", " ").capitalize()
-    playbacks = [r for r in figures.get("scenes", []) if r.get("playback")]
+    show_playback = "scenes" in figures
     toc = [f"<li><a href='#{_anchor(k)}'>{esc(titles[k])}</a></li>" for k in keys]
-    if playbacks:
-        toc.insert(1, "<li><a href='#s-playback'>3D playback of the scenes</a></li>")
+    if show_playback:
+        toc.insert(keys.index("scenes") + 1, "<li><a href='#s-playback'>3D playback of the scenes</a></li>")
     toc += ["<li><a href='#s-scope'>Scope</a></li>", "<li><a href='#s-text'>Console text</a></li>"]
+    kind = "Quick run" if figures.get("quick") else "Full run"
     parts = [
         "<!doctype html><html lang='en'><head><meta charset='utf-8'><title>armctl bench</title>",
-        f"<style>{_STYLE}</style></head><body>",
-        "<h1>armctl bench</h1>",
-        f"<p>{'Quick run' if figures.get('quick') else 'Full run'} started {esc(figures['started'])}, "
-        f"{figures.get('total_seconds', 0):.0f} s. Every number behind the tables and charts is in "
-        "<a href='figures.json'>figures.json</a>.</p>",
+        f"<style>{_asset('report.css')}</style></head><body><h1>armctl bench</h1>",
+        f"<p>{kind} started {esc(figures['started'])}, run time {esc(duration_text(figures.get('total_seconds')))}."
+        " Every number behind the tables and charts is in <a href='figures.json'>figures.json</a>.</p>",
+        skipped(figures.get("skipped", [])),
         "<nav><h2>Contents</h2><ol>" + "".join(toc) + "</ol></nav>",
     ]
     for k in keys:
-        seconds = figures.get("section_seconds", {}).get(k)
-        parts.append(f"<section id='{_anchor(k)}'><h2>{esc(titles[k])}</h2>")
-        if seconds is not None:
-            parts.append(f"<p class='note'>Section run time {seconds:.0f} s.</p>")
-        if k in figures and k in TABLES:
-            parts += [_table(t) for t in TABLES[k](figures[k])]
-        elif k in figures:
-            from armctl.bench.suite import section_summary
-
-            parts.append(f"<pre>{esc(section_summary(k, figures[k]))}</pre>")
-        for name, c in charts.items():
-            if c["section"] == k:
-                parts.append(
-                    f"<figure><img src='{esc(name)}' alt='{esc(c['caption'])}' loading='lazy'>"
-                    f"<figcaption>{esc(c['caption'])}</figcaption></figure>"
-                )
-        parts.append("</section>")
-        if k == "scenes" and playbacks:
-            parts.append("<section id='s-playback'><h2>3D playback of the scenes</h2>")
-            parts.append(
-                "<p class='note'>One run per scene (computed torque where the scene has it), drawn with the arm's "
-                "collision meshes: drag to turn the view, scroll to zoom, the slider to move in time. Each page "
-                "also opens on its own.</p>"
-            )
-            for r in playbacks:
-                name = r["playback"]
-                parts.append(
-                    f"<h3>{esc(r['scene'])}, {esc(r['method'].replace('_', ' '))}</h3><p class='note'>"
-                    f"{esc(scene_title(r['scene'], figures['scenes']))}</p>"
-                    f"<p><a href='{esc(name)}'>open on its own page</a></p>"
-                    f"<iframe src='{esc(name)}' title='{esc(r['scene'])} playback' loading='lazy'></iframe>"
-                )
-            parts.append("</section>")
-    parts.append("<section id='s-scope'><h2>Scope</h2><ul>" + "".join(f"<li>{esc(n)}</li>" for n in SCOPE) + "</ul>")
-    parts.append("</section>")
-    parts.append(
+        parts.append(section(k, titles[k], figures, charts))
+        if k == "scenes":
+            parts.append(playbacks(figures))
+    scope = "".join(f"<li>{esc(n)}</li>" for n in SCOPE)
+    parts += [
+        f"<section id='s-scope'><h2>Scope</h2><ul>{scope}</ul></section>",
         f"<section id='s-text'><h2>Console text</h2><details><summary>as printed</summary><pre>{esc(summary)}</pre>"
-    )
-    parts.append(f"</details></section><script>{_SORT}</script></body></html>")
-    path = out / "report.html"
-    path.write_text("\n".join(parts), encoding="utf-8")
+        "</details></section>",
+        f"<script>{_asset('sort.js')}</script></body></html>",
+    ]
+    return "\n".join(p for p in parts if p)
+
+
+def write_report(out: Path, figures: dict[str, Any], charts: dict[str, Any], summary: str) -> Path:
+    """Write ``out/report.html``: what the run left out, a table of contents, then per section (in the order of
+    :data:`armctl.bench.sections.SECTION_TITLES`, then any other) its tables, charts, warnings and playbacks;
+    the scope of the run and the console text last.
+
+    Parameters
+    ----------
+    out : pathlib.Path
+        The folder of the run (the charts and playbacks are there).
+    figures : dict
+        The run's figures (as in ``figures.json``).
+    charts : dict
+        File name → {"section", "caption"} (a bare caption string is put under the section "charts").
+    summary : str
+        The console text.
+
+    Returns
+    -------
+    pathlib.Path
+        The page written.
+    """
+    path = Path(out) / "report.html"
+    path.write_text(page(figures, charts, summary), encoding="utf-8")
     return path

@@ -13,6 +13,10 @@ shared machine slows both alike. Sections:
   damping 0.2 and frictionloss 0.3, the same controller and reference); the tracking errors of both.
 * **Chains**: planar chains of N = 2, 4, 7, 12, 20 revolute joints (:func:`planar_chain`: 1 kg, 0.25 m links), the
   same friction, controller and kind of reference, default ``simulate`` against MuJoCo's loop.
+* **Sticking chains**: the same chains with friction that makes joints stick at every size: each joint's static
+  level is :data:`STICK_PER_INERTIA` times its diagonal inertia M_ii at the hanging pose (Coulomb 0.8 of it), so
+  joints stop and break away throughout the run, many at once on the long chains — the cost of the stick solve as
+  the stuck set grows, against MuJoCo with the same frictionloss.
 * **Contact**: the plant of ``panda_contact`` alone (table: Kelvin–Voigt with Coulomb sliding, joint friction; 0.2 ms
   steps), replaying the torques of one run of the scene — the generated step and the Python step against MuJoCo's
   plant at the same step (:func:`armctl.bench.mujoco_loops.contact_model`).
@@ -45,6 +49,7 @@ from armctl.sim import simulate
 TARGETS = {
     "panda_ratio": 1.0,
     "chain_ratio": 2.0,
+    "sticking_chain_ratio": 1.5,
     "contact_plant_ratio": 3.0,
     "semi_implicit_over_rk4": 1.5,
     "pool_speedup": 1.65,
@@ -54,6 +59,9 @@ TARGETS = {
 FRICTION = {"viscous": 0.2, "coulomb": 0.3, "static": 0.4}
 Q_PANDA = np.array([0.0, -0.4, 0.0, -2.0, 0.0, 1.6, 0.8])
 CHAINS = (2, 4, 7, 12, 20)
+#: the sticking chains' static friction per unit of joint inertia [N·m per kg·m², i.e. rad/s²]: comparable to the
+#: reference's peak acceleration (1.2 rad/s²), so that joints stick at each reversal
+STICK_PER_INERTIA = 1.0
 #: the modes of ``simulate`` timed on the Panda: name → (plant friction, keywords)
 PANDA_MODES: dict[str, tuple[bool, dict[str, Any]]] = {
     "default": (True, {}),
@@ -188,21 +196,32 @@ def panda_figures(duration: float = 10.0, rounds: int = 3) -> dict[str, Any]:
 
 
 # -------------------------------------------------------------------------------------------------- chains
-def chain_figures(ns: tuple[int, ...] = CHAINS, duration: float = 2.0, rounds: int = 3) -> dict[str, Any]:
+def sticking_friction(model: armctl.RobotModel, q0: np.ndarray) -> armctl.RobotModel:
+    """``model`` with static friction F_s,i = :data:`STICK_PER_INERTIA` · M_ii(q0), Coulomb 0.8 F_s,i, viscous
+    0.2 N·m·s/rad."""
+    static = STICK_PER_INERTIA * np.diag(armctl.Dynamics(model).mass_matrix(q0))
+    return model.with_friction(viscous=FRICTION["viscous"], coulomb=0.8 * static, static=static)
+
+
+def chain_figures(
+    ns: tuple[int, ...] = CHAINS, duration: float = 2.0, rounds: int = 3, sticking: bool = False
+) -> dict[str, Any]:
+    """The chains' figures (see the module); ``sticking``: with :func:`sticking_friction` instead of the fixed
+    levels."""
     from armctl.bench import mujoco_loops
 
     out: dict[str, Any] = {}
     for n in ns:
-        model = planar_chain(n).with_friction(**FRICTION)
-        dyn = armctl.Dynamics(model)
         q0 = np.zeros(n)
         q0[0] = -math.pi / 2  # hanging
+        model = sticking_friction(planar_chain(n), q0) if sticking else planar_chain(n).with_friction(**FRICTION)
+        dyn = armctl.Dynamics(model)
         ctrl, ref, steps = _tracking(model, q0, duration)
         info: dict[str, Any] = {}
 
         def arm(dyn: Any = dyn, ctrl: Any = ctrl, ref: Any = ref, q0: np.ndarray = q0, info: dict = info) -> None:
             res = simulate(dyn, ctrl, ref, duration, q0=q0)
-            info.update(res.info)
+            info.update(res.info, stuck_fraction=float(res.stuck.mean()), most_stuck=int(res.stuck.sum(axis=1).max()))
 
         m, d = mujoco_loops.joint_friction_model(model, 1e-3)
 
@@ -218,6 +237,8 @@ def chain_figures(ns: tuple[int, ...] = CHAINS, duration: float = 2.0, rounds: i
             "ratio_to_mujoco": _ratios(samples, "mujoco")["armctl"],
             "stick_events": info.get("stick_events"),
             "breakaway_events": info.get("breakaway_events"),
+            "stuck_fraction": info.get("stuck_fraction"),
+            "most_stuck": info.get("most_stuck"),
             "compiled": info.get("compiled"),
         }
     return out
@@ -307,6 +328,17 @@ def report(fig: dict[str, Any]) -> str:
                 f"  N = {n:>2}  {f['us_per_step']:7.1f} µs/step  MuJoCo {f['mujoco_us_per_step']:6.1f}  "
                 f"{f['ratio_to_mujoco']:5.2f}×  ({f['stick_events']} stops, {f['breakaway_events']} breakaways)"
             )
+    if "sticking_chains" in fig:
+        lines.append(
+            f"Planar chains with static friction {STICK_PER_INERTIA:g}·M_ii (joints stick at every size): default "
+            "simulate against MuJoCo"
+        )
+        for n, f in fig["sticking_chains"].items():
+            lines.append(
+                f"  N = {n:>2}  {f['us_per_step']:7.1f} µs/step  MuJoCo {f['mujoco_us_per_step']:6.1f}  "
+                f"{f['ratio_to_mujoco']:5.2f}×  ({f['stick_events']} stops, {f['breakaway_events']} breakaways, "
+                f"{100 * f['stuck_fraction']:.0f} % of joint-samples stuck, up to {f['most_stuck']} at once)"
+            )
     if "contact" in fig:
         c = fig["contact"]
         lines.append(
@@ -340,6 +372,10 @@ def checks(fig: dict[str, Any]) -> dict[str, bool]:
         )
     for n, f in fig.get("chains", {}).items():
         out[f"chain N = {n} / MuJoCo <= {TARGETS['chain_ratio']}"] = f["ratio_to_mujoco"] <= TARGETS["chain_ratio"]
+    for n, f in fig.get("sticking_chains", {}).items():
+        out[f"sticking chain N = {n} / MuJoCo <= {TARGETS['sticking_chain_ratio']}"] = (
+            f["ratio_to_mujoco"] <= TARGETS["sticking_chain_ratio"]
+        )
     if "contact" in fig:
         out[f"contact plant / MuJoCo's <= {TARGETS['contact_plant_ratio']}"] = (
             fig["contact"]["ratio_to_mujoco"] <= TARGETS["contact_plant_ratio"]
@@ -363,6 +399,8 @@ def run(quick: bool = False, sweep: bool = True) -> dict[str, Any]:
     print(report(fig), flush=True)
     fig["chains"] = chain_figures(duration=1.0 if quick else 2.0, rounds=1 if quick else 3)
     print("\n".join(report({"chains": fig["chains"]}).splitlines()), flush=True)
+    fig["sticking_chains"] = chain_figures(duration=1.0 if quick else 2.0, rounds=1 if quick else 3, sticking=True)
+    print(report({"sticking_chains": fig["sticking_chains"]}), flush=True)
     fig["contact"] = contact_figures(1 if quick else 3)
     print(report({"contact": fig["contact"]}), flush=True)
     if sweep:

@@ -235,7 +235,7 @@ def maps(
 
 def plot(data: dict[str, Any], path_for: Callable[[str], Any]) -> list[str]:
     """One PNG per controller (two panels); returns the file names."""
-    from armctl.bench.report import plain_log_ticks, pyplot
+    from armctl.bench.charts import plain_log_ticks, pyplot
 
     plt = pyplot()
     colour = {"stable": "#2a9d4a", "marginal": "#e9c46a", "unstable": "#d62828"}

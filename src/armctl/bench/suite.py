@@ -4,12 +4,15 @@ charts), charts, a 3D playback of each scene and ``report.html``.
 
 Sections run in turn, under a progress bar (:mod:`armctl.bench.progress`), and each one's results are printed
 as it finishes; the simulation-heavy ones go through an ``Executor`` (a process pool by default). ``quick``
-shrinks grids, repetitions and runs so the whole bench takes a few minutes on 2 cores.
+shrinks grids, repetitions and runs so the whole bench takes a few minutes on 2 cores; ``sections`` and
+``scenes`` run a part of it. The warnings a section's runs raise are counted into its results (the report shows
+them under the section), not printed as they come; the parts a run leaves out (a section not asked for, the
+playbacks without meshcat, the engines without MuJoCo) are named in the console and the report, each with the
+command that adds it.
 """
 
 from __future__ import annotations
 
-import json
 import time
 import warnings
 from collections.abc import Callable
@@ -19,12 +22,23 @@ from typing import Any
 
 import numpy as np
 
-from armctl.bench.outcomes import outcome, scene_title, scenes_summary
+from armctl.bench.outcomes import outcome, scene_title
 from armctl.bench.pareto import pareto_front, plot_pareto
+from armctl.bench.sections import (
+    SCENE_NAMES,
+    SECTION_TITLES,
+    available_sections,
+    duration_text,
+    missing_extra,
+    model_sections,
+    section_summary,
+    skipped_text,
+    summary,
+    to_json,
+    warnings_summary,
+)
 
 __all__ = ["outcome", "pareto_front", "plot_pareto", "run_suite", "scene_matrix", "scene_title", "summary"]
-
-SCENE_NAMES = ("pendulum", "planar_2r", "panda_topp", "panda_contact")
 
 
 #: the measures of a scene row, NaN in the row of a method that failed
@@ -72,7 +86,7 @@ def run_scene_method(scene: str, method: str, playback: str | None = None) -> di
     }
     if playback is not None:
         try:
-            title = f"{scene}, {method.replace('_', ' ')} ({res.info.get('plant', '')}): {res.status}"
+            title = f"{scene}: {method.replace('_', ' ')} on {res.info.get('plant', sc.plant.name)}, {res.status}"
             env = sc.sim_options.get("environment")
             row["playback"] = res.playback(playback, meshes="collision", environment=env, title=title).name
         except BackendError as exc:  # meshcat not installed: the report says so instead
@@ -129,7 +143,10 @@ def time_controllers(rows: list[dict[str, Any]], rounds: int) -> None:
 
 
 def scene_matrix(
-    executor: Executor | str | None = None, rounds: int = 9, playback_dir: Path | None = None
+    executor: Executor | str | None = None,
+    rounds: int = 9,
+    playback_dir: Path | None = None,
+    scenes: tuple[str, ...] | list[str] | None = None,
 ) -> list[dict[str, Any]]:
     """Every method on every scene (:func:`run_scene_method`), timed afterwards (:func:`time_controllers`);
     with ``playback_dir``, each scene's :func:`showcase` run is also written there as
@@ -143,6 +160,8 @@ def scene_matrix(
         Timing rounds of each controller.
     playback_dir : pathlib.Path, optional
         Where the playbacks go (None: none written).
+    scenes : sequence of str, optional
+        The scenes to run, among ``SCENE_NAMES`` (None: all of them).
 
     Returns
     -------
@@ -156,7 +175,7 @@ def scene_matrix(
     cases: list[dict[str, Any]] = []
     unbuilt = []
     for name in SCENE_NAMES:
-        if name not in SCENES:
+        if name not in SCENES or (scenes is not None and name not in scenes):
             continue
         try:
             methods = scene(name).methods
@@ -201,7 +220,7 @@ def plot_topp(data: dict[str, Any], path: Path) -> None:
         np.array(data["compute_s"]),
         data["analytic_duration"],
     )
-    from armctl.bench.report import plain_log_ticks
+    from armctl.bench.charts import plain_log_ticks
 
     fig = plot_convergence(study)
     fig.set_size_inches(10.0, 4.6)
@@ -220,41 +239,62 @@ def plot_topp(data: dict[str, Any], path: Path) -> None:
     fig.savefig(path, dpi=110)
 
 
-def _model_sections() -> dict[str, Any]:
-    """The sections on the models' cost against accuracy, by key: backends, integrators, fidelity, and the plant
-    engines where MuJoCo is installed."""
+def _chosen(names: Any, valid: tuple[str, ...], kind: str) -> tuple[str, ...] | None:
+    """``names`` (None, a name or names) checked against ``valid``: the names in ``valid``'s order, or None."""
+    from armctl.errors import UnknownNameError
+
+    if names is None:
+        return None
+    given = (names,) if isinstance(names, str) else tuple(names)
+    for name in given:
+        if name not in valid:
+            raise UnknownNameError(kind, name, valid)
+    return tuple(v for v in valid if v in given)
+
+
+def _counted(said: list[warnings.WarningMessage]) -> list[dict[str, Any]]:
+    """The warnings caught in a section, one entry per category and message with its count, most frequent first."""
+    counts: dict[tuple[str, str], int] = {}
+    for w in said:
+        key = (w.category.__name__, str(w.message))
+        counts[key] = counts.get(key, 0) + 1
+    ranked = sorted(counts.items(), key=lambda kv: -kv[1])
+    return [{"category": c, "message": m, "count": n} for (c, m), n in ranked]
+
+
+def _skipped(
+    quick: bool, out: Path, sections: tuple[str, ...], scenes: tuple[str, ...] | None, asked: bool
+) -> list[dict[str, str]]:
+    """The parts this run leaves out, each with the reason and the command that adds it."""
     from importlib.util import find_spec
 
-    from armctl.bench import backends, fidelity, integrators
-
-    sections = {"backends": backends, "integrators": integrators, "fidelity": fidelity}
-    if find_spec("mujoco") is not None:
-        from armctl.bench import engines
-
-        sections["engines"] = engines
-    return sections
-
-
-#: the report's title of each section, in the order they run
-SECTION_TITLES = {
-    "scenes": "Scenes × controllers",
-    "stability_maps": "Stability maps",
-    "topp_convergence": "TOPP convergence",
-    "backends": "Dynamics backends: cost against accuracy",
-    "integrators": "Integrators: cost against accuracy",
-    "fidelity": "Model fidelity: the cheapest sufficient model",
-    "engines": "Plant engines: armctl's and MuJoCo's integrators, cost against accuracy",
-    "dynamics_speed": "Dynamics speed",
-    "controller_speed": "Controller step speed",
-    "osc_speed": "Operational-space QP step speed",
-}
+    whole = f"armctl bench{' --quick' if quick else ''} --out {out}"
+    left: list[dict[str, str]] = []
+    if asked:
+        rest = [k for k in SECTION_TITLES if k not in sections and (k != "engines" or find_spec("mujoco"))]
+        if rest:
+            left.append({"part": "the sections " + ", ".join(rest), "reason": "not asked for", "command": whole})
+    if scenes is not None and "scenes" in sections:
+        rest = [s for s in SCENE_NAMES if s not in scenes]
+        if rest:
+            left.append({"part": "the scenes " + ", ".join(rest), "reason": "not asked for", "command": whole})
+    if "scenes" in sections and (s := missing_extra("playback")) is not None:
+        left.append(s)
+    if not asked and (s := missing_extra("engines")) is not None:
+        left.append(s)
+    return left
 
 
 def run_suite(
-    quick: bool = False, out: Path = Path("bench-out"), executor: Executor | str | None = None
+    quick: bool = False,
+    out: Path = Path("bench-out"),
+    executor: Executor | str | None = None,
+    *,
+    sections: str | tuple[str, ...] | list[str] | None = None,
+    scenes: str | tuple[str, ...] | list[str] | None = None,
 ) -> dict[str, Any]:
-    """Run every section in turn (its results printed as it finishes), then write ``figures.json``, the charts,
-    the scenes' playbacks and ``report.html`` into ``out``.
+    """Run the sections in turn (each one's results printed as it finishes), then write ``figures.json``, the
+    charts, the scenes' playbacks and ``report.html`` into ``out``.
 
     Parameters
     ----------
@@ -264,19 +304,46 @@ def run_suite(
         The folder (created if missing).
     executor : concurrent.futures.Executor or "serial", optional
         Where the scene runs go (see :func:`armctl.sim.sweep`; None: a process pool).
+    sections : str or sequence of str, optional
+        The sections to run, by key (``"scenes"``, ``"stability_maps"``, … ``"osc_speed"``; ``"engines"`` needs
+        MuJoCo). None: every section, or only ``"scenes"`` if ``scenes`` is given.
+    scenes : str or sequence of str, optional
+        The scenes of the scene matrix to run (``"pendulum"``, ``"planar_2r"``, ``"panda_topp"``,
+        ``"panda_contact"``; None: all).
 
     Returns
     -------
     dict of str
-        The figures (also written as ``figures.json``).
+        The figures (also written as ``figures.json``). ``section_warnings``: per section, the warnings its
+        runs raised, with their counts; ``skipped``: the parts left out, with the command that adds each.
+
+    Raises
+    ------
+    UnknownNameError
+        A section or scene that is not one (the error lists the valid names).
+    InvalidParameterError
+        ``scenes`` given with ``sections`` that leave out ``"scenes"``.
     """
     from armctl.bench import controller_speed, dynamics_speed, osc_speed, stability
-    from armctl.bench.progress import sections
+    from armctl.bench.progress import sections as progress_bar
     from armctl.bench.report import write_report
+    from armctl.errors import InvalidParameterError
 
+    chosen_scenes = _chosen(scenes, SCENE_NAMES, "scene")
+    asked = _chosen(sections, available_sections(), "section")
+    chosen = asked if asked is not None else ("scenes",) if chosen_scenes is not None else available_sections()
+    if chosen_scenes is not None and "scenes" not in chosen:
+        raise InvalidParameterError(
+            f"scenes {list(chosen_scenes)} were given but the sections {list(chosen)} leave out the scene matrix; "
+            "add the section 'scenes' (--section scenes) or drop the scenes",
+            value=chosen_scenes,
+        )
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     figures: dict[str, Any] = {"quick": quick, "started": time.strftime("%Y-%m-%d %H:%M:%S")}
+    figures["skipped"] = _skipped(quick, out, chosen, chosen_scenes, asked is not None or chosen_scenes is not None)
+    for s in figures["skipped"]:
+        print(skipped_text(s), flush=True)
     charts: dict[str, dict[str, str]] = {}  # file name → {"section", "caption"}
     number, rounds = (100, 15) if quick else (200, 75)  # paired rounds: see bench.timing.paired_ratio
     t_all = time.perf_counter()
@@ -316,13 +383,18 @@ def run_suite(
 
         return after
 
+    playbacks = out if missing_extra("playback") is None else None
     plan: list[tuple[str, Callable[[], Any], Callable[[], None] | None]] = [
-        ("scenes", lambda: scene_matrix(executor, rounds=5 if quick else 15, playback_dir=out), after_scenes),
+        (
+            "scenes",
+            lambda: scene_matrix(executor, rounds=5 if quick else 15, playback_dir=playbacks, scenes=chosen_scenes),
+            after_scenes,
+        ),
         ("stability_maps", lambda: stability.maps(quick=quick, executor=executor), after_stability),
         ("topp_convergence", lambda: topp_convergence(quick), after_topp),
         *(
             (key, (lambda mod=mod: mod.run(quick=quick)), after_model_section(key, mod))
-            for key, mod in _model_sections().items()
+            for key, mod in model_sections().items()
         ),
         (
             "dynamics_speed",
@@ -332,88 +404,33 @@ def run_suite(
         ("controller_speed", lambda: controller_speed.run(number=number, rounds=rounds), None),
         ("osc_speed", lambda: osc_speed.run(quick=quick), None),
     ]
-    bar = sections(len(plan))
+    plan = [p for p in plan if p[0] in chosen]
+    bar = progress_bar(len(plan))
     try:
         for key, fn, after in plan:
             bar.set_description(SECTION_TITLES.get(key, key))
             t0 = time.perf_counter()
-            figures[key] = fn()
-            if after is not None:
-                after()
-            figures.setdefault("section_seconds", {})[key] = time.perf_counter() - t0
+            with warnings.catch_warnings(record=True) as said:
+                warnings.simplefilter("always", UserWarning)  # armctl's warnings, each one counted
+                figures[key] = fn()
+                if after is not None:
+                    after()
+            seconds = time.perf_counter() - t0
+            figures.setdefault("section_seconds", {})[key] = seconds
+            figures.setdefault("section_warnings", {})[key] = _counted(said)
             bar.clear()
-            print(f"\n== {SECTION_TITLES.get(key, key)} ({time.perf_counter() - t0:.0f} s)", flush=True)
+            print(f"\n== {SECTION_TITLES.get(key, key)} ({duration_text(seconds)})", flush=True)
             print(section_summary(key, figures[key]), flush=True)
+            if said:
+                print(warnings_summary(figures["section_warnings"][key]), flush=True)
             bar.update()
     finally:
         bar.close()
     figures["total_seconds"] = time.perf_counter() - t_all
     figures["charts"] = charts
-    (out / "figures.json").write_text(json.dumps(figures, indent=1, default=_json_default))
+    (out / "figures.json").write_text(to_json(figures))
     report = write_report(out, figures, charts, summary(figures))
-    print(f"\ntotal {figures['total_seconds']:.1f} s ({report.name} in {out})", flush=True)
+    for s in figures["skipped"]:
+        print(skipped_text(s), flush=True)
+    print(f"\ntotal {duration_text(figures['total_seconds'])} ({report.name} in {out})", flush=True)
     return figures
-
-
-def _json_default(x: Any) -> Any:
-    if isinstance(x, (np.floating, np.integer)):
-        return x.item()
-    if isinstance(x, np.ndarray):
-        return x.tolist()
-    return str(x)
-
-
-def stability_summary(maps: dict[str, Any]) -> str:
-    """Per controller and map: how many cells were stable, marginal and unstable."""
-    lines = [
-        "stability maps (one-joint pendulum in a horizontal plane, one period of delay): cells stable / "
-        "marginal / unstable"
-    ]
-    for c, kinds in maps.items():
-        if not isinstance(kinds, dict) or "rate_gain" not in kinds:
-            continue
-        for kind, data in kinds.items():
-            cells = [o for row in data["outcome"] for o in row]
-            counts = " / ".join(str(cells.count(o)) for o in ("stable", "marginal", "unstable"))
-            lines.append(f"  {c.replace('_', ' '):18s} {kind.replace('_', ' × '):14s} {counts}")
-    return "\n".join(lines)
-
-
-def topp_summary(data: dict[str, Any]) -> str:
-    lines = [f"TOPP-RA on planar 2R, analytic duration {data['analytic_duration']:.6f} s"]
-    for n, err, t in zip(data["grids"], data["errors"], data["compute_s"], strict=True):
-        lines.append(f"  N = {int(n):5d}   |T_N − T|/T = {err:.2e}   {1e3 * t:7.2f} ms")
-    return "\n".join(lines)
-
-
-def section_summary(key: str, data: Any) -> str:
-    """The text of one section's results (as printed when it finishes)."""
-    from armctl.bench import controller_speed, dynamics_speed, osc_speed
-
-    texts: dict[str, Callable[[Any], str]] = {
-        "scenes": scenes_summary,
-        "stability_maps": stability_summary,
-        "topp_convergence": topp_summary,
-        **{k: mod.summary for k, mod in _model_sections().items()},
-        "dynamics_speed": dynamics_speed.report,
-        "controller_speed": controller_speed.report,
-        "osc_speed": osc_speed.report,
-    }
-    return texts[key](data) if key in texts else json.dumps(data, indent=1, default=_json_default)[:2000]
-
-
-def summary(figures: dict[str, Any]) -> str:
-    """Every section's text, in order (the report keeps it, below its tables).
-
-    Parameters
-    ----------
-    figures : dict
-        The figures of :func:`run_suite`.
-
-    Returns
-    -------
-    str
-    """
-    parts = [section_summary(key, figures[key]) for key in SECTION_TITLES if key in figures]
-    parts.append(f"total {figures.get('total_seconds', 0.0):.1f} s")
-    return "\n\n".join(parts)

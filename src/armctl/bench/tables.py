@@ -106,7 +106,7 @@ def integrators(data: dict[str, Any]) -> list[Table]:
                     text(name),
                     num(c["step"], ".3g", 1e3),
                     num(c["error"], ".2e"),
-                    num(c["cost"], ".3f"),
+                    num(c["cost"], ".3g"),
                     num(order, ".2f"),
                 ]
             )
@@ -218,7 +218,7 @@ def engines(data: dict[str, Any]) -> list[Table]:
         for scene in ("frictionless", "stiction"):
             for c in d.get(scene, []):
                 t.rows.append(
-                    [text(name), text(scene), num(c["step"], ".3g", 1e3), num(c["error"], ".2e"), num(c["cost"], ".4f")]
+                    [text(name), text(scene), num(c["step"], ".3g", 1e3), num(c["error"], ".2e"), num(c["cost"], ".3g")]
                 )
     return [t]
 

@@ -2,14 +2,15 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 import scipy.linalg
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, Gain, boolean, scalar, vector
+from armctl._checks import FloatArray, flag, scalar, vector
 from armctl.controllers.base import Controller
+from armctl.controllers.gains import gain
 from armctl.controllers.passivity import SlidingGains, sliding
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError, ShapeError
@@ -99,8 +100,9 @@ class Adaptive(SlidingGains, Controller):
     _plant: Dynamics | None
     _gamma_factor: Any = None
 
-    gamma = Gain("Γ (13n×13n).", size=lambda owner: 13 * owner.n)
-    _gamma: FloatArray  # Γ in the compact form the Gain keeps (its diagonal if diagonal)
+    gain_names: ClassVar[dict[str, bool]] = {**SlidingGains.gain_names, "gamma": False}
+    gamma = gain("gamma", "Γ (13n×13n).")
+    _gamma: FloatArray  # Γ in the compact form set_gains keeps (its diagonal if diagonal)
     _gamma_matrix: FloatArray
     _gamma_dt: FloatArray  # Γ·dt for the control period _dt (a diagonal Γ)
 
@@ -122,7 +124,7 @@ class Adaptive(SlidingGains, Controller):
     ) -> None:
         super().__init__(dynamics)
         p = 13 * self.n
-        self.lam, self.kd, self.gamma = lam, kd, gamma
+        self.set_gains(lam=lam, kd=kd, gamma=gamma)
         self.theta0 = dynamics.parameters().copy() if theta0 is None else vector(theta0, p, "theta0").copy()
         self.projection = projection
         self.sigma = scalar(sigma, "sigma", nonnegative=True)
@@ -137,14 +139,10 @@ class Adaptive(SlidingGains, Controller):
         self.plant = plant
         self.reset()
 
-    @property
-    def projection(self) -> bool:
-        """Project θ̂ onto the physically consistent set after each update (may be switched between calls)."""
-        return self._projection
-
-    @projection.setter
-    def projection(self, value: bool) -> None:
-        self._projection = boolean(value, "projection")
+    projection = flag(
+        "projection", "Project θ̂ onto the physically consistent set after each update (may be switched between calls)."
+    )
+    _projection: bool
 
     @property
     def plant(self) -> Dynamics | None:
@@ -201,8 +199,11 @@ class Adaptive(SlidingGains, Controller):
             weighted = scipy.linalg.cho_solve(self._gamma_factor, err)
         return 0.5 * float(s.dot(self._plant.mass_matrix(q).dot(s)) + err.dot(weighted))
 
-    def _gains_changed(self) -> None:
-        super()._gains_changed()
+    def _gain_spec(self, name: str) -> tuple[int, str]:
+        return (13 if name == "gamma" else 1) * self.n, name
+
+    def _derive(self) -> None:
+        super()._derive()
         self._dt = 0.0  # Γ·dt formed anew at the next update (no update has dt = 0)
         self._gamma_factor = None  # and Γ's Cholesky factor, for V
 

@@ -61,6 +61,16 @@ class Controller(ABC):
     def measured(self, name: str) -> FloatArray:
         """The signal ``name`` of the current measurement (see :mod:`armctl.controllers.measurement`).
 
+        Parameters
+        ----------
+        name : str
+            A name of :data:`armctl.controllers.measurement.SIGNALS` (``"wrench"``, ``"tau_applied"``, ...).
+
+        Returns
+        -------
+        ndarray
+            Its value in the measurement of the current call.
+
         Raises
         ------
         InvalidParameterError
@@ -77,20 +87,26 @@ class Controller(ABC):
             )
         return value
 
-    #: the ``compute`` of a built-in law without state between calls whose τ is NaN or inf whenever an entry of
-    #: q or q̇ is (set by those classes). While ``type(self).compute`` is that function (not overridden by a
-    #: subclass), ``_checks_result`` may be set: then only τ is checked for finiteness (one check instead of
-    #: two), and the inputs only when τ is not finite (to name the culprit). Otherwise (users'
-    #: controllers, subclasses, laws with state) the inputs are checked before ``compute`` and τ after it. Either
-    #: way a non-finite τ from a finite state raises a NonFiniteError naming both. (An inf input then
-    #: meets zeros in the law's matrix product, so NumPy may print an "invalid value" RuntimeWarning before the
+    #: Declared by a class whose ``compute`` keeps no state between calls and gives a NaN or inf τ whenever an
+    #: entry of q or q̇ is one (the built-in PD, computed torque and passivity laws): then only τ is checked for
+    #: finiteness (one check instead of two), and the inputs only when τ is not finite (to name the culprit).
+    #: Otherwise (False: users' controllers, laws with state) the inputs are checked before ``compute`` and τ
+    #: after it. Either way a non-finite τ from a finite state raises a NonFiniteError naming both. A class that
+    #: defines its own ``compute`` declares this itself: without a declaration in its body it is False, so a
+    #: subclass that overrides ``compute`` (and may keep state a NaN must never reach) gets its inputs checked
+    #: first, and one that keeps its parent's ``compute`` keeps its parent's checking. (An inf input meets zeros
+    #: in the law's matrix product, so NumPy may print an "invalid value" RuntimeWarning before the
     #: NonFiniteError that names the input.)
-    _result_checked_compute: Any = None
+    result_check: ClassVar[bool] = False
+    #: this object's reading of :attr:`result_check` (False while the law holds state, e.g. an integral term)
     _checks_result: bool = False
 
-    def _own_law(self) -> bool:
-        cls = type(self)
-        return cls.compute is cls._result_checked_compute
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if "compute" in vars(cls) and "result_check" not in vars(cls):
+            cls.result_check = False
+        if "_checks_result" not in vars(cls):
+            cls._checks_result = cls.result_check
 
     def __call__(
         self, t: float, q: ArrayLike, qd: ArrayLike, ref: Reference, measurement: Measurement | None = None

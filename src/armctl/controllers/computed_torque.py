@@ -54,7 +54,7 @@ class ComputedTorque(PIDGains, Controller):
         self, dynamics: Dynamics, kp: ArrayLike, kd: ArrayLike, ki: ArrayLike | None = None, friction: bool | str = True
     ) -> None:
         super().__init__(dynamics)
-        self._set_gains(kp, kd, ki)
+        self._start(kp, kd, ki)
         self.friction = friction
 
     @property
@@ -71,15 +71,17 @@ class ComputedTorque(PIDGains, Controller):
         else:
             raise InvalidParameterError(f"friction must be True, False or 'reference', got {value!r}", value=value)
 
-    def _gains_changed(self) -> None:
-        super()._gains_changed()
-        if hasattr(self, "_feedback"):
-            # [v; K_p e + K_d ė] = [[I, F], [0, F]]·[q̈_d; q_d; q̇_d; q; q̇] (F: PIDGains' K_p e + K_d ė): the command
-            # and its feedback term (for the log) from one product, which costs about what v's alone does
-            n = self.n
-            self._command = np.vstack(
-                (np.hstack((np.eye(n), self._feedback)), np.hstack((np.zeros((n, n)), self._feedback)))
-            )
+    def _derive(self) -> None:
+        super()._derive()
+        # [v; K_p e + K_d ė] = [[I, F], [0, F]]·[q̈_d; q_d; q̇_d; q; q̇] (F: PIDGains' K_p e + K_d ė): the command
+        # and its feedback term (for the log) from one product, which costs about what v's alone does
+        n = self.n
+        self._command = np.vstack(
+            (np.hstack((np.eye(n), self._feedback)), np.hstack((np.zeros((n, n)), self._feedback)))
+        )
+
+    #: stateless without an integral; a NaN/inf in q_j or q̇_j reaches τ through v_j and M_jj > 0
+    result_check = True
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         kernel = self.dynamics.kernel
@@ -98,5 +100,3 @@ class ComputedTorque(PIDGains, Controller):
             log["friction"] = friction
         self.last_log = log
         return tau
-
-    _result_checked_compute = compute  # stateless without an integral (see Controller)

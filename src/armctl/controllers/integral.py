@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, Gain
+from armctl._checks import FloatArray
+from armctl.controllers.gains import GainSet, gain
 
 
 class ErrorIntegral:
@@ -29,17 +32,17 @@ class ErrorIntegral:
         return self.value
 
 
-class PIDGains:
+class PIDGains(GainSet):
     """Mixin of the controllers with K_p, K_d and an optional K_i: checks the gains (scalar, vector or matrix;
     symmetric positive definite), keeps their cheap forms and the error integral. The gains may be reassigned
     between calls (``ctrl.kp = 400.0``): they are checked again and take effect at the next call."""
 
     n: int
-
-    kp = Gain("K_p (n×n).")
-    kd = Gain("K_d (n×n).")
-    ki = Gain("K_i (n×n), or None: no integral term.", optional=True)
-    # what the Gain descriptors keep: the compact forms and the matrices
+    gain_names: ClassVar[dict[str, bool]] = {"kp": False, "kd": False, "ki": True}
+    kp = gain("kp", "K_p (n×n).")
+    kd = gain("kd", "K_d (n×n).")
+    ki = gain("ki", "K_i (n×n), or None: no integral term.")
+    # what set_gains keeps: the compact forms and the matrices
     _kp: FloatArray
     _kd: FloatArray
     _ki: FloatArray | None
@@ -47,21 +50,18 @@ class PIDGains:
     _kd_matrix: FloatArray
     _ki_matrix: FloatArray | None
 
-    def _set_gains(self, kp: ArrayLike, kd: ArrayLike, ki: ArrayLike | None) -> None:
+    def _start(self, kp: ArrayLike, kd: ArrayLike, ki: ArrayLike | None) -> None:
+        """The error integral and the gains, for the constructor."""
         self._integral = ErrorIntegral(self.n)
-        self._ki = None
-        self.kp, self.kd, self.ki = kp, kd, ki
+        self.set_gains(kp=kp, kd=kd, ki=ki)
 
-    def _gains_changed(self) -> None:
-        if not hasattr(self, "_kd"):  # during _set_gains
-            return
+    def _derive(self) -> None:
         # K_p e + K_d ė as one product with the stacked reference and state: F·[q_d; q̇_d; q; q̇], F = [K_p, K_d,
         # −K_p, −K_d] (one concatenation and one product, where the term by term form takes six array operations)
         kp, kd = self._kp_matrix, self._kd_matrix
         self._feedback = np.hstack((kp, kd, -kp, -kd))
-        # without an integral the law keeps no state, and a NaN/inf in q_j or q̇_j reaches τ through K_p e or
-        # K_d ė (K ≻ 0: a positive diagonal entry multiplies it; in computed torque through v_j and M_jj > 0)
-        self._checks_result = self._ki is None and self._own_law()  # type: ignore[attr-defined]  # Controller's, the other base
+        # with an integral the law keeps state: its inputs are checked first whatever its class declares
+        self._checks_result = self._ki is None and type(self).result_check  # type: ignore[attr-defined]
 
     def reset(self) -> None:
         super().reset()  # type: ignore[misc]  # the Controller's, next in the MRO

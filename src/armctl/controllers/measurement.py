@@ -86,7 +86,13 @@ class Measurement:
             )
 
     def available(self) -> frozenset[str]:
-        """The names of the signals this measurement carries."""
+        """The names of the signals this measurement carries.
+
+        Returns
+        -------
+        frozenset of str
+            Names of :data:`SIGNALS` whose value is not None.
+        """
         return frozenset(f.name for f in fields(self) if f.name in SIGNALS and getattr(self, f.name) is not None)
 
 

@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, Gain
+from armctl._checks import FloatArray
 from armctl.controllers.base import Controller
+from armctl.controllers.gains import GainSet, gain
 from armctl.dynamics.base import Dynamics
 from armctl.references import Reference
 
@@ -29,23 +32,19 @@ def sliding(q: FloatArray, qd: FloatArray, ref: Reference, p: FloatArray) -> tup
     return r[0], r[1], r[2], r[3], r[4], r[5]
 
 
-class SlidingGains:
-    """Mixin of the Slotine–Li controllers: the gains Λ and K_D, and the map P = :func:`sliding_map` built
-    from them (anew whenever one is reassigned)."""
+class SlidingGains(GainSet):
+    """Mixin of the Slotine–Li controllers: the gains Λ and K_D, and the map P = :func:`sliding_map` made from
+    them (anew whenever one is reassigned)."""
 
     n: int
-
-    lam = Gain("Λ (n×n); may be reassigned between calls (checked again).")
-    kd = Gain("K_D (n×n); may be reassigned between calls (checked again).")
-    # what the Gain descriptors keep: the compact forms and the matrices
-    _lam: FloatArray
-    _kd: FloatArray
-    _lam_matrix: FloatArray
+    gain_names: ClassVar[dict[str, bool]] = {"lam": False, "kd": False}
+    lam = gain("lam", "Λ (n×n); may be reassigned between calls (checked again).")
+    kd = gain("kd", "K_D (n×n); may be reassigned between calls (checked again).")
+    _lam_matrix: FloatArray  # (set_gains keeps the matrices, and their compact forms in _lam, _kd)
     _kd_matrix: FloatArray
 
-    def _gains_changed(self) -> None:
-        if hasattr(self, "_kd"):  # Λ and K_D both set
-            self._sliding = sliding_map(self._lam_matrix, self._kd_matrix)
+    def _derive(self) -> None:
+        self._sliding = sliding_map(self._lam_matrix, self._kd_matrix)
 
 
 class PassivityBased(SlidingGains, Controller):
@@ -79,14 +78,13 @@ class PassivityBased(SlidingGains, Controller):
 
     def __init__(self, dynamics: Dynamics, lam: ArrayLike, kd: ArrayLike) -> None:
         super().__init__(dynamics)
-        self.lam, self.kd = lam, kd
-        # no state; a NaN/inf in q_j or q̇_j reaches s_j = q̃̇_j + (Λq̃)_j and τ through −K_D s (K_D ≻ 0)
-        self._checks_result = self._own_law()
+        self.set_gains(lam=lam, kd=kd)
+
+    #: stateless; a NaN/inf in q_j or q̇_j reaches s_j = q̃̇_j + (Λq̃)_j and τ through −K_D s (K_D ≻ 0)
+    result_check = True
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         qd_r, qdd_r, s, kd_s, a, w = sliding(q, qd, ref, self._sliding)
         model = self.dynamics.kernel.passivity_torque(q, qd, qd_r, qdd_r, a, w)
         self.last_log = {"model": model, "damping": kd_s, "s": s}
         return model - kd_s
-
-    _result_checked_compute = compute  # stateless (see Controller)

@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, apply_gain, boolean
+from armctl._checks import FloatArray, apply_gain, flag
 from armctl.controllers.base import Controller
 from armctl.controllers.integral import PIDGains
 from armctl.dynamics.base import Dynamics
@@ -58,35 +58,28 @@ class PDGravity(PIDGains, Controller):
         self, dynamics: Dynamics, kp: ArrayLike, kd: ArrayLike, ki: ArrayLike | None = None, friction: bool = False
     ) -> None:
         super().__init__(dynamics)
-        self._set_gains(kp, kd, ki)
+        self._start(kp, kd, ki)
         self.friction = friction
 
-    @property
-    def friction(self) -> bool:
-        """Compensate the model's friction at the measured velocity."""
-        return self._friction
+    friction = flag("friction", "Compensate the model's friction at the measured velocity.")
+    _friction: bool
 
-    @friction.setter
-    def friction(self, value: bool) -> None:
-        self._friction = boolean(value, "friction")
-
-    #: the kernel's fused law g + F·[q_d; q̇_d; q; q̇] (``Dynamics(model, compile=True)``; None for others) and
-    #: the kernel it was made for: made again at the next step on another kernel (another dynamics object,
-    #: another thread)
+    #: the fused law g + F·[q_d; q̇_d; q; q̇] in generated code (:mod:`armctl.controllers.pd_generated`, on
+    #: ``Dynamics(model, compile=True)``; None for others) and the kernel it was made for: made again at the next
+    #: step on another kernel (another dynamics object, another thread)
     _law: Any = None
     _law_for: Any = None
 
-    def _gains_changed(self) -> None:
-        super()._gains_changed()
-        if hasattr(self, "_feedback"):
-            # [τ; K_p e + K_d ė] = [[F, I], [F, 0]]·[q_d; q̇_d; q; q̇; g]: the torque and its feedback term (for the
-            # log) from one product
-            n = self.n
-            self._with_gravity = np.vstack(
-                (np.hstack((self._feedback, np.eye(n))), np.hstack((self._feedback, np.zeros((n, n)))))
-            )
-            if self._law is not None:  # new gains into the law's own F, in place (binding a new law costs more)
-                self._law.feedback[...] = self._feedback
+    def _derive(self) -> None:
+        super()._derive()
+        # [τ; K_p e + K_d ė] = [[F, I], [F, 0]]·[q_d; q̇_d; q; q̇; g]: the torque and its feedback term (for the
+        # log) from one product
+        n = self.n
+        self._with_gravity = np.vstack(
+            (np.hstack((self._feedback, np.eye(n))), np.hstack((self._feedback, np.zeros((n, n)))))
+        )
+        if self._law is not None:  # new gains into the law's own F, in place (binding a new law costs more)
+            self._law.feedback[...] = self._feedback
 
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
@@ -94,10 +87,20 @@ class PDGravity(PIDGains, Controller):
         state.pop("_law_for", None)
         return state
 
+    def _generated_law(self) -> Any:
+        if not self.dynamics.compiled:
+            return None
+        from armctl.controllers.pd_generated import generated_law  # CasADi, imported on use
+
+        return generated_law(self.dynamics, self._feedback)
+
+    #: stateless without an integral; a NaN/inf in q_j or q̇_j reaches τ through K_p e or K_d ė (K ≻ 0)
+    result_check = True
+
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         kernel = self.dynamics.kernel
         if kernel is not self._law_for:
-            self._law, self._law_for = kernel.pd_gravity_law(self._feedback), kernel
+            self._law, self._law_for = self._generated_law(), kernel
         law = self._law
         if law is not None:
             tau = law(q, qd, ref.q, ref.qd)
@@ -118,5 +121,3 @@ class PDGravity(PIDGains, Controller):
             log["friction"] = friction
         self.last_log = log
         return tau
-
-    _result_checked_compute = compute  # stateless without an integral (see Controller)

@@ -41,7 +41,7 @@ class PDDesiredGravity(PIDGains, Controller):
 
     def __init__(self, dynamics: Dynamics, kp: ArrayLike, kd: ArrayLike) -> None:
         super().__init__(dynamics)
-        self._set_gains(kp, kd, None)
+        self._start(kp, kd, None)
         self._cached: tuple[tuple[float, ...], FloatArray] | None = None
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:

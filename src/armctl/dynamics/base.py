@@ -7,7 +7,8 @@ backends (:func:`register_backend`):
 
 * ``"pinocchio"`` (:class:`~armctl.dynamics.pinocchio_backend.PinocchioDynamics`): RNEA / CRBA / ABA / Coriolis
   matrix / joint-torque regressor of Pinocchio; rotors as reflected inertia (armature). With ``compile=True``
-  (:class:`~armctl.dynamics.compiled.CompiledDynamics`) its hot terms run as generated C code.
+  (or ``"auto"``, :mod:`armctl.codegen.policy`) its hot terms run as generated C code
+  (:mod:`armctl.dynamics.compiled`).
 * ``"lagrange"`` (:class:`~armctl.dynamics.lagrange.LagrangeDynamics`): the Lagrange formulation built with
   CasADi from the kinetic and potential energies, including the rotors' gyroscopic coupling.
 
@@ -27,7 +28,7 @@ from typing import TYPE_CHECKING, Any, cast
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FLOAT, FloatArray, all_finite, boolean, vector
+from armctl._checks import FLOAT, FloatArray, all_finite, vector
 from armctl.dynamics.friction_terms import FrictionTerms
 from armctl.dynamics.kernel import Kernel
 from armctl.dynamics.regressor import RegressorMethods
@@ -60,10 +61,6 @@ def backend_names() -> tuple[str, ...]:
 
 
 def _pinocchio(options: dict[str, Any]) -> type[Dynamics]:
-    if boolean(options.get("compile", False), "compile"):
-        from armctl.dynamics.compiled import CompiledDynamics
-
-        return CompiledDynamics
     from armctl.dynamics.pinocchio_backend import PinocchioDynamics
 
     return PinocchioDynamics
@@ -77,7 +74,7 @@ def _lagrange(options: dict[str, Any]) -> type[Dynamics]:
 
 register_backend("pinocchio", _pinocchio)
 register_backend("lagrange", _lagrange)
-#: the registered backends' names at import
+#: The names of the dynamics backends registered at import: ``"pinocchio"`` and ``"lagrange"``.
 BACKENDS = backend_names()
 
 
@@ -91,8 +88,8 @@ class Dynamics(RegressorMethods):
     backend : {"pinocchio", "lagrange"}
         Which evaluation (see the module).
     **options
-        The backend's options: ``compile`` (both: generated C code), ``cache_dir`` (both: where it is
-        kept), ``rotor_coupling`` (Lagrange).
+        The backend's options: ``compile`` (both: generated C code; False by default, True or ``"auto"``:
+        see :mod:`armctl.codegen.policy`), ``cache_dir`` (both: where it is kept), ``rotor_coupling`` (Lagrange).
 
     Notes
     -----
@@ -103,6 +100,8 @@ class Dynamics(RegressorMethods):
     backend: str = ""
     #: the keyword options the backend takes
     option_names: tuple[str, ...] = ()
+    #: whether the backend's terms run as generated C code (``compile=True``, or ``"auto"`` where it was built)
+    compiled: bool = False
 
     def __new__(cls, model: RobotModel | None = None, backend: str = "pinocchio", **options: Any) -> Dynamics:
         if not isinstance(model, RobotModel):  # before a backend reads it

@@ -1,17 +1,15 @@
-"""The ``"pinocchio"`` backend with its hot terms in generated C: ``armctl.Dynamics(model, compile=True)``.
+"""The ``"pinocchio"`` backend's hot terms in generated C: ``armctl.Dynamics(model, compile=True)`` (or ``"auto"``).
 
 Gravity, forward dynamics, the Slotine–Li passivity torque, the regressor and the passivity regressor are
 generated with CasADi from the recursive algorithms of
 :mod:`armctl.dynamics.recursive`, with the model's numbers built in (the regressors from the same recursion
 with the parameters π as symbols, differentiated: τ is linear in π), compiled with the system's C compiler
-and cached on disk by the model's full fingerprint (:mod:`armctl.dynamics.codegen`; a payload or perturbed
+and cached on disk by the model's full fingerprint (:mod:`armctl.codegen.library`; a payload or perturbed
 variant builds its own library, 2–3 s for the Panda, then milliseconds to load). Each call copies its
 inputs into fixed arrays that the C code reads in place (CasADi's zero-copy buffers) and returns a copy of
 the result; the terms whose Pinocchio call costs little more than that round trip stay Pinocchio's — inverse
 dynamics (RNEA) and the mass matrix (CRBA) — as do the Coriolis matrix, Jacobians, frames and energies
 (``python -m armctl.bench.dynamics_speed`` and ``controller_speed`` time both variants).
-:class:`~armctl.controllers.PDGravity` on these dynamics runs its whole law τ = g(q) + F·[q_d; q̇_d; q; q̇] as
-one call of the generated code (F, the gains, an input of it).
 
 The model is the one the ``"pinocchio"`` backend expresses (rotors as reflected inertia, no gyroscopic
 coupling); every term agrees with Pinocchio's RNEA, ABA and regressor to rounding
@@ -29,24 +27,26 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable
-from functools import partial
 from typing import Any
 
 import casadi as cs
 import numpy as np
 
 from armctl._checks import FloatArray
-from armctl.dynamics import codegen, recursive
+from armctl.codegen import Fallback
+from armctl.codegen import library as codegen
+from armctl.dynamics import recursive
 from armctl.dynamics.casadi_buffer import buffer_of, view
-from armctl.dynamics.pinocchio_backend import PinocchioDynamics, PinocchioKernel
+from armctl.dynamics.pinocchio_kernel import PinocchioKernel
 from armctl.model.robot import PARAMS_PER_JOINT, RobotModel
 
 #: bumped when the generated code changes, so that stale cached libraries are not loaded
-_CODE_VERSION = 2
+_CODE_VERSION = 3
 #: the generated functions, in the library's order; each takes its variable inputs, then ``zero`` (a scalar
-#: held at 0.0) and, for the regressors, ``rho`` (the Coulomb asymmetry ratios), for the PD law ``F`` (its
-#: n × 4n feedback matrix)
-NAMES = ("g", "ptau", "qdd", "Y", "Yp", "pd")
+#: held at 0.0) and, for the regressors, ``rho`` (the Coulomb asymmetry ratios)
+NAMES = ("g", "ptau", "qdd", "Y", "Yp")
+#: what ``compile="auto"`` runs without a C compiler
+FALLBACK = Fallback("the dynamics' generated C code", "Pinocchio", "up to a few times slower")
 
 
 def _carry(out: cs.SX, inputs: list[cs.SX], zero: cs.SX) -> cs.SX:
@@ -79,7 +79,6 @@ def symbolic_functions(model: RobotModel) -> list[cs.Function]:
         cs.SX.sym(s, n) for s in ("q", "qd", "qdd", "a", "w", "tau", "v", "c", "qd_r", "qdd_r", "rho")
     )
     zero = cs.SX.sym("zero")
-    x, feedback = cs.SX.sym("x", 4 * n), cs.SX.sym("F", n, 4 * n)
     zeros = cs.SX.zeros(n)
     tf = recursive.joint_transforms(model, q)
 
@@ -96,10 +95,8 @@ def symbolic_functions(model: RobotModel) -> list[cs.Function]:
         "qdd": ([q, qd, tau], recursive.forward_dynamics(model, q, qd, tau)),
         "Y": ([q, qd, qdd, v, c], _regressor(model, lambda p: rnea(qd, qdd, p), v, c, rho)),
         "Yp": ([q, a, w, qdd_r, qd_r, qd], _regressor(model, passivity, qd_r, qd, rho)),
-        # PD + gravity on x = [q_d; q̇_d; q; q̇] stacked (one copy in: see CompiledDynamics._pd_gravity_law)
-        "pd": ([x], cs.substitute(gravity, q, x[2 * n : 3 * n]) + cs.mtimes(feedback, x)),
     }
-    consts_of = {"Y": [zero, rho], "Yp": [zero, rho], "pd": [zero, feedback]}
+    consts_of = {"Y": [zero, rho], "Yp": [zero, rho]}
     out = []
     for name in NAMES:
         inputs, expr = exprs[name]
@@ -115,6 +112,7 @@ def library(model: RobotModel, cache_dir: str | os.PathLike[str] | None = None) 
         f"dynamics|{model.fingerprint(inertial=True, tool=False)}|v{_CODE_VERSION}",
         lambda: symbolic_functions(model),
         cache_dir,
+        what=f"the dynamics of {model.name!r}",
     )
 
 
@@ -160,8 +158,7 @@ class CompiledKernel(PinocchioKernel):
     def __init__(self, model: RobotModel, pin_model: Any, functions: dict[str, cs.Function]) -> None:
         super().__init__(model, pin_model)
         n = self.n
-        self._pd_function = functions["pd"]
-        self._zero = zero = np.zeros(1)
+        zero = np.zeros(1)
         rho = np.array(self.friction.ratio)  # (kept alive by the bound calls)
         vec: dict[str, FloatArray] = {k: np.zeros(n) for k in ("g", "ptau", "qdd")}
         y_out = np.zeros((PARAMS_PER_JOINT * n, n))  # both regressors write Y (column-major: Yᵀ here) into it
@@ -196,61 +193,21 @@ class CompiledKernel(PinocchioKernel):
     ) -> FloatArray:
         return self.add_passivity_friction(self._ptau_call(q, a, w, qdd_r).copy(), qd, qd_r)
 
-    def pd_gravity_law(self, feedback: FloatArray) -> Callable[..., FloatArray]:
-        """τ = g(q) + F·[q_d; q̇_d; q; q̇] in one call of the generated code, for a PD + gravity controller with
-        feedback matrix ``feedback`` = F (n × 4n, copied): a function (q, q̇, q_d, q̇_d) → τ (a new array) on
-        buffers of its own, so that each controller holds its own F; its ``feedback`` attribute is that F, to be
-        overwritten in place when the gains change. One concatenation copies the four vectors into the stacked
-        input. The caller checks the lengths (a wrong total raises ValueError)."""
-        n = self.n
-        F = np.array(feedback, dtype=float, order="F")  # CasADi reads a matrix column by column
-        if F.shape != (n, 4 * n):
-            raise ValueError(f"feedback matrix has shape {F.shape}, not {(n, 4 * n)}")
-        flat = F.ravel(order="K")  # F's own memory, column by column (a view)
-        buf, run = buffer_of(self._pd_function)
-        x, out = np.zeros(4 * n), np.zeros(n)
-        for k, arr in enumerate((x, self._zero, flat)):
-            buf.set_arg(k, view(arr))
-        buf.set_res(0, view(out))
-        concatenate = np.concatenate
 
-        def law(q: FloatArray, qd: FloatArray, q_d: FloatArray, qd_d: FloatArray) -> FloatArray:
-            concatenate((q_d, qd_d, q, qd), out=x)
-            run()
-            return out.copy()
+def __getattr__(name: str) -> Any:
+    """``CompiledDynamics``, the class of ``Dynamics(model, compile=True)`` before it became a
+    :class:`~armctl.dynamics.pinocchio_backend.PinocchioDynamics` with ``compiled`` True: that class, with a
+    DeprecationWarning (the name goes in the next release)."""
+    if name == "CompiledDynamics":
+        import warnings
 
-        # CasADi keeps no reference to what its buffer reads: these do. ``feedback``: F itself, which the
-        # controller overwrites in place (F[...] = new gains, the layout kept) when its gains change
-        law.bound = (buf, x, flat, self._zero, out)  # type: ignore[attr-defined]  # kept alive with the law
-        law.feedback = F  # type: ignore[attr-defined]  # the F the controller overwrites in place
-        return law
+        from armctl.dynamics.pinocchio_backend import PinocchioDynamics
 
-
-class CompiledDynamics(PinocchioDynamics):
-    """The ``"pinocchio"`` backend with gravity, forward dynamics, the passivity torque and both regressors
-    evaluated by generated C code (see the module). Made by ``armctl.Dynamics(model, compile=True,
-    cache_dir=None)``; ``cache_dir``: where compiled libraries are kept (default ``$ARMCTL_CACHE`` or
-    ``~/.cache/armctl``)."""
-
-    compiled = True
-
-    def __init__(
-        self,
-        model: RobotModel,
-        backend: str | None = None,
-        compile: bool = True,
-        cache_dir: str | os.PathLike[str] | None = None,
-        **options: Any,
-    ) -> None:
-        self._functions = library(model, cache_dir)
-        super().__init__(model, backend, compile=compile, cache_dir=cache_dir, **options)
-
-    def kernel_factory(self) -> Callable[[], CompiledKernel]:
-        return partial(CompiledKernel, self.model, self.pin_model, self._functions)
-
-    @property
-    def options(self) -> dict[str, Any]:
-        return {"compile": True, "cache_dir": self._cache_dir}
-
-    def __repr__(self) -> str:
-        return f"Dynamics({self.model.name!r}, backend={self.backend!r}, compile=True, n={self.n})"
+        warnings.warn(
+            "armctl.dynamics.compiled.CompiledDynamics is deprecated: compiled dynamics are PinocchioDynamics with "
+            "dyn.compiled True (make them with armctl.Dynamics(model, compile=True))",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return PinocchioDynamics
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

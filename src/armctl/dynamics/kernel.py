@@ -156,12 +156,6 @@ class Kernel(ABC):
             tau += self.friction.torque(qd, qd_r)
         return tau
 
-    # ------------------------------------------------------------------------------- fused laws
-    def pd_gravity_law(self, feedback: FloatArray) -> Callable[..., FloatArray] | None:
-        """The law τ = g(q) + F·[q_d; q̇_d; q; q̇] (F = ``feedback``, n × 4n) as one function (q, q̇, q_d, q̇_d) → τ
-        where the backend fuses it (generated code), else None."""
-        return None
-
     # ---------------------------------------------------------------------------------- failures
     def nonfinite_error(self, q: FloatArray, out: FloatArray | None = None) -> ArmctlError:
         """The error for a result that is not finite (or could not be computed) from finite inputs: a mass

@@ -14,7 +14,7 @@ From the model's kinematic chain it builds, as the textbook derives it (see ``sh
 * τ = M q̈ + C q̇ + g with the parameters π kept symbolic, so the regressor is exactly Y = ∂τ/∂π.
 
 Evaluation runs CasADi's virtual machine, or C code generated from the same functions and compiled with the
-system's C compiler (``compile=True``), cached on disk by the model's fingerprint (see :mod:`.codegen`).
+system's C compiler (``compile=True``), cached on disk by the model's fingerprint (see :mod:`armctl.codegen`).
 """
 
 from __future__ import annotations
@@ -28,8 +28,10 @@ import casadi as cs
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, boolean, check_cache_dir
-from armctl.dynamics import codegen
+from armctl._checks import FloatArray, boolean
+from armctl.codegen import Fallback, compile_mode
+from armctl.codegen import library as codegen
+from armctl.codegen.policy import CompileMode, check_cache_dir
 from armctl.dynamics.base import Dynamics
 from armctl.dynamics.casadi_buffer import buffer_of, view
 from armctl.dynamics.kernel import Kernel
@@ -122,6 +124,8 @@ class _Symbols:
         return pose, jac
 
 
+#: what ``compile="auto"`` runs without a C compiler
+FALLBACK = Fallback("the Lagrange model's generated C code", "CasADi's virtual machine", "several times slower")
 _FUNCTION_NAMES = ("M", "C", "g", "tau", "Y", "T", "U", "tool_J", "tool_pose")
 
 
@@ -219,8 +223,10 @@ class LagrangeDynamics(Dynamics):
     rotor_coupling : bool
         Include the rotors' gyroscopic coupling k_r I_m q̇_i z_mᵀω_{i−1} (default True; with False the model is
         exactly what the ``"pinocchio"`` backend expresses).
-    compile : bool
-        Generate C code and compile it (cached on disk; see :func:`armctl.dynamics.codegen.compiled`).
+    compile : {False, True, "auto"}
+        Generate C code and compile it (cached on disk; see :func:`armctl.codegen.library.compiled`), under the
+        compile policy of :mod:`armctl.codegen.policy`: True (or a BackendError), False (CasADi's virtual
+        machine), ``"auto"`` (generated where it can be built).
     cache_dir : str or path, optional
         Where compiled code is cached (default ``$ARMCTL_CACHE`` or ``~/.cache/armctl``).
     """
@@ -234,13 +240,13 @@ class LagrangeDynamics(Dynamics):
         backend: str | None = None,
         *,
         rotor_coupling: bool = True,
-        compile: bool = False,
+        compile: CompileMode = False,
         cache_dir: str | None = None,
         **options: Any,
     ) -> None:
         self.rotor_coupling = boolean(rotor_coupling, "rotor_coupling")  # bool("False") would be True
-        self.compiled = boolean(compile, "compile")  # checked before the build: "False" would compile
-        check_cache_dir(cache_dir, self.compiled)
+        self._compile = compile_mode(compile)  # checked before the build: "False" would compile
+        check_cache_dir(cache_dir, self._compile)
         t0 = time.perf_counter()
         s = _Symbols(model, self.rotor_coupling)
         self._sym = s
@@ -263,8 +269,11 @@ class LagrangeDynamics(Dynamics):
         ]
         self.build_seconds = time.perf_counter() - t0
         self._cache_dir = cache_dir
-        if self.compiled:
-            fns = codegen.compiled(fns, _cache_tag(model, self.rotor_coupling), cache_dir)
+        #: whether the functions run as generated C code (``compile=True``, or ``"auto"`` where it could be built)
+        tag = _cache_tag(model, self.rotor_coupling)
+        built = FALLBACK.attempt(lambda: codegen.compiled(fns, tag, cache_dir), self._compile)
+        self.compiled = built is not None
+        fns = built or fns
         self.functions: dict[str, cs.Function] = {f.name(): f for f in fns}
         super().__init__(model, backend, **options)
 
@@ -280,7 +289,7 @@ class LagrangeDynamics(Dynamics):
 
     @property
     def options(self) -> dict[str, Any]:
-        return {"rotor_coupling": self.rotor_coupling, "compile": self.compiled, "cache_dir": self._cache_dir}
+        return {"rotor_coupling": self.rotor_coupling, "compile": self._compile, "cache_dir": self._cache_dir}
 
     @cached_property
     def symbols(self) -> _Symbols:

@@ -58,6 +58,7 @@ PARAMETER_NAMES: tuple[str, ...] = (
     "Fv",
     "Fc",
 )
+#: The number of dynamic parameters of one joint (13): the length of :data:`PARAMETER_NAMES`.
 PARAMS_PER_JOINT = len(PARAMETER_NAMES)
 
 

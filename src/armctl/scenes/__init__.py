@@ -11,6 +11,7 @@ from armctl.scenes.joint_scenes import pendulum, planar_2r
 from armctl.scenes.panda_contact import ContactScene, PressAndSlide, panda_contact
 from armctl.scenes.panda_topp import panda_topp
 
+#: The standard scenes by name, each a function that builds it (:func:`scene` calls it).
 SCENES: dict[str, Callable[[], Scene]] = {
     "pendulum": pendulum,
     "planar_2r": planar_2r,

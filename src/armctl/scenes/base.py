@@ -33,6 +33,8 @@ from armctl.model.robot import RobotModel
 from armctl.references import Reference
 from armctl.tuning.presets import load_preset
 
+#: The joint-space control laws a joint-space scene runs, by name (PD + gravity, computed torque on the exact
+#: and on a reduced model, passivity-based, adaptive).
 JOINT_METHODS = ("pd_gravity", "computed_torque", "computed_torque_reduced", "passivity", "adaptive")
 #: the gain keys of each built-in method: (required, optional)
 GAIN_KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {

@@ -3,12 +3,15 @@
 :func:`choose_step` is where ``simulate``'s ``compile`` option is decided:
 
 * ``compile="auto"`` (the default): the generated step whenever this plant has one and it can be built (or is
-  cached); without a C compiler the Python step, with one warning (per process) that says how to get one;
+  cached); without a C compiler the Python step, with one :class:`~armctl.errors.PerformanceWarning` (per process
+  and cause, :data:`FALLBACK`) that says how to get one;
 * ``compile=True``: the generated step, or an error saying why there is none;
 * ``compile=False``: the Python step (:mod:`armctl.sim.integrators`, :mod:`armctl.sim.stepper`).
 
+The option is checked by :func:`armctl.codegen.compile_mode`, as everywhere it appears.
+
 A library is built on first use (a second or two; one line is logged with the time it took) and cached on disk
-(:mod:`armctl.dynamics.codegen`); it depends on the arm's chain (joint axes and placements) and on the plant's
+(:mod:`armctl.codegen.library`); it depends on the arm's chain (joint axes and placements) and on the plant's
 structure (friction model, contact laws and the links their points ride on, a disturbance, the family of schemes),
 not on numbers: payload, perturbed or friction variants of a plant share it (:mod:`armctl.sim.compiled_plant`).
 
@@ -23,9 +26,7 @@ function (q, q̇, τ, h) → (q₁, q̇₁, q̈) for use outside ``simulate``.
 
 from __future__ import annotations
 
-import logging
 import os
-import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -33,9 +34,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from armctl._checks import FloatArray
+from armctl.codegen import Fallback, compile_mode
 from armctl.dynamics.base import Dynamics
 from armctl.dynamics.casadi_buffer import buffer_of, view
-from armctl.errors import InvalidParameterError, SimulationWarning
+from armctl.errors import InvalidParameterError
 from armctl.model.robot import RobotModel
 from armctl.sim.integrators import fast_step, make_step, rk4, semi_implicit_euler
 from armctl.sim.plant import Plant
@@ -49,14 +51,12 @@ if TYPE_CHECKING:  # CasADi is imported on first use: ``import armctl`` stays li
 SCHEMES = ("rk4", "euler")
 #: bumped when the generated code changes, so that stale cached libraries are not loaded
 _CODE_VERSION = 2
-#: the values of ``compile``
-COMPILE_OPTIONS = (True, False, "auto")
+#: what ``compile="auto"`` runs where the generated step cannot be built
+FALLBACK = Fallback("the simulator's generated step", "the Python step", "several times slower")
+#: ``compile`` checked (see :func:`armctl.codegen.compile_mode`)
+compile_option = compile_mode
 
 Step = Callable[[FloatArray, FloatArray, FloatArray, float], tuple[FloatArray, FloatArray, FloatArray]]
-
-_log = logging.getLogger(__name__)
-#: libraries this process has loaded, by path
-_ready: dict[str, Any] = {}
 
 
 @dataclass(frozen=True)
@@ -70,19 +70,6 @@ class StepChoice:
     fast: Step | None
     compiled: bool
     reason: str = ""
-
-
-def compile_option(compile: Any) -> bool | str:
-    """``compile`` checked: True, False or ``"auto"``."""
-    if compile is True or compile is False or (isinstance(compile, str) and compile == "auto"):
-        return compile
-    if isinstance(compile, np.bool_):
-        return bool(compile)
-    raise InvalidParameterError(
-        f"compile must be True (the generated step, or an error), False (the Python step) or 'auto' (the generated "
-        f"step where it can be built), got {compile!r}",
-        value=compile,
-    )
 
 
 def choose_step(
@@ -100,11 +87,11 @@ def choose_step(
 
     Warns
     -----
-    SimulationWarning
+    PerformanceWarning
         ``compile="auto"`` and no C compiler, or a build that fails for another reason: the Python step is used
         (one warning per process and cause).
     """
-    mode = compile_option(compile)
+    mode = compile_mode(compile)
 
     def python(reason: str) -> StepChoice:
         return StepChoice(plant, make_step(scheme, plant), fast_step(scheme, plant), False, reason)
@@ -116,23 +103,12 @@ def choose_step(
         if mode is True:
             raise InvalidParameterError(f"compile=True: {found}; use compile=False", value=found)
         return python(found)
-    from armctl.dynamics import codegen
-
     try:
         return _generated(dyn, scheme, plant, found, cache_dir)
     except Exception as e:  # "auto" falls back on any failure to build: the run still happens, and says why
         if mode is True:
             raise
-        reason = codegen.warn_fallback(
-            e,
-            "the generated step",
-            "simulating with the Python step",
-            "several times slower",
-            "compile=False chooses the Python step",
-            SimulationWarning,
-            stacklevel=3,
-        )
-        return python(reason)
+        return python(FALLBACK.warn(e, stacklevel=3))
 
 
 def _generated(
@@ -143,7 +119,6 @@ def _generated(
 
     model = dyn.model
     family = compiled_plant.FAMILY[scheme]
-    tag = compiled_plant.library_tag(model, layout, family)[0]
     what = ", ".join(
         w
         for w, present in (
@@ -153,50 +128,16 @@ def _generated(
         )
         if present
     )
-    fns = _library(
-        list(compiled_plant.DRIVER),
-        tag,
-        cache_dir,
-        lambda: compiled_plant.library(model, layout, family, cache_dir),
+    fns = compiled_plant.library(
         model,
-        f"the plant ({what or 'rigid'}, {scheme})",
-        compiled_plant.FLAGS,
+        layout,
+        family,
+        cache_dir,
+        what=f"the integration step of the plant ({what or 'rigid'}, {scheme}) for {model.name!r}",
     )
     cp = compiled_plant.CompiledPlant(plant, scheme, layout, fns)
     fast = cp.fast if plant.simple and scheme in SCHEMES else None
     return StepChoice(cp, cp.step, fast, True)
-
-
-def _library(
-    names: list[str],
-    tag: str,
-    cache_dir: str | os.PathLike[str] | None,
-    load: Callable[[], Any],
-    model: RobotModel,
-    what: str,
-    flags: tuple[str, ...] | None = None,
-) -> Any:
-    """``load()``'s library (compiled with ``flags``), timed and logged when it has to be built."""
-    from armctl.dynamics import codegen
-
-    key = str(codegen.library_path(names, tag, cache_dir, flags))
-    found = _ready.get(key)
-    if found is not None:
-        return found
-    built = not codegen.is_cached(names, tag, cache_dir, flags)
-    t0 = time.perf_counter()
-    found = load()
-    if built:
-        _log.warning(
-            "armctl: generated and compiled the integration step of %s for %r in %.1f s (cached in %s: later runs "
-            "load it)",
-            what,
-            model.name,
-            time.perf_counter() - t0,
-            codegen.cache_root(cache_dir),
-        )
-    _ready[key] = found
-    return found
 
 
 def _step_tag(model: RobotModel, scheme: str) -> str:
@@ -232,11 +173,14 @@ def step_function(model: RobotModel, scheme: str) -> cs.Function:
 
 def _library_function(model: RobotModel, scheme: str, cache_dir: str | os.PathLike[str] | None) -> cs.Function:
     """The compiled step function, built only if its library is not cached yet."""
-    from armctl.dynamics import codegen
+    from armctl.codegen import library as codegen
 
     _check_scheme(scheme)
     name = f"step_{scheme}"
-    return codegen.cached([name], _step_tag(model, scheme), lambda: [step_function(model, scheme)], cache_dir)[name]
+    make = lambda: [step_function(model, scheme)]  # noqa: E731
+    return codegen.cached(
+        [name], _step_tag(model, scheme), make, cache_dir, what=f"the {scheme} step of {model.name!r}"
+    )[name]
 
 
 def compiled_step(model: RobotModel, scheme: str, cache_dir: str | os.PathLike[str] | None = None) -> Step:

@@ -13,7 +13,7 @@ the run's record by row.
 
 One library per arm (the geometry of its chain), plant structure (:class:`~armctl.sim.plant_layout.PlantLayout`)
 and family of schemes (explicit: ``"rk4"``, ``"euler"``; implicit: ``"semi-implicit-euler"``, ``"implicit-euler"``),
-built on first use and cached on disk (:mod:`armctl.dynamics.codegen`, compiled with :data:`FLAGS`); inertial
+built on first use and cached on disk (:mod:`armctl.codegen.library`, compiled with :data:`FLAGS`); inertial
 parameters, friction levels, contact coefficients, planes and point offsets are inputs of the code, so the variants of
 a plant share its library.
 
@@ -33,7 +33,7 @@ import casadi as cs
 import numpy as np
 
 from armctl._checks import FloatArray
-from armctl.dynamics import codegen
+from armctl.codegen import library as codegen
 from armctl.dynamics.casadi_buffer import buffer_of, view
 from armctl.model.robot import RobotModel
 from armctl.sim.generated_plant import kernels
@@ -109,14 +109,19 @@ def library_tag(model: RobotModel, layout: PlantLayout, family: str) -> tuple[st
 
 
 def library(
-    model: RobotModel, layout: PlantLayout, family: str, cache_dir: str | os.PathLike[str] | None = None
+    model: RobotModel,
+    layout: PlantLayout,
+    family: str,
+    cache_dir: str | os.PathLike[str] | None = None,
+    what: str = "",
 ) -> dict[str, cs.Function]:
-    """The driver's functions for ``model`` with ``layout`` (built if the library is not cached yet).
+    """The driver's functions for ``model`` with ``layout`` (built if the library is not cached yet; ``what``: the
+    plant in words, for the line logged with the build's time).
 
     Raises
     ------
     BackendError
-        No C compiler, or one that fails (see :func:`armctl.dynamics.codegen.cached`).
+        No C compiler, or one that fails (see :func:`armctl.codegen.library.cached`).
     """
     tag, source = library_tag(model, layout, family)
     return codegen.cached(
@@ -126,6 +131,7 @@ def library(
         cache_dir,
         source=source,
         flags=FLAGS,
+        what=what,
     )
 
 

@@ -43,6 +43,8 @@ from armctl.errors import UnknownNameError
 from armctl.sim.implicit import implicit_euler, symplectic_euler
 from armctl.sim.plant import Plant
 
+#: The integrators ``simulate(integrator=...)`` accepts: fixed-step RK4 (the default), symplectic Euler on the
+#: momentum, backward Euler implicit in the stiff forces (contact, friction), and Euler in velocity form.
 INTEGRATORS = ("rk4", "semi-implicit-euler", "implicit-euler", "euler")
 
 #: step(t, q, q̇, τ, h) → (q₁, q̇₁, a(t, q, q̇) or None, friction work, external work)

@@ -19,6 +19,7 @@ import math
 import operator
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 from typing import Any, cast
 
 import numpy as np
@@ -29,6 +30,7 @@ from armctl.references import Reference
 from armctl.sim import period as codes
 from armctl.sim import setup
 from armctl.sim.integrators import Step
+from armctl.sim.measurement_feed import MeasurementFeed
 from armctl.sim.period import WholePeriods
 from armctl.sim.plant import Plant
 from armctl.sim.recorder import Recorder
@@ -64,6 +66,7 @@ class LoopSettings:
     saturate: bool
     max_velocity: float
     max_position: float
+    feed: MeasurementFeed | None = None  # the signals the controller reads besides q and q̇, or None
 
 
 class ClosedLoop:
@@ -91,6 +94,9 @@ class ClosedLoop:
         self._plant = pl = s.plant
         self._controller = s.controller
         self._call = s.call
+        #: a controller that reads signals and is not a Controller gets them as the call's keyword
+        self._plain_call = s.call
+        self._by_keyword = s.feed is not None and s.call is s.controller
         self._fixed_reference = s.fixed_reference
         self._reference_fn = s.reference_fn
         self._shape = (s.n,)
@@ -227,6 +233,8 @@ class ClosedLoop:
             if not self._plant.simple:
                 rec.work_friction[k] = self._work_friction
                 rec.work_external[k] = self._work_external
+        if self._external:  # contact forces, wrench and sensors at this state (before the controller reads them)
+            rec.record_external(k, self._plant, k * self.s.control_dt, rec.q[k], rec.qd[k])
         if not rec.measured:
             return self._q_view[k], self._qd_view[k]
         s = self.s
@@ -249,6 +257,9 @@ class ClosedLoop:
             if not isinstance(ref, Reference) or ref.q.shape != self._shape:
                 setup.check_reference(ref, self.s.n, t)  # (raises, naming what is wrong)
         self._references[k] = ref
+        feed = self.s.feed
+        if feed is not None:
+            self._give_measurement(feed, k)
         try:
             tau = self._call(t, qm, vm, ref)
         except ValueError as exc:
@@ -268,6 +279,8 @@ class ClosedLoop:
             raise ShapeError(
                 f"the controller returned a torque of shape {tau.shape} at t = {t}; expected {self._shape}", value=tau
             )
+        if feed is not None:
+            feed.applied(tau)
         if self._period is not None:  # the period checks and saturates τ_k, read from the record (see integrate)
             self._taus[k] = tau
             return tau
@@ -282,14 +295,22 @@ class ClosedLoop:
             return np.clip(tau, -self.s.effort_limit, self.s.effort_limit)
         return tau
 
+    def _give_measurement(self, feed: MeasurementFeed, k: int) -> None:
+        """Hand the controller the signals it reads at sample k (:mod:`armctl.sim.measurement_feed`): as its
+        ``measurement`` (a :class:`~armctl.controllers.Controller` whose ``compute`` the loop calls), or through
+        the call's ``measurement`` keyword (another callable)."""
+        rec = self._rec
+        m = feed.at(rec.sensor[k, 0] if feed.sensor is not None else None)
+        if self._by_keyword:
+            self._call = partial(self._plain_call, measurement=m)
+        else:
+            self._controller.measurement = m
+
     def integrate(self, k: int, t: float, tau: FloatArray) -> bool:
         """Integrate the plant over [t, t + Δt_c) under the held τ (sub-steps of the integrator). True: the run
         stopped (a plant's whole period found τ not finite)."""
         period = self._period
         if period is not None:
-            if self._external:
-                rec = self._rec
-                rec.record_external(k, self._plant, t, rec.q[k], rec.qd[k])
             code = self._state_code = period(k, t)
             if code > codes.STATE_MASK:
                 return self._period_events(k, t, tau, int(code))
@@ -297,8 +318,6 @@ class ClosedLoop:
         s, rec, pl = self.s, self._rec, self._plant
         q, qd, h = self.q, self.qd, s.dt
         if not pl.simple:
-            if pl.has_external:
-                rec.record_external(k, pl, t, q, qd)
             pl.begin(t, q, qd, tau)
             rec.record_friction(k, pl, qd)
         if s.implicit:
@@ -335,8 +354,6 @@ class ClosedLoop:
     def _last_sample(self, k: int, t: float, tau: FloatArray) -> None:
         rec, pl = self._rec, self._plant
         q, qd = self._state(k)
-        if self._external:
-            rec.record_external(k, pl, t, q, qd)
         if self._whole is not None:
             code = self._whole.last_sample(k, t)
             if code:

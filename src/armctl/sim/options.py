@@ -35,7 +35,21 @@ class Sensing:
     delay : int
         The controller sees the measurement of ``delay`` control periods earlier (the first one before that).
     sensors : ForceSensor or sequence of ForceSensor
-        Force sensors, recorded in ``res.sensor``.
+        Force sensors, recorded in ``res.sensor``; the first one feeds a controller that reads ``"wrench"``
+        (:mod:`armctl.controllers.measurement`).
+    noise_wrench : float or (6,) array_like
+        Standard deviation of the noise on the wrench a controller reads [N, N·m] (the recorded ``res.sensor`` is
+        the true reading).
+    noise_tau : float or (n,) array_like
+        Standard deviation of the noise on the joint torques a controller reads as ``"tau_measured"`` [N·m].
+    cutoff : float, optional
+        Cut-off frequency [Hz] of a first-order low-pass filter on the wrench and the measured torques a
+        controller reads (None: unfiltered). See :class:`~armctl.sim.signal_chain.SignalChain`.
+
+    Notes
+    -----
+    A controller that declares signals in ``reads`` is given them at every sample, each through its chain: noise,
+    the filter, and ``delay`` periods of delay. ``"tau_applied"`` is τ_{k−1} after saturation, exact.
     """
 
     noise_q: ArrayLike = 0.0
@@ -43,6 +57,9 @@ class Sensing:
     seed: int | None = None
     delay: int = 0
     sensors: ForceSensor | Sequence[ForceSensor] = ()
+    noise_wrench: ArrayLike = 0.0
+    noise_tau: ArrayLike = 0.0
+    cutoff: float | None = None
 
 
 @dataclass(frozen=True)

@@ -102,7 +102,7 @@ class _Scene:
         elif isinstance(geometry, mg.Object):
             self.commands.append(SetObject(geometry, path=mpath).lower())
         else:
-            self.commands.append(SetObject(geometry, material, path=mpath).lower())
+            self.commands.append(_current_types(SetObject(geometry, material, path=mpath).lower()))
         if matrix is not None:
             self.commands.append(SetTransform(np.asarray(matrix, dtype=float), mpath).lower())
         return path
@@ -131,6 +131,16 @@ class _Scene:
             "options": {"play": True, "repetitions": 1},
         }
         return [base64.b64encode(umsgpack.packb(c)).decode("ascii") for c in (*self.commands, animation)]
+
+
+def _current_types(command: dict[str, Any]) -> dict[str, Any]:
+    """A lowered set_object command with its mesh files under the type the viewer reads without a console
+    warning: meshcat's Python package lowers a mesh file as "_meshfile", which its viewer reads as the deprecated
+    spelling of "_meshfile_geometry"."""
+    for geometry in command.get("object", {}).get("geometries", []):
+        if geometry.get("type") == "_meshfile":
+            geometry["type"] = "_meshfile_geometry"
+    return command
 
 
 def _line(points: FloatArray, colour: int) -> Any:
@@ -200,13 +210,29 @@ def _planes(scene: _Scene, environment: Any, centre: FloatArray, size: float) ->
         scene.add(f"environment_{e}", mg.Box([side, 0.005, side]), PLANE_COLOUR, opacity=0.45, matrix=pose)
 
 
+def _ground_and_camera(scene: _Scene, low: FloatArray, high: FloatArray, size: float) -> None:
+    """The ground grid under everything the arm sweeps (``low``, ``high``: the corners of its box [m]), sized to
+    the arm (cells of a tenth of its reach), and the camera on the box's centre, from ahead, to the side and
+    above, far enough to see the whole box."""
+    centre = (low + high) / 2.0
+    ground = np.diag([0.2 * size, 0.2 * size, 0.2 * size, 1.0])  # meshcat's grid: 20 m, in 0.5 m cells
+    ground[:3, 3] = [centre[0], centre[1], min(0.0, float(low[2])) - 0.01 * size]
+    scene.commands.append({"type": "set_transform", "path": "/Grid", "matrix": ground.T.flatten().tolist()})
+    cam = np.eye(4)
+    cam[:3, 3] = centre
+    scene.commands.append({"type": "set_transform", "path": "/Cameras/default", "matrix": cam.T.flatten().tolist()})
+    # the camera's offset from its target, in three.js axes (y up): 30° above the horizon
+    reach = max(float(np.linalg.norm(high - low)) / 2.0, 0.3 * size)
+    scene.property("/Cameras/default/rotated/<object>", "position", [1.6 * reach, 1.3 * reach, 1.6 * reach])
+
+
 def playback(
     res: SimResult,
     path: str | Path,
     model: RobotModel | None = None,
     *,
     fps: float = 30.0,
-    meshes: str = "visual",
+    meshes: str = "collision",
     environment: Environment | list[Environment] | tuple[Environment, ...] | None = None,
     title: str | None = None,
 ) -> Path:
@@ -222,9 +248,10 @@ def playback(
         The arm (default: ``res.plant``, the model the run simulated; needed for a result read from a file).
     fps : float, optional
         Frames a second of run time (at most :data:`MAX_FRAMES` in all).
-    meshes : {"visual", "collision", "shapes"}, optional
-        ``"visual"``: the example-robot-data meshes of a model that has them, else simple shapes;
-        ``"collision"``: that description's collision meshes (a far smaller page); ``"shapes"``: simple shapes.
+    meshes : {"collision", "visual", "shapes"}, optional
+        ``"collision"`` (the default): the example-robot-data collision meshes of a model that has them (a page
+        about ten times smaller than with the visual meshes), else simple shapes; ``"visual"``: that
+        description's visual meshes (textured, larger); ``"shapes"``: simple shapes.
     environment : Environment or sequence of Environment, optional
         Contact environments to draw (their planes), e.g. the run's own.
     title : str, optional
@@ -268,10 +295,11 @@ def playback(
     pm = model.to_pinocchio()
     pd = pm.createData()
     tool_id = pm.getFrameId(model.tool_frame) if model.tool_frame is not None else None
-    joint_poses, tool = [], []
+    joint_poses, tool, points = [], [], []
     for k in idx:
         pin.forwardKinematics(pm, pd, np.asarray(res.q[k], dtype=float))
         joint_poses.append([np.array(pd.oMi[j].homogeneous) for j in range(pm.njoints)])
+        points += [pose[:3, 3] for pose in joint_poses[-1]]
         if tool_id is not None:
             pin.updateFramePlacement(pm, pd, tool_id)
             tool.append(np.array(pd.oMf[tool_id].translation))
@@ -287,7 +315,7 @@ def playback(
         if part.scale != (1.0, 1.0, 1.0):
             scene.track(node, "scale", "vector3", [list(part.scale)] * len(poses))
     tool_path = np.array(tool)
-    legend = [f"{model.name}: {source}"]
+    legend = [f"drawn with {source}"]
     if len(tool_path) > 1:
         scene.add("tool_path", _line(tool_path, TOOL_COLOUR), None)
         legend.append("blue line: tool path")
@@ -309,12 +337,8 @@ def playback(
     _planes(scene, environment, tool_path.mean(axis=0), size)
     if environment is not None:
         legend.append("grey slab: contact plane")
-    centre = tool_path.mean(axis=0) / 2.0
-    cam = np.eye(4)
-    cam[:3, 3] = centre
-    scene.commands.append({"type": "set_transform", "path": "/Cameras/default", "matrix": cam.T.flatten().tolist()})
-    # the camera's offset from its target, in three.js axes (y up): ahead, to the side and above the arm
-    scene.property("/Cameras/default/rotated/<object>", "position", [0.9 * size, 0.6 * size, 0.75 * size])
+    swept = np.vstack([np.array(points), tool_path])
+    _ground_and_camera(scene, swept.min(axis=0), swept.max(axis=0), size)
     if title is None:
         title = f"{res.info.get('plant', model.name)}: {res.status}, {res.duration:g} s"
     page = _page(scene.encoded(), title, legend, float(res.t[idx[0]]), (len(idx) - 1) / rate, rate)

@@ -23,7 +23,7 @@ from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray, boolean, nonnegative_vector
 from armctl.dynamics.base import Dynamics
-from armctl.errors import SimulationWarning
+from armctl.errors import InvalidParameterError, SimulationWarning
 from armctl.model.robot import RobotModel
 from armctl.references import Reference
 from armctl.sim import setup
@@ -32,6 +32,7 @@ from armctl.sim.compiled import choose_step
 from armctl.sim.contact import Environment, ForceSensor
 from armctl.sim.friction import FrictionModel
 from armctl.sim.loop import ClosedLoop, LoopSettings
+from armctl.sim.measurement_feed import MeasurementFeed, declared_reads
 from armctl.sim.options import Forces, Sensing, StopRules, grouped
 from armctl.sim.plant import Plant
 from armctl.sim.recorder import Recorder
@@ -79,6 +80,9 @@ def simulate(
     controller : callable
         ``tau = controller(t, q, qd, ref)`` [N·m]; its ``reset()`` is called first (``reset=True``), its
         ``end_run()`` (if it has one) after the last step, and its ``last_log`` dict recorded after every call.
+        A controller that declares signals in ``reads`` (a force sensor's wrench, the applied or measured
+        torques: :mod:`armctl.controllers.measurement`) is given them at every sample, through the measurement
+        chain of ``sensing``.
     reference : Reference or callable
         A :class:`~armctl.Reference`, or t [s] → Reference.
     duration : float
@@ -167,10 +171,21 @@ def simulate(
         if value is not None
     }
     sense, force, rules = grouped({"sensing": sensing, "forces": forces, "stop": stop}, given)
+    reads = declared_reads(controller)
     if engine != "native":  # another engine integrates the plant (armctl.sim.mujoco_engine)
         from armctl.sim.mujoco_engine import run_engine
 
-        options = {f.name: getattr(group, f.name) for group in (sense, force, rules) for f in fields(group)}
+        if reads:
+            raise InvalidParameterError(
+                f"the controller reads {sorted(reads)}, which engine={engine!r} does not measure: use engine='native'",
+                value=engine,
+            )
+        options = {
+            f.name: getattr(group, f.name)
+            for group in (sense, force, rules)
+            for f in fields(group)
+            if f.name not in _SIGNAL_OPTIONS
+        }
         return run_engine(
             engine,
             plant=plant,
@@ -222,6 +237,23 @@ def simulate(
     # sample k's noise is the k-th block of 2n draws (q's, then q̇'s): a longer run with the same seed sees the
     # same noise over the common samples
     draws = np.random.default_rng(seed_used).standard_normal((samples, 2, n)) if noisy else None
+    feed = (
+        MeasurementFeed(
+            reads,
+            n,
+            cdt,
+            sc.sensors,
+            nonnegative_vector(sense.noise_wrench, 6, "noise_wrench (a standard deviation)"),
+            nonnegative_vector(sense.noise_tau, n, "noise_tau (a standard deviation)"),
+            sense.cutoff,
+            lag,
+            seed_used,
+            dyn.model.effort_limit,
+            saturate,
+        )
+        if reads
+        else None
+    )
     settings = LoopSettings(
         n=n,
         control_dt=cdt,
@@ -244,6 +276,7 @@ def simulate(
         saturate=saturate,
         max_velocity=vmax,
         max_position=qmax,
+        feed=feed,
     )
     reset_controller = getattr(controller, "reset", None)
     if reset and callable(reset_controller):
@@ -285,6 +318,10 @@ def simulate(
         raise loop.failure
     after_run(res, dyn, sc.environments, scheme, h, sc.disturbance is not None)
     return res
+
+
+#: Sensing's fields that only a controller's declared signals use (no other engine measures them)
+_SIGNAL_OPTIONS = frozenset({"noise_wrench", "noise_tau", "cutoff"})
 
 
 def _check_contacts(

@@ -8,6 +8,7 @@ import math
 import warnings
 
 import numpy as np
+import pytest
 
 import armctl
 from armctl import sim
@@ -131,6 +132,8 @@ def test_through_a_singularity_closed_form_spikes_and_the_qp_degrades_gracefully
     assert errors["qp"] < 2e-3  # graceful: it still tracks within 2 mm
 
 
+# its run goes beyond a velocity limit on the way, as expected
+@pytest.mark.filterwarnings("ignore:the run went beyond the plant's limits:armctl.errors.SimulationWarning")
 def test_tight_torque_limits_posture_gives_way_before_the_task() -> None:
     """Holding the tool still (priority 0) while the posture (priority 1) swings the elbow along the null
     space at 2 Hz, with the torque limits at 100 % and then 28 % of the Panda's (gravity alone needs 25 % on

@@ -237,12 +237,12 @@ def test_the_default_takes_generated_code_on_pinocchios_dynamics() -> None:
 def test_without_a_compiler_auto_warns_once_and_true_raises(monkeypatch, tmp_path) -> None:  # type: ignore[no-untyped-def]
     """No C compiler (``CC`` a missing program, an empty cache): ``"auto"`` takes the NumPy path with one
     PerformanceWarning naming the fix; ``compile=True`` raises BackendError; ``compile="yes"`` is refused."""
-    from armctl.dynamics import codegen
+    from armctl.controllers.osc.controller import FALLBACK
     from armctl.errors import BackendError, PerformanceWarning
 
     monkeypatch.setenv("CC", "no-such-compiler-armctl")
     monkeypatch.setenv("ARMCTL_CACHE", str(tmp_path))
-    monkeypatch.setattr(codegen, "warned", set())
+    FALLBACK.reset()
     dyn = armctl.Dynamics(armctl.models.planar_2r())
     with pytest.warns(PerformanceWarning, match="no C compiler") as caught:
         first = OperationalSpaceQP(dyn, [PostureTask(2, kp=50.0)])

@@ -1,15 +1,15 @@
 """Operational-space control as a QP (DAQP, then proxsuite), with contacts, limits and strict priorities.
 
-    from armctl.controllers.osc import OperationalSpaceQP, FramePoseTask, PostureTask
-
-Parts, one concept a file: ``state`` (model terms of one step), ``tasks/`` (error + Jacobian), ``limits/`` (bounds
-on q̈ or τ), ``contact`` (force variables, contact rows, friction cones), ``build`` (the QP), ``problem`` (the
-inspectable QP), ``reduced`` (the same QP on q̈ alone), ``generated`` (its data as generated code,
-``compile``), ``scale`` (out-of-scale task rows refused), ``solve`` (proxsuite / qpsolvers), ``daqp_solver``
-(DAQP from an active set, the chain's first stage), ``active_set`` (a dual active-set solver in NumPy),
-``optimality`` (the KKT check), ``chain`` (verified optimum, with fallbacks), ``diagnose`` (conflicting rows),
-``hierarchy`` (cascaded priorities), ``controller`` (the controller), ``closed_form`` (Khatib's baseline).
+from armctl.controllers.osc import OperationalSpaceQP, FramePoseTask, PostureTask
 """
+
+# The parts, for a reader of the source: ``state`` (model terms of one step), ``tasks/`` (error + Jacobian),
+# ``limits/`` (bounds on q̈ or τ), ``contact`` (force variables, contact rows, friction cones), ``build`` (the QP),
+# ``problem`` (the inspectable QP), ``reduced`` (the same QP on q̈ alone), ``generated`` (its data as generated code,
+# ``compile``), ``scale`` (out-of-scale task rows refused), ``solve`` (proxsuite / qpsolvers), ``daqp_solver`` (DAQP
+# from an active set, the chain's first stage), ``active_set`` (a dual active-set solver in NumPy), ``optimality``
+# (the KKT check), ``chain`` (verified optimum, with fallbacks), ``diagnose`` (conflicting rows), ``hierarchy``
+# (cascaded priorities), ``controller`` (the controller), ``closed_form`` (Khatib's baseline).
 
 from armctl.controllers.osc.active_set import DualActiveSetSolver
 from armctl.controllers.osc.build import QPBuilder, StepQP

@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from armctl._checks import FloatArray, instances, scalar, vector
+from armctl.codegen import Fallback, compile_mode
 from armctl.controllers.base import Controller
 from armctl.controllers.osc.build import QPBuilder, StepQP
 from armctl.controllers.osc.chain import QPFailure, SolverChain
@@ -36,11 +37,15 @@ from armctl.controllers.osc.state import ModelEvaluator
 from armctl.controllers.osc.task_errors import FrameTaskLog
 from armctl.controllers.osc.tasks.base import Task
 from armctl.dynamics.base import Dynamics
-from armctl.errors import InvalidParameterError, PerformanceWarning, SolverWarning
+from armctl.errors import InvalidParameterError, SolverWarning
 from armctl.references import Reference
 
 #: the limits whose bounds read only q and q̇ of a step's state (the generated path gives them no more)
 _PLAIN_LIMITS = (TorqueLimit, JointPositionLimit, JointVelocityLimit, AccelerationLimit)
+#: what ``compile="auto"`` runs where the QP's generated data cannot be built
+FALLBACK = Fallback(
+    "the operational-space QP's generated data", "the NumPy path (Pinocchio's terms)", "about twice as slow"
+)
 
 
 def default_limits(dt: float = 1e-3) -> list[Limit]:
@@ -195,13 +200,7 @@ class OperationalSpaceQP(Controller):
                 f"dynamics must be an armctl.Dynamics, got {type(dynamics).__name__}", value=dynamics
             )
         super().__init__(dynamics)
-        if not (compile is True or compile is False or (isinstance(compile, str) and compile == "auto")):
-            raise InvalidParameterError(
-                f"compile must be True (generated QP data, or an error), False (NumPy) or 'auto' (generated where "
-                f"it can be built), got {compile!r}",
-                value=compile,
-            )
-        self.compile = compile
+        self.compile = compile_mode(compile)
         tasks = instances(tasks, Task, "tasks", "Task", single=True)
         if not tasks:
             raise InvalidParameterError("OperationalSpaceQP needs at least one task", value=tasks)
@@ -371,23 +370,8 @@ class OperationalSpaceQP(Controller):
 
         if not supported(qp.plan.tasks):
             return None
-        try:
-            return GeneratedQddData(self.dynamics, qp.plan.tasks, self.builder.regularization)
-        except Exception as exc:  # "auto": the NumPy path, and why (once per process and cause)
-            if mode is True:
-                raise
-            from armctl.dynamics import codegen
-
-            codegen.warn_fallback(
-                exc,
-                "the operational-space QP's generated data",
-                "the QP takes its data from Pinocchio and NumPy",
-                "about twice as slow",
-                "compile=False chooses the NumPy path",
-                PerformanceWarning,
-                stacklevel=4,
-            )
-            return None
+        make = lambda: GeneratedQddData(self.dynamics, qp.plan.tasks, self.builder.regularization)  # noqa: E731
+        return FALLBACK.attempt(make, mode, stacklevel=4)
 
     def _qdd_step(self, lay: Layout, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         """One level without contact forces: the QP on q̈ alone (see reduced)."""

@@ -17,15 +17,13 @@ The gains, weights and ε are an input of the code, refreshed when a task's ``re
 changed between steps without generating code again. The tasks it takes are :class:`FramePoseTask`,
 :class:`FramePositionTask`, :class:`FrameOrientationTask` and :class:`PostureTask` themselves (a subclass may
 have kinematics of its own: :func:`supported` is False for it and the controller keeps the NumPy path). The
-library is compiled once and cached on disk (:mod:`armctl.dynamics.codegen`), keyed by the model, the tasks'
+library is compiled once and cached on disk (:mod:`armctl.codegen.library`), keyed by the model, the tasks'
 kinds and frames and whether the model has friction.
 """
 
 from __future__ import annotations
 
 import hashlib
-import logging
-import time
 from collections.abc import Sequence
 from typing import Any, cast
 
@@ -33,6 +31,7 @@ import casadi as cs
 import numpy as np
 
 from armctl._checks import FloatArray
+from armctl.codegen import library as codegen
 from armctl.controllers.osc.tasks.base import MotionTask, Task
 from armctl.controllers.osc.tasks.frame_orientation import FrameOrientationTask
 from armctl.controllers.osc.tasks.frame_pose import FramePoseTask
@@ -40,7 +39,6 @@ from armctl.controllers.osc.tasks.frame_position import FramePositionTask
 from armctl.controllers.osc.tasks.frame_task import FrameTask
 from armctl.controllers.osc.tasks.posture import PostureTask
 from armctl.controllers.osc.tasks.rotation import rotation_error_sx
-from armctl.dynamics import codegen
 from armctl.dynamics.base import Dynamics
 from armctl.dynamics.casadi_buffer import buffer_of, view
 from armctl.dynamics.recursive import cholesky_solve, inverse_dynamics, joint_transforms, mass_matrix
@@ -51,7 +49,6 @@ from armctl.references import Reference
 #: bumped when the generated code changes, so that stale cached libraries are not loaded
 _CODE_VERSION = 1
 _NAME = "osc_qdd_qp"
-_log = logging.getLogger(__name__)
 #: the frame tasks the code takes: their kind and the shape of their target value
 _FRAME_TASKS: dict[type, tuple[str, tuple[int, ...]]] = {
     FramePoseTask: ("pose", (4, 4)),
@@ -165,20 +162,11 @@ class GeneratedQddData:
         self.regularization = float(regularization)
         cache_dir = dynamics.options.get("cache_dir")
         tag = _tag(model, self.tasks, self.friction is not None)
-        built = not codegen.is_cached([_NAME], tag, cache_dir)
-        t0 = time.perf_counter()
+        kinds = ", ".join(type(tk).__name__ for tk in self.tasks)
+        what = f"the operational-space QP's data for {model.name!r} ({kinds})"
         fn = codegen.cached(
-            [_NAME], tag, lambda: [qp_function(model, self.tasks, self.friction is not None)], cache_dir
+            [_NAME], tag, lambda: [qp_function(model, self.tasks, self.friction is not None)], cache_dir, what=what
         )[_NAME]
-        if built:
-            _log.warning(
-                "armctl: generated and compiled the operational-space QP's data for %r (%s) in %.1f s (cached in %s: "
-                "later controllers load it)",
-                model.name,
-                ", ".join(type(tk).__name__ for tk in self.tasks),
-                time.perf_counter() - t0,
-                codegen.cache_root(cache_dir),
-            )
         m = sum(tk.dim for tk in self.tasks)
         self.inp = np.zeros(fn.size1_in(0))
         self.par = np.zeros(fn.size1_in(1))

@@ -5,12 +5,13 @@
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, Gain, nonnegative_vector, whole_number
+from armctl._checks import FloatArray, gain_matrix, nonnegative_vector, whole_number
+from armctl.controllers.gains import GainSet, gain
 from armctl.controllers.osc.state import ModelState
 from armctl.references import Reference
 
@@ -125,15 +126,7 @@ class Task(ABC):
         return f"{type(self).__name__}({self.name!r}, dim={self.dim}, priority={self.priority})"
 
 
-def _dim(task: Task) -> int:
-    return task.dim
-
-
-def _label(task: Task, gain: str) -> str:
-    return f"{task.name}: {gain}"
-
-
-class MotionTask(Task):
+class MotionTask(GainSet, Task):
     """A task on q̈ defined by its error e, its Jacobian J and the drift J̇ q̇ (the pink / TSID way); the class
     turns them into the desired task acceleration of a PD law. Subclasses implement :meth:`kinematics`.
 
@@ -169,13 +162,11 @@ class MotionTask(Task):
     so that a zero residual gives the error dynamics ë + K_d ė + K_p e = 0.
     """
 
-    # assigning a gain rebuilds the law's matrices [I, K_d, K_p] (_gains_changed), which every step then uses
-    kp = Gain("K_p (dim×dim); may be reassigned between control periods (checked again).", size=_dim, label=_label)
-    kd = Gain("K_d (dim×dim); may be reassigned between control periods (checked again).", size=_dim, label=_label)
-    # what the Gain descriptors keep: the compact forms and the matrices
-    _kp: FloatArray
-    _kd: FloatArray
-    _kp_matrix: FloatArray
+    # assigning a gain rebuilds the law's matrices [I, K_d, K_p] (_derive), which every step then uses
+    gain_names: ClassVar[dict[str, bool]] = {"kp": False, "kd": False}
+    kp = gain("kp", "K_p (dim×dim); may be reassigned between control periods (checked again).")
+    kd = gain("kd", "K_d (dim×dim); may be reassigned between control periods (checked again).")
+    _kp_matrix: FloatArray  # (set_gains keeps the matrices, and their compact forms in _kp, _kd)
     _kd_matrix: FloatArray
 
     def __init__(
@@ -188,11 +179,13 @@ class MotionTask(Task):
         priority: int = 0,
     ) -> None:
         super().__init__(dim, name, weight, priority)
-        self.kp = kp
         if kd is None:  # critical damping: K_d = 2 K_p^½ (the symmetric square root; 2√k_p for a scalar)
-            lam, vec = np.linalg.eigh(self._kp_matrix)
+            lam, vec = np.linalg.eigh(gain_matrix(kp, *self._gain_spec("kp")))
             kd = 2.0 * (vec * np.sqrt(lam)) @ vec.T
-        self.kd = kd
+        self.set_gains(kp=kp, kd=kd)
+
+    def _gain_spec(self, name: str) -> tuple[int, str]:
+        return self.dim, f"{self.name}: {name}"
 
     @abstractmethod
     def kinematics(
@@ -223,14 +216,13 @@ class MotionTask(Task):
             The feed-forward acceleration ẍ_ref [m/s² or rad/s²].
         """
 
-    def _gains_changed(self) -> None:
+    def _derive(self) -> None:
         self.revision += 1
-        if hasattr(self, "_kd"):  # both gains set
-            # ẍ* = [I, K_d, K_p]·[ẍ_ref; ė; e] and ẍ* − J̇q̇ = [I, K_d, K_p, −I]·[ẍ_ref; ė; e; J̇q̇]: one
-            # concatenation and one product each (the term by term form takes five array operations)
-            eye = np.eye(self.dim)
-            self._law = np.hstack((eye, self._kd_matrix, self._kp_matrix))
-            self._law_drift = np.hstack((self._law, -eye))
+        # ẍ* = [I, K_d, K_p]·[ẍ_ref; ė; e] and ẍ* − J̇q̇ = [I, K_d, K_p, −I]·[ẍ_ref; ė; e; J̇q̇]: one
+        # concatenation and one product each (the term by term form takes five array operations)
+        eye = np.eye(self.dim)
+        self._law = np.hstack((eye, self._kd_matrix, self._kp_matrix))
+        self._law_drift = np.hstack((self._law, -eye))
 
     def desired_acceleration(
         self, state: ModelState, t: float, ref: Reference

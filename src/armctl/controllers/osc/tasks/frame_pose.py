@@ -92,13 +92,12 @@ class FramePoseTask(FrameTask):
         e[3:] = rotation_error(pose[:3, :3], fk.rotation)
         return fk.jacobian, fk.drift, e, twist - fk.velocity, acc
 
-    def _gains_changed(self) -> None:
-        super()._gains_changed()
-        if hasattr(self, "_kd"):
-            # ẍ* − J̇q̇ with the errors themselves inside the product: [I, K_d, −K_d, K_p,lin, −K_p,lin, K_p,rot, −I]
-            # · [ẍ_ref; V_ref; J q̇; p_ref; p; log(R_ref Rᵀ); J̇q̇] (K_p,lin / K_p,rot: K_p's first / last 3 columns)
-            eye, kd, kp = np.eye(6), self._kd_matrix, self._kp_matrix
-            self._pose_law = np.hstack((eye, kd, -kd, kp[:, :3], -kp[:, :3], kp[:, 3:], -eye))
+    def _derive(self) -> None:
+        super()._derive()
+        # ẍ* − J̇q̇ with the errors themselves inside the product: [I, K_d, −K_d, K_p,lin, −K_p,lin, K_p,rot, −I]
+        # · [ẍ_ref; V_ref; J q̇; p_ref; p; log(R_ref Rᵀ); J̇q̇] (K_p,lin / K_p,rot: K_p's first / last 3 columns)
+        eye, kd, kp = np.eye(6), self._kd_matrix, self._kp_matrix
+        self._pose_law = np.hstack((eye, kd, -kd, kp[:, :3], -kp[:, :3], kp[:, 3:], -eye))
 
     def residual(self, state: ModelState, t: float, ref: Reference) -> tuple[FloatArray, FloatArray]:
         """The rows of the residual r = J q̈ − (ẍ* − J̇ q̇): :meth:`kinematics` and the PD law in one product. A

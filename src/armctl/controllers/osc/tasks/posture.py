@@ -127,12 +127,11 @@ class PostureTask(MotionTask):
         r = self._fixed or ref
         return None, None, r.q - state.q, r.qd - state.qd, r.qdd
 
-    def _gains_changed(self) -> None:
-        super()._gains_changed()
-        if hasattr(self, "_kd"):
-            # ẍ* with the errors inside the product: [I, K_d, −K_d, K_p, −K_p]·[q̈_ref; q̇_ref; q̇; q_ref; q]
-            eye, kd, kp = np.eye(self.dim), self._kd_matrix, self._kp_matrix
-            self._posture_law = np.hstack((eye, kd, -kd, kp, -kp))
+    def _derive(self) -> None:
+        super()._derive()
+        # ẍ* with the errors inside the product: [I, K_d, −K_d, K_p, −K_p]·[q̈_ref; q̇_ref; q̇; q_ref; q]
+        eye, kd, kp = np.eye(self.dim), self._kd_matrix, self._kp_matrix
+        self._posture_law = np.hstack((eye, kd, -kd, kp, -kp))
 
     def residual(self, state: ModelState, t: float, ref: Reference) -> tuple[None, FloatArray]:
         """The rows of the residual r = q̈ − ẍ* (J = I, no drift): :meth:`kinematics` and the PD law in one
