@@ -21,9 +21,11 @@ WRITES = {
     "contact_recipe.py": ["contact_recipe_normal_force.png", "contact_recipe_run.png"],
     "custom_controller.py": ["custom_controller.png"],
     "identification.py": ["identification.png"],
+    "interaction_control.py": ["interaction_press.png", "interaction_wipe.png"],
     "model_views.py": ["model_views.png"],
     "mujoco_comparison.py": ["panda_table.xml"],
     "osc_priorities.py": ["osc_priorities.png"],
+    "sweep_study.py": ["sweep_study.parquet", "sweep_study.png", "sweep_study_store"],
     "topp_tracking.py": ["topp_tracking.png"],
 }
 

@@ -276,18 +276,13 @@ def all_finite(a: FloatArray) -> bool:
 _SUMMED = 256
 
 
-def float_vectors(a: Any, b: Any, c: Any, d: Any = None) -> bool:
-    """True if ``a``, ``b``, ``c`` (and ``d`` if given) are native float64 1-D ndarrays (finite or not; their
-    lengths are not compared)."""
-    try:
-        return (
-            type(a) is type(b) is type(c) is np.ndarray
-            and a.ndim == b.ndim == c.ndim == 1
-            and a.dtype == b.dtype == c.dtype == FLOAT
-            and (d is None or (type(d) is np.ndarray and d.ndim == 1 and d.dtype == FLOAT))
-        )
-    except AttributeError:
-        return False
+def float_vectors(*arrays: Any) -> bool:
+    """True if every one of ``arrays`` is a native float64 1-D ndarray (finite or not; their lengths are not
+    compared). None is not one: an argument left out by the caller is refused here like any other non-array."""
+    for a in arrays:
+        if type(a) is not np.ndarray or a.ndim != 1 or a.dtype != FLOAT:
+            return False
+    return True
 
 
 def memory_limit() -> float:

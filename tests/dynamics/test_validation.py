@@ -377,3 +377,33 @@ def test_a_dynamics_no_one_refers_to_is_freed_without_the_cycle_collector() -> N
             assert ref() is None
     finally:
         gc.enable()
+
+
+THREE_BACKENDS = [("pinocchio", {}), ("pinocchio", {"compile": True}), ("lagrange", {})]
+
+
+@pytest.mark.parametrize(("backend", "options"), THREE_BACKENDS)
+def test_a_wrench_whose_joint_torque_is_finite_but_whose_acceleration_overflows_is_named(
+    backend: str, options: dict
+) -> None:
+    """Jᵀh is finite (one entry of ~1e308 against Jacobian entries below 1), but M⁻¹(τ − Jᵀh) is not: the
+    wrench is the input at fault, not the τ it was folded into."""
+    dyn = armctl.Dynamics(armctl.models.panda(), backend=backend, **options)
+    q, z = np.array([0.0, -0.5, 0.0, -2.0, 0.0, 1.6, 0.8]), np.zeros(7)
+    wrench = np.array([1e308, 0.0, 0.0, 0.0, 0.0, 0.0])
+    assert np.isfinite(dyn.jacobian(q).T @ wrench).all()  # the premise: the joint torque itself is finite
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        with pytest.raises(NonFiniteError, match=r"overflowed .*wrench\[0\] = 1e\+308 is too large"):
+            dyn.forward_dynamics(q, z, z, wrench=wrench)
+
+
+@pytest.mark.parametrize(("backend", "options"), THREE_BACKENDS)
+@pytest.mark.parametrize("method", ["passivity_regressor", "passivity_torque"])
+def test_a_missing_reference_acceleration_is_named(backend: str, options: dict, method: str) -> None:
+    """``qdd_r=None`` (left out by mistake) is refused by name on every backend, not passed to Pinocchio or to
+    the generated code, which would refuse it in their own terms."""
+    dyn = armctl.Dynamics(armctl.models.planar_2r(), backend=backend, **options)
+    z = np.zeros(2)
+    with pytest.raises(InvalidParameterError, match=r"^qdd_r must hold real numbers, got None"):
+        getattr(dyn, method)(z, z, z, None)

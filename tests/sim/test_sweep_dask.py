@@ -3,6 +3,9 @@ a run that kills its worker each time (Dask's ``KilledWorker``) are recorded, th
 
 from __future__ import annotations
 
+import os
+import signal
+import time
 from pathlib import Path
 
 import pytest
@@ -38,3 +41,46 @@ def test_killed_worker_and_raising_run_on_dask_are_recorded(tmp_path: Path) -> N
     assert "in failing_job" in raised.traceback  # the worker's traceback
     assert isinstance(killed, CaseFailure) and killed.kind == "worker_died" and killed.case is cs[3]
     assert killed.error_type == "distributed.scheduler.KilledWorker" and "workers died" in killed.message
+
+
+def killer_and_neighbour(x: int, log: str) -> int:
+    """x², after noting the start in ``log``. Case 0 kills its worker process: on its first start once case 1
+    has started too (so that case 1 is on the worker when it dies; at most 5 s), later at once. Case 1 takes
+    0.5 s."""
+    with open(log, "a") as f:
+        f.write(f"{x}\n")
+    if x == 0:
+        deadline = time.monotonic() + 5.0
+        while Path(log).read_text().split().count("0") == 1 and time.monotonic() < deadline:
+            if "1" in Path(log).read_text().split():
+                break
+            time.sleep(0.01)
+        os.kill(os.getpid(), signal.SIGKILL)
+    if x == 1:
+        time.sleep(0.5)
+    return x * x
+
+
+@pytest.mark.slow
+def test_a_case_that_shared_a_dying_worker_is_not_lost(tmp_path: Path) -> None:
+    """One worker with two threads, and no retry by Dask: the killer kills the worker while the innocent case
+    runs beside it, and Dask gives up on both (KilledWorker). The sweep runs each of them again alone: the
+    innocent one returns its result, and only the killer is recorded as a dead worker."""
+    import dask
+    import distributed
+
+    log = tmp_path / "starts.log"
+    cs = [{"x": x, "log": str(log)} for x in range(3)]
+    with (
+        dask.config.set({"distributed.scheduler.allowed-failures": 0}),
+        distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=True, dashboard_address=None) as cl,
+        distributed.Client(cl) as client,
+    ):
+        with pytest.warns(SweepWarning, match=r"3 cases: 2 ok, 1 failed \(0 raised, 1 worker died"):
+            out = sweep(cs, run=killer_and_neighbour, executor=client.get_executor(), progress=False)
+    killed = out[0]
+    assert isinstance(killed, CaseFailure) and killed.kind == "worker_died" and killed.case is cs[0]
+    assert killed.error_type == "distributed.scheduler.KilledWorker"
+    assert out[1:] == [1, 4] and out.failures == [killed]
+    starts = log.read_text().split()
+    assert starts.count("0") == 2 and starts.count("1") == 2  # together on the dying worker, then each alone

@@ -249,3 +249,36 @@ def test_sampled_data_condition_in_closed_loop() -> None:
     assert res.diverged or np.abs(res.q[-1] - set_point).max() > 1e-2
     assert run(1.25 * critical).diverged
     assert not sampled_data_condition(b, 1.05 * critical, 0.2 * 1.05 * critical, 0.01, 1).holds
+
+
+# ------------------------------------------------------------------------------------------------ the text
+def _numbers(text: str) -> list[float]:
+    import re
+
+    return [float(x) for x in re.findall(r"(?<![\w(])-?\d+(?:\.\d+)?(?:e[+-]?\d+)?", text)]
+
+
+def test_a_failing_condition_is_printed_as_the_comparison_that_holds() -> None:
+    """Below k_g the condition reads "λ_min(K_p) = a ≤ k_g = b: fails", a true statement about the numbers, and
+    above it "a > b"; the two numbers printed are the gain and the bound."""
+    b = _bounds("pendulum")
+    kp_low, kp_high = 0.5 * b.k_g, 2.0 * b.k_g
+    low = pd_desired_gravity_condition(b, kp_low).condition
+    high = pd_desired_gravity_condition(b, kp_high).condition
+    assert low.startswith("λ_min(K_p) = ") and " ≤ k_g = " in low and ": fails" in low
+    assert " > " not in low.split(":")[0]
+    assert " > k_g = " in high and "fails" not in high
+    a, bound = _numbers(low)[:2]
+    assert a == pytest.approx(kp_low, rel=1e-4) and bound == pytest.approx(b.k_g, rel=1e-4) and a <= bound
+    pid = pid_condition(b, kp_low, 10.0, 5.0).condition
+    assert " ≤ k_g = " in pid and ": fails" in pid
+    required = 5.0 / (kp_high - b.k_g) * b.lambda_max**2 / b.lambda_min
+    weak = pid_condition(b, kp_high, 0.5 * required, 5.0).condition
+    assert " > k_g = " in weak and "λ_min(K_d) = " in weak and " ≤ " in weak and ": fails" in weak
+
+
+def test_a_failing_inertia_estimate_condition_is_printed_as_it_stands() -> None:
+    b = _bounds("planar_2r")
+    heavy = 6.0 * b.lambda_max * np.eye(2)
+    verdict = computed_torque_condition(b, heavy, 100.0, 20.0)
+    assert not verdict.holds and " ≥ 1: fails" in verdict.condition and " < 1" not in verdict.condition.split(":")[0]

@@ -3,7 +3,8 @@ solve of the same QPs, on two sets of states, with the controller as made by def
 data from generated code where a C compiler builds it) and with ``compile=False`` (Pinocchio's terms, the QP rows
 in NumPy), both on ``Dynamics(panda)``.
 
-Run: ``python -m armctl.bench.osc_speed [--quick]``.
+Run: ``python -m armctl.bench.osc_speed [--quick]``. With an active contact (figures ``contact``, ``scene``
+and ``scene["tail"]``): see :mod:`~armctl.bench.osc_contact`.
 
 Set-up: pose task on the tool frame (kp 400) + posture task (kp 100, weight 1e-3, the same level) + the URDF's
 torque limits; the QP on [q̈; τ] has 14 variables, 7 equality and 7 inequality rows (the controller solves it on
@@ -44,11 +45,21 @@ from typing import Any
 import numpy as np
 
 import armctl
+from armctl.bench.osc_contact import contact_checks, report_lines
 from armctl.bench.timing import interleaved_samples
-from armctl.controllers.osc import ClosedFormOSC, FramePoseTask, OperationalSpaceQP, PostureTask, TorqueLimit
+from armctl.controllers.osc import (
+    ClosedFormOSC,
+    FramePoseTask,
+    OperationalSpaceQP,
+    PostureTask,
+    QPArrays,
+    TorqueLimit,
+)
 
-#: what the checks of this benchmark ask: the default step within 15 RNEA on both sets of states
-TARGETS = {"ratio_rnea": 15.0}
+#: what the checks of this benchmark ask: the default step within 15 RNEA on both sets of states; with a
+#: contact, the fixed-contact step and the panda_contact scene's controller within their ratios to RNEA, and the
+#: scene's p99.9 per-call time within 4 medians
+TARGETS = {"ratio_rnea": 15.0, "contact_ratio_rnea": 12.0, "scene_ratio_rnea": 25.0, "tail_ratio": 4.0}
 
 Q_HOME = np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])
 States = list[tuple[float, np.ndarray, np.ndarray]]
@@ -152,6 +163,11 @@ def _cycle(seq: States) -> Callable[[], tuple[float, np.ndarray, np.ndarray]]:
     return nxt
 
 
+def _writable(qp: QPArrays) -> tuple[np.ndarray, ...]:
+    """(H, g, A, b, C, l, u) of ``qp`` as writable copies, in proxsuite's order of arguments."""
+    return tuple(np.array(a) for a in (qp.H, qp.g, qp.A, qp.b, qp.C, qp.l, qp.u))
+
+
 def measure(seq: States, ctrl: OperationalSpaceQP, rounds: int, extra: dict[str, Any] | None = None) -> dict[str, Any]:
     """The figures of one set of states (module docstring); ``extra``: more candidates to time, by name."""
     import pinocchio as pin
@@ -159,12 +175,11 @@ def measure(seq: States, ctrl: OperationalSpaceQP, rounds: int, extra: dict[str,
 
     ref = armctl.Reference(Q_HOME)
     count = len(seq)
-    qps = [tuple(np.array(a) for a in ctrl.build(t, q, qd, ref).arrays(0)) for t, q, qd in seq]
-    H, g, A, b, C, l, u = qps[0]  # noqa: E741
-    bare = proxqp.dense.QP(H.shape[0], b.shape[0], l.shape[0])
+    qps = [_writable(ctrl.build(t, q, qd, ref).arrays(0)) for t, q, qd in seq]
+    bare = proxqp.dense.QP(qps[0][0].shape[0], qps[0][3].shape[0], qps[0][5].shape[0])
     bare.settings.eps_abs = ctrl.solver.eps_abs
     bare.settings.eps_rel = 0.0
-    bare.init(H, g, A, b, C, l, u)
+    bare.init(*qps[0])
     bare.solve()
     bare.settings.initial_guess = proxqp.InitialGuess.WARM_START_WITH_PREVIOUS_RESULT
     pm = ctrl.dynamics.model.to_pinocchio()
@@ -234,17 +249,20 @@ def _wrong(ctrl: OperationalSpaceQP, seq: States, taus: list[np.ndarray], ref: a
     return wrong
 
 
-def run(count: int = 400, rounds: int = 15, quick: bool = False) -> dict[str, Any]:
+def run(
+    count: int = 400, rounds: int = 15, quick: bool = False, contact: bool = True, tail_steps: int = 20_000
+) -> dict[str, Any]:
     """Measure; returns a dict of figures per set of states (seconds per call and ratios). ``quick``: 100 states,
-    5 rounds."""
+    5 rounds, a tail of 2 000 calls. ``contact``: also the figures with an active contact
+    (:mod:`~armctl.bench.osc_contact`), the scene's tail over ``tail_steps`` calls (0: none)."""
     from proxsuite import proxqp
 
     if quick:
-        count, rounds = 100, 5
+        count, rounds, tail_steps = 100, 5, min(tail_steps, 2_000)
     seq, ctrl, closed = states(count)
     ref = armctl.Reference(Q_HOME)
     closed_next = _cycle(seq)
-    cold = [tuple(np.array(a) for a in ctrl.build(t, q, qd, ref).arrays(0)) for t, q, qd in seq]
+    cold = [_writable(ctrl.build(t, q, qd, ref).arrays(0)) for t, q, qd in seq]
     cold_index = [0]
 
     def closed_form() -> None:
@@ -272,6 +290,13 @@ def run(count: int = 400, rounds: int = 15, quick: bool = False) -> dict[str, An
         "circle": measure(seq, circle_controller(dyn, count, compile=False)[0], rounds),
         "random": measure(rseq, random_states(count, dyn=dyn, compile=False)[1], rounds),
     }
+    if contact:
+        from armctl.bench.osc_contact import measure_contact, measure_scene  # the scenes: imported on use
+
+        fixed = measure_contact(count, rounds)
+        fixed["numpy"] = measure_contact(count, rounds, compile=False)
+        out["contact"] = fixed
+        out["scene"] = measure_scene(min(count, 200), rounds, tail_steps)
     return out
 
 
@@ -285,6 +310,7 @@ def checks(fig: dict[str, Any]) -> dict[str, bool]:
         for label, g in ((name, fig[name]), (f"{name} (compile=False)", fig.get("numpy", {}).get(name))):
             if g is not None and g["wrong"] is not None:
                 out[f"{label}: every torque the optimum"] = g["wrong"] == 0
+    out.update(contact_checks(fig, TARGETS))
     return out
 
 
@@ -321,6 +347,7 @@ def report(fig: dict[str, Any]) -> str:
                 f"    closed-form OSC baseline  {f['closed_form_s'] * us:8.1f} µs",
                 f"    proxsuite dense.solve     {f['cold_solve_s'] * us:8.1f} µs   (one-shot, cold)",
             ]
+    lines += report_lines(fig)
     return "\n".join(lines)
 
 

@@ -14,7 +14,7 @@ import numpy as np
 from armctl.bench.outcomes import scenes_summary
 
 #: the scenes of the scene matrix, in the order they run
-SCENE_NAMES = ("pendulum", "planar_2r", "panda_topp", "panda_contact")
+SCENE_NAMES = ("pendulum", "planar_2r", "panda_topp", "panda_contact", "panda_press", "panda_wipe")
 
 #: the report's title of each section, in the order they run (``engines`` only where MuJoCo is installed)
 SECTION_TITLES = {

@@ -55,8 +55,9 @@ class Controller(ABC):
 
     #: the signals this controller reads besides q and q̇ (names of
     #: :data:`armctl.controllers.measurement.SIGNALS`): ``simulate`` feeds them through its measurement chain,
-    #: and a call without them raises. Empty: the controller reads q and q̇ only.
-    reads: ClassVar[frozenset[str]] = frozenset()
+    #: and a call without them raises. Empty: the controller reads q and q̇ only. A class attribute, which an
+    #: instance may set for itself (a force controller reads what its force source needs).
+    reads: frozenset[str] = frozenset()
 
     def measured(self, name: str) -> FloatArray:
         """The signal ``name`` of the current measurement (see :mod:`armctl.controllers.measurement`).

@@ -36,11 +36,12 @@ class GainSet:
 
     #: gain name → whether it may be None (no such term)
     gain_names: ClassVar[dict[str, bool]] = {}
+    n: int  # the number of joints (set by the controller or task that owns the gains)
 
     def _gain_spec(self, name: str) -> tuple[int, str]:
         """(rows, label): the number of rows of the gain ``name`` (n, the joints, unless the owner says otherwise)
         and how errors name it."""
-        return int(self.n), name  # type: ignore[attr-defined]
+        return int(self.n), name
 
     def set_gains(self, **gains: Any) -> None:
         """Check and set the gains given (name → a scalar, an (n,) diagonal or an n×n symmetric positive definite

@@ -412,10 +412,13 @@ class Dynamics(RegressorMethods):
             if wrench is not None:
                 h = vector(wrench, 6, "wrench")
                 net = net - k.jacobian(q, None).T @ h
+        names, args = (("tau", "qd", "wrench"), (tau, qd, h)) if wrench is not None else (("tau", "qd"), (tau, qd))
         if not np.isfinite(net).all():  # τ − τ_f − Jᵀh beyond the range of floats: name the largest input
-            names, args = (("tau", "qd", "wrench"), (tau, qd, h)) if wrench is not None else (("tau", "qd"), (tau, qd))
             raise self._overflow(net, names, args, q)
-        return self._evaluate(k.aba, ("q", "qd", "tau"), q, qd, net)
+        try:
+            return self._evaluate(k.aba, ("q", "qd", "tau"), q, qd, net)
+        except NonFiniteError:  # q̈ overflowed from finite inputs: name the largest of the caller's, not the sum
+            raise self._overflow(None, ("q", *names), (q, *args), q) from None
 
     def jacobian(self, q: ArrayLike, frame: str | None = None) -> FloatArray:
         """Geometric Jacobian (6×n) of ``frame`` at its origin, world-aligned axes, rows [linear; angular].

@@ -17,7 +17,9 @@ geoms, ``fullinertia`` diagonalised, ``boundmass``/``boundinertia``); the arm is
 * ``range`` of limited joints → position limits; actuator force ranges (``forcerange`` times ``gear`` of the
   actuators that drive a joint, or ``gear`` × gain × ``ctrlrange`` of a plain ``motor``) and a joint's
   ``actuatorfrcrange`` → effort limits (the smaller magnitude of an asymmetric range);
-* every named body and site on the chain → a :class:`~armctl.model.parts.Frame`; ``option/gravity`` → gravity.
+* every named body and site on the chain → a :class:`~armctl.model.parts.Frame`; ``option/gravity`` → gravity;
+* joints given in ``lock`` are held at their positions: their bodies are welded to the body that carries them,
+  so that a gripper's fingers (a branch whose joints are all locked) ride on the hand.
 
 Joint springs (``stiffness``) and polynomial damping have no counterpart in a RobotModel and raise
 :class:`~armctl.errors.ModelLoadError`; gravity compensation (``gravcomp``) is reported by a warning (the model
@@ -27,11 +29,13 @@ keeps full gravity).
 from __future__ import annotations
 
 import os
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 from armctl._mujoco import require_mujoco
 from armctl.errors import InvalidParameterError, ModelLoadError
-from armctl.model.mjcf_chain import MjcfChain, read_chain
+from armctl.model.mjcf_chain import MjcfChain, joint_name, read_chain
+from armctl.model.pinocchio_io import lock_positions
 from armctl.model.robot import RobotModel
 
 __all__ = ["MjcfChain", "compile_mjcf", "model_from_mjcf", "read_chain"]
@@ -87,7 +91,11 @@ def compile_mjcf(source: Any, what: str = "RobotModel.from_mjcf") -> tuple[Any, 
 
 
 def model_from_mjcf(
-    source: Any, tool_frame: str | None = None, base: str | None = None, name: str | None = None
+    source: Any,
+    tool_frame: str | None = None,
+    base: str | None = None,
+    name: str | None = None,
+    lock: Sequence[str] | Mapping[str, float] | None = None,
 ) -> RobotModel:
     """The arm of an MJCF description (see the module for what is read and how); the function behind
     :meth:`RobotModel.from_mjcf <armctl.model.RobotModel.from_mjcf>`.
@@ -102,6 +110,9 @@ def model_from_mjcf(
         The body the chain starts from (None: the one subtree of the world with joints).
     name : str, optional
         The model's name (None: the MJCF's).
+    lock : str, sequence of str or mapping str → float, optional
+        Joints held fixed: names (held at 0) or name → position (MuJoCo's ``qpos``) [rad or m], as in
+        :meth:`RobotModel.from_urdf <armctl.model.RobotModel.from_urdf>`.
 
     Returns
     -------
@@ -111,9 +122,15 @@ def model_from_mjcf(
     ------
     ModelLoadError
         What a RobotModel cannot hold, named.
+    UnknownNameError
+        A name in ``lock`` that is not a hinge or slide joint of the description.
     """
     m, path = compile_mjcf(source)
-    chain = read_chain(m, base, path or "the MJCF model")
+    mj = require_mujoco("RobotModel.from_mjcf")
+    kinds = (int(mj.mjtJoint.mjJNT_HINGE), int(mj.mjtJoint.mjJNT_SLIDE))
+    names = [n for j in range(m.njnt) if int(m.jnt_type[j]) in kinds and (n := joint_name(m, j))]
+    positions = lock_positions(lock, names)
+    chain = read_chain(m, base, path or "the MJCF model", positions)
     return RobotModel(
         chain.joints,
         name=name or chain.name or (os.path.splitext(os.path.basename(path))[0] if path else "mjcf_robot"),

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -50,6 +51,11 @@ class MjcfChain:
 def _name(m: Any, kind: str, i: int) -> str:
     adr = getattr(m, f"name_{kind}adr")[i]
     return m.names[adr:].split(b"\0", 1)[0].decode()
+
+
+def joint_name(m: Any, j: int) -> str:
+    """The name of MuJoCo joint j ("" if it has none)."""
+    return _name(m, "jnt", j)
 
 
 def _pose(pos: Any, quat: Any) -> FloatArray:
@@ -109,7 +115,9 @@ def _effort(m: Any, mj: Any, j: int) -> float:
     return effort if effort > 0 else math.inf
 
 
-def read_chain(m: Any, base: str | None = None, source: str = "the MJCF model") -> MjcfChain:
+def read_chain(
+    m: Any, base: str | None = None, source: str = "the MJCF model", lock: Mapping[str, float] | None = None
+) -> MjcfChain:
     """The serial chain of a compiled ``mjModel``, from the body ``base`` to its last joint.
 
     Parameters
@@ -120,6 +128,10 @@ def read_chain(m: Any, base: str | None = None, source: str = "the MJCF model") 
         The body the chain starts from (None: the one subtree of the world with joints).
     source : str, optional
         What the model was read from, for the error messages.
+    lock : mapping of str to float, optional
+        Joints held fixed, name → position (MuJoCo's ``qpos`` [rad or m], names already checked): each is welded
+        at that position, its body carried by the joint before it, so that a branch whose joints are all locked
+        (a gripper's fingers) no longer moves.
 
     Returns
     -------
@@ -131,10 +143,13 @@ def read_chain(m: Any, base: str | None = None, source: str = "the MJCF model") 
         No chain, a chain that branches, or a joint armctl cannot model.
     """
     mj = require_mujoco("reading an MJCF model")
+    lock = dict(lock or {})
+    locked = {j for j in range(m.njnt) if _name(m, "jnt", j) in lock}
     parent = m.body_parentid
-    moving = np.zeros(m.nbody, dtype=bool)  # the body's subtree has joints (MuJoCo numbers parents first)
+    moving = np.zeros(m.nbody, dtype=bool)  # the body's subtree has free joints (MuJoCo numbers parents first)
     for b in range(m.nbody - 1, 0, -1):
-        moving[b] |= m.body_jntnum[b] > 0
+        adr = int(m.body_jntadr[b])
+        moving[b] |= any(j not in locked for j in range(adr, adr + int(m.body_jntnum[b])))
         moving[parent[b]] |= moving[b]
     children: list[list[int]] = [[] for _ in range(m.nbody)]
     for b in range(1, m.nbody):
@@ -166,9 +181,9 @@ def read_chain(m: Any, base: str | None = None, source: str = "the MJCF model") 
             "the body where the arm starts",
             value=roots,
         )
-    if not moving[start] and not m.body_jntnum[start]:
+    if not moving[start]:
         raise ModelLoadError(f"{source}: no hinge or slide joint below {base or 'the world'!r}", value=base)
-    reader = _ChainReader(m, mj, source, bodies, moving, children)
+    reader = _ChainReader(m, mj, source, bodies, moving, children, lock)
     if start == 0:
         reader.sites(0, 0, np.eye(4))
         reader.walk_children(0, 0, np.eye(4))
@@ -201,8 +216,18 @@ def read_chain(m: Any, base: str | None = None, source: str = "the MJCF model") 
 class _ChainReader:
     """Walks the chain body by body, collecting joints, links and frames (the state of :func:`read_chain`)."""
 
-    def __init__(self, m: Any, mj: Any, source: str, bodies: list[str], moving: Any, children: list[list[int]]):
+    def __init__(
+        self,
+        m: Any,
+        mj: Any,
+        source: str,
+        bodies: list[str],
+        moving: Any,
+        children: list[list[int]],
+        lock: Mapping[str, float],
+    ):
         self.m, self.mj, self.source, self.bodies, self.moving, self.children = m, mj, source, bodies, moving, children
+        self.lock = lock
         self.joints: list[tuple[Any, ...]] = []
         self.links: list[Link] = []
         self.frames: list[Frame] = []
@@ -236,6 +261,10 @@ class _ChainReader:
         pose = parent_pose @ _pose(m.body_pos[b], m.body_quat[b])
         adr = int(m.body_jntadr[b])
         for j in range(adr, adr + int(m.body_jntnum[b])):
+            name = _name(m, "jnt", j)
+            if name in self.lock:
+                pose = pose @ self.held(j, self.lock[name])
+                continue
             pose = self.joint(j, pose)
             i = len(self.joints)
         self.body_joint[b] = i
@@ -251,8 +280,8 @@ class _ChainReader:
             names = [self.bodies[c] or f"body {c}" for c in moving]
             raise ModelLoadError(
                 f"{self.source}: body {self.bodies[b] or 'world'!r} carries several bodies with joints "
-                f"({', '.join(map(repr, names))}); armctl reads one serial chain: weld or remove the joints of "
-                "the other branches",
+                f"({', '.join(map(repr, names))}); armctl reads one serial chain: hold the joints of the other "
+                "branches with lock= (a gripper's fingers, for instance), or weld or remove them",
                 value=names,
             )
         for c in self.children[b]:
@@ -260,6 +289,23 @@ class _ChainReader:
                 self.body(c, i, pose)
         for c in moving:
             self.body(c, i, pose)
+
+    def held(self, j: int, position: float) -> FloatArray:
+        """The motion of joint j held at ``position`` (its ``qpos``): about (along) its axis through its ``pos``,
+        from the body's frame at ``qpos0``."""
+        m = self.m
+        axis = np.array(m.jnt_axis[j], dtype=float)
+        offset = position - float(m.qpos0[m.jnt_qposadr[j]])
+        hinge = int(m.jnt_type[j]) == int(self.mj.mjtJoint.mjJNT_HINGE)
+        if not hinge and int(m.jnt_type[j]) != int(self.mj.mjtJoint.mjJNT_SLIDE):
+            name = _name(m, "jnt", j)
+            raise ModelLoadError(
+                f"{self.source}: joint {name!r} is not a hinge or a slide joint and cannot be locked at a position; "
+                "weld it in the MJCF instead",
+                value=name,
+            )
+        motion = transform(rot(axis, offset)) if hinge else _shift(offset * axis)
+        return _shift(m.jnt_pos[j]) @ motion @ _shift(-np.asarray(m.jnt_pos[j], dtype=float))
 
     def joint(self, j: int, body_pose: FloatArray) -> FloatArray:
         """Joint j of a body whose frame (before this joint moves it) is ``body_pose``; appends the joint and

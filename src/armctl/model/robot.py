@@ -285,7 +285,12 @@ class RobotModel:
 
     @classmethod
     def from_mjcf(
-        cls, path_or_xml: Any, tool_frame: str | None = None, base: str | None = None, name: str | None = None
+        cls,
+        path_or_xml: Any,
+        tool_frame: str | None = None,
+        base: str | None = None,
+        name: str | None = None,
+        lock: Sequence[str] | Mapping[str, float] | None = None,
     ) -> RobotModel:
         """A model from an MJCF (MuJoCo) description (needs ``pip install "armctl[mujoco]"``).
 
@@ -304,6 +309,9 @@ class RobotModel:
             The body the chain starts from (None: the one subtree of the world with joints).
         name : str, optional
             The model's name (None: the MJCF's).
+        lock : str, sequence of str or mapping str → float, optional
+            Joints held fixed: names (held at 0) or name → position (MuJoCo's ``qpos``) [rad or m], as in
+            :meth:`from_urdf`; a branch whose joints are all locked (a gripper's fingers) is welded to the chain.
 
         Returns
         -------
@@ -313,10 +321,12 @@ class RobotModel:
         ------
         ModelLoadError
             What a RobotModel cannot hold (free or ball joints, branches with joints, joint springs), named.
+        UnknownNameError
+            A name in ``lock`` that is not a hinge or slide joint of the description.
         """
         from armctl.model.mjcf import model_from_mjcf
 
-        return model_from_mjcf(path_or_xml, tool_frame=tool_frame, base=base, name=name)
+        return model_from_mjcf(path_or_xml, tool_frame=tool_frame, base=base, name=name, lock=lock)
 
     def to_mjcf(self, meshes: Any = None, contacts: bool = True) -> str:
         """This arm as an MJCF text that MuJoCo compiles to the same dynamics (see :mod:`armctl.model.mjcf_export`).

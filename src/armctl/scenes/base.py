@@ -75,14 +75,20 @@ VELOCITY_TOLERANCE = 0.01
 
 
 def replay_times(controller: Controller, window: dict[str, Any], passes: int) -> list[float]:
-    """Seconds per step of each of ``passes`` replays of ``window`` through ``controller`` (reset first)."""
+    """Seconds per step of each of ``passes`` replays of ``window`` through ``controller`` (reset first); a window
+    with a ``"measurement"`` list (the signals a controller reads, one per step) passes each step its own."""
     out = []
+    measured = window.get("measurement")
     for _ in range(passes):
         if callable(getattr(controller, "reset", None)):
             controller.reset()
         t0 = time.perf_counter()
-        for t, q, qd, r in zip(window["t"], window["q"], window["qd"], window["ref"], strict=True):
-            controller(t, q, qd, r)
+        if measured is None:
+            for t, q, qd, r in zip(window["t"], window["q"], window["qd"], window["ref"], strict=True):
+                controller(t, q, qd, r)
+        else:
+            for t, q, qd, r, m in zip(window["t"], window["q"], window["qd"], window["ref"], measured, strict=True):
+                controller(t, q, qd, r, measurement=m)
         out.append((time.perf_counter() - t0) / len(window["t"]))
     return out
 

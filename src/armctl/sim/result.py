@@ -562,6 +562,55 @@ class SimResult:
 
         return plot_wrench(self)
 
+    # ------------------------------------------------------------------------------ tables
+    def to_dataframe(self, layout: str = "long") -> Any:
+        """The run as a pandas DataFrame (``pip install "armctl[data]"``; see :mod:`armctl.sim.tables`).
+
+        Parameters
+        ----------
+        layout : {"long", "wide"}, optional
+            ``"long"``: one row per sample and joint, columns ``t`` [s], ``joint`` (the joint's name), ``q``,
+            ``qd``, ``qdd``, ``tau``, ``tau_applied`` and, where the result holds its reference, ``q_ref``,
+            ``qd_ref``, ``qdd_ref`` and ``error`` (= q_ref − q). ``"wide"``: one row per sample, indexed by
+            ``t``, with columns (quantity, joint), so that ``df["q"]`` holds one column per joint.
+
+        Returns
+        -------
+        pandas.DataFrame
+            Angles in rad (m for prismatic joints), torques in N·m (N).
+
+        Raises
+        ------
+        OptionalDependencyError
+            pandas is not installed.
+        InvalidParameterError
+            An unknown layout.
+        """
+        from armctl.sim.tables import sim_dataframe
+
+        return sim_dataframe(self, layout)
+
+    def to_xarray(self) -> Any:
+        """The run as an xarray Dataset with coordinates ``time`` [s] and ``joint`` (the joint names)
+        (``pip install "armctl[data]"``; see :mod:`armctl.sim.tables`).
+
+        Returns
+        -------
+        xarray.Dataset
+            Variables over (time, joint): ``q``, ``qd``, ``qdd``, ``tau``, ``tau_applied`` and, with the
+            reference, ``q_ref``, ``qd_ref``, ``qdd_ref``, ``error``; ``wrench`` over (time, wrench_axis);
+            the work terms over time. Each variable's ``units`` and ``long_name`` are in its attrs; the
+            run's status and settings in the Dataset's attrs.
+
+        Raises
+        ------
+        OptionalDependencyError
+            xarray is not installed.
+        """
+        from armctl.sim.tables import sim_xarray
+
+        return sim_xarray(self)
+
 
 def _tolerances(tasks: bool) -> str:
     t = TRACKING_TOLERANCE

@@ -18,19 +18,20 @@ from __future__ import annotations
 import dataclasses
 import os
 import pickle
-import traceback
 import warnings
 from collections.abc import Callable, Iterable, Mapping
-from concurrent.futures import BrokenExecutor, Executor, Future, ProcessPoolExecutor, ThreadPoolExecutor, as_completed
+from concurrent.futures import Executor, ProcessPoolExecutor, ThreadPoolExecutor
 from typing import Any, Literal, TextIO, cast
 
 import numpy as np
 
 from armctl.errors import InvalidParameterError, RunTimeoutError, SweepWarning, WorkerDiedError
 from armctl.sim import sweep_checks as checks
-from armctl.sim.sweep_pool import WorkerPool, run_one, run_pickled
+from armctl.sim.sweep_executor import failure, from_report, through
+from armctl.sim.sweep_pool import WorkerPool, run_one
 from armctl.sim.sweep_progress import Progress
-from armctl.sim.sweep_result import CaseFailure, ErrorReport, FailureKind, SweepResult, type_name
+from armctl.sim.sweep_result import CaseFailure, SweepResult
+from armctl.sim.sweep_store import SweepStore
 
 ON_ERROR = ("record", "raise")
 
@@ -45,6 +46,8 @@ def sweep(
     summary: Callable[[Any], Any] | None = None,
     on_error: Literal["record", "raise"] = "record",
     timeout: float | None = None,
+    store: str | os.PathLike[str] | None = None,
+    resume: bool = False,
 ) -> SweepResult:
     """Run ``run(**case)`` for every case; return one outcome per case, in case order.
 
@@ -62,7 +65,9 @@ def sweep(
         too). An Executor (a ``ThreadPoolExecutor``, a ``ProcessPoolExecutor``, a Dask
         ``client.get_executor()``) is used as given and not shut down. If a ``ProcessPoolExecutor`` breaks
         (a worker died), the cases it had not finished continue on a pool of the sweep's own, as their retry.
-        On Dask, a ``KilledWorker`` (the scheduler's own retries spent) is recorded as a dead worker.
+        On Dask, a case that gets a ``KilledWorker`` (the scheduler's own retries spent: each worker that ran
+        it died) runs once more alone, after the other cases, because Dask blames every case that shared a
+        dying worker: only one that kills its worker alone too is recorded as a dead worker.
     max_workers : int, optional
         Processes of the sweep's own pool (default: the number of CPUs, at most one per case).
     progress : bool or text stream
@@ -81,6 +86,15 @@ def sweep(
         killed (and replaced) and is recorded as timed out; it is not retried. Enforced on the sweep's own
         pool only (``executor=None``; ``max_workers=1`` runs one case at a time): a run in this process or in
         a thread cannot be stopped, and another executor's workers are not the sweep's to kill.
+    store : str or path-like, optional
+        A folder where each case's outcome is written as soon as it finishes (see
+        :mod:`armctl.sim.sweep_store`): its settings, how it ended, and the value returned for it (``summary``'s
+        output, or the full result without ``summary``). A new or empty folder is made a store of these cases.
+        :meth:`SweepResult.load <armctl.sim.SweepResult.load>` reads it back.
+    resume : bool
+        With ``store``: run only the cases whose outcome the store does not hold yet, and return all of them.
+        The store must have been made from the same cases (compared case by case, key by key; the error names
+        the first difference). Without ``resume``, a store that already holds outcomes is refused.
 
     Returns
     -------
@@ -93,7 +107,11 @@ def sweep(
     ------
     InvalidParameterError
         A bad argument; a case that is not a mapping, has a key that is not a parameter of ``run`` (a
-        close match is suggested), lacks a required one, or (for worker processes) does not pickle.
+        close match is suggested), lacks a required one, or (for worker processes) does not pickle; a store
+        made from other cases, or holding outcomes without ``resume=True``.
+    KeyboardInterrupt
+        The sweep was interrupted (Ctrl-C): the sweep's own workers are stopped, every outcome finished so far is
+        in the store, and a note says how many and how to resume.
     Exception
         With ``on_error="raise"``, the first failure.
     """
@@ -119,17 +137,28 @@ def sweep(
         )
     checks.check_timeout(timeout, executor)
     checks.check_keywords(case_list, run)
+    if not isinstance(resume, bool | np.bool_):
+        raise InvalidParameterError(f"resume must be True or False, got {resume!r}", value=resume)
+    if resume and store is None:
+        raise InvalidParameterError("resume=True needs the store to resume from: pass store=PATH", value=resume)
+    kept = SweepStore.open(store, case_list, bool(resume)) if store is not None else None
+    done = kept.load(case_list) if kept is not None else {}
+    todo = [i for i in range(len(case_list)) if i not in done]
     blobs = None
     if executor is None or isinstance(executor, ProcessPoolExecutor):
         blobs = checks.pickled(case_list, run, summary, pickle.dumps)
     elif executor != "serial" and not isinstance(executor, ThreadPoolExecutor):
         blobs = checks.pickled(case_list, run, summary, checks.other_pickler())
 
-    out = SweepResult([None] * len(case_list))
-    bar = Progress(len(case_list), None if progress is True else progress) if progress else None
+    out = SweepResult(done.get(i) for i in range(len(case_list)))
+    out.cases = case_list
+    out.store = None if kept is None else str(kept.path)
+    bar = Progress(len(case_list), None if progress is True else progress, done=len(done)) if progress else None
 
     def record(i: int, outcome: Any) -> None:
         out[i] = outcome
+        if kept is not None:
+            kept.write(i, outcome)
         failed = isinstance(outcome, CaseFailure)
         if bar:
             bar.update(failed)
@@ -139,20 +168,27 @@ def sweep(
                 exc.add_note(f"(in sweep case {i})")
             raise exc
 
-    workers = min(max_workers or os.cpu_count() or 1, max(len(case_list), 1))
+    workers = min(max_workers or os.cpu_count() or 1, max(len(todo), 1))
     try:
         if executor == "serial":
-            for i, c in enumerate(case_list):
-                record(i, _call_here(i, c, run, summary))
+            for i in todo:
+                record(i, _call_here(i, case_list[i], run, summary))
         elif executor is None:
             assert blobs is not None  # pickled above for the sweep's own pool
-            _own_pool(list(enumerate(blobs)), {}, case_list, workers, timeout, record)
+            _own_pool([(i, blobs[i]) for i in todo], {}, case_list, workers, timeout, record)
         else:
-            broken = _through(cast(Executor, executor), case_list, blobs, run, summary, record)
+            broken = through(cast(Executor, executor), case_list, todo, blobs, run, summary, record)
             if broken:  # a ProcessPoolExecutor broke: the cases it left run on a pool of ours
                 assert blobs is not None  # a ProcessPoolExecutor's cases were pickled above
                 tasks = [(i, blobs[i]) for i in sorted(broken)]
                 _own_pool(tasks, broken, case_list, workers, None, record)
+    except KeyboardInterrupt as exc:
+        note = _interrupted(len(case_list), kept, sum(o is not None for o in out))
+        if hasattr(exc, "add_note"):  # (Python ≥ 3.11; before, the note is the exception's message)
+            exc.add_note(note)
+        else:
+            exc.args = (*exc.args, note)
+        raise
     finally:
         if bar:
             bar.close()
@@ -163,22 +199,24 @@ def sweep(
     return out
 
 
-def _failure(
-    i: int, case: Mapping[str, Any], exc: BaseException, kind: FailureKind = "raised", tries: int = 1
-) -> CaseFailure:
-    text = "".join(traceback.format_exception(type(exc), exc, exc.__traceback__))
-    return CaseFailure(i, case, kind, type_name(type(exc)), str(exc), text, tries, exc)
-
-
-def _from_report(i: int, case: Mapping[str, Any], report: ErrorReport) -> CaseFailure:
-    return CaseFailure(i, case, "raised", report.error_type, report.message, report.traceback, 1, report.exception())
+def _interrupted(n: int, kept: SweepStore | None, finished: int) -> str:
+    """The note of a sweep interrupted with ``finished`` of its ``n`` cases done."""
+    if kept is None:
+        return (
+            f"sweep interrupted: {finished} of {n} cases had finished, and they are not kept; pass store=PATH to "
+            "keep each outcome as it finishes, and resume=True to run only the others"
+        )
+    return (
+        f"sweep interrupted: {kept.written} of {n} cases are stored in {str(kept.path)!r}; run the same sweep with "
+        f"store={str(kept.path)!r}, resume=True to run the other {n - kept.written}"
+    )
 
 
 def _call_here(i: int, case: Mapping[str, Any], run: Callable[..., Any], summary: Callable[[Any], Any] | None) -> Any:
     try:
         return run_one(run, case, summary)
     except Exception as exc:
-        return _failure(i, case, exc)
+        return failure(i, case, exc)
 
 
 def _own_pool(
@@ -195,65 +233,12 @@ def _own_pool(
             if kind == "ok":
                 record(i, pickle.loads(outcome[1]))
             elif kind == "error":
-                record(i, _from_report(i, cases[i], outcome[1]))
+                record(i, from_report(i, cases[i], outcome[1]))
             else:
                 died = kind == "died"
                 exc = (WorkerDiedError if died else RunTimeoutError)(outcome[1], value=cases[i])
-                failure = _failure(i, cases[i], exc, "worker_died" if died else "timed_out", outcome[2])
+                lost = failure(i, cases[i], exc, "worker_died" if died else "timed_out", outcome[2])
                 if outcome[3]:
-                    text = f"{failure.traceback}\nThe run's stack when it was stopped:\n{outcome[3]}"
-                    failure = dataclasses.replace(failure, traceback=text)
-                record(i, failure)
-
-
-def _through(
-    executor: Executor,
-    cases: list[Mapping[str, Any]],
-    blobs: list[bytes] | None,
-    run: Callable[..., Any],
-    summary: Callable[[Any], Any] | None,
-    record: Callable[[int, Any], None],
-) -> dict[int, int]:
-    """Run every case on a given executor. Returns the cases a broken ProcessPoolExecutor left undone, with
-    the attempts they had (1 if it broke under them, 0 if it was broken before they were submitted)."""
-    futures: dict[Future[Any], int] = {}
-    broken: dict[int, int] = {}
-    try:
-        for i, c in enumerate(cases):
-            try:  # threads: nothing is pickled, the case's own exception comes back from the future
-                fut = (
-                    executor.submit(run_one, run, c, summary)
-                    if blobs is None
-                    else executor.submit(run_pickled, blobs[i])
-                )
-            except BrokenExecutor:
-                if not isinstance(executor, ProcessPoolExecutor):
-                    raise
-                broken.update(dict.fromkeys(range(i, len(cases)), 0))
-                break
-            futures[fut] = i
-        for fut in as_completed(futures):
-            i = futures[fut]
-            try:
-                got = fut.result()
-            except BrokenExecutor as exc:
-                if isinstance(executor, ProcessPoolExecutor):
-                    broken[i] = 1
-                else:
-                    record(i, _failure(i, cases[i], exc))
-                continue
-            except Exception as exc:  # the executor's own failure, or the run's exception from a thread
-                died = type(exc).__name__ == "KilledWorker"
-                record(i, _failure(i, cases[i], exc, "worker_died" if died else "raised"))
-                continue
-            if blobs is None:
-                record(i, got)
-            elif got[0] == "ok":
-                record(i, pickle.loads(got[1]))
-            else:
-                record(i, _from_report(i, cases[i], got[1]))
-    except BaseException:
-        for fut in futures:
-            fut.cancel()
-        raise
-    return broken
+                    text = f"{lost.traceback}\nThe run's stack when it was stopped:\n{outcome[3]}"
+                    lost = dataclasses.replace(lost, traceback=text)
+                record(i, lost)

@@ -60,6 +60,12 @@ def run_pickled(blob: bytes) -> tuple[str, Any]:
         return "error", ErrorReport.of(err)
 
 
+def run_pickled_again(blob: bytes) -> tuple[str, Any]:
+    """:func:`run_pickled` under another name, for a case run a second time: an executor that names a task by
+    its function and arguments (Dask) would otherwise hand back the first run's outcome."""
+    return run_pickled(blob)
+
+
 def _worker_main(conn: Connection, parent: int, stack_file: str | None) -> None:
     """A worker: run the cases ``(index, blob)`` that arrive, in order, answering ``("started",)`` and then the
     outcome for each; stop on None, or when the parent process is gone. A thread receives the cases, so that

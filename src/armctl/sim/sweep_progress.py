@@ -40,16 +40,20 @@ def _is_terminal(stream: Any) -> bool:
 
 
 class Progress:
-    """Progress of ``total`` runs on ``stream`` (None: ``sys.stderr``), with the number that failed."""
+    """Progress of ``total`` runs on ``stream`` (None: ``sys.stderr``), ``done`` of them finished before (a
+    resumed sweep's), with the number that failed."""
 
-    def __init__(self, total: int, stream: TextIO | None = None) -> None:
+    def __init__(self, total: int, stream: TextIO | None = None, done: int = 0) -> None:
         stream = sys.stderr if stream is None else stream
         self.failed = 0
         if _is_terminal(stream):
-            self.bar = tqdm(total=total, desc="sweep", unit=" runs", file=stream, leave=True, dynamic_ncols=True)
+            self.bar = tqdm(
+                total=total, initial=done, desc="sweep", unit=" runs", file=stream, leave=True, dynamic_ncols=True
+            )
         else:
             self.bar = tqdm(
                 total=total,
+                initial=done,
                 desc="sweep",
                 unit=" runs",
                 file=_Lines(stream),

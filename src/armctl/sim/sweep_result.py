@@ -8,6 +8,7 @@ itself, and how it failed (it raised, its worker process died, or it ran past th
 from __future__ import annotations
 
 import builtins
+import os
 import pickle
 import traceback as tb
 from collections.abc import Mapping
@@ -33,8 +34,8 @@ class CaseFailure:
     kind : {"raised", "worker_died", "timed_out"}
         ``"raised"``: ``run`` (or ``summary``) raised. ``"worker_died"``: the process running it died
         (a signal such as SIGKILL, ``os._exit``, a crash in compiled code), also on its retry; on Dask, a
-        ``KilledWorker``. ``"timed_out"``: it ran longer than the sweep's ``timeout`` and its process was
-        stopped.
+        ``KilledWorker`` also when it ran again alone. ``"timed_out"``: it ran longer than the sweep's
+        ``timeout`` and its process was stopped.
     error_type : str
         The exception's class, e.g. ``"ValueError"`` or ``"armctl.errors.InvalidParameterError"``.
     message : str
@@ -70,8 +71,44 @@ class SweepResult(list[Any]):
     """The outcomes of a sweep in case order: each case's result, or a :class:`CaseFailure`.
 
     A plain list in every other respect (it compares equal to a list of the same items). ``failures`` lists
-    the failed cases, ``counts`` counts the outcomes by kind, ``all_ok`` is True when no case failed.
+    the failed cases, ``counts`` counts the outcomes by kind, ``all_ok`` is True when no case failed;
+    ``cases`` holds the cases themselves (set by :func:`~armctl.sim.sweep`), ``store`` the folder the outcomes
+    were written to (``sweep(..., store=PATH)``), ``to_dataframe()`` makes a table of them.
     """
+
+    #: the sweep's cases, in order (None for a list built otherwise)
+    cases: list[Mapping[str, Any]] | None = None
+    #: the folder the outcomes were written to, or None
+    store: str | None = None
+    #: the cases not finished (their entries are None): only in a store loaded with ``partial=True``
+    pending: frozenset[int] = frozenset()
+
+    @classmethod
+    def load(cls, path: str | os.PathLike[str], partial: bool = False) -> SweepResult:
+        """The outcomes a sweep wrote to its store (``sweep(..., store=path)``; see :mod:`armctl.sim.sweep_store`).
+
+        Parameters
+        ----------
+        path : str or path-like
+            The store's folder.
+        partial : bool, optional
+            Accept a store whose sweep did not finish: the unfinished cases are None and listed in
+            :attr:`pending` (their rows in :meth:`to_dataframe` have the outcome ``"not_run"``).
+
+        Returns
+        -------
+        SweepResult
+            In case order; ``cases`` holds each case's settings as the store shows them (numbers and strings as
+            they were, other objects by name or repr).
+
+        Raises
+        ------
+        InvalidParameterError
+            Not a store, or (without ``partial``) a store with unfinished cases.
+        """
+        from armctl.sim.sweep_store import load
+
+        return load(path, partial)
 
     @property
     def failures(self) -> list[CaseFailure]:
@@ -105,6 +142,27 @@ class SweepResult(list[Any]):
             fails = self.failures
             text += "; " + "; ".join(str(f) for f in fails[:3]) + ("; …" if len(fails) > 3 else "")
         return text
+
+    def to_dataframe(self) -> Any:
+        """One row per case, indexed by the case's position (``pip install "armctl[data]"``; see
+        :mod:`armctl.sim.tables`).
+
+        Returns
+        -------
+        pandas.DataFrame
+            Columns: the case's settings (scalars as they are, other objects by their name or repr), ``outcome``
+            (``"ok"``, ``"raised"``, ``"worker_died"``, ``"timed_out"``), ``error_type`` and ``message`` of a
+            failure, and the scalar metrics of each result (the summary's numbers, or a full run's status and
+            tracking error).
+
+        Raises
+        ------
+        OptionalDependencyError
+            pandas is not installed.
+        """
+        from armctl.sim.tables import sweep_dataframe
+
+        return sweep_dataframe(self, self.cases, self.pending)
 
     def __repr__(self) -> str:
         return f"SweepResult({self.describe()})"

@@ -24,7 +24,7 @@ from armctl._checks import scalar, whole_number
 from armctl.tuning.bounds import ModelBounds
 from armctl.tuning.inertia_estimate import computed_torque_condition
 from armctl.tuning.sampled import _gain_crossings, _stable_ranges
-from armctl.tuning.verdict import Verdict, certified_inputs, eigen_range
+from armctl.tuning.verdict import Verdict, certified_inputs, eigen_range, inequality
 
 __all__ = [
     "Verdict",
@@ -71,7 +71,7 @@ def pd_desired_gravity_condition(bounds: ModelBounds, kp: ArrayLike) -> Verdict:
         margin=kp_min - kg,
         factor=kp_min / kg if kg > 0 else math.inf,
         unit="N·m/rad",
-        condition=f"λ_min(K_p) = {kp_min:.5g} > k_g = {kg:.5g}",
+        condition=inequality(f"λ_min(K_p) = {kp_min:.5g}", ">", f"k_g = {kg:.5g}", kp_min > kg),
         certified=certified,
         source=f"Kelly 1997 (Int. J. Robotics Research 16(5)); {KELLY_2005}, ch. 7",
         details={"kp_min": kp_min, "k_g": kg},
@@ -108,13 +108,14 @@ def pid_condition(bounds: ModelBounds, kp: ArrayLike, kd: ArrayLike, ki: ArrayLi
     _, ki_max = eigen_range(ki, n, "ki")
     kg, lm, lM = bounds.k_g, bounds.lambda_min, bounds.lambda_max
     kp_margin = kp_min - kg
+    text = inequality(f"λ_min(K_p) = {kp_min:.5g}", ">", f"k_g = {kg:.5g}", kp_margin > 0)
     if kp_margin > 0:
         required = ki_max / kp_margin * lM * lM / lm
         margin, factor = kd_min - required, kd_min / required
-        text = f"λ_min(K_p) = {kp_min:.5g} > k_g = {kg:.5g} and λ_min(K_d) = {kd_min:.5g} > {required:.5g}"
+        kd_text = inequality(f"λ_min(K_d) = {kd_min:.5g}", ">", f"{required:.5g}", margin > 0)
+        text = f"{text} and {kd_text}"
     else:
         required, margin, factor = math.inf, -math.inf, 0.0
-        text = f"λ_min(K_p) = {kp_min:.5g} > k_g = {kg:.5g} fails"
     return Verdict(
         "PID (Kelly, Santibáñez & Loría tuning)",
         holds=kp_margin > 0 and margin > 0,

@@ -36,7 +36,7 @@ from armctl._checks import FloatArray, per_joint, real_array, scalar, whole_numb
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError
 from armctl.tuning.bounds import ModelBounds
-from armctl.tuning.verdict import Verdict, certified_inputs, eigen_range
+from armctl.tuning.verdict import Verdict, certified_inputs, eigen_range, inequality
 
 
 def impulse_l1_norms(kp: float, kd: float) -> tuple[float, float]:
@@ -174,7 +174,8 @@ def computed_torque_condition(
         margin=1.0 - loop,
         factor=1.0 / loop if loop > 0 else math.inf,
         unit="",
-        condition=f"α γ = {alpha:.4g} × {gamma:.4g} = {loop:.4g} < 1 (α = sup ‖I − M⁻¹M̂‖, γ = max ‖h‖₁)",
+        condition=inequality(f"α γ = {alpha:.4g} × {gamma:.4g} = {loop:.4g}", "<", "1", holds)
+        + " (α = sup ‖I − M⁻¹M̂‖, γ = max ‖h‖₁)",
         certified=certified and from_bounds,
         source=(
             "small gain on ë + K_d ė + K_p e = (I − M⁻¹M̂) v; the premise α < 1 of Siciliano et al. 2009 §8.5.3 "

@@ -69,6 +69,31 @@ class Verdict:
         return self.summary()
 
 
+_FAILS = {">": "≤", "<": "≥"}
+
+
+def inequality(left: str, relation: str, right: str, holds: bool) -> str:
+    """The comparison as it stands: ``"a > b"`` when it holds, ``"a ≤ b: fails (a > b required)"`` when not.
+
+    Parameters
+    ----------
+    left, right : str
+        The two sides, with their numbers (``"λ_min(K_p) = 10"``).
+    relation : {">", "<"}
+        The relation the condition requires.
+    holds : bool
+        Whether it holds.
+
+    Returns
+    -------
+    str
+    """
+    if holds:
+        return f"{left} {relation} {right}"
+    required = f"{left.split(' = ')[0]} {relation} {right.split(' = ')[0]}"
+    return f"{left} {_FAILS[relation]} {right}: fails ({required} required)"
+
+
 def certified_inputs(bounds: ModelBounds, *names: str) -> bool:
     """True if the constants ``names`` of ``bounds`` are certified; raise if an inertia bound is not usable."""
     if not isinstance(bounds, ModelBounds):

@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import armctl
-from armctl.controllers.osc import FramePoseTask, OperationalSpaceQP, PostureTask, SolverChain, TorqueLimit
+from armctl.controllers.osc import FramePoseTask, OperationalSpaceQP, PostureTask, QPArrays, SolverChain, TorqueLimit
 from armctl.controllers.osc.daqp_solver import DaqpSolver
 from armctl.controllers.osc.optimality import kkt_ok, residuals
 from armctl.controllers.osc.solve import ProxQPSolver, QPSolution
@@ -22,25 +22,30 @@ if "quadprog" not in qpsolvers.available_solvers:  # pragma: no cover - the test
     pytest.skip("quadprog (the test extra) is not installed", allow_module_level=True)
 
 
-def _random_qp(rng: np.random.Generator) -> tuple[np.ndarray, ...]:
-    """A strictly convex QP (H, g, A, b, C, l, u) with equalities, two-sided, one-sided and equal bounds."""
+def _random_qp(rng: np.random.Generator) -> QPArrays:
+    """A strictly convex QP with equalities, two-sided, one-sided and equal bounds."""
     n, me, mi = int(rng.integers(2, 10)), int(rng.integers(0, 3)), int(rng.integers(0, 12))
     B = rng.normal(size=(n + 2, n))
     H, g = B.T @ B + 1e-6 * np.eye(n), 5.0 * rng.normal(size=n)
     A, b = rng.normal(size=(me, n)), rng.normal(size=me)
-    C, l = rng.normal(size=(mi, n)), rng.normal(size=mi) - 1.0  # noqa: E741
-    u = l + rng.uniform(0.0, 2.0, mi)
-    l[rng.random(mi) < 0.3], u[rng.random(mi) < 0.3] = -np.inf, np.inf
-    return H, g, A, b, C, l, u
+    C, lower = rng.normal(size=(mi, n)), rng.normal(size=mi) - 1.0
+    upper = lower + rng.uniform(0.0, 2.0, mi)
+    lower[rng.random(mi) < 0.3], upper[rng.random(mi) < 0.3] = -np.inf, np.inf
+    return QPArrays(H, g, A, b, C, lower, upper)
 
 
-def _quadprog(arrays: tuple[np.ndarray, ...]) -> np.ndarray | None:
-    H, g, A, b, C, l, u = arrays  # noqa: E741
-    up, lo = np.isfinite(u), np.isfinite(l)
-    G, h = np.vstack([C[up], -C[lo]]), np.concatenate([u[up], -l[lo]])
-    me = len(b)
+def _quadprog(qp: QPArrays) -> np.ndarray | None:
+    up, lo = np.isfinite(qp.u), np.isfinite(qp.l)
+    G, h = np.vstack([qp.C[up], -qp.C[lo]]), np.concatenate([qp.u[up], -qp.l[lo]])
+    me = len(qp.b)
     return qpsolvers.solve_qp(  # type: ignore[no-any-return]
-        H, g, G if len(h) else None, h if len(h) else None, A if me else None, b if me else None, solver="quadprog"
+        qp.H,
+        qp.g,
+        G if len(h) else None,
+        h if len(h) else None,
+        qp.A if me else None,
+        qp.b if me else None,
+        solver="quadprog",
     )
 
 
@@ -61,15 +66,15 @@ def test_daqp_gives_quadprogs_optimum_with_multipliers_that_pass_the_check_from_
             infeasible += 1
             continue
         first = solver.solve_from(arrays, None)
-        wrong = rng.integers(-1, 2, arrays[5].shape[0]).astype(np.int8)
-        wrong[((wrong > 0) & ~np.isfinite(arrays[6])) | ((wrong < 0) & ~np.isfinite(arrays[5]))] = 0
+        wrong = rng.integers(-1, 2, arrays.l.shape[0]).astype(np.int8)
+        wrong[((wrong > 0) & ~np.isfinite(arrays.u)) | ((wrong < 0) & ~np.isfinite(arrays.l))] = 0
         for sol in (first, solver.solve_from(arrays, first.active), solver.solve_from(arrays, wrong)):
             np.testing.assert_allclose(sol.x, ref, atol=1e-8 * (1 + np.abs(ref).max()))
             assert kkt_ok(arrays, sol.x, sol.y, sol.z)
             assert residuals(arrays, sol.x, sol.y, sol.z).ok(1e-8, 1e-8)
             u_active, l_active = sol.active > 0, sol.active < 0
-            np.testing.assert_allclose((arrays[4] @ sol.x)[u_active], arrays[6][u_active], atol=1e-8)
-            np.testing.assert_allclose((arrays[4] @ sol.x)[l_active], arrays[5][l_active], atol=1e-8)
+            np.testing.assert_allclose((arrays.C @ sol.x)[u_active], arrays.u[u_active], atol=1e-8)
+            np.testing.assert_allclose((arrays.C @ sol.x)[l_active], arrays.l[l_active], atol=1e-8)
         solved += 1
     assert solved > 100 and infeasible > 10
 
@@ -77,10 +82,10 @@ def test_daqp_gives_quadprogs_optimum_with_multipliers_that_pass_the_check_from_
 def test_daqp_takes_read_only_arrays() -> None:
     """The layouts' constant rows are read-only arrays: DAQP (which takes writable buffers) gets copies."""
     H, g = np.eye(2), np.array([-2.0, -2.0])
-    C, l, u = np.eye(2), np.full(2, -np.inf), np.array([1.0, 5.0])  # noqa: E741
-    for a in (H, C, u):
+    C, lower, upper = np.eye(2), np.full(2, -np.inf), np.array([1.0, 5.0])
+    for a in (H, C, upper):
         a.flags.writeable = False
-    sol = DaqpSolver().solve_from((H, g, np.zeros((0, 2)), np.zeros(0), C, l, u), None)
+    sol = DaqpSolver().solve_from(QPArrays(H, g, np.zeros((0, 2)), np.zeros(0), C, lower, upper), None)
     np.testing.assert_allclose(sol.x, [1.0, 2.0], atol=1e-14)
     np.testing.assert_allclose(sol.z, [1.0, 0.0], atol=1e-14)
     assert sol.active.tolist() == [1, 0]
@@ -96,7 +101,7 @@ def test_kkt_ok_is_the_residuals_check(seed: int, shift: float) -> None:
     try:
         sol = DaqpSolver().solve_from(arrays, None)
     except SolverError:
-        x, y, z = rng.normal(size=arrays[1].shape[0]), rng.normal(size=arrays[3].shape[0]), None
+        x, y, z = rng.normal(size=arrays.nx), rng.normal(size=arrays.me), None
     else:
         x, y, z = sol.x + shift * rng.normal(size=sol.x.shape), sol.y, sol.z.copy()
         if z.size and rng.random() < 0.3:
@@ -153,8 +158,7 @@ def test_a_start_that_misleads_daqp_is_dropped_for_a_start_from_no_row() -> None
     for _ in range(200):
         arrays = _random_qp(rng)
         ref = _quadprog(arrays)
-        l, u = arrays[5], arrays[6]  # noqa: E741
-        start = np.where(~np.isfinite(u), 1, np.where(~np.isfinite(l), -1, 0)).astype(np.int8)
+        start = np.where(~np.isfinite(arrays.u), 1, np.where(~np.isfinite(arrays.l), -1, 0)).astype(np.int8)
         if ref is None or not start.any():
             continue
         try:

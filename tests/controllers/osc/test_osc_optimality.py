@@ -14,6 +14,7 @@ from armctl.controllers.osc import (
     OperationalSpaceQP,
     PostureTask,
     ProxQPSolver,
+    QPArrays,
     QPProblem,
     TorqueLimit,
 )
@@ -83,19 +84,18 @@ def test_the_solution_shown_satisfies_the_public_problems_kkt_conditions() -> No
         p = sol.problem(0)
         qp = sol.solutions[0]
         assert qp is not None and qp.y is not None and qp.z is not None
-        H, g, A, b, C, l, u = (p.H, p.g, p.A, p.b, p.C, p.l, p.u)  # noqa: E741
-        stationarity = H @ sol.x + g + A.T @ qp.y + C.T @ qp.z
-        assert np.abs(stationarity).max() <= 1e-7 * (1 + np.abs(g).max())
-        assert np.abs(A @ sol.x - b).max() <= 1e-9
-        cx = C @ sol.x
-        assert (cx <= u + 1e-8).all() and (cx >= l - 1e-8).all()
-        assert (qp.z[cx < u - 1e-6] <= 1e-9).all() and (qp.z[cx > l + 1e-6] >= -1e-9).all()  # complementarity
-        assert residuals((H, g, A, b, C, l, u), sol.x, qp.y, qp.z).ok()
+        stationarity = p.H @ sol.x + p.g + p.A.T @ qp.y + p.C.T @ qp.z
+        assert np.abs(stationarity).max() <= 1e-7 * (1 + np.abs(p.g).max())
+        assert np.abs(p.A @ sol.x - p.b).max() <= 1e-9
+        cx = p.C @ sol.x
+        assert (cx <= p.u + 1e-8).all() and (cx >= p.l - 1e-8).all()
+        assert (qp.z[cx < p.u - 1e-6] <= 1e-9).all() and (qp.z[cx > p.l + 1e-6] >= -1e-9).all()  # complementarity
+        assert residuals(p.arrays, sol.x, qp.y, qp.z).ok()
         assert ctrl.verify_last_step()
-        free = np.flatnonzero((cx < u - 1.0) & (cx > l + 1.0))
+        free = np.flatnonzero((cx < p.u - 1.0) & (cx > p.l + 1.0))
         spurious = qp.z.copy()
         spurious[free[0]] = 10.0  # a multiplier on a bound 1 N·m away
-        r = residuals((H, g, A, b, C, l, u), sol.x, qp.y, spurious)
+        r = residuals(p.arrays, sol.x, qp.y, spurious)
         assert not r.ok() and r.gap > 1.0
 
 
@@ -104,8 +104,7 @@ def test_the_exact_solve_on_an_active_set_is_accepted_only_if_it_is_the_optimum(
     multiplier 1; taking x₂'s bound active instead, or no row, gives a point that the check refuses."""
     H, g = np.eye(2), np.array([-2.0, -2.0])
     A, b = np.zeros((0, 2)), np.zeros(0)
-    C, l, u = np.eye(2), np.full(2, -np.inf), np.array([1.0, 5.0])  # noqa: E741
-    arrays = (H, g, A, b, C, l, u)
+    arrays = QPArrays(H, g, A, b, np.eye(2), np.full(2, -np.inf), np.array([1.0, 5.0]))
     for active, optimal in (([1, 0], True), ([0, 1], False), ([0, 0], False), ([1, 1], False)):
         act = np.array(active, dtype=np.int8)
         x, _, z = solve_on_active_set(arrays, act)  # type: ignore[misc]
@@ -126,24 +125,25 @@ def test_the_dual_active_set_solver_agrees_with_quadprog_and_detects_infeasibili
         B = rng.normal(size=(n + 2, n))
         H, g = B.T @ B + 1e-6 * np.eye(n), 5.0 * rng.normal(size=n)
         A, b = rng.normal(size=(me, n)), rng.normal(size=me)
-        C, l = rng.normal(size=(mi, n)), rng.normal(size=mi) - 1.0  # noqa: E741
-        u = l + rng.uniform(0.0, 2.0, mi)
-        l[rng.random(mi) < 0.3], u[rng.random(mi) < 0.3] = -np.inf, np.inf
-        if mi and np.isfinite(u[0]) and rng.random() < 0.2:
-            l[0] = u[0]
-        up, lo = np.isfinite(u), np.isfinite(l)
-        G, h = np.vstack([C[up], -C[lo]]), np.concatenate([u[up], -l[lo]])
+        C, lower = rng.normal(size=(mi, n)), rng.normal(size=mi) - 1.0
+        upper = lower + rng.uniform(0.0, 2.0, mi)
+        lower[rng.random(mi) < 0.3], upper[rng.random(mi) < 0.3] = -np.inf, np.inf
+        if mi and np.isfinite(upper[0]) and rng.random() < 0.2:
+            lower[0] = upper[0]
+        qp = QPArrays(H, g, A, b, C, lower, upper)
+        up, lo = np.isfinite(upper), np.isfinite(lower)
+        G, h = np.vstack([C[up], -C[lo]]), np.concatenate([upper[up], -lower[lo]])
         ref = qpsolvers.solve_qp(
             H, g, G if len(h) else None, h if len(h) else None, A if me else None, b if me else None, solver="quadprog"
         )
         if ref is None:
             with pytest.raises(InfeasibleError):
-                dual_active_set((H, g, A, b, C, l, u))
+                dual_active_set(qp)
             infeasible += 1
             continue
-        x, y, z, _ = dual_active_set((H, g, A, b, C, l, u))
+        x, y, z, _ = dual_active_set(qp)
         np.testing.assert_allclose(x, ref, atol=1e-8 * (1 + np.abs(ref).max()))
-        assert residuals((H, g, A, b, C, l, u), x, y, z).ok(1e-8, 1e-6)
+        assert residuals(qp, x, y, z).ok(1e-8, 1e-6)
         solved += 1
     assert solved > 50 and infeasible > 20
 

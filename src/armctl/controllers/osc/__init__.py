@@ -1,11 +1,12 @@
-"""Operational-space control as a QP (DAQP, then proxsuite), with contacts, limits and strict priorities.
+"""Operational-space control as a QP (DAQP, then proxsuite), with contacts, limits and strict priorities::
 
 from armctl.controllers.osc import OperationalSpaceQP, FramePoseTask, PostureTask
 """
 
 # The parts, for a reader of the source: ``state`` (model terms of one step), ``tasks/`` (error + Jacobian),
 # ``limits/`` (bounds on q̈ or τ), ``contact`` (force variables, contact rows, friction cones), ``build`` (the QP),
-# ``problem`` (the inspectable QP), ``reduced`` (the same QP on q̈ alone), ``generated`` (its data as generated code,
+# ``problem`` (the inspectable QP), ``reduced`` (the same QP on q̈ alone), ``contact_qp`` and ``contact_public``
+# (with contacts, on [q̈; f], and back), ``generated`` and ``generated_contact`` (their data as generated code,
 # ``compile``), ``scale`` (out-of-scale task rows refused), ``solve`` (proxsuite / qpsolvers), ``daqp_solver`` (DAQP
 # from an active set, the chain's first stage), ``active_set`` (a dual active-set solver in NumPy), ``optimality``
 # (the KKT check), ``chain`` (verified optimum, with fallbacks), ``diagnose`` (conflicting rows), ``hierarchy``
@@ -21,7 +22,7 @@ from armctl.controllers.osc.daqp_solver import DaqpSolver
 from armctl.controllers.osc.diagnose import conflicting_rows
 from armctl.controllers.osc.hierarchy import OSCSolution
 from armctl.controllers.osc.limits import AccelerationLimit, JointPositionLimit, JointVelocityLimit, Limit, TorqueLimit
-from armctl.controllers.osc.problem import QPProblem
+from armctl.controllers.osc.problem import QPArrays, QPProblem
 from armctl.controllers.osc.solve import ProxQPSolver, QPSolution, QpsolversSolver
 from armctl.controllers.osc.tasks import (
     ContactForceTask,
@@ -51,6 +52,7 @@ __all__ = [
     "OperationalSpaceQP",
     "PostureTask",
     "ProxQPSolver",
+    "QPArrays",
     "QPBuilder",
     "QPFailure",
     "QPProblem",

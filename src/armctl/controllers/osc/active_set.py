@@ -16,7 +16,7 @@ import numpy as np
 from scipy.linalg import solve_triangular
 
 from armctl._checks import FloatArray
-from armctl.controllers.osc.problem import Arrays
+from armctl.controllers.osc.problem import QPArrays
 from armctl.controllers.osc.solve import QPSolution
 from armctl.errors import InfeasibleError, SolverError
 
@@ -34,9 +34,9 @@ def _givens(a: float, b: float) -> tuple[float, float]:
 
 
 def dual_active_set(
-    arrays: Arrays, max_iter: int | None = None, tol: float = 1e-10
+    arrays: QPArrays, max_iter: int | None = None, tol: float = 1e-10
 ) -> tuple[FloatArray, FloatArray, FloatArray, int]:
-    """(x, y, z, iterations) of the QP ``arrays`` = (H, g, A, b, C, l, u), multipliers in the convention
+    """(x, y, z, iterations) of the QP ``arrays``, multipliers in the convention
     H x + g + Aᵀy + Cᵀz = 0 (z > 0 at an upper bound, < 0 at a lower one). ``tol``: a row violated by less than
     ``tol`` (1 + |bound|) counts as met. Raises InfeasibleError if no point meets the rows, SolverError if H is
     not positive definite or the iterations run out (default 10 (n + rows) + 50).
@@ -44,17 +44,17 @@ def dual_active_set(
     As in Goldfarb & Idnani's paper (and quadprog), the active rows' normals N are kept through an orthogonal
     factorisation, J = L⁻ᵀQ with H = L Lᵀ and JᵀN = [R; 0] (R upper triangular): the directions are
     z = J₂ d₂ and r = R⁻¹ d₁ with d = Jᵀ n_p, and a row joins or leaves by Givens rotations of J and R."""
-    H, g, A, b, C, l, u = arrays  # noqa: E741
-    n, me, mi = g.shape[0], b.shape[0], l.shape[0]
+    H, g, A, b, C, lb, ub = arrays.H, arrays.g, arrays.A, arrays.b, arrays.C, arrays.l, arrays.u
+    n, me, mi = g.shape[0], b.shape[0], lb.shape[0]
     try:
         L = np.linalg.cholesky(H)
     except np.linalg.LinAlgError:
         raise SolverError("the QP's Hessian is not positive definite", value=H) from None
     J = solve_triangular(L, np.eye(n), lower=True).T  # L⁻ᵀ: Jᵀ H J = I
     x = -J.dot(J.T.dot(g))
-    lo, up = np.flatnonzero(np.isfinite(l)), np.flatnonzero(np.isfinite(u))
+    lo, up = np.flatnonzero(np.isfinite(lb)), np.flatnonzero(np.isfinite(ub))
     G = np.vstack([C[lo], -C[up]]) if mi else np.zeros((0, n))  # rows G x ≥ h
-    h = np.concatenate([l[lo], -u[up]]) if mi else np.zeros(0)
+    h = np.concatenate([lb[lo], -ub[up]]) if mi else np.zeros(0)
     row = np.concatenate([lo, up])  # the row of C behind each row of G
     side = np.concatenate([-np.ones(lo.size), np.ones(up.size)])  # −1 lower bound, +1 upper
     slack_tol = tol * (1.0 + np.abs(h))
@@ -174,12 +174,12 @@ class DualActiveSetSolver:
     def reset(self) -> None:
         """Nothing to forget: every solve starts from the unconstrained minimum."""
 
-    def solve_raw(self, arrays: Arrays, slot: int = 0, mode: str = "warm") -> QPSolution:
+    def solve_raw(self, arrays: QPArrays, slot: int = 0, mode: str = "warm") -> QPSolution:
         """The optimum of a QP, from the unconstrained minimum (the solver interface of the controller's chain).
 
         Parameters
         ----------
-        arrays : tuple of ndarray
+        arrays : QPArrays
             The QP (H, g, A, b, C, l, u), H positive definite.
         slot : int, optional
             Not used: every solve starts afresh.

@@ -13,7 +13,7 @@ from armctl.controllers.osc.contact import Contact
 from armctl.controllers.osc.layout import UPPER_REGULARIZATION_FACTOR, Layout
 from armctl.controllers.osc.levels import LevelPlan, LevelRows
 from armctl.controllers.osc.limits.base import Limit
-from armctl.controllers.osc.problem import Arrays, QPProblem
+from armctl.controllers.osc.problem import QPArrays, QPProblem
 from armctl.controllers.osc.state import ModelState
 from armctl.controllers.osc.tasks.base import Task
 from armctl.model.robot import RobotModel
@@ -94,8 +94,8 @@ class StepQP:
             eq_names = eq_names + tuple(f"priority[{i}]" for i in range(frozen[0].shape[0]))
         names = tuple(t.name for t in lev.tasks)
         if not self.slacks:
-            H, g, A, b, C, l, u = self.arrays(k, frozen)  # noqa: E741
-            return QPProblem(H, g, A, b, C, l, u, lay.variables, eq_names, lay.ineq_names, k, names)
+            a = self.arrays(k, frozen)
+            return QPProblem(a.H, a.g, a.A, a.b, a.C, a.l, a.u, lay.variables, eq_names, lay.ineq_names, k, names)
         A, b = self.A, self.b
         if frozen is not None and frozen[0].shape[0]:
             A = np.vstack([A, frozen[0]])
@@ -125,7 +125,7 @@ class StepQP:
             names,
         )
 
-    def arrays(self, k: int = 0, frozen: tuple[FloatArray, FloatArray] | None = None) -> Arrays:
+    def arrays(self, k: int = 0, frozen: tuple[FloatArray, FloatArray] | None = None) -> QPArrays:
         """The arrays of :meth:`problem` without the names, for a step without slacks.
 
         Parameters
@@ -137,8 +137,8 @@ class StepQP:
 
         Returns
         -------
-        tuple of ndarray
-            (H, g, A, b, C, l, u) of the QP of level ``k``.
+        QPArrays
+            H, g, A, b, C, l, u of the QP of level ``k``.
         """
         lay = self.layout
         H, g = level_cost(self.levels[k], lay.reg_matrix if k == len(self.levels) - 1 else lay.reg_matrix_upper)
@@ -146,7 +146,7 @@ class StepQP:
         if frozen is not None and frozen[0].shape[0]:
             A = np.vstack([A, frozen[0]])
             b = np.concatenate([b, frozen[1]])
-        return H, g, A, b, lay.C, self.l, self.u
+        return QPArrays(H, g, A, b, lay.C, self.l, self.u)
 
 
 class QPBuilder:

@@ -14,7 +14,7 @@ from armctl._checks import FloatArray
 from armctl.controllers.osc.active_set import DualActiveSetSolver
 from armctl.controllers.osc.daqp_solver import DaqpSolver
 from armctl.controllers.osc.optimality import ActiveSets, active_set_of, kkt_ok, residuals
-from armctl.controllers.osc.problem import Arrays, QPProblem
+from armctl.controllers.osc.problem import QPArrays, QPProblem
 from armctl.controllers.osc.solve import QPSolution
 from armctl.errors import InfeasibleError, SolverError
 
@@ -110,7 +110,7 @@ class SolverChain:
         self._active.clear()
         self.counts.clear()
 
-    def _call(self, solver: Any, arrays: Arrays, slot: int, mode: str, problem: Callable[[], QPProblem]) -> Any:
+    def _call(self, solver: Any, arrays: QPArrays, slot: int, mode: str, problem: Callable[[], QPProblem]) -> Any:
         if solver is self.second or self._raw:
             return solver.solve_raw(arrays, slot, mode)
         if mode == "defaults":  # a user's solver has no notion of its defaults
@@ -120,12 +120,12 @@ class SolverChain:
         return solver.solve(problem(), slot)
 
     @staticmethod
-    def key(arrays: Arrays, slot: int) -> tuple[int, int, int, int]:
+    def key(arrays: QPArrays, slot: int) -> tuple[int, int, int, int]:
         """What the warm starts and active sets are kept by.
 
         Parameters
         ----------
-        arrays : tuple of ndarray
+        arrays : QPArrays
             The QP (H, g, A, b, C, l, u).
         slot : int
             Its slot (one per priority level).
@@ -135,7 +135,7 @@ class SolverChain:
         tuple of int
             (slot, number of variables, of equality rows, of inequality rows).
         """
-        return (slot, arrays[1].shape[0], arrays[3].shape[0], arrays[5].shape[0])
+        return (slot, arrays.g.shape[0], arrays.b.shape[0], arrays.l.shape[0])
 
     def last_active(self, key: tuple[int, int, int, int]) -> np.ndarray | None:
         """The active set of the last verified optimum of a kind of QP.
@@ -169,7 +169,7 @@ class SolverChain:
 
     def solve(
         self,
-        arrays: Arrays,
+        arrays: QPArrays,
         slot: int = 0,
         problem: Callable[[], QPProblem] | None = None,
         start: np.ndarray | None = None,
@@ -179,7 +179,7 @@ class SolverChain:
 
         Parameters
         ----------
-        arrays : tuple of ndarray
+        arrays : QPArrays
             The QP (H, g, A, b, C, l, u): min ½ xᵀH x + gᵀx s.t. A x = b, l ≤ C x ≤ u, H positive definite.
         slot : int, optional
             One per priority level: the warm starts and active sets are kept per slot.
@@ -253,8 +253,8 @@ class SolverChain:
     def _verify(sets: ActiveSets, sol: QPSolution) -> tuple[FloatArray, FloatArray, FloatArray, np.ndarray] | None:
         """The optimum that ``sol`` points at, verified: its active set solved exactly and accepted, or else
         ``sol`` itself if its KKT residuals (with its multipliers) are within the tolerances; None if neither."""
-        arrays = sets.arrays
-        x = np.asarray(sol.x, dtype=float)[: arrays[1].shape[0]]
+        arrays = sets.qp
+        x = np.asarray(sol.x, dtype=float)[: arrays.g.shape[0]]
         if not np.isfinite(x).all():
             return None
         candidates = [active_set_of(arrays, x, sol.z)]
@@ -264,7 +264,7 @@ class SolverChain:
             exact = sets.solve(active)
             if exact is not None and sets.following(exact[0], exact[2], active) is None:
                 return exact[0], exact[1], exact[2], active
-        if sol.z is not None and (sol.y is not None or not arrays[3].shape[0]):
+        if sol.z is not None and (sol.y is not None or not arrays.b.shape[0]):
             if residuals(arrays, x, sol.y, sol.z).ok():
                 return x, sol.y if sol.y is not None else np.zeros(0), sol.z, candidates[0]
         return None

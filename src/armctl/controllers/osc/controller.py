@@ -19,6 +19,8 @@ from armctl.controllers.base import Controller
 from armctl.controllers.osc.build import QPBuilder, StepQP
 from armctl.controllers.osc.chain import QPFailure, SolverChain
 from armctl.controllers.osc.contact import Contact
+from armctl.controllers.osc.contact_public import ContactStep
+from armctl.controllers.osc.contact_qp import ContactQP, applies
 from armctl.controllers.osc.diagnose import raise_unsolved
 from armctl.controllers.osc.hierarchy import OSCSolution, solve_cascade
 from armctl.controllers.osc.layout import Layout
@@ -170,7 +172,10 @@ class OperationalSpaceQP(Controller):
     optimum), and (``compile``) its data come from one call of generated C code when its
     tasks (:class:`~armctl.controllers.osc.FramePositionTask`, :class:`~armctl.controllers.osc.FrameOrientationTask`,
     :class:`~armctl.controllers.osc.FramePoseTask`, :class:`~armctl.controllers.osc.PostureTask`, not
-    subclasses) and limits are built-in ones. Each step's fallbacks are in ``last_log["qp_fallbacks"]``;
+    subclasses) and limits are built-in ones. With active contacts the QPs are solved on [q̈; f] (τ eliminated, every
+    level; see :mod:`~armctl.controllers.osc.contact_qp`), their data likewise from generated code when the tasks
+    are of those kinds or :class:`~armctl.controllers.osc.ContactForceTask`. Each step's fallbacks are in
+    ``last_log["qp_fallbacks"]``;
     :meth:`end_run` (which :func:`armctl.sim.simulate` calls) warns once with what happened during the run and
     how often.
 
@@ -239,9 +244,12 @@ class OperationalSpaceQP(Controller):
             and callable(getattr(self.solver, "solve_raw", None))
         )
         self._qdd: dict[Layout, QddQP] = {}
+        # with active contacts: the QPs on [q̈; f] (see contact_qp)
+        self._contact_path = callable(getattr(self.solver, "solve_raw", None)) and applies(self.builder)
+        self._contact_qps: dict[Layout, ContactQP] = {}
         if self._qdd_path and not self.contacts:  # made now: its generated code is built or loaded here
             self._qdd_qp(self.builder.layout())
-        self._pending: tuple[QddQP, QddStep] | None = None
+        self._pending: tuple[QddQP, QddStep] | tuple[ContactQP, ContactStep] | None = None
         self._last_solution: OSCSolution | None = None
         self._steps = 0
         self._kept: Counter[int] = Counter()
@@ -249,11 +257,21 @@ class OperationalSpaceQP(Controller):
 
     @property
     def uses_generated_code(self) -> bool:
-        """Whether the q̈-only QP of the current layout (the tasks and contacts as they are) takes its data from
-        generated code (see ``compile``)."""
-        if not self._qdd_path or any(c.active for c in self.contacts):
-            return False
-        return self._qdd_qp(self.builder.layout()).generated is not None
+        """Whether the QP of the current layout (the tasks and contacts as they are) takes its data from generated
+        code (see ``compile``): the q̈-only QP without active contacts, the QPs on [q̈; f] with them."""
+        lay = self.builder.layout()
+        if lay.contacts:
+            return self._contact_path and self._contact_qp(lay).generated is not None
+        return self._qdd_path and self._qdd_qp(lay).generated is not None
+
+    def _contact_qp(self, lay: Layout) -> ContactQP:
+        """The QPs on [q̈; f] of layout ``lay`` (made on first use, with their generated data where ``compile``
+        asks for it)."""
+        qp = self._contact_qps.get(lay)
+        if qp is None:
+            qp = self._contact_qps[lay] = ContactQP(self.builder, lay)
+            qp.generated = self._generated_contact(qp, lay)
+        return qp
 
     @property
     def last_solution(self) -> OSCSolution | None:
@@ -261,9 +279,7 @@ class OperationalSpaceQP(Controller):
         pending = self._pending
         if pending is not None:
             self._pending = None
-            qp, result = pending
-            step, mapped = qp.public(result)
-            self._last_solution = OSCSolution(step, mapped.x, (mapped,), ("solved",), None, [None])
+            self._last_solution = pending[0].solution(pending[1])  # type: ignore[arg-type]  # each QP its own step
         return self._last_solution
 
     @last_solution.setter
@@ -373,6 +389,28 @@ class OperationalSpaceQP(Controller):
         make = lambda: GeneratedQddData(self.dynamics, qp.plan.tasks, self.builder.regularization)  # noqa: E731
         return FALLBACK.attempt(make, mode, stacklevel=4)
 
+    def _generated_contact(self, qp: ContactQP, lay: Layout) -> Any:
+        """The generated data of the contact QPs ``qp`` (a GeneratedContactData), or None: the NumPy path, on the
+        terms of :meth:`_generated_data`."""
+        mode = self.compile
+        if mode is False or not all(type(lim) in _PLAIN_LIMITS for lim in lay.limits):
+            return None
+        from armctl.dynamics.pinocchio_backend import PinocchioDynamics
+
+        if mode == "auto" and not isinstance(self.dynamics, PinocchioDynamics):
+            return None
+        from armctl.controllers.osc.generated_contact import GeneratedContactData, supported_contact
+
+        levels = [plan.tasks for plan, _, _, _ in qp.levels]
+        if not supported_contact(levels):
+            return None
+        variables = [lim.variable for lim in lay.limits]
+        weights = [w for _, _, _, w in qp.levels]
+        make = lambda: GeneratedContactData(  # noqa: E731
+            self.dynamics, levels, lay.contacts, weights, variables, lay.constant_bounds
+        )
+        return FALLBACK.attempt(make, mode, stacklevel=4)
+
     def _qdd_step(self, lay: Layout, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         """One level without contact forces: the QP on q̈ alone (see reduced)."""
         qp = self._qdd.get(lay) or self._qdd_qp(lay)
@@ -393,6 +431,35 @@ class OperationalSpaceQP(Controller):
         if self._tau_up is not None and self._tau_lo is not None:
             np.minimum(tau, self._tau_up, out=tau)
             np.maximum(tau, self._tau_lo, out=tau)
+        return tau
+
+    def _contact_step(self, lay: Layout, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
+        """The levels with active contacts, solved on [q̈; f] (see contact_qp)."""
+        qp = self._contact_qps.get(lay) or self._contact_qp(lay)
+        gen = qp.generated
+        if gen is not None:
+            result = qp.step_generated(gen, q, qd, t, ref, self.chain, self.evaluator.evaluate)
+        else:
+            result = qp.step(self.evaluator.evaluate(q, qd), t, ref, self.chain)
+        self._pending = (qp, result)
+        tau = result.tau.clip(self._tau_lo, self._tau_up) if self._tau_up is not None else result.tau.copy()
+        iterations = fallbacks = 0
+        for s in result.solutions:
+            if s is not None:
+                iterations += s.iterations
+                fallbacks += s.fallbacks
+        log: dict[str, Any] = {"qp_iterations": iterations, "qp_fallbacks": fallbacks}
+        for name, f in qp.forces(result).items():
+            log[f"force[{name}]"] = f
+        status = result.status
+        if len(status) > 1:
+            log["level_status"] = tuple(status)
+            for k, st in enumerate(status):
+                if st != "solved":
+                    self._kept[k] += 1
+                    self._kept_reason[k] = st
+        self._task_log(log, t)
+        self.last_log = log
         return tau
 
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
@@ -421,10 +488,13 @@ class OperationalSpaceQP(Controller):
         """
         self._steps += 1
         self._pending = self._last_solution = None
-        if self._qdd_path:
+        if self._qdd_path or self._contact_path:
             lay = self.builder.layout()
             if not lay.contacts:
-                return self._qdd_step(lay, t, q, qd, ref)
+                if self._qdd_path:
+                    return self._qdd_step(lay, t, q, qd, ref)
+            elif self._contact_path:
+                return self._contact_step(lay, t, q, qd, ref)
         state = self.evaluator.evaluate(q, qd)
         step = self.builder.build(state, t, ref)
         for lev in step.levels:
@@ -464,7 +534,7 @@ class OperationalSpaceQP(Controller):
         """
         pending = self._pending
         if pending is not None:
-            return pending[0].verify(pending[1])
+            return pending[0].verify(pending[1])  # type: ignore[arg-type]  # each QP its own step
         sol = self._last_solution
         if sol is None:
             raise InvalidParameterError("there is no last step to verify (call the controller first)")
@@ -472,7 +542,7 @@ class OperationalSpaceQP(Controller):
             if qs is None:
                 continue
             p = sol.problem(k)
-            if not verified((p.H, p.g, p.A, p.b, p.C, p.l, p.u), qs.x[: p.nx], qs.y, qs.z):
+            if not verified(p.arrays, qs.x[: p.nx], qs.y, qs.z):
                 return False
         return True
 

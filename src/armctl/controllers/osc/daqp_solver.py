@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from armctl._checks import FloatArray
-from armctl.controllers.osc.problem import Arrays
+from armctl.controllers.osc.problem import QPArrays
 from armctl.controllers.osc.solve import QPSolution
 from armctl.errors import SolverError
 
@@ -73,7 +73,7 @@ class DaqpSolver:
     def reset(self) -> None:
         """Nothing to forget: the active set to start from is given at each solve."""
 
-    def solve_from(self, arrays: Arrays, active: np.ndarray | None) -> QPSolution:
+    def solve_from(self, arrays: QPArrays, active: np.ndarray | None) -> QPSolution:
         """The optimum of a QP, from a given active set.
 
         A start can mislead it (rows that depend on each other, a row taken at an infinite bound): what it returns
@@ -81,7 +81,7 @@ class DaqpSolver:
 
         Parameters
         ----------
-        arrays : tuple of ndarray
+        arrays : QPArrays
             The QP (H, g, A, b, C, l, u), H positive definite.
         active : ndarray of int8, shape (mi,), or None
             The active set to start from: per row of C, +1 at its upper bound, −1 at its lower one, 0 free;
@@ -99,18 +99,20 @@ class DaqpSolver:
             DAQP finds no optimum (the error gives its exit flag: infeasible, cycling, iteration limit, ...), or
             calls a non-finite point optimal.
         """
-        H, g, A, b, C, l, u = arrays  # noqa: E741
+        H, g, b = arrays.H, arrays.g, arrays.b
         me = b.shape[0]
         if me:
-            rows: FloatArray = np.concatenate((A, C))
-            upper, lower = np.concatenate((b, u)), np.concatenate((b, l))
-            both = np.empty(me + l.shape[0], dtype=np.intc)
+            rows: FloatArray = np.concatenate((arrays.A, arrays.C))
+            upper, lower = np.concatenate((b, arrays.u)), np.concatenate((b, arrays.l))
+            both = np.empty(me + arrays.l.shape[0], dtype=np.intc)
             both[:me] = _EQUALITY
             both[me:] = 0 if active is None else _SENSE[active]
             sense: np.ndarray | None = both
         else:
-            rows, upper, lower = C, u, l
+            rows, upper, lower = arrays.C, arrays.u, arrays.l
             sense = None if active is None else _SENSE[active]
+        if not (H.flags.c_contiguous and rows.flags.c_contiguous):  # DAQP reads the buffers as C-ordered
+            H, rows = np.ascontiguousarray(H), np.ascontiguousarray(rows)
         data = (H, g, rows, upper, lower)
         try:
             x, _, flag, info = self._solve(*data, sense, primal_tol=self.primal_tol, iter_limit=self.iter_limit)
@@ -125,12 +127,12 @@ class DaqpSolver:
         z = lam[me:]
         return QPSolution(x, "solved", info["iterations"], self.name, lam[:me], z, active=np.sign(z).astype(np.int8))
 
-    def solve_raw(self, arrays: Arrays, slot: int = 0, mode: str = "warm") -> QPSolution:
+    def solve_raw(self, arrays: QPArrays, slot: int = 0, mode: str = "warm") -> QPSolution:
         """The optimum of a QP from no active row (the solver interface of the controller's chain).
 
         Parameters
         ----------
-        arrays : tuple of ndarray
+        arrays : QPArrays
             The QP (H, g, A, b, C, l, u), H positive definite.
         slot : int, optional
             Not used: DAQP keeps nothing between solves.

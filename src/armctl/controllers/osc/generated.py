@@ -62,7 +62,7 @@ def supported(tasks: Sequence[Task]) -> bool:
     return bool(tasks) and all(type(tk) in _FRAME_TASKS or type(tk) is PostureTask for tk in tasks)
 
 
-def _gram(a: cs.SX) -> cs.SX:
+def gram(a: cs.SX) -> cs.SX:
     """aᵀ a, each entry of the symmetric result computed once."""
     n = a.shape[1]
     cols = [a[:, j] for j in range(n)]
@@ -73,15 +73,14 @@ def _gram(a: cs.SX) -> cs.SX:
     return out
 
 
-def qp_function(model: RobotModel, tasks: Sequence[Task], friction: bool) -> cs.Function:
-    """The CasADi function of the module: ``f(inputs, params) -> (q̈₀, τ₀, H, g, c, M, h', [J | b])`` with
-    ``inputs`` = [q; q̇; per task its target (a frame task: value row by row, velocity, acceleration; a posture
-    task: q_ref, q̇_ref, q̈_ref); τ_f if ``friction``] and ``params`` = [per task K_p, K_d (row by row), W^½; ε];
-    [J | b] the unweighted task rows, stacked in the tasks' order."""
+def task_rows(
+    model: RobotModel, q: cs.SX, qd: cs.SX, tasks: Sequence[Task], tf: list[tuple[cs.SX, cs.SX]]
+) -> tuple[list[cs.SX], list[cs.SX], list[cs.SX], list[cs.SX], list[cs.SX]]:
+    """The motion tasks' rows at (q, q̇): (inputs, params, J_i, b_i, W_i^½) per task, with ``inputs`` its target
+    (a frame task: value row by row, velocity, acceleration; a posture task: q_ref, q̇_ref, q̈_ref) and ``params``
+    its K_p, K_d (row by row) and W^½; b_i = ẍ*_i − J̇_i q̇ (its PD law on its error)."""
     n = model.n
-    q, qd = cs.SX.sym("q", n), cs.SX.sym("qd", n)
-    inputs, params = [q, qd], []
-    tf = joint_transforms(model, q)
+    inputs, params = [], []
     frames: dict[str | None, tuple[cs.SX, cs.SX, cs.SX, cs.SX]] = {}
     jacs, rhs, weights = [], [], []
     for k, tk in enumerate(tasks):
@@ -115,6 +114,19 @@ def qp_function(model: RobotModel, tasks: Sequence[Task], friction: bool) -> cs.
             jacs.append(j)
             rhs.append(acc + gain_d @ (vel - j @ qd) + gain_p @ err - drift[rows])
         weights.append(w)
+    return inputs, params, jacs, rhs, weights
+
+
+def qp_function(model: RobotModel, tasks: Sequence[Task], friction: bool) -> cs.Function:
+    """The CasADi function of the module: ``f(inputs, params) -> (q̈₀, τ₀, H, g, c, M, h', [J | b])`` with
+    ``inputs`` = [q; q̇; per task its target (a frame task: value row by row, velocity, acceleration; a posture
+    task: q_ref, q̇_ref, q̈_ref); τ_f if ``friction``] and ``params`` = [per task K_p, K_d (row by row), W^½; ε];
+    [J | b] the unweighted task rows, stacked in the tasks' order."""
+    n = model.n
+    q, qd = cs.SX.sym("q", n), cs.SX.sym("qd", n)
+    tf = joint_transforms(model, q)
+    task_inputs, params, jacs, rhs, weights = task_rows(model, q, qd, tasks, tf)
+    inputs = [q, qd, *task_inputs]
     tau_f = cs.SX.sym("tau_f", n) if friction else cs.SX.zeros(n)
     if friction:
         inputs.append(tau_f)
@@ -125,7 +137,7 @@ def qp_function(model: RobotModel, tasks: Sequence[Task], friction: bool) -> cs.
     jall, ball, wall = cs.vertcat(*jacs), cs.vertcat(*rhs), cs.vertcat(*weights)
     weighted = jall * cs.repmat(wall, 1, n)  # W^½ J
     t = wall * ball  # W^½ b
-    hess = _gram(weighted) + eps * (cs.SX.eye(n) + _gram(mass))
+    hess = gram(weighted) + eps * (cs.SX.eye(n) + gram(mass))
     grad = -(weighted.T @ t) + eps * (mass @ hf)  # M symmetric: Mᵀh' = M h'
     c = cs.dot(t, t) + eps * cs.dot(hf, hf)
     qdd0 = -cholesky_solve(hess, grad)
@@ -134,15 +146,39 @@ def qp_function(model: RobotModel, tasks: Sequence[Task], friction: bool) -> cs.
     return cs.Function(_NAME, [cs.vertcat(*inputs), cs.vertcat(*params)], [cs.densify(o) for o in outputs])
 
 
-def _tag(model: RobotModel, tasks: Sequence[Task], friction: bool) -> str:
-    parts = [f"osc-qdd|{model.fingerprint(inertial=True, tool=False)}|v{_CODE_VERSION}|friction={friction}"]
+def target_pieces(tasks: Sequence[Task], t: float, ref: Reference, pieces: list[FloatArray]) -> None:
+    """Append the motion tasks' targets at t to ``pieces``, in the order of :func:`task_rows`' inputs (a
+    trajectory's output checked as the NumPy path checks it; the posture tasks' references)."""
     for tk in tasks:
         if type(tk) is PostureTask:
-            parts.append("posture")
+            r = tk.reference(ref)
+            pieces += [r.q, r.qd, r.qdd]
         else:
-            f = model.frame(cast(FrameTask, tk).frame)
-            where = hashlib.sha256(f.placement.tobytes()).hexdigest()[:12]
-            parts.append(f"{_FRAME_TASKS[type(tk)][0]}:{f.name}:{f.joint}:{where}")
+            value, vel, acc = cast(FrameTask, tk).target.at(t)
+            pieces += [value.reshape(-1), vel, acc]
+
+
+def task_params(tasks: Sequence[Task]) -> list[FloatArray]:
+    """The motion tasks' parameters in the order of :func:`task_rows`': K_p, K_d (row by row), W^½."""
+    parts = []
+    for tk in tasks:
+        motion = cast(MotionTask, tk)  # every task here is a motion task
+        parts += [np.ravel(motion.kp), np.ravel(motion.kd), motion.sqrt_weight]
+    return parts
+
+
+def task_tag(model: RobotModel, tk: Task) -> str:
+    """What of a motion task the generated code depends on (its kind, frame and the frame's placement)."""
+    if type(tk) is PostureTask:
+        return "posture"
+    f = model.frame(cast(FrameTask, tk).frame)
+    where = hashlib.sha256(f.placement.tobytes()).hexdigest()[:12]
+    return f"{_FRAME_TASKS[type(tk)][0]}:{f.name}:{f.joint}:{where}"
+
+
+def _tag(model: RobotModel, tasks: Sequence[Task], friction: bool) -> str:
+    parts = [f"osc-qdd|{model.fingerprint(inertial=True, tool=False)}|v{_CODE_VERSION}|friction={friction}"]
+    parts += [task_tag(model, tk) for tk in tasks]
     return "|".join(parts)
 
 
@@ -189,10 +225,7 @@ class GeneratedQddData:
 
     def _params(self) -> None:
         """The gains, weights and ε into the parameter buffer (in place: the buffer reads it)."""
-        parts = []
-        for tk in self.tasks:
-            motion = cast(MotionTask, tk)  # every task here is a motion task
-            parts += [np.ravel(motion.kp), np.ravel(motion.kd), motion.sqrt_weight]
+        parts = task_params(self.tasks)
         parts.append(np.array([self.regularization]))
         np.concatenate(parts, out=self.par)
 
@@ -204,13 +237,7 @@ class GeneratedQddData:
             self._params()
             self._revisions = revisions
         pieces = [q, qd]
-        for tk in self.tasks:
-            if type(tk) is PostureTask:
-                r = tk.reference(ref)
-                pieces += [r.q, r.qd, r.qdd]
-            else:
-                value, vel, acc = cast(FrameTask, tk).target.at(t)
-                pieces += [value.reshape(-1), vel, acc]
+        target_pieces(self.tasks, t, ref, pieces)
         if self.friction is not None:
             pieces.append(self.friction.torque(qd))
         np.concatenate(pieces, out=self.inp)

@@ -22,12 +22,13 @@ from __future__ import annotations
 from functools import partial
 
 import numpy as np
+from scipy.linalg import lapack
 
 from armctl._checks import FloatArray
 from armctl.controllers.osc import diagnose as _diagnose
 from armctl.controllers.osc.build import StepQP
 from armctl.controllers.osc.chain import QPFailure, SolverChain
-from armctl.controllers.osc.problem import Arrays, QPProblem
+from armctl.controllers.osc.problem import QPArrays, QPProblem
 from armctl.controllers.osc.solve import QPSolution
 from armctl.errors import SolverError
 
@@ -145,13 +146,40 @@ class OSCSolution:
         return _diagnose.conflicting_rows(self.problem(level))
 
 
-def _extend_basis(F: FloatArray, T: FloatArray, rank_tol: float) -> FloatArray:
-    """Orthonormal rows spanning rows(F) + rows(T)."""
+#: the reciprocal condition number (LAPACK's estimate, 1-norm) of P Pᵀ above which :func:`extend_basis` takes
+#: the Cholesky basis: its rows are then independent by a margin of about 1e5 over the SVD's rank test
+WELL_CONDITIONED = 1e-6
+
+
+def extend_basis(F: FloatArray, T: FloatArray, rank_tol: float = 1e-9) -> FloatArray:
+    """Orthonormal rows spanning rows(F) + rows(T): F and a basis of P, the part of T outside rows(F).
+
+    When P Pᵀ is well conditioned (:data:`WELL_CONDITIONED`, the usual case: a level's task rows independent of
+    each other and of the levels above), the basis is L⁻¹P with L the Cholesky factor of P Pᵀ (orthonormal:
+    L⁻¹ P Pᵀ L⁻ᵀ = I), which costs a factorisation of a matrix of the level's size and one triangular solve.
+    Otherwise the SVD of P decides the rank: its right singular vectors whose singular values exceed
+    ``rank_tol`` times T's largest entry. Rows of P shorter than that are left out first (a task direction of
+    zero weight). Either way the span is that of the rows kept, so the QP of the level below has the same
+    feasible set and the same optimum."""
     if T.shape[0] == 0:
         return F
     P = T - (T @ F.T) @ F if F.shape[0] else T
-    _, s, vt = np.linalg.svd(P, full_matrices=False)
     scale = max(float(np.abs(T).max()), 1e-300)
+    G = P.dot(P.T)
+    rows = np.diag(G) > (rank_tol * scale) ** 2  # rows of no weight (a task direction switched off) span nothing
+    if not rows.all():
+        P, G = P[rows], G[np.ix_(rows, rows)]
+    if 0 < P.shape[0] <= P.shape[1]:
+        c, info = lapack.dpotrf(G, lower=1, clean=1)
+        if info == 0:
+            rcond, info = lapack.dpocon(c, float(np.abs(G).sum(axis=0).max()), uplo="L")
+            if info == 0 and rcond > WELL_CONDITIONED:
+                basis, info = lapack.dtrtrs(c, P, lower=1)
+                if info == 0:
+                    return np.vstack([F, basis]) if F.shape[0] else basis
+    if not P.shape[0]:
+        return F
+    _, s, vt = np.linalg.svd(P, full_matrices=False)
     keep = s > rank_tol * scale
     return np.vstack([F, vt[keep]]) if keep.any() else F
 
@@ -172,7 +200,7 @@ def solve_cascade(step: StepQP, chain: SolverChain, rank_tol: float = 1e-9) -> O
         frozen_rows.append(frozen)
         if step.slacks:
             p = step.problem(k, frozen)
-            arrays: Arrays = (p.H, p.g, p.A, p.b, p.C, p.l, p.u)
+            arrays: QPArrays = p.arrays
         else:
             arrays = step.arrays(k, frozen)
         try:
@@ -183,7 +211,7 @@ def solve_cascade(step: StepQP, chain: SolverChain, rank_tol: float = 1e-9) -> O
             sols.append(None)
             status.append(f"kept level {k - 1}: no verified optimum ({err.attempts[-1][1] if err.attempts else ''})")
             if k < last:  # the levels below keep this level's residual at x_{k−1}: it gives way to none of them
-                F = _extend_basis(F, lev.T, rank_tol)
+                F = extend_basis(F, lev.T, rank_tol)
             continue
         sols.append(sol)
         status.append("solved")
@@ -192,7 +220,7 @@ def solve_cascade(step: StepQP, chain: SolverChain, rank_tol: float = 1e-9) -> O
             s = sol.x[nx:]
             slacks.update({name: s[sl] for name, sl in lev.slices.items()})
         if k < last:
-            F = _extend_basis(F, lev.T, rank_tol)
+            F = extend_basis(F, lev.T, rank_tol)
     if x is None:
         raise SolverError("the controller has no priority level to solve", value=step)
     return OSCSolution(step, x, tuple(sols), tuple(status), slacks, frozen_rows)

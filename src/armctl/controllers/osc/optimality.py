@@ -40,7 +40,7 @@ import numpy as np
 from scipy.linalg import lapack
 
 from armctl._checks import FloatArray
-from armctl.controllers.osc.problem import Arrays
+from armctl.controllers.osc.problem import QPArrays
 
 #: largest violation of a row accepted, in the row's own units (N·m for torque rows and the equation of
 #: motion, rad/s² for acceleration bounds, N for force rows)
@@ -69,60 +69,60 @@ class Residuals:
         return self.primal <= primal_tol and self.dual <= dual_tol * self.scale and self.gap <= dual_tol * self.scale
 
 
-def residuals(arrays: Arrays, x: FloatArray, y: FloatArray | None, z: FloatArray | None) -> Residuals:
-    """The KKT residuals of the QP ``arrays`` = (H, g, A, b, C, l, u) at (x, y, z) (None: zero multipliers)."""
-    H, g, A, b, C, l, u = arrays  # noqa: E741
-    r = H.dot(x) + g
+def residuals(qp: QPArrays, x: FloatArray, y: FloatArray | None, z: FloatArray | None) -> Residuals:
+    """The KKT residuals of the QP ``qp`` at (x, y, z) (None: zero multipliers)."""
+    r = qp.H.dot(x) + qp.g
     primal = 0.0
-    if b.shape[0]:
+    if qp.b.shape[0]:
         if y is not None:
-            r += A.T.dot(y)
-        primal = float(np.abs(A.dot(x) - b).max())
+            r += qp.A.T.dot(y)
+        primal = float(np.abs(qp.A.dot(x) - qp.b).max())
     gap = 0.0
-    if l.shape[0]:
-        s = C.dot(x)
-        du, dl = u - s, s - l
+    if qp.l.shape[0]:
+        s = qp.C.dot(x)
+        du, dl = qp.u - s, s - qp.l
         primal = max(primal, float(-du.min()), float(-dl.min()), 0.0)
         if z is not None:
-            r += C.T.dot(z)
+            r += qp.C.T.dot(z)
             zp, zm = np.maximum(z, 0.0), np.maximum(-z, 0.0)
             gap = float(zp.dot(np.fmin(np.abs(du), _BIG)) + zm.dot(np.fmin(np.abs(dl), _BIG)))
-    return Residuals(primal, float(np.abs(r).max()), gap, 1.0 + float(np.abs(g).max()))
+    return Residuals(primal, float(np.abs(r).max()), gap, 1.0 + float(np.abs(qp.g).max()))
 
 
 def kkt_ok(
-    arrays: Arrays,
+    qp: QPArrays,
     x: FloatArray,
     y: FloatArray | None,
     z: FloatArray | None,
     primal_tol: float = PRIMAL_TOL,
     dual_tol: float = DUAL_TOL,
 ) -> bool:
-    """``residuals(arrays, x, y, z).ok(primal_tol, dual_tol)`` — the same three conditions (primal residual,
+    """``residuals(qp, x, y, z).ok(primal_tol, dual_tol)`` — the same three conditions (primal residual,
     stationarity residual and duality gap within tolerance), with the row tests on Python floats. The stated
     default tolerances are those of an exact solve on an active set: :data:`PRIMAL_TOL` and :data:`DUAL_TOL`
     (relative to 1 + ‖g‖∞)."""
-    H, g, A, b, C, l, u = arrays  # noqa: E741
     if not math.isfinite(sum(x.tolist())):
         return False
-    gl = g.tolist()
+    gl = qp.g.tolist()
     bound = dual_tol * (1.0 + max(max(gl), -min(gl))) if gl else dual_tol
-    r = H.dot(x)
-    r += g
-    if b.shape[0]:
+    r = qp.H.dot(x)
+    r += qp.g
+    if qp.b.shape[0]:
         if y is not None:
-            r += y.dot(A)  # Aᵀy
-        e = A.dot(x)
-        e -= b
+            r += y.dot(qp.A)  # Aᵀy
+        e = qp.A.dot(x)
+        e -= qp.b
         el = e.tolist()
         if not (max(el) <= primal_tol and min(el) >= -primal_tol):
             return False
     gap = 0.0
-    if l.shape[0]:
+    mi = qp.l.shape[0]
+    if mi:
+        C = qp.C
         if z is not None:
             r += z.dot(C)  # Cᵀz
-        zl = z.tolist() if z is not None else [0.0] * l.shape[0]
-        for si, zi, li, ui in zip(C.dot(x).tolist(), zl, l.tolist(), u.tolist(), strict=True):
+        zl = z.tolist() if z is not None else [0.0] * mi
+        for si, zi, li, ui in zip(C.dot(x).tolist(), zl, qp.l.tolist(), qp.u.tolist(), strict=True):
             if not li - primal_tol <= si <= ui + primal_tol:
                 return False
             if zi > 0.0:
@@ -133,53 +133,65 @@ def kkt_ok(
     return math.isfinite(sum(rl)) and max(rl) <= bound and min(rl) >= -bound and gap <= bound
 
 
-def verified(arrays: Arrays, x: FloatArray, y: FloatArray | None, z: FloatArray | None) -> bool:
+def verified(qp: QPArrays, x: FloatArray, y: FloatArray | None, z: FloatArray | None) -> bool:
     """Whether (x, y, z) passes the check a control step accepts a solution on: :func:`kkt_ok` at the tolerances
     of an exact solve (:data:`PRIMAL_TOL`, :data:`DUAL_TOL`), or, for a solver's own point, :func:`residuals`
     within :data:`KKT_TOL`."""
-    return kkt_ok(arrays, x, y, z) or residuals(arrays, x, y, z).ok()
+    return kkt_ok(qp, x, y, z) or residuals(qp, x, y, z).ok()
 
 
-def solve_on_active_set(arrays: Arrays, active: np.ndarray) -> tuple[FloatArray, FloatArray, FloatArray] | None:
+def equality_optimum_ok(qp: QPArrays, x: FloatArray, y: FloatArray, eq_res: FloatArray, stat: FloatArray) -> bool:
+    """Whether (x, y), the optimum on the equality rows alone (no inequality row active, z = 0) with its
+    residuals ``eq_res`` = A x − b and ``stat`` = H x + g + Aᵀy, is the optimum of ``qp``: the residuals within
+    :data:`PRIMAL_TOL` and :data:`DUAL_TOL` (1 + ‖g‖∞) and every inequality row within its bounds exactly (no
+    multiplier, no gap: the KKT conditions); False for NaN."""
+    if not float(np.abs(eq_res).max()) <= PRIMAL_TOL:
+        return False
+    if not float(np.abs(stat).max()) <= DUAL_TOL * (1.0 + float(np.abs(qp.g).max())):
+        return False
+    s = qp.C.dot(x)
+    return bool((s >= qp.l).all() and (s <= qp.u).all())
+
+
+def solve_on_active_set(qp: QPArrays, active: np.ndarray) -> tuple[FloatArray, FloatArray, FloatArray] | None:
     """(x, y, z) of the QP with the rows ``active`` as equalities (``active``: int8 per row of C, +1 at its
     upper bound, −1 at its lower, 0 free), by one direct solve of the KKT system (LU; if active rows depend on
     each other or on A, the least-squares solution with the smallest multipliers); None if the rows
     contradict each other."""
-    H, g, A, b, C, l, u = arrays  # noqa: E741
-    n, me = g.shape[0], b.shape[0]
+    n, me, mi = qp.g.shape[0], qp.b.shape[0], qp.l.shape[0]
     idx = np.flatnonzero(active)
     if me == 0 and idx.size == 0:  # the unconstrained minimum: Cholesky of H
-        _, x, info = lapack.dposv(H, g)
+        _, x, info = lapack.dposv(qp.H, qp.g)
         if info != 0:
             return None
         np.negative(x, out=x)
-        return x, np.zeros(0), np.zeros(l.shape[0])
+        return x, np.zeros(0), np.zeros(mi)
     k = me + idx.size
     K = np.zeros((n + k, n + k))
-    K[:n, :n] = H
+    K[:n, :n] = qp.H
     N = K[n:, :n]
-    N[:me] = A
-    N[me:] = C[idx]
+    N[:me] = qp.A
+    N[me:] = qp.C[idx]
     K[:n, n:] = N.T
     rhs = np.empty(n + k)
-    np.negative(g, out=rhs[:n])
-    rhs[n : n + me] = b
-    rhs[n + me :] = np.where(active[idx] > 0, u[idx], l[idx])
+    np.negative(qp.g, out=rhs[:n])
+    rhs[n : n + me] = qp.b
+    rhs[n + me :] = np.where(active[idx] > 0, qp.u[idx], qp.l[idx])
     _, _, sol, info = lapack.dgesv(K, rhs)
     if info != 0:  # dependent active rows (a degenerate optimum): x is still unique, the multipliers are not
         sol = np.linalg.lstsq(K, rhs, rcond=None)[0]
         if np.abs(K.dot(sol) - rhs).max() > 1e-9 * (1.0 + float(np.abs(rhs).max())):
             return None
-    z = np.zeros(l.shape[0])
+    z = np.zeros(mi)
     z[idx] = sol[n + me :]
     return sol[:n], sol[n : n + me], z
 
 
-def accept(arrays: Arrays, x: FloatArray, z: FloatArray, active: np.ndarray) -> bool:
+def accept(qp: QPArrays, x: FloatArray, z: FloatArray, active: np.ndarray) -> bool:
     """Whether (x, z) from :func:`solve_on_active_set` with ``active`` is the optimum (module docstring):
     every row within its bounds to :data:`PRIMAL_TOL` and every active row's multiplier of the right sign to
     :data:`DUAL_TOL` · (1 + ‖g‖∞)."""
-    return ActiveSets(arrays).following(x, z, active) is None
+    return ActiveSets(qp).following(x, z, active) is None
 
 
 class ActiveSets:
@@ -189,24 +201,23 @@ class ActiveSets:
 
         (N H⁻¹ Nᵀ) z_act = N x₀ − d,   x = x₀ − H⁻¹ Nᵀ z_act."""
 
-    def __init__(self, arrays: Arrays, unconstrained: tuple[FloatArray, FloatArray] | None = None) -> None:
+    def __init__(self, qp: QPArrays, unconstrained: tuple[FloatArray, FloatArray] | None = None) -> None:
         """``unconstrained``: (H's upper Cholesky factor, x₀) if the caller has them (LAPACK's ``dposv``)."""
-        _, g, _, _, _, l, u = arrays  # noqa: E741
-        self.arrays = arrays
-        self.dual_tol = DUAL_TOL * (1.0 + float(np.abs(g).max()))
-        self.upper, self.lower = u + PRIMAL_TOL, l - PRIMAL_TOL
+        self.qp = qp
+        self.dual_tol = DUAL_TOL * (1.0 + float(np.abs(qp.g).max()))
+        self.upper, self.lower = qp.u + PRIMAL_TOL, qp.l - PRIMAL_TOL
         # False: not computed yet
         self._factor: tuple[FloatArray, FloatArray] | bool | None = False if unconstrained is None else unconstrained
 
     def _unconstrained(self) -> tuple[FloatArray, FloatArray] | None:
         """(Cholesky factor of H, x₀), or None with equality rows or an H that is not positive definite."""
         if self._factor is False:
-            H, g, _, b, _, _, _ = self.arrays
+            qp = self.qp
             self._factor = None
-            if not b.shape[0]:
-                c, info = lapack.dpotrf(H, lower=0, clean=1)
+            if not qp.b.shape[0]:
+                c, info = lapack.dpotrf(qp.H, lower=0, clean=1)
                 if info == 0:
-                    x0, info = lapack.dpotrs(c, g)
+                    x0, info = lapack.dpotrs(c, qp.g)
                     if info == 0:
                         np.negative(x0, out=x0)
                         self._factor = (c, x0)
@@ -216,20 +227,20 @@ class ActiveSets:
         """:func:`solve_on_active_set`, by the Schur complement where there are no equality rows."""
         un = self._unconstrained()
         if un is None:
-            return solve_on_active_set(self.arrays, active)
+            return solve_on_active_set(self.qp, active)
         c, x0 = un
-        _, _, _, _, C, l, u = self.arrays  # noqa: E741
+        qp = self.qp
         idx = np.flatnonzero(active)
-        z = np.zeros(l.shape[0])
+        z = np.zeros(qp.l.shape[0])
         if not idx.size:
             return x0.copy(), np.zeros(0), z
-        N = C[idx]
+        N = qp.C[idx]
         W, info = lapack.dpotrs(c, N.T)  # H⁻¹ Nᵀ
         r = N.dot(x0)
-        r -= np.where(active[idx] > 0, u[idx], l[idx])
+        r -= np.where(active[idx] > 0, qp.u[idx], qp.l[idx])
         _, za, info = lapack.dposv(N.dot(W), r)
         if info != 0:  # dependent active rows: the general solve (least squares)
-            return solve_on_active_set(self.arrays, active)
+            return solve_on_active_set(self.qp, active)
         z[idx] = za
         return x0 - W.dot(za), np.zeros(0), z
 
@@ -237,7 +248,7 @@ class ActiveSets:
         """None if (x, z) from :meth:`solve` with ``active`` passes the check (:func:`accept`); else the active set
         of a primal-dual active-set step (Hintermüller, Ito & Kunisch, SIAM J. Optim. 13, 2002): the active rows
         whose multiplier has its sign, and the rows that x violates, at the bound they violate."""
-        C = self.arrays[4]
+        C = self.qp.C
         if not C.shape[0]:
             return None
         s = C.dot(x)
@@ -251,22 +262,22 @@ class ActiveSets:
         return new
 
 
-def active_set_of(arrays: Arrays, x: FloatArray, z: FloatArray | None, tol: float = 1e-6) -> np.ndarray:
+def active_set_of(qp: QPArrays, x: FloatArray, z: FloatArray | None, tol: float = 1e-6) -> np.ndarray:
     """The active set a solver's (x, z) points at: with multipliers, the rows whose multiplier is above ``tol``
     (1 + ‖g‖∞) with a bound on its side (a solver stopped early can leave the row short of its bound); without,
     the rows within ``tol`` (1 + |bound|) of a bound. The exact solve then decides: a row taken active wrongly
     comes out with a multiplier of the wrong sign, a row left out beyond its bound, and the check refuses it."""
-    _, g, _, _, C, l, u = arrays  # noqa: E741
-    active = np.zeros(l.shape[0], dtype=np.int8)
+    lo, up = qp.l, qp.u
+    active = np.zeros(lo.shape[0], dtype=np.int8)
     if z is not None:
-        big = tol * (1.0 + float(np.abs(g).max()))
-        active[(z > big) & np.isfinite(u)] = 1
-        active[(z < -big) & np.isfinite(l)] = -1
+        big = tol * (1.0 + float(np.abs(qp.g).max()))
+        active[(z > big) & np.isfinite(up)] = 1
+        active[(z < -big) & np.isfinite(lo)] = -1
         return active
-    s = C.dot(x)
+    s = qp.C.dot(x)
     with np.errstate(invalid="ignore"):  # (an infinite bound is never near)
-        near_u = ((u - s) <= tol * (1.0 + np.abs(u))) & np.isfinite(u)
-        near_l = ((s - l) <= tol * (1.0 + np.abs(l))) & np.isfinite(l)
+        near_u = ((up - s) <= tol * (1.0 + np.abs(up))) & np.isfinite(up)
+        near_l = ((s - lo) <= tol * (1.0 + np.abs(lo))) & np.isfinite(lo)
     active[near_u] = 1
     active[near_l & ~near_u] = -1
     return active

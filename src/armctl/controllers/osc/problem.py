@@ -10,8 +10,54 @@ import numpy as np
 
 from armctl._checks import FloatArray
 
-#: a QP as the arrays (H, g, A, b, C, l, u) of QPProblem's formulation
-Arrays = tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]
+
+@dataclass(frozen=True, slots=True)
+class QPArrays:
+    """The arrays of one QP, without names: what the solvers and the optimality check take::
+
+        minimise   ½ xᵀ H x + gᵀ x
+        subject to A x = b,   l ≤ C x ≤ u
+
+    (:class:`QPProblem` is the same QP with its variables and rows named; ``problem.arrays`` gives its arrays).
+
+    Attributes
+    ----------
+    H : ndarray, shape (nx, nx)
+        The cost's Hessian (symmetric positive definite).
+    g : ndarray, shape (nx,)
+        The cost's gradient at x = 0.
+    A : ndarray, shape (me, nx)
+        The equality rows.
+    b : ndarray, shape (me,)
+        Their right-hand side.
+    C : ndarray, shape (mi, nx)
+        The inequality rows.
+    l, u : ndarray, shape (mi,)
+        Their lower and upper bounds (±inf: no bound).
+    """
+
+    H: FloatArray
+    g: FloatArray
+    A: FloatArray
+    b: FloatArray
+    C: FloatArray
+    l: FloatArray  # noqa: E741  (the name of the bound in the formulation)
+    u: FloatArray
+
+    @property
+    def nx(self) -> int:
+        """Number of decision variables."""
+        return int(self.g.shape[0])
+
+    @property
+    def me(self) -> int:
+        """Number of equality rows."""
+        return int(self.b.shape[0])
+
+    @property
+    def mi(self) -> int:
+        """Number of inequality rows."""
+        return int(self.l.shape[0])
 
 
 @dataclass(frozen=True)
@@ -74,6 +120,11 @@ class QPProblem:
     def nx(self) -> int:
         """Number of decision variables."""
         return int(self.H.shape[0])
+
+    @property
+    def arrays(self) -> QPArrays:
+        """The QP's arrays without the names (read-only, shared with this problem)."""
+        return QPArrays(self.H, self.g, self.A, self.b, self.C, self.l, self.u)
 
     def block(self, x: FloatArray, name: str) -> FloatArray:
         """The part of a solution that is one variable block.

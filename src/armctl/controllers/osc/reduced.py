@@ -34,10 +34,11 @@ from armctl._checks import FloatArray
 from armctl.controllers.osc.build import QPBuilder, StepQP
 from armctl.controllers.osc.chain import QPFailure, SolverChain
 from armctl.controllers.osc.diagnose import raise_unsolved
+from armctl.controllers.osc.hierarchy import OSCSolution
 from armctl.controllers.osc.layout import Layout
 from armctl.controllers.osc.levels import LevelPlan, LevelRows
 from armctl.controllers.osc.optimality import verified
-from armctl.controllers.osc.problem import Arrays
+from armctl.controllers.osc.problem import QPArrays
 from armctl.controllers.osc.scale import MAX_TASK_RHS, refuse_scale
 from armctl.controllers.osc.solve import QPSolution
 from armctl.controllers.osc.state import ModelState
@@ -69,7 +70,7 @@ class QddStep:
         bounds: list[tuple[FloatArray, FloatArray]],
         qdd: FloatArray,
         tau: FloatArray,
-        arrays: Arrays | None = None,
+        arrays: QPArrays | None = None,
         solution: QPSolution | None = None,
         generated: GeneratedQddData | None = None,
     ) -> None:
@@ -252,11 +253,12 @@ class QddQP:
         mass: FloatArray,
         hf: FloatArray,
         bounds: list[tuple[FloatArray, FloatArray]],
-    ) -> Arrays:
-        """The QP (H, g, A, b, C, l, u) on q̈ (its rows those of the public problem, torque rows shifted by h')."""
+    ) -> QPArrays:
+        """The QP on q̈ (its rows those of the public problem, torque rows shifted by h')."""
+        A, b = self.no_rows
         if self.torque_only:  # one torque limit: C = M, bounds shifted by h'
             lo, up = bounds[0]
-            return (np.array(H), g.copy(), *self.no_rows, mass.copy(), lo - hf, up - hf)
+            return QPArrays(np.array(H), g.copy(), A, b, mass.copy(), lo - hf, up - hf)
         C = self.C_template.copy()
         lo = np.concatenate([b[0] for b in bounds]) if bounds else np.zeros(0)
         up = np.concatenate([b[1] for b in bounds]) if bounds else np.zeros(0)
@@ -264,8 +266,7 @@ class QddQP:
             C[r] = mass
             lo[r] -= hf
             up[r] -= hf
-        A, b = self.no_rows
-        return (np.array(H), g.copy(), A, b, C, lo, up)
+        return QPArrays(np.array(H), g.copy(), A, b, C, lo, up)
 
     def public(self, result: QddStep) -> tuple[StepQP, QPSolution]:
         """The public :class:`StepQP` of the last step (x = [q̈; τ]) and its solution mapped onto it: x = [q̈; τ],
@@ -282,6 +283,11 @@ class QddQP:
         if sol is None:
             return step, QPSolution(x, "solved", 0, "active set", y, z, "active set", 0, np.zeros(z.shape[0], np.int8))
         return step, QPSolution(x, sol.status, sol.iterations, sol.solver, y, z, sol.stage, sol.fallbacks, sol.active)
+
+    def solution(self, result: QddStep) -> OSCSolution:
+        """The public :class:`OSCSolution` of a step (:meth:`public`)."""
+        step, mapped = self.public(result)
+        return OSCSolution(step, mapped.x, (mapped,), ("solved",), None, [None])
 
     def public_step(self, bounds: list[tuple[FloatArray, FloatArray]]) -> StepQP:
         """The public :class:`StepQP` of the rows in the workspace (those of the last step)."""

@@ -1,13 +1,13 @@
 """Solvers of the controller's QPs: proxsuite's dense ProxQP, warm-started from the previous control period,
 or any solver of qpsolvers.
 
-Inside a control step the controller calls ``solve_raw(arrays, slot, mode)`` on the arrays (H, g, A, b, C, l, u)
-of a QP; it returns a :class:`QPSolution` with the multipliers, or raises :class:`~armctl.errors.SolverError`
-with the solver's status — nothing more: whether the solution is the optimum is checked by the controller
-(:mod:`~armctl.controllers.osc.optimality`), which also decides what to try next
-(:mod:`~armctl.controllers.osc.chain`). ``solve(problem)``, for a user's own call on a
-:class:`~armctl.controllers.osc.problem.QPProblem`, diagnoses a failure instead: a problem with no feasible
-point raises :class:`~armctl.errors.InfeasibleError` naming the rows that conflict. Never a ``None``.
+Inside a control step the controller calls ``solve_raw(arrays, slot, mode)`` on the
+:class:`~armctl.controllers.osc.problem.QPArrays` (H, g, A, b, C, l, u) of a QP; it returns a :class:`QPSolution`
+with the multipliers, or raises :class:`~armctl.errors.SolverError` with the solver's status — nothing more:
+whether the solution is the optimum is checked by the controller (:mod:`~armctl.controllers.osc.optimality`),
+which also decides what to try next (:mod:`~armctl.controllers.osc.chain`). ``solve(problem)``, for a user's own
+call on a :class:`~armctl.controllers.osc.problem.QPProblem`, diagnoses a failure instead: a problem with no
+feasible point raises :class:`~armctl.errors.InfeasibleError` naming the rows that conflict. Never a ``None``.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ import numpy as np
 
 from armctl._checks import FloatArray, scalar
 from armctl.controllers.osc.diagnose import raise_failure
-from armctl.controllers.osc.problem import Arrays, QPProblem
+from armctl.controllers.osc.problem import QPArrays, QPProblem
 from armctl.errors import SolverError, UnknownNameError
 
 #: the ways ``solve_raw`` can start: from the slot's previous solution, from scratch with the solver's own
@@ -146,11 +146,11 @@ class ProxQPSolver:
             ProxQP failed on a feasible problem (or the diagnosis failed too).
         """
         try:
-            return self.solve_raw((p.H, p.g, p.A, p.b, p.C, p.l, p.u), slot)
+            return self.solve_raw(p.arrays, slot)
         except SolverError as err:
             raise_failure(p, self.name, str(err.value), err.result)
 
-    def _new_qp(self, key: tuple[int, int, int, int], arrays: Arrays, defaults: bool) -> Any:
+    def _new_qp(self, key: tuple[int, int, int, int], arrays: QPArrays, defaults: bool) -> Any:
         px = self._proxqp
         qp = px.dense.QP(key[1], key[2], key[3])
         qp.settings.eps_abs = self.eps_abs
@@ -166,16 +166,15 @@ class ProxQPSolver:
             qp.settings.eps_duality_gap_abs = self.eps_abs
             qp.settings.eps_duality_gap_rel = 0.0
             qp.settings.initial_guess = px.InitialGuess.EQUALITY_CONSTRAINED_INITIAL_GUESS
-        H, g, A, b, C, l, u = arrays  # noqa: E741
-        qp.init(H, g, A, b, C, l, u)
+        qp.init(arrays.H, arrays.g, arrays.A, arrays.b, arrays.C, arrays.l, arrays.u)
         return qp
 
-    def solve_raw(self, arrays: Arrays, slot: int = 0, mode: str = "warm") -> QPSolution:
+    def solve_raw(self, arrays: QPArrays, slot: int = 0, mode: str = "warm") -> QPSolution:
         """Solve a QP given as its arrays (the solver interface of the controller's chain).
 
         Parameters
         ----------
-        arrays : tuple of ndarray
+        arrays : QPArrays
             The QP (H, g, A, b, C, l, u).
         slot : int, optional
             Its slot (one per priority level): the warm starts are kept per slot and problem shape.
@@ -194,8 +193,8 @@ class ProxQPSolver:
         SolverError
             ProxQP does not report SOLVED (the error carries its status).
         """
-        H, g, A, b, C, l, u = arrays  # noqa: E741
-        key = (slot, H.shape[0], b.shape[0], l.shape[0])
+        H, g, A, b, C, lb, ub = arrays.H, arrays.g, arrays.A, arrays.b, arrays.C, arrays.l, arrays.u
+        key = (slot, H.shape[0], b.shape[0], lb.shape[0])
         qp = self._qps.get(key) if mode == "warm" else None
         if qp is None:
             qp = self._new_qp(key, arrays, defaults=mode == "defaults")
@@ -203,14 +202,14 @@ class ProxQPSolver:
             if mode != "defaults":
                 qp.settings.initial_guess = self._proxqp.InitialGuess.WARM_START_WITH_PREVIOUS_RESULT
                 self._qps[key] = qp
-                self._cl[key] = (C, l, u)
+                self._cl[key] = (C, lb, ub)
         else:
             prev = self._cl[key]
-            if prev[0] is C and prev[1] is l and prev[2] is u:  # constant inequality rows (read-only arrays)
+            if prev[0] is C and prev[1] is lb and prev[2] is ub:  # constant inequality rows (read-only arrays)
                 qp.update(H, g, A, b, None, None, None)
             else:
-                qp.update(H, g, A, b, C, l, u)
-                self._cl[key] = (C, l, u)
+                qp.update(H, g, A, b, C, lb, ub)
+                self._cl[key] = (C, lb, ub)
             qp.solve()
         res = qp.results
         info = res.info
@@ -277,16 +276,16 @@ class QpsolversSolver:
             The solver failed on a feasible problem (or the diagnosis failed too).
         """
         try:
-            return self.solve_raw((p.H, p.g, p.A, p.b, p.C, p.l, p.u), slot)
+            return self.solve_raw(p.arrays, slot)
         except SolverError as err:
             raise_failure(p, self.name, str(err.value), err.result)
 
-    def solve_raw(self, arrays: Arrays, slot: int = 0, mode: str = "warm") -> QPSolution:
+    def solve_raw(self, arrays: QPArrays, slot: int = 0, mode: str = "warm") -> QPSolution:
         """Solve a QP given as its arrays (the solver interface of the controller's chain).
 
         Parameters
         ----------
-        arrays : tuple of ndarray
+        arrays : QPArrays
             The QP (H, g, A, b, C, l, u); each finite bound of l ≤ C x ≤ u becomes a row of G x ≤ h.
         slot : int, optional
             Its slot (one per priority level): the warm starts are kept per slot and number of variables.
@@ -305,11 +304,11 @@ class QpsolversSolver:
         SolverError
             The solver finds no solution, or a non-finite one.
         """
-        H, g, A, b, C, l, u = arrays  # noqa: E741
+        H, g, A, b, C, lb, ub = arrays.H, arrays.g, arrays.A, arrays.b, arrays.C, arrays.l, arrays.u
         key = (slot, H.shape[0])
-        up, lo = np.isfinite(u), np.isfinite(l)
+        up, lo = np.isfinite(ub), np.isfinite(lb)
         G = np.vstack([C[up], -C[lo]])
-        h = np.concatenate([u[up], -l[lo]])
+        h = np.concatenate([ub[up], -lb[lo]])
         problem = self._qpsolvers.Problem(
             np.array(H),
             np.array(g),
@@ -328,7 +327,7 @@ class QpsolversSolver:
         if mode != "defaults":
             self._x[key] = x
         y = np.asarray(sol.y, dtype=float) if len(b) and sol.y is not None else np.zeros(len(b))
-        z = np.zeros(len(l))
+        z = np.zeros(len(lb))
         if len(h) and sol.z is not None:
             k = int(up.sum())
             z[up] += sol.z[:k]

@@ -1,0 +1,189 @@
+"""`ForceLoop`: what force control and parallel force/position control share — the desired force, the
+PI action on the force error, the force source and the inner motion loop.
+
+    e_f = P (f_d − f),    x_F = K_F e_f + K_I ∫ e_f dt   [m]
+
+f [N] is the force the arm exerts (world axes), f_d the desired one, P the projector on the force-controlled
+directions. The commanded position p_c = p_d + P x_F goes to the inner motion loop
+(:class:`~armctl.controllers.interaction.inner.InnerMotion`): where the environment resists, pushing the command
+into it raises the force, so x_F moves towards the force wanted; the integral makes the error vanish at rest.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from armctl._checks import FloatArray, all_finite, boolean, readonly, real_array, vector
+from armctl.controllers.base import Controller
+from armctl.controllers.interaction.force_source import ForceInput
+from armctl.controllers.interaction.gains import symmetric_psd
+from armctl.controllers.interaction.inner import InnerMotion
+from armctl.controllers.interaction.task_space import FrameTarget
+from armctl.controllers.osc.tasks.target import Trajectory
+from armctl.dynamics.base import Dynamics
+from armctl.errors import InvalidParameterError
+from armctl.references import Reference
+
+
+class ForceTarget:
+    """t → f_d (3,) [N] from a constant (3,) or a callable (its output checked at each call); picklable when the
+    callable is.
+
+    Parameters
+    ----------
+    force : array_like or callable
+        f_d, or t [s] → f_d.
+    """
+
+    def __init__(self, force: Any) -> None:
+        self.fn = force if callable(force) else None
+        self.value = None if callable(force) else vector(force, 3, "force")
+
+    def __call__(self, t: float) -> FloatArray:
+        if self.fn is not None:
+            return vector(self.fn(t), 3, "force(t)")
+        assert self.value is not None  # set whenever fn is None
+        return self.value
+
+
+def projector(directions: ArrayLike | None) -> FloatArray:
+    """P (3×3), the orthogonal projector on the span of ``directions`` ((3,) or (k, 3) rows); None: I."""
+    if directions is None:
+        return np.eye(3)
+    d = real_array(directions, "directions")
+    d = d.reshape(1, 3) if d.shape == (3,) else d
+    if d.ndim != 2 or d.shape[1] != 3 or not 1 <= d.shape[0] <= 3 or not np.isfinite(d).all():
+        raise InvalidParameterError(
+            f"directions must be a (3,) vector or (k, 3) rows (k ≤ 3) of world axes, got {directions!r}",
+            value=directions,
+        )
+    u, s, _ = np.linalg.svd(d.T, full_matrices=False)
+    if s[-1] <= 1e-9 * s[0]:
+        raise InvalidParameterError(f"directions must be linearly independent, got {directions!r}", value=directions)
+    return np.asarray(u @ u.T)
+
+
+class ForceLoop(Controller):
+    """The shared machinery (see the module); :class:`ForceControl` and :class:`ParallelForcePosition` set P.
+
+    Parameters
+    ----------
+    dynamics, force, force_gain, integral_gain, frame, force_source, inner, kp, kd, posture, posture_kp,
+    compensate, compile
+        As in :class:`~armctl.controllers.ForceControl`.
+    directions : ndarray, shape (3, 3)
+        P.
+    """
+
+    dynamics: Dynamics
+
+    def __init__(
+        self,
+        dynamics: Dynamics,
+        force: Any,
+        force_gain: ArrayLike,
+        integral_gain: ArrayLike,
+        frame: str | None,
+        directions: FloatArray,
+        force_source: Any,
+        inner: str,
+        kp: ArrayLike,
+        kd: ArrayLike | None,
+        posture: ArrayLike | None,
+        posture_kp: ArrayLike,
+        compensate: bool,
+        compile: bool | str,
+    ) -> None:
+        super().__init__(dynamics)
+        owner = type(self).__name__
+        self.force_input = ForceInput(force_source, owner)
+        self.reads = self.force_input.reads  # per instance: what it reads depends on the source
+        self.force_target = ForceTarget(force)
+        self.force_gain = readonly(symmetric_psd(force_gain, (3,), "force_gain", "m/N"))
+        self.integral_gain = readonly(symmetric_psd(integral_gain, (3,), "integral_gain", "m/(N·s)"))
+        self.directions = readonly(np.array(directions))
+        self._free = readonly(np.eye(3) - self.directions)
+        self.frame = frame
+        self.target = FrameTarget(owner, 6)
+        self.inner = InnerMotion(dynamics, inner, kp, kd, posture_kp, frame=frame, compile=compile, force_loop=True)
+        self.posture = None if posture is None else vector(posture, self.n, "posture")
+        self.compensate = boolean(compensate, "compensate")
+        self._pkf = readonly(self.directions @ self.force_gain)
+        self._pki = readonly(self.directions @ self.integral_gain)
+        self._free6 = np.eye(6)
+        self._free6[:3, :3] = self._free
+        readonly(self._free6)
+        gen = self.inner.generated
+        if gen is not None:
+            inner_gains = (self.inner.kp, self.inner.kd, self.inner.posture_kp, self.inner.posture_kd)
+            gen.set_gains(*inner_gains, self.directions, self._pkf, self._pki, self.compensate)
+        self._integral = np.zeros(3)  # ∫ e_f dt [N·s], by the rectangle rule between calls
+        self._t: float | None = None
+        self._dt = np.zeros(1)
+
+    def set_target(
+        self, pose: ArrayLike, twist: ArrayLike | None = None, acceleration: ArrayLike | None = None
+    ) -> None:
+        """Set the motion target (world axes): the 4×4 pose p_d, R_d [m], the twist [m/s; rad/s] and the
+        acceleration [m/s²; rad/s²] (None: zero). Unset, the frame holds the pose it has at the first call.
+
+        Parameters
+        ----------
+        pose : array_like, shape (4, 4)
+            The pose.
+        twist, acceleration : array_like, shape (6,), optional
+            Its rates.
+        """
+        self.target.set(pose, twist, acceleration)
+
+    def set_trajectory(self, fn: Trajectory) -> None:
+        """Follow a motion trajectory.
+
+        Parameters
+        ----------
+        fn : callable
+            ``fn(t) -> (pose, twist, acceleration)`` in :meth:`set_target`'s terms.
+        """
+        self.target.follow(fn)
+
+    def reset(self) -> None:
+        super().reset()
+        self._integral = np.zeros(3)
+        self._t = None
+        self.target.reset()
+        self.force_input.reset()
+
+    def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
+        target = self.target
+        if not target.holder.is_set:
+            target.hold(self.dynamics.kernel.frame_pose(q, self.frame))
+        pose, twist, acc = target.holder.at(t)
+        h = self.force_input.wrench(self, t, q, qd, self.frame)
+        f_d = self.force_target(t)
+        dt = t - self._t if self._t is not None and t > self._t else 0.0  # a new run's clock restarts: no step back
+        self._t = t
+        posture = self.posture if self.posture is not None else ref.q
+        gen = self.inner.generated
+        if gen is not None:
+            self._dt[0] = dt
+            out = gen.run_force((q, qd, pose.ravel(), twist, acc, posture, h, f_d, self._integral, self._dt))
+            if all_finite(out):
+                n = self.n
+                self._integral = out[n + 9 : n + 12]
+                self.last_log = {"force_error": out[n + 6 : n + 9], "offset": out[n + 12 :], "wrench": h}
+                self.last_log["error"] = out[n : n + 6]
+                return self.inner.with_friction(out[:n], qd)
+        e_f = self.directions @ (f_d - h[:3])
+        integral = self._integral + e_f * dt
+        x_f = self._pkf @ e_f + self._pki @ integral
+        cmd = pose.copy()
+        cmd[:3, 3] += x_f
+        tau, e = self.inner.command(
+            q, qd, cmd, self._free6 @ twist, self._free6 @ acc, posture, h if self.compensate else None
+        )
+        self._integral = integral
+        self.last_log = {"force_error": e_f, "offset": x_f, "wrench": h, "error": e}
+        return tau

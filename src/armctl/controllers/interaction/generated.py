@@ -1,0 +1,211 @@
+"""`GeneratedImpedance`: the whole Cartesian impedance law as one call of generated C code, for the laws with a
+constant damping and no inertia shaping (``CartesianImpedance(..., compile=...)``).
+
+At (q, q̇), the target (p_d, R_d, v_d) and the posture q_n, one call of code generated with CasADi from the model
+(its numbers built in) evaluates
+
+    τ = Jᵀ F + C q̇ + g  [+ Nᵀ τ_n],     F = K e + D (v_d − J q̇) + Λ a_d
+
+with the frame's kinematics from :mod:`armctl.dynamics.symbolic_frames`, C q̇ + g by Newton–Euler at q̈ = 0 and
+M(q) by composite rigid bodies (:mod:`armctl.dynamics.recursive`), e as the OSC tasks (the rotation error by
+:func:`~armctl.controllers.osc.tasks.rotation.rotation_error_sx`) and, with null-space stiffness,
+Nᵀ τ_n = τ_n − Jᵀ (J M⁻¹ Jᵀ)⁻¹ J M⁻¹ τ_n by Cholesky factorisations written out. K, D, K_n and D_n are an input of
+the code. The library is compiled once per model, frame and variant and cached on disk
+(:mod:`armctl.codegen.library`); a singular configuration gives NaN, which the controller answers by its NumPy
+path (and its named error).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import logging
+import time
+from typing import Any
+
+import casadi as cs
+import numpy as np
+
+from armctl._checks import FloatArray
+from armctl.codegen import library as codegen
+from armctl.controllers.osc.tasks.rotation import rotation_error_sx
+from armctl.dynamics.base import Dynamics
+from armctl.dynamics.casadi_buffer import buffer_of, view
+from armctl.dynamics.recursive import inverse_dynamics, joint_transforms, mass_matrix
+from armctl.dynamics.symbolic_frames import frame_kinematics
+from armctl.model.robot import RobotModel
+
+#: bumped when the generated code changes, so that stale cached libraries are not loaded
+_CODE_VERSION = 4
+_NAME = "cartesian_impedance"
+_log = logging.getLogger(__name__)
+
+
+def cholesky_factor(a: Any) -> list[list[Any]]:
+    """L (lower, as nested lists of SX) with L Lᵀ = A, written out entry by entry."""
+    n = a.shape[0]
+    low: list[list[Any]] = [[None] * n for _ in range(n)]
+    for i in range(n):
+        for k in range(i + 1):
+            s = a[i, k]
+            for p in range(k):
+                s = s - low[i][p] * low[k][p]
+            low[i][k] = cs.sqrt(s) if i == k else s / low[k][k]
+    return low
+
+
+def cholesky_solve_columns(low: list[list[Any]], b: Any) -> Any:
+    """x with L Lᵀ x = b (b a vector or a matrix, column by column)."""
+    n = len(low)
+    cols = []
+    for c in range(b.shape[1]):
+        y: list[Any] = [None] * n
+        for i in range(n):
+            s = b[i, c]
+            for p in range(i):
+                s = s - low[i][p] * y[p]
+            y[i] = s / low[i][i]
+        x: list[Any] = [None] * n
+        for i in reversed(range(n)):
+            s = y[i]
+            for p in range(i + 1, n):
+                s = s - low[p][i] * x[p]
+            x[i] = s / low[i][i]
+        cols.append(cs.vertcat(*x))
+    return cs.horzcat(*cols)
+
+
+def sizes(n: int, axes: int) -> tuple[int, int]:
+    """(inputs, parameters): x = [q; q̇; target (the 4×4 pose row by row, or p_d); v_d; a_d; q_n],
+    p = [K; D; K_n; D_n]."""
+    return 2 * n + (16 if axes == 6 else 3) + 2 * axes + n, 2 * axes * axes + 2 * n * n
+
+
+def impedance_function(model: RobotModel, frame: str | None, axes: int, null: bool, split: bool = False) -> cs.Function:
+    """The CasADi function of the module: (x, p) → [τ; e; F]. ``split``: the damping term is left out (D is not
+    read) and the outputs are [τ₀; e; F₀; ė; Λ; J] (Λ and J column by column), for a damping computed from Λ
+    outside: τ = τ₀ + Jᵀ D ė, F = F₀ + D ė."""
+    n = model.n
+    nx, npar = sizes(n, axes)
+    x, par = cs.SX.sym("x", nx), cs.SX.sym("p", npar)
+    q, qd = x[:n], x[n : 2 * n]
+    k = 2 * n
+    tf = joint_transforms(model, q)
+    pos, rot, jac, _ = frame_kinematics(model, q, qd, frame, tf)
+    if axes == 6:
+        pose = cs.reshape(x[k : k + 16], 4, 4).T  # row by row
+        e = cs.vertcat(pose[:3, 3] - pos, rotation_error_sx(pose[:3, :3], rot))
+        k += 16
+    else:
+        e = x[k : k + 3] - pos
+        k += 3
+        jac = jac[:3, :]
+    v_d, a_d, q_n = x[k : k + axes], x[k + axes : k + 2 * axes], x[k + 2 * axes : k + 2 * axes + n]
+    m2 = axes * axes
+    stiff, damp = cs.reshape(par[:m2], axes, axes), cs.reshape(par[m2 : 2 * m2], axes, axes)
+    low_m = cholesky_factor(mass_matrix(model, q, tf))
+    mij = cholesky_solve_columns(low_m, jac.T)  # M⁻¹ Jᵀ
+    low_a = cholesky_factor(jac @ mij)  # J M⁻¹ Jᵀ = Λ⁻¹
+    edot = v_d - jac @ qd
+    force = stiff @ e + cholesky_solve_columns(low_a, a_d)  # K e + Λ a_d
+    if not split:
+        force = force + damp @ edot
+    tau = jac.T @ force + inverse_dynamics(model, q, qd, cs.SX.zeros(n), transforms=tf)
+    if null:
+        kn = cs.reshape(par[2 * m2 : 2 * m2 + n * n], n, n)
+        dn = cs.reshape(par[2 * m2 + n * n :], n, n)
+        tau_n = kn @ (q_n - q) - dn @ qd
+        z = cholesky_solve_columns(low_a, mij.T @ tau_n)  # Λ J M⁻¹ τ_n
+        tau = tau + tau_n - jac.T @ z
+    if split:
+        lam = cholesky_solve_columns(low_a, cs.SX.eye(axes))
+        return cs.Function(_NAME, [x, par], [cs.vertcat(tau, e, force, edot, cs.vec(lam), cs.vec(jac))])
+    return cs.Function(_NAME, [x, par], [cs.vertcat(tau, e, force)])
+
+
+def _tag(model: RobotModel, frame: str | None, axes: int, null: bool, split: bool) -> str:
+    f = model.frame(frame)
+    where = hashlib.sha256(f.placement.tobytes()).hexdigest()[:12]
+    return (
+        f"impedance|{model.fingerprint(inertial=True, tool=False)}|v{_CODE_VERSION}|{f.name}:{f.joint}:{where}"
+        f"|axes={axes}|null={null}|split={split}"
+    )
+
+
+class GeneratedImpedance:
+    """The generated law of the module for a frame of ``dynamics``' model, bound to buffers of its own. Builds
+    or loads the library (the first time for a model and frame: seconds; then milliseconds). Not thread-safe.
+
+    Parameters
+    ----------
+    dynamics : Dynamics
+        The controller's model (its cache folder too).
+    frame : str or None
+        The controlled frame.
+    axes : {3, 6}
+        The law's axes.
+    null : bool
+        With the null-space term.
+    split : bool, optional
+        Without the damping term, and with Λ, J and ė as outputs (see :func:`impedance_function`).
+    """
+
+    def __init__(self, dynamics: Dynamics, frame: str | None, axes: int, null: bool, split: bool = False) -> None:
+        model = dynamics.model
+        self.dynamics, self.frame, self.axes, self.null, self.split = dynamics, frame, axes, null, split
+        cache_dir = dynamics.options.get("cache_dir")
+        tag = _tag(model, frame, axes, null, split)
+        built = not codegen.is_cached([_NAME], tag, cache_dir)
+        t0 = time.perf_counter()
+        fn = codegen.cached([_NAME], tag, lambda: [impedance_function(model, frame, axes, null, split)], cache_dir)[
+            _NAME
+        ]
+        if built:
+            _log.warning(
+                "armctl: generated and compiled the Cartesian impedance law for %r in %.1f s (cached in %s)",
+                model.name,
+                time.perf_counter() - t0,
+                codegen.cache_root(cache_dir),
+            )
+        nx, npar = sizes(model.n, axes)
+        self.n = model.n
+        size = model.n + 2 * axes + ((axes + axes * axes + axes * model.n) if split else 0)
+        self.inp, self.par, self.out = np.zeros(nx), np.zeros(npar), np.zeros(size)
+        buf, self._run = buffer_of(fn)
+        buf.set_arg(0, view(self.inp))
+        buf.set_arg(1, view(self.par))
+        buf.set_res(0, view(self.out))
+        self._buf = buf  # keeps the binding alive
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        # rebuilt (the library loads from the cache: the buffers are this process's), with the gains
+        args = (self.dynamics, self.frame, self.axes, self.null, self.split)
+        return (GeneratedImpedance, args, {"par": self.par.copy()})
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.par[...] = state["par"]
+
+    def set_gains(
+        self, stiffness: FloatArray, damping: FloatArray | None, null_k: FloatArray, null_d: FloatArray
+    ) -> None:
+        """K, D (None: zero, for ``split``), K_n, D_n into the parameter buffer (column by column: symmetric)."""
+        parts = [stiffness.ravel(), np.zeros(stiffness.size) if damping is None else damping.ravel()]
+        if self.null:
+            parts += [null_k.ravel(), null_d.ravel()]
+        else:
+            parts += [np.zeros(self.par.size - 2 * stiffness.size)]
+        np.concatenate(parts, out=self.par)
+
+    def run(
+        self,
+        q: FloatArray,
+        qd: FloatArray,
+        value: FloatArray,
+        velocity: FloatArray,
+        acceleration: FloatArray,
+        posture: FloatArray,
+    ) -> FloatArray:
+        """[τ; e; F] (a new array) at (q, q̇) for the target ``value`` (4×4 or (3,)), ``velocity``,
+        ``acceleration`` and ``posture``."""
+        np.concatenate((q, qd, value.ravel(), velocity, acceleration, posture), out=self.inp)
+        self._run()
+        return self.out.copy()

@@ -1,0 +1,102 @@
+"""What the task-space interaction controllers share: the frame's target (a pose, or a position for 3 axes),
+its error as in the operational-space tasks, and the operational-space inertia.
+
+    e = [p_d − p;  log(R_d Rᵀ)]  (6 axes)   or   e = p_d − p  (3 axes),     ė = v_d − J q̇
+
+(world axes at the frame origin, rows [linear; angular]; log: SO(3) → ℝ³ as
+:func:`armctl.controllers.osc.tasks.rotation.rotation_error`), and Λ = (J M⁻¹ Jᵀ)⁻¹, J̄ᵀ = Λ J M⁻¹.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike
+from scipy.linalg import lapack
+
+from armctl._checks import FloatArray
+from armctl.controllers.osc.state import FrameKinematics
+from armctl.controllers.osc.tasks.rotation import rotation_error
+from armctl.controllers.osc.tasks.target import TargetHolder, Trajectory
+from armctl.errors import SingularConfigurationError
+
+
+class FrameTarget:
+    """The target of a frame: constant (:meth:`set`) or a trajectory (:meth:`follow`); unset, the pose the
+    frame has at the first call is held (until :meth:`reset`).
+
+    Parameters
+    ----------
+    owner : str
+        The controller's name, for the error messages.
+    axes : {3, 6}
+        6: a pose (4×4) with twist and acceleration (6,); 3: a position (3,) with velocity and acceleration (3,).
+    """
+
+    def __init__(self, owner: str, axes: int) -> None:
+        self.axes = axes
+        self.holder = TargetHolder(owner, (4, 4) if axes == 6 else (3,), axes)
+        self._held = False
+
+    def set(self, value: ArrayLike, velocity: ArrayLike | None = None, acceleration: ArrayLike | None = None) -> None:
+        self.holder.set(value, velocity, acceleration)
+        self._held = False
+
+    def follow(self, fn: Trajectory) -> None:
+        self.holder.follow(fn)
+        self._held = False
+
+    def reset(self) -> None:
+        """Forget a target that was only the held first pose."""
+        if self._held:
+            self.holder = TargetHolder(self.holder.owner, self.holder.value_shape, self.holder.rate)
+            self._held = False
+
+    def hold(self, pose: FloatArray) -> None:
+        """Hold ``pose`` (4×4; its position for 3 axes) until :meth:`reset`, as the first call does unset."""
+        self.holder.set(np.array(pose) if self.axes == 6 else np.array(pose[:3, 3]))
+        self._held = True
+
+    def at(self, t: float, fk: FrameKinematics) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """(value, velocity, acceleration) at t [s]; the first call without a target holds the frame's pose."""
+        if not self.holder.is_set:
+            if self.axes == 6:
+                pose = np.eye(4)
+                pose[:3, :3], pose[:3, 3] = fk.rotation, fk.position
+                self.holder.set(pose)
+            else:
+                self.holder.set(np.array(fk.position))
+            self._held = True
+        return self.holder.at(t)
+
+    def error(self, value: FloatArray, fk: FrameKinematics) -> FloatArray:
+        """e (see the module) [m; rad]."""
+        if self.axes == 6:
+            return np.concatenate((value[:3, 3] - fk.position, rotation_error(value[:3, :3], fk.rotation)))
+        return value - fk.position
+
+
+def task_inertia(mass: FloatArray, jac: FloatArray, q: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Λ = (J M⁻¹ Jᵀ)⁻¹ [kg, kg·m²] and J̄ᵀ = Λ J M⁻¹.
+
+    Raises
+    ------
+    SingularConfigurationError
+        J M⁻¹ Jᵀ is singular at q (J loses rank): the impedance is not defined along the lost direction.
+    """
+    low_m, info = lapack.dpotrf(mass, lower=1)
+    if not info:
+        mij, info = lapack.dpotrs(low_m, jac.T, lower=1)  # M⁻¹ Jᵀ
+    if not info:
+        low_a, info = lapack.dpotrf(jac @ mij, lower=1)  # J M⁻¹ Jᵀ = L Lᵀ
+    if not info:
+        lam, info = lapack.dpotri(low_a, lower=1)  # its inverse, lower triangle
+    if info:
+        sv = np.linalg.svd(jac, compute_uv=False)
+        raise SingularConfigurationError(
+            f"the task Jacobian is singular at q = {q} (singular values {sv}): Λ = (J M⁻¹ Jᵀ)⁻¹ does not exist; "
+            "move away from the singularity or control fewer axes",
+            value=q,
+            sigma_min=float(sv[-1]),
+        )
+    lam = np.tril(lam) + np.tril(lam, -1).T
+    return lam, lam @ mij.T

@@ -1,0 +1,321 @@
+"""`GeneratedContactData`: the data of the QPs on y = [q̈; f] with active contacts
+(:mod:`~armctl.controllers.osc.contact_qp`) from one call of generated C code (``OperationalSpaceQP(...,
+compile=...)``).
+
+At (q, q̇), the tasks' targets and τ_f(q̇), one call of code generated with CasADi from the model evaluates what
+:meth:`~armctl.controllers.osc.contact_qp.ContactQP.step` builds from Pinocchio's terms:
+
+* B = [M | −J_1ᵀ … −J_kᵀ] and h' = C q̇ + g + τ_f (``brows`` = [B | −h']), with J_c the linear rows of each
+  contact frame's Jacobian;
+* the contacts' equality rows [G_q G_f | rhs] (``contact``), as :meth:`~armctl.controllers.osc.Contact.equality_rows`
+  gives them: fixed, J_c q̈ = −J̇_c q̇ − k_d v_c; sliding, nᵀJ_c q̈ = −nᵀ(J̇_c q̇ + k_d v_c) and
+  (t_i + μ ŝ_i n)ᵀ f = 0 with ŝ = v_t / √(‖v_t‖² + v_ε²);
+* the task rows [J | b] on y (``rows``), the motion tasks' as in :mod:`~armctl.controllers.osc.generated` and a
+  contact-force task's the identity (or nᵀ) on its contact's force with its target;
+* per priority level k, with T_k its weighted task rows and ε_k its regularisation:
+  H_k = T_kᵀT_k + ε_k (I + BᵀB), g_k = −T_kᵀt_k + ε_k Bᵀh', c_k = ‖t_k‖² + ε_k‖h'‖²;
+* with one level, the optimum on the contact rows A y = b alone (no inequality row active), y* and λ, by the Schur
+  complement of H (a Cholesky factorisation written out), and its residuals A y* − b and H y* + g + Aᵀλ: the
+  step takes it, without a solver, when they vanish to the optimality check's tolerances and every inequality
+  row holds.
+
+Gains, weights, the contacts' coefficients and ε_k are an input of the code, refreshed when a task's
+``revision`` changes. The tasks it takes are those of :func:`~armctl.controllers.osc.generated.supported` and
+:class:`~armctl.controllers.osc.ContactForceTask`; the library is compiled once and cached on disk, keyed by the
+model, the tasks, the levels, the contacts' frames and modes and whether the model has friction.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from collections.abc import Sequence
+from typing import Any
+
+import casadi as cs
+import numpy as np
+
+from armctl._checks import FloatArray
+from armctl.codegen import library as codegen
+from armctl.controllers.osc.contact import Contact
+from armctl.controllers.osc.generated import gram, supported, target_pieces, task_params, task_rows, task_tag
+from armctl.controllers.osc.generated_optimum import equality_optimum, verdict
+from armctl.controllers.osc.tasks.base import Task
+from armctl.controllers.osc.tasks.contact_force import ContactForceTask
+from armctl.dynamics.base import Dynamics
+from armctl.dynamics.casadi_buffer import buffer_of, view
+from armctl.dynamics.recursive import inverse_dynamics, joint_transforms, mass_matrix
+from armctl.dynamics.symbolic_frames import frame_kinematics
+from armctl.model.robot import RobotModel
+from armctl.references import Reference
+
+_CODE_VERSION = 2
+_NAME = "osc_contact_qp"
+
+
+def supported_contact(levels: Sequence[Sequence[Task]]) -> bool:
+    """Whether the generated code takes these levels' tasks: the motion tasks of
+    :func:`~armctl.controllers.osc.generated.supported` and contact-force tasks, not subclasses."""
+    motion = [tk for lev in levels for tk in lev if type(tk) is not ContactForceTask]
+    return all(type(tk) is ContactForceTask or supported([tk]) for lev in levels for tk in lev) and (
+        not motion or supported(motion)
+    )
+
+
+def contact_function(
+    model: RobotModel,
+    levels: Sequence[Sequence[Task]],
+    contacts: Sequence[Contact],
+    friction: bool,
+    limits: Sequence[str] | None = None,
+) -> cs.Function:
+    """The CasADi function of the module: ``f(inputs, params) -> (brows, contact, rows, H_0, g_0, c_0, …)`` with
+    ``inputs`` = [q; q̇; per task its target; τ_f if ``friction``] and ``params`` = [per contact n, t_1, t_2, μ,
+    k_d, v_ε; per motion task K_p, K_d, W^½; per force task W^½; per level ε_k]. With one level also the optimum
+    on the contact rows alone and its residuals (:mod:`~armctl.controllers.osc.generated_optimum`), and with
+    ``limits`` (the variable of each limit, ``"tau"`` or ``"qdd"``, whose bounds are constant) its verdict and
+    τ, ``params`` then ending with [per contact its cone rows (row by row); l; u]."""
+    n = model.n
+    q, qd = cs.SX.sym("q", n), cs.SX.sym("qd", n)
+    tf = joint_transforms(model, q)
+    cols: dict[str, tuple[int, int]] = {}
+    col = n
+    for c in contacts:
+        cols[c.name] = (col, col + 3)
+        col += 3
+    ny = col
+    inputs, params = [q, qd], []
+    mass = mass_matrix(model, q, tf)
+    bmat = cs.SX.zeros(n, ny)
+    bmat[:, :n] = mass
+    crows, crhs = [], []
+    for k, c in enumerate(contacts):
+        _, _, jac, drift = frame_kinematics(model, q, qd, c.frame, tf)
+        jv, acc0 = jac[:3, :], drift[:3]
+        vel = jv @ qd
+        nrm, t1, t2 = cs.SX.sym(f"normal{k}", 3), cs.SX.sym(f"t1_{k}", 3), cs.SX.sym(f"t2_{k}", 3)
+        mu, kd, veps = cs.SX.sym(f"mu{k}"), cs.SX.sym(f"kd{k}"), cs.SX.sym(f"veps{k}")
+        params += [nrm, t1, t2, mu, kd, veps]
+        a, b = cols[c.name]
+        bmat[:, a:b] = -jv.T
+        g = cs.SX.zeros(3, ny)
+        if c.mode == "fixed":
+            g[:, :n] = jv
+            rhs = -acc0 - kd * vel
+        else:
+            g[0, :n] = nrm.T @ jv
+            vt = cs.vertcat(cs.dot(t1, vel), cs.dot(t2, vel))
+            s = vt / cs.sqrt(cs.dot(vt, vt) + veps * veps)
+            g[1, a:b] = (t1 + mu * s[0] * nrm).T
+            g[2, a:b] = (t2 + mu * s[1] * nrm).T
+            rhs = cs.vertcat(-cs.dot(nrm, acc0) - kd * cs.dot(nrm, vel), 0.0, 0.0)
+        crows.append(g)
+        crhs.append(rhs)
+    tau_f = cs.SX.sym("tau_f", n) if friction else cs.SX.zeros(n)
+    hf = inverse_dynamics(model, q, qd, cs.SX.zeros(n), transforms=tf) + tau_f
+    rows: list[cs.SX] = []
+    rhs_all: list[cs.SX] = []
+    outputs_levels: list[tuple[cs.SX, cs.SX, cs.SX]] = []
+    for lev_idx, tasks in enumerate(levels):
+        jl: list[cs.SX] = []
+        bl: list[cs.SX] = []
+        wl: list[cs.SX] = []
+        for tk in tasks:
+            if type(tk) is ContactForceTask:
+                force = tk
+                a, b = cols[force.contact.name]
+                target, w = cs.SX.sym(f"force{lev_idx}_{len(jl)}", tk.dim), cs.SX.sym(f"fw{lev_idx}_{len(jl)}", tk.dim)
+                inputs.append(target)
+                params.append(w)
+                j = cs.SX.zeros(tk.dim, ny)
+                if force.normal_only:
+                    j[0, a:b] = cs.DM(force.contact.normal).T
+                else:
+                    j[:, a:b] = cs.SX.eye(3)
+                jl.append(j)
+                bl.append(target)
+                wl.append(w)
+            else:
+                ins, ps, jacs, task_b, ws = task_rows(model, q, qd, [tk], tf)
+                inputs += ins
+                params += ps
+                j = cs.SX.zeros(tk.dim, ny)
+                j[:, :n] = jacs[0]
+                jl.append(j)
+                bl.append(task_b[0])
+                wl.append(ws[0])
+        jall, ball, wall = cs.vertcat(*jl), cs.vertcat(*bl), cs.vertcat(*wl)
+        rows.append(jall)
+        rhs_all.append(ball)
+        eps = cs.SX.sym(f"eps{lev_idx}")
+        outputs_levels.append((jall * cs.repmat(wall, 1, ny), wall * ball, eps))
+    if friction:
+        inputs.append(tau_f)
+    outputs = [
+        cs.horzcat(bmat, -hf),
+        cs.horzcat(cs.vertcat(*crows), cs.vertcat(*crhs)) if contacts else cs.SX.zeros(0, ny + 1),
+        cs.horzcat(cs.vertcat(*rows), cs.vertcat(*rhs_all)),
+    ]
+    bth = bmat.T @ hf
+    bgram = gram(bmat)
+    for weighted, t, eps in outputs_levels:
+        params.append(eps)
+        outputs.append(gram(weighted) + eps * (cs.SX.eye(ny) + bgram))
+        outputs.append(-(weighted.T @ t) + eps * bth)
+        outputs.append(cs.dot(t, t) + eps * cs.dot(hf, hf))
+    if len(levels) == 1 and contacts:  # the optimum on the contact rows alone (no inequality row active)
+        optimum = equality_optimum(outputs[3], outputs[4], cs.vertcat(*crows), cs.vertcat(*crhs))
+        outputs += optimum
+        if limits is not None:
+            y = optimum[0]
+            tau = bmat @ y + hf
+            values = [tau if var == "tau" else y[:n] for var in limits]
+            for k, c in enumerate(contacts):
+                rows_c = c.cone_rows()[0].shape[0]
+                cone = cs.SX.sym(f"cone{k}", rows_c * 3)
+                params.append(cone)
+                a, b = cols[c.name]
+                values.append(cs.reshape(cone, 3, rows_c).T @ y[a:b])  # row by row in
+            v = cs.vertcat(*values)
+            lo, up = cs.SX.sym("lower", v.shape[0]), cs.SX.sym("upper", v.shape[0])
+            params += [lo, up]
+            outputs += [verdict(optimum, outputs[4], outputs[5], v, lo, up), tau]
+    return cs.Function(_NAME, [cs.vertcat(*inputs), cs.vertcat(*params)], [cs.densify(o) for o in outputs])
+
+
+def _tag(
+    model: RobotModel,
+    levels: Sequence[Sequence[Task]],
+    contacts: Sequence[Contact],
+    friction: bool,
+    limits: Sequence[str] | None,
+) -> str:
+    parts = [f"osc-contact|{model.fingerprint(inertial=True, tool=False)}|v{_CODE_VERSION}|friction={friction}"]
+    parts.append("limits:" + ("-" if limits is None else ",".join(limits)))
+    for c in contacts:
+        f = model.frame(c.frame)
+        where = hashlib.sha256(f.placement.tobytes()).hexdigest()[:12]
+        parts.append(f"contact:{c.mode}:{c.cone_rows()[0].shape[0]}:{f.name}:{f.joint}:{where}")
+    names = [c.name for c in contacts]
+    for k, tasks in enumerate(levels):
+        parts.append(f"level{k}")
+        for tk in tasks:
+            if type(tk) is ContactForceTask:
+                force = tk
+                nrm = ",".join(f"{v:.17g}" for v in force.contact.normal) if force.normal_only else "all"
+                parts.append(f"force:{names.index(force.contact.name)}:{nrm}")
+            else:
+                parts.append(task_tag(model, tk))
+    return "|".join(parts)
+
+
+class GeneratedContactData:
+    """The generated function of the module for ``levels`` (the tasks per priority level, in order) and
+    ``contacts`` (the active ones, in the layout's order) on ``dynamics``, bound to buffers of its own. After
+    :meth:`run`, the outputs are arrays that the next run overwrites: ``brows`` (n × (ny+1)), ``contact``
+    (3k × (ny+1)), ``rows`` (m × (ny+1)), per level ``H[k]``, ``g[k]``, ``c[k]``, with one level ``equality``, and
+    with ``bounds`` (one level, constant bounds l, u of the limits' and cones' rows, the limits' variables
+    ``limits``) ``accepted`` (1,) and ``tau`` (n,). Not thread-safe."""
+
+    def __init__(
+        self,
+        dynamics: Dynamics,
+        levels: Sequence[Sequence[Task]],
+        contacts: Sequence[Contact],
+        regularization: Sequence[float],
+        limits: Sequence[str] | None = None,
+        bounds: tuple[FloatArray, FloatArray] | None = None,
+    ) -> None:
+        model = dynamics.model
+        self.dynamics = dynamics
+        self.n = n = model.n
+        self.levels = tuple(tuple(lev) for lev in levels)
+        self.contacts = tuple(contacts)
+        self.regularization = tuple(float(e) for e in regularization)
+        self.friction = dynamics.friction if model.has_friction else None
+        one = len(self.levels) == 1 and bool(self.contacts)
+        self.limits = tuple(limits) if limits is not None and bounds is not None and one else None
+        self.bounds = bounds if self.limits is not None else None
+        cache_dir = dynamics.options.get("cache_dir")
+        tag = _tag(model, self.levels, self.contacts, self.friction is not None, self.limits)
+        what = f"the operational-space QP's contact data for {model.name!r}"
+        fn = codegen.cached(
+            [_NAME],
+            tag,
+            lambda: [contact_function(model, self.levels, self.contacts, self.friction is not None, self.limits)],
+            cache_dir,
+            what=what,
+        )[_NAME]
+        ny = n + 3 * len(self.contacts)
+        m = sum(tk.dim for lev in self.levels for tk in lev)
+        self.inp = np.zeros(fn.size1_in(0))
+        self.par = np.zeros(fn.size1_in(1))
+        # CasADi writes a matrix column by column: each (r × c) output held as its transpose, row by row
+        self._brows_t = np.zeros((ny + 1, n))
+        self._contact_t = np.zeros((ny + 1, 3 * len(self.contacts)))
+        self._rows_t = np.zeros((ny + 1, m))
+        self.brows, self.contact, self.rows = self._brows_t.T, self._contact_t.T, self._rows_t.T
+        self.H = [np.zeros((ny, ny)) for _ in self.levels]  # symmetric: column by column is row by row
+        self.g = [np.zeros(ny) for _ in self.levels]
+        self.c = [np.zeros(1) for _ in self.levels]
+        buf, self._run = buffer_of(fn)
+        for k, arr in enumerate((self.inp, self.par)):
+            buf.set_arg(k, view(arr))
+        results: list[FloatArray] = [self._brows_t, self._contact_t, self._rows_t]
+        for k in range(len(self.levels)):
+            results += [self.H[k], self.g[k], self.c[k]]
+        me = 3 * len(self.contacts)
+        #: with one level: the optimum on the contact rows alone, y* (ny) and λ (3k), and its residuals A y* − b
+        #: (3k) and H y* + g + Aᵀλ (ny); None with more levels
+        self.equality: tuple[FloatArray, FloatArray, FloatArray, FloatArray] | None = None
+        if one:
+            self.equality = (np.zeros(ny), np.zeros(me), np.zeros(me), np.zeros(ny))
+            results += list(self.equality)
+        #: with ``bounds``: 1.0 if the optimum on the contact rows alone is the QP's (see _verdict), and its τ
+        self.accepted = np.zeros(1)
+        self.tau = np.zeros(n)
+        if self.limits is not None:
+            results += [self.accepted, self.tau]
+        for k, res in enumerate(results):
+            buf.set_res(k, view(res.reshape(-1)))
+        self._bound = (buf, results)  # the buffer reads and writes these: keep them alive
+        self._revisions: list[int] | None = None
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        # rebuilt (the library loads from the cache): the buffers are this process's
+        return (
+            GeneratedContactData,
+            (self.dynamics, self.levels, self.contacts, self.regularization, self.limits, self.bounds),
+        )
+
+    def _params(self) -> None:
+        """The contacts' coefficients, the gains and weights and ε_k into the parameter buffer (in place), in the
+        function's order."""
+        parts: list[FloatArray] = []
+        for c in self.contacts:
+            parts += [c.normal, c.tangents[0], c.tangents[1], np.array([c.mu, c.kd, c.slip_velocity])]
+        for lev in self.levels:
+            for tk in lev:
+                parts += [tk.sqrt_weight] if type(tk) is ContactForceTask else task_params([tk])
+        parts.append(np.array(self.regularization))
+        if self.bounds is not None:
+            parts += [c.cone_rows()[0].ravel() for c in self.contacts]
+            parts += list(self.bounds)
+        np.concatenate(parts, out=self.par)
+
+    def run(self, q: FloatArray, qd: FloatArray, t: float, ref: Reference) -> None:
+        """Evaluate the outputs at (q, q̇) with the tasks' targets at t."""
+        revisions = [tk.revision for lev in self.levels for tk in lev]
+        if revisions != self._revisions:
+            self._params()
+            self._revisions = revisions
+        pieces = [q, qd]
+        for lev in self.levels:
+            for tk in lev:
+                if type(tk) is ContactForceTask:
+                    pieces.append(tk.target(t))
+                else:
+                    target_pieces([tk], t, ref, pieces)
+        if self.friction is not None:
+            pieces.append(self.friction.torque(qd))
+        np.concatenate(pieces, out=self.inp)
+        self._run()

@@ -1,0 +1,211 @@
+"""`InteractionScene`: a scene in which the arm touches a table and the controllers feel it — the plant, a
+table (a compliant :class:`~armctl.sim.Plane`), a force/torque sensor at the tool in world axes, and the
+interaction controllers (:mod:`armctl.controllers.interaction`) built from presets.
+
+Its result shows the force trace — ``res.sensor[:, 0, :]``, the wrench the arm exerts [N; N·m] (world axes),
+the normal force :func:`normal_force` — and the motion (the tool's path, :meth:`InteractionScene.tool_path`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any, ClassVar
+
+import numpy as np
+
+from armctl.controllers import Measurement
+from armctl.controllers.base import Controller
+from armctl.errors import UnknownNameError
+from armctl.scenes.base import Scene, check_gains, diverged_errors
+
+#: the sensor's row in ``res.sensor``
+SENSOR = 0
+
+
+def normal_force(res: Any, normal: Any = (0.0, 0.0, 1.0)) -> Any:
+    """The normal force the arm exerts on the table at each sample [N] (positive pressing): −nᵀ f, f the
+    sensor's force (world axes), n the table's outward normal.
+
+    Parameters
+    ----------
+    res : SimResult
+        A run of an interaction scene.
+    normal : array_like, shape (3,), optional
+        n (default +z).
+
+    Returns
+    -------
+    ndarray, shape (N,)
+    """
+    if not res.sensor.size:
+        return np.zeros(len(res.t))
+    return -(res.sensor[:, SENSOR, :3] @ np.asarray(normal, dtype=float))
+
+
+class InteractionScene(Scene):
+    """A scene of the interaction controllers (see the module); a subclass sets :attr:`gain_keys` (method →
+    (required, optional) gain names), implements :meth:`build` and :meth:`measures`. Its parameters are
+    :class:`~armctl.scenes.base.Scene`'s.
+
+    Parameters
+    ----------
+    name, description, plant, exact, reduced, reference, duration, methods : optional
+        As for :class:`~armctl.scenes.base.Scene`.
+    control_dt, dt, integrator, q0, sim_options, builders, backend : optional
+        As for :class:`~armctl.scenes.base.Scene`.
+    """
+
+    gain_keys: ClassVar[dict[str, tuple[tuple[str, ...], tuple[str, ...]]]] = {}
+    #: the desired normal force [N]
+    force: float = 10.0
+    #: the table's outward normal (world axes)
+    normal: Any = (0.0, 0.0, 1.0)
+    timing_samples = 100
+
+    def controller(self, method: str, gains: dict[str, Any] | None = None) -> Controller:
+        """The controller of a method (gains from the preset ``controllers/<scene>.<method>.toml`` unless given).
+
+        Parameters
+        ----------
+        method : str
+            One of :attr:`methods`.
+        gains : dict, optional
+            Gain name → value; an unknown key or a missing required one is an error.
+
+        Returns
+        -------
+        Controller
+
+        Raises
+        ------
+        UnknownNameError
+            An unknown method or gain.
+        InvalidParameterError
+            A required gain missing, or a value out of range.
+        """
+        if method not in self.methods:
+            raise UnknownNameError("method", method, self.methods)
+        g = check_gains(method, self.gains(method) if gains is None else gains, *self.gain_keys[method])
+        return self.build(method, g)
+
+    def build(self, method: str, gains: dict[str, Any]) -> Controller:  # pragma: no cover - abstract
+        """The controller of ``method`` with checked ``gains``.
+
+        Parameters
+        ----------
+        method : str
+            One of :attr:`methods`.
+        gains : dict
+            Its gains, checked against :attr:`gain_keys`.
+
+        Returns
+        -------
+        Controller
+        """
+        raise NotImplementedError
+
+    def measures(self, res: Any, fn: Any) -> dict[str, Any]:  # pragma: no cover - abstract
+        """The scene's own measures of a run.
+
+        Parameters
+        ----------
+        res : SimResult
+            A run of this scene.
+        fn : ndarray, shape (N,)
+            The normal force [N] at each sample (:func:`normal_force`).
+
+        Returns
+        -------
+        dict of str
+        """
+        raise NotImplementedError
+
+    def tool_path(self, res: Any) -> Any:
+        """The tool's position at each sample [m] (N, 3), world axes.
+
+        Parameters
+        ----------
+        res : SimResult
+            A run of this scene.
+
+        Returns
+        -------
+        ndarray, shape (N, 3)
+        """
+        dyn = self.dynamics("plant")
+        return np.array([dyn.frame_pose(q)[:3, 3] for q in res.q]).reshape(-1, 3)
+
+    def metrics(
+        self,
+        res: Any,
+        method: str,
+        gains: dict[str, Any] | None = None,
+        timing_samples: int | None = None,
+        timing_rounds: int = 5,
+    ) -> dict[str, Any]:
+        """The scene's force and motion measures (:meth:`measures`) with :meth:`Scene.metrics`' torque, limit,
+        divergence and timing measures (its joint tracking error is replaced: the reference here is a posture).
+
+        Parameters
+        ----------
+        res : SimResult
+            A run of this scene.
+        method : str
+            The method that ran.
+        gains : dict, optional
+            Its gains (default: the preset), to rebuild the controller for timing.
+        timing_samples : int, optional
+            Recorded states replayed to time the controller.
+        timing_rounds : int, optional
+            Timed passes (0: not timed, NaN).
+
+        Returns
+        -------
+        dict of str
+        """
+        out = super().metrics(res, method, gains, timing_samples, timing_rounds)
+        out.update(self.measures(res, normal_force(res, self.normal)))
+        return diverged_errors(out)
+
+    def replay_window(self, res: Any, samples: int = 200) -> dict[str, Any]:
+        """:meth:`Scene.replay_window` with the measurement of each sample (the sensor's reading, in world axes,
+        and the applied torques of the period before), for the controllers that read them.
+
+        Parameters
+        ----------
+        res : SimResult
+            A run of this scene.
+        samples : int, optional
+            The window's length.
+
+        Returns
+        -------
+        dict of str
+        """
+        window = super().replay_window(res, samples)
+        count = len(window["t"])
+        first = (len(res.t) - count) // 2
+        window["measurement"] = [
+            Measurement(
+                wrench=res.sensor[k, SENSOR],
+                tau_applied=res.tau_applied[k - 1] if k else np.zeros(self.plant.n),
+                world_axes=True,
+            )
+            for k in range(first, first + count)
+        ]
+        return window
+
+
+def quintic(start: Any, end: Any, t0: float, duration: float) -> Callable[[float], tuple[Any, Any, Any]]:
+    """t → (position, velocity, acceleration) of a minimum-jerk move from ``start`` to ``end`` (arrays) between t0
+    and t0 + duration [s], held before and after."""
+    a, b = np.asarray(start, dtype=float), np.asarray(end, dtype=float)
+
+    def at(t: float) -> tuple[Any, Any, Any]:
+        s = min(max((t - t0) / duration, 0.0), 1.0)
+        shape = s**3 * (10 - 15 * s + 6 * s * s)
+        rate = 30 * s * s * (1 - s) ** 2 / duration
+        accel = 60 * s * (1 - s) * (1 - 2 * s) / duration**2
+        return a + (b - a) * shape, (b - a) * rate, (b - a) * accel
+
+    return at
