@@ -17,6 +17,7 @@ WRITES = {
     "closed_loop_simulation.py": [
         f"{stem}.{ext}" for stem in ("computed_torque", "passivity_based") for ext in ("npz", "png", "html")
     ],
+    "collision_detection.py": ["collision_detection.png", "force_control_border.png"],
     "contact_qp.py": ["contact_qp.png"],
     "contact_recipe.py": ["contact_recipe_normal_force.png", "contact_recipe_run.png"],
     "custom_controller.py": ["custom_controller.png"],

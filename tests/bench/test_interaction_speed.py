@@ -15,5 +15,5 @@ def test_rows_beyond_their_target_are_named() -> None:
 def test_every_row_runs() -> None:
     fig = interaction_speed.run(number=5, rounds=3)
     rows = [k for k, v in fig.items() if isinstance(v, dict)]
-    assert set(interaction_speed.TARGETS) <= set(rows) and len(rows) == 7
+    assert set(interaction_speed.TARGETS) <= set(rows) and len(rows) == 9  # 7 laws and 2 observers
     assert all(fig[r]["ratio"] > 0 for r in rows)

@@ -4,7 +4,9 @@ Pinocchio RNEA call measured in the same run (paired rounds). Run: ``python -m a
 Rows: Cartesian impedance with a given damping (the stiffness alone, no Λ), with the default damping (Λ(q) and
 its double diagonalisation at every step) and with null-space stiffness; joint impedance; force control and
 parallel force/position control with the computed-torque inner loop; admittance with the computed-torque inner
-loop. The force-reading laws are called with a measured wrench, as in a user's loop."""
+loop. The force-reading laws are called with a measured wrench, as in a user's loop. The momentum observer's
+``update(t, q, qd, tau_applied)`` (:func:`observer_rows`): as generated code (its default), and on the Pinocchio
+kernel (``compile=False``), with collision thresholds."""
 
 from __future__ import annotations
 
@@ -18,7 +20,7 @@ import armctl
 from armctl.bench.timing import paired_ratio
 
 #: the benchmark's own checks (its tests), not printed: the largest ratio to RNEA each step should keep
-TARGETS = {"CartesianImpedance": 3.0, "ForceControl (inner CT)": 4.0}
+TARGETS = {"CartesianImpedance": 3.0, "ForceControl (inner CT)": 4.0, "MomentumObserver.update": 2.0}
 
 Q_READY = np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])
 
@@ -69,12 +71,50 @@ def run(number: int = 200, rounds: int = 41, seed: int = 0) -> dict[str, Any]:
             return c(next(clock), q, qd, ref, measurement=m)
 
         r = paired_ratio(step, lambda: pin.rnea(pm, pd, q, qd, qdd), number, rounds)
-        out[name] = {
-            "step_s": r["candidate_s"],
-            "rnea_s": r["reference_s"],
-            "ratio": r["ratio"],
-            "ratio_iqr": (r["ratio_q1"], r["ratio_q3"]),
-        }
+        out[name] = _row(r)
+    out.update(observer_rows(number, rounds, seed))
+    return out
+
+
+def _row(r: dict[str, float]) -> dict[str, Any]:
+    return {
+        "step_s": r["candidate_s"],
+        "rnea_s": r["reference_s"],
+        "ratio": r["ratio"],
+        "ratio_iqr": (r["ratio_q1"], r["ratio_q3"]),
+    }
+
+
+def observer_rows(number: int = 200, rounds: int = 41, seed: int = 0) -> dict[str, Any]:
+    """One ``MomentumObserver.update`` on the Panda at 1 kHz against one raw RNEA: as generated code (the default,
+    ``compile="auto"``; skipped, with the reason, where it cannot be built) and on the Pinocchio kernel
+    (``compile=False``)."""
+    import pinocchio as pin
+
+    from armctl.controllers import MomentumObserver
+    from armctl.errors import BackendError
+
+    model = armctl.models.panda()
+    pm = model.to_pinocchio()
+    pd = pm.createData()
+    rng = np.random.default_rng(seed)
+    q = Q_READY + rng.uniform(-0.2, 0.2, model.n)
+    qd, tau = rng.uniform(-0.5, 0.5, (2, model.n))
+    out: dict[str, Any] = {}
+    dyn = armctl.Dynamics(model)
+    variants = {"MomentumObserver.update": True, "MomentumObserver.update (compile=False)": False}
+    for name, compiled in variants.items():
+        try:
+            obs = MomentumObserver(dyn, 50.0, thresholds=1e3, compile=compiled)
+        except BackendError as exc:
+            out["observer_compile_unavailable"] = str(exc)
+            continue
+        clock = itertools.count(0.0, 1e-3)
+
+        def update(obs: Any = obs, clock: Iterator[float] = clock) -> Any:
+            return obs.update(next(clock), q, qd, tau)
+
+        out[name] = _row(paired_ratio(update, lambda: pin.rnea(pm, pd, q, qd, tau), number, rounds))
     return out
 
 

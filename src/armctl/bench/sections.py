@@ -14,7 +14,7 @@ import numpy as np
 from armctl.bench.outcomes import scenes_summary
 
 #: the scenes of the scene matrix, in the order they run
-SCENE_NAMES = ("pendulum", "planar_2r", "panda_topp", "panda_contact", "panda_press", "panda_wipe")
+SCENE_NAMES = ("pendulum", "planar_2r", "panda_topp", "panda_contact", "panda_press", "panda_wipe", "panda_collision")
 
 #: the report's title of each section, in the order they run (``engines`` only where MuJoCo is installed)
 SECTION_TITLES = {
@@ -25,6 +25,7 @@ SECTION_TITLES = {
     "integrators": "Integrators: cost against accuracy",
     "fidelity": "Model fidelity: the cheapest sufficient model",
     "engines": "Plant engines: armctl's and MuJoCo's integrators, cost against accuracy",
+    "interaction": "Interaction control: force tracking, stability borders, the momentum observer",
     "dynamics_speed": "Dynamics speed",
     "controller_speed": "Controller step speed",
     "osc_speed": "Operational-space QP step speed",
@@ -62,19 +63,26 @@ SCOPE = (
     "Plant engines (with MuJoCo installed): the same closed loop on armctl's and on MuJoCo's integrators, the Panda "
     "without friction against a DOP853 reference, and held below breakaway with Coulomb friction, where the error "
     "is the creep (armctl's stick–slip model holds exactly; MuJoCo's frictionloss is a soft constraint).",
+    "Interaction control: the Panda at its ready pose pressing on a table at 1 kHz with one period of measurement "
+    "delay; each controller's gains fixed across the table stiffnesses; the stability borders at that pose (the "
+    "sampled-data model is linear about it); the observer's trade-off for one push at the tool with white "
+    "velocity noise; panda_collision's controller is computed torque (the scene matrix times it with the "
+    "observer and the reaction).",
 )
 
 
 def model_sections() -> dict[str, Any]:
-    """The sections on the models' cost against accuracy, by key: backends, integrators, fidelity, and the plant
-    engines where MuJoCo is installed (their modules)."""
-    from armctl.bench import backends, fidelity, integrators
+    """The sections that are a module with ``run(quick)``, ``plot(data, path)`` and ``summary(data)``, by key:
+    backends, integrators, fidelity, the plant engines where MuJoCo is installed, and interaction control (their
+    modules, in the order of :data:`SECTION_TITLES`)."""
+    from armctl.bench import backends, fidelity, integrators, interaction
 
     sections: dict[str, Any] = {"backends": backends, "integrators": integrators, "fidelity": fidelity}
     if find_spec("mujoco") is not None:
         from armctl.bench import engines
 
         sections["engines"] = engines
+    sections["interaction"] = interaction
     return sections
 
 

@@ -250,6 +250,43 @@ def stability(maps: dict[str, Any]) -> list[Table]:
     return [t]
 
 
+def interaction(data: dict[str, Any]) -> list[Table]:
+    """The interaction section's tables: force error against stiffness, the force-control border, the observer's
+    gain and its speed (see :mod:`armctl.bench.interaction`)."""
+    tracking = data["force_tracking"]
+    force = Table(
+        f"Force error |f − {tracking['force']:g} N| at the end of a press [N], against the table's stiffness [N/m]",
+        ["controller", *(f"{k:.0e}" for k in tracking["stiffness"])],
+    )
+    for name, rows in tracking["controllers"].items():
+        force.rows.append([text(name), *(num(r["error"]) if r["outcome"] == "stable" else text(r["outcome"])
+                                         for r in rows)])  # fmt: skip
+    border = Table(
+        "Force control: critical force gain K_F* [m/N], sampled-data prediction against closed-loop bisection",
+        ["k_e [N/m]", "predicted", "simulated", "simulated / predicted"],
+    )
+    for r in data["force_border"]["rows"]:
+        border.rows.append([num(r["stiffness"], ".0e"), num(r["predicted"]), num(r["border"]), num(r["ratio"])])
+    obs = Table(
+        "Momentum observer: gain against noise, error and detection delay",
+        ["K_O [1/s]", "noise [N·m]", "noise, closed form", "error after 5/K_O [N·m]", "delay [ms]", "lag's [ms]"],
+    )
+    for r in data["observer"]["rows"]:
+        delay = text("false alarm") if r["false_alarm"] else num(r["delay"], ".1f", 1e3)
+        obs.rows.append([num(r["gain"], "g"), num(r["noise"]), num(r["noise_predicted"]), num(r["error"]), delay,
+                         num(r["lag_delay"], ".1f", 1e3)])  # fmt: skip
+    speed = Table(
+        "Momentum observer: one update(t, q, qd, tau_applied) on the Panda against one raw RNEA in the same run",
+        ["variant", "update [µs]", "RNEA [µs]", "ratio", "ratio quartiles"],
+    )
+    for name, f in data["observer_speed"].items():
+        if isinstance(f, dict):
+            q1, q3 = f["ratio_iqr"]
+            speed.rows.append([text(name), num(f["step_s"], ".2f", 1e6), num(f["rnea_s"], ".2f", 1e6),
+                               num(f["ratio"], ".2f"), text(f"[{q1:.2f}, {q3:.2f}]")])  # fmt: skip
+    return [force, border, obs, speed]
+
+
 #: the table makers of the sections that have them
 TABLES: dict[str, Callable[[Any], list[Table]]] = {
     "scenes": scenes,
@@ -259,6 +296,7 @@ TABLES: dict[str, Callable[[Any], list[Table]]] = {
     "integrators": integrators,
     "fidelity": fidelity,
     "engines": engines,
+    "interaction": interaction,
     "dynamics_speed": dynamics_speed,
     "controller_speed": controller_speed,
     "osc_speed": osc_speed,

@@ -16,6 +16,9 @@
 :class:`Admittance`                a compliant frame driven by the measured wrench, tracked by an inner motion loop
 :class:`ForceControl`              force control (PI on the force error) with an inner motion loop
 :class:`ParallelForcePosition`     parallel force/position control, integral action on the force error
+:class:`MomentumObserver`          the generalized-momentum observer of the external joint torques: collision
+                                   detection and isolation, the contact wrench without a force sensor
+:class:`CollisionReaction`         a controller that reacts to the observer's detection (gravity compensation, reflex)
 =================================  ====================================================================================
 
 Write your own by subclassing :class:`Controller` and implementing ``compute(t, q, qd, ref)``; a controller that
@@ -25,6 +28,7 @@ reads a force sensor or the applied torques declares it in ``reads`` and finds t
 
 from armctl.controllers.adaptive import Adaptive
 from armctl.controllers.base import Controller
+from armctl.controllers.collision_reaction import CollisionReaction
 from armctl.controllers.computed_torque import ComputedTorque
 from armctl.controllers.interaction import (
     Admittance,
@@ -34,6 +38,7 @@ from armctl.controllers.interaction import (
     ParallelForcePosition,
 )
 from armctl.controllers.measurement import Measurement
+from armctl.controllers.momentum_observer import Collision, MomentumObserver
 from armctl.controllers.osc import ClosedFormOSC, OperationalSpaceQP
 from armctl.controllers.passivity import PassivityBased
 from armctl.controllers.pd import PDGravity
@@ -44,11 +49,14 @@ __all__ = [
     "Admittance",
     "CartesianImpedance",
     "ClosedFormOSC",
+    "Collision",
+    "CollisionReaction",
     "ComputedTorque",
     "Controller",
     "ForceControl",
     "JointImpedance",
     "Measurement",
+    "MomentumObserver",
     "OperationalSpaceQP",
     "PDDesiredGravity",
     "PDGravity",

@@ -1,6 +1,6 @@
 """Standard closed-loop scenes, each modelling no more than it needs: ``pendulum``, ``planar_2r``,
-``panda_topp``, ``panda_contact``, and the interaction scenes ``panda_press`` and ``panda_wipe``.
-``scene(name)`` builds one; ``SCENES`` lists them."""
+``panda_topp``, ``panda_contact``, the interaction scenes ``panda_press`` and ``panda_wipe``, and
+``panda_collision``. ``scene(name)`` builds one; ``SCENES`` lists them."""
 
 from __future__ import annotations
 
@@ -10,6 +10,7 @@ from armctl.errors import UnknownNameError
 from armctl.scenes.base import JOINT_METHODS, Scene
 from armctl.scenes.interaction import InteractionScene, normal_force
 from armctl.scenes.joint_scenes import pendulum, planar_2r
+from armctl.scenes.panda_collision import CollisionScene, panda_collision
 from armctl.scenes.panda_contact import ContactScene, PressAndSlide, panda_contact
 from armctl.scenes.panda_press import PressScene, panda_press
 from armctl.scenes.panda_topp import panda_topp
@@ -23,6 +24,7 @@ SCENES: dict[str, Callable[[], Scene]] = {
     "panda_contact": panda_contact,
     "panda_press": panda_press,
     "panda_wipe": panda_wipe,
+    "panda_collision": panda_collision,
 }
 
 
@@ -51,6 +53,7 @@ def scene(name: str) -> Scene:
 __all__ = [
     "JOINT_METHODS",
     "SCENES",
+    "CollisionScene",
     "ContactScene",
     "InteractionScene",
     "PressAndSlide",
@@ -58,6 +61,7 @@ __all__ = [
     "Scene",
     "WipeScene",
     "normal_force",
+    "panda_collision",
     "panda_contact",
     "panda_press",
     "panda_topp",

@@ -1,4 +1,5 @@
-"""Tuning on python-control: linear models of the error dynamics, gains, sampled-data margins; bounds on the
+"""Tuning on python-control: linear models of the error dynamics, gains, sampled-data margins (of joint loops, and of
+force control and impedance against a compliant environment: :mod:`armctl.tuning.force_stability`); bounds on the
 dynamic model over the joint ranges (:func:`model_bounds`) and the textbook stability conditions they give
 (:mod:`armctl.tuning.conditions`); and the tuned presets the scenes read (:mod:`armctl.tuning.presets`).
 
@@ -16,6 +17,14 @@ from armctl.tuning.conditions import (
     pid_condition,
     sampled_data_condition,
 )
+from armctl.tuning.force_stability import (
+    critical_environment_stiffness,
+    critical_force_gain,
+    force_loop_matrix,
+    force_loop_radius,
+    impedance_loop_matrix,
+    normal_inertia,
+)
 from armctl.tuning.inertia_estimate import robust_inertia_estimate
 from armctl.tuning.linear import closed_loop_poles, linearize, lqr_gains, pd_from_bandwidth
 from armctl.tuning.sampled import SampledDataAnalysis, sampled_pd_loop, spectral_radius
@@ -28,9 +37,15 @@ __all__ = [
     "Verdict",
     "closed_loop_poles",
     "computed_torque_condition",
+    "critical_environment_stiffness",
+    "critical_force_gain",
+    "force_loop_matrix",
+    "force_loop_radius",
+    "impedance_loop_matrix",
     "linearize",
     "lqr_gains",
     "model_bounds",
+    "normal_inertia",
     "pd_desired_gravity_condition",
     "pd_from_bandwidth",
     "pid_condition",
