@@ -44,7 +44,7 @@ def main() -> None:
             f"  {method:12s} contact at {m['contact_at']:.3f} s, detected {1e3 * m['detection_delay']:.0f} ms later; "
             f"peak force {m['peak_force']:5.1f} N, 0.3 s after detection {m['force_after']:5.2f} N"
         )
-        force = np.linalg.norm(res.contact_force[:, 0], axis=1)
+        force = np.linalg.norm(res.contact_force_on_environment[:, 0], axis=1)
         (line,) = ax_f.plot(res.t, force, label=f"{method.replace('_', ' ')}: true")
         estimate = np.linalg.norm(np.nan_to_num(res.logs["wrench_estimate"][:, :3]), axis=1)
         ax_f.plot(res.t, estimate, ":", color=line.get_color(), label="  observer's estimate")

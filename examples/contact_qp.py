@@ -33,7 +33,7 @@ def main() -> None:
     for method in sc.methods:
         res = sc.run(method)
         m = sc.metrics(res, method)
-        fn = -res.contact_force[:, 0, 2]
+        fn = res.contact_force_on_robot[:, 0, 2]
         late = res.t >= 1.2
         # the QP regulates the force towards 10 N; the closed form has no force target: its force is whatever
         # its pose stiffness gives, pushing its target 1 cm below the table

@@ -119,7 +119,7 @@ def mesh_contact(out: Path) -> None:
     plant = MujocoPlant(scene, model=panda)
     ctrl = PressDown(dyn, np.array([0.0, 0.0, -15.0]), kp=10.0, kd=3.0)
     res = simulate(plant, ctrl, armctl.Reference.hold(home), 2.0, q0=home, engine="mujoco", integrator="implicitfast")
-    touching = np.flatnonzero(np.abs(res.contact_force).sum(axis=(1, 2)) > 0)
+    touching = np.flatnonzero(np.abs(res.contact_force_on_environment).sum(axis=(1, 2)) > 0)
     q, h = res.q[-1], res.wrench[-1]
     jac = dyn.jacobian(q)
     statics = res.tau_applied[-1] - dyn.gravity_torque(q) + res.tau_friction[-1]

@@ -19,6 +19,7 @@ WRITES = {
     ],
     "collision_detection.py": ["collision_detection.png", "force_control_border.png"],
     "contact_qp.py": ["contact_qp.png"],
+    "contact_recipe.py": ["contact_recipe_normal_force.png", "contact_recipe_run.png"],
     "custom_controller.py": ["custom_controller.png"],
     "identification.py": ["identification.png"],
     "interaction_control.py": ["interaction_press.png", "interaction_wipe.png"],

@@ -45,7 +45,10 @@ class UnknownNameError(ArmctlError, KeyError, ValueError):
 
     def __init__(self, kind: str, name: Any, valid: list[str] | tuple[str, ...]) -> None:
         shown = ", ".join(repr(v) for v in valid[:40]) + (" …" if len(valid) > 40 else "")
-        super().__init__(f"unknown {kind} {name!r}; valid {kind}s: {shown}", value=name)
+        plural = (
+            kind[:-1] + "ies" if kind.endswith("y") and kind[-2:-1] not in ("a", "e", "i", "o", "u") else kind + "s"
+        )
+        super().__init__(f"unknown {kind} {name!r}; valid {plural}: {shown}", value=name)
         self.kind, self.valid = kind, tuple(valid)
 
     def __reduce__(self) -> tuple[Any, ...]:  # pickled with the arguments of __init__ (not the message), so
@@ -86,6 +89,17 @@ class InfeasibleError(ArmctlError, ValueError):
     def __init__(self, message: str, *, value: Any = None, problem: Any = None) -> None:
         super().__init__(message, value=value)
         self.problem = problem
+
+
+class InverseKinematicsError(InfeasibleError):
+    """No joint vector within the joint limits puts a frame at a target (``Dynamics.inverse_kinematics``); carries
+    the smallest residual found (``.residual``: [position (3,) [m]; rotation (3,) [rad]], the position alone for
+    a position target) and its joint vector (``.q``)."""
+
+    def __init__(self, message: str, *, value: Any = None, residual: Any = None, q: Any = None) -> None:
+        super().__init__(message, value=value)
+        self.residual = residual
+        self.q = q
 
 
 class SolverError(ArmctlError, RuntimeError):

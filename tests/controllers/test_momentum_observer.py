@@ -157,7 +157,7 @@ def test_collision_isolation_names_the_link_that_was_hit() -> None:
     speed = np.array([0.0, 0.0, 0.0, -0.3, 0.0, 0.0, 0.0])  # the elbow folds: the point on link 4 goes down
     ref = lambda t: armctl.Reference(Q_READY + speed * t, speed, np.zeros(7))  # noqa: E731
     res = simulate(m, PDGravity(dyn, KP, KD), ref, 0.5, q0=Q_READY, forces=Forces(environment=floor))
-    touched = np.flatnonzero(np.abs(res.contact_force[:, 0]).max(axis=1) > 0)
+    touched = np.flatnonzero(np.abs(res.contact_force_on_environment[:, 0]).max(axis=1) > 0)
     assert touched.size
     calls = []
     obs = MomentumObserver(dyn, 100.0, thresholds=2.0, on_collision=lambda o, c: calls.append(c))
@@ -309,5 +309,5 @@ def test_force_control_reads_the_observer_instead_of_a_sensor() -> None:
     c = ParallelForcePosition(dyn, [0.0, 0.0, -10.0], 2e-4, 1e-3, kp=400.0, force_source=MomentumObserver(dyn, 100.0))
     assert c.reads == {"tau_applied"}
     res = press(c, 3e4, 2.0)
-    f = -res.contact_force[:, 0, 2]  # the simulator's truth
+    f = res.contact_force_on_robot[:, 0, 2]  # the simulator's truth
     assert np.abs(f[res.t > 1.7] - 10.0).max() < 0.01

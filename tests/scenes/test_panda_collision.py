@@ -47,7 +47,7 @@ def test_the_residual_is_the_first_order_lag_of_the_true_external_torques() -> N
 
 def test_the_estimated_tool_force_follows_the_true_one_while_pushing() -> None:
     res, m = run("no_reaction")
-    f = np.linalg.norm(res.contact_force[:, 0], axis=1)
+    f = np.linalg.norm(res.contact_force_on_environment[:, 0], axis=1)
     steady = (res.t > m["contact_at"] + 5.0 / DEFAULTS["observer_gain"]) & (res.t > 2.0)  # the path's end: held
     assert steady.any() and (f[steady] > 10.0).all()
     est = res.logs["wrench_estimate"][steady, :3]

@@ -182,7 +182,9 @@ def test_contact_scene_reads_its_presets(
 def test_contact_metrics_of_a_run_without_samples(contact: Any, numeric: SimResult) -> None:
     def rows(name: str) -> tuple[int, ...]:
         a = getattr(numeric, name)
-        return (0, *a.shape[1:]) if a.ndim == 1 or name in ("wrench", "contact_force", "sensor") else (0, 7)
+        return (
+            (0, *a.shape[1:]) if a.ndim == 1 or name in ("wrench", "contact_force_on_environment", "sensor") else (0, 7)
+        )
 
     empty = SimResult(**{name: np.zeros(rows(name)) for name in _ARRAYS})
     m = contact.metrics(empty, "osc_qp")

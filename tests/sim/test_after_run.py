@@ -60,7 +60,7 @@ def test_friction_too_stiff_for_the_step_is_reported_and_chatters() -> None:
     assert item["min_slip_velocity"] == pytest.approx(MU * FN * 1e-3 / (MASS * 2.785), rel=1e-6)
     texts = sorted(str(w.message) for w in warned)  # the friction, and the energy its chatter made
     assert len(texts) == 2 and "slip_velocity >=" in texts[0] and "no force supplied" in texts[1]
-    ft = -res.contact_force[10:, 0, 0]  # the friction on the slider: −10 N in the exact creep; here it swings
+    ft = res.contact_force_on_robot[10:, 0, 0]  # the friction on the slider: −10 N in the exact creep; here it swings
     assert np.abs(ft + PUSH).mean() > PUSH and ft.max() > 0.0 and ft.min() == pytest.approx(-MU * FN)  # ±μ f_n
 
 
@@ -122,7 +122,7 @@ def test_a_point_sliding_fast_is_not_judged_by_the_law_below_its_slip_velocity()
 def test_below_the_limit_or_implicit_the_slider_creeps_as_the_closed_form(dt: float, integrator: str) -> None:
     res, warned = _creep(dt, integrator)  # RK4 at 1e-4: a h = 2.5 < 2.785
     assert warned == [] and "unstable_friction" not in res.info
-    ft = -res.contact_force[-20:, 0, 0]
+    ft = res.contact_force_on_robot[-20:, 0, 0]
     np.testing.assert_allclose(ft, -PUSH, rtol=1e-3)
     np.testing.assert_allclose(res.qd[-20:, 0], PUSH * SLIP / (MU * FN), rtol=1e-3)
 
@@ -214,7 +214,7 @@ def _quiet(*args: object, **kwargs: object) -> tuple[armctl.sim.SimResult, list[
 
 def test_a_plane_s_friction_is_judged_from_its_own_columns_of_the_contact_forces() -> None:
     """The creeping slider of the module with a frictionless wall of two points ahead of its floor in the list
-    (never touched): the floor's normal force must be read from its own column of res.contact_force."""
+    (never touched): the floor's normal force must be read from its own column of res.contact_force_on_environment."""
     from armctl.sim.contact import ContactPoint
 
     far = Plane(
@@ -321,7 +321,7 @@ def test_friction_is_judged_on_the_contact_samples_of_a_run_mostly_out_of_contac
         environment=floor,
         energy=False,
     )
-    touching = np.abs(res.contact_force).max(axis=(1, 2)) > 0.0
+    touching = np.abs(res.contact_force_on_environment).max(axis=(1, 2)) > 0.0
     assert 0 < touching.sum() < 0.5 * len(res.t)
     (item,) = res.info["unstable_friction"]
     rate = MU * item["normal_force"] * math.cos(tilt) ** 2 / (MASS * slip)
@@ -344,7 +344,7 @@ def test_a_first_order_run_that_stays_in_contact_is_judged_against_its_first_ord
         environment=wall,
         integrator="semi-implicit-euler",
     )
-    touching = np.abs(res.contact_force).max(axis=(1, 2)) > 0.0
+    touching = np.abs(res.contact_force_on_environment).max(axis=(1, 2)) > 0.0
     first = int(np.argmax(touching))
     assert 0 < first and touching[first:].all()
     assert warned == [] and res.info["energy_gain"] > 0.0

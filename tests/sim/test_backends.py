@@ -29,7 +29,7 @@ def test_pinocchio_and_lagrange_plants_give_the_same_run(integrator: str) -> Non
         )
         for b in ("pinocchio", "lagrange")
     ]
-    assert runs[0].contact_force[:, 0, 0].max() > 1000.0 and runs[0].info["stick_events"] > 0
+    assert runs[0].contact_force_on_environment[:, 0, 0].max() > 1000.0 and runs[0].info["stick_events"] > 0
     np.testing.assert_allclose(runs[1].q, runs[0].q, atol=1e-10)
-    np.testing.assert_allclose(runs[1].contact_force, runs[0].contact_force, atol=1e-6)
+    np.testing.assert_allclose(runs[1].contact_force_on_environment, runs[0].contact_force_on_environment, atol=1e-6)
     np.testing.assert_allclose(runs[1].energy, runs[0].energy, atol=1e-8)

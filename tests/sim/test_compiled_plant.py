@@ -112,7 +112,9 @@ def test_generated_and_python_steps_give_the_same_run(name: str, scheme: str) ->
     for work in ("work_friction", "work_external"):
         assert np.abs(getattr(generated, work) - getattr(python, work)).max() <= 1e-9 * scale, work
     np.testing.assert_allclose(generated.tau_friction, python.tau_friction, rtol=1e-9, atol=1e-9)
-    np.testing.assert_allclose(generated.contact_force, python.contact_force, rtol=1e-7, atol=1e-6)
+    np.testing.assert_allclose(
+        generated.contact_force_on_environment, python.contact_force_on_environment, rtol=1e-7, atol=1e-6
+    )
     if name not in ("rigid panda",):
         assert python.info["stick_events"] + python.info["breakaway_events"] > 0 or name.endswith("smooth")
 

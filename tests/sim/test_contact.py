@@ -21,7 +21,7 @@ PANDA_Q0 = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8])  # hand pointing down
 def _static_identity(dyn: armctl.Dynamics, res: armctl.sim.SimResult, point: int = 0) -> float:
     """Relative residual of J_pᵀh = τ − g(q) at the final sample (h: the logged contact force)."""
     q = res.q[-1]
-    lhs = dyn.jacobian(q)[:3].T @ res.contact_force[-1, point]
+    lhs = dyn.jacobian(q)[:3].T @ res.contact_force_on_environment[-1, point]
     rhs = res.tau_applied[-1] - dyn.gravity_torque(q)
     return float(np.linalg.norm(lhs - rhs) / np.linalg.norm(rhs))
 
@@ -40,11 +40,11 @@ def test_planar_arm_pressing_a_wall_settles_at_the_commanded_force() -> None:
     )
     assert not res.diverged
     assert np.abs(res.qd[-1]).max() < 1e-4
-    np.testing.assert_allclose(res.contact_force[-1, 0], force, rtol=0.01, atol=0.01 * force[0])
+    np.testing.assert_allclose(res.contact_force_on_environment[-1, 0], force, rtol=0.01, atol=0.01 * force[0])
     # the same force from the static balance Jᵀh = τ − g, solved by least squares
     q = res.q[-1]
     predicted = np.linalg.lstsq(dyn.jacobian(q)[:3].T, res.tau_applied[-1] - dyn.gravity_torque(q), rcond=None)[0]
-    np.testing.assert_allclose(res.contact_force[-1, 0], predicted, rtol=0.01, atol=0.01 * force[0])
+    np.testing.assert_allclose(res.contact_force_on_environment[-1, 0], predicted, rtol=0.01, atol=0.01 * force[0])
     # penetration of a Kelvin–Voigt wall at rest: f / k
     depth = dyn.frame_pose(q)[0, 3] - 1.70
     assert depth == pytest.approx(force[0] / 2e5, rel=0.01)
@@ -65,7 +65,7 @@ def test_implicit_scheme_is_stable_over_four_decades_of_contact_stiffness(stiffn
     assert not res.diverged
     assert np.abs(res.qd[-1]).max() < 1e-3
     assert res.info["implicit_unconverged"] == 0
-    fz = -res.contact_force[-1, 0, 2]
+    fz = res.contact_force_on_robot[-1, 0, 2]
     assert 15.0 < fz < 25.0
     assert _static_identity(dyn, res) <= 0.01
     depth = z_floor - dyn.frame_pose(res.q[-1])[2, 3]
@@ -93,7 +93,7 @@ def test_rk4_fails_on_the_stiffest_contact_where_the_implicit_scheme_holds() -> 
             forces=Forces(environment=floor),
         )
     assert res.info["unstable_contacts"]
-    settled = not res.diverged and abs(-res.contact_force[-1, 0, 2] - 19.6) < 1.0
+    settled = not res.diverged and abs(res.contact_force_on_robot[-1, 0, 2] - 19.6) < 1.0
     assert not settled
     assert res.diverged or np.abs(res.qd).max() > 1.0
 
@@ -143,7 +143,7 @@ def test_coulomb_friction_along_the_wall_is_mu_times_the_normal_force() -> None:
         1.0,
         forces=Forces(environment=floor),
     )
-    h = res.contact_force[:, 0]
+    h = res.contact_force_on_environment[:, 0]
     v = np.array([dyn.jacobian(q)[:3] @ qd for q, qd in zip(res.q, res.qd, strict=True)])
     sliding = (h[:, 2] < -1.0) & (np.abs(v[:, 0]) > 1e-3)
     assert sliding.sum() > 100
@@ -169,11 +169,11 @@ def test_several_contact_points_and_force_sensors() -> None:
         forces=Forces(environment=floor),
         sensing=Sensing(sensors=sensors),
     )
-    assert res.contact_force.shape == (1001, 2, 3) and res.sensor.shape == (1001, 3, 6)
+    assert res.contact_force_on_environment.shape == (1001, 2, 3) and res.sensor.shape == (1001, 3, 6)
     q = res.q[-1]
     tcp, hand, tool = (dyn.frame_pose(q, f) for f in ("panda_hand_tcp", "panda_hand", None))
     pos = [tcp[:3, :3] @ o + tcp[:3, 3] for o in offsets]
-    h = res.contact_force[-1]
+    h = res.contact_force_on_environment[-1]
     assert (h[:, 2] < -5.0).all()  # both points press
     force = h.sum(axis=0)
     moment = sum(np.cross(p - hand[:3, 3], f) for p, f in zip(pos, h, strict=True))

@@ -116,7 +116,7 @@ def test_energy_balance_closes_to_fourth_order_with_rk4() -> None:
     for dt in (1e-3, 5e-4):
         res = _balance_scene("rk4", dt, "smooth")
         assert not res.diverged
-        assert res.contact_force[:, 0, 0].max() > 1000.0  # the wall was hit
+        assert res.contact_force_on_environment[:, 0, 0].max() > 1000.0  # the wall was hit
         assert res.work_friction[-1] < -10.0 and res.work_external[-1] < -10.0
         errors.append(np.abs(res.energy_balance()).max())
     assert errors[0] <= 1e-6 * np.abs(res.work_friction).max()
@@ -133,7 +133,7 @@ def test_energy_balance_with_tangential_contact_friction() -> None:
     errors = []
     for dt in (1e-3, 5e-4):
         res = _balance_scene("rk4", dt, "smooth", mu=0.4)
-        assert np.abs(res.contact_force[:, 0, 2]).max() > 500.0  # tangential force along z
+        assert np.abs(res.contact_force_on_environment[:, 0, 2]).max() > 500.0  # tangential force along z
         errors.append(np.abs(res.energy_balance()).max())
     assert errors[0] <= 1e-3 * abs(res.work_external[-1])
     assert errors[0] / errors[1] > 4.0, errors

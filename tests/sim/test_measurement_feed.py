@@ -54,9 +54,9 @@ def _run(push: float = 300.0, **sensing: Any) -> tuple[armctl.sim.SimResult, Rec
         ctrl,
         armctl.Reference.hold(Q0),
         0.3,
-        environment=_floor(),
         sensing=Sensing(sensors=ForceSensor("tool", world_axes=True), **sensing),
         integrator="implicit-euler",
+        forces=Forces(environment=_floor()),
     )
     return res, ctrl
 
@@ -137,8 +137,8 @@ def test_a_controller_that_reads_nothing_is_called_as_before() -> None:
         PDGravity(dyn, 200.0, 20.0),
         armctl.Reference.hold(Q0),
         0.05,
-        environment=_floor(),
         sensing=Sensing(sensors=ForceSensor("tool"), noise_wrench=1.0),
+        forces=Forces(environment=_floor()),
     )
     np.testing.assert_array_equal(a.q, b.q)
 

@@ -125,7 +125,7 @@ def test_press_on_a_mujoco_floor_gives_the_static_force(mj) -> None:  # type: ig
     skew = np.array([[0, -r[2], r[1]], [r[2], 0, -r[0]], [-r[1], r[0], 0]])
     jp = jac[:3] - skew @ jac[3:]
     predicted = np.linalg.solve(jp.T, tau - dyn.gravity_torque(q) + res.tau_friction[-1])
-    h = res.contact_force[-1]
+    h = res.contact_force_on_environment[-1]
     assert np.abs(h[:2]).max() == 0.0  # only the last link touches
     assert np.linalg.norm(h[2] - predicted) <= 0.02 * np.linalg.norm(predicted)
     assert abs(predicted[2] + 20.0) < 0.4  # what the controller commands

@@ -167,5 +167,5 @@ def test_runs_are_deterministic() -> None:
     ]
     for a, b in (runs[:2], runs[2:]):
         np.testing.assert_array_equal(a.q, b.q)
-        np.testing.assert_array_equal(a.contact_force, b.contact_force)
+        np.testing.assert_array_equal(a.contact_force_on_environment, b.contact_force_on_environment)
         np.testing.assert_array_equal(a.work_friction, b.work_friction)

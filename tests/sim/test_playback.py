@@ -107,7 +107,7 @@ def contact_page(tmp_path_factory: pytest.TempPathFactory) -> Path:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         res = sc.run("osc_qp", duration=1.0)
-    assert np.abs(res.contact_force).max() > 1.0  # it touches the table
+    assert np.abs(res.contact_force_on_environment).max() > 1.0  # it touches the table
     return res.playback(tmp_path_factory.mktemp("pb") / "contact", environment=sc.sim_options["environment"])
 
 

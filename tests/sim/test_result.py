@@ -40,7 +40,7 @@ def test_save_and_load_round_trip(result: SimResult, tmp_path: Path) -> None:
         "tau_friction",
         "tau_ext",
         "wrench",
-        "contact_force",
+        "contact_force_on_environment",
         "sensor",
         "q_measured",
         "qd_measured",

@@ -130,7 +130,7 @@ def test_one_sided_contact_gaining_energy_below_the_linear_limit_is_reported(zet
             bad = simulate(
                 slider(mass), run, armctl.Reference.hold([0.0]), 0.5, integrator=scheme, forces=Forces(environment=wall)
             )
-        assert np.abs(bad.contact_force).max() > 1.5 * 2.0 * push  # what the warning is about
+        assert np.abs(bad.contact_force_on_environment).max() > 1.5 * 2.0 * push  # what the warning is about
         dt = 1e-3 / math.ceil(1e-3 / bad.info["unstable_contacts"][0]["max_dt"])  # the step it recommends
         with warnings.catch_warnings():
             warnings.simplefilter("error")
@@ -143,13 +143,13 @@ def test_one_sided_contact_gaining_energy_below_the_linear_limit_is_reported(zet
                 dt=dt,
                 forces=Forces(environment=wall),
             )
-        assert np.abs(good.contact_force).max() <= 1.02 * 2.0 * push
+        assert np.abs(good.contact_force_on_environment).max() <= 1.02 * 2.0 * push
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         res = simulate(
             slider(mass), run, armctl.Reference.hold([0.0]), 0.5, integrator="rk4", forces=Forces(environment=wall)
         )
-    assert np.abs(res.contact_force).max() <= 2.0 * push * (1 + 1e-9)
+    assert np.abs(res.contact_force_on_environment).max() <= 2.0 * push * (1 + 1e-9)
 
 
 def test_the_one_sided_limits_hold_for_the_impact_model() -> None:

@@ -492,7 +492,7 @@ def test_plot_refuses_bad_joint_indices(numeric: SimResult, joints: Any, match: 
 def test_plot_refuses_no_quantities_and_takes_one_name(numeric: SimResult) -> None:
     with pytest.raises(InvalidParameterError, match=r"quantities must name at least one of q, qd"):
         numeric.plot(quantities=())
-    with pytest.raises(UnknownNameError, match=r"unknown quantity 'torque'"):
+    with pytest.raises(UnknownNameError, match=r"unknown quantity 'torque'; valid quantities: 'q'"):
         numeric.plot(quantities=("q", "torque"))
     fig = numeric.plot("qd", joints=np.array([0]))
     # the joint is labelled with the plant's name for it; the legend stands beside the panel, off the curves

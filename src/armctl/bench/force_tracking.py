@@ -82,7 +82,7 @@ def run(quick: bool = False) -> dict[str, Any]:
         rows = []
         for k_e in stiffnesses:
             res = press(make(), k_e, duration)
-            f = -res.contact_force[:, 0, 2]
+            f = res.contact_force_on_robot[:, 0, 2]
             last = res.t >= res.t[-1] - 0.3
             rows.append({"outcome": outcome(res), "error": float(np.abs(f[last] - FORCE).mean())})
         out["controllers"][name] = rows

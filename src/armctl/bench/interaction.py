@@ -34,7 +34,7 @@ def collision_traces() -> dict[str, Any]:
         every = max(1, len(res.t) // 500)
         out[method] = {
             "t": res.t[::every].tolist(),
-            "force": np.linalg.norm(res.contact_force[::every, 0], axis=1).tolist(),
+            "force": np.linalg.norm(res.contact_force_on_environment[::every, 0], axis=1).tolist(),
             "estimate": est[::every].tolist(),
             **{k: m[k] for k in ("contact_at", "detected_at", "peak_force", "force_after", "push_impulse")},
         }

@@ -65,7 +65,7 @@ def outcome(res: Any) -> str:
     """``"stable"``, ``"chatter"`` or ``"diverged"`` (see the module)."""
     if res.diverged:
         return "diverged"
-    f = -res.contact_force[:, 0, 2]
+    f = res.contact_force_on_robot[:, 0, 2]
     after = res.t >= SETTLE
     if (f[after] <= 0.0).any():
         return "chatter"

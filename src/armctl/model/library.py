@@ -18,18 +18,24 @@ towards +z; gravity is −z.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from functools import cache
 from pathlib import Path
 
 import numpy as np
 
-from armctl._checks import boolean
+from armctl._checks import FloatArray, boolean
 from armctl.errors import ModelLoadError
 from armctl.model.dh import DHLink
 from armctl.model.parts import Frame, Joint, JointFriction, JointLimits, Link, Motor, transform
 from armctl.model.robot import RobotModel
 
 _PLANE_AXIS = (0.0, -1.0, 0.0)
+
+
+def _poses(**poses: tuple[float, ...]) -> dict[str, FloatArray]:
+    """Named poses as the arrays a model holds (checked against the joint limits by the model)."""
+    return {name: np.array(q, dtype=float) for name, q in poses.items()}
 
 
 def _rod(mass: float, length: float) -> Link:
@@ -61,7 +67,8 @@ def pendulum() -> RobotModel:
         JointLimits(effort=20.0, velocity=10.0),
     )
     tip = Frame("tool", 1, transform(None, (0.0, 0.0, -length)))
-    return RobotModel((joint,), name="pendulum", frames=(tip,), tool_frame="tool")
+    poses = {"ready": (math.pi / 2,), "zero": (0.0,)}
+    return RobotModel((joint,), name="pendulum", frames=(tip,), tool_frame="tool", named_poses=poses)
 
 
 def planar_2r() -> RobotModel:
@@ -86,7 +93,11 @@ def planar_2r() -> RobotModel:
         "joint2", "revolute", _PLANE_AXIS, transform(None, (a, 0.0, 0.0)), link(), Motor(i_m, k_r), limits=limits
     )
     return RobotModel(
-        (j1, j2), name="planar_2r", frames=(Frame("tool", 2, transform(None, (a, 0, 0))),), tool_frame="tool"
+        (j1, j2),
+        name="planar_2r",
+        frames=(Frame("tool", 2, transform(None, (a, 0, 0))),),
+        tool_frame="tool",
+        named_poses={"ready": (math.pi / 4, -math.pi / 2), "zero": (0.0, 0.0)},
     )
 
 
@@ -113,7 +124,8 @@ def planar_3r() -> RobotModel:
         )
         offset = length
     tool = Frame("tool", 3, transform(None, (lengths[-1], 0.0, 0.0)))
-    return RobotModel(tuple(joints), name="planar_3r", frames=(tool,), tool_frame="tool")
+    poses = {"ready": (math.pi / 4, -math.pi / 2, math.pi / 4), "zero": (0.0, 0.0, 0.0)}
+    return RobotModel(tuple(joints), name="planar_3r", frames=(tool,), tool_frame="tool", named_poses=poses)
 
 
 # Corke's Puma 560 (Robotics Toolbox, mdl_puma560): per link d, a, alpha, m, r (COM in the link frame),
@@ -191,7 +203,8 @@ def puma560(physical: bool = False) -> RobotModel:
                 physical=physical or k not in (0, 2),
             )
         )
-    return RobotModel.from_dh(rows, convention="standard", name="puma560")
+    model = RobotModel.from_dh(rows, convention="standard", name="puma560")
+    return replace(model, named_poses=_poses(ready=PUMA_QR, zero=PUMA_QZ, nominal=PUMA_QN))
 
 
 @cache
@@ -237,6 +250,14 @@ def robot_description(relative: str) -> Path:
     return path
 
 
+#: the Panda's ready pose (Franka's own "ready"): hand pointing down in front of the base
+PANDA_QR = (0.0, -math.pi / 4, 0.0, -3 * math.pi / 4, 0.0, math.pi / 2, math.pi / 4)
+#: the UR5's ready pose: elbow up, tool pointing down in front of the base
+UR5_QR = (0.0, -math.pi / 2, math.pi / 2, -math.pi / 2, -math.pi / 2, 0.0)
+#: the UR5 straight up (a singular configuration: wrist and shoulder aligned)
+UR5_QU = (0.0, -math.pi / 2, 0.0, -math.pi / 2, 0.0, 0.0)
+
+
 def panda() -> RobotModel:
     """Franka Emika Panda (URDF of example-robot-data), fingers locked closed: 7 joints; tool frame
     ``panda_hand_tcp``; URDF effort/velocity/position limits; no motors and no friction.
@@ -252,7 +273,13 @@ def panda() -> RobotModel:
     model = RobotModel.from_urdf(path, lock=("panda_finger_joint1", "panda_finger_joint2"), name="panda")
     tool = "panda_hand_tcp" if "panda_hand_tcp" in model.frame_names else "panda_hand"
     return RobotModel(
-        model.joints, name="panda", gravity=model.gravity, frames=model.frames, tool_frame=tool, source=model.source
+        model.joints,
+        name="panda",
+        gravity=model.gravity,
+        frames=model.frames,
+        tool_frame=tool,
+        source=model.source,
+        named_poses={"ready": PANDA_QR},
     ).reduced(friction=False)
 
 
@@ -264,4 +291,5 @@ def ur5() -> RobotModel:
     RobotModel
     """
     path = robot_description("ur_description/urdf/ur5_robot.urdf")
-    return RobotModel.from_urdf(path, tool_frame="tool0", name="ur5")
+    model = RobotModel.from_urdf(path, tool_frame="tool0", name="ur5")
+    return replace(model, named_poses=_poses(ready=UR5_QR, zero=(0.0,) * 6, up=UR5_QU))

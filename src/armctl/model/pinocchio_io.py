@@ -235,4 +235,6 @@ def lock_joints(model: RobotModel, positions: Mapping[str, float]) -> RobotModel
     tool = model.tool_frame
     if tool is None and model.n in locked:  # the default tool frame (last joint's) must not move
         tool = model.joints[-1].name
-    return replace(model, joints=tuple(out), frames=tuple(frames), tool_frame=tool)
+    kept = [i - 1 for i in range(1, model.n + 1) if i not in locked]  # a named pose keeps the free joints' entries
+    poses = {name: pose[kept] for name, pose in model.named_poses.items()}
+    return replace(model, joints=tuple(out), frames=tuple(frames), tool_frame=tool, named_poses=poses)

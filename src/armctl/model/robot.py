@@ -28,6 +28,7 @@ from armctl._checks import (
     whole_number,
 )
 from armctl.errors import InvalidParameterError, UnknownNameError
+from armctl.model.named_poses import checked_poses
 from armctl.model.parts import (
     Frame,
     Joint,
@@ -112,12 +113,22 @@ class RobotModel:
     source : str or path-like, optional
         The description file the model was read from (URDF or MJCF; None for a model built in code), where
         :meth:`to_mjcf` finds its meshes.
+    named_poses : mapping of str to array_like, optional
+        Named joint configurations (n,) [rad or m], each within the joint limits, e.g. ``{"ready": q}``;
+        ``"zero"`` is added where it is not given (every joint at 0, or at the end of its range nearest to 0).
+        Kept by the variants (:meth:`with_payload`, :meth:`reduced`, ...).
+
+    Attributes
+    ----------
+    named_poses : dict of str to ndarray
+        The named poses (read-only arrays). Every built-in arm of :mod:`armctl.models` has at least ``"ready"``
+        (a posture to start from, away from singularities) and ``"zero"``.
 
     Raises
     ------
     InvalidParameterError
         No joints, names repeated or reserved, a frame on a joint that does not exist, parameters whose dynamics
-        overflow.
+        overflow, a named pose outside the joint limits.
     UnknownNameError
         ``tool_frame`` names no frame.
     """
@@ -128,6 +139,7 @@ class RobotModel:
     frames: tuple[Frame, ...]
     tool_frame: str | None
     source: str | None
+    named_poses: dict[str, FloatArray]
 
     def __init__(
         self,
@@ -137,10 +149,11 @@ class RobotModel:
         frames: Sequence[Frame] = (),
         tool_frame: str | None = None,
         source: str | os.PathLike[str] | None = None,
+        named_poses: Mapping[str, ArrayLike] | None = None,
     ) -> None:
         """See the class."""
         values = (("joints", joints), ("name", name), ("gravity", gravity), ("frames", frames))
-        for key, value in (*values, ("tool_frame", tool_frame), ("source", source)):
+        for key, value in (*values, ("tool_frame", tool_frame), ("source", source), ("named_poses", named_poses)):
             object.__setattr__(self, key, value)
         self._check()
 
@@ -182,6 +195,8 @@ class RobotModel:
             name_text(self.source, "model source (a file path)")
         if self.tool_frame is not None and self.tool_frame not in all_names:
             raise UnknownNameError("frame", self.tool_frame, all_names)
+        poses = checked_poses(self.named_poses, self.lower, self.upper, tuple(names))
+        object.__setattr__(self, "named_poses", poses)
 
     # ----------------------------------------------------------------------------------------- builders
     @classmethod
@@ -743,7 +758,8 @@ class RobotModel:
         With ``lock``, the locked joints' frames and every other frame stay (attached to the joint that now carries
         them, the world for links merged into it), a motor's explicit spin axis is re-expressed in the link its rotor
         now rides on, the locked joints' motors and friction are dropped (they no longer move), and a default tool frame
-        (``tool_frame=None``: the last joint's) is kept by name if that joint is locked. Links merged into the world
+        (``tool_frame=None``: the last joint's) is kept by name if that joint is locked; the named poses keep the
+        entries of the free joints. Links merged into the world
         (locking the first joints) no longer move and are no longer in the model: the dynamics are the full arm's held
         at the lock, but ``potential_energy`` differs from the full arm's by their constant potential energy.
 

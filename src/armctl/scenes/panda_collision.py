@@ -150,7 +150,8 @@ class CollisionScene(Scene):
         """
         out = super().metrics(res, method, gains, timing_samples, timing_rounds)
         nan = float("nan")
-        f = np.linalg.norm(res.contact_force[:, 0], axis=1) if res.contact_force.size else np.zeros(len(res.t))
+        h = res.contact_force_on_environment
+        f = np.linalg.norm(h[:, 0], axis=1) if h.size else np.zeros(len(res.t))
         touch = np.flatnonzero(f > 0)
         hit = np.flatnonzero(res.logs["collision"] > 0) if "collision" in res.logs else np.zeros(0, int)
         k_o = {**DEFAULTS, **(gains or {})}["observer_gain"]

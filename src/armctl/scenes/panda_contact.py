@@ -225,7 +225,7 @@ class ContactScene(Scene):
         x = np.array([dyn.frame_pose(q)[:3, 3] for q in res.q])
         want = np.array([probe.target(float(t))[0][:3, 3] for t in res.t])
         err = np.linalg.norm((x - want)[:, :2], axis=1)  # in the table plane: the normal is force-controlled
-        fn = -res.contact_force[:, 0, 2] if res.contact_force.size else np.zeros(len(res.t))
+        fn = res.contact_force_on_robot[:, 0, 2] if res.contact_force_on_environment.size else np.zeros(len(res.t))
         touch = np.flatnonzero(fn > 0)
         settled = (res.t >= res.t[touch[0]] + 0.4) if touch.size else np.zeros(len(res.t), bool)
         out.update(

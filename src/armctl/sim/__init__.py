@@ -6,16 +6,17 @@ controller runs at its own rate with a zero-order hold. :func:`~armctl.simulate`
 parts are :class:`StickSlip` and :class:`SmoothFriction`, contact :class:`Plane` environments with a
 :class:`KelvinVoigt` or :class:`HuntCrossley` normal force and a :class:`ForceSensor`; the options come in groups
 (:class:`Forces`, :class:`Sensing`, :class:`StopRules`); :func:`sweep` runs many cases through an Executor
-(:class:`SweepResult`); :class:`MujocoPlant` hands the plant to MuJoCo (``engine="mujoco"``).
+(:class:`SweepResult`); :class:`MujocoPlant` hands the plant to MuJoCo (``engine="mujoco"``). Whether a run
+tracked what was asked is judged on :class:`ErrorSummary` values within :data:`TRACKING_TOLERANCE`.
 """
 
 # The modules, for a reader of the source: ``simulate`` (the loop; ``setup`` checks its arguments, ``recorder``
 # keeps the samples), ``plant`` (the equations of motion), ``integrators`` and ``implicit`` (the schemes),
 # ``stepper`` (a step with stick–slip events), ``compiled`` (the choice of the generated step: ``compiled_plant``,
 # ``generated_plant``, ``plant_layout``, the C driver ``step_*.c``), ``friction`` and ``stick_slip``, ``contact``
-# and ``normal_force``, ``result`` (with ``sampled_reference`` and ``limits``), ``plot``, ``playback`` (``visuals``:
-# the arm's shapes; ``playback_page``: the page), ``sweep`` (``sweep_result``, ``sweep_pool``, ``sweep_progress``);
-# ``mujoco_engine`` and ``mujoco_plant``: the same loop on a MuJoCo plant.
+# and ``normal_force``, ``result`` (with ``sampled_reference``, ``limits`` and ``tracking``), ``plot``,
+# ``playback`` (``visuals``: the arm's shapes; ``playback_page``: the page), ``sweep`` (``sweep_result``,
+# ``sweep_pool``, ``sweep_progress``); ``mujoco_engine`` and ``mujoco_plant``: the same loop on a MuJoCo plant.
 
 from armctl.sim.contact import ContactPoint, Environment, ForceSensor, Plane
 from armctl.sim.friction import FrictionModel, SmoothFriction, StickSlip
@@ -29,12 +30,15 @@ from armctl.sim.result import SimResult
 from armctl.sim.simulate import simulate
 from armctl.sim.sweep import sweep
 from armctl.sim.sweep_result import CaseFailure, SweepResult
+from armctl.sim.tracking import TRACKING_TOLERANCE, ErrorSummary
 
 __all__ = [
     "INTEGRATORS",
+    "TRACKING_TOLERANCE",
     "CaseFailure",
     "ContactPoint",
     "Environment",
+    "ErrorSummary",
     "ForceSensor",
     "Forces",
     "FrictionModel",

@@ -75,7 +75,7 @@ def check_energy_gain(res: SimResult, scheme: str) -> None:
     if scheme == "rk4":
         gain = float(balance.max())
     else:
-        touching = np.abs(res.contact_force).reshape(len(balance), -1).max(axis=1) > 0.0
+        touching = np.abs(res.contact_force_on_environment).reshape(len(balance), -1).max(axis=1) > 0.0
         first = int(np.argmax(touching)) if touching.any() else len(balance)
         apart = ~touching
         apart[:first] = False
@@ -144,7 +144,7 @@ def check_friction_slope(
     for e, env in enumerate(environments):
         if isinstance(env, Plane) and env.friction > 0.0:
             tangent = np.eye(3) - np.outer(env.normal, env.normal)
-            fn = -(res.contact_force[:, col : col + len(env.points), :] @ env.normal)  # on the arm (N, P)
+            fn = res.contact_force_on_robot[:, col : col + len(env.points), :] @ env.normal  # (N, P)
             planes.append((e, env, env.kinematics(dyn), tangent, np.maximum(fn, 0.0)))
         col += len(env.points)
     if not planes:

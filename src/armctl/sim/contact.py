@@ -447,8 +447,10 @@ class ForceSensor:
     Notes
     -----
     The reading is [f; m] (6,): the sum f [N] of the forces h_p = −F_p of the contact points riding on the
-    sensor's joint or on a joint after it, and their moment m = Σ_p (p − o) × h_p [N·m] about the sensor's
-    origin o. External disturbances (``simulate(disturbance=...)``) are not contacts and are not read.
+    sensor's joint or on a joint after it (what the arm exerts: the sense of ``SimResult.wrench`` and
+    ``SimResult.contact_force_on_environment``, opposite to ``SimResult.contact_force_on_robot``), and their
+    moment m = Σ_p (p − o) × h_p [N·m] about the sensor's origin o. External disturbances
+    (``simulate(disturbance=...)``) are not contacts and are not read.
     """
 
     frame: str | None = None

@@ -150,12 +150,12 @@ def _line(points: FloatArray, colour: int) -> Any:
 
 
 def _arrows(scene: _Scene, res: SimResult, idx: FloatArray, size: float) -> str:
-    """A red arrow per contact point, animated: at the point, along the force on the arm (−contact_force),
+    """A red arrow per contact point, animated: at the point, along the force on the arm (contact_force_on_robot),
     of length |F| × scale. Returns the scale's text for the page ("" without contact forces)."""
     mg, _ = _meshcat()
     from armctl.sim.visuals import _rotation_y_to
 
-    forces = -np.asarray(res.contact_force)[idx]  # the environment's force on the arm
+    forces = np.asarray(res.contact_force_on_robot)[idx]  # the environment's force on the arm
     positions = res.contact_position
     if forces.size == 0 or positions is None or not np.abs(forces).max() > 0.0:
         return ""

@@ -146,7 +146,7 @@ class Recorder:
             tau_friction=self.tau_friction[r],
             tau_ext=self.tau_ext[r],
             wrench=self.wrench[r],
-            contact_force=self.contact_force[r],
+            contact_force_on_environment=self.contact_force[r],
             sensor=self.sensor[r],
             q_measured=self.q_measured[r],
             qd_measured=self.qd_measured[r],

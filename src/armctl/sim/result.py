@@ -6,11 +6,20 @@ read-only. Torques are in N·m (N for prismatic joints), the sign conventions th
     M q̈ + C q̇ + g = tau_applied − tau_friction − tau_ext,     tau_ext = Σ J_pᵀ h_p + J_toolᵀ h_d
 
 Energies in J. ``save``/``load`` use NumPy's npz format (no pickle).
+
+Contact forces come in two named senses: :attr:`SimResult.contact_force_on_robot` (F_p, what the environment
+exerts on the arm: pressing on a floor gives a force along the floor's normal, up; the sense of
+:class:`armctl.controllers.osc.Contact` and :class:`~armctl.controllers.osc.ContactForceTask`) and
+:attr:`SimResult.contact_force_on_environment` (h_p = −F_p, what the arm exerts, the sense of
+:attr:`SimResult.wrench` and of the force sensors, :attr:`SimResult.sensor`). ``contact_force`` is a deprecated
+alias of ``contact_force_on_environment``.
 """
 
 from __future__ import annotations
 
+import inspect
 import json
+import warnings
 import zipfile
 from collections.abc import Callable
 from dataclasses import InitVar, dataclass, field, fields
@@ -23,6 +32,7 @@ from armctl._checks import FloatArray
 from armctl.errors import InvalidParameterError
 from armctl.sim.limits import LimitReport
 from armctl.sim.sampled_reference import SampledReference
+from armctl.sim.tracking import TRACKING_TOLERANCE, ErrorSummary, joint_summary, task_errors, task_summaries
 
 if TYPE_CHECKING:
     from armctl.model.robot import RobotModel
@@ -37,7 +47,7 @@ _ARRAYS = (
     "tau_friction",
     "tau_ext",
     "wrench",
-    "contact_force",
+    "contact_force_on_environment",
     "sensor",
     "q_measured",
     "qd_measured",
@@ -46,6 +56,8 @@ _ARRAYS = (
     "work_friction",
     "work_external",
 )
+#: entries of a saved result named otherwise than the field (the file format keeps its names)
+_FILE_KEYS = {"contact_force_on_environment": "contact_force"}
 
 
 @dataclass(frozen=True, eq=False)
@@ -70,10 +82,12 @@ class SimResult:
     wrench : ndarray, shape (N, 6)
         The total wrench h_e the arm exerts on its surroundings (contacts and disturbance), [f; moment about the
         tool-frame origin] in world axes [N, N·m].
-    contact_force : ndarray, shape (N, P, 3)
-        The force each contact point exerts on its environment [N].
+    contact_force_on_environment : ndarray, shape (N, P, 3)
+        h_p: the force each contact point exerts on its environment [N], world axes (pressing on a floor: down).
+        The sense of :attr:`wrench` and :attr:`sensor`; :attr:`contact_force_on_robot` is its opposite.
     sensor : ndarray, shape (N, S, 6)
-        Force-sensor readings.
+        Force-sensor readings: the wrench the arm exerts beyond each sensor (see
+        :class:`~armctl.sim.ForceSensor`), in the sense of :attr:`contact_force_on_environment`.
     q_measured, qd_measured : ndarray, shape (N, n)
         The measurements taken at each sample, noise included (with a delay of d periods the controller at sample
         k was given row max(k − d, 0)).
@@ -119,7 +133,7 @@ class SimResult:
     tau_friction: FloatArray
     tau_ext: FloatArray
     wrench: FloatArray
-    contact_force: FloatArray
+    contact_force_on_environment: FloatArray
     sensor: FloatArray
     q_measured: FloatArray
     qd_measured: FloatArray
@@ -145,6 +159,10 @@ class SimResult:
     #: made read-only, not copied
     _copy: InitVar[bool] = True
 
+    if TYPE_CHECKING:  # the dataclass's __init__, which also takes the deprecated keyword contact_force (below)
+
+        def __init__(self, *args: Any, **kwargs: Any) -> None: ...
+
     def __post_init__(self, _copy: bool) -> None:
         for name in (*_ARRAYS, "diverged_q", "diverged_qd", "_energy", "contact_position"):
             a = getattr(self, name)
@@ -160,6 +178,75 @@ class SimResult:
         object.__setattr__(self, "logs", logs)
 
     # ------------------------------------------------------------------------------ derived
+    @property
+    def contact_force_on_robot(self) -> FloatArray:
+        """F_p = −h_p: the force the environment exerts on each contact point of the arm (N, P, 3) [N], world
+        axes. Pressing on a floor with 10 N reads (0, 0, +10): the sense of :class:`armctl.controllers.osc.Contact`
+        and :class:`~armctl.controllers.osc.ContactForceTask` (whose target it is to be compared with)."""
+        f = -self.contact_force_on_environment
+        f.flags.writeable = False
+        return f
+
+    @property
+    def contact_force(self) -> FloatArray:
+        """Deprecated alias of :attr:`contact_force_on_environment` (the same values: the force the arm exerts,
+        h_p); it warns with a :class:`DeprecationWarning`. Use :attr:`contact_force_on_environment`, or
+        :attr:`contact_force_on_robot` for the force on the arm (−h_p), the sense of the contact tasks."""
+        warnings.warn(
+            "SimResult.contact_force is deprecated: it is the force the arm exerts on its environment, now named "
+            "contact_force_on_environment (same values); for the force on the arm, the sense of osc.Contact and "
+            "ContactForceTask, use contact_force_on_robot (= −contact_force_on_environment)",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return self.contact_force_on_environment
+
+    @property
+    def task_errors(self) -> dict[str, FloatArray]:
+        """The frame tasks' errors: ``position_error[NAME]`` (N, 3) [m] and ``orientation_error[NAME]`` (N, 3)
+        [rad] of each frame task NAME whose target the controller logged (the operational-space controllers do,
+        see :mod:`armctl.controllers.osc.task_errors`), e = target − actual in world axes, the actual pose by the
+        plant's forward kinematics at :attr:`q` (computed when first asked for; :meth:`save` keeps them in the
+        file); NaN on rows the task leaves free (weight 0) and on samples without a target. Empty for a
+        controller without frame tasks."""
+        cached = self.__dict__.get("_task_error_cache")
+        if cached is None:
+            cached = task_errors(self.logs, self.plant, self.q)
+            for a in cached.values():
+                a.flags.writeable = False
+            object.__setattr__(self, "_task_error_cache", cached)
+        return dict(cached)
+
+    def tracking_errors(self) -> list[ErrorSummary]:
+        """The errors the run is judged on, headline first: each task error of :attr:`task_errors` when there are
+        some, then the joint error against the joint reference (see :mod:`armctl.sim.tracking`).
+
+        Returns
+        -------
+        list of ErrorSummary
+            Name, kind, RMS and max of each error [m or rad]; empty without a reference or task errors.
+        """
+        out = task_summaries(self.task_errors)
+        if self.reference is not None:
+            joint = joint_summary(self.error, self.joint_names, "joint reference" if out else "joints")
+            if joint is not None:
+                out.append(joint)
+        return out
+
+    @property
+    def tracked(self) -> bool | None:
+        """Whether the run tracked what was asked: it finished (not diverged, not stopped by an exception) and
+        the RMS of each task error (or, without task errors, of the joint error) is within
+        :data:`armctl.sim.TRACKING_TOLERANCE`. None when there is nothing to judge (no reference and no
+        task errors). Separate from :attr:`status`, which is the run's numerical health."""
+        summaries = self.tracking_errors()
+        headline = [s for s in summaries if s.name != "joint reference"]
+        if not headline:
+            return None
+        if self.diverged or "failure" in self.info:
+            return False
+        return all(s.within for s in headline)
+
     @property
     def energy(self) -> FloatArray:
         """E = T + U of the plant at every sample [J] (computed from q, q̇ when first asked for; NaN if the run
@@ -249,13 +336,12 @@ class SimResult:
             lines.append(f"  stopped at t = {self.duration:g} s by {self.info['failure']}")
         if self.diverged:
             lines.append(f"  diverged at t = {self.diverged_at:g} s ({self.divergence})")
-        e = np.abs(self.error) if self.reference is not None else np.zeros((0, 0))
-        e = e[~np.isnan(e).any(axis=1)]  # (a sample without a reference: NaN)
-        if e.size:
-            lines.append(
-                f"  tracking error: RMS {float(np.sqrt((e**2).mean())):.3g}, max {float(e.max()):.3g} "
-                f"({self.joint_names[int(e.max(axis=0).argmax())]}) [rad or m]"
-            )
+        for summary in self.tracking_errors():  # the task errors first, where there are some
+            lines.append(f"  {summary.text()}")
+        tracked = self.tracked
+        if tracked is not None:
+            tasks = bool(self.task_errors)
+            lines.append(f"  tracked: {'yes' if tracked else 'no'} (RMS within {_tolerances(tasks)})")
         if len(self.t):
             peak = np.fmax.reduce(np.abs(self.tau_applied), axis=0)  # (NaN: a sample without a torque)
             lines.append(f"  peak |τ applied| {float(peak.max()):.3g} N·m ({self.joint_names[int(peak.argmax())]})")
@@ -289,7 +375,7 @@ class SimResult:
         path = Path(path)
         if path.suffix != ".npz":
             path = path.with_name(path.name + ".npz")
-        arrays: dict[str, Any] = {name: getattr(self, name) for name in (*_ARRAYS, "energy")}
+        arrays: dict[str, Any] = {_FILE_KEYS.get(name, name): getattr(self, name) for name in (*_ARRAYS, "energy")}
         for name in ("diverged_q", "diverged_qd", "contact_position"):
             if getattr(self, name) is not None:
                 arrays[name] = getattr(self, name)
@@ -299,7 +385,8 @@ class SimResult:
         if self.limits is not None:
             for name in ("effort", "velocity", "lower", "upper"):
                 arrays[f"limit_{name}"] = getattr(self.limits, name)
-        for k, v in self.logs.items():
+        logs = {**self.task_errors, **self.logs}  # the tasks' errors too (a loaded result has no plant to compute them)
+        for k, v in logs.items():
             if v.dtype.kind == "O":
                 raise InvalidParameterError(
                     f"log {k!r} holds Python objects (e.g. None or dicts), which a SimResult file cannot store; "
@@ -361,12 +448,12 @@ class SimResult:
         with data:
             if "meta" not in data.files:
                 raise bad("is not a saved SimResult (no 'meta' entry)")
-            missing = [name for name in (*_ARRAYS, "energy") if name not in data.files]
+            missing = [k for k in (*(_FILE_KEYS.get(a, a) for a in _ARRAYS), "energy") if k not in data.files]
             if missing:
                 raise bad(f"is incomplete: it lacks the entries {missing}")
             try:
                 meta = json.loads(str(data["meta"]))
-                kw: dict[str, Any] = {name: data[name] for name in _ARRAYS}
+                kw: dict[str, Any] = {name: data[_FILE_KEYS.get(name, name)] for name in _ARRAYS}
                 kw["_energy"] = data["energy"]
                 for name in ("diverged_q", "diverged_qd", "contact_position"):
                     kw[name] = data[name] if name in data.files else None
@@ -408,11 +495,15 @@ class SimResult:
         Parameters
         ----------
         quantities : str or tuple of str, optional
-            Per-joint arrays of the result: ``"q"``, ``"qd"``, ``"qdd"``, ``"tau"``, ``"tau_applied"``,
-            ``"tau_friction"``, ``"tau_ext"``, ``"q_measured"``, ``"qd_measured"``, and ``"error"`` (q_d − q); at
-            least one.
+            At least one of: per-joint arrays of the result, ``"q"``, ``"qd"``, ``"qdd"``, ``"tau"``,
+            ``"tau_applied"``, ``"tau_friction"``, ``"tau_ext"``, ``"q_measured"``, ``"qd_measured"``, and
+            ``"error"`` (q_d − q); contact forces, ``"contact_force"`` (the force on the robot,
+            :attr:`contact_force_on_robot`), ``"contact_force_on_robot"``, ``"contact_force_on_environment"``;
+            wrenches, ``"wrench"`` (:attr:`wrench`) and ``"sensor"`` (:attr:`sensor`, the measured wrench); and
+            the frame tasks' errors, ``"position_error"`` [m] and ``"orientation_error"`` [rad]
+            (:attr:`task_errors`).
         joints : int or sequence of int, optional
-            The joints to draw, 0-based indices 0 … n − 1 (None: all).
+            The joints to draw in the per-joint panels, 0-based indices 0 … n − 1 (None: all).
 
         Returns
         -------
@@ -421,7 +512,8 @@ class SimResult:
         Raises
         ------
         InvalidParameterError, UnknownNameError
-            No quantity, an unknown one, or joint indices out of range.
+            No quantity, an unknown one, one the result has nothing of (task errors without frame tasks, a
+            sensor reading without sensors), or joint indices out of range.
         """
         from armctl.sim.plot import plot_joints
 
@@ -518,6 +610,32 @@ class SimResult:
         from armctl.sim.tables import sim_xarray
 
         return sim_xarray(self)
+
+
+def _tolerances(tasks: bool) -> str:
+    t = TRACKING_TOLERANCE
+    return f"{t['position']:g} m and {t['orientation']:g} rad" if tasks else f"{t['joint']:g} rad or m"
+
+
+_dataclass_init = SimResult.__init__
+
+
+def _init(self: SimResult, *args: Any, contact_force: FloatArray | None = None, **kwargs: Any) -> None:
+    """The dataclass's __init__, also taking ``contact_force``: the deprecated name of
+    ``contact_force_on_environment``."""
+    if contact_force is not None:
+        if "contact_force_on_environment" in kwargs:
+            raise InvalidParameterError(
+                "give contact_force_on_environment only (contact_force is its deprecated name), not both",
+                value=contact_force,
+            )
+        kwargs["contact_force_on_environment"] = contact_force
+    _dataclass_init(self, *args, **kwargs)
+
+
+# (inspect reads a function's __signature__, which typeshed does not declare on functions)
+_init.__signature__ = inspect.signature(_dataclass_init)  # type: ignore[attr-defined]  # see the line above
+setattr(SimResult, "__init__", _init)  # noqa: B010  (mypy: a method is not assigned to)
 
 
 def _jsonable(x: Any) -> Any:

@@ -83,7 +83,7 @@ def test_press_and_slide_on_a_table_with_friction() -> None:
             dyn, scene, armctl.Reference(Q_HOME), 1.95, q0=Q_HOME, dt=2e-4, forces=Forces(environment=plane)
         )
     assert not res.diverged and scene.touched is not None
-    fn = -res.contact_force[:, 0, 2]  # the table's push on the arm [N]
+    fn = res.contact_force_on_robot[:, 0, 2]  # the table's push on the arm [N]
     touch = int(np.searchsorted(res.t, scene.touched))
     assert (fn[touch + 1 :] > 0).all()  # never leaves the table
     settled = res.t >= scene.touched + 0.4

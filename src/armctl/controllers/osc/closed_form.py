@@ -14,6 +14,7 @@ from scipy.linalg import lapack
 from armctl._checks import FloatArray, scalar
 from armctl.controllers.base import Controller
 from armctl.controllers.osc.state import ModelEvaluator, ModelState
+from armctl.controllers.osc.task_errors import FrameTaskLog
 from armctl.controllers.osc.tasks.base import MotionTask
 from armctl.controllers.osc.tasks.posture import PostureTask
 from armctl.dynamics.base import Dynamics
@@ -73,8 +74,10 @@ class ClosedFormOSC(Controller):
     tolerance of :meth:`armctl.Dynamics.operational_space_model`): the torque spike near a singularity is kept.
 
     ``last_log`` holds ``"lambda_trace"``, the trace of Λ (an upper bound of its largest eigenvalue), and
-    ``"damping"``, the step's δ² (0 on a regular step); :meth:`end_run` warns once per run
-    (:class:`~armctl.errors.SingularityWarning`) with the steps that needed the damping.
+    ``"damping"``, the step's δ² (0 on a regular step), and a built-in frame task's target and weights, from
+    which the run's result computes the task's errors (see :mod:`~armctl.controllers.osc.task_errors`);
+    :meth:`end_run` warns once per run (:class:`~armctl.errors.SingularityWarning`) with the steps that needed
+    the damping.
     """
 
     dynamics: Dynamics  # given to __init__, never None
@@ -101,6 +104,7 @@ class ClosedFormOSC(Controller):
         if posture is not None:
             posture.check(self.evaluator, self.n, {})
         self.task = task
+        self._task_log = FrameTaskLog((task,))  # what each step logs of the task
         self.posture = posture
         self._steps = 0
         self._damped: list[float] = []  # the damping of the damped steps since the run began
@@ -187,6 +191,7 @@ class ClosedFormOSC(Controller):
         if damping:
             self._damped.append(damping)
         log: dict[str, Any] = {"lambda_trace": float(lam.trace()), "damping": damping}  # trace ≥ largest eigenvalue
+        self._task_log(log, t)
         self.last_log = log
         return tau
 

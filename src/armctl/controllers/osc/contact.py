@@ -56,7 +56,9 @@ class Contact:
     Notes
     -----
     The force f (3,) [N], world axes, is the force the environment exerts on the robot at the origin of
-    ``frame`` (f = −h_e for the wrench h_e the arm exerts, see ``armctl.Dynamics.inverse_dynamics``); it enters
+    ``frame`` (f = −h_e for the wrench h_e the arm exerts, see ``armctl.Dynamics.inverse_dynamics``): in a
+    simulated run, compare it with ``SimResult.contact_force_on_robot`` (same sense), not with
+    ``SimResult.wrench`` or the force sensors (the arm's force, the opposite sense); it enters
     the equation of motion as  M q̈ + C q̇ + g + τ_f − J_cᵀ f = τ,  with J_c the linear rows of the frame
     Jacobian. The two modes:
 

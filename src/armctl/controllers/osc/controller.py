@@ -36,6 +36,7 @@ from armctl.controllers.osc.reduced import QddQP, QddStep
 from armctl.controllers.osc.scale import check_level_scale
 from armctl.controllers.osc.solve import make_second_solver, make_solver
 from armctl.controllers.osc.state import ModelEvaluator
+from armctl.controllers.osc.task_errors import FrameTaskLog
 from armctl.controllers.osc.tasks.base import Task
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError, SolverWarning
@@ -179,7 +180,9 @@ class OperationalSpaceQP(Controller):
     how often.
 
     ``last_log`` holds ``"qp_iterations"`` and ``"qp_fallbacks"`` (summed over the levels), ``"force[NAME]"``
-    [N] per active contact, and with more than one level ``"level_status"``.
+    [N] per active contact (the force on the robot), with more than one level ``"level_status"``, and each frame
+    task's target and weights, from which the run's result computes the task's errors (see
+    :mod:`~armctl.controllers.osc.task_errors`).
     """
 
     dynamics: Dynamics  # given to __init__, never None
@@ -223,6 +226,7 @@ class OperationalSpaceQP(Controller):
         for lim in limits:
             lim.bind(dynamics.model)
         self.tasks = tasks
+        self._task_log = FrameTaskLog(tasks)  # what each step logs of the frame tasks
         self.limits = tuple(limits)
         self.contacts = contacts
         self.solver = make_solver(solver)
@@ -420,8 +424,10 @@ class OperationalSpaceQP(Controller):
         tau = result.tau.copy()
         if sol is None:  # the unconstrained minimum, within every bound
             self.last_log = {"qp_iterations": 0, "qp_fallbacks": 0}
+            self._task_log(self.last_log, t)
             return tau
         self.last_log = {"qp_iterations": sol.iterations, "qp_fallbacks": sol.fallbacks}
+        self._task_log(self.last_log, t)
         if self._tau_up is not None and self._tau_lo is not None:
             np.minimum(tau, self._tau_up, out=tau)
             np.maximum(tau, self._tau_lo, out=tau)
@@ -452,6 +458,7 @@ class OperationalSpaceQP(Controller):
                 if st != "solved":
                     self._kept[k] += 1
                     self._kept_reason[k] = st
+        self._task_log(log, t)
         self.last_log = log
         return tau
 
@@ -501,6 +508,7 @@ class OperationalSpaceQP(Controller):
         log: dict[str, Any] = {"qp_iterations": sol.iterations, "qp_fallbacks": sol.fallbacks}
         for name, f in sol.forces.items():
             log[f"force[{name}]"] = f
+        self._task_log(log, t)
         if len(sol.level_status) > 1:
             log["level_status"] = sol.level_status
             for k, status in enumerate(sol.level_status):

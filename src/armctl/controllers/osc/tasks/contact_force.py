@@ -22,7 +22,8 @@ class ContactForceTask(Task):
 
     The force is the one the environment exerts on the robot, so pressing means a positive normal component
     (the contact's normal points from the surface towards the robot): to press on a table with 10 N, ask for 10
-    (or (0, 0, 10)), not −10.
+    (or (0, 0, 10)), not −10. A simulated run reports the same force, in the same sense, as
+    ``SimResult.contact_force_on_robot``.
 
     Parameters
     ----------

@@ -63,6 +63,9 @@ class TargetHolder:
         self.rate = rate
         self._constant: tuple[FloatArray, FloatArray, FloatArray] | None = None
         self._trajectory: Trajectory | None = None
+        #: a trajectory's last time read and its checked output: read once per control step, whoever asks (the
+        #: QP's rows, the step's log)
+        self._read: tuple[float, tuple[FloatArray, FloatArray, FloatArray]] | None = None
 
     def _check(self, value: Any, velocity: Any, acceleration: Any) -> tuple[FloatArray, FloatArray, FloatArray]:
         shape = self.value_shape
@@ -105,6 +108,7 @@ class TargetHolder:
     def set(self, value: Any, velocity: Any = None, acceleration: Any = None) -> None:
         self._constant = self._check(value, velocity, acceleration)
         self._trajectory = None
+        self._read = None
 
     def follow(self, fn: Trajectory) -> None:
         if not callable(fn):
@@ -115,6 +119,7 @@ class TargetHolder:
             )
         self._trajectory = fn
         self._constant = None
+        self._read = None
 
     @property
     def is_set(self) -> bool:
@@ -123,12 +128,17 @@ class TargetHolder:
     def at(self, t: float) -> tuple[FloatArray, FloatArray, FloatArray]:
         """The target at time t [s]."""
         if self._trajectory is not None:
+            read = self._read
+            if read is not None and read[0] == t:
+                return read[1]
             out = self._trajectory(t)
             if not isinstance(out, tuple) or len(out) != 3:
                 raise InvalidParameterError(
                     f"{self.owner}: the trajectory must return (value, velocity, acceleration), got {out!r}", value=out
                 )
-            return self._check(*out)
+            checked = self._check(*out)
+            self._read = (t, checked)
+            return checked
         if self._constant is None:
             raise InvalidParameterError(f"{self.owner} has no target: call set_target(...) or set_trajectory(fn) first")
         return self._constant
