@@ -3,12 +3,13 @@ is pulled towards a posture by a joint spring."""
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, all_finite, boolean, readonly, vector
+from armctl._checks import FloatArray, boolean, readonly, vector
 from armctl.codegen import Fallback, compile_mode
 from armctl.controllers.base import Controller
 from armctl.controllers.interaction.force_source import ForceInput
@@ -153,6 +154,7 @@ class CartesianImpedance(Controller):
             if a is not None:
                 readonly(a)
         self._generated = self._generated_law(compile)
+        self._checks_result = self._generated is not None  # the NumPy path holds a pose: inputs checked first
         kernel_friction = dynamics.kernel.friction
         self._friction_terms = kernel_friction if self.friction and kernel_friction.any else None
 
@@ -211,15 +213,23 @@ class CartesianImpedance(Controller):
         if self.force is not None:
             self.force.reset()
 
+    #: the generated law checks its own inputs (see :meth:`compute`): ``__call__`` checks only τ
+    result_check = True
+
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         gen = self._generated
         if gen is not None:
+            # Called on unchecked q and q̇ (result_check): nothing is kept (the held pose, last_log) and no user
+            # function is called (a trajectory, on t) before they are known to be finite.
             target = self.target
-            if not target.holder.is_set:
+            holder = target.holder
+            if not holder.is_set:
+                q, qd = self._checked(t, q, qd)
                 target.hold(self.dynamics.kernel.frame_pose(q, self.frame))
-            value, vel, acc = target.holder.at(t)
-            out = gen.run(q, qd, value, vel, acc, self.posture if self.posture is not None else ref.q)
-            if all_finite(out):  # NaN at a singular configuration: the NumPy path names it
+            elif not math.isfinite(t):
+                self._checked(t, q, qd)  # raises, naming t
+            out = gen.run(q, qd, holder.at(t), self.posture if self.posture is not None else ref.q)
+            if math.isfinite(gen.check.item()):  # NaN at a singular configuration: the NumPy path names it
                 n, m = self.n, self.axes
                 tau, force = out[:n], out[n + m : n + 2 * m]
                 if gen.split:  # the default damping, from Λ(q): τ = τ₀ + Jᵀ D ė
@@ -233,6 +243,7 @@ class CartesianImpedance(Controller):
                     tau += self._friction_terms.torque(qd)
                 self.last_log = {"error": out[n : n + m], "force": force}
                 return tau
+            q, qd = self._checked(t, q, qd)  # a non-finite input named, before the NumPy path
         return self._numpy_law(t, q, qd, ref)
 
     def _numpy_law(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:

@@ -18,6 +18,7 @@ path (and its named error).
 from __future__ import annotations
 
 import hashlib
+import itertools
 import logging
 import time
 from typing import Any
@@ -35,7 +36,7 @@ from armctl.dynamics.symbolic_frames import frame_kinematics
 from armctl.model.robot import RobotModel
 
 #: bumped when the generated code changes, so that stale cached libraries are not loaded
-_CODE_VERSION = 4
+_CODE_VERSION = 5
 _NAME = "cartesian_impedance"
 _log = logging.getLogger(__name__)
 
@@ -80,10 +81,22 @@ def sizes(n: int, axes: int) -> tuple[int, int]:
     return 2 * n + (16 if axes == 6 else 3) + 2 * axes + n, 2 * axes * axes + 2 * n * n
 
 
+def input_views(inp: FloatArray, n: int, axes: int) -> tuple[FloatArray, ...]:
+    """Views of the input buffer x (see :func:`sizes`) for q, q̇, the target (4×4 row by row, or (3,)), v_d, a_d
+    and q_n, each of its piece's shape."""
+    value = 16 if axes == 6 else 3
+    bounds = np.cumsum([0, n, n, value, axes, axes, n])
+    views = [inp[a:b] for a, b in itertools.pairwise(bounds)]
+    if axes == 6:
+        views[2] = views[2].reshape(4, 4)  # a view still: x is contiguous
+    return tuple(views)
+
+
 def impedance_function(model: RobotModel, frame: str | None, axes: int, null: bool, split: bool = False) -> cs.Function:
-    """The CasADi function of the module: (x, p) → [τ; e; F]. ``split``: the damping term is left out (D is not
-    read) and the outputs are [τ₀; e; F₀; ė; Λ; J] (Λ and J column by column), for a damping computed from Λ
-    outside: τ = τ₀ + Jᵀ D ė, F = F₀ + D ė."""
+    """The CasADi function of the module: (x, p) → ([τ; e; F], s), s = Σ x + Σ [τ; e; F] (:func:`finiteness`: one
+    number that tells whether the inputs and outputs are all finite). ``split``: the damping term is left out (D
+    is not read) and the first output is [τ₀; e; F₀; ė; Λ; J] (Λ and J column by column), for a damping computed
+    from Λ outside: τ = τ₀ + Jᵀ D ė, F = F₀ + D ė."""
     n = model.n
     nx, npar = sizes(n, axes)
     x, par = cs.SX.sym("x", nx), cs.SX.sym("p", npar)
@@ -118,8 +131,16 @@ def impedance_function(model: RobotModel, frame: str | None, axes: int, null: bo
         tau = tau + tau_n - jac.T @ z
     if split:
         lam = cholesky_solve_columns(low_a, cs.SX.eye(axes))
-        return cs.Function(_NAME, [x, par], [cs.vertcat(tau, e, force, edot, cs.vec(lam), cs.vec(jac))])
-    return cs.Function(_NAME, [x, par], [cs.vertcat(tau, e, force)])
+        out = cs.vertcat(tau, e, force, edot, cs.vec(lam), cs.vec(jac))
+    else:
+        out = cs.vertcat(tau, e, force)
+    return cs.Function(_NAME, [x, par], [out, finiteness(x, out)])
+
+
+def finiteness(x: Any, out: Any) -> Any:
+    """Σ x + Σ out (SX): finite when every input and output entry is (NaN and inf propagate into a sum; a
+    finite sum beyond the range of floats reads as not finite, which sends the caller to its careful path)."""
+    return cs.sum1(x) + cs.sum1(out)
 
 
 def _tag(model: RobotModel, frame: str | None, axes: int, null: bool, split: bool) -> str:
@@ -174,7 +195,11 @@ class GeneratedImpedance:
         buf.set_arg(0, view(self.inp))
         buf.set_arg(1, view(self.par))
         buf.set_res(0, view(self.out))
+        self.check = np.zeros(1)  # s of :func:`finiteness`, at the last call
+        buf.set_res(1, view(self.check))
         self._buf = buf  # keeps the binding alive
+        self._pieces = input_views(self.inp, model.n, axes)
+        self._target: tuple[FloatArray, ...] | None = None  # the target in the input buffer
 
     def __reduce__(self) -> tuple[Any, ...]:
         # rebuilt (the library loads from the cache: the buffers are this process's), with the gains
@@ -196,16 +221,17 @@ class GeneratedImpedance:
         np.concatenate(parts, out=self.par)
 
     def run(
-        self,
-        q: FloatArray,
-        qd: FloatArray,
-        value: FloatArray,
-        velocity: FloatArray,
-        acceleration: FloatArray,
-        posture: FloatArray,
+        self, q: FloatArray, qd: FloatArray, target: tuple[FloatArray, FloatArray, FloatArray], posture: FloatArray
     ) -> FloatArray:
-        """[τ; e; F] (a new array) at (q, q̇) for the target ``value`` (4×4 or (3,)), ``velocity``,
-        ``acceleration`` and ``posture``."""
-        np.concatenate((q, qd, value.ravel(), velocity, acceleration, posture), out=self.inp)
+        """[τ; e; F] (a new array) at (q, q̇) for the ``target`` (value (4×4 or (3,)), velocity, acceleration)
+        and the ``posture``. A target that is the same tuple as at the last call is not copied again: pass a
+        new tuple when its values change (a constant target's tuple holds read-only arrays)."""
+        q_in, qd_in, value_in, velocity_in, acceleration_in, posture_in = self._pieces
+        q_in[...] = q  # into views of the input buffer: cheaper than one concatenation of six pieces
+        qd_in[...] = qd
+        if target is not self._target:
+            value_in[...], velocity_in[...], acceleration_in[...] = target
+            self._target = target  # kept: its identity is not reused while it lives
+        posture_in[...] = posture
         self._run()
         return self.out.copy()

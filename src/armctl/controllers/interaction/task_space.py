@@ -13,7 +13,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.linalg import lapack
 
-from armctl._checks import FloatArray
+from armctl._checks import FloatArray, readonly
 from armctl.controllers.osc.state import FrameKinematics
 from armctl.controllers.osc.tasks.rotation import rotation_error
 from armctl.controllers.osc.tasks.target import TargetHolder, Trajectory
@@ -38,7 +38,10 @@ class FrameTarget:
         self._held = False
 
     def set(self, value: ArrayLike, velocity: ArrayLike | None = None, acceleration: ArrayLike | None = None) -> None:
+        """Hold a constant target: checked (named errors), then copied, read-only — later changes to the arrays
+        given do not reach it, so a law may keep what it has read of it while it is the same."""
         self.holder.set(value, velocity, acceleration)
+        self.holder.set(*(readonly(np.array(a)) for a in self.holder.at(0.0)))
         self._held = False
 
     def follow(self, fn: Trajectory) -> None:
