@@ -1,6 +1,8 @@
 """The generated Cartesian impedance law runs on unchecked q and q̇ (only τ is checked after it): a NaN or inf in
 any entry, or a non-finite t, still raises a NonFiniteError naming it, and leaves nothing behind — no held pose,
-no log, no trajectory called. The constant target is a copy of what was given, and a new target replaces it."""
+no log, no trajectory called. The constant target is a copy of what was given, and a new target replaces it.
+Force control with a sensor does the same, and keeps neither its integral nor its clock from a refused call; a
+measurement given as float arrays is still checked."""
 
 from __future__ import annotations
 
@@ -11,8 +13,8 @@ import numpy as np
 import pytest
 
 import armctl
-from armctl.controllers import CartesianImpedance
-from armctl.errors import NonFiniteError
+from armctl.controllers import CartesianImpedance, ForceControl, Measurement, ParallelForcePosition
+from armctl.errors import NonFiniteError, ShapeError
 
 Q_READY = np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])
 K = [800.0, 600.0, 700.0, 50.0, 40.0, 30.0]
@@ -114,3 +116,74 @@ def test_the_target_is_a_copy_and_a_new_one_replaces_it(panda: armctl.Dynamics, 
         c.set_target(given, twist, np.full(axes, 0.5))
     np.testing.assert_allclose(fast(0.0, q, qd, ref), slow(0.0, q, qd, ref), rtol=1e-9, atol=1e-9)
     np.testing.assert_allclose(fast.last_log["error"], slow.last_log["error"], rtol=1e-9, atol=1e-9)
+
+
+def force_pair(panda: armctl.Dynamics, cls: type, **kwargs: Any) -> tuple[Any, Any]:
+    fast = cls(panda, [0.0, 0.0, -10.0], 2e-4, 1e-3, compile=True, **kwargs)
+    slow = cls(panda, [0.0, 0.0, -10.0], 2e-4, 1e-3, compile=False, **kwargs)
+    assert fast.inner.generated is not None and slow.inner.generated is None
+    return fast, slow
+
+
+@pytest.mark.parametrize("cls", [ForceControl, ParallelForcePosition])
+@pytest.mark.parametrize("bad", [math.nan, math.inf])
+def test_force_control_names_a_non_finite_state_and_keeps_no_state(
+    panda: armctl.Dynamics, cls: type, bad: float
+) -> None:
+    fast, slow = force_pair(panda, cls)
+    ref = armctl.Reference(Q_READY)
+    sensed = Measurement(wrench=np.array([0.5, -0.2, -7.0, 0.1, 0.0, 0.05]), world_axes=True)
+    in_sensor_axes = Measurement(wrench=np.array([0.5, -0.2, -7.0, 0.1, 0.0, 0.05]))
+    qd = np.linspace(-0.3, 0.3, 7)
+    for m in (sensed, in_sensor_axes):
+        for joint in range(7):
+            for name in ("q", "qd"):
+                q_bad, qd_bad = Q_READY.copy(), qd.copy()
+                (q_bad if name == "q" else qd_bad)[joint] = bad
+                with pytest.raises(NonFiniteError, match=rf"^{name} holds NaN or inf"):
+                    fast(0.0, q_bad, qd_bad, ref, measurement=m)
+                assert fast.last_log == {}
+    with pytest.raises(NonFiniteError, match="t must be finite"):
+        fast(bad, Q_READY, qd, ref, measurement=sensed)
+    # nothing was kept: the pose held, the integral and its clock start at the first finite call, as the NumPy
+    # law's do
+    for k, t in enumerate((0.0, 1e-3, 2e-3)):
+        q = Q_READY + 0.01 * k
+        np.testing.assert_allclose(
+            fast(t, q, qd, ref, measurement=sensed), slow(t, q, qd, ref, measurement=sensed), rtol=1e-8, atol=1e-8
+        )
+        np.testing.assert_allclose(fast.last_log["offset"], slow.last_log["offset"], rtol=1e-9, atol=1e-12)
+
+
+def test_force_control_after_a_refused_step_integrates_as_before(panda: armctl.Dynamics) -> None:
+    fast, slow = force_pair(panda, ForceControl)
+    ref = armctl.Reference(Q_READY)
+    m = Measurement(wrench=np.array([0.0, 0.0, -4.0, 0.0, 0.0, 0.0]), world_axes=True)
+    qd = np.zeros(7)
+    for c in (fast, slow):
+        c(0.0, Q_READY, qd, ref, measurement=m)
+    with pytest.raises(NonFiniteError, match=r"^qd holds"):
+        fast(1e-3, Q_READY, np.full(7, math.nan), ref, measurement=m)
+    for c in (fast, slow):  # the refused call moved neither the integral nor its clock
+        c(2e-3, Q_READY, qd, ref, measurement=m)
+    np.testing.assert_allclose(fast.last_log["offset"], slow.last_log["offset"], rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(fast._integral, slow._integral, rtol=1e-12, atol=0.0)
+    assert fast._integral[2] == pytest.approx(-6.0 * 2e-3)  # e_f = −10 − (−4) N over Δt = 2 ms, by hand
+
+
+@pytest.mark.parametrize("bad", [math.nan, math.inf, -math.inf])
+def test_a_measurement_of_float_arrays_is_still_checked(bad: float) -> None:
+    h = np.zeros(6)
+    h[4] = bad
+    with pytest.raises(NonFiniteError, match=r"measurement\.wrench"):
+        Measurement(wrench=h)
+    with pytest.raises(NonFiniteError, match=r"measurement\.tau_applied"):
+        Measurement(tau_applied=np.array([0.0, bad]))
+    with pytest.raises(ShapeError, match=r"measurement\.wrench"):
+        Measurement(wrench=np.zeros(5))
+    with pytest.raises(ShapeError, match=r"measurement\.tau_measured"):
+        Measurement(tau_measured=np.zeros((2, 2)))
+    big = np.full(6, 1e308)  # finite, whose sum is not: taken through the full check, and accepted
+    assert Measurement(wrench=big).wrench is big
+    m = Measurement(wrench=np.ones(6), tau_measured=np.ones(3))
+    assert m.available() == {"wrench", "tau_measured"}
