@@ -41,7 +41,8 @@ class ForceTarget:
 
     def __init__(self, force: Any) -> None:
         self.fn = force if callable(force) else None
-        self.value = None if callable(force) else vector(force, 3, "force")
+        # a constant: a read-only copy (later changes to the array given do not reach it)
+        self.value = None if callable(force) else readonly(vector(force, 3, "force").copy())
 
     def __call__(self, t: float) -> FloatArray:
         if self.fn is not None:
@@ -102,7 +103,8 @@ class ForceLoop(Controller):
         owner = type(self).__name__
         self.force_input = ForceInput(force_source, owner)
         self.reads = self.force_input.reads  # per instance: what it reads depends on the source
-        self._checks_result = self.force_input.source == "sensor"  # an observer keeps state from q and q̇
+        self._sensor = self.force_input.source == "sensor"
+        self._checks_result = self._sensor  # an observer keeps state from q and q̇: its inputs are checked first
         self.force_target = ForceTarget(force)
         self.force_gain = readonly(symmetric_psd(force_gain, (3,), "force_gain", "m/N"))
         self.integral_gain = readonly(symmetric_psd(integral_gain, (3,), "integral_gain", "m/(N·s)"))
@@ -171,19 +173,28 @@ class ForceLoop(Controller):
         elif not math.isfinite(t):
             self._checked(t, q, qd)  # raises, naming t
         goal = holder.at(t)
-        h = self.force_input.wrench(self, t, q, qd, self.frame)  # an observer's inputs are checked: not result_check
-        f_d = self.force_target(t)
+        m = self.measurement
+        if self._sensor and m is not None and m.world_axes and m.frame == self.frame and m.wrench is not None:
+            h = m.wrench  # already in world axes at the frame (what force_input.wrench gives, without its calls)
+        else:
+            h = self.force_input.wrench(self, t, q, qd, self.frame)  # an observer's inputs are checked first
+        force_target = self.force_target
+        f_d = force_target(t)
         dt = t - self._t if self._t is not None and t > self._t else 0.0  # a new run's clock restarts: no step back
         posture = self.posture if self.posture is not None else ref.q
         gen = self.inner.generated
         if gen is not None:
-            out = gen.run_force_loop(q, qd, goal, posture, h, f_d, self._integral, dt)
+            out = gen.run_force_loop(q, qd, goal, posture, h, f_d, force_target.fn is None, self._integral, dt)
             if math.isfinite(gen.check.item()):  # inputs and outputs finite
                 self._t = t
                 n = self.n
                 self._integral = out[n + 9 : n + 12]
-                self.last_log = {"force_error": out[n + 6 : n + 9], "offset": out[n + 12 :], "wrench": h}
-                self.last_log["error"] = out[n : n + 6]
+                self.last_log = {
+                    "force_error": out[n + 6 : n + 9],
+                    "offset": out[n + 12 :],
+                    "wrench": h,
+                    "error": out[n : n + 6],
+                }
                 return self.inner.with_friction(out[:n], qd)
         q, qd = self._checked(t, q, qd)  # a non-finite input named, before the NumPy path
         self._t = t

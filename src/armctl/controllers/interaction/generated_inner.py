@@ -208,6 +208,7 @@ class GeneratedInner:
             self._pieces = tuple(views)
             self._dt_at = int(bounds[-1])
         self._target: tuple[FloatArray, ...] | None = None  # the target in the input buffer
+        self._force: FloatArray | None = None  # the fixed f_d in the input buffer
 
     def __reduce__(self) -> tuple[Any, ...]:
         # rebuilt (the library loads from the cache: the buffers are this process's), with the gains
@@ -253,13 +254,15 @@ class GeneratedInner:
         posture: FloatArray,
         wrench: FloatArray,
         force: FloatArray,
+        fixed_force: bool,
         integral: FloatArray,
         dt: float,
     ) -> FloatArray:
         """With the force loop: [τ; e; e_f; ∫e_f; x_F] (a new array) at (q, q̇) for the ``target`` (x_d, v_d,
         a_d), the posture q_n, the wrench h, f_d, ∫e_f before this step and Δt [s]; :attr:`check` is then the
         finiteness sum of the call. A target that is the same tuple as at the last call is not copied again
-        (pass a new tuple when its values change)."""
+        (pass a new tuple when its values change), nor a ``force`` that is the same read-only array
+        (``fixed_force``: it never changes)."""
         q_in, qd_in, pose_in, twist_in, acc_in, posture_in, h_in, force_in, integral_in = self._pieces
         q_in[...] = q  # into views of the input buffer: cheaper than one concatenation of many pieces
         qd_in[...] = qd
@@ -268,7 +271,9 @@ class GeneratedInner:
             self._target = target  # kept: its identity is not reused while it lives
         posture_in[...] = posture
         h_in[...] = wrench
-        force_in[...] = force
+        if force is not self._force:
+            force_in[...] = force
+            self._force = force if fixed_force else None
         integral_in[...] = integral
         self.inp[self._dt_at] = dt
         self._run()
