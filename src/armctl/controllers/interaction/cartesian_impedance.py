@@ -228,7 +228,17 @@ class CartesianImpedance(Controller):
                 target.hold(self.dynamics.kernel.frame_pose(q, self.frame))
             elif not math.isfinite(t):
                 self._checked(t, q, qd)  # raises, naming t
-            out = gen.run(q, qd, holder.at(t), self.posture if self.posture is not None else ref.q)
+            # gen.run(q, qd, holder.at(t), posture), written out: this is the whole per-step cost of the law
+            pieces = gen.pieces
+            pieces[0][...] = q
+            pieces[1][...] = qd
+            goal = holder.at(t)
+            if goal is not gen.target:
+                gen.load_target(goal)
+            if self._null:
+                pieces[5][...] = self.posture if self.posture is not None else ref.q
+            gen.evaluate()
+            out = gen.out.copy()
             if math.isfinite(gen.check.item()):  # NaN at a singular configuration: the NumPy path names it
                 n, m = self.n, self.axes
                 tau, force = out[:n], out[n + m : n + 2 * m]

@@ -198,8 +198,12 @@ class GeneratedImpedance:
         self.check = np.zeros(1)  # s of :func:`finiteness`, at the last call
         buf.set_res(1, view(self.check))
         self._buf = buf  # keeps the binding alive
-        self._pieces = input_views(self.inp, model.n, axes)
-        self._target: tuple[FloatArray, ...] | None = None  # the target in the input buffer
+        #: views of the input buffer for q, q̇, the target, v_d, a_d, q_n (:func:`input_views`)
+        self.pieces = input_views(self.inp, model.n, axes)
+        #: the target tuple whose values the input buffer holds (:meth:`load_target`)
+        self.target: tuple[FloatArray, ...] | None = None
+        #: one evaluation of the code on the buffers: ``out`` and ``check`` from ``inp`` and ``par``
+        self.evaluate = self._run
 
     def __reduce__(self) -> tuple[Any, ...]:
         # rebuilt (the library loads from the cache: the buffers are this process's), with the gains
@@ -220,18 +224,25 @@ class GeneratedImpedance:
             parts += [np.zeros(self.par.size - 2 * stiffness.size)]
         np.concatenate(parts, out=self.par)
 
+    def load_target(self, target: tuple[FloatArray, FloatArray, FloatArray]) -> None:
+        """Write ``target`` (value (4×4 or (3,)), velocity, acceleration) into the input buffer and keep it as
+        :attr:`target`: a caller that has the same tuple again (a constant target's, of read-only arrays) need not
+        write it again; its identity is not reused while it is kept."""
+        self.pieces[2][...], self.pieces[3][...], self.pieces[4][...] = target
+        self.target = target
+
     def run(
         self, q: FloatArray, qd: FloatArray, target: tuple[FloatArray, FloatArray, FloatArray], posture: FloatArray
     ) -> FloatArray:
         """[τ; e; F] (a new array) at (q, q̇) for the ``target`` (value (4×4 or (3,)), velocity, acceleration)
-        and the ``posture``. A target that is the same tuple as at the last call is not copied again: pass a
-        new tuple when its values change (a constant target's tuple holds read-only arrays)."""
-        q_in, qd_in, value_in, velocity_in, acceleration_in, posture_in = self._pieces
-        q_in[...] = q  # into views of the input buffer: cheaper than one concatenation of six pieces
-        qd_in[...] = qd
-        if target is not self._target:
-            value_in[...], velocity_in[...], acceleration_in[...] = target
-            self._target = target  # kept: its identity is not reused while it lives
-        posture_in[...] = posture
+        and the ``posture`` (read with the null-space term only): the inputs written into :attr:`pieces` (the
+        target only if it is not :attr:`target`), then :attr:`evaluate`."""
+        pieces = self.pieces
+        pieces[0][...] = q  # into views of the input buffer: cheaper than one concatenation of six pieces
+        pieces[1][...] = qd
+        if target is not self.target:
+            self.load_target(target)
+        if self.null:  # q_n is read by the null-space term only
+            pieces[5][...] = posture
         self._run()
         return self.out.copy()
