@@ -36,7 +36,7 @@ from armctl.dynamics.symbolic_frames import frame_kinematics
 from armctl.model.robot import RobotModel
 
 #: bumped when the generated code changes, so that stale cached libraries are not loaded
-_CODE_VERSION = 5
+_CODE_VERSION = 6
 _NAME = "cartesian_impedance"
 _log = logging.getLogger(__name__)
 
@@ -81,6 +81,21 @@ def sizes(n: int, axes: int) -> tuple[int, int]:
     return 2 * n + (16 if axes == 6 else 3) + 2 * axes + n, 2 * axes * axes + 2 * n * n
 
 
+def lower_inverse(low: list[list[Any]]) -> Any:
+    """L⁻¹ (SX, lower triangular) of the lower triangular L given as nested lists, by forward substitution."""
+    n = len(low)
+    inv = cs.SX.zeros(n, n)
+    for c in range(n):
+        y: list[Any] = [0.0] * n
+        for i in range(c, n):
+            s = 1.0 if i == c else 0.0
+            for p in range(c, i):
+                s = s - low[i][p] * y[p]
+            y[i] = s / low[i][i]
+            inv[i, c] = y[i]
+    return inv
+
+
 def input_views(inp: FloatArray, n: int, axes: int) -> tuple[FloatArray, ...]:
     """Views of the input buffer x (see :func:`sizes`) for q, q̇, the target (4×4 row by row, or (3,)), v_d, a_d
     and q_n, each of its piece's shape."""
@@ -95,8 +110,10 @@ def input_views(inp: FloatArray, n: int, axes: int) -> tuple[FloatArray, ...]:
 def impedance_function(model: RobotModel, frame: str | None, axes: int, null: bool, split: bool = False) -> cs.Function:
     """The CasADi function of the module: (x, p) → ([τ; e; F], s), s = Σ x + Σ [τ; e; F] (:func:`finiteness`: one
     number that tells whether the inputs and outputs are all finite). ``split``: the damping term is left out (D
-    is not read) and the first output is [τ₀; e; F₀; ė; Λ; J] (Λ and J column by column), for a damping computed
-    from Λ outside: τ = τ₀ + Jᵀ D ė, F = F₀ + D ė."""
+    is not read) and the first output is [τ₀; e; F₀; ė; S; G; J] (column by column), for a damping computed from
+    Λ outside: τ = τ₀ + Jᵀ D ė, F = F₀ + D ė, where Λ = G Gᵀ (G = L⁻ᵀ, L the Cholesky factor of Λ⁻¹ = J M⁻¹ Jᵀ) and
+    S = G⁻¹ K G⁻ᵀ = Lᵀ K L: the double diagonalisation's matrices but for the eigendecomposition of S
+    (:func:`~armctl.controllers.interaction.gains.modal_damping`)."""
     n = model.n
     nx, npar = sizes(n, axes)
     x, par = cs.SX.sym("x", nx), cs.SX.sym("p", npar)
@@ -129,9 +146,13 @@ def impedance_function(model: RobotModel, frame: str | None, axes: int, null: bo
         tau_n = kn @ (q_n - q) - dn @ qd
         z = cholesky_solve_columns(low_a, mij.T @ tau_n)  # Λ J M⁻¹ τ_n
         tau = tau + tau_n - jac.T @ z
-    if split:
-        lam = cholesky_solve_columns(low_a, cs.SX.eye(axes))
-        out = cs.vertcat(tau, e, force, edot, cs.vec(lam), cs.vec(jac))
+    if split:  # Λ = G Gᵀ with G = L⁻ᵀ (J M⁻¹ Jᵀ = L Lᵀ), and S = G⁻¹ K G⁻ᵀ = Lᵀ K L
+        low = cs.SX.zeros(axes, axes)
+        for i in range(axes):
+            for j in range(i + 1):
+                low[i, j] = low_a[i][j]
+        factor = lower_inverse(low_a).T
+        out = cs.vertcat(tau, e, force, edot, cs.vec(low.T @ stiff @ low), cs.vec(factor), cs.vec(jac))
     else:
         out = cs.vertcat(tau, e, force)
     return cs.Function(_NAME, [x, par], [out, finiteness(x, out)])
@@ -189,7 +210,7 @@ class GeneratedImpedance:
             )
         nx, npar = sizes(model.n, axes)
         self.n = model.n
-        size = model.n + 2 * axes + ((axes + axes * axes + axes * model.n) if split else 0)
+        size = model.n + 2 * axes + ((axes + 2 * axes * axes + axes * model.n) if split else 0)
         self.inp, self.par, self.out = np.zeros(nx), np.zeros(npar), np.zeros(size)
         buf, self._run = buffer_of(fn)
         buf.set_arg(0, view(self.inp))
