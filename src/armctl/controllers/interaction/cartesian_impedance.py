@@ -13,7 +13,7 @@ from armctl._checks import FloatArray, boolean, readonly, vector
 from armctl.codegen import Fallback, compile_mode
 from armctl.controllers.base import Controller
 from armctl.controllers.interaction.force_source import ForceInput
-from armctl.controllers.interaction.gains import critical_damping, damping_ratio, modal_damping, symmetric_psd
+from armctl.controllers.interaction.gains import critical_damping, damping_ratio, symmetric_psd
 from armctl.controllers.interaction.task_space import FrameTarget, task_inertia
 from armctl.controllers.osc.state import ModelEvaluator
 from armctl.controllers.osc.tasks.target import Trajectory
@@ -177,6 +177,8 @@ class CartesianImpedance(Controller):
         if gen is None:
             return None
         gen.set_gains(self.stiffness, self.damping, self.nullspace_stiffness, self.nullspace_damping)
+        if gen.split:
+            gen.set_damping_ratio(self.zeta)
         return gen
 
     def set_target(
@@ -238,19 +240,11 @@ class CartesianImpedance(Controller):
             if self._null:
                 pieces[5][...] = self.posture if self.posture is not None else ref.q
             gen.evaluate()
-            out = gen.out.copy()
             if math.isfinite(gen.check.item()):  # NaN at a singular configuration: the NumPy path names it
+                # the default damping, from Λ(q): one eigendecomposition between the two stages of the code
+                out = gen.damp() if gen.split else gen.out.copy()
                 n, m = self.n, self.axes
                 tau, force = out[:n], out[n + m : n + 2 * m]
-                if gen.split:  # the default damping, from Λ(q): τ = τ₀ + Jᵀ D ė, D = Q diag(d) Qᵀ
-                    k, mm = n + 3 * m, m * m
-                    scaled = out[k : k + mm].reshape(m, m)  # symmetric: its columns are its rows
-                    factor = out[k + mm : k + 2 * mm].reshape(m, m).T  # G column by column
-                    jac_t = out[k + 2 * mm :].reshape(n, m)  # J column by column: Jᵀ row by row
-                    modes, rates = modal_damping(scaled, factor, self.zeta)
-                    d_edot = modes @ (rates * (out[n + 2 * m : k] @ modes))
-                    tau += jac_t @ d_edot
-                    force += d_edot
                 if self._friction_terms is not None:
                     tau += self._friction_terms.torque(qd)
                 self.last_log = {"error": out[n : n + m], "force": force}

@@ -106,31 +106,3 @@ def critical_damping(inertia: FloatArray, stiffness: FloatArray, zeta: float = 1
         raise InvalidParameterError(f"no eigendecomposition of L⁻¹ K L⁻ᵀ (LAPACK info {info})", value=stiffness)
     qmat = low @ u
     return np.asarray((qmat * (2.0 * zeta * np.sqrt(np.maximum(omega2, 0.0)))) @ qmat.T)
-
-
-def modal_damping(scaled: FloatArray, factor: FloatArray, zeta: float = 1.0) -> tuple[FloatArray, FloatArray]:
-    """The damping of :func:`critical_damping` as D = Q diag(d) Qᵀ, from the factor G of Λ = G Gᵀ (any, e.g.
-    triangular) and S = G⁻¹ K G⁻ᵀ: with S = U K₀ Uᵀ (one symmetric eigendecomposition), Q = G U and
-    d = 2 ζ K₀^½. (With G = L, the Cholesky factor, this is :func:`critical_damping`'s Q.) Applying D to a vector
-    as Q (d ⊙ (Qᵀ v)) needs no D.
-
-    Parameters
-    ----------
-    scaled : ndarray, shape (m, m)
-        S, symmetric positive semi-definite (its lower triangle is read).
-    factor : ndarray, shape (m, m)
-        G.
-    zeta : float, optional
-        ζ ≥ 0; 1 (the default): critical damping.
-
-    Returns
-    -------
-    q : ndarray, shape (m, m)
-        Q.
-    d : ndarray, shape (m,)
-        d = 2 ζ ω [N·s/m, N·m·s/rad in Q's units].
-    """
-    omega2, u, info = lapack.dsyev(scaled)
-    if info:  # pragma: no cover - the symmetric eigensolver does not fail on finite input
-        raise InvalidParameterError(f"no eigendecomposition of G⁻¹ K G⁻ᵀ (LAPACK info {info})", value=scaled)
-    return factor @ u, (2.0 * zeta) * np.sqrt(np.maximum(omega2, 0.0))

@@ -25,6 +25,7 @@ from typing import Any
 
 import casadi as cs
 import numpy as np
+from scipy.linalg import lapack
 
 from armctl._checks import FloatArray
 from armctl.codegen import library as codegen
@@ -33,6 +34,7 @@ from armctl.dynamics.base import Dynamics
 from armctl.dynamics.casadi_buffer import buffer_of, view
 from armctl.dynamics.recursive import inverse_dynamics, joint_transforms, mass_matrix
 from armctl.dynamics.symbolic_frames import frame_kinematics
+from armctl.errors import InvalidParameterError
 from armctl.model.robot import RobotModel
 
 #: bumped when the generated code changes, so that stale cached libraries are not loaded
@@ -113,7 +115,7 @@ def impedance_function(model: RobotModel, frame: str | None, axes: int, null: bo
     is not read) and the first output is [τ₀; e; F₀; ė; S; G; J] (column by column), for a damping computed from
     Λ outside: τ = τ₀ + Jᵀ D ė, F = F₀ + D ė, where Λ = G Gᵀ (G = L⁻ᵀ, L the Cholesky factor of Λ⁻¹ = J M⁻¹ Jᵀ) and
     S = G⁻¹ K G⁻ᵀ = Lᵀ K L: the double diagonalisation's matrices but for the eigendecomposition of S
-    (:func:`~armctl.controllers.interaction.gains.modal_damping`)."""
+    (:func:`damping_function`)."""
     n = model.n
     nx, npar = sizes(n, axes)
     x, par = cs.SX.sym("x", nx), cs.SX.sym("p", npar)
@@ -164,6 +166,24 @@ def finiteness(x: Any, out: Any) -> Any:
     return cs.sum1(x) + cs.sum1(out)
 
 
+def damping_function(n: int, axes: int) -> cs.Function:
+    """The second stage of the split law: y → [τ; e; F], y = [τ₀; e; F₀; ė; S; G; J] (the first stage's output)
+    followed by U (column by column) and K₀ of S = U K₀ Uᵀ, and ζ. With d = 2 ζ K₀^½ and Q = G U (the modes:
+    Q Qᵀ = Λ and Q K₀ Qᵀ = K, the double diagonalisation of :mod:`~armctl.controllers.interaction.gains` with the
+    factor G in place of Λ's Cholesky factor), D = Q diag(d) Qᵀ, D ė = Q (d ⊙ (Qᵀ ė)), F = F₀ + D ė and
+    τ = τ₀ + Jᵀ D ė."""
+    m, mm = axes, axes * axes
+    first = n + 3 * m + 2 * mm + m * n
+    y = cs.SX.sym("y", first + mm + m + 1)
+    tau0, e, f0, edot = y[:n], y[n : n + m], y[n + m : n + 2 * m], y[n + 2 * m : n + 3 * m]
+    k = n + 3 * m + mm  # past S
+    factor, jac = cs.reshape(y[k : k + mm], m, m), cs.reshape(y[k + mm : first], m, n)
+    modes, omega2, zeta = cs.reshape(y[first : first + mm], m, m), y[first + mm : first + mm + m], y[-1]
+    rates = 2.0 * zeta * cs.sqrt(cs.fmax(omega2, 0.0))
+    d_edot = factor @ (modes @ (rates * (modes.T @ (factor.T @ edot))))
+    return cs.Function(_NAME + "_damping", [y], [cs.vertcat(tau0 + jac.T @ d_edot, e, f0 + d_edot)])
+
+
 def _tag(model: RobotModel, frame: str | None, axes: int, null: bool, split: bool) -> str:
     f = model.frame(frame)
     where = hashlib.sha256(f.placement.tobytes()).hexdigest()[:12]
@@ -209,13 +229,35 @@ class GeneratedImpedance:
                 codegen.cache_root(cache_dir),
             )
         nx, npar = sizes(model.n, axes)
-        self.n = model.n
-        size = model.n + 2 * axes + ((axes + 2 * axes * axes + axes * model.n) if split else 0)
-        self.inp, self.par, self.out = np.zeros(nx), np.zeros(npar), np.zeros(size)
+        self.n = n = model.n
+        m, mm = axes, axes * axes
+        size = n + 2 * m + ((m + 2 * mm + m * n) if split else 0)
+        self.inp, self.par = np.zeros(nx), np.zeros(npar)
+        # split: the first stage writes into the second's input, [out; U; K₀; ζ]
+        self.staged = np.zeros(size + mm + m + 1) if split else np.zeros(0)
+        self.out = self.staged[:size] if split else np.zeros(size)
         buf, self._run = buffer_of(fn)
         buf.set_arg(0, view(self.inp))
         buf.set_arg(1, view(self.par))
         buf.set_res(0, view(self.out))
+        if split:
+            stage = codegen.cached(
+                [_NAME + "_damping"],
+                f"impedance-damping|n={n}|axes={m}|v{_CODE_VERSION}",
+                lambda: [damping_function(n, m)],
+                cache_dir,
+            )[_NAME + "_damping"]
+            self.damped = np.zeros(n + 2 * m)  # [τ; e; F] of the second stage
+            buf2, self._run_damping = buffer_of(stage)
+            buf2.set_arg(0, view(self.staged))
+            buf2.set_res(0, view(self.damped))
+            self._buf2 = buf2
+            k = n + 3 * m
+            #: S (m×m) of the first stage's output, symmetric
+            self.scaled = self.out[k : k + mm].reshape(m, m)
+            #: where U goes (written as a matrix: column by column underneath) and K₀
+            self.modes = self.staged[size : size + mm].reshape(m, m).T
+            self.omega2 = self.staged[size + mm : size + mm + m]
         self.check = np.zeros(1)  # s of :func:`finiteness`, at the last call
         buf.set_res(1, view(self.check))
         self._buf = buf  # keeps the binding alive
@@ -229,10 +271,26 @@ class GeneratedImpedance:
     def __reduce__(self) -> tuple[Any, ...]:
         # rebuilt (the library loads from the cache: the buffers are this process's), with the gains
         args = (self.dynamics, self.frame, self.axes, self.null, self.split)
-        return (GeneratedImpedance, args, {"par": self.par.copy()})
+        return (GeneratedImpedance, args, {"par": self.par.copy(), "zeta": self.staged[-1:].copy()})
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.par[...] = state["par"]
+        self.staged[-1:] = state["zeta"]
+
+    def set_damping_ratio(self, zeta: float) -> None:
+        """ζ of the split law's damping (:func:`damping_function`)."""
+        self.staged[-1] = zeta
+
+    def damp(self) -> FloatArray:
+        """The split law's second stage after :attr:`evaluate` (finite): S = U K₀ Uᵀ by one symmetric
+        eigendecomposition, then [τ; e; F] (a new array) with the damping (:func:`damping_function`)."""
+        omega2, u, info = lapack.dsyev(self.scaled)
+        if info:  # pragma: no cover - the symmetric eigensolver does not fail on finite input
+            raise InvalidParameterError(f"no eigendecomposition of G⁻¹ K G⁻ᵀ (LAPACK info {info})", value=self.scaled)
+        self.modes[...] = u
+        self.omega2[...] = omega2
+        self._run_damping()
+        return self.damped.copy()
 
     def set_gains(
         self, stiffness: FloatArray, damping: FloatArray | None, null_k: FloatArray, null_d: FloatArray
