@@ -154,6 +154,7 @@ class CartesianImpedance(Controller):
             if a is not None:
                 readonly(a)
         self._generated = self._generated_law(compile)
+        self._outputs = (slice(0, n), slice(n, n + m), slice(n + m, n + 2 * m))  # τ, e, F in its [τ; e; F]
         self._checks_result = self._generated is not None  # the NumPy path holds a pose: inputs checked first
         kernel_friction = dynamics.kernel.friction
         self._friction_terms = kernel_friction if self.friction and kernel_friction.any else None
@@ -243,11 +244,11 @@ class CartesianImpedance(Controller):
             if math.isfinite(gen.check.item()):  # NaN at a singular configuration: the NumPy path names it
                 # the default damping, from Λ(q): one eigendecomposition between the two stages of the code
                 out = gen.damp() if gen.split else gen.out.copy()
-                n, m = self.n, self.axes
-                tau, force = out[:n], out[n + m : n + 2 * m]
+                at_tau, at_error, at_force = self._outputs
+                tau = out[at_tau]
                 if self._friction_terms is not None:
                     tau += self._friction_terms.torque(qd)
-                self.last_log = {"error": out[n : n + m], "force": force}
+                self.last_log = {"error": out[at_error], "force": out[at_force]}
                 return tau
             q, qd = self._checked(t, q, qd)  # a non-finite input named, before the NumPy path
         return self._numpy_law(t, q, qd, ref)

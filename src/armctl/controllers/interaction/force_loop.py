@@ -125,6 +125,10 @@ class ForceLoop(Controller):
             inner_gains = (self.inner.kp, self.inner.kd, self.inner.posture_kp, self.inner.posture_kd)
             gen.set_gains(*inner_gains, self.directions, self._pkf, self._pki, self.compensate)
         self._integral = np.zeros(3)  # ∫ e_f dt [N·s], by the rectangle rule between calls
+        n = self.n  # where τ, e, e_f, ∫e_f and x_F are in the generated law's output
+        self._outputs = tuple(
+            slice(a, b) for a, b in ((0, n), (n, n + 6), (n + 6, n + 9), (n + 9, n + 12), (n + 12, n + 15))
+        )
         self._t: float | None = None
 
     def set_target(
@@ -187,15 +191,15 @@ class ForceLoop(Controller):
             out = gen.run_force_loop(q, qd, goal, posture, h, f_d, force_target.fn is None, self._integral, dt)
             if math.isfinite(gen.check.item()):  # inputs and outputs finite
                 self._t = t
-                n = self.n
-                self._integral = out[n + 9 : n + 12]
+                at_tau, at_error, at_force_error, at_integral, at_offset = self._outputs
+                self._integral = out[at_integral]
                 self.last_log = {
-                    "force_error": out[n + 6 : n + 9],
-                    "offset": out[n + 12 :],
+                    "force_error": out[at_force_error],
+                    "offset": out[at_offset],
                     "wrench": h,
-                    "error": out[n : n + 6],
+                    "error": out[at_error],
                 }
-                return self.inner.with_friction(out[:n], qd)
+                return self.inner.with_friction(out[at_tau], qd)
         q, qd = self._checked(t, q, qd)  # a non-finite input named, before the NumPy path
         self._t = t
         pose, twist, acc = goal
