@@ -203,3 +203,27 @@ def test_the_default_damping_survives_a_pickle(panda: armctl.Dynamics, zeta: flo
     q, qd, ref = Q_READY + 0.1, np.linspace(-0.5, 0.5, 7), armctl.Reference(Q_READY)
     np.testing.assert_allclose(copy(0.0, q, qd, ref), slow(0.0, q, qd, ref), rtol=1e-9, atol=1e-9)
     np.testing.assert_allclose(copy.last_log["force"], slow.last_log["force"], rtol=1e-9, atol=1e-9)
+
+
+def test_a_subclass_with_its_own_law_gets_its_inputs_checked_first(panda: armctl.Dynamics) -> None:
+    seen: list[np.ndarray] = []
+
+    class Recording(CartesianImpedance):
+        def compute(self, t: float, q: np.ndarray, qd: np.ndarray, ref: armctl.Reference) -> np.ndarray:
+            seen.append(q.copy())  # state a NaN must never reach
+            return super().compute(t, q, qd, ref)
+
+    class RecordingForce(ForceControl):
+        def compute(self, t: float, q: np.ndarray, qd: np.ndarray, ref: armctl.Reference) -> np.ndarray:
+            seen.append(q.copy())
+            return super().compute(t, q, qd, ref)
+
+    q = Q_READY.copy()
+    q[3] = math.nan
+    ref = armctl.Reference(Q_READY)
+    with pytest.raises(NonFiniteError, match=r"^q holds NaN or inf"):
+        Recording(panda, K, D, compile=True)(0.0, q, np.zeros(7), ref)
+    force = RecordingForce(panda, [0.0, 0.0, -10.0], 2e-4, compile=True)
+    with pytest.raises(NonFiniteError, match=r"^q holds NaN or inf"):
+        force(0.0, q, np.zeros(7), ref, measurement=Measurement(wrench=np.zeros(6)))
+    assert seen == []

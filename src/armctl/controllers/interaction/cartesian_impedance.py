@@ -155,7 +155,8 @@ class CartesianImpedance(Controller):
                 readonly(a)
         self._generated = self._generated_law(compile)
         self._outputs = (slice(0, n), slice(n, n + m), slice(n + m, n + 2 * m))  # τ, e, F in its [τ; e; F]
-        self._checks_result = self._generated is not None  # the NumPy path holds a pose: inputs checked first
+        # the NumPy path holds a pose, and a subclass's own compute may keep state: their inputs are checked first
+        self._checks_result = type(self).result_check and self._generated is not None
         kernel_friction = dynamics.kernel.friction
         self._friction_terms = kernel_friction if self.friction and kernel_friction.any else None
 

@@ -104,7 +104,8 @@ class ForceLoop(Controller):
         self.force_input = ForceInput(force_source, owner)
         self.reads = self.force_input.reads  # per instance: what it reads depends on the source
         self._sensor = self.force_input.source == "sensor"
-        self._checks_result = self._sensor  # an observer keeps state from q and q̇: its inputs are checked first
+        # an observer keeps state from q and q̇, and a subclass's own compute may: their inputs are checked first
+        self._checks_result = type(self).result_check and self._sensor
         self.force_target = ForceTarget(force)
         self.force_gain = readonly(symmetric_psd(force_gain, (3,), "force_gain", "m/N"))
         self.integral_gain = readonly(symmetric_psd(integral_gain, (3,), "integral_gain", "m/(N·s)"))
