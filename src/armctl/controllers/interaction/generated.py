@@ -41,6 +41,8 @@ from armctl.model.robot import RobotModel
 _CODE_VERSION = 6
 _NAME = "cartesian_impedance"
 _log = logging.getLogger(__name__)
+#: the compiler's flags: the law runs at every control step (a slower build for faster code)
+FLAGS = codegen.CFLAGS_FAST
 
 
 def cholesky_factor(a: Any) -> list[list[Any]]:
@@ -216,11 +218,11 @@ class GeneratedImpedance:
         self.dynamics, self.frame, self.axes, self.null, self.split = dynamics, frame, axes, null, split
         cache_dir = dynamics.options.get("cache_dir")
         tag = _tag(model, frame, axes, null, split)
-        built = not codegen.is_cached([_NAME], tag, cache_dir)
+        built = not codegen.is_cached([_NAME], tag, cache_dir, FLAGS)
         t0 = time.perf_counter()
-        fn = codegen.cached([_NAME], tag, lambda: [impedance_function(model, frame, axes, null, split)], cache_dir)[
-            _NAME
-        ]
+        fn = codegen.cached(
+            [_NAME], tag, lambda: [impedance_function(model, frame, axes, null, split)], cache_dir, flags=FLAGS
+        )[_NAME]
         if built:
             _log.warning(
                 "armctl: generated and compiled the Cartesian impedance law for %r in %.1f s (cached in %s)",
@@ -246,6 +248,7 @@ class GeneratedImpedance:
                 f"impedance-damping|n={n}|axes={m}|v{_CODE_VERSION}",
                 lambda: [damping_function(n, m)],
                 cache_dir,
+                flags=FLAGS,
             )[_NAME + "_damping"]
             self.damped = np.zeros(n + 2 * m)  # [τ; e; F] of the second stage
             buf2, self._run_damping = buffer_of(stage)

@@ -26,7 +26,7 @@ import numpy as np
 
 from armctl._checks import FloatArray
 from armctl.codegen import library as codegen
-from armctl.controllers.interaction.generated import cholesky_factor, cholesky_solve_columns, finiteness
+from armctl.controllers.interaction.generated import FLAGS, cholesky_factor, cholesky_solve_columns, finiteness
 from armctl.controllers.osc.tasks.rotation import rotation_error_sx
 from armctl.dynamics.base import Dynamics
 from armctl.dynamics.casadi_buffer import buffer_of, view
@@ -171,10 +171,10 @@ class GeneratedInner:
         cache_dir = dynamics.options.get("cache_dir")
         name = _NAME + ("_force" if force_loop else f"_admittance{admittance}" if admittance else "")
         tag = _tag(model, frame, kind) + f"|force_loop={force_loop}|admittance={admittance}"
-        built = not codegen.is_cached([name], tag, cache_dir)
+        built = not codegen.is_cached([name], tag, cache_dir, FLAGS)
         t0 = time.perf_counter()
         make = lambda: [inner_function(model, frame, kind, force_loop, admittance)]  # noqa: E731
-        fn = codegen.cached([name], tag, make, cache_dir)[name]
+        fn = codegen.cached([name], tag, make, cache_dir, flags=FLAGS)[name]
         if built:
             _log.warning(
                 "armctl: generated and compiled the interaction controllers' inner loop (%s) for %r in %.1f s "
