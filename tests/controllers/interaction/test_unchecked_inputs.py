@@ -227,3 +227,23 @@ def test_a_subclass_with_its_own_law_gets_its_inputs_checked_first(panda: armctl
     with pytest.raises(NonFiniteError, match=r"^q holds NaN or inf"):
         force(0.0, q, np.zeros(7), ref, measurement=Measurement(wrench=np.zeros(6)))
     assert seen == []
+
+
+@pytest.mark.parametrize("variant", ["given damping", "three axes"])
+def test_reset_forgets_a_held_pose_and_keeps_a_set_target(panda: armctl.Dynamics, variant: str) -> None:
+    fast, slow = pair(panda, variant)
+    ref, qd = armctl.Reference(Q_READY), np.full(7, 0.1)
+    q1, q2 = Q_READY + 0.1, Q_READY - 0.1
+    for c in (fast, slow):
+        c(0.0, q1, qd, ref)  # holds the pose at q1
+        c.reset()
+    np.testing.assert_allclose(fast(0.0, q2, qd, ref), slow(0.0, q2, qd, ref), rtol=1e-9, atol=1e-9)
+    held_at_q2 = fast(0.0, q2, np.zeros(7), ref)
+    np.testing.assert_allclose(fast.last_log["error"], 0.0, atol=1e-12)  # the pose at q2 is the target now
+    axes = len(VARIANTS[variant]["stiffness"])
+    pose = panda.frame_pose(Q_READY)
+    for c in (fast, slow):
+        c.set_target(pose if axes == 6 else pose[:3, 3])
+        c.reset()  # a target that was set stays
+    np.testing.assert_allclose(fast(0.0, q2, qd, ref), slow(0.0, q2, qd, ref), rtol=1e-9, atol=1e-9)
+    assert not np.allclose(fast(0.0, q2, np.zeros(7), ref), held_at_q2)
