@@ -268,7 +268,7 @@ def all_finite(a: FloatArray) -> bool:
     ``np.isfinite``). Python's float arithmetic raises no floating-point warning for inf − inf, as NumPy's would.
     A larger array is tested entry by entry (``np.isfinite``), where the sum's conversion would cost more."""
     if a.size <= _SUMMED:
-        return math.isfinite(sum(a.ravel(order="K").tolist()))
+        return math.isfinite(sum((a if a.ndim == 1 else a.ravel(order="K")).tolist()))  # a vector: no ravel
     return bool(np.isfinite(a).all())
 
 

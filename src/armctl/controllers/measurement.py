@@ -28,10 +28,13 @@ delay, an optional first-order filter; :class:`armctl.sim.Sensing`) and calls
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, fields
 from typing import Any
 
-from armctl._checks import FloatArray, real_array, vector
+import numpy as np
+
+from armctl._checks import FLOAT, FloatArray, real_array, vector
 from armctl.errors import InvalidParameterError, ShapeError
 
 #: the names of the signals a controller can declare in ``reads``
@@ -71,11 +74,11 @@ class Measurement:
     world_axes: bool = False
 
     def __post_init__(self) -> None:
-        if self.wrench is not None:
+        if self.wrench is not None and not _checked_vector(self.wrench, 6):
             object.__setattr__(self, "wrench", vector(self.wrench, 6, "measurement.wrench"))
         for name in ("tau_applied", "tau_measured"):
             value = getattr(self, name)
-            if value is not None:
+            if value is not None and not _checked_vector(value, None):
                 arr = real_array(value, f"measurement.{name}")
                 if arr.ndim != 1:
                     raise ShapeError(f"measurement.{name} must be a vector (n,), got shape {arr.shape}", value=value)
@@ -84,6 +87,8 @@ class Measurement:
             raise InvalidParameterError(
                 f"measurement.world_axes must be True or False, got {self.world_axes!r}", value=self.world_axes
             )
+        names = frozenset(f.name for f in fields(self) if f.name in SIGNALS and getattr(self, f.name) is not None)
+        object.__setattr__(self, "_available", names)  # the signals are fixed (frozen): named once
 
     def available(self) -> frozenset[str]:
         """The names of the signals this measurement carries.
@@ -93,7 +98,21 @@ class Measurement:
         frozenset of str
             Names of :data:`SIGNALS` whose value is not None.
         """
-        return frozenset(f.name for f in fields(self) if f.name in SIGNALS and getattr(self, f.name) is not None)
+        available: frozenset[str] = self._available  # type: ignore[attr-defined]  # set by __post_init__
+        return available
+
+
+def _checked_vector(value: Any, n: int | None) -> bool:
+    """Whether ``value`` is already what the checks would make of it: a float64 ndarray (not a subclass) of shape
+    (n,) (any length for None), all finite (one sum: NaN and inf propagate into it; a finite sum beyond the range
+    of floats answers False, and the full check takes over)."""
+    return (
+        type(value) is np.ndarray
+        and value.dtype == FLOAT
+        and value.ndim == 1
+        and (n is None or value.shape[0] == n)
+        and math.isfinite(sum(value.tolist()))
+    )
 
 
 def check_reads(reads: Any, owner: str) -> frozenset[str]:

@@ -3,12 +3,13 @@ is pulled towards a posture by a joint spring."""
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, all_finite, boolean, readonly, vector
+from armctl._checks import FloatArray, boolean, readonly, vector
 from armctl.codegen import Fallback, compile_mode
 from armctl.controllers.base import Controller
 from armctl.controllers.interaction.force_source import ForceInput
@@ -153,6 +154,9 @@ class CartesianImpedance(Controller):
             if a is not None:
                 readonly(a)
         self._generated = self._generated_law(compile)
+        self._outputs = (slice(0, n), slice(n, n + m), slice(n + m, n + 2 * m))  # τ, e, F in its [τ; e; F]
+        # the NumPy path holds a pose, and a subclass's own compute may keep state: their inputs are checked first
+        self._checks_result = type(self).result_check and self._generated is not None
         kernel_friction = dynamics.kernel.friction
         self._friction_terms = kernel_friction if self.friction and kernel_friction.any else None
 
@@ -175,6 +179,8 @@ class CartesianImpedance(Controller):
         if gen is None:
             return None
         gen.set_gains(self.stiffness, self.damping, self.nullspace_stiffness, self.nullspace_damping)
+        if gen.split:
+            gen.set_damping_ratio(self.zeta)
         return gen
 
     def set_target(
@@ -211,28 +217,43 @@ class CartesianImpedance(Controller):
         if self.force is not None:
             self.force.reset()
 
+    #: the generated law checks its own inputs (see :meth:`compute`): ``__call__`` checks only τ
+    result_check = True
+
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         gen = self._generated
         if gen is not None:
+            # Called on unchecked q and q̇ (result_check): nothing is kept (the held pose, last_log) and no user
+            # function is called (a trajectory, on t) before they are known to be finite.
+            if not math.isfinite(t):
+                self._checked(t, q, qd)  # raises, naming t
             target = self.target
-            if not target.holder.is_set:
-                target.hold(self.dynamics.kernel.frame_pose(q, self.frame))
-            value, vel, acc = target.holder.at(t)
-            out = gen.run(q, qd, value, vel, acc, self.posture if self.posture is not None else ref.q)
-            if all_finite(out):  # NaN at a singular configuration: the NumPy path names it
-                n, m = self.n, self.axes
-                tau, force = out[:n], out[n + m : n + 2 * m]
-                if gen.split:  # the default damping, from Λ(q): τ = τ₀ + Jᵀ D ė
-                    k = n + 3 * m
-                    lam = out[k : k + m * m].reshape(m, m)
-                    jac_t = out[k + m * m :].reshape(n, m)  # J column by column: Jᵀ row by row
-                    d_edot = critical_damping(lam, self.stiffness, self.zeta) @ out[n + 2 * m : k]
-                    tau += jac_t @ d_edot
-                    force += d_edot
+            goal = target.fixed  # a constant target, or None
+            if goal is None:
+                holder = target.holder
+                if not holder.is_set:
+                    q, qd = self._checked(t, q, qd)
+                    target.hold(self.dynamics.kernel.frame_pose(q, self.frame))
+                goal = holder.at(t)
+            # gen.run(q, qd, goal, posture), written out: this is the whole per-step cost of the law
+            pieces = gen.pieces
+            pieces[0][...] = q
+            pieces[1][...] = qd
+            if goal is not gen.target:
+                gen.load_target(goal)
+            if self._null:
+                pieces[5][...] = self.posture if self.posture is not None else ref.q
+            gen.evaluate()
+            if math.isfinite(gen.check.item()):  # NaN at a singular configuration: the NumPy path names it
+                # the default damping, from Λ(q): one eigendecomposition between the two stages of the code
+                out = gen.damp() if gen.split else gen.out.copy()
+                at_tau, at_error, at_force = self._outputs
+                tau = out[at_tau]
                 if self._friction_terms is not None:
                     tau += self._friction_terms.torque(qd)
-                self.last_log = {"error": out[n : n + m], "force": force}
+                self.last_log = {"error": out[at_error], "force": out[at_force]}
                 return tau
+            q, qd = self._checked(t, q, qd)  # a non-finite input named, before the NumPy path
         return self._numpy_law(t, q, qd, ref)
 
     def _numpy_law(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:

@@ -11,12 +11,13 @@ into it raises the force, so x_F moves towards the force wanted; the integral ma
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, all_finite, boolean, readonly, real_array, vector
+from armctl._checks import FloatArray, boolean, readonly, real_array, vector
 from armctl.controllers.base import Controller
 from armctl.controllers.interaction.force_source import ForceInput
 from armctl.controllers.interaction.gains import symmetric_psd
@@ -40,7 +41,8 @@ class ForceTarget:
 
     def __init__(self, force: Any) -> None:
         self.fn = force if callable(force) else None
-        self.value = None if callable(force) else vector(force, 3, "force")
+        # a constant: a read-only copy (later changes to the array given do not reach it)
+        self.value = None if callable(force) else readonly(vector(force, 3, "force").copy())
 
     def __call__(self, t: float) -> FloatArray:
         if self.fn is not None:
@@ -101,6 +103,9 @@ class ForceLoop(Controller):
         owner = type(self).__name__
         self.force_input = ForceInput(force_source, owner)
         self.reads = self.force_input.reads  # per instance: what it reads depends on the source
+        self._sensor = self.force_input.source == "sensor"
+        # an observer keeps state from q and q̇, and a subclass's own compute may: their inputs are checked first
+        self._checks_result = type(self).result_check and self._sensor
         self.force_target = ForceTarget(force)
         self.force_gain = readonly(symmetric_psd(force_gain, (3,), "force_gain", "m/N"))
         self.integral_gain = readonly(symmetric_psd(integral_gain, (3,), "integral_gain", "m/(N·s)"))
@@ -121,8 +126,11 @@ class ForceLoop(Controller):
             inner_gains = (self.inner.kp, self.inner.kd, self.inner.posture_kp, self.inner.posture_kd)
             gen.set_gains(*inner_gains, self.directions, self._pkf, self._pki, self.compensate)
         self._integral = np.zeros(3)  # ∫ e_f dt [N·s], by the rectangle rule between calls
+        n = self.n  # where τ, e, e_f, ∫e_f and x_F are in the generated law's output
+        self._outputs = tuple(
+            slice(a, b) for a, b in ((0, n), (n, n + 6), (n + 6, n + 9), (n + 9, n + 12), (n + 12, n + 15))
+        )
         self._t: float | None = None
-        self._dt = np.zeros(1)
 
     def set_target(
         self, pose: ArrayLike, twist: ArrayLike | None = None, acceleration: ArrayLike | None = None
@@ -156,26 +164,48 @@ class ForceLoop(Controller):
         self.target.reset()
         self.force_input.reset()
 
+    #: with a sensor, the generated law checks its own inputs (see :meth:`compute`): ``__call__`` checks τ only
+    result_check = True
+
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
+        # With a sensor q and q̇ come unchecked (result_check): nothing is kept (the held pose, the integral, the
+        # time, last_log) and no user function is called (f_d(t), a trajectory) before they are known finite.
+        if not math.isfinite(t):
+            self._checked(t, q, qd)  # raises, naming t
         target = self.target
-        if not target.holder.is_set:
-            target.hold(self.dynamics.kernel.frame_pose(q, self.frame))
-        pose, twist, acc = target.holder.at(t)
-        h = self.force_input.wrench(self, t, q, qd, self.frame)
-        f_d = self.force_target(t)
+        goal = target.fixed  # a constant target, or None
+        if goal is None:
+            holder = target.holder
+            if not holder.is_set:
+                q, qd = self._checked(t, q, qd)
+                target.hold(self.dynamics.kernel.frame_pose(q, self.frame))
+            goal = holder.at(t)
+        m = self.measurement
+        if self._sensor and m is not None and m.world_axes and m.frame == self.frame and m.wrench is not None:
+            h = m.wrench  # already in world axes at the frame (what force_input.wrench gives, without its calls)
+        else:
+            h = self.force_input.wrench(self, t, q, qd, self.frame)  # an observer's inputs are checked first
+        force_target = self.force_target
+        f_d = force_target(t)
         dt = t - self._t if self._t is not None and t > self._t else 0.0  # a new run's clock restarts: no step back
-        self._t = t
         posture = self.posture if self.posture is not None else ref.q
         gen = self.inner.generated
         if gen is not None:
-            self._dt[0] = dt
-            out = gen.run_force((q, qd, pose.ravel(), twist, acc, posture, h, f_d, self._integral, self._dt))
-            if all_finite(out):
-                n = self.n
-                self._integral = out[n + 9 : n + 12]
-                self.last_log = {"force_error": out[n + 6 : n + 9], "offset": out[n + 12 :], "wrench": h}
-                self.last_log["error"] = out[n : n + 6]
-                return self.inner.with_friction(out[:n], qd)
+            out = gen.run_force_loop(q, qd, goal, posture, h, f_d, force_target.fn is None, self._integral, dt)
+            if math.isfinite(gen.check.item()):  # inputs and outputs finite
+                self._t = t
+                at_tau, at_error, at_force_error, at_integral, at_offset = self._outputs
+                self._integral = out[at_integral]
+                self.last_log = {
+                    "force_error": out[at_force_error],
+                    "offset": out[at_offset],
+                    "wrench": h,
+                    "error": out[at_error],
+                }
+                return self.inner.with_friction(out[at_tau], qd)
+        q, qd = self._checked(t, q, qd)  # a non-finite input named, before the NumPy path
+        self._t = t
+        pose, twist, acc = goal
         e_f = self.directions @ (f_d - h[:3])
         integral = self._integral + e_f * dt
         x_f = self._pkf @ e_f + self._pki @ integral

@@ -16,6 +16,7 @@ input of the code; the library is compiled once per model, frame and kind and ca
 from __future__ import annotations
 
 import hashlib
+import itertools
 import logging
 import time
 from typing import Any
@@ -25,7 +26,7 @@ import numpy as np
 
 from armctl._checks import FloatArray
 from armctl.codegen import library as codegen
-from armctl.controllers.interaction.generated import cholesky_factor, cholesky_solve_columns
+from armctl.controllers.interaction.generated import FLAGS, cholesky_factor, cholesky_solve_columns, finiteness
 from armctl.controllers.osc.tasks.rotation import rotation_error_sx
 from armctl.dynamics.base import Dynamics
 from armctl.dynamics.casadi_buffer import buffer_of, view
@@ -33,7 +34,7 @@ from armctl.dynamics.recursive import inverse_dynamics, joint_transforms, mass_m
 from armctl.dynamics.symbolic_frames import frame_kinematics
 from armctl.model.robot import RobotModel
 
-_CODE_VERSION = 2
+_CODE_VERSION = 3
 _NAME = "interaction_inner"
 _log = logging.getLogger(__name__)
 
@@ -85,7 +86,8 @@ def inner_function(
     f = h[:3]; the outputs are then [τ; e; e_f; ∫e_f after this step; x_F]. With ``admittance`` (its axes, 3 or 6),
     the compliant frame's step (:func:`admittance_stage`) comes first: x also holds p_c, R_c (row by row), v_c and
     Δt, p holds M_d⁻¹, D_d, K_d and whether to compensate h; the pose, twist and acceleration inputs are the
-    target's; the outputs are then [τ; e; p_c; R_c (column by column); v_c; e_c]."""
+    target's; the outputs are then [τ; e; p_c; R_c (column by column); v_c; e_c]. A second output is Σ x + Σ of the
+    first (:func:`~armctl.controllers.interaction.generated.finiteness`)."""
     n = model.n
     nx, npar = sizes(n)
     extra = (7, 28) if force_loop else (19, 3 * admittance * admittance + 1) if admittance else (0, 0)
@@ -128,10 +130,12 @@ def inner_function(
     tau = tau + jac.T @ (h * par[-1] if force_loop or admittance else h)  # the last parameter: compensate
     name = _NAME + ("_force" if force_loop else f"_admittance{admittance}" if admittance else "")
     if force_loop:
-        return cs.Function(name, [x, par], [cs.vertcat(tau, e, e_f, after, offset)])
-    if admittance:
-        return cs.Function(name, [x, par], [cs.vertcat(tau, e, state, e_c)])
-    return cs.Function(name, [x, par], [cs.vertcat(tau, e, pos)])
+        out = cs.vertcat(tau, e, e_f, after, offset)
+    elif admittance:
+        out = cs.vertcat(tau, e, state, e_c)
+    else:
+        out = cs.vertcat(tau, e, pos)
+    return cs.Function(name, [x, par], [out, finiteness(x, out)])
 
 
 def _tag(model: RobotModel, frame: str | None, kind: str) -> str:
@@ -167,10 +171,10 @@ class GeneratedInner:
         cache_dir = dynamics.options.get("cache_dir")
         name = _NAME + ("_force" if force_loop else f"_admittance{admittance}" if admittance else "")
         tag = _tag(model, frame, kind) + f"|force_loop={force_loop}|admittance={admittance}"
-        built = not codegen.is_cached([name], tag, cache_dir)
+        built = not codegen.is_cached([name], tag, cache_dir, FLAGS)
         t0 = time.perf_counter()
         make = lambda: [inner_function(model, frame, kind, force_loop, admittance)]  # noqa: E731
-        fn = codegen.cached([name], tag, make, cache_dir)[name]
+        fn = codegen.cached([name], tag, make, cache_dir, flags=FLAGS)[name]
         if built:
             _log.warning(
                 "armctl: generated and compiled the interaction controllers' inner loop (%s) for %r in %.1f s "
@@ -194,7 +198,17 @@ class GeneratedInner:
         buf.set_arg(0, view(self.inp))
         buf.set_arg(1, view(self.par))
         buf.set_res(0, view(self.out))
+        self.check = np.zeros(1)  # the finiteness sum of the last call
+        buf.set_res(1, view(self.check))
         self._buf = buf
+        if force_loop:  # views of the input buffer, each of its piece's shape
+            bounds = np.cumsum([0, n, n, 16, 6, 6, n, 6, 3, 3])
+            views = [self.inp[a:b] for a, b in itertools.pairwise(bounds)]
+            views[2] = views[2].reshape(4, 4)  # row by row
+            self._pieces = tuple(views)
+            self._dt_at = int(bounds[-1])
+        self._target: tuple[FloatArray, ...] | None = None  # the target in the input buffer
+        self._force: FloatArray | None = None  # the fixed f_d in the input buffer
 
     def __reduce__(self) -> tuple[Any, ...]:
         # rebuilt (the library loads from the cache: the buffers are this process's), with the gains
@@ -229,6 +243,39 @@ class GeneratedInner:
         """[τ; e; p] (a new array): the torque, the frame error [m; rad] and the frame's position [m]."""
         h = self._zero_wrench if wrench is None else wrench
         np.concatenate((q, qd, pose.ravel(), twist, acceleration, posture, h), out=self.inp)
+        self._run()
+        return self.out.copy()
+
+    def run_force_loop(
+        self,
+        q: FloatArray,
+        qd: FloatArray,
+        target: tuple[FloatArray, FloatArray, FloatArray],
+        posture: FloatArray,
+        wrench: FloatArray,
+        force: FloatArray,
+        fixed_force: bool,
+        integral: FloatArray,
+        dt: float,
+    ) -> FloatArray:
+        """With the force loop: [τ; e; e_f; ∫e_f; x_F] (a new array) at (q, q̇) for the ``target`` (x_d, v_d,
+        a_d), the posture q_n, the wrench h, f_d, ∫e_f before this step and Δt [s]; :attr:`check` is then the
+        finiteness sum of the call. A target that is the same tuple as at the last call is not copied again
+        (pass a new tuple when its values change), nor a ``force`` that is the same read-only array
+        (``fixed_force``: it never changes)."""
+        q_in, qd_in, pose_in, twist_in, acc_in, posture_in, h_in, force_in, integral_in = self._pieces
+        q_in[...] = q  # into views of the input buffer: cheaper than one concatenation of many pieces
+        qd_in[...] = qd
+        if target is not self._target:
+            pose_in[...], twist_in[...], acc_in[...] = target
+            self._target = target  # kept: its identity is not reused while it lives
+        posture_in[...] = posture
+        h_in[...] = wrench
+        if force is not self._force:
+            force_in[...] = force
+            self._force = force if fixed_force else None
+        integral_in[...] = integral
+        self.inp[self._dt_at] = dt
         self._run()
         return self.out.copy()
 

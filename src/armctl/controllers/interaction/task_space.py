@@ -13,7 +13,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.linalg import lapack
 
-from armctl._checks import FloatArray
+from armctl._checks import FloatArray, readonly
 from armctl.controllers.osc.state import FrameKinematics
 from armctl.controllers.osc.tasks.rotation import rotation_error
 from armctl.controllers.osc.tasks.target import TargetHolder, Trajectory
@@ -36,36 +36,42 @@ class FrameTarget:
         self.axes = axes
         self.holder = TargetHolder(owner, (4, 4) if axes == 6 else (3,), axes)
         self._held = False
+        #: the constant target's (value, velocity, acceleration), one tuple while it lasts (None: a trajectory,
+        #: or no target yet); change the target through this object's methods, which keep it
+        self.fixed: tuple[FloatArray, FloatArray, FloatArray] | None = None
 
     def set(self, value: ArrayLike, velocity: ArrayLike | None = None, acceleration: ArrayLike | None = None) -> None:
+        """Hold a constant target: checked (named errors), then copied, read-only — later changes to the arrays
+        given do not reach it, so a law may keep what it has read of it while it is the same."""
         self.holder.set(value, velocity, acceleration)
+        self.holder.set(*(readonly(np.array(a)) for a in self.holder.at(0.0)))
+        self.fixed = self.holder.at(0.0)
         self._held = False
 
     def follow(self, fn: Trajectory) -> None:
         self.holder.follow(fn)
+        self.fixed = None
         self._held = False
 
     def reset(self) -> None:
         """Forget a target that was only the held first pose."""
         if self._held:
             self.holder = TargetHolder(self.holder.owner, self.holder.value_shape, self.holder.rate)
+            self.fixed = None
             self._held = False
 
     def hold(self, pose: FloatArray) -> None:
         """Hold ``pose`` (4×4; its position for 3 axes) until :meth:`reset`, as the first call does unset."""
         self.holder.set(np.array(pose) if self.axes == 6 else np.array(pose[:3, 3]))
+        self.fixed = self.holder.at(0.0)
         self._held = True
 
     def at(self, t: float, fk: FrameKinematics) -> tuple[FloatArray, FloatArray, FloatArray]:
         """(value, velocity, acceleration) at t [s]; the first call without a target holds the frame's pose."""
         if not self.holder.is_set:
-            if self.axes == 6:
-                pose = np.eye(4)
-                pose[:3, :3], pose[:3, 3] = fk.rotation, fk.position
-                self.holder.set(pose)
-            else:
-                self.holder.set(np.array(fk.position))
-            self._held = True
+            pose = np.eye(4)
+            pose[:3, :3], pose[:3, 3] = fk.rotation, fk.position
+            self.hold(pose)  # its position for 3 axes
         return self.holder.at(t)
 
     def error(self, value: FloatArray, fk: FrameKinematics) -> FloatArray:
