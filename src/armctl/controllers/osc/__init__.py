@@ -1,6 +1,5 @@
-"""Operational-space control as a QP (DAQP, then proxsuite), with contacts, limits and strict priorities::
-
-from armctl.controllers.osc import OperationalSpaceQP, FramePoseTask, PostureTask
+"""Operational-space control as a QP (DAQP, then proxsuite), with contacts, limits and strict priorities:
+``from armctl.controllers.osc import OperationalSpaceQP, FramePoseTask, PostureTask``.
 """
 
 # The parts, for a reader of the source: ``state`` (model terms of one step), ``tasks/`` (error + Jacobian),
