@@ -18,6 +18,7 @@ from armctl.sim.compiled import compiled_step
 from armctl.sim.contact import ContactPoint, Environment
 from armctl.sim.friction import FrictionModel
 from armctl.sim.integrators import rk4, semi_implicit_euler
+from armctl.sim.options import regroup
 from tests.dynamics.helpers import skewed_rpr
 from tests.sim.helpers import ComputedTorque
 
@@ -159,14 +160,14 @@ def test_compile_true_refuses_a_plant_without_generated_code(case: str) -> None:
         kw["environment"] = _OwnEnvironment()
     ctrl = ComputedTorque(armctl.Dynamics(rigid), 100.0, 20.0)
     with pytest.raises(InvalidParameterError) as err:
-        armctl.sim.simulate(plant, ctrl, Reference(np.zeros(2)), 0.01, compile=True, **kw)
+        armctl.sim.simulate(plant, ctrl, Reference(np.zeros(2)), 0.01, compile=True, **regroup(kw))
     expect = {
         "rotor_coupling": "rotor_coupling=False",
         "own_friction": "_OwnFriction has no generated code",
         "own_environment": "_OwnEnvironment has no generated code",
     }[case]
     assert expect in str(err.value) and "compile=False" in str(err.value)
-    assert armctl.sim.simulate(plant, ctrl, Reference(np.zeros(2)), 0.01, **kw).info["compiled"] is False
+    assert armctl.sim.simulate(plant, ctrl, Reference(np.zeros(2)), 0.01, **regroup(kw)).info["compiled"] is False
 
 
 @pytest.mark.parametrize("value", ["yes", 1, None])

@@ -18,6 +18,7 @@ import armctl
 from armctl.errors import BackendError, PerformanceWarning, SimulationWarning
 from armctl.sim import ContactPoint, Forces, HuntCrossley, KelvinVoigt, Plane, SmoothFriction, simulate
 from armctl.sim import compiled as compiled_module
+from armctl.sim.options import regroup
 from tests.sim.helpers import OpenLoop, PDGravity, Ramp, slider, zero_torque
 
 pytestmark = pytest.mark.one_step  # each test names the step it runs
@@ -100,7 +101,9 @@ def test_generated_and_python_steps_give_the_same_run(name: str, scheme: str) ->
     case = PLANTS[name]()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", SimulationWarning)  # (velocity limits of the free runs)
-        python, generated = (simulate(**case, duration=0.4, integrator=scheme, compile=c) for c in (False, True))
+        python, generated = (
+            simulate(**regroup(case), duration=0.4, integrator=scheme, compile=c) for c in (False, True)
+        )
     assert (python.info["compiled"], generated.info["compiled"]) == (False, True)
     assert not python.diverged and not generated.diverged
     assert np.abs(generated.q - python.q).max() <= 1e-9

@@ -10,6 +10,7 @@ from armctl.controllers import PDGravity
 from armctl.controllers.base import Controller
 from armctl.errors import InvalidParameterError, SimulationWarning
 from armctl.sim import Sensing
+from armctl.sim.options import regroup
 
 
 class _Subtracts(Controller):
@@ -26,7 +27,7 @@ def test_a_controller_writing_into_its_measurements_gets_a_named_error(options: 
     # change: the same rule now, read-only views, whatever the options
     dyn = armctl.Dynamics(armctl.models.pendulum())
     with pytest.raises(InvalidParameterError, match=r"wrote into a read-only array at t = 0 s .*\(q = q\.copy\(\)\)"):
-        armctl.simulate(dyn, _Subtracts(dyn), armctl.Reference([0.1]), 0.01, **options)
+        armctl.simulate(dyn, _Subtracts(dyn), armctl.Reference([0.1]), 0.01, **regroup(options))
 
 
 def test_a_noisy_run_without_a_seed_records_the_one_it_drew() -> None:

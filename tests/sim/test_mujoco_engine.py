@@ -22,6 +22,7 @@ from armctl.model import Frame, Joint, JointFriction, Link, Motor
 from armctl.model.parts import transform
 from armctl.references import Sinusoid
 from armctl.sim import ForceSensor, MujocoPlant, Sensing, simulate
+from armctl.sim.options import regroup
 from tests.helpers.mjcf_arms import SPATIAL_ARM
 from tests.sim.helpers import ComputedTorque, ForceControl, OpenLoop, PDGravity
 
@@ -43,8 +44,8 @@ def arm(mj) -> armctl.RobotModel:  # type: ignore[no-untyped-def]
 
 def both(model: armctl.RobotModel, controller, **options):  # type: ignore[no-untyped-def]
     q0 = REF(0.0).q + np.array([0.1, -0.1, 0.1])
-    native = simulate(model, controller, REF, 1.0, q0=q0, **options)
-    mujoco = simulate(model, controller, REF, 1.0, q0=q0, engine="mujoco", **options)
+    native = simulate(model, controller, REF, 1.0, q0=q0, **regroup(options))
+    mujoco = simulate(model, controller, REF, 1.0, q0=q0, engine="mujoco", **regroup(options))
     return native, mujoco
 
 
@@ -237,7 +238,7 @@ def test_what_the_engine_does_not_take(arm: armctl.RobotModel) -> None:
     plane = armctl.sim.Plane(armctl.sim.KelvinVoigt(1e4))
     for option, value in (("environment", plane), ("friction", "smooth"), ("compile", True)):
         with pytest.raises(InvalidParameterError, match=f"{option}=.* is not available with engine='mujoco'"):
-            simulate(arm, ctrl, REF, 0.1, engine="mujoco", **{option: value})
+            simulate(arm, ctrl, REF, 0.1, engine="mujoco", **regroup({option: value}))
     with pytest.raises(ModelLoadError, match="must be the same, in the same order"):
         MujocoPlant(SPATIAL_ARM, model=armctl.models.planar_3r())
 

@@ -25,6 +25,7 @@ from armctl.sim.compiled import choose_step
 from armctl.sim.engine import state_code
 from armctl.sim.friction import make_friction
 from armctl.sim.generated_engine import PeriodBinding
+from armctl.sim.options import regroup
 from armctl.sim.plant import Plant
 from armctl.sim.stepper import advance
 from tests.sim.helpers import OpenLoop, Ramp, slider, zero_torque
@@ -60,7 +61,7 @@ def _saturating() -> dict:
 def _both(case: dict, **kw: object) -> tuple[armctl.sim.SimResult, armctl.sim.SimResult]:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", SimulationWarning)  # (the limits' report of the runs)
-        python, generated = (simulate(**case, **kw, compile=c) for c in (False, True))
+        python, generated = (simulate(**regroup({**case, **kw}), compile=c) for c in (False, True))
     assert (python.info["compiled"], generated.info["compiled"]) == (False, True)
     return python, generated
 

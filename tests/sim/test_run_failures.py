@@ -184,7 +184,10 @@ def test_the_option_groups_equal_their_keywords() -> None:
 def test_an_option_given_twice_or_a_wrong_group_is_named() -> None:
     dyn, ref = _setup()
     ctrl = PDGravity(dyn, 50.0, 10.0)
-    with pytest.raises(armctl.errors.InvalidParameterError, match="noise_q given both as keyword"):
+    with (
+        pytest.warns(DeprecationWarning, match="noise_q"),
+        pytest.raises(armctl.errors.InvalidParameterError, match="noise_q given both as keyword"),
+    ):
         simulate(dyn, ctrl, ref, 0.1, noise_q=0.01, sensing=Sensing(seed=1))
     with pytest.raises(armctl.errors.InvalidParameterError, match=r"sensing must be an armctl\.sim\.Sensing"):
         simulate(dyn, ctrl, ref, 0.1, sensing={"noise_q": 0.01})  # type: ignore[arg-type]

@@ -12,7 +12,7 @@ import pytest
 
 import armctl
 from armctl.errors import ArmctlError, InvalidParameterError, SweepWarning, UnknownNameError
-from armctl.sim import CaseFailure, SimResult, SweepResult, sweep
+from armctl.sim import CaseFailure, SimResult, StopRules, SweepResult, sweep
 from tests.sim.helpers import PDGravity
 
 pytestmark = pytest.mark.one_step  # sweeps and the step functions themselves: not a choice of step
@@ -34,7 +34,7 @@ def cases(gains: list[float]) -> list[dict[str, object]]:
             "reference": armctl.Reference.hold([0.3, -0.2]),
             "duration": 0.3,
             "q0": [0.0, 0.0],
-            "max_velocity": 20.0,
+            "stop": StopRules(max_velocity=20.0),
             "saturate": False,
         }
         for kp in gains

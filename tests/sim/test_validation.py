@@ -30,6 +30,7 @@ from armctl.errors import (
 )
 from armctl.sim import ContactPoint, Forces, ForceSensor, HuntCrossley, KelvinVoigt, Plane, SimResult, simulate
 from armctl.sim.friction import SmoothFriction, StickSlip
+from armctl.sim.options import regroup
 from tests.sim.helpers import logging_run, without_samples, zero_torque
 
 MODEL = armctl.models.planar_2r()
@@ -41,7 +42,7 @@ REF = armctl.Reference.hold([0.1, 0.2])
 def run(**kw: object) -> armctl.sim.SimResult:
     args: dict[str, object] = {"plant": MODEL, "controller": zero_torque, "reference": REF, "duration": 0.01}
     args.update(kw)
-    return simulate(**args)  # type: ignore[arg-type]
+    return simulate(**regroup(args))  # type: ignore[arg-type]
 
 
 @pytest.mark.parametrize(
