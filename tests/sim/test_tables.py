@@ -14,7 +14,7 @@ import pytest
 import armctl
 from armctl.errors import ArmctlError, InvalidParameterError, OptionalDependencyError
 from armctl.references import Quintic
-from armctl.sim import SimResult, simulate, sweep
+from armctl.sim import SimResult, StopRules, simulate, sweep
 from tests.sim.helpers import PDGravity, failing_cases, failing_job, slider
 
 pytestmark = pytest.mark.one_step  # conversions of what a run recorded: not a choice of step
@@ -116,8 +116,8 @@ def test_full_results_give_their_status_and_error() -> None:
     model = armctl.models.planar_2r()
     cases = [
         {"plant": model, "controller": PDGravity(armctl.Dynamics(model), kp, 0.1 * kp),
-         "reference": armctl.Reference.hold([0.3, -0.2]), "duration": 0.2, "q0": [0.0, 0.0], "max_velocity": 20.0,
-         "saturate": False}
+         "reference": armctl.Reference.hold([0.3, -0.2]), "duration": 0.2, "q0": [0.0, 0.0],
+         "stop": StopRules(max_velocity=20.0), "saturate": False}
         for kp in (2e3, 3e7)
     ]  # fmt: skip
     out = sweep(cases, executor="serial", progress=False)
