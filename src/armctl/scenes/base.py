@@ -105,6 +105,14 @@ def diverged_errors(metrics: dict[str, Any]) -> dict[str, Any]:
     return metrics
 
 
+def applied_before(res: Any, window: dict[str, Any]) -> list[tuple[int, Any]]:
+    """The samples of a replay window (centred in the run, as :meth:`Scene.replay_window` takes it) with the
+    torque applied over the period before each: (k, τ_{k−1}), τ_{−1} = 0 [N·m]."""
+    count = len(window["t"])
+    first = (len(res.t) - count) // 2
+    return [(k, res.tau_applied[k - 1] if k else np.zeros(res.q.shape[1])) for k in range(first, first + count)]
+
+
 @dataclass
 class Scene:
     """A standard closed-loop setup: a true plant, the models its controllers are given, a reference, and

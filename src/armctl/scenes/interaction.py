@@ -16,7 +16,7 @@ import numpy as np
 from armctl.controllers import Measurement
 from armctl.controllers.base import Controller
 from armctl.errors import UnknownNameError
-from armctl.scenes.base import Scene, check_gains, diverged_errors
+from armctl.scenes.base import Scene, applied_before, check_gains, diverged_errors
 
 #: the sensor's row in ``res.sensor``
 SENSOR = 0
@@ -183,17 +183,20 @@ class InteractionScene(Scene):
         dict of str
         """
         window = super().replay_window(res, samples)
-        count = len(window["t"])
-        first = (len(res.t) - count) // 2
         window["measurement"] = [
-            Measurement(
-                wrench=res.sensor[k, SENSOR],
-                tau_applied=res.tau_applied[k - 1] if k else np.zeros(self.plant.n),
-                world_axes=True,
-            )
-            for k in range(first, first + count)
+            Measurement(wrench=res.sensor[k, SENSOR], tau_applied=tau, world_axes=True)
+            for k, tau in applied_before(res, window)
         ]
         return window
+
+
+def impedance_depth(gains: dict[str, Any], force: float, table_stiffness: float) -> tuple[Any, float]:
+    """The stiffness K of an impedance's ``gains`` and the depth δ_c = f_d (k_e + k_z)/(k_e k_z) [m] below a
+    table of stiffness k_e [N/m] at which its target makes the force f_d [N] at rest, k_z [N/m] K's vertical entry
+    (K a (3,) diagonal or a 3×3 matrix)."""
+    k = np.asarray(gains["stiffness"], dtype=float)
+    kz = float(np.diag(k)[2]) if k.ndim == 2 else float(k[2])
+    return k, force * (table_stiffness + kz) / (table_stiffness * kz)
 
 
 def quintic(start: Any, end: Any, t0: float, duration: float) -> Callable[[float], tuple[Any, Any, Any]]:

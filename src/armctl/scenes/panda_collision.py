@@ -23,7 +23,7 @@ from armctl.controllers.measurement import Measurement
 from armctl.controllers.momentum_observer import MomentumObserver
 from armctl.errors import UnknownNameError
 from armctl.references import Quintic
-from armctl.scenes.base import Scene, check_gains, diverged_errors
+from armctl.scenes.base import Scene, applied_before, check_gains, diverged_errors
 
 Q_START = np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])  # the Panda's "ready" posture
 Q_END = Q_START + np.array([0.8, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])  # the shoulder swings the tool 0.22 m along +y
@@ -112,12 +112,7 @@ class CollisionScene(Scene):
         dict of str
         """
         window = super().replay_window(res, samples)
-        first = (len(res.t) - len(window["t"])) // 2
-        zeros = np.zeros(res.q.shape[1])
-        window["measurement"] = [
-            Measurement(tau_applied=res.tau_applied[k - 1] if k else zeros)
-            for k in range(first, first + len(window["t"]))
-        ]
+        window["measurement"] = [Measurement(tau_applied=tau) for _, tau in applied_before(res, window)]
         return window
 
     def metrics(
