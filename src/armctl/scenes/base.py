@@ -169,6 +169,9 @@ class Scene:
     builders: dict[str, Callable[[Scene, dict[str, Any]], Controller]] = field(default_factory=dict)
     backend: str = "pinocchio"
     timing_samples: ClassVar[int] = 200  # recorded states :meth:`metrics` replays to time a controller
+    #: method → (required, optional) gain names, against which :meth:`controller` checks the gains it passes to
+    #: :meth:`build`
+    gain_keys: ClassVar[dict[str, tuple[tuple[str, ...], tuple[str, ...]]]] = GAIN_KEYS
 
     def dynamics(self, which: str = "exact") -> Dynamics:
         """Dynamics of one of the scene's models (pickles by rebuilding).
@@ -214,8 +217,9 @@ class Scene:
         return dict(load_preset(self.name, method)["gains"])
 
     def controller(self, method: str, gains: dict[str, Any] | None = None) -> Controller:
-        """The controller of a method (the keys of each built-in method's gains are in :data:`GAIN_KEYS`; an unknown
-        key or a missing required one is an error, not ignored).
+        """The controller of a method, built by :meth:`build` (the keys of each method's gains are in
+        :attr:`gain_keys`, :data:`GAIN_KEYS` for the built-in joint-space methods; an unknown key or a missing
+        required one is an error, not ignored) or by the method's entry in :attr:`builders`.
 
         Parameters
         ----------
@@ -239,7 +243,27 @@ class Scene:
             raise UnknownNameError("method", method, self.methods)
         if method in self.builders:  # a custom builder checks its own gains
             return self.builders[method](self, self.gains(method) if gains is None else dict(gains))
-        g = check_gains(method, self.gains(method) if gains is None else gains, *GAIN_KEYS[method])
+        g = check_gains(method, self.gains(method) if gains is None else gains, *self.gain_keys[method])
+        return self.build(method, g)
+
+    def build(self, method: str, gains: dict[str, Any]) -> Controller:
+        """The controller of ``method`` with checked ``gains`` (see :meth:`controller`): here the built-in
+        joint-space methods (an UnknownNameError for any other); a subclass with methods of its own overrides it,
+        and :attr:`gain_keys`.
+
+        Parameters
+        ----------
+        method : str
+            One of :attr:`methods`.
+        gains : dict
+            Its gains, checked against :attr:`gain_keys`.
+
+        Returns
+        -------
+        Controller
+            The method's control law on this scene's models.
+        """
+        g = gains
         if method == "pd_gravity":
             return PDGravity(self.dynamics("exact"), g["kp"], g["kd"], g.get("ki"))
         if method in ("computed_torque", "computed_torque_reduced"):

@@ -14,9 +14,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from armctl.controllers import Measurement
-from armctl.controllers.base import Controller
-from armctl.errors import UnknownNameError
-from armctl.scenes.base import Scene, applied_before, check_gains, diverged_errors
+from armctl.scenes.base import Scene, applied_before, diverged_errors
 
 #: the sensor's row in ``res.sensor``
 SENSOR = 0
@@ -61,48 +59,6 @@ class InteractionScene(Scene):
     #: the table's outward normal (world axes)
     normal: Any = (0.0, 0.0, 1.0)
     timing_samples = 100
-
-    def controller(self, method: str, gains: dict[str, Any] | None = None) -> Controller:
-        """The controller of a method (gains from the preset ``controllers/<scene>.<method>.toml`` unless given).
-
-        Parameters
-        ----------
-        method : str
-            One of :attr:`methods`.
-        gains : dict, optional
-            Gain name → value; an unknown key or a missing required one is an error.
-
-        Returns
-        -------
-        Controller
-
-        Raises
-        ------
-        UnknownNameError
-            An unknown method or gain.
-        InvalidParameterError
-            A required gain missing, or a value out of range.
-        """
-        if method not in self.methods:
-            raise UnknownNameError("method", method, self.methods)
-        g = check_gains(method, self.gains(method) if gains is None else gains, *self.gain_keys[method])
-        return self.build(method, g)
-
-    def build(self, method: str, gains: dict[str, Any]) -> Controller:  # pragma: no cover - abstract
-        """The controller of ``method`` with checked ``gains``.
-
-        Parameters
-        ----------
-        method : str
-            One of :attr:`methods`.
-        gains : dict
-            Its gains, checked against :attr:`gain_keys`.
-
-        Returns
-        -------
-        Controller
-        """
-        raise NotImplementedError
 
     def measures(self, res: Any, fn: Any) -> dict[str, Any]:  # pragma: no cover - abstract
         """The scene's own measures of a run.
