@@ -26,7 +26,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from armctl._checks import boolean, whole_number
-from armctl.controllers import Adaptive, ComputedTorque, Controller, PassivityBased, PDGravity
+from armctl.controllers import Adaptive, ComputedTorque, Controller, Measurement, PassivityBased, PDGravity
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError, UnknownNameError
 from armctl.model.robot import RobotModel
@@ -46,6 +46,8 @@ GAIN_KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
 }
 #: the models a scene holds
 MODELS = ("plant", "exact", "reduced")
+#: the force/torque sensor's row in ``res.sensor`` (a scene's first sensor)
+SENSOR = 0
 
 
 def check_gains(method: str, gains: Any, required: tuple[str, ...], optional: tuple[str, ...] = ()) -> dict[str, Any]:
@@ -103,14 +105,6 @@ def diverged_errors(metrics: dict[str, Any]) -> dict[str, Any]:
             metrics[f"{key}_until_divergence"] = metrics[key]
             metrics[key] = float("nan")
     return metrics
-
-
-def applied_before(res: Any, window: dict[str, Any]) -> list[tuple[int, Any]]:
-    """The samples of a replay window (centred in the run, as :meth:`Scene.replay_window` takes it) with the
-    torque applied over the period before each: (k, τ_{k−1}), τ_{−1} = 0 [N·m]."""
-    count = len(window["t"])
-    first = (len(res.t) - count) // 2
-    return [(k, res.tau_applied[k - 1] if k else np.zeros(res.q.shape[1])) for k in range(first, first + count)]
 
 
 @dataclass
@@ -172,6 +166,10 @@ class Scene:
     #: method → (required, optional) gain names, against which :meth:`controller` checks the gains it passes to
     #: :meth:`build`
     gain_keys: ClassVar[dict[str, tuple[tuple[str, ...], tuple[str, ...]]]] = GAIN_KEYS
+    #: the signals :meth:`replay_window` gives each sample (a :class:`~armctl.controllers.Measurement`), for the
+    #: controllers that read them: ``"tau_applied"``, the torque applied over the period before it [N·m];
+    #: ``"wrench"``, the force/torque sensor's reading (row :data:`SENSOR` of ``res.sensor``, world axes) [N; N·m]
+    replay_reads: ClassVar[tuple[str, ...]] = ()
 
     def dynamics(self, which: str = "exact") -> Dynamics:
         """Dynamics of one of the scene's models (pickles by rebuilding).
@@ -412,7 +410,8 @@ class Scene:
 
     def replay_window(self, res: Any, samples: int = 200) -> dict[str, Any]:
         """A contiguous window of recorded states from the middle of a run, as the controller measured them (t, q,
-        q̇ and the references), for :meth:`compute_time`.
+        q̇ and the references), for :meth:`compute_time`; with :attr:`replay_reads`, each sample's measurement too
+        (``"measurement"``).
 
         Parameters
         ----------
@@ -430,12 +429,23 @@ class Scene:
         first = (len(res.t) - count) // 2
         idx = np.arange(first, first + count)
         t = [float(res.t[k]) for k in idx]
-        return {
+        window = {
             "t": t,
             "q": res.q_measured[idx].copy(),
             "qd": res.qd_measured[idx].copy(),
             "ref": [self.reference(tk) for tk in t],
         }
+        if self.replay_reads:
+            wrench = "wrench" in self.replay_reads
+            window["measurement"] = [
+                Measurement(
+                    wrench=res.sensor[k, SENSOR] if wrench else None,
+                    tau_applied=res.tau_applied[k - 1] if k else np.zeros(res.q.shape[1]),
+                    world_axes=wrench,
+                )
+                for k in idx
+            ]
+        return window
 
     def compute_time(
         self, method: str, window: dict[str, Any], gains: dict[str, Any] | None = None, rounds: int = 5

@@ -13,11 +13,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from armctl.controllers import Measurement
-from armctl.scenes.base import Scene, applied_before, diverged_errors
-
-#: the sensor's row in ``res.sensor``
-SENSOR = 0
+from armctl.scenes.base import SENSOR, Scene, diverged_errors
 
 
 def normal_force(res: Any, normal: Any = (0.0, 0.0, 1.0)) -> Any:
@@ -59,6 +55,7 @@ class InteractionScene(Scene):
     #: the table's outward normal (world axes)
     normal: Any = (0.0, 0.0, 1.0)
     timing_samples = 100
+    replay_reads = ("wrench", "tau_applied")
 
     def measures(self, res: Any, fn: Any) -> dict[str, Any]:  # pragma: no cover - abstract
         """The scene's own measures of a run.
@@ -122,28 +119,6 @@ class InteractionScene(Scene):
         out = super().metrics(res, method, gains, timing_samples, timing_rounds)
         out.update(self.measures(res, normal_force(res, self.normal)))
         return diverged_errors(out)
-
-    def replay_window(self, res: Any, samples: int = 200) -> dict[str, Any]:
-        """:meth:`Scene.replay_window` with the measurement of each sample (the sensor's reading, in world axes,
-        and the applied torques of the period before), for the controllers that read them.
-
-        Parameters
-        ----------
-        res : SimResult
-            A run of this scene.
-        samples : int, optional
-            The window's length.
-
-        Returns
-        -------
-        dict of str
-        """
-        window = super().replay_window(res, samples)
-        window["measurement"] = [
-            Measurement(wrench=res.sensor[k, SENSOR], tau_applied=tau, world_axes=True)
-            for k, tau in applied_before(res, window)
-        ]
-        return window
 
 
 def impedance_depth(gains: dict[str, Any], force: float, table_stiffness: float) -> tuple[Any, float]:
