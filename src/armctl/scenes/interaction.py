@@ -121,6 +121,15 @@ class InteractionScene(Scene):
         return diverged_errors(out)
 
 
+def pressing_args(dyn: Any, force: float, gains: dict[str, Any]) -> tuple[tuple[Any, ...], dict[str, Any]]:
+    """The arguments of a force law (:class:`~armctl.controllers.ForceControl`,
+    :class:`~armctl.controllers.ParallelForcePosition`) pressing f_d = ``force`` [N] down (−z, world axes) with
+    ``gains``' force and integral gains, and position gains ``kp`` (default 400) and ``kd``: (positional,
+    keyword)."""
+    options = {"kp": gains.get("kp", 400.0), "kd": gains.get("kd")}
+    return (dyn, [0.0, 0.0, -force], gains["force_gain"], gains["integral_gain"]), options
+
+
 def impedance_depth(gains: dict[str, Any], force: float, table_stiffness: float) -> tuple[Any, float]:
     """The stiffness K of an impedance's ``gains`` and the depth δ_c = f_d (k_e + k_z)/(k_e k_z) [m] below a
     table of stiffness k_e [N/m] at which its target makes the force f_d [N] at rest, k_z [N/m] K's vertical entry
