@@ -96,6 +96,22 @@ def _wrong(ctrl: OperationalSpaceQP, seq: States, taus: list[np.ndarray], ref: a
     return wrong
 
 
+def check_time(ctrl: OperationalSpaceQP, seq: States, ref: armctl.Reference, rounds: int) -> float:
+    """Process seconds per step of the optimality check of the step just made (``verify_last_step``): each state of
+    ``seq`` stepped, then checked 20 times; the median over max(1, ``rounds`` // 3) passes of the mean per step."""
+    checks = []
+    for _ in range(max(1, rounds // 3)):
+        total = 0.0
+        for t, q, qd in seq:
+            ctrl(t, q, qd, ref)
+            t0 = time.process_time()
+            for _ in range(20):
+                ctrl.verify_last_step()
+            total += (time.process_time() - t0) / 20
+        checks.append(total / len(seq))
+    return statistics.median(checks)
+
+
 def measure_contact(count: int = 400, rounds: int = 15, compile: bool | str = "auto") -> dict[str, Any]:
     """The ``contact`` figures (module docstring)."""
     dyn = armctl.Dynamics(armctl.models.panda())
@@ -118,17 +134,7 @@ def measure_contact(count: int = 400, rounds: int = 15, compile: bool | str = "a
     taus = [ctrl(t, q, qd, ref) for t, q, qd in seq]
     out["stages"] = ctrl.fallback_counts
     out["wrong"] = _wrong(ctrl, seq, taus, ref)
-    checks = []
-    for _ in range(max(1, rounds // 3)):
-        total = 0.0
-        for t, q, qd in seq:
-            ctrl(t, q, qd, ref)
-            t0 = time.process_time()
-            for _ in range(20):
-                ctrl.verify_last_step()
-            total += (time.process_time() - t0) / 20
-        checks.append(total / count)
-    out["check_s"] = statistics.median(checks)
+    out["check_s"] = check_time(ctrl, seq, ref, rounds)
     out["check_share"] = out["check_s"] / out["step_s"]
     return out
 

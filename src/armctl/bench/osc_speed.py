@@ -45,7 +45,7 @@ from typing import Any
 import numpy as np
 
 import armctl
-from armctl.bench.osc_contact import contact_checks, report_lines
+from armctl.bench.osc_contact import check_time, contact_checks, report_lines
 from armctl.bench.timing import interleaved_samples
 from armctl.controllers.osc import (
     ClosedFormOSC,
@@ -217,17 +217,7 @@ def measure(seq: States, ctrl: OperationalSpaceQP, rounds: int, extra: dict[str,
     out["fallbacks"] = fallbacks
     out["wrong"] = _wrong(ctrl, seq, taus, ref)
     # the optimality check of each step's solution, timed on its own (the step just made)
-    checks = []
-    for _ in range(max(1, rounds // 3)):
-        total = 0.0
-        for t, q, qd in seq:
-            ctrl(t, q, qd, ref)
-            t0 = time.process_time()
-            for _ in range(20):
-                ctrl.verify_last_step()
-            total += (time.process_time() - t0) / 20
-        checks.append(total / count)
-    out["check_s"] = statistics.median(checks)
+    out["check_s"] = check_time(ctrl, seq, ref, rounds)
     out["check_share"] = out["check_s"] / out["step_s"]
     ctrl.reset()
     return out

@@ -26,7 +26,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from armctl._checks import boolean, whole_number
-from armctl.controllers import Adaptive, ComputedTorque, Controller, PassivityBased, PDGravity
+from armctl.controllers import Adaptive, ComputedTorque, Controller, Measurement, PassivityBased, PDGravity
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError, UnknownNameError
 from armctl.model.robot import RobotModel
@@ -46,6 +46,8 @@ GAIN_KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
 }
 #: the models a scene holds
 MODELS = ("plant", "exact", "reduced")
+#: the force/torque sensor's row in ``res.sensor`` (a scene's first sensor)
+SENSOR = 0
 
 
 def check_gains(method: str, gains: Any, required: tuple[str, ...], optional: tuple[str, ...] = ()) -> dict[str, Any]:
@@ -161,6 +163,13 @@ class Scene:
     builders: dict[str, Callable[[Scene, dict[str, Any]], Controller]] = field(default_factory=dict)
     backend: str = "pinocchio"
     timing_samples: ClassVar[int] = 200  # recorded states :meth:`metrics` replays to time a controller
+    #: method → (required, optional) gain names, against which :meth:`controller` checks the gains it passes to
+    #: :meth:`build`
+    gain_keys: ClassVar[dict[str, tuple[tuple[str, ...], tuple[str, ...]]]] = GAIN_KEYS
+    #: the signals :meth:`replay_window` gives each sample (a :class:`~armctl.controllers.Measurement`), for the
+    #: controllers that read them: ``"tau_applied"``, the torque applied over the period before it [N·m];
+    #: ``"wrench"``, the force/torque sensor's reading (row :data:`SENSOR` of ``res.sensor``, world axes) [N; N·m]
+    replay_reads: ClassVar[tuple[str, ...]] = ()
 
     def dynamics(self, which: str = "exact") -> Dynamics:
         """Dynamics of one of the scene's models (pickles by rebuilding).
@@ -206,8 +215,9 @@ class Scene:
         return dict(load_preset(self.name, method)["gains"])
 
     def controller(self, method: str, gains: dict[str, Any] | None = None) -> Controller:
-        """The controller of a method (the keys of each built-in method's gains are in :data:`GAIN_KEYS`; an unknown
-        key or a missing required one is an error, not ignored).
+        """The controller of a method, built by :meth:`build` (the keys of each method's gains are in
+        :attr:`gain_keys`, :data:`GAIN_KEYS` for the built-in joint-space methods; an unknown key or a missing
+        required one is an error, not ignored) or by the method's entry in :attr:`builders`.
 
         Parameters
         ----------
@@ -231,7 +241,27 @@ class Scene:
             raise UnknownNameError("method", method, self.methods)
         if method in self.builders:  # a custom builder checks its own gains
             return self.builders[method](self, self.gains(method) if gains is None else dict(gains))
-        g = check_gains(method, self.gains(method) if gains is None else gains, *GAIN_KEYS[method])
+        g = check_gains(method, self.gains(method) if gains is None else gains, *self.gain_keys[method])
+        return self.build(method, g)
+
+    def build(self, method: str, gains: dict[str, Any]) -> Controller:
+        """The controller of ``method`` with checked ``gains`` (see :meth:`controller`): here the built-in
+        joint-space methods (an UnknownNameError for any other); a subclass with methods of its own overrides it,
+        and :attr:`gain_keys`.
+
+        Parameters
+        ----------
+        method : str
+            One of :attr:`methods`.
+        gains : dict
+            Its gains, checked against :attr:`gain_keys`.
+
+        Returns
+        -------
+        Controller
+            The method's control law on this scene's models.
+        """
+        g = gains
         if method == "pd_gravity":
             return PDGravity(self.dynamics("exact"), g["kp"], g["kd"], g.get("ki"))
         if method in ("computed_torque", "computed_torque_reduced"):
@@ -380,7 +410,8 @@ class Scene:
 
     def replay_window(self, res: Any, samples: int = 200) -> dict[str, Any]:
         """A contiguous window of recorded states from the middle of a run, as the controller measured them (t, q,
-        q̇ and the references), for :meth:`compute_time`.
+        q̇ and the references), for :meth:`compute_time`; with :attr:`replay_reads`, each sample's measurement too
+        (``"measurement"``).
 
         Parameters
         ----------
@@ -398,12 +429,23 @@ class Scene:
         first = (len(res.t) - count) // 2
         idx = np.arange(first, first + count)
         t = [float(res.t[k]) for k in idx]
-        return {
+        window = {
             "t": t,
             "q": res.q_measured[idx].copy(),
             "qd": res.qd_measured[idx].copy(),
             "ref": [self.reference(tk) for tk in t],
         }
+        if self.replay_reads:
+            wrench = "wrench" in self.replay_reads
+            window["measurement"] = [
+                Measurement(
+                    wrench=res.sensor[k, SENSOR] if wrench else None,
+                    tau_applied=res.tau_applied[k - 1] if k else np.zeros(res.q.shape[1]),
+                    world_axes=wrench,
+                )
+                for k in idx
+            ]
+        return window
 
     def compute_time(
         self, method: str, window: dict[str, Any], gains: dict[str, Any] | None = None, rounds: int = 5

@@ -13,13 +13,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from armctl.controllers import Measurement
-from armctl.controllers.base import Controller
-from armctl.errors import UnknownNameError
-from armctl.scenes.base import Scene, check_gains, diverged_errors
-
-#: the sensor's row in ``res.sensor``
-SENSOR = 0
+from armctl.scenes.base import SENSOR, Scene, diverged_errors
 
 
 def normal_force(res: Any, normal: Any = (0.0, 0.0, 1.0)) -> Any:
@@ -61,48 +55,7 @@ class InteractionScene(Scene):
     #: the table's outward normal (world axes)
     normal: Any = (0.0, 0.0, 1.0)
     timing_samples = 100
-
-    def controller(self, method: str, gains: dict[str, Any] | None = None) -> Controller:
-        """The controller of a method (gains from the preset ``controllers/<scene>.<method>.toml`` unless given).
-
-        Parameters
-        ----------
-        method : str
-            One of :attr:`methods`.
-        gains : dict, optional
-            Gain name → value; an unknown key or a missing required one is an error.
-
-        Returns
-        -------
-        Controller
-
-        Raises
-        ------
-        UnknownNameError
-            An unknown method or gain.
-        InvalidParameterError
-            A required gain missing, or a value out of range.
-        """
-        if method not in self.methods:
-            raise UnknownNameError("method", method, self.methods)
-        g = check_gains(method, self.gains(method) if gains is None else gains, *self.gain_keys[method])
-        return self.build(method, g)
-
-    def build(self, method: str, gains: dict[str, Any]) -> Controller:  # pragma: no cover - abstract
-        """The controller of ``method`` with checked ``gains``.
-
-        Parameters
-        ----------
-        method : str
-            One of :attr:`methods`.
-        gains : dict
-            Its gains, checked against :attr:`gain_keys`.
-
-        Returns
-        -------
-        Controller
-        """
-        raise NotImplementedError
+    replay_reads = ("wrench", "tau_applied")
 
     def measures(self, res: Any, fn: Any) -> dict[str, Any]:  # pragma: no cover - abstract
         """The scene's own measures of a run.
@@ -167,33 +120,23 @@ class InteractionScene(Scene):
         out.update(self.measures(res, normal_force(res, self.normal)))
         return diverged_errors(out)
 
-    def replay_window(self, res: Any, samples: int = 200) -> dict[str, Any]:
-        """:meth:`Scene.replay_window` with the measurement of each sample (the sensor's reading, in world axes,
-        and the applied torques of the period before), for the controllers that read them.
 
-        Parameters
-        ----------
-        res : SimResult
-            A run of this scene.
-        samples : int, optional
-            The window's length.
+def pressing_args(dyn: Any, force: float, gains: dict[str, Any]) -> tuple[tuple[Any, ...], dict[str, Any]]:
+    """The arguments of a force law (:class:`~armctl.controllers.ForceControl`,
+    :class:`~armctl.controllers.ParallelForcePosition`) pressing f_d = ``force`` [N] down (−z, world axes) with
+    ``gains``' force and integral gains, and position gains ``kp`` (default 400) and ``kd``: (positional,
+    keyword)."""
+    options = {"kp": gains.get("kp", 400.0), "kd": gains.get("kd")}
+    return (dyn, [0.0, 0.0, -force], gains["force_gain"], gains["integral_gain"]), options
 
-        Returns
-        -------
-        dict of str
-        """
-        window = super().replay_window(res, samples)
-        count = len(window["t"])
-        first = (len(res.t) - count) // 2
-        window["measurement"] = [
-            Measurement(
-                wrench=res.sensor[k, SENSOR],
-                tau_applied=res.tau_applied[k - 1] if k else np.zeros(self.plant.n),
-                world_axes=True,
-            )
-            for k in range(first, first + count)
-        ]
-        return window
+
+def impedance_depth(gains: dict[str, Any], force: float, table_stiffness: float) -> tuple[Any, float]:
+    """The stiffness K of an impedance's ``gains`` and the depth δ_c = f_d (k_e + k_z)/(k_e k_z) [m] below a
+    table of stiffness k_e [N/m] at which its target makes the force f_d [N] at rest, k_z [N/m] K's vertical entry
+    (K a (3,) diagonal or a 3×3 matrix)."""
+    k = np.asarray(gains["stiffness"], dtype=float)
+    kz = float(np.diag(k)[2]) if k.ndim == 2 else float(k[2])
+    return k, force * (table_stiffness + kz) / (table_stiffness * kz)
 
 
 def quintic(start: Any, end: Any, t0: float, duration: float) -> Callable[[float], tuple[Any, Any, Any]]:

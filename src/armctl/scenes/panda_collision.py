@@ -19,7 +19,6 @@ from armctl import models
 from armctl.controllers.base import Controller
 from armctl.controllers.collision_reaction import CollisionReaction
 from armctl.controllers.computed_torque import ComputedTorque
-from armctl.controllers.measurement import Measurement
 from armctl.controllers.momentum_observer import MomentumObserver
 from armctl.errors import UnknownNameError
 from armctl.references import Quintic
@@ -53,6 +52,8 @@ class CollisionScene(Scene):
     control_dt, dt, integrator, q0, sim_options, builders, backend : optional
         As for :class:`Scene`.
     """
+
+    replay_reads = ("tau_applied",)  # the observer reads the torque applied over the period before
 
     def gains(self, method: str) -> dict[str, Any]:
         """The method's default gains (:data:`DEFAULTS`).
@@ -95,30 +96,6 @@ class CollisionScene(Scene):
         obs = MomentumObserver(dyn, g["observer_gain"], thresholds=g["thresholds"], period=self.control_dt)
         reaction: Any = method if method != "no_reaction" else (lambda t, q, qd, ref, o: ct.compute(t, q, qd, ref))
         return CollisionReaction(ct, obs, reaction, damping=g["damping"], reflex_gain=g["reflex_gain"], log_wrench=True)
-
-    def replay_window(self, res: Any, samples: int = 200) -> dict[str, Any]:
-        """:meth:`Scene.replay_window` with each sample's measurement (the torque applied over the period before
-        it, which the observer reads).
-
-        Parameters
-        ----------
-        res : SimResult
-            A run of this scene.
-        samples : int, optional
-            The window's length.
-
-        Returns
-        -------
-        dict of str
-        """
-        window = super().replay_window(res, samples)
-        first = (len(res.t) - len(window["t"])) // 2
-        zeros = np.zeros(res.q.shape[1])
-        window["measurement"] = [
-            Measurement(tau_applied=res.tau_applied[k - 1] if k else zeros)
-            for k in range(first, first + len(window["t"]))
-        ]
-        return window
 
     def metrics(
         self,

@@ -14,7 +14,7 @@ from armctl.controllers import Admittance, CartesianImpedance, ParallelForcePosi
 from armctl.controllers.base import Controller
 from armctl.dynamics.base import Dynamics
 from armctl.references import Reference
-from armctl.scenes.interaction import InteractionScene, quintic
+from armctl.scenes.interaction import InteractionScene, impedance_depth, pressing_args, quintic
 from armctl.scenes.panda_contact import Q_HOME
 
 #: the table's stiffness [N/m] and damping [N·s/m]
@@ -98,19 +98,11 @@ class PressScene(InteractionScene):
         """
         dyn = self.dynamics("exact")
         if method == "parallel_force_position":
-            c: Any = ParallelForcePosition(
-                dyn,
-                [0.0, 0.0, -self.force],
-                gains["force_gain"],
-                gains["integral_gain"],
-                kp=gains.get("kp", 400.0),
-                kd=gains.get("kd"),
-            )
+            args, options = pressing_args(dyn, self.force, gains)
+            c: Any = ParallelForcePosition(*args, **options)
             c.set_trajectory(self.target_path(0.0))
             return c
-        k = np.asarray(gains["stiffness"], dtype=float)
-        kz = float(np.diag(k)[2]) if k.ndim == 2 else float(k[2])
-        depth = self.force * (TABLE_STIFFNESS + kz) / (TABLE_STIFFNESS * kz)
+        k, depth = impedance_depth(gains, self.force, TABLE_STIFFNESS)
         if method == "cartesian_impedance":
             c = CartesianImpedance(
                 dyn, k, gains.get("damping"), nullspace_stiffness=gains.get("nullspace_stiffness", 5.0)

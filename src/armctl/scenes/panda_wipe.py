@@ -16,7 +16,7 @@ from armctl.controllers import CartesianImpedance, ForceControl, ParallelForcePo
 from armctl.controllers.base import Controller
 from armctl.dynamics.base import Dynamics
 from armctl.references import Reference
-from armctl.scenes.interaction import InteractionScene, quintic
+from armctl.scenes.interaction import InteractionScene, impedance_depth, pressing_args, quintic
 from armctl.scenes.panda_contact import Q_HOME
 
 #: the table's stiffness [N/m], damping [N·s/m] and friction coefficient
@@ -93,16 +93,13 @@ class WipeScene(InteractionScene):
         dyn = self.dynamics("exact")
         c: Any
         if method == "cartesian_impedance":
-            k = np.asarray(gains["stiffness"], dtype=float)
-            kz = float(np.diag(k)[2]) if k.ndim == 2 else float(k[2])
-            depth = self.force * (TABLE_STIFFNESS + kz) / (TABLE_STIFFNESS * kz)
+            k, depth = impedance_depth(gains, self.force, TABLE_STIFFNESS)
             c = CartesianImpedance(
                 dyn, k, gains.get("damping"), nullspace_stiffness=gains.get("nullspace_stiffness", 5.0)
             )
             c.set_trajectory(self.path(depth))
             return c
-        args = (dyn, [0.0, 0.0, -self.force], gains["force_gain"], gains["integral_gain"])
-        options = {"kp": gains.get("kp", 400.0), "kd": gains.get("kd")}
+        args, options = pressing_args(dyn, self.force, gains)
         if method == "force_control":
             c = ForceControl(*args, directions=[0.0, 0.0, 1.0], **options)
         else:
