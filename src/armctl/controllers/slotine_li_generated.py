@@ -125,6 +125,16 @@ class _Law:
         self.lam[...] = lam.ravel(order="F")
         self.kd[...] = kd.ravel(order="F")
 
+    def _set_state(self, q: FloatArray, qd: FloatArray, ref: Reference) -> None:
+        """The inputs x = (q_d, q̇_d, q̈_d, q, q̇) into their bound arrays (copies cost less than one
+        concatenation)."""
+        x = self.x
+        x[0][...] = ref.q
+        x[1][...] = ref.qd
+        x[2][...] = ref.qdd
+        x[3][...] = q
+        x[4][...] = qd
+
 
 class PassivityLaw(_Law):
     """τ = Y π − K_D s of :class:`~armctl.controllers.PassivityBased` in one call, with π the dynamics' own
@@ -138,12 +148,7 @@ class PassivityLaw(_Law):
         _bind(self.buf, [*self.x, self.lam, self.kd, self.pi, self.rho], [self.out.reshape(-1)])
 
     def __call__(self, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
-        x = self.x  # (copies cost less than one concatenation)
-        x[0][...] = ref.q
-        x[1][...] = ref.qd
-        x[2][...] = ref.qdd
-        x[3][...] = q
-        x[4][...] = qd
+        self._set_state(q, qd, ref)
         self._run()
         return self.out.copy()
 
@@ -184,12 +189,7 @@ class AdaptiveLaw(_Law):
             self._key = key
 
     def __call__(self, q: FloatArray, qd: FloatArray, ref: Reference, theta: FloatArray) -> FloatArray:
-        x = self.x  # (copies cost less than one concatenation)
-        x[0][...] = ref.q
-        x[1][...] = ref.qd
-        x[2][...] = ref.qdd
-        x[3][...] = q
-        x[4][...] = qd
+        self._set_state(q, qd, ref)
         self.theta[...] = theta
         self._run()
         return self.out.copy()

@@ -225,16 +225,7 @@ class CartesianImpedance(Controller):
         if gen is not None:
             # Called on unchecked q and q̇ (result_check): nothing is kept (the held pose, last_log) and no user
             # function is called (a trajectory, on t) before they are known to be finite.
-            if not math.isfinite(t):
-                self._checked(t, q, qd)  # raises, naming t
-            target = self.target
-            goal = target.fixed  # a constant target, or None
-            if goal is None:
-                holder = target.holder
-                if not holder.is_set:
-                    q, qd = self._checked(t, q, qd)
-                    target.hold(self.dynamics.kernel.frame_pose(q, self.frame))
-                goal = holder.at(t)
+            goal, q, qd = self.target.goal_unchecked(t, q, qd, self._checked, self.dynamics.kernel, self.frame)
             # gen.run(q, qd, goal, posture), written out: this is the whole per-step cost of the law
             pieces = gen.pieces
             pieces[0][...] = q

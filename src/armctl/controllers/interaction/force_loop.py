@@ -170,16 +170,7 @@ class ForceLoop(Controller):
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         # With a sensor q and q̇ come unchecked (result_check): nothing is kept (the held pose, the integral, the
         # time, last_log) and no user function is called (f_d(t), a trajectory) before they are known finite.
-        if not math.isfinite(t):
-            self._checked(t, q, qd)  # raises, naming t
-        target = self.target
-        goal = target.fixed  # a constant target, or None
-        if goal is None:
-            holder = target.holder
-            if not holder.is_set:
-                q, qd = self._checked(t, q, qd)
-                target.hold(self.dynamics.kernel.frame_pose(q, self.frame))
-            goal = holder.at(t)
+        goal, q, qd = self.target.goal_unchecked(t, q, qd, self._checked, self.dynamics.kernel, self.frame)
         m = self.measurement
         if self._sensor and m is not None and m.world_axes and m.frame == self.frame and m.wrench is not None:
             h = m.wrench  # already in world axes at the frame (what force_input.wrench gives, without its calls)

@@ -9,6 +9,10 @@ its error as in the operational-space tasks, and the operational-space inertia.
 
 from __future__ import annotations
 
+import math
+from collections.abc import Callable
+from typing import Any
+
 import numpy as np
 from numpy.typing import ArrayLike
 from scipy.linalg import lapack
@@ -17,6 +21,7 @@ from armctl._checks import FloatArray, readonly
 from armctl.controllers.osc.state import FrameKinematics
 from armctl.controllers.osc.tasks.rotation import rotation_error
 from armctl.controllers.osc.tasks.target import TargetHolder, Trajectory
+from armctl.dynamics.kernel import Kernel
 from armctl.errors import SingularConfigurationError
 
 
@@ -73,6 +78,51 @@ class FrameTarget:
             pose[:3, :3], pose[:3, 3] = fk.rotation, fk.position
             self.hold(pose)  # its position for 3 axes
         return self.holder.at(t)
+
+    def goal_unchecked(
+        self,
+        t: float,
+        q: Any,
+        qd: Any,
+        checked: Callable[[float, Any, Any], tuple[FloatArray, FloatArray]],
+        kernel: Kernel,
+        frame: str | None,
+    ) -> tuple[tuple[FloatArray, FloatArray, FloatArray], Any, Any]:
+        """The target at t [s] for a law that checks its own inputs: t is checked first, and (q, q̇) only when the
+        first call without a target holds the frame's pose, so that nothing is kept and no trajectory is called
+        before they are known finite.
+
+        Parameters
+        ----------
+        t : float
+            Time [s].
+        q, qd : array_like, shape (n,)
+            The measured state [rad, rad/s], unchecked.
+        checked : callable
+            ``checked(t, q, qd) -> (q, qd)``: the controller's check (a named error if one is not finite or of
+            the wrong size).
+        kernel : Kernel
+            The dynamics' kernel, whose ``frame_pose(q, frame)`` gives the pose to hold (4×4).
+        frame : str or None
+            The controlled frame.
+
+        Returns
+        -------
+        goal : tuple of ndarray
+            (value, velocity, acceleration) at t.
+        q, qd : array_like
+            The state: checked (as ``checked`` returns it) where the pose was held, as given otherwise.
+        """
+        if not math.isfinite(t):
+            checked(t, q, qd)  # raises, naming t
+        goal = self.fixed  # a constant target, or None
+        if goal is None:
+            holder = self.holder
+            if not holder.is_set:
+                q, qd = checked(t, q, qd)
+                self.hold(kernel.frame_pose(q, frame))
+            goal = holder.at(t)
+        return goal, q, qd
 
     def error(self, value: FloatArray, fk: FrameKinematics) -> FloatArray:
         """e (see the module) [m; rad]."""
