@@ -27,7 +27,17 @@ SCANNED = ("src", "tests", "examples", "docs", "README.md", "CHANGELOG.md")
 #: text files by suffix
 SUFFIXES = {".py", ".md", ".rst", ".txt", ".toml", ".cfg", ".ini", ".html", ".css", ".js", ".svg", ".yml", ".yaml"}
 #: generated folders (a local docs build, caches): not the product's sources
-GENERATED = {"_build", "auto_examples", "generated", "gen_modules", "__pycache__", ".pytest_cache", ".ruff_cache"}
+GENERATED = {
+    "_build",
+    "example-out",
+    "bench-out",
+    "auto_examples",
+    "generated",
+    "gen_modules",
+    "__pycache__",
+    ".pytest_cache",
+    ".ruff_cache",
+}
 #: this file holds the words it refuses
 SELF = Path(__file__).resolve()
 
