@@ -139,7 +139,8 @@ def open_page(page: Path, expression: str = "true", settle: float = 2.0, then: S
     taking a screenshot after each."""
     exe = chromium()
     assert exe is not None
-    with tempfile.TemporaryDirectory() as profile:
+    # (Chromium's child processes may still write into the profile as the browser exits: what they leave stays)
+    with tempfile.TemporaryDirectory(ignore_cleanup_errors=True) as profile:
         proc = subprocess.Popen(
             [exe, *FLAGS, f"--user-data-dir={profile}", "--remote-debugging-port=0", "about:blank"],
             stdout=subprocess.DEVNULL,
