@@ -148,9 +148,10 @@ def mass_matrix(
     return cs.vertcat(*[cs.horzcat(*row) for row in mm])
 
 
-def cholesky_solve(a: cs.SX, b: cs.SX) -> cs.SX:
-    """x with A x = b for a symmetric positive definite A, by Cholesky A = L Lᵀ written out entry by entry (the
-    generated code then has no loops or branches; a matrix that is not positive definite gives NaN)."""
+def cholesky_factor(a: Any) -> list[list[Any]]:
+    """L (lower triangular, as nested lists of SX entries) with L Lᵀ = A for a symmetric positive definite A,
+    written out entry by entry (the generated code then has no loops or branches; a matrix that is not positive
+    definite gives NaN)."""
     n = a.shape[0]
     low: list[list[Any]] = [[None] * n for _ in range(n)]
     for i in range(n):
@@ -159,19 +160,35 @@ def cholesky_solve(a: cs.SX, b: cs.SX) -> cs.SX:
             for p in range(k):
                 s = s - low[i][p] * low[k][p]
             low[i][k] = cs.sqrt(s) if i == k else s / low[k][k]
-    y: list[Any] = [None] * n
-    for i in range(n):
-        s = b[i]
-        for p in range(i):
-            s = s - low[i][p] * y[p]
-        y[i] = s / low[i][i]
-    x: list[Any] = [None] * n
-    for i in reversed(range(n)):
-        s = y[i]
-        for p in range(i + 1, n):
-            s = s - low[p][i] * x[p]
-        x[i] = s / low[i][i]
-    return cs.vertcat(*x)
+    return low
+
+
+def cholesky_substitute(low: list[list[Any]], b: Any) -> Any:
+    """X with L Lᵀ X = B, from L of :func:`cholesky_factor`: forward then backward substitution, column by column
+    of B (a vector or a matrix)."""
+    n = len(low)
+    cols = []
+    for c in range(b.shape[1]):
+        y: list[Any] = [None] * n
+        for i in range(n):
+            s = b[i, c]
+            for p in range(i):
+                s = s - low[i][p] * y[p]
+            y[i] = s / low[i][i]
+        x: list[Any] = [None] * n
+        for i in reversed(range(n)):
+            s = y[i]
+            for p in range(i + 1, n):
+                s = s - low[p][i] * x[p]
+            x[i] = s / low[i][i]
+        cols.append(cs.vertcat(*x))
+    return cs.horzcat(*cols)
+
+
+def cholesky_solve(a: cs.SX, b: cs.SX) -> cs.SX:
+    """x with A x = b for a symmetric positive definite A, by Cholesky A = L Lᵀ (:func:`cholesky_factor`,
+    :func:`cholesky_substitute`)."""
+    return cholesky_substitute(cholesky_factor(a), b)
 
 
 def forward_dynamics(model: RobotModel, q: cs.SX, qd: cs.SX, tau: cs.SX) -> cs.SX:

@@ -32,7 +32,13 @@ from armctl.codegen import library as codegen
 from armctl.controllers.osc.tasks.rotation import rotation_error_sx
 from armctl.dynamics.base import Dynamics
 from armctl.dynamics.casadi_buffer import buffer_of, view
-from armctl.dynamics.recursive import inverse_dynamics, joint_transforms, mass_matrix
+from armctl.dynamics.recursive import (
+    cholesky_factor,
+    cholesky_substitute,
+    inverse_dynamics,
+    joint_transforms,
+    mass_matrix,
+)
 from armctl.dynamics.symbolic_frames import frame_kinematics
 from armctl.errors import InvalidParameterError
 from armctl.model.robot import RobotModel
@@ -43,40 +49,6 @@ _NAME = "cartesian_impedance"
 _log = logging.getLogger(__name__)
 #: the compiler's flags: the law runs at every control step (a slower build for faster code)
 FLAGS = codegen.CFLAGS_FAST
-
-
-def cholesky_factor(a: Any) -> list[list[Any]]:
-    """L (lower, as nested lists of SX) with L Lᵀ = A, written out entry by entry."""
-    n = a.shape[0]
-    low: list[list[Any]] = [[None] * n for _ in range(n)]
-    for i in range(n):
-        for k in range(i + 1):
-            s = a[i, k]
-            for p in range(k):
-                s = s - low[i][p] * low[k][p]
-            low[i][k] = cs.sqrt(s) if i == k else s / low[k][k]
-    return low
-
-
-def cholesky_solve_columns(low: list[list[Any]], b: Any) -> Any:
-    """x with L Lᵀ x = b (b a vector or a matrix, column by column)."""
-    n = len(low)
-    cols = []
-    for c in range(b.shape[1]):
-        y: list[Any] = [None] * n
-        for i in range(n):
-            s = b[i, c]
-            for p in range(i):
-                s = s - low[i][p] * y[p]
-            y[i] = s / low[i][i]
-        x: list[Any] = [None] * n
-        for i in reversed(range(n)):
-            s = y[i]
-            for p in range(i + 1, n):
-                s = s - low[p][i] * x[p]
-            x[i] = s / low[i][i]
-        cols.append(cs.vertcat(*x))
-    return cs.horzcat(*cols)
 
 
 def sizes(n: int, axes: int) -> tuple[int, int]:
@@ -137,10 +109,10 @@ def impedance_function(model: RobotModel, frame: str | None, axes: int, null: bo
     m2 = axes * axes
     stiff, damp = cs.reshape(par[:m2], axes, axes), cs.reshape(par[m2 : 2 * m2], axes, axes)
     low_m = cholesky_factor(mass_matrix(model, q, tf))
-    mij = cholesky_solve_columns(low_m, jac.T)  # M⁻¹ Jᵀ
+    mij = cholesky_substitute(low_m, jac.T)  # M⁻¹ Jᵀ
     low_a = cholesky_factor(jac @ mij)  # J M⁻¹ Jᵀ = Λ⁻¹
     edot = v_d - jac @ qd
-    force = stiff @ e + cholesky_solve_columns(low_a, a_d)  # K e + Λ a_d
+    force = stiff @ e + cholesky_substitute(low_a, a_d)  # K e + Λ a_d
     if not split:
         force = force + damp @ edot
     tau = jac.T @ force + inverse_dynamics(model, q, qd, cs.SX.zeros(n), transforms=tf)
@@ -148,7 +120,7 @@ def impedance_function(model: RobotModel, frame: str | None, axes: int, null: bo
         kn = cs.reshape(par[2 * m2 : 2 * m2 + n * n], n, n)
         dn = cs.reshape(par[2 * m2 + n * n :], n, n)
         tau_n = kn @ (q_n - q) - dn @ qd
-        z = cholesky_solve_columns(low_a, mij.T @ tau_n)  # Λ J M⁻¹ τ_n
+        z = cholesky_substitute(low_a, mij.T @ tau_n)  # Λ J M⁻¹ τ_n
         tau = tau + tau_n - jac.T @ z
     if split:  # Λ = G Gᵀ with G = L⁻ᵀ (J M⁻¹ Jᵀ = L Lᵀ), and S = G⁻¹ K G⁻ᵀ = Lᵀ K L
         low = cs.SX.zeros(axes, axes)

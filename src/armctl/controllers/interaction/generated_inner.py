@@ -26,11 +26,17 @@ import numpy as np
 
 from armctl._checks import FloatArray
 from armctl.codegen import library as codegen
-from armctl.controllers.interaction.generated import FLAGS, cholesky_factor, cholesky_solve_columns, finiteness
+from armctl.controllers.interaction.generated import FLAGS, finiteness
 from armctl.controllers.osc.tasks.rotation import rotation_error_sx
 from armctl.dynamics.base import Dynamics
 from armctl.dynamics.casadi_buffer import buffer_of, view
-from armctl.dynamics.recursive import inverse_dynamics, joint_transforms, mass_matrix
+from armctl.dynamics.recursive import (
+    cholesky_factor,
+    cholesky_substitute,
+    inverse_dynamics,
+    joint_transforms,
+    mass_matrix,
+)
 from armctl.dynamics.symbolic_frames import frame_kinematics
 from armctl.model.robot import RobotModel
 
@@ -121,11 +127,11 @@ def inner_function(
     rhs = xdd - drift - jac @ qdd0
     if kind == "osc":
         low_m = cholesky_factor(mass_matrix(model, q, tf))
-        mij = cholesky_solve_columns(low_m, jac.T)
-        force = cholesky_solve_columns(cholesky_factor(jac @ mij), rhs)
+        mij = cholesky_substitute(low_m, jac.T)
+        force = cholesky_substitute(cholesky_factor(jac @ mij), rhs)
         tau = jac.T @ force + inverse_dynamics(model, q, qd, qdd0, transforms=tf)
     else:
-        qdd = jac.T @ cholesky_solve_columns(cholesky_factor(jac @ jac.T), rhs) + qdd0
+        qdd = jac.T @ cholesky_substitute(cholesky_factor(jac @ jac.T), rhs) + qdd0
         tau = inverse_dynamics(model, q, qd, qdd, transforms=tf)
     tau = tau + jac.T @ (h * par[-1] if force_loop or admittance else h)  # the last parameter: compensate
     name = _NAME + ("_force" if force_loop else f"_admittance{admittance}" if admittance else "")

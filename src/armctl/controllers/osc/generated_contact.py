@@ -48,7 +48,7 @@ from armctl.dynamics.symbolic_frames import frame_kinematics
 from armctl.model.robot import RobotModel
 from armctl.references import Reference
 
-_CODE_VERSION = 2
+_CODE_VERSION = 3
 _NAME = "osc_contact_qp"
 
 

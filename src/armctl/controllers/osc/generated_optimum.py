@@ -8,15 +8,16 @@ import casadi as cs
 
 from armctl.controllers.osc.optimality import DUAL_TOL, PRIMAL_TOL
 from armctl.controllers.osc.scale import MAX_TASK_RHS
-from armctl.dynamics.recursive import cholesky_solve
+from armctl.dynamics.recursive import cholesky_factor, cholesky_solve, cholesky_substitute
 
 
 def equality_optimum(hess: cs.SX, grad: cs.SX, a: cs.SX, b: cs.SX) -> list[cs.SX]:
     """(y*, λ, A y* − b, H y* + g + Aᵀλ): the optimum of ½yᵀHy + gᵀy subject to A y = b alone, by
     the Schur complement of H (Cholesky written out): y₀ = −H⁻¹g, W = H⁻¹Aᵀ, λ = (A W)⁻¹(A y₀ − b),
     y* = y₀ − W λ; and its residuals, which the step checks."""
-    y0 = -cholesky_solve(hess, grad)
-    w = cs.horzcat(*[cholesky_solve(hess, a[i, :].T) for i in range(a.shape[0])])
+    low = cholesky_factor(hess)  # once, for y₀ and every column of W
+    y0 = -cholesky_substitute(low, grad)
+    w = cholesky_substitute(low, a.T)
     lam = cholesky_solve(a @ w, a @ y0 - b)
     y = y0 - w @ lam
     return [y, lam, a @ y - b, hess @ y + grad + a.T @ lam]
