@@ -44,26 +44,54 @@ class ContactStep:
         self.tau: FloatArray
 
 
+class TakenStep(ContactStep):
+    """The step of the optimum on the contact rows alone that the generated code accepted: one copy ``flat`` of
+    the code's outputs (``GeneratedContactData.out``), of which ``b_rows``, ``contact``, ``rows`` and ``hg`` are
+    read when asked for (by the public solution and the check run again), not at every step."""
+
+    __slots__ = ("_flat", "_gen")
+
+    def __init__(self, flat: FloatArray, gen: GeneratedContactData) -> None:
+        self._flat = flat
+        self._gen = gen
+        self.arrays = []
+        self.frozen = [None]
+        self.status = ["solved"]
+
+    # read-only here: the outputs of the copy
+    @property
+    def b_rows(self) -> FloatArray:  # type: ignore[override]
+        return self._gen.outputs(self._flat)[0]
+
+    @property
+    def contact(self) -> tuple[FloatArray, FloatArray]:  # type: ignore[override]
+        c = self._gen.outputs(self._flat)[1]
+        ny = self._gen.ny
+        return c[:, :ny], c[:, ny]
+
+    @property
+    def rows(self) -> list[FloatArray]:  # type: ignore[override]
+        return [self._gen.outputs(self._flat)[2]]
+
+    @property
+    def hg(self) -> tuple[FloatArray, FloatArray]:  # type: ignore[override]
+        out = self._gen.outputs(self._flat)
+        return out[3][0], out[4][0]
+
+
 def taken_step(qp: ContactQP, gen: GeneratedContactData, chain: SolverChain) -> ContactStep:
     """The step of the optimum on the contact rows alone that the generated code accepted (``gen.accepted``:
     the check of :func:`~armctl.controllers.osc.optimality.equality_optimum_ok`, in the code): its outputs
-    copied, the QP's arrays made when asked for (:func:`step_arrays`)."""
-    ny = qp.ny
-    res = ContactStep()
-    res.b_rows = gen.brows.copy()
-    res.contact = (gen.contact[:, :ny].copy(), gen.contact[:, ny].copy())
-    res.rows.append(gen.rows.copy())
+    copied at once (:class:`TakenStep`), the QP's arrays made when asked for (:func:`step_arrays`)."""
+    flat = gen.out.copy()
+    res = TakenStep(flat, gen)
     res.bounds = gen.bounds  # type: ignore[assignment]  # set: the code accepts only with constant bounds
-    res.hg = (gen.H[0].copy(), gen.g[0].copy())
-    res.frozen.append(None)
-    eq = gen.equality
-    assert eq is not None  # one level
-    y = eq[0].copy()
-    z = np.zeros(qp.C_template.shape[0])
-    res.solutions.append(QPSolution(y, "solved", 0, "active set", eq[1].copy(), z, "active set", 0, qp.no_active))
-    res.status.append("solved")
-    res.y = y
-    res.tau = gen.tau.copy()
+    y, lam, tau = gen.taken  # type: ignore[misc]  # set: the code accepts only with constant bounds
+    res.y = flat[y]
+    res.tau = flat[tau]
+    res.solutions = [
+        QPSolution(res.y, "solved", 0, "active set", flat[lam], qp.no_multipliers, "active set", 0, qp.no_active)
+    ]
     chain.record(qp.key, qp.no_active)
     return res
 

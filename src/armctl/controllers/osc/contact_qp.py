@@ -120,6 +120,9 @@ class ContactQP:
         #: the active set with no inequality row active (read-only)
         self.no_active = np.zeros(self.C_template.shape[0], dtype=np.int8)
         self.no_active.flags.writeable = False
+        #: the multipliers of the inequality rows with none active (read-only)
+        self.no_multipliers = np.zeros(self.C_template.shape[0])
+        self.no_multipliers.flags.writeable = False
         #: :meth:`SolverChain.key <armctl.controllers.osc.SolverChain.key>` of level 0's QP
         self.key = (0, ny, self.me, self.C_template.shape[0])
         #: per level: (the plan's weights it was made from, the rows of non-zero weight or None for all, weights)
@@ -146,6 +149,7 @@ class ContactQP:
             b[rows] = rhs
         res.b_rows, res.contact = brows, (A, b)
         levels = []
+        last = len(self.levels) - 1
         for k, (plan, _, template, _) in enumerate(self.levels):
             rows = template.copy()
             for tk, r, cols in plan.entries:
@@ -161,7 +165,7 @@ class ContactQP:
             if not G[ny, ny] <= _MAX_RHS2:  # ‖W^{1/2} b‖² + ε_k‖h'‖² (NaN too)
                 refuse_scale(plan.tasks, list(plan.slices.values()), rows, ny, state, t, ref)
             # H contiguous (DAQP reads the buffer)
-            levels.append((G[:ny, :ny].copy(), G[ny, :ny], self._weighted_rows(k, rows)))
+            levels.append((G[:ny, :ny].copy(), G[ny, :ny], self._weighted_rows(k, rows) if k < last else None))
         return self._cascade(res, hf, self._bounds(state), levels, chain)
 
     def step_generated(
@@ -191,15 +195,19 @@ class ContactQP:
         res.contact = (gen.contact[:, :ny].copy(), gen.contact[:, ny].copy())
         levels = []
         start = 0
+        last = len(self.levels) - 1
         for k, (plan, _, _, _) in enumerate(self.levels):
             m = plan.m
             rows = gen.rows[start : start + m].copy()
             start += m
             res.rows.append(rows)
-            levels.append((gen.H[k].copy(), gen.g[k].copy(), self._weighted_rows(k, rows)))
+            levels.append((gen.H[k].copy(), gen.g[k].copy(), self._weighted_rows(k, rows) if k < last else None))
         # the built-in limits read q and q̇ only (see controller: the generated path takes no others)
         state = ModelState(None, q, qd, brows[:, :n], hf, None)  # type: ignore[arg-type]  # no evaluator: no frame read
-        return self._cascade(res, hf, self._bounds(state), levels, chain, gen.equality)
+        # where the code gave its verdict on the optimum on the contact rows alone (gen.accepted, the check of
+        # equality_optimum_ok), it said no: that optimum is not offered again
+        equality = gen.equality if gen.limits is None else None
+        return self._cascade(res, hf, self._bounds(state), levels, chain, equality)
 
     def _weighted_rows(self, k: int, rows: FloatArray) -> FloatArray:
         """T_k: level k's task rows weighted (W^½ J on y), without the rows of zero weight (a task direction
@@ -232,11 +240,12 @@ class ContactQP:
         res: ContactStep,
         hf: FloatArray,
         bounds: tuple[FloatArray, FloatArray],
-        levels: list[tuple[FloatArray, FloatArray, FloatArray]],
+        levels: list[tuple[FloatArray, FloatArray, FloatArray | None]],
         chain: SolverChain,
         equality: tuple[FloatArray, ...] | None = None,
     ) -> ContactStep:
-        """Solve the levels (H_k, g_k, the weighted task rows T_k) in order under the step's rows (``res``).
+        """Solve the levels (H_k, g_k, the weighted task rows T_k, None for the last level, whose rows freeze
+        nothing) in order under the step's rows (``res``).
         ``equality``: for one level, the generated optimum on the contact rows alone and its residuals (see
         generated_contact), taken if it passes :meth:`_accept_equality`."""
         ny = self.ny
@@ -283,13 +292,13 @@ class ContactQP:
                     f"kept level {k - 1}: no verified optimum ({err.attempts[-1][1] if err.attempts else ''})"
                 )
                 if k < last:
-                    F = extend_basis(F, T)
+                    F = extend_basis(F, T)  # type: ignore[arg-type]  # given for every level but the last
                 continue
             res.solutions.append(sol)
             res.status.append("solved")
             y = sol.x
             if k < last:
-                F = extend_basis(F, T)
+                F = extend_basis(F, T)  # type: ignore[arg-type]  # given for every level but the last
         assert y is not None  # level 0 raised otherwise
         res.y = y
         tau = brows[:, :ny].dot(y)

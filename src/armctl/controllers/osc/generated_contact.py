@@ -249,36 +249,82 @@ class GeneratedContactData:
         m = sum(tk.dim for lev in self.levels for tk in lev)
         self.inp = np.zeros(fn.size1_in(0))
         self.par = np.zeros(fn.size1_in(1))
-        # CasADi writes a matrix column by column: each (r × c) output held as its transpose, row by row
-        self._brows_t = np.zeros((ny + 1, n))
-        self._contact_t = np.zeros((ny + 1, 3 * len(self.contacts)))
-        self._rows_t = np.zeros((ny + 1, m))
-        self.brows, self.contact, self.rows = self._brows_t.T, self._contact_t.T, self._rows_t.T
-        self.H = [np.zeros((ny, ny)) for _ in self.levels]  # symmetric: column by column is row by row
-        self.g = [np.zeros(ny) for _ in self.levels]
-        self.c = [np.zeros(1) for _ in self.levels]
+        self.ny, self.m, self.me = ny, m, 3 * len(self.contacts)
+        #: every output, one after the other in one buffer (:meth:`outputs` reads a copy of it the same way)
+        self.out = np.zeros(self._size())
+        (
+            self.brows,
+            self.contact,
+            self.rows,
+            self.H,
+            self.g,
+            self.c,
+            self.equality,
+            self.accepted,
+            self.tau,
+        ) = self.outputs(self.out)
         buf, self._run = buffer_of(fn)
         for k, arr in enumerate((self.inp, self.par)):
             buf.set_arg(k, view(arr))
-        results: list[FloatArray] = [self._brows_t, self._contact_t, self._rows_t]
-        for k in range(len(self.levels)):
-            results += [self.H[k], self.g[k], self.c[k]]
-        me = 3 * len(self.contacts)
-        #: with one level: the optimum on the contact rows alone, y* (ny) and λ (3k), and its residuals A y* − b
-        #: (3k) and H y* + g + Aᵀλ (ny); None with more levels
-        self.equality: tuple[FloatArray, FloatArray, FloatArray, FloatArray] | None = None
-        if one:
-            self.equality = (np.zeros(ny), np.zeros(me), np.zeros(me), np.zeros(ny))
-            results += list(self.equality)
-        #: with ``bounds``: 1.0 if the optimum on the contact rows alone is the QP's (see _verdict), and its τ
-        self.accepted = np.zeros(1)
-        self.tau = np.zeros(n)
+        for k, (start, stop) in enumerate(self._spans()):
+            buf.set_res(k, view(self.out[start:stop]))
+        self._bound = buf  # the buffer reads and writes inp, par and out: kept with them
+        #: with ``bounds``: where y*, λ and τ of the optimum on the contact rows alone sit in :attr:`out`
+        self.taken: tuple[slice, slice, slice] | None = None
         if self.limits is not None:
-            results += [self.accepted, self.tau]
-        for k, res in enumerate(results):
-            buf.set_res(k, view(res.reshape(-1)))
-        self._bound = (buf, results)  # the buffer reads and writes these: keep them alive
+            spans = self._spans()
+            first = 3 + 3 * len(self.levels)
+            self.taken = tuple(slice(*spans[k]) for k in (first, first + 1, first + 5))  # type: ignore[assignment]
         self._revisions: list[int] | None = None
+
+    def _sizes(self) -> list[int]:
+        """The sizes of the function's outputs, in its order (see :meth:`outputs`)."""
+        n, ny, m, me = self.n, self.ny, self.m, self.me
+        sizes = [(ny + 1) * n, (ny + 1) * me, (ny + 1) * m]
+        sizes += [ny * ny, ny, 1] * len(self.levels)
+        if self.equality_rows:
+            sizes += [ny, me, me, ny]
+        if self.limits is not None:
+            sizes += [1, n]
+        return sizes
+
+    @property
+    def equality_rows(self) -> bool:
+        """Whether the code gives the optimum on the contact rows alone (one level, with contacts)."""
+        return len(self.levels) == 1 and bool(self.contacts)
+
+    def _spans(self) -> list[tuple[int, int]]:
+        """(start, stop) of each output in :attr:`out`."""
+        spans, start = [], 0
+        for size in self._sizes():
+            spans.append((start, start + size))
+            start += size
+        return spans
+
+    def _size(self) -> int:
+        return sum(self._sizes())
+
+    def outputs(self, flat: FloatArray) -> tuple[Any, ...]:
+        """The outputs as arrays viewing ``flat`` (:attr:`out`, or a copy of it): (brows, contact, rows, H, g, c,
+        equality, accepted, tau) as in the class docstring (H, g, c lists per level; equality None with more
+        levels; accepted and tau empty without ``bounds``)."""
+        n, ny, m, me = self.n, self.ny, self.m, self.me
+        spans = iter(self._spans())
+
+        def take(*shape: int) -> FloatArray:
+            start, stop = next(spans)
+            return flat[start:stop].reshape(shape)
+
+        # CasADi writes a matrix column by column: each (r × c) output read as its transpose, row by row
+        brows, contact, rows = take(ny + 1, n).T, take(ny + 1, me).T, take(ny + 1, m).T
+        H, g, c = [], [], []
+        for _ in self.levels:
+            H.append(take(ny, ny))  # symmetric: column by column is row by row
+            g.append(take(ny))
+            c.append(take(1))
+        equality = (take(ny), take(me), take(me), take(ny)) if self.equality_rows else None
+        accepted, tau = (take(1), take(n)) if self.limits is not None else (np.zeros(1), np.zeros(n))
+        return brows, contact, rows, H, g, c, equality, accepted, tau
 
     def __reduce__(self) -> tuple[Any, ...]:
         # rebuilt (the library loads from the cache): the buffers are this process's
