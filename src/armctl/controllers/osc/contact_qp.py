@@ -83,6 +83,8 @@ class ContactQP:
             self.contacts.append((c, variables[c.name], lay.variables[c.name], slice(3 * k, 3 * k + 3)))
             col += c.dim
         self.ny = ny = col
+        #: per contact: the key of its force in a step's log and its columns in y
+        self.force_keys = [(f"force[{c.name}]", cy) for c, cy, _, _ in self.contacts]
         self.variables = variables
         ylay = _YLayout(ny, variables)
         eps = builder.regularization

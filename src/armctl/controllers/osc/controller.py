@@ -442,15 +442,20 @@ class OperationalSpaceQP(Controller):
         else:
             result = qp.step(self.evaluator.evaluate(q, qd), t, ref, self.chain)
         self._pending = (qp, result)
-        tau = result.tau.clip(self._tau_lo, self._tau_up) if self._tau_up is not None else result.tau.copy()
+        if self._tau_up is not None and self._tau_lo is not None:
+            tau = np.minimum(result.tau, self._tau_up)
+            np.maximum(tau, self._tau_lo, out=tau)
+        else:
+            tau = result.tau.copy()
         iterations = fallbacks = 0
         for s in result.solutions:
             if s is not None:
                 iterations += s.iterations
                 fallbacks += s.fallbacks
         log: dict[str, Any] = {"qp_iterations": iterations, "qp_fallbacks": fallbacks}
-        for name, f in qp.forces(result).items():
-            log[f"force[{name}]"] = f
+        y = result.y
+        for key, cy in qp.force_keys:
+            log[key] = y[cy]
         status = result.status
         if len(status) > 1:
             log["level_status"] = tuple(status)
