@@ -27,7 +27,20 @@ class ContactStep:
     verified solution (None for a level that kept the one above) and status, and the rows the public problem is
     made from (B = [M | −J_cᵀ | −h'], the contact rows, the bounds, each level's task rows)."""
 
-    __slots__ = ("arrays", "b_rows", "bounds", "contact", "frozen", "hg", "rows", "solutions", "status", "tau", "y")
+    __slots__ = (
+        "arrays",
+        "b_rows",
+        "bounds",
+        "contact",
+        "frozen",
+        "hg",
+        "outputs",
+        "rows",
+        "solutions",
+        "status",
+        "tau",
+        "y",
+    )
 
     def __init__(self) -> None:
         self.arrays: list[QPArrays] = []
@@ -37,6 +50,9 @@ class ContactStep:
         self.rows: list[FloatArray] = []
         #: (H, g) of level 0 for a step taken without a solver, whose arrays are made when asked for
         self.hg: tuple[FloatArray, FloatArray] | None = None
+        #: for a step taken without a solver: its copy of the generated code's outputs and the code, until the
+        #: rows above are read from it
+        self.outputs: tuple[FloatArray, GeneratedContactData] | None = None
         self.b_rows: FloatArray
         self.contact: tuple[FloatArray, FloatArray]
         self.bounds: tuple[FloatArray, FloatArray]
@@ -44,60 +60,45 @@ class ContactStep:
         self.tau: FloatArray
 
 
-class TakenStep(ContactStep):
-    """The step of the optimum on the contact rows alone that the generated code accepted: one copy ``flat`` of
-    the code's outputs (``GeneratedContactData.out``), of which ``b_rows``, ``contact``, ``rows`` and ``hg`` are
-    read when asked for (by the public solution and the check run again), not at every step."""
-
-    __slots__ = ("_flat", "_gen")
-
-    def __init__(self, flat: FloatArray, gen: GeneratedContactData) -> None:
-        self._flat = flat
-        self._gen = gen
-        self.arrays = []
-        self.frozen = [None]
-        self.status = ["solved"]
-
-    # read-only here: the outputs of the copy
-    @property
-    def b_rows(self) -> FloatArray:  # type: ignore[override]
-        return self._gen.outputs(self._flat)[0]
-
-    @property
-    def contact(self) -> tuple[FloatArray, FloatArray]:  # type: ignore[override]
-        c = self._gen.outputs(self._flat)[1]
-        ny = self._gen.ny
-        return c[:, :ny], c[:, ny]
-
-    @property
-    def rows(self) -> list[FloatArray]:  # type: ignore[override]
-        return [self._gen.outputs(self._flat)[2]]
-
-    @property
-    def hg(self) -> tuple[FloatArray, FloatArray]:  # type: ignore[override]
-        out = self._gen.outputs(self._flat)
-        return out[3][0], out[4][0]
-
-
 def taken_step(qp: ContactQP, gen: GeneratedContactData, chain: SolverChain) -> ContactStep:
     """The step of the optimum on the contact rows alone that the generated code accepted (``gen.accepted``:
     the check of :func:`~armctl.controllers.osc.optimality.equality_optimum_ok`, in the code): its outputs
-    copied at once (:class:`TakenStep`), the QP's arrays made when asked for (:func:`step_arrays`)."""
+    copied at once, y*, λ and τ read from that copy, the rows, contact rows and (H, g) when the public solution or
+    the check run again asks for them (:func:`_unpack`), the QP's arrays then (:func:`step_arrays`)."""
     flat = gen.out.copy()
-    res = TakenStep(flat, gen)
+    res = ContactStep()
+    res.outputs = (flat, gen)
     res.bounds = gen.bounds  # type: ignore[assignment]  # set: the code accepts only with constant bounds
-    y, lam, tau = gen.taken  # type: ignore[misc]  # set: the code accepts only with constant bounds
+    assert gen.taken is not None  # the code accepts only with constant bounds
+    y, lam, tau = gen.taken
     res.y = flat[y]
     res.tau = flat[tau]
-    res.solutions = [
+    res.solutions.append(
         QPSolution(res.y, "solved", 0, "active set", flat[lam], qp.no_multipliers, "active set", 0, qp.no_active)
-    ]
+    )
+    res.status.append("solved")
+    res.frozen.append(None)
     chain.record(qp.key, qp.no_active)
     return res
 
 
+def _unpack(res: ContactStep) -> None:
+    """The rows, contact rows and (H, g) of a step taken without a solver, from its copy of the code's outputs
+    (views of it), if not read yet."""
+    if res.outputs is None:
+        return
+    flat, gen = res.outputs
+    brows, contact, rows, H, g, *_ = gen.outputs(flat)
+    res.b_rows = brows
+    res.contact = (contact[:, : gen.ny], contact[:, gen.ny])
+    res.rows.append(rows)
+    res.hg = (H[0], g[0])
+    res.outputs = None
+
+
 def step_arrays(qp: ContactQP, res: ContactStep) -> list[QPArrays]:
     """The QP of each level of a step (made now for a step taken without a solver)."""
+    _unpack(res)
     if not res.arrays and res.hg is not None:
         brows = res.b_rows
         C, ly, uy = qp.inequalities(brows, -brows[:, qp.ny], res.bounds)
@@ -133,6 +134,7 @@ def public_solution(qp: ContactQP, res: ContactStep, partial: bool = False) -> O
     """The public :class:`OSCSolution` of a step: its :class:`StepQP` on x = [q̈; τ; f], x, and each level's
     solution mapped onto it (the same z and contact-row multipliers; ε_k τ + Σ z_τ for the equation of
     motion). ``partial``: for a step that stopped at level 0 (only the problem is read)."""
+    _unpack(res)
     n, ny, lay = qp.n, qp.ny, qp.layout
     brows = res.b_rows
     hf = -brows[:, ny]

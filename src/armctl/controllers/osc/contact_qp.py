@@ -293,14 +293,14 @@ class ContactQP:
                 res.status.append(
                     f"kept level {k - 1}: no verified optimum ({err.attempts[-1][1] if err.attempts else ''})"
                 )
-                if k < last:
-                    F = extend_basis(F, T)  # type: ignore[arg-type]  # given for every level but the last
+                if k < last and T is not None:  # (T is given for every level but the last)
+                    F = extend_basis(F, T)
                 continue
             res.solutions.append(sol)
             res.status.append("solved")
             y = sol.x
-            if k < last:
-                F = extend_basis(F, T)  # type: ignore[arg-type]  # given for every level but the last
+            if k < last and T is not None:
+                F = extend_basis(F, T)
         assert y is not None  # level 0 raised otherwise
         res.y = y
         tau = brows[:, :ny].dot(y)

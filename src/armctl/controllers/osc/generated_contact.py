@@ -274,7 +274,7 @@ class GeneratedContactData:
         if self.limits is not None:
             spans = self._spans()
             first = 3 + 3 * len(self.levels)
-            self.taken = tuple(slice(*spans[k]) for k in (first, first + 1, first + 5))  # type: ignore[assignment]
+            self.taken = (slice(*spans[first]), slice(*spans[first + 1]), slice(*spans[first + 5]))
         self._revisions: list[int] | None = None
 
     def _sizes(self) -> list[int]:
