@@ -327,10 +327,11 @@ class ContactQP:
             uy[r] -= hf
         return C, ly, uy
 
-    def verify(self, res: ContactStep) -> bool:
-        """The optimality check of every level's solution of ``res``, run again (what a step pays for it)."""
+    def verify(self, res: ContactStep, check: Callable[..., bool] | None = None) -> bool:
+        """The optimality check of every level's solution of ``res``, run again (what a step pays for it;
+        ``check``: the chain's, see :func:`~armctl.controllers.osc.optimality.verified`)."""
         for arrays, sol in zip(step_arrays(self, res), res.solutions, strict=True):
-            if sol is not None and not verified(arrays, sol.x, sol.y, sol.z):
+            if sol is not None and not verified(arrays, sol.x, sol.y, sol.z, check):
                 return False
         return True
 

@@ -23,6 +23,8 @@ from armctl.controllers.osc.contact_public import ContactStep
 from armctl.controllers.osc.contact_qp import ContactQP, applies
 from armctl.controllers.osc.diagnose import raise_unsolved
 from armctl.controllers.osc.hierarchy import OSCSolution, solve_cascade
+from armctl.controllers.osc.kkt_code import FALLBACK as CHECK_FALLBACK
+from armctl.controllers.osc.kkt_code import CompiledKKT
 from armctl.controllers.osc.layout import Layout
 from armctl.controllers.osc.limits import (
     AccelerationLimit,
@@ -230,7 +232,9 @@ class OperationalSpaceQP(Controller):
         self.limits = tuple(limits)
         self.contacts = contacts
         self.solver = make_solver(solver)
-        self.chain = SolverChain(self.solver, make_second_solver(fallback_solver))
+        # the first stage's check compiled for the QPs whose data are generated (see _compiled_check)
+        check = CompiledKKT(dynamics.options.get("cache_dir"))
+        self.chain = SolverChain(self.solver, make_second_solver(fallback_solver), check=check)
         self.builder = QPBuilder(
             dynamics.model, tasks, limits, contacts, scalar(regularization, "regularization", positive=True), slacks
         )
@@ -271,6 +275,8 @@ class OperationalSpaceQP(Controller):
         if qp is None:
             qp = self._contact_qps[lay] = ContactQP(self.builder, lay)
             qp.generated = self._generated_contact(qp, lay)
+            if qp.generated is not None:
+                self._compiled_check(qp.key)
         return qp
 
     @property
@@ -367,8 +373,17 @@ class OperationalSpaceQP(Controller):
         if qp is None:
             qp = QddQP(self.builder, lay)
             qp.generated = self._generated_data(qp, lay)
+            if qp.generated is not None:
+                self._compiled_check(qp.key)
             self._qdd[lay] = qp
         return qp
+
+    def _compiled_check(self, key: tuple[int, int, int, int]) -> None:
+        """The chain's first-stage check compiled for the level-0 QPs of ``key`` (a QP's
+        :meth:`SolverChain.key <armctl.controllers.osc.SolverChain.key>`), on the terms of ``compile``."""
+        check = self.chain.check
+        if isinstance(check, CompiledKKT):
+            CHECK_FALLBACK.attempt(lambda: check.prepare(key[1:]), self.compile, stacklevel=5)
 
     def _generated_data(self, qp: QddQP, lay: Layout) -> Any:
         """The generated data of ``qp`` (a GeneratedQddData), or None: the NumPy path (``compile=False``, tasks or
@@ -539,7 +554,7 @@ class OperationalSpaceQP(Controller):
         """
         pending = self._pending
         if pending is not None:
-            return pending[0].verify(pending[1])  # type: ignore[arg-type]  # each QP its own step
+            return pending[0].verify(pending[1], self.chain.check)  # type: ignore[arg-type]  # each QP its own step
         sol = self._last_solution
         if sol is None:
             raise InvalidParameterError("there is no last step to verify (call the controller first)")

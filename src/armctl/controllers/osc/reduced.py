@@ -222,13 +222,14 @@ class QddQP:
         self.rows[mr, :n] = gen.M
         np.negative(gen.hf, out=self.rows[mr, n])
 
-    def verify(self, result: QddStep) -> bool:
+    def verify(self, result: QddStep, check: Callable[..., bool] | None = None) -> bool:
         """The optimality check of ``result``, run again (what a step pays for it): the bounds for the
-        unconstrained minimum, :func:`~armctl.controllers.osc.optimality.verified` for a solution of the chain."""
+        unconstrained minimum, :func:`~armctl.controllers.osc.optimality.verified` for a solution of the chain
+        (``check``: the chain's)."""
         if result.solution is None or result.arrays is None:
             return self._holds(result.qdd, result.tau, result.bounds)
         sol = result.solution
-        return verified(result.arrays, sol.x, sol.y, sol.z)
+        return verified(result.arrays, sol.x, sol.y, sol.z, check)
 
     def _holds(self, x: FloatArray, tau: FloatArray, bounds: list[tuple[FloatArray, FloatArray]]) -> bool:
         """Every torque and q̈ bound holds at (q̈, τ) (False for NaN); compared as Python floats."""
