@@ -61,7 +61,8 @@ class _QddLayout:
 class QddStep:
     """What one step of :class:`QddQP` leaves for :meth:`QddQP.public`: the bounds of every limit (l, u per
     limit), q̈, τ, and the QP ``arrays`` with the chain's ``solution`` (both None for the unconstrained
-    minimum)."""
+    minimum). With ``generated``, the rows, and q̈ and τ of the unconstrained minimum, are the code's outputs:
+    valid until its next run."""
 
     __slots__ = ("arrays", "bounds", "generated", "qdd", "solution", "tau")
 
@@ -189,7 +190,9 @@ class QddQP:
         x, tau = gen.qdd0, gen.tau0
         if self._holds(x, tau, bounds):
             chain.record(self.key, self.no_active)
-            return QddStep(bounds, x.copy(), tau.copy(), generated=gen)
+            # q̈ and τ read from the code's outputs, as its rows are (valid until its next run; the controller
+            # hands out a copy of τ, the public solution copies both)
+            return QddStep(bounds, x, tau, generated=gen)
         return self._solve(gen.H, gen.g, gen.M, gen.hf, bounds, chain, None, gen)
 
     def _solve(
