@@ -194,7 +194,8 @@ class ContactQP:
         brows = gen.brows.copy()  # kept by the step (the code's outputs are overwritten by the next run)
         hf = -brows[:, ny]
         res.b_rows = brows
-        res.contact = (gen.contact[:, :ny].copy(), gen.contact[:, ny].copy())
+        contact = gen.contact.copy()  # one copy, then its two views
+        res.contact = (contact[:, :ny], contact[:, ny])
         levels = []
         start = 0
         last = len(self.levels) - 1
@@ -320,12 +321,11 @@ class ContactQP:
         if not self.tau_rows:
             return self.C_template, lo, up
         C = self.C_template.copy()
-        ly, uy = lo.copy(), up.copy()
+        shift = np.zeros(lo.shape[0])  # h' in the torque rows (l − 0 is l exactly, ±inf included)
         for r in self.tau_rows:
             C[r] = brows[:, : self.ny]
-            ly[r] -= hf
-            uy[r] -= hf
-        return C, ly, uy
+            shift[r] = hf
+        return C, lo - shift, up - shift
 
     def verify(self, res: ContactStep, check: Callable[..., bool] | None = None) -> bool:
         """The optimality check of every level's solution of ``res``, run again (what a step pays for it;
