@@ -207,7 +207,7 @@ class QddQP:
         generated: GeneratedQddData | None,
     ) -> QddStep:
         """The verified optimum from the solver chain (past the unconstrained minimum)."""
-        arrays = self.arrays(H, g, mass, hf, bounds)
+        arrays = self.arrays(H, g, mass, hf, bounds, copy=generated is None)
         try:
             sol = chain.solve(arrays, 0, unconstrained=unconstrained)
         except QPFailure as err:
@@ -257,11 +257,15 @@ class QddQP:
         mass: FloatArray,
         hf: FloatArray,
         bounds: list[tuple[FloatArray, FloatArray]],
+        copy: bool = True,
     ) -> QPArrays:
-        """The QP on q̈ (its rows those of the public problem, torque rows shifted by h')."""
+        """The QP on q̈ (its rows those of the public problem, torque rows shifted by h'); ``copy=False``: H, g and
+        M taken as they are (the generated code's outputs, kept until its next run)."""
         A, b = self.no_rows
         if self.torque_only:  # one torque limit: C = M, bounds shifted by h'
             lo, up = bounds[0]
+            if not copy:
+                return QPArrays(H, g, A, b, mass, lo - hf, up - hf)
             return QPArrays(np.array(H), g.copy(), A, b, mass.copy(), lo - hf, up - hf)
         C = self.C_template.copy()
         lo = np.concatenate([b[0] for b in bounds]) if bounds else np.zeros(0)
