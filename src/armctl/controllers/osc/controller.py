@@ -401,7 +401,10 @@ class OperationalSpaceQP(Controller):
 
         if not supported(qp.plan.tasks):
             return None
-        make = lambda: GeneratedQddData(self.dynamics, qp.plan.tasks, self.builder.regularization)  # noqa: E731
+        variables = [lim.variable for lim in lay.limits]
+        make = lambda: GeneratedQddData(  # noqa: E731
+            self.dynamics, qp.plan.tasks, self.builder.regularization, variables, lay.constant_bounds
+        )
         return FALLBACK.attempt(make, mode, stacklevel=4)
 
     def _generated_contact(self, qp: ContactQP, lay: Layout) -> Any:

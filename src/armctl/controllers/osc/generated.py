@@ -11,7 +11,10 @@ model (its numbers built in) evaluates what the NumPy path builds from Pinocchio
   :func:`~armctl.controllers.osc.tasks.rotation.rotation_error_sx`);
 * the QP on q̈ with W_i the tasks' weights and ε the regularisation:
   H = Σ J_iᵀ W_i J_i + ε I + ε Mᵀ M,   g = −Σ J_iᵀ W_i b_i + ε Mᵀ h',   c = Σ ‖W_i^½ b_i‖² + ε ‖h'‖²,
-  and its unconstrained minimum q̈₀ = −H⁻¹ g (a Cholesky factorisation written out) with τ₀ = M q̈₀ + h'.
+  and its unconstrained minimum q̈₀ = −H⁻¹ g (a Cholesky factorisation written out) with τ₀ = M q̈₀ + h';
+* with limits whose bounds are constant (their l, u an input), the verdict on that minimum: 1 if every limit's
+  row holds at it (l ≤ τ₀ ≤ u, l ≤ q̈₀ ≤ u: then it is the QP's optimum, no row active) and the level is in
+  scale (c ≤ MAX_TASK_RHS²), else 0 (NaN included) — the check of the q̈-only step, in the code.
 
 The gains, weights and ε are an input of the code, refreshed when a task's ``revision`` changes: they may be
 changed between steps without generating code again. The tasks it takes are :class:`FramePoseTask`,
@@ -32,6 +35,7 @@ import numpy as np
 
 from armctl._checks import FloatArray
 from armctl.codegen import library as codegen
+from armctl.controllers.osc.scale import MAX_TASK_RHS
 from armctl.controllers.osc.tasks.base import MotionTask, Task
 from armctl.controllers.osc.tasks.frame_orientation import FrameOrientationTask
 from armctl.controllers.osc.tasks.frame_pose import FramePoseTask
@@ -47,7 +51,7 @@ from armctl.model.robot import RobotModel
 from armctl.references import Reference
 
 #: bumped when the generated code changes, so that stale cached libraries are not loaded
-_CODE_VERSION = 1
+_CODE_VERSION = 2
 _NAME = "osc_qdd_qp"
 #: the frame tasks the code takes: their kind and the shape of their target value
 _FRAME_TASKS: dict[type, tuple[str, tuple[int, ...]]] = {
@@ -117,11 +121,15 @@ def task_rows(
     return inputs, params, jacs, rhs, weights
 
 
-def qp_function(model: RobotModel, tasks: Sequence[Task], friction: bool) -> cs.Function:
+def qp_function(
+    model: RobotModel, tasks: Sequence[Task], friction: bool, limits: Sequence[str] | None = None
+) -> cs.Function:
     """The CasADi function of the module: ``f(inputs, params) -> (q̈₀, τ₀, H, g, c, M, h', [J | b])`` with
     ``inputs`` = [q; q̇; per task its target (a frame task: value row by row, velocity, acceleration; a posture
     task: q_ref, q̇_ref, q̈_ref); τ_f if ``friction``] and ``params`` = [per task K_p, K_d (row by row), W^½; ε];
-    [J | b] the unweighted task rows, stacked in the tasks' order."""
+    [J | b] the unweighted task rows, stacked in the tasks' order. With ``limits`` (each limit's variable,
+    ``"tau"`` or ``"qdd"``; their bounds constant) also the verdict on (q̈₀, τ₀), ``params`` then ending with
+    [l; u] (n rows per limit, in their order)."""
     n = model.n
     q, qd = cs.SX.sym("q", n), cs.SX.sym("qd", n)
     tf = joint_transforms(model, q)
@@ -143,6 +151,14 @@ def qp_function(model: RobotModel, tasks: Sequence[Task], friction: bool) -> cs.
     qdd0 = -cholesky_solve(hess, grad)
     tau0 = mass @ qdd0 + hf
     outputs = [qdd0, tau0, hess, grad, c, mass, hf, cs.horzcat(jall, ball)]
+    if limits is not None:
+        values = cs.vertcat(*[tau0 if var == "tau" else qdd0 for var in limits])
+        lo, up = cs.SX.sym("lower", n * len(limits)), cs.SX.sym("upper", n * len(limits))
+        params += [lo, up]
+        ok = cs.le(c, MAX_TASK_RHS**2)
+        for i in range(values.shape[0]):
+            ok = cs.logic_and(ok, cs.logic_and(cs.le(lo[i], values[i]), cs.le(values[i], up[i])))
+        outputs.append(ok)
     return cs.Function(_NAME, [cs.vertcat(*inputs), cs.vertcat(*params)], [cs.densify(o) for o in outputs])
 
 
@@ -176,8 +192,9 @@ def task_tag(model: RobotModel, tk: Task) -> str:
     return f"{_FRAME_TASKS[type(tk)][0]}:{f.name}:{f.joint}:{where}"
 
 
-def _tag(model: RobotModel, tasks: Sequence[Task], friction: bool) -> str:
+def _tag(model: RobotModel, tasks: Sequence[Task], friction: bool, limits: Sequence[str] | None = None) -> str:
     parts = [f"osc-qdd|{model.fingerprint(inertial=True, tool=False)}|v{_CODE_VERSION}|friction={friction}"]
+    parts.append("limits:" + ("-" if limits is None else ",".join(limits)))
     parts += [task_tag(model, tk) for tk in tasks]
     return "|".join(parts)
 
@@ -186,22 +203,36 @@ class GeneratedQddData:
     """The generated function of the module for ``tasks`` on ``dynamics`` (its model, its friction, its cache
     folder), bound to buffers of its own. After :meth:`run`, the outputs are arrays that the next run
     overwrites: ``qdd0``, ``tau0`` (n,), ``H`` (n×n), ``g`` (n,), ``c`` (1,), ``M`` (n×n), ``hf`` (n,) and
-    ``rows`` (m × (n+1)), as in the module. Builds or loads the library (the first time for a model and tasks:
-    seconds; then milliseconds). Not thread-safe."""
+    ``rows`` (m × (n+1)), as in the module, and with ``limits`` and their constant ``bounds`` (l, u, n rows per
+    limit) ``accepted`` (1,): the verdict on (q̈₀, τ₀). Builds or loads the library (the first time for a model
+    and tasks: seconds; then milliseconds). Not thread-safe."""
 
-    def __init__(self, dynamics: Dynamics, tasks: Sequence[Task], regularization: float) -> None:
+    def __init__(
+        self,
+        dynamics: Dynamics,
+        tasks: Sequence[Task],
+        regularization: float,
+        limits: Sequence[str] | None = None,
+        bounds: tuple[FloatArray, FloatArray] | None = None,
+    ) -> None:
         model = dynamics.model
         self.dynamics = dynamics
         self.n = n = model.n
         self.tasks = tuple(tasks)
         self.friction = dynamics.friction if model.has_friction else None
         self.regularization = float(regularization)
+        self.limits = tuple(limits) if limits is not None and bounds is not None else None
+        self.bounds = bounds if self.limits is not None else None
         cache_dir = dynamics.options.get("cache_dir")
-        tag = _tag(model, self.tasks, self.friction is not None)
+        tag = _tag(model, self.tasks, self.friction is not None, self.limits)
         kinds = ", ".join(type(tk).__name__ for tk in self.tasks)
         what = f"the operational-space QP's data for {model.name!r} ({kinds})"
         fn = codegen.cached(
-            [_NAME], tag, lambda: [qp_function(model, self.tasks, self.friction is not None)], cache_dir, what=what
+            [_NAME],
+            tag,
+            lambda: [qp_function(model, self.tasks, self.friction is not None, self.limits)],
+            cache_dir,
+            what=what,
         )[_NAME]
         m = sum(tk.dim for tk in self.tasks)
         self.inp = np.zeros(fn.size1_in(0))
@@ -213,7 +244,12 @@ class GeneratedQddData:
         buf, self._run = buffer_of(fn)
         for k, arr in enumerate((self.inp, self.par)):
             buf.set_arg(k, view(arr))
-        for k, res in enumerate((self.qdd0, self.tau0, self.H, self.g, self.c, self.M, self.hf, rows_t)):
+        #: with ``bounds``: 1.0 if the unconstrained minimum holds every limit's row and the level is in scale
+        self.accepted: FloatArray | None = np.zeros(1) if self.limits is not None else None
+        results = [self.qdd0, self.tau0, self.H, self.g, self.c, self.M, self.hf, rows_t]
+        if self.accepted is not None:
+            results.append(self.accepted)
+        for k, res in enumerate(results):
             buf.set_res(k, view(res.reshape(-1)))
         self._bound = (buf, rows_t)  # the buffer reads and writes these: keep them alive
         self._revisions: list[int] | None = None
@@ -221,12 +257,14 @@ class GeneratedQddData:
 
     def __reduce__(self) -> tuple[Any, ...]:
         # rebuilt (the library loads from the cache): the buffers are this process's
-        return (GeneratedQddData, (self.dynamics, self.tasks, self.regularization))
+        return (GeneratedQddData, (self.dynamics, self.tasks, self.regularization, self.limits, self.bounds))
 
     def _params(self) -> None:
         """The gains, weights and ε into the parameter buffer (in place: the buffer reads it)."""
         parts = task_params(self.tasks)
         parts.append(np.array([self.regularization]))
+        if self.bounds is not None:
+            parts += list(self.bounds)
         np.concatenate(parts, out=self.par)
 
     def run(self, q: FloatArray, qd: FloatArray, t: float, ref: Reference) -> None:

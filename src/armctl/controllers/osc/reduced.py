@@ -179,6 +179,10 @@ class QddQP:
         ``evaluate(q, qd)`` gives the :class:`ModelState` of the NumPy path, which takes over when the rows are out
         of scale (to name the task, see :mod:`~armctl.controllers.osc.scale`)."""
         gen.run(q, qd, t, ref)
+        accepted, constant = gen.accepted, self.constant
+        if accepted is not None and constant is not None and accepted[0] == 1.0:  # the code checked its minimum
+            chain.record(self.key, self.no_active)
+            return QddStep(constant, gen.qdd0, gen.tau0, generated=gen)
         if not gen.c[0] <= _MAX_RHS2:  # ‖W^{1/2} b‖² + ε‖h'‖² (NaN too)
             return self.step(evaluate(q, qd), t, ref, chain)
         if self.constant is not None:
