@@ -192,7 +192,8 @@ class QddQP:
             state = ModelState(None, q, qd, gen.M, gen.hf, None)  # type: ignore[arg-type]
             bounds = [lim.bounds(state) for lim in self.layout.limits]
         x, tau = gen.qdd0, gen.tau0
-        if self._holds(x, tau, bounds):
+        # (where the code gave its verdict, in scale, it said that the minimum breaks a row: not checked again)
+        if accepted is None and self._holds(x, tau, bounds):
             chain.record(self.key, self.no_active)
             # q̈ and τ read from the code's outputs, as its rows are (valid until its next run; the controller
             # hands out a copy of τ, the public solution copies both)
