@@ -45,13 +45,20 @@ from armctl.controllers.osc.tasks.posture import PostureTask
 from armctl.controllers.osc.tasks.rotation import rotation_error_sx
 from armctl.dynamics.base import Dynamics
 from armctl.dynamics.casadi_buffer import buffer_of, view
-from armctl.dynamics.recursive import cholesky_solve, inverse_dynamics, joint_transforms, mass_matrix
+from armctl.dynamics.recursive import (
+    cholesky_factor,
+    cholesky_solve,
+    cholesky_substitute,
+    inverse_dynamics,
+    joint_transforms,
+    mass_matrix,
+)
 from armctl.dynamics.symbolic_frames import frame_kinematics
 from armctl.model.robot import RobotModel
 from armctl.references import Reference
 
 #: bumped when the generated code changes, so that stale cached libraries are not loaded
-_CODE_VERSION = 2
+_CODE_VERSION = 3
 _NAME = "osc_qdd_qp"
 #: the frame tasks the code takes: their kind and the shape of their target value
 _FRAME_TASKS: dict[type, tuple[str, tuple[int, ...]]] = {
@@ -148,18 +155,77 @@ def qp_function(
     hess = gram(weighted) + eps * (cs.SX.eye(n) + gram(mass))
     grad = -(weighted.T @ t) + eps * (mass @ hf)  # M symmetric: Mᵀh' = M h'
     c = cs.dot(t, t) + eps * cs.dot(hf, hf)
-    qdd0 = -cholesky_solve(hess, grad)
+    low = cholesky_factor(hess)  # once: for q̈₀ and, with limits, the solve on a guessed active set
+    qdd0 = -cholesky_substitute(low, grad)
     tau0 = mass @ qdd0 + hf
     outputs = [qdd0, tau0, hess, grad, c, mass, hf, cs.horzcat(jall, ball)]
     if limits is not None:
         values = cs.vertcat(*[tau0 if var == "tau" else qdd0 for var in limits])
         lo, up = cs.SX.sym("lower", n * len(limits)), cs.SX.sym("upper", n * len(limits))
         params += [lo, up]
-        ok = cs.le(c, MAX_TASK_RHS**2)
+        in_scale = cs.le(c, MAX_TASK_RHS**2)
+        ok = in_scale
         for i in range(values.shape[0]):
             ok = cs.logic_and(ok, cs.logic_and(cs.le(lo[i], values[i]), cs.le(values[i], up[i])))
         outputs.append(ok)
+        outputs += guessed_active_set(hess, grad, low, qdd0, mass, hf, limits, lo, up, in_scale)
     return cs.Function(_NAME, [cs.vertcat(*inputs), cs.vertcat(*params)], [cs.densify(o) for o in outputs])
+
+
+def guessed_active_set(
+    hess: cs.SX,
+    grad: cs.SX,
+    low: list[list[cs.SX]],
+    qdd0: cs.SX,
+    mass: cs.SX,
+    hf: cs.SX,
+    limits: Sequence[str],
+    lo: cs.SX,
+    up: cs.SX,
+    in_scale: cs.SX,
+) -> list[cs.SX]:
+    """(verdict, q̈, τ, z, active): the QP on q̈ solved with the rows that its unconstrained minimum q̈₀ breaks
+    taken as equalities at the bound they break, and its KKT check.
+
+    The rows are those of the q̈-only QP (:meth:`~armctl.controllers.osc.reduced.QddQP.arrays`): C = M for a
+    torque limit, its bounds l − h', u − h'; C = I for a q̈ limit. With D the guessed active rows (those with
+    C q̈₀ above u or below l) and d their bounds, the multipliers and the solution are (Schur complement, with
+    H's Cholesky factor)
+
+        (D C H⁻¹ Cᵀ D + I − D) z = D (C q̈₀ − d),   q̈ = q̈₀ − H⁻¹ Cᵀ z,
+
+    z = 0 off D. The verdict is :func:`~armctl.controllers.osc.kkt_code.kkt_verdict` of (q̈, z) on that QP (the
+    conditions and tolerances of :func:`~armctl.controllers.osc.optimality.kkt_ok`) with the level in scale: 1
+    only for the QP's optimum, whatever the guess (a wrong guess fails it, dependent rows give NaN, which fails
+    it too)."""
+    from armctl.controllers.osc.kkt_code import kkt_verdict  # its SX check
+
+    n = mass.shape[0]
+    blocks, shifts = [], []
+    for var in limits:
+        blocks.append(mass if var == "tau" else cs.SX.eye(n))
+        shifts.append(hf if var == "tau" else cs.SX.zeros(n))
+    C, shift = cs.vertcat(*blocks), cs.vertcat(*shifts)
+    ly, uy = lo - shift, up - shift
+    mi = C.shape[0]
+    s0 = C @ qdd0
+    above = [cs.gt(s0[i], uy[i]) for i in range(mi)]
+    below = [cs.lt(s0[i], ly[i]) for i in range(mi)]
+    on = [cs.logic_or(above[i], below[i]) for i in range(mi)]
+    w = cholesky_substitute(low, C.T)  # H⁻¹ Cᵀ
+    k = C @ w
+    schur = cs.SX.zeros(mi, mi)
+    rhs = cs.SX.zeros(mi)
+    for i in range(mi):
+        for j in range(mi):
+            schur[i, j] = cs.if_else(cs.logic_and(on[i], on[j]), k[i, j], 1.0 if i == j else 0.0)
+        bound = cs.if_else(above[i], uy[i], ly[i])
+        rhs[i] = cs.if_else(on[i], s0[i] - bound, 0.0)  # a branch: an infinite bound off D never enters
+    z = cholesky_solve(schur, rhs)
+    qdd = qdd0 - w @ z
+    ok = cs.logic_and(in_scale, kkt_verdict(hess, grad, None, None, C, ly, uy, qdd, None, z))
+    active = cs.vertcat(*[cs.if_else(above[i], 1.0, cs.if_else(below[i], -1.0, 0.0)) for i in range(mi)])
+    return [ok, qdd, mass @ qdd + hf, z, active]
 
 
 def target_pieces(tasks: Sequence[Task], t: float, ref: Reference, pieces: list[FloatArray]) -> None:
@@ -204,7 +270,8 @@ class GeneratedQddData:
     folder), bound to buffers of its own. After :meth:`run`, the outputs are arrays that the next run
     overwrites: ``qdd0``, ``tau0`` (n,), ``H`` (n×n), ``g`` (n,), ``c`` (1,), ``M`` (n×n), ``hf`` (n,) and
     ``rows`` (m × (n+1)), as in the module, and with ``limits`` and their constant ``bounds`` (l, u, n rows per
-    limit) ``accepted`` (1,): the verdict on (q̈₀, τ₀). Builds or loads the library (the first time for a model
+    limit) ``accepted`` (1,), the verdict on (q̈₀, τ₀), and ``guess``, the solve on the active set q̈₀ points at.
+    Builds or loads the library (the first time for a model
     and tasks: seconds; then milliseconds). Not thread-safe."""
 
     def __init__(
@@ -246,9 +313,14 @@ class GeneratedQddData:
             buf.set_arg(k, view(arr))
         #: with ``bounds``: 1.0 if the unconstrained minimum holds every limit's row and the level is in scale
         self.accepted: FloatArray | None = np.zeros(1) if self.limits is not None else None
+        #: with ``bounds``: the solve on the active set that q̈₀ points at (see guessed_active_set): its verdict
+        #: (1.0: the QP's optimum, checked), q̈, τ, z and the active set (+1, −1, 0 per row, as floats)
+        self.guess: tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray] | None = None
         results = [self.qdd0, self.tau0, self.H, self.g, self.c, self.M, self.hf, rows_t]
-        if self.accepted is not None:
-            results.append(self.accepted)
+        if self.accepted is not None and self.limits is not None:
+            mi = n * len(self.limits)
+            self.guess = (np.zeros(1), np.zeros(n), np.zeros(n), np.zeros(mi), np.zeros(mi))
+            results += [self.accepted, *self.guess]
         for k, res in enumerate(results):
             buf.set_res(k, view(res.reshape(-1)))
         self._bound = (buf, rows_t)  # the buffer reads and writes these: keep them alive

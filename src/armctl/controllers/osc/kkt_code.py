@@ -32,12 +32,45 @@ from armctl.dynamics.casadi_buffer import buffer_of, view
 if TYPE_CHECKING:
     import casadi as cs
 
-_CODE_VERSION = 1
+_CODE_VERSION = 2
 _NAME = "osc_kkt_check"
 _HUGE = 1.7976931348623157e308  # the largest float: |v| ≤ it exactly when v is finite
 Sizes = tuple[int, int, int]
 #: what ``compile="auto"`` runs where the check cannot be built
 FALLBACK = Fallback("the QP's compiled optimality check", "the same check in NumPy", "a few µs slower a QP")
+
+
+def kkt_verdict(H: Any, g: Any, A: Any, b: Any, C: Any, lo: Any, up: Any, x: Any, y: Any, z: Any) -> Any:
+    """The check of the module as a CasADi SX expression (1 or 0) of the QP's SX arrays and the candidate
+    (A, b, y may be None: no equality row)."""
+    import casadi as cs  # imported on use: a controller without generated code never needs it
+
+    nx, mi = x.shape[0], lo.shape[0]
+    ok = cs.SX(1)
+    for i in range(nx):
+        ok = cs.logic_and(ok, cs.le(cs.fabs(x[i]), _HUGE))
+    r = H @ x + g
+    if A is not None and A.shape[0]:
+        r += A.T @ y
+        e = A @ x - b
+        for i in range(A.shape[0]):
+            ok = cs.logic_and(ok, cs.logic_and(cs.le(e[i], PRIMAL_TOL), cs.ge(e[i], -PRIMAL_TOL)))
+    gap = cs.SX(0)
+    if mi:
+        r += C.T @ z
+        s = C @ x
+        for i in range(mi):
+            ok = cs.logic_and(ok, cs.logic_and(cs.le(lo[i] - PRIMAL_TOL, s[i]), cs.le(s[i], up[i] + PRIMAL_TOL)))
+            upper = cs.if_else(cs.gt(z[i], 0), z[i] * cs.fabs(up[i] - s[i]), 0)  # a branch: 0 · ∞ never formed
+            lower = cs.if_else(cs.lt(z[i], 0), -z[i] * cs.fabs(s[i] - lo[i]), 0)
+            gap += upper + lower
+    scale = cs.SX(0)
+    for i in range(nx):
+        scale = cs.fmax(scale, cs.fabs(g[i]))
+    bound = DUAL_TOL * (1 + scale)
+    for i in range(nx):
+        ok = cs.logic_and(ok, cs.le(cs.fabs(r[i]), bound))
+    return cs.logic_and(ok, cs.le(gap, bound))
 
 
 def kkt_function(nx: int, me: int, mi: int) -> cs.Function:
@@ -56,32 +89,7 @@ def kkt_function(nx: int, me: int, mi: int) -> cs.Function:
 
     H, g, A, b, C, lo, up = take(nx, nx), take(nx), take(me, nx), take(me), take(mi, nx), take(mi), take(mi)
     x, y, z = take(nx), take(me), take(mi)
-    ok = cs.SX(1)
-    for i in range(nx):
-        ok = cs.logic_and(ok, cs.le(cs.fabs(x[i]), _HUGE))
-    r = H @ x + g
-    if me:
-        r += A.T @ y
-        e = A @ x - b
-        for i in range(me):
-            ok = cs.logic_and(ok, cs.logic_and(cs.le(e[i], PRIMAL_TOL), cs.ge(e[i], -PRIMAL_TOL)))
-    gap = cs.SX(0)
-    if mi:
-        r += C.T @ z
-        s = C @ x
-        for i in range(mi):
-            ok = cs.logic_and(ok, cs.logic_and(cs.le(lo[i] - PRIMAL_TOL, s[i]), cs.le(s[i], up[i] + PRIMAL_TOL)))
-            upper = cs.if_else(cs.gt(z[i], 0), z[i] * cs.fabs(up[i] - s[i]), 0)
-            lower = cs.if_else(cs.lt(z[i], 0), -z[i] * cs.fabs(s[i] - lo[i]), 0)
-            gap += upper + lower
-    scale = cs.SX(0)
-    for i in range(nx):
-        scale = cs.fmax(scale, cs.fabs(g[i]))
-    bound = DUAL_TOL * (1 + scale)
-    for i in range(nx):
-        ok = cs.logic_and(ok, cs.le(cs.fabs(r[i]), bound))
-    ok = cs.logic_and(ok, cs.le(gap, bound))
-    return cs.Function(_NAME, [data], [ok])
+    return cs.Function(_NAME, [data], [kkt_verdict(H, g, A, b, C, lo, up, x, y, z)])
 
 
 class _Check:

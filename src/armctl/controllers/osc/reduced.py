@@ -179,10 +179,13 @@ class QddQP:
         ``evaluate(q, qd)`` gives the :class:`ModelState` of the NumPy path, which takes over when the rows are out
         of scale (to name the task, see :mod:`~armctl.controllers.osc.scale`)."""
         gen.run(q, qd, t, ref)
-        accepted, constant = gen.accepted, self.constant
-        if accepted is not None and constant is not None and accepted[0] == 1.0:  # the code checked its minimum
-            chain.record(self.key, self.no_active)
-            return QddStep(constant, gen.qdd0, gen.tau0, generated=gen)
+        accepted, constant, guess = gen.accepted, self.constant, gen.guess
+        if accepted is not None and constant is not None and guess is not None:
+            if accepted[0] == 1.0:  # the code checked its minimum
+                chain.record(self.key, self.no_active)
+                return QddStep(constant, gen.qdd0, gen.tau0, generated=gen)
+            if guess[0][0] == 1.0:  # the code solved on the rows the minimum breaks, and checked that optimum
+                return self._guessed(gen, guess, constant, chain)
         if not gen.c[0] <= _MAX_RHS2:  # ‖W^{1/2} b‖² + ε‖h'‖² (NaN too)
             return self.step(evaluate(q, qd), t, ref, chain)
         if self.constant is not None:
@@ -199,6 +202,22 @@ class QddQP:
             # hands out a copy of τ, the public solution copies both)
             return QddStep(bounds, x, tau, generated=gen)
         return self._solve(gen.H, gen.g, gen.M, gen.hf, bounds, chain, None, gen)
+
+    def _guessed(
+        self,
+        gen: GeneratedQddData,
+        guess: tuple[FloatArray, ...],
+        bounds: list[tuple[FloatArray, FloatArray]],
+        chain: SolverChain,
+    ) -> QddStep:
+        """The step of the optimum that the generated code found on the rows its unconstrained minimum breaks and
+        checked (``gen.guess``): q̈, τ and z read from the code's outputs, as its rows are (valid until its next
+        run), the QP's arrays made when the check is run again."""
+        _, x, tau, z, active = guess
+        act = active.astype(np.int8)
+        chain.record(self.key, act)
+        sol = QPSolution(x, "solved", 0, "active set", self.no_rows[1], z, "active set", 0, act)
+        return QddStep(bounds, x, tau, None, sol, gen)
 
     def _solve(
         self,
@@ -234,10 +253,15 @@ class QddQP:
         """The optimality check of ``result``, run again (what a step pays for it): the bounds for the
         unconstrained minimum, :func:`~armctl.controllers.osc.optimality.verified` for a solution of the chain
         (``check``: the chain's)."""
-        if result.solution is None or result.arrays is None:
-            return self._holds(result.qdd, result.tau, result.bounds)
         sol = result.solution
-        return verified(result.arrays, sol.x, sol.y, sol.z, check)
+        if sol is None:
+            return self._holds(result.qdd, result.tau, result.bounds)
+        arrays = result.arrays
+        if arrays is None:  # solved in the generated code: its QP from the code's outputs (this step's)
+            gen = result.generated
+            assert gen is not None  # only the generated code solves without the chain's arrays
+            arrays = self.arrays(gen.H, gen.g, gen.M, gen.hf, result.bounds, copy=False)
+        return verified(arrays, sol.x, sol.y, sol.z, check)
 
     def _holds(self, x: FloatArray, tau: FloatArray, bounds: list[tuple[FloatArray, FloatArray]]) -> bool:
         """Every torque and q̈ bound holds at (q̈, τ) (False for NaN); compared as Python floats."""
