@@ -60,25 +60,33 @@ class ContactStep:
         self.tau: FloatArray
 
 
-def taken_step(qp: ContactQP, gen: GeneratedContactData, chain: SolverChain) -> ContactStep:
-    """The step of the optimum on the contact rows alone that the generated code accepted (``gen.accepted``:
-    the check of :func:`~armctl.controllers.osc.optimality.equality_optimum_ok`, in the code): its outputs
-    copied at once, y*, λ and τ read from that copy, the rows, contact rows and (H, g) when the public solution or
-    the check run again asks for them (:func:`_unpack`), the QP's arrays then (:func:`step_arrays`)."""
+def taken_step(qp: ContactQP, gen: GeneratedContactData, chain: SolverChain, guessed: bool = False) -> ContactStep:
+    """The step of an optimum that the generated code found and checked: on the contact rows alone
+    (``gen.accepted``: the check of :func:`~armctl.controllers.osc.optimality.equality_optimum_ok`, in the code),
+    or with ``guessed`` that of its active-set iterations (``gen.guess_ok``: the KKT check of
+    :func:`~armctl.controllers.osc.optimality.kkt_ok`, in the code). Its outputs copied at once, y, λ, z and τ read
+    from that copy, the rows, contact rows and (H, g) when the public solution or the check run again asks for
+    them (:func:`_unpack`), the QP's arrays then (:func:`step_arrays`)."""
     flat = gen.out.copy()
     res = ContactStep()
     res.outputs = (flat, gen)
     res.bounds = gen.bounds  # type: ignore[assignment]  # set: the code accepts only with constant bounds
-    assert gen.taken is not None  # the code accepts only with constant bounds
-    y, lam, tau = gen.taken
-    res.y = flat[y]
-    res.tau = flat[tau]
-    res.solutions.append(
-        QPSolution(res.y, "solved", 0, "active set", flat[lam], qp.no_multipliers, "active set", 0, qp.no_active)
-    )
+    if guessed:
+        assert gen.guess_out is not None  # run_guess passed
+        found = gen.guess_out.copy()
+        y, lam, zs, act, tau = gen.guessed
+        z, active = found[zs], found[act].astype(np.int8)
+    else:
+        assert gen.taken is not None  # the code accepts only with constant bounds
+        found = flat
+        y, lam, tau = gen.taken
+        z, active = qp.no_multipliers, qp.no_active
+    res.y = found[y]
+    res.tau = found[tau]
+    res.solutions.append(QPSolution(res.y, "solved", 0, "active set", found[lam], z, "active set", 0, active))
     res.status.append("solved")
     res.frozen.append(None)
-    chain.record(qp.key, qp.no_active)
+    chain.record(qp.key, active)
     return res
 
 

@@ -186,6 +186,8 @@ class ContactQP:
         gen.run(q, qd, t, ref)
         if gen.accepted[0] == 1.0:  # one level, constant bounds: the code checked its optimum on the contact rows
             return taken_step(self, gen, chain)
+        if gen.guess_out is not None and gen.run_guess():  # its active-set iterations' optimum, checked
+            return taken_step(self, gen, chain, guessed=True)
         for c in gen.c:
             if not c[0] <= _MAX_RHS2:  # ‖W^{1/2} b‖² + ε_k‖h'‖² (NaN too)
                 return self.step(evaluate(q, qd), t, ref, chain)

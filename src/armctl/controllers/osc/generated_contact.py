@@ -17,7 +17,11 @@ At (q, q̇), the tasks' targets and τ_f(q̇), one call of code generated with C
 * with one level, the optimum on the contact rows A y = b alone (no inequality row active), y* and λ, by the Schur
   complement of H (a Cholesky factorisation written out), and its residuals A y* − b and H y* + g + Aᵀλ: the
   step takes it, without a solver, when they vanish to the optimality check's tolerances and every inequality
-  row holds.
+  row holds;
+* with one level and constant bounds, where that optimum breaks a row, a few primal-dual active-set iterations
+  from the rows it breaks and the KKT check of their result
+  (:func:`~armctl.controllers.osc.generated_optimum.active_set_optimum`): the step takes that optimum, without a
+  solver, when it passes.
 
 Gains, weights, the contacts' coefficients and ε_k are an input of the code, refreshed when a task's
 ``revision`` changes. The tasks it takes are those of :func:`~armctl.controllers.osc.generated.supported` and
@@ -38,7 +42,8 @@ from armctl._checks import FloatArray
 from armctl.codegen import library as codegen
 from armctl.controllers.osc.contact import Contact
 from armctl.controllers.osc.generated import gram, supported, target_pieces, task_params, task_rows, task_tag
-from armctl.controllers.osc.generated_optimum import equality_optimum, verdict
+from armctl.controllers.osc.generated_optimum import active_set_optimum, equality_optimum, verdict
+from armctl.controllers.osc.scale import MAX_TASK_RHS
 from armctl.controllers.osc.tasks.base import Task
 from armctl.controllers.osc.tasks.contact_force import ContactForceTask
 from armctl.dynamics.base import Dynamics
@@ -48,8 +53,9 @@ from armctl.dynamics.symbolic_frames import frame_kinematics
 from armctl.model.robot import RobotModel
 from armctl.references import Reference
 
-_CODE_VERSION = 3
+_CODE_VERSION = 6
 _NAME = "osc_contact_qp"
+_GUESS = "osc_contact_active_set"
 
 
 def supported_contact(levels: Sequence[Sequence[Task]]) -> bool:
@@ -182,6 +188,55 @@ def contact_function(
     return cs.Function(_NAME, [cs.vertcat(*inputs), cs.vertcat(*params)], [cs.densify(o) for o in outputs])
 
 
+def guess_function(n: int, contacts: Sequence[Contact], limits: Sequence[str], m: int) -> cs.Function:
+    """The CasADi function ``f(out, params) -> (verdict, y, λ, z, active, τ)`` of the active-set iterations
+    (:func:`~armctl.controllers.osc.generated_optimum.active_set_optimum`) on the QP of one level, its data read
+    from the outputs of :func:`contact_function` (``out``: them one after the other, as
+    :attr:`GeneratedContactData.out` holds them, up to τ; ``m`` task rows) and ``params`` = [per contact its cone
+    rows (row by row); l; u]. Run only where the optimum on the contact rows alone breaks a row."""
+    ny, me = n + 3 * len(contacts), 3 * len(contacts)
+    cone_counts = [c.cone_rows()[0].shape[0] for c in contacts]
+    mi = n * len(limits) + sum(cone_counts)
+    sizes = [(ny + 1) * n, (ny + 1) * me, (ny + 1) * m, ny * ny, ny, 1, ny, me, me, ny, 1, n]
+    out = cs.SX.sym("out", sum(sizes))
+    par = cs.SX.sym("par", 3 * sum(cone_counts) + 2 * mi)
+    blocks_out, pos = [], 0
+    for size in sizes:
+        blocks_out.append(out[pos : pos + size])
+        pos += size
+    brows = cs.reshape(blocks_out[0], n, ny + 1)  # column by column, as CasADi wrote it
+    contact = cs.reshape(blocks_out[1], me, ny + 1)
+    hess, grad, c_val, y_star = cs.reshape(blocks_out[3], ny, ny), blocks_out[4], blocks_out[5], blocks_out[6]
+    bmat, hf = brows[:, :ny], -brows[:, ny]
+    # the inequality rows on y (those of ContactQP.inequalities): B for a torque limit (bounds shifted by h'),
+    # [I 0] for a q̈ limit, each contact's cone rows on its force
+    rows, shifts = [], []
+    for var in limits:
+        if var == "tau":
+            rows.append(bmat)
+            shifts.append(hf)
+        else:
+            blk = cs.SX.zeros(n, ny)
+            blk[:, :n] = cs.SX.eye(n)
+            rows.append(blk)
+            shifts.append(cs.SX.zeros(n))
+    pos = 0
+    for k, count in enumerate(cone_counts):
+        cone_rows = cs.reshape(par[pos : pos + 3 * count], 3, count).T  # row by row in
+        pos += 3 * count
+        blk = cs.SX.zeros(count, ny)
+        blk[:, n + 3 * k : n + 3 * k + 3] = cone_rows
+        rows.append(blk)
+        shifts.append(cs.SX.zeros(count))
+    lo, up = par[pos : pos + mi], par[pos + mi : pos + 2 * mi]
+    shift = cs.vertcat(*shifts)
+    in_scale = cs.le(c_val, MAX_TASK_RHS**2)
+    ok, y, lam, z, active = active_set_optimum(
+        hess, grad, contact[:, :ny], contact[:, ny], cs.vertcat(*rows), lo - shift, up - shift, y_star, in_scale
+    )
+    return cs.Function(_GUESS, [out, par], [cs.densify(o) for o in (ok, y, lam, z, active, bmat @ y + hf)])
+
+
 def _tag(
     model: RobotModel,
     levels: Sequence[Sequence[Task]],
@@ -214,7 +269,8 @@ class GeneratedContactData:
     :meth:`run`, the outputs are arrays that the next run overwrites: ``brows`` (n × (ny+1)), ``contact``
     (3k × (ny+1)), ``rows`` (m × (ny+1)), per level ``H[k]``, ``g[k]``, ``c[k]``, with one level ``equality``, and
     with ``bounds`` (one level, constant bounds l, u of the limits' and cones' rows, the limits' variables
-    ``limits``) ``accepted`` (1,) and ``tau`` (n,). Not thread-safe."""
+    ``limits``) ``accepted`` (1,) and ``tau`` (n,); with ``bounds`` also :meth:`run_guess`, the active-set
+    iterations on those outputs (``guess_out``, ``guessed``). Not thread-safe."""
 
     def __init__(
         self,
@@ -271,11 +327,54 @@ class GeneratedContactData:
         self._bound = buf  # the buffer reads and writes inp, par and out: kept with them
         #: with ``bounds``: where y*, λ and τ of the optimum on the contact rows alone sit in :attr:`out`
         self.taken: tuple[slice, slice, slice] | None = None
+        #: with ``bounds``: the active-set iterations (:func:`guess_function`), their outputs one after the other
+        #: (verdict, y, λ, z, active set, τ) and where y, λ, z, the active set and τ sit in it
+        self.guess_out: FloatArray | None = None
+        self.guessed: tuple[slice, ...] = ()
+        self._run_guess: Any = None
         if self.limits is not None:
             spans = self._spans()
             first = 3 + 3 * len(self.levels)
             self.taken = (slice(*spans[first]), slice(*spans[first + 1]), slice(*spans[first + 5]))
+            self._bind_guess(model, cache_dir, tag)
         self._revisions: list[int] | None = None
+
+    def _bind_guess(self, model: RobotModel, cache_dir: Any, tag: str) -> None:
+        """Build or load :func:`guess_function` and bind it: its inputs :attr:`out` and its own parameters (the
+        cones' rows and the bounds, set by :meth:`_params`), its outputs :attr:`guess_out`."""
+        limits = self.limits
+        assert limits is not None and self.bounds is not None  # called with constant bounds only
+        n, ny, me, m = self.n, self.ny, self.me, self.m
+        fn = codegen.cached(
+            [_GUESS],
+            tag + "|active-set",
+            lambda: [guess_function(n, self.contacts, limits, m)],
+            cache_dir,
+            what=f"the contact QP's active-set iterations for {model.name!r}",
+        )[_GUESS]
+        mi = self.bounds[0].shape[0]
+        self.par_guess = np.zeros(fn.size1_in(1))
+        self.guess_out = np.zeros(1 + ny + me + 2 * mi + n)
+        sizes = [1, ny, me, mi, mi, n]
+        buf, self._run_guess = buffer_of(fn)
+        used = fn.size1_in(0)
+        buf.set_arg(0, view(self.out[:used]))
+        buf.set_arg(1, view(self.par_guess))
+        start, spans = 0, []
+        for k, size in enumerate(sizes):
+            buf.set_res(k, view(self.guess_out[start : start + size]))
+            spans.append(slice(start, start + size))
+            start += size
+        self.guessed = tuple(spans[1:])
+        self._bound_guess = buf  # reads out and par_guess, writes guess_out: kept with them
+
+    def run_guess(self) -> bool:
+        """Run the active-set iterations on the outputs of the last :meth:`run` (with ``bounds`` only); True if
+        their optimum passed its check (then in :attr:`guess_out`)."""
+        out = self.guess_out
+        assert out is not None  # bound with bounds, the only case the step calls this in
+        self._run_guess()
+        return bool(out[0] == 1.0)
 
     def _sizes(self) -> list[int]:
         """The sizes of the function's outputs, in its order (see :meth:`outputs`)."""
@@ -344,8 +443,9 @@ class GeneratedContactData:
                 parts += [tk.sqrt_weight] if type(tk) is ContactForceTask else task_params([tk])
         parts.append(np.array(self.regularization))
         if self.bounds is not None:
-            parts += [c.cone_rows()[0].ravel() for c in self.contacts]
-            parts += list(self.bounds)
+            tail = [c.cone_rows()[0].ravel() for c in self.contacts] + list(self.bounds)
+            parts += tail
+            np.concatenate(tail, out=self.par_guess)
         np.concatenate(parts, out=self.par)
 
     def run(self, q: FloatArray, qd: FloatArray, t: float, ref: Reference) -> None:
