@@ -58,8 +58,9 @@ from armctl.model.robot import RobotModel
 from armctl.references import Reference
 
 #: bumped when the generated code changes, so that stale cached libraries are not loaded
-_CODE_VERSION = 3
+_CODE_VERSION = 4
 _NAME = "osc_qdd_qp"
+_GUESS = "osc_qdd_active_set"
 #: the frame tasks the code takes: their kind and the shape of their target value
 _FRAME_TASKS: dict[type, tuple[str, tuple[int, ...]]] = {
     FramePoseTask: ("pose", (4, 4)),
@@ -155,20 +156,17 @@ def qp_function(
     hess = gram(weighted) + eps * (cs.SX.eye(n) + gram(mass))
     grad = -(weighted.T @ t) + eps * (mass @ hf)  # M symmetric: Mᵀh' = M h'
     c = cs.dot(t, t) + eps * cs.dot(hf, hf)
-    low = cholesky_factor(hess)  # once: for q̈₀ and, with limits, the solve on a guessed active set
-    qdd0 = -cholesky_substitute(low, grad)
+    qdd0 = -cholesky_solve(hess, grad)
     tau0 = mass @ qdd0 + hf
     outputs = [qdd0, tau0, hess, grad, c, mass, hf, cs.horzcat(jall, ball)]
     if limits is not None:
         values = cs.vertcat(*[tau0 if var == "tau" else qdd0 for var in limits])
         lo, up = cs.SX.sym("lower", n * len(limits)), cs.SX.sym("upper", n * len(limits))
         params += [lo, up]
-        in_scale = cs.le(c, MAX_TASK_RHS**2)
-        ok = in_scale
+        ok = cs.le(c, MAX_TASK_RHS**2)
         for i in range(values.shape[0]):
             ok = cs.logic_and(ok, cs.logic_and(cs.le(lo[i], values[i]), cs.le(values[i], up[i])))
         outputs.append(ok)
-        outputs += guessed_active_set(hess, grad, low, qdd0, mass, hf, limits, lo, up, in_scale)
     return cs.Function(_NAME, [cs.vertcat(*inputs), cs.vertcat(*params)], [cs.densify(o) for o in outputs])
 
 
@@ -226,6 +224,26 @@ def guessed_active_set(
     ok = cs.logic_and(in_scale, kkt_verdict(hess, grad, None, None, C, ly, uy, qdd, None, z))
     active = cs.vertcat(*[cs.if_else(above[i], 1.0, cs.if_else(below[i], -1.0, 0.0)) for i in range(mi)])
     return [ok, qdd, mass @ qdd + hf, z, active]
+
+
+def guess_function(n: int, m: int, limits: Sequence[str]) -> cs.Function:
+    """The CasADi function ``f(out, params) -> (verdict, q̈, τ, z, active)`` of :func:`guessed_active_set`, its data
+    read from the outputs of :func:`qp_function` (``out``: them one after the other up to the rows, as
+    :attr:`GeneratedQddData.out` holds them; ``m`` task rows) and ``params`` = [l; u]. Run only where the
+    unconstrained minimum breaks a row."""
+    sizes = [n, n, n * n, n, 1, n * n, n, (n + 1) * m]
+    out = cs.SX.sym("out", sum(sizes))
+    lo, up = cs.SX.sym("lower", n * len(limits)), cs.SX.sym("upper", n * len(limits))
+    parts, pos = [], 0
+    for size in sizes:
+        parts.append(out[pos : pos + size])
+        pos += size
+    qdd0, _, hess, grad, c, mass, hf = parts[:7]
+    hess, mass = cs.reshape(hess, n, n), cs.reshape(mass, n, n)  # symmetric: column by column is row by row
+    found = guessed_active_set(
+        hess, grad, cholesky_factor(hess), qdd0, mass, hf, limits, lo, up, cs.le(c, MAX_TASK_RHS**2)
+    )
+    return cs.Function(_GUESS, [out, cs.vertcat(lo, up)], [cs.densify(o) for o in found])
 
 
 def target_pieces(tasks: Sequence[Task], t: float, ref: Reference, pieces: list[FloatArray]) -> None:
@@ -304,28 +322,64 @@ class GeneratedQddData:
         m = sum(tk.dim for tk in self.tasks)
         self.inp = np.zeros(fn.size1_in(0))
         self.par = np.zeros(fn.size1_in(1))
-        self.qdd0, self.tau0, self.g, self.hf, self.c = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(1)
-        self.H, self.M = np.zeros((n, n)), np.zeros((n, n))  # symmetric: column by column is row by row
-        rows_t = np.zeros((n + 1, m))  # CasADi writes a matrix column by column: [J | b]ᵀ row by row
-        self.rows = rows_t.T
+        # the outputs one after the other in one buffer (the active-set iterations read it): views of it
+        sizes = [n, n, n * n, n, 1, n * n, n, (n + 1) * m] + ([1] if self.limits is not None else [])
+        #: the outputs, one after the other
+        self.out = np.zeros(sum(sizes))
+        spans, start = [], 0
+        for size in sizes:
+            spans.append(self.out[start : start + size])
+            start += size
+        self.qdd0, self.tau0, self.g, self.hf, self.c = spans[0], spans[1], spans[3], spans[6], spans[4]
+        self.H, self.M = spans[2].reshape(n, n), spans[5].reshape(n, n)  # symmetric: column by column is row by row
+        self.rows = spans[7].reshape(n + 1, m).T  # CasADi writes a matrix column by column: [J | b]ᵀ row by row
         buf, self._run = buffer_of(fn)
         for k, arr in enumerate((self.inp, self.par)):
             buf.set_arg(k, view(arr))
         #: with ``bounds``: 1.0 if the unconstrained minimum holds every limit's row and the level is in scale
-        self.accepted: FloatArray | None = np.zeros(1) if self.limits is not None else None
-        #: with ``bounds``: the solve on the active set that q̈₀ points at (see guessed_active_set): its verdict
-        #: (1.0: the QP's optimum, checked), q̈, τ, z and the active set (+1, −1, 0 per row, as floats)
+        self.accepted: FloatArray | None = spans[8] if self.limits is not None else None
+        for k, res in enumerate(spans):
+            buf.set_res(k, view(res))
+        self._bound = buf  # the buffer reads inp and par and writes out: kept with them
+        #: with ``bounds``: the solve on the active set that q̈₀ points at (:meth:`run_guess`): its verdict (1.0:
+        #: the QP's optimum, checked), q̈, τ, z and the active set (+1, −1, 0 per row, as floats)
         self.guess: tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray] | None = None
-        results = [self.qdd0, self.tau0, self.H, self.g, self.c, self.M, self.hf, rows_t]
-        if self.accepted is not None and self.limits is not None:
-            mi = n * len(self.limits)
-            self.guess = (np.zeros(1), np.zeros(n), np.zeros(n), np.zeros(mi), np.zeros(mi))
-            results += [self.accepted, *self.guess]
-        for k, res in enumerate(results):
-            buf.set_res(k, view(res.reshape(-1)))
-        self._bound = (buf, rows_t)  # the buffer reads and writes these: keep them alive
+        self._run_guess: Any = None
+        if self.limits is not None:
+            self._bind_guess(model, cache_dir, tag, m, start - 1)
         self._revisions: list[int] | None = None
         self._pieces: list[FloatArray] = []
+
+    def _bind_guess(self, model: RobotModel, cache_dir: Any, tag: str, m: int, used: int) -> None:
+        """Build or load :func:`guess_function` and bind it: its inputs the first ``used`` entries of :attr:`out`
+        and the bounds, its outputs :attr:`guess`."""
+        limits = self.limits
+        assert limits is not None and self.bounds is not None  # called with constant bounds only
+        n = self.n
+        fn = codegen.cached(
+            [_GUESS],
+            tag + "|active-set",
+            lambda: [guess_function(n, m, limits)],
+            cache_dir,
+            what=f"the q̈-only QP's solve on the rows its minimum breaks for {model.name!r}",
+        )[_GUESS]
+        mi = n * len(limits)
+        self.par_guess = np.concatenate(self.bounds)
+        self.guess = (np.zeros(1), np.zeros(n), np.zeros(n), np.zeros(mi), np.zeros(mi))
+        buf, self._run_guess = buffer_of(fn)
+        buf.set_arg(0, view(self.out[:used]))
+        buf.set_arg(1, view(self.par_guess))
+        for k, res in enumerate(self.guess):
+            buf.set_res(k, view(res))
+        self._bound_guess = buf  # reads out and par_guess, writes guess: kept with them
+
+    def run_guess(self) -> bool:
+        """Solve on the rows that the last :meth:`run`'s unconstrained minimum breaks (with ``bounds`` only); True
+        if that point passed its check (then in :attr:`guess`)."""
+        guess = self.guess
+        assert guess is not None  # bound with bounds, the only case the step calls this in
+        self._run_guess()
+        return bool(guess[0][0] == 1.0)
 
     def __reduce__(self) -> tuple[Any, ...]:
         # rebuilt (the library loads from the cache): the buffers are this process's

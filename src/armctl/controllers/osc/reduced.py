@@ -184,7 +184,7 @@ class QddQP:
             if accepted[0] == 1.0:  # the code checked its minimum
                 chain.record(self.key, self.no_active)
                 return QddStep(constant, gen.qdd0, gen.tau0, generated=gen)
-            if guess[0][0] == 1.0:  # the code solved on the rows the minimum breaks, and checked that optimum
+            if gen.run_guess():  # the code solved on the rows the minimum breaks, and checked that optimum
                 return self._guessed(gen, guess, constant, chain)
         if not gen.c[0] <= _MAX_RHS2:  # ‖W^{1/2} b‖² + ε‖h'‖² (NaN too)
             return self.step(evaluate(q, qd), t, ref, chain)
