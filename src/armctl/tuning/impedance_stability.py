@@ -23,13 +23,16 @@ model takes the controller's whole Λ, K and D (:func:`impedance_model`) rather 
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from armctl._checks import scalar, vector, whole_number
 from armctl.controllers.interaction.gains import critical_damping, damping_ratio, symmetric_psd
 from armctl.errors import InvalidParameterError
+
+if TYPE_CHECKING:
+    from armctl.controllers import CartesianImpedance
 
 
 def _task_matrix(value: Any, m: int, name: str, unit: str, definite: bool = False) -> np.ndarray:
@@ -177,7 +180,7 @@ def critical_environment_stiffness(impedance_stiffness: Any, rtol: float = 1e-4,
     return float(np.sqrt(lo * hi))
 
 
-def impedance_model(controller: Any, q: Any) -> dict[str, Any]:
+def impedance_model(controller: CartesianImpedance, q: Any) -> dict[str, Any]:
     """What a Cartesian impedance controller puts in its task axes at q: the frame's inertia Λ(q) = (J M⁻¹ Jᵀ)⁻¹
     from the controller's model, its stiffness K and the damping D it applies there (its own, or its default
     from Λ(q) and ζ), as the keyword arguments of :func:`impedance_loop_matrix` and
