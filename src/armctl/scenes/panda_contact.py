@@ -6,7 +6,7 @@ controllers' model knows."""
 
 from __future__ import annotations
 
-from typing import Any, cast
+from typing import Any, ClassVar, cast
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -23,9 +23,8 @@ from armctl.controllers.osc import (
     PostureTask,
 )
 from armctl.dynamics.base import Dynamics
-from armctl.errors import UnknownNameError
 from armctl.references import Reference
-from armctl.scenes.base import Scene, check_gains, diverged_errors
+from armctl.scenes.base import Scene, holding_scene
 
 Q_HOME = np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])  # the Panda's "ready" posture
 
@@ -161,43 +160,38 @@ class ContactScene(Scene):
     mu: float = 0.3
     timing_samples = 100  # a QP step costs ten times a joint-space law's
 
-    def controller(self, method: str, gains: dict[str, Any] | None = None) -> Controller:
+    gain_keys: ClassVar[dict[str, tuple[tuple[str, ...], tuple[str, ...]]]] = {
+        "osc_qp": ((), ("kp", "kd")),
+        "osc_closed_form": ((), ("kp", "kd")),
+    }
+
+    def build(self, method: str, gains: dict[str, Any]) -> Controller:
         """The :class:`PressAndSlide` controller of a method.
 
         Parameters
         ----------
         method : {"osc_qp", "osc_closed_form"}
             The method.
-        gains : dict, optional
-            The pose task's ``kp`` and ``kd`` (default: the preset, ``controllers/panda_contact.<method>.toml``; a
-            missing key: the task's default); other keys are refused.
+        gains : dict
+            The pose task's ``kp`` and ``kd`` (the preset, ``controllers/panda_contact.<method>.toml``, unless
+            given; a missing key: the task's default).
 
         Returns
         -------
         PressAndSlide
         """
-        if method not in self.methods:
-            raise UnknownNameError("method", method, self.methods)
-        g = check_gains(method, self.gains(method) if gains is None else gains, (), ("kp", "kd"))
         return PressAndSlide(
             self.dynamics("exact"),
             self.z_table,
             self.mu,
             closed_form=method == "osc_closed_form",
-            kp=g.get("kp", 400.0),
-            kd=g.get("kd"),
+            kp=gains.get("kp", 400.0),
+            kd=gains.get("kd"),
         )
 
-    def metrics(
-        self,
-        res: Any,
-        method: str,
-        gains: dict[str, Any] | None = None,
-        timing_samples: int | None = None,
-        timing_rounds: int = 5,
-    ) -> dict[str, Any]:
-        """The tool's position error [m] (RMS, max) against the controller's target, the normal force error after
-        settling [N], whether contact was lost, and :meth:`Scene.metrics`' other measures.
+    def scene_measures(self, res: Any, method: str, gains: dict[str, Any] | None = None) -> dict[str, Any]:
+        """The tool's position error [m] (RMS, max) against the controller's target, in place of the joint error,
+        the normal force error after settling [N] and whether contact was lost.
 
         Parameters
         ----------
@@ -206,20 +200,14 @@ class ContactScene(Scene):
         method : str
             The method that ran.
         gains : dict, optional
-            Its gains (default: the preset), to rebuild the controller for timing.
-        timing_samples : int, optional
-            Recorded states replayed to time the controller (default :attr:`timing_samples`).
-        timing_rounds : int, optional
-            Timed passes (0: not timed, NaN).
+            Its gains (default: the preset), to rebuild the controller's target.
 
         Returns
         -------
         dict of str
         """
-        out = super().metrics(res, method, gains, timing_samples, timing_rounds)
         if not len(res.t):  # a run without samples: nothing to measure
-            out.update({"force_rms_error": float("nan"), "contact_lost": False, "error_unit": "m"})
-            return out
+            return {"force_rms_error": float("nan"), "contact_lost": False, "error_unit": "m"}
         dyn = self.dynamics("exact")
         probe = cast(PressAndSlide, self.controller(method, gains))
         x = np.array([dyn.frame_pose(q)[:3, 3] for q in res.q])
@@ -228,18 +216,13 @@ class ContactScene(Scene):
         fn = res.contact_force_on_robot[:, 0, 2] if res.contact_force_on_environment.size else np.zeros(len(res.t))
         touch = np.flatnonzero(fn > 0)
         settled = (res.t >= res.t[touch[0]] + 0.4) if touch.size else np.zeros(len(res.t), bool)
-        out.update(
-            {
-                "rms_error": float(np.sqrt((err**2).mean())),
-                "max_error": float(err.max()),
-                "force_rms_error": float(np.sqrt(((fn[settled] - 10.0) ** 2).mean()))
-                if settled.any()
-                else float("nan"),
-                "contact_lost": bool(touch.size and (fn[touch[0] + 1 :] <= 0).any()),
-                "error_unit": "m",
-            }
-        )
-        return diverged_errors(out)
+        return {
+            "rms_error": float(np.sqrt((err**2).mean())),
+            "max_error": float(err.max()),
+            "force_rms_error": float(np.sqrt(((fn[settled] - 10.0) ** 2).mean())) if settled.any() else float("nan"),
+            "contact_lost": bool(touch.size and (fn[touch[0] + 1 :] <= 0).any()),
+            "error_unit": "m",
+        }
 
 
 def panda_contact() -> Scene:
@@ -256,20 +239,18 @@ def panda_contact() -> Scene:
     model = panda_contact_model()
     z_table = float(Dynamics(model).frame_pose(Q_HOME)[2, 3]) - 0.005
     plane = Plane(KelvinVoigt(2e4, 50.0), normal=(0, 0, 1), point=(0, 0, z_table), friction=0.3)
-    sc = ContactScene(
+    sc = holding_scene(
+        ContactScene,
         "panda_contact",
         "Panda with joint friction pressing 10 N on a table (surface friction μ = 0.3) and sliding 10 cm",
-        plant=model,
-        exact=model,
-        reduced=model,
-        reference=lambda t: Reference(Q_HOME),
+        model,
+        Q_HOME,
         duration=1.95,
         # 0.2 ms steps: below its 1 mm/s slip velocity the table's friction is a viscous law of slope
         # μ f_n / v_slip, which RK4 integrates only below 0.4 ms here (at the closed form's 21 N;
         # armctl.sim.after_run): at 1 ms the tangential force chatters
         dt=2e-4,
         methods=("osc_qp", "osc_closed_form"),
-        q0=Q_HOME,
         sim_options={"environment": plane},
     )
     sc.z_table = z_table
