@@ -22,8 +22,7 @@ from armctl.controllers.base import Controller
 from armctl.controllers.interaction.force_source import ForceInput
 from armctl.controllers.interaction.gains import symmetric_psd
 from armctl.controllers.interaction.inner import InnerMotion
-from armctl.controllers.interaction.task_space import FrameTarget
-from armctl.controllers.osc.tasks.target import Trajectory
+from armctl.controllers.interaction.task_space import FrameTarget, PoseTargeted
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError
 from armctl.references import Reference
@@ -68,7 +67,7 @@ def projector(directions: ArrayLike | None) -> FloatArray:
     return np.asarray(u @ u.T)
 
 
-class ForceLoop(Controller):
+class ForceLoop(PoseTargeted, Controller):
     """The shared machinery (see the module); :class:`ForceControl` and :class:`ParallelForcePosition` set P.
 
     Parameters
@@ -131,31 +130,6 @@ class ForceLoop(Controller):
             slice(a, b) for a, b in ((0, n), (n, n + 6), (n + 6, n + 9), (n + 9, n + 12), (n + 12, n + 15))
         )
         self._t: float | None = None
-
-    def set_target(
-        self, pose: ArrayLike, twist: ArrayLike | None = None, acceleration: ArrayLike | None = None
-    ) -> None:
-        """Set the motion target (world axes): the 4×4 pose p_d, R_d [m], the twist [m/s; rad/s] and the
-        acceleration [m/s²; rad/s²] (None: zero). Unset, the frame holds the pose it has at the first call.
-
-        Parameters
-        ----------
-        pose : array_like, shape (4, 4)
-            The pose.
-        twist, acceleration : array_like, shape (6,), optional
-            Its rates.
-        """
-        self.target.set(pose, twist, acceleration)
-
-    def set_trajectory(self, fn: Trajectory) -> None:
-        """Follow a motion trajectory.
-
-        Parameters
-        ----------
-        fn : callable
-            ``fn(t) -> (pose, twist, acceleration)`` in :meth:`set_target`'s terms.
-        """
-        self.target.follow(fn)
 
     def reset(self) -> None:
         super().reset()
