@@ -195,7 +195,8 @@ class Scene:
         )
 
     def gains(self, method: str) -> dict[str, Any]:
-        """A method's preset gains.
+        """A method's default gains: its preset (``controllers/<scene>.<method>.toml``), unless the scene has
+        defaults of its own.
 
         Parameters
         ----------
@@ -211,6 +212,8 @@ class Scene:
         ------
         ModelLoadError
             No preset for the method.
+        UnknownNameError
+            A scene with defaults of its own: an unknown method.
         """
         return dict(load_preset(self.name, method)["gains"])
 
@@ -391,12 +394,8 @@ class Scene:
 
         Parameters
         ----------
-        res : SimResult
-            A run of this scene.
-        method : str
-            The method that ran.
-        gains : dict, optional
-            Its gains (default: the preset).
+        res, method, gains
+            As for :meth:`metrics`.
 
         Returns
         -------

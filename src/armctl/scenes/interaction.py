@@ -48,8 +48,9 @@ class InteractionScene(Scene):
     * ``force_control``: :class:`~armctl.controllers.ForceControl` along z with PI action, position along x and y;
     * ``parallel_force_position``: the same force and position targets on all three axes.
 
-    A subclass implements :meth:`path` and :meth:`measures` and lists the methods it runs; its parameters are
-    :class:`~armctl.scenes.base.Scene`'s.
+    A subclass implements :meth:`path` and :meth:`measures` (the force and motion measures that replace the joint
+    tracking error of :meth:`~armctl.scenes.base.Scene.metrics`: the reference here is a posture) and lists the
+    methods it runs; its parameters are :class:`~armctl.scenes.base.Scene`'s.
 
     Parameters
     ----------
@@ -162,22 +163,6 @@ class InteractionScene(Scene):
         return np.array([dyn.frame_pose(q)[:3, 3] for q in res.q]).reshape(-1, 3)
 
     def scene_measures(self, res: Any, method: str, gains: dict[str, Any] | None = None) -> dict[str, Any]:
-        """The scene's force and motion measures (:meth:`measures`), which replace :meth:`Scene.metrics`' joint
-        tracking error (the reference here is a posture).
-
-        Parameters
-        ----------
-        res : SimResult
-            A run of this scene.
-        method : str
-            The method that ran.
-        gains : dict, optional
-            Its gains.
-
-        Returns
-        -------
-        dict of str
-        """
         return self.measures(res, normal_force(res, self.normal))
 
 

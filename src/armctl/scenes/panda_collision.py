@@ -42,8 +42,14 @@ METHODS = ("no_reaction", "gravity", "reflex")
 
 
 class CollisionScene(Scene):
-    """The ``panda_collision`` scene: its methods' controllers and the collision measures (see the module). Its
-    parameters are :class:`Scene`'s.
+    """The ``panda_collision`` scene (see the module). Its methods' gains are any keys of :data:`DEFAULTS` (the
+    rest: the defaults); each method's controller is computed torque, wrapped for ``gravity`` and ``reflex`` in a
+    :class:`~armctl.controllers.CollisionReaction` that logs the observer's residual and tool wrench. Its
+    :meth:`metrics` keep the joint tracking error [rad] and add the collision's measures: ``contact_at`` (first
+    sample in contact) and ``detected_at`` [s], ``detection_delay`` [s], ``peak_force`` [N], ``force_after`` (the
+    contact force 0.3 s after detection) [N], ``push_impulse`` (∫ |f| dt after detection) [N·s], and
+    ``wrench_error`` (the largest error of the observer's tool force against the simulator's while in contact,
+    after 5/K_O) [N]. Its parameters are :class:`Scene`'s.
 
     Parameters
     ----------
@@ -59,36 +65,11 @@ class CollisionScene(Scene):
     }
 
     def gains(self, method: str) -> dict[str, Any]:
-        """The method's default gains (:data:`DEFAULTS`).
-
-        Parameters
-        ----------
-        method : str
-            The method.
-
-        Returns
-        -------
-        dict of str
-        """
         if method not in self.methods:
             raise UnknownNameError("method", method, self.methods)
         return dict(DEFAULTS)
 
     def build(self, method: str, gains: dict[str, Any]) -> Controller:
-        """The method's controller: computed torque, wrapped for ``gravity`` and ``reflex`` in a
-        :class:`~armctl.controllers.CollisionReaction` that logs the observer's residual and tool wrench.
-
-        Parameters
-        ----------
-        method : {"no_reaction", "gravity", "reflex"}
-            The method.
-        gains : dict
-            Any keys of :data:`DEFAULTS` (the rest: the defaults).
-
-        Returns
-        -------
-        Controller
-        """
         g = {**DEFAULTS, **gains}
         dyn = self.dynamics("exact")
         ct = ComputedTorque(dyn, g["kp"], g["kd"])
@@ -99,25 +80,6 @@ class CollisionScene(Scene):
         return CollisionReaction(ct, obs, reaction, damping=g["damping"], reflex_gain=g["reflex_gain"], log_wrench=True)
 
     def scene_measures(self, res: Any, method: str, gains: dict[str, Any] | None = None) -> dict[str, Any]:
-        """The collision's measures: ``contact_at`` (first sample in contact) and ``detected_at`` [s],
-        ``detection_delay`` [s], ``peak_force`` [N], ``force_after`` (the contact force 0.3 s after detection) [N],
-        ``push_impulse`` (∫ |f| dt after detection) [N·s], and ``wrench_error`` (the largest error of the
-        observer's tool force against the simulator's while in contact, after 5/K_O) [N]; the tracking error stays
-        :meth:`Scene.metrics`' joint error [rad].
-
-        Parameters
-        ----------
-        res : SimResult
-            A run of this scene.
-        method : str
-            The method that ran.
-        gains : dict, optional
-            Its gains.
-
-        Returns
-        -------
-        dict of str
-        """
         nan = float("nan")
         h = res.contact_force_on_environment
         f = np.linalg.norm(h[:, 0], axis=1) if h.size else np.zeros(len(res.t))

@@ -145,8 +145,11 @@ def panda_contact_model() -> Any:
 
 
 class ContactScene(Scene):
-    """A scene whose error is the tool's position error [m] against the controller's target, with the normal
-    force error after settling [N] and contact loss reported. Its parameters are :class:`Scene`'s.
+    """A scene whose methods (``osc_qp``, ``osc_closed_form``) are :class:`PressAndSlide` controllers, their gains
+    the pose task's ``kp`` and ``kd`` (the preset, ``controllers/panda_contact.<method>.toml``, unless given; a
+    missing key: the task's default). Its :meth:`metrics`' error is the tool's position error [m] (RMS, max) in
+    the table plane against the controller's target, with the normal force error after settling [N]
+    (``force_rms_error``) and contact loss (``contact_lost``) reported. Its parameters are :class:`Scene`'s.
 
     Parameters
     ----------
@@ -166,20 +169,6 @@ class ContactScene(Scene):
     }
 
     def build(self, method: str, gains: dict[str, Any]) -> Controller:
-        """The :class:`PressAndSlide` controller of a method.
-
-        Parameters
-        ----------
-        method : {"osc_qp", "osc_closed_form"}
-            The method.
-        gains : dict
-            The pose task's ``kp`` and ``kd`` (the preset, ``controllers/panda_contact.<method>.toml``, unless
-            given; a missing key: the task's default).
-
-        Returns
-        -------
-        PressAndSlide
-        """
         return PressAndSlide(
             self.dynamics("exact"),
             self.z_table,
@@ -190,22 +179,6 @@ class ContactScene(Scene):
         )
 
     def scene_measures(self, res: Any, method: str, gains: dict[str, Any] | None = None) -> dict[str, Any]:
-        """The tool's position error [m] (RMS, max) against the controller's target, in place of the joint error,
-        the normal force error after settling [N] and whether contact was lost.
-
-        Parameters
-        ----------
-        res : SimResult
-            A run of this scene.
-        method : str
-            The method that ran.
-        gains : dict, optional
-            Its gains (default: the preset), to rebuild the controller's target.
-
-        Returns
-        -------
-        dict of str
-        """
         if not len(res.t):  # a run without samples: nothing to measure
             return {"force_rms_error": float("nan"), "contact_lost": False, "error_unit": "m"}
         dyn = self.dynamics("exact")

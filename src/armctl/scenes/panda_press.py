@@ -21,8 +21,8 @@ TABLE_STIFFNESS, TABLE_DAMPING = 3e4, 150.0
 
 class PressScene(InteractionScene):
     """The press scene (built by :func:`panda_press`): the tool starts 2 cm above the table the controllers
-    believe in (``z_believed``); the true table is at ``z_table``. Each method moves its target down in 1 s
-    and presses.
+    believe in (``z_believed``); the true table is at ``z_table``. Each method moves its target (:meth:`path`) down
+    from the start in 1 s (from t = 0.2 s), to its depth below the believed surface, and presses.
 
     * ``cartesian_impedance``, ``admittance``: the target sits δ_c = f_d (k_e + k_d)/(k_e k_d) below the believed
       surface, so that the force would be f_d were the surface where it is believed (k_e the table's nominal
@@ -53,18 +53,6 @@ class PressScene(InteractionScene):
         return Dynamics(self.exact).frame_pose(Q_HOME)
 
     def path(self, depth: float) -> Any:
-        """The target: down from the start to ``depth`` below the believed surface in 1 s (from t = 0.2 s).
-
-        Parameters
-        ----------
-        depth : float
-            [m].
-
-        Returns
-        -------
-        callable
-            t → (pose (4×4), twist (6,), acceleration (6,)).
-        """
         start = self.start_pose()
         move = quintic(start[:3, 3], [start[0, 3], start[1, 3], self.z_believed - depth], 0.2, 1.0)
 

@@ -45,18 +45,6 @@ class WipeScene(InteractionScene):
     z_believed: float = 0.0
 
     def path(self, depth: float) -> Any:
-        """The target: down to ``depth`` below the believed surface, then along x.
-
-        Parameters
-        ----------
-        depth : float
-            [m].
-
-        Returns
-        -------
-        callable
-            t → (pose (4×4), twist (6,), acceleration (6,)).
-        """
         start = Dynamics(self.exact).frame_pose(Q_HOME)
         x0, y0, z0 = start[:3, 3]
         down = quintic([z0], [self.z_believed - depth], 0.2, 0.8)
