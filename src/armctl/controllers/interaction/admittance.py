@@ -178,6 +178,6 @@ class Admittance(PoseTargeted, Controller):
         self._state = (p_c, r_c, v_c)
         cmd = np.eye(4)
         cmd[:3, :3], cmd[:3, 3] = r_c, p_c
-        tau, e = self.inner.command(q, qd, cmd, v_c, a_c, posture, h if self.compensate else None)
+        tau, e = self.inner.command(q, qd, (cmd, v_c, a_c), posture, h if self.compensate else None)
         self.last_log = {"wrench": h, "compliant": e_c, "error": e}
         return tau

@@ -177,7 +177,7 @@ class ForceLoop(PoseTargeted, Controller):
         cmd = pose.copy()
         cmd[:3, 3] += x_f
         tau, e = self.inner.command(
-            q, qd, cmd, self._free6 @ twist, self._free6 @ acc, posture, h if self.compensate else None
+            q, qd, (cmd, self._free6 @ twist, self._free6 @ acc), posture, h if self.compensate else None
         )
         self._integral = integral
         self.last_log = {"force_error": e_f, "offset": x_f, "wrench": h, "error": e}

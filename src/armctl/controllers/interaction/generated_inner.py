@@ -240,13 +240,13 @@ class GeneratedInner:
         self,
         q: FloatArray,
         qd: FloatArray,
-        pose: FloatArray,
-        twist: FloatArray,
-        acceleration: FloatArray,
+        goal: tuple[FloatArray, FloatArray, FloatArray],
         posture: FloatArray,
         wrench: FloatArray | None,
     ) -> FloatArray:
-        """[τ; e; p] (a new array): the torque, the frame error [m; rad] and the frame's position [m]."""
+        """[τ; e; p] (a new array): the torque, the frame error [m; rad] and the frame's position [m], for the
+        commanded motion ``goal`` = (pose (4×4), twist (6,), acceleration (6,))."""
+        pose, twist, acceleration = goal
         h = self._zero_wrench if wrench is None else wrench
         np.concatenate((q, qd, pose.ravel(), twist, acceleration, posture, h), out=self.inp)
         self._run()
