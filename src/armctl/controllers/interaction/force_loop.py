@@ -68,15 +68,14 @@ def projector(directions: ArrayLike | None) -> FloatArray:
 
 
 class ForceLoop(PoseTargeted, Controller):
-    """The shared machinery (see the module); :class:`ForceControl` and :class:`ParallelForcePosition` set P.
+    """The shared machinery (see the module), with :class:`~armctl.controllers.ForceControl`'s constructor;
+    :class:`ParallelForcePosition` leaves ``directions`` at all three axes.
 
     Parameters
     ----------
-    dynamics, force, force_gain, integral_gain, frame, force_source, inner, kp, kd, posture, posture_kp,
-    compensate, compile
+    dynamics, force, force_gain, integral_gain, frame, directions, force_source, inner, kp, kd, posture,
+    posture_kp, compensate, compile
         As in :class:`~armctl.controllers.ForceControl`.
-    directions : ndarray, shape (3, 3)
-        P.
     """
 
     dynamics: Dynamics
@@ -86,18 +85,20 @@ class ForceLoop(PoseTargeted, Controller):
         dynamics: Dynamics,
         force: Any,
         force_gain: ArrayLike,
-        integral_gain: ArrayLike,
-        frame: str | None,
-        directions: FloatArray,
-        force_source: Any,
-        inner: str,
-        kp: ArrayLike,
-        kd: ArrayLike | None,
-        posture: ArrayLike | None,
-        posture_kp: ArrayLike,
-        compensate: bool,
-        compile: bool | str,
+        integral_gain: ArrayLike = 0.0,
+        frame: str | None = None,
+        *,
+        directions: ArrayLike | None = None,
+        force_source: Any = "sensor",
+        inner: str = "computed_torque",
+        kp: ArrayLike = 400.0,
+        kd: ArrayLike | None = None,
+        posture: ArrayLike | None = None,
+        posture_kp: ArrayLike = 10.0,
+        compensate: bool = True,
+        compile: bool | str = "auto",
     ) -> None:
+        p = projector(directions)
         super().__init__(dynamics)
         owner = type(self).__name__
         self.force_input = ForceInput(force_source, owner)
@@ -108,7 +109,7 @@ class ForceLoop(PoseTargeted, Controller):
         self.force_target = ForceTarget(force)
         self.force_gain = readonly(symmetric_psd(force_gain, (3,), "force_gain", "m/N"))
         self.integral_gain = readonly(symmetric_psd(integral_gain, (3,), "integral_gain", "m/(N·s)"))
-        self.directions = readonly(np.array(directions))
+        self.directions = readonly(p)
         self._free = readonly(np.eye(3) - self.directions)
         self.frame = frame
         self.target = FrameTarget(owner, 6)
