@@ -289,10 +289,8 @@ class Scene:
 
         Parameters
         ----------
-        method : str
-            One of :attr:`methods`.
-        gains : dict, optional
-            Gain name → value (default: the preset).
+        method, gains
+            As for :meth:`controller`.
         **overrides
             ``duration`` and any option of :func:`armctl.sim.simulate`: they win over the scene's settings.
 
