@@ -531,3 +531,18 @@ def holding_scene(cls: type[_S], name: str, description: str, model: RobotModel,
         q0=q0,
         **settings,
     )
+
+
+def quintic(start: Any, end: Any, t0: float, duration: float) -> Callable[[float], tuple[Any, Any, Any]]:
+    """t → (position, velocity, acceleration) of a minimum-jerk move from ``start`` to ``end`` (arrays) between t0
+    and t0 + duration [s], held before and after."""
+    a, b = np.asarray(start, dtype=float), np.asarray(end, dtype=float)
+
+    def at(t: float) -> tuple[Any, Any, Any]:
+        s = min(max((t - t0) / duration, 0.0), 1.0)
+        shape = s**3 * (10 - 15 * s + 6 * s * s)
+        rate = 30 * s * s * (1 - s) ** 2 / duration
+        accel = 60 * s * (1 - s) * (1 - 2 * s) / duration**2
+        return a + (b - a) * shape, (b - a) * rate, (b - a) * accel
+
+    return at

@@ -8,7 +8,6 @@ the normal force :func:`normal_force` — and the motion (the tool's path, :meth
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from typing import Any, ClassVar
 
 import numpy as np
@@ -182,18 +181,3 @@ def impedance_depth(gains: dict[str, Any], force: float, table_stiffness: float)
     k = np.asarray(gains["stiffness"], dtype=float)
     kz = float(np.diag(k)[2]) if k.ndim == 2 else float(k[2])
     return k, force * (table_stiffness + kz) / (table_stiffness * kz)
-
-
-def quintic(start: Any, end: Any, t0: float, duration: float) -> Callable[[float], tuple[Any, Any, Any]]:
-    """t → (position, velocity, acceleration) of a minimum-jerk move from ``start`` to ``end`` (arrays) between t0
-    and t0 + duration [s], held before and after."""
-    a, b = np.asarray(start, dtype=float), np.asarray(end, dtype=float)
-
-    def at(t: float) -> tuple[Any, Any, Any]:
-        s = min(max((t - t0) / duration, 0.0), 1.0)
-        shape = s**3 * (10 - 15 * s + 6 * s * s)
-        rate = 30 * s * s * (1 - s) ** 2 / duration
-        accel = 60 * s * (1 - s) * (1 - 2 * s) / duration**2
-        return a + (b - a) * shape, (b - a) * rate, (b - a) * accel
-
-    return at

@@ -24,7 +24,7 @@ from armctl.controllers.osc import (
 )
 from armctl.dynamics.base import Dynamics
 from armctl.references import Reference
-from armctl.scenes.base import Scene, holding_scene
+from armctl.scenes.base import Scene, holding_scene, quintic
 
 Q_HOME = np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])  # the Panda's "ready" posture
 
@@ -80,6 +80,7 @@ class PressAndSlide(Controller):
         self.slide = scalar(slide, "slide")
         self.slide_start = scalar(slide_start, "slide_start", nonnegative=True)
         self.slide_time = scalar(slide_time, "slide_time", positive=True)
+        self._slide = quintic([0.0], [self.slide], self.slide_start, self.slide_time)  # along x
         self.pose = FramePoseTask(kp=kp, kd=kd)
         self.pose.set_trajectory(self.target)
         self.closed_form = boolean(closed_form, "closed_form")
@@ -110,10 +111,9 @@ class PressAndSlide(Controller):
         z_end = self.z_table - 0.01
         pose[2, 3] = max(self.p0[2, 3] - 0.02 * t, z_end)
         twist[2] = -0.02 if pose[2, 3] > z_end else 0.0
-        s = min(max((t - self.slide_start) / self.slide_time, 0.0), 1.0)
-        pose[0, 3] += self.slide * s**3 * (10 - 15 * s + 6 * s * s)
-        twist[0] = self.slide * 30 * s * s * (1 - s) ** 2 / self.slide_time
-        acc[0] = self.slide * 60 * s * (1 - s) * (1 - 2 * s) / self.slide_time**2
+        x, vx, ax = self._slide(t)
+        pose[0, 3] += x[0]
+        twist[0], acc[0] = vx[0], ax[0]
         return pose, twist, acc
 
     def reset(self) -> None:

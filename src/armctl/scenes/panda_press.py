@@ -11,8 +11,8 @@ import numpy as np
 from armctl import models
 from armctl._checks import scalar
 from armctl.dynamics.base import Dynamics
-from armctl.scenes.base import holding_scene
-from armctl.scenes.interaction import InteractionScene, quintic
+from armctl.scenes.base import holding_scene, quintic
+from armctl.scenes.interaction import InteractionScene
 from armctl.scenes.panda_contact import Q_HOME
 
 #: the table's stiffness [N/m] and damping [N·s/m]
