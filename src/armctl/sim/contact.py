@@ -222,12 +222,8 @@ class Environment(ABC):
 
         Parameters
         ----------
-        kin : PointKinematics
-            :meth:`kinematics` of the plant.
-        q : ndarray, shape (n,)
-            Joint positions [rad] (m for a prismatic joint).
-        qd : ndarray, shape (n,)
-            Joint velocities [rad/s].
+        kin, q, qd
+            As for :meth:`joint_torque`.
 
         Returns
         -------

@@ -138,22 +138,6 @@ class ContactForceTask(Task):
         return self._value(self._fn(t)) if self._fn is not None else self._force
 
     def check(self, evaluator: object, n: int, contacts: dict[str, int]) -> None:
-        """Check that the task's contact is one of the controller's.
-
-        Parameters
-        ----------
-        evaluator : ModelEvaluator
-            The controller's evaluator of the model terms (not used).
-        n : int
-            The model's number of joints (not used).
-        contacts : dict of str to int
-            The controller's contacts, name → number of force variables.
-
-        Raises
-        ------
-        UnknownNameError
-            The contact is not among them (the error lists them).
-        """
         if self.contact.name not in contacts:
             raise UnknownNameError("contact", self.contact.name, list(contacts))
 
