@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -91,14 +92,14 @@ def predicted_force_gain(stiffness: float) -> float:
     return critical_force_gain(stiffness, kp=INNER_KP, kd=INNER_KD, inertia=lam, period=PERIOD, delay=DELAY)
 
 
-def simulated_force_gain(stiffness: float, guess: float, steps: int = 7, duration: float = 1.0) -> dict[str, Any]:
-    """The force gain where the closed loop turns from stable to chatter, by bisection on log K_F between
-    ``guess``/2 and 2·``guess`` (widened if both ends agree); the runs' outcomes are kept."""
+def border(outcome_at: Callable[[float], str], guess: float, steps: int = 7) -> dict[str, Any]:
+    """The value x where ``outcome_at(x)`` turns from "stable" to anything else, by bisection on log x between
+    ``guess``/2 and 2·``guess`` (widened if both ends agree); the runs' (x, outcome) are kept."""
     runs: list[tuple[float, str]] = []
 
-    def stable(k: float) -> bool:
-        o = outcome(press(force_control(k), stiffness, duration, preload=PRELOAD))
-        runs.append((k, o))
+    def stable(x: float) -> bool:
+        o = outcome_at(x)
+        runs.append((x, o))
         return o == "stable"
 
     lo, hi = 0.5 * guess, 2.0 * guess
@@ -110,6 +111,12 @@ def simulated_force_gain(stiffness: float, guess: float, steps: int = 7, duratio
         mid = math.sqrt(lo * hi)
         lo, hi = (mid, hi) if stable(mid) else (lo, mid)
     return {"border": math.sqrt(lo * hi), "bracket": [lo, hi], "runs": runs}
+
+
+def simulated_force_gain(stiffness: float, guess: float, steps: int = 7, duration: float = 1.0) -> dict[str, Any]:
+    """The force gain where the closed loop on a table of ``stiffness`` [N/m] turns from stable to chatter
+    (:func:`border` from ``guess``)."""
+    return border(lambda k: outcome(press(force_control(k), stiffness, duration, preload=PRELOAD)), guess, steps)
 
 
 def force_border(quick: bool = False) -> dict[str, Any]:
@@ -150,24 +157,9 @@ def impedance_outcome(k_d: float, stiffness: float, duration: float = 1.0) -> st
 
 
 def simulated_environment_stiffness(k_d: float, guess: float, steps: int = 7, duration: float = 1.0) -> dict[str, Any]:
-    """The table stiffness where impedance of stiffness ``k_d`` turns from stable to chatter, by bisection on
-    log k_e between ``guess``/2 and 2·``guess`` (widened if both ends agree); the runs' outcomes are kept."""
-    runs: list[tuple[float, str]] = []
-
-    def stable(k_e: float) -> bool:
-        o = impedance_outcome(k_d, k_e, duration)
-        runs.append((k_e, o))
-        return o == "stable"
-
-    lo, hi = 0.5 * guess, 2.0 * guess
-    while not stable(lo):
-        lo, hi = 0.5 * lo, lo
-    while stable(hi):
-        lo, hi = hi, 2.0 * hi
-    for _ in range(steps):
-        mid = math.sqrt(lo * hi)
-        lo, hi = (mid, hi) if stable(mid) else (lo, mid)
-    return {"border": math.sqrt(lo * hi), "bracket": [lo, hi], "runs": runs}
+    """The table stiffness where impedance of stiffness ``k_d`` turns from stable to chatter (:func:`border` from
+    ``guess``)."""
+    return border(lambda k_e: impedance_outcome(k_d, k_e, duration), guess, steps)
 
 
 def impedance_map(quick: bool = False) -> dict[str, Any]:
