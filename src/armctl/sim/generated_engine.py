@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from armctl._checks import FloatArray
-from armctl.sim.engine import EngineRun
+from armctl.sim.engine import TORQUE_NOT_FINITE, EngineRun
 
 if TYPE_CHECKING:
     from armctl.sim.compiled_plant import CompiledPlant
@@ -94,8 +94,10 @@ class GeneratedEngine:
                 max_position=run.max_position,
             )
         )
-        # a period is the plant's call itself (the same arguments and answer: no Python frame between them)
-        self.advance_period = self.plant.period  # type: ignore[method-assign]
+        self._hold = sat.hold
+        if self.plant.disturbance is None:
+            # a period is the plant's call itself (the same arguments and answer: no Python frame between them)
+            self.advance_period = self.plant.period  # type: ignore[method-assign]
 
     def observe(self, k: int, t: float) -> None:
         if self._external:
@@ -105,7 +107,11 @@ class GeneratedEngine:
     def advance_period(self, k: int, t: float, tau: FloatArray) -> int:
         """(:meth:`Engine.advance_period <armctl.sim.engine.Engine.advance_period>`: ``tau`` is read from row k of
         the record's torques, held by ``armctl_hold``; the state code is ``step_period.c``'s
-        ``armctl_state_check``.)"""
+        ``armctl_state_check``.) With a disturbance, τ_k is held in Python first, as the other engines hold it
+        before they sample the disturbance (a Python callable, which may raise: the applied torque of the sample
+        it fails at is then recorded alike); the C period holds it again, to the same row."""
+        if self._hold(k, tau) is None:
+            return TORQUE_NOT_FINITE
         return self.plant.period(k, t)
 
     def last_sample(self, k: int, t: float, tau: FloatArray) -> int:
