@@ -11,8 +11,8 @@ assembly after it). MuJoCo's is :func:`armctl.bench.mujoco_loops.closed_loop` wi
 controller's cost is alike in both only as far as the runs touch the table alike (the periods in contact are given).
 
 The figure is the ratio of the loops, (plant + controller) / (MuJoCo's plant + controller), the median over
-interleaved rounds; beside it the controller alone (replayed on armctl's run), which bounds what any plant can reach:
-controller / (MuJoCo's loop).
+interleaved rounds; beside it the controller alone (replayed on armctl's run in each round), which bounds what any
+plant can reach: controller / (MuJoCo's loop), the median of the rounds' ratios.
 """
 
 from __future__ import annotations
@@ -26,18 +26,19 @@ def figures(rounds: int = 3, duration: float | None = None) -> dict[str, Any]:
     """The loops' figures (see the module), over ``rounds`` interleaved rounds of runs of ``duration`` [s] (None:
     the scene's)."""
     from armctl.bench import mujoco_loops
-    from armctl.scenes.panda_contact import Q_HOME, ContactScene, panda_contact
+    from armctl.scenes.panda_contact import Q_HOME, ContactScene, PressAndSlide, panda_contact
     from armctl.sim import simulate
     from armctl.sim.options import regroup
 
     scene = cast(ContactScene, panda_contact())
-    controller = scene.controller("osc_qp")
+    controller = cast(PressAndSlide, scene.controller("osc_qp"))
     plant = scene.dynamics("plant")
     duration = scene.duration if duration is None else duration
     options = regroup({"control_dt": scene.control_dt, "dt": scene.dt, "q0": Q_HOME, **scene.sim_options})
+    h = scene.dt if scene.dt is not None else scene.control_dt  # (the scene's: 0.2 ms)
     periods = round(duration / scene.control_dt)
-    substeps = round(scene.control_dt / scene.dt)
-    m, d = mujoco_loops.contact_model(plant.model, scene.z_table, scene.mu, scene.dt)
+    substeps = round(scene.control_dt / h)
+    m, d = mujoco_loops.contact_model(plant.model, scene.z_table, scene.mu, h)
     seen: dict[str, Any] = {}
 
     def ours() -> float:
@@ -53,30 +54,34 @@ def figures(rounds: int = 3, duration: float | None = None) -> dict[str, Any]:
         seen["mujoco_touched"] = controller.touched
         return wall
 
-    samples: dict[str, list[float]] = {"armctl": [], "mujoco": []}
+    def alone() -> float:  # the controller on armctl's last run (its states and times), after a reset
+        res, call = seen["run"], controller.compute
+        controller.reset()
+        t0 = time.perf_counter()
+        for k in range(periods):
+            call(k * scene.control_dt, res.q[k], res.qd[k], scene.reference(k * scene.control_dt))
+        return time.perf_counter() - t0
+
+    samples: dict[str, list[float]] = {"armctl": [], "mujoco": [], "controller": []}
     ours(), mujoco()  # warm-up
     for _ in range(rounds):
         samples["armctl"].append(ours())
         samples["mujoco"].append(mujoco())
+        samples["controller"].append(alone())
     res = seen["run"]
-    # the controller alone on armctl's run (its states and times), after a reset: what both loops pay for it
-    call = controller.compute
-    controller.reset()
-    t0 = time.perf_counter()
-    for k in range(periods):
-        call(k * scene.control_dt, res.q[k], res.qd[k], scene.reference(k * scene.control_dt))
-    ctrl = time.perf_counter() - t0
-    ratio = statistics.median(a / b for a, b in zip(samples["armctl"], samples["mujoco"], strict=True))
-    ours_s, mj_s = statistics.median(samples["armctl"]), statistics.median(samples["mujoco"])
+    mj = samples["mujoco"]
+    ratio = statistics.median(a / b for a, b in zip(samples["armctl"], mj, strict=True))
+    bound = statistics.median(a / b for a, b in zip(samples["controller"], mj, strict=True))
+    ours_s, mj_s, ctrl = (statistics.median(samples[k]) for k in ("armctl", "mujoco", "controller"))
     return {
         "periods": periods,
         "substeps": substeps,
-        "dt": scene.dt,
+        "dt": h,
         "us_per_period": 1e6 * ours_s / periods,
         "mujoco_us_per_period": 1e6 * mj_s / periods,
         "controller_us_per_period": 1e6 * ctrl / periods,
         "ratio_to_mujoco": ratio,
-        "controller_bound": ctrl / mj_s,
+        "controller_bound": bound,
         "touched_s": seen["touched"],
         "mujoco_touched_s": seen["mujoco_touched"],
         "compiled": bool(res.info["compiled"]),
