@@ -271,6 +271,11 @@ class OperationalSpaceQP(Controller):
         if qp is None:
             qp = self._contact_qps[lay] = ContactQP(self.builder, lay)
             qp.generated = self._generated_contact(qp, lay)
+            if qp.generated is not None and len(qp.levels) == 2:
+                from armctl.controllers.osc.generated_cascade import GeneratedCascade
+
+                gen = qp.generated
+                qp.cascade = FALLBACK.attempt(lambda: GeneratedCascade(qp, gen), self.compile, stacklevel=3)
         return qp
 
     @property

@@ -1,0 +1,247 @@
+"""`GeneratedCascade`: two priority levels of a contact step (:mod:`~armctl.controllers.osc.contact_qp`) solved
+by generated C code when no inequality row is active at either level — the usual case in contact.
+
+After the generated contact data (:mod:`~armctl.controllers.osc.generated_contact`) has given B = [M | −J_cᵀ],
+h', the contact rows A y = b, the task rows and each level's H_k, g_k, one more call of code generated with CasADi
+for the layout's sizes computes, from those outputs and the limits' bounds l, u:
+
+* level 0's optimum on the contact rows alone, y₀ (:func:`~armctl.controllers.osc.generated_optimum.equality_optimum`);
+* the basis of the rows that keep level 0's optimum, as
+  :func:`~armctl.controllers.osc.hierarchy.extend_basis` takes it when they are well conditioned: with T₀ level 0's
+  weighted task rows (rows of zero weight left out) and L the Cholesky factor of T₀T₀ᵀ, F = L⁻¹T₀ (orthonormal
+  rows); and φ = F y₀;
+* level 1's optimum on [A; F] y = [b; φ] alone, y₁, by the same Schur complement;
+* both verdicts of :func:`~armctl.controllers.osc.optimality.equality_optimum_ok` (the residuals within
+  PRIMAL_TOL and DUAL_TOL (1 + ‖g_k‖∞), every inequality row of the level within its bounds exactly), and
+  τ = B y₁ + h'.
+
+A row of zero weight is zero in T₀: the code puts 1 on its diagonal in T₀T₀ᵀ and in the Schur complement, which
+leaves it out exactly (its row of F and its multiplier are zero). Which basis :func:`extend_basis` would take is
+decided as it decides: its rank test (every kept row's squared norm above (10⁻⁹ max|T₀|)²) in the code, and
+LAPACK's estimate of the reciprocal condition number of T₀T₀ᵀ from the code's factor (``dpocon``) above
+:data:`~armctl.controllers.osc.hierarchy.WELL_CONDITIONED`. Where any of this fails the step solves the levels
+as before (the solver chain); where it holds, the step's τ is that of the verified optimum of both levels, the
+same QPs as the chain's, and its frozen rows are the chain path's F.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
+
+import casadi as cs
+import numpy as np
+from scipy.linalg import lapack
+
+from armctl._checks import FloatArray
+from armctl.codegen import library as codegen
+from armctl.controllers.osc.contact_public import ContactStep
+from armctl.controllers.osc.generated_optimum import equality_optimum, verdict
+from armctl.controllers.osc.hierarchy import WELL_CONDITIONED
+from armctl.controllers.osc.problem import QPArrays
+from armctl.controllers.osc.solve import QPSolution
+from armctl.controllers.osc.state import ModelState
+from armctl.dynamics.casadi_buffer import buffer_of, view
+from armctl.dynamics.recursive import cholesky_factor, cholesky_solve, cholesky_substitute
+
+if TYPE_CHECKING:
+    from armctl.controllers.osc.chain import SolverChain
+    from armctl.controllers.osc.contact_qp import ContactQP
+    from armctl.controllers.osc.generated_contact import GeneratedContactData
+
+_CODE_VERSION = 1
+_NAME = "osc_contact_cascade"
+#: the rank test of extend_basis: a row is kept if its norm exceeds this times the largest entry of T₀
+_RANK_TOL = 1e-9
+
+
+def cascade_function(n: int, ny: int, me: int, m: int, m0: int, tau_rows: Sequence[int], mi: int) -> cs.Function:
+    """The CasADi function of the module for n joints, y of size ``ny``, ``me`` contact rows, ``m`` task rows of
+    which level 0 has the first ``m0``, ``mi`` inequality rows of which ``tau_rows`` are torque rows:
+    ``f(H0, g0, H1, g1, contact, rows, brows, c0, c1, lower, upper, C, s0) -> (y0, λ0, y1, λ1, F, φ, L, stats,
+    τ)``, ``contact`` = [A | b], ``rows`` = the task rows [J | t] of all levels, ``brows`` = [B | −h'], c_k each
+    level's scale, ``lower``/``upper`` the inequality rows' public bounds, C their rows on y (the torque rows'
+    are B, given by ``brows``), s0 level 0's square-root weights; ``stats`` = [level 0's verdict, both levels'
+    verdict, the rank test, ‖T₀T₀ᵀ‖₁]."""
+    h0, h1 = cs.SX.sym("H0", ny, ny), cs.SX.sym("H1", ny, ny)
+    g0, g1 = cs.SX.sym("g0", ny), cs.SX.sym("g1", ny)
+    contact, rows, brows = cs.SX.sym("contact", me, ny + 1), cs.SX.sym("rows", m, ny + 1), cs.SX.sym("brows", n, ny + 1)
+    c0, c1 = cs.SX.sym("c0"), cs.SX.sym("c1")
+    lower, upper = cs.SX.sym("lower", mi), cs.SX.sym("upper", mi)
+    cmat, s0 = cs.SX.sym("C", mi, ny), cs.SX.sym("s0", m0)
+    a, b = contact[:, :ny], contact[:, ny]
+    bmat, hf = brows[:, :ny], -brows[:, ny]
+    taus = set(tau_rows)
+    # the inequality rows on y: B in the torque rows, their bounds shifted by −h' (as ContactQP.inequalities)
+    crows = cs.vertcat(*[bmat[i % n, :] if i in taus else cmat[i, :] for i in range(mi)])
+    shift = cs.vertcat(*[hf[i % n] if i in taus else 0.0 for i in range(mi)])
+    ly, uy = lower - shift, upper - shift
+    opt0 = equality_optimum(h0, g0, a, b)
+    ok0 = verdict(opt0, g0, c0, crows @ opt0[0], ly, uy)
+    # level 0's weighted rows; a row of zero weight is left out by a 1 on its diagonal
+    dropped = cs.vertcat(*[cs.if_else(s0[i] == 0, 1.0, 0.0) for i in range(m0)])
+    t0 = cs.repmat(s0, 1, ny) * rows[:m0, :ny]
+    gram0 = t0 @ t0.T
+    low = cholesky_factor(gram0 + cs.diag(dropped))
+    fbasis = _forward(low, t0)  # L⁻¹T₀
+    phi = fbasis @ opt0[0]
+    nrows = cs.vertcat(a, fbasis)
+    rhs = cs.vertcat(b, phi)
+    fac = cholesky_factor(h1)
+    y0 = -cholesky_substitute(fac, g1)
+    w = cholesky_substitute(fac, nrows.T)
+    schur = nrows @ w + cs.diag(cs.vertcat(cs.SX.zeros(me), dropped))
+    lam = cholesky_solve(schur, nrows @ y0 - rhs)
+    y1 = y0 - w @ lam
+    opt1 = [y1, lam, nrows @ y1 - rhs, h1 @ y1 + g1 + nrows.T @ lam]
+    ok1 = verdict(opt1, g1, c1, crows @ y1, ly, uy)
+    scale = cs.fmax(cs.mmax(cs.fabs(t0)), 1e-300)
+    rank_ok = cs.SX(1.0)
+    for i in range(m0):
+        rank_ok = cs.logic_and(rank_ok, cs.logic_or(dropped[i] == 1, gram0[i, i] > (_RANK_TOL * scale) ** 2))
+    anorm = cs.mmax(cs.sum1(cs.fabs(gram0)))
+    stats = cs.vertcat(ok0, cs.logic_and(ok0, ok1), rank_ok, anorm)
+    inputs = [h0, g0, h1, g1, contact, rows, brows, c0, c1, lower, upper, cmat, s0]
+    outputs = [opt0[0], opt0[1], y1, lam, fbasis, phi, cs.SX(_lower(low)), stats, bmat @ y1 + hf]
+    return cs.Function(_NAME, inputs, [cs.densify(o) for o in outputs])
+
+
+def _forward(low: list[list[Any]], b: cs.SX) -> cs.SX:
+    """X = L⁻¹B by forward substitution, L of :func:`~armctl.dynamics.recursive.cholesky_factor`."""
+    k = len(low)
+    out: list[Any] = []
+    for i in range(k):
+        r = b[i, :]
+        for p in range(i):
+            r = r - low[i][p] * out[p]
+        out.append(r / low[i][i])
+    return cs.vertcat(*out)
+
+
+def _lower(low: list[list[Any]]) -> cs.SX:
+    """The lower-triangular matrix of :func:`~armctl.dynamics.recursive.cholesky_factor`'s nested lists."""
+    k = len(low)
+    out = cs.SX.zeros(k, k)
+    for i in range(k):
+        for j in range(i + 1):
+            out[i, j] = low[i][j]
+    return out
+
+
+class GeneratedCascade:
+    """The generated function of the module for the two levels of the contact QPs ``qp``, reading the outputs of
+    their generated data ``gen`` in place (bound once). :meth:`step` gives the step, or None where the code's
+    verdict or the basis test refuses it. Not thread-safe.
+
+    Parameters
+    ----------
+    qp : ContactQP
+        The layout's QPs on y = [q̈; f], with two priority levels.
+    gen : GeneratedContactData
+        Their generated data (its outputs are this function's inputs).
+    """
+
+    def __init__(self, qp: ContactQP, gen: GeneratedContactData) -> None:
+        n, ny, me = qp.n, qp.ny, qp.me
+        m, mi = gen.rows.shape[0], qp.C_template.shape[0]
+        self.m0 = m0 = qp.levels[0][0].m
+        tau_rows = [i for r in qp.tau_rows for i in range(r.start, r.stop)]
+        tag = f"osc-contact-cascade|v{_CODE_VERSION}|{n},{ny},{me},{m},{m0},{mi}|tau:{','.join(map(str, tau_rows))}"
+        fn = codegen.cached(
+            [_NAME],
+            tag,
+            lambda: [cascade_function(n, ny, me, m, m0, tau_rows, mi)],
+            gen.dynamics.options.get("cache_dir"),
+            what="the operational-space QP's two-level contact step",
+        )[_NAME]
+        self.lower, self.upper = np.zeros(mi), np.zeros(mi)
+        self._s0 = np.zeros(m0)
+        self._cmat_t = np.ascontiguousarray(qp.C_template.T)  # column by column: C held as its transpose
+        buf, self._run = buffer_of(fn)
+        # matrices in, column by column: each (r × c) input is the (c × r) array of its transpose, row by row
+        args = [gen.H[0], gen.g[0], gen.H[1], gen.g[1], gen.contact.T, gen.rows.T, gen.brows.T]
+        args += [gen.c[0], gen.c[1], self.lower, self.upper, self._cmat_t, self._s0]
+        for k, arr in enumerate(args):
+            buf.set_arg(k, view(np.ascontiguousarray(arr).reshape(-1)))
+        self.y0, self.lam0, self.y1 = np.zeros(ny), np.zeros(me), np.zeros(ny)
+        self.lam1 = np.zeros(me + m0)
+        self._basis_t = np.zeros((ny, m0))  # F (m0 × ny), held as its transpose
+        self.phi = np.zeros(m0)
+        self._low_t = np.zeros((m0, m0))  # L (m0 × m0), held as its transpose
+        self.stats = np.zeros(4)
+        self.tau = np.zeros(n)
+        results = [self.y0, self.lam0, self.y1, self.lam1, self._basis_t, self.phi, self._low_t, self.stats, self.tau]
+        for k, res in enumerate(results):
+            buf.set_res(k, view(res.reshape(-1)))
+        self._bound = (buf, args, results)  # the buffer reads and writes these: keep them alive
+        self._scale: FloatArray | None = None
+        self._live: np.ndarray | None = None
+
+    def _weights(self, qp: ContactQP) -> np.ndarray | None:
+        """Level 0's square-root weights into the function's input (when they changed); the rows of non-zero
+        weight, None for all."""
+        scale = qp.levels[0][0].scale()
+        if scale is not self._scale:
+            self._s0[:] = scale[: self.m0, 0]
+            live = np.flatnonzero(self._s0)
+            self._live = None if live.size == self.m0 else live
+            self._scale = scale
+        return self._live
+
+    def step(
+        self, qp: ContactQP, gen: GeneratedContactData, q: FloatArray, qd: FloatArray, chain: SolverChain
+    ) -> ContactStep | None:
+        """The step of both levels' optimum on their equality rows alone, after ``gen.run``, if the code's verdict
+        accepts both and level 0's rows take extend_basis's Cholesky basis (module docstring); else None."""
+        n, ny = qp.n, qp.ny
+        brows = gen.brows.copy()  # kept by the step (the code's outputs are overwritten by the next run)
+        hf = -brows[:, ny]
+        # the built-in limits read q and q̇ only (see controller: the generated path takes no others)
+        state = ModelState(None, q, qd, brows[:, :n], hf, None)  # type: ignore[arg-type]  # no frame read
+        bounds = qp.bounds(state)
+        self.lower[:] = bounds[0]
+        self.upper[:] = bounds[1]
+        live = self._weights(qp)
+        self._run()
+        stats = self.stats
+        if stats[1] != 1.0 or stats[2] != 1.0:
+            return None
+        low = self._low_t.T
+        if live is not None:
+            if not 0 < live.size <= ny:
+                return None
+            low = low[np.ix_(live, live)]
+        rcond, info = lapack.dpocon(low, float(stats[3]), uplo="L")
+        if info != 0 or not rcond > WELL_CONDITIONED:
+            return None
+        res = ContactStep()
+        res.b_rows = brows
+        A, b = gen.contact[:, :ny].copy(), gen.contact[:, ny].copy()
+        res.contact = (A, b)
+        res.bounds = bounds
+        start = 0
+        for plan, _, _, _ in qp.levels:
+            res.rows.append(gen.rows[start : start + plan.m].copy())
+            start += plan.m
+        basis = self._basis_t.T
+        if live is None:
+            F, phi, lam = basis.copy(), self.phi.copy(), self.lam1.copy()
+        else:
+            me = qp.me
+            F, phi = basis[live], self.phi[live]
+            lam = np.concatenate((self.lam1[:me], self.lam1[me:][live]))
+        res.frozen += [None, (F, phi)]
+        C, ly, uy = qp.inequalities(brows, hf, bounds)
+        arrays0 = QPArrays(gen.H[0].copy(), gen.g[0].copy(), A, b, C, ly, uy)
+        arrays1 = QPArrays(gen.H[1].copy(), gen.g[1].copy(), np.vstack((A, F)), np.concatenate((b, phi)), C, ly, uy)
+        res.arrays += [arrays0, arrays1]
+        mi, none = ly.shape[0], qp.no_active
+        for k, (y, mult) in enumerate(((self.y0, self.lam0), (self.y1, lam))):
+            res.y = y.copy()
+            res.solutions.append(
+                QPSolution(res.y, "solved", 0, "active set", mult.copy(), np.zeros(mi), "active set", 0, none)
+            )
+            res.status.append("solved")
+            chain.record(chain.key(res.arrays[k], k), none)
+        res.tau = self.tau.copy()
+        return res
