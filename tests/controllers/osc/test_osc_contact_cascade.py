@@ -51,10 +51,11 @@ def _kkt(H: np.ndarray, g: np.ndarray, A: np.ndarray, b: np.ndarray) -> np.ndarr
 
 
 def test_without_an_active_row_both_levels_are_the_kkt_cascade_on_both_paths() -> None:
-    """No solver runs (both levels' optimum from their equality rows); τ is the cascade of full KKT solves of the
-    public problem with level 0's weighted task rows kept as they are, to 1e-7 N·m; the NumPy path's τ equals
-    the generated path's to 1e-9 N·m; level 1's frozen rows are extend_basis's basis, and each level's reported
-    solution satisfies its public problem's KKT conditions to 1e-8."""
+    """The generated code is used, and no solver runs (both levels' optimum from their equality rows); τ is the
+    cascade of full KKT solves of the public problem with level 0's weighted task rows kept as they are, to 1e-7
+    N·m; the NumPy path's τ equals the generated path's to 1e-9 N·m, its bounds the limits' own; level 1's
+    frozen rows are extend_basis's basis, and each level's reported solution satisfies its public problem's KKT
+    conditions to 1e-8."""
     ref = armctl.Reference(Q_HOME)
     ctrl = _sliding()
     assert ctrl.uses_generated_code
@@ -63,8 +64,10 @@ def test_without_an_active_row_both_levels_are_the_kkt_cascade_on_both_paths() -
     for q, qd in _states(10, seed=21):
         tau = ctrl(0.0, q, qd, ref)
         np.testing.assert_allclose(tau, numpy_ctrl(0.0, q, qd, ref), atol=1e-9, rtol=0)
-        sol = ctrl.last_solution
-        assert sol is not None and sol.level_status == ("solved", "solved")
+        sol, np_sol = ctrl.last_solution, numpy_ctrl.last_solution
+        assert sol is not None and sol.level_status == ("solved", "solved") and np_sol is not None
+        for mine, theirs in ((sol.problem(0).l, np_sol.problem(0).l), (sol.problem(0).u, np_sol.problem(0).u)):
+            np.testing.assert_allclose(mine, theirs, rtol=1e-12, atol=1e-12)  # the limits' bounds, as NumPy has them
         if any(s is None or s.solver != "active set" for s in sol.solutions):
             continue  # a row binds: the chain's step (the next test)
         taken += 1

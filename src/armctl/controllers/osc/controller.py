@@ -258,10 +258,12 @@ class OperationalSpaceQP(Controller):
     @property
     def uses_generated_code(self) -> bool:
         """Whether the QP of the current layout (the tasks and contacts as they are) takes its data from generated
-        code (see ``compile``): the q̈-only QP without active contacts, the QPs on [q̈; f] with them."""
+        code (see ``compile``): the q̈-only QP without active contacts, the QPs on [q̈; f] with them (with two
+        levels, their optimum too where no inequality row is active)."""
         lay = self.builder.layout()
         if lay.contacts:
-            return self._contact_path and self._contact_qp(lay).generated is not None
+            qp = self._contact_qp(lay) if self._contact_path else None
+            return qp is not None and qp.generated is not None and (qp.cascade is not None or len(qp.levels) != 2)
         return self._qdd_path and self._qdd_qp(lay).generated is not None
 
     def _contact_qp(self, lay: Layout) -> ContactQP:
@@ -271,11 +273,13 @@ class OperationalSpaceQP(Controller):
         if qp is None:
             qp = self._contact_qps[lay] = ContactQP(self.builder, lay)
             qp.generated = self._generated_contact(qp, lay)
-            if qp.generated is not None and len(qp.levels) == 2:
-                from armctl.controllers.osc.generated_cascade import GeneratedCascade
+            if qp.generated is not None:
+                from armctl.controllers.osc import generated_cascade
 
                 gen = qp.generated
-                qp.cascade = FALLBACK.attempt(lambda: GeneratedCascade(qp, gen), self.compile, stacklevel=3)
+                if generated_cascade.applies(qp):
+                    make = lambda: generated_cascade.GeneratedCascade(qp, gen)  # noqa: E731
+                    qp.cascade = FALLBACK.attempt(make, self.compile, stacklevel=3)
         return qp
 
     @property

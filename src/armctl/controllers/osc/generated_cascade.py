@@ -36,11 +36,12 @@ from scipy.linalg import lapack
 from armctl._checks import FloatArray
 from armctl.codegen import library as codegen
 from armctl.controllers.osc.contact_public import ContactStep
+from armctl.controllers.osc.generated_limits import limit_bounds, limit_params, limit_tag, supported_limits
 from armctl.controllers.osc.generated_optimum import equality_optimum, verdict
 from armctl.controllers.osc.hierarchy import WELL_CONDITIONED
+from armctl.controllers.osc.limits.base import Limit
 from armctl.controllers.osc.problem import QPArrays
 from armctl.controllers.osc.solve import QPSolution
-from armctl.controllers.osc.state import ModelState
 from armctl.dynamics.casadi_buffer import buffer_of, view
 from armctl.dynamics.recursive import cholesky_factor, cholesky_solve, cholesky_substitute
 
@@ -55,19 +56,26 @@ _NAME = "osc_contact_cascade"
 _RANK_TOL = 1e-9
 
 
-def cascade_function(n: int, ny: int, me: int, m: int, m0: int, tau_rows: Sequence[int], mi: int) -> cs.Function:
+def cascade_function(
+    n: int, ny: int, me: int, m: int, m0: int, tau_rows: Sequence[int], mi: int, limits: Sequence[Limit]
+) -> cs.Function:
     """The CasADi function of the module for n joints, y of size ``ny``, ``me`` contact rows, ``m`` task rows of
-    which level 0 has the first ``m0``, ``mi`` inequality rows of which ``tau_rows`` are torque rows:
-    ``f(H0, g0, H1, g1, contact, rows, brows, c0, c1, lower, upper, C, s0) -> (y0, λ0, y1, λ1, F, φ, L, stats,
-    τ)``, ``contact`` = [A | b], ``rows`` = the task rows [J | t] of all levels, ``brows`` = [B | −h'], c_k each
-    level's scale, ``lower``/``upper`` the inequality rows' public bounds, C their rows on y (the torque rows'
-    are B, given by ``brows``), s0 level 0's square-root weights; ``stats`` = [level 0's verdict, both levels'
-    verdict, the rank test, ‖T₀T₀ᵀ‖₁]."""
+    which level 0 has the first ``m0``, ``mi`` inequality rows (``limits``' rows, then the cones') of which
+    ``tau_rows`` are torque rows: ``f(H0, g0, H1, g1, contact, rows, brows, c0, c1, q, qd, bounds, C, s0) ->
+    (y0, λ0, y1, λ1, F, φ, L, stats, τ, l, u)``, ``contact`` = [A | b], ``rows`` = the task rows [J | t] of all
+    levels, ``brows`` = [B | −h'], c_k each level's scale, ``bounds`` the limits' parameters
+    (:func:`~armctl.controllers.osc.generated_limits.limit_params`) and the cones' bounds, C the inequality rows
+    on y (the torque rows' are B, given by ``brows``), s0 level 0's square-root weights; ``stats`` = [level 0's
+    verdict, both levels' verdict, the rank test, ‖T₀T₀ᵀ‖₁]; l, u the inequality rows' public bounds at (q,
+    q̇)."""
     h0, h1 = cs.SX.sym("H0", ny, ny), cs.SX.sym("H1", ny, ny)
     g0, g1 = cs.SX.sym("g0", ny), cs.SX.sym("g1", ny)
     contact, rows, brows = cs.SX.sym("contact", me, ny + 1), cs.SX.sym("rows", m, ny + 1), cs.SX.sym("brows", n, ny + 1)
     c0, c1 = cs.SX.sym("c0"), cs.SX.sym("c1")
-    lower, upper = cs.SX.sym("lower", mi), cs.SX.sym("upper", mi)
+    q, qd = cs.SX.sym("q", n), cs.SX.sym("qd", n)
+    lim_lo, lim_up, lim_p = limit_bounds(limits, n, q, qd)
+    cone_lo, cone_up = cs.SX.sym("cone_lower", mi - lim_lo.shape[0]), cs.SX.sym("cone_upper", mi - lim_lo.shape[0])
+    lower, upper = cs.vertcat(lim_lo, cone_lo), cs.vertcat(lim_up, cone_up)
     cmat, s0 = cs.SX.sym("C", mi, ny), cs.SX.sym("s0", m0)
     a, b = contact[:, :ny], contact[:, ny]
     bmat, hf = brows[:, :ny], -brows[:, ny]
@@ -101,8 +109,9 @@ def cascade_function(n: int, ny: int, me: int, m: int, m0: int, tau_rows: Sequen
         rank_ok = cs.logic_and(rank_ok, cs.logic_or(dropped[i] == 1, gram0[i, i] > (_RANK_TOL * scale) ** 2))
     anorm = cs.mmax(cs.sum1(cs.fabs(gram0)))
     stats = cs.vertcat(ok0, cs.logic_and(ok0, ok1), rank_ok, anorm)
-    inputs = [h0, g0, h1, g1, contact, rows, brows, c0, c1, lower, upper, cmat, s0]
-    outputs = [opt0[0], opt0[1], y1, lam, fbasis, phi, cs.SX(_lower(low)), stats, bmat @ y1 + hf]
+    bparams = cs.vertcat(lim_p, cone_lo, cone_up)
+    inputs = [h0, g0, h1, g1, contact, rows, brows, c0, c1, q, qd, bparams, cmat, s0]
+    outputs = [opt0[0], opt0[1], y1, lam, fbasis, phi, cs.SX(_lower(low)), stats, bmat @ y1 + hf, lower, upper]
     return cs.Function(_NAME, inputs, [cs.densify(o) for o in outputs])
 
 
@@ -128,6 +137,12 @@ def _lower(low: list[list[Any]]) -> cs.SX:
     return out
 
 
+def applies(qp: ContactQP) -> bool:
+    """Whether :class:`GeneratedCascade` takes the contact QPs ``qp``: two levels, and limits that
+    :func:`~armctl.controllers.osc.generated_limits.limit_bounds` takes."""
+    return len(qp.levels) == 2 and supported_limits(qp.layout.limits)
+
+
 class GeneratedCascade:
     """The generated function of the module for the two levels of the contact QPs ``qp``, reading the outputs of
     their generated data ``gen`` in place (bound once). :meth:`step` gives the step, or None where the code's
@@ -146,21 +161,24 @@ class GeneratedCascade:
         m, mi = gen.rows.shape[0], qp.C_template.shape[0]
         self.m0 = m0 = qp.levels[0][0].m
         tau_rows = [i for r in qp.tau_rows for i in range(r.start, r.stop)]
+        limits = qp.layout.limits
         tag = f"osc-contact-cascade|v{_CODE_VERSION}|{n},{ny},{me},{m},{m0},{mi}|tau:{','.join(map(str, tau_rows))}"
+        tag += f"|limits:{limit_tag(limits)}"
         fn = codegen.cached(
             [_NAME],
             tag,
-            lambda: [cascade_function(n, ny, me, m, m0, tau_rows, mi)],
+            lambda: [cascade_function(n, ny, me, m, m0, tau_rows, mi, limits)],
             gen.dynamics.options.get("cache_dir"),
             what="the operational-space QP's two-level contact step",
         )[_NAME]
-        self.lower, self.upper = np.zeros(mi), np.zeros(mi)
+        self.q, self.qd = np.zeros(n), np.zeros(n)
+        self._bparams = np.concatenate((limit_params(limits), qp.layout.cone_l, qp.layout.cone_u))
         self._s0 = np.zeros(m0)
         self._cmat_t = np.ascontiguousarray(qp.C_template.T)  # column by column: C held as its transpose
         buf, self._run = buffer_of(fn)
         # matrices in, column by column: each (r × c) input is the (c × r) array of its transpose, row by row
         args = [gen.H[0], gen.g[0], gen.H[1], gen.g[1], gen.contact.T, gen.rows.T, gen.brows.T]
-        args += [gen.c[0], gen.c[1], self.lower, self.upper, self._cmat_t, self._s0]
+        args += [gen.c[0], gen.c[1], self.q, self.qd, self._bparams, self._cmat_t, self._s0]
         for k, arr in enumerate(args):
             buf.set_arg(k, view(np.ascontiguousarray(arr).reshape(-1)))
         self.y0, self.lam0, self.y1 = np.zeros(ny), np.zeros(me), np.zeros(ny)
@@ -170,7 +188,9 @@ class GeneratedCascade:
         self._low_t = np.zeros((m0, m0))  # L (m0 × m0), held as its transpose
         self.stats = np.zeros(4)
         self.tau = np.zeros(n)
+        self.lower, self.upper = np.zeros(mi), np.zeros(mi)
         results = [self.y0, self.lam0, self.y1, self.lam1, self._basis_t, self.phi, self._low_t, self.stats, self.tau]
+        results += [self.lower, self.upper]
         for k, res in enumerate(results):
             buf.set_res(k, view(res.reshape(-1)))
         self._bound = (buf, args, results)  # the buffer reads and writes these: keep them alive
@@ -193,14 +213,9 @@ class GeneratedCascade:
     ) -> ContactStep | None:
         """The step of both levels' optimum on their equality rows alone, after ``gen.run``, if the code's verdict
         accepts both and level 0's rows take extend_basis's Cholesky basis (module docstring); else None."""
-        n, ny = qp.n, qp.ny
-        brows = gen.brows.copy()  # kept by the step (the code's outputs are overwritten by the next run)
-        hf = -brows[:, ny]
-        # the built-in limits read q and q̇ only (see controller: the generated path takes no others)
-        state = ModelState(None, q, qd, brows[:, :n], hf, None)  # type: ignore[arg-type]  # no frame read
-        bounds = qp.bounds(state)
-        self.lower[:] = bounds[0]
-        self.upper[:] = bounds[1]
+        ny = qp.ny
+        self.q[:] = q
+        self.qd[:] = qd
         live = self._weights(qp)
         self._run()
         stats = self.stats
@@ -215,10 +230,11 @@ class GeneratedCascade:
         if info != 0 or not rcond > WELL_CONDITIONED:
             return None
         res = ContactStep()
-        res.b_rows = brows
+        brows = res.b_rows = gen.brows.copy()  # kept by the step (the code's outputs are overwritten by the next run)
+        hf = -brows[:, ny]
         A, b = gen.contact[:, :ny].copy(), gen.contact[:, ny].copy()
         res.contact = (A, b)
-        res.bounds = bounds
+        bounds = res.bounds = (self.lower.copy(), self.upper.copy())
         start = 0
         for plan, _, _, _ in qp.levels:
             res.rows.append(gen.rows[start : start + plan.m].copy())
