@@ -40,7 +40,6 @@ from armctl.controllers.osc.generated_limits import limit_bounds, limit_params, 
 from armctl.controllers.osc.generated_optimum import equality_optimum, verdict
 from armctl.controllers.osc.hierarchy import WELL_CONDITIONED
 from armctl.controllers.osc.limits.base import Limit
-from armctl.controllers.osc.problem import QPArrays
 from armctl.controllers.osc.solve import QPSolution
 from armctl.dynamics.casadi_buffer import buffer_of, view
 from armctl.dynamics.recursive import cholesky_factor, cholesky_solve, cholesky_substitute
@@ -196,6 +195,7 @@ class GeneratedCascade:
         self._bound = (buf, args, results)  # the buffer reads and writes these: keep them alive
         self._scale: FloatArray | None = None
         self._live: np.ndarray | None = None
+        self._live_entries = np.zeros(0, dtype=np.intp)
 
     def _weights(self, qp: ContactQP) -> np.ndarray | None:
         """Level 0's square-root weights into the function's input (when they changed); the rows of non-zero
@@ -205,6 +205,7 @@ class GeneratedCascade:
             self._s0[:] = scale[: self.m0, 0]
             live = np.flatnonzero(self._s0)
             self._live = None if live.size == self.m0 else live
+            self._live_entries = (live[:, None] * self.m0 + live[None, :]).ravel()  # L_live's, in L's transpose
             self._scale = scale
         return self._live
 
@@ -225,16 +226,16 @@ class GeneratedCascade:
         if live is not None:
             if not 0 < live.size <= ny:
                 return None
-            low = low[np.ix_(live, live)]
+            k = live.size
+            low = self._low_t.take(self._live_entries).reshape(k, k).T  # L's rows and columns of non-zero weight
         rcond, info = lapack.dpocon(low, float(stats[3]), uplo="L")
         if info != 0 or not rcond > WELL_CONDITIONED:
             return None
         res = ContactStep()
-        brows = res.b_rows = gen.brows.copy()  # kept by the step (the code's outputs are overwritten by the next run)
-        hf = -brows[:, ny]
+        res.b_rows = gen.brows.copy()  # kept by the step (the code's outputs are overwritten by the next run)
         A, b = gen.contact[:, :ny].copy(), gen.contact[:, ny].copy()
         res.contact = (A, b)
-        bounds = res.bounds = (self.lower.copy(), self.upper.copy())
+        res.bounds = (self.lower.copy(), self.upper.copy())
         start = 0
         for plan, _, _, _ in qp.levels:
             res.rows.append(gen.rows[start : start + plan.m].copy())
@@ -247,17 +248,16 @@ class GeneratedCascade:
             F, phi = basis[live], self.phi[live]
             lam = np.concatenate((self.lam1[:me], self.lam1[me:][live]))
         res.frozen += [None, (F, phi)]
-        C, ly, uy = qp.inequalities(brows, hf, bounds)
-        arrays0 = QPArrays(gen.H[0].copy(), gen.g[0].copy(), A, b, C, ly, uy)
-        arrays1 = QPArrays(gen.H[1].copy(), gen.g[1].copy(), np.vstack((A, F)), np.concatenate((b, phi)), C, ly, uy)
-        res.arrays += [arrays0, arrays1]
-        mi, none = ly.shape[0], qp.no_active
-        for k, (y, mult) in enumerate(((self.y0, self.lam0), (self.y1, lam))):
+        res.hg = (gen.H[0].copy(), gen.g[0].copy())  # the QPs' arrays made when asked for (step_arrays)
+        res.hg_below.append((gen.H[1].copy(), gen.g[1].copy()))
+        mi, none = self.lower.shape[0], qp.no_active
+        keys = (qp.key, (1, ny, qp.me + F.shape[0], mi))  # SolverChain.key of each level's QP
+        for key, y, mult in zip(keys, (self.y0, self.y1), (self.lam0, lam), strict=True):
             res.y = y.copy()
             res.solutions.append(
                 QPSolution(res.y, "solved", 0, "active set", mult.copy(), np.zeros(mi), "active set", 0, none)
             )
             res.status.append("solved")
-            chain.record(chain.key(res.arrays[k], k), none)
+            chain.record(key, none)
         res.tau = self.tau.copy()
         return res
