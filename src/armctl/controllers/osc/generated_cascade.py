@@ -233,13 +233,11 @@ class GeneratedCascade:
             return None
         res = ContactStep()
         res.b_rows = gen.brows.copy()  # kept by the step (the code's outputs are overwritten by the next run)
-        A, b = gen.contact[:, :ny].copy(), gen.contact[:, ny].copy()
-        res.contact = (A, b)
+        contact = gen.contact.copy()
+        res.contact = (contact[:, :ny], contact[:, ny].copy())
         res.bounds = (self.lower.copy(), self.upper.copy())
-        start = 0
-        for plan, _, _, _ in qp.levels:
-            res.rows.append(gen.rows[start : start + plan.m].copy())
-            start += plan.m
+        rows, m0 = gen.rows.copy(), self.m0
+        res.rows += [rows[:m0], rows[m0:]]
         basis = self._basis_t.T
         if live is None:
             F, phi, lam = basis.copy(), self.phi.copy(), self.lam1.copy()
@@ -251,13 +249,14 @@ class GeneratedCascade:
         res.hg = (gen.H[0].copy(), gen.g[0].copy())  # the QPs' arrays made when asked for (step_arrays)
         res.hg_below.append((gen.H[1].copy(), gen.g[1].copy()))
         mi, none = self.lower.shape[0], qp.no_active
-        keys = (qp.key, (1, ny, qp.me + F.shape[0], mi))  # SolverChain.key of each level's QP
-        for key, y, mult in zip(keys, (self.y0, self.y1), (self.lam0, lam), strict=True):
-            res.y = y.copy()
-            res.solutions.append(
-                QPSolution(res.y, "solved", 0, "active set", mult.copy(), np.zeros(mi), "active set", 0, none)
-            )
-            res.status.append("solved")
-            chain.record(key, none)
+        y0, y1 = self.y0.copy(), self.y1.copy()
+        res.solutions += [
+            QPSolution(y0, "solved", 0, "active set", self.lam0.copy(), np.zeros(mi), "active set", 0, none),
+            QPSolution(y1, "solved", 0, "active set", lam, np.zeros(mi), "active set", 0, none),
+        ]
+        res.status += ["solved", "solved"]
+        res.y = y1
+        chain.record(qp.key, none)  # SolverChain.key of each level's QP
+        chain.record((1, ny, qp.me + F.shape[0], mi), none)
         res.tau = self.tau.copy()
         return res
