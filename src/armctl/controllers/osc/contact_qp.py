@@ -1,4 +1,5 @@
-"""`ContactQP`: the QPs of a step with active contacts, solved on y = [q̈; f] (τ eliminated).
+"""`ContactQP`: the QPs of a step with active contacts, or with several priority levels, solved on y = [q̈; f]
+(τ eliminated; f the active contacts' forces, none without contacts).
 
 With contacts the equation of motion still gives τ outright, τ = M q̈ − Σ_c J_cᵀ f_c + h' with h' = C q̇ + g + τ_f,
 so every level's QP over x = [q̈; τ; f] that :class:`~armctl.controllers.osc.build.StepQP` shows,
@@ -18,8 +19,14 @@ the public stationarity condition). The regularisation enters as rows below the 
 
 Levels below the first keep the optimum of those above through the rows F y = F y_{k−1}, F an orthonormal basis
 of the weighted task rows of the levels above (:func:`~armctl.controllers.osc.hierarchy.extend_basis`): no task
-reads τ, so these are the public problem's ``priority[i]`` rows with zero τ columns. Every QP goes to the
-controller's :class:`~armctl.controllers.osc.chain.SolverChain`; τ comes only from its verified optimum.
+reads τ, so these are the public problem's ``priority[i]`` rows with zero τ columns.
+
+With several levels, each level's optimum on its equality rows alone (the contact rows and F,
+:func:`~armctl.controllers.osc.equality_optimum.equality_optimum`) is taken where
+:func:`~armctl.controllers.osc.optimality.equality_optimum_ok` finds it the QP's (no inequality row active: the
+usual case), and the generated code of :mod:`~armctl.controllers.osc.generated_cascade` does both levels of a
+two-level layout in one call; every other QP goes to the controller's
+:class:`~armctl.controllers.osc.chain.SolverChain`. τ comes only from a verified optimum.
 """
 
 from __future__ import annotations

@@ -244,7 +244,7 @@ class OperationalSpaceQP(Controller):
             and callable(getattr(self.solver, "solve_raw", None))
         )
         self._qdd: dict[Layout, QddQP] = {}
-        # with active contacts: the QPs on [q̈; f] (see contact_qp)
+        # with active contacts or several levels: the QPs on [q̈; f] (see contact_qp)
         self._contact_path = callable(getattr(self.solver, "solve_raw", None)) and applies(self.builder)
         self._contact_qps: dict[Layout, ContactQP] = {}
         if self._qdd_path and not self.contacts:  # made now: its generated code is built or loaded here
@@ -258,8 +258,8 @@ class OperationalSpaceQP(Controller):
     @property
     def uses_generated_code(self) -> bool:
         """Whether the QP of the current layout (the tasks and contacts as they are) takes its data from generated
-        code (see ``compile``): the q̈-only QP without active contacts, the QPs on [q̈; f] with them (with two
-        levels, their optimum too where no inequality row is active)."""
+        code (see ``compile``): the q̈-only QP of one level without active contacts, the QPs on [q̈; f] with them
+        or with several levels (with two levels, their optimum too where no inequality row is active)."""
         lay = self.builder.layout()
         if lay.contacts:
             qp = self._contact_qp(lay) if self._contact_path else None
@@ -499,10 +499,9 @@ class OperationalSpaceQP(Controller):
         self._pending = self._last_solution = None
         if self._qdd_path or self._contact_path:
             lay = self.builder.layout()
-            if not lay.contacts:
-                if self._qdd_path:
-                    return self._qdd_step(lay, t, q, qd, ref)
-            elif self._contact_path:
+            if not lay.contacts and self._qdd_path:
+                return self._qdd_step(lay, t, q, qd, ref)
+            if self._contact_path:  # contacts, or several levels: the QPs on [q̈; f] (f of the active contacts)
                 return self._contact_step(lay, t, q, qd, ref)
         state = self.evaluator.evaluate(q, qd)
         step = self.builder.build(state, t, ref)

@@ -32,7 +32,7 @@ def equality_optimum(
     g : ndarray, shape (n,)
         The gradient at y = 0.
     A : ndarray, shape (k, n)
-        The equality rows (k ≥ 1).
+        The equality rows (k = 0: the unconstrained minimum −H⁻¹g).
     b : ndarray, shape (k,)
         Their right-hand side.
 
@@ -45,6 +45,10 @@ def equality_optimum(
     if info != 0:
         return None
     k = b.shape[0]
+    if not k:  # the unconstrained minimum
+        y, info = lapack.dpotrs(c, g, lower=1)
+        np.negative(y, out=y)
+        return y, np.zeros(0), np.zeros(0), H.dot(y) + g
     rhs = np.empty((H.shape[0], k + 1))
     rhs[:, 0] = g
     rhs[:, 1:] = A.T

@@ -80,10 +80,14 @@ def cascade_function(
     bmat, hf = brows[:, :ny], -brows[:, ny]
     taus = set(tau_rows)
     # the inequality rows on y: B in the torque rows, their bounds shifted by −h' (as ContactQP.inequalities)
-    crows = cs.vertcat(*[bmat[i % n, :] if i in taus else cmat[i, :] for i in range(mi)])
+    crows = cs.vertcat(cs.SX(0, ny), *[bmat[i % n, :] if i in taus else cmat[i, :] for i in range(mi)])
     shift = cs.vertcat(*[hf[i % n] if i in taus else 0.0 for i in range(mi)])
     ly, uy = lower - shift, upper - shift
-    opt0 = equality_optimum(h0, g0, a, b)
+    if me:
+        opt0 = equality_optimum(h0, g0, a, b)
+    else:  # no contact: level 0's unconstrained minimum, its residuals (none on no row: 0)
+        y00 = -cholesky_solve(h0, g0)
+        opt0 = [y00, cs.SX.zeros(0), cs.SX.zeros(1), h0 @ y00 + g0]
     ok0 = verdict(opt0, g0, c0, crows @ opt0[0], ly, uy)
     # level 0's weighted rows; a row of zero weight is left out by a 1 on its diagonal
     dropped = cs.vertcat(*[cs.if_else(s0[i] == 0, 1.0, 0.0) for i in range(m0)])
