@@ -24,14 +24,19 @@ from armctl.controllers.osc.optimality import residuals
 from .helpers import Q_HOME, panda_dynamics
 
 
-def _sliding(limits: list | None = None, compile: bool | str = "auto") -> OperationalSpaceQP:  # type: ignore[type-arg]
-    """The pose task with its normal direction off and a normal force target in level 0, the posture in level 1."""
+def _sliding(
+    limits: list | None = None,  # type: ignore[type-arg]
+    compile: bool | str = "auto",
+    active: bool = True,
+) -> OperationalSpaceQP:
+    """The pose task with its normal direction off and a normal force target in level 0, the posture in level 1;
+    ``active=False``: the contact (and its force task) off, the levels on q̈ alone."""
     dyn = panda_dynamics(friction=True)
     pose = FramePoseTask(kp=400.0, weight=[1, 1, 0, 1, 1, 1])
     target = dyn.frame_pose(Q_HOME)
     target[0, 3] += 0.02
     pose.set_target(target)
-    contact = Contact(mode="sliding", mu=0.3, kd=100.0)
+    contact = Contact(mode="sliding", mu=0.3, kd=100.0, active=active)
     tasks = [pose, ContactForceTask(contact, 8.0, weight=1.0), PostureTask(7, kp=25.0, priority=1)]
     lims = default_limits() if limits is None else limits
     return OperationalSpaceQP(dyn, tasks, limits=lims, contacts=[contact], compile=compile)
@@ -50,16 +55,17 @@ def _kkt(H: np.ndarray, g: np.ndarray, A: np.ndarray, b: np.ndarray) -> np.ndarr
     return np.linalg.lstsq(K, np.concatenate((-g, b)), rcond=None)[0][:n]
 
 
-def test_without_an_active_row_both_levels_are_the_kkt_cascade_on_both_paths() -> None:
-    """The generated code is used, and no solver runs (both levels' optimum from their equality rows); τ is the
-    cascade of full KKT solves of the public problem with level 0's weighted task rows kept as they are, to 1e-7
-    N·m; the NumPy path's τ equals the generated path's to 1e-9 N·m, its bounds the limits' own; level 1's
-    frozen rows are extend_basis's basis, and each level's reported solution satisfies its public problem's KKT
-    conditions to 1e-8."""
+@pytest.mark.parametrize("active", [True, False])
+def test_without_an_active_row_both_levels_are_the_kkt_cascade_on_both_paths(active: bool) -> None:
+    """With the contact on and off: the generated code is used, and no solver runs (both levels' optimum from
+    their equality rows); τ is the cascade of full KKT solves of the public problem with level 0's weighted task
+    rows kept as they are, to 1e-7 N·m; the NumPy path's τ equals the generated path's to 1e-9 N·m, its bounds
+    the limits' own; level 1's frozen rows are extend_basis's basis, and each level's reported solution
+    satisfies its public problem's KKT conditions to 1e-8."""
     ref = armctl.Reference(Q_HOME)
-    ctrl = _sliding()
+    ctrl = _sliding(active=active)
     assert ctrl.uses_generated_code
-    numpy_ctrl = _sliding(compile=False)
+    numpy_ctrl = _sliding(compile=False, active=active)
     taken = 0
     for q, qd in _states(10, seed=21):
         tau = ctrl(0.0, q, qd, ref)

@@ -261,10 +261,12 @@ class OperationalSpaceQP(Controller):
         code (see ``compile``): the q̈-only QP of one level without active contacts, the QPs on [q̈; f] with them
         or with several levels (with two levels, their optimum too where no inequality row is active)."""
         lay = self.builder.layout()
-        if lay.contacts:
-            qp = self._contact_qp(lay) if self._contact_path else None
-            return qp is not None and qp.generated is not None and (qp.cascade is not None or len(qp.levels) != 2)
-        return self._qdd_path and self._qdd_qp(lay).generated is not None
+        if not lay.contacts and self._qdd_path:
+            return self._qdd_qp(lay).generated is not None
+        if self._contact_path:
+            qp = self._contact_qp(lay)
+            return qp.generated is not None and (qp.cascade is not None or len(qp.levels) != 2)
+        return False
 
     def _contact_qp(self, lay: Layout) -> ContactQP:
         """The QPs on [q̈; f] of layout ``lay`` (made on first use, with their generated data where ``compile``
