@@ -249,6 +249,8 @@ class OperationalSpaceQP(Controller):
         self._contact_qps: dict[Layout, ContactQP] = {}
         if self._qdd_path and not self.contacts:  # made now: its generated code is built or loaded here
             self._qdd_qp(self.builder.layout())
+        elif self._contact_path and len(self.builder.priorities) > 1:  # likewise the first layout's, several levels
+            self._contact_qp(self.builder.layout())
         self._pending: tuple[QddQP, QddStep] | tuple[ContactQP, ContactStep] | None = None
         self._last_solution: OSCSolution | None = None
         self._steps = 0
