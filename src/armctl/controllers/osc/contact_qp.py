@@ -196,7 +196,7 @@ class ContactQP:
             if not c[0] <= _MAX_RHS2:  # ‖W^{1/2} b‖² + ε_k‖h'‖² (NaN too)
                 return self.step(evaluate(q, qd), t, ref, chain)
         if self.cascade is not None:
-            taken = self.cascade.step(self, gen, q, qd, chain)
+            taken = self.cascade.step(self, gen, chain)
             if taken is not None:
                 return taken
         n, ny = self.n, self.ny

@@ -174,16 +174,17 @@ class GeneratedCascade:
             gen.dynamics.options.get("cache_dir"),
             what="the operational-space QP's two-level contact step",
         )[_NAME]
-        self.q, self.qd = np.zeros(n), np.zeros(n)
         self._bparams = np.concatenate((limit_params(limits), qp.layout.cone_l, qp.layout.cone_u))
         self._s0 = np.zeros(m0)
         self._cmat_t = np.ascontiguousarray(qp.C_template.T)  # column by column: C held as its transpose
         buf, self._run = buffer_of(fn)
         # matrices in, column by column: each (r × c) input is the (c × r) array of its transpose, row by row
         args = [gen.H[0], gen.g[0], gen.H[1], gen.g[1], gen.contact.T, gen.rows.T, gen.brows.T]
-        args += [gen.c[0], gen.c[1], self.q, self.qd, self._bparams, self._cmat_t, self._s0]
+        # (q, q̇): the first entries of the generated data's input, [q; q̇; …]
+        args += [gen.c[0], gen.c[1], gen.inp[:n], gen.inp[n : 2 * n], self._bparams, self._cmat_t, self._s0]
         for k, arr in enumerate(args):
-            buf.set_arg(k, view(np.ascontiguousarray(arr).reshape(-1)))
+            assert arr.flags.c_contiguous  # bound by its memory: a view of the array itself
+            buf.set_arg(k, view(arr.reshape(-1)))
         self.y0, self.lam0, self.y1 = np.zeros(ny), np.zeros(me), np.zeros(ny)
         self.lam1 = np.zeros(me + m0)
         self._basis_t = np.zeros((ny, m0))  # F (m0 × ny), held as its transpose
@@ -213,14 +214,11 @@ class GeneratedCascade:
             self._scale = scale
         return self._live
 
-    def step(
-        self, qp: ContactQP, gen: GeneratedContactData, q: FloatArray, qd: FloatArray, chain: SolverChain
-    ) -> ContactStep | None:
-        """The step of both levels' optimum on their equality rows alone, after ``gen.run``, if the code's verdict
-        accepts both and level 0's rows take extend_basis's Cholesky basis (module docstring); else None."""
+    def step(self, qp: ContactQP, gen: GeneratedContactData, chain: SolverChain) -> ContactStep | None:
+        """The step of both levels' optimum on their equality rows alone, after ``gen.run`` (at the (q, q̇) it was
+        given), if the code's verdict accepts both and level 0's rows take extend_basis's Cholesky basis (module
+        docstring); else None."""
         ny = qp.ny
-        self.q[:] = q
-        self.qd[:] = qd
         live = self._weights(qp)
         self._run()
         stats = self.stats
