@@ -108,3 +108,22 @@ def test_a_binding_torque_limit_takes_the_solver_chain_on_both_paths() -> None:
     sol = ctrl.last_solution
     assert sol is not None and sol.solutions[0] is not None and sol.solutions[0].solver != "active set"
     np.testing.assert_allclose(tau, numpy_ctrl(0.0, q, qd, ref), atol=1e-9, rtol=0)
+
+
+def test_a_two_level_controller_pickles_with_its_generated_code() -> None:
+    """A two-level controller with the contact off (its first layout made with it) and on crosses a pickle (as a
+    sweep's worker receives it) and gives the same τ, on the generated code (to 1e-6 N·m where a limit binds: the
+    copy's solver chain starts cold, and a verified optimum is one to the check's tolerances)."""
+    import pickle
+
+    ref = armctl.Reference(Q_HOME)
+    states = _states(3, seed=23)
+    for active in (False, True):
+        ctrl = _sliding(active=active)
+        copy = pickle.loads(pickle.dumps(ctrl))
+        assert copy.uses_generated_code
+        for q, qd in states:
+            np.testing.assert_allclose(copy(0.0, q, qd, ref), ctrl(0.0, q, qd, ref), atol=1e-6, rtol=0)
+        copy = pickle.loads(pickle.dumps(ctrl))  # after steps too
+        for q, qd in states:
+            np.testing.assert_allclose(copy(0.0, q, qd, ref), ctrl(0.0, q, qd, ref), atol=1e-6, rtol=0)

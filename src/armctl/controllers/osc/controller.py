@@ -282,7 +282,7 @@ class OperationalSpaceQP(Controller):
 
                 gen = qp.generated
                 if generated_cascade.applies(qp):
-                    make = lambda: generated_cascade.GeneratedCascade(qp, gen)  # noqa: E731
+                    make = lambda: generated_cascade.for_qp(qp, gen)  # noqa: E731
                     qp.cascade = FALLBACK.attempt(make, self.compile, stacklevel=3)
         return qp
 

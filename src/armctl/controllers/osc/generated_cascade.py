@@ -140,6 +140,13 @@ def _lower(low: list[list[Any]]) -> cs.SX:
     return out
 
 
+def for_qp(qp: ContactQP, gen: GeneratedContactData) -> GeneratedCascade:
+    """The :class:`GeneratedCascade` of the contact QPs ``qp`` and their generated data ``gen``."""
+    tau_rows = [i for r in qp.tau_rows for i in range(r.start, r.stop)]
+    cones = (qp.layout.cone_l, qp.layout.cone_u)
+    return GeneratedCascade(gen, qp.layout.limits, cones, qp.C_template, tau_rows, qp.levels[0][0].m)
+
+
 def applies(qp: ContactQP) -> bool:
     """Whether :class:`GeneratedCascade` takes the contact QPs ``qp``: two levels, and limits that
     :func:`~armctl.controllers.osc.generated_limits.limit_bounds` takes."""
@@ -147,24 +154,40 @@ def applies(qp: ContactQP) -> bool:
 
 
 class GeneratedCascade:
-    """The generated function of the module for the two levels of the contact QPs ``qp``, reading the outputs of
-    their generated data ``gen`` in place (bound once). :meth:`step` gives the step, or None where the code's
-    verdict or the basis test refuses it. Not thread-safe.
+    """The generated function of the module for the two levels of a layout's QPs on y = [q̈; f], reading the
+    outputs of their generated data ``gen`` in place (bound once). :meth:`step` gives the step, or None where the
+    code's verdict or the basis test refuses it. Made by :func:`for_qp`. Not thread-safe.
 
     Parameters
     ----------
-    qp : ContactQP
-        The layout's QPs on y = [q̈; f], with two priority levels.
     gen : GeneratedContactData
-        Their generated data (its outputs are this function's inputs).
+        The layout's generated data (its outputs are this function's inputs), for two levels.
+    limits : sequence of Limit
+        The layout's limits (bound), in its order.
+    cones : (ndarray, ndarray)
+        The bounds of the cones' rows, after the limits' rows.
+    c_template : ndarray, shape (mi, ny)
+        The inequality rows on y (the torque rows' are filled from B).
+    tau_rows : sequence of int
+        The torque limits' rows of ``c_template``.
+    m0 : int
+        Level 0's task rows.
     """
 
-    def __init__(self, qp: ContactQP, gen: GeneratedContactData) -> None:
-        n, ny, me = qp.n, qp.ny, qp.me
-        m, mi = gen.rows.shape[0], qp.C_template.shape[0]
-        self.m0 = m0 = qp.levels[0][0].m
-        tau_rows = [i for r in qp.tau_rows for i in range(r.start, r.stop)]
-        limits = qp.layout.limits
+    def __init__(
+        self,
+        gen: GeneratedContactData,
+        limits: Sequence[Limit],
+        cones: tuple[FloatArray, FloatArray],
+        c_template: FloatArray,
+        tau_rows: Sequence[int],
+        m0: int,
+    ) -> None:
+        self._args = (gen, tuple(limits), cones, c_template, tuple(tau_rows), m0)
+        n = gen.n
+        ny = gen.H[0].shape[0]
+        me, m, mi = gen.contact.shape[0], gen.rows.shape[0], c_template.shape[0]
+        self.m0 = m0
         tag = f"osc-contact-cascade|v{_CODE_VERSION}|{n},{ny},{me},{m},{m0},{mi}|tau:{','.join(map(str, tau_rows))}"
         tag += f"|limits:{limit_tag(limits)}"
         fn = codegen.cached(
@@ -174,9 +197,9 @@ class GeneratedCascade:
             gen.dynamics.options.get("cache_dir"),
             what="the operational-space QP's two-level contact step",
         )[_NAME]
-        self._bparams = np.concatenate((limit_params(limits), qp.layout.cone_l, qp.layout.cone_u))
+        self._bparams = np.concatenate((limit_params(limits), *cones))
         self._s0 = np.zeros(m0)
-        self._cmat_t = np.ascontiguousarray(qp.C_template.T)  # column by column: C held as its transpose
+        self._cmat_t = np.ascontiguousarray(c_template.T)  # column by column: C held as its transpose
         buf, self._run = buffer_of(fn)
         # matrices in, column by column: each (r × c) input is the (c × r) array of its transpose, row by row
         args = [gen.H[0], gen.g[0], gen.H[1], gen.g[1], gen.contact.T, gen.rows.T, gen.brows.T]
@@ -201,6 +224,10 @@ class GeneratedCascade:
         self._scale: FloatArray | None = None
         self._live: np.ndarray | None = None
         self._live_entries = np.zeros(0, dtype=np.intp)
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        # rebuilt (the library loads from the cache): the buffer is this process's
+        return (GeneratedCascade, self._args)
 
     def _weights(self, qp: ContactQP) -> np.ndarray | None:
         """Level 0's square-root weights into the function's input (when they changed); the rows of non-zero
