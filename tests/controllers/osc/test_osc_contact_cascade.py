@@ -19,13 +19,14 @@ from armctl.controllers.osc import (
     default_limits,
 )
 from armctl.controllers.osc.hierarchy import extend_basis
+from armctl.controllers.osc.limits.base import Limit
 from armctl.controllers.osc.optimality import residuals
 
 from .helpers import Q_HOME, panda_dynamics
 
 
 def _sliding(
-    limits: list | None = None,  # type: ignore[type-arg]
+    limits: list[Limit] | None = None,
     compile: bool | str = "auto",
     active: bool = True,
 ) -> OperationalSpaceQP:

@@ -5,6 +5,8 @@ bound never does by more than a rounding: under a_max > 0 the viability bound im
 
 from __future__ import annotations
 
+from typing import cast
+
 import casadi as cs
 import numpy as np
 
@@ -16,7 +18,7 @@ from armctl.controllers.osc import (
     TorqueLimit,
 )
 from armctl.controllers.osc.generated_limits import limit_bounds, limit_params, supported_limits
-from armctl.controllers.osc.state import ModelState
+from armctl.controllers.osc.state import ModelEvaluator, ModelState
 
 
 def _states(model: armctl.RobotModel, count: int, seed: int) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -58,7 +60,7 @@ def test_the_expressions_give_the_limits_bounds_at_states_that_reach_every_branc
     pos = limits[1]
     assert isinstance(pos, JointPositionLimit)
     for qv, qdv in _states(model, 200, seed=3):
-        state = ModelState(None, qv, qdv, np.eye(n), np.zeros(n), None)  # type: ignore[arg-type]  # reads q, q̇
+        state = ModelState(cast(ModelEvaluator, None), qv, qdv, np.eye(n), np.zeros(n), None)  # the limits read q, q̇
         want = [lim.bounds(state) for lim in limits]
         got_lo, got_up = (np.asarray(v).ravel() for v in fn(qv, qdv, params))
         np.testing.assert_allclose(got_lo, np.concatenate([w[0] for w in want]), rtol=1e-12, atol=1e-12)

@@ -91,7 +91,9 @@ def step_arrays(qp: ContactQP, res: ContactStep) -> list[QPArrays]:
         A, b = res.contact
         res.arrays.append(QPArrays(*res.hg, A, b, C, ly, uy))
         for k, (H, g) in enumerate(res.hg_below, 1):
-            F, phi = res.frozen[k]  # type: ignore[misc]  # a level below 0 has its frozen rows
+            frozen = res.frozen[k]
+            assert frozen is not None  # a level below 0 has its frozen rows
+            F, phi = frozen
             res.arrays.append(QPArrays(H, g, np.vstack((A, F)), np.concatenate((b, phi)), C, ly, uy))
     return res.arrays
 

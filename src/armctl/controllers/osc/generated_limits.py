@@ -19,6 +19,7 @@ place of the position bound, ~1e-9 rad/s² at Δt = 1 ms).
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import cast
 
 import casadi as cs
 import numpy as np
@@ -27,6 +28,7 @@ from armctl._checks import FloatArray
 from armctl.controllers.osc.limits.base import Limit
 from armctl.controllers.osc.limits.position import JointPositionLimit
 from armctl.controllers.osc.limits.velocity import JointVelocityLimit
+from armctl.controllers.osc.state import ModelState
 
 
 def supported_limits(limits: Sequence[Limit]) -> bool:
@@ -69,7 +71,7 @@ def limit_params(limits: Sequence[Limit]) -> FloatArray:
     parts: list[FloatArray] = []
     for lim in limits:
         if lim.constant:
-            parts += list(lim.bounds(None))  # type: ignore[arg-type]  # a constant limit reads no state
+            parts += list(lim.bounds(cast(ModelState, None)))  # a constant limit reads no state
         elif type(lim) is JointVelocityLimit:
             parts += [lim.limit, lim.max_deceleration, np.array([1.0 / lim.dt])]
         else:
