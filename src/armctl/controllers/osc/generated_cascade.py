@@ -195,6 +195,7 @@ class GeneratedCascade:
             tag,
             lambda: [cascade_function(n, ny, me, m, m0, tau_rows, mi, limits)],
             gen.dynamics.options.get("cache_dir"),
+            flags=codegen.CFLAGS_FAST,  # a control loop's hot path: a slower build for faster code
             what="the operational-space QP's two-level contact step",
         )[_NAME]
         self._bparams = np.concatenate((limit_params(limits), *cones))
