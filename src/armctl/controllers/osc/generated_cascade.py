@@ -49,7 +49,7 @@ if TYPE_CHECKING:
     from armctl.controllers.osc.contact_qp import ContactQP
     from armctl.controllers.osc.generated_contact import GeneratedContactData
 
-_CODE_VERSION = 1
+_CODE_VERSION = 2
 _NAME = "osc_contact_cascade"
 #: the rank test of extend_basis: a row is kept if its norm exceeds this times the largest entry of T₀
 _RANK_TOL = 1e-9
@@ -61,7 +61,7 @@ def cascade_function(
     """The CasADi function of the module for n joints, y of size ``ny``, ``me`` contact rows, ``m`` task rows of
     which level 0 has the first ``m0``, ``mi`` inequality rows (``limits``' rows, then the cones') of which
     ``tau_rows`` are torque rows: ``f(H0, g0, H1, g1, contact, rows, brows, c0, c1, q, qd, bounds, C, s0) ->
-    (y0, λ0, y1, λ1, F, φ, L, stats, τ, l, u)``, ``contact`` = [A | b], ``rows`` = the task rows [J | t] of all
+    (y0, λ0, y1, [λ1; φ], F, L, stats, τ, l, u)``, ``contact`` = [A | b], ``rows`` = the task rows [J | t] of all
     levels, ``brows`` = [B | −h'], c_k each level's scale, ``bounds`` the limits' parameters
     (:func:`~armctl.controllers.osc.generated_limits.limit_params`) and the cones' bounds, C the inequality rows
     on y (the torque rows' are B, given by ``brows``), s0 level 0's square-root weights; ``stats`` = [level 0's
@@ -114,7 +114,8 @@ def cascade_function(
     stats = cs.vertcat(ok0, cs.logic_and(ok0, ok1), rank_ok, anorm)
     bparams = cs.vertcat(lim_p, cone_lo, cone_up)
     inputs = [h0, g0, h1, g1, contact, rows, brows, c0, c1, q, qd, bparams, cmat, s0]
-    outputs = [opt0[0], opt0[1], y1, lam, fbasis, phi, cs.SX(_lower(low)), stats, bmat @ y1 + hf, lower, upper]
+    outputs = [opt0[0], opt0[1], y1, cs.vertcat(lam, phi), fbasis, cs.SX(_lower(low)), stats, bmat @ y1 + hf]
+    outputs += [lower, upper]
     return cs.Function(_NAME, inputs, [cs.densify(o) for o in outputs])
 
 
@@ -210,14 +211,13 @@ class GeneratedCascade:
             assert arr.flags.c_contiguous  # bound by its memory: a view of the array itself
             buf.set_arg(k, view(arr.reshape(-1)))
         self.y0, self.lam0, self.y1 = np.zeros(ny), np.zeros(me), np.zeros(ny)
-        self.lam1 = np.zeros(me + m0)
+        self._lam_phi = np.zeros(me + 2 * m0)  # level 1's multipliers [contact rows; F's rows], then φ
         self._basis_t = np.zeros((ny, m0))  # F (m0 × ny), held as its transpose
-        self.phi = np.zeros(m0)
         self._low_t = np.zeros((m0, m0))  # L (m0 × m0), held as its transpose
         self.stats = np.zeros(4)
         self.tau = np.zeros(n)
         self.lower, self.upper = np.zeros(mi), np.zeros(mi)
-        results = [self.y0, self.lam0, self.y1, self.lam1, self._basis_t, self.phi, self._low_t, self.stats, self.tau]
+        results = [self.y0, self.lam0, self.y1, self._lam_phi, self._basis_t, self._low_t, self.stats, self.tau]
         results += [self.lower, self.upper]
         for k, res in enumerate(results):
             buf.set_res(k, view(res.reshape(-1)))
@@ -225,6 +225,9 @@ class GeneratedCascade:
         self._scale: FloatArray | None = None
         self._live: np.ndarray | None = None
         self._live_entries = np.zeros(0, dtype=np.intp)
+        self._live_basis = np.zeros(0, dtype=np.intp)
+        self._live_lam_phi = np.zeros(0, dtype=np.intp)
+        self._me = me
 
     def __reduce__(self) -> tuple[Any, ...]:
         # rebuilt (the library loads from the cache): the buffer is this process's
@@ -238,7 +241,11 @@ class GeneratedCascade:
             self._s0[:] = scale[: self.m0, 0]
             live = np.flatnonzero(self._s0)
             self._live = None if live.size == self.m0 else live
-            self._live_entries = (live[:, None] * self.m0 + live[None, :]).ravel()  # L_live's, in L's transpose
+            m0, me, ny = self.m0, self._me, self._basis_t.shape[0]
+            # the entries of the rows of non-zero weight: of L (in its transpose), F (in its transpose) and [λ1; φ]
+            self._live_entries = (live[:, None] * m0 + live[None, :]).ravel()
+            self._live_basis = (live[:, None] + m0 * np.arange(ny)[None, :]).ravel()
+            self._live_lam_phi = np.concatenate((np.arange(me), me + live, me + m0 + live))
             self._scale = scale
         return self._live
 
@@ -266,15 +273,15 @@ class GeneratedCascade:
         contact = gen.contact.copy()
         res.contact = (contact[:, :ny], contact[:, ny].copy())
         res.bounds = (self.lower.copy(), self.upper.copy())
-        rows, m0 = gen.rows.copy(), self.m0
+        rows, m0, me = gen.rows.copy(), self.m0, self._me
         res.rows += [rows[:m0], rows[m0:]]
-        basis = self._basis_t.T
         if live is None:
-            F, phi, lam = basis.copy(), self.phi.copy(), self.lam1.copy()
-        else:
-            me = qp.me
-            F, phi = basis[live], self.phi[live]
-            lam = np.concatenate((self.lam1[:me], self.lam1[me:][live]))
+            k, F, lam_phi = m0, self._basis_t.T.copy(), self._lam_phi.copy()
+        else:  # the rows of non-zero weight (k of them): F's, their multipliers and φ's
+            k = live.size
+            F = self._basis_t.take(self._live_basis).reshape(k, ny)
+            lam_phi = self._lam_phi.take(self._live_lam_phi)
+        lam, phi = lam_phi[: me + k], lam_phi[me + k :]
         res.frozen += [None, (F, phi)]
         res.hg = (gen.H[0].copy(), gen.g[0].copy())  # the QPs' arrays made when asked for (step_arrays)
         res.hg_below.append((gen.H[1].copy(), gen.g[1].copy()))
@@ -287,6 +294,6 @@ class GeneratedCascade:
         res.status += ["solved", "solved"]
         res.y = y1
         chain.record(qp.key, none)  # SolverChain.key of each level's QP
-        chain.record((1, ny, qp.me + F.shape[0], mi), none)
+        chain.record((1, ny, me + k, mi), none)
         res.tau = self.tau.copy()
         return res
