@@ -16,12 +16,14 @@ for the layout's sizes computes, from those outputs and the limits' bounds l, u:
   τ = B y₁ + h'.
 
 A row of zero weight is zero in T₀: the code puts 1 on its diagonal in T₀T₀ᵀ and in the Schur complement, which
-leaves it out exactly (its row of F and its multiplier are zero). Which basis :func:`extend_basis` would take is
-decided as it decides: its rank test (every kept row's squared norm above (10⁻⁹ max|T₀|)²) in the code, and
-LAPACK's estimate of the reciprocal condition number of T₀T₀ᵀ from the code's factor (``dpocon``) above
-:data:`~armctl.controllers.osc.hierarchy.WELL_CONDITIONED`. Where any of this fails the step solves the levels
-as before (the solver chain); where it holds, the step's τ is that of the verified optimum of both levels, the
-same QPs as the chain's, and its frozen rows are the chain path's F.
+leaves it out exactly (its row of F and its multiplier are zero). The code takes F only where
+:func:`extend_basis` takes that basis too: its rank test (every kept row's squared norm above (10⁻⁹ max|T₀|)²),
+and the reciprocal condition number of G = T₀T₀ᵀ (1-norm, its kept rows), 1 / (‖G‖₁ ‖G⁻¹‖₁), computed exactly
+from the inverse, above :data:`~armctl.controllers.osc.hierarchy.WELL_CONDITIONED` by a relative margin of 10⁻⁶:
+LAPACK's estimate that :func:`extend_basis` reads (``dpocon``) bounds ‖G⁻¹‖₁ from below (to rounding, far
+inside the margin), so its figure is then above the threshold too. Where any of this fails the step solves the
+levels as before (the solver chain, and :func:`extend_basis` itself); where it holds, the step's τ is that of the
+verified optimum of both levels, the same QPs as the chain's, and its frozen rows are the chain path's F.
 """
 
 from __future__ import annotations
@@ -31,7 +33,6 @@ from typing import TYPE_CHECKING, Any
 
 import casadi as cs
 import numpy as np
-from scipy.linalg import lapack
 
 from armctl._checks import FloatArray
 from armctl.codegen import library as codegen
@@ -49,10 +50,12 @@ if TYPE_CHECKING:
     from armctl.controllers.osc.contact_qp import ContactQP
     from armctl.controllers.osc.generated_contact import GeneratedContactData
 
-_CODE_VERSION = 2
+_CODE_VERSION = 3
 _NAME = "osc_contact_cascade"
 #: the rank test of extend_basis: a row is kept if its norm exceeds this times the largest entry of T₀
 _RANK_TOL = 1e-9
+#: the relative margin above WELL_CONDITIONED of the exact reciprocal condition number (module docstring)
+_MARGIN = 1e-6
 
 
 def cascade_function(
@@ -61,11 +64,11 @@ def cascade_function(
     """The CasADi function of the module for n joints, y of size ``ny``, ``me`` contact rows, ``m`` task rows of
     which level 0 has the first ``m0``, ``mi`` inequality rows (``limits``' rows, then the cones') of which
     ``tau_rows`` are torque rows: ``f(H0, g0, H1, g1, contact, rows, brows, c0, c1, q, qd, bounds, C, s0) ->
-    (y0, λ0, y1, [λ1; φ], F, L, stats, τ, l, u)``, ``contact`` = [A | b], ``rows`` = the task rows [J | t] of all
+    (y0, λ0, y1, [λ1; φ], F, stats, τ, l, u)``, ``contact`` = [A | b], ``rows`` = the task rows [J | t] of all
     levels, ``brows`` = [B | −h'], c_k each level's scale, ``bounds`` the limits' parameters
     (:func:`~armctl.controllers.osc.generated_limits.limit_params`) and the cones' bounds, C the inequality rows
     on y (the torque rows' are B, given by ``brows``), s0 level 0's square-root weights; ``stats`` = [level 0's
-    verdict, both levels' verdict, the rank test, ‖T₀T₀ᵀ‖₁]; l, u the inequality rows' public bounds at (q,
+    verdict, 1 if both levels' verdicts and the basis tests pass]; l, u the inequality rows' public bounds at (q,
     q̇)."""
     h0, h1 = cs.SX.sym("H0", ny, ny), cs.SX.sym("H1", ny, ny)
     g0, g1 = cs.SX.sym("g0", ny), cs.SX.sym("g1", ny)
@@ -110,11 +113,15 @@ def cascade_function(
     rank_ok = cs.SX(1.0)
     for i in range(m0):
         rank_ok = cs.logic_and(rank_ok, cs.logic_or(dropped[i] == 1, gram0[i, i] > (_RANK_TOL * scale) ** 2))
+    # 1 / (‖G‖₁ ‖G⁻¹‖₁) of the kept rows (G + the 1s is block diagonal: the kept columns' sums are G⁻¹'s)
+    kept = 1.0 - dropped
+    inv_norm = cs.mmax(kept * cs.sum1(cs.fabs(cholesky_substitute(low, cs.SX.eye(m0)))).T)
     anorm = cs.mmax(cs.sum1(cs.fabs(gram0)))
-    stats = cs.vertcat(ok0, cs.logic_and(ok0, ok1), rank_ok, anorm)
+    well = cs.logic_and(cs.sum1(kept) >= 1.0, anorm * inv_norm * (WELL_CONDITIONED * (1.0 + _MARGIN)) < 1.0)
+    stats = cs.vertcat(ok0, cs.logic_and(cs.logic_and(ok0, ok1), cs.logic_and(rank_ok, well)))
     bparams = cs.vertcat(lim_p, cone_lo, cone_up)
     inputs = [h0, g0, h1, g1, contact, rows, brows, c0, c1, q, qd, bparams, cmat, s0]
-    outputs = [opt0[0], opt0[1], y1, cs.vertcat(lam, phi), fbasis, cs.SX(_lower(low)), stats, bmat @ y1 + hf]
+    outputs = [opt0[0], opt0[1], y1, cs.vertcat(lam, phi), fbasis, stats, bmat @ y1 + hf]
     outputs += [lower, upper]
     return cs.Function(_NAME, inputs, [cs.densify(o) for o in outputs])
 
@@ -129,16 +136,6 @@ def _forward(low: list[list[Any]], b: cs.SX) -> cs.SX:
             r = r - low[i][p] * out[p]
         out.append(r / low[i][i])
     return cs.vertcat(*out)
-
-
-def _lower(low: list[list[Any]]) -> cs.SX:
-    """The lower-triangular matrix of :func:`~armctl.dynamics.recursive.cholesky_factor`'s nested lists."""
-    k = len(low)
-    out = cs.SX.zeros(k, k)
-    for i in range(k):
-        for j in range(i + 1):
-            out[i, j] = low[i][j]
-    return out
 
 
 def for_qp(qp: ContactQP, gen: GeneratedContactData) -> GeneratedCascade:
@@ -213,18 +210,16 @@ class GeneratedCascade:
         self.y0, self.lam0, self.y1 = np.zeros(ny), np.zeros(me), np.zeros(ny)
         self._lam_phi = np.zeros(me + 2 * m0)  # level 1's multipliers [contact rows; F's rows], then φ
         self._basis_t = np.zeros((ny, m0))  # F (m0 × ny), held as its transpose
-        self._low_t = np.zeros((m0, m0))  # L (m0 × m0), held as its transpose
-        self.stats = np.zeros(4)
+        self.stats = np.zeros(2)
         self.tau = np.zeros(n)
         self.lower, self.upper = np.zeros(mi), np.zeros(mi)
-        results = [self.y0, self.lam0, self.y1, self._lam_phi, self._basis_t, self._low_t, self.stats, self.tau]
+        results = [self.y0, self.lam0, self.y1, self._lam_phi, self._basis_t, self.stats, self.tau]
         results += [self.lower, self.upper]
         for k, res in enumerate(results):
             buf.set_res(k, view(res.reshape(-1)))
         self._bound = (buf, args, results)  # the buffer reads and writes these: keep them alive
         self._scale: FloatArray | None = None
         self._live: np.ndarray | None = None
-        self._live_entries = np.zeros(0, dtype=np.intp)
         self._live_basis = np.zeros(0, dtype=np.intp)
         self._live_lam_phi = np.zeros(0, dtype=np.intp)
         self._me = me
@@ -242,8 +237,7 @@ class GeneratedCascade:
             live = np.flatnonzero(self._s0)
             self._live = None if live.size == self.m0 else live
             m0, me, ny = self.m0, self._me, self._basis_t.shape[0]
-            # the entries of the rows of non-zero weight: of L (in its transpose), F (in its transpose) and [λ1; φ]
-            self._live_entries = (live[:, None] * m0 + live[None, :]).ravel()
+            # the entries of the rows of non-zero weight: of F (in its transpose) and of [λ1; φ]
             self._live_basis = (live[:, None] + m0 * np.arange(ny)[None, :]).ravel()
             self._live_lam_phi = np.concatenate((np.arange(me), me + live, me + m0 + live))
             self._scale = scale
@@ -256,17 +250,7 @@ class GeneratedCascade:
         ny = qp.ny
         live = self._weights(qp)
         self._run()
-        stats = self.stats
-        if stats[1] != 1.0 or stats[2] != 1.0:
-            return None
-        low = self._low_t.T
-        if live is not None:
-            if not 0 < live.size <= ny:
-                return None
-            k = live.size
-            low = self._low_t.take(self._live_entries).reshape(k, k).T  # L's rows and columns of non-zero weight
-        rcond, info = lapack.dpocon(low, float(stats[3]), uplo="L")
-        if info != 0 or not rcond > WELL_CONDITIONED:
+        if self.stats[1] != 1.0 or (live is not None and live.size > ny):
             return None
         res = ContactStep()
         res.b_rows = gen.brows.copy()  # kept by the step (the code's outputs are overwritten by the next run)
