@@ -13,6 +13,7 @@ from armctl.controllers.osc import (
     Contact,
     ContactForceTask,
     FramePoseTask,
+    FramePositionTask,
     OperationalSpaceQP,
     PostureTask,
     TorqueLimit,
@@ -128,3 +129,29 @@ def test_a_two_level_controller_pickles_with_its_generated_code() -> None:
         copy = pickle.loads(pickle.dumps(ctrl))  # after steps too
         for q, qd in states:
             np.testing.assert_allclose(copy(0.0, q, qd, ref), ctrl(0.0, q, qd, ref), atol=1e-6, rtol=0)
+
+
+def test_dependent_rows_in_level_0_take_the_svd_basis_on_both_paths() -> None:
+    """Level 0 with the tool's position asked twice (its rows dependent: T₀T₀ᵀ singular), the posture below: the
+    generated code refuses its basis, the step takes extend_basis's SVD basis as the NumPy path does, and both give
+    the same τ to 1e-9 N·m with both levels solved; the frozen rows are orthonormal, as many as the rank (3)."""
+    dyn = panda_dynamics(friction=True)
+    ref = armctl.Reference(Q_HOME)
+
+    def make(compile: bool | str) -> OperationalSpaceQP:
+        target = dyn.frame_pose(Q_HOME)[:3, 3] + [0.02, 0.0, -0.01]
+        first = FramePositionTask(kp=400.0)
+        second = FramePositionTask(kp=400.0, weight=2.0, name="again")
+        first.set_target(target)
+        second.set_target(target)
+        return OperationalSpaceQP(dyn, [first, second, PostureTask(7, kp=25.0, priority=1)], compile=compile)
+
+    ctrl, numpy_ctrl = make("auto"), make(False)
+    assert ctrl.uses_generated_code
+    for q, qd in _states(4, seed=24):
+        np.testing.assert_allclose(ctrl(0.0, q, qd, ref), numpy_ctrl(0.0, q, qd, ref), atol=1e-9, rtol=0)
+        sol = ctrl.last_solution
+        assert sol is not None and sol.level_status == ("solved", "solved")
+        F = sol.problem(1).A[sol.problem(0).b.shape[0] :]
+        assert F.shape[0] == 3
+        np.testing.assert_allclose(F @ F.T, np.eye(3), atol=1e-12)
