@@ -90,6 +90,7 @@ class PressAndSlide(Controller):
         else:
             self.contact = Contact(mode="sliding", mu=mu, kd=100.0, active=False)
             self.force_task = ContactForceTask(self.contact, 0.0, weight=1.0)
+            self._force = 0.0  # the force task's target [N]
             self.ctrl = OperationalSpaceQP(
                 dyn, [self.pose, self.force_task, PostureTask(dyn.n, kp=25.0, priority=1)], contacts=[self.contact]
             )
@@ -124,6 +125,7 @@ class PressAndSlide(Controller):
         if not self.closed_form:
             self.contact.active = False
             self.force_task.set_target(0.0)
+            self._force = 0.0
 
     def compute(self, t: float, q: np.ndarray, qd: np.ndarray, ref: Reference) -> np.ndarray:
         if self.touched is None and self.dynamics.frame_pose(q)[2, 3] <= self.z_table:
@@ -132,7 +134,10 @@ class PressAndSlide(Controller):
                 self.contact.active = True
                 self.pose.weight = [1, 1, 0, 1, 1, 1]  # the contact takes over the normal direction
         if self.touched is not None and not self.closed_form:
-            self.force_task.set_target(self.force_target * min(1.0, (t - self.touched) / 0.2))
+            force = self.force_target * min(1.0, (t - self.touched) / 0.2)
+            if force != self._force:  # the ramp, then its end held (set once)
+                self.force_task.set_target(force)
+                self._force = force
         tau = self.ctrl.compute(t, q, qd, ref)
         self.last_log = dict(self.ctrl.last_log)
         return tau

@@ -27,7 +27,20 @@ class ContactStep:
     verified solution (None for a level that kept the one above) and status, and the rows the public problem is
     made from (B = [M | −J_cᵀ | −h'], the contact rows, the bounds, each level's task rows)."""
 
-    __slots__ = ("arrays", "b_rows", "bounds", "contact", "frozen", "hg", "rows", "solutions", "status", "tau", "y")
+    __slots__ = (
+        "arrays",
+        "b_rows",
+        "bounds",
+        "contact",
+        "frozen",
+        "hg",
+        "hg_below",
+        "rows",
+        "solutions",
+        "status",
+        "tau",
+        "y",
+    )
 
     def __init__(self) -> None:
         self.arrays: list[QPArrays] = []
@@ -37,6 +50,8 @@ class ContactStep:
         self.rows: list[FloatArray] = []
         #: (H, g) of level 0 for a step taken without a solver, whose arrays are made when asked for
         self.hg: tuple[FloatArray, FloatArray] | None = None
+        #: likewise (H, g) of the levels below 0 (their rows A and F of ``frozen``)
+        self.hg_below: list[tuple[FloatArray, FloatArray]] = []
         self.b_rows: FloatArray
         self.contact: tuple[FloatArray, FloatArray]
         self.bounds: tuple[FloatArray, FloatArray]
@@ -73,7 +88,13 @@ def step_arrays(qp: ContactQP, res: ContactStep) -> list[QPArrays]:
     if not res.arrays and res.hg is not None:
         brows = res.b_rows
         C, ly, uy = qp.inequalities(brows, -brows[:, qp.ny], res.bounds)
-        res.arrays.append(QPArrays(*res.hg, *res.contact, C, ly, uy))
+        A, b = res.contact
+        res.arrays.append(QPArrays(*res.hg, A, b, C, ly, uy))
+        for k, (H, g) in enumerate(res.hg_below, 1):
+            frozen = res.frozen[k]
+            assert frozen is not None  # a level below 0 has its frozen rows
+            F, phi = frozen
+            res.arrays.append(QPArrays(H, g, np.vstack((A, F)), np.concatenate((b, phi)), C, ly, uy))
     return res.arrays
 
 

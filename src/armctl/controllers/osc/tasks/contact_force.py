@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
 import numpy as np
@@ -82,6 +83,8 @@ class ContactForceTask(Task):
         self.set_target(force)
 
     def _value(self, force: ArrayLike) -> FloatArray:
+        if self.normal_only and type(force) is float and 0.0 <= force < math.inf:  # a press: nothing to refuse
+            return np.array([force])
         a = np.asarray(force, dtype=float)
         if self.normal_only:
             a = np.atleast_1d(self.contact.normal @ a if a.shape == (3,) else a)
