@@ -26,12 +26,14 @@ def test_section_writes_finite_figures_a_chart_and_tables(data: dict[str, Any], 
     assert "panda_collision" in interaction.summary(data)
     interaction.plot(data, tmp_path / "interaction.png")
     assert (tmp_path / "interaction.png").stat().st_size > 30_000
-    assert [len(t.rows) for t in tables.interaction(data)][:3] == [4, 3, 4]
+    assert [len(t.rows) for t in tables.interaction(data)][:4] == [4, 3, 2, 4]
 
 
 @pytest.mark.slow
 def test_borders_predicted_and_simulated_agree(data: dict[str, Any]) -> None:
     for r in data["force_border"]["rows"]:
+        assert 0.85 < r["ratio"] < 1.15, r
+    for r in data["impedance_map"]["rows"]:
         assert 0.85 < r["ratio"] < 1.15, r
     for c in data["impedance_map"]["cells"]:
         assert c["outcome"] == ("stable" if c["factor"] < 1.0 else "chatter"), c

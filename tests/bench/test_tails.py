@@ -32,3 +32,25 @@ def test_the_tails_are_reported_and_checked() -> None:
     fig = {"model": "panda", "PDGravity": speed, "tails": {"PDGravity": tail}}
     assert controller_speed.beyond_targets(fig) == ["PDGravity: p99.9 / p50 5.00 > 4.0"]
     assert "p99.9 / p50 5.00" in controller_speed.report(fig)
+
+
+def test_a_long_run_times_a_numpy_floor_between_the_calls() -> None:
+    """Past the calibration (the law's first CALIBRATION calls, then the floor's own next CALIBRATION samples, left
+    out), every call is followed by a timed floor: its samples are the rest of the run's; the report names it and
+    the collections counted during the loop."""
+    from armctl.scenes import panda_topp
+
+    steps = 2 * tails.CALIBRATION + 50
+    t = tails.law_tail(panda_topp().controller("pd_gravity"), steps=steps)
+    assert t["calls"] == steps and t["floor"]["calls"] == 50 and t["floor"]["products"] >= 1
+    assert t["gc_runs"] >= 0
+    assert "NumPy floor of the same median" in tails.tail_text(t) and "garbage collections" in tails.tail_text(t)
+
+
+def test_the_clock_jumps_are_counted_over_the_time_asked() -> None:
+    """A short spin: a count per second, a median jump at least the threshold when there is one, and the share per
+    µs of a call that follows from the count."""
+    j = tails.clock_jumps(seconds=0.05, threshold_s=5e-6)
+    assert j["per_s"] >= 0 and j["per_us"] == pytest.approx(j["per_s"] * 1e-6)
+    assert j["median_s"] == 0.0 or j["median_s"] > 5e-6
+    assert "a second" in tails.jumps_text(j)

@@ -99,6 +99,18 @@ def _sim_fig(scale: float) -> dict[str, Any]:
             "ratio_to_mujoco": scale * t["contact_plant_ratio"],
             "python_ratio_to_mujoco": 20.0,
         },
+        "contact_loop": {
+            "periods": 100,
+            "substeps": 5,
+            "dt": 2e-4,
+            "us_per_period": 100.0,
+            "mujoco_us_per_period": 100.0,
+            "controller_us_per_period": 50.0,
+            "ratio_to_mujoco": scale * t["contact_loop_ratio"],
+            "controller_bound": 0.5,
+            "touched_s": 0.24,
+            "mujoco_touched_s": None,
+        },
         "sweep": {
             "runs": 4,
             "duration_s": 1.0,
@@ -117,7 +129,7 @@ def _sim_fig(scale: float) -> dict[str, Any]:
 def test_sim_speed_targets() -> None:
     assert sim_speed.beyond_targets(_sim_fig(1.0)) == []
     beyond = sim_speed.beyond_targets(_sim_fig(1.1))
-    assert len(beyond) == 7 and "chain N = 20 / MuJoCo <= 2.0" in beyond and "chain N = 2 / MuJoCo <= 2.0" not in beyond
+    assert len(beyond) == 8 and "chain N = 20 / MuJoCo <= 2.0" in beyond and "chain N = 2 / MuJoCo <= 2.0" not in beyond
     assert "sticking chain N = 20 / MuJoCo <= 1.5" in beyond and "sticking chain N = 2 / MuJoCo <= 1.5" not in beyond
     for scale in (1.0, 1.1):
         text = sim_speed.report(_sim_fig(scale))

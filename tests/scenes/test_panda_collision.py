@@ -4,6 +4,8 @@ stop the push that computed torque alone keeps up."""
 
 from __future__ import annotations
 
+import math
+import warnings
 from functools import cache
 from typing import Any
 
@@ -11,7 +13,7 @@ import numpy as np
 import pytest
 
 from armctl.controllers import CollisionReaction, ComputedTorque, Measurement, MomentumObserver
-from armctl.errors import InvalidParameterError, UnknownNameError
+from armctl.errors import InvalidParameterError, SimulationWarning, UnknownNameError
 from armctl.references import Reference
 from armctl.scenes import scene
 from armctl.scenes.panda_collision import DEFAULTS
@@ -91,3 +93,22 @@ def test_the_scene_times_its_controller_with_the_recorded_applied_torques() -> N
     window = sc.replay_window(res, 20)
     assert len(window["measurement"]) == 20
     assert sc.compute_time("gravity", window, rounds=1) > 0.0
+
+
+def test_a_diverged_run_keeps_its_joint_error_until_the_divergence() -> None:
+    """A diverged run has no tracking error to rank (NaN), and its joint error until the divergence is the RMS and
+    max of q − q_ref over the samples it recorded, computed here from the reference itself."""
+    sc = scene("panda_collision")
+    gains = {"kp": 1e7, "kd": 1e4}  # far beyond the sampled-data border (k·T² ≫ 4), torques unbounded
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", SimulationWarning)  # the limits it crosses on its way to diverging
+        res = sc.run("no_reaction", gains=gains, saturate=False, duration=0.5)
+    assert res.diverged and len(res.t) > 1
+    m = sc.metrics(res, "no_reaction", gains=gains, timing_rounds=0)
+    assert m["diverged"] and m["diverged_at"] == res.diverged_at
+    assert math.isnan(m["rms_error"]) and math.isnan(m["max_error"])
+    err = res.q - np.array([sc.reference(t).q for t in res.t])
+    assert m["rms_error_until_divergence"] == pytest.approx(float(np.sqrt((err**2).mean())))
+    assert m["max_error_until_divergence"] == pytest.approx(float(np.abs(err).max()))
+    assert m["error_unit"] == "rad"
+    assert math.isnan(m["contact_at"]) or 0.0 <= m["contact_at"] <= res.t[-1]

@@ -2,9 +2,9 @@
 :meth:`CompiledPlant.period <armctl.sim.compiled_plant.CompiledPlant.period>`, ``step_period.c``), within the one
 loop that checks and saturates the controller's torque for every engine.
 
-References: the Python step (the loop's own checks of τ, its saturation and integrate: NumPy, Pinocchio, LAPACK),
-written independently of the generated C; ``np.clip`` at the effort limits; the sample times of a disturbance; exact
-rest for stiction.
+References: the Python step (the Python engine's hold of τ by :class:`~armctl.sim.saturation.Saturation`, its
+integration: NumPy, Pinocchio, LAPACK), written independently of the generated C; ``np.clip`` at the effort limits;
+the sample times of a disturbance; exact rest for stiction.
 """
 
 from __future__ import annotations
@@ -22,11 +22,12 @@ from armctl.errors import SimulationWarning
 from armctl.model.parts import JointLimits
 from armctl.sim import Forces, simulate
 from armctl.sim.compiled import choose_step
-from armctl.sim.engine import state_code
+from armctl.sim.engine import TORQUE_NOT_FINITE, state_code
 from armctl.sim.friction import make_friction
 from armctl.sim.generated_engine import PeriodBinding
 from armctl.sim.options import regroup
 from armctl.sim.plant import Plant
+from armctl.sim.saturation import Saturation
 from armctl.sim.stepper import advance
 from tests.sim.helpers import OpenLoop, Ramp, slider, zero_torque
 
@@ -35,6 +36,11 @@ pytestmark = pytest.mark.one_step  # each test names the step it runs
 SCHEMES = ("rk4", "euler", "semi-implicit-euler", "implicit-euler")
 #: the effort limits of the saturating planar_3r [N·m]
 LIMITS = np.array([6.0, 15.0, 2.0])
+
+
+def unlimited(n: int) -> dict:
+    """A period binding's saturation that holds the torque as it is (n joints)."""
+    return {"effort_limit": np.full(n, np.inf), "saturate": False}
 
 
 def _with_effort(model: armctl.RobotModel, effort: np.ndarray) -> armctl.RobotModel:
@@ -207,7 +213,8 @@ def test_one_period_writes_its_rows_of_the_record_and_nothing_else() -> None:
     tau = dyn.gravity_torque(q)
     tau[3] += 8.0  # joint 4 breaks away
     rows, k, m, h = 6, 2, 3, 1e-3 / 3
-    record = {name: np.full((rows, 7), -7.0) for name in ("tau", "q", "qd", "qdd", "tau_friction", "stuck")}
+    names = ("tau", "q", "qd", "qdd", "tau_friction", "stuck", "tau_applied")
+    record = {name: np.full((rows, 7), -7.0) for name in names}
     record.update({name: np.full(rows, -7.0) for name in ("work_friction", "work_external")})
     record["q"][k], record["qd"][k], record["tau"][k] = q, v, tau
     record["stuck"][k] = 0.0
@@ -215,7 +222,9 @@ def test_one_period_writes_its_rows_of_the_record_and_nothing_else() -> None:
     before = {name: a.copy() for name, a in record.items()}
     generated = _plant(dyn, True)
     generated.bind_record(
-        PeriodBinding(**record, substeps=m, dt=h, accel_at_start=False, max_velocity=1e3, max_position=math.inf)
+        PeriodBinding(
+            **record, **unlimited(7), substeps=m, dt=h, accel_at_start=False, max_velocity=1e3, max_position=math.inf
+        )
     )
     generated.period(k, 0.002)
 
@@ -235,11 +244,12 @@ def test_one_period_writes_its_rows_of_the_record_and_nothing_else() -> None:
     np.testing.assert_allclose(record["qdd"][k], qdd, rtol=1e-10, atol=1e-10)
     np.testing.assert_allclose(record["tau_friction"][k], friction, rtol=1e-12, atol=1e-12)
     np.testing.assert_array_equal(record["stuck"][k], stuck.astype(float))
+    np.testing.assert_array_equal(record["tau_applied"][k], tau)  # held as it is (no saturation)
     assert record["work_friction"][k + 1] == pytest.approx(work, rel=1e-9) and work < 1.5
     assert record["work_external"][k + 1] == 1.5
     for name, a in record.items():
         written = {"q": [k + 1], "qd": [k + 1], "work_friction": [k + 1], "work_external": [k + 1]}.get(name, [])
-        written = written + ([k] if name in ("qdd", "tau_friction", "stuck") else [])
+        written = written + ([k] if name in ("qdd", "tau_friction", "stuck", "tau_applied") else [])
         others = [i for i in range(rows) if i not in written]
         np.testing.assert_array_equal(a[others], before[name][others], err_msg=name)
 
@@ -250,14 +260,16 @@ def test_a_row_outside_the_record_is_an_index_error() -> None:
     model = armctl.models.planar_2r().with_friction(viscous=0.1, coulomb=0.2, static=0.3)
     dyn = armctl.Dynamics(model)
     rows = 3
-    names = ("tau", "q", "qd", "qdd", "tau_friction", "stuck")
+    names = ("tau", "q", "qd", "qdd", "tau_friction", "stuck", "tau_applied")
     record = {name: np.zeros((rows, 2)) for name in names}
     record.update({name: np.zeros(rows) for name in ("work_friction", "work_external")})
     record["q"][:] = [0.2, -0.1]
     record["tau"][:] = [0.5, -0.3]
     plant = _plant(dyn, True)
     plant.bind_record(
-        PeriodBinding(**record, substeps=1, dt=1e-3, accel_at_start=False, max_velocity=1e3, max_position=math.inf)
+        PeriodBinding(
+            **record, **unlimited(2), substeps=1, dt=1e-3, accel_at_start=False, max_velocity=1e3, max_position=math.inf
+        )
     )
     untouched = {name: a.copy() for name, a in record.items()}
     with pytest.raises(IndexError, match="sample 2 is outside the record"):
@@ -293,12 +305,14 @@ def test_the_period_checks_the_state_it_leaves_by_the_loops_rule(v0: list, tau: 
     (:func:`armctl.sim.engine.state_code`, which the other engines use)."""
     dyn = armctl.Dynamics(armctl.models.planar_2r().with_friction(viscous=0.1, coulomb=0.2, static=0.3))
     rows = 2
-    names = ("tau", "q", "qd", "qdd", "tau_friction", "stuck")
+    names = ("tau", "q", "qd", "qdd", "tau_friction", "stuck", "tau_applied")
     record = {name: np.zeros((rows, 2)) for name in names}
     record.update({name: np.zeros(rows) for name in ("work_friction", "work_external")})
     record["tau"][0], record["q"][0], record["qd"][0] = tau, [0.2, 0.999], v0
     plant = _plant(dyn, True)
-    binding = PeriodBinding(**record, substeps=2, dt=5e-4, accel_at_start=False, max_velocity=3.0, max_position=1.0)
+    binding = PeriodBinding(
+        **record, **unlimited(2), substeps=2, dt=5e-4, accel_at_start=False, max_velocity=3.0, max_position=1.0
+    )
     plant.bind_record(binding)
     with np.errstate(all="ignore"):
         code = plant.period(0, 0.0)
@@ -317,3 +331,63 @@ def test_stiction_holds_exactly_on_the_period(substeps: int) -> None:
     assert res.info["compiled"]
     assert (res.q == q0).all() and (res.qd == 0.0).all() and (res.qdd == 0.0).all() and res.stuck.all()
     np.testing.assert_allclose(res.tau_friction, np.broadcast_to(-g0, res.tau_friction.shape), rtol=1e-9, atol=1e-9)
+
+
+#: torques of planar_2r against the limits (4, inf) [N·m]: within, at, beyond, a sum that overflows, infinite, NaN
+HELD_CASES = [
+    [1.5, -300.0],
+    [4.0, 1e9],
+    [-4.0, -0.0],
+    [7.5, 2.0],
+    [-1e300, 5.0],
+    [1e308, 1e308],
+    [math.inf, 0.0],
+    [0.0, -math.inf],
+    [math.nan, 1.0],
+]
+
+
+@pytest.mark.parametrize("saturate", [True, False])
+@pytest.mark.parametrize("tau", HELD_CASES)
+def test_the_period_holds_the_torque_by_the_saturation_rule(tau: list, saturate: bool) -> None:
+    """The generated period holds τ_k as :class:`~armctl.sim.saturation.Saturation` does (its C transcription):
+    the same applied row bit for bit, np.clip at the limits where ``saturate`` (τ itself otherwise), and for a τ_k
+    that is not finite the code TORQUE_NOT_FINITE with nothing written (the state, q̈ and the applied row as they
+    were)."""
+    dyn = armctl.Dynamics(armctl.models.planar_2r().with_friction(viscous=0.1, coulomb=0.2, static=0.3))
+    limit = np.array([4.0, math.inf])
+    rows = 2
+    names = ("tau", "q", "qd", "qdd", "tau_friction", "stuck", "tau_applied")
+    record = {name: np.full((rows, 2), -7.0) for name in names}
+    record.update({name: np.zeros(rows) for name in ("work_friction", "work_external")})
+    record["q"][0], record["qd"][0], record["tau"][0] = [0.2, -0.3], [0.1, 0.0], tau
+    plant = _plant(dyn, True)
+    plant.bind_record(
+        PeriodBinding(
+            **record,
+            effort_limit=limit,
+            saturate=saturate,
+            substeps=1,
+            dt=1e-3,
+            accel_at_start=False,
+            max_velocity=math.inf,
+            max_position=math.inf,
+        )
+    )
+    before = {name: a.copy() for name, a in record.items()}
+    python_applied = np.full((rows, 2), -7.0)
+    with np.errstate(all="ignore"):
+        held = Saturation(python_applied, limit, saturate).hold(0, np.array(tau))
+        code = plant.period(0, 0.0)
+    finite = bool(np.isfinite(tau).all())
+    assert (held is not None) == finite
+    if not finite:
+        assert code == TORQUE_NOT_FINITE
+        for name, a in record.items():
+            np.testing.assert_array_equal(a, before[name], err_msg=name)
+        return
+    assert code == state_code(record["q"][1], record["qd"][1], math.inf, math.inf)  # (a huge τ held: not finite)
+    expected = np.clip(tau, -limit, limit) if saturate else np.array(tau)
+    np.testing.assert_array_equal(python_applied[0], expected)
+    np.testing.assert_array_equal(record["tau_applied"][0], expected)
+    assert np.signbit(record["tau_applied"][0]).tolist() == np.signbit(python_applied[0]).tolist()

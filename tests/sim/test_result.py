@@ -107,3 +107,25 @@ def test_importing_the_simulator_does_not_import_matplotlib() -> None:
     code = "import sys, armctl.sim; print('matplotlib' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "False"
+
+
+def test_a_reference_that_varies_is_stacked_when_read_and_travels_with_the_result() -> None:
+    """A reference given as a function of time: res.reference holds, row by row, what the function returned at
+    each sample (its vectors, read-only), whether it is first read before or after the result is pickled."""
+    import pickle
+
+    def ref(t: float) -> armctl.Reference:
+        return armctl.Reference([0.3 * t, -t], [0.3, -1.0], [0.0, t * t])
+
+    dyn = armctl.Dynamics(armctl.models.planar_2r())
+    res = simulate(dyn, ComputedTorque(dyn, 100.0, 20.0), ref, 0.05)
+    copy = pickle.loads(pickle.dumps(res))
+    for r in (res, copy):
+        expected = [ref(t) for t in r.t]
+        np.testing.assert_array_equal(r.reference.q, [e.q for e in expected])
+        np.testing.assert_array_equal(r.reference.qd, [e.qd for e in expected])
+        np.testing.assert_array_equal(r.reference.qdd, [e.qdd for e in expected])
+        assert not r.reference.q.flags.writeable and not r.reference.qdd.flags.writeable
+        np.testing.assert_array_equal(r.error, r.reference.q - r.q)
+    with pytest.raises(AttributeError, match="no attribute 'x'"):
+        _ = res.reference.x

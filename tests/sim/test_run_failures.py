@@ -191,3 +191,24 @@ def test_an_option_given_twice_or_a_wrong_group_is_named() -> None:
         simulate(dyn, ctrl, ref, 0.1, noise_q=0.01, sensing=Sensing(seed=1))
     with pytest.raises(armctl.errors.InvalidParameterError, match=r"sensing must be an armctl\.sim\.Sensing"):
         simulate(dyn, ctrl, ref, 0.1, sensing={"noise_q": 0.01})  # type: ignore[arg-type]
+
+
+def test_a_disturbance_that_raises_within_a_period_keeps_the_torque_held_there() -> None:
+    """A disturbance that raises at the middle of the period from t = 0.05 s (the plant samples it at the start,
+    middle and end of each step): the run keeps the samples up to t = 0.05 s, the torque of that sample computed
+    and held (its applied row np.clip of it at the effort limits), and its acceleration not computed (NaN)."""
+    dyn, ref = _setup()
+
+    def push(t: float) -> np.ndarray:
+        if t > 0.05 and abs(t / 1e-3 - round(t / 1e-3)) > 1e-6:
+            raise RuntimeError("the disturbance's table ends here")
+        return np.array([1.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+
+    with pytest.raises(RuntimeError, match="table ends here") as info:
+        simulate(dyn, PDGravity(dyn, 50.0, 10.0), ref, 0.2, q0=[0.0, 0.0], forces=Forces(disturbance=push))
+    part = info.value.result
+    assert len(part.t) == 51 and part.t[-1] == pytest.approx(0.05)
+    assert np.isfinite(part.tau[50]).all()
+    limit = dyn.model.effort_limit
+    np.testing.assert_array_equal(part.tau_applied, np.clip(part.tau, -limit, limit))
+    assert np.isnan(part.qdd[50]).all() and np.isfinite(part.qdd[:50]).all()

@@ -2,7 +2,9 @@
 measured in the same run (interleaved rounds), each law on the Pinocchio backend (its default path: the Slotine–Li
 laws as one generated call), again on ``Dynamics(model, compile=True)``, and the Slotine–Li laws with
 ``compile=False`` (their NumPy path); and the spread of each law's per-call cost over a 20 000-step closed loop on the
-Panda with the ``panda_topp`` scene's gains (p50, p99.9 and their ratio, :func:`~armctl.bench.tails.law_tail`). Run:
+Panda with the ``panda_topp`` scene's gains (p50, p99.9 and their ratio, :func:`~armctl.bench.tails.law_tail`, each
+beside a NumPy floor of the same median timed between its calls, and the machine's CPU-clock jumps,
+:func:`~armctl.bench.tails.clock_jumps`). Run:
 ``python -m armctl.bench.controller_speed``."""
 
 from __future__ import annotations
@@ -14,7 +16,7 @@ from typing import Any
 import numpy as np
 
 import armctl
-from armctl.bench.tails import law_tail, tail_text
+from armctl.bench.tails import clock_jumps, jumps_text, law_tail, tail_text
 from armctl.bench.timing import paired_ratio
 from armctl.errors import BackendError
 
@@ -87,6 +89,7 @@ def run(number: int = 200, rounds: int = 75, seed: int = 0, tail_steps: int = 20
         laws = {"PDGravity": "pd_gravity", "ComputedTorque": "computed_torque", "PassivityBased": "passivity"}
         laws["Adaptive"] = "adaptive"
         out["tails"] = {name: law_tail(sc.controller(method), tail_steps) for name, method in laws.items()}
+        out["clock_jumps"] = clock_jumps()
     return out
 
 
@@ -110,6 +113,8 @@ def report(fig: dict[str, Any]) -> str:
         lines.append(f"  compile=True unavailable: {fig['compiled_unavailable']}")
     for name, t in fig.get("tails", {}).items():
         lines.append(f"  {name:30s} per call over a {t['calls']}-step closed loop: {tail_text(t)}")
+    if "clock_jumps" in fig:
+        lines.append(f"  {jumps_text(fig['clock_jumps'])}")
     return "\n".join(lines)
 
 

@@ -106,6 +106,8 @@ def _force_border(data: dict[str, Any], ax: Any) -> None:
 
 def _impedance_map(data: dict[str, Any], ax: Any) -> None:
     ax.loglog(data["k_d"], data["predicted"], "k--", label="predicted border k_e*(k_d)")
+    ax.plot([r["k_d"] for r in data["rows"]], [r["border"] for r in data["rows"]], "D", color="tab:blue", ms=4,
+            label="simulated border (bisection)")  # fmt: skip
     for o, (marker, color) in OUTCOME_STYLE.items():
         cells = [(c["k_d"], c["stiffness"]) for c in data["cells"] if c["outcome"] == o]
         if cells:
@@ -149,11 +151,14 @@ def summary(data: dict[str, Any]) -> str:
             f"ratio {r['ratio']:.3f}"
         )
     imp = data["impedance_map"]
-    lines.append("Cartesian impedance: predicted k_e* [N/m] and the simulated outcome at factors of it")
-    for k_d, k_star in zip(imp["k_d"], imp["predicted"], strict=True):
-        cells = [c for c in imp["cells"] if c["k_d"] == k_d]
+    lines.append("Cartesian impedance: table stiffness k_e* [N/m] where the contact chatters, predicted and simulated")
+    for r in imp["rows"]:
+        cells = [c for c in imp["cells"] if c["k_d"] == r["k_d"]]
         said = ", ".join(f"{c['factor']:g}×: {c['outcome']}" for c in cells)
-        lines.append(f"  k_d = {k_d:6.0f}   k_e* = {k_star:.3g}   {said}")
+        lines.append(
+            f"  k_d = {r['k_d']:6.0f}   predicted {r['predicted']:.3e}   simulated {r['border']:.3e}   "
+            f"ratio {r['ratio']:.3f}   {said}"
+        )
     lines += observer_tradeoff.summary_lines(data["observer"])
     lines.append("panda_collision: contact, detection [s], peak force, force 0.3 s after detection [N], push [N·s]")
     for method, d in data["collision"].items():

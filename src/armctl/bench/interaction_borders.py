@@ -5,8 +5,10 @@ sensor at the tool in world axes and one control period of measurement delay at 
 * Force control (:class:`~armctl.controllers.ForceControl`, proportional, inner computed torque): the critical
   force gain K_F* against the table's stiffness k_e, predicted by the sampled-data model of
   :mod:`armctl.tuning.force_stability` and found in closed loop by bisection over K_F.
-* Cartesian impedance (:class:`~armctl.controllers.CartesianImpedance`, default critical damping): for a grid of
-  impedance and table stiffnesses, whether the contact holds or chatters, against the predicted border k_e*(k_d).
+* Cartesian impedance (:class:`~armctl.controllers.CartesianImpedance`, default critical damping): the table
+  stiffness k_e*(k_d) where the contact starts to chatter, predicted by :mod:`armctl.tuning.impedance_stability`
+  from the controller's own Λ(q), K and D at the pose (:func:`~armctl.tuning.impedance_model`), found in closed
+  loop by bisection over k_e, and a grid of impedance and table stiffnesses around it.
 
 A run is ``"stable"`` when, after the first 0.3 s, the tool never leaves the table and the normal force's
 oscillation shrinks from the first half of the rest of the run to the second; ``"chatter"`` when the contact is
@@ -18,12 +20,14 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 
 import armctl
-from armctl.tuning.force_stability import critical_environment_stiffness, critical_force_gain, normal_inertia
+from armctl.tuning.force_stability import critical_force_gain, normal_inertia
+from armctl.tuning.impedance_stability import critical_environment_stiffness, impedance_model
 
 Q_READY = np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])
 PERIOD = 1e-3
@@ -88,14 +92,14 @@ def predicted_force_gain(stiffness: float) -> float:
     return critical_force_gain(stiffness, kp=INNER_KP, kd=INNER_KD, inertia=lam, period=PERIOD, delay=DELAY)
 
 
-def simulated_force_gain(stiffness: float, guess: float, steps: int = 7, duration: float = 1.0) -> dict[str, Any]:
-    """The force gain where the closed loop turns from stable to chatter, by bisection on log K_F between
-    ``guess``/2 and 2·``guess`` (widened if both ends agree); the runs' outcomes are kept."""
+def border(outcome_at: Callable[[float], str], guess: float, steps: int = 7) -> dict[str, Any]:
+    """The value x where ``outcome_at(x)`` turns from "stable" to anything else, by bisection on log x between
+    ``guess``/2 and 2·``guess`` (widened if both ends agree); the runs' (x, outcome) are kept."""
     runs: list[tuple[float, str]] = []
 
-    def stable(k: float) -> bool:
-        o = outcome(press(force_control(k), stiffness, duration, preload=PRELOAD))
-        runs.append((k, o))
+    def stable(x: float) -> bool:
+        o = outcome_at(x)
+        runs.append((x, o))
         return o == "stable"
 
     lo, hi = 0.5 * guess, 2.0 * guess
@@ -107,6 +111,12 @@ def simulated_force_gain(stiffness: float, guess: float, steps: int = 7, duratio
         mid = math.sqrt(lo * hi)
         lo, hi = (mid, hi) if stable(mid) else (lo, mid)
     return {"border": math.sqrt(lo * hi), "bracket": [lo, hi], "runs": runs}
+
+
+def simulated_force_gain(stiffness: float, guess: float, steps: int = 7, duration: float = 1.0) -> dict[str, Any]:
+    """The force gain where the closed loop on a table of ``stiffness`` [N/m] turns from stable to chatter
+    (:func:`border` from ``guess``)."""
+    return border(lambda k: outcome(press(force_control(k), stiffness, duration, preload=PRELOAD)), guess, steps)
 
 
 def force_border(quick: bool = False) -> dict[str, Any]:
@@ -133,17 +143,37 @@ def impedance(k_d: float) -> Any:
     return c
 
 
+def predicted_environment_stiffness(k_d: float) -> float:
+    """k_e* [N/m] of the sampled-data model for :func:`impedance` (its Λ, K and D at the ready pose)."""
+    model = impedance_model(impedance(k_d), Q_READY)
+    return critical_environment_stiffness(period=PERIOD, delay=DELAY, **model)
+
+
+def impedance_outcome(k_d: float, stiffness: float, duration: float = 1.0) -> str:
+    """:func:`outcome` of :func:`impedance` pressing on a table of ``stiffness`` [N/m], the simulator's step short
+    enough for the contact mode (RK4 well inside its accuracy)."""
+    dt = min(PERIOD, 0.3 / math.sqrt(stiffness / _setup()[3]))
+    return outcome(press(impedance(k_d), stiffness, duration, dt=PERIOD / math.ceil(PERIOD / dt)))
+
+
+def simulated_environment_stiffness(k_d: float, guess: float, steps: int = 7, duration: float = 1.0) -> dict[str, Any]:
+    """The table stiffness where impedance of stiffness ``k_d`` turns from stable to chatter (:func:`border` from
+    ``guess``)."""
+    return border(lambda k_e: impedance_outcome(k_d, k_e, duration), guess, steps)
+
+
 def impedance_map(quick: bool = False) -> dict[str, Any]:
-    """Outcomes of impedance pressing on tables of a grid of stiffnesses, and the predicted border k_e*(k_d)."""
-    lam = _setup()[3]
+    """The predicted and simulated border k_e*(k_d) of impedance pressing on a table, and the outcomes on a grid of
+    table stiffnesses around the prediction."""
     k_ds = [300.0, 3000.0] if quick else [100.0, 300.0, 1000.0, 3000.0]
-    border = [critical_environment_stiffness(k, inertia=lam, period=PERIOD, delay=DELAY) for k in k_ds]
+    border = [predicted_environment_stiffness(k) for k in k_ds]
     factors = [0.7, 1.4] if quick else [0.5, 0.7, 0.85, 1.15, 1.4, 2.0]
-    cells = []
+    cells, rows = [], []
     for k_d, k_star in zip(k_ds, border, strict=True):
+        sim = simulated_environment_stiffness(k_d, k_star, steps=5 if quick else 7, duration=0.6 if quick else 1.0)
+        rows.append({"k_d": k_d, "predicted": k_star, **sim, "ratio": sim["border"] / k_star})
         for f in factors:
             k_e = f * k_star
-            dt = min(PERIOD, 0.3 / math.sqrt(k_e / lam))  # RK4 well inside its accuracy on the contact mode
-            res = press(impedance(k_d), k_e, 0.6 if quick else 1.0, dt=PERIOD / math.ceil(PERIOD / dt))
-            cells.append({"k_d": k_d, "stiffness": k_e, "factor": f, "outcome": outcome(res)})
-    return {"k_d": k_ds, "predicted": border, "cells": cells}
+            cells.append({"k_d": k_d, "stiffness": k_e, "factor": f,
+                          "outcome": impedance_outcome(k_d, k_e, 0.6 if quick else 1.0)})  # fmt: skip
+    return {"k_d": k_ds, "predicted": border, "rows": rows, "cells": cells}

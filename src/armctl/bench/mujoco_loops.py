@@ -5,7 +5,8 @@
   integrated by ``implicitfast``;
 * :func:`contact_model`: the Panda of ``panda_contact`` with a 5 mm sphere at its tool frame and the scene's table
   as a plane (MuJoCo's default soft contact, friction μ of the scene);
-* :func:`closed_loop`: the loop a user writes — read the state, call the controller, apply its torque, ``mj_step``;
+* :func:`closed_loop`: the loop a user writes — read the state, call the controller, apply its torque, ``mj_step``
+  (``substeps`` times a control period);
 * :func:`replay`: the plant alone, a recorded torque sequence held over each control period.
 """
 
@@ -72,9 +73,11 @@ def closed_loop(
     q0: FloatArray,
     steps: int,
     control_dt: float,
+    substeps: int = 1,
 ) -> tuple[float, float]:
-    """(seconds, RMS tracking error [rad]) of ``steps`` control periods of one step each: read q and q̇, call the
-    controller, apply its torque, ``mj_step`` (q recorded, as ``simulate`` records it; the error computed after)."""
+    """(seconds, RMS tracking error [rad]) of ``steps`` control periods of ``substeps`` steps each (MjModel's
+    timestep: control_dt / substeps): read q and q̇, call the controller, apply its torque, ``mj_step`` (q recorded,
+    as ``simulate`` records it; the error computed after)."""
     import mujoco
 
     d.qpos[:] = q0
@@ -88,7 +91,8 @@ def closed_loop(
         q = qpos.copy()
         record[k] = q
         qfrc[:] = controller(t, q, qvel.copy(), reference(t))
-        step(m, d)
+        for _ in range(substeps):
+            step(m, d)
     wall = time.perf_counter() - t0
     err = [float(np.abs(reference(k * control_dt).q - record[k]).max()) for k in range(steps)]
     return wall, float(np.sqrt(np.mean(np.square(err))))

@@ -19,7 +19,8 @@ shared machine slows both alike. Sections:
   the stuck set grows, against MuJoCo with the same frictionloss.
 * **Contact**: the plant of ``panda_contact`` alone (table: Kelvin–Voigt with Coulomb sliding, joint friction; 0.2 ms
   steps), replaying the torques of one run of the scene — the generated step and the Python step against MuJoCo's
-  plant at the same step (:func:`armctl.bench.mujoco_loops.contact_model`).
+  plant at the same step (:func:`armctl.bench.mujoco_loops.contact_model`); and the scene's whole loop, plant and
+  its own OSC controller, against MuJoCo's loop with the same controller (:mod:`armctl.bench.contact_loop`).
 * **Sweeps** (:mod:`armctl.bench.sweep_speed`): the speed-up of the sweep's process pool and of a Dask
   ``LocalCluster`` over the same runs one after the other, with the machine's ceiling.
 """
@@ -44,13 +45,14 @@ from armctl.references import Reference
 from armctl.sim import Forces, simulate
 
 #: the benchmark's own checks (its tests), not printed: the largest ratio to MuJoCo's loop of the default run on the
-#: Panda and of every chain, of the contact plant alone to MuJoCo's plant, of semi-implicit Euler to RK4; the least
-#: speed-up of the pool and of Dask
+#: Panda and of every chain, of the contact plant alone to MuJoCo's plant, of the contact scene's whole loop to
+#: MuJoCo's loop with the same controller, of semi-implicit Euler to RK4; the least speed-up of the pool and of Dask
 TARGETS = {
     "panda_ratio": 1.0,
     "chain_ratio": 2.0,
     "sticking_chain_ratio": 1.5,
     "contact_plant_ratio": 3.0,
+    "contact_loop_ratio": 0.7,
     "semi_implicit_over_rk4": 1.5,
     "pool_speedup": 1.65,
     "dask_speedup": 1.5,
@@ -346,6 +348,10 @@ def report(fig: dict[str, Any]) -> str:
             f"torques): {c['us_per_step']:.2f} µs/step, MuJoCo's plant {c['mujoco_us_per_step']:.2f}: "
             f"{c['ratio_to_mujoco']:.2f}× (the Python step {c['python_ratio_to_mujoco']:.1f}×)"
         )
+    if "contact_loop" in fig:
+        from armctl.bench import contact_loop
+
+        lines.append(contact_loop.report(fig["contact_loop"]))
     if fig.get("sweep"):
         s = fig["sweep"]
         dask = f", Dask LocalCluster {s['dask_s']:.1f} s: ×{s['dask_speedup']:.2f}" if "dask_s" in s else ""
@@ -380,6 +386,10 @@ def checks(fig: dict[str, Any]) -> dict[str, bool]:
         out[f"contact plant / MuJoCo's <= {TARGETS['contact_plant_ratio']}"] = (
             fig["contact"]["ratio_to_mujoco"] <= TARGETS["contact_plant_ratio"]
         )
+    if "contact_loop" in fig:
+        out[f"contact loop / MuJoCo's loop <= {TARGETS['contact_loop_ratio']}"] = (
+            fig["contact_loop"]["ratio_to_mujoco"] <= TARGETS["contact_loop_ratio"]
+        )
     if fig.get("sweep"):
         s = fig["sweep"]
         out[f"pool speed-up >= {TARGETS['pool_speedup']}"] = s["pool_speedup"] >= TARGETS["pool_speedup"]
@@ -403,6 +413,10 @@ def run(quick: bool = False, sweep: bool = True) -> dict[str, Any]:
     print(report({"sticking_chains": fig["sticking_chains"]}), flush=True)
     fig["contact"] = contact_figures(1 if quick else 3)
     print(report({"contact": fig["contact"]}), flush=True)
+    from armctl.bench import contact_loop
+
+    fig["contact_loop"] = contact_loop.figures(1 if quick else 3, 0.6 if quick else None)
+    print(report({"contact_loop": fig["contact_loop"]}), flush=True)
     if sweep:
         from armctl.bench import sweep_speed
 

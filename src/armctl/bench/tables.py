@@ -251,8 +251,8 @@ def stability(maps: dict[str, Any]) -> list[Table]:
 
 
 def interaction(data: dict[str, Any]) -> list[Table]:
-    """The interaction section's tables: force error against stiffness, the force-control border, the observer's
-    gain and its speed (see :mod:`armctl.bench.interaction`)."""
+    """The interaction section's tables: force error against stiffness, the force-control and impedance borders,
+    the observer's gain and its speed (see :mod:`armctl.bench.interaction`)."""
     tracking = data["force_tracking"]
     force = Table(
         f"Force error |f − {tracking['force']:g} N| at the end of a press [N], against the table's stiffness [N/m]",
@@ -267,6 +267,13 @@ def interaction(data: dict[str, Any]) -> list[Table]:
     )
     for r in data["force_border"]["rows"]:
         border.rows.append([num(r["stiffness"], ".0e"), num(r["predicted"]), num(r["border"]), num(r["ratio"])])
+    impedance = Table(
+        "Cartesian impedance: table stiffness k_e* [N/m] where the contact chatters, sampled-data prediction from the "
+        "controller's Λ, K and D against closed-loop bisection",
+        ["k_d [N/m]", "predicted", "simulated", "simulated / predicted"],
+    )
+    for r in data["impedance_map"]["rows"]:
+        impedance.rows.append([num(r["k_d"], "g"), num(r["predicted"]), num(r["border"]), num(r["ratio"])])
     obs = Table(
         "Momentum observer: gain against noise, error and detection delay",
         ["K_O [1/s]", "noise [N·m]", "noise, closed form", "error after 5/K_O [N·m]", "delay [ms]", "lag's [ms]"],
@@ -284,7 +291,7 @@ def interaction(data: dict[str, Any]) -> list[Table]:
             q1, q3 = f["ratio_iqr"]
             speed.rows.append([text(name), num(f["step_s"], ".2f", 1e6), num(f["rnea_s"], ".2f", 1e6),
                                num(f["ratio"], ".2f"), text(f"[{q1:.2f}, {q3:.2f}]")])  # fmt: skip
-    return [force, border, obs, speed]
+    return [force, border, impedance, obs, speed]
 
 
 #: the table makers of the sections that have them

@@ -45,12 +45,8 @@ def check_lag_gain(gain: FloatArray, h: float, discretization: str) -> None:
 
     Parameters
     ----------
-    gain : ndarray, shape (n,)
-        K_O [1/s].
-    h : float
-        The period [s].
-    discretization : {"exact", "euler"}
-        The form.
+    gain, h, discretization
+        As for :func:`lag_pole`.
 
     Raises
     ------

@@ -102,17 +102,9 @@ def model_from_mjcf(
 
     Parameters
     ----------
-    source : str, path-like, mujoco.MjSpec or mujoco.MjModel
-        A file path, an MJCF text, a spec or a compiled model.
-    tool_frame : str, optional
-        The frame a method given ``frame=None`` uses (None: the last joint's).
-    base : str, optional
-        The body the chain starts from (None: the one subtree of the world with joints).
-    name : str, optional
-        The model's name (None: the MJCF's).
-    lock : str, sequence of str or mapping str → float, optional
-        Joints held fixed: names (held at 0) or name → position (MuJoCo's ``qpos``) [rad or m], as in
-        :meth:`RobotModel.from_urdf <armctl.model.RobotModel.from_urdf>`.
+    source, tool_frame, base, name, lock
+        As for :meth:`RobotModel.from_mjcf <armctl.model.RobotModel.from_mjcf>` (``source`` is its
+        ``path_or_xml``).
 
     Returns
     -------
@@ -120,10 +112,8 @@ def model_from_mjcf(
 
     Raises
     ------
-    ModelLoadError
-        What a RobotModel cannot hold, named.
-    UnknownNameError
-        A name in ``lock`` that is not a hinge or slide joint of the description.
+    ModelLoadError, UnknownNameError
+        As for :meth:`RobotModel.from_mjcf <armctl.model.RobotModel.from_mjcf>`.
     """
     m, path = compile_mjcf(source)
     mj = require_mujoco("RobotModel.from_mjcf")

@@ -12,7 +12,7 @@ import math
 import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, overload
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -87,6 +87,32 @@ def _check_scale(joints: tuple[Joint, ...], gravity: FloatArray) -> None:
                     f"to {inertia:g} kg·m² (|g| = {g:g} m/s²); give parameters whose dynamics stay finite",
                     value=lk.mass,
                 )
+
+
+class _LimitField:
+    """A property of :class:`RobotModel`: one field of every joint's limits
+    (:class:`~armctl.model.parts.JointLimits`), as a read-only (n,) array.
+
+    Parameters
+    ----------
+    field : str
+        The field of :class:`~armctl.model.parts.JointLimits`.
+    doc : str
+        The property's docstring.
+    """
+
+    def __init__(self, field: str, doc: str) -> None:
+        self.field = field
+        self.__doc__ = doc
+
+    @overload
+    def __get__(self, model: None, owner: type) -> _LimitField: ...
+    @overload
+    def __get__(self, model: RobotModel, owner: type) -> FloatArray: ...
+    def __get__(self, model: RobotModel | None, owner: type) -> _LimitField | FloatArray:
+        if model is None:
+            return self
+        return readonly(np.array([getattr(j.limits, self.field) for j in model.joints]))
 
 
 @dataclass(frozen=True, eq=False, init=False)  # numpy fields: compare by identity
@@ -426,25 +452,10 @@ class RobotModel:
         except ValueError:
             raise UnknownNameError("joint", name, self.joint_names) from None
 
-    def _limit(self, attr: str) -> FloatArray:
-        return readonly(np.array([getattr(j.limits, attr) for j in self.joints]))
-
-    @property
-    def lower(self) -> FloatArray:
-        """Lower position limits (n,)."""
-        return self._limit("lower")
-
-    @property
-    def upper(self) -> FloatArray:
-        return self._limit("upper")
-
-    @property
-    def velocity_limit(self) -> FloatArray:
-        return self._limit("velocity")
-
-    @property
-    def effort_limit(self) -> FloatArray:
-        return self._limit("effort")
+    lower = _LimitField("lower", "Lower position limits (n,) [rad or m].")
+    upper = _LimitField("upper", "Upper position limits (n,) [rad or m].")
+    velocity_limit = _LimitField("velocity", "Velocity limits (n,) [rad/s or m/s].")
+    effort_limit = _LimitField("effort", "Effort limits (n,) [N·m or N].")
 
     @property
     def has_motors(self) -> bool:

@@ -13,7 +13,7 @@ gridpoint times and overshoots the limits between them (toppra issues #41, #56, 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from toppra.algorithm import TOPPRA, ParameterizationReturnCode
@@ -22,6 +22,9 @@ from toppra.interpolator import AbstractGeometricPath
 
 from armctl._checks import FloatArray
 from armctl.planning.path import Path
+
+if TYPE_CHECKING:
+    from armctl.planning.problem import TimeScalingProblem
 
 
 class PathAdapter(AbstractGeometricPath):
@@ -101,19 +104,12 @@ class ToppraOutput:
         return self.code == "Ok"
 
 
-def run_toppra(
-    path: Path,
-    s: FloatArray,
-    a: FloatArray,
-    b: FloatArray,
-    c: FloatArray,
-    g: FloatArray,
-    x_max: FloatArray,
-    interpolation: bool = True,
-) -> ToppraOutput:
-    """TOPP-RA, rest to rest, on the rows (see :class:`RowsConstraint`)."""
-    cons = RowsConstraint(s, a, b, c, g, x_max, interpolation)
-    algo = TOPPRA([cons], PathAdapter(path), gridpoints=s, solver_wrapper="seidel")
+def run_toppra(problem: TimeScalingProblem, rows: tuple[FloatArray, FloatArray, FloatArray]) -> ToppraOutput:
+    """TOPP-RA, rest to rest, on ``problem`` with the row coefficients ``rows`` = (a, b, c) (its own, or their
+    linearisation, :meth:`~armctl.planning.problem.TimeScalingProblem.linearized`; see :class:`RowsConstraint`)."""
+    interpolation = problem.discretization == "interpolation"
+    cons = RowsConstraint(problem.s, *rows, problem.g, problem.x_max, interpolation)
+    algo = TOPPRA([cons], PathAdapter(problem.path), gridpoints=problem.s, solver_wrapper="seidel")
     _, sd, _, K = algo.compute_parameterization(0.0, 0.0, return_data=True)
     code = algo.problem_data.return_code
     x = None if sd is None else np.asarray(sd, dtype=float) ** 2

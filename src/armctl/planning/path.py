@@ -128,6 +128,12 @@ class Path(ABC):
         """
         if s.__class__ is not float:
             s = scalar(s, "path parameter s")
+        if not 0.0 <= s <= 1.0:
+            return Path._at(self, s)  # checked there: raises beyond [0, 1], clips a rounding error
+        return self._at(s)
+
+    def _at(self, s: float) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """:meth:`at` for a float s in [0, 1]; a path with a closed form at one parameter overrides it."""
         q, dq, ddq = self.derivatives(np.array([s]))
         return q[0], dq[0], ddq[0]
 
@@ -249,24 +255,8 @@ class SplinePath(Path):
     def _derivatives(self, s: FloatArray, order: int) -> FloatArray:
         return self._splines[order](s)
 
-    def at(self, s: float) -> tuple[FloatArray, FloatArray, FloatArray]:
+    def _at(self, s: float) -> tuple[FloatArray, FloatArray, FloatArray]:
         # the cubic piece q = c₀d³ + c₁d² + c₂d + c₃, d = s − s_k, evaluated directly (no scipy call)
-        """(q, q', q'') at one parameter — :meth:`derivatives` for a control loop's rate.
-
-        Parameters
-        ----------
-        s : float
-            The parameter, in [0, 1].
-
-        Returns
-        -------
-        tuple of ndarray
-            (q, q', q''), each (n,).
-        """
-        if s.__class__ is not float:
-            s = scalar(s, "path parameter s")
-        if not 0.0 <= s <= 1.0:
-            return super().at(s)  # raises with the message
         knots = self._knot_list
         k = min(max(bisect_right(knots, s) - 1, 0), len(knots) - 2)
         d = s - knots[k]
@@ -317,23 +307,7 @@ class LinePath(Path):
             return np.repeat(self.delta[None, :], s.shape[0], axis=0)
         return np.zeros((s.shape[0], self.n))
 
-    def at(self, s: float) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """(q, q', q'') at one parameter — :meth:`derivatives` for a control loop's rate.
-
-        Parameters
-        ----------
-        s : float
-            The parameter, in [0, 1].
-
-        Returns
-        -------
-        tuple of ndarray
-            (q, q', q''), each (n,).
-        """
-        if s.__class__ is not float:
-            s = scalar(s, "path parameter s")
-        if not 0.0 <= s <= 1.0:
-            return super().at(s)
+    def _at(self, s: float) -> tuple[FloatArray, FloatArray, FloatArray]:
         return self.start + s * self.delta, self.delta.copy(), np.zeros(self.n)
 
 

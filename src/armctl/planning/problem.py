@@ -289,12 +289,9 @@ def build_problem(
 
     Parameters
     ----------
-    dyn : Dynamics
-        The arm.
-    path : Path
-        The path.
-    limits : JointLimits
-        The limits.
+    dyn, path, limits
+        The arm (:class:`~armctl.dynamics.base.Dynamics`), its path (:class:`~armctl.planning.path.Path`) and the
+        limits on it (:class:`~armctl.planning.limits.JointLimits`).
     grid : int or array_like, optional
         The number N of stages (evenly spaced in s), or the gridpoints (increasing from 0 to 1).
     discretization : {"interpolation", "collocation"}, optional

@@ -93,7 +93,6 @@ def solve_problem(problem: TimeScalingProblem, viscous_passes: int = 2) -> Traje
     at_rest = rest_overload(problem)
     if at_rest is not None:
         raise at_rest
-    interp = problem.discretization == "interpolation"
     x0 = None
     best: GridTiming | None = None  # the fastest conservative pass
     passes = 0
@@ -101,7 +100,7 @@ def solve_problem(problem: TimeScalingProblem, viscous_passes: int = 2) -> Traje
         found: list[FloatArray] = []
         for keep in (None,) if x0 is None else (None, VISCOUS_KEEP):  # with x₀: both lines, the faster kept
             rows = problem.linearized(x0, keep)
-            out = run_toppra(problem.path, problem.s, *rows, problem.g, problem.x_max, interp)
+            out = run_toppra(problem, rows)
             if out.ok and out.x is not None:
                 found.append(_checked_profile(problem, out.x))
         if not found:

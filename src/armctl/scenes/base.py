@@ -21,7 +21,7 @@ import statistics
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import Any, ClassVar
+from typing import Any, ClassVar, TypeVar
 
 import numpy as np
 
@@ -195,7 +195,8 @@ class Scene:
         )
 
     def gains(self, method: str) -> dict[str, Any]:
-        """A method's preset gains.
+        """A method's default gains: its preset (``controllers/<scene>.<method>.toml``), unless the scene has
+        defaults of its own.
 
         Parameters
         ----------
@@ -211,6 +212,8 @@ class Scene:
         ------
         ModelLoadError
             No preset for the method.
+        UnknownNameError
+            A scene with defaults of its own: an unknown method.
         """
         return dict(load_preset(self.name, method)["gains"])
 
@@ -286,10 +289,8 @@ class Scene:
 
         Parameters
         ----------
-        method : str
-            One of :attr:`methods`.
-        gains : dict, optional
-            Gain name → value (default: the preset).
+        method, gains
+            As for :meth:`controller`.
         **overrides
             ``duration`` and any option of :func:`armctl.sim.simulate`: they win over the scene's settings.
 
@@ -339,7 +340,9 @@ class Scene:
         time per step [s] (``compute_s``, see :meth:`compute_time` on :meth:`replay_window`). A run without samples
         gives NaN for every measure (compute time and limit-violation shares included). A run that diverged has no
         tracking error (NaN): the error of its samples before the divergence, which can look better than a stable
-        method's, is kept apart as ``rms_error_until_divergence`` and ``max_error_until_divergence``.
+        method's, is kept apart as ``rms_error_until_divergence`` and ``max_error_until_divergence`` (and a force
+        error as ``force_rms_error_until_divergence``). A scene adds its own measures, or replaces the joint
+        tracking error with its own, through :meth:`scene_measures`.
 
         Parameters
         ----------
@@ -379,7 +382,24 @@ class Scene:
             "diverged_at": res.diverged_at,
             "compute_s": step,
         }
+        out.update(self.scene_measures(res, method, gains))
         return diverged_errors(out)
+
+    def scene_measures(self, res: Any, method: str, gains: dict[str, Any] | None = None) -> dict[str, Any]:
+        """A scene's own measures of a run, which :meth:`metrics` adds to (or puts in place of) its joint-space
+        ones before it sets a diverged run's errors apart: here none; a scene with measures of its own (a tool
+        error, a force error, a collision's timing) overrides this, not :meth:`metrics`.
+
+        Parameters
+        ----------
+        res, method, gains
+            As for :meth:`metrics`.
+
+        Returns
+        -------
+        dict of str
+        """
+        return {}
 
     def limit_violations(self, res: Any) -> dict[str, float]:
         """Shares of a run's samples beyond the plant's limits (see :meth:`metrics`); NaN without samples.
@@ -474,3 +494,55 @@ class Scene:
         if not len(window["t"]):
             return float("nan")
         return statistics.median(replay_times(self.controller(method, gains), window, rounds + 1)[1:])
+
+
+_S = TypeVar("_S", bound=Scene)
+
+
+def holding_scene(cls: type[_S], name: str, description: str, model: RobotModel, q0: Any, **settings: Any) -> _S:
+    """A scene of class ``cls`` whose plant and controller-side models are all ``model`` and whose reference holds
+    the posture ``q0``, where it also starts (the scenes whose task is their own, not a joint-space reference).
+
+    Parameters
+    ----------
+    cls : type
+        :class:`Scene` or a subclass.
+    name, description : str
+        As for :class:`Scene`.
+    model : RobotModel
+        The plant, and the model its controllers are given.
+    q0 : array_like, shape (n,)
+        The posture held and the start [rad].
+    **settings
+        The other fields of :class:`Scene` (``duration``, ``methods``, ``dt``, ``sim_options``, …).
+
+    Returns
+    -------
+    Scene
+        Of class ``cls``.
+    """
+    return cls(
+        name,
+        description,
+        plant=model,
+        exact=model,
+        reduced=model,
+        reference=lambda t: Reference(q0),
+        q0=q0,
+        **settings,
+    )
+
+
+def quintic(start: Any, end: Any, t0: float, duration: float) -> Callable[[float], tuple[Any, Any, Any]]:
+    """t → (position, velocity, acceleration) of a minimum-jerk move from ``start`` to ``end`` (arrays) between t0
+    and t0 + duration [s], held before and after."""
+    a, b = np.asarray(start, dtype=float), np.asarray(end, dtype=float)
+
+    def at(t: float) -> tuple[Any, Any, Any]:
+        s = min(max((t - t0) / duration, 0.0), 1.0)
+        shape = s**3 * (10 - 15 * s + 6 * s * s)
+        rate = 30 * s * s * (1 - s) ** 2 / duration
+        accel = 60 * s * (1 - s) * (1 - 2 * s) / duration**2
+        return a + (b - a) * shape, (b - a) * rate, (b - a) * accel
+
+    return at

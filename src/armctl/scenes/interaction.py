@@ -8,12 +8,13 @@ the normal force :func:`normal_force` — and the motion (the tool's path, :meth
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from typing import Any, ClassVar
 
 import numpy as np
 
-from armctl.scenes.base import SENSOR, Scene, diverged_errors
+from armctl.controllers import Admittance, CartesianImpedance, ForceControl, ParallelForcePosition
+from armctl.controllers.base import Controller
+from armctl.scenes.base import SENSOR, Scene
 
 
 def normal_force(res: Any, normal: Any = (0.0, 0.0, 1.0)) -> Any:
@@ -37,9 +38,18 @@ def normal_force(res: Any, normal: Any = (0.0, 0.0, 1.0)) -> Any:
 
 
 class InteractionScene(Scene):
-    """A scene of the interaction controllers (see the module); a subclass sets :attr:`gain_keys` (method →
-    (required, optional) gain names), implements :meth:`build` and :meth:`measures`. Its parameters are
-    :class:`~armctl.scenes.base.Scene`'s.
+    """A scene of the interaction controllers (see the module), each of which presses f_d = :attr:`force` on the
+    table along its believed normal (z) while its target follows the scene's :meth:`path`:
+
+    * ``cartesian_impedance``, ``admittance``: the target δ_c = f_d (k_e + k_z)/(k_e k_z) below the believed
+      surface (:func:`impedance_depth`, k_e = :attr:`table_stiffness`), so that the force would be f_d were the
+      surface where it is believed;
+    * ``force_control``: :class:`~armctl.controllers.ForceControl` along z with PI action, position along x and y;
+    * ``parallel_force_position``: the same force and position targets on all three axes.
+
+    A subclass implements :meth:`path` and :meth:`measures` (the force and motion measures that replace the joint
+    tracking error of :meth:`~armctl.scenes.base.Scene.metrics`: the reference here is a posture) and lists the
+    methods it runs; its parameters are :class:`~armctl.scenes.base.Scene`'s.
 
     Parameters
     ----------
@@ -49,13 +59,35 @@ class InteractionScene(Scene):
         As for :class:`~armctl.scenes.base.Scene`.
     """
 
-    gain_keys: ClassVar[dict[str, tuple[tuple[str, ...], tuple[str, ...]]]] = {}
+    gain_keys: ClassVar[dict[str, tuple[tuple[str, ...], tuple[str, ...]]]] = {
+        "cartesian_impedance": (("stiffness",), ("damping", "nullspace_stiffness")),
+        "admittance": (("stiffness",), ("damping", "inertia", "kp", "kd")),
+        "force_control": (("force_gain", "integral_gain"), ("kp", "kd")),
+        "parallel_force_position": (("force_gain", "integral_gain"), ("kp", "kd")),
+    }
     #: the desired normal force [N]
     force: float = 10.0
     #: the table's outward normal (world axes)
     normal: Any = (0.0, 0.0, 1.0)
+    #: the table's nominal stiffness k_e [N/m], by which the impedances place their targets
+    table_stiffness: float = 3e4
     timing_samples = 100
     replay_reads = ("wrench", "tau_applied")
+
+    def path(self, depth: float) -> Any:  # pragma: no cover - abstract
+        """The target of a method whose target sits ``depth`` below the believed surface.
+
+        Parameters
+        ----------
+        depth : float
+            [m].
+
+        Returns
+        -------
+        callable
+            t → (pose (4×4), twist (6,), acceleration (6,)).
+        """
+        raise NotImplementedError
 
     def measures(self, res: Any, fn: Any) -> dict[str, Any]:  # pragma: no cover - abstract
         """The scene's own measures of a run.
@@ -73,6 +105,47 @@ class InteractionScene(Scene):
         """
         raise NotImplementedError
 
+    def build(self, method: str, gains: dict[str, Any]) -> Controller:
+        """The controller of ``method`` (see the class) with checked ``gains``, its target on :meth:`path`.
+
+        Parameters
+        ----------
+        method : str
+            One of :attr:`methods`.
+        gains : dict
+            Its gains.
+
+        Returns
+        -------
+        Controller
+        """
+        dyn = self.dynamics("exact")
+        c: Any
+        if method in ("cartesian_impedance", "admittance"):
+            k, depth = impedance_depth(gains, self.force, self.table_stiffness)
+            if method == "cartesian_impedance":
+                c = CartesianImpedance(
+                    dyn, k, gains.get("damping"), nullspace_stiffness=gains.get("nullspace_stiffness", 5.0)
+                )
+            else:
+                c = Admittance(
+                    dyn,
+                    k,
+                    gains.get("damping"),
+                    inertia=gains.get("inertia"),
+                    kp=gains.get("kp", 900.0),
+                    kd=gains.get("kd"),
+                )
+            c.set_trajectory(self.path(depth))
+            return c
+        args, options = pressing_args(dyn, self.force, gains)
+        if method == "force_control":
+            c = ForceControl(*args, directions=[0.0, 0.0, 1.0], **options)
+        else:
+            c = ParallelForcePosition(*args, **options)
+        c.set_trajectory(self.path(0.0))
+        return c
+
     def tool_path(self, res: Any) -> Any:
         """The tool's position at each sample [m] (N, 3), world axes.
 
@@ -88,37 +161,8 @@ class InteractionScene(Scene):
         dyn = self.dynamics("plant")
         return np.array([dyn.frame_pose(q)[:3, 3] for q in res.q]).reshape(-1, 3)
 
-    def metrics(
-        self,
-        res: Any,
-        method: str,
-        gains: dict[str, Any] | None = None,
-        timing_samples: int | None = None,
-        timing_rounds: int = 5,
-    ) -> dict[str, Any]:
-        """The scene's force and motion measures (:meth:`measures`) with :meth:`Scene.metrics`' torque, limit,
-        divergence and timing measures (its joint tracking error is replaced: the reference here is a posture).
-
-        Parameters
-        ----------
-        res : SimResult
-            A run of this scene.
-        method : str
-            The method that ran.
-        gains : dict, optional
-            Its gains (default: the preset), to rebuild the controller for timing.
-        timing_samples : int, optional
-            Recorded states replayed to time the controller.
-        timing_rounds : int, optional
-            Timed passes (0: not timed, NaN).
-
-        Returns
-        -------
-        dict of str
-        """
-        out = super().metrics(res, method, gains, timing_samples, timing_rounds)
-        out.update(self.measures(res, normal_force(res, self.normal)))
-        return diverged_errors(out)
+    def scene_measures(self, res: Any, method: str, gains: dict[str, Any] | None = None) -> dict[str, Any]:
+        return self.measures(res, normal_force(res, self.normal))
 
 
 def pressing_args(dyn: Any, force: float, gains: dict[str, Any]) -> tuple[tuple[Any, ...], dict[str, Any]]:
@@ -137,18 +181,3 @@ def impedance_depth(gains: dict[str, Any], force: float, table_stiffness: float)
     k = np.asarray(gains["stiffness"], dtype=float)
     kz = float(np.diag(k)[2]) if k.ndim == 2 else float(k[2])
     return k, force * (table_stiffness + kz) / (table_stiffness * kz)
-
-
-def quintic(start: Any, end: Any, t0: float, duration: float) -> Callable[[float], tuple[Any, Any, Any]]:
-    """t → (position, velocity, acceleration) of a minimum-jerk move from ``start`` to ``end`` (arrays) between t0
-    and t0 + duration [s], held before and after."""
-    a, b = np.asarray(start, dtype=float), np.asarray(end, dtype=float)
-
-    def at(t: float) -> tuple[Any, Any, Any]:
-        s = min(max((t - t0) / duration, 0.0), 1.0)
-        shape = s**3 * (10 - 15 * s + 6 * s * s)
-        rate = 30 * s * s * (1 - s) ** 2 / duration
-        accel = 60 * s * (1 - s) * (1 - 2 * s) / duration**2
-        return a + (b - a) * shape, (b - a) * rate, (b - a) * accel
-
-    return at

@@ -11,7 +11,7 @@ plant's own, so the observer's residual in free motion is its discretisation err
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -22,7 +22,7 @@ from armctl.controllers.computed_torque import ComputedTorque
 from armctl.controllers.momentum_observer import MomentumObserver
 from armctl.errors import UnknownNameError
 from armctl.references import Quintic
-from armctl.scenes.base import Scene, check_gains, diverged_errors
+from armctl.scenes.base import Scene
 
 Q_START = np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])  # the Panda's "ready" posture
 Q_END = Q_START + np.array([0.8, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])  # the shoulder swings the tool 0.22 m along +y
@@ -42,8 +42,14 @@ METHODS = ("no_reaction", "gravity", "reflex")
 
 
 class CollisionScene(Scene):
-    """The ``panda_collision`` scene: its methods' controllers and the collision measures (see the module). Its
-    parameters are :class:`Scene`'s.
+    """The ``panda_collision`` scene (see the module). Its methods' gains are any keys of :data:`DEFAULTS` (the
+    rest: the defaults); each method's controller is computed torque, wrapped for ``gravity`` and ``reflex`` in a
+    :class:`~armctl.controllers.CollisionReaction` that logs the observer's residual and tool wrench. Its
+    :meth:`metrics` keep the joint tracking error [rad] and add the collision's measures: ``contact_at`` (first
+    sample in contact) and ``detected_at`` [s], ``detection_delay`` [s], ``peak_force`` [N], ``force_after`` (the
+    contact force 0.3 s after detection) [N], ``push_impulse`` (∫ |f| dt after detection) [N·s], and
+    ``wrench_error`` (the largest error of the observer's tool force against the simulator's while in contact,
+    after 5/K_O) [N]. Its parameters are :class:`Scene`'s.
 
     Parameters
     ----------
@@ -54,41 +60,17 @@ class CollisionScene(Scene):
     """
 
     replay_reads = ("tau_applied",)  # the observer reads the torque applied over the period before
+    gain_keys: ClassVar[dict[str, tuple[tuple[str, ...], tuple[str, ...]]]] = {
+        m: ((), tuple(DEFAULTS)) for m in METHODS
+    }
 
     def gains(self, method: str) -> dict[str, Any]:
-        """The method's default gains (:data:`DEFAULTS`).
-
-        Parameters
-        ----------
-        method : str
-            The method.
-
-        Returns
-        -------
-        dict of str
-        """
         if method not in self.methods:
             raise UnknownNameError("method", method, self.methods)
         return dict(DEFAULTS)
 
-    def controller(self, method: str, gains: dict[str, Any] | None = None) -> Controller:
-        """The method's controller: computed torque, wrapped for ``gravity`` and ``reflex`` in a
-        :class:`~armctl.controllers.CollisionReaction` that logs the observer's residual and tool wrench.
-
-        Parameters
-        ----------
-        method : {"no_reaction", "gravity", "reflex"}
-            The method.
-        gains : dict, optional
-            Any keys of :data:`DEFAULTS` (the rest: the defaults).
-
-        Returns
-        -------
-        Controller
-        """
-        if method not in self.methods:
-            raise UnknownNameError("method", method, self.methods)
-        g = {**DEFAULTS, **check_gains(method, {} if gains is None else gains, (), tuple(DEFAULTS))}
+    def build(self, method: str, gains: dict[str, Any]) -> Controller:
+        g = {**DEFAULTS, **gains}
         dyn = self.dynamics("exact")
         ct = ComputedTorque(dyn, g["kp"], g["kd"])
         # the observer watches in every method (no_reaction: a reaction that is the controller itself), so that
@@ -97,35 +79,7 @@ class CollisionScene(Scene):
         reaction: Any = method if method != "no_reaction" else (lambda t, q, qd, ref, o: ct.compute(t, q, qd, ref))
         return CollisionReaction(ct, obs, reaction, damping=g["damping"], reflex_gain=g["reflex_gain"], log_wrench=True)
 
-    def metrics(
-        self,
-        res: Any,
-        method: str,
-        gains: dict[str, Any] | None = None,
-        timing_samples: int | None = None,
-        timing_rounds: int = 5,
-    ) -> dict[str, Any]:
-        """:meth:`Scene.metrics` and the collision's measures: ``contact_at`` (first sample in contact) and
-        ``detected_at`` [s], ``detection_delay`` [s], ``peak_force`` [N], ``force_after`` (the contact force 0.3 s
-        after detection) [N], ``push_impulse`` (∫ |f| dt after detection) [N·s], and ``wrench_error`` (the largest
-        error of the observer's tool force against the simulator's while in contact, after 5/K_O) [N].
-
-        Parameters
-        ----------
-        res : SimResult
-            A run of this scene.
-        method : str
-            The method that ran.
-        gains : dict, optional
-            Its gains.
-        timing_samples, timing_rounds : int, optional
-            As for :meth:`Scene.metrics`.
-
-        Returns
-        -------
-        dict of str
-        """
-        out = super().metrics(res, method, gains, timing_samples, timing_rounds)
+    def scene_measures(self, res: Any, method: str, gains: dict[str, Any] | None = None) -> dict[str, Any]:
         nan = float("nan")
         h = res.contact_force_on_environment
         f = np.linalg.norm(h[:, 0], axis=1) if h.size else np.zeros(len(res.t))
@@ -143,19 +97,16 @@ class CollisionScene(Scene):
             if est is not None and settled.any()
             else nan
         )
-        out.update(
-            {
-                "contact_at": contact_at,
-                "detected_at": detected_at,
-                "detection_delay": detected_at - contact_at,
-                "peak_force": float(f.max()) if f.size else nan,
-                "force_after": float(f[later[0]]) if later.size else nan,
-                "push_impulse": float(np.sum(f[after]) * self.control_dt),
-                "wrench_error": werr,
-                "error_unit": "rad",
-            }
-        )
-        return diverged_errors(out)
+        return {
+            "contact_at": contact_at,
+            "detected_at": detected_at,
+            "detection_delay": detected_at - contact_at,
+            "peak_force": float(f.max()) if f.size else nan,
+            "force_after": float(f[later[0]]) if later.size else nan,
+            "push_impulse": float(np.sum(f[after]) * self.control_dt),
+            "wrench_error": werr,
+            "error_unit": "rad",
+        }
 
 
 def panda_collision() -> Scene:

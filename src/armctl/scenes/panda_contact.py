@@ -6,7 +6,7 @@ controllers' model knows."""
 
 from __future__ import annotations
 
-from typing import Any, cast
+from typing import Any, ClassVar, cast
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -23,9 +23,8 @@ from armctl.controllers.osc import (
     PostureTask,
 )
 from armctl.dynamics.base import Dynamics
-from armctl.errors import UnknownNameError
 from armctl.references import Reference
-from armctl.scenes.base import Scene, check_gains, diverged_errors
+from armctl.scenes.base import Scene, holding_scene, quintic
 
 Q_HOME = np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])  # the Panda's "ready" posture
 
@@ -81,6 +80,7 @@ class PressAndSlide(Controller):
         self.slide = scalar(slide, "slide")
         self.slide_start = scalar(slide_start, "slide_start", nonnegative=True)
         self.slide_time = scalar(slide_time, "slide_time", positive=True)
+        self._slide = quintic([0.0], [self.slide], self.slide_start, self.slide_time)  # along x
         self.pose = FramePoseTask(kp=kp, kd=kd)
         self.pose.set_trajectory(self.target)
         self.closed_form = boolean(closed_form, "closed_form")
@@ -90,6 +90,7 @@ class PressAndSlide(Controller):
         else:
             self.contact = Contact(mode="sliding", mu=mu, kd=100.0, active=False)
             self.force_task = ContactForceTask(self.contact, 0.0, weight=1.0)
+            self._force = 0.0  # the force task's target [N]
             self.ctrl = OperationalSpaceQP(
                 dyn, [self.pose, self.force_task, PostureTask(dyn.n, kp=25.0, priority=1)], contacts=[self.contact]
             )
@@ -111,10 +112,9 @@ class PressAndSlide(Controller):
         z_end = self.z_table - 0.01
         pose[2, 3] = max(self.p0[2, 3] - 0.02 * t, z_end)
         twist[2] = -0.02 if pose[2, 3] > z_end else 0.0
-        s = min(max((t - self.slide_start) / self.slide_time, 0.0), 1.0)
-        pose[0, 3] += self.slide * s**3 * (10 - 15 * s + 6 * s * s)
-        twist[0] = self.slide * 30 * s * s * (1 - s) ** 2 / self.slide_time
-        acc[0] = self.slide * 60 * s * (1 - s) * (1 - 2 * s) / self.slide_time**2
+        x, vx, ax = self._slide(t)
+        pose[0, 3] += x[0]
+        twist[0], acc[0] = vx[0], ax[0]
         return pose, twist, acc
 
     def reset(self) -> None:
@@ -125,6 +125,7 @@ class PressAndSlide(Controller):
         if not self.closed_form:
             self.contact.active = False
             self.force_task.set_target(0.0)
+            self._force = 0.0
 
     def compute(self, t: float, q: np.ndarray, qd: np.ndarray, ref: Reference) -> np.ndarray:
         if self.touched is None and self.dynamics.frame_pose(q)[2, 3] <= self.z_table:
@@ -133,7 +134,10 @@ class PressAndSlide(Controller):
                 self.contact.active = True
                 self.pose.weight = [1, 1, 0, 1, 1, 1]  # the contact takes over the normal direction
         if self.touched is not None and not self.closed_form:
-            self.force_task.set_target(self.force_target * min(1.0, (t - self.touched) / 0.2))
+            force = self.force_target * min(1.0, (t - self.touched) / 0.2)
+            if force != self._force:  # the ramp, then its end held (set once)
+                self.force_task.set_target(force)
+                self._force = force
         tau = self.ctrl.compute(t, q, qd, ref)
         self.last_log = dict(self.ctrl.last_log)
         return tau
@@ -146,8 +150,11 @@ def panda_contact_model() -> Any:
 
 
 class ContactScene(Scene):
-    """A scene whose error is the tool's position error [m] against the controller's target, with the normal
-    force error after settling [N] and contact loss reported. Its parameters are :class:`Scene`'s.
+    """A scene whose methods (``osc_qp``, ``osc_closed_form``) are :class:`PressAndSlide` controllers, their gains
+    the pose task's ``kp`` and ``kd`` (the preset, ``controllers/panda_contact.<method>.toml``, unless given; a
+    missing key: the task's default). Its :meth:`metrics`' error is the tool's position error [m] (RMS, max) in
+    the table plane against the controller's target, with the normal force error after settling [N]
+    (``force_rms_error``) and contact loss (``contact_lost``) reported. Its parameters are :class:`Scene`'s.
 
     Parameters
     ----------
@@ -161,65 +168,24 @@ class ContactScene(Scene):
     mu: float = 0.3
     timing_samples = 100  # a QP step costs ten times a joint-space law's
 
-    def controller(self, method: str, gains: dict[str, Any] | None = None) -> Controller:
-        """The :class:`PressAndSlide` controller of a method.
+    gain_keys: ClassVar[dict[str, tuple[tuple[str, ...], tuple[str, ...]]]] = {
+        "osc_qp": ((), ("kp", "kd")),
+        "osc_closed_form": ((), ("kp", "kd")),
+    }
 
-        Parameters
-        ----------
-        method : {"osc_qp", "osc_closed_form"}
-            The method.
-        gains : dict, optional
-            The pose task's ``kp`` and ``kd`` (default: the preset, ``controllers/panda_contact.<method>.toml``; a
-            missing key: the task's default); other keys are refused.
-
-        Returns
-        -------
-        PressAndSlide
-        """
-        if method not in self.methods:
-            raise UnknownNameError("method", method, self.methods)
-        g = check_gains(method, self.gains(method) if gains is None else gains, (), ("kp", "kd"))
+    def build(self, method: str, gains: dict[str, Any]) -> Controller:
         return PressAndSlide(
             self.dynamics("exact"),
             self.z_table,
             self.mu,
             closed_form=method == "osc_closed_form",
-            kp=g.get("kp", 400.0),
-            kd=g.get("kd"),
+            kp=gains.get("kp", 400.0),
+            kd=gains.get("kd"),
         )
 
-    def metrics(
-        self,
-        res: Any,
-        method: str,
-        gains: dict[str, Any] | None = None,
-        timing_samples: int | None = None,
-        timing_rounds: int = 5,
-    ) -> dict[str, Any]:
-        """The tool's position error [m] (RMS, max) against the controller's target, the normal force error after
-        settling [N], whether contact was lost, and :meth:`Scene.metrics`' other measures.
-
-        Parameters
-        ----------
-        res : SimResult
-            A run of this scene.
-        method : str
-            The method that ran.
-        gains : dict, optional
-            Its gains (default: the preset), to rebuild the controller for timing.
-        timing_samples : int, optional
-            Recorded states replayed to time the controller (default :attr:`timing_samples`).
-        timing_rounds : int, optional
-            Timed passes (0: not timed, NaN).
-
-        Returns
-        -------
-        dict of str
-        """
-        out = super().metrics(res, method, gains, timing_samples, timing_rounds)
+    def scene_measures(self, res: Any, method: str, gains: dict[str, Any] | None = None) -> dict[str, Any]:
         if not len(res.t):  # a run without samples: nothing to measure
-            out.update({"force_rms_error": float("nan"), "contact_lost": False, "error_unit": "m"})
-            return out
+            return {"force_rms_error": float("nan"), "contact_lost": False, "error_unit": "m"}
         dyn = self.dynamics("exact")
         probe = cast(PressAndSlide, self.controller(method, gains))
         x = np.array([dyn.frame_pose(q)[:3, 3] for q in res.q])
@@ -228,18 +194,13 @@ class ContactScene(Scene):
         fn = res.contact_force_on_robot[:, 0, 2] if res.contact_force_on_environment.size else np.zeros(len(res.t))
         touch = np.flatnonzero(fn > 0)
         settled = (res.t >= res.t[touch[0]] + 0.4) if touch.size else np.zeros(len(res.t), bool)
-        out.update(
-            {
-                "rms_error": float(np.sqrt((err**2).mean())),
-                "max_error": float(err.max()),
-                "force_rms_error": float(np.sqrt(((fn[settled] - 10.0) ** 2).mean()))
-                if settled.any()
-                else float("nan"),
-                "contact_lost": bool(touch.size and (fn[touch[0] + 1 :] <= 0).any()),
-                "error_unit": "m",
-            }
-        )
-        return diverged_errors(out)
+        return {
+            "rms_error": float(np.sqrt((err**2).mean())),
+            "max_error": float(err.max()),
+            "force_rms_error": float(np.sqrt(((fn[settled] - 10.0) ** 2).mean())) if settled.any() else float("nan"),
+            "contact_lost": bool(touch.size and (fn[touch[0] + 1 :] <= 0).any()),
+            "error_unit": "m",
+        }
 
 
 def panda_contact() -> Scene:
@@ -256,20 +217,18 @@ def panda_contact() -> Scene:
     model = panda_contact_model()
     z_table = float(Dynamics(model).frame_pose(Q_HOME)[2, 3]) - 0.005
     plane = Plane(KelvinVoigt(2e4, 50.0), normal=(0, 0, 1), point=(0, 0, z_table), friction=0.3)
-    sc = ContactScene(
+    sc = holding_scene(
+        ContactScene,
         "panda_contact",
         "Panda with joint friction pressing 10 N on a table (surface friction μ = 0.3) and sliding 10 cm",
-        plant=model,
-        exact=model,
-        reduced=model,
-        reference=lambda t: Reference(Q_HOME),
+        model,
+        Q_HOME,
         duration=1.95,
         # 0.2 ms steps: below its 1 mm/s slip velocity the table's friction is a viscous law of slope
         # μ f_n / v_slip, which RK4 integrates only below 0.4 ms here (at the closed form's 21 N;
         # armctl.sim.after_run): at 1 ms the tangential force chatters
         dt=2e-4,
         methods=("osc_qp", "osc_closed_form"),
-        q0=Q_HOME,
         sim_options={"environment": plane},
     )
     sc.z_table = z_table

@@ -4,17 +4,15 @@ parallel force/position control, whose integral action finds the force wherever 
 
 from __future__ import annotations
 
-from typing import Any, ClassVar
+from typing import Any
 
 import numpy as np
 
 from armctl import models
 from armctl._checks import scalar
-from armctl.controllers import Admittance, CartesianImpedance, ParallelForcePosition
-from armctl.controllers.base import Controller
 from armctl.dynamics.base import Dynamics
-from armctl.references import Reference
-from armctl.scenes.interaction import InteractionScene, impedance_depth, pressing_args, quintic
+from armctl.scenes.base import holding_scene, quintic
+from armctl.scenes.interaction import InteractionScene
 from armctl.scenes.panda_contact import Q_HOME
 
 #: the table's stiffness [N/m] and damping [N·s/m]
@@ -23,13 +21,13 @@ TABLE_STIFFNESS, TABLE_DAMPING = 3e4, 150.0
 
 class PressScene(InteractionScene):
     """The press scene (built by :func:`panda_press`): the tool starts 2 cm above the table the controllers
-    believe in (``z_believed``); the true table is at ``z_table``. Each method moves its target down in 1 s
-    and presses.
+    believe in (``z_believed``); the true table is at ``z_table``. Each method moves its target (:meth:`path`) down
+    from the start in 1 s (from t = 0.2 s), to its depth below the believed surface, and presses.
 
     * ``cartesian_impedance``, ``admittance``: the target sits δ_c = f_d (k_e + k_d)/(k_e k_d) below the believed
       surface, so that the force would be f_d were the surface where it is believed (k_e the table's nominal
       stiffness, k_d the vertical stiffness); the force is k_e k_d/(k_e + k_d) (δ_c − Δz) instead, Δz how much
-      lower the table is.
+      lower the table is (see :class:`~armctl.scenes.interaction.InteractionScene`).
     * ``parallel_force_position``: the position target is the believed surface, f_d = 10 N down: the integral
       action reaches f_d at rest wherever the table is.
 
@@ -41,11 +39,7 @@ class PressScene(InteractionScene):
         As for :class:`~armctl.scenes.base.Scene`.
     """
 
-    gain_keys: ClassVar[dict[str, tuple[tuple[str, ...], tuple[str, ...]]]] = {
-        "cartesian_impedance": (("stiffness",), ("damping", "nullspace_stiffness")),
-        "admittance": (("stiffness",), ("damping", "inertia", "kp", "kd")),
-        "parallel_force_position": (("force_gain", "integral_gain"), ("kp", "kd")),
-    }
+    table_stiffness = TABLE_STIFFNESS
     z_table: float = 0.0
     z_believed: float = 0.0
 
@@ -58,19 +52,7 @@ class PressScene(InteractionScene):
         """
         return Dynamics(self.exact).frame_pose(Q_HOME)
 
-    def target_path(self, depth: float) -> Any:
-        """The target: down from the start to ``depth`` below the believed surface in 1 s (from t = 0.2 s).
-
-        Parameters
-        ----------
-        depth : float
-            [m].
-
-        Returns
-        -------
-        callable
-            t → (pose (4×4), twist (6,), acceleration (6,)).
-        """
+    def path(self, depth: float) -> Any:
         start = self.start_pose()
         move = quintic(start[:3, 3], [start[0, 3], start[1, 3], self.z_believed - depth], 0.2, 1.0)
 
@@ -81,43 +63,6 @@ class PressScene(InteractionScene):
             return pose, np.concatenate((v, np.zeros(3))), np.concatenate((a, np.zeros(3)))
 
         return at
-
-    def build(self, method: str, gains: dict[str, Any]) -> Controller:
-        """The controller of ``method`` (see the class) with checked ``gains``.
-
-        Parameters
-        ----------
-        method : str
-            One of :attr:`methods`.
-        gains : dict
-            Its gains.
-
-        Returns
-        -------
-        Controller
-        """
-        dyn = self.dynamics("exact")
-        if method == "parallel_force_position":
-            args, options = pressing_args(dyn, self.force, gains)
-            c: Any = ParallelForcePosition(*args, **options)
-            c.set_trajectory(self.target_path(0.0))
-            return c
-        k, depth = impedance_depth(gains, self.force, TABLE_STIFFNESS)
-        if method == "cartesian_impedance":
-            c = CartesianImpedance(
-                dyn, k, gains.get("damping"), nullspace_stiffness=gains.get("nullspace_stiffness", 5.0)
-            )
-        else:
-            c = Admittance(
-                dyn,
-                k,
-                gains.get("damping"),
-                inertia=gains.get("inertia"),
-                kp=gains.get("kp", 900.0),
-                kd=gains.get("kd"),
-            )
-        c.set_trajectory(self.target_path(depth))
-        return c
 
     def measures(self, res: Any, fn: Any) -> dict[str, Any]:
         """The force at rest (the mean of the last 0.2 s) [N], its error against f_d, the RMS force error after
@@ -174,17 +119,15 @@ def panda_press(offset: float = 0.01) -> PressScene:
     z_believed = float(Dynamics(model).frame_pose(Q_HOME)[2, 3]) - 0.02
     z_table = z_believed - offset
     plane = Plane(KelvinVoigt(TABLE_STIFFNESS, TABLE_DAMPING), point=(0.0, 0.0, z_table))
-    sc = PressScene(
+    sc = holding_scene(
+        PressScene,
         "panda_press",
         f"Panda pressing 10 N on a table {offset * 100:g} cm lower than believed",
-        plant=model,
-        exact=model,
-        reduced=model,
-        reference=lambda t: Reference(Q_HOME),
+        model,
+        Q_HOME,
         duration=3.0,
         dt=5e-4,
         methods=("cartesian_impedance", "admittance", "parallel_force_position"),
-        q0=Q_HOME,
         sim_options={"environment": plane, "sensors": ForceSensor(world_axes=True)},
     )
     sc.z_table, sc.z_believed = z_table, z_believed

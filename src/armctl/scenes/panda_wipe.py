@@ -6,17 +6,15 @@ reads the surface friction as a force error and lags along the path."""
 from __future__ import annotations
 
 import math
-from typing import Any, ClassVar
+from typing import Any
 
 import numpy as np
 
 from armctl import models
 from armctl._checks import scalar
-from armctl.controllers import CartesianImpedance, ForceControl, ParallelForcePosition
-from armctl.controllers.base import Controller
 from armctl.dynamics.base import Dynamics
-from armctl.references import Reference
-from armctl.scenes.interaction import InteractionScene, impedance_depth, pressing_args, quintic
+from armctl.scenes.base import holding_scene, quintic
+from armctl.scenes.interaction import InteractionScene
 from armctl.scenes.panda_contact import Q_HOME
 
 #: the table's stiffness [N/m], damping [N·s/m] and friction coefficient
@@ -43,26 +41,10 @@ class WipeScene(InteractionScene):
         As for :class:`~armctl.scenes.base.Scene`.
     """
 
-    gain_keys: ClassVar[dict[str, tuple[tuple[str, ...], tuple[str, ...]]]] = {
-        "force_control": (("force_gain", "integral_gain"), ("kp", "kd")),
-        "parallel_force_position": (("force_gain", "integral_gain"), ("kp", "kd")),
-        "cartesian_impedance": (("stiffness",), ("damping", "nullspace_stiffness")),
-    }
+    table_stiffness = TABLE_STIFFNESS
     z_believed: float = 0.0
 
     def path(self, depth: float) -> Any:
-        """The target: down to ``depth`` below the believed surface, then along x.
-
-        Parameters
-        ----------
-        depth : float
-            [m].
-
-        Returns
-        -------
-        callable
-            t → (pose (4×4), twist (6,), acceleration (6,)).
-        """
         start = Dynamics(self.exact).frame_pose(Q_HOME)
         x0, y0, z0 = start[:3, 3]
         down = quintic([z0], [self.z_believed - depth], 0.2, 0.8)
@@ -75,37 +57,6 @@ class WipeScene(InteractionScene):
             return pose, np.array([vx[0], 0, vz[0], 0, 0, 0]), np.array([ax[0], 0, az[0], 0, 0, 0])
 
         return at
-
-    def build(self, method: str, gains: dict[str, Any]) -> Controller:
-        """The controller of ``method`` (see the class) with checked ``gains``.
-
-        Parameters
-        ----------
-        method : str
-            One of :attr:`methods`.
-        gains : dict
-            Its gains.
-
-        Returns
-        -------
-        Controller
-        """
-        dyn = self.dynamics("exact")
-        c: Any
-        if method == "cartesian_impedance":
-            k, depth = impedance_depth(gains, self.force, TABLE_STIFFNESS)
-            c = CartesianImpedance(
-                dyn, k, gains.get("damping"), nullspace_stiffness=gains.get("nullspace_stiffness", 5.0)
-            )
-            c.set_trajectory(self.path(depth))
-            return c
-        args, options = pressing_args(dyn, self.force, gains)
-        if method == "force_control":
-            c = ForceControl(*args, directions=[0.0, 0.0, 1.0], **options)
-        else:
-            c = ParallelForcePosition(*args, **options)
-        c.set_trajectory(self.path(0.0))
-        return c
 
     def measures(self, res: Any, fn: Any) -> dict[str, Any]:
         """Over the slide: the normal force's RMS error [N] (``rms_error``; ``max_error`` its largest), its range
@@ -171,17 +122,15 @@ def panda_wipe(slope: float = 2.0) -> WipeScene:
         point=(tool[0], tool[1], z_believed),
         friction=TABLE_FRICTION,
     )
-    sc = WipeScene(
+    sc = holding_scene(
+        WipeScene,
         "panda_wipe",
         f"Panda wiping a table at 10 N over 15 cm against friction μ = 0.3; the table slopes {slope:g}° unknown",
-        plant=model,
-        exact=model,
-        reduced=model,
-        reference=lambda t: Reference(Q_HOME),
+        model,
+        Q_HOME,
         duration=4.0,
         dt=2e-4,
         methods=("force_control", "parallel_force_position", "cartesian_impedance"),
-        q0=Q_HOME,
         sim_options={"environment": plane, "sensors": ForceSensor(world_axes=True)},
     )
     sc.z_believed = z_believed

@@ -43,7 +43,7 @@ from armctl.sim.plant_layout import PlantLayout
 from armctl.sim.stick_slip import NotPositiveDefinite
 
 #: bumped when the generated code changes, so that stale cached libraries are not loaded
-CODE_VERSION = 7
+CODE_VERSION = 8
 #: the scheme codes of the C driver, and the family of kernels each needs
 SCHEMES = {"rk4": 0, "euler": 1, "semi-implicit-euler": 2, "implicit-euler": 3}
 FAMILY = {"rk4": "explicit", "euler": "explicit", "semi-implicit-euler": "implicit", "implicit-euler": "implicit"}
@@ -55,7 +55,7 @@ BAD_ROW = 3
 #: where a period failed (``step_period.c``'s PERIOD_*), as the messages of begin, accel and step name it
 _WHERE = {0: "stick solve", 1: "accelerations", 2: "step"}
 #: entries of the period's ``opt`` and ``out`` (see ``step_period.c``)
-PERIOD_OPT, PERIOD_OUT = 8, 3
+PERIOD_OPT, PERIOD_OUT = 9, 3
 
 #: the compiler's flags for the plant's library (its step runs in the simulator's loop: a slower build, faster code)
 FLAGS = codegen.CFLAGS_FAST
@@ -83,7 +83,7 @@ def _shapes(layout: PlantLayout) -> list[cs.Function]:
         "begin": ([n, n, n, 18, layout.size, ns], [ns, 4]),
         "accel": ([n, n, n, 18, layout.size, ns], [n, 4]),
         # the record's outputs are declared as one row (bound to the whole arrays, see step_period.c)
-        "period": ([n, 18, layout.size, PERIOD_OPT, ns], [n, n, n, n, n, 1, 1, PERIOD_OUT, ns]),
+        "period": ([n, 18, layout.size, PERIOD_OPT, ns, n], [n, n, n, n, n, 1, 1, PERIOD_OUT, ns, n]),
     }
     out = []
     for name, (ins, outs) in spec.items():
@@ -363,28 +363,37 @@ class CompiledPlant:
         :class:`~armctl.sim.generated_engine.PeriodBinding`)."""
         b = binding
         rows = len(b.q)
-        record = (b.tau, b.q, b.qd, b.qdd, b.tau_friction, b.stuck, b.work_friction, b.work_external)
+        record = (b.tau, b.q, b.qd, b.qdd, b.tau_friction, b.stuck, b.work_friction, b.work_external, b.tau_applied)
         for a in record:
             if a.dtype != np.float64 or not a.flags.c_contiguous or len(a) != rows or a.size != rows * a[0].size:
                 raise ValueError("the record's arrays must be C-contiguous float64 arrays of the same samples")
         self._substeps, self._period_h = b.substeps, b.dt
         self._period_samples = np.zeros(18 * max(b.substeps, 1))
+        self._period_limit = np.array(b.effort_limit, dtype=float)
         opt = self._period_opt
-        opt[:] = (0.0, b.dt, self.opt[2], b.substeps, rows, float(b.accel_at_start), b.max_velocity, b.max_position)
+        opt[:] = (
+            *(0.0, b.dt, self.opt[2], b.substeps, rows, float(b.accel_at_start)),
+            *(b.max_velocity, b.max_position, float(b.saturate)),
+        )
         self._record = record  # kept alive with the binding
         self._run_period = _bound(
             self._period_fn,
-            [b.tau, self._period_samples, self.par, opt, self.state],
-            [*record[1:], self._period_out, self.state],
+            [b.tau, self._period_samples, self.par, opt, self.state, self._period_limit],
+            [*record[1:-1], self._period_out, self.state, b.tau_applied],
             self._buffers,
         )
         self._free = False
 
-    def period(self, k: int, t: float) -> int:
+    def period(self, k: int, t: float, tau: object = None) -> int:
         """Integrate the control period [t, t + Δt_c) from the state of sample k on the record bound by
-        :meth:`bind_record` under the torque in row k of its ``tau``: the stick solve at t and its records at row k
-        (q̈, friction torque, stuck joints), the sub-steps with their events, the state and the work at row k + 1.
-        Returns why that state stops the run (:func:`armctl.sim.engine.state_code`'s code, 0: it does not).
+        :meth:`bind_record` under the torque in row k of its ``tau``, held (``step_period.c``'s ``armctl_hold``, the
+        transcription of :meth:`Saturation.hold <armctl.sim.saturation.Saturation.hold>`) into row k of its
+        ``tau_applied``: the stick solve at t and its records at row k (q̈, friction torque, stuck joints), the
+        sub-steps with their events, the state and the work at row k + 1. Returns why that state stops the run
+        (:func:`armctl.sim.engine.state_code`'s code, 0: it does not), or
+        :data:`~armctl.sim.engine.TORQUE_NOT_FINITE` (τ_k is not finite: nothing else written). ``tau``: not read
+        (τ_k is the record's row; the argument lets the call stand for :meth:`Engine.advance_period
+        <armctl.sim.engine.Engine.advance_period>`).
 
         Raises
         ------
@@ -402,9 +411,10 @@ class CompiledPlant:
             self._raise(k)
         return int(out[2])
 
-    def last_sample(self, k: int, t: float) -> None:
-        """The run's last sample k (no step after it): the stick solve at t, the friction torque, the stuck joints
-        and q̈ at row k (raises as :meth:`period`)."""
+    def last_sample(self, k: int, t: float) -> int:
+        """The run's last sample k (no step after it): the torque held, the stick solve at t, the friction torque,
+        the stuck joints and q̈ at row k; returns 0 or :data:`~armctl.sim.engine.TORQUE_NOT_FINITE` (raises as
+        :meth:`period`)."""
         opt = self._period_opt
         m = opt[3]
         opt[3] = 0.0
@@ -415,8 +425,10 @@ class CompiledPlant:
             self._run_period()
         finally:
             opt[3] = m
-        if self._period_out[0]:
+        status, _, code = self._period_out.tolist()
+        if status:
             self._raise(k)
+        return int(code)
 
     def _raise(self, k: int) -> None:
         """Raise why the last period from sample k failed (see :meth:`period`)."""

@@ -222,6 +222,24 @@ class Environment(ABC):
 
         Parameters
         ----------
+        kin, q, qd
+            As for :meth:`joint_torque`.
+
+        Returns
+        -------
+        h : ndarray, shape (P, 3)
+            h_p = −F_p [N], world axes, for each of the P points (zero for a point out of contact).
+        p : ndarray, shape (P, 3)
+            The points' positions [m], world axes.
+        """
+        _, hs, ps = self.contact(kin, q, qd)
+        return hs, ps
+
+    def contact(self, kin: PointKinematics, q: FloatArray, qd: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """:meth:`joint_torque`'s τ_c and :meth:`forces`' h and p, from one evaluation of the points' kinematics.
+
+        Parameters
+        ----------
         kin : PointKinematics
             :meth:`kinematics` of the plant.
         q : ndarray, shape (n,)
@@ -231,18 +249,22 @@ class Environment(ABC):
 
         Returns
         -------
+        tau : ndarray, shape (n,)
+            τ_c = Σ_p J_pᵀ F_p [N·m], the joint torque of the forces on the arm (as :meth:`joint_torque`).
         h : ndarray, shape (P, 3)
-            h_p = −F_p [N], world axes, for each of the P points (zero for a point out of contact).
+            h_p = −F_p [N], world axes (zero for a point out of contact).
         p : ndarray, shape (P, 3)
             The points' positions [m], world axes.
         """
+        tau = np.zeros(kin.dyn.n)
         hs, ps = np.zeros((len(self.points), 3)), np.zeros((len(self.points), 3))
         for i, (p, jp) in enumerate(kin(q)):
             force, _, _ = self.force(p, jp @ qd, False)
             ps[i] = p
             if force is not None:
+                tau += jp.T @ force
                 hs[i] = -force
-        return hs, ps
+        return tau, hs, ps
 
     @abstractmethod
     def force(

@@ -1,18 +1,22 @@
 """`Engine`: what advances the plant of a run, one control period at a time, for :class:`~armctl.sim.loop.ClosedLoop`.
 
 The loop is one (:mod:`armctl.sim.loop`): at each control instant t_k it checks the state of sample k, measures it,
-calls the controller and saturates its torque. The engine does the rest — the plant's side of a sample:
+calls the controller and records its torque τ_k. The engine does the rest — the plant's side of a sample:
 
 * :meth:`Engine.bind` ties it to the run's record (:class:`EngineRun`), whose row 0 holds the initial state;
 * :meth:`Engine.observe` records what the plant shows at the state of sample k before the controller is called
   (contact forces, the sensors, the wrench and external torques), so that a controller that reads a force sensor
   (:mod:`armctl.sim.measurement_feed`) is given the reading of this sample;
-* :meth:`Engine.advance_period` records what the plant does at sample k under τ_k (q̈_k, the friction torque, the
-  stuck joints) and integrates the period [t_k, t_k + Δt_c) under the held torque τ_k (the applied one, also in row k
-  of ``record.tau_applied``), writing the state it reaches and the work so far into row k + 1. It answers with the
-  status of that state: the code of :func:`state_code`, the one stop rule (0: the run goes on), which the generated
-  engine evaluates in C as the period ends; the loop turns a code into the run's reason;
-* :meth:`Engine.last_sample` records the plant's side of the run's last sample (no step after it).
+* :meth:`Engine.advance_period` holds τ_k by the run's one saturation rule (:mod:`armctl.sim.saturation`: τ_k finite,
+  clipped at the effort limits, recorded in row k of ``record.tau_applied``), records what the plant does at sample k
+  under the held torque (q̈_k, the friction torque, the stuck joints) and integrates the period [t_k, t_k + Δt_c)
+  under it, writing the state it reaches and the work so far into row k + 1. It answers with the status of that
+  state: the code of :func:`state_code`, the one stop rule (0: the run goes on), which the generated engine
+  evaluates in C as the period ends — or :data:`TORQUE_NOT_FINITE` (τ_k is not finite: nothing is held or
+  advanced). The loop turns a code into the run's reason. The Python and MuJoCo engines hold τ_k by
+  :meth:`Saturation.hold <armctl.sim.saturation.Saturation.hold>`; the generated engine by its C transcription, in
+  the same call as the period;
+* :meth:`Engine.last_sample` holds τ_k and records the plant's side of the run's last sample (no step after it).
 
 A plant that cannot be advanced from a state (a mass matrix that is not positive definite) raises
 :class:`~armctl.sim.stick_slip.NotPositiveDefinite` (or NumPy's ``LinAlgError``): the loop stops the run there as
@@ -39,9 +43,12 @@ import numpy as np
 
 from armctl._checks import FloatArray
 from armctl.sim.recorder import Recorder
+from armctl.sim.saturation import Saturation
 
 #: the codes of :func:`state_code`: the state is fine, not finite, a velocity or a position beyond its bound
 STATE_OK, STATE_NOT_FINITE, STATE_VELOCITY, STATE_POSITION = 0, 1, 2, 3
+#: the code of an engine given a τ_k that is not finite (it held nothing; ``step_period.c``'s copy: the same value)
+TORQUE_NOT_FINITE = 4
 
 
 def state_code(q: FloatArray, qd: FloatArray, max_velocity: float, max_position: float) -> int:
@@ -83,6 +90,8 @@ class EngineRun:
     ----------
     record : Recorder
         The run's record; its row 0 holds the initial state (q₀, q̇₀).
+    saturation : Saturation
+        How τ_k is held (:mod:`armctl.sim.saturation`), writing ``record.tau_applied``.
     substeps : int
         Integration steps m per control period.
     dt : float
@@ -96,6 +105,7 @@ class EngineRun:
     """
 
     record: Recorder
+    saturation: Saturation
     substeps: int
     dt: float
     accel_at_start: bool
@@ -119,13 +129,15 @@ class Engine(Protocol):
         ...
 
     def advance_period(self, k: int, t: float, tau: FloatArray) -> int:
-        """Record the plant's side of sample k (time t [s]) and integrate [t, t + Δt_c) under the held ``tau``
-        (the applied torque, row k of ``record.tau_applied``); the state reached goes into row k + 1. Returns
-        :func:`state_code` of that state (0: the run goes on)."""
+        """Hold ``tau`` (τ_k as the controller gave it, recorded in row k of ``record.tau``) by the run's
+        saturation, record the plant's side of sample k (time t [s]) and integrate [t, t + Δt_c) under the torque
+        held; the state reached goes into row k + 1. Returns :func:`state_code` of that state (0: the run goes on),
+        or :data:`TORQUE_NOT_FINITE` (nothing held or advanced)."""
         ...
 
-    def last_sample(self, k: int, t: float, tau: FloatArray) -> None:
-        """Record the plant's side of the run's last sample k under ``tau`` (no step after it)."""
+    def last_sample(self, k: int, t: float, tau: FloatArray) -> int:
+        """Hold ``tau`` and record the plant's side of the run's last sample k under it (no step after it).
+        Returns 0, or :data:`TORQUE_NOT_FINITE`."""
         ...
 
     def info(self) -> dict[str, Any]:

@@ -160,6 +160,11 @@ class FrictionModel(ABC):
         return -2.0 * x * g / self.stribeck_velocity
 
 
+def _signed(direction: FloatArray, pos: FloatArray, neg: FloatArray) -> FloatArray:
+    """``pos`` where ``direction`` > 0, −``neg`` where it is < 0, 0 elsewhere (a level on each side of rest)."""
+    return np.where(direction > 0, pos, 0.0) - np.where(direction < 0, neg, 0.0)
+
+
 class StickSlip(FrictionModel):
     """Stick–slip friction: the kinetic Stribeck curve while a joint slides, exact sticking at rest (the
     simulator's default friction model).
@@ -239,7 +244,7 @@ class StickSlip(FrictionModel):
         ndarray, shape (n,)
             +F_c⁺ where ``direction`` > 0, −F_c⁻ where it is < 0, 0 elsewhere [N·m] (N for a prismatic joint).
         """
-        return np.where(direction > 0, self.coulomb_pos, 0.0) - np.where(direction < 0, self.coulomb_neg, 0.0)
+        return _signed(direction, self.coulomb_pos, self.coulomb_neg)
 
     def hump(self, direction: FloatArray) -> FloatArray:
         """The signed Stribeck excess F_s − F_c for the sliding directions (its weight exp(−(q̇/v_s)²) is 1 at
@@ -247,8 +252,8 @@ class StickSlip(FrictionModel):
 
         Parameters
         ----------
-        direction : ndarray, shape (n,)
-            The sliding direction of every joint: +1, −1, or 0 (stuck).
+        direction
+            As for :meth:`level`.
 
         Returns
         -------
@@ -256,7 +261,7 @@ class StickSlip(FrictionModel):
             +(F_s⁺ − F_c⁺) where ``direction`` > 0, −(F_s⁻ − F_c⁻) where it is < 0, 0 elsewhere (and 0 for a
             joint without a Stribeck curve, or with ``stribeck=False``) [N·m].
         """
-        return np.where(direction > 0, self.hump_pos, 0.0) - np.where(direction < 0, self.hump_neg, 0.0)
+        return _signed(direction, self.hump_pos, self.hump_neg)
 
     def torque(self, qd: FloatArray, direction: FloatArray) -> FloatArray:
         # (a second source: armctl.sim.generated_plant.PlantExpressions.friction, the generated step's;

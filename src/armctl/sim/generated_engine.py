@@ -2,10 +2,12 @@
 
 The plant is a :class:`~armctl.sim.compiled_plant.CompiledPlant`; a control period is one call into C
 (:meth:`CompiledPlant.period <armctl.sim.compiled_plant.CompiledPlant.period>`, ``step_period.c``), bound once to the
-run's record (:class:`PeriodBinding`): it reads the held torque and the state of sample k from the record and writes
-what :class:`~armctl.sim.python_engine.PythonEngine` writes — q̈_k, the friction torque and stuck joints at row k, the
-state and the work at row k + 1. The external torques, contact forces and sensors of a sample are recorded in Python
-(:meth:`Recorder.record_external <armctl.sim.recorder.Recorder.record_external>`), as the Python engine records them.
+run's record (:class:`PeriodBinding`): it reads τ_k and the state of sample k from the record, holds τ_k as
+:meth:`Saturation.hold <armctl.sim.saturation.Saturation.hold>` does (its C transcription, ``armctl_hold``) and writes
+what :class:`~armctl.sim.python_engine.PythonEngine` writes — the applied torque, q̈_k, the friction torque and stuck
+joints at row k, the state and the work at row k + 1. The external torques, contact forces and sensors of a sample
+are recorded in Python (:meth:`Recorder.record_external <armctl.sim.recorder.Recorder.record_external>`), as the
+Python engine records them.
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from armctl._checks import FloatArray
-from armctl.sim.engine import EngineRun
+from armctl.sim.engine import TORQUE_NOT_FINITE, EngineRun
 
 if TYPE_CHECKING:
     from armctl.sim.compiled_plant import CompiledPlant
@@ -26,15 +28,19 @@ class PeriodBinding:
     """The rows the generated period reads and writes, and how it integrates a period.
 
     The arrays are C-contiguous float64 arrays of the run's samples (the generated code reads and writes them by
-    row): (samples, n) ones of the applied torques (read), q, q̇, q̈, the friction torque and the stuck joints (1.0:
-    stuck), and (samples,) ones of the friction and external work [J].
+    row): (samples, n) ones of the controller's torques (read), q, q̇, q̈, the friction torque, the stuck joints (1.0:
+    stuck) and the applied torques, and (samples,) ones of the friction and external work [J].
 
     Parameters
     ----------
-    tau, q, qd, qdd, tau_friction, stuck : (samples, n) ndarray
+    tau, q, qd, qdd, tau_friction, stuck, tau_applied : (samples, n) ndarray
         The record's rows (see above).
     work_friction, work_external : (samples,) ndarray
         The record's work.
+    effort_limit : (n,) ndarray
+        τ̄ [N·m or N] (inf: none), the limits the torque held is clipped at where ``saturate``.
+    saturate : bool
+        Clip the torque held at ``effort_limit`` (:class:`~armctl.sim.saturation.Saturation`).
     substeps : int
         Integration steps m per control period.
     dt : float
@@ -53,6 +59,9 @@ class PeriodBinding:
     stuck: FloatArray
     work_friction: FloatArray
     work_external: FloatArray
+    tau_applied: FloatArray
+    effort_limit: FloatArray
+    saturate: bool
     substeps: int
     dt: float
     accel_at_start: bool
@@ -71,11 +80,13 @@ class GeneratedEngine:
         self._rec = rec = run.record
         if not self.plant.simple:  # the friction torque of a sample the run stops at before its stick solve: NaN
             rec.tau_friction.fill(math.nan)
-        rows = ("q", "qd", "qdd", "tau_friction", "stuck", "work_friction", "work_external")
+        rows = ("tau", "q", "qd", "qdd", "tau_friction", "stuck", "work_friction", "work_external", "tau_applied")
+        sat = run.saturation
         self.plant.bind_record(
             PeriodBinding(
-                tau=rec.tau_applied,  # the torque held
                 **{name: getattr(rec, name) for name in rows},
+                effort_limit=sat.limit,
+                saturate=sat.saturate,
                 substeps=run.substeps,
                 dt=run.dt,
                 accel_at_start=run.accel_at_start,
@@ -83,6 +94,10 @@ class GeneratedEngine:
                 max_position=run.max_position,
             )
         )
+        self._hold = sat.hold
+        if self.plant.disturbance is None:
+            # a period is the plant's call itself (the same arguments and answer: no Python frame between them)
+            self.advance_period = self.plant.period  # type: ignore[method-assign]
 
     def observe(self, k: int, t: float) -> None:
         if self._external:
@@ -91,11 +106,16 @@ class GeneratedEngine:
 
     def advance_period(self, k: int, t: float, tau: FloatArray) -> int:
         """(:meth:`Engine.advance_period <armctl.sim.engine.Engine.advance_period>`: ``tau`` is read from row k of
-        the record's applied torques; the state code is ``step_period.c``'s ``armctl_state_check``.)"""
+        the record's torques, held by ``armctl_hold``; the state code is ``step_period.c``'s
+        ``armctl_state_check``.) With a disturbance, τ_k is held in Python first, as the other engines hold it
+        before they sample the disturbance (a Python callable, which may raise: the applied torque of the sample
+        it fails at is then recorded alike); the C period holds it again, to the same row."""
+        if self._hold(k, tau) is None:
+            return TORQUE_NOT_FINITE
         return self.plant.period(k, t)
 
-    def last_sample(self, k: int, t: float, tau: FloatArray) -> None:
-        self.plant.last_sample(k, t)
+    def last_sample(self, k: int, t: float, tau: FloatArray) -> int:
+        return self.plant.last_sample(k, t)
 
     def info(self) -> dict[str, Any]:
         pl = self.plant

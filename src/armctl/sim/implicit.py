@@ -33,6 +33,7 @@ def implicit_euler(
     t1 = t + h
     v1 = v.copy()
     f = e = plant.zeros
+    converged = False
     for _ in range(NEWTON_MAX_ITER):
         q1 = q + h * v1
         jac = mass.copy()
@@ -48,10 +49,7 @@ def implicit_euler(
         v1, converged = _newton_update(jac, mass @ (v1 - v) - h * force, stuck, v1, "implicit step")
         if converged:
             break
-    else:
-        plant.stats["implicit_unconverged"] += 1
-    if stuck is not None:
-        v1[stuck] = 0.0
+    v1 = _solved(plant, v1, converged, stuck)
     q1 = q + h * v1
     wf = we = 0.0
     if fr is not None:
@@ -79,6 +77,7 @@ def symplectic_euler(
     vb = v.copy()
     f = e = plant.zeros
     kj = None
+    converged = False
     for _ in range(NEWTON_MAX_ITER):
         force = base + kernel.coriolis(q, vb).T @ vb
         jac = mass.copy()
@@ -96,10 +95,7 @@ def symplectic_euler(
         vb, converged = _newton_update(jac, mass @ vb - p0 - h * force, stuck, vb, "semi-implicit Euler")
         if converged:
             break
-    else:
-        plant.stats["implicit_unconverged"] += 1
-    if stuck is not None:
-        vb[stuck] = 0.0
+    vb = _solved(plant, vb, converged, stuck)
     q1 = q + h * vb
     v1 = constrained_accel(plant.mass(q1), mass @ vb, stuck)
     wf = -h * float(vb @ f) if plant.friction is not None else 0.0
@@ -122,16 +118,27 @@ def _symplectic_conservative(
         raise NotPositiveDefinite(f"mass matrix not positive definite (LAPACK info {info})")
     coriolis = plant.kernel.coriolis
     vb = v
+    converged = False
     for _ in range(NEWTON_MAX_ITER):
         new = lapack.dpotrs(chol, p0 + h * (base + coriolis(q, vb).T @ vb))[0]
         dv = np.abs(new - vb).max()
         vb = new
-        if dv <= NEWTON_TOL * (1.0 + np.abs(vb).max()):
+        converged = bool(dv <= NEWTON_TOL * (1.0 + np.abs(vb).max()))
+        if converged:
             break
-    else:
-        plant.stats["implicit_unconverged"] += 1
+    vb = _solved(plant, vb, converged, None)
     q1 = q + h * vb
     return q1, constrained_accel(plant.mass(q1), mass @ vb, None), None, 0.0, 0.0
+
+
+def _solved(plant: Plant, x: FloatArray, converged: bool, stuck: BoolArray | None) -> FloatArray:
+    """The end of an implicit scheme's iteration: an unconverged one counted in ``plant.stats``, and ``x`` (the
+    velocities, changed in place) with the stuck joints' set to zero."""
+    if not converged:
+        plant.stats["implicit_unconverged"] += 1
+    if stuck is not None:
+        x[stuck] = 0.0
+    return x
 
 
 def _newton_update(

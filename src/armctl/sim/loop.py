@@ -7,11 +7,14 @@ At each control instant t_k = k·Δt_c the loop
 2. *measures* it: the engine records what the plant shows there (contact forces, sensors), the loop what the
    controller is given — q and q̇ with noise and delay, and the signals it declares it reads
    (:mod:`armctl.sim.measurement_feed`: a force sensor's wrench, τ_{k−1} applied, measured torques),
-3. *controls*: calls the controller on the measurement and the reference, checks τ_k and records it,
-4. *saturates* τ_k at the effort limits and records the torque applied,
-5. has its *engine* (:mod:`armctl.sim.engine`) advance the plant over [t_k, t_k + Δt_c) under the held τ_k: the
-   Python step, the generated C period or MuJoCo. The engine records the plant's side of the sample (q̈, the
-   friction and external torques, contact forces, the work) and the state it reaches, in row k + 1.
+3. *controls*: calls the controller on the measurement and the reference, checks τ_k (a real array of n entries) and
+   records it,
+4. *saturates* τ_k — finite, clipped at the effort limits, recorded as the torque applied — by the run's one rule,
+   :class:`~armctl.sim.saturation.Saturation`, which it hands its *engine* (:mod:`armctl.sim.engine`) with τ_k: the
+   engine holds τ_k by it (the generated engine by its C transcription, in the same call as the period) and
+5. advances the plant over [t_k, t_k + Δt_c) under the torque held: the Python step, the generated C period or
+   MuJoCo. The engine records the plant's side of the sample (q̈, the friction and external torques, contact
+   forces, the work) and the state it reaches, in row k + 1.
 
 The loop stops early when the state or the torque is not finite, the state leaves the stop rules, or the engine
 cannot advance the plant (a mass matrix that is not positive definite): ``divergence``. An exception from the
@@ -22,7 +25,6 @@ samples before it on with the exception.
 from __future__ import annotations
 
 import math
-import operator
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import partial
@@ -34,9 +36,17 @@ from armctl._checks import FLOAT, FloatArray, real_array
 from armctl.errors import InvalidParameterError, ShapeError
 from armctl.references import Reference
 from armctl.sim import setup
-from armctl.sim.engine import STATE_NOT_FINITE, STATE_VELOCITY, Engine, EngineRun, state_code
+from armctl.sim.engine import (
+    STATE_NOT_FINITE,
+    STATE_VELOCITY,
+    TORQUE_NOT_FINITE,
+    Engine,
+    EngineRun,
+    state_code,
+)
 from armctl.sim.measurement_feed import MeasurementFeed
 from armctl.sim.recorder import Recorder
+from armctl.sim.saturation import Saturation
 from armctl.sim.stick_slip import NotPositiveDefinite
 
 #: (time [s], why, q, q̇): where and why a run stopped as diverged
@@ -91,12 +101,8 @@ class ClosedLoop:
         self._log_add = rec.log.add
         self._references, self._taus, self._applied = rec.references, rec.tau, rec.tau_applied
         self._q, self._qd = rec.q, rec.qd
-        self._tau_list: list[float] = []  # τ_k as a list (control's, for saturate)
-        limit = s.effort_limit
-        self._clip = s.saturate and bool(np.isfinite(limit).any())
-        self._limits = limit.tolist()
-        self._lowest_limit = min(self._limits, default=math.inf)  # |τ| below it needs no clipping
-        self._upper, self._lower = limit, -limit
+        #: the rule τ_k is held by (every engine applies it: see the module)
+        self.saturation = Saturation(rec.tau_applied, s.effort_limit, s.saturate)
         # read-only views of the recorded rows: the controller is given these (it cannot change the record)
         self._views = [a.view() for a in (rec.q, rec.qd, rec.q_measured, rec.qd_measured)]
         for view in self._views:
@@ -107,7 +113,9 @@ class ClosedLoop:
         rec.q[0] = q
         rec.qd[0] = qd
         sensors_read = s.feed is not None and s.feed.wrench_chain is not None
-        engine.bind(EngineRun(rec, s.substeps, s.dt, s.implicit, s.max_velocity, s.max_position, sensors_read))
+        engine.bind(
+            EngineRun(rec, self.saturation, s.substeps, s.dt, s.implicit, s.max_velocity, s.max_position, sensors_read)
+        )
         #: why the state of the current sample stops the run (:func:`~armctl.sim.engine.state_code`; the engine
         #: gives it for the state a period reaches)
         self._code = state_code(q, qd, s.max_velocity, s.max_position)
@@ -116,30 +124,33 @@ class ClosedLoop:
 
     def run(self) -> None:
         """Run every sample; afterwards ``rows``, ``divergence`` and ``failure`` say what happened."""
-        s, engine = self.s, self.engine
-        check, measure, control, saturate = self.check, self.measure, self.control, self.saturate
+        s, engine, feed = self.s, self.engine, self._feed
+        measure, control, advance = self.measure, self.control, engine.advance_period
+        # the measurement is the record's row itself: read here (measure's first case, without its call)
+        plain = not self._rec.measured and self._observe is None
+        q_view, qd_view = self._q_view, self._qd_view
+        applied = self._applied
         last, cdt = s.periods, s.control_dt
+        code = self._code
         with np.errstate(all="ignore"):
             for k in range(last + 1):
                 t = k * cdt
                 try:
-                    why = check(k)
-                    if why is not None:
-                        self._stop(k, t, why, k)
+                    if code:  # check: the state of sample k stops the run
+                        self._stop(k, t, self.reason(code), k)
                         return
-                    qm, vm = measure(k, t)
+                    if plain:
+                        qm, vm = q_view[k], qd_view[k]
+                    else:
+                        qm, vm = measure(k, t)
                     tau = control(k, t, qm, vm)
-                    if tau is None:
-                        return
-                    tau = saturate(k, tau)
                 except BaseException as exc:  # the controller's or the reference's: the run so far is kept
                     self._fail(exc, k, t)
                     return
                 try:
-                    if k == last:  # the last sample: its state and torque, no step after it
-                        engine.last_sample(k, t, tau)
-                        return
-                    self._code = engine.advance_period(k, t, tau)
+                    # saturate (the engine holds τ_k by self.saturation) and advance; the last sample: its torque
+                    # held and its state recorded, no step after it
+                    code = advance(k, t, tau) if k < last else engine.last_sample(k, t, tau)
                 except (NotPositiveDefinite, np.linalg.LinAlgError) as exc:  # the latter: the Lagrange backend's
                     if k == last:
                         self._stop(k + 1, t, f"{exc} at t = {t:g} s", k)
@@ -149,6 +160,11 @@ class ClosedLoop:
                 except BaseException as exc:  # the plant's (a disturbance's, say): the run so far is kept
                     self._fail(exc, k, t)
                     return
+                if code == TORQUE_NOT_FINITE:
+                    self._stop(k, t, f"the controller returned a non-finite torque {tau}", k)
+                    return
+                if feed is not None:
+                    feed.applied(applied[k])
 
     def _fail(self, exc: BaseException, k: int, t: float) -> None:
         """Stop at sample k (time t [s]) on ``exc``, keeping sample k: its state is recorded, and what the loop did
@@ -160,18 +176,14 @@ class ClosedLoop:
         self.divergence, self.rows = (t, why, self._q[k].copy(), self._qd[k].copy()), rows
 
     # ------------------------------------------------------------------------------------ the steps
-    def check(self, k: int) -> str | None:
-        """Why the state of sample k stops the run (None: it does not), by the stop rules
-        (:func:`armctl.sim.engine.state_code`, which the engine evaluates where the state is)."""
-        code = self._code
-        if not code:
-            return None
-        s = self.s
+    def reason(self, code: int) -> str:
+        """Why a state stops the run, from its code by the stop rules (:func:`armctl.sim.engine.state_code`, which
+        the engine evaluates where the state is)."""
         if code == STATE_NOT_FINITE:
             return "the state is not finite"
         if code == STATE_VELOCITY:
-            return f"a joint velocity is beyond max_velocity = {s.max_velocity:g}"
-        return f"a joint position is beyond max_position = {s.max_position:g}"
+            return f"a joint velocity is beyond max_velocity = {self.s.max_velocity:g}"
+        return f"a joint position is beyond max_position = {self.s.max_position:g}"
 
     def measure(self, k: int, t: float) -> tuple[FloatArray, FloatArray]:
         """The (read-only) measurement of sample k (time t [s]) the controller is given, recorded; what the plant
@@ -193,8 +205,9 @@ class ClosedLoop:
         j = k - s.delay if k >= s.delay else 0
         return self._qm_view[j], self._qdm_view[j]
 
-    def control(self, k: int, t: float, qm: FloatArray, vm: FloatArray) -> FloatArray | None:
-        """τ_k from the controller, checked and recorded; None if it is not finite (the run stops as diverged)."""
+    def control(self, k: int, t: float, qm: FloatArray, vm: FloatArray) -> FloatArray:
+        """τ_k from the controller, checked (a real array of n entries) and recorded; whether it is finite is the
+        saturation's check, where the engine holds it."""
         ref = self._fixed_reference
         if ref is None:
             ref = self._reference_fn(t)  # type: ignore[misc]  # set when there is no fixed one
@@ -223,29 +236,8 @@ class ClosedLoop:
             raise ShapeError(
                 f"the controller returned a torque of shape {tau.shape} at t = {t}; expected {self._shape}", value=tau
             )
-        self._tau_list = tl = tau.tolist()  # (saturate reads it too)
-        if not math.isfinite(sum(tl)) and not np.isfinite(tau).all():  # (a sum of finite entries can overflow)
-            self._stop(k, t, f"the controller returned a non-finite torque {tau}", k)
-            return None
         self._taus[k] = tau
         return tau
-
-    def saturate(self, k: int, tau: FloatArray) -> FloatArray:
-        """τ_k (checked by :meth:`control`) clipped at the effort limits where ``saturate`` (else τ_k): the torque
-        applied, recorded."""
-        tl, low = self._tau_list, self._lowest_limit
-        if self._clip and (max(tl) > low or -min(tl) > low) and any(map(operator.gt, map(abs, tl), self._limits)):
-            # np.clip(τ, −limit, limit) written into the record's row (two ufuncs: a third of np.clip's time)
-            applied = self._applied[k]
-            np.minimum(tau, self._upper, out=applied)
-            np.maximum(applied, self._lower, out=applied)
-        else:
-            applied = tau
-            self._applied[k] = tau
-        feed = self._feed
-        if feed is not None:
-            feed.applied(applied)
-        return applied
 
     def _give_measurement(self, feed: MeasurementFeed, k: int) -> None:
         """Hand the controller the signals it reads at sample k (:mod:`armctl.sim.measurement_feed`): as its

@@ -31,7 +31,7 @@ from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError, UnknownNameError
 from armctl.model.robot import RobotModel
 from armctl.sim import setup
-from armctl.sim.engine import EngineRun, state_code
+from armctl.sim.engine import TORQUE_NOT_FINITE, EngineRun, state_code
 from armctl.sim.mujoco_plant import MujocoPlant, Readout, available_integrators, integrator_code
 from armctl.sim.options import Forces
 
@@ -118,6 +118,7 @@ class MujocoEngine:
 
     def bind(self, run: EngineRun) -> None:
         self._rec = rec = run.record
+        self._hold = run.saturation.hold
         self._substeps = run.substeps
         self._sensors_read = self.observes = run.sensors_read
         self._stop = (run.max_velocity, run.max_position)
@@ -142,7 +143,10 @@ class MujocoEngine:
     def advance_period(self, k: int, t: float, tau: FloatArray) -> int:
         """(:meth:`Engine.advance_period <armctl.sim.engine.Engine.advance_period>`: ``mj_forward`` then the
         integrator, m times; the first forward gives what is recorded at sample k.)"""
-        self._period(k, t, tau, self._substeps)
+        held = self._hold(k, tau)
+        if held is None:
+            return TORQUE_NOT_FINITE
+        self._period(k, t, held, self._substeps)
         rec, d = self._rec, self.d
         rec.q[k + 1] = d.qpos[self._qadr]
         rec.qd[k + 1] = d.qvel[self._vadr]
@@ -150,8 +154,12 @@ class MujocoEngine:
             rec.work_friction[k + 1], rec.work_external[k + 1] = self._wf, self._we
         return state_code(rec.q[k + 1], rec.qd[k + 1], *self._stop)
 
-    def last_sample(self, k: int, t: float, tau: FloatArray) -> None:
-        self._period(k, t, tau, 0)
+    def last_sample(self, k: int, t: float, tau: FloatArray) -> int:
+        held = self._hold(k, tau)
+        if held is None:
+            return TORQUE_NOT_FINITE
+        self._period(k, t, held, 0)
+        return 0
 
     def _period(self, k: int, t: float, tau: FloatArray, substeps: int) -> None:
         """The forward dynamics at sample k and what is recorded of them, then ``substeps`` steps (none: the

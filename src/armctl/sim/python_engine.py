@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from armctl._checks import FloatArray
-from armctl.sim.engine import EngineRun, state_code
+from armctl.sim.engine import TORQUE_NOT_FINITE, EngineRun, state_code
 from armctl.sim.integrators import Step
 from armctl.sim.plant import Plant
 from armctl.sim.stepper import advance
@@ -45,6 +45,7 @@ class PythonEngine:
 
     def bind(self, run: EngineRun) -> None:
         self._rec = rec = run.record
+        self._hold = run.saturation.hold
         self._m, self._h, self._accel_at_start = run.substeps, run.dt, run.accel_at_start
         self._stop = (run.max_velocity, run.max_position)
         self.q, self.qd = rec.q[0].copy(), rec.qd[0].copy()
@@ -60,21 +61,24 @@ class PythonEngine:
     def advance_period(self, k: int, t: float, tau: FloatArray) -> int:
         """(:meth:`Engine.advance_period <armctl.sim.engine.Engine.advance_period>`; ``step_period.c``'s
         ``period`` is its C transcription.)"""
+        held = self._hold(k, tau)
+        if held is None:
+            return TORQUE_NOT_FINITE
         rec, pl, h = self._rec, self.plant, self._h
         q, qd = self.q, self.qd
-        self._begin(k, t, q, qd, tau)
+        self._begin(k, t, q, qd, held)
         if self._accel_at_start:
-            rec.qdd[k] = pl.accel(t, q, qd, tau)
+            rec.qdd[k] = pl.accel(t, q, qd, held)
         fast = self.fast
         if fast is not None:  # no friction, contact or disturbance
             for i in range(self._m):
-                q, qd, a0 = fast(q, qd, tau, h)
+                q, qd, a0 = fast(q, qd, held, h)
                 if i == 0:
                     rec.qdd[k] = a0
         else:
             step = self.step
             for i in range(self._m):
-                q, qd, a_sub, dwf, dwe = advance(pl, step, t + i * h, q, qd, tau, h, begun=i == 0)
+                q, qd, a_sub, dwf, dwe = advance(pl, step, t + i * h, q, qd, held, h, begun=i == 0)
                 if i == 0 and a_sub is not None:
                     rec.qdd[k] = a_sub
                 self._work_friction += dwf
@@ -87,10 +91,14 @@ class PythonEngine:
             rec.work_external[k + 1] = self._work_external
         return state_code(q, qd, *self._stop)
 
-    def last_sample(self, k: int, t: float, tau: FloatArray) -> None:
+    def last_sample(self, k: int, t: float, tau: FloatArray) -> int:
+        held = self._hold(k, tau)
+        if held is None:
+            return TORQUE_NOT_FINITE
         q, qd = self.q, self.qd
-        self._begin(k, t, q, qd, tau)
-        self._rec.qdd[k] = self.plant.accel(t, q, qd, tau)
+        self._begin(k, t, q, qd, held)
+        self._rec.qdd[k] = self.plant.accel(t, q, qd, held)
+        return 0
 
     def _begin(self, k: int, t: float, q: FloatArray, qd: FloatArray, tau: FloatArray) -> None:
         """The plant's stick solve at sample k and what it records of it."""

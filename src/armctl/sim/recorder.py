@@ -64,30 +64,45 @@ class Recorder:
 
     def record_external(self, k: int, plant: Plant, t: float, q: FloatArray, qd: FloatArray) -> None:
         """External torques, contact forces, wrench and sensors at sample k (plants with contact or a
-        disturbance)."""
+        disturbance): τ_ext, the negative of :meth:`Plant.external <armctl.sim.plant.Plant.external>` (without a
+        disturbance, −τ_c from the same evaluation as the forces, :meth:`Environment.contact
+        <armctl.sim.contact.Environment.contact>`), and the wrench on the environment about the tool frame's origin
+        o: f = Σ_p h_p + f_d, m = Σ_p (p − o) × h_p + m_d."""
         dyn = plant.dyn
-        self.tau_ext[k] = -plant.external(t, q, qd)
-        tool = dyn.frame_pose(q, None)[:3, 3]
-        f, m = np.zeros(3), np.zeros(3)
+        tau_c = np.zeros(len(q))  # Σ J_pᵀ F_p
+        f, m = [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]
         if self.points:
+            tx, ty, tz = dyn.frame_pose(q, None)[:3, 3].tolist()
             forces, positions = [], []
             for env, kin in zip(plant.environments, plant.kinematics, strict=True):
-                h, p = env.forces(kin, q, qd)
+                te, h, p = env.contact(kin, q, qd)
+                tau_c += te
                 forces.append(h)
                 positions.append(p)
-            hs, ps = np.concatenate(forces), np.concatenate(positions)
+            one = len(forces) == 1
+            hs = forces[0] if one else np.concatenate(forces)
+            ps = positions[0] if one else np.concatenate(positions)
             self.contact_force[k] = hs
             self.contact_position[k] = ps
-            f += hs.sum(axis=0)
-            m += np.cross(ps - tool, hs).sum(axis=0)
+            for (hx, hy, hz), (px, py, pz) in zip(hs.tolist(), ps.tolist(), strict=True):
+                rx, ry, rz = px - tx, py - ty, pz - tz
+                f[0] += hx
+                f[1] += hy
+                f[2] += hz
+                m[0] += ry * hz - rz * hy
+                m[1] += rz * hx - rx * hz
+                m[2] += rx * hy - ry * hx
             if self.sensors:
                 joints = np.concatenate([kin.joints for kin in plant.kinematics])
                 for s, sensor in enumerate(self.sensors):
                     self.sensor[k, s] = sensor.reading(dyn, q, hs, ps, joints)
         if plant.disturbance is not None:
+            self.tau_ext[k] = -plant.external(t, q, qd)  # (h_d as the plant takes it within its steps)
             hd = plant.disturbance_wrench(t)
-            f += hd[:3]
-            m += hd[3:]
+            f = [a + b for a, b in zip(f, hd[:3].tolist(), strict=True)]
+            m = [a + b for a, b in zip(m, hd[3:].tolist(), strict=True)]
+        else:
+            self.tau_ext[k] = -tau_c
         self.wrench[k, :3] = f
         self.wrench[k, 3:] = m
 

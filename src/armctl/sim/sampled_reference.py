@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 
@@ -38,10 +39,29 @@ class SampledReference:
         if first is not None and all(r is first for r in references):  # a fixed reference
             rows = len(references)
             return cls._holding(t, *(np.tile(a, (rows, 1)) for a in (first.q, first.qd, first.qdd)))
-        # one concatenation of the references' vectors, reshaped into the (N, n) rows
+        # stacked when first read (see __getattr__): a run's result costs nothing for a reference nobody reads
+        out = cls.__new__(cls)
+        times = np.array(t, dtype=float)
+        times.flags.writeable = False
+        object.__setattr__(out, "t", times)
+        object.__setattr__(out, "_given", (list(references), n))
+        return out
+
+    def __getattr__(self, name: str) -> FloatArray:
+        """q, q̇ and q̈ of a SampledReference made by :meth:`of` from references that differ, stacked on the first
+        read of any of them (one concatenation of the references' vectors per name, reshaped into the (N, n)
+        rows; NaN rows for None)."""
+        given = self.__dict__.get("_given")
+        if given is None or name not in ("q", "qd", "qdd"):
+            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+        references, n = given
         nan = np.full(n, np.nan)
-        parts = ([nan if r is None else getattr(r, name) for r in references] for name in ("q", "qd", "qdd"))
-        return cls._holding(t, *(np.concatenate(x).reshape(-1, n) for x in parts))
+        for key in ("q", "qd", "qdd"):
+            a = np.concatenate([nan if r is None else getattr(r, key) for r in references]).reshape(-1, n)
+            a.flags.writeable = False
+            object.__setattr__(self, key, a)
+        object.__delattr__(self, "_given")
+        return cast(FloatArray, self.__dict__[name])
 
     @classmethod
     def _holding(cls, t: FloatArray, q: FloatArray, qd: FloatArray, qdd: FloatArray) -> SampledReference:

@@ -3,23 +3,25 @@
  * (armctl/sim/python_engine.py), the plant's side of the period [t_k, t_k + Δt_c) under the held τ_k — the stick
  * solve at t_k (Plant.begin), the friction torque and the stuck joints recorded there (Recorder.record_friction),
  * q̈ at t_k, the m sub-steps with their events (stepper.advance), the friction and external work accumulated over
- * them. A change to one is a change to the other (tests/sim/test_compiled_plant.py compares them). The controller's
- * side (the checks of the state and of τ_k, its saturation) is ClosedLoop's, in Python, for every engine.
+ * them. A change to one is a change to the other (tests/sim/test_compiled_plant.py compares them). Before them, the
+ * torque is held as every engine holds it (armctl_hold, the transcription of Saturation.hold,
+ * armctl/sim/saturation.py): the checks of the state and the controller's call are ClosedLoop's, in Python.
  *
- *   period(TAU, W, par, opt, S) -> (Q, V, A, F, STUCK, WF, WE, out, S)
+ *   period(TAU, W, par, opt, S, LIM) -> (Q, V, A, F, STUCK, WF, WE, out, S, TAUA)
  *
- * TAU and the outputs Q … WE are bound to the whole arrays of the run's record (rows of N, or of 1 for the work),
- * larger than the one row they are declared as (CasADi's buffers take any buffer at least that large). The function
- * reads the torque held, τ_k, from row k of TAU (the record's applied torques: saturated by the loop), the state of
- * sample k (row k of Q and V, the work so far from WF[k] and WE[k]) and writes row k of A, F and STUCK (STUCK only
- * where a joint is stuck: the record starts as zeros) and row k + 1 of Q, V, WF and WE. W holds the disturbance's
- * samples of every sub-step, 18 each (start, middle, end of sub-step i at W + 18 i; only its start for the last
- * sample).
+ * TAU, TAUA and the outputs Q … WE are bound to the whole arrays of the run's record (rows of N, or of 1 for the
+ * work), larger than the one row they are declared as (CasADi's buffers take any buffer at least that large). The
+ * function reads τ_k from row k of TAU (the controller's torques), holds it (finite, clipped at the effort limits
+ * LIM where opt[8] says so) into row k of TAUA (the applied torques), reads the state of sample k (row k of Q and V,
+ * the work so far from WF[k] and WE[k]) and writes row k of A, F and STUCK (STUCK only where a joint is stuck: the
+ * record starts as zeros) and row k + 1 of Q, V, WF and WE. W holds the disturbance's samples of every sub-step, 18
+ * each (start, middle, end of sub-step i at W + 18 i; only its start for the last sample).
  *
  * opt = [k, h, scheme, m, rows, q̈ by an evaluation at t_k (1) or from the first sub-step (0), max_velocity,
- *        max_position]; m = 0: the last sample (no step after it: the stick solve, its records and q̈ only).
+ *        max_position, saturate (1: clip at LIM)]; m = 0: the last sample (no step after it: the hold, the stick
+ *        solve, its records and q̈ only).
  * out = [status, where it failed (PERIOD_BEGIN, PERIOD_ACCEL, PERIOD_STEP), the state code of the state it left
- *        (armctl_state_check)].
+ *        (armctl_state_check), or TORQUE_NOT_FINITE: τ_k is not finite and nothing else was written].
  * A row outside the record (k < 0, or k + 1 ≥ rows with m > 0, k ≥ rows) writes nothing: status BAD_ROW.
  */
 #define BAD_ROW 3
@@ -30,6 +32,18 @@
 #define STATE_NOT_FINITE 1
 #define STATE_VELOCITY 2
 #define STATE_POSITION 3
+#define TORQUE_NOT_FINITE 4
+
+/* Saturation.hold (armctl/sim/saturation.py), the torque held over a period: nothing (0) where an entry of τ is not
+ * finite, else (1) max(min(τ_i, limit_i), −limit_i) where clip, τ itself otherwise. A change to one is a change to the
+ * other (tests/sim/test_period.py compares them). */
+static int armctl_hold(const double* tau, const double* limit, int clip, double* held) {
+  int i;
+  for (i = 0; i < N; ++i)
+    if (!isfinite(tau[i])) return 0;
+  for (i = 0; i < N; ++i) held[i] = clip ? fmax(fmin(tau[i], limit[i]), -limit[i]) : tau[i];
+  return 1;
+}
 
 /* engine.state_code (armctl/sim/engine.py), the stop rules on the state a period leaves: the same tests in the same
  * order (finite: every entry; a sum could overflow). A change to one is a change to the other
@@ -65,7 +79,12 @@ CASADI_SYMBOL_EXPORT int period(const casadi_real** arg, casadi_real** res, casa
     out[0] = BAD_ROW;
     return 0;
   }
-  memcpy(tau, arg[0] + k * N, sizeof tau);
+  if (!armctl_hold(arg[0] + k * N, arg[5], opt[8] != 0.0, tau)) {
+    out[2] = TORQUE_NOT_FINITE;
+    memmove(res[8], arg[4], sizeof S); /* (the state unchanged: they may be one buffer) */
+    return 0;
+  }
+  memcpy(res[9] + k * N, tau, sizeof tau);
   memcpy(S, arg[4], sizeof S);
   memcpy(q, Q + k * N, sizeof q);
   memcpy(v, V + k * N, sizeof v);

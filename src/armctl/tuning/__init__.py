@@ -1,7 +1,8 @@
 """Tuning on python-control: linear models of the error dynamics, gains, sampled-data margins (of joint loops, and of
-force control and impedance against a compliant environment: :mod:`armctl.tuning.force_stability`); bounds on the
-dynamic model over the joint ranges (:func:`model_bounds`) and the textbook stability conditions they give
-(:mod:`armctl.tuning.conditions`); and the tuned presets the scenes read (:mod:`armctl.tuning.presets`).
+force control and impedance against a compliant environment: :mod:`armctl.tuning.force_stability`,
+:mod:`armctl.tuning.impedance_stability`); bounds on the dynamic model over the joint ranges (:func:`model_bounds`)
+and the textbook stability conditions they give (:mod:`armctl.tuning.conditions`); and the tuned presets the scenes
+read (:mod:`armctl.tuning.presets`).
 
 Many closed loops for a gain study run through :func:`armctl.sim.sweep` (``armctl.tuning.sweep`` is a deprecated
 alias of it).
@@ -17,14 +18,8 @@ from armctl.tuning.conditions import (
     pid_condition,
     sampled_data_condition,
 )
-from armctl.tuning.force_stability import (
-    critical_environment_stiffness,
-    critical_force_gain,
-    force_loop_matrix,
-    force_loop_radius,
-    impedance_loop_matrix,
-    normal_inertia,
-)
+from armctl.tuning.force_stability import critical_force_gain, force_loop_matrix, force_loop_radius, normal_inertia
+from armctl.tuning.impedance_stability import critical_environment_stiffness, impedance_loop_matrix, impedance_model
 from armctl.tuning.inertia_estimate import robust_inertia_estimate
 from armctl.tuning.linear import closed_loop_poles, linearize, lqr_gains, pd_from_bandwidth
 from armctl.tuning.sampled import SampledDataAnalysis, sampled_pd_loop, spectral_radius
@@ -42,6 +37,7 @@ __all__ = [
     "force_loop_matrix",
     "force_loop_radius",
     "impedance_loop_matrix",
+    "impedance_model",
     "linearize",
     "lqr_gains",
     "model_bounds",

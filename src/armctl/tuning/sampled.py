@@ -33,6 +33,11 @@ def _delay(delay: Any) -> int:
     return whole_number(delay, "delay (in periods)")
 
 
+def _loop(kp: Any, kd: Any, period: Any, delay: Any) -> tuple[float, float, float, int]:
+    """The loop's K_p, K_d, period T and delay d, checked (named errors)."""
+    return scalar(kp, "kp"), scalar(kd, "kd"), scalar(period, "period", positive=True), _delay(delay)
+
+
 def sampled_pd_loop(kp: float, kd: float, period: float, delay: int = 1) -> Any:
     """The discrete loop transfer function L(z) of a PD on a zero-order-hold double integrator with a
     measurement delay.
@@ -55,10 +60,7 @@ def sampled_pd_loop(kp: float, kd: float, period: float, delay: int = 1) -> Any:
     """
     import control
 
-    kp = scalar(kp, "kp")
-    kd = scalar(kd, "kd")
-    t = scalar(period, "period", positive=True)
-    d = _delay(delay)
+    kp, kd, t, d = _loop(kp, kd, period, delay)
     plant = control.ss([[1.0, t], [0.0, 1.0]], [[t * t / 2], [t]], [[kp, kd]], [[0.0]], dt=t)
     loop = control.ss2tf(plant)
     if d:
@@ -74,23 +76,14 @@ def spectral_radius(kp: float, kd: float, period: float, delay: int = 1) -> floa
 
     Parameters
     ----------
-    kp : float
-        K_p [1/s²].
-    kd : float
-        K_d [1/s].
-    period : float
-        The control period T [s], > 0.
-    delay : int, optional
-        Periods of measurement delay, ≥ 0.
+    kp, kd, period, delay
+        As for :func:`sampled_pd_loop`.
 
     Returns
     -------
     float
     """
-    kp = scalar(kp, "kp")
-    kd = scalar(kd, "kd")
-    t = scalar(period, "period", positive=True)
-    d = _delay(delay)
+    kp, kd, t, d = _loop(kp, kd, period, delay)
     size = 2 * (d + 1)
     big = np.zeros((size, size))
     big[:2, :2] = [[1.0, t], [0.0, 1.0]]
@@ -256,14 +249,8 @@ class SampledDataAnalysis:
 
         Parameters
         ----------
-        kp : float
-            K_p [1/s²].
-        kd : float
-            K_d [1/s].
-        period : float
-            The control period T [s], > 0.
-        delay : int, optional
-            Periods of measurement delay, ≥ 0.
+        kp, kd, period, delay
+            As for :func:`sampled_pd_loop`, with K_p > 0 and K_d ≥ 0.
 
         Returns
         -------

@@ -12,7 +12,16 @@ import pytest
 
 import armctl
 from armctl import sim
-from armctl.controllers.osc import FramePoseTask, OperationalSpaceQP, PostureTask, ProxQPSolver, QPFailure, SolverChain
+from armctl.controllers.osc import (
+    FramePoseTask,
+    OperationalSpaceQP,
+    PostureTask,
+    ProxQPSolver,
+    QPFailure,
+    SolverChain,
+    contact_qp,
+    generated_cascade,
+)
 from armctl.controllers.osc import diagnose as diagnose_module
 from armctl.errors import InvalidParameterError, SolverWarning
 from tests.controllers.osc.helpers import Q_HOME, panda_dynamics
@@ -95,10 +104,10 @@ def test_a_reachable_target_drives_a_joint_to_its_velocity_limit_and_the_limit_h
 def test_a_lower_level_that_fails_is_not_diagnosed_in_the_loop_and_warns_once(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    """Pose task above a posture task, 2 s; the posture's level has no verified optimum on 8 steps (the solver
-    chain made to give up on every 250th QP of level 1): the run completes, those steps keep the pose level's
-    solution (``level_status`` in the logs), the elastic diagnosis is not called once (counted), and one
-    warning says on how many steps; the diagnosis is there on demand."""
+    """Pose task above a posture task, 2 s; the posture's level has no verified optimum on 8 steps (every QP sent
+    to the solver chain, which is made to give up on every 250th QP of level 1): the run completes, those steps
+    keep the pose level's solution (``level_status`` in the logs), the elastic diagnosis is not called once
+    (counted), and one warning says on how many steps; the diagnosis is there on demand."""
     calls = []
     original = diagnose_module.conflicting_rows
 
@@ -118,6 +127,9 @@ def test_a_lower_level_that_fails_is_not_diagnosed_in_the_loop_and_warns_once(
 
     monkeypatch.setattr(diagnose_module, "conflicting_rows", counted)
     monkeypatch.setattr(SolverChain, "solve", gives_up)
+    # every QP to the chain: the optimum on the equality rows alone (taken without a solver) refused
+    monkeypatch.setattr(contact_qp, "equality_optimum", lambda *args: None)
+    monkeypatch.setattr(generated_cascade.GeneratedCascade, "step", lambda *args: None)
     dyn = panda_dynamics()
     task, _ = _reach((0.5, 0.3, 0.6), 0.7, 400.0)
     ctrl = OperationalSpaceQP(dyn, [task, PostureTask(7, kp=100.0, priority=1)])

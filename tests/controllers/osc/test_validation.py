@@ -285,3 +285,22 @@ def test_a_pulling_contact_force_target_is_refused_with_the_sign_convention() ->
     assert abs(ramp.target(3.0)[0]) < 1e-15
     with pytest.raises(InvalidParameterError, match="a pull"):
         ContactForceTask(wall, -1e-6)  # a micronewton pull is one
+
+
+def test_a_normal_force_target_given_as_a_float_is_checked_as_any_other() -> None:
+    """A sliding contact's force target as a Python float (what a ramp sets each step): a press is taken as the
+    one-entry target, a pull, NaN or an infinite one refused as the same value given as an array is."""
+    from armctl.errors import NonFiniteError
+
+    task = ContactForceTask(Contact(mode="sliding", mu=0.3), 0.0)
+    for value in (0.0, 2.5, 1e300):
+        task.set_target(value)
+        got = task.target(0.0)
+        assert got.tolist() == [value] and got.dtype == np.float64
+        task.set_target(np.array([value]))
+        assert task.target(0.0).tolist() == [value]
+    for bad, error in ((-1.0, InvalidParameterError), (float("nan"), NonFiniteError), (float("inf"), NonFiniteError)):
+        with pytest.raises(error):
+            task.set_target(bad)
+        with pytest.raises(error):
+            task.set_target(np.array([bad]))

@@ -13,14 +13,13 @@ from armctl.controllers.base import Controller
 from armctl.controllers.interaction.force_source import ForceInput
 from armctl.controllers.interaction.gains import critical_damping, damping_ratio, symmetric_psd
 from armctl.controllers.interaction.inner import InnerMotion
-from armctl.controllers.interaction.task_space import FrameTarget
+from armctl.controllers.interaction.task_space import FrameTarget, PoseTargeted
 from armctl.controllers.osc.tasks.rotation import rotation_error
-from armctl.controllers.osc.tasks.target import Trajectory
 from armctl.dynamics.base import Dynamics
 from armctl.references import Reference
 
 
-class Admittance(Controller):
+class Admittance(PoseTargeted, Controller):
     """Admittance control (position-based impedance; Siciliano, Sciavicco, Villani & Oriolo, *Robotics:
     Modelling, Planning and Control*, 2009, §9.3): the measured wrench drives a compliant frame x_c through a
     mass–spring–damper about the target x_d, and an inner motion loop of your choice tracks x_c.
@@ -138,31 +137,6 @@ class Admittance(Controller):
         self._t: float | None = None
         self._dt = np.zeros(1)
 
-    def set_target(
-        self, pose: ArrayLike, twist: ArrayLike | None = None, acceleration: ArrayLike | None = None
-    ) -> None:
-        """Set the target x_d (world axes): the 4×4 pose, the twist [m/s; rad/s] and the acceleration
-        [m/s²; rad/s²] (None: zero). Unset, the frame's pose at the first call is held.
-
-        Parameters
-        ----------
-        pose : array_like, shape (4, 4)
-            The pose.
-        twist, acceleration : array_like, shape (6,), optional
-            Its rates.
-        """
-        self.target.set(pose, twist, acceleration)
-
-    def set_trajectory(self, fn: Trajectory) -> None:
-        """Follow a target trajectory.
-
-        Parameters
-        ----------
-        fn : callable
-            ``fn(t) -> (pose, twist, acceleration)`` in :meth:`set_target`'s terms.
-        """
-        self.target.follow(fn)
-
     def reset(self) -> None:
         super().reset()
         self.target.reset()
@@ -204,6 +178,6 @@ class Admittance(Controller):
         self._state = (p_c, r_c, v_c)
         cmd = np.eye(4)
         cmd[:3, :3], cmd[:3, 3] = r_c, p_c
-        tau, e = self.inner.command(q, qd, cmd, v_c, a_c, posture, h if self.compensate else None)
+        tau, e = self.inner.command(q, qd, (cmd, v_c, a_c), posture, h if self.compensate else None)
         self.last_log = {"wrench": h, "compliant": e_c, "error": e}
         return tau

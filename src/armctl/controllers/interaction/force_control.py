@@ -2,12 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Any
-
-from numpy.typing import ArrayLike
-
-from armctl.controllers.interaction.force_loop import ForceLoop, projector
-from armctl.dynamics.base import Dynamics
+from armctl.controllers.interaction.force_loop import ForceLoop
 
 
 class ForceControl(ForceLoop):
@@ -79,38 +74,3 @@ class ForceControl(ForceLoop):
     ``last_log`` holds ``"force_error"`` e_f [N], ``"offset"`` x_F [m], ``"wrench"`` h and ``"error"`` the
     inner loop's frame error [m; rad].
     """
-
-    def __init__(
-        self,
-        dynamics: Dynamics,
-        force: Any,
-        force_gain: ArrayLike,
-        integral_gain: ArrayLike = 0.0,
-        frame: str | None = None,
-        *,
-        directions: ArrayLike | None = None,
-        force_source: Any = "sensor",
-        inner: str = "computed_torque",
-        kp: ArrayLike = 400.0,
-        kd: ArrayLike | None = None,
-        posture: ArrayLike | None = None,
-        posture_kp: ArrayLike = 10.0,
-        compensate: bool = True,
-        compile: bool | str = "auto",
-    ) -> None:
-        super().__init__(
-            dynamics,
-            force,
-            force_gain,
-            integral_gain,
-            frame,
-            projector(directions),
-            force_source,
-            inner,
-            kp,
-            kd,
-            posture,
-            posture_kp,
-            compensate,
-            compile,
-        )

@@ -22,8 +22,7 @@ from armctl.controllers.base import Controller
 from armctl.controllers.interaction.force_source import ForceInput
 from armctl.controllers.interaction.gains import symmetric_psd
 from armctl.controllers.interaction.inner import InnerMotion
-from armctl.controllers.interaction.task_space import FrameTarget
-from armctl.controllers.osc.tasks.target import Trajectory
+from armctl.controllers.interaction.task_space import FrameTarget, PoseTargeted
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError
 from armctl.references import Reference
@@ -68,16 +67,15 @@ def projector(directions: ArrayLike | None) -> FloatArray:
     return np.asarray(u @ u.T)
 
 
-class ForceLoop(Controller):
-    """The shared machinery (see the module); :class:`ForceControl` and :class:`ParallelForcePosition` set P.
+class ForceLoop(PoseTargeted, Controller):
+    """The shared machinery (see the module), with :class:`~armctl.controllers.ForceControl`'s constructor;
+    :class:`ParallelForcePosition` leaves ``directions`` at all three axes.
 
     Parameters
     ----------
-    dynamics, force, force_gain, integral_gain, frame, force_source, inner, kp, kd, posture, posture_kp,
-    compensate, compile
+    dynamics, force, force_gain, integral_gain, frame, directions, force_source, inner, kp, kd, posture,
+    posture_kp, compensate, compile
         As in :class:`~armctl.controllers.ForceControl`.
-    directions : ndarray, shape (3, 3)
-        P.
     """
 
     dynamics: Dynamics
@@ -87,18 +85,20 @@ class ForceLoop(Controller):
         dynamics: Dynamics,
         force: Any,
         force_gain: ArrayLike,
-        integral_gain: ArrayLike,
-        frame: str | None,
-        directions: FloatArray,
-        force_source: Any,
-        inner: str,
-        kp: ArrayLike,
-        kd: ArrayLike | None,
-        posture: ArrayLike | None,
-        posture_kp: ArrayLike,
-        compensate: bool,
-        compile: bool | str,
+        integral_gain: ArrayLike = 0.0,
+        frame: str | None = None,
+        *,
+        directions: ArrayLike | None = None,
+        force_source: Any = "sensor",
+        inner: str = "computed_torque",
+        kp: ArrayLike = 400.0,
+        kd: ArrayLike | None = None,
+        posture: ArrayLike | None = None,
+        posture_kp: ArrayLike = 10.0,
+        compensate: bool = True,
+        compile: bool | str = "auto",
     ) -> None:
+        p = projector(directions)
         super().__init__(dynamics)
         owner = type(self).__name__
         self.force_input = ForceInput(force_source, owner)
@@ -109,7 +109,7 @@ class ForceLoop(Controller):
         self.force_target = ForceTarget(force)
         self.force_gain = readonly(symmetric_psd(force_gain, (3,), "force_gain", "m/N"))
         self.integral_gain = readonly(symmetric_psd(integral_gain, (3,), "integral_gain", "m/(N·s)"))
-        self.directions = readonly(np.array(directions))
+        self.directions = readonly(p)
         self._free = readonly(np.eye(3) - self.directions)
         self.frame = frame
         self.target = FrameTarget(owner, 6)
@@ -131,31 +131,6 @@ class ForceLoop(Controller):
             slice(a, b) for a, b in ((0, n), (n, n + 6), (n + 6, n + 9), (n + 9, n + 12), (n + 12, n + 15))
         )
         self._t: float | None = None
-
-    def set_target(
-        self, pose: ArrayLike, twist: ArrayLike | None = None, acceleration: ArrayLike | None = None
-    ) -> None:
-        """Set the motion target (world axes): the 4×4 pose p_d, R_d [m], the twist [m/s; rad/s] and the
-        acceleration [m/s²; rad/s²] (None: zero). Unset, the frame holds the pose it has at the first call.
-
-        Parameters
-        ----------
-        pose : array_like, shape (4, 4)
-            The pose.
-        twist, acceleration : array_like, shape (6,), optional
-            Its rates.
-        """
-        self.target.set(pose, twist, acceleration)
-
-    def set_trajectory(self, fn: Trajectory) -> None:
-        """Follow a motion trajectory.
-
-        Parameters
-        ----------
-        fn : callable
-            ``fn(t) -> (pose, twist, acceleration)`` in :meth:`set_target`'s terms.
-        """
-        self.target.follow(fn)
 
     def reset(self) -> None:
         super().reset()
@@ -203,7 +178,7 @@ class ForceLoop(Controller):
         cmd = pose.copy()
         cmd[:3, 3] += x_f
         tau, e = self.inner.command(
-            q, qd, cmd, self._free6 @ twist, self._free6 @ acc, posture, h if self.compensate else None
+            q, qd, (cmd, self._free6 @ twist, self._free6 @ acc), posture, h if self.compensate else None
         )
         self._integral = integral
         self.last_log = {"force_error": e_f, "offset": x_f, "wrench": h, "error": e}

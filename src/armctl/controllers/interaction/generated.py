@@ -19,8 +19,6 @@ from __future__ import annotations
 
 import hashlib
 import itertools
-import logging
-import time
 from typing import Any
 
 import casadi as cs
@@ -46,7 +44,6 @@ from armctl.model.robot import RobotModel
 #: bumped when the generated code changes, so that stale cached libraries are not loaded
 _CODE_VERSION = 6
 _NAME = "cartesian_impedance"
-_log = logging.getLogger(__name__)
 #: the compiler's flags: the law runs at every control step (a slower build for faster code)
 FLAGS = codegen.CFLAGS_FAST
 
@@ -190,18 +187,9 @@ class GeneratedImpedance:
         self.dynamics, self.frame, self.axes, self.null, self.split = dynamics, frame, axes, null, split
         cache_dir = dynamics.options.get("cache_dir")
         tag = _tag(model, frame, axes, null, split)
-        built = not codegen.is_cached([_NAME], tag, cache_dir, FLAGS)
-        t0 = time.perf_counter()
-        fn = codegen.cached(
-            [_NAME], tag, lambda: [impedance_function(model, frame, axes, null, split)], cache_dir, flags=FLAGS
-        )[_NAME]
-        if built:
-            _log.warning(
-                "armctl: generated and compiled the Cartesian impedance law for %r in %.1f s (cached in %s)",
-                model.name,
-                time.perf_counter() - t0,
-                codegen.cache_root(cache_dir),
-            )
+        make = lambda: [impedance_function(model, frame, axes, null, split)]  # noqa: E731
+        what = f"the Cartesian impedance law for {model.name!r}"  # logged with its time if it is built
+        fn = codegen.cached([_NAME], tag, make, cache_dir, flags=FLAGS, what=what)[_NAME]
         nx, npar = sizes(model.n, axes)
         self.n = n = model.n
         m, mm = axes, axes * axes

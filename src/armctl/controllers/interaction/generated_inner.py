@@ -17,8 +17,6 @@ from __future__ import annotations
 
 import hashlib
 import itertools
-import logging
-import time
 from typing import Any
 
 import casadi as cs
@@ -42,7 +40,6 @@ from armctl.model.robot import RobotModel
 
 _CODE_VERSION = 3
 _NAME = "interaction_inner"
-_log = logging.getLogger(__name__)
 
 
 def sizes(n: int) -> tuple[int, int]:
@@ -156,10 +153,8 @@ class GeneratedInner:
 
     Parameters
     ----------
-    dynamics : Dynamics
-        The controller's model (its cache folder too).
-    frame : str or None
-        The controlled frame.
+    dynamics, frame
+        As for :class:`~armctl.controllers.interaction.generated.GeneratedImpedance`.
     kind : {"osc", "computed_torque"}
         The law.
     force_loop : bool, optional
@@ -177,19 +172,9 @@ class GeneratedInner:
         cache_dir = dynamics.options.get("cache_dir")
         name = _NAME + ("_force" if force_loop else f"_admittance{admittance}" if admittance else "")
         tag = _tag(model, frame, kind) + f"|force_loop={force_loop}|admittance={admittance}"
-        built = not codegen.is_cached([name], tag, cache_dir, FLAGS)
-        t0 = time.perf_counter()
         make = lambda: [inner_function(model, frame, kind, force_loop, admittance)]  # noqa: E731
-        fn = codegen.cached([name], tag, make, cache_dir, flags=FLAGS)[name]
-        if built:
-            _log.warning(
-                "armctl: generated and compiled the interaction controllers' inner loop (%s) for %r in %.1f s "
-                "(cached in %s)",
-                kind,
-                model.name,
-                time.perf_counter() - t0,
-                codegen.cache_root(cache_dir),
-            )
+        what = f"the interaction controllers' inner loop ({kind}) for {model.name!r}"  # logged if it is built
+        fn = codegen.cached([name], tag, make, cache_dir, flags=FLAGS, what=what)[name]
         self.n = n = model.n
         nx, npar = sizes(n)
         if force_loop:
@@ -240,13 +225,13 @@ class GeneratedInner:
         self,
         q: FloatArray,
         qd: FloatArray,
-        pose: FloatArray,
-        twist: FloatArray,
-        acceleration: FloatArray,
+        goal: tuple[FloatArray, FloatArray, FloatArray],
         posture: FloatArray,
         wrench: FloatArray | None,
     ) -> FloatArray:
-        """[τ; e; p] (a new array): the torque, the frame error [m; rad] and the frame's position [m]."""
+        """[τ; e; p] (a new array): the torque, the frame error [m; rad] and the frame's position [m], for the
+        commanded motion ``goal`` = (pose (4×4), twist (6,), acceleration (6,))."""
+        pose, twist, acceleration = goal
         h = self._zero_wrench if wrench is None else wrench
         np.concatenate((q, qd, pose.ravel(), twist, acceleration, posture, h), out=self.inp)
         self._run()

@@ -35,6 +35,9 @@ from armctl.controllers.osc.tasks.rotation import rotation_error
 from armctl.dynamics.base import Dynamics
 from armctl.errors import SingularConfigurationError, UnknownNameError
 
+#: a commanded frame motion: (pose (4×4), twist (6,) [m/s; rad/s], acceleration (6,) [m/s²; rad/s²]), world axes
+Motion = tuple[FloatArray, FloatArray, FloatArray]
+
 #: the inner loops
 INNER = ("osc", "computed_torque")
 #: what ``compile="auto"`` runs where the generated loop cannot be built
@@ -141,14 +144,7 @@ class InnerMotion:
         return tau
 
     def command(
-        self,
-        q: FloatArray,
-        qd: FloatArray,
-        pose: FloatArray,
-        twist: FloatArray,
-        acceleration: FloatArray,
-        posture: FloatArray,
-        wrench: FloatArray | None = None,
+        self, q: FloatArray, qd: FloatArray, goal: Motion, posture: FloatArray, wrench: FloatArray | None = None
     ) -> tuple[FloatArray, FloatArray]:
         """τ [N·m] and the frame error e (6,) [m; rad] at the measured (q, q̇) (checked finite by the caller), by
         the generated law where there is one (the NumPy path at a singular configuration, to name it).
@@ -157,8 +153,8 @@ class InnerMotion:
         ----------
         q, qd : ndarray, shape (n,)
             The measured state [rad, rad/s].
-        pose, twist, acceleration : ndarray
-            x_c (4×4), v_c (6,) and a_c (6,), world axes.
+        goal : tuple of ndarray
+            The commanded motion (x_c (4×4), v_c (6,), a_c (6,)), world axes.
         posture : ndarray, shape (n,)
             q_n [rad].
         wrench : ndarray, shape (6,), optional
@@ -166,25 +162,23 @@ class InnerMotion:
         """
         gen = self.generated
         if gen is not None and not (self.force_loop or self.admittance):
-            out = gen.run(q, qd, pose, twist, acceleration, posture, wrench)
+            out = gen.run(q, qd, goal, posture, wrench)
             if all_finite(out):
                 n = self.dynamics.n
                 return self.with_friction(out[:n], qd), out[n : n + 6]
         state = self.evaluator.evaluate(q, qd)
-        return self.torque(state, state.frame(self.frame), pose, twist, acceleration, posture, wrench)
+        return self.torque(state, state.frame(self.frame), goal, posture, wrench)
 
     def torque(
         self,
         state: ModelState,
         fk: FrameKinematics,
-        pose: FloatArray,
-        twist: FloatArray,
-        acceleration: FloatArray,
+        goal: Motion,
         posture: FloatArray,
         wrench: FloatArray | None = None,
     ) -> tuple[FloatArray, FloatArray]:
-        """τ [N·m] driving the frame to the commanded ``pose`` (4×4), ``twist`` and ``acceleration`` (6,), and the
-        frame error e (6,) [m; rad].
+        """τ [N·m] driving the frame to the commanded motion ``goal`` = (pose (4×4), twist (6,), acceleration
+        (6,)), and the frame error e (6,) [m; rad].
 
         Parameters
         ----------
@@ -192,14 +186,15 @@ class InnerMotion:
             The model terms at the measured (q, q̇).
         fk : FrameKinematics
             The frame's kinematics at that state.
-        pose, twist, acceleration : ndarray
-            x_c (4×4), v_c (6,) [m/s; rad/s] and a_c (6,) [m/s²; rad/s²], world axes.
+        goal : tuple of ndarray
+            (x_c (4×4), v_c (6,) [m/s; rad/s], a_c (6,) [m/s²; rad/s²]), world axes.
         posture : ndarray, shape (n,)
             q_n [rad].
         wrench : ndarray, shape (6,), optional
             h [N; N·m] to compensate (world axes at the frame); None: not compensated.
         """
         q, qd = state.q, state.qd
+        pose, twist, acceleration = goal
         jac = fk.jacobian
         e = np.concatenate((pose[:3, 3] - fk.position, rotation_error(pose[:3, :3], fk.rotation)))
         xdd = acceleration + self.kp @ e + self.kd @ (twist - fk.velocity) - fk.drift

@@ -32,21 +32,9 @@ class ParallelForcePosition(ForceLoop):
         force prevail).
     frame : str, optional
         The controlled frame (None: the tool frame).
-    force_source : "sensor" or observer, optional
-        As in :class:`~armctl.controllers.ForceControl`.
-    inner : {"computed_torque", "osc"}, optional
-        The inner motion loop.
-    kp, kd : array_like, optional
-        Its gains K_P [1/s²] (default 400) and K_D [1/s] (None: 2 K_P^½).
-    posture : array_like, optional
-        q_n (n,) [rad] of the null-space posture; None: the joint reference ``ref.q``.
-    posture_kp : array_like, optional
-        K_P,n [1/s²] ≥ 0 of the posture (default 10).
-    compile : bool or "auto", optional
-        The inner loop as one call of generated C code: "auto" (the default) where the dynamics are Pinocchio's and
-        a C compiler builds it, True (or an error), False (NumPy).
-    compensate : bool, optional
-        Add Jᵀ h, the measured wrench, to the torque (default True).
+    force_source, inner, kp, kd, posture, posture_kp, compile, compensate : optional
+        The force source, the inner motion loop and its gains, the null-space posture, code generation and the
+        compensation of the measured wrench, as in :class:`~armctl.controllers.ForceControl`.
 
     Raises
     ------
@@ -104,13 +92,12 @@ class ParallelForcePosition(ForceLoop):
             force_gain,
             ki,
             frame,
-            np.eye(3),
-            force_source,
-            inner,
-            kp,
-            kd,
-            posture,
-            posture_kp,
-            compensate,
-            compile,
+            force_source=force_source,
+            inner=inner,
+            kp=kp,
+            kd=kd,
+            posture=posture,
+            posture_kp=posture_kp,
+            compensate=compensate,
+            compile=compile,
         )

@@ -131,6 +131,40 @@ class FrameTarget:
         return value - fk.position
 
 
+class PoseTargeted:
+    """What a controller whose frame follows a pose target shares: :meth:`set_target` and :meth:`set_trajectory`
+    on its :attr:`target` (a 6-axis :class:`FrameTarget`, which the controller creates)."""
+
+    #: the frame's target: a 4×4 pose with its twist and acceleration
+    target: FrameTarget
+
+    def set_target(
+        self, pose: ArrayLike, twist: ArrayLike | None = None, acceleration: ArrayLike | None = None
+    ) -> None:
+        """Set the motion target x_d (world axes): the 4×4 pose p_d, R_d [m], the twist [m/s; rad/s] and the
+        acceleration [m/s²; rad/s²] (None: zero); it replaces a trajectory. Unset, the frame holds the pose it has
+        at the first call.
+
+        Parameters
+        ----------
+        pose : array_like, shape (4, 4)
+            The pose.
+        twist, acceleration : array_like, shape (6,), optional
+            Its rates.
+        """
+        self.target.set(pose, twist, acceleration)
+
+    def set_trajectory(self, fn: Trajectory) -> None:
+        """Follow a motion trajectory; it replaces a constant target.
+
+        Parameters
+        ----------
+        fn : callable
+            ``fn(t) -> (pose, twist, acceleration)`` in :meth:`set_target`'s terms.
+        """
+        self.target.follow(fn)
+
+
 def task_inertia(mass: FloatArray, jac: FloatArray, q: FloatArray) -> tuple[FloatArray, FloatArray]:
     """Λ = (J M⁻¹ Jᵀ)⁻¹ [kg, kg·m²] and J̄ᵀ = Λ J M⁻¹.
 

@@ -34,6 +34,7 @@ class ContactStep:
         "contact",
         "frozen",
         "hg",
+        "hg_below",
         "outputs",
         "rows",
         "solutions",
@@ -50,6 +51,8 @@ class ContactStep:
         self.rows: list[FloatArray] = []
         #: (H, g) of level 0 for a step taken without a solver, whose arrays are made when asked for
         self.hg: tuple[FloatArray, FloatArray] | None = None
+        #: likewise (H, g) of the levels below 0 (their rows A and F of ``frozen``)
+        self.hg_below: list[tuple[FloatArray, FloatArray]] = []
         #: for a step taken without a solver: its copy of the generated code's outputs and the code, until the
         #: rows above are read from it
         self.outputs: tuple[FloatArray, GeneratedContactData] | None = None
@@ -110,7 +113,13 @@ def step_arrays(qp: ContactQP, res: ContactStep) -> list[QPArrays]:
     if not res.arrays and res.hg is not None:
         brows = res.b_rows
         C, ly, uy = qp.inequalities(brows, -brows[:, qp.ny], res.bounds)
-        res.arrays.append(QPArrays(*res.hg, *res.contact, C, ly, uy))
+        A, b = res.contact
+        res.arrays.append(QPArrays(*res.hg, A, b, C, ly, uy))
+        for k, (H, g) in enumerate(res.hg_below, 1):
+            frozen = res.frozen[k]
+            assert frozen is not None  # a level below 0 has its frozen rows
+            F, phi = frozen
+            res.arrays.append(QPArrays(H, g, np.vstack((A, F)), np.concatenate((b, phi)), C, ly, uy))
     return res.arrays
 
 

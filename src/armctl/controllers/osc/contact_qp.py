@@ -1,4 +1,5 @@
-"""`ContactQP`: the QPs of a step with active contacts, solved on y = [q̈; f] (τ eliminated).
+"""`ContactQP`: the QPs of a step with active contacts, or with several priority levels, solved on y = [q̈; f]
+(τ eliminated; f the active contacts' forces, none without contacts).
 
 With contacts the equation of motion still gives τ outright, τ = M q̈ − Σ_c J_cᵀ f_c + h' with h' = C q̇ + g + τ_f,
 so every level's QP over x = [q̈; τ; f] that :class:`~armctl.controllers.osc.build.StepQP` shows,
@@ -18,8 +19,14 @@ the public stationarity condition). The regularisation enters as rows below the 
 
 Levels below the first keep the optimum of those above through the rows F y = F y_{k−1}, F an orthonormal basis
 of the weighted task rows of the levels above (:func:`~armctl.controllers.osc.hierarchy.extend_basis`): no task
-reads τ, so these are the public problem's ``priority[i]`` rows with zero τ columns. Every QP goes to the
-controller's :class:`~armctl.controllers.osc.chain.SolverChain`; τ comes only from its verified optimum.
+reads τ, so these are the public problem's ``priority[i]`` rows with zero τ columns.
+
+With several levels, each level's optimum on its equality rows alone (the contact rows and F,
+:func:`~armctl.controllers.osc.equality_optimum.equality_optimum`) is taken where
+:func:`~armctl.controllers.osc.optimality.equality_optimum_ok` finds it the QP's (no inequality row active: the
+usual case), and the generated code of :mod:`~armctl.controllers.osc.generated_cascade` does both levels of a
+two-level layout in one call; every other QP goes to the controller's
+:class:`~armctl.controllers.osc.chain.SolverChain`. τ comes only from a verified optimum.
 """
 
 from __future__ import annotations
@@ -35,6 +42,7 @@ from armctl.controllers.osc.chain import QPFailure, SolverChain
 from armctl.controllers.osc.contact import Contact
 from armctl.controllers.osc.contact_public import ContactStep, public_solution, step_arrays, taken_step
 from armctl.controllers.osc.diagnose import raise_unsolved
+from armctl.controllers.osc.equality_optimum import equality_optimum
 from armctl.controllers.osc.hierarchy import OSCSolution, extend_basis
 from armctl.controllers.osc.layout import UPPER_REGULARIZATION_FACTOR, Layout
 from armctl.controllers.osc.levels import LevelPlan
@@ -46,6 +54,7 @@ from armctl.controllers.osc.state import ModelState
 from armctl.references import Reference
 
 if TYPE_CHECKING:
+    from armctl.controllers.osc.generated_cascade import GeneratedCascade
     from armctl.controllers.osc.generated_contact import GeneratedContactData
 
 _MAX_RHS2 = MAX_TASK_RHS**2
@@ -71,6 +80,9 @@ class ContactQP:
     def __init__(self, builder: QPBuilder, lay: Layout) -> None:
         #: the QPs' data from generated code (:mod:`~armctl.controllers.osc.generated_contact`), or None: NumPy
         self.generated: GeneratedContactData | None = None
+        #: with two levels and generated data, their optimum when no inequality row is active, from generated code
+        #: (:mod:`~armctl.controllers.osc.generated_cascade`), or None
+        self.cascade: GeneratedCascade | None = None
         n = self.n = builder.n
         self.builder = builder
         self.layout = lay
@@ -168,7 +180,7 @@ class ContactQP:
                 refuse_scale(plan.tasks, list(plan.slices.values()), rows, ny, state, t, ref)
             # H contiguous (DAQP reads the buffer)
             levels.append((G[:ny, :ny].copy(), G[ny, :ny], self._weighted_rows(k, rows) if k < last else None))
-        return self._cascade(res, hf, self._bounds(state), levels, chain)
+        return self._cascade(res, hf, self.bounds(state), levels, chain)
 
     def step_generated(
         self,
@@ -191,6 +203,10 @@ class ContactQP:
         for c in gen.c:
             if not c[0] <= _MAX_RHS2:  # ‖W^{1/2} b‖² + ε_k‖h'‖² (NaN too)
                 return self.step(evaluate(q, qd), t, ref, chain)
+        if self.cascade is not None:
+            taken = self.cascade.step(self, gen, chain)
+            if taken is not None:
+                return taken
         n, ny = self.n, self.ny
         res = ContactStep()
         brows = gen.brows.copy()  # kept by the step (the code's outputs are overwritten by the next run)
@@ -212,7 +228,7 @@ class ContactQP:
         # where the code gave its verdict on the optimum on the contact rows alone (gen.accepted, the check of
         # equality_optimum_ok), it said no: that optimum is not offered again
         equality = gen.equality if gen.limits is None else None
-        return self._cascade(res, hf, self._bounds(state), levels, chain, equality)
+        return self._cascade(res, hf, self.bounds(state), levels, chain, equality)
 
     def _weighted_rows(self, k: int, rows: FloatArray) -> FloatArray:
         """T_k: level k's task rows weighted (W^½ J on y), without the rows of zero weight (a task direction
@@ -230,7 +246,7 @@ class ContactQP:
             return weights * rows[: plan.m, : self.ny]
         return weights[live] * rows[live, : self.ny]
 
-    def _bounds(self, state: ModelState) -> tuple[FloatArray, FloatArray]:
+    def bounds(self, state: ModelState) -> tuple[FloatArray, FloatArray]:
         """The public bounds l, u of the limits and cones at ``state``."""
         lay = self.layout
         if lay.constant_bounds is not None:
@@ -271,22 +287,15 @@ class ContactQP:
             res.arrays.append(arrays)
             if equality is not None and k == 0:
                 if equality_optimum_ok(arrays, *equality):
-                    sol_eq = QPSolution(
-                        equality[0].copy(),
-                        "solved",
-                        0,
-                        "active set",
-                        equality[1].copy(),
-                        np.zeros(arrays.l.shape[0]),
-                        "active set",
-                        0,
-                        self.no_active,
-                    )
-                    chain.record(chain.key(arrays, 0), self.no_active)
-                    res.solutions.append(sol_eq)
-                    res.status.append("solved")
-                    res.y = y = sol_eq.x
+                    res.y = y = self._take_equality(res, arrays, k, equality[0].copy(), equality[1].copy(), chain)
                     break
+            elif last:  # several levels: the optimum on the equality rows alone, if it is the QP's
+                opt = equality_optimum(H, g, arrays.A, arrays.b)
+                if opt is not None and equality_optimum_ok(arrays, *opt):
+                    y = self._take_equality(res, arrays, k, opt[0], opt[1], chain)
+                    if k < last and T is not None:
+                        F = extend_basis(F, T)
+                    continue
             try:
                 sol = chain.solve(arrays, k)
             except QPFailure as err:
@@ -310,6 +319,18 @@ class ContactQP:
         tau += hf
         res.tau = tau
         return res
+
+    def _take_equality(
+        self, res: ContactStep, arrays: QPArrays, k: int, y: FloatArray, lam: FloatArray, chain: SolverChain
+    ) -> FloatArray:
+        """Level k's optimum on its equality rows alone (y, their multipliers λ; no inequality row active),
+        verified, into ``res`` and the chain's record; returns y."""
+        z = np.zeros(arrays.l.shape[0])
+        sol = QPSolution(y, "solved", 0, "active set", lam, z, "active set", 0, self.no_active)
+        chain.record(chain.key(arrays, k), self.no_active)
+        res.solutions.append(sol)
+        res.status.append("solved")
+        return y
 
     def forces(self, res: ContactStep) -> dict[str, FloatArray]:
         """Each active contact's force f [N] of a step (views of its y)."""

@@ -248,11 +248,13 @@ class OperationalSpaceQP(Controller):
             and callable(getattr(self.solver, "solve_raw", None))
         )
         self._qdd: dict[Layout, QddQP] = {}
-        # with active contacts: the QPs on [q̈; f] (see contact_qp)
+        # with active contacts or several levels: the QPs on [q̈; f] (see contact_qp)
         self._contact_path = callable(getattr(self.solver, "solve_raw", None)) and applies(self.builder)
         self._contact_qps: dict[Layout, ContactQP] = {}
         if self._qdd_path and not self.contacts:  # made now: its generated code is built or loaded here
             self._qdd_qp(self.builder.layout())
+        elif self._contact_path and len(self.builder.priorities) > 1:  # likewise the first layout's, several levels
+            self._contact_qp(self.builder.layout())
         self._pending: tuple[QddQP, QddStep] | tuple[ContactQP, ContactStep] | None = None
         self._last_solution: OSCSolution | None = None
         self._steps = 0
@@ -262,11 +264,15 @@ class OperationalSpaceQP(Controller):
     @property
     def uses_generated_code(self) -> bool:
         """Whether the QP of the current layout (the tasks and contacts as they are) takes its data from generated
-        code (see ``compile``): the q̈-only QP without active contacts, the QPs on [q̈; f] with them."""
+        code (see ``compile``): the q̈-only QP of one level without active contacts, the QPs on [q̈; f] with them
+        or with several levels (with two levels, their optimum too where no inequality row is active)."""
         lay = self.builder.layout()
-        if lay.contacts:
-            return self._contact_path and self._contact_qp(lay).generated is not None
-        return self._qdd_path and self._qdd_qp(lay).generated is not None
+        if not lay.contacts and self._qdd_path:
+            return self._qdd_qp(lay).generated is not None
+        if self._contact_path:
+            qp = self._contact_qp(lay)
+            return qp.generated is not None and (qp.cascade is not None or len(qp.levels) != 2)
+        return False
 
     def _contact_qp(self, lay: Layout) -> ContactQP:
         """The QPs on [q̈; f] of layout ``lay`` (made on first use, with their generated data where ``compile``
@@ -277,6 +283,12 @@ class OperationalSpaceQP(Controller):
             qp.generated = self._generated_contact(qp, lay)
             if qp.generated is not None:
                 self._compiled_check(qp.key)
+                from armctl.controllers.osc import generated_cascade
+
+                gen = qp.generated
+                if generated_cascade.applies(qp):
+                    make = lambda: generated_cascade.for_qp(qp, gen)  # noqa: E731
+                    qp.cascade = FALLBACK.attempt(make, self.compile, stacklevel=3)
         return qp
 
     @property
@@ -513,10 +525,9 @@ class OperationalSpaceQP(Controller):
         self._pending = self._last_solution = None
         if self._qdd_path or self._contact_path:
             lay = self.builder.layout()
-            if not lay.contacts:
-                if self._qdd_path:
-                    return self._qdd_step(lay, t, q, qd, ref)
-            elif self._contact_path:
+            if not lay.contacts and self._qdd_path:
+                return self._qdd_step(lay, t, q, qd, ref)
+            if self._contact_path:  # contacts, or several levels: the QPs on [q̈; f] (f of the active contacts)
                 return self._contact_step(lay, t, q, qd, ref)
         state = self.evaluator.evaluate(q, qd)
         step = self.builder.build(state, t, ref)

@@ -152,7 +152,7 @@ def equality_optimum_ok(qp: QPArrays, x: FloatArray, y: FloatArray, eq_res: Floa
     residuals ``eq_res`` = A x − b and ``stat`` = H x + g + Aᵀy, is the optimum of ``qp``: the residuals within
     :data:`PRIMAL_TOL` and :data:`DUAL_TOL` (1 + ‖g‖∞) and every inequality row within its bounds exactly (no
     multiplier, no gap: the KKT conditions); False for NaN."""
-    if not float(np.abs(eq_res).max()) <= PRIMAL_TOL:
+    if not float(np.abs(eq_res).max(initial=0.0)) <= PRIMAL_TOL:  # (no equality row: none violated)
         return False
     if not float(np.abs(stat).max()) <= DUAL_TOL * (1.0 + float(np.abs(qp.g).max())):
         return False

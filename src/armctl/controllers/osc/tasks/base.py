@@ -132,20 +132,16 @@ class MotionTask(GainSet, Task):
 
     Parameters
     ----------
-    dim : int
-        m, the number of rows.
-    name : str
-        The task's name, unique in a controller.
+    dim, name
+        As for :class:`Task`.
     kp : array_like
         K_p [1/s²]: a scalar, a (dim,) diagonal or a dim×dim symmetric positive definite matrix. May be
         reassigned between control periods (checked again).
     kd : array_like, optional
         K_d [1/s], likewise; None (the default): critical damping K_d = 2 K_p^½ (the symmetric square root; 2√k_p
         for a scalar or each entry of a vector).
-    weight : array_like, optional
-        The rows' weights w_i ≥ 0 (scalar or (dim,)).
-    priority : int, optional
-        Its level, 0 the most important.
+    weight, priority : optional
+        As for :class:`Task`.
 
     Raises
     ------
@@ -195,12 +191,8 @@ class MotionTask(GainSet, Task):
 
         Parameters
         ----------
-        state : ModelState
-            The model terms at the measured (q, q̇).
-        t : float
-            Time [s].
-        ref : Reference
-            The controller's joint reference at t.
+        state, t, ref
+            As for :meth:`Task.residual`.
 
         Returns
         -------
@@ -231,12 +223,8 @@ class MotionTask(GainSet, Task):
 
         Parameters
         ----------
-        state : ModelState
-            The model terms at the measured (q, q̇).
-        t : float
-            Time [s].
-        ref : Reference
-            The controller's joint reference at t.
+        state, t, ref
+            As for :meth:`Task.residual`.
 
         Returns
         -------
@@ -251,24 +239,6 @@ class MotionTask(GainSet, Task):
         return (jac, np.zeros(self.dim) if drift is None else drift, self._law.dot(np.concatenate((acc, ed, e))))
 
     def residual(self, state: ModelState, t: float, ref: Reference) -> tuple[FloatArray | None, FloatArray]:
-        """The rows of the residual r = J q̈ − (ẍ* − J̇ q̇) at this step.
-
-        Parameters
-        ----------
-        state : ModelState
-            The model terms at the measured (q, q̇).
-        t : float
-            Time [s].
-        ref : Reference
-            The controller's joint reference at t.
-
-        Returns
-        -------
-        J : ndarray, shape (dim, n), or None
-            The task Jacobian; None means the identity.
-        b : ndarray, shape (dim,)
-            ẍ* − J̇ q̇ [m/s² or rad/s²].
-        """
         jac, drift, e, ed, acc = self.kinematics(state, t, ref)
         if drift is None:
             return jac, self._law.dot(np.concatenate((acc, ed, e)))
@@ -279,12 +249,8 @@ class MotionTask(GainSet, Task):
 
         Parameters
         ----------
-        state : ModelState
-            The model terms at the measured (q, q̇).
-        t : float
-            Time [s].
-        ref : Reference
-            The controller's joint reference at t.
+        state, t, ref
+            As for :meth:`Task.residual`.
 
         Returns
         -------

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
 import numpy as np
@@ -82,6 +83,8 @@ class ContactForceTask(Task):
         self.set_target(force)
 
     def _value(self, force: ArrayLike) -> FloatArray:
+        if self.normal_only and type(force) is float and 0.0 <= force < math.inf:  # a press: nothing to refuse
+            return np.array([force])
         a = np.asarray(force, dtype=float)
         if self.normal_only:
             a = np.atleast_1d(self.contact.normal @ a if a.shape == (3,) else a)
@@ -138,22 +141,6 @@ class ContactForceTask(Task):
         return self._value(self._fn(t)) if self._fn is not None else self._force
 
     def check(self, evaluator: object, n: int, contacts: dict[str, int]) -> None:
-        """Check that the task's contact is one of the controller's.
-
-        Parameters
-        ----------
-        evaluator : ModelEvaluator
-            The controller's evaluator of the model terms (not used).
-        n : int
-            The model's number of joints (not used).
-        contacts : dict of str to int
-            The controller's contacts, name → number of force variables.
-
-        Raises
-        ------
-        UnknownNameError
-            The contact is not among them (the error lists them).
-        """
         if self.contact.name not in contacts:
             raise UnknownNameError("contact", self.contact.name, list(contacts))
 

@@ -43,6 +43,9 @@ class FramePoseTask(FrameTask):
     angular])::
 
         e = [p_ref − p;  log(R_ref Rᵀ)],   ė = V_ref − J q̇,   J = the 6×n frame Jacobian,   drift = J̇ q̇
+
+    A step without a target, or whose trajectory gives one that is not a pose, of the wrong shape or not finite,
+    raises InvalidParameterError, ShapeError or NonFiniteError.
     """
 
     def __init__(
@@ -100,31 +103,7 @@ class FramePoseTask(FrameTask):
         self._pose_law = np.hstack((eye, kd, -kd, kp[:, :3], -kp[:, :3], kp[:, 3:], -eye))
 
     def residual(self, state: ModelState, t: float, ref: Reference) -> tuple[FloatArray, FloatArray]:
-        """The rows of the residual r = J q̈ − (ẍ* − J̇ q̇): :meth:`kinematics` and the PD law in one product. A
-        subclass that overrides :meth:`kinematics` gets the generic form on its own kinematics.
-
-        Parameters
-        ----------
-        state : ModelState
-            The model terms at the measured (q, q̇).
-        t : float
-            Time [s].
-        ref : Reference
-            The controller's joint reference at t (not used).
-
-        Returns
-        -------
-        J : ndarray, shape (6, n)
-            The frame Jacobian, rows [linear; angular] (world axes).
-        b : ndarray, shape (6,)
-            ẍ* − J̇ q̇ [m/s²; rad/s²].
-
-        Raises
-        ------
-        InvalidParameterError, ShapeError, NonFiniteError
-            The task has no target, or its trajectory returns one that is not a pose, of the wrong shape or not
-            finite.
-        """
+        # kinematics and the PD law in one product; a subclass that overrides kinematics gets the generic form
         if type(self).kinematics is not FramePoseTask.kinematics:
             return super().residual(state, t, ref)  # type: ignore[return-value]  # a frame task has a Jacobian
         pose, twist, acc = self.target.at(t)

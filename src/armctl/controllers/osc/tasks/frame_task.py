@@ -50,20 +50,4 @@ class FrameTask(MotionTask):
         self.target.follow(fn)
 
     def check(self, evaluator: Any, n: int, contacts: dict[str, int]) -> None:
-        """Check that the model has the task's frame.
-
-        Parameters
-        ----------
-        evaluator : ModelEvaluator
-            The controller's evaluator of the model terms.
-        n : int
-            The model's number of joints.
-        contacts : dict of str to int
-            The controller's contacts, name → number of force variables.
-
-        Raises
-        ------
-        UnknownNameError
-            The model has no frame of that name (the error lists the valid ones).
-        """
         evaluator.check_frame(self.frame)

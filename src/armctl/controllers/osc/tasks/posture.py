@@ -100,22 +100,6 @@ class PostureTask(MotionTask):
         return self._fixed or ref
 
     def check(self, evaluator: object, n: int, contacts: dict[str, int]) -> None:
-        """Check that the task has as many joints as the model.
-
-        Parameters
-        ----------
-        evaluator : ModelEvaluator
-            The controller's evaluator of the model terms (not used).
-        n : int
-            The model's number of joints.
-        contacts : dict of str to int
-            The controller's contacts (not used).
-
-        Raises
-        ------
-        ShapeError
-            The task's n is not the model's.
-        """
         if self.dim != n:
             raise ShapeError(
                 f"{self.name}: a posture task of {self.dim} joints on a model of {n} joints", value=self.dim
@@ -134,25 +118,7 @@ class PostureTask(MotionTask):
         self._posture_law = np.hstack((eye, kd, -kd, kp, -kp))
 
     def residual(self, state: ModelState, t: float, ref: Reference) -> tuple[None, FloatArray]:
-        """The rows of the residual r = q̈ − ẍ* (J = I, no drift): :meth:`kinematics` and the PD law in one
-        product. A subclass that overrides :meth:`kinematics` gets the generic form on its own kinematics.
-
-        Parameters
-        ----------
-        state : ModelState
-            The model terms at the measured (q, q̇).
-        t : float
-            Time [s].
-        ref : Reference
-            The controller's joint reference at t.
-
-        Returns
-        -------
-        J : None
-            The identity.
-        b : ndarray, shape (n,)
-            ẍ* = q̈_ref + K_d (q̇_ref − q̇) + K_p (q_ref − q) [rad/s²].
-        """
+        # kinematics and the PD law in one product; a subclass that overrides kinematics gets the generic form
         if type(self).kinematics is not PostureTask.kinematics:
             return super().residual(state, t, ref)  # type: ignore[return-value]  # no Jacobian: None
         r = self._fixed or ref
