@@ -243,12 +243,14 @@ def run(
     count: int = 400, rounds: int = 15, quick: bool = False, contact: bool = True, tail_steps: int = 20_000
 ) -> dict[str, Any]:
     """Measure; returns a dict of figures per set of states (seconds per call and ratios). ``quick``: 100 states,
-    5 rounds, a tail of 2 000 calls. ``contact``: also the figures with an active contact
-    (:mod:`~armctl.bench.osc_contact`), the scene's tail over ``tail_steps`` calls (0: none)."""
+    5 rounds, the tail's calls replayed over a run of 5 000 periods (not one of ``tail_steps``). ``contact``:
+    also the figures with an active contact (:mod:`~armctl.bench.osc_contact`), the scene's tail over
+    ``tail_steps`` calls (0: none)."""
     from proxsuite import proxqp
 
+    simulated = None
     if quick:
-        count, rounds, tail_steps = 100, 5, min(tail_steps, 2_000)
+        count, rounds, simulated = 100, 5, 5_000
     seq, ctrl, closed = states(count)
     ref = armctl.Reference(Q_HOME)
     closed_next = _cycle(seq)
@@ -286,7 +288,7 @@ def run(
         fixed = measure_contact(count, rounds)
         fixed["numpy"] = measure_contact(count, rounds, compile=False)
         out["contact"] = fixed
-        out["scene"] = measure_scene(min(count, 200), rounds, tail_steps)
+        out["scene"] = measure_scene(min(count, 200), rounds, tail_steps, simulated)
     return out
 
 

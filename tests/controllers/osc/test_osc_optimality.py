@@ -182,11 +182,12 @@ def test_each_fallback_gives_the_optimum_and_is_counted_and_summarised(
     """The primary solver made to fail (or to return a wrong point it calls solved) in the first stages: the
     chain goes on to the next stage, τ is still quadprog's cold optimum, ``last_log["qp_fallbacks"]`` counts
     the fallbacks of the step, and :meth:`end_run` warns once with how many QPs each fallback solved. States
-    whose optimum binds a torque limit, and the chain's first stage (DAQP) switched off, so that every QP past
-    the unconstrained minimum reaches the solvers."""
+    whose optimum binds a torque limit, the chain's first stage (DAQP) switched off and the QP's data from NumPy
+    (the generated code first solves on the rows its unconstrained minimum breaks), so that every QP past the
+    unconstrained minimum reaches the solvers."""
     dyn = panda_dynamics()
     solver = _Failing(modes, wrong)
-    ctrl = _controller(dyn, solver=solver)
+    ctrl = _controller(dyn, solver=solver, compile=False)
     ctrl.chain.first = None
     ref = armctl.Reference(Q_HOME)
     checked = 0

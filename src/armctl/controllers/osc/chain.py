@@ -54,6 +54,11 @@ class SolverChain:
     first : object, str or None, optional
         The first stage's solver, an object with ``solve_from(arrays, active)`` and ``reset()``; ``"daqp"`` (the
         default): :class:`~armctl.controllers.osc.DaqpSolver`; None: no first stage.
+    check : callable, optional
+        ``check(arrays, x, y, z) -> bool``, the first stage's check: the conditions of
+        :func:`~armctl.controllers.osc.optimality.kkt_ok` at its default tolerances (the default: ``kkt_ok``
+        itself; a controller with generated code gives the same check compiled,
+        :class:`~armctl.controllers.osc.kkt_code.CompiledKKT`). Kept as ``check``.
 
     Attributes
     ----------
@@ -70,7 +75,8 @@ class SolverChain:
     1. ``"active set"`` — DAQP (:class:`~armctl.controllers.osc.DaqpSolver`, a dual active-set method in C)
        started from the active set of the slot's last verified optimum (consecutive control steps rarely change
        which limits bind), or from a given one, and if that fails, from no active row; its answer, the exact
-       solution on its final active set, is checked by :func:`~armctl.controllers.osc.optimality.kkt_ok` to
+       solution on its final active set, is checked by :func:`~armctl.controllers.osc.optimality.kkt_ok` (or
+       ``check``, the same conditions) to
        :data:`~armctl.controllers.osc.optimality.PRIMAL_TOL` (1e-8 in each row's units) and
        :data:`~armctl.controllers.osc.optimality.DUAL_TOL` (1e-8, relative to 1 + ‖g‖∞).
     2. ``"warm"`` — the primary solver (ProxQP), warm-started from the slot's previous solution.
@@ -88,8 +94,15 @@ class SolverChain:
     level 0, the level above's solution kept for a lower level).
     """
 
-    def __init__(self, primary: Any, second: Any = "active-set", first: Any = "daqp") -> None:
+    def __init__(
+        self,
+        primary: Any,
+        second: Any = "active-set",
+        first: Any = "daqp",
+        check: Callable[[QPArrays, FloatArray, FloatArray | None, FloatArray | None], bool] = kkt_ok,
+    ) -> None:
         self.primary = primary
+        self.check = check
         self.second = DualActiveSetSolver() if isinstance(second, str) and second == "active-set" else second
         self.first = DaqpSolver() if isinstance(first, str) and first == "daqp" else first
         self._raw = callable(getattr(primary, "solve_raw", None))
@@ -99,7 +112,7 @@ class SolverChain:
         self.counts: Counter[str] = Counter()
 
     def __reduce__(self) -> tuple[Any, ...]:
-        return (SolverChain, (self.primary, self.second, self.first))  # starts cold, as after reset()
+        return (SolverChain, (self.primary, self.second, self.first, self.check))  # starts cold, as after reset()
 
     def reset(self) -> None:
         """Forget the warm starts and the counts."""
@@ -213,7 +226,7 @@ class SolverChain:
                 except (SolverError, InfeasibleError) as err:
                     attempts.append((STAGES[0], str(err)))
                     continue
-                if kkt_ok(arrays, sol.x, sol.y, sol.z):
+                if self.check(arrays, sol.x, sol.y, sol.z):
                     if sol.active is not None:
                         self._active[key] = sol.active
                     self.counts[STAGES[0]] += 1

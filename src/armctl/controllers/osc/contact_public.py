@@ -35,6 +35,7 @@ class ContactStep:
         "frozen",
         "hg",
         "hg_below",
+        "outputs",
         "rows",
         "solutions",
         "status",
@@ -52,6 +53,9 @@ class ContactStep:
         self.hg: tuple[FloatArray, FloatArray] | None = None
         #: likewise (H, g) of the levels below 0 (their rows A and F of ``frozen``)
         self.hg_below: list[tuple[FloatArray, FloatArray]] = []
+        #: for a step taken without a solver: its copy of the generated code's outputs and the code, until the
+        #: rows above are read from it
+        self.outputs: tuple[FloatArray, GeneratedContactData] | None = None
         self.b_rows: FloatArray
         self.contact: tuple[FloatArray, FloatArray]
         self.bounds: tuple[FloatArray, FloatArray]
@@ -59,32 +63,53 @@ class ContactStep:
         self.tau: FloatArray
 
 
-def taken_step(qp: ContactQP, gen: GeneratedContactData, chain: SolverChain) -> ContactStep:
-    """The step of the optimum on the contact rows alone that the generated code accepted (``gen.accepted``:
-    the check of :func:`~armctl.controllers.osc.optimality.equality_optimum_ok`, in the code): its outputs
-    copied, the QP's arrays made when asked for (:func:`step_arrays`)."""
-    ny = qp.ny
+def taken_step(qp: ContactQP, gen: GeneratedContactData, chain: SolverChain, guessed: bool = False) -> ContactStep:
+    """The step of an optimum that the generated code found and checked: on the contact rows alone
+    (``gen.accepted``: the check of :func:`~armctl.controllers.osc.optimality.equality_optimum_ok`, in the code),
+    or with ``guessed`` that of its active-set iterations (``gen.guess_ok``: the KKT check of
+    :func:`~armctl.controllers.osc.optimality.kkt_ok`, in the code). Its outputs copied at once, y, λ, z and τ read
+    from that copy, the rows, contact rows and (H, g) when the public solution or the check run again asks for
+    them (:func:`_unpack`), the QP's arrays then (:func:`step_arrays`)."""
+    flat = gen.out.copy()
     res = ContactStep()
-    res.b_rows = gen.brows.copy()
-    res.contact = (gen.contact[:, :ny].copy(), gen.contact[:, ny].copy())
-    res.rows.append(gen.rows.copy())
+    res.outputs = (flat, gen)
     res.bounds = gen.bounds  # type: ignore[assignment]  # set: the code accepts only with constant bounds
-    res.hg = (gen.H[0].copy(), gen.g[0].copy())
-    res.frozen.append(None)
-    eq = gen.equality
-    assert eq is not None  # one level
-    y = eq[0].copy()
-    z = np.zeros(qp.C_template.shape[0])
-    res.solutions.append(QPSolution(y, "solved", 0, "active set", eq[1].copy(), z, "active set", 0, qp.no_active))
+    if guessed:
+        assert gen.guess_out is not None  # run_guess passed
+        found = gen.guess_out.copy()
+        y, lam, zs, act, tau = gen.guessed
+        z, active = found[zs], found[act].astype(np.int8)
+    else:
+        assert gen.taken is not None  # the code accepts only with constant bounds
+        found = flat
+        y, lam, tau = gen.taken
+        z, active = qp.no_multipliers, qp.no_active
+    res.y = found[y]
+    res.tau = found[tau]
+    res.solutions.append(QPSolution(res.y, "solved", 0, "active set", found[lam], z, "active set", 0, active))
     res.status.append("solved")
-    res.y = y
-    res.tau = gen.tau.copy()
-    chain.record(qp.key, qp.no_active)
+    res.frozen.append(None)
+    chain.record(qp.key, active)
     return res
+
+
+def _unpack(res: ContactStep) -> None:
+    """The rows, contact rows and (H, g) of a step taken without a solver, from its copy of the code's outputs
+    (views of it), if not read yet."""
+    if res.outputs is None:
+        return
+    flat, gen = res.outputs
+    brows, contact, rows, H, g, *_ = gen.outputs(flat)
+    res.b_rows = brows
+    res.contact = (contact[:, : gen.ny], contact[:, gen.ny])
+    res.rows.append(rows)
+    res.hg = (H[0], g[0])
+    res.outputs = None
 
 
 def step_arrays(qp: ContactQP, res: ContactStep) -> list[QPArrays]:
     """The QP of each level of a step (made now for a step taken without a solver)."""
+    _unpack(res)
     if not res.arrays and res.hg is not None:
         brows = res.b_rows
         C, ly, uy = qp.inequalities(brows, -brows[:, qp.ny], res.bounds)
@@ -126,6 +151,7 @@ def public_solution(qp: ContactQP, res: ContactStep, partial: bool = False) -> O
     """The public :class:`OSCSolution` of a step: its :class:`StepQP` on x = [q̈; τ; f], x, and each level's
     solution mapped onto it (the same z and contact-row multipliers; ε_k τ + Σ z_τ for the equation of
     motion). ``partial``: for a step that stopped at level 0 (only the problem is read)."""
+    _unpack(res)
     n, ny, lay = qp.n, qp.ny, qp.layout
     brows = res.b_rows
     hf = -brows[:, ny]

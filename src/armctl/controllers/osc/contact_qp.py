@@ -95,6 +95,8 @@ class ContactQP:
             self.contacts.append((c, variables[c.name], lay.variables[c.name], slice(3 * k, 3 * k + 3)))
             col += c.dim
         self.ny = ny = col
+        #: per contact: the key of its force in a step's log and its columns in y
+        self.force_keys = [(f"force[{c.name}]", cy) for c, cy, _, _ in self.contacts]
         self.variables = variables
         ylay = _YLayout(ny, variables)
         eps = builder.regularization
@@ -132,6 +134,9 @@ class ContactQP:
         #: the active set with no inequality row active (read-only)
         self.no_active = np.zeros(self.C_template.shape[0], dtype=np.int8)
         self.no_active.flags.writeable = False
+        #: the multipliers of the inequality rows with none active (read-only)
+        self.no_multipliers = np.zeros(self.C_template.shape[0])
+        self.no_multipliers.flags.writeable = False
         #: :meth:`SolverChain.key <armctl.controllers.osc.SolverChain.key>` of level 0's QP
         self.key = (0, ny, self.me, self.C_template.shape[0])
         #: per level: (the plan's weights it was made from, the rows of non-zero weight or None for all, weights)
@@ -158,6 +163,7 @@ class ContactQP:
             b[rows] = rhs
         res.b_rows, res.contact = brows, (A, b)
         levels = []
+        last = len(self.levels) - 1
         for k, (plan, _, template, _) in enumerate(self.levels):
             rows = template.copy()
             for tk, r, cols in plan.entries:
@@ -173,7 +179,7 @@ class ContactQP:
             if not G[ny, ny] <= _MAX_RHS2:  # ‖W^{1/2} b‖² + ε_k‖h'‖² (NaN too)
                 refuse_scale(plan.tasks, list(plan.slices.values()), rows, ny, state, t, ref)
             # H contiguous (DAQP reads the buffer)
-            levels.append((G[:ny, :ny].copy(), G[ny, :ny], self._weighted_rows(k, rows)))
+            levels.append((G[:ny, :ny].copy(), G[ny, :ny], self._weighted_rows(k, rows) if k < last else None))
         return self._cascade(res, hf, self.bounds(state), levels, chain)
 
     def step_generated(
@@ -192,6 +198,8 @@ class ContactQP:
         gen.run(q, qd, t, ref)
         if gen.accepted[0] == 1.0:  # one level, constant bounds: the code checked its optimum on the contact rows
             return taken_step(self, gen, chain)
+        if gen.guess_out is not None and gen.run_guess():  # its active-set iterations' optimum, checked
+            return taken_step(self, gen, chain, guessed=True)
         for c in gen.c:
             if not c[0] <= _MAX_RHS2:  # ‖W^{1/2} b‖² + ε_k‖h'‖² (NaN too)
                 return self.step(evaluate(q, qd), t, ref, chain)
@@ -204,18 +212,23 @@ class ContactQP:
         brows = gen.brows.copy()  # kept by the step (the code's outputs are overwritten by the next run)
         hf = -brows[:, ny]
         res.b_rows = brows
-        res.contact = (gen.contact[:, :ny].copy(), gen.contact[:, ny].copy())
+        contact = gen.contact.copy()  # one copy, then its two views
+        res.contact = (contact[:, :ny], contact[:, ny])
         levels = []
         start = 0
+        last = len(self.levels) - 1
         for k, (plan, _, _, _) in enumerate(self.levels):
             m = plan.m
             rows = gen.rows[start : start + m].copy()
             start += m
             res.rows.append(rows)
-            levels.append((gen.H[k].copy(), gen.g[k].copy(), self._weighted_rows(k, rows)))
+            levels.append((gen.H[k].copy(), gen.g[k].copy(), self._weighted_rows(k, rows) if k < last else None))
         # the built-in limits read q and q̇ only (see controller: the generated path takes no others)
         state = ModelState(None, q, qd, brows[:, :n], hf, None)  # type: ignore[arg-type]  # no evaluator: no frame read
-        return self._cascade(res, hf, self.bounds(state), levels, chain, gen.equality)
+        # where the code gave its verdict on the optimum on the contact rows alone (gen.accepted, the check of
+        # equality_optimum_ok), it said no: that optimum is not offered again
+        equality = gen.equality if gen.limits is None else None
+        return self._cascade(res, hf, self.bounds(state), levels, chain, equality)
 
     def _weighted_rows(self, k: int, rows: FloatArray) -> FloatArray:
         """T_k: level k's task rows weighted (W^½ J on y), without the rows of zero weight (a task direction
@@ -248,11 +261,12 @@ class ContactQP:
         res: ContactStep,
         hf: FloatArray,
         bounds: tuple[FloatArray, FloatArray],
-        levels: list[tuple[FloatArray, FloatArray, FloatArray]],
+        levels: list[tuple[FloatArray, FloatArray, FloatArray | None]],
         chain: SolverChain,
         equality: tuple[FloatArray, ...] | None = None,
     ) -> ContactStep:
-        """Solve the levels (H_k, g_k, the weighted task rows T_k) in order under the step's rows (``res``).
+        """Solve the levels (H_k, g_k, the weighted task rows T_k, None for the last level, whose rows freeze
+        nothing) in order under the step's rows (``res``).
         ``equality``: for one level, the generated optimum on the contact rows alone and its residuals (see
         generated_contact), taken if it passes :meth:`_accept_equality`."""
         ny = self.ny
@@ -279,7 +293,7 @@ class ContactQP:
                 opt = equality_optimum(H, g, arrays.A, arrays.b)
                 if opt is not None and equality_optimum_ok(arrays, *opt):
                     y = self._take_equality(res, arrays, k, opt[0], opt[1], chain)
-                    if k < last:
+                    if k < last and T is not None:
                         F = extend_basis(F, T)
                     continue
             try:
@@ -291,13 +305,13 @@ class ContactQP:
                 res.status.append(
                     f"kept level {k - 1}: no verified optimum ({err.attempts[-1][1] if err.attempts else ''})"
                 )
-                if k < last:
+                if k < last and T is not None:  # (T is given for every level but the last)
                     F = extend_basis(F, T)
                 continue
             res.solutions.append(sol)
             res.status.append("solved")
             y = sol.x
-            if k < last:
+            if k < last and T is not None:
                 F = extend_basis(F, T)
         assert y is not None  # level 0 raised otherwise
         res.y = y
@@ -330,17 +344,17 @@ class ContactQP:
         if not self.tau_rows:
             return self.C_template, lo, up
         C = self.C_template.copy()
-        ly, uy = lo.copy(), up.copy()
+        shift = np.zeros(lo.shape[0])  # h' in the torque rows (l − 0 is l exactly, ±inf included)
         for r in self.tau_rows:
             C[r] = brows[:, : self.ny]
-            ly[r] -= hf
-            uy[r] -= hf
-        return C, ly, uy
+            shift[r] = hf
+        return C, lo - shift, up - shift
 
-    def verify(self, res: ContactStep) -> bool:
-        """The optimality check of every level's solution of ``res``, run again (what a step pays for it)."""
+    def verify(self, res: ContactStep, check: Callable[..., bool] | None = None) -> bool:
+        """The optimality check of every level's solution of ``res``, run again (what a step pays for it;
+        ``check``: the chain's, see :func:`~armctl.controllers.osc.optimality.verified`)."""
         for arrays, sol in zip(step_arrays(self, res), res.solutions, strict=True):
-            if sol is not None and not verified(arrays, sol.x, sol.y, sol.z):
+            if sol is not None and not verified(arrays, sol.x, sol.y, sol.z, check):
                 return False
         return True
 

@@ -23,6 +23,8 @@ from armctl.controllers.osc.contact_public import ContactStep
 from armctl.controllers.osc.contact_qp import ContactQP, applies
 from armctl.controllers.osc.diagnose import raise_unsolved
 from armctl.controllers.osc.hierarchy import OSCSolution, solve_cascade
+from armctl.controllers.osc.kkt_code import FALLBACK as CHECK_FALLBACK
+from armctl.controllers.osc.kkt_code import CompiledKKT
 from armctl.controllers.osc.layout import Layout
 from armctl.controllers.osc.limits import (
     AccelerationLimit,
@@ -230,7 +232,9 @@ class OperationalSpaceQP(Controller):
         self.limits = tuple(limits)
         self.contacts = contacts
         self.solver = make_solver(solver)
-        self.chain = SolverChain(self.solver, make_second_solver(fallback_solver))
+        # the first stage's check compiled for the QPs whose data are generated (see _compiled_check)
+        check = CompiledKKT(dynamics.options.get("cache_dir"))
+        self.chain = SolverChain(self.solver, make_second_solver(fallback_solver), check=check)
         self.builder = QPBuilder(
             dynamics.model, tasks, limits, contacts, scalar(regularization, "regularization", positive=True), slacks
         )
@@ -278,6 +282,7 @@ class OperationalSpaceQP(Controller):
             qp = self._contact_qps[lay] = ContactQP(self.builder, lay)
             qp.generated = self._generated_contact(qp, lay)
             if qp.generated is not None:
+                self._compiled_check(qp.key)
                 from armctl.controllers.osc import generated_cascade
 
                 gen = qp.generated
@@ -380,8 +385,17 @@ class OperationalSpaceQP(Controller):
         if qp is None:
             qp = QddQP(self.builder, lay)
             qp.generated = self._generated_data(qp, lay)
+            if qp.generated is not None:
+                self._compiled_check(qp.key)
             self._qdd[lay] = qp
         return qp
+
+    def _compiled_check(self, key: tuple[int, int, int, int]) -> None:
+        """The chain's first-stage check compiled for the level-0 QPs of ``key`` (a QP's
+        :meth:`SolverChain.key <armctl.controllers.osc.SolverChain.key>`), on the terms of ``compile``."""
+        check = self.chain.check
+        if isinstance(check, CompiledKKT):
+            CHECK_FALLBACK.attempt(lambda: check.prepare(key[1:]), self.compile, stacklevel=5)
 
     def _generated_data(self, qp: QddQP, lay: Layout) -> Any:
         """The generated data of ``qp`` (a GeneratedQddData), or None: the NumPy path (``compile=False``, tasks or
@@ -399,7 +413,10 @@ class OperationalSpaceQP(Controller):
 
         if not supported(qp.plan.tasks):
             return None
-        make = lambda: GeneratedQddData(self.dynamics, qp.plan.tasks, self.builder.regularization)  # noqa: E731
+        variables = [lim.variable for lim in lay.limits]
+        make = lambda: GeneratedQddData(  # noqa: E731
+            self.dynamics, qp.plan.tasks, self.builder.regularization, variables, lay.constant_bounds
+        )
         return FALLBACK.attempt(make, mode, stacklevel=4)
 
     def _generated_contact(self, qp: ContactQP, lay: Layout) -> Any:
@@ -455,15 +472,20 @@ class OperationalSpaceQP(Controller):
         else:
             result = qp.step(self.evaluator.evaluate(q, qd), t, ref, self.chain)
         self._pending = (qp, result)
-        tau = result.tau.clip(self._tau_lo, self._tau_up) if self._tau_up is not None else result.tau.copy()
+        if self._tau_up is not None and self._tau_lo is not None:
+            tau = np.minimum(result.tau, self._tau_up)
+            np.maximum(tau, self._tau_lo, out=tau)
+        else:
+            tau = result.tau.copy()
         iterations = fallbacks = 0
         for s in result.solutions:
             if s is not None:
                 iterations += s.iterations
                 fallbacks += s.fallbacks
         log: dict[str, Any] = {"qp_iterations": iterations, "qp_fallbacks": fallbacks}
-        for name, f in qp.forces(result).items():
-            log[f"force[{name}]"] = f
+        y = result.y
+        for key, cy in qp.force_keys:
+            log[key] = y[cy]
         status = result.status
         if len(status) > 1:
             log["level_status"] = tuple(status)
@@ -546,7 +568,7 @@ class OperationalSpaceQP(Controller):
         """
         pending = self._pending
         if pending is not None:
-            return pending[0].verify(pending[1])  # type: ignore[arg-type]  # each QP its own step
+            return pending[0].verify(pending[1], self.chain.check)  # type: ignore[arg-type]  # each QP its own step
         sol = self._last_solution
         if sol is None:
             raise InvalidParameterError("there is no last step to verify (call the controller first)")

@@ -11,7 +11,10 @@ model (its numbers built in) evaluates what the NumPy path builds from Pinocchio
   :func:`~armctl.controllers.osc.tasks.rotation.rotation_error_sx`);
 * the QP on q̈ with W_i the tasks' weights and ε the regularisation:
   H = Σ J_iᵀ W_i J_i + ε I + ε Mᵀ M,   g = −Σ J_iᵀ W_i b_i + ε Mᵀ h',   c = Σ ‖W_i^½ b_i‖² + ε ‖h'‖²,
-  and its unconstrained minimum q̈₀ = −H⁻¹ g (a Cholesky factorisation written out) with τ₀ = M q̈₀ + h'.
+  and its unconstrained minimum q̈₀ = −H⁻¹ g (a Cholesky factorisation written out) with τ₀ = M q̈₀ + h';
+* with limits whose bounds are constant (their l, u an input), the verdict on that minimum: 1 if every limit's
+  row holds at it (l ≤ τ₀ ≤ u, l ≤ q̈₀ ≤ u: then it is the QP's optimum, no row active) and the level is in
+  scale (c ≤ MAX_TASK_RHS²), else 0 (NaN included) — the check of the q̈-only step, in the code.
 
 The gains, weights and ε are an input of the code, refreshed when a task's ``revision`` changes: they may be
 changed between steps without generating code again. The tasks it takes are :class:`FramePoseTask`,
@@ -32,6 +35,7 @@ import numpy as np
 
 from armctl._checks import FloatArray
 from armctl.codegen import library as codegen
+from armctl.controllers.osc.scale import MAX_TASK_RHS
 from armctl.controllers.osc.tasks.base import MotionTask, Task
 from armctl.controllers.osc.tasks.frame_orientation import FrameOrientationTask
 from armctl.controllers.osc.tasks.frame_pose import FramePoseTask
@@ -41,14 +45,22 @@ from armctl.controllers.osc.tasks.posture import PostureTask
 from armctl.controllers.osc.tasks.rotation import rotation_error_sx
 from armctl.dynamics.base import Dynamics
 from armctl.dynamics.casadi_buffer import buffer_of, view
-from armctl.dynamics.recursive import cholesky_solve, inverse_dynamics, joint_transforms, mass_matrix
+from armctl.dynamics.recursive import (
+    cholesky_factor,
+    cholesky_solve,
+    cholesky_substitute,
+    inverse_dynamics,
+    joint_transforms,
+    mass_matrix,
+)
 from armctl.dynamics.symbolic_frames import frame_kinematics
 from armctl.model.robot import RobotModel
 from armctl.references import Reference
 
 #: bumped when the generated code changes, so that stale cached libraries are not loaded
-_CODE_VERSION = 1
+_CODE_VERSION = 4
 _NAME = "osc_qdd_qp"
+_GUESS = "osc_qdd_active_set"
 #: the frame tasks the code takes: their kind and the shape of their target value
 _FRAME_TASKS: dict[type, tuple[str, tuple[int, ...]]] = {
     FramePoseTask: ("pose", (4, 4)),
@@ -117,11 +129,15 @@ def task_rows(
     return inputs, params, jacs, rhs, weights
 
 
-def qp_function(model: RobotModel, tasks: Sequence[Task], friction: bool) -> cs.Function:
+def qp_function(
+    model: RobotModel, tasks: Sequence[Task], friction: bool, limits: Sequence[str] | None = None
+) -> cs.Function:
     """The CasADi function of the module: ``f(inputs, params) -> (q̈₀, τ₀, H, g, c, M, h', [J | b])`` with
     ``inputs`` = [q; q̇; per task its target (a frame task: value row by row, velocity, acceleration; a posture
     task: q_ref, q̇_ref, q̈_ref); τ_f if ``friction``] and ``params`` = [per task K_p, K_d (row by row), W^½; ε];
-    [J | b] the unweighted task rows, stacked in the tasks' order."""
+    [J | b] the unweighted task rows, stacked in the tasks' order. With ``limits`` (each limit's variable,
+    ``"tau"`` or ``"qdd"``; their bounds constant) also the verdict on (q̈₀, τ₀), ``params`` then ending with
+    [l; u] (n rows per limit, in their order)."""
     n = model.n
     q, qd = cs.SX.sym("q", n), cs.SX.sym("qd", n)
     tf = joint_transforms(model, q)
@@ -143,7 +159,91 @@ def qp_function(model: RobotModel, tasks: Sequence[Task], friction: bool) -> cs.
     qdd0 = -cholesky_solve(hess, grad)
     tau0 = mass @ qdd0 + hf
     outputs = [qdd0, tau0, hess, grad, c, mass, hf, cs.horzcat(jall, ball)]
+    if limits is not None:
+        values = cs.vertcat(*[tau0 if var == "tau" else qdd0 for var in limits])
+        lo, up = cs.SX.sym("lower", n * len(limits)), cs.SX.sym("upper", n * len(limits))
+        params += [lo, up]
+        ok = cs.le(c, MAX_TASK_RHS**2)
+        for i in range(values.shape[0]):
+            ok = cs.logic_and(ok, cs.logic_and(cs.le(lo[i], values[i]), cs.le(values[i], up[i])))
+        outputs.append(ok)
     return cs.Function(_NAME, [cs.vertcat(*inputs), cs.vertcat(*params)], [cs.densify(o) for o in outputs])
+
+
+def guessed_active_set(
+    hess: cs.SX,
+    grad: cs.SX,
+    low: list[list[cs.SX]],
+    qdd0: cs.SX,
+    mass: cs.SX,
+    hf: cs.SX,
+    limits: Sequence[str],
+    lo: cs.SX,
+    up: cs.SX,
+    in_scale: cs.SX,
+) -> list[cs.SX]:
+    """(verdict, q̈, τ, z, active): the QP on q̈ solved with the rows that its unconstrained minimum q̈₀ breaks
+    taken as equalities at the bound they break, and its KKT check.
+
+    The rows are those of the q̈-only QP (:meth:`~armctl.controllers.osc.reduced.QddQP.arrays`): C = M for a
+    torque limit, its bounds l − h', u − h'; C = I for a q̈ limit. With D the guessed active rows (those with
+    C q̈₀ above u or below l) and d their bounds, the multipliers and the solution are (Schur complement, with
+    H's Cholesky factor)
+
+        (D C H⁻¹ Cᵀ D + I − D) z = D (C q̈₀ − d),   q̈ = q̈₀ − H⁻¹ Cᵀ z,
+
+    z = 0 off D. The verdict is :func:`~armctl.controllers.osc.kkt_code.kkt_verdict` of (q̈, z) on that QP (the
+    conditions and tolerances of :func:`~armctl.controllers.osc.optimality.kkt_ok`) with the level in scale: 1
+    only for the QP's optimum, whatever the guess (a wrong guess fails it, dependent rows give NaN, which fails
+    it too)."""
+    from armctl.controllers.osc.kkt_code import kkt_verdict  # its SX check
+
+    n = mass.shape[0]
+    blocks, shifts = [], []
+    for var in limits:
+        blocks.append(mass if var == "tau" else cs.SX.eye(n))
+        shifts.append(hf if var == "tau" else cs.SX.zeros(n))
+    C, shift = cs.vertcat(*blocks), cs.vertcat(*shifts)
+    ly, uy = lo - shift, up - shift
+    mi = C.shape[0]
+    s0 = C @ qdd0
+    above = [cs.gt(s0[i], uy[i]) for i in range(mi)]
+    below = [cs.lt(s0[i], ly[i]) for i in range(mi)]
+    on = [cs.logic_or(above[i], below[i]) for i in range(mi)]
+    w = cholesky_substitute(low, C.T)  # H⁻¹ Cᵀ
+    k = C @ w
+    schur = cs.SX.zeros(mi, mi)
+    rhs = cs.SX.zeros(mi)
+    for i in range(mi):
+        for j in range(mi):
+            schur[i, j] = cs.if_else(cs.logic_and(on[i], on[j]), k[i, j], 1.0 if i == j else 0.0)
+        bound = cs.if_else(above[i], uy[i], ly[i])
+        rhs[i] = cs.if_else(on[i], s0[i] - bound, 0.0)  # a branch: an infinite bound off D never enters
+    z = cholesky_solve(schur, rhs)
+    qdd = qdd0 - w @ z
+    ok = cs.logic_and(in_scale, kkt_verdict(hess, grad, None, None, C, ly, uy, qdd, None, z))
+    active = cs.vertcat(*[cs.if_else(above[i], 1.0, cs.if_else(below[i], -1.0, 0.0)) for i in range(mi)])
+    return [ok, qdd, mass @ qdd + hf, z, active]
+
+
+def guess_function(n: int, m: int, limits: Sequence[str]) -> cs.Function:
+    """The CasADi function ``f(out, params) -> (verdict, q̈, τ, z, active)`` of :func:`guessed_active_set`, its data
+    read from the outputs of :func:`qp_function` (``out``: them one after the other up to the rows, as
+    :attr:`GeneratedQddData.out` holds them; ``m`` task rows) and ``params`` = [l; u]. Run only where the
+    unconstrained minimum breaks a row."""
+    sizes = [n, n, n * n, n, 1, n * n, n, (n + 1) * m]
+    out = cs.SX.sym("out", sum(sizes))
+    lo, up = cs.SX.sym("lower", n * len(limits)), cs.SX.sym("upper", n * len(limits))
+    parts, pos = [], 0
+    for size in sizes:
+        parts.append(out[pos : pos + size])
+        pos += size
+    qdd0, _, hess, grad, c, mass, hf = parts[:7]
+    hess, mass = cs.reshape(hess, n, n), cs.reshape(mass, n, n)  # symmetric: column by column is row by row
+    found = guessed_active_set(
+        hess, grad, cholesky_factor(hess), qdd0, mass, hf, limits, lo, up, cs.le(c, MAX_TASK_RHS**2)
+    )
+    return cs.Function(_GUESS, [out, cs.vertcat(lo, up)], [cs.densify(o) for o in found])
 
 
 def target_pieces(tasks: Sequence[Task], t: float, ref: Reference, pieces: list[FloatArray]) -> None:
@@ -176,8 +276,9 @@ def task_tag(model: RobotModel, tk: Task) -> str:
     return f"{_FRAME_TASKS[type(tk)][0]}:{f.name}:{f.joint}:{where}"
 
 
-def _tag(model: RobotModel, tasks: Sequence[Task], friction: bool) -> str:
+def _tag(model: RobotModel, tasks: Sequence[Task], friction: bool, limits: Sequence[str] | None = None) -> str:
     parts = [f"osc-qdd|{model.fingerprint(inertial=True, tool=False)}|v{_CODE_VERSION}|friction={friction}"]
+    parts.append("limits:" + ("-" if limits is None else ",".join(limits)))
     parts += [task_tag(model, tk) for tk in tasks]
     return "|".join(parts)
 
@@ -186,47 +287,110 @@ class GeneratedQddData:
     """The generated function of the module for ``tasks`` on ``dynamics`` (its model, its friction, its cache
     folder), bound to buffers of its own. After :meth:`run`, the outputs are arrays that the next run
     overwrites: ``qdd0``, ``tau0`` (n,), ``H`` (n×n), ``g`` (n,), ``c`` (1,), ``M`` (n×n), ``hf`` (n,) and
-    ``rows`` (m × (n+1)), as in the module. Builds or loads the library (the first time for a model and tasks:
-    seconds; then milliseconds). Not thread-safe."""
+    ``rows`` (m × (n+1)), as in the module, and with ``limits`` and their constant ``bounds`` (l, u, n rows per
+    limit) ``accepted`` (1,), the verdict on (q̈₀, τ₀), and ``guess``, the solve on the active set q̈₀ points at.
+    Builds or loads the library (the first time for a model
+    and tasks: seconds; then milliseconds). Not thread-safe."""
 
-    def __init__(self, dynamics: Dynamics, tasks: Sequence[Task], regularization: float) -> None:
+    def __init__(
+        self,
+        dynamics: Dynamics,
+        tasks: Sequence[Task],
+        regularization: float,
+        limits: Sequence[str] | None = None,
+        bounds: tuple[FloatArray, FloatArray] | None = None,
+    ) -> None:
         model = dynamics.model
         self.dynamics = dynamics
         self.n = n = model.n
         self.tasks = tuple(tasks)
         self.friction = dynamics.friction if model.has_friction else None
         self.regularization = float(regularization)
+        self.limits = tuple(limits) if limits is not None and bounds is not None else None
+        self.bounds = bounds if self.limits is not None else None
         cache_dir = dynamics.options.get("cache_dir")
-        tag = _tag(model, self.tasks, self.friction is not None)
+        tag = _tag(model, self.tasks, self.friction is not None, self.limits)
         kinds = ", ".join(type(tk).__name__ for tk in self.tasks)
         what = f"the operational-space QP's data for {model.name!r} ({kinds})"
         fn = codegen.cached(
-            [_NAME], tag, lambda: [qp_function(model, self.tasks, self.friction is not None)], cache_dir, what=what
+            [_NAME],
+            tag,
+            lambda: [qp_function(model, self.tasks, self.friction is not None, self.limits)],
+            cache_dir,
+            what=what,
         )[_NAME]
         m = sum(tk.dim for tk in self.tasks)
         self.inp = np.zeros(fn.size1_in(0))
         self.par = np.zeros(fn.size1_in(1))
-        self.qdd0, self.tau0, self.g, self.hf, self.c = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(1)
-        self.H, self.M = np.zeros((n, n)), np.zeros((n, n))  # symmetric: column by column is row by row
-        rows_t = np.zeros((n + 1, m))  # CasADi writes a matrix column by column: [J | b]ᵀ row by row
-        self.rows = rows_t.T
+        # the outputs one after the other in one buffer (the active-set iterations read it): views of it
+        sizes = [n, n, n * n, n, 1, n * n, n, (n + 1) * m] + ([1] if self.limits is not None else [])
+        #: the outputs, one after the other
+        self.out = np.zeros(sum(sizes))
+        spans, start = [], 0
+        for size in sizes:
+            spans.append(self.out[start : start + size])
+            start += size
+        self.qdd0, self.tau0, self.g, self.hf, self.c = spans[0], spans[1], spans[3], spans[6], spans[4]
+        self.H, self.M = spans[2].reshape(n, n), spans[5].reshape(n, n)  # symmetric: column by column is row by row
+        self.rows = spans[7].reshape(n + 1, m).T  # CasADi writes a matrix column by column: [J | b]ᵀ row by row
         buf, self._run = buffer_of(fn)
         for k, arr in enumerate((self.inp, self.par)):
             buf.set_arg(k, view(arr))
-        for k, res in enumerate((self.qdd0, self.tau0, self.H, self.g, self.c, self.M, self.hf, rows_t)):
-            buf.set_res(k, view(res.reshape(-1)))
-        self._bound = (buf, rows_t)  # the buffer reads and writes these: keep them alive
+        #: with ``bounds``: 1.0 if the unconstrained minimum holds every limit's row and the level is in scale
+        self.accepted: FloatArray | None = spans[8] if self.limits is not None else None
+        for k, res in enumerate(spans):
+            buf.set_res(k, view(res))
+        self._bound = buf  # the buffer reads inp and par and writes out: kept with them
+        #: with ``bounds``: the solve on the active set that q̈₀ points at (:meth:`run_guess`): its verdict (1.0:
+        #: the QP's optimum, checked), q̈, τ, z and the active set (+1, −1, 0 per row, as floats)
+        self.guess: tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray] | None = None
+        self._run_guess: Any = None
+        if self.limits is not None:
+            self._bind_guess(model, cache_dir, tag, m, start - 1)
         self._revisions: list[int] | None = None
         self._pieces: list[FloatArray] = []
 
+    def _bind_guess(self, model: RobotModel, cache_dir: Any, tag: str, m: int, used: int) -> None:
+        """Build or load :func:`guess_function` and bind it: its inputs the first ``used`` entries of :attr:`out`
+        and the bounds, its outputs :attr:`guess`."""
+        limits = self.limits
+        assert limits is not None and self.bounds is not None  # called with constant bounds only
+        n = self.n
+        fn = codegen.cached(
+            [_GUESS],
+            tag + "|active-set",
+            lambda: [guess_function(n, m, limits)],
+            cache_dir,
+            what=f"the q̈-only QP's solve on the rows its minimum breaks for {model.name!r}",
+        )[_GUESS]
+        mi = n * len(limits)
+        self.par_guess = np.concatenate(self.bounds)
+        self.guess = (np.zeros(1), np.zeros(n), np.zeros(n), np.zeros(mi), np.zeros(mi))
+        buf, self._run_guess = buffer_of(fn)
+        buf.set_arg(0, view(self.out[:used]))
+        buf.set_arg(1, view(self.par_guess))
+        for k, res in enumerate(self.guess):
+            buf.set_res(k, view(res))
+        self._bound_guess = buf  # reads out and par_guess, writes guess: kept with them
+
+    def run_guess(self) -> bool:
+        """Solve on the rows that the last :meth:`run`'s unconstrained minimum breaks (with ``bounds`` only); True
+        if that point passed its check (then in :attr:`guess`)."""
+        guess = self.guess
+        assert guess is not None  # bound with bounds, the only case the step calls this in
+        self._run_guess()
+        return bool(guess[0][0] == 1.0)
+
     def __reduce__(self) -> tuple[Any, ...]:
         # rebuilt (the library loads from the cache): the buffers are this process's
-        return (GeneratedQddData, (self.dynamics, self.tasks, self.regularization))
+        return (GeneratedQddData, (self.dynamics, self.tasks, self.regularization, self.limits, self.bounds))
 
     def _params(self) -> None:
         """The gains, weights and ε into the parameter buffer (in place: the buffer reads it)."""
         parts = task_params(self.tasks)
         parts.append(np.array([self.regularization]))
+        if self.bounds is not None:
+            parts += list(self.bounds)
         np.concatenate(parts, out=self.par)
 
     def run(self, q: FloatArray, qd: FloatArray, t: float, ref: Reference) -> None:

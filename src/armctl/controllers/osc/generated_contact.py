@@ -17,7 +17,11 @@ At (q, q̇), the tasks' targets and τ_f(q̇), one call of code generated with C
 * with one level, the optimum on the contact rows A y = b alone (no inequality row active), y* and λ, by the Schur
   complement of H (a Cholesky factorisation written out), and its residuals A y* − b and H y* + g + Aᵀλ: the
   step takes it, without a solver, when they vanish to the optimality check's tolerances and every inequality
-  row holds.
+  row holds;
+* with one level and constant bounds, where that optimum breaks a row, a few primal-dual active-set iterations
+  from the rows it breaks and the KKT check of their result
+  (:func:`~armctl.controllers.osc.generated_optimum.active_set_optimum`): the step takes that optimum, without a
+  solver, when it passes.
 
 Gains, weights, the contacts' coefficients and ε_k are an input of the code, refreshed when a task's
 ``revision`` changes. The tasks it takes are those of :func:`~armctl.controllers.osc.generated.supported` and
@@ -38,7 +42,8 @@ from armctl._checks import FloatArray
 from armctl.codegen import library as codegen
 from armctl.controllers.osc.contact import Contact
 from armctl.controllers.osc.generated import gram, supported, target_pieces, task_params, task_rows, task_tag
-from armctl.controllers.osc.generated_optimum import equality_optimum, verdict
+from armctl.controllers.osc.generated_optimum import active_set_optimum, equality_optimum, verdict
+from armctl.controllers.osc.scale import MAX_TASK_RHS
 from armctl.controllers.osc.tasks.base import Task
 from armctl.controllers.osc.tasks.contact_force import ContactForceTask
 from armctl.dynamics.base import Dynamics
@@ -48,8 +53,9 @@ from armctl.dynamics.symbolic_frames import frame_kinematics
 from armctl.model.robot import RobotModel
 from armctl.references import Reference
 
-_CODE_VERSION = 3
+_CODE_VERSION = 6
 _NAME = "osc_contact_qp"
+_GUESS = "osc_contact_active_set"
 
 
 def supported_contact(levels: Sequence[Sequence[Task]]) -> bool:
@@ -182,6 +188,55 @@ def contact_function(
     return cs.Function(_NAME, [cs.vertcat(*inputs), cs.vertcat(*params)], [cs.densify(o) for o in outputs])
 
 
+def guess_function(n: int, contacts: Sequence[Contact], limits: Sequence[str], m: int) -> cs.Function:
+    """The CasADi function ``f(out, params) -> (verdict, y, λ, z, active, τ)`` of the active-set iterations
+    (:func:`~armctl.controllers.osc.generated_optimum.active_set_optimum`) on the QP of one level, its data read
+    from the outputs of :func:`contact_function` (``out``: them one after the other, as
+    :attr:`GeneratedContactData.out` holds them, up to τ; ``m`` task rows) and ``params`` = [per contact its cone
+    rows (row by row); l; u]. Run only where the optimum on the contact rows alone breaks a row."""
+    ny, me = n + 3 * len(contacts), 3 * len(contacts)
+    cone_counts = [c.cone_rows()[0].shape[0] for c in contacts]
+    mi = n * len(limits) + sum(cone_counts)
+    sizes = [(ny + 1) * n, (ny + 1) * me, (ny + 1) * m, ny * ny, ny, 1, ny, me, me, ny, 1, n]
+    out = cs.SX.sym("out", sum(sizes))
+    par = cs.SX.sym("par", 3 * sum(cone_counts) + 2 * mi)
+    blocks_out, pos = [], 0
+    for size in sizes:
+        blocks_out.append(out[pos : pos + size])
+        pos += size
+    brows = cs.reshape(blocks_out[0], n, ny + 1)  # column by column, as CasADi wrote it
+    contact = cs.reshape(blocks_out[1], me, ny + 1)
+    hess, grad, c_val, y_star = cs.reshape(blocks_out[3], ny, ny), blocks_out[4], blocks_out[5], blocks_out[6]
+    bmat, hf = brows[:, :ny], -brows[:, ny]
+    # the inequality rows on y (those of ContactQP.inequalities): B for a torque limit (bounds shifted by h'),
+    # [I 0] for a q̈ limit, each contact's cone rows on its force
+    rows, shifts = [], []
+    for var in limits:
+        if var == "tau":
+            rows.append(bmat)
+            shifts.append(hf)
+        else:
+            blk = cs.SX.zeros(n, ny)
+            blk[:, :n] = cs.SX.eye(n)
+            rows.append(blk)
+            shifts.append(cs.SX.zeros(n))
+    pos = 0
+    for k, count in enumerate(cone_counts):
+        cone_rows = cs.reshape(par[pos : pos + 3 * count], 3, count).T  # row by row in
+        pos += 3 * count
+        blk = cs.SX.zeros(count, ny)
+        blk[:, n + 3 * k : n + 3 * k + 3] = cone_rows
+        rows.append(blk)
+        shifts.append(cs.SX.zeros(count))
+    lo, up = par[pos : pos + mi], par[pos + mi : pos + 2 * mi]
+    shift = cs.vertcat(*shifts)
+    in_scale = cs.le(c_val, MAX_TASK_RHS**2)
+    ok, y, lam, z, active = active_set_optimum(
+        hess, grad, contact[:, :ny], contact[:, ny], cs.vertcat(*rows), lo - shift, up - shift, y_star, in_scale
+    )
+    return cs.Function(_GUESS, [out, par], [cs.densify(o) for o in (ok, y, lam, z, active, bmat @ y + hf)])
+
+
 def _tag(
     model: RobotModel,
     levels: Sequence[Sequence[Task]],
@@ -214,7 +269,8 @@ class GeneratedContactData:
     :meth:`run`, the outputs are arrays that the next run overwrites: ``brows`` (n × (ny+1)), ``contact``
     (3k × (ny+1)), ``rows`` (m × (ny+1)), per level ``H[k]``, ``g[k]``, ``c[k]``, with one level ``equality``, and
     with ``bounds`` (one level, constant bounds l, u of the limits' and cones' rows, the limits' variables
-    ``limits``) ``accepted`` (1,) and ``tau`` (n,). Not thread-safe."""
+    ``limits``) ``accepted`` (1,) and ``tau`` (n,); with ``bounds`` also :meth:`run_guess`, the active-set
+    iterations on those outputs (``guess_out``, ``guessed``). Not thread-safe."""
 
     def __init__(
         self,
@@ -249,36 +305,125 @@ class GeneratedContactData:
         m = sum(tk.dim for lev in self.levels for tk in lev)
         self.inp = np.zeros(fn.size1_in(0))
         self.par = np.zeros(fn.size1_in(1))
-        # CasADi writes a matrix column by column: each (r × c) output held as its transpose, row by row
-        self._brows_t = np.zeros((ny + 1, n))
-        self._contact_t = np.zeros((ny + 1, 3 * len(self.contacts)))
-        self._rows_t = np.zeros((ny + 1, m))
-        self.brows, self.contact, self.rows = self._brows_t.T, self._contact_t.T, self._rows_t.T
-        self.H = [np.zeros((ny, ny)) for _ in self.levels]  # symmetric: column by column is row by row
-        self.g = [np.zeros(ny) for _ in self.levels]
-        self.c = [np.zeros(1) for _ in self.levels]
+        self.ny, self.m, self.me = ny, m, 3 * len(self.contacts)
+        #: every output, one after the other in one buffer (:meth:`outputs` reads a copy of it the same way)
+        self.out = np.zeros(self._size())
+        (
+            self.brows,
+            self.contact,
+            self.rows,
+            self.H,
+            self.g,
+            self.c,
+            self.equality,
+            self.accepted,
+            self.tau,
+        ) = self.outputs(self.out)
         buf, self._run = buffer_of(fn)
         for k, arr in enumerate((self.inp, self.par)):
             buf.set_arg(k, view(arr))
-        results: list[FloatArray] = [self._brows_t, self._contact_t, self._rows_t]
-        for k in range(len(self.levels)):
-            results += [self.H[k], self.g[k], self.c[k]]
-        me = 3 * len(self.contacts)
-        #: with one level: the optimum on the contact rows alone, y* (ny) and λ (3k), and its residuals A y* − b
-        #: (3k) and H y* + g + Aᵀλ (ny); None with more levels
-        self.equality: tuple[FloatArray, FloatArray, FloatArray, FloatArray] | None = None
-        if one:
-            self.equality = (np.zeros(ny), np.zeros(me), np.zeros(me), np.zeros(ny))
-            results += list(self.equality)
-        #: with ``bounds``: 1.0 if the optimum on the contact rows alone is the QP's (see _verdict), and its τ
-        self.accepted = np.zeros(1)
-        self.tau = np.zeros(n)
+        for k, (start, stop) in enumerate(self._spans()):
+            buf.set_res(k, view(self.out[start:stop]))
+        self._bound = buf  # the buffer reads and writes inp, par and out: kept with them
+        #: with ``bounds``: where y*, λ and τ of the optimum on the contact rows alone sit in :attr:`out`
+        self.taken: tuple[slice, slice, slice] | None = None
+        #: with ``bounds``: the active-set iterations (:func:`guess_function`), their outputs one after the other
+        #: (verdict, y, λ, z, active set, τ) and where y, λ, z, the active set and τ sit in it
+        self.guess_out: FloatArray | None = None
+        self.guessed: tuple[slice, ...] = ()
+        self._run_guess: Any = None
         if self.limits is not None:
-            results += [self.accepted, self.tau]
-        for k, res in enumerate(results):
-            buf.set_res(k, view(res.reshape(-1)))
-        self._bound = (buf, results)  # the buffer reads and writes these: keep them alive
+            spans = self._spans()
+            first = 3 + 3 * len(self.levels)
+            self.taken = (slice(*spans[first]), slice(*spans[first + 1]), slice(*spans[first + 5]))
+            self._bind_guess(model, cache_dir, tag)
         self._revisions: list[int] | None = None
+
+    def _bind_guess(self, model: RobotModel, cache_dir: Any, tag: str) -> None:
+        """Build or load :func:`guess_function` and bind it: its inputs :attr:`out` and its own parameters (the
+        cones' rows and the bounds, set by :meth:`_params`), its outputs :attr:`guess_out`."""
+        limits = self.limits
+        assert limits is not None and self.bounds is not None  # called with constant bounds only
+        n, ny, me, m = self.n, self.ny, self.me, self.m
+        fn = codegen.cached(
+            [_GUESS],
+            tag + "|active-set",
+            lambda: [guess_function(n, self.contacts, limits, m)],
+            cache_dir,
+            what=f"the contact QP's active-set iterations for {model.name!r}",
+        )[_GUESS]
+        mi = self.bounds[0].shape[0]
+        self.par_guess = np.zeros(fn.size1_in(1))
+        self.guess_out = np.zeros(1 + ny + me + 2 * mi + n)
+        sizes = [1, ny, me, mi, mi, n]
+        buf, self._run_guess = buffer_of(fn)
+        used = fn.size1_in(0)
+        buf.set_arg(0, view(self.out[:used]))
+        buf.set_arg(1, view(self.par_guess))
+        start, spans = 0, []
+        for k, size in enumerate(sizes):
+            buf.set_res(k, view(self.guess_out[start : start + size]))
+            spans.append(slice(start, start + size))
+            start += size
+        self.guessed = tuple(spans[1:])
+        self._bound_guess = buf  # reads out and par_guess, writes guess_out: kept with them
+
+    def run_guess(self) -> bool:
+        """Run the active-set iterations on the outputs of the last :meth:`run` (with ``bounds`` only); True if
+        their optimum passed its check (then in :attr:`guess_out`)."""
+        out = self.guess_out
+        assert out is not None  # bound with bounds, the only case the step calls this in
+        self._run_guess()
+        return bool(out[0] == 1.0)
+
+    def _sizes(self) -> list[int]:
+        """The sizes of the function's outputs, in its order (see :meth:`outputs`)."""
+        n, ny, m, me = self.n, self.ny, self.m, self.me
+        sizes = [(ny + 1) * n, (ny + 1) * me, (ny + 1) * m]
+        sizes += [ny * ny, ny, 1] * len(self.levels)
+        if self.equality_rows:
+            sizes += [ny, me, me, ny]
+        if self.limits is not None:
+            sizes += [1, n]
+        return sizes
+
+    @property
+    def equality_rows(self) -> bool:
+        """Whether the code gives the optimum on the contact rows alone (one level, with contacts)."""
+        return len(self.levels) == 1 and bool(self.contacts)
+
+    def _spans(self) -> list[tuple[int, int]]:
+        """(start, stop) of each output in :attr:`out`."""
+        spans, start = [], 0
+        for size in self._sizes():
+            spans.append((start, start + size))
+            start += size
+        return spans
+
+    def _size(self) -> int:
+        return sum(self._sizes())
+
+    def outputs(self, flat: FloatArray) -> tuple[Any, ...]:
+        """The outputs as arrays viewing ``flat`` (:attr:`out`, or a copy of it): (brows, contact, rows, H, g, c,
+        equality, accepted, tau) as in the class docstring (H, g, c lists per level; equality None with more
+        levels; accepted and tau empty without ``bounds``)."""
+        n, ny, m, me = self.n, self.ny, self.m, self.me
+        spans = iter(self._spans())
+
+        def take(*shape: int) -> FloatArray:
+            start, stop = next(spans)
+            return flat[start:stop].reshape(shape)
+
+        # CasADi writes a matrix column by column: each (r × c) output read as its transpose, row by row
+        brows, contact, rows = take(ny + 1, n).T, take(ny + 1, me).T, take(ny + 1, m).T
+        H, g, c = [], [], []
+        for _ in self.levels:
+            H.append(take(ny, ny))  # symmetric: column by column is row by row
+            g.append(take(ny))
+            c.append(take(1))
+        equality = (take(ny), take(me), take(me), take(ny)) if self.equality_rows else None
+        accepted, tau = (take(1), take(n)) if self.limits is not None else (np.zeros(1), np.zeros(n))
+        return brows, contact, rows, H, g, c, equality, accepted, tau
 
     def __reduce__(self) -> tuple[Any, ...]:
         # rebuilt (the library loads from the cache): the buffers are this process's
@@ -298,8 +443,9 @@ class GeneratedContactData:
                 parts += [tk.sqrt_weight] if type(tk) is ContactForceTask else task_params([tk])
         parts.append(np.array(self.regularization))
         if self.bounds is not None:
-            parts += [c.cone_rows()[0].ravel() for c in self.contacts]
-            parts += list(self.bounds)
+            tail = [c.cone_rows()[0].ravel() for c in self.contacts] + list(self.bounds)
+            parts += tail
+            np.concatenate(tail, out=self.par_guess)
         np.concatenate(parts, out=self.par)
 
     def run(self, q: FloatArray, qd: FloatArray, t: float, ref: Reference) -> None:

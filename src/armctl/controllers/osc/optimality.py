@@ -34,6 +34,7 @@ duality gap all within :data:`KKT_TOL` (1e-6, the solvers' own tolerance; the la
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -133,11 +134,17 @@ def kkt_ok(
     return math.isfinite(sum(rl)) and max(rl) <= bound and min(rl) >= -bound and gap <= bound
 
 
-def verified(qp: QPArrays, x: FloatArray, y: FloatArray | None, z: FloatArray | None) -> bool:
+def verified(
+    qp: QPArrays,
+    x: FloatArray,
+    y: FloatArray | None,
+    z: FloatArray | None,
+    check: Callable[[QPArrays, FloatArray, FloatArray | None, FloatArray | None], bool] | None = None,
+) -> bool:
     """Whether (x, y, z) passes the check a control step accepts a solution on: :func:`kkt_ok` at the tolerances
-    of an exact solve (:data:`PRIMAL_TOL`, :data:`DUAL_TOL`), or, for a solver's own point, :func:`residuals`
-    within :data:`KKT_TOL`."""
-    return kkt_ok(qp, x, y, z) or residuals(qp, x, y, z).ok()
+    of an exact solve (:data:`PRIMAL_TOL`, :data:`DUAL_TOL`; or ``check``, the same conditions compiled), or, for
+    a solver's own point, :func:`residuals` within :data:`KKT_TOL`."""
+    return (kkt_ok if check is None else check)(qp, x, y, z) or residuals(qp, x, y, z).ok()
 
 
 def equality_optimum_ok(qp: QPArrays, x: FloatArray, y: FloatArray, eq_res: FloatArray, stat: FloatArray) -> bool:

@@ -61,7 +61,8 @@ class _QddLayout:
 class QddStep:
     """What one step of :class:`QddQP` leaves for :meth:`QddQP.public`: the bounds of every limit (l, u per
     limit), q̈, τ, and the QP ``arrays`` with the chain's ``solution`` (both None for the unconstrained
-    minimum)."""
+    minimum). With ``generated``, the rows, and q̈ and τ of the unconstrained minimum, are the code's outputs:
+    valid until its next run."""
 
     __slots__ = ("arrays", "bounds", "generated", "qdd", "solution", "tau")
 
@@ -178,6 +179,13 @@ class QddQP:
         ``evaluate(q, qd)`` gives the :class:`ModelState` of the NumPy path, which takes over when the rows are out
         of scale (to name the task, see :mod:`~armctl.controllers.osc.scale`)."""
         gen.run(q, qd, t, ref)
+        accepted, constant, guess = gen.accepted, self.constant, gen.guess
+        if accepted is not None and constant is not None and guess is not None:
+            if accepted[0] == 1.0:  # the code checked its minimum
+                chain.record(self.key, self.no_active)
+                return QddStep(constant, gen.qdd0, gen.tau0, generated=gen)
+            if gen.run_guess():  # the code solved on the rows the minimum breaks, and checked that optimum
+                return self._guessed(gen, guess, constant, chain)
         if not gen.c[0] <= _MAX_RHS2:  # ‖W^{1/2} b‖² + ε‖h'‖² (NaN too)
             return self.step(evaluate(q, qd), t, ref, chain)
         if self.constant is not None:
@@ -187,10 +195,29 @@ class QddQP:
             state = ModelState(None, q, qd, gen.M, gen.hf, None)  # type: ignore[arg-type]
             bounds = [lim.bounds(state) for lim in self.layout.limits]
         x, tau = gen.qdd0, gen.tau0
-        if self._holds(x, tau, bounds):
+        # (where the code gave its verdict, in scale, it said that the minimum breaks a row: not checked again)
+        if accepted is None and self._holds(x, tau, bounds):
             chain.record(self.key, self.no_active)
-            return QddStep(bounds, x.copy(), tau.copy(), generated=gen)
+            # q̈ and τ read from the code's outputs, as its rows are (valid until its next run; the controller
+            # hands out a copy of τ, the public solution copies both)
+            return QddStep(bounds, x, tau, generated=gen)
         return self._solve(gen.H, gen.g, gen.M, gen.hf, bounds, chain, None, gen)
+
+    def _guessed(
+        self,
+        gen: GeneratedQddData,
+        guess: tuple[FloatArray, ...],
+        bounds: list[tuple[FloatArray, FloatArray]],
+        chain: SolverChain,
+    ) -> QddStep:
+        """The step of the optimum that the generated code found on the rows its unconstrained minimum breaks and
+        checked (``gen.guess``): q̈, τ and z read from the code's outputs, as its rows are (valid until its next
+        run), the QP's arrays made when the check is run again."""
+        _, x, tau, z, active = guess
+        act = active.astype(np.int8)
+        chain.record(self.key, act)
+        sol = QPSolution(x, "solved", 0, "active set", self.no_rows[1], z, "active set", 0, act)
+        return QddStep(bounds, x, tau, None, sol, gen)
 
     def _solve(
         self,
@@ -204,7 +231,7 @@ class QddQP:
         generated: GeneratedQddData | None,
     ) -> QddStep:
         """The verified optimum from the solver chain (past the unconstrained minimum)."""
-        arrays = self.arrays(H, g, mass, hf, bounds)
+        arrays = self.arrays(H, g, mass, hf, bounds, copy=generated is None)
         try:
             sol = chain.solve(arrays, 0, unconstrained=unconstrained)
         except QPFailure as err:
@@ -222,13 +249,19 @@ class QddQP:
         self.rows[mr, :n] = gen.M
         np.negative(gen.hf, out=self.rows[mr, n])
 
-    def verify(self, result: QddStep) -> bool:
+    def verify(self, result: QddStep, check: Callable[..., bool] | None = None) -> bool:
         """The optimality check of ``result``, run again (what a step pays for it): the bounds for the
-        unconstrained minimum, :func:`~armctl.controllers.osc.optimality.verified` for a solution of the chain."""
-        if result.solution is None or result.arrays is None:
-            return self._holds(result.qdd, result.tau, result.bounds)
+        unconstrained minimum, :func:`~armctl.controllers.osc.optimality.verified` for a solution of the chain
+        (``check``: the chain's)."""
         sol = result.solution
-        return verified(result.arrays, sol.x, sol.y, sol.z)
+        if sol is None:
+            return self._holds(result.qdd, result.tau, result.bounds)
+        arrays = result.arrays
+        if arrays is None:  # solved in the generated code: its QP from the code's outputs (this step's)
+            gen = result.generated
+            assert gen is not None  # only the generated code solves without the chain's arrays
+            arrays = self.arrays(gen.H, gen.g, gen.M, gen.hf, result.bounds, copy=False)
+        return verified(arrays, sol.x, sol.y, sol.z, check)
 
     def _holds(self, x: FloatArray, tau: FloatArray, bounds: list[tuple[FloatArray, FloatArray]]) -> bool:
         """Every torque and q̈ bound holds at (q̈, τ) (False for NaN); compared as Python floats."""
@@ -253,11 +286,15 @@ class QddQP:
         mass: FloatArray,
         hf: FloatArray,
         bounds: list[tuple[FloatArray, FloatArray]],
+        copy: bool = True,
     ) -> QPArrays:
-        """The QP on q̈ (its rows those of the public problem, torque rows shifted by h')."""
+        """The QP on q̈ (its rows those of the public problem, torque rows shifted by h'); ``copy=False``: H, g and
+        M taken as they are (the generated code's outputs, kept until its next run)."""
         A, b = self.no_rows
         if self.torque_only:  # one torque limit: C = M, bounds shifted by h'
             lo, up = bounds[0]
+            if not copy:
+                return QPArrays(H, g, A, b, mass, lo - hf, up - hf)
             return QPArrays(np.array(H), g.copy(), A, b, mass.copy(), lo - hf, up - hf)
         C = self.C_template.copy()
         lo = np.concatenate([b[0] for b in bounds]) if bounds else np.zeros(0)
