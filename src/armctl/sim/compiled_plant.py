@@ -43,7 +43,7 @@ from armctl.sim.plant_layout import PlantLayout
 from armctl.sim.stick_slip import NotPositiveDefinite
 
 #: bumped when the generated code changes, so that stale cached libraries are not loaded
-CODE_VERSION = 8
+CODE_VERSION = 9
 #: the scheme codes of the C driver, and the family of kernels each needs
 SCHEMES = {"rk4": 0, "euler": 1, "semi-implicit-euler": 2, "implicit-euler": 3}
 FAMILY = {"rk4": "explicit", "euler": "explicit", "semi-implicit-euler": "implicit", "implicit-euler": "implicit"}
@@ -55,7 +55,7 @@ BAD_ROW = 3
 #: where a period failed (``step_period.c``'s PERIOD_*), as the messages of begin, accel and step name it
 _WHERE = {0: "stick solve", 1: "accelerations", 2: "step"}
 #: entries of the period's ``opt`` and ``out`` (see ``step_period.c``)
-PERIOD_OPT, PERIOD_OUT = 9, 3
+PERIOD_OPT, PERIOD_OUT = 10, 3
 
 #: the compiler's flags for the plant's library (its step runs in the simulator's loop: a slower build, faster code)
 FLAGS = codegen.CFLAGS_FAST
@@ -74,6 +74,7 @@ def _shapes(layout: PlantLayout) -> list[cs.Function]:
     """Functions with the inputs and outputs of the driver's functions (their generated sparsity patterns are
     what the driver reports to CasADi)."""
     n, ns = layout.n, 4 * layout.n + 8
+    pts = max(3 * len(layout.points), 1)  # (the record's contact rows: one entry bound where there are none)
 
     def dense(name: str, sizes: list[int]) -> list[cs.SX]:
         return [cs.SX.sym(f"{name}{k}", s) for k, s in enumerate(sizes)]
@@ -83,7 +84,10 @@ def _shapes(layout: PlantLayout) -> list[cs.Function]:
         "begin": ([n, n, n, 18, layout.size, ns], [ns, 4]),
         "accel": ([n, n, n, 18, layout.size, ns], [n, 4]),
         # the record's outputs are declared as one row (bound to the whole arrays, see step_period.c)
-        "period": ([n, 18, layout.size, PERIOD_OPT, ns, n], [n, n, n, n, n, 1, 1, PERIOD_OUT, ns, n]),
+        "period": (
+            [n, 18, layout.size, PERIOD_OPT, ns, n],
+            [n, n, n, n, n, 1, 1, PERIOD_OUT, ns, n, pts, pts, n, 6],
+        ),
     }
     out = []
     for name, (ins, outs) in spec.items():
@@ -100,6 +104,7 @@ def library_tag(model: RobotModel, layout: PlantLayout, family: str) -> tuple[st
         "ARMCTL_STICKY": int(layout.sticky),
         "ARMCTL_FRICTION": int(layout.has_friction),
         "ARMCTL_EXTERNAL": int(layout.has_external),
+        "ARMCTL_POINTS": len(layout.points),
         "ARMCTL_EXPLICIT": int(family == "explicit"),
     }
     source = "".join(f"#define {k} {v}\n" for k, v in defines.items()) + _driver_source()
@@ -364,7 +369,13 @@ class CompiledPlant:
         b = binding
         rows = len(b.q)
         record = (b.tau, b.q, b.qd, b.qdd, b.tau_friction, b.stuck, b.work_friction, b.work_external, b.tau_applied)
-        for a in record:
+        given = (b.contact_force, b.contact_position, b.tau_ext, b.wrench)
+        contacts: tuple[FloatArray, ...] = (np.zeros(1), np.zeros(1), np.zeros(self.n), np.zeros(6))  # (scratch)
+        if b.record_contacts:
+            if any(a is None for a in given) or not self.layout.points or self.disturbance is not None:
+                raise ValueError("recording the contacts takes a plant with points, no disturbance, and their rows")
+            contacts = tuple(a for a in given if a is not None)
+        for a in record + (contacts if b.record_contacts else ()):
             if a.dtype != np.float64 or not a.flags.c_contiguous or len(a) != rows or a.size != rows * a[0].size:
                 raise ValueError("the record's arrays must be C-contiguous float64 arrays of the same samples")
         self._substeps, self._period_h = b.substeps, b.dt
@@ -373,16 +384,36 @@ class CompiledPlant:
         opt = self._period_opt
         opt[:] = (
             *(0.0, b.dt, self.opt[2], b.substeps, rows, float(b.accel_at_start)),
-            *(b.max_velocity, b.max_position, float(b.saturate)),
+            *(b.max_velocity, b.max_position, float(b.saturate), float(b.record_contacts)),
         )
-        self._record = record  # kept alive with the binding
+        self._record = (record, contacts)  # kept alive with the binding
         self._run_period = _bound(
             self._period_fn,
             [b.tau, self._period_samples, self.par, opt, self.state, self._period_limit],
-            [*record[1:-1], self._period_out, self.state, b.tau_applied],
+            [*record[1:-1], self._period_out, self.state, b.tau_applied, *contacts],
             self._buffers,
         )
         self._free = False
+
+    def record_sample(self, k: int) -> None:
+        """Record the contacts at the state of sample k into the bound record's rows (what :meth:`period` records
+        at the state it leaves, see :class:`~armctl.sim.generated_engine.PeriodBinding`): for the run's first
+        sample, before any period.
+
+        Raises
+        ------
+        IndexError
+            A row outside the bound record.
+        """
+        opt = self._period_opt
+        m = opt[3]
+        opt[3], opt[0] = -1.0, k
+        try:
+            self._run_period()
+        finally:
+            opt[3] = m
+        if self._period_out[0]:
+            self._raise(k)
 
     def period(self, k: int, t: float, tau: object = None) -> int:
         """Integrate the control period [t, t + Δt_c) from the state of sample k on the record bound by
