@@ -370,7 +370,8 @@ class CompiledPlant:
         rows = len(b.q)
         record = (b.tau, b.q, b.qd, b.qdd, b.tau_friction, b.stuck, b.work_friction, b.work_external, b.tau_applied)
         given = (b.contact_force, b.contact_position, b.tau_ext, b.wrench)
-        contacts: tuple[FloatArray, ...] = (np.zeros(1), np.zeros(1), np.zeros(self.n), np.zeros(6))  # (scratch)
+        pts = max(3 * len(self.layout.points), 1)  # (scratch rows of the declared sizes, see _shapes)
+        contacts: tuple[FloatArray, ...] = (np.zeros(pts), np.zeros(pts), np.zeros(self.n), np.zeros(6))
         if b.record_contacts:
             if any(a is None for a in given) or not self.layout.points or self.disturbance is not None:
                 raise ValueError("recording the contacts takes a plant with points, no disturbance, and their rows")
