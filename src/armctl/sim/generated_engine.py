@@ -18,13 +18,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 from armctl._checks import FloatArray
 from armctl.sim.engine import TORQUE_NOT_FINITE, EngineRun
 
 if TYPE_CHECKING:
     from armctl.sim.compiled_plant import CompiledPlant
+    from armctl.sim.plant import Plant
 
 
 @dataclass(frozen=True)
@@ -94,6 +95,9 @@ class GeneratedEngine:
 
     def __init__(self, plant: CompiledPlant) -> None:
         self.plant = plant
+        #: the plant as the recorder takes it (what it reads of a Plant, CompiledPlant has: dyn, environments,
+        #: kinematics, external, disturbance_wrench)
+        self._duck = cast("Plant", plant)
         #: the period records the contacts (see the module); Python records them with a disturbance
         self._in_c = plant.disturbance is None and bool(plant.layout.points)
         self._external = self.observes = plant.has_external
@@ -132,11 +136,11 @@ class GeneratedEngine:
 
     def observe(self, k: int, t: float) -> None:
         if self._external:
-            rec = self._rec
+            rec, plant = self._rec, self._duck
             if self._in_c:  # the contacts are recorded by the period: the sensors' readings of them
-                rec.record_sensors(k, self.plant, rec.q[k])  # type: ignore[arg-type]  # a plant's duck
+                rec.record_sensors(k, plant, rec.q[k])
             else:
-                rec.record_external(k, self.plant, t, rec.q[k], rec.qd[k])  # type: ignore[arg-type]
+                rec.record_external(k, plant, t, rec.q[k], rec.qd[k])
 
     def advance_period(self, k: int, t: float, tau: FloatArray) -> int:
         """(:meth:`Engine.advance_period <armctl.sim.engine.Engine.advance_period>`: ``tau`` is read from row k of
