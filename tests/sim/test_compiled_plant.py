@@ -234,3 +234,23 @@ def test_variants_of_a_plant_share_its_library(fresh_cache) -> None:  # type: ig
         finals.append(generated.q[-1])
     assert len(list(fresh_cache.rglob("*.so"))) == 1
     assert np.abs(finals[0] - finals[1]).max() > 1e-3 and np.abs(finals[0] - finals[2]).max() > 1e-3
+
+
+def test_a_compiler_that_refuses_the_machine_s_flags_builds_portable_code(monkeypatch, tmp_path) -> None:
+    """Where the plant's flags for this processor fail to compile, the library is built with the portable flags
+    (the library of their key is the one built, and it loads)."""
+    from armctl.sim import compiled_plant
+    from armctl.sim.plant import Plant
+    from armctl.sim.plant_layout import layout_of
+
+    monkeypatch.setattr(compiled_plant, "FLAGS", (*compiled_plant.PORTABLE_FLAGS, "-mno-such-option-anywhere"))
+    model = armctl.models.planar_2r()
+    layout = layout_of(Plant(armctl.Dynamics(model)))
+    assert not isinstance(layout, str)
+    functions = compiled_plant.library(model, layout, "explicit", cache_dir=tmp_path)
+    assert set(compiled_plant.DRIVER) <= set(functions)
+    tag = compiled_plant.library_tag(model, layout, "explicit")[0]
+    names = list(compiled_plant.DRIVER)
+    portable = compiled_plant.codegen.library_path(names, tag, tmp_path, compiled_plant.PORTABLE_FLAGS)
+    refused = compiled_plant.codegen.library_path(names, tag, tmp_path, compiled_plant.FLAGS)
+    assert portable.exists() and not refused.exists()

@@ -3,7 +3,9 @@
 
 An entry that is a float64 array (or a float) of one shape throughout is written into a (samples, *shape) array
 made at its first sample; any other entry (integers, booleans, changing shapes, objects) is kept as a copy per
-sample and stacked at the end, where what cannot be stacked into numbers is left out with a warning.
+sample and stacked at the end, where what cannot be stacked into numbers is left out with a warning. (An entry
+that cannot change after it is logged — a number, a string, a tuple of them — is kept as it is, and made an array
+when the entries are stacked.)
 """
 
 from __future__ import annotations
@@ -13,6 +15,9 @@ from typing import Any
 import numpy as np
 
 from armctl._checks import FLOAT, FloatArray
+
+#: the types of entries that cannot change after they are logged (kept as they are, see the module)
+_IMMUTABLE = (int, float, bool, str, np.integer, np.floating, np.bool_)
 
 
 class ControllerLog:
@@ -35,6 +40,9 @@ class ControllerLog:
             if slot is not None and type(val) is np.ndarray and val.shape == slot[2] and val.dtype == FLOAT:
                 slot[0][k] = val  # (the usual entry: an array of the key's shape)
                 slot[1][k] = True
+            elif slot is None and _kept_as_is(val) and key in self._copies:  # (a key kept one by one)
+                self._copies[key].append(val)
+                self._copy_rows[key].append(k)
             else:
                 self._add_other(k, key, val)
 
@@ -57,7 +65,7 @@ class ControllerLog:
             rows[k] = val
             logged[k] = True
             return
-        self._copies.setdefault(key, []).append(np.array(val, copy=True))
+        self._copies.setdefault(key, []).append(val if _kept_as_is(val) else np.array(val, copy=True))
         self._copy_rows.setdefault(key, []).append(k)
 
     def _keep_copies(self, key: str) -> None:
@@ -86,16 +94,25 @@ class ControllerLog:
             idx_list = [i for i in self._copy_rows[key] if i < rows]
             if not idx_list:
                 continue
+            arrays = [np.asarray(v) for v in vals[: len(idx_list)]]
             try:
-                stacked = np.stack(vals[: len(idx_list)])
+                stacked = np.stack(arrays)
             except ValueError:  # entries of different shapes
                 skipped.append(f"{key!r} (entries of different shapes)")
                 continue
             if stacked.dtype.kind == "O":  # None, dicts, …: npz cannot store them without pickle
-                bad = next((v for v in vals[: len(idx_list)] if v.dtype.kind == "O"), stacked)
+                bad = next((v for v in arrays if v.dtype.kind == "O"), stacked)
                 skipped.append(f"{key!r} (not numbers: {type(bad.item() if bad.ndim == 0 else bad).__name__})")
                 continue
             logs[key] = stacked
             if idx_list != list(range(len(idx_list))):
                 logs[f"{key}:sample"] = np.array(idx_list)
         return logs, skipped
+
+
+def _kept_as_is(val: Any) -> bool:
+    """Whether a logged entry cannot change after it is logged: a number, a string, or a tuple of them."""
+    t = type(val)
+    if t is tuple:
+        return all(isinstance(v, _IMMUTABLE) for v in val)
+    return t in _IMMUTABLE

@@ -5,22 +5,27 @@ The plant is a :class:`~armctl.sim.compiled_plant.CompiledPlant`; a control peri
 run's record (:class:`PeriodBinding`): it reads τ_k and the state of sample k from the record, holds τ_k as
 :meth:`Saturation.hold <armctl.sim.saturation.Saturation.hold>` does (its C transcription, ``armctl_hold``) and writes
 what :class:`~armctl.sim.python_engine.PythonEngine` writes — the applied torque, q̈_k, the friction torque and stuck
-joints at row k, the state and the work at row k + 1. The external torques, contact forces and sensors of a sample
-are recorded in Python (:meth:`Recorder.record_external <armctl.sim.recorder.Recorder.record_external>`), as the
-Python engine records them.
+joints at row k, the state and the work at row k + 1. For a plant with contact points and no disturbance, the same
+call records the contacts at the state it leaves, sample k + 1 — the points' forces and positions, τ_ext and the
+wrench (the kernel ``pk_sample``, the generated transcription of :meth:`Recorder.record_external
+<armctl.sim.recorder.Recorder.record_external>`); sample 0's are recorded when the run is bound, and only the force
+sensors' readings are taken in Python, from the recorded forces (:meth:`Recorder.record_sensors
+<armctl.sim.recorder.Recorder.record_sensors>`). With a disturbance (a Python callable), the external torques,
+contact forces and sensors of a sample are recorded in Python, as the Python engine records them.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 from armctl._checks import FloatArray
 from armctl.sim.engine import TORQUE_NOT_FINITE, EngineRun
 
 if TYPE_CHECKING:
     from armctl.sim.compiled_plant import CompiledPlant
+    from armctl.sim.plant import Plant
 
 
 @dataclass(frozen=True)
@@ -49,6 +54,17 @@ class PeriodBinding:
         q̈ at the period's start by an evaluation (the implicit schemes, whose step gives none).
     max_velocity, max_position : float
         The stop rules the state a period leaves is checked against (:func:`armctl.sim.engine.state_code`).
+    contact_force, contact_position : (samples, 3 P) ndarray, optional
+        The record's forces h_p [N] of the P contact points on the environment and their positions [m] (written
+        where ``record_contacts``).
+    tau_ext : (samples, n) ndarray, optional
+        The record's external torques τ_ext [N·m or N] (written where ``record_contacts``).
+    wrench : (samples, 6) ndarray, optional
+        The record's wrench on the environment about the tool frame's origin [N, N·m] (written where
+        ``record_contacts``).
+    record_contacts : bool, optional
+        The period records the contacts at the state it leaves (a plant with contact points and no disturbance;
+        the four arrays above are then given). False by default.
     """
 
     tau: FloatArray
@@ -67,6 +83,11 @@ class PeriodBinding:
     accel_at_start: bool
     max_velocity: float
     max_position: float
+    contact_force: FloatArray | None = None
+    contact_position: FloatArray | None = None
+    tau_ext: FloatArray | None = None
+    wrench: FloatArray | None = None
+    record_contacts: bool = False
 
 
 class GeneratedEngine:
@@ -74,6 +95,11 @@ class GeneratedEngine:
 
     def __init__(self, plant: CompiledPlant) -> None:
         self.plant = plant
+        #: the plant as the recorder takes it (what it reads of a Plant, CompiledPlant has: dyn, environments,
+        #: kinematics, external, disturbance_wrench)
+        self._duck = cast("Plant", plant)
+        #: the period records the contacts (see the module); Python records them with a disturbance
+        self._in_c = plant.disturbance is None and bool(plant.layout.points)
         self._external = self.observes = plant.has_external
 
     def bind(self, run: EngineRun) -> None:
@@ -82,6 +108,7 @@ class GeneratedEngine:
             rec.tau_friction.fill(math.nan)
         rows = ("tau", "q", "qd", "qdd", "tau_friction", "stuck", "work_friction", "work_external", "tau_applied")
         sat = run.saturation
+        points = len(rec.points)
         self.plant.bind_record(
             PeriodBinding(
                 **{name: getattr(rec, name) for name in rows},
@@ -92,8 +119,16 @@ class GeneratedEngine:
                 accel_at_start=run.accel_at_start,
                 max_velocity=run.max_velocity,
                 max_position=run.max_position,
+                contact_force=rec.contact_force.reshape(len(rec.q), 3 * points),
+                contact_position=rec.contact_position.reshape(len(rec.q), 3 * points),
+                tau_ext=rec.tau_ext,
+                wrench=rec.wrench,
+                record_contacts=self._in_c,
             )
         )
+        if self._in_c:  # sample 0's contacts (the periods record those of the samples after it)
+            self.plant.record_sample(0)
+            self._external = self.observes = bool(rec.sensors)
         self._hold = sat.hold
         if self.plant.disturbance is None:
             # a period is the plant's call itself (the same arguments and answer: no Python frame between them)
@@ -101,8 +136,11 @@ class GeneratedEngine:
 
     def observe(self, k: int, t: float) -> None:
         if self._external:
-            rec = self._rec
-            rec.record_external(k, self.plant, t, rec.q[k], rec.qd[k])  # type: ignore[arg-type]  # a plant's duck
+            rec, plant = self._rec, self._duck
+            if self._in_c:  # the contacts are recorded by the period: the sensors' readings of them
+                rec.record_sensors(k, plant, rec.q[k])
+            else:
+                rec.record_external(k, plant, t, rec.q[k], rec.qd[k])
 
     def advance_period(self, k: int, t: float, tau: FloatArray) -> int:
         """(:meth:`Engine.advance_period <armctl.sim.engine.Engine.advance_period>`: ``tau`` is read from row k of

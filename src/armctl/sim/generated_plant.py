@@ -115,51 +115,92 @@ class PlantExpressions:
             at += POINT_PARAMS
         return out
 
+    def _point_force(self, at: int, law: str, p: cs.SX, vp: cs.SX, par: cs.SX) -> dict[str, Any]:
+        """The force F on the arm of the point at ``par[at:]`` (position p, velocity ṗ) and what its derivatives
+        use. (A second source of :meth:`Plane.force <armctl.sim.contact.Plane.force>` and of the normal laws'
+        ``force`` in :mod:`armctl.sim.normal_force`: a change there is a change here; tests/sim/test_compiled_plant.py
+        and tests/sim/test_contact_record.py fail when they disagree.)"""
+        nrm, pt = par[at : at + 3], par[at + 3 : at + 6]
+        k, c, expo, mu, vslip = (par[at + i] for i in range(9, 14))
+        depth = cs.dot(nrm, pt - p)
+        vn = cs.dot(nrm, vp)
+        rate = -vn
+        if law == "kv":
+            raw = k * depth + c * rate
+            active = cs.logic_and(depth > 0, raw > 0)
+            fn = cs.if_else(active, raw, 0)
+            dfn_depth, dfn_rate = cs.if_else(active, k, 0), cs.if_else(active, c, 0)
+        else:
+            dpos = cs.fmax(depth, 0)
+            dp = dpos**expo
+            damp = 1.0 + c * rate
+            active = cs.logic_and(depth > 0, damp > 0)
+            fn = cs.if_else(active, k * dp * damp, 0)
+            dfn_depth = cs.if_else(active, k * (expo * dpos ** (expo - 1.0)) * damp, 0)
+            dfn_rate = cs.if_else(active, k * dp * c, 0)
+        vt = vp - vn * nrm
+        speed = cs.sqrt(cs.dot(vt, vt))
+        dirn = nrm - (mu / cs.fmax(speed, vslip)) * vt
+        return {
+            "force": fn * dirn,
+            **{"fn": fn, "dirn": dirn, "nrm": nrm, "vt": vt, "speed": speed, "mu": mu, "vslip": vslip},
+            **{"dfn_depth": dfn_depth, "dfn_rate": dfn_rate},
+        }
+
     def contact(self, q: cs.SX, v: cs.SX, par: cs.SX, stiffness: bool = False) -> tuple[cs.SX, cs.SX, cs.SX]:
         """(τ_c, K, D) of every point (see :meth:`Environment.joint_torque`); K and D are zero without
-        ``stiffness``. (A second source of :meth:`Plane.force <armctl.sim.contact.Plane.force>` and of the normal
-        laws' ``force`` in :mod:`armctl.sim.normal_force`: a change there is a change here;
-        tests/sim/test_compiled_plant.py fails when they disagree.)"""
+        ``stiffness``. (The force of a point: :meth:`_point_force`, a second source of :meth:`Plane.force
+        <armctl.sim.contact.Plane.force>`.)"""
         n = self.n
         tau = cs.SX.zeros(n)
         kj = cs.SX.zeros(n, n)
         dj = cs.SX.zeros(n, n)
         at = self.layout.points_offset
         for (_, law), (p, jp) in zip(self.layout.points, self.points(q, par), strict=True):
-            nrm, pt = par[at : at + 3], par[at + 3 : at + 6]
-            k, c, expo, mu, vslip = (par[at + i] for i in range(9, 14))
+            f = self._point_force(at, law, p, jp @ v, par)
             at += POINT_PARAMS
-            vp = jp @ v
-            depth = cs.dot(nrm, pt - p)
-            vn = cs.dot(nrm, vp)
-            rate = -vn
-            if law == "kv":
-                raw = k * depth + c * rate
-                active = cs.logic_and(depth > 0, raw > 0)
-                fn = cs.if_else(active, raw, 0)
-                dfn_depth, dfn_rate = cs.if_else(active, k, 0), cs.if_else(active, c, 0)
-            else:
-                dpos = cs.fmax(depth, 0)
-                dp = dpos**expo
-                damp = 1.0 + c * rate
-                active = cs.logic_and(depth > 0, damp > 0)
-                fn = cs.if_else(active, k * dp * damp, 0)
-                dfn_depth = cs.if_else(active, k * (expo * dpos ** (expo - 1.0)) * damp, 0)
-                dfn_rate = cs.if_else(active, k * dp * c, 0)
-            vt = vp - vn * nrm
-            speed = cs.sqrt(cs.dot(vt, vt))
-            dirn = nrm - (mu / cs.fmax(speed, vslip)) * vt
-            tau = tau + jp.T @ (fn * dirn)
+            tau = tau + jp.T @ f["force"]
             if stiffness:
-                dfdp = -dfn_depth * (dirn @ nrm.T)
+                names = ("nrm", "dirn", "fn", "mu", "vslip", "vt", "speed")
+                nrm, dirn, fn, mu, vslip, vt, speed = (f[x] for x in names)
+                dfdp = -f["dfn_depth"] * (dirn @ nrm.T)
                 proj = cs.SX.eye(3) - nrm @ nrm.T
                 tang = vt / speed
                 slow = (mu * fn / vslip) * proj
                 fast = (mu * fn / speed) * (proj - tang @ tang.T)
-                dfdv = -dfn_rate * (dirn @ nrm.T) - cs.if_else(speed <= vslip, slow, fast)
+                dfdv = -f["dfn_rate"] * (dirn @ nrm.T) - cs.if_else(speed <= vslip, slow, fast)
                 kj = kj + jp.T @ dfdp @ jp
                 dj = dj + jp.T @ dfdv @ jp
         return tau, kj, dj
+
+    def sample(self, q: cs.SX, v: cs.SX, par: cs.SX) -> tuple[cs.SX, cs.SX, cs.SX, cs.SX]:
+        """What is recorded of the contacts at one sample: (h, p, τ_ext, w) — the forces h_p = −F_p on the
+        environment and the positions p of the P points (3P each, point by point), τ_ext = −τ_c and the wrench
+        w = [Σ_p h_p; Σ_p (p − o) × h_p] about the tool frame's origin o. (A second source of
+        :meth:`Recorder.record_external <armctl.sim.recorder.Recorder.record_external>` for a plant without a
+        disturbance: a change there is a change here; tests/sim/test_contact_record.py fails when they disagree.)"""
+        tau = cs.SX.zeros(self.n)
+        hs, ps = [], []
+        f, m = cs.SX.zeros(3), cs.SX.zeros(3)
+        origin = self.tool(q, par)
+        at = self.layout.points_offset
+        for (_, law), (p, jp) in zip(self.layout.points, self.points(q, par), strict=True):
+            force = self._point_force(at, law, p, jp @ v, par)["force"]
+            at += POINT_PARAMS
+            tau = tau + jp.T @ force
+            h = -force
+            hs.append(h)
+            ps.append(p)
+            f = f + h
+            m = m + cs.cross(p - origin, h)
+        return cs.vertcat(*hs), cs.vertcat(*ps), -tau, cs.vertcat(f, m)
+
+    def tool(self, q: cs.SX, par: cs.SX) -> cs.SX:
+        """The tool frame's origin [m], world axes (its place in its joint's frame is in ``par``)."""
+        poses, _ = self.poses(q)
+        rot, pos = poses[cast(int, self.layout.tool_joint)]  # set: the plant has points or a disturbance
+        at = self.layout.tool_offset
+        return pos + rot @ par[at : at + 3]
 
     def disturbance(self, q: cs.SX, hd: cs.SX, par: cs.SX) -> cs.SX:
         """−J_tool(q)ᵀ h_d: the joint torque the disturbance wrench h_d (what the arm exerts) adds to τ."""
@@ -247,7 +288,9 @@ def kernels(model: RobotModel, layout: PlantLayout, family: str) -> list[cs.Func
     * ``pk_implicit(q, q̇₁, h, d, h_d, par) → (−τ_f + τ_e(q + h q̇₁, q̇₁), h diag(∂τ_f/∂q̇) − h(D + hK), τ_f, τ_e)``:
       backward Euler's velocity-dependent force and its Jacobian;
     * ``pk_symplectic(q, v̄, h, d, h_d, par) → (C(q, v̄)ᵀv̄ − τ_f + τ_e, h diag(∂τ_f/∂q̇) − hD, τ_f, τ_e, K)``:
-      the same for symplectic Euler (C(q, v̄)ᵀv̄ = ∂T/∂q at v̄).
+      the same for symplectic Euler (C(q, v̄)ᵀv̄ = ∂T/∂q at v̄);
+    * with contact points, ``pk_sample(q, q̇, par) → (h, p, τ_ext, w)``: what is recorded of the contacts at a
+      sample (:meth:`PlantExpressions.sample`).
     """
     n = model.n
     ex = PlantExpressions(model, layout)
@@ -298,4 +341,6 @@ def kernels(model: RobotModel, layout: PlantLayout, family: str) -> list[cs.Func
             _, kj0, dj0 = ex.contact(q, v, par, stiffness=True)
             jac_s = jac_s - h * dj0
         add("pk_symplectic", [q, v, h, d, hd, par], [dtdq - fric + ext, jac_s, fric, ext, kj0])
-    return [made[name] for name in KERNELS[family]]
+    if layout.points:
+        add("pk_sample", [q, v, par], list(ex.sample(q, v, par)))
+    return [made[name] for name in KERNELS[family] + (("pk_sample",) if layout.points else ())]

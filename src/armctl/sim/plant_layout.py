@@ -4,7 +4,7 @@ The generated step (:mod:`armctl.sim.generated_plant`, :mod:`armctl.sim.compiled
 *structure*: the friction model (none, stick–slip, smooth; with or without a Stribeck term; joints that can stick or
 not), the contact points (the link each rides on, its normal law), a disturbance (the link of the tool frame). Every
 number is an input of the code, the parameter vector ``par`` laid out here: the arm's inertial parameters π (13 per
-joint, :meth:`armctl.RobotModel.parameters`), the friction model's, 14 per contact point, the tool point's.
+joint, :meth:`armctl.RobotModel.parameters`), the friction model's, 14 per contact point, the tool frame's origin.
 :func:`layout_of` also says why a plant has no generated step.
 """
 
@@ -49,6 +49,10 @@ class PlantLayout:
         Every contact point: the 1-based joint it rides on (0: the world) and its normal law (``"kv"``, ``"hc"``).
     disturbance_joint : int or None
         The tool frame's joint when the plant has a disturbance.
+    tool_joint : int or None
+        The tool frame's joint when the plant has contact points or a disturbance (the disturbance's point of
+        application, and the origin of the recorded wrench's moment); its origin in that joint's frame is in
+        ``par`` (:attr:`tool_offset`).
     """
 
     n: int
@@ -57,6 +61,7 @@ class PlantLayout:
     sticky: bool
     points: tuple[tuple[int, str], ...]
     disturbance_joint: int | None
+    tool_joint: int | None = None
 
     @property
     def has_friction(self) -> bool:
@@ -81,11 +86,12 @@ class PlantLayout:
     @property
     def size(self) -> int:
         """Entries of ``par`` (at least one)."""
-        return max(self.tool_offset + (3 if self.disturbance_joint is not None else 0), 1)
+        return max(self.tool_offset + (3 if self.tool_joint is not None else 0), 1)
 
     def tag(self) -> str:
         """The structure as a hash, for the library's cache key."""
         text = f"{self.n}|{self.friction}|{self.stribeck}|{self.sticky}|{self.points}|{self.disturbance_joint}"
+        text += f"|{self.tool_joint}"
         return hashlib.sha256(text.encode()).hexdigest()[:16]
 
     def parameters(self, plant: Plant) -> FloatArray:
@@ -122,7 +128,7 @@ class PlantLayout:
                 par[at + 12] = env.friction
                 par[at + 13] = env.slip_velocity
                 at += POINT_PARAMS
-        if self.disturbance_joint is not None:
+        if self.tool_joint is not None:
             par[at : at + 3] = _in_joint_frame(model, None, np.zeros(3))
         return par
 
@@ -164,5 +170,6 @@ def layout_of(plant: Plant) -> PlantLayout | str:
             )
         kind_law = "kv" if type(law) is KelvinVoigt else "hc"
         points += [(model.frame(p.frame).joint, kind_law) for p in env.points]
-    dist = model.frame(None).joint if plant.disturbance is not None else None
-    return PlantLayout(model.n, kind, stribeck, plant.sticky is not None, tuple(points), dist)
+    tool = model.frame(None).joint if points or plant.disturbance is not None else None
+    dist = tool if plant.disturbance is not None else None
+    return PlantLayout(model.n, kind, stribeck, plant.sticky is not None, tuple(points), dist, tool)

@@ -67,7 +67,10 @@ class Recorder:
         disturbance): τ_ext, the negative of :meth:`Plant.external <armctl.sim.plant.Plant.external>` (without a
         disturbance, −τ_c from the same evaluation as the forces, :meth:`Environment.contact
         <armctl.sim.contact.Environment.contact>`), and the wrench on the environment about the tool frame's origin
-        o: f = Σ_p h_p + f_d, m = Σ_p (p − o) × h_p + m_d."""
+        o: f = Σ_p h_p + f_d, m = Σ_p (p − o) × h_p + m_d. (For a plant without a disturbance, the generated
+        engine records the same quantities in C: the kernel ``pk_sample``, :meth:`PlantExpressions.sample
+        <armctl.sim.generated_plant.PlantExpressions.sample>`, is its second source; a change here is a change there,
+        tests/sim/test_contact_record.py fails when they disagree.)"""
         dyn = plant.dyn
         tau_c = np.zeros(len(q))  # Σ J_pᵀ F_p
         f, m = [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]
@@ -93,9 +96,7 @@ class Recorder:
                 m[1] += rz * hx - rx * hz
                 m[2] += rx * hy - ry * hx
             if self.sensors:
-                joints = np.concatenate([kin.joints for kin in plant.kinematics])
-                for s, sensor in enumerate(self.sensors):
-                    self.sensor[k, s] = sensor.reading(dyn, q, hs, ps, joints)
+                self.record_sensors(k, plant, q)
         if plant.disturbance is not None:
             self.tau_ext[k] = -plant.external(t, q, qd)  # (h_d as the plant takes it within its steps)
             hd = plant.disturbance_wrench(t)
@@ -105,6 +106,14 @@ class Recorder:
             self.tau_ext[k] = -tau_c
         self.wrench[k, :3] = f
         self.wrench[k, 3:] = m
+
+    def record_sensors(self, k: int, plant: Plant, q: FloatArray) -> None:
+        """The force sensors' readings at sample k (:meth:`ForceSensor.reading
+        <armctl.sim.contact.ForceSensor.reading>`) from the contact forces and positions recorded at row k."""
+        joints = np.concatenate([kin.joints for kin in plant.kinematics])
+        hs, ps = self.contact_force[k], self.contact_position[k]
+        for s, sensor in enumerate(self.sensors):
+            self.sensor[k, s] = sensor.reading(plant.dyn, q, hs, ps, joints)
 
     def log_controller(self, k: int, log: dict[str, Any]) -> None:
         """Record the controller's ``last_log`` entries at sample k."""

@@ -7,7 +7,7 @@
  * torque is held as every engine holds it (armctl_hold, the transcription of Saturation.hold,
  * armctl/sim/saturation.py): the checks of the state and the controller's call are ClosedLoop's, in Python.
  *
- *   period(TAU, W, par, opt, S, LIM) -> (Q, V, A, F, STUCK, WF, WE, out, S, TAUA)
+ *   period(TAU, W, par, opt, S, LIM) -> (Q, V, A, F, STUCK, WF, WE, out, S, TAUA, H, P, TE, WR)
  *
  * TAU, TAUA and the outputs Q … WE are bound to the whole arrays of the run's record (rows of N, or of 1 for the
  * work), larger than the one row they are declared as (CasADi's buffers take any buffer at least that large). The
@@ -17,9 +17,15 @@
  * record starts as zeros) and row k + 1 of Q, V, WF and WE. W holds the disturbance's samples of every sub-step, 18
  * each (start, middle, end of sub-step i at W + 18 i; only its start for the last sample).
  *
+ * Where opt[9] says so (a plant with contact points and no disturbance), the period also records the contacts at the
+ * state it leaves, sample k + 1 (armctl_record_sample: the kernel pk_sample, the generated transcription of
+ * Recorder.record_external, armctl/sim/recorder.py): rows of H (the points' forces on the environment, 3 P a row), P
+ * (their positions), TE (τ_ext) and WR (the wrench about the tool frame's origin). m < 0 records sample k only
+ * (the run's first sample, before any period).
+ *
  * opt = [k, h, scheme, m, rows, q̈ by an evaluation at t_k (1) or from the first sub-step (0), max_velocity,
- *        max_position, saturate (1: clip at LIM)]; m = 0: the last sample (no step after it: the hold, the stick
- *        solve, its records and q̈ only).
+ *        max_position, saturate (1: clip at LIM), record the contacts (1)]; m = 0: the last sample (no step after
+ *        it: the hold, the stick solve, its records and q̈ only); m < 0: the contacts of sample k only.
  * out = [status, where it failed (PERIOD_BEGIN, PERIOD_ACCEL, PERIOD_STEP), the state code of the state it left
  *        (armctl_state_check), or TORQUE_NOT_FINITE: τ_k is not finite and nothing else was written].
  * A row outside the record (k < 0, or k + 1 ≥ rows with m > 0, k ≥ rows) writes nothing: status BAD_ROW.
@@ -64,6 +70,20 @@ static int armctl_state_check(const double* q, const double* v, double max_veloc
   return STATE_OK;
 }
 
+/* Recorder.record_external (armctl/sim/recorder.py) for a plant without a disturbance: the contacts at the state
+ * (q, v) of sample k into row k of H, P, TE and WR (res[10] … res[13]) by the kernel pk_sample
+ * (generated_plant.PlantExpressions.sample). A change to one is a change to the other
+ * (tests/sim/test_contact_record.py compares them). */
+static void armctl_record_sample(const double* q, const double* v, const double* par, long k, double** res) {
+#if ARMCTL_POINTS
+  const double* in[3] = {q, v, par};
+  double* out[4] = {res[10] + k * 3 * ARMCTL_POINTS, res[11] + k * 3 * ARMCTL_POINTS, res[12] + k * N, res[13] + k * 6};
+  CALL(pk_sample, 3, in, 4, out);
+#else
+  (void)q; (void)v; (void)par; (void)k; (void)res;
+#endif
+}
+
 CASADI_SYMBOL_EXPORT int period(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   const double *W = arg[1], *par = arg[2], *opt = arg[3];
   double *Q = res[0], *V = res[1], *A = res[2], *F = res[3], *STUCK = res[4], *WF = res[5], *WE = res[6];
@@ -77,6 +97,11 @@ CASADI_SYMBOL_EXPORT int period(const casadi_real** arg, casadi_real** res, casa
   out[0] = out[1] = out[2] = 0.0;
   if (k < 0 || k >= rows || (m > 0 && k + 1 >= rows)) {
     out[0] = BAD_ROW;
+    return 0;
+  }
+  if (m < 0) { /* the contacts of sample k only */
+    if (opt[9] != 0.0) armctl_record_sample(Q + k * N, V + k * N, par, k, res);
+    memmove(res[8], arg[4], sizeof S);
     return 0;
   }
   if (!armctl_hold(arg[0] + k * N, arg[5], opt[8] != 0.0, tau)) {
@@ -141,6 +166,7 @@ CASADI_SYMBOL_EXPORT int period(const casadi_real** arg, casadi_real** res, casa
     (void)wf; (void)we;
 #endif
     out[2] = armctl_state_check(q, v, opt[6], opt[7]);
+    if (opt[9] != 0.0 && out[2] == STATE_OK) armctl_record_sample(q, v, par, k + 1, res);
   }
   S[S_BEGUN] = 0.0;
   memcpy(res[8], S, sizeof S);
