@@ -24,8 +24,8 @@ from armctl.sim import Forces, simulate
 from armctl.sim.compiled import choose_step
 from armctl.sim.engine import TORQUE_NOT_FINITE, state_code
 from armctl.sim.friction import make_friction
-from armctl.sim.generated_engine import PeriodBinding
 from armctl.sim.options import regroup
+from armctl.sim.period_binding import PeriodBinding
 from armctl.sim.plant import Plant
 from armctl.sim.saturation import Saturation
 from armctl.sim.stepper import advance

@@ -38,8 +38,8 @@ from armctl.codegen import library as codegen
 from armctl.dynamics.casadi_buffer import buffer_of, view
 from armctl.errors import BackendError
 from armctl.model.robot import RobotModel
-from armctl.sim.generated_engine import PeriodBinding
 from armctl.sim.generated_plant import kernels
+from armctl.sim.period_binding import PeriodBinding
 from armctl.sim.plant import Plant
 from armctl.sim.plant_layout import PlantLayout
 from armctl.sim.stick_slip import NotPositiveDefinite
@@ -389,7 +389,7 @@ class CompiledPlant:
     # ---------------------------------------------------------------------------- control periods
     def bind_record(self, binding: PeriodBinding) -> None:
         """Make :meth:`period` and :meth:`last_sample` integrate on the rows of a run's record (``binding``, see
-        :class:`~armctl.sim.generated_engine.PeriodBinding`)."""
+        :class:`~armctl.sim.period_binding.PeriodBinding`)."""
         b = binding
         rows = len(b.q)
         record = (b.tau, b.q, b.qd, b.qdd, b.tau_friction, b.stuck, b.work_friction, b.work_external, b.tau_applied)
@@ -422,7 +422,7 @@ class CompiledPlant:
 
     def record_sample(self, k: int) -> None:
         """Record the contacts at the state of sample k into the bound record's rows (what :meth:`period` records
-        at the state it leaves, see :class:`~armctl.sim.generated_engine.PeriodBinding`): for the run's first
+        at the state it leaves, see :class:`~armctl.sim.period_binding.PeriodBinding`): for the run's first
         sample, before any period.
 
         Raises
