@@ -14,10 +14,13 @@ tracked what was asked is judged on :class:`ErrorSummary` values within :data:`T
 # keeps the samples), ``plant`` (the equations of motion), ``integrators`` and ``implicit`` (the schemes),
 # ``stepper`` (a step with stick–slip events), ``compiled`` (the choice of the generated step: ``compiled_plant``,
 # ``generated_plant``, ``plant_layout``, the C driver ``step_*.c``), ``friction`` and ``stick_slip``, ``contact``
-# and ``normal_force``, ``result`` (with ``sampled_reference``, ``limits`` and ``tracking``), ``plot``,
-# ``playback`` (``visuals``: the arm's shapes; ``playback_page``: the page), ``sweep`` (``sweep_result``,
-# ``sweep_pool``, ``sweep_progress``); ``mujoco_engine`` and ``mujoco_plant``: the same loop on a MuJoCo plant.
+# and ``normal_force``, ``result`` (with ``sampled_reference``, ``limits`` and ``tracking``; its readers ``plot``,
+# ``tables`` and ``playback`` (``visuals``: the arm's shapes; ``playback_page``: the page) read a run through
+# ``run_record`` and sit below it), ``sweep`` (``sweep_result`` with ``sweep_store`` and ``sweep_table``,
+# ``case_failure`` and ``case_settings`` below them, ``sweep_pool``, ``sweep_progress``); ``mujoco_engine`` and
+# ``mujoco_plant``: the same loop on a MuJoCo plant.
 
+from armctl.sim.case_failure import CaseFailure
 from armctl.sim.contact import ContactPoint, Environment, ForceSensor, Plane
 from armctl.sim.friction import FrictionModel, SmoothFriction, StickSlip
 from armctl.sim.integrators import INTEGRATORS
@@ -29,7 +32,7 @@ from armctl.sim.playback import playback
 from armctl.sim.result import SimResult
 from armctl.sim.simulate import simulate
 from armctl.sim.sweep import sweep
-from armctl.sim.sweep_result import CaseFailure, SweepResult
+from armctl.sim.sweep_result import SweepResult
 from armctl.sim.tracking import TRACKING_TOLERANCE, ErrorSummary
 
 __all__ = [

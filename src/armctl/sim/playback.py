@@ -29,7 +29,7 @@ from armctl.sim.visuals import MESHES, parts, reach
 
 if TYPE_CHECKING:
     from armctl.sim.contact import Environment
-    from armctl.sim.result import SimResult
+    from armctl.sim.run_record import RunRecord
 
 #: at most this many frames in a page (a longer run is shown at a lower frame rate)
 MAX_FRAMES = 3000
@@ -149,7 +149,7 @@ def _line(points: FloatArray, colour: int) -> Any:
     return mg.Line(geometry, mg.LineBasicMaterial(color=colour, linewidth=2))
 
 
-def _arrows(scene: _Scene, res: SimResult, idx: FloatArray, size: float) -> str:
+def _arrows(scene: _Scene, res: RunRecord, idx: FloatArray, size: float) -> str:
     """A red arrow per contact point, animated: at the point, along the force on the arm (contact_force_on_robot),
     of length |F| × scale. Returns the scale's text for the page ("" without contact forces)."""
     mg, _ = _meshcat()
@@ -227,7 +227,7 @@ def _ground_and_camera(scene: _Scene, low: FloatArray, high: FloatArray, size: f
 
 
 def playback(
-    res: SimResult,
+    res: RunRecord,
     path: str | Path,
     model: RobotModel | None = None,
     *,
@@ -240,8 +240,8 @@ def playback(
 
     Parameters
     ----------
-    res : SimResult
-        The run.
+    res : SimResult or RunRecord
+        The run (what it reads of it: :class:`~armctl.sim.run_record.RunRecord`).
     path : str or path-like
         The page (``.html`` added if missing).
     model : RobotModel, optional

@@ -1,5 +1,6 @@
-"""Plots of a :class:`~armctl.sim.result.SimResult`. Each helper returns a ``matplotlib.figure.Figure``
-(made without pyplot, so no GUI state is touched); matplotlib is imported only when a plot is asked for."""
+"""Plots of a run: a :class:`~armctl.sim.SimResult`, read through :class:`~armctl.sim.run_record.RunRecord`.
+Each helper returns a ``matplotlib.figure.Figure`` (made without pyplot, so no GUI state is touched); matplotlib
+is imported only when a plot is asked for."""
 
 from __future__ import annotations
 
@@ -13,7 +14,7 @@ from armctl.errors import InvalidParameterError, UnknownNameError
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-    from armctl.sim.result import SimResult
+    from armctl.sim.run_record import RunRecord
 
 _UNITS = {
     "q": "rad",
@@ -62,14 +63,14 @@ def _figure(rows: int, height: float = 2.2) -> tuple[Figure, Any]:
     return fig, axes
 
 
-def _mark_divergence(res: SimResult, axes: Any) -> None:
+def _mark_divergence(res: RunRecord, axes: Any) -> None:
     if res.diverged and res.diverged_at is not None:
         for ax in axes:
             ax.axvline(res.diverged_at, color="red", linestyle="--", linewidth=1)
 
 
 def plot_joints(
-    res: SimResult,
+    res: RunRecord,
     quantities: tuple[str, ...] | str = ("q", "qd", "error", "tau_applied"),
     joints: Any = None,
 ) -> Figure:
@@ -156,7 +157,7 @@ def plot_joints(
     return fig
 
 
-def _check_other(res: SimResult, name: str) -> None:
+def _check_other(res: RunRecord, name: str) -> None:
     """Refuse a quantity the result has nothing of (named, with what to do)."""
     if name in ("position_error", "orientation_error"):
         if not any(k.startswith(f"{name}[") for k in res.task_errors):
@@ -179,12 +180,12 @@ def _components(ax: Any, t: Any, data: Any, labels: list[str], prefix: str) -> N
         ax.plot(t, data[:, i], label=f"{prefix}{c}", linewidth=1, color=f"C{i % 10}" if not prefix else None)
 
 
-def plot_other(res: SimResult, name: str, ax: Any) -> None:
+def plot_other(res: RunRecord, name: str, ax: Any) -> None:
     """Draw one quantity that is not per joint on the axes ``ax``, with its legend and label.
 
     Parameters
     ----------
-    res : SimResult
+    res : SimResult or RunRecord
         The run.
     name : str
         ``"contact_force"`` / ``"contact_force_on_robot"`` (F_p, one line per point and axis, world axes [N]),
@@ -220,7 +221,7 @@ def plot_other(res: SimResult, name: str, ax: Any) -> None:
     ax.grid(True, alpha=0.3)
 
 
-def plot_energy(res: SimResult) -> Figure:
+def plot_energy(res: RunRecord) -> Figure:
     """Energy E − E(0) against the work of actuators, friction and external wrenches, and the balance
     residual E − E(0) − W. Raises an InvalidParameterError for a result without samples."""
     if not len(res.t):
@@ -246,7 +247,7 @@ def plot_energy(res: SimResult) -> Figure:
     return fig
 
 
-def plot_wrench(res: SimResult) -> Figure:
+def plot_wrench(res: RunRecord) -> Figure:
     """The wrench the arm exerts (force and moment, world axes) and the normal force of each contact
     point."""
     fig, axes = _figure(3)

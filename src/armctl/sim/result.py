@@ -31,7 +31,10 @@ import numpy as np
 from armctl._checks import FloatArray
 from armctl.errors import InvalidParameterError
 from armctl.sim.limits import LimitReport
+from armctl.sim.playback import playback as _playback
+from armctl.sim.plot import plot_energy, plot_joints, plot_wrench
 from armctl.sim.sampled_reference import SampledReference
+from armctl.sim.tables import sim_dataframe, sim_xarray
 from armctl.sim.tracking import TRACKING_TOLERANCE, ErrorSummary, joint_summary, task_errors, task_summaries
 
 if TYPE_CHECKING:
@@ -515,8 +518,6 @@ class SimResult:
             No quantity, an unknown one, one the result has nothing of (task errors without frame tasks, a
             sensor reading without sensors), or joint indices out of range.
         """
-        from armctl.sim.plot import plot_joints
-
         return plot_joints(self, quantities, joints)
 
     def plot_energy(self) -> Any:
@@ -526,8 +527,6 @@ class SimResult:
         -------
         matplotlib.figure.Figure
         """
-        from armctl.sim.plot import plot_energy
-
         return plot_energy(self)
 
     def playback(self, path: str | Path, model: RobotModel | None = None, **options: Any) -> Path:
@@ -547,9 +546,7 @@ class SimResult:
         pathlib.Path
             The page written.
         """
-        from armctl.sim.playback import playback
-
-        return playback(self, path, model, **options)
+        return _playback(self, path, model, **options)
 
     def plot_wrench(self) -> Any:
         """A matplotlib Figure of the contact wrench and forces (see :func:`armctl.sim.plot.plot_wrench`).
@@ -558,8 +555,6 @@ class SimResult:
         -------
         matplotlib.figure.Figure
         """
-        from armctl.sim.plot import plot_wrench
-
         return plot_wrench(self)
 
     # ------------------------------------------------------------------------------ tables
@@ -586,8 +581,6 @@ class SimResult:
         InvalidParameterError
             An unknown layout.
         """
-        from armctl.sim.tables import sim_dataframe
-
         return sim_dataframe(self, layout)
 
     def to_xarray(self) -> Any:
@@ -607,8 +600,6 @@ class SimResult:
         OptionalDependencyError
             xarray is not installed.
         """
-        from armctl.sim.tables import sim_xarray
-
         return sim_xarray(self)
 
 

@@ -2,7 +2,7 @@
 
 Each case is a mapping of keyword arguments for ``run`` (by default :func:`armctl.sim.simulate`). A case
 that fails, because ``run`` raised, its worker process died or it ran past ``timeout``, is recorded as a
-:class:`~armctl.sim.sweep_result.CaseFailure` in its place, and the other cases' results come back.
+:class:`~armctl.sim.CaseFailure` in its place, and the other cases' results come back.
 
 Cases sent to worker processes are pickled, so everything in them must pickle: Dynamics and RobotModel objects
 do (a Dynamics is rebuilt from its model in the worker), controllers do if their class is importable, and
@@ -27,10 +27,11 @@ import numpy as np
 
 from armctl.errors import InvalidParameterError, RunTimeoutError, SweepWarning, WorkerDiedError
 from armctl.sim import sweep_checks as checks
+from armctl.sim.case_failure import CaseFailure
 from armctl.sim.sweep_executor import failure, from_report, through
 from armctl.sim.sweep_pool import WorkerPool, run_one
 from armctl.sim.sweep_progress import Progress
-from armctl.sim.sweep_result import CaseFailure, SweepResult
+from armctl.sim.sweep_result import SweepResult
 from armctl.sim.sweep_store import SweepStore
 
 ON_ERROR = ("record", "raise")
@@ -77,7 +78,7 @@ def sweep(
         ``summary(output)`` is returned instead of the output; it runs in the worker, so that only what is
         needed travels back.
     on_error : {"record", "raise"}
-        ``"record"`` (default): a failed case is a :class:`~armctl.sim.sweep_result.CaseFailure` in the
+        ``"record"`` (default): a failed case is a :class:`~armctl.sim.CaseFailure` in the
         result, and a :class:`~armctl.errors.SweepWarning` names the failed cases at the end. ``"raise"``: the
         first failure stops the sweep and is raised, with a note naming the case's index: the run's own
         exception, or :class:`~armctl.errors.WorkerDiedError` / :class:`~armctl.errors.RunTimeoutError`.
@@ -100,7 +101,7 @@ def sweep(
     -------
     SweepResult
         A list with, for case ``i``, ``summary(run(**cases[i]))`` (or the output without ``summary``), or a
-        :class:`~armctl.sim.sweep_result.CaseFailure`; ``.failures`` lists the failures, ``.counts`` counts
+        :class:`~armctl.sim.CaseFailure`; ``.failures`` lists the failures, ``.counts`` counts
         ok / raised / worker_died / timed_out.
 
     Raises

@@ -1,5 +1,5 @@
 """Sweep cases run on an Executor the caller gives (a thread pool, a ``ProcessPoolExecutor``, a Dask cluster's
-``client.get_executor()``), and the :class:`~armctl.sim.sweep_result.CaseFailure` of a case that failed.
+``client.get_executor()``), and the :class:`~armctl.sim.CaseFailure` of a case that failed.
 
 On Dask, a ``KilledWorker`` blames every case that was on a worker when it died, the ones that merely shared it
 included: each such case runs once more alone, after the others, and only one that kills its worker alone too
@@ -14,8 +14,8 @@ from collections.abc import Callable, Mapping
 from concurrent.futures import BrokenExecutor, Executor, Future, ProcessPoolExecutor, as_completed
 from typing import Any
 
+from armctl.sim.case_failure import CaseFailure, ErrorReport, FailureKind, type_name
 from armctl.sim.sweep_pool import run_one, run_pickled, run_pickled_again
-from armctl.sim.sweep_result import CaseFailure, ErrorReport, FailureKind, type_name
 
 
 def failure(

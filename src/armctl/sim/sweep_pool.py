@@ -27,7 +27,7 @@ from multiprocessing.process import BaseProcess
 from typing import Any
 
 from armctl.errors import ArmctlError, WorkerDiedError
-from armctl.sim.sweep_result import ErrorReport
+from armctl.sim.case_failure import ErrorReport
 
 RETRIES = 1  # a case whose worker died is run once more
 DEPTH = 2  # cases handed to a worker at once: the one it runs and the next

@@ -8,7 +8,7 @@ The store is an append-only folder::
 Each outcome is written to a temporary file and renamed into place, so a sweep stopped at any instant (Ctrl-C,
 SIGKILL, a lost node, a batch job's wall-clock limit) leaves every finished outcome whole and nothing half
 written; files are never rewritten, so nothing already stored can be lost by a later crash. An outcome holds the
-case's index, how it ended (``"ok"``, or a :class:`~armctl.sim.sweep_result.CaseFailure`'s kind, type, message
+case's index, how it ended (``"ok"``, or a :class:`~armctl.sim.CaseFailure`'s kind, type, message
 and traceback) and the value the sweep returns for it: ``summary``'s output, or the full result without
 ``summary``. The outcome files are pickles: read only stores you wrote yourself.
 
@@ -24,14 +24,15 @@ import json
 import os
 import pickle
 from collections.abc import Mapping
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from armctl.errors import ArmctlError, InvalidParameterError
-from armctl.sim.sweep_result import CaseFailure, ErrorReport, SweepResult
-from armctl.sim.tables import setting
+from armctl.sim.case_failure import CaseFailure, ErrorReport
+from armctl.sim.case_settings import setting
 
 FORMAT = "armctl.sweep-store/1"
 MANIFEST = "manifest.json"
@@ -214,8 +215,50 @@ def _outcome(path: Path, case: Mapping[str, Any]) -> Any:
     return CaseFailure(record["index"], case, kind, error_type, message, traceback, attempts, exc)
 
 
-def load(path: str | os.PathLike[str], partial: bool = False) -> SweepResult:
-    """The outcomes of a sweep's store (see :meth:`SweepResult.load <armctl.sim.SweepResult.load>`)."""
+@dataclass(frozen=True)
+class StoredOutcomes:
+    """What a sweep's store holds, read by :func:`read_outcomes` (from which :meth:`SweepResult.load
+    <armctl.sim.SweepResult.load>` makes its result).
+
+    Attributes
+    ----------
+    outcomes : list
+        One entry per case, in case order: the value stored for it (``summary``'s output or the full result),
+        a :class:`~armctl.sim.CaseFailure`, or None for a case not finished.
+    settings : list of dict
+        Each case's settings as the manifest shows them (numbers and strings as they were, other objects by name
+        or repr; see :mod:`armctl.sim.case_settings`).
+    path : str
+        The store's folder.
+    pending : frozenset of int
+        The cases not finished.
+    """
+
+    outcomes: list[Any]
+    settings: list[dict[str, Any]]
+    path: str
+    pending: frozenset[int]
+
+
+def read_outcomes(path: str | os.PathLike[str], partial: bool = False) -> StoredOutcomes:
+    """The outcomes of a sweep's store (see :meth:`SweepResult.load <armctl.sim.SweepResult.load>`).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The store's folder.
+    partial : bool, optional
+        Accept a store whose sweep did not finish (its unfinished cases are None and listed as pending).
+
+    Returns
+    -------
+    StoredOutcomes
+
+    Raises
+    ------
+    InvalidParameterError
+        Not a store, or (without ``partial``) a store with unfinished cases.
+    """
     root = Path(path)
     if not (root / MANIFEST).is_file():
         raise InvalidParameterError(
@@ -231,8 +274,5 @@ def load(path: str | os.PathLike[str], partial: bool = False) -> SweepResult:
             "store= this folder and resume=True to finish it, or load(..., partial=True) for the finished ones",
             value=str(root),
         )
-    out = SweepResult(done.get(i) for i in range(n))
-    out.cases = list(store.manifest["settings"])
-    out.store = str(root)
-    out.pending = frozenset(range(n)) - frozenset(done)
-    return out
+    outcomes = [done.get(i) for i in range(n)]
+    return StoredOutcomes(outcomes, list(store.manifest["settings"]), str(root), frozenset(range(n)) - frozenset(done))

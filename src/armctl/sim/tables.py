@@ -1,40 +1,31 @@
-"""Results as tables and labelled arrays: :meth:`SimResult.to_dataframe <armctl.sim.SimResult.to_dataframe>`,
-:meth:`SimResult.to_xarray <armctl.sim.SimResult.to_xarray>` and :meth:`SweepResult.to_dataframe
-<armctl.sim.SweepResult.to_dataframe>`.
+"""A run as a table and as labelled arrays: :meth:`SimResult.to_dataframe <armctl.sim.SimResult.to_dataframe>` and
+:meth:`SimResult.to_xarray <armctl.sim.SimResult.to_xarray>`, and a run's scalar metrics (:func:`run_metrics`,
+also a ready ``summary=`` for :func:`~armctl.sim.sweep`). A sweep's table is :mod:`armctl.sim.sweep_table`.
 
 pandas and xarray are optional (``pip install "armctl[data]"``, which adds pyarrow for Parquet files too): they
 are imported here, when a conversion is first asked for, never by ``import armctl``; without them the methods
 raise :class:`~armctl.errors.OptionalDependencyError` saying how to install them.
 
-A sweep's table has one row per case: the case's settings (numbers, strings and booleans as they are; other
-objects by their ``name``, a function by its qualified name, anything else by its ``repr``), the outcome
-(``"ok"``, ``"raised"``, ``"worker_died"``, ``"timed_out"``, with the exception's type and message; ``"not_run"``
-for a case a partially loaded store lacks) and the
-scalar metrics of what the case returned (a number, the scalar entries of a mapping or the fields of a
-dataclass, or for a full :class:`~armctl.sim.SimResult` its status and tracking error).
+The functions read a run through :class:`~armctl.sim.run_record.RunRecord` (what a
+:class:`~armctl.sim.SimResult` is), so that the result can offer them as methods.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import numbers
-from collections.abc import Collection, Mapping, Sequence
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from armctl.errors import InvalidParameterError, OptionalDependencyError
-
-if TYPE_CHECKING:
-    from armctl.sim.result import SimResult
-    from armctl.sim.sweep_result import SweepResult
+from armctl.sim.case_settings import plain
+from armctl.sim.run_record import RunRecord
 
 INSTALL = 'pip install "armctl[data]"'
 LAYOUTS = ("long", "wide")
-SHOWN = 120  # characters of a setting's repr kept in a table
 
-# per-joint arrays of a SimResult in a table: (column, attribute, what, unit of a revolute / prismatic joint)
+# per-joint arrays of a run in a table: (column, attribute, what, unit of a revolute / prismatic joint)
 _JOINT_ARRAYS = (
     ("q", "q", "joint position", "rad", "m"),
     ("qd", "qd", "joint velocity", "rad/s", "m/s"),
@@ -63,8 +54,7 @@ def require(module: str, feature: str) -> Any:
         ) from exc
 
 
-# ------------------------------------------------------------------------------------------------ SimResult
-def _columns(res: SimResult) -> list[tuple[str, Any, str, str]]:
+def _columns(res: RunRecord) -> list[tuple[str, Any, str, str]]:
     """(name, (N, n) array, description, unit) of every per-joint quantity of ``res`` in a table."""
     kinds = [j.kind for j in res.plant.joints] if res.plant is not None else None
     out = []
@@ -81,7 +71,7 @@ def _columns(res: SimResult) -> list[tuple[str, Any, str, str]]:
     return out
 
 
-def sim_dataframe(res: SimResult, layout: str = "long") -> Any:
+def sim_dataframe(res: RunRecord, layout: str = "long") -> Any:
     """A run as a pandas DataFrame (see :meth:`SimResult.to_dataframe <armctl.sim.SimResult.to_dataframe>`)."""
     pd = require("pandas", "SimResult.to_dataframe")
     if layout not in LAYOUTS:
@@ -104,7 +94,7 @@ def sim_dataframe(res: SimResult, layout: str = "long") -> Any:
     return pd.DataFrame(long)
 
 
-def sim_xarray(res: SimResult) -> Any:
+def sim_xarray(res: RunRecord) -> Any:
     """A run as an xarray Dataset (see :meth:`SimResult.to_xarray <armctl.sim.SimResult.to_xarray>`)."""
     xr = require("xarray", "SimResult.to_xarray")
     data: dict[str, Any] = {}
@@ -137,39 +127,11 @@ def sim_xarray(res: SimResult) -> Any:
         elif isinstance(v, numbers.Integral):
             attrs[k] = int(v) if -(2**63) <= int(v) < 2**63 else str(v)  # (a seed may not fit an int64)
         elif isinstance(v, str | numbers.Real):
-            attrs[k] = _plain(v)
+            attrs[k] = plain(v)
     return xr.Dataset(data, coords=coords, attrs=attrs)
 
 
-# ------------------------------------------------------------------------------------------------ SweepResult
-def _is_scalar(x: Any) -> bool:
-    return x is None or isinstance(x, str | bool | numbers.Number | np.generic)
-
-
-def _plain(x: Any) -> Any:
-    return x.item() if isinstance(x, np.generic) else x
-
-
-def setting(value: Any) -> Any:
-    """How a case's setting appears in a table: a scalar as it is; an object by its ``name`` (a RobotModel, a
-    scene), a function or class by its qualified name, a small array as a list, an object without a repr of its
-    own by its class's name; anything else by its repr (the first :data:`SHOWN` characters)."""
-    if _is_scalar(value):
-        return _plain(value)
-    name = getattr(value, "name", None)
-    if isinstance(name, str) and name:
-        return name
-    if isinstance(value, np.ndarray):
-        return repr(value.tolist()) if value.size <= 12 else f"ndarray{value.shape}"
-    if callable(value) and hasattr(value, "__qualname__"):
-        return f"{getattr(value, '__module__', '')}.{value.__qualname__}".lstrip(".")
-    if type(value).__repr__ is object.__repr__:  # "<… object at 0x…>": only its class says anything
-        return type(value).__qualname__
-    text = repr(value)
-    return text if len(text) <= SHOWN else text[: SHOWN - 1] + "…"
-
-
-def run_metrics(res: SimResult) -> dict[str, Any]:
+def run_metrics(res: RunRecord) -> dict[str, Any]:
     """The scalar metrics of a full result: status, divergence, duration, tracking error, peak torque."""
     out: dict[str, Any] = {
         "status": res.status,
@@ -185,65 +147,3 @@ def run_metrics(res: SimResult) -> dict[str, Any]:
     if len(res.t):
         out["tau_peak"] = float(np.fmax.reduce(np.abs(res.tau_applied), axis=None))
     return out
-
-
-def metrics(value: Any) -> dict[str, Any]:
-    """The scalar metrics of what a case returned (see the module)."""
-    from armctl.sim.result import SimResult
-
-    if isinstance(value, SimResult):
-        return run_metrics(value)
-    if _is_scalar(value):
-        return {"summary": _plain(value)}
-    if dataclasses.is_dataclass(value) and not isinstance(value, type):
-        value = {f.name: getattr(value, f.name) for f in dataclasses.fields(value)}
-    if isinstance(value, Mapping):
-        return {str(k): _plain(v) for k, v in value.items() if _is_scalar(v)}
-    if isinstance(value, Sequence) and all(_is_scalar(v) for v in value):
-        return {f"summary[{k}]": _plain(v) for k, v in enumerate(value)}
-    if isinstance(value, np.ndarray) and value.ndim == 1 and value.size <= 16:
-        return {f"summary[{k}]": float(v) for k, v in enumerate(value)}
-    return {}
-
-
-def sweep_rows(
-    outcomes: SweepResult, cases: Sequence[Mapping[str, Any]] | None, pending: Collection[int] = ()
-) -> list[dict[str, Any]]:
-    """One dict per case: settings, outcome, metrics (the columns of :func:`sweep_dataframe`); the cases in
-    ``pending`` did not run (outcome ``"not_run"``)."""
-    from armctl.sim.sweep_result import CaseFailure
-
-    rows = []
-    for i, outcome in enumerate(outcomes):
-        case = cases[i] if cases is not None else outcome.case if isinstance(outcome, CaseFailure) else {}
-        row: dict[str, Any] = {"case": i}
-        row.update({str(k): setting(v) for k, v in case.items()})
-        if i in pending:
-            row.update(outcome="not_run", error_type=None, message=None)
-        elif isinstance(outcome, CaseFailure):
-            row.update(outcome=outcome.kind, error_type=outcome.error_type, message=outcome.message)
-        else:
-            row.update(outcome="ok", error_type=None, message=None)
-            for k, v in metrics(outcome).items():
-                row[k if k not in row else f"{k} (summary)"] = v
-        rows.append(row)
-    return rows
-
-
-def sweep_dataframe(
-    outcomes: SweepResult, cases: Sequence[Mapping[str, Any]] | None = None, pending: Collection[int] = ()
-) -> Any:
-    """A sweep as a pandas DataFrame (see :meth:`SweepResult.to_dataframe
-    <armctl.sim.SweepResult.to_dataframe>`)."""
-    pd = require("pandas", "SweepResult.to_dataframe")
-    if cases is not None and len(cases) != len(outcomes):
-        raise InvalidParameterError(
-            f"cases has {len(cases)} entries but the sweep {len(outcomes)} outcomes; pass the sweep's own cases",
-            value=len(cases),
-        )
-    frame = pd.DataFrame(sweep_rows(outcomes, cases, pending)).set_index("case")
-    for column in frame.columns:  # a column mixing strings and numbers is shown as strings (one type a column)
-        kinds = {type(v) for v in frame[column] if v is not None and not (isinstance(v, float) and math.isnan(v))}
-        if str in kinds and len(kinds) > 1:
-            frame[column] = [None if v is None else str(v) for v in frame[column]]
-    return frame
