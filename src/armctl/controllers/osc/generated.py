@@ -36,6 +36,7 @@ import numpy as np
 from armctl._checks import FloatArray
 from armctl.codegen import library as codegen
 from armctl.controllers.osc.scale import MAX_TASK_RHS
+from armctl.controllers.osc.target_code import target_verdict
 from armctl.controllers.osc.tasks.base import MotionTask, Task
 from armctl.controllers.osc.tasks.frame_orientation import FrameOrientationTask
 from armctl.controllers.osc.tasks.frame_pose import FramePoseTask
@@ -58,7 +59,7 @@ from armctl.model.robot import RobotModel
 from armctl.references import Reference
 
 #: bumped when the generated code changes, so that stale cached libraries are not loaded
-_CODE_VERSION = 4
+_CODE_VERSION = 6
 _NAME = "osc_qdd_qp"
 _GUESS = "osc_qdd_active_set"
 #: the frame tasks the code takes: their kind and the shape of their target value
@@ -137,7 +138,8 @@ def qp_function(
     task: q_ref, q̇_ref, q̈_ref); τ_f if ``friction``] and ``params`` = [per task K_p, K_d (row by row), W^½; ε];
     [J | b] the unweighted task rows, stacked in the tasks' order. With ``limits`` (each limit's variable,
     ``"tau"`` or ``"qdd"``; their bounds constant) also the verdict on (q̈₀, τ₀), ``params`` then ending with
-    [l; u] (n rows per limit, in their order)."""
+    [l; u] (n rows per limit, in their order). Its last output is the verdict on the frame tasks' targets
+    (:func:`~armctl.controllers.osc.target_code.target_verdict`: 1 if each is finite and its rotation one)."""
     n = model.n
     q, qd = cs.SX.sym("q", n), cs.SX.sym("qd", n)
     tf = joint_transforms(model, q)
@@ -159,6 +161,11 @@ def qp_function(
     qdd0 = -cholesky_solve(hess, grad)
     tau0 = mass @ qdd0 + hf
     outputs = [qdd0, tau0, hess, grad, c, mass, hf, cs.horzcat(jall, ball)]
+    targets = cs.SX(1)  # the frame tasks' targets checked (target_code): the step's Python checks no more
+    for k, tk in enumerate(tasks):
+        if type(tk) is not PostureTask:
+            value, vel, acc = task_inputs[3 * k : 3 * k + 3]
+            targets = cs.logic_and(targets, target_verdict(_FRAME_TASKS[type(tk)][0], value, vel, acc))
     if limits is not None:
         values = cs.vertcat(*[tau0 if var == "tau" else qdd0 for var in limits])
         lo, up = cs.SX.sym("lower", n * len(limits)), cs.SX.sym("upper", n * len(limits))
@@ -167,6 +174,7 @@ def qp_function(
         for i in range(values.shape[0]):
             ok = cs.logic_and(ok, cs.logic_and(cs.le(lo[i], values[i]), cs.le(values[i], up[i])))
         outputs.append(ok)
+    outputs.append(targets)
     return cs.Function(_NAME, [cs.vertcat(*inputs), cs.vertcat(*params)], [cs.densify(o) for o in outputs])
 
 
@@ -340,6 +348,11 @@ class GeneratedQddData:
         self.accepted: FloatArray | None = spans[8] if self.limits is not None else None
         for k, res in enumerate(spans):
             buf.set_res(k, view(res))
+        #: 1.0 if the frame tasks' targets passed the code's check (see target_code)
+        self.targets_ok = np.zeros(1)
+        buf.set_res(len(spans), view(self.targets_ok))
+        #: per task, its target's holder (None: a posture task)
+        self._holders = [None if type(tk) is PostureTask else cast(FrameTask, tk).target for tk in self.tasks]
         self._bound = buf  # the buffer reads inp and par and writes out: kept with them
         #: with ``bounds``: the solve on the active set that q̈₀ points at (:meth:`run_guess`): its verdict (1.0:
         #: the QP's optimum, checked), q̈, τ, z and the active set (+1, −1, 0 per row, as floats)
@@ -394,15 +407,35 @@ class GeneratedQddData:
         np.concatenate(parts, out=self.par)
 
     def run(self, q: FloatArray, qd: FloatArray, t: float, ref: Reference) -> None:
-        """Evaluate the outputs at (q, q̇) with the tasks' targets at t (a trajectory's output checked as the
-        NumPy path checks it) and the posture tasks' references."""
-        revisions = [tk.revision for tk in self.tasks]
+        """Evaluate the outputs at (q, q̇) with the tasks' targets at t and the posture tasks' references. A
+        trajectory's new output is checked in the code (see :mod:`~armctl.controllers.osc.target_code`; one
+        the code does not pass gets the NumPy path's check, which raises its named error).
+
+        Raises
+        ------
+        InvalidParameterError, NonFiniteError, ShapeError
+            A trajectory's output is not a valid target (as the NumPy path says)."""
+        tasks = self.tasks
+        revisions = [tk.revision for tk in tasks]
         if revisions != self._revisions:
             self._params()
             self._revisions = revisions
         pieces = [q, qd]
-        target_pieces(self.tasks, t, ref, pieces)
+        unchecked = None
+        for tk, holder in zip(tasks, self._holders, strict=True):
+            if holder is None:
+                r = tk.reference(ref)  # type: ignore[attr-defined]  # a posture task
+                pieces += [r.q, r.qd, r.qdd]
+            else:
+                out, checked = holder.shaped(t)
+                pieces += [out[0].reshape(-1), out[1], out[2]]
+                if not checked:
+                    unchecked = [(holder, out)] if unchecked is None else [*unchecked, (holder, out)]
         if self.friction is not None:
             pieces.append(self.friction.torque(qd))
         np.concatenate(pieces, out=self.inp)
         self._run()
+        if unchecked is not None:
+            valid = self.targets_ok[0] == 1.0
+            for holder, out in unchecked:
+                holder.confirm(t, out, valid)
