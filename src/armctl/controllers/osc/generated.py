@@ -351,8 +351,8 @@ class GeneratedQddData:
         #: 1.0 if the frame tasks' targets passed the code's check (see target_code)
         self.targets_ok = np.zeros(1)
         buf.set_res(len(spans), view(self.targets_ok))
-        #: per task, its target's holder (None: a posture task)
-        self._holders = [None if type(tk) is PostureTask else cast(FrameTask, tk).target for tk in self.tasks]
+        #: per task, its target's holder (None: a posture task) and the task
+        self._plan = tuple((None if type(tk) is PostureTask else cast(FrameTask, tk).target, tk) for tk in self.tasks)
         self._bound = buf  # the buffer reads inp and par and writes out: kept with them
         #: with ``bounds``: the solve on the active set that q̈₀ points at (:meth:`run_guess`): its verdict (1.0:
         #: the QP's optimum, checked), q̈, τ, z and the active set (+1, −1, 0 per row, as floats)
@@ -422,13 +422,13 @@ class GeneratedQddData:
             self._revisions = revisions
         pieces = [q, qd]
         unchecked = None
-        for tk, holder in zip(tasks, self._holders, strict=True):
+        for holder, tk in self._plan:
             if holder is None:
                 r = tk.reference(ref)  # type: ignore[attr-defined]  # a posture task
-                pieces += [r.q, r.qd, r.qdd]
+                pieces += (r.q, r.qd, r.qdd)
             else:
                 out, checked = holder.shaped(t)
-                pieces += [out[0].reshape(-1), out[1], out[2]]
+                pieces += (out[0].ravel(), out[1], out[2])  # the value row by row
                 if not checked:
                     unchecked = [(holder, out)] if unchecked is None else [*unchecked, (holder, out)]
         if self.friction is not None:

@@ -156,9 +156,12 @@ class TargetHolder:
         target it passes is a valid one, and one it does not pass gets :meth:`at`'s check, with its named error.
         """
         fn = self._trajectory
+        if fn is None:
+            constant = self._constant
+            return (constant, True) if constant is not None else (self.at(t), True)  # at: no target, raises
         read = self._read
-        if fn is None or (read is not None and read[0] == t):
-            return self.at(t), True
+        if read is not None and read[0] == t:
+            return read[1], True
         out = self._call(fn, t)
         value, velocity, acceleration = out
         if (
