@@ -63,7 +63,7 @@ from armctl.model.robot import RobotModel
 from armctl.references import Reference
 
 #: bumped when the generated code changes, so that stale cached libraries are not loaded
-_CODE_VERSION = 7
+_CODE_VERSION = 8
 _NAME = "osc_qdd_qp"
 _GUESS = "osc_qdd_active_set"
 #: the frame tasks the code takes: their kind and the shape of their target value
@@ -138,8 +138,8 @@ def qp_function(
     model: RobotModel, tasks: Sequence[Task], friction: bool, limits: Sequence[str] | None = None
 ) -> cs.Function:
     """The CasADi function of the module: ``f(inputs, params) -> (q̈₀, τ₀, H, g, c, M, h', [J | b])`` with
-    ``inputs`` = [q; q̇; per task its target (a frame task: value row by row, velocity, acceleration; a posture
-    task: q_ref, q̇_ref, q̈_ref); τ_f if ``friction``] and ``params`` = [per task K_p, K_d (row by row), W^½; ε];
+    ``inputs`` = [q; q̇; per frame task its target (value row by row, velocity, acceleration); τ_f if
+    ``friction``; per posture task q_ref, q̇_ref, q̈_ref] and ``params`` = [per task K_p, K_d (row by row), W^½; ε];
     [J | b] the unweighted task rows, stacked in the tasks' order. With ``limits`` (each limit's variable,
     ``"tau"`` or ``"qdd"``; their bounds constant) also the verdict on (q̈₀, τ₀), ``params`` then ending with
     [l; u] (n rows per limit, in their order). Its last output is the verdict on the frame tasks' targets
@@ -148,10 +148,13 @@ def qp_function(
     q, qd = cs.SX.sym("q", n), cs.SX.sym("qd", n)
     tf = joint_transforms(model, q)
     task_inputs, params, jacs, rhs, weights = task_rows(model, q, qd, tasks, tf)
-    inputs = [q, qd, *task_inputs]
+    # the frame tasks' targets first, the posture tasks' references last (written only when they change)
+    postures = [type(tk) is PostureTask for tk in tasks]
+    inputs = [q, qd, *[x for k, x in enumerate(task_inputs) if not postures[k // 3]]]
     tau_f = cs.SX.sym("tau_f", n) if friction else cs.SX.zeros(n)
     if friction:
         inputs.append(tau_f)
+    inputs += [x for k, x in enumerate(task_inputs) if postures[k // 3]]
     eps = cs.SX.sym("eps")
     params.append(eps)
     mass = mass_matrix(model, q, tf)
@@ -371,7 +374,16 @@ class GeneratedQddData:
         self.targets_ok = np.zeros(1)
         buf.set_res(len(spans), view(self.targets_ok))
         #: per task, its target's holder (None: a posture task) and the task
-        self._plan = tuple((None if type(tk) is PostureTask else cast(FrameTask, tk).target, tk) for tk in self.tasks)
+        self._frames = tuple(cast(FrameTask, tk).target for tk in self.tasks if type(tk) is not PostureTask)
+        lead = 2 * n + sum(int(np.prod(holder.value_shape)) + 2 * holder.rate for holder in self._frames)
+        lead += n if self.friction is not None else 0
+        #: the inputs written at every step (q, q̇, the frame tasks' targets, τ_f)
+        self._lead = self.inp[:lead]
+        #: per posture task: the task, its inputs' part of the buffer and the Reference last written there
+        self._postures: list[list[Any]] = []
+        for k, tk in enumerate(tk for tk in self.tasks if type(tk) is PostureTask):
+            self._postures.append([tk, self.inp[lead + 3 * n * k : lead + 3 * n * (k + 1)], None])
+        assert lead + 3 * n * len(self._postures) == self.inp.size  # the layout of qp_function's inputs
         self._bound = buf  # the buffer reads inp and par and writes out: kept with them
         #: with ``bounds``: the active-set steps from the rows that q̈₀ breaks (:meth:`run_guess`): its verdict (1.0:
         #: the QP's optimum, checked), q̈, τ, z and the active set (+1, −1, 0 per row, as floats)
@@ -441,18 +453,19 @@ class GeneratedQddData:
             self._revisions = revisions
         pieces = [q, qd]
         unchecked = None
-        for holder, tk in self._plan:
-            if holder is None:
-                r = tk.reference(ref)  # type: ignore[attr-defined]  # a posture task
-                pieces += (r.q, r.qd, r.qdd)
-            else:
-                out, checked = holder.shaped(t)
-                pieces += (out[0].ravel(), out[1], out[2])  # the value row by row
-                if not checked:
-                    unchecked = [(holder, out)] if unchecked is None else [*unchecked, (holder, out)]
+        for holder in self._frames:
+            out, checked = holder.shaped(t)
+            pieces += (out[0].ravel(), out[1], out[2])  # the value row by row
+            if not checked:
+                unchecked = [(holder, out)] if unchecked is None else [*unchecked, (holder, out)]
         if self.friction is not None:
             pieces.append(self.friction.torque(qd))
-        np.concatenate(pieces, out=self.inp)
+        np.concatenate(pieces, out=self._lead)
+        for posture in self._postures:
+            r = posture[0].reference(ref)
+            if r is not posture[2]:  # a Reference is immutable (read-only arrays): written when another one comes
+                np.concatenate((r.q, r.qd, r.qdd), out=posture[1])
+                posture[2] = r if type(r) is Reference else None  # a subclass's arrays: read at every step
         self._run()
         if unchecked is not None:
             valid = self.targets_ok[0] == 1.0
