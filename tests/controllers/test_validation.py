@@ -404,6 +404,35 @@ def test_a_non_finite_torque_from_a_finite_state_raises() -> None:
     assert AsList(n=2)(0.0, z, z, ref) == [1.0, 2.0]
 
 
+def test_a_users_law_gets_finite_native_floats_and_only_those() -> None:
+    """A law with state (its inputs checked before it runs): a byte-swapped float64 state reaches it as native
+    floats of the same values, finite entries whose sum overflows are taken, NaN or inf in q, q̇ or t raise
+    before the law runs."""
+    seen: list[tuple[np.ndarray, np.ndarray]] = []
+
+    class Recording(Controller):
+        def compute(self, t: float, q: np.ndarray, qd: np.ndarray, r: armctl.Reference) -> np.ndarray:
+            seen.append((q, qd))
+            return np.array([q[0] - qd[1], 2.0])
+
+    ctrl, ref = Recording(n=2), armctl.Reference(np.zeros(2))
+    swapped = np.array([0.5, -1.5], dtype=">f8")
+    np.testing.assert_array_equal(ctrl(0.0, swapped, swapped, ref), [2.0, 2.0])
+    assert seen[-1][0].dtype == np.float64 and seen[-1][0].dtype.isnative
+    np.testing.assert_array_equal(seen[-1][0], [0.5, -1.5])
+    big = np.array([1e308, 1e308])
+    np.testing.assert_array_equal(ctrl(0.0, big, np.zeros(2), ref), [1e308, 2.0])
+    calls = len(seen)
+    for t, q, qd, name in [
+        (0.0, np.array([0.0, np.nan]), np.zeros(2), "^q"),
+        (0.0, np.zeros(2), np.array([np.inf, 0.0]), "^qd"),
+        (np.inf, np.zeros(2), np.zeros(2), "^t must be finite"),
+    ]:
+        with pytest.raises(NonFiniteError, match=name):
+            ctrl(t, q, qd, ref)
+    assert len(seen) == calls
+
+
 @pytest.mark.parametrize("flag", [1, 1.0, 0, "measured", None])
 def test_computed_torque_friction_mode_is_true_false_or_reference(flag: object) -> None:
     # 1 and 1.0 equal True, so they passed the check and then took the reference-velocity branch

@@ -124,13 +124,12 @@ class Controller(ABC):
             self.check_reference(ref)  # raises, unless ref is a subclass of the right size
         if type(t) is not float:
             t = scalar(t, "t")
-        shape = self._shape
         if not (
             type(q) is np.ndarray
             and type(qd) is np.ndarray
-            and q.dtype == FLOAT
-            and qd.dtype == FLOAT
-            and q.shape == qd.shape == shape
+            and q.dtype is FLOAT  # the one float64 dtype NumPy makes (an equal one takes the careful path)
+            and qd.dtype is FLOAT
+            and q.shape == qd.shape == self._shape
         ):
             q, qd = self._checked(t, q, qd)
         elif self._checks_result:  # NaN or inf in q or q̇ reaches τ: one check, of τ
@@ -143,9 +142,11 @@ class Controller(ABC):
                 return tau
             self._checked(t, q, qd)  # NonFiniteError if an input is the cause
             self._nonfinite_torque(tau, q, qd)
-        elif not (all_finite(q) and all_finite(qd) and math.isfinite(t)):
-            q, qd = self._checked(t, q, qd)
+        elif not math.isfinite(sum(q.tolist()) + sum(qd.tolist()) + t):  # finite unless NaN, inf or overflow
+            q, qd = self._checked(t, q, qd)  # raises, unless finite entries overflowed the sum
         tau = self.compute(t, q, qd, ref)
+        if type(tau) is np.ndarray and tau.ndim == 1 and math.isfinite(sum(tau.tolist())):
+            return tau  # the usual case; anything else (or an overflowing sum): the checks below
         try:
             if all_finite(tau):
                 return tau

@@ -302,3 +302,33 @@ def test_a_closed_loop_run_on_the_generated_path_is_the_numpy_paths_run() -> Non
     ratio = np.abs(runs[0].qd) / dyn.model.velocity_limit
     assert (ratio > 0.999).sum() > 100  # the velocity limits bind
     np.testing.assert_allclose(runs[0].q, runs[1].q, atol=1e-6)
+
+
+def test_each_reference_reaches_the_posture_rows_of_the_generated_code() -> None:
+    """A posture task following the controller's reference, then a fixed target, then the reference again: the
+    generated step's τ is the NumPy path's at every call, whether the Reference object is a new one, the same
+    one again or a subclass."""
+
+    class Shifted(armctl.Reference):
+        pass
+
+    def make(compile: bool) -> tuple[OperationalSpaceQP, PostureTask]:
+        pose = FramePoseTask(kp=400.0)
+        pose.set_target(_dynamics().frame_pose(Q_HOME))
+        posture = PostureTask(7, kp=100.0, weight=1e-2)
+        return OperationalSpaceQP(_dynamics(compile=compile), [pose, posture], compile=compile), posture
+
+    (ctrl, posture), (numpy_path, numpy_posture) = make(True), make(False)
+    assert ctrl.uses_generated_code
+    rng = np.random.default_rng(4)
+    refs = [armctl.Reference(Q_HOME + rng.normal(0.0, 0.2, 7), rng.normal(0.0, 0.3, 7)) for _ in range(3)]
+    refs += [refs[0], refs[0], Shifted(Q_HOME - 0.1), refs[0]]
+    q, qd = Q_HOME + 0.05, np.full(7, 0.1)
+    for k, ref in enumerate(refs):
+        if k == 4:  # a fixed target, then the reference again
+            posture.set_target(Q_HOME + 0.2)
+            numpy_posture.set_target(Q_HOME + 0.2)
+        if k == 5:
+            posture.set_target(None)
+            numpy_posture.set_target(None)
+        np.testing.assert_allclose(ctrl(0.0, q, qd, ref), numpy_path(0.0, q, qd, ref), atol=1e-9)

@@ -71,6 +71,41 @@ def test_the_guessed_active_set_gives_the_optimum_or_hands_over(accel: bool) -> 
     assert ctrl.fallback_counts.get("failed", 0) == 0
 
 
+def _rows_the_minimum_breaks(p: object) -> np.ndarray:
+    """+1 / −1 for each inequality row that the optimum on the equality rows alone puts above u / below l (the
+    KKT system of the public problem solved with NumPy), 0 elsewhere."""
+    H, g, A, b, C, lo, up = (np.asarray(getattr(p, k)) for k in ("H", "g", "A", "b", "C", "l", "u"))
+    nx, me = H.shape[0], A.shape[0]
+    kkt = np.block([[H, A.T], [A, np.zeros((me, me))]])
+    x = np.linalg.solve(kkt, np.concatenate([-g, b]))[:nx]
+    s = C @ x
+    return np.where(s > up, 1, np.where(s < lo, -1, 0))
+
+
+def test_the_code_solves_past_a_wrong_first_guess() -> None:
+    """Where the rows that the unconstrained minimum breaks are not the optimum's active set, the code's second
+    active-set step finds it on some states: the step is taken from the code (no solver iteration) with an
+    active set other than that first guess, and τ is quadprog's optimum."""
+    model = armctl.models.panda()
+    ctrl = _controller(armctl.Dynamics(model, compile=True), True, False)
+    ref = armctl.Reference(Q_HOME)
+    rng = np.random.default_rng(2)
+    second = 0
+    for _ in range(300):
+        q, qd = Q_HOME + rng.normal(0.0, 0.1, 7), rng.normal(0.0, 0.6, 7)
+        tau = ctrl(0.0, q, qd, ref)
+        first = ctrl.last_solution.solutions[0]  # type: ignore[union-attr]
+        if first is None or first.iterations > 0 or not first.active.any():
+            continue
+        p = ctrl.build(0.0, q, qd, ref).problem(0)
+        if np.array_equal(first.active, _rows_the_minimum_breaks(p)):
+            continue
+        second += 1
+        best = np.asarray(qpsolvers.solve_problem(p.to_qpsolvers(), "quadprog").x)[p.variables["tau"]]
+        np.testing.assert_allclose(tau, np.clip(best, p.l, p.u), atol=1e-6)
+    assert second >= 3, second
+
+
 def _kind(ctrl: OperationalSpaceQP) -> str:
     """How the last step's level-0 optimum was found: "none active" (no row active, no solver), "in code" (rows
     active, no solver iteration) or "solver"."""

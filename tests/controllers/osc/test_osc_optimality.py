@@ -240,7 +240,8 @@ def test_a_qp_no_stage_solves_raises_with_what_each_stage_did() -> None:
     SolverError saying so and listing the stages' outcomes (the elastic diagnosis finds the QP feasible), never a
     torque."""
     dyn = panda_dynamics()
-    ctrl = _controller(dyn, solver=_Failing(("warm", "cold", "defaults")), fallback_solver=None)
+    # the NumPy path: the step goes to the chain (the generated code would solve this QP itself)
+    ctrl = _controller(dyn, solver=_Failing(("warm", "cold", "defaults")), fallback_solver=None, compile=False)
     ctrl.chain.first = None
     ref = armctl.Reference(Q_HOME)
     for q, qd in _random_states(20, seed=7):

@@ -451,16 +451,17 @@ class OperationalSpaceQP(Controller):
             result = qp.step(self.evaluator.evaluate(q, qd), t, ref, self.chain)
         self._pending = (qp, result)
         sol = result.solution
-        tau = result.tau.copy()
         if sol is None:  # the unconstrained minimum, within every bound
-            self.last_log = {"qp_iterations": 0, "qp_fallbacks": 0}
-            self._task_log(self.last_log, t)
-            return tau
-        self.last_log = {"qp_iterations": sol.iterations, "qp_fallbacks": sol.fallbacks}
-        self._task_log(self.last_log, t)
-        if self._tau_up is not None and self._tau_lo is not None:
-            np.minimum(tau, self._tau_up, out=tau)
-            np.maximum(tau, self._tau_lo, out=tau)
+            self.last_log = log = {"qp_iterations": 0, "qp_fallbacks": 0}
+            self._task_log(log, t)
+            return result.tau.copy()
+        self.last_log = log = {"qp_iterations": sol.iterations, "qp_fallbacks": sol.fallbacks}
+        self._task_log(log, t)
+        up, lo = self._tau_up, self._tau_lo
+        if up is None or lo is None:
+            return result.tau.copy()
+        tau = np.minimum(result.tau, up)  # a new array: the result's τ is the public solution's
+        np.maximum(tau, lo, out=tau)
         return tau
 
     def _contact_step(self, lay: Layout, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:

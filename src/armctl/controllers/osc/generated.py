@@ -14,7 +14,10 @@ model (its numbers built in) evaluates what the NumPy path builds from Pinocchio
   and its unconstrained minimum q̈₀ = −H⁻¹ g (a Cholesky factorisation written out) with τ₀ = M q̈₀ + h';
 * with limits whose bounds are constant (their l, u an input), the verdict on that minimum: 1 if every limit's
   row holds at it (l ≤ τ₀ ≤ u, l ≤ q̈₀ ≤ u: then it is the QP's optimum, no row active) and the level is in
-  scale (c ≤ MAX_TASK_RHS²), else 0 (NaN included) — the check of the q̈-only step, in the code.
+  scale (c ≤ MAX_TASK_RHS²), else 0 (NaN included) — the check of the q̈-only step, in the code; where the
+  minimum breaks a row, a second function (:func:`guess_function`) takes primal-dual active-set steps from the
+  rows it breaks and checks their result (:func:`guessed_active_set`);
+* the verdict on the frame tasks' targets (:mod:`~armctl.controllers.osc.target_code`).
 
 The gains, weights and ε are an input of the code, refreshed when a task's ``revision`` changes: they may be
 changed between steps without generating code again. The tasks it takes are :class:`FramePoseTask`,
@@ -35,7 +38,9 @@ import numpy as np
 
 from armctl._checks import FloatArray
 from armctl.codegen import library as codegen
+from armctl.controllers.osc.optimality import DUAL_TOL, PRIMAL_TOL
 from armctl.controllers.osc.scale import MAX_TASK_RHS
+from armctl.controllers.osc.target_code import target_verdict
 from armctl.controllers.osc.tasks.base import MotionTask, Task
 from armctl.controllers.osc.tasks.frame_orientation import FrameOrientationTask
 from armctl.controllers.osc.tasks.frame_pose import FramePoseTask
@@ -58,7 +63,7 @@ from armctl.model.robot import RobotModel
 from armctl.references import Reference
 
 #: bumped when the generated code changes, so that stale cached libraries are not loaded
-_CODE_VERSION = 4
+_CODE_VERSION = 8
 _NAME = "osc_qdd_qp"
 _GUESS = "osc_qdd_active_set"
 #: the frame tasks the code takes: their kind and the shape of their target value
@@ -133,19 +138,23 @@ def qp_function(
     model: RobotModel, tasks: Sequence[Task], friction: bool, limits: Sequence[str] | None = None
 ) -> cs.Function:
     """The CasADi function of the module: ``f(inputs, params) -> (q̈₀, τ₀, H, g, c, M, h', [J | b])`` with
-    ``inputs`` = [q; q̇; per task its target (a frame task: value row by row, velocity, acceleration; a posture
-    task: q_ref, q̇_ref, q̈_ref); τ_f if ``friction``] and ``params`` = [per task K_p, K_d (row by row), W^½; ε];
+    ``inputs`` = [q; q̇; per frame task its target (value row by row, velocity, acceleration); τ_f if
+    ``friction``; per posture task q_ref, q̇_ref, q̈_ref] and ``params`` = [per task K_p, K_d (row by row), W^½; ε];
     [J | b] the unweighted task rows, stacked in the tasks' order. With ``limits`` (each limit's variable,
     ``"tau"`` or ``"qdd"``; their bounds constant) also the verdict on (q̈₀, τ₀), ``params`` then ending with
-    [l; u] (n rows per limit, in their order)."""
+    [l; u] (n rows per limit, in their order). Its last output is the verdict on the frame tasks' targets
+    (:func:`~armctl.controllers.osc.target_code.target_verdict`: 1 if each is finite and its rotation one)."""
     n = model.n
     q, qd = cs.SX.sym("q", n), cs.SX.sym("qd", n)
     tf = joint_transforms(model, q)
     task_inputs, params, jacs, rhs, weights = task_rows(model, q, qd, tasks, tf)
-    inputs = [q, qd, *task_inputs]
+    # the frame tasks' targets first, the posture tasks' references last (written only when they change)
+    postures = [type(tk) is PostureTask for tk in tasks]
+    inputs = [q, qd, *[x for k, x in enumerate(task_inputs) if not postures[k // 3]]]
     tau_f = cs.SX.sym("tau_f", n) if friction else cs.SX.zeros(n)
     if friction:
         inputs.append(tau_f)
+    inputs += [x for k, x in enumerate(task_inputs) if postures[k // 3]]
     eps = cs.SX.sym("eps")
     params.append(eps)
     mass = mass_matrix(model, q, tf)
@@ -159,6 +168,11 @@ def qp_function(
     qdd0 = -cholesky_solve(hess, grad)
     tau0 = mass @ qdd0 + hf
     outputs = [qdd0, tau0, hess, grad, c, mass, hf, cs.horzcat(jall, ball)]
+    targets = cs.SX(1)  # the frame tasks' targets checked (target_code): the step's Python checks no more
+    for k, tk in enumerate(tasks):
+        if type(tk) is not PostureTask:
+            value, vel, acc = task_inputs[3 * k : 3 * k + 3]
+            targets = cs.logic_and(targets, target_verdict(_FRAME_TASKS[type(tk)][0], value, vel, acc))
     if limits is not None:
         values = cs.vertcat(*[tau0 if var == "tau" else qdd0 for var in limits])
         lo, up = cs.SX.sym("lower", n * len(limits)), cs.SX.sym("upper", n * len(limits))
@@ -167,6 +181,7 @@ def qp_function(
         for i in range(values.shape[0]):
             ok = cs.logic_and(ok, cs.logic_and(cs.le(lo[i], values[i]), cs.le(values[i], up[i])))
         outputs.append(ok)
+    outputs.append(targets)
     return cs.Function(_NAME, [cs.vertcat(*inputs), cs.vertcat(*params)], [cs.densify(o) for o in outputs])
 
 
@@ -182,20 +197,24 @@ def guessed_active_set(
     up: cs.SX,
     in_scale: cs.SX,
 ) -> list[cs.SX]:
-    """(verdict, q̈, τ, z, active): the QP on q̈ solved with the rows that its unconstrained minimum q̈₀ breaks
-    taken as equalities at the bound they break, and its KKT check.
+    """(verdict, q̈, τ, z, active): the QP on q̈ solved by primal-dual active-set steps from the rows that its
+    unconstrained minimum q̈₀ breaks, and its KKT check.
 
     The rows are those of the q̈-only QP (:meth:`~armctl.controllers.osc.reduced.QddQP.arrays`): C = M for a
-    torque limit, its bounds l − h', u − h'; C = I for a q̈ limit. With D the guessed active rows (those with
-    C q̈₀ above u or below l) and d their bounds, the multipliers and the solution are (Schur complement, with
-    H's Cholesky factor)
+    torque limit, its bounds l − h', u − h'; C = I for a q̈ limit. Each of
+    :data:`~armctl.controllers.osc.generated_optimum.ACTIVE_SET_ITERATIONS` steps (Hintermüller, Ito & Kunisch,
+    SIAM J. Optim. 13, 2002) takes the rows of its active set D as equalities at their bound d, and solves (Schur
+    complement, with H's Cholesky factor)
 
         (D C H⁻¹ Cᵀ D + I − D) z = D (C q̈₀ − d),   q̈ = q̈₀ − H⁻¹ Cᵀ z,
 
-    z = 0 off D. The verdict is :func:`~armctl.controllers.osc.kkt_code.kkt_verdict` of (q̈, z) on that QP (the
-    conditions and tolerances of :func:`~armctl.controllers.osc.optimality.kkt_ok`) with the level in scale: 1
-    only for the QP's optimum, whatever the guess (a wrong guess fails it, dependent rows give NaN, which fails
-    it too)."""
+    z = 0 off D; the first D holds the rows with C q̈₀ above u or below l, the next keeps the rows whose
+    multiplier has its sign and adds the rows the point breaks (beyond PRIMAL_TOL). The verdict is
+    :func:`~armctl.controllers.osc.kkt_code.kkt_verdict` of the last step's (q̈, z) on that QP (the conditions
+    and tolerances of :func:`~armctl.controllers.osc.optimality.kkt_ok`) with the level in scale: 1 only for the
+    QP's optimum, whatever the steps did (dependent rows give NaN, which fails it too); ``active`` is the last
+    step's D (+1 at an upper bound, −1 at a lower one)."""
+    from armctl.controllers.osc.generated_optimum import ACTIVE_SET_ITERATIONS
     from armctl.controllers.osc.kkt_code import kkt_verdict  # its SX check
 
     n = mass.shape[0]
@@ -207,22 +226,33 @@ def guessed_active_set(
     ly, uy = lo - shift, up - shift
     mi = C.shape[0]
     s0 = C @ qdd0
-    above = [cs.gt(s0[i], uy[i]) for i in range(mi)]
-    below = [cs.lt(s0[i], ly[i]) for i in range(mi)]
-    on = [cs.logic_or(above[i], below[i]) for i in range(mi)]
+    upper = [cs.gt(s0[i], uy[i]) for i in range(mi)]
+    lower = [cs.lt(s0[i], ly[i]) for i in range(mi)]
     w = cholesky_substitute(low, C.T)  # H⁻¹ Cᵀ
     k = C @ w
-    schur = cs.SX.zeros(mi, mi)
-    rhs = cs.SX.zeros(mi)
-    for i in range(mi):
-        for j in range(mi):
-            schur[i, j] = cs.if_else(cs.logic_and(on[i], on[j]), k[i, j], 1.0 if i == j else 0.0)
-        bound = cs.if_else(above[i], uy[i], ly[i])
-        rhs[i] = cs.if_else(on[i], s0[i] - bound, 0.0)  # a branch: an infinite bound off D never enters
-    z = cholesky_solve(schur, rhs)
-    qdd = qdd0 - w @ z
+    dual_tol = DUAL_TOL * (1.0 + cs.mmax(cs.fabs(grad)))
+    qdd, z = qdd0, cs.SX.zeros(mi)
+    for step in range(ACTIVE_SET_ITERATIONS):
+        on = [cs.logic_or(upper[i], lower[i]) for i in range(mi)]
+        schur = cs.SX.zeros(mi, mi)
+        rhs = cs.SX.zeros(mi)
+        for i in range(mi):
+            for j in range(mi):
+                schur[i, j] = cs.if_else(cs.logic_and(on[i], on[j]), k[i, j], 1.0 if i == j else 0.0)
+            bound = cs.if_else(upper[i], uy[i], ly[i])
+            rhs[i] = cs.if_else(on[i], s0[i] - bound, 0.0)  # a branch: an infinite bound off D never enters
+        z = cholesky_solve(schur, rhs)
+        qdd = qdd0 - w @ z
+        active = cs.vertcat(*[cs.if_else(upper[i], 1.0, cs.if_else(lower[i], -1.0, 0.0)) for i in range(mi)])
+        if step + 1 < ACTIVE_SET_ITERATIONS:
+            s = C @ qdd
+            keep_up = [cs.logic_and(upper[i], cs.ge(z[i], -dual_tol)) for i in range(mi)]
+            keep_lo = [cs.logic_and(lower[i], cs.le(z[i], dual_tol)) for i in range(mi)]
+            over = [cs.gt(s[i], uy[i] + PRIMAL_TOL) for i in range(mi)]
+            under = [cs.lt(s[i], ly[i] - PRIMAL_TOL) for i in range(mi)]
+            upper = [cs.logic_or(over[i], cs.logic_and(keep_up[i], cs.logic_not(under[i]))) for i in range(mi)]
+            lower = [cs.logic_and(cs.logic_or(under[i], keep_lo[i]), cs.logic_not(upper[i])) for i in range(mi)]
     ok = cs.logic_and(in_scale, kkt_verdict(hess, grad, None, None, C, ly, uy, qdd, None, z))
-    active = cs.vertcat(*[cs.if_else(above[i], 1.0, cs.if_else(below[i], -1.0, 0.0)) for i in range(mi)])
     return [ok, qdd, mass @ qdd + hf, z, active]
 
 
@@ -288,7 +318,7 @@ class GeneratedQddData:
     folder), bound to buffers of its own. After :meth:`run`, the outputs are arrays that the next run
     overwrites: ``qdd0``, ``tau0`` (n,), ``H`` (n×n), ``g`` (n,), ``c`` (1,), ``M`` (n×n), ``hf`` (n,) and
     ``rows`` (m × (n+1)), as in the module, and with ``limits`` and their constant ``bounds`` (l, u, n rows per
-    limit) ``accepted`` (1,), the verdict on (q̈₀, τ₀), and ``guess``, the solve on the active set q̈₀ points at.
+    limit) ``accepted`` (1,), the verdict on (q̈₀, τ₀), and ``guess``, the active-set steps from the rows q̈₀ breaks.
     Builds or loads the library (the first time for a model
     and tasks: seconds; then milliseconds). Not thread-safe."""
 
@@ -340,8 +370,22 @@ class GeneratedQddData:
         self.accepted: FloatArray | None = spans[8] if self.limits is not None else None
         for k, res in enumerate(spans):
             buf.set_res(k, view(res))
+        #: 1.0 if the frame tasks' targets passed the code's check (see target_code)
+        self.targets_ok = np.zeros(1)
+        buf.set_res(len(spans), view(self.targets_ok))
+        #: per task, its target's holder (None: a posture task) and the task
+        self._frames = tuple(cast(FrameTask, tk).target for tk in self.tasks if type(tk) is not PostureTask)
+        lead = 2 * n + sum(int(np.prod(holder.value_shape)) + 2 * holder.rate for holder in self._frames)
+        lead += n if self.friction is not None else 0
+        #: the inputs written at every step (q, q̇, the frame tasks' targets, τ_f)
+        self._lead = self.inp[:lead]
+        #: per posture task: the task, its inputs' part of the buffer and the Reference last written there
+        self._postures: list[list[Any]] = []
+        for k, tk in enumerate(tk for tk in self.tasks if type(tk) is PostureTask):
+            self._postures.append([tk, self.inp[lead + 3 * n * k : lead + 3 * n * (k + 1)], None])
+        assert lead + 3 * n * len(self._postures) == self.inp.size  # the layout of qp_function's inputs
         self._bound = buf  # the buffer reads inp and par and writes out: kept with them
-        #: with ``bounds``: the solve on the active set that q̈₀ points at (:meth:`run_guess`): its verdict (1.0:
+        #: with ``bounds``: the active-set steps from the rows that q̈₀ breaks (:meth:`run_guess`): its verdict (1.0:
         #: the QP's optimum, checked), q̈, τ, z and the active set (+1, −1, 0 per row, as floats)
         self.guess: tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray] | None = None
         self._run_guess: Any = None
@@ -374,8 +418,8 @@ class GeneratedQddData:
         self._bound_guess = buf  # reads out and par_guess, writes guess: kept with them
 
     def run_guess(self) -> bool:
-        """Solve on the rows that the last :meth:`run`'s unconstrained minimum breaks (with ``bounds`` only); True
-        if that point passed its check (then in :attr:`guess`)."""
+        """Solve by active-set steps from the rows that the last :meth:`run`'s unconstrained minimum breaks (with
+        ``bounds`` only, :func:`guessed_active_set`); True if the point passed its check (then in :attr:`guess`)."""
         guess = self.guess
         assert guess is not None  # bound with bounds, the only case the step calls this in
         self._run_guess()
@@ -394,15 +438,36 @@ class GeneratedQddData:
         np.concatenate(parts, out=self.par)
 
     def run(self, q: FloatArray, qd: FloatArray, t: float, ref: Reference) -> None:
-        """Evaluate the outputs at (q, q̇) with the tasks' targets at t (a trajectory's output checked as the
-        NumPy path checks it) and the posture tasks' references."""
-        revisions = [tk.revision for tk in self.tasks]
+        """Evaluate the outputs at (q, q̇) with the tasks' targets at t and the posture tasks' references. A
+        trajectory's new output is checked in the code (see :mod:`~armctl.controllers.osc.target_code`; one
+        the code does not pass gets the NumPy path's check, which raises its named error).
+
+        Raises
+        ------
+        InvalidParameterError, NonFiniteError, ShapeError
+            A trajectory's output is not a valid target (as the NumPy path says)."""
+        tasks = self.tasks
+        revisions = [tk.revision for tk in tasks]
         if revisions != self._revisions:
             self._params()
             self._revisions = revisions
         pieces = [q, qd]
-        target_pieces(self.tasks, t, ref, pieces)
+        unchecked = None
+        for holder in self._frames:
+            out, checked = holder.shaped(t)
+            pieces += (out[0].ravel(), out[1], out[2])  # the value row by row
+            if not checked:
+                unchecked = [(holder, out)] if unchecked is None else [*unchecked, (holder, out)]
         if self.friction is not None:
             pieces.append(self.friction.torque(qd))
-        np.concatenate(pieces, out=self.inp)
+        np.concatenate(pieces, out=self._lead)
+        for posture in self._postures:
+            r = posture[0].reference(ref)
+            if r is not posture[2]:  # a Reference is immutable (read-only arrays): written when another one comes
+                np.concatenate((r.q, r.qd, r.qdd), out=posture[1])
+                posture[2] = r if type(r) is Reference else None  # a subclass's arrays: read at every step
         self._run()
+        if unchecked is not None:
+            valid = self.targets_ok[0] == 1.0
+            for holder, out in unchecked:
+                holder.confirm(t, out, valid)

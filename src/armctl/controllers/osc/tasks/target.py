@@ -125,20 +125,68 @@ class TargetHolder:
     def is_set(self) -> bool:
         return self._constant is not None or self._trajectory is not None
 
+    def _call(self, fn: Trajectory, t: float) -> tuple[Any, Any, Any]:
+        out = fn(t)
+        if not isinstance(out, tuple) or len(out) != 3:
+            raise InvalidParameterError(
+                f"{self.owner}: the trajectory must return (value, velocity, acceleration), got {out!r}", value=out
+            )
+        return out
+
     def at(self, t: float) -> tuple[FloatArray, FloatArray, FloatArray]:
         """The target at time t [s]."""
         if self._trajectory is not None:
             read = self._read
             if read is not None and read[0] == t:
                 return read[1]
-            out = self._trajectory(t)
-            if not isinstance(out, tuple) or len(out) != 3:
-                raise InvalidParameterError(
-                    f"{self.owner}: the trajectory must return (value, velocity, acceleration), got {out!r}", value=out
-                )
-            checked = self._check(*out)
+            checked = self._check(*self._call(self._trajectory, t))
             self._read = (t, checked)
             return checked
         if self._constant is None:
             raise InvalidParameterError(f"{self.owner} has no target: call set_target(...) or set_trajectory(fn) first")
         return self._constant
+
+    def shaped(self, t: float) -> tuple[tuple[FloatArray, FloatArray, FloatArray], bool]:
+        """The target at time t [s] for a reader that tests the values itself: a trajectory's new output of float
+        arrays of the right shapes as it is, with False (its values not yet checked: pass it to :meth:`confirm`
+        before anything else reads the target), or else the checked target (:meth:`at`), with True.
+
+        The generated QP data of :mod:`~armctl.controllers.osc.generated` tests the values in its own code (the
+        conditions of :meth:`at`'s check, see :func:`~armctl.controllers.osc.target_code.target_verdict`): a
+        target it passes is a valid one, and one it does not pass gets :meth:`at`'s check, with its named error.
+        """
+        fn = self._trajectory
+        if fn is None:
+            constant = self._constant
+            return (constant, True) if constant is not None else (self.at(t), True)  # at: no target, raises
+        read = self._read
+        if read is not None and read[0] == t:
+            return read[1], True
+        out = self._call(fn, t)
+        value, velocity, acceleration = out
+        if (
+            type(value) is np.ndarray
+            and type(velocity) is np.ndarray
+            and type(acceleration) is np.ndarray
+            and value.dtype == FLOAT
+            and velocity.dtype == FLOAT
+            and acceleration.dtype == FLOAT
+            and value.shape == self.value_shape
+            and velocity.shape == acceleration.shape == (self.rate,)
+        ):
+            return out, False
+        checked = self._check(value, velocity, acceleration)
+        self._read = (t, checked)
+        return checked, True
+
+    def confirm(self, t: float, out: tuple[FloatArray, FloatArray, FloatArray], valid: bool) -> None:
+        """Take ``out``, what :meth:`shaped` gave unchecked at time t [s], as the target at t: as it is if the
+        reader's test found it ``valid``, else after :meth:`at`'s check (which raises its named error if it is not
+        a valid target).
+
+        Raises
+        ------
+        InvalidParameterError, NonFiniteError
+            ``valid`` is False and ``out`` is not a valid target.
+        """
+        self._read = (t, out if valid else self._check(*out))
