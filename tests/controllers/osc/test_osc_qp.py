@@ -94,6 +94,7 @@ def test_build_is_separate_from_solve_and_inspectable(panda: armctl.Dynamics) ->
     p = ctrl.build(0.0, Q_HOME, np.zeros(7), armctl.Reference(Q_HOME)).problem(0)
     assert isinstance(p, QPProblem)
     assert (p.H.shape, p.A.shape, p.C.shape) == ((14, 14), (7, 14), (7, 14))
+    assert (p.nx, p.me, p.mi) == (14, 7, 7)  # the counts of QPArrays, which a named problem is too
     assert p.eq_names[3] == "dynamics[panda_joint4]" and p.ineq_names[6] == "torque_limit[panda_joint7]"
     np.testing.assert_allclose(p.H, p.H.T)
     assert np.linalg.eigvalsh(p.H).min() > 0

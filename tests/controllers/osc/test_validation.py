@@ -189,6 +189,22 @@ def test_infeasible_qp_names_the_conflicting_rows(panda: armctl.Dynamics) -> Non
     assert max(e.value.values()) > 1.0  # joint 4 needs ~20 N·m more than allowed
 
 
+def _contact_problem(torque: float) -> QPProblem:
+    """½ q̈ − τ = 0 (physics), q̈ = 5 (a contact's row), |τ| ≤ ``torque``, cost ½‖x‖²."""
+    return QPProblem(
+        np.eye(2),
+        np.zeros(2),
+        np.array([[0.5, -1.0], [1.0, 0.0]]),
+        np.array([0.0, 5.0]),
+        np.array([[0.0, 1.0]]),
+        np.array([-torque]),
+        np.array([torque]),
+        {"qdd": slice(0, 1), "tau": slice(1, 2)},
+        ("dynamics[j]", "contact.acceleration[x]"),
+        ("torque_limit[j]",),
+    )
+
+
 def test_a_row_that_binds_the_conflict_is_named_with_zero() -> None:
     """A QP made by hand: ½ q̈ − τ = 0 (physics), q̈ = 5 (a contact's row), |τ| ≤ 1. By hand, the cheapest
     relaxation is the torque limit's by 1.5 (τ = 2.5), not the contact row's by 3 (q̈ = 2, τ = 1): the contact
@@ -197,18 +213,7 @@ def test_a_row_that_binds_the_conflict_is_named_with_zero() -> None:
     from armctl.controllers.osc.diagnose import conflicting_rows
     from armctl.controllers.osc.solve import ProxQPSolver
 
-    p = QPProblem(
-        np.eye(2),
-        np.zeros(2),
-        np.array([[0.5, -1.0], [1.0, 0.0]]),
-        np.array([0.0, 5.0]),
-        np.array([[0.0, 1.0]]),
-        np.array([-1.0]),
-        np.array([1.0]),
-        {"qdd": slice(0, 1), "tau": slice(1, 2)},
-        ("dynamics[j]", "contact.acceleration[x]"),
-        ("torque_limit[j]",),
-    )
+    p = _contact_problem(1.0)
     rows = conflicting_rows(p)
     assert rows is not None and set(rows) == {"torque_limit[j]", "contact.acceleration[x]"}
     assert rows["torque_limit[j]"] == pytest.approx(1.5, abs=1e-6)
@@ -217,6 +222,30 @@ def test_a_row_that_binds_the_conflict_is_named_with_zero() -> None:
         ProxQPSolver().solve(p)
     assert err.value.value == rows
     assert "contact.acceleration[x], torque_limit[j] (relax by 1.5)" in str(err.value)
+
+
+@pytest.mark.parametrize("make", ["proxsuite", "qpsolvers:quadprog", "daqp", "active-set"])
+def test_every_solver_solves_a_named_problem_and_names_the_conflicting_rows(make: str) -> None:
+    """Each solver of the controller's chain, called on a named problem (``solve``, from QPSolver): with |τ| ≤ 3
+    the equalities alone fix x = (5, 2.5) by hand; with |τ| ≤ 1 there is no feasible point and the error names
+    the rows found by hand in the test above (torque limit relaxed by 1.5, the contact row binding with 0)."""
+    from armctl.controllers.osc import DaqpSolver, DualActiveSetSolver, QPSolver
+    from armctl.controllers.osc.solve import make_solver
+
+    if make == "qpsolvers:quadprog":
+        qpsolvers = pytest.importorskip("qpsolvers")
+        if "quadprog" not in qpsolvers.available_solvers:  # pragma: no cover - the test extra installs it
+            pytest.skip("quadprog (the test extra) is not installed")
+    own = {"daqp": DaqpSolver, "active-set": DualActiveSetSolver}
+    solver = own[make]() if make in own else make_solver(make)
+    assert isinstance(solver, QPSolver)
+    sol = solver.solve(_contact_problem(3.0))
+    np.testing.assert_allclose(sol.x, [5.0, 2.5], atol=1e-5)
+    with pytest.raises(InfeasibleError) as err:
+        solver.solve(_contact_problem(1.0))
+    assert set(err.value.value) == {"torque_limit[j]", "contact.acceleration[x]"}
+    assert err.value.value["torque_limit[j]"] == pytest.approx(1.5, abs=1e-6)
+    assert err.value.value["contact.acceleration[x]"] == 0.0
 
 
 @pytest.mark.parametrize(

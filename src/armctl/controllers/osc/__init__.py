@@ -22,7 +22,7 @@ from armctl.controllers.osc.diagnose import conflicting_rows
 from armctl.controllers.osc.hierarchy import OSCSolution
 from armctl.controllers.osc.limits import AccelerationLimit, JointPositionLimit, JointVelocityLimit, Limit, TorqueLimit
 from armctl.controllers.osc.problem import QPArrays, QPProblem
-from armctl.controllers.osc.solve import ProxQPSolver, QPSolution, QpsolversSolver
+from armctl.controllers.osc.solve import ProxQPSolver, QPSolution, QPSolver, QpsolversSolver
 from armctl.controllers.osc.tasks import (
     ContactForceTask,
     FrameOrientationTask,
@@ -56,6 +56,7 @@ __all__ = [
     "QPFailure",
     "QPProblem",
     "QPSolution",
+    "QPSolver",
     "QpsolversSolver",
     "SolverChain",
     "StepQP",

@@ -17,7 +17,7 @@ from scipy.linalg import solve_triangular
 
 from armctl._checks import FloatArray
 from armctl.controllers.osc.problem import QPArrays
-from armctl.controllers.osc.solve import QPSolution
+from armctl.controllers.osc.solve import QPSolution, QPSolver
 from armctl.errors import InfeasibleError, SolverError
 
 #: a row whose normal has a part outside the active rows' span below this fraction of its size (in H⁻¹'s
@@ -147,7 +147,7 @@ def dual_active_set(
     return x, y, z_out, iterations
 
 
-class DualActiveSetSolver:
+class DualActiveSetSolver(QPSolver):
     """A dense dual active-set QP solver in NumPy (Goldfarb & Idnani, "A numerically stable dual method for
     solving strictly convex quadratic programs", Math. Programming 27, 1983; the method of quadprog and of TSID's
     eiquadprog), behind the solver interface of the controller's chain: its second solver, an algorithm unlike
@@ -167,36 +167,15 @@ class DualActiveSetSolver:
     Every iterate stays dually feasible and the dual objective grows, so the method ends in finitely many steps:
     at the optimum, or with a row that no step can satisfy — then the QP has no feasible point. Written in NumPy,
     it is slower than the compiled solvers, which is why it comes last in the chain.
+
+    Every :meth:`solve_raw` starts afresh from the unconstrained minimum (``slot`` and ``mode`` are not used); it
+    raises InfeasibleError if no point meets the QP's rows, SolverError if H is not positive definite or the
+    iterations run out (10 (n + rows) + 50).
     """
 
     name = "dual active set"
 
-    def reset(self) -> None:
-        """Nothing to forget: every solve starts from the unconstrained minimum."""
-
     def solve_raw(self, arrays: QPArrays, slot: int = 0, mode: str = "warm") -> QPSolution:
-        """The optimum of a QP, from the unconstrained minimum (the solver interface of the controller's chain).
-
-        Parameters
-        ----------
-        arrays : QPArrays
-            The QP (H, g, A, b, C, l, u), H positive definite.
-        slot : int, optional
-            Not used: every solve starts afresh.
-        mode : str, optional
-            Not used, likewise.
-
-        Returns
-        -------
-        QPSolution
-            x and its multipliers y, z (H x + g + Aᵀy + Cᵀz = 0, z > 0 at an upper bound, < 0 at a lower one).
-
-        Raises
-        ------
-        InfeasibleError
-            No point meets the QP's rows.
-        SolverError
-            H is not positive definite, or the iterations run out (10 (n + rows) + 50).
-        """
+        # (documented with QPSolver.solve_raw and the class)
         x, y, z, iterations = dual_active_set(arrays)
         return QPSolution(x, "solved", iterations, self.name, y, z)

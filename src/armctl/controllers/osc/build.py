@@ -333,12 +333,8 @@ class QPBuilder:
         ----------
         plan : LevelPlan
             The level's plan (:meth:`plans`).
-        state : ModelState
-            The model terms at the measured (q, q̇).
-        t : float
-            Time [s].
-        ref : Reference
-            The controller's joint reference at t.
+        state, t, ref
+            As for :meth:`build`.
 
         Returns
         -------

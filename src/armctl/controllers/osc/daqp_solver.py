@@ -11,7 +11,7 @@ import numpy as np
 
 from armctl._checks import FloatArray
 from armctl.controllers.osc.problem import QPArrays
-from armctl.controllers.osc.solve import QPSolution
+from armctl.controllers.osc.solve import QPSolution, QPSolver
 from armctl.errors import SolverError
 
 #: DAQP's marks of a row (its ``sense``): active at its upper bound, active at its lower bound, an equality
@@ -34,7 +34,7 @@ EXIT_FLAGS = {
 }
 
 
-class DaqpSolver:
+class DaqpSolver(QPSolver):
     """DAQP (Arnström, Bemporad & Axehill, "A dual active-set solver for embedded quadratic programming using
     recursive LDLᵀ updates", IEEE Trans. Automatic Control 67(8), 2022) on the arrays (H, g, A, b, C, l, u) of a
     QP, started from an active set.
@@ -56,6 +56,9 @@ class DaqpSolver:
     control step's optimum (consecutive steps rarely change which limits bind) it usually ends in one step; from
     scratch, a QP of a 7-joint arm takes a few. Its answer is the exact solution on its final active set — which
     the controller still checks (:func:`~armctl.controllers.osc.optimality.kkt_ok`) before using it.
+
+    :meth:`solve_raw` is :meth:`solve_from` with no active row (``slot`` and ``mode`` are not used: DAQP keeps
+    nothing between solves).
     """
 
     name = "daqp"
@@ -69,9 +72,6 @@ class DaqpSolver:
 
     def __reduce__(self) -> tuple[Any, ...]:
         return (DaqpSolver, (self.primal_tol, self.iter_limit))
-
-    def reset(self) -> None:
-        """Nothing to forget: the active set to start from is given at each solve."""
 
     def solve_from(self, arrays: QPArrays, active: np.ndarray | None) -> QPSolution:
         """The optimum of a QP, from a given active set.
@@ -128,25 +128,5 @@ class DaqpSolver:
         return QPSolution(x, "solved", info["iterations"], self.name, lam[:me], z, active=np.sign(z).astype(np.int8))
 
     def solve_raw(self, arrays: QPArrays, slot: int = 0, mode: str = "warm") -> QPSolution:
-        """The optimum of a QP from no active row (the solver interface of the controller's chain).
-
-        Parameters
-        ----------
-        arrays : QPArrays
-            The QP (H, g, A, b, C, l, u), H positive definite.
-        slot : int, optional
-            Not used: DAQP keeps nothing between solves.
-        mode : str, optional
-            Not used, likewise.
-
-        Returns
-        -------
-        QPSolution
-            As :meth:`solve_from`.
-
-        Raises
-        ------
-        SolverError
-            As :meth:`solve_from`.
-        """
+        # (documented with QPSolver.solve_raw and the class)
         return self.solve_from(arrays, None)

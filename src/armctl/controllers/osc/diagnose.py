@@ -93,6 +93,18 @@ def conflicting_rows(p: QPProblem, tol: float = 1e-6) -> dict[str, float] | None
     return out
 
 
+def _infeasible(p: QPProblem, rows: dict[str, float], how: str) -> InfeasibleError:
+    """The error of ``p`` without a feasible point: the conflicting ``rows`` (:func:`conflicting_rows`) and how
+    much to relax each; ``how``: what found it out, shown after "no feasible point"."""
+    shown = ", ".join(f"{k} (relax by {v:.4g})" if v > 0 else k for k, v in rows.items())
+    return InfeasibleError(
+        f"the QP of priority level {p.level} has no feasible point{how}; conflicting rows (coupled through the "
+        f"equation of motion): {shown}. Relax one of these limits or contacts.",
+        value=rows,
+        problem=p,
+    )
+
+
 def raise_failure(p: QPProblem, solver: str, status: str, result: Any) -> NoReturn:
     """Raise InfeasibleError (with the conflicting rows) or SolverError for a failed solve of ``p``."""
     rows = conflicting_rows(p)
@@ -106,13 +118,7 @@ def raise_failure(p: QPProblem, solver: str, status: str, result: Any) -> NoRetu
             result=result,
         )
     if rows:
-        shown = ", ".join(f"{k} (relax by {v:.4g})" if v > 0 else k for k, v in rows.items())
-        raise InfeasibleError(
-            f"the QP of priority level {p.level} has no feasible point ({solver}: {status}); conflicting rows "
-            f"(coupled through the equation of motion): {shown}. Relax one of these limits or contacts.",
-            value=rows,
-            problem=p,
-        )
+        raise _infeasible(p, rows, f" ({solver}: {status})")
     raise SolverError(
         f"{solver} failed on the QP of priority level {p.level} ({status}) although it is "
         "feasible; try a looser eps_abs or another solver (solver='qpsolvers:<name>')",
@@ -128,13 +134,7 @@ def raise_unsolved(p: QPProblem, attempts: list[tuple[str, str]]) -> NoReturn:
     tried = "; ".join(f"{stage}: {what}" for stage, what in attempts)
     rows = conflicting_rows(p)
     if rows:
-        shown = ", ".join(f"{k} (relax by {v:.4g})" if v > 0 else k for k, v in rows.items())
-        raise InfeasibleError(
-            f"the QP of priority level {p.level} has no feasible point; conflicting rows (coupled through the "
-            f"equation of motion): {shown}. Relax one of these limits or contacts.",
-            value=rows,
-            problem=p,
-        )
+        raise _infeasible(p, rows, "")
     feasible = "although it is feasible" if rows is not None else "and the search for conflicting rows failed too"
     raise SolverError(
         f"no solver found a verified optimum of the QP of priority level {p.level} {feasible} ({tried}); the "

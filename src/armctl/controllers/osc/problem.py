@@ -61,28 +61,21 @@ class QPArrays:
 
 
 @dataclass(frozen=True)
-class QPProblem:
+class QPProblem(QPArrays):
     """The QP of one priority level at one control step, named row by row (its arrays are read-only)::
 
         minimise   ½ xᵀ H x + gᵀ x
         subject to A x = b,   l ≤ C x ≤ u
 
-    with x = [q̈ (n); τ (n); f_1 (3); …; f_k (3); s (m, only with slacks)].
+    with x = [q̈ (n); τ (n); f_1 (3); …; f_k (3); s (m, only with slacks)]: the arrays of :class:`QPArrays` with
+    their variables and rows named.
 
     Attributes
     ----------
-    H : ndarray, shape (nx, nx)
-        The cost's Hessian (symmetric positive definite).
-    g : ndarray, shape (nx,)
-        The cost's gradient at x = 0.
-    A : ndarray, shape (me, nx)
-        The equality rows: the equation of motion [N·m], the contacts' rows, the rows that keep the levels above.
-    b : ndarray, shape (me,)
-        Their right-hand side.
-    C : ndarray, shape (mi, nx)
-        The inequality rows: limits and friction cones.
-    l, u : ndarray, shape (mi,)
-        Their bounds [rad/s², N·m or N, by row]; ±inf: no bound.
+    H, g, A, b, C, l, u : ndarray
+        As for :class:`QPArrays`. The equality rows A are the equation of motion [N·m], the contacts' rows and the
+        rows that keep the levels above; the inequality rows C the limits and friction cones, their bounds l, u
+        [rad/s², N·m or N, by row] ±inf where there is none.
     variables : dict of str to slice
         The blocks of x: ``"qdd"`` [rad/s²], ``"tau"`` [N·m], each active contact's name (its force [N]), and
         ``"slack"`` with slacks.
@@ -98,13 +91,6 @@ class QPProblem:
         Anything more a caller wants to attach.
     """
 
-    H: FloatArray
-    g: FloatArray
-    A: FloatArray
-    b: FloatArray
-    C: FloatArray
-    l: FloatArray  # noqa: E741  (the name of the bound in the formulation)
-    u: FloatArray
     variables: dict[str, slice]
     eq_names: tuple[str, ...]
     ineq_names: tuple[str, ...]
@@ -115,11 +101,6 @@ class QPProblem:
     def __post_init__(self) -> None:
         for name in ("H", "g", "A", "b", "C", "l", "u"):
             getattr(self, name).flags.writeable = False
-
-    @property
-    def nx(self) -> int:
-        """Number of decision variables."""
-        return int(self.H.shape[0])
 
     @property
     def arrays(self) -> QPArrays:

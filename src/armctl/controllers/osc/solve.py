@@ -12,6 +12,7 @@ feasible point raises :class:`~armctl.errors.InfeasibleError` naming the rows th
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from dataclasses import dataclass
 from typing import Any
 
@@ -20,7 +21,7 @@ import numpy as np
 from armctl._checks import FloatArray, scalar
 from armctl.controllers.osc.diagnose import raise_failure
 from armctl.controllers.osc.problem import QPArrays, QPProblem
-from armctl.errors import SolverError, UnknownNameError
+from armctl.errors import InfeasibleError, SolverError, UnknownNameError
 
 #: the ways ``solve_raw`` can start: from the slot's previous solution, from scratch with the solver's own
 #: settings, or from scratch with the solver's default settings
@@ -70,7 +71,86 @@ class QPSolution:
     active: np.ndarray | None = None
 
 
-class ProxQPSolver:
+class QPSolver(ABC):
+    """The base of the controller's QP solvers: the interface its :class:`~armctl.controllers.osc.SolverChain`
+    calls (:meth:`solve_raw`, :meth:`reset`) and, on it, :meth:`solve` for a user's own call on a named problem.
+
+    A solver of one's own derives from it and implements :meth:`solve_raw` (and :meth:`reset` if it keeps warm
+    starts); any object with ``solve_raw`` and ``reset`` serves the chain as well, without :meth:`solve`.
+
+    Attributes
+    ----------
+    name : str
+        The solver's name (in :class:`QPSolution` and in the errors).
+    """
+
+    name = "solver"
+
+    def reset(self) -> None:
+        """Forget the previous solutions (no warm start at the next solve); a solver that keeps none has nothing
+        to forget."""
+        return None
+
+    @abstractmethod
+    def solve_raw(self, arrays: QPArrays, slot: int = 0, mode: str = "warm") -> QPSolution:
+        """Solve a QP given as its arrays (the solver interface of the controller's chain).
+
+        Parameters
+        ----------
+        arrays : QPArrays
+            The QP (H, g, A, b, C, l, u), H positive definite.
+        slot : int, optional
+            Its slot (one per priority level), for a solver that keeps warm starts; others ignore it.
+        mode : {"warm", "cold", "defaults"}, optional
+            ``"warm"``: from the slot's previous solution; ``"cold"``: from scratch with the solver's settings;
+            ``"defaults"``: from scratch with its default settings. A solver that keeps no warm start and has no
+            settings ignores it.
+
+        Returns
+        -------
+        QPSolution
+            x and the multipliers y, z (H x + g + Aᵀy + Cᵀz = 0, z > 0 at an upper bound, < 0 at a lower one),
+            not checked against the optimality conditions.
+
+        Raises
+        ------
+        SolverError
+            The solver finds no solution (the error carries its status).
+        """
+
+    def solve(self, p: QPProblem, slot: int = 0) -> QPSolution:
+        """Solve a named problem (:meth:`solve_raw` on its arrays), diagnosing a failure.
+
+        Parameters
+        ----------
+        p : QPProblem
+            The problem.
+        slot : int, optional
+            Its slot (one per priority level): a solver that keeps warm starts starts from the slot's last
+            solution of the same shape.
+
+        Returns
+        -------
+        QPSolution
+            The solution, with its multipliers y, z where the solver gives them (not checked against the
+            optimality conditions).
+
+        Raises
+        ------
+        InfeasibleError
+            ``p`` has no feasible point: the error names the conflicting rows and by how much to relax them.
+        SolverError
+            The solver failed on a feasible problem (or the diagnosis failed too).
+        """
+        try:
+            return self.solve_raw(p.arrays, slot)
+        except SolverError as err:
+            raise_failure(p, self.name, str(err.value), err.result)
+        except InfeasibleError:  # a solver that finds no feasible point itself: the diagnosis names the rows
+            raise_failure(p, self.name, "infeasible", None)
+
+
+class ProxQPSolver(QPSolver):
     """Dense ProxQP (proxsuite), with one QP object per (slot, problem shape), so that each priority level is
     warm-started from its own previous solution.
 
@@ -122,33 +202,6 @@ class ProxQPSolver:
         """Forget the previous solutions (no warm start at the next solve)."""
         self._qps.clear()
         self._cl.clear()
-
-    def solve(self, p: QPProblem, slot: int = 0) -> QPSolution:
-        """Solve a named problem, warm-started from the last solution of the same slot and shape.
-
-        Parameters
-        ----------
-        p : QPProblem
-            The problem.
-        slot : int, optional
-            Its slot (one per priority level).
-
-        Returns
-        -------
-        QPSolution
-            The solution, with its multipliers y, z (not checked against the optimality conditions).
-
-        Raises
-        ------
-        InfeasibleError
-            ``p`` has no feasible point: the error names the conflicting rows and by how much to relax them.
-        SolverError
-            ProxQP failed on a feasible problem (or the diagnosis failed too).
-        """
-        try:
-            return self.solve_raw(p.arrays, slot)
-        except SolverError as err:
-            raise_failure(p, self.name, str(err.value), err.result)
 
     def _new_qp(self, key: tuple[int, int, int, int], arrays: QPArrays, defaults: bool) -> Any:
         px = self._proxqp
@@ -220,7 +273,7 @@ class ProxQPSolver:
         return QPSolution(res.x.copy(), "solved", info.iter, self.name, res.y.copy(), res.z.copy())
 
 
-class QpsolversSolver:
+class QpsolversSolver(QPSolver):
     """Any solver of qpsolvers, warm-started with the previous primal solution of the same slot where the solver
     takes one.
 
@@ -251,34 +304,6 @@ class QpsolversSolver:
     def reset(self) -> None:
         """Forget the previous solutions (no warm start at the next solve)."""
         self._x.clear()
-
-    def solve(self, p: QPProblem, slot: int = 0) -> QPSolution:
-        """Solve a named problem, warm-started where the solver takes an initial point.
-
-        Parameters
-        ----------
-        p : QPProblem
-            The problem.
-        slot : int, optional
-            Its slot (one per priority level).
-
-        Returns
-        -------
-        QPSolution
-            The solution, with its multipliers y, z where the solver gives them (not checked against the
-            optimality conditions).
-
-        Raises
-        ------
-        InfeasibleError
-            ``p`` has no feasible point: the error names the conflicting rows and by how much to relax them.
-        SolverError
-            The solver failed on a feasible problem (or the diagnosis failed too).
-        """
-        try:
-            return self.solve_raw(p.arrays, slot)
-        except SolverError as err:
-            raise_failure(p, self.name, str(err.value), err.result)
 
     def solve_raw(self, arrays: QPArrays, slot: int = 0, mode: str = "warm") -> QPSolution:
         """Solve a QP given as its arrays (the solver interface of the controller's chain).
