@@ -38,7 +38,7 @@ import numpy as np
 
 from armctl._checks import FloatArray
 from armctl.codegen import library as codegen
-from armctl.controllers.osc.optimality import DUAL_TOL, PRIMAL_TOL
+from armctl.controllers.osc.optimality import DUAL_TOL
 from armctl.controllers.osc.scale import MAX_TASK_RHS
 from armctl.controllers.osc.target_code import target_verdict
 from armctl.controllers.osc.tasks.base import MotionTask, Task
@@ -214,7 +214,7 @@ def guessed_active_set(
     and tolerances of :func:`~armctl.controllers.osc.optimality.kkt_ok`) with the level in scale: 1 only for the
     QP's optimum, whatever the steps did (dependent rows give NaN, which fails it too); ``active`` is the last
     step's D (+1 at an upper bound, −1 at a lower one)."""
-    from armctl.controllers.osc.generated_optimum import ACTIVE_SET_ITERATIONS
+    from armctl.controllers.osc.generated_optimum import ACTIVE_SET_ITERATIONS, next_active_set
     from armctl.controllers.osc.kkt_code import kkt_verdict  # its SX check
 
     n = mass.shape[0]
@@ -245,13 +245,7 @@ def guessed_active_set(
         qdd = qdd0 - w @ z
         active = cs.vertcat(*[cs.if_else(upper[i], 1.0, cs.if_else(lower[i], -1.0, 0.0)) for i in range(mi)])
         if step + 1 < ACTIVE_SET_ITERATIONS:
-            s = C @ qdd
-            keep_up = [cs.logic_and(upper[i], cs.ge(z[i], -dual_tol)) for i in range(mi)]
-            keep_lo = [cs.logic_and(lower[i], cs.le(z[i], dual_tol)) for i in range(mi)]
-            over = [cs.gt(s[i], uy[i] + PRIMAL_TOL) for i in range(mi)]
-            under = [cs.lt(s[i], ly[i] - PRIMAL_TOL) for i in range(mi)]
-            upper = [cs.logic_or(over[i], cs.logic_and(keep_up[i], cs.logic_not(under[i]))) for i in range(mi)]
-            lower = [cs.logic_and(cs.logic_or(under[i], keep_lo[i]), cs.logic_not(upper[i])) for i in range(mi)]
+            upper, lower = next_active_set(upper, lower, C @ qdd, z, ly, uy, dual_tol)
     ok = cs.logic_and(in_scale, kkt_verdict(hess, grad, None, None, C, ly, uy, qdd, None, z))
     return [ok, qdd, mass @ qdd + hf, z, active]
 

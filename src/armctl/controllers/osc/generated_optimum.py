@@ -43,6 +43,23 @@ def verdict(optimum: list[cs.SX], grad: cs.SX, c: cs.SX, values: cs.SX, lo: cs.S
 ACTIVE_SET_ITERATIONS = 2
 
 
+def next_active_set(
+    upper: list[cs.SX], lower: list[cs.SX], s: cs.SX, z: cs.SX, lo: cs.SX, up: cs.SX, dual_tol: cs.SX
+) -> tuple[list[cs.SX], list[cs.SX]]:
+    """The next primal-dual active set (Hintermüller, Ito & Kunisch): the rows at their upper (lower) bound whose
+    multiplier z has its sign (z ≥ −tol, z ≤ tol) and that the point s = C y does not leave the other way, and the
+    rows that s breaks by more than PRIMAL_TOL. ``upper`` and ``lower`` are the rows' flags (SX 0/1) at each
+    bound."""
+    mi = len(upper)
+    keep_up = [cs.logic_and(upper[i], cs.ge(z[i], -dual_tol)) for i in range(mi)]
+    keep_lo = [cs.logic_and(lower[i], cs.le(z[i], dual_tol)) for i in range(mi)]
+    over = [cs.gt(s[i], up[i] + PRIMAL_TOL) for i in range(mi)]
+    under = [cs.lt(s[i], lo[i] - PRIMAL_TOL) for i in range(mi)]
+    upper = [cs.logic_or(over[i], cs.logic_and(keep_up[i], cs.logic_not(under[i]))) for i in range(mi)]
+    lower = [cs.logic_and(cs.logic_or(under[i], keep_lo[i]), cs.logic_not(upper[i])) for i in range(mi)]
+    return upper, lower
+
+
 def active_set_optimum(
     hess: cs.SX, grad: cs.SX, a: cs.SX, b: cs.SX, c: cs.SX, lo: cs.SX, up: cs.SX, start: cs.SX, in_scale: cs.SX
 ) -> list[cs.SX]:
@@ -87,12 +104,7 @@ def active_set_optimum(
         y = y0 - w @ mult
         s = c @ y
         z = mult[me:]
-        keep_up = [cs.logic_and(upper[i], cs.ge(z[i], -dual_tol)) for i in range(mi)]
-        keep_lo = [cs.logic_and(lower[i], cs.le(z[i], dual_tol)) for i in range(mi)]
-        over = [cs.gt(s[i], up[i] + PRIMAL_TOL) for i in range(mi)]
-        under = [cs.lt(s[i], lo[i] - PRIMAL_TOL) for i in range(mi)]
-        upper = [cs.logic_or(over[i], cs.logic_and(keep_up[i], cs.logic_not(under[i]))) for i in range(mi)]
-        lower = [cs.logic_and(cs.logic_or(under[i], keep_lo[i]), cs.logic_not(upper[i])) for i in range(mi)]
+        upper, lower = next_active_set(upper, lower, s, z, lo, up, dual_tol)
     lam, z = mult[:me], mult[me:]
     ok = cs.logic_and(in_scale, kkt_verdict(hess, grad, a, b, c, lo, up, y, lam, z))
     active = cs.vertcat(*[cs.if_else(cs.gt(z[i], 0), 1.0, cs.if_else(cs.lt(z[i], 0), -1.0, 0.0)) for i in range(mi)])
