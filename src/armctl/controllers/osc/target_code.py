@@ -16,7 +16,7 @@ from collections.abc import Sequence
 
 import casadi as cs
 
-from armctl.controllers.osc.tasks.target import ROTATION_TOL
+from armctl.controllers.osc.tasks.target import ROTATION_TOL, rotation_det, rotation_gram
 
 #: the tolerance on R Rᵀ − I in the code: the Python check's, less far more than the rounding of its sums
 _TOL = ROTATION_TOL - 1e-12
@@ -30,19 +30,10 @@ def _finite(x: cs.SX) -> cs.SX:
 
 def _rotation(e: Sequence[cs.SX]) -> cs.SX:
     """1 if the row-major 3×3 entries ``e`` are a rotation to :data:`_TOL`, with a determinant near +1."""
-    a, b, c, d, f, g, h, i, j = e
-    gram = (
-        a * a + b * b + c * c - 1.0,
-        d * d + f * f + g * g - 1.0,
-        h * h + i * i + j * j - 1.0,
-        a * d + b * f + c * g,
-        a * h + b * i + c * j,
-        d * h + f * i + g * j,
-    )
     ok = cs.SX(1)
-    for x in gram:
+    for x in rotation_gram(*e):
         ok = cs.logic_and(ok, cs.le(cs.fabs(x), _TOL))
-    det = a * (f * j - g * i) - b * (d * j - g * h) + c * (d * i - f * h)
+    det = rotation_det(*e)
     return cs.logic_and(ok, cs.gt(det, 0.5))  # orthonormal to 1e-4: det is ±1 to 1e-3
 
 

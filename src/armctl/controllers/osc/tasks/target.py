@@ -19,6 +19,24 @@ Trajectory = Callable[[float], tuple[Any, Any, Any]]
 ROTATION_TOL = 1e-4
 
 
+def rotation_gram(a: Any, b: Any, c: Any, d: Any, e: Any, f: Any, g: Any, h: Any, i: Any) -> tuple[Any, ...]:
+    """The upper triangle of R Rᵀ − I (diagonal first) for R = [[a, b, c], [d, e, f], [g, h, i]]: on floats (the
+    Python check) or on CasADi symbols (its generated counterpart, :mod:`~armctl.controllers.osc.target_code`)."""
+    return (
+        a * a + b * b + c * c - 1.0,
+        d * d + e * e + f * f - 1.0,
+        g * g + h * h + i * i - 1.0,
+        a * d + b * e + c * f,
+        a * g + b * h + c * i,
+        d * g + e * h + f * i,
+    )
+
+
+def rotation_det(a: Any, b: Any, c: Any, d: Any, e: Any, f: Any, g: Any, h: Any, i: Any) -> Any:
+    """det R for R = [[a, b, c], [d, e, f], [g, h, i]], on floats or CasADi symbols (as :func:`rotation_gram`)."""
+    return a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
+
+
 def rotation_defect(entries: list[float], shape: tuple[int, ...]) -> str | None:
     """Why the row-major ``entries`` of a 3×3 rotation or 4×4 pose are not one (None if they are): R Rᵀ = I
     to :data:`ROTATION_TOL`, det R = +1 (not a reflection), a pose's last row [0, 0, 0, 1]. On Python floats:
@@ -29,14 +47,7 @@ def rotation_defect(entries: list[float], shape: tuple[int, ...]) -> str | None:
         a, b, c, _, d, e, f, _, g, h, i = entries[:11]
     else:
         a, b, c, d, e, f, g, h, i = entries
-    gram = (
-        a * a + b * b + c * c - 1.0,
-        d * d + e * e + f * f - 1.0,
-        g * g + h * h + i * i - 1.0,
-        a * d + b * e + c * f,
-        a * g + b * h + c * i,
-        d * g + e * h + f * i,
-    )  # R Rᵀ − I, upper triangle
+    gram = rotation_gram(a, b, c, d, e, f, g, h, i)
     tol = ROTATION_TOL
     if not (
         -tol <= gram[0] <= tol
@@ -48,7 +59,7 @@ def rotation_defect(entries: list[float], shape: tuple[int, ...]) -> str | None:
     ):  # no calls
         worst = max(abs(x) for x in gram)
         return f"its rotation is not orthonormal: |R Rᵀ − I| reaches {worst:.3g} (tolerance {ROTATION_TOL:g})"
-    if a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g) < 0.0:
+    if rotation_det(a, b, c, d, e, f, g, h, i) < 0.0:
         return "its rotation is a reflection (det R = −1)"
     return None
 
