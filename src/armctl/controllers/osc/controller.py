@@ -350,12 +350,8 @@ class OperationalSpaceQP(Controller):
 
         Parameters
         ----------
-        t : float
-            Time [s].
-        q, qd : array_like, shape (n,)
-            Joint positions [rad] and velocities [rad/s] (m, m/s for a prismatic joint).
-        ref : Reference
-            The joint reference at t.
+        t, q, qd, ref : float, array_like, array_like, Reference
+            As for :meth:`build`.
 
         Returns
         -------
