@@ -68,10 +68,31 @@ def scene_title(name: str, rows: list[dict[str, Any]]) -> str:
     return name
 
 
+def error_units(rows: list[dict[str, Any]]) -> str:
+    """The unit of each scene's errors, as the scenes report it (``error_unit``; rad where a scene does not say),
+    e.g. "rad (pendulum, planar_2r), m (panda_contact), N (panda_press)".
+
+    Parameters
+    ----------
+    rows : list of dict
+        The scene matrix's rows.
+
+    Returns
+    -------
+    str
+    """
+    units: dict[str, list[str]] = {}
+    for r in rows:
+        scenes = units.setdefault(str(r.get("error_unit", "rad")), [])
+        if r["scene"] not in scenes:
+            scenes.append(r["scene"])
+    return ", ".join(f"{unit} ({', '.join(scenes)})" for unit, scenes in units.items())
+
+
 def scenes_summary(rows: list[dict[str, Any]]) -> str:
     """The scene matrix as text: one row per scene and method."""
     lines = [
-        "errors in rad (joint scenes) or m (panda_contact: tool position in the table plane); force: RMS "
+        f"errors in {error_units(rows)}; force: RMS "
         "normal-force error after settling [N]; over limits: share of samples beyond the effort limit / "
         "velocity limit (+1 %) / position range; a run that diverged has no error (its error until then is in "
         "figures.json)",

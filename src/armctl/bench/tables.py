@@ -35,7 +35,7 @@ def text(s: Any) -> Cell:
 
 
 def scenes(rows: list[dict[str, Any]]) -> list[Table]:
-    from armctl.bench.outcomes import outcome, scene_title
+    from armctl.bench.outcomes import error_units, outcome, scene_title
 
     names = list(dict.fromkeys(r["scene"] for r in rows))
     t = Table(
@@ -54,8 +54,8 @@ def scenes(rows: list[dict[str, Any]]) -> list[Table]:
             "outcome",
         ],
         notes="Scenes: " + "; ".join(f"{n}: {scene_title(n, rows)}" for n in names) + ". "
-        "Errors in rad (joint scenes) or m (panda_contact: the tool's position in the table plane); force error: "
-        "RMS normal-force error after settling. "
+        f"Errors in each scene's unit: {error_units(rows)} (panda_contact: the tool's position in the table plane; "
+        "panda_press and panda_wipe: the normal force); force error: RMS normal-force error after settling. "
         "Saturated: share of samples whose command exceeded the effort limit (clipped); over q̇ limit: beyond the "
         "velocity limit by more than 1 %; outside q range: outside the position limits. A run that diverged has "
         "no error (its error until then is in figures.json). Click a header to sort.",
