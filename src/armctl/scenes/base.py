@@ -534,9 +534,12 @@ def holding_scene(cls: type[_S], name: str, description: str, model: RobotModel,
 
 
 def quintic(start: Any, end: Any, t0: float, duration: float) -> Callable[[float], tuple[Any, Any, Any]]:
-    """t → (position, velocity, acceleration) of a minimum-jerk move from ``start`` to ``end`` (arrays) between t0
-    and t0 + duration [s], held before and after."""
-    a, b = np.asarray(start, dtype=float), np.asarray(end, dtype=float)
+    """t → (position, velocity, acceleration) of a minimum-jerk move from ``start`` to ``end`` (arrays, or floats:
+    then floats) between t0 and t0 + duration [s], held before and after."""
+    a: Any = np.asarray(start, dtype=float)
+    b: Any = np.asarray(end, dtype=float)
+    if a.ndim == b.ndim == 0:  # floats: the same arithmetic without arrays
+        a, b = float(a), float(b)
 
     def at(t: float) -> tuple[Any, Any, Any]:
         s = min(max((t - t0) / duration, 0.0), 1.0)

@@ -80,7 +80,7 @@ class PressAndSlide(Controller):
         self.slide = scalar(slide, "slide")
         self.slide_start = scalar(slide_start, "slide_start", nonnegative=True)
         self.slide_time = scalar(slide_time, "slide_time", positive=True)
-        self._slide = quintic([0.0], [self.slide], self.slide_start, self.slide_time)  # along x
+        self._slide = quintic(0.0, self.slide, self.slide_start, self.slide_time)  # along x
         self.pose = FramePoseTask(kp=kp, kd=kd)
         self.pose.set_trajectory(self.target)
         self.closed_form = boolean(closed_form, "closed_form")
@@ -113,8 +113,8 @@ class PressAndSlide(Controller):
         pose[2, 3] = max(self.p0[2, 3] - 0.02 * t, z_end)
         twist[2] = -0.02 if pose[2, 3] > z_end else 0.0
         x, vx, ax = self._slide(t)
-        pose[0, 3] += x[0]
-        twist[0], acc[0] = vx[0], ax[0]
+        pose[0, 3] += x
+        twist[0], acc[0] = vx, ax
         return pose, twist, acc
 
     def reset(self) -> None:

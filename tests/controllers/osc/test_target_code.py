@@ -1,5 +1,5 @@
-"""A trajectory's output is checked at every step on the generated path as on the NumPy path: the same named
-errors for each kind of bad target, the same τ for valid ones."""
+"""A trajectory's output is checked at every step on the generated path as on the NumPy path, with contacts or
+without: the same named errors for each kind of bad target, the same τ for valid ones."""
 
 from __future__ import annotations
 
@@ -11,6 +11,8 @@ import pytest
 
 import armctl
 from armctl.controllers.osc import (
+    Contact,
+    ContactForceTask,
     FrameOrientationTask,
     FramePoseTask,
     FramePositionTask,
@@ -78,6 +80,30 @@ def test_a_bad_pose_from_a_trajectory_raises_the_numpy_paths_error(panda: armctl
         with pytest.raises(kind, match=message):
             ctrl(1.0, Q_HOME, np.zeros(7), ref)
         # a valid target afterwards: the step goes on
+        taus.append(ctrl(0.3, Q_HOME, np.zeros(7), ref))
+    np.testing.assert_allclose(taus[0], taus[2], atol=1e-6)
+    np.testing.assert_allclose(taus[1], taus[3], atol=1e-6)
+
+
+@pytest.mark.parametrize("levels", [1, 2])
+@pytest.mark.parametrize("bad", range(len(BAD_POSES)))
+def test_a_bad_pose_raises_the_numpy_paths_error_with_a_contact(panda: armctl.Dynamics, bad: int, levels: int) -> None:
+    """With an active contact (the contact QP's generated data, one level or two): the same named error, and the
+    step goes on with a valid target afterwards."""
+    value, vel, kind, message = BAD_POSES[bad]
+    ref = armctl.Reference(Q_HOME)
+    good = lambda t: (_pose(ROT, (0.4, 0.1 * t, 0.5)), ZERO.copy(), ZERO.copy())  # noqa: E731
+    taus = []
+    for compile in ("auto", False):
+        task = FramePoseTask(kp=100.0, weight=[1, 1, 0, 1, 1, 1])
+        task.set_trajectory(_switching(good, (value, vel, ZERO.copy())))
+        contact = Contact(mode="sliding", mu=0.3, kd=100.0)
+        tasks = [task, ContactForceTask(contact, 8.0), PostureTask(7, kp=25.0, weight=1e-3, priority=levels - 1)]
+        ctrl = OperationalSpaceQP(panda, tasks, limits=[TorqueLimit()], contacts=[contact], compile=compile)
+        assert ctrl.uses_generated_code is (compile == "auto")
+        taus.append(ctrl(0.25, Q_HOME, np.zeros(7), ref))
+        with pytest.raises(kind, match=message):
+            ctrl(1.0, Q_HOME, np.zeros(7), ref)
         taus.append(ctrl(0.3, Q_HOME, np.zeros(7), ref))
     np.testing.assert_allclose(taus[0], taus[2], atol=1e-6)
     np.testing.assert_allclose(taus[1], taus[3], atol=1e-6)

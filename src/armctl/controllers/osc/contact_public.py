@@ -94,16 +94,21 @@ def taken_step(qp: ContactQP, gen: GeneratedContactData, chain: SolverChain, gue
 
 
 def _unpack(res: ContactStep) -> None:
-    """The rows, contact rows and (H, g) of a step taken without a solver, from its copy of the code's outputs
-    (views of it), if not read yet."""
+    """The rows, contact rows, each level's task rows and (H, g) of a step taken without a solver, from its copy
+    of the code's outputs (views of it), if not read yet."""
     if res.outputs is None:
         return
     flat, gen = res.outputs
     brows, contact, rows, H, g, *_ = gen.outputs(flat)
     res.b_rows = brows
     res.contact = (contact[:, : gen.ny], contact[:, gen.ny])
-    res.rows.append(rows)
+    start = 0
+    for lev in gen.levels:
+        m = sum(tk.dim for tk in lev)
+        res.rows.append(rows[start : start + m])
+        start += m
     res.hg = (H[0], g[0])
+    res.hg_below += zip(H[1:], g[1:], strict=True)
     res.outputs = None
 
 

@@ -134,6 +134,18 @@ def task_rows(
     return inputs, params, jacs, rhs, weights
 
 
+def targets_verdict(tasks: Sequence[Task], task_inputs: Sequence[cs.SX], targets: cs.SX | None = None) -> cs.SX:
+    """1 if the target of every frame task of ``tasks`` passes
+    :func:`~armctl.controllers.osc.target_code.target_verdict` (``task_inputs``: the three inputs per task of
+    :func:`task_rows`), and ``targets`` (a verdict so far, 1 if None) is 1; else 0."""
+    targets = cs.SX(1) if targets is None else targets
+    for k, tk in enumerate(tasks):
+        if type(tk) is not PostureTask:
+            value, vel, acc = task_inputs[3 * k : 3 * k + 3]
+            targets = cs.logic_and(targets, target_verdict(_FRAME_TASKS[type(tk)][0], value, vel, acc))
+    return targets
+
+
 def qp_function(
     model: RobotModel, tasks: Sequence[Task], friction: bool, limits: Sequence[str] | None = None
 ) -> cs.Function:
@@ -168,11 +180,7 @@ def qp_function(
     qdd0 = -cholesky_solve(hess, grad)
     tau0 = mass @ qdd0 + hf
     outputs = [qdd0, tau0, hess, grad, c, mass, hf, cs.horzcat(jall, ball)]
-    targets = cs.SX(1)  # the frame tasks' targets checked (target_code): the step's Python checks no more
-    for k, tk in enumerate(tasks):
-        if type(tk) is not PostureTask:
-            value, vel, acc = task_inputs[3 * k : 3 * k + 3]
-            targets = cs.logic_and(targets, target_verdict(_FRAME_TASKS[type(tk)][0], value, vel, acc))
+    targets = targets_verdict(tasks, task_inputs)  # the step's Python checks no more
     if limits is not None:
         values = cs.vertcat(*[tau0 if var == "tau" else qdd0 for var in limits])
         lo, up = cs.SX.sym("lower", n * len(limits)), cs.SX.sym("upper", n * len(limits))

@@ -207,16 +207,17 @@ class GeneratedCascade:
         for k, arr in enumerate(args):
             assert arr.flags.c_contiguous  # bound by its memory: a view of the array itself
             buf.set_arg(k, view(arr.reshape(-1)))
-        self.y0, self.lam0, self.y1 = np.zeros(ny), np.zeros(me), np.zeros(ny)
-        self._lam_phi = np.zeros(me + 2 * m0)  # level 1's multipliers [contact rows; F's rows], then φ
-        self._basis_t = np.zeros((ny, m0))  # F (m0 × ny), held as its transpose
-        self.stats = np.zeros(2)
-        self.tau = np.zeros(n)
-        self.lower, self.upper = np.zeros(mi), np.zeros(mi)
-        results = [self.y0, self.lam0, self.y1, self._lam_phi, self._basis_t, self.stats, self.tau]
-        results += [self.lower, self.upper]
+        # the outputs, one after the other in one buffer (a step copies it once): y0, λ0, y1, [λ1; φ] (level 1's
+        # multipliers [contact rows; F's rows], then φ), F (m0 × ny, held as its transpose), stats, τ, l, u
+        sizes = [ny, me, ny, me + 2 * m0, ny * m0, 2, n, mi, mi]
+        ends = np.cumsum(sizes)
+        self._spans = tuple(slice(int(e - s), int(e)) for s, e in zip(sizes, ends, strict=True))
+        self._out = np.zeros(int(ends[-1]))
+        results = [self._out[span] for span in self._spans]
+        self.y0, self.lam0, self.y1, self._lam_phi, basis, self.stats, self.tau, self.lower, self.upper = results
+        self._basis_t = basis.reshape(ny, m0)
         for k, res in enumerate(results):
-            buf.set_res(k, view(res.reshape(-1)))
+            buf.set_res(k, view(res))
         self._bound = (buf, args, results)  # the buffer reads and writes these: keep them alive
         self._scale: FloatArray | None = None
         self._live: np.ndarray | None = None
@@ -252,32 +253,31 @@ class GeneratedCascade:
         self._run()
         if self.stats[1] != 1.0 or (live is not None and live.size > ny):
             return None
+        # the outputs copied once each (the next run overwrites them), the step's arrays views of the copies; the
+        # rows, contact rows and (H, g) read from the generated data's copy when asked for (step_arrays)
         res = ContactStep()
-        res.b_rows = gen.brows.copy()  # kept by the step (the code's outputs are overwritten by the next run)
-        contact = gen.contact.copy()
-        res.contact = (contact[:, :ny], contact[:, ny].copy())
-        res.bounds = (self.lower.copy(), self.upper.copy())
-        rows, m0, me = gen.rows.copy(), self.m0, self._me
-        res.rows += [rows[:m0], rows[m0:]]
+        res.outputs = (gen.out.copy(), gen)
+        out = self._out.copy()
+        y0s, lam0s, y1s, lam_phis, basis, _, taus, lower, upper = self._spans
+        res.bounds = (out[lower], out[upper])
+        m0, me = self.m0, self._me
         if live is None:
-            k, F, lam_phi = m0, self._basis_t.T.copy(), self._lam_phi.copy()
+            k, F, lam_phi = m0, out[basis].reshape(ny, m0).T, out[lam_phis]
         else:  # the rows of non-zero weight (k of them): F's, their multipliers and φ's
             k = live.size
             F = self._basis_t.take(self._live_basis).reshape(k, ny)
             lam_phi = self._lam_phi.take(self._live_lam_phi)
         lam, phi = lam_phi[: me + k], lam_phi[me + k :]
         res.frozen += [None, (F, phi)]
-        res.hg = (gen.H[0].copy(), gen.g[0].copy())  # the QPs' arrays made when asked for (step_arrays)
-        res.hg_below.append((gen.H[1].copy(), gen.g[1].copy()))
-        mi, none = self.lower.shape[0], qp.no_active
-        y0, y1 = self.y0.copy(), self.y1.copy()
+        none, z = qp.no_active, qp.no_multipliers
+        y1 = out[y1s]
         res.solutions += [
-            QPSolution(y0, "solved", 0, "active set", self.lam0.copy(), np.zeros(mi), "active set", 0, none),
-            QPSolution(y1, "solved", 0, "active set", lam, np.zeros(mi), "active set", 0, none),
+            QPSolution(out[y0s], "solved", 0, "active set", out[lam0s], z, "active set", 0, none),
+            QPSolution(y1, "solved", 0, "active set", lam, z, "active set", 0, none),
         ]
         res.status += ["solved", "solved"]
         res.y = y1
         chain.record(qp.key, none)  # SolverChain.key of each level's QP
-        chain.record((1, ny, me + k, mi), none)
-        res.tau = self.tau.copy()
+        chain.record((1, ny, me + k, z.shape[0]), none)
+        res.tau = out[taus]
         return res

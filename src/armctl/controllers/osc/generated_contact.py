@@ -18,6 +18,8 @@ At (q, q̇), the tasks' targets and τ_f(q̇), one call of code generated with C
   complement of H (a Cholesky factorisation written out), and its residuals A y* − b and H y* + g + Aᵀλ: the
   step takes it, without a solver, when they vanish to the optimality check's tolerances and every inequality
   row holds;
+* the verdict on the frame tasks' targets (:mod:`~armctl.controllers.osc.target_code`), so that the step's Python
+  checks a trajectory's output only where the code does not pass it;
 * with one level and constant bounds, where that optimum breaks a row, a few primal-dual active-set iterations
   from the rows it breaks and the KKT check of their result
   (:func:`~armctl.controllers.osc.generated_optimum.active_set_optimum`): the step takes that optimum, without a
@@ -33,7 +35,7 @@ from __future__ import annotations
 
 import hashlib
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, cast
 
 import casadi as cs
 import numpy as np
@@ -41,11 +43,22 @@ import numpy as np
 from armctl._checks import FloatArray
 from armctl.codegen import library as codegen
 from armctl.controllers.osc.contact import Contact
-from armctl.controllers.osc.generated import gram, supported, target_pieces, task_params, task_rows, task_tag
+from armctl.controllers.osc.generated import (
+    gram,
+    supported,
+    target_pieces,
+    targets_verdict,
+    task_params,
+    task_rows,
+    task_tag,
+)
 from armctl.controllers.osc.generated_optimum import active_set_optimum, equality_optimum, verdict
 from armctl.controllers.osc.scale import MAX_TASK_RHS
 from armctl.controllers.osc.tasks.base import Task
 from armctl.controllers.osc.tasks.contact_force import ContactForceTask
+from armctl.controllers.osc.tasks.frame_task import FrameTask
+from armctl.controllers.osc.tasks.posture import PostureTask
+from armctl.controllers.osc.tasks.target import TargetHolder
 from armctl.dynamics.base import Dynamics
 from armctl.dynamics.casadi_buffer import buffer_of, view
 from armctl.dynamics.recursive import inverse_dynamics, joint_transforms, mass_matrix
@@ -53,7 +66,7 @@ from armctl.dynamics.symbolic_frames import frame_kinematics
 from armctl.model.robot import RobotModel
 from armctl.references import Reference
 
-_CODE_VERSION = 6
+_CODE_VERSION = 7
 _NAME = "osc_contact_qp"
 _GUESS = "osc_contact_active_set"
 
@@ -79,7 +92,8 @@ def contact_function(
     k_d, v_ε; per motion task K_p, K_d, W^½; per force task W^½; per level ε_k]. With one level also the optimum
     on the contact rows alone and its residuals (:mod:`~armctl.controllers.osc.generated_optimum`), and with
     ``limits`` (the variable of each limit, ``"tau"`` or ``"qdd"``, whose bounds are constant) its verdict and
-    τ, ``params`` then ending with [per contact its cone rows (row by row); l; u]."""
+    τ, ``params`` then ending with [per contact its cone rows (row by row); l; u]. Its last output is the verdict
+    on the frame tasks' targets (:func:`~armctl.controllers.osc.target_code.target_verdict`)."""
     n = model.n
     q, qd = cs.SX.sym("q", n), cs.SX.sym("qd", n)
     tf = joint_transforms(model, q)
@@ -121,6 +135,7 @@ def contact_function(
     rows: list[cs.SX] = []
     rhs_all: list[cs.SX] = []
     outputs_levels: list[tuple[cs.SX, cs.SX, cs.SX]] = []
+    targets = cs.SX(1)  # the frame tasks' targets checked (target_code): the step's Python checks no more
     for lev_idx, tasks in enumerate(levels):
         jl: list[cs.SX] = []
         bl: list[cs.SX] = []
@@ -142,6 +157,7 @@ def contact_function(
                 wl.append(w)
             else:
                 ins, ps, jacs, task_b, ws = task_rows(model, q, qd, [tk], tf)
+                targets = targets_verdict([tk], ins, targets)
                 inputs += ins
                 params += ps
                 j = cs.SX.zeros(tk.dim, ny)
@@ -185,6 +201,7 @@ def contact_function(
             lo, up = cs.SX.sym("lower", v.shape[0]), cs.SX.sym("upper", v.shape[0])
             params += [lo, up]
             outputs += [verdict(optimum, outputs[4], outputs[5], v, lo, up), tau]
+    outputs.append(targets)
     return cs.Function(_NAME, [cs.vertcat(*inputs), cs.vertcat(*params)], [cs.densify(o) for o in outputs])
 
 
@@ -270,7 +287,8 @@ class GeneratedContactData:
     (3k × (ny+1)), ``rows`` (m × (ny+1)), per level ``H[k]``, ``g[k]``, ``c[k]``, with one level ``equality``, and
     with ``bounds`` (one level, constant bounds l, u of the limits' and cones' rows, the limits' variables
     ``limits``) ``accepted`` (1,) and ``tau`` (n,); with ``bounds`` also :meth:`run_guess`, the active-set
-    iterations on those outputs (``guess_out``, ``guessed``). Not thread-safe."""
+    iterations on those outputs (``guess_out``, ``guessed``); ``targets_ok`` (1,) the code's verdict on the
+    frame tasks' targets. Not thread-safe."""
 
     def __init__(
         self,
@@ -324,6 +342,15 @@ class GeneratedContactData:
             buf.set_arg(k, view(arr))
         for k, (start, stop) in enumerate(self._spans()):
             buf.set_res(k, view(self.out[start:stop]))
+        #: 1.0 if the frame tasks' targets passed the code's check (see target_code)
+        self.targets_ok = np.zeros(1)
+        buf.set_res(len(self._spans()), view(self.targets_ok))
+        #: per task in the inputs' order: its target's holder for a frame task, else the task
+        self._sources = tuple(
+            cast(FrameTask, tk).target if type(tk) not in (ContactForceTask, PostureTask) else tk
+            for lev in self.levels
+            for tk in lev
+        )
         self._bound = buf  # the buffer reads and writes inp, par and out: kept with them
         #: with ``bounds``: where y*, λ and τ of the optimum on the contact rows alone sit in :attr:`out`
         self.taken: tuple[slice, slice, slice] | None = None
@@ -449,19 +476,35 @@ class GeneratedContactData:
         np.concatenate(parts, out=self.par)
 
     def run(self, q: FloatArray, qd: FloatArray, t: float, ref: Reference) -> None:
-        """Evaluate the outputs at (q, q̇) with the tasks' targets at t."""
+        """Evaluate the outputs at (q, q̇) with the tasks' targets at t. A trajectory's new output is checked in the
+        code (see :mod:`~armctl.controllers.osc.target_code`; one the code does not pass gets the NumPy path's
+        check, which raises its named error).
+
+        Raises
+        ------
+        InvalidParameterError, NonFiniteError, ShapeError
+            A trajectory's output is not a valid target (as the NumPy path says)."""
         revisions = [tk.revision for lev in self.levels for tk in lev]
         if revisions != self._revisions:
             self._params()
             self._revisions = revisions
         pieces = [q, qd]
-        for lev in self.levels:
-            for tk in lev:
-                if type(tk) is ContactForceTask:
-                    pieces.append(tk.target(t))
-                else:
-                    target_pieces([tk], t, ref, pieces)
+        unchecked = None
+        for src in self._sources:
+            if type(src) is TargetHolder:
+                out, checked = src.shaped(t)
+                pieces += (out[0].ravel(), out[1], out[2])  # the value row by row
+                if not checked:
+                    unchecked = [(src, out)] if unchecked is None else [*unchecked, (src, out)]
+            elif type(src) is ContactForceTask:
+                pieces.append(src.target(t))
+            else:
+                target_pieces([cast(Task, src)], t, ref, pieces)
         if self.friction is not None:
             pieces.append(self.friction.torque(qd))
         np.concatenate(pieces, out=self.inp)
         self._run()
+        if unchecked is not None:
+            valid = self.targets_ok[0] == 1.0
+            for holder, out in unchecked:
+                holder.confirm(t, out, valid)

@@ -2,11 +2,12 @@
 
 A trajectory's output is checked at every step (:class:`~armctl.controllers.osc.tasks.target.TargetHolder`):
 finite entries and, for a rotation or a pose, R Rᵀ = I to :data:`~armctl.controllers.osc.tasks.target.ROTATION_TOL`,
-det R > 0 and a pose's last row [0, 0, 0, 1]. The generated QP data (:mod:`~armctl.controllers.osc.generated`)
-evaluates these conditions on its inputs, in its own call, so that the step's Python only checks the arrays'
-types and shapes; a target the code does not pass gets the Python check, which names the defect or, on a target
-within a rounding of the tolerance, takes it. The code's tolerances are a hair tighter than the Python check's, so
-that what the code passes the Python check passes too.
+det R > 0 and a pose's last row [0, 0, 0, 1]. The generated QP data (:mod:`~armctl.controllers.osc.generated`,
+and :mod:`~armctl.controllers.osc.generated_contact` with contacts) evaluates these conditions on its inputs, in
+its own call, so that the step's Python only checks the arrays' types and shapes; a target the code does not pass
+gets the Python check, which names the defect or, on a target within a rounding of the tolerance, takes it. The
+code's tolerances are a hair tighter than the Python check's, so that what the code passes the Python check passes
+too.
 """
 
 from __future__ import annotations
