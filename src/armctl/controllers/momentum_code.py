@@ -127,8 +127,10 @@ class CompiledStep:
             bufs.append(buf)
             runs.append(run)
         self.runs: tuple[Callable[[], None], ...] = tuple(runs)
-        #: per side k: (its run, the residual it writes, the input, the flag array)
-        self.sides = tuple((runs[k], self.residuals[1 - k], self.x, self.flags) for k in (0, 1))
+        #: the input's pieces q, q̇, τ (views of :attr:`x`: three slice writes cost less than one concatenation)
+        self.pieces = (self.x[:n], self.x[n : 2 * n], self.x[2 * n :])
+        #: per side k: (its run, the residual it writes, the input's pieces, the flag array)
+        self.sides = tuple((runs[k], self.residuals[1 - k], self.pieces, self.flags) for k in (0, 1))
         self._bufs = bufs  # CasADi keeps the arrays' addresses, not the arrays: they live as long as this object
 
     def set_period(self, gamma: FloatArray, h: float) -> None:
@@ -160,8 +162,10 @@ class CompiledUpdate:
 
     def _compiled_step(self, t: float, q: FloatArray, qd: FloatArray, tau: FloatArray) -> FloatArray:
         k = self._side
-        run, out, x, flags = self._code.sides[k]
-        np.concatenate((q, qd, tau), out=x)
+        run, out, (xq, xqd, xtau), flags = self._code.sides[k]
+        xq[...] = q  # x ← [q; q̇; τ]
+        xqd[...] = qd
+        xtau[...] = tau
         try:
             h = t - self._t  # type: ignore[operator]  # None before the first sample
         except TypeError:  # None: the first sample, r = 0 and (p, β) from one call with γ = 1, h = 1
@@ -182,7 +186,7 @@ class CompiledUpdate:
             self._code.set_period(self._gamma, h)
         run()
         r = out.copy()
-        if not flags[0] <= 0.0:  # a residual above its threshold, or NaN: a residual that is not finite
+        if not flags.item() <= 0.0:  # a residual above its threshold, or NaN: a residual that is not finite
             if not np.isfinite(r).all():  # (the state stays that of the last good sample: side k)
                 raise NonFiniteError(f"the observer's residual is not finite ({r}) at t = {t}", value=r)
             self._t, self._side, self.residual = t, 1 - k, r

@@ -244,9 +244,9 @@ class MomentumObserver(CompiledUpdate):
             and type(q) is np.ndarray
             and type(qd) is np.ndarray
             and type(tau_applied) is np.ndarray
-            and q.dtype == FLOAT
-            and qd.dtype == FLOAT
-            and tau_applied.dtype == FLOAT
+            and q.dtype is FLOAT  # the one float64 dtype NumPy makes (an equal one takes the careful path)
+            and qd.dtype is FLOAT
+            and tau_applied.dtype is FLOAT
             and q.shape == qd.shape == tau_applied.shape == self._shape
             and type(t) is float
             and math.isfinite(t)

@@ -225,7 +225,9 @@ class CartesianImpedance(Controller):
         if gen is not None:
             # Called on unchecked q and q̇ (result_check): nothing is kept (the held pose, last_log) and no user
             # function is called (a trajectory, on t) before they are known to be finite.
-            goal, q, qd = self.target.goal_unchecked(t, q, qd, self._checked, self.dynamics.kernel, self.frame)
+            goal = self.target.fixed  # a constant target: nothing to call, once t is known finite
+            if goal is None or not math.isfinite(t):
+                goal, q, qd = self.target.goal_unchecked(t, q, qd, self._checked, self.dynamics.kernel, self.frame)
             # gen.run(q, qd, goal, posture), written out: this is the whole per-step cost of the law
             pieces = gen.pieces
             pieces[0][...] = q

@@ -145,7 +145,9 @@ class ForceLoop(PoseTargeted, Controller):
     def compute(self, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         # With a sensor q and q̇ come unchecked (result_check): nothing is kept (the held pose, the integral, the
         # time, last_log) and no user function is called (f_d(t), a trajectory) before they are known finite.
-        goal, q, qd = self.target.goal_unchecked(t, q, qd, self._checked, self.dynamics.kernel, self.frame)
+        goal = self.target.fixed  # a constant target: nothing to call, once t is known finite
+        if goal is None or not math.isfinite(t):
+            goal, q, qd = self.target.goal_unchecked(t, q, qd, self._checked, self.dynamics.kernel, self.frame)
         m = self.measurement
         if self._sensor and m is not None and m.world_axes and m.frame == self.frame and m.wrench is not None:
             h = m.wrench  # already in world axes at the frame (what force_input.wrench gives, without its calls)
