@@ -11,6 +11,19 @@ from armctl.references._rows import row
 from armctl.references.reference import Reference
 
 
+def minimum_jerk(t: float, t0: float, duration: float) -> tuple[float, float, float]:
+    """The minimum-jerk profile at time ``t`` [s] of a move starting at ``t0`` [s] and lasting ``duration`` [s]:
+    (σ̂, σ̂', σ̂'') with σ̂ = σ³(10 − 15σ + 6σ²), σ = clip((t − t0)/T, 0, 1), and its first two time derivatives
+    [1/s, 1/s²], which are exactly 0 at both ends and outside the move. A move from a to b is a + (b − a) σ̂.
+    """
+    s = min(max((t - t0) / duration, 0.0), 1.0)
+    return (
+        s**3 * (10 - 15 * s + 6 * s * s),
+        30 * s * s * (1 - s) ** 2 / duration,
+        60 * s * (1 - s) * (1 - 2 * s) / duration**2,
+    )
+
+
 @dataclass(frozen=True, eq=False, init=False)
 class Quintic:
     """Minimum-jerk move from ``q0`` to ``q1`` in ``duration`` [s] starting at ``t0``, holding before and after:
@@ -52,11 +65,5 @@ class Quintic:
         """The reference at time ``t`` [s] (a real finite scalar)."""
         if t.__class__ is not float or t - t != 0.0:  # t - t: NaN for NaN and ±inf
             t = scalar(t, "t")  # a real finite scalar, or raise naming t
-        big_t = self.duration
-        s = min(max((t - self.t0) / big_t, 0.0), 1.0)
-        p = 10 * s**3 - 15 * s**4 + 6 * s**5
-        v = (30 * s**2 - 60 * s**3 + 30 * s**4) / big_t
-        a = (60 * s - 180 * s**2 + 120 * s**3) / big_t**2
-        if s in (0.0, 1.0):
-            v = a = 0.0
+        p, v, a = minimum_jerk(t, self.t0, self.duration)
         return Reference(self.q0 + p * self._d, v * self._d, a * self._d)

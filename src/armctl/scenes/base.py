@@ -31,6 +31,7 @@ from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError, UnknownNameError
 from armctl.model.robot import RobotModel
 from armctl.references import Reference
+from armctl.references.quintic import minimum_jerk
 from armctl.tuning.presets import load_preset
 
 #: The joint-space control laws a joint-space scene runs, by name (PD + gravity, computed torque on the exact
@@ -542,10 +543,7 @@ def quintic(start: Any, end: Any, t0: float, duration: float) -> Callable[[float
         a, b = float(a), float(b)
 
     def at(t: float) -> tuple[Any, Any, Any]:
-        s = min(max((t - t0) / duration, 0.0), 1.0)
-        shape = s**3 * (10 - 15 * s + 6 * s * s)
-        rate = 30 * s * s * (1 - s) ** 2 / duration
-        accel = 60 * s * (1 - s) * (1 - 2 * s) / duration**2
+        shape, rate, accel = minimum_jerk(t, t0, duration)
         return a + (b - a) * shape, (b - a) * rate, (b - a) * accel
 
     return at
