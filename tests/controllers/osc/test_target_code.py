@@ -65,16 +65,17 @@ def _switching(good: Callable[[float], tuple], bad: tuple) -> Callable[[float], 
     return lambda t: good(t) if t < 0.5 else bad
 
 
-@pytest.mark.parametrize("bad", range(len(BAD_POSES)))
-def test_a_bad_pose_from_a_trajectory_raises_the_numpy_paths_error(panda: armctl.Dynamics, bad: int) -> None:
+def _same_error_then_on(make: Callable[[str | bool, FramePoseTask], OperationalSpaceQP], bad: int, **task: Any) -> None:
+    """On the generated path and on NumPy's, a trajectory's bad pose (``BAD_POSES[bad]``) after a good one raises
+    the same named error, and a valid target afterwards gives the step the same τ on both paths."""
     value, vel, kind, message = BAD_POSES[bad]
     ref = armctl.Reference(Q_HOME)
     good = lambda t: (_pose(ROT, (0.4, 0.1 * t, 0.5)), ZERO.copy(), ZERO.copy())  # noqa: E731
     taus = []
     for compile in ("auto", False):
-        task = FramePoseTask(kp=100.0)
-        task.set_trajectory(_switching(good, (value, vel, ZERO.copy())))
-        ctrl = _controller(panda, task, compile)
+        pose = FramePoseTask(kp=100.0, **task)
+        pose.set_trajectory(_switching(good, (value, vel, ZERO.copy())))
+        ctrl = make(compile, pose)
         assert ctrl.uses_generated_code is (compile == "auto")
         taus.append(ctrl(0.25, Q_HOME, np.zeros(7), ref))
         with pytest.raises(kind, match=message):
@@ -85,28 +86,23 @@ def test_a_bad_pose_from_a_trajectory_raises_the_numpy_paths_error(panda: armctl
     np.testing.assert_allclose(taus[1], taus[3], atol=1e-6)
 
 
+@pytest.mark.parametrize("bad", range(len(BAD_POSES)))
+def test_a_bad_pose_from_a_trajectory_raises_the_numpy_paths_error(panda: armctl.Dynamics, bad: int) -> None:
+    _same_error_then_on(lambda compile, pose: _controller(panda, pose, compile), bad)
+
+
 @pytest.mark.parametrize("levels", [1, 2])
 @pytest.mark.parametrize("bad", range(len(BAD_POSES)))
 def test_a_bad_pose_raises_the_numpy_paths_error_with_a_contact(panda: armctl.Dynamics, bad: int, levels: int) -> None:
     """With an active contact (the contact QP's generated data, one level or two): the same named error, and the
     step goes on with a valid target afterwards."""
-    value, vel, kind, message = BAD_POSES[bad]
-    ref = armctl.Reference(Q_HOME)
-    good = lambda t: (_pose(ROT, (0.4, 0.1 * t, 0.5)), ZERO.copy(), ZERO.copy())  # noqa: E731
-    taus = []
-    for compile in ("auto", False):
-        task = FramePoseTask(kp=100.0, weight=[1, 1, 0, 1, 1, 1])
-        task.set_trajectory(_switching(good, (value, vel, ZERO.copy())))
+
+    def make(compile: str | bool, pose: FramePoseTask) -> OperationalSpaceQP:
         contact = Contact(mode="sliding", mu=0.3, kd=100.0)
-        tasks = [task, ContactForceTask(contact, 8.0), PostureTask(7, kp=25.0, weight=1e-3, priority=levels - 1)]
-        ctrl = OperationalSpaceQP(panda, tasks, limits=[TorqueLimit()], contacts=[contact], compile=compile)
-        assert ctrl.uses_generated_code is (compile == "auto")
-        taus.append(ctrl(0.25, Q_HOME, np.zeros(7), ref))
-        with pytest.raises(kind, match=message):
-            ctrl(1.0, Q_HOME, np.zeros(7), ref)
-        taus.append(ctrl(0.3, Q_HOME, np.zeros(7), ref))
-    np.testing.assert_allclose(taus[0], taus[2], atol=1e-6)
-    np.testing.assert_allclose(taus[1], taus[3], atol=1e-6)
+        tasks = [pose, ContactForceTask(contact, 8.0), PostureTask(7, kp=25.0, weight=1e-3, priority=levels - 1)]
+        return OperationalSpaceQP(panda, tasks, limits=[TorqueLimit()], contacts=[contact], compile=compile)
+
+    _same_error_then_on(make, bad, weight=[1, 1, 0, 1, 1, 1])
 
 
 def test_orientation_and_position_trajectories_are_checked(panda: armctl.Dynamics) -> None:
