@@ -255,13 +255,10 @@ def test_a_compiler_that_exits_0_without_a_usable_library_is_named_and_poisons_n
     assert [w.message for w in seen if issubclass(w.category, CacheWarning)] == []
 
 
-def test_a_build_killed_midway_leaves_no_folder_behind_for_long(tmp_path: Path) -> None:
-    """A build killed while compiling left its temporary folder (generated C included) in the cache forever.
-    The child is killed (SIGKILL, its compiler too) while its $CC runs; the folder is there, and once it is
-    older than the stale age and no build holds its lock, the next process to use the cache removes it."""
-    from armctl.codegen.library_cache import STALE_AFTER
-
-    cache, started = tmp_path / "cache", tmp_path / "compiler-started"
+def _kill_a_build_while_it_compiles(tmp_path: Path, cache: Path) -> None:
+    """Start a build of the test model into ``cache`` in a child process whose $CC hangs, and kill the child and
+    its compiler (SIGKILL) once the compiler runs."""
+    started = tmp_path / "compiler-started"
     cc = _script(tmp_path / "hanging-cc", f'touch "{started}"\nexec sleep 300\n')
     child = _child(cache, env={"CC": str(cc)}, start_new_session=True)
     try:
@@ -272,6 +269,16 @@ def test_a_build_killed_midway_leaves_no_folder_behind_for_long(tmp_path: Path) 
     finally:
         os.killpg(child.pid, signal.SIGKILL)
         child.communicate()
+
+
+def test_a_build_killed_midway_leaves_no_folder_behind_for_long(tmp_path: Path) -> None:
+    """A build killed while compiling left its temporary folder (generated C included) in the cache forever.
+    The child is killed (SIGKILL, its compiler too) while its $CC runs; the folder is there, and once it is
+    older than the stale age and no build holds its lock, the next process to use the cache removes it."""
+    from armctl.codegen.library_cache import STALE_AFTER
+
+    cache = tmp_path / "cache"
+    _kill_a_build_while_it_compiles(tmp_path, cache)
     (left,) = _build_folders(cache)
     assert any(left.glob("*.c")) and _libraries(cache) == []
     old = time.time() - STALE_AFTER - 60
@@ -336,17 +343,8 @@ def test_the_next_build_after_a_build_killed_midway_leaves_nothing_stale(tmp_pat
     the next build of the same library, at once (no waiting for the stale age), succeeds and leaves neither
     behind: the folder is the dead build's (no other build of the library can run while the lock is held), and
     the lock's owner is dead. What the library computes is checked against the uncompiled backend."""
-    cache, started = tmp_path / "cache", tmp_path / "compiler-started"
-    cc = _script(tmp_path / "hanging-cc", f'touch "{started}"\nexec sleep 300\n')
-    child = _child(cache, env={"CC": str(cc)}, start_new_session=True)
-    try:
-        deadline = time.monotonic() + 120
-        while not started.exists():
-            assert child.poll() is None and time.monotonic() < deadline, child.communicate()[1][-3000:]
-            time.sleep(0.05)
-    finally:
-        os.killpg(child.pid, signal.SIGKILL)
-        child.communicate()
+    cache = tmp_path / "cache"
+    _kill_a_build_while_it_compiles(tmp_path, cache)
     folder = cache / "casadi"
     assert len(_build_folders(cache)) == 1 and len(list(folder.glob("*.lock"))) == 1  # what the kill left
     dyn = armctl.Dynamics(_model(), compile=True, cache_dir=cache)
