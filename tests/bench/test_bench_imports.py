@@ -3,27 +3,7 @@
 
 from __future__ import annotations
 
-import ast
-from pathlib import Path
-
-BENCH = Path(__file__).resolve().parents[2] / "src" / "armctl" / "bench"
-
-
-def _imports() -> dict[str, set[str]]:
-    """Module name → the armctl.bench modules it imports, anywhere in its source."""
-    names = {p.stem for p in BENCH.glob("*.py") if p.stem != "__init__"}
-    graph: dict[str, set[str]] = {}
-    for name in names:
-        found: set[str] = set()
-        for node in ast.walk(ast.parse((BENCH / f"{name}.py").read_text(encoding="utf-8"))):
-            if isinstance(node, ast.ImportFrom) and node.module == "armctl.bench":
-                found |= {a.name for a in node.names if a.name in names}
-            elif isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("armctl.bench."):
-                found.add(node.module.split(".")[2])
-            elif isinstance(node, ast.Import):
-                found |= {a.name.split(".")[2] for a in node.names if a.name.startswith("armctl.bench.")}
-        graph[name] = found - {name}
-    return graph
+from tests.helpers.imports import package_imports
 
 
 def _cycle(graph: dict[str, set[str]]) -> list[str] | None:
@@ -50,7 +30,7 @@ def _cycle(graph: dict[str, set[str]]) -> list[str] | None:
 
 
 def test_the_bench_has_no_import_loop() -> None:
-    graph = _imports()
+    graph = package_imports("bench")
     assert {"report", "sections", "suite", "charts"} <= set(graph)
     assert _cycle(graph) is None, _cycle(graph)
     assert "suite" not in graph["report"] and "suite" not in graph["sections"]

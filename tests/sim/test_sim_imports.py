@@ -6,10 +6,7 @@ these modules."""
 
 from __future__ import annotations
 
-import ast
-from pathlib import Path
-
-SIM = Path(__file__).resolve().parents[2] / "src" / "armctl" / "sim"
+from tests.helpers.imports import package_imports
 
 #: the modules whose layering this file checks
 LAYERED = (
@@ -24,23 +21,6 @@ LAYERED = (
     "case_failure",
     "case_settings",
 )
-
-
-def _imports() -> dict[str, set[str]]:
-    """Module name → the armctl.sim modules it imports, anywhere in its source."""
-    names = {p.stem for p in SIM.glob("*.py") if p.stem != "__init__"}
-    graph: dict[str, set[str]] = {}
-    for name in names:
-        found: set[str] = set()
-        for node in ast.walk(ast.parse((SIM / f"{name}.py").read_text(encoding="utf-8"))):
-            if isinstance(node, ast.ImportFrom) and node.module == "armctl.sim":
-                found |= {a.name for a in node.names if a.name in names}
-            elif isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("armctl.sim."):
-                found.add(node.module.split(".")[2])
-            elif isinstance(node, ast.Import):
-                found |= {a.name.split(".")[2] for a in node.names if a.name.startswith("armctl.sim.")}
-        graph[name] = found - {name}
-    return graph
 
 
 def _reachable(graph: dict[str, set[str]], start: str) -> set[str]:
@@ -60,21 +40,21 @@ def _in_a_loop(graph: dict[str, set[str]], module: str) -> bool:
 
 
 def test_no_import_loop_passes_through_the_run_readers_or_the_sweep_modules() -> None:
-    graph = _imports()
+    graph = package_imports("sim")
     assert set(LAYERED) <= set(graph)
     looped = [m for m in LAYERED if _in_a_loop(graph, m)]
     assert not looped, looped
 
 
 def test_the_readers_of_a_run_do_not_import_the_result() -> None:
-    graph = _imports()
+    graph = package_imports("sim")
     for reader in ("plot", "playback", "tables", "run_record"):
         assert "result" not in _reachable(graph, reader), reader
     assert {"plot", "playback", "tables"} <= graph["result"]
 
 
 def test_the_sweep_store_and_table_sit_below_the_sweep_result() -> None:
-    graph = _imports()
+    graph = package_imports("sim")
     for low in ("sweep_store", "sweep_table", "case_failure", "case_settings"):
         assert "sweep_result" not in _reachable(graph, low), low
     assert not _reachable(graph, "case_failure") and not _reachable(graph, "case_settings")
