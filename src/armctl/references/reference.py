@@ -60,6 +60,23 @@ class Reference:
                 object.__setattr__(self, "qd", vel)
                 object.__setattr__(self, "qdd", acc)
                 return
+        elif (  # a set-point: a float64 vector with a finite sum, zero velocity and acceleration
+            qd is None
+            and qdd is None
+            and type(q) is np.ndarray
+            and q.dtype == FLOAT
+            and q.ndim == 1
+            and q.shape[0]
+        ):
+            pos = q.copy()
+            if math.isfinite(sum(pos.tolist())):
+                pos.setflags(write=False)
+                zero = np.zeros(q.shape[0])
+                zero.setflags(write=False)
+                object.__setattr__(self, "q", pos)
+                object.__setattr__(self, "qd", zero)
+                object.__setattr__(self, "qdd", zero)
+                return
         self._checked(q, qd, qdd)
 
     def _checked(self, raw_q: ArrayLike, raw_qd: ArrayLike | None, raw_qdd: ArrayLike | None) -> None:

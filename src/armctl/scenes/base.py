@@ -522,13 +522,14 @@ def holding_scene(cls: type[_S], name: str, description: str, model: RobotModel,
     Scene
         Of class ``cls``.
     """
+    held = Reference(q0)  # (read-only: one for every instant)
     return cls(
         name,
         description,
         plant=model,
         exact=model,
         reduced=model,
-        reference=lambda t: Reference(q0),
+        reference=lambda t: held,
         q0=q0,
         **settings,
     )
