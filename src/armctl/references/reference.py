@@ -61,12 +61,7 @@ class Reference:
                 object.__setattr__(self, "qdd", acc)
                 return
         elif (  # a set-point: a float64 vector with a finite sum, zero velocity and acceleration
-            qd is None
-            and qdd is None
-            and type(q) is np.ndarray
-            and q.dtype == FLOAT
-            and q.ndim == 1
-            and q.shape[0]
+            qd is None and qdd is None and type(q) is np.ndarray and q.dtype == FLOAT and q.ndim == 1 and q.shape[0]
         ):
             pos = q.copy()
             if math.isfinite(sum(pos.tolist())):
