@@ -18,6 +18,8 @@ from armctl._checks import FLOAT, FloatArray
 
 #: the types of entries that cannot change after they are logged (kept as they are, see the module)
 _IMMUTABLE = (int, float, bool, str, np.integer, np.floating, np.bool_)
+#: the exact types of the usual such entries (ControllerLog.add's quick test; the others take _kept_as_is)
+_EXACT = frozenset((int, float, bool, str, np.bool_, np.float64, np.int64))
 
 
 class ControllerLog:
@@ -26,25 +28,30 @@ class ControllerLog:
     def __init__(self, samples: int) -> None:
         self.samples = samples
         self._arrays: dict[str, FloatArray] = {}  # key → (samples, *shape) rows
-        self._logged: dict[str, np.ndarray] = {}  # key → which rows hold an entry
-        #: key → (its rows, its logged mask, the shape of an entry): what :meth:`add` needs, in one lookup
-        self._slots: dict[str, tuple[FloatArray, np.ndarray, tuple[int, ...]]] = {}
+        self._logged: dict[str, list[int]] = {}  # key → the rows that hold an entry, in order
+        #: key → (its rows, the rows logged, the shape of an entry): what :meth:`add` needs, in one lookup
+        self._slots: dict[str, tuple[FloatArray, list[int], tuple[int, ...]]] = {}
         self._copies: dict[str, list[Any]] = {}  # key → the entries kept one by one
         self._copy_rows: dict[str, list[int]] = {}
 
     def add(self, k: int, log: dict[str, Any]) -> None:
         """Record the entries of ``log`` at sample k."""
-        slots = self._slots
+        slots, copies = self._slots, self._copies
         for key, val in log.items():
             slot = slots.get(key)
-            if slot is not None and type(val) is np.ndarray and val.shape == slot[2] and val.dtype == FLOAT:
-                slot[0][k] = val  # (the usual entry: an array of the key's shape)
-                slot[1][k] = True
-            elif slot is None and _kept_as_is(val) and key in self._copies:  # (a key kept one by one)
-                self._copies[key].append(val)
+            kind = type(val)
+            if slot is not None:
+                if kind is np.ndarray and val.shape == slot[2] and val.dtype == FLOAT:
+                    slot[0][k] = val  # (the usual entry: an array of the key's shape)
+                    slot[1].append(k)
+                    continue
+            elif (  # (a key kept one by one, and an entry of the exact types that cannot change)
+                kind in _EXACT or (kind is tuple and set(map(type, val)) <= _EXACT)
+            ) and key in copies:
+                copies[key].append(val)
                 self._copy_rows[key].append(k)
-            else:
-                self._add_other(k, key, val)
+                continue
+            self._add_other(k, key, val)
 
     def _add_other(self, k: int, key: str, val: Any) -> None:
         """:meth:`add` of an entry that is not a float64 array of its key's rows: a float of a key of floats, a
@@ -54,16 +61,15 @@ class ControllerLog:
             rows, logged, shape = slot
             if type(val) is float and not shape:
                 rows[k] = val
-                logged[k] = True
+                logged.append(k)
                 return
             self._keep_copies(key)  # another shape or kind from now on: kept one by one
         elif key not in self._copies and ((type(val) is np.ndarray and val.dtype == FLOAT) or type(val) is float):
             shape = np.shape(val)
             rows = self._arrays[key] = np.empty((self.samples, *shape))
-            logged = self._logged[key] = np.zeros(self.samples, dtype=bool)
-            self._slots[key] = (rows, logged, shape)
+            self._logged[key] = [k]
+            self._slots[key] = (rows, self._logged[key], shape)
             rows[k] = val
-            logged[k] = True
             return
         self._copies.setdefault(key, []).append(val if _kept_as_is(val) else np.array(val, copy=True))
         self._copy_rows.setdefault(key, []).append(k)
@@ -72,9 +78,8 @@ class ControllerLog:
         """Move ``key``'s rows so far into copies (its entries change shape or kind)."""
         rows, logged = self._arrays.pop(key), self._logged.pop(key)
         del self._slots[key]
-        idx = np.flatnonzero(logged).tolist()
-        self._copies[key] = [rows[i].copy() for i in idx]
-        self._copy_rows[key] = idx
+        self._copies[key] = [rows[i].copy() for i in logged]
+        self._copy_rows[key] = logged
 
     def stacked(self, rows: int) -> tuple[dict[str, np.ndarray], list[str]]:
         """(logs, skipped) of the first ``rows`` samples: each key's entries stacked (with ``key:sample``, the
@@ -82,7 +87,7 @@ class ControllerLog:
         logs: dict[str, np.ndarray] = {}
         skipped: list[str] = []
         for key, arr in self._arrays.items():
-            idx = np.flatnonzero(self._logged[key][:rows])
+            idx = np.array([i for i in self._logged[key] if i < rows], dtype=np.intp)
             if not len(idx):  # logged only after the last recorded sample
                 continue
             if len(idx) == idx[-1] + 1:  # at every sample from the first
