@@ -102,18 +102,30 @@ class PlantExpressions:
 
     # ------------------------------------------------------------------------------------- contact
     def points(self, q: cs.SX, par: cs.SX) -> list[tuple[cs.SX, cs.SX]]:
-        """(p, J_p) of every contact point."""
-        qs = cs.SX.sym("qs", self.n)  # J_p = ∂p/∂q on a symbol, then at q (which may be an expression)
-        poses, _ = self.poses(qs)
+        """(p, J_p) of every contact point (J_p = ∂p/∂q: :meth:`linear_jacobian`)."""
+        poses, _ = self.poses(q)
         out = []
         at = self.layout.points_offset
         for joint, _ in self.layout.points:
             rot, pos = poses[joint]
             p = pos + rot @ par[at + 6 : at + 9]
-            p, jac = cs.substitute([p, cs.jacobian(p, qs)], [qs], [q])
-            out.append((p, jac))
+            out.append((p, self.linear_jacobian(poses, joint, p)))
             at += POINT_PARAMS
         return out
+
+    def linear_jacobian(self, poses: list[tuple[Any, Any]], joint: int, p: cs.SX) -> cs.SX:
+        """∂p/∂q (3 × n) of a point p [m] fixed to the frame of joint ``joint``, from the world poses of
+        :meth:`poses`, column by column: a revolute joint i below it moves p along a_i × (p − o_i), a prismatic one
+        along a_i (a_i its axis and o_i its frame's origin, in world axes); the joints above it not at all."""
+        cols = []
+        for i, j in enumerate(self.model.joints):
+            if i >= joint:
+                cols.append(cs.SX.zeros(3))
+                continue
+            rot, origin = poses[i + 1]
+            axis = rot @ cs.DM(j.axis)
+            cols.append(cs.cross(axis, p - origin) if j.kind == "revolute" else axis)
+        return cs.horzcat(*cols)
 
     def _point_force(self, at: int, law: str, p: cs.SX, vp: cs.SX, par: cs.SX) -> dict[str, Any]:
         """The force F on the arm of the point at ``par[at:]`` (position p, velocity ṗ) and what its derivatives
@@ -205,12 +217,10 @@ class PlantExpressions:
     def disturbance(self, q: cs.SX, hd: cs.SX, par: cs.SX) -> cs.SX:
         """−J_tool(q)ᵀ h_d: the joint torque the disturbance wrench h_d (what the arm exerts) adds to τ."""
         joint = cast(int, self.layout.disturbance_joint)  # set: the plant has a disturbance
-        qs = cs.SX.sym("qs", self.n)
-        poses, _ = self.poses(qs)
+        poses, _ = self.poses(q)
         rot, pos = poses[joint]
         at = self.layout.tool_offset
-        p = pos + rot @ par[at : at + 3]
-        jl = cs.jacobian(p, qs)
+        jl = self.linear_jacobian(poses, joint, pos + rot @ par[at : at + 3])
         cols = []
         for i, j in enumerate(self.model.joints):
             if i < joint and j.kind == "revolute":
@@ -218,7 +228,7 @@ class PlantExpressions:
             else:
                 cols.append(cs.SX.zeros(3))
         ja = cs.horzcat(*cols)
-        return cs.substitute(-(jl.T @ hd[:3] + ja.T @ hd[3:]), qs, q)
+        return -(jl.T @ hd[:3] + ja.T @ hd[3:])
 
     def external(self, q: cs.SX, v: cs.SX, hd: cs.SX, par: cs.SX) -> cs.SX:
         """τ_e: contact torque plus disturbance torque (0 without either)."""
