@@ -37,8 +37,9 @@ CFLAGS = ("-O1", "-fPIC", "-shared")
 #: the flags of a library whose code runs in a hot loop (the simulator's step): a slower build for faster code
 CFLAGS_FAST = ("-O3", "-fPIC", "-shared")
 Flags = tuple[str, ...]
-#: bumped when what a library holds besides the user's functions changes (the key function)
-_LAYOUT = 2
+#: bumped when what a library holds besides the user's functions changes (the key function), or how their code is
+#: generated (:func:`merged`)
+_LAYOUT = 3
 #: libraries loaded by this process, by path, most recently used last (at most _KEEP)
 _loaded: OrderedDict[Path, dict[str, cs.Function]] = OrderedDict()
 _KEEP = 64
@@ -219,6 +220,17 @@ def _loader_error(message: str, path: str) -> str:
     return message.strip().splitlines()[-1][:300]
 
 
+def merged(fn: cs.Function) -> cs.Function:
+    """``fn`` with its common subexpressions evaluated once (CasADi's ``cse``): an SX function's expression
+    graph can hold the same subexpression twice (built twice, as the forward kinematics of a contact point and of
+    the dynamics are); the code generated from it then computes it twice. The values are the same; other
+    functions are returned as they are."""
+    if not fn.is_a("SXFunction"):
+        return fn
+    inputs = fn.sx_in()
+    return cs.Function(fn.name(), inputs, fn.call(inputs), fn.name_in(), fn.name_out(), {"cse": True})
+
+
 def build(
     functions: list[cs.Function],
     lib: Path,
@@ -247,7 +259,7 @@ def build(
     try:
         gen = cs.CodeGenerator(f"{stem}.c", {"with_header": False})
         for f in functions:
-            gen.add(f)
+            gen.add(merged(f))
         gen.add(library_cache.key_function(key))
         try:
             src = Path(gen.generate(str(tmp) + os.sep))
