@@ -301,3 +301,28 @@ def test_all_finite_agrees_with_isfinite_and_warns_nothing(shape: tuple[int, ...
         warnings.simplefilter("error")
         assert all_finite(a) == bool(np.isfinite(a).all())
         assert all_finite(np.asfortranarray(a)) == bool(np.isfinite(a).all())
+
+
+def test_readonly_fields_copies_each_named_field_as_a_read_only_float_array() -> None:
+    from dataclasses import dataclass
+
+    from armctl._checks import readonly_fields
+
+    @dataclass(frozen=True)
+    class Record:
+        a: Any
+        b: Any
+        c: Any
+
+        def __post_init__(self) -> None:
+            readonly_fields(self, ("a", "b"))
+
+    given = np.arange(3)
+    rec = Record(given, [[1, 2], [3, 4]], given)
+    assert rec.a.dtype == np.float64 and rec.b.dtype == np.float64 and rec.b.shape == (2, 2)
+    assert not rec.a.flags.writeable and not rec.b.flags.writeable
+    assert rec.c is given  # a field not named is left alone
+    given[0] = 7  # the caller's array is not shared
+    assert rec.a[0] == 0.0
+    with pytest.raises(ValueError, match="read-only"):
+        rec.a[0] = 1.0

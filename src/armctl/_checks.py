@@ -8,6 +8,7 @@ from __future__ import annotations
 import datetime
 import math
 import os
+from collections.abc import Iterable
 from typing import Any
 
 import numpy as np
@@ -248,6 +249,13 @@ def gain_matrix(k: object, n: int, name: str) -> FloatArray:
 def readonly(a: FloatArray) -> FloatArray:
     a.flags.writeable = False
     return a
+
+
+def readonly_fields(obj: Any, names: Iterable[str]) -> None:
+    """Set each field of ``names`` of the frozen dataclass ``obj`` (in its ``__post_init__``) to a read-only float
+    copy of its value: the caller's arrays are not shared, and the result's cannot be written to."""
+    for name in names:
+        object.__setattr__(obj, name, readonly(np.array(getattr(obj, name), dtype=float)))
 
 
 def compact_gain(k: FloatArray) -> FloatArray:

@@ -200,3 +200,22 @@ def test_bad_input_raises_armctl_error_naming_the_value(case: str) -> None:
     call, named = BAD_INPUTS[case]
     with pytest.raises(ArmctlError, match=named.replace(".", r"\.")):
         call()
+
+
+@pytest.mark.parametrize("delay", [0, 1, 3])
+def test_delayed_loop_matrix_poles_are_the_roots_of_the_delayed_characteristic_polynomial(delay: int) -> None:
+    """x_{k+1} = a x_k + f x_{k−d} (one state): its poles are the roots of z^{d+1} − a z^d − f."""
+    from armctl.tuning.sampled import delayed_loop_matrix
+
+    a, f = 0.9, -0.35
+    poles = np.linalg.eigvals(delayed_loop_matrix(np.array([[a]]), np.array([[f]]), delay))
+    roots = np.roots([1.0, -a, *([0.0] * (delay - 1)), -f] if delay else [1.0, -(a + f)])
+    np.testing.assert_allclose(np.sort_complex(poles), np.sort_complex(roots), atol=1e-12)
+
+
+def test_delayed_loop_matrix_without_delay_is_the_plant_plus_the_feedback() -> None:
+    from armctl.tuning.sampled import delayed_loop_matrix
+
+    a = np.array([[1.0, 0.1], [0.0, 1.0]])
+    f = np.array([[-0.2, -0.05], [0.3, -0.4]])
+    np.testing.assert_array_equal(delayed_loop_matrix(a, f, 0), a + f)

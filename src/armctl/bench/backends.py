@@ -238,8 +238,7 @@ def plot(data: dict[str, Any], path: Path) -> None:
         f"{ZERO_ERROR_PLOT:g})",
         fontsize=12,
     )
-    fig.tight_layout(rect=(0, 0.0 if spare else 0.12 / rows, 1, 0.96))
-    save_figure(fig, path)
+    save_figure(fig, path, rect=(0, 0.0 if spare else 0.12 / rows, 1, 0.96))
 
 
 def main() -> None:

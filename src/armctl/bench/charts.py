@@ -30,7 +30,9 @@ def plain_log_ticks(ax: Any) -> None:
             axis.set_minor_formatter(matplotlib.ticker.NullFormatter())
 
 
-def save_figure(fig: Any, path: Path, dpi: int = 110) -> None:
-    """Write ``fig`` to ``path`` and free it."""
+def save_figure(fig: Any, path: Path, dpi: int = 110, rect: tuple[float, float, float, float] | None = None) -> None:
+    """Lay ``fig`` out (matplotlib's ``tight_layout`` within ``rect``, (left, bottom, right, top) as fractions of
+    the figure; None: all of it), write it to ``path`` and free it."""
+    fig.tight_layout(rect=rect)
     fig.savefig(path, dpi=dpi)
     pyplot().close(fig)

@@ -331,7 +331,6 @@ def plot(data: dict[str, Any], path: Path) -> None:
         ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
         ax.axvspan(zero_at / 2.0, zero_at * 2.0, color="0.93", zorder=0)
     fig.suptitle(f"Plant engines on the {data['plant']}: cost against error (labels: step [ms])", fontsize=11)
-    fig.tight_layout()
     save_figure(fig, path)
 
 

@@ -426,7 +426,6 @@ def plot(data: dict[str, Any], path: Path) -> None:
     shown = dict.fromkeys(c["backend"] for s in scenes.values() for c in s["closed_loop"]["candidates"].values())
     symbols = {"pinocchio": "○ Pinocchio", "lagrange": "□ Lagrange VM"}
     fig.suptitle(f"Model no more than a scene needs ({', '.join(symbols[b] for b in shown)})", fontsize=11)
-    fig.tight_layout()
     save_figure(fig, path)
 
 

@@ -277,7 +277,6 @@ def plot(data: dict[str, Any], path: Path) -> None:
     ax.set_title(f"Integrators on {s['plant']}: cost vs accuracy (labels: step [ms])", fontsize=10)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=9)
-    fig.tight_layout()
     save_figure(fig, path)
 
 

@@ -152,7 +152,6 @@ def plot_pareto(rows: list[dict[str, Any]], path: Path) -> None:
         Line2D([], [], ls="", marker="x", color="#d62828", ms=9, mew=2, label="diverged or failed (listed)"),
     ]
     fig.legend(handles=key, loc="lower center", ncol=3, fontsize=10, frameon=False)
-    fig.tight_layout(rect=(0, 0.08, 1, 1))
     from armctl.bench.charts import save_figure
 
-    save_figure(fig, path, dpi=110)
+    save_figure(fig, path, dpi=110, rect=(0, 0.08, 1, 1))

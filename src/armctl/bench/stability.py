@@ -235,7 +235,7 @@ def maps(
 
 def plot(data: dict[str, Any], path_for: Callable[[str], Any]) -> list[str]:
     """One PNG per controller (two panels); returns the file names."""
-    from armctl.bench.charts import plain_log_ticks, pyplot
+    from armctl.bench.charts import plain_log_ticks, pyplot, save_figure
 
     plt = pyplot()
     colour = {"stable": "#2a9d4a", "marginal": "#e9c46a", "unstable": "#d62828"}
@@ -277,10 +277,8 @@ def plot(data: dict[str, Any], path_for: Callable[[str], Any]) -> list[str]:
             handles = [*keys, *ax.get_legend_handles_labels()[0]]
             # below the axes: inside, the key covered cells
             ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2, fontsize=8)
-        fig.tight_layout()
         name = f"stability_{c}.png"
-        fig.savefig(path_for(name), dpi=110)
-        plt.close(fig)
+        save_figure(fig, path_for(name))
         names.append(name)
     if "pd_desired_gravity" in data:
         from armctl.bench.desired_gravity_map import plot as plot_desired_gravity

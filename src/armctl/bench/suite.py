@@ -351,37 +351,40 @@ def run_suite(
     def chart(name: str, section: str, caption: str) -> None:
         charts[name] = {"section": section, "caption": caption}
 
-    def after_scenes() -> None:
-        plot_pareto(figures["scenes"], out / "speed_accuracy.svg")
-        chart(
-            "speed_accuracy.svg",
-            "scenes",
-            "RMS tracking error against the controller's compute time per step, one panel per scene (its arm "
-            "and task in the title). Circles: within the plant's limits; diamonds: saturated or beyond a limit "
-            "(see the outcome column); red: the Pareto front; horizontal bars: the timing's quartiles; crosses: "
-            "methods that diverged or failed.",
-        )
+    def one_chart(key: str, plot: Callable[[Any, Path], None], name: str, caption: str) -> Callable[[], None]:
+        """What follows a section with one chart: ``plot`` of its figures written to ``out / name``, listed with
+        ``caption``."""
+
+        def after() -> None:
+            plot(figures[key], out / name)
+            chart(name, key, caption)
+
+        return after
 
     def after_stability() -> None:
         for name in stability.plot(figures["stability_maps"], lambda n: out / n):
             key = name.removeprefix("stability_").removesuffix(".png")
             chart(name, "stability_maps", stability.caption(key, figures["stability_maps"]))
 
-    def after_topp() -> None:
-        plot_topp(figures["topp_convergence"], out / "topp_convergence.svg")
-        chart(
-            "topp_convergence.svg",
-            "topp_convergence",
-            "TOPP-RA on a planar 2R arm: duration error against the analytic bang-bang duration, and compute "
-            "time, against the grid size.",
-        )
+    after_scenes = one_chart(
+        "scenes",
+        plot_pareto,
+        "speed_accuracy.svg",
+        "RMS tracking error against the controller's compute time per step, one panel per scene (its arm "
+        "and task in the title). Circles: within the plant's limits; diamonds: saturated or beyond a limit "
+        "(see the outcome column); red: the Pareto front; horizontal bars: the timing's quartiles; crosses: "
+        "methods that diverged or failed.",
+    )
+    after_topp = one_chart(
+        "topp_convergence",
+        plot_topp,
+        "topp_convergence.svg",
+        "TOPP-RA on a planar 2R arm: duration error against the analytic bang-bang duration, and compute "
+        "time, against the grid size.",
+    )
 
     def after_model_section(key: str, mod: Any) -> Callable[[], None]:
-        def after() -> None:
-            mod.plot(figures[key], out / f"{key}.svg")
-            chart(f"{key}.svg", key, (mod.__doc__ or key).strip().splitlines()[0])
-
-        return after
+        return one_chart(key, mod.plot, f"{key}.svg", (mod.__doc__ or key).strip().splitlines()[0])
 
     playbacks = out if missing_extra("playback") is None else None
     plan: list[tuple[str, Callable[[], Any], Callable[[], None] | None]] = [

@@ -240,21 +240,15 @@ class Environment(ABC):
 
         Parameters
         ----------
-        kin : PointKinematics
-            :meth:`kinematics` of the plant.
-        q : ndarray, shape (n,)
-            Joint positions [rad] (m for a prismatic joint).
-        qd : ndarray, shape (n,)
-            Joint velocities [rad/s].
+        kin, q, qd
+            As for :meth:`joint_torque`.
 
         Returns
         -------
         tau : ndarray, shape (n,)
-            τ_c = Σ_p J_pᵀ F_p [N·m], the joint torque of the forces on the arm (as :meth:`joint_torque`).
-        h : ndarray, shape (P, 3)
-            h_p = −F_p [N], world axes (zero for a point out of contact).
-        p : ndarray, shape (P, 3)
-            The points' positions [m], world axes.
+            τ_c [N·m], as for :meth:`joint_torque`.
+        h, p : ndarray, shape (P, 3)
+            As for :meth:`forces`.
         """
         tau = np.zeros(kin.dyn.n)
         hs, ps = np.zeros((len(self.points), 3)), np.zeros((len(self.points), 3))

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from armctl._checks import FloatArray
+from armctl._checks import FloatArray, readonly_fields
 from armctl.errors import SimulationWarning
 
 #: share of the samples above which a joint whose torque sits at its limit makes the run "saturated"
@@ -89,10 +89,7 @@ class LimitReport:
     samples: int = 0
 
     def __post_init__(self) -> None:
-        for name in _PER_JOINT:
-            a = np.array(getattr(self, name), dtype=float)
-            a.flags.writeable = False
-            object.__setattr__(self, name, a)
+        readonly_fields(self, _PER_JOINT)
         object.__setattr__(self, "joint_names", tuple(self.joint_names))
 
     @classmethod

@@ -8,7 +8,7 @@ from typing import cast
 
 import numpy as np
 
-from armctl._checks import FloatArray
+from armctl._checks import FloatArray, readonly_fields
 from armctl.references import Reference
 
 
@@ -23,10 +23,7 @@ class SampledReference:
     qdd: FloatArray
 
     def __post_init__(self) -> None:
-        for name in ("t", "q", "qd", "qdd"):
-            a = np.array(getattr(self, name), dtype=float)
-            a.flags.writeable = False
-            object.__setattr__(self, name, a)
+        readonly_fields(self, ("t", "q", "qd", "qdd"))
 
     @classmethod
     def of(cls, t: FloatArray, references: Sequence[Reference | None], n: int) -> SampledReference:

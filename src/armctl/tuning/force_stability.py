@@ -27,6 +27,7 @@ import numpy as np
 
 from armctl._checks import scalar, whole_number
 from armctl.errors import InvalidParameterError
+from armctl.tuning.sampled import delayed_loop_matrix
 
 
 def _discrete_plant(stiffness: float, inertia: float, period: float, damping: float) -> tuple[Any, Any]:
@@ -86,13 +87,7 @@ def force_loop_matrix(
     # u = (a, f_m) = G x_{k−d}:  a = −K_P (s + K_F f) − K_D ṡ  (deviations from the set-point)
     gain = np.vstack([-scalar(kp, "kp") * (np.array([1.0, 0.0]) + k_f * c_f) - np.array([0.0, scalar(kd, "kd")]),
                       c_f if compensate else np.zeros(2)])  # fmt: skip
-    size = 2 * (d + 1)
-    big = np.zeros((size, size))
-    big[:2, :2] = ad
-    big[:2, 2 * d : 2 * d + 2] += bd @ gain
-    if d:
-        big[2:, :-2] = np.eye(2 * d)
-    return big
+    return delayed_loop_matrix(ad, bd @ gain, d)
 
 
 def force_loop_radius(stiffness: float, force_gain: float, **loop: Any) -> float:

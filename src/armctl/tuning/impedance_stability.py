@@ -30,6 +30,7 @@ import numpy as np
 from armctl._checks import scalar, vector, whole_number
 from armctl.controllers.interaction.gains import critical_damping, damping_ratio, symmetric_psd
 from armctl.errors import InvalidParameterError
+from armctl.tuning.sampled import delayed_loop_matrix
 
 if TYPE_CHECKING:
     from armctl.controllers import CartesianImpedance
@@ -125,13 +126,7 @@ def impedance_loop_matrix(
     a = np.block([[zero, eye], [-k_e * lam_inv @ nn, -scalar(damping, "damping", nonnegative=True) * lam_inv @ nn]])
     b = np.vstack([zero, lam_inv])
     sys = control.c2d(control.ss(a, b, np.eye(2 * m), np.zeros((2 * m, m))), t, method="zoh")
-    size = 2 * m * (d + 1)
-    big = np.zeros((size, size))
-    big[: 2 * m, : 2 * m] = sys.A
-    big[: 2 * m, 2 * m * d : 2 * m * (d + 1)] += np.asarray(sys.B) @ -np.hstack([k, d_imp])
-    if d:
-        big[2 * m :, : -2 * m] = np.eye(2 * m * d)
-    return big
+    return delayed_loop_matrix(np.asarray(sys.A), np.asarray(sys.B) @ -np.hstack([k, d_imp]), d)
 
 
 def critical_environment_stiffness(impedance_stiffness: Any, rtol: float = 1e-4, **loop: Any) -> float:

@@ -44,10 +44,8 @@ def sampled_pd_loop(kp: float, kd: float, period: float, delay: int = 1) -> Any:
 
     Parameters
     ----------
-    kp : float
-        K_p [1/s²].
-    kd : float
-        K_d [1/s].
+    kp, kd : float
+        As for :func:`~armctl.tuning.closed_loop_poles`: the PD's gains on the double integrator.
     period : float
         The control period T [s], > 0.
     delay : int, optional
@@ -84,18 +82,44 @@ def spectral_radius(kp: float, kd: float, period: float, delay: int = 1) -> floa
     float
     """
     kp, kd, t, d = _loop(kp, kd, period, delay)
-    size = 2 * (d + 1)
-    big = np.zeros((size, size))
-    big[:2, :2] = [[1.0, t], [0.0, 1.0]]
-    big[:2, 2 * d : 2 * d + 2] -= np.array([[t * t / 2], [t]]) @ np.array([[kp, kd]])
-    if d:
-        big[2:, :-2] = np.eye(2 * d)
+    big = delayed_loop_matrix(np.array([[1.0, t], [0.0, 1.0]]), -np.array([[t * t / 2], [t]]) @ np.array([[kp, kd]]), d)
     try:
         if not np.isfinite(big).all():
             raise np.linalg.LinAlgError
         return float(np.abs(np.linalg.eigvals(big)).max())
     except np.linalg.LinAlgError:
         raise _beyond_analysis(kp, kd, t) from None
+
+
+def delayed_loop_matrix(a: np.ndarray, feedback: np.ndarray, delay: int) -> np.ndarray:
+    """The transition matrix of a sampled loop whose feedback acts on the state measured ``delay`` periods ago,
+
+        x_{k+1} = A x_k + F x_{k−d},
+
+    on the state augmented with the d past samples, z_k = (x_k, x_{k−1}, …, x_{k−d}): the first block row is
+    [A, 0, …, 0, F] (A + F for d = 0), and each other block row shifts a sample one period back.
+
+    Parameters
+    ----------
+    a : ndarray, shape (m, m)
+        A, the sampled plant (zero-order hold).
+    feedback : ndarray, shape (m, m)
+        F = B_d G: the feedback gain G on the delayed state through the plant's input matrix B_d.
+    delay : int
+        d ≥ 0 [periods], checked by the caller.
+
+    Returns
+    -------
+    ndarray, shape (m(d+1), m(d+1))
+    """
+    m = a.shape[0]
+    size = m * (delay + 1)
+    big = np.zeros((size, size))
+    big[:m, :m] = a
+    big[:m, m * delay :] += feedback
+    if delay:
+        big[m:, :-m] = np.eye(m * delay)
+    return big
 
 
 def _beyond_analysis(kp: float, kd: float, t: float) -> InvalidParameterError:

@@ -26,7 +26,7 @@ from typing import cast
 import numpy as np
 import scipy.linalg
 
-from armctl._checks import FloatArray, readonly, scalar, whole_number
+from armctl._checks import FloatArray, readonly, readonly_fields, scalar, whole_number
 from armctl.dynamics.base import Dynamics
 from armctl.errors import InvalidParameterError
 from armctl.model.robot import PARAMS_PER_JOINT
@@ -76,7 +76,7 @@ class BaseParameters:
     tol: float
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "beta", readonly(np.array(self.beta, dtype=float)))
+        readonly_fields(self, ("beta",))
 
     @property
     def n_full(self) -> int:

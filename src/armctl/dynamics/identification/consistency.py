@@ -31,7 +31,7 @@ import scipy.linalg
 import scipy.optimize
 from numpy.typing import ArrayLike
 
-from armctl._checks import FloatArray, readonly, scalar, vector, whole_number
+from armctl._checks import FloatArray, readonly_fields, scalar, vector, whole_number
 from armctl.dynamics.identification.least_squares import LeastSquaresEstimate, check_torque
 from armctl.dynamics.identification.problem import IdentificationProblem
 from armctl.dynamics.identification.pseudo_inertia import factor_of, parameters_from_factor
@@ -87,8 +87,7 @@ class ConsistentEstimate:
     message: str
 
     def __post_init__(self) -> None:
-        for k in ("pi", "coulomb_offset", "theta", "residual_rms"):
-            object.__setattr__(self, k, readonly(np.array(getattr(self, k), dtype=float)))
+        readonly_fields(self, ("pi", "coulomb_offset", "theta", "residual_rms"))
 
 
 def check_prior_weight(prior_weight: float) -> float:

@@ -21,7 +21,7 @@ from typing import cast
 
 import numpy as np
 
-from armctl._checks import FloatArray, boolean, readonly, scalar
+from armctl._checks import FloatArray, boolean, readonly, readonly_fields, scalar
 from armctl.dynamics.identification.problem import IdentificationProblem
 from armctl.errors import IdentifiabilityError, InvalidParameterError
 
@@ -60,8 +60,7 @@ class LeastSquaresEstimate:
     names: tuple[str, ...]
 
     def __post_init__(self) -> None:
-        for k in ("theta", "std", "covariance", "noise_std", "residual_rms"):
-            object.__setattr__(self, k, readonly(np.array(getattr(self, k), dtype=float)))
+        readonly_fields(self, ("theta", "std", "covariance", "noise_std", "residual_rms"))
 
     @property
     def relative_std(self) -> FloatArray:
