@@ -449,15 +449,18 @@ class Dynamics(RegressorMethods):
 
         Parameters
         ----------
-        q : (n,) array_like
-            Joint positions [rad or m].
-        frame : str, optional
-            A frame of the model (default: the tool frame).
+        q, frame
+            As for :meth:`jacobian`.
 
         Returns
         -------
         ndarray, shape (4, 4)
             The homogeneous pose [m].
+
+        Raises
+        ------
+        UnknownNameError
+            As for :meth:`jacobian`.
         """
         if frame is not None:
             self.model.frame(frame)
