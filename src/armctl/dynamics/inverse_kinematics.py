@@ -101,8 +101,8 @@ def inverse_kinematics(
     restarts: int = 20,
     seed: int = 0,
 ) -> FloatArray:
-    """A joint vector within the joint limits that puts ``frame`` at ``target_pose`` (see the module for the
-    iteration).
+    """A joint vector within the joint limits that puts ``frame`` at ``target_pose`` (see
+    :mod:`armctl.dynamics.inverse_kinematics` for the iteration).
 
     Parameters
     ----------
