@@ -30,6 +30,7 @@ from numpy.typing import ArrayLike
 
 from armctl._checks import FLOAT, FloatArray, all_finite, vector
 from armctl.dynamics.friction_terms import FrictionTerms
+from armctl.dynamics.inverse_kinematics import inverse_kinematics
 from armctl.dynamics.kernel import Kernel
 from armctl.dynamics.regressor import RegressorMethods
 from armctl.errors import InvalidParameterError, NonFiniteError, UnknownNameError
@@ -449,70 +450,25 @@ class Dynamics(RegressorMethods):
 
         Parameters
         ----------
-        q : (n,) array_like
-            Joint positions [rad or m].
-        frame : str, optional
-            A frame of the model (default: the tool frame).
+        q, frame
+            As for :meth:`jacobian`.
 
         Returns
         -------
         ndarray, shape (4, 4)
             The homogeneous pose [m].
+
+        Raises
+        ------
+        UnknownNameError
+            As for :meth:`jacobian`.
         """
         if frame is not None:
             self.model.frame(frame)
         return self._local.kernel.frame_pose(self._vector(q, "q"), frame)
 
-    def inverse_kinematics(
-        self,
-        target_pose: ArrayLike,
-        q0: ArrayLike | None = None,
-        frame: str | None = None,
-        rows: str | None = None,
-        tolerance: float = 1e-10,
-        max_iterations: int = 100,
-        restarts: int = 20,
-        seed: int = 0,
-    ) -> FloatArray:
-        """A joint vector within the joint limits that puts ``frame`` at ``target_pose``: damped least squares on
-        this object's frame Jacobian, with random restarts (see
-        :func:`armctl.dynamics.inverse_kinematics.inverse_kinematics`).
-
-        Parameters
-        ----------
-        target_pose : array_like, shape (4, 4) or (3,)
-            A homogeneous pose in the world [m], or a position [m].
-        q0 : array_like, shape (n,), optional
-            The first start (None: the model's named pose ``"ready"``, else ``"zero"``).
-        frame : str, optional
-            The frame to place (None: the tool frame).
-        rows : {"pose", "position"}, optional
-            The whole pose or the position alone; None: the pose for a 4×4 target on an arm of 6 joints or more,
-            the position otherwise (an arm of fewer joints cannot reach an arbitrary pose).
-        tolerance : float, optional
-            The largest position error [m] and rotation error [rad] accepted.
-        max_iterations : int, optional
-            Iterations per start.
-        restarts : int, optional
-            Further starts from random configurations within the limits.
-        seed : int, optional
-            Seed of the random starts.
-
-        Returns
-        -------
-        ndarray, shape (n,)
-            q [rad or m] within the joint limits.
-
-        Raises
-        ------
-        InverseKinematicsError
-            No start reached the target; ``.residual`` is the smallest residual found [m; rad], ``.q`` its q.
-        InvalidParameterError, ShapeError, UnknownNameError
-            A malformed target, q0 or option; an unknown frame.
-        """
-        from armctl.dynamics.inverse_kinematics import inverse_kinematics
-
-        return inverse_kinematics(self, target_pose, q0, frame, rows, tolerance, max_iterations, restarts, seed)
+    # dyn.inverse_kinematics(target_pose, ...) is the function itself, with this object as its ``dyn``
+    inverse_kinematics = inverse_kinematics
 
     def kinetic_energy(self, q: ArrayLike, qd: ArrayLike) -> float:
         """T = ½ q̇ᵀ M q̇ [J] (links and rotors).

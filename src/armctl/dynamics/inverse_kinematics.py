@@ -101,13 +101,14 @@ def inverse_kinematics(
     restarts: int = 20,
     seed: int = 0,
 ) -> FloatArray:
-    """A joint vector within the joint limits that puts ``frame`` at ``target_pose`` (see the module for the
-    iteration).
+    """A joint vector within the joint limits that puts ``frame`` at ``target_pose`` (see
+    :mod:`armctl.dynamics.inverse_kinematics` for the iteration).
 
     Parameters
     ----------
     dyn : Dynamics
-        The arm (its frame poses and Jacobians, its joint limits).
+        The arm (its frame poses and Jacobians, its joint limits); the object itself when called as the method
+        ``dyn.inverse_kinematics(target_pose, ...)``.
     target_pose : array_like, shape (4, 4) or (3,)
         The frame's target: a homogeneous pose in the world [m], or a position [m] alone.
     q0 : array_like, shape (n,), optional

@@ -92,7 +92,7 @@ class RegressorMethods:
         Parameters
         ----------
         qd : (n,) array_like
-            Joint velocities [rad/s or m/s].
+            As for :meth:`friction_torque`.
 
         Returns
         -------
@@ -109,7 +109,7 @@ class RegressorMethods:
         Parameters
         ----------
         qd : (n,) array_like
-            Joint velocities [rad/s or m/s].
+            As for :meth:`friction_torque`.
 
         Returns
         -------

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -25,7 +25,9 @@ from armctl.model.parts import (
     rot,
     transform,
 )
-from armctl.model.robot import RobotModel
+
+if TYPE_CHECKING:
+    from armctl.model.robot import RobotModel
 
 _Z = np.array([0.0, 0.0, 1.0])
 _X = np.array([1.0, 0.0, 0.0])
@@ -123,12 +125,36 @@ def model_from_dh(
     name: str = "dh_robot",
     base: ArrayLike | None = None,
 ) -> RobotModel:
-    """Joint i's frame is the DH frame in which its axis is z; link bodies are re-expressed there.
+    """A model from a Denavit–Hartenberg table.
+
+    Joint i's frame is the DH frame in which its axis is z; link bodies are re-expressed there.
 
     standard: frame {i−1} · Rz(q_i) is joint i's frame, link frame {i} = joint frame · Rz(θ_off)Tz(d)Tx(a)Rx(α).
     modified (Craig): joint i's frame is link frame {i} = {i−1} · Rx(α)Tx(a)Rz(θ_off)Tz(d), moved by Rz(q_i).
     A tool transform (4×4) is given in the last DH link frame and becomes the frame ``"tool"``.
+
+    Parameters
+    ----------
+    links : sequence of DHLink
+        One row per joint, from the base (see :class:`~armctl.model.dh.DHLink` for the parameters and units).
+    convention : {"standard", "modified"}, optional
+        Standard (distal) or modified (proximal, Craig's) DH.
+    gravity : array_like, shape (3,), optional
+        g [m/s²] in world axes.
+    tool : array_like, shape (4, 4), optional
+        The placement of the frame ``"tool"`` (the model's tool frame) in the last DH link frame (None: the
+        identity).
+    name : str, optional
+        The model's name.
+    base : array_like, shape (4, 4), optional
+        The DH base frame {0} in the world (None: the identity).
+
+    Returns
+    -------
+    RobotModel
     """
+    from armctl.model.robot import RobotModel
+
     if convention not in ("standard", "modified"):
         raise InvalidParameterError(
             f"DH convention must be 'standard' or 'modified', got {convention!r}", value=convention

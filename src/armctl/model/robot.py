@@ -28,6 +28,7 @@ from armctl._checks import (
     whole_number,
 )
 from armctl.errors import InvalidParameterError, UnknownNameError
+from armctl.model.dh import model_from_dh
 from armctl.model.named_poses import checked_poses
 from armctl.model.parts import (
     Frame,
@@ -38,6 +39,7 @@ from armctl.model.parts import (
     name_text,
     vec3,
 )
+from armctl.model.urdf import model_from_urdf
 
 if TYPE_CHECKING:
     import pinocchio
@@ -225,89 +227,9 @@ class RobotModel:
         object.__setattr__(self, "named_poses", poses)
 
     # ----------------------------------------------------------------------------------------- builders
-    @classmethod
-    def from_dh(
-        cls,
-        links: Sequence[Any],
-        convention: str = "standard",
-        gravity: ArrayLike = (0, 0, -9.81),
-        tool: ArrayLike | None = None,
-        name: str = "dh_robot",
-        base: ArrayLike | None = None,
-    ) -> RobotModel:
-        """A model from a Denavit–Hartenberg table.
-
-        Parameters
-        ----------
-        links : sequence of DHLink
-            One row per joint, from the base (see :class:`~armctl.model.dh.DHLink` for the parameters and units).
-        convention : {"standard", "modified"}, optional
-            Standard (distal) or modified (proximal, Craig's) DH.
-        gravity : array_like, shape (3,), optional
-            g [m/s²] in world axes.
-        tool : array_like, shape (4, 4), optional
-            The placement of the frame ``"tool"`` (the model's tool frame) in the last DH link frame (None: the
-            identity).
-        name : str, optional
-            The model's name.
-        base : array_like, shape (4, 4), optional
-            The DH base frame {0} in the world (None: the identity).
-
-        Returns
-        -------
-        RobotModel
-        """
-        from armctl.model.dh import model_from_dh
-
-        return model_from_dh(links, convention=convention, gravity=gravity, tool=tool, name=name, base=base)
-
-    @classmethod
-    def from_urdf(
-        cls,
-        path: str | os.PathLike[str],
-        tool_frame: str | None = None,
-        lock: Sequence[str] | Mapping[str, float] = (),
-        gravity: ArrayLike = (0, 0, -9.81),
-        name: str | None = None,
-        physical: bool = True,
-    ) -> RobotModel:
-        """A model from a URDF file through Pinocchio's parser.
-
-        URDF ``<dynamics damping friction>`` become viscous and Coulomb friction. Every link and fixed joint becomes a
-        named frame, those fixed to the world included (the base link, and with the first joint locked its link and the
-        locked joint's frame); a root link called ``"world"`` is the model's own ``"world"`` frame. The file is checked
-        before Pinocchio reads it (:mod:`armctl.model.urdf_checks`).
-
-        Parameters
-        ----------
-        path : str or path-like
-            The URDF file.
-        tool_frame : str, optional
-            The frame a method given ``frame=None`` uses (None: the last joint's).
-        lock : str, sequence of str or mapping str → float, optional
-            Joints held fixed: names (locked at 0) or name → position [rad or m], checked as in :meth:`reduced`.
-        gravity : array_like, shape (3,), optional
-            g [m/s²] in world axes.
-        name : str, optional
-            The model's name (None: the URDF's robot name).
-        physical : bool, optional
-            False accepts link inertias that violate the triangle inequality, as published data sets have some (see
-            :class:`~armctl.model.parts.Link`).
-
-        Returns
-        -------
-        RobotModel
-
-        Raises
-        ------
-        ModelLoadError
-            A number Pinocchio cannot read (an ``<inertial>`` that would leave its link massless), duplicate or missing
-            names, a link called ``universe``, a ``<mimic>`` joint not given in ``lock`` (a model's joints are
-            independent), or a ``"world"`` frame other than the root link; each naming the link or joint.
-        """
-        from armctl.model.urdf import model_from_urdf
-
-        return model_from_urdf(path, tool_frame=tool_frame, lock=lock, gravity=gravity, name=name, physical=physical)
+    # RobotModel.from_dh(...) and .from_urdf(...) are the builders' functions themselves
+    from_dh = staticmethod(model_from_dh)
+    from_urdf = staticmethod(model_from_urdf)
 
     @classmethod
     def from_mjcf(

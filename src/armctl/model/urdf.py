@@ -5,12 +5,15 @@ from __future__ import annotations
 import os
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
+from typing import TYPE_CHECKING
 
 from numpy.typing import ArrayLike
 
 from armctl._checks import boolean
 from armctl.errors import InvalidParameterError, ModelLoadError, UnknownNameError
-from armctl.model.robot import RobotModel
+
+if TYPE_CHECKING:
+    from armctl.model.robot import RobotModel
 
 
 def model_from_urdf(
@@ -21,12 +24,45 @@ def model_from_urdf(
     name: str | None = None,
     physical: bool = True,
 ) -> RobotModel:
-    """See :meth:`RobotModel.from_urdf`. The file is checked first (:mod:`armctl.model.urdf_checks`): what
-    urdfdom would drop or refuse with only a line on the standard error stream raises
-    :class:`~armctl.errors.ModelLoadError` naming the link or joint."""
+    """A model from a URDF file through Pinocchio's parser.
+
+    URDF ``<dynamics damping friction>`` become viscous and Coulomb friction. Every link and fixed joint becomes a
+    named frame, those fixed to the world included (the base link, and with the first joint locked its link and the
+    locked joint's frame); a root link called ``"world"`` is the model's own ``"world"`` frame. The file is checked
+    before Pinocchio reads it (:mod:`armctl.model.urdf_checks`).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The URDF file.
+    tool_frame : str, optional
+        The frame a method given ``frame=None`` uses (None: the last joint's).
+    lock : str, sequence of str or mapping str → float, optional
+        Joints held fixed: names (locked at 0) or name → position [rad or m], checked as in
+        :meth:`~armctl.model.RobotModel.reduced`.
+    gravity : array_like, shape (3,), optional
+        g [m/s²] in world axes.
+    name : str, optional
+        The model's name (None: the URDF's robot name).
+    physical : bool, optional
+        False accepts link inertias that violate the triangle inequality, as published data sets have some (see
+        :class:`~armctl.model.parts.Link`).
+
+    Returns
+    -------
+    RobotModel
+
+    Raises
+    ------
+    ModelLoadError
+        A number Pinocchio cannot read (an ``<inertial>`` that would leave its link massless), duplicate or missing
+        names, a link called ``universe``, a ``<mimic>`` joint not given in ``lock`` (a model's joints are
+        independent), or a ``"world"`` frame other than the root link; each naming the link or joint.
+    """
     import pinocchio as pin
 
     from armctl.model.pinocchio_io import joints_from_pinocchio, lock_positions
+    from armctl.model.robot import RobotModel
     from armctl.model.urdf_checks import check_urdf
 
     if not isinstance(path, str | os.PathLike):
