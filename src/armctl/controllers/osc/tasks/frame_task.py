@@ -9,13 +9,15 @@ from typing import Any, ClassVar
 from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray
+from armctl.controllers.osc.docstrings import fill
 from armctl.controllers.osc.state import FrameKinematics, ModelState
 from armctl.controllers.osc.tasks.base import MotionTask
 from armctl.controllers.osc.tasks.target import TargetHolder, Trajectory
 from armctl.references import Reference
 
 #: the line of a frame task's class docstring that :meth:`FrameTask.__init_subclass__` replaces with the
-#: constructor's Parameters and Raises sections (:data:`PARAMETERS`, in the class's terms)
+#: constructor's Parameters and Raises sections (:data:`PARAMETERS`, in the class's terms; see
+#: :func:`~armctl.controllers.osc.docstrings.fill`)
 PARAMETERS_MARK = "(the Parameters and Raises sections of a frame task)"
 
 #: the Parameters and Raises sections of a frame task's constructor, for a task of ``dim`` rows (``rows``: what
@@ -62,12 +64,9 @@ class FrameTask(MotionTask):
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
-        doc = cls.__doc__
-        if doc is not None and PARAMETERS_MARK in doc:
-            # the sections take the indentation of the mark's line (the docstring's)
-            indent = doc[: doc.index(PARAMETERS_MARK)].rsplit("\n", 1)[-1]
+        if cls.__doc__ is not None and PARAMETERS_MARK in cls.__doc__:
             sections = PARAMETERS.format(dim=cls.task_dim, kind=cls.kind, rows=cls.rows_note)
-            cls.__doc__ = doc.replace(PARAMETERS_MARK, sections.replace("\n", "\n" + indent))
+            cls.__doc__ = fill(cls.__doc__, PARAMETERS_MARK, sections)
 
     def __init__(
         self,
