@@ -6,7 +6,6 @@ The QP, the task targets, the solver chain and the q̈-only path are described w
 
 from __future__ import annotations
 
-import warnings
 from collections import Counter
 from collections.abc import Sequence
 from typing import Any
@@ -35,6 +34,7 @@ from armctl.controllers.osc.limits import (
 )
 from armctl.controllers.osc.optimality import verified
 from armctl.controllers.osc.reduced import QddQP, QddStep
+from armctl.controllers.osc.run_report import RunReport
 from armctl.controllers.osc.scale import check_level_scale
 from armctl.controllers.osc.solve import make_second_solver, make_solver
 from armctl.controllers.osc.state import ModelEvaluator
@@ -81,7 +81,7 @@ def _unique(items: Sequence[Any], kind: str) -> None:
         raise InvalidParameterError(f"{kind} names must be unique; repeated: {dup} (give name=...)", value=dup)
 
 
-class OperationalSpaceQP(Controller):
+class OperationalSpaceQP(RunReport, Controller):
     """Operational-space control as a QP: every control period, the torques of the joint accelerations that
     best serve the tasks, level by level in priority order, within the limits and the contacts' rows.
 
@@ -188,6 +188,7 @@ class OperationalSpaceQP(Controller):
     """
 
     dynamics: Dynamics  # given to __init__, never None
+    run_warning = SolverWarning
 
     def __init__(
         self,
@@ -606,34 +607,15 @@ class OperationalSpaceQP(Controller):
             return None
         return f"OperationalSpaceQP over {self._steps} control steps: " + "; ".join(parts)
 
-    def end_run(self) -> str | None:
-        """End of a run: warn once with :meth:`run_summary` if there is anything to report, and start counting
-        afresh. :func:`armctl.sim.simulate` calls it after the last step; call it after a loop of your own.
-
-        Returns
-        -------
-        str or None
-            The summary (None if there was nothing to report).
-
-        Warns
-        -----
-        SolverWarning
-            With the summary, if it is not None.
-        """
-        msg = self.run_summary()
-        if msg is not None:
-            warnings.warn(msg, SolverWarning, stacklevel=2)
+    def _forget_run(self) -> None:
         self.chain.counts.clear()
         self._kept.clear()
         self._kept_reason.clear()
         self._steps = 0
-        return msg
 
     def reset(self) -> None:
         """Forget the warm starts, the last solution and the run's counts."""
         super().reset()
         self.chain.reset()
         self.last_solution = None
-        self._kept.clear()
-        self._kept_reason.clear()
-        self._steps = 0
+        self._forget_run()
