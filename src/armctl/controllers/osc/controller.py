@@ -441,11 +441,7 @@ class OperationalSpaceQP(RunReport, Controller):
     def _qdd_step(self, lay: Layout, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         """One level without contact forces: the QP on q̈ alone (see reduced)."""
         qp = self._qdd.get(lay) or self._qdd_qp(lay)
-        gen = qp.generated
-        if gen is not None:
-            result = qp.step_generated(gen, q, qd, t, ref, self.chain, self.evaluator.evaluate)
-        else:
-            result = qp.step(self.evaluator.evaluate(q, qd), t, ref, self.chain)
+        result = qp.run(q, qd, t, ref, self.chain, self.evaluator.evaluate)
         self._pending = (qp, result)
         sol = result.solution
         if sol is None:  # the unconstrained minimum, within every bound
@@ -464,11 +460,7 @@ class OperationalSpaceQP(RunReport, Controller):
     def _contact_step(self, lay: Layout, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         """The levels with active contacts, solved on [q̈; f] (see contact_qp)."""
         qp = self._contact_qps.get(lay) or self._contact_qp(lay)
-        gen = qp.generated
-        if gen is not None:
-            result = qp.step_generated(gen, q, qd, t, ref, self.chain, self.evaluator.evaluate)
-        else:
-            result = qp.step(self.evaluator.evaluate(q, qd), t, ref, self.chain)
+        result = qp.run(q, qd, t, ref, self.chain, self.evaluator.evaluate)
         self._pending = (qp, result)
         if self._tau_up is not None and self._tau_lo is not None:
             tau = np.minimum(result.tau, self._tau_up)

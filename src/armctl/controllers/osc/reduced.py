@@ -34,6 +34,7 @@ from armctl._checks import FloatArray
 from armctl.controllers.osc.build import QPBuilder, StepQP
 from armctl.controllers.osc.chain import QPFailure, SolverChain
 from armctl.controllers.osc.diagnose import raise_unsolved
+from armctl.controllers.osc.eliminated import EliminatedQP
 from armctl.controllers.osc.hierarchy import OSCSolution
 from armctl.controllers.osc.layout import Layout
 from armctl.controllers.osc.levels import LevelPlan, LevelRows
@@ -80,7 +81,7 @@ class QddStep:
         self.generated = generated
 
 
-class QddQP:
+class QddQP(EliminatedQP["GeneratedQddData", QddStep]):
     """Builds and solves the q̈-only QP of the module docstring for a single-level builder and a layout without
     contacts, and maps its solution back to the public problem. Holds its stacked rows as a workspace: the
     rows of one step are valid until the next (:meth:`public` copies what it keeps)."""
@@ -165,20 +166,11 @@ class QddQP:
             unconstrained = (factor, x)
         return self._solve(H, g, mass, hf, bounds, chain, unconstrained, None)
 
-    def step_generated(
-        self,
-        gen: GeneratedQddData,
-        q: FloatArray,
-        qd: FloatArray,
-        t: float,
-        ref: Reference,
-        chain: SolverChain,
-        evaluate: Callable[[FloatArray, FloatArray], ModelState],
-    ) -> QddStep:
-        """:meth:`step` with the QP's data from the generated code ``gen`` (this QP's ``generated``);
-        ``evaluate(q, qd)`` gives the :class:`ModelState` of the NumPy path, which takes over when the rows are out
-        of scale (to name the task, see :mod:`~armctl.controllers.osc.scale`)."""
-        gen.run(q, qd, t, ref)
+    def _from_generated(
+        self, gen: GeneratedQddData, q: FloatArray, qd: FloatArray, chain: SolverChain
+    ) -> QddStep | None:
+        """:meth:`step` from the outputs of the generated code ``gen`` (this QP's ``generated``) at (q, q̇); None if
+        they are out of scale."""
         accepted, constant, guess = gen.accepted, self.constant, gen.guess
         if accepted is not None and constant is not None and guess is not None:
             if accepted[0] == 1.0:  # the code checked its minimum
@@ -187,7 +179,7 @@ class QddQP:
             if gen.run_guess():  # the code solved on the rows the minimum breaks, and checked that optimum
                 return self._guessed(gen, guess, constant, chain)
         if not gen.c[0] <= _MAX_RHS2:  # ‖W^{1/2} b‖² + ε‖h'‖² (NaN too)
-            return self.step(evaluate(q, qd), t, ref, chain)
+            return None
         if self.constant is not None:
             bounds = self.constant
         else:  # the built-in limits read q and q̇ only (see controller: the generated path takes no others)
