@@ -25,7 +25,7 @@ no gap. Otherwise the whole QP goes to the controller's :class:`~armctl.controll
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 from scipy.linalg import lapack
@@ -57,6 +57,17 @@ class _QddLayout:
     def __init__(self, n: int) -> None:
         self.nx = n
         self.variables = {"qdd": slice(0, n)}
+
+
+class QddTerms(NamedTuple):
+    """The data of the q̈-only QP at one step, from NumPy (the generated data hold the same as attributes of the
+    same names): the Hessian H (n×n) and gradient g (n,) of its cost, the mass matrix M (n×n) and
+    h' = C q̇ + g + τ_f (n,) [N·m]."""
+
+    H: FloatArray
+    g: FloatArray
+    M: FloatArray
+    hf: FloatArray
 
 
 class QddStep:
@@ -164,7 +175,7 @@ class QddQP(EliminatedQP["GeneratedQddData", QddStep]):
                 chain.record(self.key, self.no_active)
                 return QddStep(bounds, x, tau)
             unconstrained = (factor, x)
-        return self._solve(H, g, mass, hf, bounds, chain, unconstrained, None)
+        return self._solve(QddTerms(H, g, mass, hf), bounds, chain, unconstrained, None)
 
     def _from_generated(
         self, gen: GeneratedQddData, q: FloatArray, qd: FloatArray, chain: SolverChain
@@ -193,7 +204,7 @@ class QddQP(EliminatedQP["GeneratedQddData", QddStep]):
             # q̈ and τ read from the code's outputs, as its rows are (valid until its next run; the controller
             # hands out a copy of τ, the public solution copies both)
             return QddStep(bounds, x, tau, generated=gen)
-        return self._solve(gen.H, gen.g, gen.M, gen.hf, bounds, chain, None, gen)
+        return self._solve(gen, bounds, chain, None, gen)
 
     def _guessed(
         self,
@@ -213,25 +224,22 @@ class QddQP(EliminatedQP["GeneratedQddData", QddStep]):
 
     def _solve(
         self,
-        H: FloatArray,
-        g: FloatArray,
-        mass: FloatArray,
-        hf: FloatArray,
+        terms: QddTerms | GeneratedQddData,
         bounds: list[tuple[FloatArray, FloatArray]],
         chain: SolverChain,
         unconstrained: tuple[FloatArray, FloatArray] | None,
         generated: GeneratedQddData | None,
     ) -> QddStep:
-        """The verified optimum from the solver chain (past the unconstrained minimum)."""
-        arrays = self.arrays(H, g, mass, hf, bounds, copy=generated is None)
+        """The verified optimum of the QP of ``terms`` from the solver chain (past the unconstrained minimum)."""
+        arrays = self.arrays(terms, bounds, copy=generated is None)
         try:
             sol = chain.solve(arrays, 0, unconstrained=unconstrained)
         except QPFailure as err:
             if generated is not None:
                 self._fill_rows(generated)
             raise_unsolved(self.public_step(bounds).problem(0), err.attempts)
-        tau = mass.dot(sol.x)
-        tau += hf
+        tau = terms.M.dot(sol.x)
+        tau += terms.hf
         return QddStep(bounds, sol.x, tau, arrays, sol, generated)
 
     def _fill_rows(self, gen: GeneratedQddData) -> None:
@@ -252,7 +260,7 @@ class QddQP(EliminatedQP["GeneratedQddData", QddStep]):
         if arrays is None:  # solved in the generated code: its QP from the code's outputs (this step's)
             gen = result.generated
             assert gen is not None  # only the generated code solves without the chain's arrays
-            arrays = self.arrays(gen.H, gen.g, gen.M, gen.hf, result.bounds, copy=False)
+            arrays = self.arrays(gen, result.bounds, copy=False)
         return verified(arrays, sol.x, sol.y, sol.z, check)
 
     def _holds(self, x: FloatArray, tau: FloatArray, bounds: list[tuple[FloatArray, FloatArray]]) -> bool:
@@ -272,16 +280,11 @@ class QddQP(EliminatedQP["GeneratedQddData", QddStep]):
         return True
 
     def arrays(
-        self,
-        H: FloatArray,
-        g: FloatArray,
-        mass: FloatArray,
-        hf: FloatArray,
-        bounds: list[tuple[FloatArray, FloatArray]],
-        copy: bool = True,
+        self, terms: QddTerms | GeneratedQddData, bounds: list[tuple[FloatArray, FloatArray]], copy: bool = True
     ) -> QPArrays:
-        """The QP on q̈ (its rows those of the public problem, torque rows shifted by h'); ``copy=False``: H, g and
-        M taken as they are (the generated code's outputs, kept until its next run)."""
+        """The QP on q̈ of ``terms`` and ``bounds`` (its rows those of the public problem, torque rows shifted by
+        h'); ``copy=False``: H, g and M taken as they are (the generated code's outputs, kept until its next run)."""
+        H, g, mass, hf = terms.H, terms.g, terms.M, terms.hf
         A, b = self.no_rows
         if self.torque_only:  # one torque limit: C = M, bounds shifted by h'
             lo, up = bounds[0]
