@@ -35,7 +35,7 @@ class FramePoseTask(FrameTask):
     kind = "pose"
     frame_rows = slice(0, 6)
     target_shape = (4, 4)
-    rows_note = " (rows [linear; angular])"
+    _rows_note = " (rows [linear; angular])"
     #: whether :meth:`residual` takes the one-product form: not for a subclass that changes the kinematics or the
     #: error, which gets the generic form
     _fused: ClassVar[bool] = True

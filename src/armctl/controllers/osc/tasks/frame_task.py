@@ -60,12 +60,12 @@ class FrameTask(MotionTask):
     #: the task's rows among the frame's 6 rows [linear; angular] (of its Jacobian, drift and velocity)
     frame_rows: ClassVar[slice]
     #: what the rows are, said after the gains' shapes in the documentation (e.g. " (rows [linear; angular])")
-    rows_note: ClassVar[str] = ""
+    _rows_note: ClassVar[str] = ""
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
         if cls.__doc__ is not None and PARAMETERS_MARK in cls.__doc__:
-            sections = PARAMETERS.format(dim=cls.task_dim, kind=cls.kind, rows=cls.rows_note)
+            sections = PARAMETERS.format(dim=cls.task_dim, kind=cls.kind, rows=cls._rows_note)
             cls.__doc__ = fill(cls.__doc__, PARAMETERS_MARK, sections)
 
     def __init__(
