@@ -5,11 +5,13 @@
 # The parts, for a reader of the source: ``state`` (model terms of one step), ``tasks/`` (error + Jacobian),
 # ``limits/`` (bounds on q̈ or τ), ``contact`` (force variables, contact rows, friction cones), ``build`` (the QP),
 # ``problem`` (the inspectable QP), ``reduced`` (the same QP on q̈ alone), ``contact_qp`` and ``contact_public``
-# (with contacts, on [q̈; f], and back), ``generated`` and ``generated_contact`` (their data as generated code,
-# ``compile``), ``scale`` (out-of-scale task rows refused), ``solve`` (proxsuite / qpsolvers), ``daqp_solver`` (DAQP
-# from an active set, the chain's first stage), ``active_set`` (a dual active-set solver in NumPy), ``optimality``
-# (the KKT check), ``chain`` (verified optimum, with fallbacks), ``diagnose`` (conflicting rows), ``hierarchy``
-# (cascaded priorities), ``controller`` (the controller), ``closed_form`` (Khatib's baseline).
+# (with contacts, on [q̈; f], and back), ``eliminated`` (what those two share: a step from generated data or
+# NumPy), ``generated`` and ``generated_contact`` (their data as generated code, ``compile``; ``generated_data``
+# what they share), ``scale`` (out-of-scale task rows refused), ``solve`` (proxsuite / qpsolvers), ``daqp_solver``
+# (DAQP from an active set, the chain's first stage), ``active_set`` (a dual active-set solver in NumPy),
+# ``optimality`` (the KKT check), ``chain`` (verified optimum, with fallbacks), ``diagnose`` (conflicting rows),
+# ``hierarchy`` (cascaded priorities), ``controller`` (the controller), ``closed_form`` (Khatib's baseline),
+# ``run_report`` (their end-of-run summary), ``docstrings`` (docstring sections written once).
 
 from armctl.controllers.osc.active_set import DualActiveSetSolver
 from armctl.controllers.osc.build import QPBuilder, StepQP

@@ -10,6 +10,7 @@ import numpy as np
 
 from armctl._checks import FloatArray
 from armctl.controllers.osc.contact import Contact
+from armctl.controllers.osc.docstrings import step_parameters
 from armctl.controllers.osc.layout import UPPER_REGULARIZATION_FACTOR, Layout
 from armctl.controllers.osc.levels import LevelPlan, LevelRows
 from armctl.controllers.osc.limits.base import Limit
@@ -233,17 +234,11 @@ class QPBuilder:
             )
         return lay
 
+    @step_parameters
     def build(self, state: ModelState, t: float, ref: Reference) -> StepQP:
         """The QPs of one control step.
 
-        Parameters
-        ----------
-        state : ModelState
-            The model terms at the measured (q, q̇).
-        t : float
-            Time [s].
-        ref : Reference
-            The controller's joint reference at t.
+        (the Parameters section of a control step's state, t, ref)
 
         Returns
         -------

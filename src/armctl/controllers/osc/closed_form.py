@@ -5,7 +5,6 @@ The law, and the damped inverse it takes at or next to a singular configuration,
 
 from __future__ import annotations
 
-import warnings
 from typing import Any
 
 import numpy as np
@@ -13,6 +12,7 @@ from scipy.linalg import lapack
 
 from armctl._checks import FloatArray, scalar
 from armctl.controllers.base import Controller
+from armctl.controllers.osc.run_report import RunReport
 from armctl.controllers.osc.state import ModelEvaluator, ModelState
 from armctl.controllers.osc.task_errors import FrameTaskLog
 from armctl.controllers.osc.tasks.base import MotionTask
@@ -26,7 +26,7 @@ from armctl.references import Reference
 CONDITION_LIMIT = 1e12
 
 
-class ClosedFormOSC(Controller):
+class ClosedFormOSC(RunReport, Controller):
     """Closed-form operational-space control (Khatib) of one frame task, with an optional posture task in the
     dynamically consistent null space. No limits: near a singularity Λ grows without bound and so does τ — which
     is what this baseline is here to show.
@@ -81,6 +81,7 @@ class ClosedFormOSC(Controller):
     """
 
     dynamics: Dynamics  # given to __init__, never None
+    run_warning = SingularityWarning
 
     def __init__(
         self,
@@ -212,29 +213,11 @@ class ClosedFormOSC(Controller):
             "direction there; last_log['damping'] gives δ² per step"
         )
 
-    def end_run(self) -> str | None:
-        """End of a run: warn once with :meth:`run_summary` if Λ was damped, and start counting afresh.
-        :func:`armctl.sim.simulate` calls it after the last step; call it after a loop of your own.
-
-        Returns
-        -------
-        str or None
-            The summary (None if Λ was never damped).
-
-        Warns
-        -----
-        SingularityWarning
-            With the summary, if it is not None.
-        """
-        msg = self.run_summary()
-        if msg is not None:
-            warnings.warn(msg, SingularityWarning, stacklevel=2)
+    def _forget_run(self) -> None:
         self._steps = 0
         self._damped = []
-        return msg
 
     def reset(self) -> None:
         """Forget the run's counts."""
         super().reset()
-        self._steps = 0
-        self._damped = []
+        self._forget_run()

@@ -42,6 +42,7 @@ from armctl.controllers.osc.chain import QPFailure, SolverChain
 from armctl.controllers.osc.contact import Contact
 from armctl.controllers.osc.contact_public import ContactStep, public_solution, step_arrays, taken_step
 from armctl.controllers.osc.diagnose import raise_unsolved
+from armctl.controllers.osc.eliminated import EliminatedQP
 from armctl.controllers.osc.equality_optimum import equality_optimum
 from armctl.controllers.osc.hierarchy import OSCSolution, extend_basis
 from armctl.controllers.osc.layout import UPPER_REGULARIZATION_FACTOR, Layout
@@ -73,7 +74,7 @@ def applies(builder: QPBuilder) -> bool:
     return not builder.slacks and all(tk.variable != "tau" for tk in builder.tasks)
 
 
-class ContactQP:
+class ContactQP(EliminatedQP["GeneratedContactData", ContactStep]):
     """Builds and solves the levels of one step on y = [q̈; f] (module docstring) for a layout with contacts, and
     maps the solution back onto the public problem (:meth:`solution`). Made once per layout."""
 
@@ -182,27 +183,18 @@ class ContactQP:
             levels.append((G[:ny, :ny].copy(), G[ny, :ny], self._weighted_rows(k, rows) if k < last else None))
         return self._cascade(res, hf, self.bounds(state), levels, chain)
 
-    def step_generated(
-        self,
-        gen: GeneratedContactData,
-        q: FloatArray,
-        qd: FloatArray,
-        t: float,
-        ref: Reference,
-        chain: SolverChain,
-        evaluate: Callable[[FloatArray, FloatArray], ModelState],
-    ) -> ContactStep:
-        """:meth:`step` with the QPs' data from the generated code ``gen``; ``evaluate(q, qd)`` gives the
-        :class:`ModelState` of the NumPy path, which takes over when a level's rows are out of scale (to name the
-        task, see :mod:`~armctl.controllers.osc.scale`)."""
-        gen.run(q, qd, t, ref)
+    def _from_generated(
+        self, gen: GeneratedContactData, q: FloatArray, qd: FloatArray, chain: SolverChain
+    ) -> ContactStep | None:
+        """:meth:`step` from the outputs of the generated code ``gen`` at (q, q̇); None if a level's rows are out of
+        scale."""
         if gen.accepted[0] == 1.0:  # one level, constant bounds: the code checked its optimum on the contact rows
             return taken_step(self, gen, chain)
         if gen.guess_out is not None and gen.run_guess():  # its active-set iterations' optimum, checked
             return taken_step(self, gen, chain, guessed=True)
         for c in gen.c:
             if not c[0] <= _MAX_RHS2:  # ‖W^{1/2} b‖² + ε_k‖h'‖² (NaN too)
-                return self.step(evaluate(q, qd), t, ref, chain)
+                return None
         if self.cascade is not None:
             taken = self.cascade.step(self, gen, chain)
             if taken is not None:

@@ -6,7 +6,6 @@ The QP, the task targets, the solver chain and the q̈-only path are described w
 
 from __future__ import annotations
 
-import warnings
 from collections import Counter
 from collections.abc import Sequence
 from typing import Any
@@ -35,6 +34,7 @@ from armctl.controllers.osc.limits import (
 )
 from armctl.controllers.osc.optimality import verified
 from armctl.controllers.osc.reduced import QddQP, QddStep
+from armctl.controllers.osc.run_report import RunReport
 from armctl.controllers.osc.scale import check_level_scale
 from armctl.controllers.osc.solve import make_second_solver, make_solver
 from armctl.controllers.osc.state import ModelEvaluator
@@ -81,7 +81,7 @@ def _unique(items: Sequence[Any], kind: str) -> None:
         raise InvalidParameterError(f"{kind} names must be unique; repeated: {dup} (give name=...)", value=dup)
 
 
-class OperationalSpaceQP(Controller):
+class OperationalSpaceQP(RunReport, Controller):
     """Operational-space control as a QP: every control period, the torques of the joint accelerations that
     best serve the tasks, level by level in priority order, within the limits and the contacts' rows.
 
@@ -188,6 +188,7 @@ class OperationalSpaceQP(Controller):
     """
 
     dynamics: Dynamics  # given to __init__, never None
+    run_warning = SolverWarning
 
     def __init__(
         self,
@@ -440,11 +441,7 @@ class OperationalSpaceQP(Controller):
     def _qdd_step(self, lay: Layout, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         """One level without contact forces: the QP on q̈ alone (see reduced)."""
         qp = self._qdd.get(lay) or self._qdd_qp(lay)
-        gen = qp.generated
-        if gen is not None:
-            result = qp.step_generated(gen, q, qd, t, ref, self.chain, self.evaluator.evaluate)
-        else:
-            result = qp.step(self.evaluator.evaluate(q, qd), t, ref, self.chain)
+        result = qp.run(q, qd, t, ref, self.chain, self.evaluator.evaluate)
         self._pending = (qp, result)
         sol = result.solution
         if sol is None:  # the unconstrained minimum, within every bound
@@ -463,11 +460,7 @@ class OperationalSpaceQP(Controller):
     def _contact_step(self, lay: Layout, t: float, q: FloatArray, qd: FloatArray, ref: Reference) -> FloatArray:
         """The levels with active contacts, solved on [q̈; f] (see contact_qp)."""
         qp = self._contact_qps.get(lay) or self._contact_qp(lay)
-        gen = qp.generated
-        if gen is not None:
-            result = qp.step_generated(gen, q, qd, t, ref, self.chain, self.evaluator.evaluate)
-        else:
-            result = qp.step(self.evaluator.evaluate(q, qd), t, ref, self.chain)
+        result = qp.run(q, qd, t, ref, self.chain, self.evaluator.evaluate)
         self._pending = (qp, result)
         if self._tau_up is not None and self._tau_lo is not None:
             tau = np.minimum(result.tau, self._tau_up)
@@ -606,34 +599,15 @@ class OperationalSpaceQP(Controller):
             return None
         return f"OperationalSpaceQP over {self._steps} control steps: " + "; ".join(parts)
 
-    def end_run(self) -> str | None:
-        """End of a run: warn once with :meth:`run_summary` if there is anything to report, and start counting
-        afresh. :func:`armctl.sim.simulate` calls it after the last step; call it after a loop of your own.
-
-        Returns
-        -------
-        str or None
-            The summary (None if there was nothing to report).
-
-        Warns
-        -----
-        SolverWarning
-            With the summary, if it is not None.
-        """
-        msg = self.run_summary()
-        if msg is not None:
-            warnings.warn(msg, SolverWarning, stacklevel=2)
+    def _forget_run(self) -> None:
         self.chain.counts.clear()
         self._kept.clear()
         self._kept_reason.clear()
         self._steps = 0
-        return msg
 
     def reset(self) -> None:
         """Forget the warm starts, the last solution and the run's counts."""
         super().reset()
         self.chain.reset()
         self.last_solution = None
-        self._kept.clear()
-        self._kept_reason.clear()
-        self._steps = 0
+        self._forget_run()

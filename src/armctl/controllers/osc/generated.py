@@ -38,6 +38,7 @@ import numpy as np
 
 from armctl._checks import FloatArray
 from armctl.codegen import library as codegen
+from armctl.controllers.osc.generated_data import GeneratedData
 from armctl.controllers.osc.optimality import DUAL_TOL
 from armctl.controllers.osc.scale import MAX_TASK_RHS
 from armctl.controllers.osc.target_code import target_verdict
@@ -49,7 +50,6 @@ from armctl.controllers.osc.tasks.frame_task import FrameTask
 from armctl.controllers.osc.tasks.posture import PostureTask
 from armctl.controllers.osc.tasks.rotation import rotation_error_sx
 from armctl.dynamics.base import Dynamics
-from armctl.dynamics.casadi_buffer import buffer_of, view
 from armctl.dynamics.recursive import (
     cholesky_factor,
     cholesky_solve,
@@ -315,7 +315,7 @@ def _tag(model: RobotModel, tasks: Sequence[Task], friction: bool, limits: Seque
     return "|".join(parts)
 
 
-class GeneratedQddData:
+class GeneratedQddData(GeneratedData):
     """The generated function of the module for ``tasks`` on ``dynamics`` (its model, its friction, its cache
     folder), bound to buffers of its own. After :meth:`run`, the outputs are arrays that the next run
     overwrites: ``qdd0``, ``tau0`` (n,), ``H`` (n×n), ``g`` (n,), ``c`` (1,), ``M`` (n×n), ``hf`` (n,) and
@@ -332,15 +332,12 @@ class GeneratedQddData:
         limits: Sequence[str] | None = None,
         bounds: tuple[FloatArray, FloatArray] | None = None,
     ) -> None:
-        model = dynamics.model
-        self.dynamics = dynamics
-        self.n = n = model.n
+        super().__init__(dynamics)
+        model, n = dynamics.model, self.n
         self.tasks = tuple(tasks)
-        self.friction = dynamics.friction if model.has_friction else None
         self.regularization = float(regularization)
         self.limits = tuple(limits) if limits is not None and bounds is not None else None
         self.bounds = bounds if self.limits is not None else None
-        cache_dir = dynamics.options.get("cache_dir")
         tag = _tag(model, self.tasks, self.friction is not None, self.limits)
         kinds = ", ".join(type(tk).__name__ for tk in self.tasks)
         what = f"the operational-space QP's data for {model.name!r} ({kinds})"
@@ -348,12 +345,10 @@ class GeneratedQddData:
             [_NAME],
             tag,
             lambda: [qp_function(model, self.tasks, self.friction is not None, self.limits)],
-            cache_dir,
+            self.cache_dir,
             what=what,
         )[_NAME]
         m = sum(tk.dim for tk in self.tasks)
-        self.inp = np.zeros(fn.size1_in(0))
-        self.par = np.zeros(fn.size1_in(1))
         # the outputs one after the other in one buffer (the active-set iterations read it): views of it
         sizes = [n, n, n * n, n, 1, n * n, n, (n + 1) * m] + ([1] if self.limits is not None else [])
         #: the outputs, one after the other
@@ -365,16 +360,9 @@ class GeneratedQddData:
         self.qdd0, self.tau0, self.g, self.hf, self.c = spans[0], spans[1], spans[3], spans[6], spans[4]
         self.H, self.M = spans[2].reshape(n, n), spans[5].reshape(n, n)  # symmetric: column by column is row by row
         self.rows = spans[7].reshape(n + 1, m).T  # CasADi writes a matrix column by column: [J | b]ᵀ row by row
-        buf, self._run = buffer_of(fn)
-        for k, arr in enumerate((self.inp, self.par)):
-            buf.set_arg(k, view(arr))
         #: with ``bounds``: 1.0 if the unconstrained minimum holds every limit's row and the level is in scale
         self.accepted: FloatArray | None = spans[8] if self.limits is not None else None
-        for k, res in enumerate(spans):
-            buf.set_res(k, view(res))
-        #: 1.0 if the frame tasks' targets passed the code's check (see target_code)
-        self.targets_ok = np.zeros(1)
-        buf.set_res(len(spans), view(self.targets_ok))
+        self._bind(fn, spans)
         #: per task, its target's holder (None: a posture task) and the task
         self._frames = tuple(cast(FrameTask, tk).target for tk in self.tasks if type(tk) is not PostureTask)
         lead = 2 * n + sum(int(np.prod(holder.value_shape)) + 2 * holder.rate for holder in self._frames)
@@ -386,17 +374,16 @@ class GeneratedQddData:
         for k, tk in enumerate(tk for tk in self.tasks if type(tk) is PostureTask):
             self._postures.append([tk, self.inp[lead + 3 * n * k : lead + 3 * n * (k + 1)], None])
         assert lead + 3 * n * len(self._postures) == self.inp.size  # the layout of qp_function's inputs
-        self._bound = buf  # the buffer reads inp and par and writes out: kept with them
         #: with ``bounds``: the active-set steps from the rows that q̈₀ breaks (:meth:`run_guess`): its verdict (1.0:
         #: the QP's optimum, checked), q̈, τ, z and the active set (+1, −1, 0 per row, as floats)
         self.guess: tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray] | None = None
         self._run_guess: Any = None
         if self.limits is not None:
-            self._bind_guess(model, cache_dir, tag, m, start - 1)
+            self._bind_guess(model, tag, m, start - 1)
         self._revisions: list[int] | None = None
         self._pieces: list[FloatArray] = []
 
-    def _bind_guess(self, model: RobotModel, cache_dir: Any, tag: str, m: int, used: int) -> None:
+    def _bind_guess(self, model: RobotModel, tag: str, m: int, used: int) -> None:
         """Build or load :func:`guess_function` and bind it: its inputs the first ``used`` entries of :attr:`out`
         and the bounds, its outputs :attr:`guess`."""
         limits = self.limits
@@ -406,18 +393,13 @@ class GeneratedQddData:
             [_GUESS],
             tag + "|active-set",
             lambda: [guess_function(n, m, limits)],
-            cache_dir,
+            self.cache_dir,
             what=f"the q̈-only QP's solve on the rows its minimum breaks for {model.name!r}",
         )[_GUESS]
         mi = n * len(limits)
         self.par_guess = np.concatenate(self.bounds)
         self.guess = (np.zeros(1), np.zeros(n), np.zeros(n), np.zeros(mi), np.zeros(mi))
-        buf, self._run_guess = buffer_of(fn)
-        buf.set_arg(0, view(self.out[:used]))
-        buf.set_arg(1, view(self.par_guess))
-        for k, res in enumerate(self.guess):
-            buf.set_res(k, view(res))
-        self._bound_guess = buf  # reads out and par_guess, writes guess: kept with them
+        self._bind_active_set(fn, used, self.par_guess, self.guess)
 
     def run_guess(self) -> bool:
         """Solve by active-set steps from the rows that the last :meth:`run`'s unconstrained minimum breaks (with

@@ -52,6 +52,7 @@ from armctl.controllers.osc.generated import (
     task_rows,
     task_tag,
 )
+from armctl.controllers.osc.generated_data import GeneratedData
 from armctl.controllers.osc.generated_optimum import active_set_optimum, equality_optimum, verdict
 from armctl.controllers.osc.scale import MAX_TASK_RHS
 from armctl.controllers.osc.tasks.base import Task
@@ -60,7 +61,6 @@ from armctl.controllers.osc.tasks.frame_task import FrameTask
 from armctl.controllers.osc.tasks.posture import PostureTask
 from armctl.controllers.osc.tasks.target import TargetHolder
 from armctl.dynamics.base import Dynamics
-from armctl.dynamics.casadi_buffer import buffer_of, view
 from armctl.dynamics.recursive import inverse_dynamics, joint_transforms, mass_matrix
 from armctl.dynamics.symbolic_frames import frame_kinematics
 from armctl.model.robot import RobotModel
@@ -280,7 +280,7 @@ def _tag(
     return "|".join(parts)
 
 
-class GeneratedContactData:
+class GeneratedContactData(GeneratedData):
     """The generated function of the module for ``levels`` (the tasks per priority level, in order) and
     ``contacts`` (the active ones, in the layout's order) on ``dynamics``, bound to buffers of its own. After
     :meth:`run`, the outputs are arrays that the next run overwrites: ``brows`` (n × (ny+1)), ``contact``
@@ -299,30 +299,25 @@ class GeneratedContactData:
         limits: Sequence[str] | None = None,
         bounds: tuple[FloatArray, FloatArray] | None = None,
     ) -> None:
-        model = dynamics.model
-        self.dynamics = dynamics
-        self.n = n = model.n
+        super().__init__(dynamics)
+        model, n = dynamics.model, self.n
         self.levels = tuple(tuple(lev) for lev in levels)
         self.contacts = tuple(contacts)
         self.regularization = tuple(float(e) for e in regularization)
-        self.friction = dynamics.friction if model.has_friction else None
         one = len(self.levels) == 1 and bool(self.contacts)
         self.limits = tuple(limits) if limits is not None and bounds is not None and one else None
         self.bounds = bounds if self.limits is not None else None
-        cache_dir = dynamics.options.get("cache_dir")
         tag = _tag(model, self.levels, self.contacts, self.friction is not None, self.limits)
         what = f"the operational-space QP's contact data for {model.name!r}"
         fn = codegen.cached(
             [_NAME],
             tag,
             lambda: [contact_function(model, self.levels, self.contacts, self.friction is not None, self.limits)],
-            cache_dir,
+            self.cache_dir,
             what=what,
         )[_NAME]
         ny = n + 3 * len(self.contacts)
         m = sum(tk.dim for lev in self.levels for tk in lev)
-        self.inp = np.zeros(fn.size1_in(0))
-        self.par = np.zeros(fn.size1_in(1))
         self.ny, self.m, self.me = ny, m, 3 * len(self.contacts)
         #: every output, one after the other in one buffer (:meth:`outputs` reads a copy of it the same way)
         self.out = np.zeros(self._size())
@@ -337,21 +332,13 @@ class GeneratedContactData:
             self.accepted,
             self.tau,
         ) = self.outputs(self.out)
-        buf, self._run = buffer_of(fn)
-        for k, arr in enumerate((self.inp, self.par)):
-            buf.set_arg(k, view(arr))
-        for k, (start, stop) in enumerate(self._spans()):
-            buf.set_res(k, view(self.out[start:stop]))
-        #: 1.0 if the frame tasks' targets passed the code's check (see target_code)
-        self.targets_ok = np.zeros(1)
-        buf.set_res(len(self._spans()), view(self.targets_ok))
+        self._bind(fn, [self.out[start:stop] for start, stop in self._spans()])
         #: per task in the inputs' order: its target's holder for a frame task, else the task
         self._sources = tuple(
             cast(FrameTask, tk).target if type(tk) not in (ContactForceTask, PostureTask) else tk
             for lev in self.levels
             for tk in lev
         )
-        self._bound = buf  # the buffer reads and writes inp, par and out: kept with them
         #: with ``bounds``: where y*, λ and τ of the optimum on the contact rows alone sit in :attr:`out`
         self.taken: tuple[slice, slice, slice] | None = None
         #: with ``bounds``: the active-set iterations (:func:`guess_function`), their outputs one after the other
@@ -363,10 +350,10 @@ class GeneratedContactData:
             spans = self._spans()
             first = 3 + 3 * len(self.levels)
             self.taken = (slice(*spans[first]), slice(*spans[first + 1]), slice(*spans[first + 5]))
-            self._bind_guess(model, cache_dir, tag)
+            self._bind_guess(model, tag)
         self._revisions: list[int] | None = None
 
-    def _bind_guess(self, model: RobotModel, cache_dir: Any, tag: str) -> None:
+    def _bind_guess(self, model: RobotModel, tag: str) -> None:
         """Build or load :func:`guess_function` and bind it: its inputs :attr:`out` and its own parameters (the
         cones' rows and the bounds, set by :meth:`_params`), its outputs :attr:`guess_out`."""
         limits = self.limits
@@ -376,24 +363,18 @@ class GeneratedContactData:
             [_GUESS],
             tag + "|active-set",
             lambda: [guess_function(n, self.contacts, limits, m)],
-            cache_dir,
+            self.cache_dir,
             what=f"the contact QP's active-set iterations for {model.name!r}",
         )[_GUESS]
         mi = self.bounds[0].shape[0]
         self.par_guess = np.zeros(fn.size1_in(1))
         self.guess_out = np.zeros(1 + ny + me + 2 * mi + n)
-        sizes = [1, ny, me, mi, mi, n]
-        buf, self._run_guess = buffer_of(fn)
-        used = fn.size1_in(0)
-        buf.set_arg(0, view(self.out[:used]))
-        buf.set_arg(1, view(self.par_guess))
         start, spans = 0, []
-        for k, size in enumerate(sizes):
-            buf.set_res(k, view(self.guess_out[start : start + size]))
+        for size in (1, ny, me, mi, mi, n):
             spans.append(slice(start, start + size))
             start += size
+        self._bind_active_set(fn, fn.size1_in(0), self.par_guess, [self.guess_out[s] for s in spans])
         self.guessed = tuple(spans[1:])
-        self._bound_guess = buf  # reads out and par_guess, writes guess_out: kept with them
 
     def run_guess(self) -> bool:
         """Run the active-set iterations on the outputs of the last :meth:`run` (with ``bounds`` only); True if

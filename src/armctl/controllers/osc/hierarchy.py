@@ -135,7 +135,7 @@ class OSCSolution:
         Parameters
         ----------
         level : int, optional
-            The level's index in priority order.
+            As for :meth:`problem`.
 
         Returns
         -------

@@ -25,7 +25,7 @@ no gap. Otherwise the whole QP goes to the controller's :class:`~armctl.controll
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 from scipy.linalg import lapack
@@ -34,6 +34,7 @@ from armctl._checks import FloatArray
 from armctl.controllers.osc.build import QPBuilder, StepQP
 from armctl.controllers.osc.chain import QPFailure, SolverChain
 from armctl.controllers.osc.diagnose import raise_unsolved
+from armctl.controllers.osc.eliminated import EliminatedQP
 from armctl.controllers.osc.hierarchy import OSCSolution
 from armctl.controllers.osc.layout import Layout
 from armctl.controllers.osc.levels import LevelPlan, LevelRows
@@ -58,6 +59,17 @@ class _QddLayout:
         self.variables = {"qdd": slice(0, n)}
 
 
+class QddTerms(NamedTuple):
+    """The data of the q̈-only QP at one step, from NumPy (the generated data hold the same as attributes of the
+    same names): the Hessian H (n×n) and gradient g (n,) of its cost, the mass matrix M (n×n) and
+    h' = C q̇ + g + τ_f (n,) [N·m]."""
+
+    H: FloatArray
+    g: FloatArray
+    M: FloatArray
+    hf: FloatArray
+
+
 class QddStep:
     """What one step of :class:`QddQP` leaves for :meth:`QddQP.public`: the bounds of every limit (l, u per
     limit), q̈, τ, and the QP ``arrays`` with the chain's ``solution`` (both None for the unconstrained
@@ -80,7 +92,7 @@ class QddStep:
         self.generated = generated
 
 
-class QddQP:
+class QddQP(EliminatedQP["GeneratedQddData", QddStep]):
     """Builds and solves the q̈-only QP of the module docstring for a single-level builder and a layout without
     contacts, and maps its solution back to the public problem. Holds its stacked rows as a workspace: the
     rows of one step are valid until the next (:meth:`public` copies what it keeps)."""
@@ -163,22 +175,13 @@ class QddQP:
                 chain.record(self.key, self.no_active)
                 return QddStep(bounds, x, tau)
             unconstrained = (factor, x)
-        return self._solve(H, g, mass, hf, bounds, chain, unconstrained, None)
+        return self._solve(QddTerms(H, g, mass, hf), bounds, chain, unconstrained, None)
 
-    def step_generated(
-        self,
-        gen: GeneratedQddData,
-        q: FloatArray,
-        qd: FloatArray,
-        t: float,
-        ref: Reference,
-        chain: SolverChain,
-        evaluate: Callable[[FloatArray, FloatArray], ModelState],
-    ) -> QddStep:
-        """:meth:`step` with the QP's data from the generated code ``gen`` (this QP's ``generated``);
-        ``evaluate(q, qd)`` gives the :class:`ModelState` of the NumPy path, which takes over when the rows are out
-        of scale (to name the task, see :mod:`~armctl.controllers.osc.scale`)."""
-        gen.run(q, qd, t, ref)
+    def _from_generated(
+        self, gen: GeneratedQddData, q: FloatArray, qd: FloatArray, chain: SolverChain
+    ) -> QddStep | None:
+        """:meth:`step` from the outputs of the generated code ``gen`` (this QP's ``generated``) at (q, q̇); None if
+        they are out of scale."""
         accepted, constant, guess = gen.accepted, self.constant, gen.guess
         if accepted is not None and constant is not None and guess is not None:
             if accepted[0] == 1.0:  # the code checked its minimum
@@ -187,7 +190,7 @@ class QddQP:
             if gen.run_guess():  # the code solved on the rows the minimum breaks, and checked that optimum
                 return self._guessed(gen, guess, constant, chain)
         if not gen.c[0] <= _MAX_RHS2:  # ‖W^{1/2} b‖² + ε‖h'‖² (NaN too)
-            return self.step(evaluate(q, qd), t, ref, chain)
+            return None
         if self.constant is not None:
             bounds = self.constant
         else:  # the built-in limits read q and q̇ only (see controller: the generated path takes no others)
@@ -201,7 +204,7 @@ class QddQP:
             # q̈ and τ read from the code's outputs, as its rows are (valid until its next run; the controller
             # hands out a copy of τ, the public solution copies both)
             return QddStep(bounds, x, tau, generated=gen)
-        return self._solve(gen.H, gen.g, gen.M, gen.hf, bounds, chain, None, gen)
+        return self._solve(gen, bounds, chain, None, gen)
 
     def _guessed(
         self,
@@ -221,25 +224,22 @@ class QddQP:
 
     def _solve(
         self,
-        H: FloatArray,
-        g: FloatArray,
-        mass: FloatArray,
-        hf: FloatArray,
+        terms: QddTerms | GeneratedQddData,
         bounds: list[tuple[FloatArray, FloatArray]],
         chain: SolverChain,
         unconstrained: tuple[FloatArray, FloatArray] | None,
         generated: GeneratedQddData | None,
     ) -> QddStep:
-        """The verified optimum from the solver chain (past the unconstrained minimum)."""
-        arrays = self.arrays(H, g, mass, hf, bounds, copy=generated is None)
+        """The verified optimum of the QP of ``terms`` from the solver chain (past the unconstrained minimum)."""
+        arrays = self.arrays(terms, bounds, copy=generated is None)
         try:
             sol = chain.solve(arrays, 0, unconstrained=unconstrained)
         except QPFailure as err:
             if generated is not None:
                 self._fill_rows(generated)
             raise_unsolved(self.public_step(bounds).problem(0), err.attempts)
-        tau = mass.dot(sol.x)
-        tau += hf
+        tau = terms.M.dot(sol.x)
+        tau += terms.hf
         return QddStep(bounds, sol.x, tau, arrays, sol, generated)
 
     def _fill_rows(self, gen: GeneratedQddData) -> None:
@@ -260,7 +260,7 @@ class QddQP:
         if arrays is None:  # solved in the generated code: its QP from the code's outputs (this step's)
             gen = result.generated
             assert gen is not None  # only the generated code solves without the chain's arrays
-            arrays = self.arrays(gen.H, gen.g, gen.M, gen.hf, result.bounds, copy=False)
+            arrays = self.arrays(gen, result.bounds, copy=False)
         return verified(arrays, sol.x, sol.y, sol.z, check)
 
     def _holds(self, x: FloatArray, tau: FloatArray, bounds: list[tuple[FloatArray, FloatArray]]) -> bool:
@@ -280,16 +280,11 @@ class QddQP:
         return True
 
     def arrays(
-        self,
-        H: FloatArray,
-        g: FloatArray,
-        mass: FloatArray,
-        hf: FloatArray,
-        bounds: list[tuple[FloatArray, FloatArray]],
-        copy: bool = True,
+        self, terms: QddTerms | GeneratedQddData, bounds: list[tuple[FloatArray, FloatArray]], copy: bool = True
     ) -> QPArrays:
-        """The QP on q̈ (its rows those of the public problem, torque rows shifted by h'); ``copy=False``: H, g and
-        M taken as they are (the generated code's outputs, kept until its next run)."""
+        """The QP on q̈ of ``terms`` and ``bounds`` (its rows those of the public problem, torque rows shifted by
+        h'); ``copy=False``: H, g and M taken as they are (the generated code's outputs, kept until its next run)."""
+        H, g, mass, hf = terms.H, terms.g, terms.M, terms.hf
         A, b = self.no_rows
         if self.torque_only:  # one torque limit: C = M, bounds shifted by h'
             lo, up = bounds[0]

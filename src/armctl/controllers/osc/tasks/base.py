@@ -12,6 +12,7 @@ from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray, gain_matrix, nonnegative_vector, whole_number
 from armctl.controllers.gains import GainSet, gain
+from armctl.controllers.osc.docstrings import step_parameters
 from armctl.controllers.osc.state import ModelState
 from armctl.references import Reference
 
@@ -101,17 +102,11 @@ class Task(ABC):
         return None
 
     @abstractmethod
+    @step_parameters
     def residual(self, state: ModelState, t: float, ref: Reference) -> tuple[FloatArray | None, FloatArray]:
         """The rows of the residual r = J x_b − b at this step.
 
-        Parameters
-        ----------
-        state : ModelState
-            The model terms at the measured (q, q̇).
-        t : float
-            Time [s].
-        ref : Reference
-            The controller's joint reference at t.
+        (the Parameters section of a control step's state, t, ref)
 
         Returns
         -------
@@ -184,15 +179,13 @@ class MotionTask(GainSet, Task):
         return self.dim, f"{self.name}: {name}"
 
     @abstractmethod
+    @step_parameters
     def kinematics(
         self, state: ModelState, t: float, ref: Reference
     ) -> tuple[FloatArray | None, FloatArray | None, FloatArray, FloatArray, FloatArray]:
         """The task's kinematics at this step.
 
-        Parameters
-        ----------
-        state, t, ref
-            As for :meth:`Task.residual`.
+        (the Parameters section of a control step's state, t, ref)
 
         Returns
         -------
@@ -216,15 +209,13 @@ class MotionTask(GainSet, Task):
         self._law = np.hstack((eye, self._kd_matrix, self._kp_matrix))
         self._law_drift = np.hstack((self._law, -eye))
 
+    @step_parameters
     def desired_acceleration(
         self, state: ModelState, t: float, ref: Reference
     ) -> tuple[FloatArray | None, FloatArray, FloatArray]:
         """The desired task acceleration ẍ* = ẍ_ref + K_d ė + K_p e at this step.
 
-        Parameters
-        ----------
-        state, t, ref
-            As for :meth:`Task.residual`.
+        (the Parameters section of a control step's state, t, ref)
 
         Returns
         -------
@@ -244,13 +235,11 @@ class MotionTask(GainSet, Task):
             return jac, self._law.dot(np.concatenate((acc, ed, e)))
         return jac, self._law_drift.dot(np.concatenate((acc, ed, e, drift)))
 
+    @step_parameters
     def error(self, state: ModelState, t: float, ref: Reference) -> FloatArray:
         """The task error e at this state (for logs and tests).
 
-        Parameters
-        ----------
-        state, t, ref
-            As for :meth:`Task.residual`.
+        (the Parameters section of a control step's state, t, ref)
 
         Returns
         -------

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+from typing import Any, ClassVar
+
 import numpy as np
 from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray
-from armctl.controllers.osc.state import ModelState
+from armctl.controllers.osc.state import FrameKinematics, ModelState
 from armctl.controllers.osc.tasks.frame_task import FrameTask
 from armctl.controllers.osc.tasks.rotation import rotation_error
 from armctl.references import Reference
@@ -16,26 +18,7 @@ class FramePoseTask(FrameTask):
     """Position and orientation of a frame together (6 rows, [linear; angular]): a constant target
     (:meth:`set_target`) or a trajectory (:meth:`set_trajectory`).
 
-    Parameters
-    ----------
-    frame : str, optional
-        A name of the model's ``frame_names`` (its joints' frames and the frames it declares); None (the default):
-        the tool frame (the last joint's frame on a model without one).
-    kp : array_like, optional
-        K_p [1/s²]: a scalar, a (6,) diagonal or a 6×6 symmetric positive definite matrix (rows [linear; angular]).
-    kd : array_like, optional
-        K_d [1/s], likewise; None (the default): critical damping, 2 K_p^½.
-    weight : array_like, optional
-        The rows' weights w_i ≥ 0 (scalar or (6,)).
-    priority : int, optional
-        Its level, 0 the most important.
-    name : str, optional
-        The task's name; None (the default): ``"pose[FRAME]"`` (``"pose[tool]"`` for the tool frame).
-
-    Raises
-    ------
-    InvalidParameterError, ShapeError, NonFiniteError
-        A gain that is not symmetric positive definite, of the wrong size or not finite; a negative weight.
+    (the Parameters and Raises sections of a frame task)
 
     Notes
     -----
@@ -48,16 +31,18 @@ class FramePoseTask(FrameTask):
     raises InvalidParameterError, ShapeError or NonFiniteError.
     """
 
-    def __init__(
-        self,
-        frame: str | None = None,
-        kp: ArrayLike = 400.0,
-        kd: ArrayLike | None = None,
-        weight: ArrayLike = 1.0,
-        priority: int = 0,
-        name: str | None = None,
-    ) -> None:
-        super().__init__(6, "pose", (4, 4), frame, kp, kd, weight, priority, name)
+    task_dim = 6
+    kind = "pose"
+    frame_rows = slice(0, 6)
+    target_shape = (4, 4)
+    _rows_note = " (rows [linear; angular])"
+    #: whether :meth:`residual` takes the one-product form: not for a subclass that changes the kinematics or the
+    #: error, which gets the generic form
+    _fused: ClassVar[bool] = True
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        cls._fused = cls.kinematics is FrameTask.kinematics and cls._frame_error is FramePoseTask._frame_error
 
     def set_target(
         self, pose: ArrayLike, twist: ArrayLike | None = None, acceleration: ArrayLike | None = None
@@ -85,15 +70,11 @@ class FramePoseTask(FrameTask):
         """
         self.target.set(pose, twist, acceleration)
 
-    def kinematics(
-        self, state: ModelState, t: float, ref: Reference
-    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
-        pose, twist, acc = self.target.at(t)
-        fk = state.frame(self.frame)
+    def _frame_error(self, value: FloatArray, fk: FrameKinematics) -> FloatArray:
         e = np.empty(6)
-        e[:3] = pose[:3, 3] - fk.position
-        e[3:] = rotation_error(pose[:3, :3], fk.rotation)
-        return fk.jacobian, fk.drift, e, twist - fk.velocity, acc
+        e[:3] = value[:3, 3] - fk.position
+        e[3:] = rotation_error(value[:3, :3], fk.rotation)
+        return e
 
     def _derive(self) -> None:
         super()._derive()
@@ -103,8 +84,8 @@ class FramePoseTask(FrameTask):
         self._pose_law = np.hstack((eye, kd, -kd, kp[:, :3], -kp[:, :3], kp[:, 3:], -eye))
 
     def residual(self, state: ModelState, t: float, ref: Reference) -> tuple[FloatArray, FloatArray]:
-        # kinematics and the PD law in one product; a subclass that overrides kinematics gets the generic form
-        if type(self).kinematics is not FramePoseTask.kinematics:
+        # kinematics and the PD law in one product (a subclass that changes the kinematics: the generic form)
+        if not self._fused:
             return super().residual(state, t, ref)  # type: ignore[return-value]  # a frame task has a Jacobian
         pose, twist, acc = self.target.at(t)
         fk = state.frame(self.frame)

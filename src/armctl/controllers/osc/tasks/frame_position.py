@@ -5,35 +5,15 @@ from __future__ import annotations
 from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray
-from armctl.controllers.osc.state import ModelState
+from armctl.controllers.osc.state import FrameKinematics
 from armctl.controllers.osc.tasks.frame_task import FrameTask
-from armctl.references import Reference
 
 
 class FramePositionTask(FrameTask):
     """The origin of a frame follows a point in the world [m]: a constant target (:meth:`set_target`) or a
     trajectory (:meth:`set_trajectory`).
 
-    Parameters
-    ----------
-    frame : str, optional
-        A name of the model's ``frame_names`` (its joints' frames and the frames it declares); None (the default):
-        the tool frame (the last joint's frame on a model without one).
-    kp : array_like, optional
-        K_p [1/s²]: a scalar, a (3,) diagonal or a 3×3 symmetric positive definite matrix.
-    kd : array_like, optional
-        K_d [1/s], likewise; None (the default): critical damping, 2 K_p^½.
-    weight : array_like, optional
-        The rows' weights w_i ≥ 0 (scalar or (3,)).
-    priority : int, optional
-        Its level, 0 the most important.
-    name : str, optional
-        The task's name; None (the default): ``"position[FRAME]"`` (``"position[tool]"`` for the tool frame).
-
-    Raises
-    ------
-    InvalidParameterError, ShapeError, NonFiniteError
-        A gain that is not symmetric positive definite, of the wrong size or not finite; a negative weight.
+    (the Parameters and Raises sections of a frame task)
 
     Notes
     -----
@@ -44,16 +24,10 @@ class FramePositionTask(FrameTask):
     The model's frame is checked when the task is given to a controller (UnknownNameError).
     """
 
-    def __init__(
-        self,
-        frame: str | None = None,
-        kp: ArrayLike = 400.0,
-        kd: ArrayLike | None = None,
-        weight: ArrayLike = 1.0,
-        priority: int = 0,
-        name: str | None = None,
-    ) -> None:
-        super().__init__(3, "position", (3,), frame, kp, kd, weight, priority, name)
+    task_dim = 3
+    kind = "position"
+    frame_rows = slice(0, 3)
+    target_shape = (3,)
 
     def set_target(
         self, position: ArrayLike, velocity: ArrayLike | None = None, acceleration: ArrayLike | None = None
@@ -76,9 +50,5 @@ class FramePositionTask(FrameTask):
         """
         self.target.set(position, velocity, acceleration)
 
-    def kinematics(
-        self, state: ModelState, t: float, ref: Reference
-    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
-        p, v, a = self.target.at(t)
-        fk = state.frame(self.frame)
-        return fk.jacobian[:3], fk.drift[:3], p - fk.position, v - fk.velocity[:3], a
+    def _frame_error(self, value: FloatArray, fk: FrameKinematics) -> FloatArray:
+        return value - fk.position
