@@ -45,7 +45,7 @@ from armctl.sim.plant_layout import PlantLayout
 from armctl.sim.stick_slip import NotPositiveDefinite
 
 #: bumped when the generated code changes, so that stale cached libraries are not loaded
-CODE_VERSION = 10
+CODE_VERSION = 11
 #: the scheme codes of the C driver, and the family of kernels each needs
 SCHEMES = {"rk4": 0, "euler": 1, "semi-implicit-euler": 2, "implicit-euler": 3}
 FAMILY = {"rk4": "explicit", "euler": "explicit", "semi-implicit-euler": "implicit", "implicit-euler": "implicit"}

@@ -292,8 +292,8 @@ def kernels(model: RobotModel, layout: PlantLayout, family: str) -> list[cs.Func
 
     * ``pk_rhs(q, q̇, τ, d, s, h_d, par) → (q̈, τ_f, τ_e, smallest pivot)``: the accelerations with the stuck joints
       held, and the friction and external torques they used;
-    * ``pk_terms(q, q̇, τ, d, h_d, par) → (M, r)``: the mass matrix and r = τ − τ_f − C q̇ − g + τ_e, for the stick
-      solve;
+    * ``pk_terms(q, q̇, τ, d, h_d, par) → (M, r, τ_f, τ_e)``: the mass matrix and r = τ − τ_f − C q̇ − g + τ_e, for
+      the stick solve (whose accelerations are then RK4's first stage), with the friction and external torques;
     * ``pk_mass(q, par) → M``; ``pk_friction(q̇, d, par) → τ_f``; ``pk_bias(q, q̇, par) → (C q̇ + g, g)``;
     * ``pk_implicit(q, q̇₁, h, d, h_d, par) → (−τ_f + τ_e(q + h q̇₁, q̇₁), h diag(∂τ_f/∂q̇) − h(D + hK), τ_f, τ_e)``:
       backward Euler's velocity-dependent force and its Jacobian;
@@ -329,7 +329,7 @@ def kernels(model: RobotModel, layout: PlantLayout, family: str) -> list[cs.Func
 
     acc, pivot = masked_cholesky_solve(mass, tau - fric + ext - bias(v), s)
     add("pk_rhs", [q, v, tau, d, s, hd, par], [acc, fric, ext, pivot])
-    add("pk_terms", [q, v, tau, d, hd, par], [mass, tau - fric + ext - bias(v)])
+    add("pk_terms", [q, v, tau, d, hd, par], [mass, tau - fric + ext - bias(v), fric, ext])
     add("pk_mass", [q, par], [mass])
     add("pk_friction", [v, d, par], [fric])
     if family == "implicit":

@@ -175,10 +175,14 @@ static int armctl_lu_solve(double* A, const double* b, double* x) {
   return OK;
 }
 
-/* The stick state of a step, unpacked from S. */
+/* The stick state of a step, unpacked from S; and what the stick solve of armctl_begin found at the state it solved
+ * (not kept in S: valid for that state only): q̈ with the joints it left stuck held (x_S = 0), and the friction and
+ * external torques there — RK4's first stage at that state, without a second evaluation. */
 typedef struct {
   double dir[N], hold[N];
   int stuck[N], any, all;
+  int solved; /* start_a, start_f, start_e hold the state's terms */
+  double start_a[N], start_f[N], start_e[N];
 } armctl_mode;
 
 static void armctl_mode_read(const double* S, armctl_mode* m) {
@@ -190,6 +194,7 @@ static void armctl_mode_read(const double* S, armctl_mode* m) {
   }
   m->any = S[S_ANY] != 0.0;
   m->all = S[S_ALL] != 0.0;
+  m->solved = 0;
 }
 
 static void armctl_mode_write(const armctl_mode* m, double* S) {

@@ -1,9 +1,11 @@
 /* Stick–slip of the generated step (see step_core.c): which joints stick, the events within a step, and the
  * functions CasADi loads. */
 
-/* stick_slip.solve_sticking, on M and r (r is changed); m->stuck holds the candidates on entry. */
-static int armctl_solve_sticking(const double* M, double* r, armctl_mode* m, const int* held, const double* par) {
-  double lam[N], a[N], Ma[N];
+/* stick_slip.solve_sticking, on M and r (r is changed); m->stuck holds the candidates on entry. On return, a holds the
+ * accelerations of the joints left free (the stuck ones' 0) unless every joint is stuck. */
+static int armctl_solve_sticking(const double* M, double* r, armctl_mode* m, const int* held, const double* par,
+                                 double* a) {
+  double lam[N], Ma[N];
   int i;
   for (;;) {
     int all = 1, k = -1;
@@ -49,6 +51,7 @@ static int armctl_begin(const double* q, const double* v, const double* tau, con
 #if ARMCTL_STICKY
   int i, any_zero = 0, any_cand = 0, cand[N];
   double M[N * N], r[N];
+  m->solved = 0;
   for (i = 0; i < N; ++i) {
     m->dir[i] = par[P_CAP + i] != 0.0 ? (v[i] > 0 ? 1.0 : v[i] < 0 ? -1.0 : 0.0) : 0.0;
     if (v[i] == 0.0) any_zero = 1;
@@ -61,11 +64,11 @@ static int armctl_begin(const double* q, const double* v, const double* tau, con
   if (!any_cand) { armctl_free_all(m); return OK; }
   {
     const double* in[6] = {q, v, tau, m->dir, hd, par};
-    double* out[2] = {M, r};
-    CALL(pk_terms, 6, in, 2, out);
+    double* out[4] = {M, r, m->start_f, m->start_e};
+    CALL(pk_terms, 6, in, 4, out);
   }
   for (i = 0; i < N; ++i) m->stuck[i] = cand[i];
-  if (armctl_solve_sticking(M, r, m, held, par) != OK) return NOT_POSITIVE_DEFINITE;
+  if (armctl_solve_sticking(M, r, m, held, par, m->start_a) != OK) return NOT_POSITIVE_DEFINITE;
   m->any = m->all = 0;
   for (i = 0; i < N; ++i) {
     if (cand[i] && !m->stuck[i]) S[S_BREAKAWAY_EVENTS] += 1.0;
@@ -74,22 +77,30 @@ static int armctl_begin(const double* q, const double* v, const double* tau, con
   m->all = 1;
   for (i = 0; i < N; ++i) if (!m->stuck[i]) m->all = 0;
   if (!m->any) for (i = 0; i < N; ++i) m->hold[i] = 0.0;
+  /* q̈ at this state as pk_rhs gives it for the stick state found: the solve's last (r as pk_rhs's right-hand side
+   * with the directions of the joints that broke away; their friction force does no work at their zero velocity) */
+  m->solved = !m->all;
 #else
   (void)q; (void)v; (void)tau; (void)hd; (void)par; (void)m; (void)held; (void)S;
 #endif
   return OK;
 }
 
-/* stepper.advance: the step from (q, v) over h under tau, with stick–slip events. */
-static int armctl_advance(int scheme, double h, int begun, const double* q_in, const double* v_in, const double* tau,
-                          const double* W, const double* par, double* S, double* q_out, double* v_out, double* a_first,
-                          int* a_first_valid, double* wf_out, double* we_out) {
+/* stepper.advance: the step from (q, v) over h under tau, with stick–slip events. begun: the stick state is S's, solved
+ * at (q, v) — the mode itself if given (with what its solve found there), else read from S. */
+static int armctl_advance(int scheme, double h, int begun, const armctl_mode* begun_mode, const double* q_in,
+                          const double* v_in, const double* tau, const double* W, const double* par, double* S,
+                          double* q_out, double* v_out, double* a_first, int* a_first_valid, double* wf_out,
+                          double* we_out) {
   armctl_mode m;
   double q[N], v[N], qn[N], vn[N], an[N], off = 0.0, remaining = h, wf = 0.0, we = 0.0, dwf, dwe, hd[6];
   int held[N], have_held = 0, at_start = 1, attempt, budget = 4 * N + 8, an_valid, st, i;
   memcpy(q, q_in, sizeof q);
   memcpy(v, v_in, sizeof v);
-  armctl_mode_read(S, &m);
+  if (begun && begun_mode)
+    m = *begun_mode;
+  else
+    armctl_mode_read(S, &m);
   *a_first_valid = 0;
   for (i = 0; i < N; ++i) held[i] = 0;
 #if !ARMCTL_STICKY
@@ -207,7 +218,7 @@ CASADI_SYMBOL_EXPORT int advance(const casadi_real** arg, casadi_real** res, cas
   memcpy(tau, arg[2], sizeof tau);
   begun = S[S_BEGUN] != 0.0;
   S[S_BEGUN] = 0.0;
-  st = armctl_advance((int)arg[5][2], arg[5][1], begun, q, v, tau, arg[3], arg[4], S, q1, v1, a0, &valid, &wf, &we);
+  st = armctl_advance((int)arg[5][2], arg[5][1], begun, 0, q, v, tau, arg[3], arg[4], S, q1, v1, a0, &valid, &wf, &we);
   if (st != OK) {
     memcpy(q1, q, sizeof q);
     memcpy(v1, v, sizeof v);

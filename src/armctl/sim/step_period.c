@@ -144,7 +144,7 @@ CASADI_SYMBOL_EXPORT int period(const casadi_real** arg, casadi_real** res, casa
     double q1[N], v1[N], a0[N], wf = WF[k], we = WE[k], dwf, dwe;
     int valid;
     for (i = 0; i < m; ++i) {
-      st = armctl_advance(scheme, h, i == 0, q, v, tau, W + 18 * i, par, S, q1, v1, a0, &valid, &dwf, &dwe);
+      st = armctl_advance(scheme, h, i == 0, &md, q, v, tau, W + 18 * i, par, S, q1, v1, a0, &valid, &dwf, &dwe);
       if (st != OK) {
         out[0] = st;
         out[1] = PERIOD_STEP;

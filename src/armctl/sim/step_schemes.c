@@ -34,7 +34,13 @@ static int armctl_scheme_step(int scheme, double off, double hs, double h, const
     double a[4][N], f[N], e[N], x[N], y[N], pf[4], pe[4], h2 = 0.5 * hs, hh = hs * hs;
     int st;
     armctl_interp(W, off / h, hd);
-    if ((st = armctl_rhs(q, v, tau, hd, par, m, a[0], f, e)) != OK) return st;
+    if (m->solved) { /* the stick solve's at this state (armctl_begin) */
+      memcpy(a[0], m->start_a, sizeof a[0]);
+      memcpy(f, m->start_f, sizeof f);
+      memcpy(e, m->start_e, sizeof e);
+    } else if ((st = armctl_rhs(q, v, tau, hd, par, m, a[0], f, e)) != OK) {
+      return st;
+    }
     pf[0] = -armctl_dot(v, f); pe[0] = armctl_dot(v, e);
     armctl_interp(W, (off + h2) / h, hd);
     for (i = 0; i < N; ++i) { x[i] = q[i] + h2 * v[i]; y[i] = v[i] + h2 * a[0][i]; }
