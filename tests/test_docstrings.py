@@ -3,7 +3,8 @@ each public method of a public class), the numpydoc ``Parameters`` section (or `
 class ``Attributes``) names every parameter of its signature, and names none it does not have. Read with
 numpydoc's own parser, as python-control's docstring test does.
 
-Classes are checked on their constructor (the class docstring or ``__init__``'s) and on the methods they define
+Classes are checked on their constructor (the class docstring or ``__init__``'s; a class that inherits its
+constructor may leave its parameters to the docstring of the class that defines it) and on the methods they define
 or inherit from armctl's own bases; ``*args`` / ``**kwargs`` must be documented under their starred names. A
 function that returns something has a ``Returns`` section."""
 
@@ -68,7 +69,8 @@ def _cases() -> list[tuple[str, Callable[..., Any], list[Any]]]:
             continue
         init = obj.__init__
         if init is not object.__init__ and inspect.isfunction(init):
-            cases.append((f"{qual}()", init, [obj, init]))
+            definer = next(base for base in obj.__mro__ if vars(base).get("__init__") is init)
+            cases.append((f"{qual}()", init, [obj, init] + ([definer] if definer is not obj else [])))
         for base in obj.__mro__:
             if not base.__module__.startswith("armctl"):
                 continue
