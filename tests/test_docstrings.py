@@ -107,6 +107,13 @@ def test_the_public_api_is_found() -> None:
     assert len(CASES) > 300
 
 
+def test_an_inherited_constructor_is_read_from_the_class_that_defines_it() -> None:
+    """PressScene inherits Scene's constructor: its parameters are read from PressScene's docstring and Scene's."""
+    owners = {q: o for q, _, o in CASES}["armctl.scenes.PressScene()"]
+    assert owners[0] is armctl.scenes.PressScene and armctl.scenes.Scene in owners
+    assert _problems(armctl.scenes.Scene.__init__, owners[:2]) != []  # without Scene's docstring: undocumented
+
+
 def _problems(fn: Callable[..., Any], owners: list[Any]) -> list[str]:
     """What is wrong with the docstrings of ``fn`` (read from ``owners``): undocumented parameters, documented
     ones it does not have, a missing Returns section."""
