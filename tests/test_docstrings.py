@@ -3,7 +3,8 @@ each public method of a public class), the numpydoc ``Parameters`` section (or `
 class ``Attributes``) names every parameter of its signature, and names none it does not have. Read with
 numpydoc's own parser, as python-control's docstring test does.
 
-Classes are checked on their constructor (the class docstring or ``__init__``'s) and on the methods they define
+Classes are checked on their constructor (the class docstring or ``__init__``'s; a class that inherits its
+constructor may leave its parameters to the docstring of the class that defines it) and on the methods they define
 or inherit from armctl's own bases; ``*args`` / ``**kwargs`` must be documented under their starred names. A
 function that returns something has a ``Returns`` section."""
 
@@ -68,7 +69,8 @@ def _cases() -> list[tuple[str, Callable[..., Any], list[Any]]]:
             continue
         init = obj.__init__
         if init is not object.__init__ and inspect.isfunction(init):
-            cases.append((f"{qual}()", init, [obj, init]))
+            definer = next(base for base in obj.__mro__ if vars(base).get("__init__") is init)
+            cases.append((f"{qual}()", init, [obj, init] + ([definer] if definer is not obj else [])))
         for base in obj.__mro__:
             if not base.__module__.startswith("armctl"):
                 continue
@@ -103,6 +105,13 @@ def test_the_public_api_is_found() -> None:
     names = {q for q, _, _ in CASES}
     assert {"armctl.Dynamics()", "armctl.simulate", "armctl.RobotModel.from_urdf", "armctl.Dynamics.regressor"} <= names
     assert len(CASES) > 300
+
+
+def test_an_inherited_constructor_is_read_from_the_class_that_defines_it() -> None:
+    """PressScene inherits Scene's constructor: its parameters are read from PressScene's docstring and Scene's."""
+    owners = {q: o for q, _, o in CASES}["armctl.scenes.PressScene()"]
+    assert owners[0] is armctl.scenes.PressScene and armctl.scenes.Scene in owners
+    assert _problems(armctl.scenes.Scene.__init__, owners[:2]) != []  # without Scene's docstring: undocumented
 
 
 def _problems(fn: Callable[..., Any], owners: list[Any]) -> list[str]:

@@ -50,13 +50,6 @@ class InteractionScene(Scene):
     A subclass implements :meth:`path` and :meth:`measures` (the force and motion measures that replace the joint
     tracking error of :meth:`~armctl.scenes.base.Scene.metrics`: the reference here is a posture) and lists the
     methods it runs; its parameters are :class:`~armctl.scenes.base.Scene`'s.
-
-    Parameters
-    ----------
-    name, description, plant, exact, reduced, reference, duration, methods : optional
-        As for :class:`~armctl.scenes.base.Scene`.
-    control_dt, dt, integrator, q0, sim_options, builders, backend : optional
-        As for :class:`~armctl.scenes.base.Scene`.
     """
 
     gain_keys: ClassVar[dict[str, tuple[tuple[str, ...], tuple[str, ...]]]] = {

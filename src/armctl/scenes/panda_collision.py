@@ -50,13 +50,6 @@ class CollisionScene(Scene):
     contact force 0.3 s after detection) [N], ``push_impulse`` (∫ |f| dt after detection) [N·s], and
     ``wrench_error`` (the largest error of the observer's tool force against the simulator's while in contact,
     after 5/K_O) [N]. Its parameters are :class:`Scene`'s.
-
-    Parameters
-    ----------
-    name, description, plant, exact, reduced, reference, duration, methods : optional
-        As for :class:`Scene`.
-    control_dt, dt, integrator, q0, sim_options, builders, backend : optional
-        As for :class:`Scene`.
     """
 
     replay_reads = ("tau_applied",)  # the observer reads the torque applied over the period before

@@ -155,13 +155,6 @@ class ContactScene(Scene):
     missing key: the task's default). Its :meth:`metrics`' error is the tool's position error [m] (RMS, max) in
     the table plane against the controller's target, with the normal force error after settling [N]
     (``force_rms_error``) and contact loss (``contact_lost``) reported. Its parameters are :class:`Scene`'s.
-
-    Parameters
-    ----------
-    name, description, plant, exact, reduced, reference, duration, methods : optional
-        As for :class:`Scene`.
-    control_dt, dt, integrator, q0, sim_options, builders, backend : optional
-        As for :class:`Scene`.
     """
 
     z_table: float = 0.0

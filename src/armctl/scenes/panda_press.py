@@ -31,12 +31,10 @@ class PressScene(InteractionScene):
     * ``parallel_force_position``: the position target is the believed surface, f_d = 10 N down: the integral
       action reaches f_d at rest wherever the table is.
 
-    Parameters
-    ----------
-    name, description, plant, exact, reduced, reference, duration, methods : optional
-        As for :class:`~armctl.scenes.base.Scene`.
-    control_dt, dt, integrator, q0, sim_options, builders, backend : optional
-        As for :class:`~armctl.scenes.base.Scene`.
+    Its :meth:`measures`: the force at rest (``force_at_rest``, the mean of the last 0.2 s) [N], its error against
+    f_d (``force_error``), the RMS force error after 1.5 s (``rms_error``; ``max_error`` its largest), whether
+    contact was lost after first touch (``contact_lost``), and the tool's final depth in the table [m]
+    (``depth``). Its parameters are :class:`~armctl.scenes.base.Scene`'s.
     """
 
     table_stiffness = TABLE_STIFFNESS
@@ -65,20 +63,6 @@ class PressScene(InteractionScene):
         return at
 
     def measures(self, res: Any, fn: Any) -> dict[str, Any]:
-        """The force at rest (the mean of the last 0.2 s) [N], its error against f_d, the RMS force error after
-        1.5 s, whether contact was lost after first touch, and the tool's final depth in the table [m].
-
-        Parameters
-        ----------
-        res : SimResult
-            A run of this scene.
-        fn : ndarray, shape (N,)
-            The normal force [N] at each sample.
-
-        Returns
-        -------
-        dict of str
-        """
         if not len(res.t):
             nan = float("nan")
             return {"force_at_rest": nan, "force_error": nan, "rms_error": nan, "max_error": nan, "error_unit": "N"}

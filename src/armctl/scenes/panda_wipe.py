@@ -33,12 +33,10 @@ class WipeScene(InteractionScene):
     * ``parallel_force_position``: the same force and position targets on all three axes.
     * ``cartesian_impedance``: the target δ_c below the believed surface (as in ``panda_press``).
 
-    Parameters
-    ----------
-    name, description, plant, exact, reduced, reference, duration, methods : optional
-        As for :class:`~armctl.scenes.base.Scene`.
-    control_dt, dt, integrator, q0, sim_options, builders, backend : optional
-        As for :class:`~armctl.scenes.base.Scene`.
+    Its :meth:`measures`, over the slide: the normal force's RMS error [N] (``rms_error``; ``max_error`` its
+    largest), its range (``force_min``, ``force_max``), the tool's RMS path error along the table [m]
+    (``path_rms_error``, in x and y against the target path), and whether contact was lost (``contact_lost``).
+    Its parameters are :class:`~armctl.scenes.base.Scene`'s.
     """
 
     table_stiffness = TABLE_STIFFNESS
@@ -59,21 +57,6 @@ class WipeScene(InteractionScene):
         return at
 
     def measures(self, res: Any, fn: Any) -> dict[str, Any]:
-        """Over the slide: the normal force's RMS error [N] (``rms_error``; ``max_error`` its largest), its range
-        (``force_min``, ``force_max``), the tool's RMS path error along the table [m] (``path_rms_error``, in x and
-        y against the target path), and whether contact was lost.
-
-        Parameters
-        ----------
-        res : SimResult
-            A run of this scene.
-        fn : ndarray, shape (N,)
-            The normal force [N] at each sample.
-
-        Returns
-        -------
-        dict of str
-        """
         sliding = (res.t >= SLIDE_START) & (res.t <= SLIDE_START + SLIDE_TIME)
         if not sliding.any():
             nan = float("nan")

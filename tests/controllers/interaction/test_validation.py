@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -54,6 +56,34 @@ def test_a_stiffness_of_the_wrong_size_is_named(panda: armctl.Dynamics) -> None:
         CartesianImpedance(panda, 500.0)
     with pytest.raises(ShapeError, match="damping"):
         CartesianImpedance(panda, [500.0] * 6, damping=[10.0] * 3)
+
+
+@pytest.mark.parametrize(
+    ("law", "stiffness", "unit"),
+    [
+        (JointImpedance, [100.0] * 7, "N·m·s/rad"),
+        (CartesianImpedance, [500.0] * 6, "N·s/m; N·m·s/rad"),
+        (Admittance, [500.0] * 6, "N·s/m; N·m·s/rad"),
+    ],
+)
+def test_the_spring_laws_name_a_bad_damping_alike(
+    panda: armctl.Dynamics, law: type, stiffness: list[float], unit: str
+) -> None:
+    """The three spring laws check D the same way: a negative entry, and a size other than K's, named with D's
+    unit."""
+    bad = [10.0] * (len(stiffness) - 1) + [-1.0]
+    with pytest.raises(InvalidParameterError, match=re.escape(f"damping [{unit}]") + ".*negative damping"):
+        law(panda, stiffness, bad)
+    with pytest.raises(ShapeError, match=re.escape(f"damping [{unit}]")):
+        law(panda, stiffness, [10.0] * (len(stiffness) - 2))
+
+
+def test_admittance_keeps_a_given_damping_and_derives_the_default(panda: armctl.Dynamics) -> None:
+    """D_d given: that matrix; None: ζ-damped for M_d, which for diagonal M_d and K_d is 2 ζ (k m)^½ per axis."""
+    given = Admittance(panda, [400.0] * 3, [30.0, 20.0, 10.0], inertia=[4.0] * 3, compile=False)
+    np.testing.assert_array_equal(given.damping, np.diag([30.0, 20.0, 10.0]))
+    derived = Admittance(panda, [400.0, 100.0, 400.0], inertia=[4.0, 1.0, 9.0], zeta=0.5, compile=False)
+    np.testing.assert_allclose(derived.damping, np.diag([40.0, 10.0, 60.0]), rtol=1e-12, atol=1e-12)
 
 
 def test_an_unknown_frame_is_named(panda: armctl.Dynamics) -> None:

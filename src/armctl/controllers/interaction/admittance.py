@@ -9,17 +9,17 @@ import pinocchio as pin
 from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray, all_finite, boolean, readonly, vector
-from armctl.controllers.base import Controller
 from armctl.controllers.interaction.force_source import ForceInput
 from armctl.controllers.interaction.gains import critical_damping, damping_ratio, symmetric_psd
 from armctl.controllers.interaction.inner import InnerMotion
+from armctl.controllers.interaction.spring import FRAME_SIZES, FRAME_UNITS, SpringLaw
 from armctl.controllers.interaction.task_space import FrameTarget, PoseTargeted
 from armctl.controllers.osc.tasks.rotation import rotation_error
 from armctl.dynamics.base import Dynamics
 from armctl.references import Reference
 
 
-class Admittance(PoseTargeted, Controller):
+class Admittance(PoseTargeted, SpringLaw):
     """Admittance control (position-based impedance; Siciliano, Sciavicco, Villani & Oriolo, *Robotics:
     Modelling, Planning and Control*, 2009, §9.3): the measured wrench drives a compliant frame x_c through a
     mass–spring–damper about the target x_d, and an inner motion loop of your choice tracks x_c.
@@ -84,7 +84,7 @@ class Admittance(PoseTargeted, Controller):
     ``last_log`` holds ``"wrench"`` h, ``"compliant"`` e_c [m; rad] and ``"error"`` the inner loop's frame error.
     """
 
-    dynamics: Dynamics
+    damping: FloatArray  # D_d: given, or derived from M_d and K_d
 
     def __init__(
         self,
@@ -104,19 +104,15 @@ class Admittance(PoseTargeted, Controller):
         compensate: bool = True,
         compile: bool | str = "auto",
     ) -> None:
-        super().__init__(dynamics)
+        super().__init__(dynamics, stiffness, damping, FRAME_SIZES, FRAME_UNITS)
         owner = type(self).__name__
-        self.stiffness = symmetric_psd(stiffness, (6, 3), "stiffness", "N/m; N·m/rad")
         m = self.axes = self.stiffness.shape[0]
         default_inertia = np.array([5.0, 5.0, 5.0, 0.5, 0.5, 0.5])[:m]
         self.inertia = symmetric_psd(
             default_inertia if inertia is None else inertia, (m,), "inertia", "kg; kg·m²", definite=True
         )
-        self.damping = (
-            critical_damping(self.inertia, self.stiffness, damping_ratio(zeta))
-            if damping is None
-            else symmetric_psd(damping, (m,), "damping", "N·s/m; N·m·s/rad")
-        )
+        if damping is None:
+            self.damping = critical_damping(self.inertia, self.stiffness, damping_ratio(zeta))
         self._inv_inertia: FloatArray = np.asarray(np.linalg.inv(self.inertia), dtype=float)
         self.force_input = ForceInput(force_source, owner)
         self.reads = self.force_input.reads  # per instance: what it reads depends on the source

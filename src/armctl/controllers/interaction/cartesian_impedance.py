@@ -11,9 +11,9 @@ from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray, boolean, readonly, vector
 from armctl.codegen import Fallback, compile_mode
-from armctl.controllers.base import Controller
 from armctl.controllers.interaction.force_source import ForceInput
 from armctl.controllers.interaction.gains import critical_damping, damping_ratio, symmetric_psd
+from armctl.controllers.interaction.spring import FRAME_SIZES, FRAME_UNITS, SpringLaw
 from armctl.controllers.interaction.task_space import FrameTarget, task_inertia
 from armctl.controllers.osc.state import ModelEvaluator
 from armctl.controllers.osc.tasks.target import Trajectory
@@ -24,7 +24,7 @@ from armctl.references import Reference
 FALLBACK = Fallback("the Cartesian impedance law's generated code", "the Pinocchio/NumPy law", "several times slower")
 
 
-class CartesianImpedance(Controller):
+class CartesianImpedance(SpringLaw):
     """Cartesian impedance control of one frame, with null-space joint stiffness towards a posture and, if asked,
     inertia shaping from a measured wrench.
 
@@ -106,8 +106,6 @@ class CartesianImpedance(Controller):
     with inertia shaping, ``"wrench"`` h.
     """
 
-    dynamics: Dynamics
-
     def __init__(
         self,
         dynamics: Dynamics,
@@ -124,10 +122,8 @@ class CartesianImpedance(Controller):
         friction: bool = True,
         compile: bool | str = "auto",
     ) -> None:
-        super().__init__(dynamics)
-        self.stiffness = symmetric_psd(stiffness, (6, 3), "stiffness", "N/m; N·m/rad")
+        super().__init__(dynamics, stiffness, damping, FRAME_SIZES, FRAME_UNITS)
         m = self.axes = self.stiffness.shape[0]
-        self.damping = None if damping is None else symmetric_psd(damping, (m,), "damping", "N·s/m; N·m·s/rad")
         self.zeta = damping_ratio(zeta)
         self.evaluator = ModelEvaluator(dynamics)
         self.evaluator.check_frame(frame)

@@ -6,13 +6,13 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from armctl._checks import FloatArray, boolean
-from armctl.controllers.base import Controller
-from armctl.controllers.interaction.gains import critical_damping, damping_ratio, symmetric_psd
+from armctl.controllers.interaction.gains import critical_damping, damping_ratio
+from armctl.controllers.interaction.spring import SpringLaw
 from armctl.dynamics.base import Dynamics
 from armctl.references import Reference
 
 
-class JointImpedance(Controller):
+class JointImpedance(SpringLaw):
     """Joint impedance control: the arm behaves as M(q) ë + D ė + K e = Jᵀ h about the joint reference.
 
     Parameters
@@ -50,8 +50,6 @@ class JointImpedance(Controller):
     ``last_log`` holds ``"spring"`` K e + D ė [N·m].
     """
 
-    dynamics: Dynamics
-
     def __init__(
         self,
         dynamics: Dynamics,
@@ -61,10 +59,7 @@ class JointImpedance(Controller):
         zeta: float = 1.0,
         friction: bool = True,
     ) -> None:
-        super().__init__(dynamics)
-        n = self.n
-        self.stiffness = symmetric_psd(stiffness, (n,), "stiffness", "N·m/rad")
-        self.damping = None if damping is None else symmetric_psd(damping, (n,), "damping", "N·m·s/rad")
+        super().__init__(dynamics, stiffness, damping)
         self.zeta = damping_ratio(zeta)
         self.friction = boolean(friction, "friction")
 

@@ -21,29 +21,20 @@ class ParallelForcePosition(ForceLoop):
 
     Parameters
     ----------
-    dynamics : Dynamics
-        The controller's model.
-    force : array_like or callable
-        f_d (3,) [N], the force the arm should exert (world axes), or t [s] → f_d.
-    force_gain : array_like
-        K_F [m/N] ≥ 0: scalar, (3,) or 3×3.
+    dynamics, force, force_gain, frame
+        As for :class:`~armctl.controllers.ForceControl`.
     integral_gain : array_like
         K_I [m/(N·s)]: scalar, (3,) or 3×3, symmetric positive definite (the integral action is what makes the
         force prevail).
-    frame : str, optional
-        The controlled frame (None: the tool frame).
     force_source, inner, kp, kd, posture, posture_kp, compile, compensate : optional
         The force source, the inner motion loop and its gains, the null-space posture, code generation and the
         compensation of the measured wrench, as in :class:`~armctl.controllers.ForceControl`.
 
     Raises
     ------
-    InvalidParameterError
-        No force source, K_I not positive definite, another gain not symmetric positive semi-definite.
-    ShapeError
-        ``force`` or a gain of the wrong size.
-    UnknownNameError
-        ``frame`` or ``inner`` unknown.
+    InvalidParameterError, ShapeError, UnknownNameError
+        As for :class:`~armctl.controllers.ForceControl`; InvalidParameterError also for a K_I that is not
+        positive definite.
 
     Notes
     -----
