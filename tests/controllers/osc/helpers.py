@@ -1,10 +1,13 @@
-"""Helpers of the operational-space QP tests: the Panda's ready posture and its Dynamics, built once."""
+"""Helpers of the operational-space QP tests: the Panda's ready posture and its Dynamics, built once; the independent
+solver (quadprog) the tests check optima against."""
 
 from __future__ import annotations
 
 from functools import cache
+from types import ModuleType
 
 import numpy as np
+import pytest
 
 import armctl
 
@@ -20,3 +23,12 @@ def panda_dynamics(backend: str = "pinocchio", friction: bool = False) -> armctl
             viscous=[0.5, 0.5, 0.5, 0.5, 0.2, 0.2, 0.2], coulomb=[0.8, 0.8, 0.8, 0.8, 0.3, 0.3, 0.3]
         )
     return armctl.Dynamics(model, backend=backend)
+
+
+def quadprog_solvers() -> ModuleType:
+    """qpsolvers, where it has quadprog (the independent solver of the optimality tests); else the calling test, or
+    the module that calls it at import, is skipped."""
+    qpsolvers = pytest.importorskip("qpsolvers")
+    if "quadprog" not in qpsolvers.available_solvers:  # pragma: no cover - the test extra installs it
+        pytest.skip("quadprog (the test extra) is not installed", allow_module_level=True)
+    return qpsolvers

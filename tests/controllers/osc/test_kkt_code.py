@@ -15,9 +15,9 @@ from armctl.controllers.osc import QPArrays
 from armctl.controllers.osc.kkt_code import CompiledKKT
 from armctl.controllers.osc.optimality import DUAL_TOL, PRIMAL_TOL, kkt_ok, solve_on_active_set
 
-qpsolvers = pytest.importorskip("qpsolvers")
-if "quadprog" not in qpsolvers.available_solvers:  # pragma: no cover - the test extra installs it
-    pytest.skip("quadprog (the test extra) is not installed", allow_module_level=True)
+from .helpers import quadprog_solvers
+
+qpsolvers = quadprog_solvers()
 if armctl.codegen.compiler() is None:  # pragma: no cover - the machines that run the tests have one
     pytest.skip("no C compiler: the check is not compiled", allow_module_level=True)
 

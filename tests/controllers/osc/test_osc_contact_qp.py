@@ -22,11 +22,9 @@ from armctl.controllers.osc import (
 from armctl.controllers.osc.hierarchy import extend_basis
 from armctl.controllers.osc.optimality import residuals
 
-from .helpers import Q_HOME, panda_dynamics
+from .helpers import Q_HOME, panda_dynamics, quadprog_solvers
 
-qpsolvers = pytest.importorskip("qpsolvers")
-if "quadprog" not in qpsolvers.available_solvers:  # pragma: no cover - the test extra installs it
-    pytest.skip("quadprog (the test extra) is not installed", allow_module_level=True)
+qpsolvers = quadprog_solvers()
 
 
 def _fixed(friction: bool = False, compile: bool | str = "auto", solver: object = "proxsuite") -> OperationalSpaceQP:

@@ -14,12 +14,11 @@ from armctl.controllers.osc.daqp_solver import DaqpSolver
 from armctl.controllers.osc.optimality import kkt_ok, residuals
 from armctl.controllers.osc.solve import ProxQPSolver, QPSolution
 from armctl.errors import SolverError
+from tests.controllers.osc.helpers import quadprog_solvers
 
 from .conftest import Q_HOME, panda_dynamics
 
-qpsolvers = pytest.importorskip("qpsolvers")
-if "quadprog" not in qpsolvers.available_solvers:  # pragma: no cover - the test extra installs it
-    pytest.skip("quadprog (the test extra) is not installed", allow_module_level=True)
+qpsolvers = quadprog_solvers()
 
 
 def _random_qp(rng: np.random.Generator) -> QPArrays:

@@ -23,12 +23,11 @@ from armctl.controllers.osc import (
     TorqueLimit,
 )
 from armctl.errors import InvalidParameterError
+from tests.controllers.osc.helpers import quadprog_solvers
 
 from .conftest import Q_HOME
 
-qpsolvers = pytest.importorskip("qpsolvers")
-if "quadprog" not in qpsolvers.available_solvers:  # pragma: no cover - the test extra installs it
-    pytest.skip("quadprog (the test extra) is not installed", allow_module_level=True)
+qpsolvers = quadprog_solvers()
 
 
 @cache

@@ -19,12 +19,11 @@ from armctl.controllers.osc import (
     PostureTask,
     TorqueLimit,
 )
+from tests.controllers.osc.helpers import quadprog_solvers
 
 from .conftest import Q_HOME
 
-qpsolvers = pytest.importorskip("qpsolvers")
-if "quadprog" not in qpsolvers.available_solvers:  # pragma: no cover - the test extra installs it
-    pytest.skip("quadprog (the test extra) is not installed", allow_module_level=True)
+qpsolvers = quadprog_solvers()
 if armctl.codegen.compiler() is None:  # pragma: no cover - the machines that run the tests have one
     pytest.skip("no C compiler: no generated code", allow_module_level=True)
 

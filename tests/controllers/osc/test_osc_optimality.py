@@ -21,11 +21,9 @@ from armctl.controllers.osc import (
 from armctl.controllers.osc.active_set import dual_active_set
 from armctl.controllers.osc.optimality import accept, residuals, solve_on_active_set
 from armctl.errors import InfeasibleError, SolverError, SolverWarning
-from tests.controllers.osc.helpers import Q_HOME, panda_dynamics
+from tests.controllers.osc.helpers import Q_HOME, panda_dynamics, quadprog_solvers
 
-qpsolvers = pytest.importorskip("qpsolvers")
-if "quadprog" not in qpsolvers.available_solvers:  # pragma: no cover - the test extra installs it
-    pytest.skip("quadprog (the test extra) is not installed", allow_module_level=True)
+qpsolvers = quadprog_solvers()
 
 
 def _cold_optimum(p: QPProblem) -> np.ndarray:

@@ -29,7 +29,7 @@ from armctl.errors import (
     ShapeError,
     UnknownNameError,
 )
-from tests.controllers.osc.helpers import Q_HOME
+from tests.controllers.osc.helpers import Q_HOME, quadprog_solvers
 
 
 def test_unknown_frame_lists_the_valid_names(panda: armctl.Dynamics) -> None:
@@ -233,9 +233,7 @@ def test_every_solver_solves_a_named_problem_and_names_the_conflicting_rows(make
     from armctl.controllers.osc.solve import make_solver
 
     if make == "qpsolvers:quadprog":
-        qpsolvers = pytest.importorskip("qpsolvers")
-        if "quadprog" not in qpsolvers.available_solvers:  # pragma: no cover - the test extra installs it
-            pytest.skip("quadprog (the test extra) is not installed")
+        quadprog_solvers()  # (skips without quadprog)
     own = {"daqp": DaqpSolver, "active-set": DualActiveSetSolver}
     solver = own[make]() if make in own else make_solver(make)
     assert isinstance(solver, QPSolver)
