@@ -25,6 +25,15 @@ def panda_dynamics(backend: str = "pinocchio", friction: bool = False) -> armctl
     return armctl.Dynamics(model, backend=backend)
 
 
+def rotation_zyx(rx: float, ry: float, rz: float) -> np.ndarray:
+    """R_z R_y R_x, written out (not from the code under test)."""
+    cx, sx, cy, sy, cz, sz = np.cos(rx), np.sin(rx), np.cos(ry), np.sin(ry), np.cos(rz), np.sin(rz)
+    rot_x = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
+    rot_y = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
+    rot_z = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
+    return rot_z @ rot_y @ rot_x
+
+
 def quadprog_solvers() -> ModuleType:
     """qpsolvers, where it has quadprog (the independent solver of the optimality tests); else the calling test, or
     the module that calls it at import, is skipped."""

@@ -22,16 +22,7 @@ from armctl.controllers.osc import (
 )
 from armctl.controllers.osc.task_errors import target_key
 from armctl.errors import InvalidParameterError, NonFiniteError
-from tests.controllers.osc.helpers import Q_HOME
-
-
-def _rotation(rx: float, ry: float, rz: float) -> np.ndarray:
-    """R_z R_y R_x, written out."""
-    cx, sx, cy, sy, cz, sz = np.cos(rx), np.sin(rx), np.cos(ry), np.sin(ry), np.cos(rz), np.sin(rz)
-    rot_x = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
-    rot_y = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
-    rot_z = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
-    return rot_z @ rot_y @ rot_x
+from tests.controllers.osc.helpers import Q_HOME, rotation_zyx
 
 
 def _pose(rot: np.ndarray, p: Any = (0.4, 0.0, 0.5)) -> np.ndarray:
@@ -41,7 +32,7 @@ def _pose(rot: np.ndarray, p: Any = (0.4, 0.0, 0.5)) -> np.ndarray:
     return out
 
 
-ROT = _rotation(np.pi, 0.1, 0.2)
+ROT = rotation_zyx(np.pi, 0.1, 0.2)
 ZERO = np.zeros(6)
 #: (bad pose target, velocity, the error and what it says), each found by the NumPy path's check
 BAD_POSES: list[tuple[np.ndarray, np.ndarray, type, str]] = [

@@ -29,7 +29,7 @@ from armctl.errors import (
     ShapeError,
     UnknownNameError,
 )
-from tests.controllers.osc.helpers import Q_HOME, quadprog_solvers
+from tests.controllers.osc.helpers import Q_HOME, quadprog_solvers, rotation_zyx
 
 
 def test_unknown_frame_lists_the_valid_names(panda: armctl.Dynamics) -> None:
@@ -71,18 +71,9 @@ def test_targets_of_the_wrong_size(panda: armctl.Dynamics) -> None:
         OperationalSpaceQP(panda, [FramePositionTask()])(0.0, Q_HOME, np.zeros(7), armctl.Reference(Q_HOME))
 
 
-def _rotation(rx: float, ry: float, rz: float) -> np.ndarray:
-    """R_z R_y R_x, written out (not from the code under test)."""
-    cx, sx, cy, sy, cz, sz = np.cos(rx), np.sin(rx), np.cos(ry), np.sin(ry), np.cos(rz), np.sin(rz)
-    rot_x = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
-    rot_y = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
-    rot_z = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
-    return rot_z @ rot_y @ rot_x
-
-
 def test_rotation_and_pose_targets_must_be_rotations(panda: armctl.Dynamics) -> None:
     # a reflection, a scaled or a zero matrix would give a zero rotation error: the task would think it is there
-    rot = _rotation(0.1, 0.2, 0.3)
+    rot = rotation_zyx(0.1, 0.2, 0.3)
     orientation, pose = FrameOrientationTask(), FramePoseTask()
     for bad, why in [
         (rot @ np.diag([1.0, 1.0, -1.0]), "reflection"),
